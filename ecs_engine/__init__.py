@@ -1,0 +1,36 @@
+"""ecs_engine: entities as NumPy component arrays, systems over whole columns, Vulkan rendering.
+
+Rules of use, in short:
+- Components are schemas (`class Health(Component): hp = Field("f4", default=100)`); each field
+  is one NumPy column per archetype table.
+- `world.spawn(...)`, `world.spawn_batch(n, ...)`, `destroy`, `add`, `remove` change structure;
+  inside a system or a query loop they are deferred to the next sync point.
+- `world.query(A, B, with_=..., without=..., write=...)` yields per-table batches of column views.
+- Values are checked where they enter the world (NaN/Inf, ranges, shapes, dtypes); systems that
+  write through views are trusted.
+"""
+
+from .errors import AccessError, DeadEntityError, EcsError, MissingComponentError
+from .query import Batch, ComponentView, Query
+from .schedule import FunctionSystem, Schedule, System, system
+from .schema import Component, Field
+from .world import World
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "AccessError",
+    "Batch",
+    "Component",
+    "ComponentView",
+    "DeadEntityError",
+    "EcsError",
+    "Field",
+    "FunctionSystem",
+    "MissingComponentError",
+    "Query",
+    "Schedule",
+    "System",
+    "World",
+    "system",
+]

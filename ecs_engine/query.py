@@ -1,0 +1,202 @@
+"""Queries: the tables holding a set of component types, handed out as per-table column views."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .errors import AccessError
+from .schema import Component, Field, ObjectStore
+from .table import ArchetypeTable, ColumnKey
+
+if TYPE_CHECKING:
+    from .world import World
+
+
+class ComponentView:
+    """The columns of one component in one table; `view.position` is an (n, 3) array view."""
+
+    __slots__ = ("component", "_arrays")
+
+    def __init__(self, component: type[Component], arrays: dict[str, np.ndarray]) -> None:
+        self.component = component
+        self._arrays = arrays
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        try:
+            return self._arrays[name]
+        except KeyError:
+            raise AttributeError(f"{self.component.__name__} has no field {name!r}") from None
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name in ComponentView.__slots__:
+            object.__setattr__(self, name, value)
+            return
+        # `view.position = x` would rebind, not write: make it write through instead.
+        self.__getattr__(name)[...] = value
+
+    def fields(self) -> dict[str, np.ndarray]:
+        return dict(self._arrays)
+
+
+class Batch:
+    """One matched table: `entities` (ids) and column views, read-only where not written."""
+
+    __slots__ = ("table", "entities", "_query", "_views")
+
+    def __init__(self, table: ArchetypeTable, query: Query) -> None:
+        self.table = table
+        self._query = query
+        self._views: dict[type[Component], ComponentView] = {}
+        ids = table.entities[: table.count]
+        ids.flags.writeable = False
+        self.entities = ids
+
+    def __len__(self) -> int:
+        return self.table.count
+
+    def __getitem__(self, key: type | Field) -> Any:
+        if isinstance(key, Field):
+            return getattr(self.view(key.component), key.name)  # type: ignore[arg-type]
+        view = self.view(key)
+        if issubclass(view.component, ObjectStore):
+            return view.value  # a plain Python class stored as objects: hand out the object column
+        return view
+
+    def view(self, component: type) -> ComponentView:
+        ct = self._query._world.schema_of(component)
+        view = self._views.get(ct)
+        if view is None:
+            if ct not in self._query.access:
+                raise AccessError(
+                    f"query over {self._query.describe()} does not include {ct.__name__}"
+                )
+            writable = ct in self._query.write
+            arrays = {}
+            n = self.table.count
+            for name in ct.__fields__:
+                arr = self.table.columns[(ct, name)][:n]
+                if not writable:
+                    arr.flags.writeable = False
+                arrays[name] = arr
+            view = ComponentView(ct, arrays)
+            self._views[ct] = view
+        return view
+
+
+class Query:
+    """Matches tables holding all `required` and `with_` types and none of `without`.
+
+    The matched table list is cached and extended as new tables appear. Iterating yields one
+    `Batch` per non-empty table; structural changes made meanwhile are deferred to the next
+    sync point, so the views stay valid for the whole loop.
+    """
+
+    def __init__(
+        self,
+        world: World,
+        required: tuple[type[Component], ...],
+        with_: frozenset[type[Component]],
+        without: frozenset[type[Component]],
+        write: frozenset[type[Component]],
+    ) -> None:
+        self._world = world
+        self.required = required
+        self.with_ = with_
+        self.without = without
+        self.write = write
+        self.access = frozenset(required)
+        self._all = frozenset(required) | with_
+        self._write_keys: list[ColumnKey] = [(ct, name) for ct in write for name in ct.__fields__]
+        self._tables: list[ArchetypeTable] = []
+        self._scanned = 0
+
+    def describe(self) -> str:
+        parts = [", ".join(t.__name__ for t in self.required)]
+        if self.with_:
+            parts.append("with " + ", ".join(sorted(t.__name__ for t in self.with_)))
+        if self.without:
+            parts.append("without " + ", ".join(sorted(t.__name__ for t in self.without)))
+        return "(" + "; ".join(parts) + ")"
+
+    def _refresh(self) -> list[ArchetypeTable]:
+        tables = self._world._tables
+        if self._scanned < len(tables):
+            for table in tables[self._scanned :]:
+                if self._all <= table.type_set and not (self.without & table.type_set):
+                    self._tables.append(table)
+            self._scanned = len(tables)
+        return self._tables
+
+    @property
+    def tables(self) -> list[ArchetypeTable]:
+        return list(self._refresh())
+
+    def __iter__(self) -> Iterator[Batch]:
+        return self.iter()
+
+    def iter(self, changed: tuple[type, ...] = (), since: int | None = None) -> Iterator[Batch]:
+        """Yield batches; with `changed`, only tables where one of those columns was written
+        after tick `since` (inside a system, `since` defaults to its last run)."""
+        world = self._world
+        tables = self._refresh()
+        changed_keys: list[ColumnKey] = []
+        if changed:
+            if since is None:
+                since = world.system_last_run_tick()
+            for t in changed:
+                ct = world.schema_of(t)
+                changed_keys.extend((ct, name) for name in ct.__fields__)
+        tick = world._write_tick() if self._write_keys else 0
+        world._begin_iteration()
+        try:
+            for table in tables:
+                if table.count == 0:
+                    continue
+                if changed_keys and not _changed(table, changed_keys, since):  # type: ignore[arg-type]
+                    continue
+                for key in self._write_keys:
+                    table.column_ticks[key] = tick
+                yield Batch(table, self)
+        finally:
+            world._end_iteration()
+
+    def count(self) -> int:
+        return sum(t.count for t in self._refresh())
+
+    def entities(self) -> np.ndarray:
+        tables = self._refresh()
+        parts = [t.entities[: t.count] for t in tables if t.count]
+        return np.concatenate(parts) if parts else np.empty(0, dtype=np.int64)
+
+    def column(self, field: Field) -> np.ndarray:
+        """All rows of one field, concatenated across tables (a copy)."""
+        ct = field.component
+        assert ct is not None
+        tables = self._refresh()
+        parts = [t.columns[(ct, field.name)][: t.count] for t in tables if t.count]
+        if not parts:
+            return np.empty((0, *field.shape), dtype=field.dtype)
+        return np.concatenate(parts)
+
+
+def _changed(table: ArchetypeTable, keys: list[ColumnKey], since: int) -> bool:
+    ticks = table.column_ticks
+    return any(ticks[k] > since for k in keys if k in ticks)
+
+
+def check_access(
+    system_name: str,
+    reads: frozenset[type[Component]],
+    writes: frozenset[type[Component]],
+    required: tuple[type[Component], ...],
+    write: frozenset[type[Component]],
+) -> None:
+    undeclared = [t.__name__ for t in required if t not in reads and t not in writes]
+    if undeclared:
+        raise AccessError(f"system {system_name} queries {undeclared} but does not declare them")
+    not_writable = [t.__name__ for t in write if t not in writes]
+    if not_writable:
+        raise AccessError(f"system {system_name} asks to write {not_writable} but declares them read-only")

@@ -1,0 +1,263 @@
+"""Component schemas: a component type is a class whose fields each become one NumPy column.
+
+    class Health(Component):
+        hp = Field("f4", default=100.0, finite=True, minimum=0.0)
+        regen = Field("f4", (2,), default=(0.0, 1.0))
+
+`Health(hp=50)` is a value bundle used to spawn, add or set; its fields may hold one value (shared
+by every entity in a batch) or an array with one row per entity. Values are checked when they
+reach the world (the API boundary), where the failing entity can be named; systems writing through
+column views are trusted and pay nothing.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable
+from typing import Any, ClassVar
+
+import numpy as np
+
+_component_ids = itertools.count(1)
+
+# Rows whose quaternion/vector length is below this cannot be normalised and are rejected.
+UNIT_EPSILON = 1e-12
+
+
+def describe_row(row: int) -> str:
+    return f"row {row} of the batch"
+
+
+class Field:
+    """One column of a component: dtype, per-entity shape, default and the checks on write."""
+
+    def __init__(
+        self,
+        dtype: Any,
+        shape: tuple[int, ...] | int = (),
+        default: Any = 0,
+        *,
+        finite: bool = False,
+        allow_posinf: bool = False,
+        minimum: float | None = None,
+        min_exclusive: bool = False,
+        maximum: float | None = None,
+        unit: bool = False,
+        doc: str = "",
+    ) -> None:
+        self.dtype = np.dtype(dtype)
+        self.shape = (shape,) if isinstance(shape, int) else tuple(shape)
+        self.finite = finite
+        self.allow_posinf = allow_posinf
+        self.minimum = minimum
+        self.min_exclusive = min_exclusive
+        self.maximum = maximum
+        self.unit = unit
+        self.doc = doc
+        self.name = "?"
+        self.component: type[Component] | None = None
+        if self.dtype == object:
+            self.default = default
+        else:
+            self.default = np.broadcast_to(np.asarray(default, dtype=self.dtype), self.shape).copy()
+            self.default.flags.writeable = False
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+        self.component = owner  # type: ignore[assignment]
+
+    @property
+    def qualname(self) -> str:
+        owner = self.component.__name__ if self.component is not None else "?"
+        return f"{owner}.{self.name}"
+
+    @property
+    def is_object(self) -> bool:
+        return self.dtype == object
+
+    def __repr__(self) -> str:
+        return f"Field({self.qualname}, {self.dtype}, shape={self.shape})"
+
+    # ------------------------------------------------------------------ checks
+    def coerce(self, value: Any, n: int, who: Callable[[int], str] = describe_row) -> np.ndarray:
+        """Return `value` as an array of shape (1, *shape) (shared) or (n, *shape), checked and
+        normalised.
+
+        Raises ValueError naming `who(row)` and the field on any bad row; never mutates storage.
+        """
+        if self.is_object:
+            return self._coerce_object(value, n)
+        arr = value if isinstance(value, np.ndarray) else np.asarray(value)
+        if arr.dtype != self.dtype:
+            arr = self._cast(arr, value, who)
+        if arr.shape != self.shape and arr.shape != (n, *self.shape) and arr.shape != (1, *self.shape):
+            per = self.shape if self.shape else "a scalar"
+            raise ValueError(
+                f"{self.qualname} expects {per} per entity, or shape {(n, *self.shape)} for "
+                f"{n} entities; got shape {arr.shape}"
+            )
+        if self.finite or self.minimum is not None or self.maximum is not None:
+            self._check_range(arr, who)
+        if self.unit:
+            arr = self._normalise(arr, who)
+        return arr[None] if arr.shape == self.shape else arr
+
+    def _cast(self, arr: np.ndarray, value: Any, who: Callable[[int], str]) -> np.ndarray:
+        """Same-kind casts, plus any integer into an integer field when every value fits."""
+        target = self.dtype
+        if arr.dtype.kind in "iub" and target.kind in "iu":
+            if arr.size:
+                info = np.iinfo(target)
+                rows = self._rows((arr < info.min) | (arr > info.max))
+                if rows.any():
+                    self._fail(rows, arr, who, f"must fit in {target} ({info.min}..{info.max})")
+            return arr.astype(target)
+        if arr.dtype == object or not np.can_cast(arr.dtype, target, casting="same_kind"):
+            raise ValueError(f"{self.qualname} holds {target} values; got {arr.dtype} ({_preview(value)})")
+        return arr.astype(target)
+
+    def _coerce_object(self, value: Any, n: int) -> np.ndarray:
+        out = np.empty(n, dtype=object)
+        if n == 1:
+            out[0] = value
+            return out
+        seq = list(value)
+        if len(seq) != n:
+            raise ValueError(f"{self.qualname} needs one object per entity ({n}); got {len(seq)}")
+        out[:] = seq
+        return out
+
+    def _rows(self, mask: np.ndarray) -> np.ndarray:
+        """Collapse a per-element mask to a per-row mask (shape () means one row)."""
+        extra = len(self.shape)
+        if mask.ndim > extra:
+            return mask.reshape(mask.shape[0], -1).any(axis=1)
+        return np.atleast_1d(mask.any()) if extra else np.atleast_1d(mask)
+
+    def _fail(self, rows: np.ndarray, arr: np.ndarray, who: Callable[[int], str], what: str) -> None:
+        row = int(np.flatnonzero(rows)[0])
+        shown = arr[row] if arr.ndim > len(self.shape) else arr
+        count = int(rows.sum())
+        more = f" ({count} rows fail)" if count > 1 else ""
+        raise ValueError(f"{who(row)}: {self.qualname} {what}, got {_preview(shown)}{more}")
+
+    def _check_range(self, arr: np.ndarray, who: Callable[[int], str]) -> None:
+        if self.finite and arr.dtype.kind in "fc":
+            bad = np.isnan(arr)
+            if self.allow_posinf:
+                bad |= np.isneginf(arr)
+                what = "must not be NaN or -inf"
+            else:
+                bad |= np.isinf(arr)
+                what = "must be finite (no NaN or Inf)"
+            rows = self._rows(bad)
+            if rows.any():
+                self._fail(rows, arr, who, what)
+        if self.minimum is not None:
+            bad = arr <= self.minimum if self.min_exclusive else arr < self.minimum
+            rows = self._rows(bad)
+            if rows.any():
+                op = ">" if self.min_exclusive else ">="
+                self._fail(rows, arr, who, f"must be {op} {self.minimum}")
+        if self.maximum is not None:
+            rows = self._rows(arr > self.maximum)
+            if rows.any():
+                self._fail(rows, arr, who, f"must be <= {self.maximum}")
+
+    def _normalise(self, arr: np.ndarray, who: Callable[[int], str]) -> np.ndarray:
+        norm = np.linalg.norm(arr, axis=-1, keepdims=True)
+        rows = np.atleast_1d(norm[..., 0] < UNIT_EPSILON)
+        if rows.any():
+            self._fail(rows, arr, who, "must have non-zero length (it is normalised on write)")
+        return arr / norm
+
+
+class Component:
+    """Base class of component schemas. Subclasses declare `Field`s as class attributes."""
+
+    __fields__: ClassVar[dict[str, Field]] = {}
+    # Components added automatically (with defaults) to any entity that gets this one.
+    required: ClassVar[tuple[type[Component], ...]] = ()
+    component_id: ClassVar[int] = 0
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        fields: dict[str, Field] = {}
+        for base in reversed(cls.__mro__[1:]):
+            fields.update(getattr(base, "__fields__", {}))
+        for name, value in cls.__dict__.items():
+            if isinstance(value, Field):
+                if name.startswith("_") or name in ("required", "component_id"):
+                    raise TypeError(f"{cls.__name__}: field name {name!r} is reserved")
+                fields[name] = value
+        cls.__fields__ = fields
+        cls.component_id = next(_component_ids)
+
+    def __init__(self, **values: Any) -> None:
+        unknown = set(values) - set(self.__fields__)
+        if unknown:
+            raise TypeError(
+                f"{type(self).__name__} has no field(s) {sorted(unknown)}; "
+                f"its fields are {list(self.__fields__)}"
+            )
+        for name, f in self.__fields__.items():
+            setattr(self, name, values[name] if name in values else f.default)
+
+    def values(self) -> dict[str, Any]:
+        return {name: getattr(self, name) for name in self.__fields__}
+
+    def __repr__(self) -> str:
+        inner = ", ".join(f"{k}={_preview(v)}" for k, v in self.values().items())
+        return f"{type(self).__name__}({inner})"
+
+    def __eq__(self, other: object) -> bool:
+        if type(other) is not type(self):
+            return NotImplemented
+        return all(_equal(getattr(self, k), getattr(other, k)) for k in self.__fields__)
+
+    __hash__ = None  # type: ignore[assignment]
+
+
+def _equal(a: Any, b: Any) -> bool:
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return bool(np.array_equal(np.asarray(a), np.asarray(b)))
+    return bool(a == b)
+
+
+def _preview(value: Any) -> str:
+    if isinstance(value, np.ndarray):
+        if value.size > 8:
+            return f"array of shape {value.shape}"
+        return repr(value.tolist())
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+class ObjectStore(Component):
+    """Storage schema for an arbitrary Python class used as a component (esper style)."""
+
+    value = Field(object, default=None)
+
+
+def object_component(py_type: type) -> type[Component]:
+    """A one-column object schema standing for `py_type` (same type -> same schema)."""
+    store = _object_schemas.get(py_type)
+    if store is None:
+        store = type(f"{py_type.__name__}Store", (ObjectStore,), {"wraps": py_type})
+        _object_schemas[py_type] = store
+    return store
+
+
+_object_schemas: dict[type, type[Component]] = {}
+
+
+def closure(types: set[type[Component]]) -> set[type[Component]]:
+    """`types` plus every component they require, transitively."""
+    out = set(types)
+    todo = list(types)
+    while todo:
+        for req in todo.pop().required:
+            if req not in out:
+                out.add(req)
+                todo.append(req)
+    return out
