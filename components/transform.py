@@ -1,0 +1,25 @@
+"""Where an entity is: position (float64, world units), rotation, scale; and its derived matrices."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ecs_engine.schema import Component, Field
+
+
+class Transform(Component):
+    """Position stays float64 so a world 10,000 km across keeps millimetre precision; the
+    renderer subtracts the camera position before casting to float32. The rotation is a unit
+    quaternion (x, y, z, w), normalised on write; a zero-length one is rejected."""
+
+    position = Field(np.float64, (3,), default=(0.0, 0.0, 0.0), finite=True)
+    rotation = Field(np.float64, (4,), default=(0.0, 0.0, 0.0, 1.0), finite=True, unit=True)
+    scale = Field(np.float64, (3,), default=(1.0, 1.0, 1.0), finite=True)
+
+
+class ModelMatrix(Component):
+    """Written by the transform system: camera-relative model matrix and normal matrix, float32,
+    indexed [row, column] (see ecs_engine.transform_math)."""
+
+    model = Field(np.float32, (4, 4), default=np.eye(4))
+    normal = Field(np.float32, (3, 3), default=np.eye(3))

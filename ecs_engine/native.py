@@ -1,0 +1,24 @@
+"""Optional numba: native loops that release the GIL. Everything has a NumPy fallback.
+
+Set ECS_ENGINE_NO_NUMBA=1 to force the fallbacks (tests compare both paths).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from typing import Any
+
+try:
+    import numba as _numba
+except ImportError:  # pragma: no cover - exercised only where numba is not installed
+    _numba = None
+
+AVAILABLE: bool = _numba is not None and os.environ.get("ECS_ENGINE_NO_NUMBA", "") != "1"
+
+
+def njit(fn: Callable[..., Any]) -> Callable[..., Any] | None:
+    """Compile `fn` with nogil (so worker threads run it in parallel), or None without numba."""
+    if not AVAILABLE:
+        return None
+    return _numba.njit(nogil=True, cache=True, error_model="numpy")(fn)

@@ -1,0 +1,44 @@
+"""Transform columns -> camera-relative float32 model and normal matrices (ModelMatrix)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ecs_engine.components import ModelMatrix, Transform
+from ecs_engine.schedule import System
+from ecs_engine.transform_math import compose
+from ecs_engine.world import World
+
+
+@dataclass
+class RenderOrigin:
+    """World resource: the float64 point matrices are made relative to (the camera position)."""
+
+    position: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+
+class TransformSystem(System):
+    """Rebuilds ModelMatrix only in tables whose Transform changed since its last run, unless
+    the render origin moved (then every table)."""
+
+    def __init__(self) -> None:
+        super().__init__(reads=[Transform], writes=[ModelMatrix], name="transform")
+        self._origin: np.ndarray | None = None
+        self.rows_updated = 0
+
+    def run(self, world: World, dt: float) -> None:
+        resource = world.resources.get(RenderOrigin)
+        origin = np.zeros(3) if resource is None else np.asarray(resource.position, dtype=np.float64)
+        moved = self._origin is None or not np.array_equal(origin, self._origin)
+        self._origin = origin.copy()
+        query = world.query(Transform, ModelMatrix)
+        batches = query.iter() if moved else query.iter(changed=[Transform])
+        updated = 0
+        for batch in batches:
+            t = batch[Transform]
+            m = batch[ModelMatrix]
+            compose(t.position, t.rotation, t.scale, origin, m.model, m.normal)
+            updated += len(batch)
+        self.rows_updated = updated
