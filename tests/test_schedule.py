@@ -1,0 +1,146 @@
+"""Systems, declared access, the schedule's order and its sync points."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ecs_engine import AccessError, EcsError, Schedule, System, World, system
+from ecs_engine.components import AngularVelocity, Mesh, ModelMatrix, Transform, Velocity
+from ecs_engine.systems import MotionSystem, RenderOrigin, TransformSystem
+
+
+def test_systems_run_in_stated_order_with_sync_points():
+    w = World()
+    log = []
+
+    @system(reads=[Velocity])
+    def spawner(world, dt):
+        log.append(("spawner", world.query(Velocity).count()))
+        world.spawn(Velocity())  # deferred to the end of the stage
+
+    @system(reads=[Velocity])
+    def counter(world, dt):
+        log.append(("counter", world.query(Velocity).count()))
+
+    @system(reads=[Velocity])
+    def later(world, dt):
+        log.append(("later", world.query(Velocity).count()))
+
+    s = Schedule()
+    s.add(spawner)
+    s.add(counter)
+    s.add(later, "post_update")
+    s.run(w, 0.1)
+    assert log == [("spawner", 0), ("counter", 0), ("later", 1)]
+    assert s.order() == [("update", ["spawner", "counter"]), ("post_update", ["later"])]
+
+
+def test_declared_access_is_enforced():
+    w = World()
+    w.spawn(Transform(), Velocity())
+
+    @system(reads=[Velocity], writes=[Transform])
+    def good(world, dt):
+        for b in world.query(Transform, Velocity):
+            b[Transform].position += b[Velocity].linear
+            with pytest.raises(ValueError, match="read-only"):
+                b[Velocity].linear[:] = 0
+
+    @system(reads=[Transform])
+    def sneaky(world, dt):
+        world.query(Transform, Velocity)
+
+    @system(reads=[Transform])
+    def writer(world, dt):
+        world.query(Transform, write=[Transform])
+
+    @system(reads=[Transform])
+    def setter(world, dt):
+        world.set(world.query(Transform).entities()[0], Transform, position=(1, 1, 1))
+
+    s = Schedule()
+    s.add(good)
+    s.run(w, 1.0)
+    for bad, pattern in [(sneaky, "does not declare"), (writer, "read-only"), (setter, "does not declare")]:
+        s2 = Schedule()
+        s2.add(bad)
+        with pytest.raises(AccessError, match=pattern):
+            s2.run(w, 1.0)
+
+
+def test_changed_filter_uses_last_run_tick_and_excludes_own_writes():
+    w = World()
+    e = w.spawn(Transform(), Velocity())
+    seen = []
+
+    @system(reads=[Transform])
+    def watcher(world, dt):
+        seen.append(sum(len(b) for b in world.query(Transform).iter(changed=[Transform])))
+
+    s = Schedule()
+    s.add(watcher)
+    s.run(w, 0.0)  # first run: everything is new
+    s.run(w, 0.0)  # nothing changed
+    w.set(e, Transform, position=(1, 0, 0))
+    s.run(w, 0.0)
+    s.run(w, 0.0)
+    assert seen == [1, 0, 1, 0]
+
+
+def test_class_system_and_plain_function():
+    w = World()
+    calls = []
+
+    class Counter(System):
+        def __init__(self):
+            super().__init__(reads=[Velocity])
+
+        def run(self, world, dt):
+            calls.append(dt)
+
+    s = Schedule()
+    s.add(Counter())
+    s.add(lambda world, dt: calls.append("plain"))
+    s.run(w, 0.5)
+    assert calls == [0.5, "plain"]
+    with pytest.raises(ValueError, match="already scheduled"):
+        sys_ = Counter()
+        s.add(sys_)
+        s.add(sys_)
+    with pytest.raises(ValueError, match="unknown stage"):
+        s.add(Counter(), "nope")
+
+
+def test_schedule_cannot_run_inside_a_loop():
+    w = World()
+    w.spawn(Velocity())
+    for _ in w.query(Velocity):
+        with pytest.raises(EcsError):
+            Schedule().run(w, 0.0)
+
+
+def test_motion_and_transform_systems():
+    w = World()
+    e = w.spawn(Transform(position=(1, 0, 0)), Velocity(linear=(0, 2, 0)),
+                AngularVelocity(angular=(0, 0, np.pi)), Mesh())
+    s = Schedule()
+    s.add(MotionSystem())
+    ts = s.add(TransformSystem(), "post_update")
+    s.run(w, 0.5)
+    t = w.get(e, Transform)
+    assert np.allclose(t.position, [1, 1, 0])
+    # rotated by pi/2 about z: quaternion (0, 0, sin(pi/4), cos(pi/4))
+    assert np.allclose(t.rotation, [0, 0, np.sqrt(0.5), np.sqrt(0.5)])
+    m = w.get(e, ModelMatrix).model
+    assert np.allclose(m[:3, :3], [[0, -1, 0], [1, 0, 0], [0, 0, 1]], atol=1e-6)
+    assert np.allclose(m[:3, 3], [1, 1, 0])
+    # unchanged transforms are skipped; a moved origin rebuilds everything
+    s2 = Schedule()
+    s2.add(ts)
+    s2.run(w, 0.0)
+    assert ts.rows_updated == 0
+    w.resources[RenderOrigin] = RenderOrigin(np.array([1.0, 1.0, 0.0]))
+    s2.run(w, 0.0)
+    assert ts.rows_updated == 1
+    assert np.allclose(w.get(e, ModelMatrix).model[:3, 3], [0, 0, 0])
