@@ -22,3 +22,11 @@ class Camera(Component):
     far = Field(np.float64, default=np.inf, finite=True, allow_posinf=True, minimum=0.0, min_exclusive=True)
     aspect = Field(np.float64, default=0.0, finite=True, minimum=0.0)
     height = Field(np.float64, default=10.0, finite=True, minimum=0.0, min_exclusive=True)
+
+    @classmethod
+    def check(cls, values, who):
+        near, far = np.broadcast_arrays(values["near"], values["far"])
+        bad = near >= far
+        if bad.any():
+            row = int(np.flatnonzero(bad)[0])
+            raise ValueError(f"{who(row)}: Camera.near ({near[row]}) must be less than Camera.far ({far[row]})")

@@ -203,6 +203,10 @@ class Component:
         for name, f in self.__fields__.items():
             setattr(self, name, values[name] if name in values else f.default)
 
+    @classmethod
+    def check(cls, values: dict[str, np.ndarray], who: Callable[[int], str]) -> None:
+        """Cross-field checks on coerced values (arrays of 1 or n rows); raise ValueError."""
+
     def values(self) -> dict[str, Any]:
         return {name: getattr(self, name) for name in self.__fields__}
 

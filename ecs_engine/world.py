@@ -152,7 +152,9 @@ class World:
                 value = ct(value=value)
             if ct in checked:
                 raise ValueError(f"{ct.__name__} given twice")
-            checked[ct] = {name: f.coerce(getattr(value, name), n, who) for name, f in ct.__fields__.items()}
+            vals = {name: f.coerce(getattr(value, name), n, who) for name, f in ct.__fields__.items()}
+            ct.check(vals, who)
+            checked[ct] = vals
         return checked
 
     def _ids(self, target: Any, allow_reserved: bool = False) -> np.ndarray:
@@ -383,10 +385,25 @@ class World:
         who = self._who(ids)
         vals = {name: ct.__fields__[name].coerce(v, n, who) for name, v in raw.items()}
         placed = self._index.table[ids & INDEX_MASK] >= 0
+        if len(vals) < len(ct.__fields__) and placed.all() and self._all_have(ids, ct):
+            # partial write: cross-field checks see the stored values of the other fields
+            ct.check({**self._stored(ids, ct), **vals}, who)
+        elif len(vals) == len(ct.__fields__):
+            ct.check(vals, who)
         if self.deferring and (not placed.all() or not self._all_have(ids, ct)):
             self._commands.append(("set", ids, ct, vals))
             return
         self._set_now(ids, ct, vals)
+
+    def _stored(self, ids: np.ndarray, ct: type[Component]) -> dict[str, np.ndarray]:
+        index = ids & INDEX_MASK
+        out = {}
+        for name in ct.__fields__:
+            out[name] = np.stack([
+                self._tables[int(t)].columns[(ct, name)][int(r)]
+                for t, r in zip(self._index.table[index], self._index.row[index])
+            ])
+        return out
 
     def _all_have(self, ids: np.ndarray, ct: type[Component]) -> bool:
         return all(src.has(ct) for src, _, _ in self._groups(ids))

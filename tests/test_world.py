@@ -315,3 +315,16 @@ def test_memory_of_bulk_spawn_is_close_to_raw_columns():
     w.spawn_batch(n, Transform(), Velocity(), Mesh())
     raw = sum(t.count * col.dtype.itemsize * int(np.prod(col.shape[1:])) for t in w.tables for col in t.columns.values())
     assert w.memory_bytes() / raw < 1.5
+
+
+def test_cross_field_check_camera_near_below_far():
+    w = World()
+    with pytest.raises(ValueError, match=r"new entity: Camera\.near \(5\.0\) must be less than Camera\.far \(1\.0\)"):
+        w.spawn(Camera(near=5.0, far=1.0))
+    e = w.spawn(Camera(near=0.1, far=100.0))
+    with pytest.raises(ValueError, match=f"entity {e} .*must be less than"):
+        w.set(e, Camera, near=200.0)  # checked against the stored far
+    assert w.get(e, Camera).near == 0.1
+    w.set(e, Camera, far=np.inf)
+    w.set(e, Camera, near=1000.0)
+    assert w.get(e, Camera).near == 1000.0

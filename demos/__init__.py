@@ -1,0 +1,1 @@
+"""Runnable demo scenes (installed as ecs_engine.demos)."""
