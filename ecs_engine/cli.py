@@ -36,7 +36,7 @@ def build_parser() -> argparse.ArgumentParser:
                       help="motion: text-mode ECS scene, N moving entities, no rendering")
     demo.add_argument("--entities", type=positive_int, default=100_000)
     demo.add_argument("--frames", type=positive_int, default=300)
-    demo.add_argument("--debug", action="store_true", help="show tracebacks")
+    demo.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show tracebacks")
     return parser
 
 
