@@ -7,12 +7,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from .errors import EcsError
-
-
-class UsageError(Exception):
-    """A problem with what the user asked for (bad file, bad value, missing device)."""
-
+from .errors import EcsError, UsageError
 
 def positive_int(text: str) -> int:
     try:

@@ -3,6 +3,11 @@
 from __future__ import annotations
 
 
+class UsageError(Exception):
+    """A problem with what the user asked for (bad file, bad value, no GPU): the CLI prints the
+    message as one line and exits 2."""
+
+
 class EcsError(Exception):
     """Base class for errors raised by the ECS API."""
 
