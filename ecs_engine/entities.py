@@ -72,6 +72,25 @@ class EntityIndex:
         self.alive_count += 1
         return (int(self.generation[index]) << INDEX_BITS) | index
 
+    def release_one(self, index: int) -> None:
+        self.table[index] = FREE
+        gen = int(self.generation[index]) + 1
+        self.generation[index] = gen
+        if gen <= MAX_GENERATION:
+            if self._free_count == len(self._free):
+                self._free = _grown(self._free, max(2 * len(self._free), 64), 0)
+            self._free[self._free_count] = index
+            self._free_count += 1
+        self.alive_count -= 1
+
+    def shrink_to_fit(self) -> None:
+        """Drop capacity above the slots ever used (and spare free-list room)."""
+        used = max(self.used, 1)
+        self.generation = self.generation[:used].copy()
+        self.table = self.table[:used].copy()
+        self.row = self.row[:used].copy()
+        self._free = self._free[: self._free_count].copy()
+
     def release(self, index: np.ndarray) -> None:
         """Free slots (already removed from their tables): bump generations, recycle or retire."""
         self.table[index] = FREE

@@ -16,40 +16,39 @@ if TYPE_CHECKING:
 
 
 class ComponentView:
-    """The columns of one component in one table; `view.position` is an (n, 3) array view."""
+    """The columns of one component in one table; `view.position` is an (n, 3) array view.
 
-    __slots__ = ("component", "_arrays")
+    Fields are plain instance attributes (fast to read). Assigning one writes into the column
+    (`view.position = p` copies p in) instead of rebinding, so no update is silently lost."""
 
     def __init__(self, component: type[Component], arrays: dict[str, np.ndarray]) -> None:
-        self.component = component
-        self._arrays = arrays
+        self.__dict__.update(arrays)
+        object.__setattr__(self, "_component", component)
 
     def __getattr__(self, name: str) -> np.ndarray:
-        try:
-            return self._arrays[name]
-        except KeyError:
-            raise AttributeError(f"{self.component.__name__} has no field {name!r}") from None
+        raise AttributeError(f"{self._component.__name__} has no field {name!r}")
 
     def __setattr__(self, name: str, value: Any) -> None:
-        if name in ComponentView.__slots__:
-            object.__setattr__(self, name, value)
-            return
-        # `view.position = x` would rebind, not write: make it write through instead.
-        self.__getattr__(name)[...] = value
+        if name not in self._component.__fields__:
+            raise AttributeError(f"{self._component.__name__} has no field {name!r}")
+        self.__dict__[name][...] = value
 
-    def fields(self) -> dict[str, np.ndarray]:
-        return dict(self._arrays)
+    def __repr__(self) -> str:
+        return f"<{self._component.__name__} columns: {', '.join(self._component.__fields__)}>"
 
 
 class Batch:
-    """One matched table: `entities` (ids) and column views, read-only where not written."""
+    """One matched table: `entities` (ids) and column views, read-only where not written.
+
+    A query keeps its batches while their table's layout is unchanged (same rows, same
+    arrays), so iterating an unchanged world costs little more than a loop over tables."""
 
     __slots__ = ("table", "entities", "_query", "_views")
 
     def __init__(self, table: ArchetypeTable, query: Query) -> None:
         self.table = table
         self._query = query
-        self._views: dict[type[Component], ComponentView] = {}
+        self._views: dict[Any, ComponentView] = {}
         ids = table.entities[: table.count]
         ids.flags.writeable = False
         self.entities = ids
@@ -59,30 +58,28 @@ class Batch:
 
     def __getitem__(self, key: type | Field) -> Any:
         if isinstance(key, Field):
-            return getattr(self.view(key.component), key.name)  # type: ignore[arg-type]
+            return self.view(key.component).__dict__[key.name]  # type: ignore[arg-type]
         view = self.view(key)
-        if issubclass(view.component, ObjectStore):
+        if issubclass(view._component, ObjectStore):
             return view.value  # a plain Python class stored as objects: hand out the object column
         return view
 
     def view(self, component: type) -> ComponentView:
+        view = self._views.get(component)
+        if view is not None:
+            return view
         ct = self._query._world.schema_of(component)
-        view = self._views.get(ct)
-        if view is None:
-            if ct not in self._query.access:
-                raise AccessError(
-                    f"query over {self._query.describe()} does not include {ct.__name__}"
-                )
-            writable = ct in self._query.write
-            arrays = {}
-            n = self.table.count
-            for name in ct.__fields__:
-                arr = self.table.columns[(ct, name)][:n]
-                if not writable:
-                    arr.flags.writeable = False
-                arrays[name] = arr
-            view = ComponentView(ct, arrays)
-            self._views[ct] = view
+        if ct not in self._query.access:
+            raise AccessError(f"query over {self._query.describe()} does not include {ct.__name__}")
+        writable = ct in self._query.write
+        arrays = {}
+        n = self.table.count
+        for name in ct.__fields__:
+            arr = self.table.columns[(ct, name)][:n]
+            if not writable:
+                arr.flags.writeable = False
+            arrays[name] = arr
+        view = self._views[component] = ComponentView(ct, arrays)
         return view
 
 
@@ -112,6 +109,7 @@ class Query:
         self._write_keys: list[ColumnKey] = [(ct, name) for ct in write for name in ct.__fields__]
         self._tables: list[ArchetypeTable] = []
         self._scanned = 0
+        self._batches: dict[int, tuple[int, Batch]] = {}  # table id -> (table version, batch)
 
     def describe(self) -> str:
         parts = [", ".join(t.__name__ for t in self.required)]
@@ -159,7 +157,10 @@ class Query:
                     continue
                 for key in self._write_keys:
                     table.column_ticks[key] = tick
-                yield Batch(table, self)
+                cached = self._batches.get(table.id)
+                if cached is None or cached[0] != table.version:
+                    cached = self._batches[table.id] = (table.version, Batch(table, self))
+                yield cached[1]
         finally:
             world._end_iteration()
 

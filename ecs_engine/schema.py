@@ -61,6 +61,7 @@ class Field:
         else:
             self.default = np.broadcast_to(np.asarray(default, dtype=self.dtype), self.shape).copy()
             self.default.flags.writeable = False
+            self._default_row = self.default[None]
 
     def __set_name__(self, owner: type, name: str) -> None:
         self.name = name
@@ -87,6 +88,8 @@ class Field:
         """
         if self.is_object:
             return self._coerce_object(value, n)
+        if value is self.default:
+            return self._default_row  # the default passed its checks when the schema was made
         arr = value if isinstance(value, np.ndarray) else np.asarray(value)
         if arr.dtype != self.dtype:
             arr = self._cast(arr, value, who)

@@ -25,6 +25,9 @@ class ArchetypeTable:
         self.type_set = frozenset(types)
         self.count = 0
         self.capacity = 0
+        # Bumped whenever rows are added or removed or arrays are replaced: views of an older
+        # version may be stale.
+        self.version = 0
         self.entities = np.empty(0, dtype=np.int64)
         self.fields: dict[ColumnKey, Field] = {
             (ct, name): f for ct in types for name, f in ct.__fields__.items()
@@ -64,6 +67,7 @@ class ArchetypeTable:
         for key, col in self.columns.items():
             self.columns[key] = _grow(col, self.count, new_cap)
         self.capacity = new_cap
+        self.version += 1
 
     def shrink_to_fit(self) -> None:
         """Release spare capacity (growth by doubling can leave up to half a table unused)."""
@@ -73,6 +77,7 @@ class ArchetypeTable:
         for key, col in self.columns.items():
             self.columns[key] = col[: self.count].copy()
         self.capacity = self.count
+        self.version += 1
 
     # ------------------------------------------------------------------- rows
     def push(self, ids: np.ndarray, tick: int) -> slice:
@@ -85,6 +90,15 @@ class ArchetypeTable:
         self._touch_all(tick)
         return rows
 
+    def push_one(self, eid: int, tick: int) -> int:
+        if self.count == self.capacity:
+            self.reserve(1)
+        row = self.count
+        self.entities[row] = eid
+        self.count = row + 1
+        self._touch_all(tick)
+        return row
+
     def fill_defaults(self, rows: slice, exclude: set[ColumnKey]) -> None:
         for key, f in self.fields.items():
             if key not in exclude:
@@ -96,6 +110,7 @@ class ArchetypeTable:
             self.column_ticks[(ct, name)] = tick
 
     def _touch_all(self, tick: int) -> None:
+        self.version += 1
         for key in self.column_ticks:
             self.column_ticks[key] = tick
         self.structure_tick = tick
@@ -117,6 +132,7 @@ class ArchetypeTable:
             self.columns[key][new_n:n] = None  # drop references held past the end
         self.count = new_n
         self.structure_tick = tick
+        self.version += 1
         return self.entities[holes], holes
 
     def remove_row(self, row: int, tick: int) -> int:
@@ -132,6 +148,7 @@ class ArchetypeTable:
             self.columns[key][last] = None
         self.count = last
         self.structure_tick = tick
+        self.version += 1
         return moved
 
 

@@ -39,6 +39,7 @@ class World:
         self._tables: list[ArchetypeTable] = []
         self._table_ids: dict[frozenset[type[Component]], int] = {}
         self._queries: dict[tuple[Any, ...], Query] = {}
+        self._closures: dict[frozenset[type[Component]], frozenset[type[Component]]] = {}
         self.tick = 0
         # Bumped by every spawn, destroy, add and remove that is applied (not when queued).
         self.structure_version = 0
@@ -76,8 +77,10 @@ class World:
         return self._index.nbytes() + sum(t.nbytes() for t in self._tables)
 
     def shrink_to_fit(self) -> None:
+        """Release the spare capacity that growth by doubling leaves behind."""
         for t in self._tables:
             t.shrink_to_fit()
+        self._index.shrink_to_fit()
 
     def is_alive(self, eid: int) -> bool:
         return self._index.valid_one(int(eid)) and int(self._index.table[int(eid) & INDEX_MASK]) >= 0
@@ -196,15 +199,21 @@ class World:
     def spawn(self, *values: Any) -> int:
         """Create one entity from component values; returns its id."""
         checked = self._bundles(values, 1, _new_entity)
-        types = frozenset(closure(set(checked)))
+        types = self._closure(checked)
         eid = self._index.allocate_one()
-        ids = np.array([eid], dtype=np.int64)
         if self.deferring:
             self._index.table[eid & INDEX_MASK] = RESERVED
-            self._commands.append(("spawn", ids, types, checked))
+            self._commands.append(("spawn", np.array([eid], dtype=np.int64), types, checked))
         else:
-            self._place(ids, types, checked)
+            self._place_one(eid, types, checked)
         return eid
+
+    def _closure(self, checked: Checked) -> frozenset[type[Component]]:
+        key = frozenset(checked)
+        types = self._closures.get(key)
+        if types is None:
+            types = self._closures[key] = frozenset(closure(set(key)))
+        return types
 
     def spawn_batch(self, n: int, *values: Component) -> np.ndarray:
         """Create n entities in one call; field values may be shared or given per row."""
@@ -212,7 +221,7 @@ class World:
         if n < 0:
             raise ValueError(f"cannot spawn a negative number of entities ({n})")
         checked = self._bundles(values, n, _new_entity)
-        types = frozenset(closure(set(checked)))
+        types = self._closure(checked)
         ids = self._index.allocate(n)
         if self.deferring:
             self._index.table[ids & INDEX_MASK] = RESERVED
@@ -220,6 +229,19 @@ class World:
         else:
             self._place(ids, types, checked)
         return ids
+
+    def _place_one(self, eid: int, types: frozenset[type[Component]], checked: Checked) -> None:
+        table = self._table_for(types)
+        tick = self._write_tick()
+        self.structure_version += 1
+        row = table.push_one(eid, tick)
+        columns = table.columns
+        for key, f in table.fields.items():
+            vals = checked.get(key[0])
+            columns[key][row] = vals[key[1]][0] if vals is not None else f.default
+        index = eid & INDEX_MASK
+        self._index.table[index] = table.id
+        self._index.row[index] = row
 
     def _place(self, ids: np.ndarray, types: frozenset[type[Component]], checked: Checked) -> None:
         table = self._table_for(types)
@@ -238,12 +260,24 @@ class World:
     # --------------------------------------------------------------- destroy
     def destroy(self, target: Any) -> None:
         """Destroy one entity or an array of them. Their ids never name an entity again."""
+        if isinstance(target, (int, np.integer)) and not self.deferring:
+            self._destroy_one(int(target))
+            return
         ids = self._ids(target, allow_reserved=self.deferring)
         if self.deferring:
             self._pending_destroy.update(ids.tolist())
             self._commands.append(("destroy", ids))
             return
         self._destroy_now(ids)
+
+    def _destroy_one(self, eid: int) -> None:
+        table, row = self._locate(eid)
+        tick = self._write_tick()
+        self.structure_version += 1
+        moved = table.remove_row(row, tick)
+        if moved:
+            self._index.row[moved & INDEX_MASK] = row
+        self._index.release_one(eid & INDEX_MASK)
 
     def _destroy_now(self, ids: np.ndarray) -> None:
         index = ids & INDEX_MASK
