@@ -1,0 +1,42 @@
+"""Benchmarks for ecs_engine: `python -m bench NAME [--quick] [--out DIR] [--machine SLUG]`.
+
+Each benchmark is a module registered in `bench.__main__.REGISTRY`. It provides
+`add_arguments(parser)` (optional, for its own options), `THREADS` (the thread count it uses,
+recorded in the machine description) and `run(args, progress) -> dict` returning the JSON
+document that `bench.__main__` writes to `<out>/<name>-<slug>.json`.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import TextIO
+
+
+class Progress:
+    """Progress lines on stderr: one line when a step starts, one with its elapsed time."""
+
+    def __init__(self, name: str, stream: TextIO | None = None, enabled: bool = True) -> None:
+        self.name = name
+        self.stream = stream
+        self.enabled = enabled
+        self.start = time.perf_counter()
+        self.steps = 0
+
+    def _write(self, text: str) -> None:
+        if self.enabled:
+            stream = self.stream if self.stream is not None else sys.stderr
+            print(f"[{self.name} {time.perf_counter() - self.start:7.1f}s] {text}", file=stream, flush=True)
+
+    def note(self, text: str) -> None:
+        self._write(text)
+
+    @contextmanager
+    def step(self, what: str) -> Iterator[None]:
+        self.steps += 1
+        self._write(f"{what} ...")
+        t0 = time.perf_counter()
+        yield
+        self._write(f"{what}: {time.perf_counter() - t0:.2f} s")
