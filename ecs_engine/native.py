@@ -17,8 +17,16 @@ except ImportError:  # pragma: no cover - exercised only where numba is not inst
 AVAILABLE: bool = _numba is not None and os.environ.get("ECS_ENGINE_NO_NUMBA", "") != "1"
 
 
+# Reassociation, contraction, reciprocals and signed zeros only: no "no NaN/Inf" assumptions,
+# so non-finite input still propagates instead of being optimised into garbage. Measured on
+# the angular kernel: 2.1 -> 1.2 ms per 100k rows. numba's on-disk cache is keyed on the
+# kernel's own source file, not on these flags: after changing them, delete the *.nbi/*.nbc
+# files under ecs_engine/__pycache__.
+FASTMATH = {"contract", "arcp", "nsz", "reassoc"}
+
+
 def njit(fn: Callable[..., Any]) -> Callable[..., Any] | None:
     """Compile `fn` with nogil (so worker threads run it in parallel), or None without numba."""
     if not AVAILABLE:
         return None
-    return _numba.njit(nogil=True, cache=True, error_model="numpy")(fn)
+    return _numba.njit(nogil=True, cache=True, error_model="numpy", fastmath=FASTMATH)(fn)

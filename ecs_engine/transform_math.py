@@ -167,22 +167,30 @@ def _linear_kernel(position, linear, dt):  # pragma: no cover
 def _angular_kernel(rotation, angular, dt):  # pragma: no cover
     for i in range(rotation.shape[0]):
         ax, ay, az = angular[i, 0], angular[i, 1], angular[i, 2]
-        rate = np.sqrt(ax * ax + ay * ay + az * az)
-        half = 0.5 * rate * dt
-        k = np.sin(half) / rate if rate > 1e-12 else 0.5 * dt
-        dx, dy, dz, dw = ax * k, ay * k, az * k, np.cos(half)
+        r2 = ax * ax + ay * ay + az * az
+        h2 = 0.25 * r2 * dt * dt  # (half angle)^2
+        if h2 < 0.01:
+            # |half angle| < 0.1: Taylor series of cos(h) and sin(h)/h, both exact to rounding
+            # (next terms below 3e-17), and ~4x cheaper than libm's sin and cos.
+            dw = 1.0 - h2 * (0.5 - h2 * (1.0 / 24.0 - h2 * (1.0 / 720.0 - h2 / 40320.0)))
+            k = 0.5 * dt * (1.0 - h2 * (1.0 / 6.0 - h2 * (1.0 / 120.0 - h2 * (1.0 / 5040.0 - h2 / 362880.0))))
+        else:
+            rate = np.sqrt(r2)
+            half = 0.5 * rate * dt
+            dw = np.cos(half)
+            k = np.sin(half) / rate
+        dx, dy, dz = ax * k, ay * k, az * k
         x, y, z, w = rotation[i, 0], rotation[i, 1], rotation[i, 2], rotation[i, 3]
         nx = dw * x + dx * w + dy * z - dz * y
         ny = dw * y - dx * z + dy * w + dz * x
         nz = dw * z + dx * y - dy * x + dz * w
         nw = dw * w - dx * x - dy * y - dz * z
         norm = np.sqrt(nx * nx + ny * ny + nz * nz + nw * nw)
-        if norm == 0.0:
-            norm = 1.0
-        rotation[i, 0] = nx / norm
-        rotation[i, 1] = ny / norm
-        rotation[i, 2] = nz / norm
-        rotation[i, 3] = nw / norm
+        inv = 1.0 / norm if norm > 0.0 else 1.0
+        rotation[i, 0] = nx * inv
+        rotation[i, 1] = ny * inv
+        rotation[i, 2] = nz * inv
+        rotation[i, 3] = nw * inv
 
 
 _linear_native = native.njit(_linear_kernel)

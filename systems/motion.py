@@ -3,19 +3,24 @@
 from __future__ import annotations
 
 from ecs_engine.components import AngularVelocity, Transform, Velocity
+from ecs_engine.jobs import JobPool, over_rows
 from ecs_engine.schedule import System
 from ecs_engine.transform_math import integrate_angular, integrate_linear
 from ecs_engine.world import World
 
 
 class MotionSystem(System):
-    """Explicit step over dt: position += v*dt, rotation by the exact constant-rate quaternion."""
+    """Explicit step over dt: position += v*dt, rotation by the exact constant-rate quaternion.
+    Large tables are split across the world's JobPool resource, if it has one."""
 
     def __init__(self) -> None:
         super().__init__(reads=[Velocity, AngularVelocity], writes=[Transform], name="motion")
 
     def run(self, world: World, dt: float) -> None:
+        pool = world.resources.get(JobPool)
         for batch in world.query(Transform, Velocity):
-            integrate_linear(batch[Transform].position, batch[Velocity].linear, dt)
+            pos, lin = batch[Transform].position, batch[Velocity].linear
+            over_rows(pool, len(batch), lambda s: integrate_linear(pos[s], lin[s], dt))
         for batch in world.query(Transform, AngularVelocity):
-            integrate_angular(batch[Transform].rotation, batch[AngularVelocity].angular, dt)
+            rot, ang = batch[Transform].rotation, batch[AngularVelocity].angular
+            over_rows(pool, len(batch), lambda s: integrate_angular(rot[s], ang[s], dt))

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ecs_engine.components import ModelMatrix, Transform
+from ecs_engine.jobs import JobPool, over_rows
 from ecs_engine.schedule import System
 from ecs_engine.transform_math import compose
 from ecs_engine.world import World
@@ -21,7 +22,8 @@ class RenderOrigin:
 
 class TransformSystem(System):
     """Rebuilds ModelMatrix only in tables whose Transform changed since its last run, unless
-    the render origin moved (then every table)."""
+    the render origin moved (then every table). Large tables are split across the world's
+    JobPool resource, if it has one."""
 
     def __init__(self) -> None:
         super().__init__(reads=[Transform], writes=[ModelMatrix], name="transform")
@@ -35,10 +37,12 @@ class TransformSystem(System):
         self._origin = origin.copy()
         query = world.query(Transform, ModelMatrix)
         batches = query.iter() if moved else query.iter(changed=[Transform])
+        pool = world.resources.get(JobPool)
         updated = 0
         for batch in batches:
             t = batch[Transform]
             m = batch[ModelMatrix]
-            compose(t.position, t.rotation, t.scale, origin, m.model, m.normal)
+            over_rows(pool, len(batch), lambda s: compose(
+                t.position[s], t.rotation[s], t.scale[s], origin, m.model[s], m.normal[s]))
             updated += len(batch)
         self.rows_updated = updated

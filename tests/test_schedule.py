@@ -144,3 +144,26 @@ def test_motion_and_transform_systems():
     s2.run(w, 0.0)
     assert ts.rows_updated == 1
     assert np.allclose(w.get(e, ModelMatrix).model[:3, 3], [0, 0, 0])
+
+
+def test_stock_systems_split_across_a_job_pool_give_the_same_result():
+    from ecs_engine.jobs import JobPool
+
+    rng = np.random.default_rng(5)
+    n = 40_000  # above two chunks, so the pool really splits the tables
+    data = dict(position=rng.normal(size=(n, 3)), rotation=rng.normal(size=(n, 4)),
+                linear=rng.normal(size=(n, 3)), angular=rng.normal(size=(n, 3)))
+    out = []
+    for threads in (1, 3):
+        w = World()
+        w.resources[JobPool] = JobPool(threads)
+        w.spawn_batch(n, Transform(position=data["position"], rotation=data["rotation"]),
+                      Velocity(linear=data["linear"]), AngularVelocity(angular=data["angular"]), Mesh())
+        s = Schedule()
+        s.add(MotionSystem())
+        s.add(TransformSystem(), "post_update")
+        for _ in range(3):
+            s.run(w, 1 / 30)
+        out.append(w.query(ModelMatrix, write=()).column(ModelMatrix.model))
+        w.resources[JobPool].close()
+    assert np.array_equal(out[0], out[1])

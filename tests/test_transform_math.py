@@ -164,7 +164,7 @@ def test_linear_integration_paths_agree():
     a, b = pos.copy(), pos.copy()
     tm.integrate_linear(a, lin, 0.1)
     tm.integrate_linear_numpy(b, lin, 0.1)
-    assert np.array_equal(a, b)
+    assert np.allclose(a, b, rtol=1e-15, atol=1e-15)  # fused multiply-add may differ in the last bit
     assert np.allclose(a, pos + lin * 0.1)
 
 
