@@ -59,7 +59,7 @@ def test_results_rows(doc: dict) -> None:
     for row in rows:
         assert isinstance(row["workload"], str)
         assert isinstance(row["entities"], int) and row["entities"] > 0
-        assert row["engine"] in ("esper", "native", "native-numpy", "adapter")
+        assert row["engine"] in ("esper", "native", "native-mt", "native-numpy", "adapter")
         assert _is_num(row["seconds"]) and row["seconds"] > 0
         assert _is_num(row["ns_per_entity"]) and row["ns_per_entity"] > 0
     native = {(r["workload"], r["entities"]) for r in rows if r["engine"] == "native"}
@@ -73,12 +73,16 @@ def test_results_rows(doc: dict) -> None:
 
 
 def test_targets_and_memory(doc: dict) -> None:
-    assert len(doc["targets"]) == 3
+    names = [t["name"] for t in doc["targets"]]
+    assert len(names) >= 3 + (1 if any(r["engine"] == "esper" for r in doc["results"]) else 0)
+    assert any(n.startswith("transform frame speed-up over esper (1 thread") for n in names) or not any(
+        r["engine"] == "esper" for r in doc["results"])
+    ops = {"<": lambda m, t: m < t, "<=": lambda m, t: m <= t, ">=": lambda m, t: m >= t}
     for t in doc["targets"]:
         assert isinstance(t["name"], str) and isinstance(t["unit"], str)
         assert _is_num(t["target"]) and _is_num(t["measured"])
         assert type(t["met"]) is bool
-        assert t["met"] == (t["measured"] < t["target"] if t["op"] == "<" else t["measured"] <= t["target"])
+        assert t["met"] == ops[t["op"]](t["measured"], t["target"])
     mem = doc["memory"]
     assert mem["memory_bytes"] >= mem["raw_column_bytes"] > 0
     assert mem["batches10"]["ratio_shrunk"] <= mem["batches10"]["ratio"]
@@ -117,7 +121,8 @@ def test_runs_without_esper_or_adapter(tmp_path: Path, monkeypatch: pytest.Monke
     monkeypatch.setattr(ecs, "adapter_class", lambda: (None, "disabled by the test"))
     doc = _run(tmp_path)
     assert ecs.validate(doc) == []
-    assert {r["engine"] for r in doc["results"]} == {"native", "native-numpy"}
+    engines = {r["engine"] for r in doc["results"]}
+    assert {"native", "native-numpy"} <= engines <= {"native", "native-mt", "native-numpy"}
     assert doc["ratios"] == []
     assert doc["versions"]["esper"] is None and doc["adapter"] == {"available": False,
                                                                    "reason": "disabled by the test"}
