@@ -117,7 +117,7 @@ except ImportError:  # pragma: no cover - esper is a dev/bench extra
 if esper is not None and not hasattr(esper, "switch_world"):  # pragma: no cover - esper 2.x
     esper = None  # type: ignore[assignment]
 
-THREADS = 1
+THREADS = default_threads()  # the most any row uses (native-mt); each row records its own
 SCHEMA_VERSION = 1
 DT = 1.0 / 60.0
 ROOT = Path(__file__).resolve().parent.parent
