@@ -1,18 +1,23 @@
 """Stock component schemas. Declare your own the same way: subclass Component, add Fields."""
 
 from .camera import ORTHOGRAPHIC, PERSPECTIVE, Camera
+from .camera_control import ActiveCamera, FlyCamera
 from .light import PointLight
 from .mesh import Mesh
 from .motion import AngularVelocity, Velocity
+from .orbit import Orbit
 from .transform import ModelMatrix, Transform
 
 __all__ = [
     "ORTHOGRAPHIC",
     "PERSPECTIVE",
+    "ActiveCamera",
     "AngularVelocity",
     "Camera",
+    "FlyCamera",
     "Mesh",
     "ModelMatrix",
+    "Orbit",
     "PointLight",
     "Transform",
     "Velocity",

@@ -1,6 +1,8 @@
-"""Stock systems: motion integration and the transform (matrix) system."""
+"""Stock systems: motion, transform (matrices), fly camera, orbits."""
 
+from .camera_control import FlyCameraSystem, InputState
 from .motion import MotionSystem
+from .orbit import OrbitSystem
 from .transform import RenderOrigin, TransformSystem
 
-__all__ = ["MotionSystem", "RenderOrigin", "TransformSystem"]
+__all__ = ["FlyCameraSystem", "InputState", "MotionSystem", "OrbitSystem", "RenderOrigin", "TransformSystem"]
