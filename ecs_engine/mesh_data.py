@@ -1,0 +1,362 @@
+"""Mesh data the renderer uploads once and many entities share: loading (OBJ, glTF/GLB, PLY, STL via
+trimesh), checks that turn every bad file into one-line `UsageError`s, a unit cube, and resizing."""
+
+from __future__ import annotations
+
+import importlib.resources
+import io
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Final
+
+import numpy as np
+
+from .errors import UsageError
+
+__all__ = ["DEFAULT_MODEL", "SUPPORTED_FORMATS", "MeshData", "bounding_sphere", "cube_mesh", "load_mesh",
+           "normalized"]
+
+#: File extension -> format name, in the order error messages list them.
+SUPPORTED_FORMATS: Final[dict[str, str]] = {".obj": "OBJ", ".gltf": "glTF", ".glb": "GLB", ".ply": "PLY",
+                                            ".stl": "STL"}
+
+#: The model demos show when given none: a (2,3) torus knot, centred, largest extent 2.0. It lives in the
+#: repo's demos/assets/, which installs as package data of `ecs_engine.demos`.
+DEFAULT_MODEL: Final[Path] = Path(str(importlib.resources.files("ecs_engine.demos") / "assets" / "torus_knot.obj"))
+
+# A triangle counts as degenerate when twice its area is below this fraction of the mesh's squared size:
+# such triangles have no usable normal and nothing to draw.
+_DEGENERATE_AREA: Final = 1e-12
+
+
+def _frozen(values: object, dtype: type, name: str) -> np.ndarray:
+    """A C-contiguous, read-only array of `dtype`; arrays we froze earlier are shared, not copied."""
+    if (isinstance(values, np.ndarray) and values.dtype == dtype and values.flags.c_contiguous
+            and not values.flags.writeable and values.base is None):
+        return values
+    try:
+        array = np.array(values, dtype=dtype, order="C", copy=True)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"MeshData.{name}: {exc}") from None
+    array.setflags(write=False)
+    return array
+
+
+@dataclass(frozen=True, eq=False)
+class MeshData:
+    """One triangle mesh, immutable because many entities share it and the GPU copy is made once.
+
+    `center`/`radius` are a bounding sphere enclosing every vertex, for culling and camera framing.
+    Build one with `MeshData.from_arrays`, which computes the sphere."""
+
+    positions: np.ndarray  # (V, 3) float32
+    normals: np.ndarray  # (V, 3) float32, unit length
+    indices: np.ndarray  # (I,) uint32, triangle list, counter-clockwise seen from outside
+    name: str
+    center: np.ndarray  # (3,) float32
+    radius: float
+
+    def __post_init__(self) -> None:
+        for field, dtype in (("positions", np.float32), ("normals", np.float32), ("indices", np.uint32),
+                             ("center", np.float32)):
+            object.__setattr__(self, field, _frozen(getattr(self, field), dtype, field))
+        object.__setattr__(self, "radius", float(self.radius))
+        v = self.positions.shape[0] if self.positions.ndim == 2 else -1
+        if self.positions.shape != (v, 3) or self.normals.shape != (v, 3):
+            raise ValueError(f"MeshData {self.name!r}: positions and normals must both be (V, 3), got "
+                             f"{self.positions.shape} and {self.normals.shape}")
+        if self.indices.ndim != 1 or self.indices.size % 3:
+            raise ValueError(f"MeshData {self.name!r}: indices must be a flat triangle list (length a multiple "
+                             f"of 3), got shape {self.indices.shape}")
+        if self.indices.size and int(self.indices.max()) >= v:
+            raise ValueError(f"MeshData {self.name!r}: index {int(self.indices.max())} out of range for {v} vertices")
+        if not np.isfinite(self.positions).all():
+            raise ValueError(f"MeshData {self.name!r}: positions must be finite")
+        if v and not np.allclose(np.linalg.norm(self.normals, axis=1), 1.0, atol=1e-3):
+            raise ValueError(f"MeshData {self.name!r}: normals must be unit length")
+        if self.center.shape != (3,) or not np.isfinite(self.center).all() or not 0.0 <= self.radius < np.inf:
+            raise ValueError(f"MeshData {self.name!r}: bad bounding sphere {self.center}, {self.radius}")
+
+    @classmethod
+    def from_arrays(cls, positions: np.ndarray, normals: np.ndarray, indices: np.ndarray, name: str) -> MeshData:
+        """Validate and freeze the arrays and compute the bounding sphere."""
+        positions = _frozen(positions, np.float32, "positions")
+        center, radius = bounding_sphere(positions)
+        return cls(positions, normals, np.asarray(indices).reshape(-1), name, center, radius)
+
+    @property
+    def vertex_count(self) -> int:
+        return int(self.positions.shape[0])
+
+    @property
+    def triangle_count(self) -> int:
+        return int(self.indices.size // 3)
+
+
+def bounding_sphere(points: np.ndarray) -> tuple[np.ndarray, float]:
+    """A tight, cheap sphere around `points` (N, 3): the smallest of Ritter's sphere and the spheres about
+    the box centre and the vertex mean (the last wins on symmetric shapes like the torus knot). The radius
+    is measured from the float32 centre and padded by 1e-6 so float32 checks hold."""
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    if p.shape[0] == 0:
+        return np.zeros(3, np.float32), 0.0
+    # Ritter: start from an approximate diameter, then grow towards the farthest outlier a few times.
+    b = p[np.argmax(((p - p[0]) ** 2).sum(1))]
+    c = p[np.argmax(((p - b) ** 2).sum(1))]
+    center, radius = (b + c) / 2, float(np.linalg.norm(b - c)) / 2
+    for _ in range(32):
+        d = np.sqrt(((p - center) ** 2).sum(1))
+        far = int(np.argmax(d))
+        if d[far] <= radius:
+            break
+        grown = (radius + d[far]) / 2
+        center = center + (d[far] - grown) / d[far] * (p[far] - center)
+        radius = grown
+    candidates = [x.astype(np.float32) for x in (center, (p.min(0) + p.max(0)) / 2, p.mean(0))]
+    radii = [float(np.sqrt(((p - cand.astype(np.float64)) ** 2).sum(1).max())) for cand in candidates]
+    best = int(np.argmin(radii))
+    return candidates[best], radii[best] * (1 + 1e-6)
+
+
+def cube_mesh() -> MeshData:
+    """Unit cube centred at the origin: 24 vertices (4 per face, so normals stay flat), 36 indices,
+    counter-clockwise from outside. The fallback model, needing no file."""
+    positions, normals, indices = [], [], []
+    for axis in range(3):
+        for sign in (1.0, -1.0):
+            n = np.zeros(3)
+            n[axis] = sign
+            u = np.zeros(3)
+            u[(axis + 1) % 3] = 1.0
+            v = np.cross(n, u)  # u x v == n, so corners in (u, v) order wind counter-clockwise around n
+            base = len(positions)
+            for du, dv in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+                positions.append((n + du * u + dv * v) / 2)
+                normals.append(n)
+            indices += [base, base + 1, base + 2, base, base + 2, base + 3]
+    return MeshData.from_arrays(np.array(positions), np.array(normals), np.array(indices), "cube")
+
+
+def normalized(mesh: MeshData, size: float = 1.0) -> MeshData:
+    """A copy centred on its bounding-box centre, uniformly scaled so its largest extent is `size`,
+    so demos can show any model at a known size."""
+    if not 0.0 < size < np.inf:
+        raise ValueError(f"size must be a finite number above 0, got {size}")
+    p = mesh.positions.astype(np.float64)
+    lo, hi = p.min(0), p.max(0)
+    extent = float((hi - lo).max())
+    scale = size / extent if extent > 0 else 1.0
+    return MeshData.from_arrays((p - (lo + hi) / 2) * scale, mesh.normals, mesh.indices, mesh.name)
+
+
+# ---------------------------------------------------------------------------------------------- loading
+
+
+def load_mesh(path: str | os.PathLike[str], *, max_triangles: int | None = None) -> MeshData:
+    """Load a triangle mesh from OBJ, glTF/GLB, PLY or STL; scenes are flattened with their transforms.
+
+    Polygons are triangulated, zero-area triangles dropped, files without normals get smooth ones.
+    Any problem with the file (or more than `max_triangles` triangles) raises `UsageError` with one
+    line naming the file, so the CLI can show it without a traceback."""
+    if max_triangles is not None and max_triangles < 1:
+        raise ValueError(f"max_triangles must be at least 1, got {max_triangles}")
+    file = Path(path)
+    fmt = _check_path(file)
+    try:
+        data = file.read_bytes()
+    except OSError as exc:
+        raise UsageError(f"{file}: cannot read the file: {exc.strerror or exc}") from None
+    if not data.strip():
+        raise UsageError(f"{file}: the file is empty")
+    _sniff(file, fmt, data)
+    parts, only_points_or_lines = _read_parts(file, fmt, data)
+    faces_total = sum(len(f) for _, f, _ in parts)
+    if faces_total == 0:
+        if only_points_or_lines:
+            raise UsageError(f"{file}: has no triangles (only points/lines)")
+        raise UsageError(f"{file}: contains no triangles (an empty mesh, or not a valid {fmt} file)")
+    if max_triangles is not None and faces_total > max_triangles:
+        raise UsageError(f"{file}: has {faces_total} triangles, more than the limit of {max_triangles}")
+    return _assemble(file, parts)
+
+
+def _check_path(file: Path) -> str:
+    """Reject what cannot be a mesh file before reading it; return the format name."""
+    if not file.exists():
+        raise UsageError(f"{file}: no such file")
+    if file.is_dir():
+        raise UsageError(f"{file}: is a directory, not a mesh file")
+    fmt = SUPPORTED_FORMATS.get(file.suffix.lower())
+    if fmt is None:
+        what = f"format '{file.suffix}'" if file.suffix else "file type (no extension)"
+        raise UsageError(f"{file}: unsupported mesh {what}; supported: {', '.join(SUPPORTED_FORMATS)}")
+    return fmt
+
+
+def _sniff(file: Path, fmt: str, data: bytes) -> None:
+    """Cheap format checks that give a clear message where trimesh would crash, guess, or stay silent."""
+    if fmt == "OBJ":
+        if b"\0" in data:
+            raise UsageError(f"{file}: is binary data, not a text OBJ file")
+        _check_obj_faces(file, data.decode("utf-8", errors="replace"))
+    elif fmt == "STL":
+        # Binary STL: an 84-byte header whose triangle count matches the size; otherwise ASCII "solid ...".
+        binary = len(data) >= 84 and len(data) == 84 + 50 * int.from_bytes(data[80:84], "little")
+        if not binary and not data.lstrip()[:5].lower() == b"solid":
+            raise UsageError(f"{file}: not a valid STL file (neither binary STL nor ASCII 'solid ...' text)")
+    elif fmt == "glTF":
+        try:
+            json.loads(data)
+        except ValueError as exc:
+            raise UsageError(f"{file}: not a valid glTF file (not JSON: {exc})") from None
+
+
+def _check_obj_faces(file: Path, text: str) -> None:
+    """Check every OBJ face index: trimesh crashes on indices past the end and silently wraps 0 and
+    too-negative ones to other vertices, so the user would get a traceback or a wrong mesh."""
+    vertices = 0
+    faces: list[tuple[int, int, int, list[str]]] = []  # (face number, line number, vertices so far, tokens)
+    other = 0  # points and lines
+    for line_no, line in enumerate(text.splitlines(), 1):
+        tokens = line.split()
+        if not tokens:
+            continue
+        if tokens[0] == "v":
+            vertices += 1
+        elif tokens[0] == "f":
+            faces.append((len(faces) + 1, line_no, vertices, tokens[1:]))
+        elif tokens[0] in ("l", "p"):
+            other += 1
+    if not faces:
+        if vertices or other:
+            raise UsageError(f"{file}: has no triangles (only points/lines)")
+        raise UsageError(f"{file}: contains no vertices or faces (an empty mesh, or not an OBJ file)")
+    for face_no, line_no, before, tokens in faces:
+        where = f"face {face_no} (line {line_no})"
+        if len(tokens) < 3:
+            raise UsageError(f"{file}: {where} has {len(tokens)} vertices; a face needs at least 3")
+        for token in tokens:
+            try:
+                k = int(token.split("/")[0])
+            except ValueError:
+                raise UsageError(f"{file}: {where} has an unreadable vertex reference {token!r}") from None
+            if k == 0:
+                raise UsageError(f"{file}: {where} refers to vertex 0, but OBJ vertex numbers start at 1")
+            if k > vertices:
+                raise UsageError(f"{file}: {where} refers to vertex {k} but the file has only {vertices} vertices")
+            if k < 0 and before + k < 0:
+                raise UsageError(f"{file}: {where} refers to vertex {k} (counted back), but only {before} "
+                                 f"vertices come before it")
+
+
+_Part = tuple[np.ndarray, np.ndarray, "np.ndarray | None"]  # positions (V,3) f8, faces (F,3) i8, normals or None
+
+
+def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[_Part], bool]:
+    """Parse with trimesh (unprocessed, so NaNs and bad indices stay visible to our checks) and bake each
+    scene node's transform into its geometry. Also says whether the file held only points/lines."""
+    try:
+        import trimesh
+
+        scene = trimesh.load_scene(io.BytesIO(data), file_type=fmt.lower(), process=False,
+                                   resolver=trimesh.resolvers.FilePathResolver(str(file)))
+        parts: list[_Part] = []
+        non_mesh = 0
+        for node in scene.graph.nodes_geometry:
+            transform, geometry_name = scene.graph[node]
+            geometry = scene.geometry[geometry_name]
+            if not isinstance(geometry, trimesh.Trimesh):
+                non_mesh += 1
+                continue
+            # trimesh keeps normals read from the file in its cache; asking `vertex_normals` would compute them.
+            normals = geometry._cache["vertex_normals"] if "vertex_normals" in geometry._cache else None
+            parts.append(_transformed(np.array(geometry.vertices, np.float64),
+                                      np.array(geometry.faces, np.int64).reshape(-1, 3),
+                                      None if normals is None else np.array(normals, np.float64),
+                                      np.asarray(transform, np.float64)))
+    except UsageError:
+        raise
+    except FileNotFoundError as exc:  # a glTF's buffer or image file is not next to it
+        raise UsageError(f"{file}: refers to a file that is missing: {exc.filename or exc}") from None
+    except Exception as exc:  # noqa: BLE001 - trimesh raises anything on bad input; the user gets one line
+        reason = (str(exc).strip().splitlines() or [""])[0] or type(exc).__name__
+        raise UsageError(f"{file}: not a valid {fmt} file ({reason})") from None
+    return parts, non_mesh > 0 and not any(len(f) for _, f, _ in parts)
+
+
+def _transformed(positions: np.ndarray, faces: np.ndarray, normals: np.ndarray | None,
+                 transform: np.ndarray) -> _Part:
+    """Apply a 4x4 node transform; normals use the inverse transpose, mirroring flips the winding."""
+    if np.array_equal(transform, np.eye(4)):
+        return positions, faces, normals
+    linear = transform[:3, :3]
+    positions = positions @ linear.T + transform[:3, 3]
+    det = float(np.linalg.det(linear)) if np.isfinite(linear).all() else 0.0
+    if det < 0:
+        faces = faces[:, ::-1]
+    if normals is not None:
+        normals = normals @ np.linalg.inv(linear) if abs(det) > 1e-300 else None
+    return positions, faces, normals
+
+
+def _assemble(file: Path, parts: list[_Part]) -> MeshData:
+    """Check values, drop zero-area triangles and unused vertices, fill in normals, build the MeshData."""
+    bad = sum(int((~np.isfinite(p)).any(axis=1).sum()) for p, _, _ in parts)
+    if bad:
+        what = "vertex has" if bad == 1 else "vertices have"
+        raise UsageError(f"{file}: {bad} {what} NaN or infinite coordinates")
+    for positions, faces, _ in parts:
+        if faces.size and (faces.min() < 0 or faces.max() >= len(positions)):
+            i = int(np.argmax(((faces < 0) | (faces >= len(positions))).any(axis=1)))
+            k = int(faces[i][(faces[i] < 0) | (faces[i] >= len(positions))][0])
+            raise UsageError(f"{file}: face {i + 1} refers to vertex {k} but the file has only "
+                             f"{len(positions)} vertices")
+    everything = np.concatenate([p for p, _, _ in parts])
+    size = float((everything.max(0) - everything.min(0)).max())
+    out_p, out_n, out_i, offset, total = [], [], [], 0, 0
+    for positions, faces, normals in parts:
+        total += len(faces)
+        if normals is None:  # no normals in the file: weld equal positions so the computed ones are smooth
+            positions, inverse = np.unique(positions, axis=0, return_inverse=True)
+            faces = inverse.reshape(-1)[faces]
+        cross = _face_cross(positions, faces)
+        keep = np.linalg.norm(cross, axis=1) > _DEGENERATE_AREA * size * size
+        faces, cross = faces[keep], cross[keep]
+        used, faces = np.unique(faces, return_inverse=True)
+        faces = faces.reshape(-1, 3)
+        positions = positions[used]
+        normals = _vertex_normals(len(positions), faces, cross, None if normals is None else normals[used])
+        out_p.append(positions)
+        out_n.append(normals)
+        out_i.append(faces + offset)
+        offset += len(positions)
+    if offset == 0:
+        raise UsageError(f"{file}: all {total} triangles are degenerate (zero area)")
+    return MeshData.from_arrays(np.concatenate(out_p), np.concatenate(out_n), np.concatenate(out_i), file.stem)
+
+
+def _face_cross(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(v1 - v0) x (v2 - v0) per face: along the outward normal for counter-clockwise faces, length 2x area."""
+    v0, v1, v2 = (positions[faces[:, k]] for k in range(3))
+    return np.cross(v1 - v0, v2 - v0)
+
+
+def _vertex_normals(count: int, faces: np.ndarray, cross: np.ndarray, given: np.ndarray | None) -> np.ndarray:
+    """Unit normals per vertex: the file's where usable, else area-weighted face normals; where those cancel
+    (a two-sided sheet) fall back to one adjacent face's normal. Every vertex here has a non-degenerate face."""
+    flat = faces.reshape(-1)
+    smooth = np.stack([np.bincount(flat, weights=np.repeat(cross[:, k], 3), minlength=count) for k in range(3)], 1)
+    unit_faces = cross / np.linalg.norm(cross, axis=1, keepdims=True)
+    fallback = np.zeros((count, 3))
+    fallback[flat] = np.repeat(unit_faces, 3, axis=0)
+    result = fallback
+    for candidate in (smooth, given):
+        if candidate is None:
+            continue
+        with np.errstate(invalid="ignore", over="ignore"):
+            length = np.linalg.norm(candidate, axis=1, keepdims=True)
+            ok = (np.isfinite(length) & (length > 1e-12)).reshape(-1)
+            result = np.where(ok[:, None], candidate / np.where(ok[:, None], length, 1.0), result)
+    return result
