@@ -1,0 +1,17 @@
+"""The README's example runs (with fewer entities), so the documentation cannot rot."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+
+def test_readme_example_runs():
+    text = (Path(__file__).resolve().parent.parent / "README.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
+    assert blocks, "README has no python example"
+    code = blocks[0].replace("1_000_000", "5_000")
+    scope: dict = {}
+    exec(compile(code, "README.md", "exec"), scope)  # noqa: S102 - our own documentation
+    world = scope["world"]
+    assert len(world) == 5_000
