@@ -31,3 +31,5 @@ bench:
 
 clean:
 	rm -rf .venv *.egg-info
+
+$(SHADERS:=.spv): shaders/common.glsl

@@ -3,6 +3,6 @@
 from .camera_control import FlyCameraSystem, InputState
 from .motion import MotionSystem
 from .orbit import OrbitSystem
-from .transform import RenderOrigin, TransformSystem
+from .transform import RenderOrigin, RenderOriginSystem, TransformSystem
 
-__all__ = ["FlyCameraSystem", "InputState", "MotionSystem", "OrbitSystem", "RenderOrigin", "TransformSystem"]
+__all__ = ["FlyCameraSystem", "InputState", "MotionSystem", "OrbitSystem", "RenderOrigin", "RenderOriginSystem", "TransformSystem"]

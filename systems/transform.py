@@ -46,3 +46,21 @@ class TransformSystem(System):
                 t.position[s], t.rotation[s], t.scale[s], origin, m.model[s], m.normal[s]))
             updated += len(batch)
         self.rows_updated = updated
+
+
+class RenderOriginSystem(System):
+    """Sets the RenderOrigin resource to the active camera's position, before the transform
+    system runs, so this frame's matrices are relative to this frame's camera."""
+
+    def __init__(self) -> None:
+        from ecs_engine.components import Camera
+
+        super().__init__(reads=[Camera, Transform], writes=[], name="render_origin")
+
+    def run(self, world: World, dt: float) -> None:
+        from ecs_engine.camera_math import active_camera
+
+        if world.query(*self.reads, write=()).count() == 0:
+            return  # nothing to follow (a scene without a camera renders nothing)
+        position = world.get(active_camera(world), Transform).position
+        world.resources[RenderOrigin] = RenderOrigin(position)

@@ -1,0 +1,165 @@
+"""Running a scene: world and schedule, the Vulkan objects it needs, the frame loop, the summary.
+
+Headless runs render into an offscreen image (no window, surface or swapchain, no display
+needed) with a fixed time step, so a run is reproducible frame for frame.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import UsageError
+from .schedule import Schedule
+from .world import World
+
+SCENES = ("cube", "grid100", "model")
+FIXED_DT = 1.0 / 60.0
+
+
+@dataclass
+class RunOptions:
+    scene: str = "grid100"
+    path: str | None = None
+    headless: bool = True
+    frames: int | None = None  # None: until the window closes (headless: 1)
+    screenshot: str | None = None
+    width: int = 1280
+    height: int = 720
+    validate: bool = False
+    present: str = "fifo"
+    quiet: bool = False
+
+
+@dataclass
+class RunResult:
+    frames: int = 0
+    wall_s: float = 0.0
+    cpu_ms: list[float] = field(default_factory=list)
+    gpu_ms: list[float] = field(default_factory=list)
+    validation_messages: list[str] = field(default_factory=list)
+    device: str = ""
+    pixels: np.ndarray | None = None
+    last_stats: Any = None
+
+    @property
+    def fps(self) -> float:
+        return self.frames / self.wall_s if self.wall_s > 0 else 0.0
+
+
+def scene_builder(name: str) -> Callable[..., None]:
+    if name not in SCENES:
+        raise UsageError(f"unknown scene {name!r}; scenes: {', '.join(SCENES)}")
+    return importlib.import_module(f"ecs_engine.demos.{name}").build
+
+
+def default_schedule() -> Schedule:
+    from .systems import FlyCameraSystem, MotionSystem, OrbitSystem, RenderOriginSystem, TransformSystem
+
+    schedule = Schedule(("update", "post_update"))
+    schedule.add(FlyCameraSystem(), "update")
+    schedule.add(OrbitSystem(), "update")
+    schedule.add(MotionSystem(), "update")
+    schedule.add(RenderOriginSystem(), "post_update")
+    schedule.add(TransformSystem(), "post_update")
+    return schedule
+
+
+def has_lights(world: World) -> bool:
+    from .components import PointLight
+
+    return world.query(PointLight, write=()).count() > 0
+
+
+def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunResult:
+    """Build the scene and run it; headless only here (the window path lives in window.py)."""
+    from .gpu.device import Device
+    from .gpu.instance import Instance
+    from .gpu.offscreen import OffscreenTarget
+    from .mesh_registry import MeshRegistry
+    from .renderer import Renderer
+
+    say = log or (lambda text: None if options.quiet else print(text))
+    build = scene_builder(options.scene)
+    result = RunResult()
+    instance = device = target = meshes = renderer = None
+    try:
+        instance = Instance(validate=options.validate)
+        device = Device(instance)
+        result.device = f"{device.info.name} ({device.info.driver_name} {device.info.driver_info})".strip()
+        target = OffscreenTarget(device, options.width, options.height)
+        meshes = MeshRegistry(device)
+        world = World()
+        build(world, meshes.add, options.path)
+        schedule = default_schedule()
+        renderer = Renderer(device, target, meshes, lights=has_lights(world))
+        frames = options.frames or 1
+        say(f"{options.scene}: headless {options.width}x{options.height} on {result.device}, {frames} frames")
+        start = last_report = time.perf_counter()
+        for i in range(frames):
+            t0 = time.perf_counter()
+            schedule.run(world, FIXED_DT)
+            last = i == frames - 1
+            stats = renderer.render(world, readback=last and options.screenshot is not None)
+            now = time.perf_counter()
+            result.cpu_ms.append((now - t0) * 1e3)
+            if stats.gpu_ms is not None:
+                result.gpu_ms.append(stats.gpu_ms)
+            result.last_stats = stats
+            if now - last_report >= 1.0:
+                say(summary_line(result, i + 1, now - start))
+                last_report = now
+        device.wait_idle()
+        result.frames = frames
+        result.wall_s = time.perf_counter() - start
+        if options.screenshot is not None:
+            result.pixels = target.pixels()
+            save_png(result.pixels, options.screenshot)
+        say(summary_line(result, frames, result.wall_s))
+    finally:
+        for obj in (renderer, meshes, target, device):
+            if obj is not None:
+                obj.destroy()
+        if instance is not None:
+            instance.destroy()
+            result.validation_messages = list(instance.messages)
+    return result
+
+
+def summary_line(result: RunResult, frames: int, wall_s: float) -> str:
+    cpu = np.array(result.cpu_ms[-600:])
+    gpu = np.array(result.gpu_ms[-600:])
+    stats = result.last_stats
+    gpu_text = f"gpu {gpu.mean():.3f} ms" if len(gpu) else "gpu n/a"
+    return (f"frame {frames}: {frames / wall_s if wall_s > 0 else 0:.0f} fps (wall clock), cpu {cpu.mean():.3f} ms "
+            f"(p99 {np.percentile(cpu, 99):.3f}), {gpu_text}; {stats.instances} entities drawn in {stats.draws} "
+            f"draws, {stats.triangles} triangles, {stats.lights} lights")
+
+
+def save_png(pixels: np.ndarray, path: str) -> None:
+    from PIL import Image
+
+    out = Path(path)
+    if out.parent and not out.parent.exists():
+        raise UsageError(f"cannot write {path}: folder {out.parent} does not exist")
+    try:
+        Image.fromarray(pixels, "RGBA").convert("RGB").save(out)
+    except OSError as exc:
+        raise UsageError(f"cannot write {path}: {exc.strerror or exc}") from exc
+
+
+def report_validation(result: RunResult) -> int:
+    """Print validation messages; non-zero when there were any."""
+    if not result.validation_messages:
+        return 0
+    for message in result.validation_messages:
+        print(f"vulkan validation: {message}", file=sys.stderr)
+    print(f"ecs-engine: {len(result.validation_messages)} validation message(s)", file=sys.stderr)
+    return 1

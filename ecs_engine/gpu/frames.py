@@ -1,0 +1,98 @@
+"""Frames in flight: per frame a command pool (reset whole), a primary command buffer, a fence,
+swapchain semaphores and a timestamp query pool read back without waiting."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .device import Device
+
+FRAMES_IN_FLIGHT = 2
+
+
+@dataclass
+class Frame:
+    pool: Any
+    command_buffer: Any
+    fence: Any
+    image_available: Any
+    render_finished: Any
+    queries: Any
+    submitted: bool = False  # the query pool holds results of a submitted frame
+
+
+class FrameRing:
+    def __init__(self, device: Device, count: int = FRAMES_IN_FLIGHT) -> None:
+        vk = device.vk
+        self.device = device
+        self.frames: list[Frame] = []
+        self.index = 0
+        self.timestamps = device.info.timestamp_valid_bits > 0
+        for _ in range(count):
+            pool = vk.vkCreateCommandPool(device.handle, vk.VkCommandPoolCreateInfo(
+                flags=vk.VK_COMMAND_POOL_CREATE_TRANSIENT_BIT, queueFamilyIndex=device.queue_family), None)
+            cb = vk.vkAllocateCommandBuffers(device.handle, vk.VkCommandBufferAllocateInfo(
+                commandPool=pool, level=vk.VK_COMMAND_BUFFER_LEVEL_PRIMARY, commandBufferCount=1))[0]
+            fence = vk.vkCreateFence(device.handle, vk.VkFenceCreateInfo(flags=vk.VK_FENCE_CREATE_SIGNALED_BIT), None)
+            sem = [vk.vkCreateSemaphore(device.handle, vk.VkSemaphoreCreateInfo(), None) for _ in range(2)]
+            queries = vk.vkCreateQueryPool(device.handle, vk.VkQueryPoolCreateInfo(
+                queryType=vk.VK_QUERY_TYPE_TIMESTAMP, queryCount=2), None)
+            self.frames.append(Frame(pool, cb, fence, sem[0], sem[1], queries))
+
+    def begin(self) -> tuple[Frame, float | None]:
+        """Wait for the next frame slot, reset its pool; return it with the GPU time (ms) of the
+        work it last carried, which is complete once its fence is signalled (no extra wait)."""
+        vk = self.device.vk
+        frame = self.frames[self.index]
+        vk.vkWaitForFences(self.device.handle, 1, [frame.fence], vk.VK_TRUE, 2**64 - 1)
+        gpu_ms = self._read_timestamps(frame) if frame.submitted else None
+        vk.vkResetCommandPool(self.device.handle, frame.pool, 0)
+        vk.vkBeginCommandBuffer(frame.command_buffer, vk.VkCommandBufferBeginInfo(
+            flags=vk.VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT))
+        if self.timestamps:
+            vk.vkCmdResetQueryPool(frame.command_buffer, frame.queries, 0, 2)
+            vk.vkCmdWriteTimestamp(frame.command_buffer, vk.VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, frame.queries, 0)
+        return frame, gpu_ms
+
+    def end(self, frame: Frame, wait: Any = None, signal: Any = None) -> None:
+        vk = self.device.vk
+        if self.timestamps:
+            vk.vkCmdWriteTimestamp(frame.command_buffer, vk.VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, frame.queries, 1)
+        vk.vkEndCommandBuffer(frame.command_buffer)
+        vk.vkResetFences(self.device.handle, 1, [frame.fence])
+        info = vk.VkSubmitInfo(
+            pCommandBuffers=[frame.command_buffer],
+            pWaitSemaphores=[wait] if wait is not None else None,
+            pWaitDstStageMask=[vk.VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT] if wait is not None else None,
+            pSignalSemaphores=[signal] if signal is not None else None)
+        vk.vkQueueSubmit(self.device.queue, 1, [info], frame.fence)
+        frame.submitted = self.timestamps
+        self.index = (self.index + 1) % len(self.frames)
+
+    def wait(self, frame: Frame) -> None:
+        vk = self.device.vk
+        vk.vkWaitForFences(self.device.handle, 1, [frame.fence], vk.VK_TRUE, 2**64 - 1)
+
+    def _read_timestamps(self, frame: Frame) -> float | None:
+        vk = self.device.vk
+        data = vk.ffi.new("uint64_t[2]")
+        result = vk.lib.vkGetQueryPoolResults(self.device.handle, frame.queries, 0, 2, 16, data, 8,
+                                              vk.VK_QUERY_RESULT_64_BIT)
+        if result != vk.VK_SUCCESS:
+            return None
+        bits = self.device.info.timestamp_valid_bits
+        mask = (1 << bits) - 1 if bits < 64 else (1 << 64) - 1
+        ticks = (int(data[1]) - int(data[0])) & mask
+        return ticks * self.device.info.timestamp_period_ns / 1e6
+
+    def destroy(self) -> None:
+        vk = self.device.vk
+        for f in self.frames:
+            vk.vkDestroyQueryPool(self.device.handle, f.queries, None)
+            vk.vkDestroySemaphore(self.device.handle, f.image_available, None)
+            vk.vkDestroySemaphore(self.device.handle, f.render_finished, None)
+            vk.vkDestroyFence(self.device.handle, f.fence, None)
+            vk.vkDestroyCommandPool(self.device.handle, f.pool, None)
+        self.frames.clear()

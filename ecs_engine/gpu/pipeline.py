@@ -1,0 +1,148 @@
+"""Shader modules, pipeline layouts, graphics pipelines and an on-disk pipeline cache."""
+
+from __future__ import annotations
+
+import importlib.resources
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ..errors import UsageError
+
+if TYPE_CHECKING:
+    from .device import Device
+
+# The repo's shaders/ folder installs as the package ecs_engine.shaders (see pyproject.toml).
+SHADER_DIR = Path(str(importlib.resources.files("ecs_engine.shaders")))
+
+
+def shader_path(name: str) -> Path:
+    path = SHADER_DIR / f"{name}.spv"
+    if not path.is_file():
+        raise UsageError(f"compiled shader {path} is missing: run `make shaders`")
+    return path
+
+
+class PipelineCache:
+    """VkPipelineCache loaded from and saved to ~/.cache/ecs_engine, one file per device and
+    driver (the driver rejects a foreign cache itself, but one file each keeps them useful)."""
+
+    def __init__(self, device: Device) -> None:
+        vk = device.vk
+        self.device = device
+        info = device.info
+        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "ecs_engine"
+        self.path = base / f"pipelines-{info.vendor_id:04x}-{info.device_id:04x}-{info.driver_version:08x}.bin"
+        data = b""
+        try:
+            data = self.path.read_bytes()
+        except OSError:
+            pass
+        if data:
+            self.handle = vk.vkCreatePipelineCache(device.handle, vk.VkPipelineCacheCreateInfo(
+                initialDataSize=len(data), pInitialData=vk.ffi.from_buffer(data)), None)
+        else:
+            self.handle = vk.vkCreatePipelineCache(device.handle, vk.VkPipelineCacheCreateInfo(), None)
+
+    def save(self) -> None:
+        vk = self.device.vk
+        size = vk.ffi.new("size_t*")  # the binding has no wrapper for this call: use the raw one
+        if vk.lib.vkGetPipelineCacheData(self.device.handle, self.handle, size, vk.ffi.NULL) != vk.VK_SUCCESS:
+            return
+        buf = vk.ffi.new("char[]", size[0])
+        if vk.lib.vkGetPipelineCacheData(self.device.handle, self.handle, size, buf) != vk.VK_SUCCESS:
+            return
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = self.path.with_suffix(f".{os.getpid()}.tmp")
+            tmp.write_bytes(bytes(vk.ffi.buffer(buf, size[0])))
+            os.replace(tmp, self.path)
+        except OSError:
+            pass  # a cache that cannot be written only costs start-up time
+
+    def destroy(self) -> None:
+        if self.handle is not None:
+            self.save()
+            self.device.vk.vkDestroyPipelineCache(self.device.handle, self.handle, None)
+            self.handle = None
+
+
+def shader_module(device: Device, name: str) -> Any:
+    vk = device.vk
+    code = shader_path(name).read_bytes()
+    return vk.vkCreateShaderModule(device.handle, vk.VkShaderModuleCreateInfo(codeSize=len(code), pCode=code), None)
+
+
+def pipeline_layout(device: Device, set_layouts: Sequence[Any], push_constants: Sequence[tuple[int, int, int]] = ()) -> Any:
+    """push_constants: (stage flags, offset, size)."""
+    vk = device.vk
+    return vk.vkCreatePipelineLayout(device.handle, vk.VkPipelineLayoutCreateInfo(
+        pSetLayouts=list(set_layouts),
+        pPushConstantRanges=[vk.VkPushConstantRange(stageFlags=s, offset=o, size=n) for s, o, n in push_constants]), None)
+
+
+@dataclass
+class GraphicsPipelineSpec:
+    vertex_shader: str
+    fragment_shader: str
+    layout: Any
+    render_pass: Any
+    subpass: int = 0
+    vertex_stride: int = 0  # 0: no vertex buffer (vertices made in the shader)
+    vertex_attributes: list[tuple[int, int, int]] = field(default_factory=list)  # location, format, offset
+    cull_back: bool = True
+    front_face_ccw: bool = True
+    depth_test: bool = True
+    depth_write: bool = True
+    alpha_blend: bool = False
+
+
+def graphics_pipeline(device: Device, cache: PipelineCache, spec: GraphicsPipelineSpec) -> Any:
+    """A pipeline with dynamic viewport and scissor and reverse-Z depth (compare GREATER)."""
+    vk = device.vk
+    vert = shader_module(device, spec.vertex_shader)
+    frag = shader_module(device, spec.fragment_shader)
+    try:
+        stages = [
+            vk.VkPipelineShaderStageCreateInfo(stage=vk.VK_SHADER_STAGE_VERTEX_BIT, module=vert, pName="main"),
+            vk.VkPipelineShaderStageCreateInfo(stage=vk.VK_SHADER_STAGE_FRAGMENT_BIT, module=frag, pName="main"),
+        ]
+        if spec.vertex_stride:
+            vertex_input = vk.VkPipelineVertexInputStateCreateInfo(
+                pVertexBindingDescriptions=[vk.VkVertexInputBindingDescription(
+                    binding=0, stride=spec.vertex_stride, inputRate=vk.VK_VERTEX_INPUT_RATE_VERTEX)],
+                pVertexAttributeDescriptions=[vk.VkVertexInputAttributeDescription(
+                    location=loc, binding=0, format=fmt, offset=off) for loc, fmt, off in spec.vertex_attributes])
+        else:
+            vertex_input = vk.VkPipelineVertexInputStateCreateInfo()
+        blend = vk.VkPipelineColorBlendAttachmentState(
+            blendEnable=vk.VK_TRUE if spec.alpha_blend else vk.VK_FALSE,
+            srcColorBlendFactor=vk.VK_BLEND_FACTOR_SRC_ALPHA, dstColorBlendFactor=vk.VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
+            colorBlendOp=vk.VK_BLEND_OP_ADD, srcAlphaBlendFactor=vk.VK_BLEND_FACTOR_ONE,
+            dstAlphaBlendFactor=vk.VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA, alphaBlendOp=vk.VK_BLEND_OP_ADD,
+            colorWriteMask=0xF)
+        info = vk.VkGraphicsPipelineCreateInfo(
+            pStages=stages,
+            pVertexInputState=vertex_input,
+            pInputAssemblyState=vk.VkPipelineInputAssemblyStateCreateInfo(topology=vk.VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST),
+            pViewportState=vk.VkPipelineViewportStateCreateInfo(viewportCount=1, scissorCount=1),
+            pRasterizationState=vk.VkPipelineRasterizationStateCreateInfo(
+                polygonMode=vk.VK_POLYGON_MODE_FILL, lineWidth=1.0,
+                cullMode=vk.VK_CULL_MODE_BACK_BIT if spec.cull_back else vk.VK_CULL_MODE_NONE,
+                frontFace=vk.VK_FRONT_FACE_COUNTER_CLOCKWISE if spec.front_face_ccw else vk.VK_FRONT_FACE_CLOCKWISE),
+            pMultisampleState=vk.VkPipelineMultisampleStateCreateInfo(rasterizationSamples=vk.VK_SAMPLE_COUNT_1_BIT),
+            pDepthStencilState=vk.VkPipelineDepthStencilStateCreateInfo(
+                depthTestEnable=vk.VK_TRUE if spec.depth_test else vk.VK_FALSE,
+                depthWriteEnable=vk.VK_TRUE if spec.depth_write else vk.VK_FALSE,
+                depthCompareOp=vk.VK_COMPARE_OP_GREATER),
+            pColorBlendState=vk.VkPipelineColorBlendStateCreateInfo(pAttachments=[blend]),
+            pDynamicState=vk.VkPipelineDynamicStateCreateInfo(
+                pDynamicStates=[vk.VK_DYNAMIC_STATE_VIEWPORT, vk.VK_DYNAMIC_STATE_SCISSOR]),
+            layout=spec.layout, renderPass=spec.render_pass, subpass=spec.subpass,
+        )
+        return vk.vkCreateGraphicsPipelines(device.handle, cache.handle, 1, [info], None)[0]
+    finally:
+        vk.vkDestroyShaderModule(device.handle, vert, None)
+        vk.vkDestroyShaderModule(device.handle, frag, None)

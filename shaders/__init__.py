@@ -1,0 +1,1 @@
+"""GLSL sources and their committed SPIR-V (installed as ecs_engine.shaders)."""
