@@ -1,7 +1,6 @@
 # `make demo` and `make test` install everything (scripts/bootstrap.sh) and then run.
 # Variables: PYTEST_ARGS="-k world", DEMO_ARGS="...", BENCH="...", PYTHON=python3.12 (new .venv only).
 PY      := .venv/bin/python
-SHADERS := $(wildcard shaders/*.vert shaders/*.frag shaders/*.comp)
 PYTEST_ARGS ?=
 DEMO_ARGS   ?=
 BENCH       ?=
@@ -19,11 +18,10 @@ test: setup
 demo: setup
 	.venv/bin/ecs-engine demo $(DEMO_ARGS)
 
-# The compiled .spv files are committed (a test fails when one is stale); this rebuilds them.
-shaders: $(SHADERS:=.spv)
-
-shaders/%.spv: shaders/% | setup
-	glslc $< -o $@
+# The compiled .spv files and shaders/manifest.json are committed; tests/test_shaders.py fails
+# when a source changed without them. This rebuilds them all.
+shaders: setup
+	$(PY) scripts/compile_shaders.py
 
 bench:
 	@bash scripts/bootstrap.sh --extras dev,bench
@@ -32,4 +30,3 @@ bench:
 clean:
 	rm -rf .venv *.egg-info
 
-$(SHADERS:=.spv): shaders/common.glsl

@@ -48,6 +48,8 @@ class RunResult:
     device: str = ""
     pixels: np.ndarray | None = None
     last_stats: Any = None
+    recreations: int = 0  # swapchain recreations (windowed)
+    minimised_waits: int = 0  # loop turns spent waiting while minimised (windowed)
 
     @property
     def fps(self) -> float:

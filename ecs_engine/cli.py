@@ -19,7 +19,16 @@ def positive_int(text: str) -> int:
     return value
 
 
-SCENES = ("motion",)
+SCENES = ("cube", "grid100", "model", "motion")
+DEFAULT_SCENE = "grid100"
+HEADLESS_FALLBACK_FRAMES = 300
+
+
+def dimension(text: str) -> int:
+    value = positive_int(text)
+    if value > 16384:
+        raise argparse.ArgumentTypeError(f"expected at most 16384 pixels, got {value}")
+    return value
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -27,21 +36,57 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help="show tracebacks")
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser("demo", help="run a demo scene")
-    demo.add_argument("scene", nargs="?", default="motion", choices=SCENES,
-                      help="motion: text-mode ECS scene, N moving entities, no rendering")
-    demo.add_argument("--entities", type=positive_int, default=100_000)
-    demo.add_argument("--frames", type=positive_int, default=300)
+    demo.add_argument("scene", nargs="?", default=DEFAULT_SCENE, choices=SCENES,
+                      help="cube, grid100, model: the seed's scenes; motion: text-mode ECS scene (no rendering)")
+    demo.add_argument("path", nargs="?", help="model file for the model scene (OBJ, glTF/GLB, PLY, STL)")
+    demo.add_argument("--headless", action="store_true", help="render offscreen, no window (no display needed)")
+    demo.add_argument("--frames", type=positive_int, help="frames to run (default: until the window closes; "
+                      f"headless: 1, or {HEADLESS_FALLBACK_FRAMES} when falling back from a window)")
+    demo.add_argument("--screenshot", metavar="PNG", help="write the last frame to this PNG (headless)")
+    demo.add_argument("--width", type=dimension, default=1280)
+    demo.add_argument("--height", type=dimension, default=720)
+    demo.add_argument("--present", choices=("fifo", "mailbox", "immediate"), default="fifo",
+                      help="swapchain present mode (windowed)")
+    demo.add_argument("--validate", action="store_true", help="enable the Vulkan validation layers")
+    demo.add_argument("--entities", type=positive_int, default=100_000, help="motion scene: entity count")
     demo.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show tracebacks")
     return parser
 
 
 def run(args: argparse.Namespace) -> int:
     if args.command == "demo":
-        from ecs_engine.demos import motion
-
         if args.scene == "motion":
-            return motion.main(args.entities, args.frames)
+            from ecs_engine.demos import motion
+
+            return motion.main(args.entities, args.frames or 300)
+        return run_scene(args)
     raise UsageError(f"unknown command {args.command!r}")
+
+
+def run_scene(args: argparse.Namespace) -> int:
+    from .app import RunOptions, report_validation
+    from .app import run as run_headless
+
+    if args.path is not None and args.scene != "model":
+        raise UsageError(f"a model path only goes with the model scene, not {args.scene!r}")
+    options = RunOptions(scene=args.scene, path=args.path, headless=args.headless, frames=args.frames,
+                         screenshot=args.screenshot, width=args.width, height=args.height,
+                         validate=args.validate, present=args.present)
+    if not args.headless:
+        from .window import open_glfw, run_windowed
+
+        glfw = open_glfw()
+        if glfw is not None:
+            return report_validation(run_windowed(options, glfw))
+        options.frames = args.frames or HEADLESS_FALLBACK_FRAMES
+        if options.screenshot is None:
+            options.screenshot = f"{args.scene}.png"
+        print(f"no display found: rendering {options.frames} frames headless instead "
+              f"(last frame saved to {options.screenshot})")
+    result = run_headless(options)
+    if options.screenshot:
+        print(f"wrote {options.screenshot}")
+    return report_validation(result)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -77,9 +77,13 @@ class Device:
         base = vk.vkGetPhysicalDeviceFeatures(self.physical)
         features = vk.VkPhysicalDeviceFeatures(multiDrawIndirect=base.multiDrawIndirect)
         self.features["multiDrawIndirect"] = bool(base.multiDrawIndirect)
+        # Keep nested structs in locals until the call: the binding copies a list of structs into
+        # an array, and what an element points to (here its priorities) lives only as long as
+        # the Python object of that element.
+        queue_info = vk.VkDeviceQueueCreateInfo(queueFamilyIndex=self.queue_family, pQueuePriorities=[1.0])
         info = vk.VkDeviceCreateInfo(
             pNext=want12,
-            pQueueCreateInfos=[vk.VkDeviceQueueCreateInfo(queueFamilyIndex=self.queue_family, pQueuePriorities=[1.0])],
+            pQueueCreateInfos=[queue_info],
             ppEnabledExtensionNames=exts,
             pEnabledFeatures=features,
         )

@@ -75,7 +75,9 @@ class Allocation:
 class BlockAllocator:
     def __init__(self, device: Device) -> None:
         self.device = device
-        self._blocks: dict[tuple[int, str], list[_Block]] = {}
+        # keyed by (memory type, resource kind, where): a type can be both device-local and
+        # host-visible (CPU drivers, resizable BAR), and only HOST blocks are mapped
+        self._blocks: dict[tuple[int, str, str], list[_Block]] = {}
         self.allocate_calls = 0  # how many vkAllocateMemory calls were made
 
     def _memory_type(self, type_bits: int, where: str) -> int:
@@ -94,7 +96,7 @@ class BlockAllocator:
     def allocate(self, requirements: Any, where: str, kind: str) -> Allocation:
         vk = self.device.vk
         type_index = self._memory_type(requirements.memoryTypeBits, where)
-        blocks = self._blocks.setdefault((type_index, kind), [])
+        blocks = self._blocks.setdefault((type_index, kind, where), [])
         size, alignment = int(requirements.size), int(requirements.alignment)
         for block in blocks:
             offset = block.take(size, alignment)

@@ -1,0 +1,155 @@
+"""Window target: surface format and present mode choice, the swapchain with its depth image and
+framebuffers, recreated on resize; acquire and present."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+from ..errors import UsageError
+from .memory import Image
+from .render_pass import create_framebuffer, create_render_pass
+
+if TYPE_CHECKING:
+    from .device import Device
+
+PRESENT_MODES = {"fifo": "VK_PRESENT_MODE_FIFO_KHR", "mailbox": "VK_PRESENT_MODE_MAILBOX_KHR",
+                 "immediate": "VK_PRESENT_MODE_IMMEDIATE_KHR"}
+
+
+class OutOfDate(Exception):
+    """The swapchain no longer matches the window: recreate it and skip this frame."""
+
+
+class Swapchain:
+    def __init__(self, device: Device, surface: Any, framebuffer_size: Callable[[], tuple[int, int]],
+                 present: str = "fifo") -> None:
+        vk = self.vk = device.vk
+        self.device = device
+        self.surface = surface
+        self.framebuffer_size = framebuffer_size
+        inst = device.instance
+        self._caps = inst.proc("vkGetPhysicalDeviceSurfaceCapabilitiesKHR")
+        formats = inst.proc("vkGetPhysicalDeviceSurfaceFormatsKHR")(device.physical, surface)
+        modes = inst.proc("vkGetPhysicalDeviceSurfacePresentModesKHR")(device.physical, surface)
+        wanted = getattr(vk, PRESENT_MODES[present])
+        if wanted not in modes:
+            raise UsageError(f"present mode {present!r} is not supported here; try --present fifo")
+        self.present_mode = wanted
+        srgb = [f for f in formats if f.format in (vk.VK_FORMAT_B8G8R8A8_SRGB, vk.VK_FORMAT_R8G8B8A8_SRGB)
+                and f.colorSpace == vk.VK_COLOR_SPACE_SRGB_NONLINEAR_KHR]
+        chosen = srgb[0] if srgb else formats[0]
+        self.color_format, self.color_space = chosen.format, chosen.colorSpace
+        self.render_pass = create_render_pass(device, self.color_format, vk.VK_IMAGE_LAYOUT_PRESENT_SRC_KHR)
+        self._create_fn = device_proc(device, "vkCreateSwapchainKHR")
+        self._destroy_fn = device_proc(device, "vkDestroySwapchainKHR")
+        self._images_fn = device_proc(device, "vkGetSwapchainImagesKHR")
+        # raw entry points: the binding's wrappers raise on VK_SUBOPTIMAL_KHR, a success code
+        # that still acquires an image and signals the semaphore
+        self._acquire_raw = raw_device_proc(device, "vkAcquireNextImageKHR")
+        self._present_raw = raw_device_proc(device, "vkQueuePresentKHR")
+        self._index = vk.ffi.new("uint32_t*")
+        self.handle = None
+        self.views: list[Any] = []
+        self.framebuffers: list[Any] = []
+        self.render_finished: list[Any] = []
+        self.depth: Image | None = None
+        self.width = self.height = 0
+        self.recreations = 0
+        self._build()
+
+    def _build(self) -> None:
+        vk = self.vk
+        caps = self._caps(self.device.physical, self.surface)
+        if caps.currentExtent.width != 0xFFFFFFFF:
+            width, height = caps.currentExtent.width, caps.currentExtent.height
+        else:
+            w, h = self.framebuffer_size()
+            width = min(max(w, caps.minImageExtent.width), caps.maxImageExtent.width)
+            height = min(max(h, caps.minImageExtent.height), caps.maxImageExtent.height)
+        count = caps.minImageCount + 1
+        if caps.maxImageCount:
+            count = min(count, caps.maxImageCount)
+        old = self.handle
+        self.handle = self._create_fn(self.device.handle, vk.VkSwapchainCreateInfoKHR(
+            surface=self.surface, minImageCount=count, imageFormat=self.color_format, imageColorSpace=self.color_space,
+            imageExtent=vk.VkExtent2D(width, height), imageArrayLayers=1,
+            imageUsage=vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, imageSharingMode=vk.VK_SHARING_MODE_EXCLUSIVE,
+            preTransform=caps.currentTransform, compositeAlpha=vk.VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR,
+            presentMode=self.present_mode, clipped=vk.VK_TRUE, oldSwapchain=old), None)
+        if old is not None:
+            self._destroy_fn(self.device.handle, old, None)
+        self.width, self.height = width, height
+        self.images = self._images_fn(self.device.handle, self.handle)
+        self.depth = Image(self.device, width, height, vk.VK_FORMAT_D32_SFLOAT,
+                           vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, vk.VK_IMAGE_ASPECT_DEPTH_BIT)
+        for image in self.images:
+            view = vk.vkCreateImageView(self.device.handle, vk.VkImageViewCreateInfo(
+                image=image, viewType=vk.VK_IMAGE_VIEW_TYPE_2D, format=self.color_format,
+                subresourceRange=vk.VkImageSubresourceRange(aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=0,
+                                                            levelCount=1, baseArrayLayer=0, layerCount=1)), None)
+            self.views.append(view)
+            self.framebuffers.append(create_framebuffer(self.device, self.render_pass, [view, self.depth.view],
+                                                        width, height))
+            # one per image: a semaphore waited on by present is free again only once that image
+            # is acquired again
+            self.render_finished.append(vk.vkCreateSemaphore(self.device.handle, vk.VkSemaphoreCreateInfo(), None))
+
+    def _release(self) -> None:
+        vk = self.vk
+        for fb in self.framebuffers:
+            vk.vkDestroyFramebuffer(self.device.handle, fb, None)
+        for view in self.views:
+            vk.vkDestroyImageView(self.device.handle, view, None)
+        for sem in self.render_finished:
+            vk.vkDestroySemaphore(self.device.handle, sem, None)
+        self.framebuffers, self.views, self.render_finished = [], [], []
+        if self.depth is not None:
+            self.depth.destroy()
+            self.depth = None
+
+    def recreate(self) -> None:
+        self.device.wait_idle()
+        self._release()
+        self._build()
+        self.recreations += 1
+
+    def acquire(self, semaphore: Any) -> tuple[int, bool]:
+        """(image index, suboptimal). Raises OutOfDate when no image could be acquired."""
+        vk = self.vk
+        result = self._acquire_raw(self.device.handle, self.handle, 2**64 - 1, semaphore, vk.ffi.NULL, self._index)
+        if result == vk.VK_ERROR_OUT_OF_DATE_KHR:
+            raise OutOfDate
+        if result not in (vk.VK_SUCCESS, vk.VK_SUBOPTIMAL_KHR):
+            raise RuntimeError(f"vkAcquireNextImageKHR failed with VkResult {result}")
+        return int(self._index[0]), result == vk.VK_SUBOPTIMAL_KHR
+
+    def present(self, index: int) -> bool:
+        """Queue the image; False when the swapchain should be recreated."""
+        vk = self.vk
+        info = vk.VkPresentInfoKHR(pWaitSemaphores=[self.render_finished[index]], pSwapchains=[self.handle],
+                                   pImageIndices=[index])
+        result = self._present_raw(self.device.queue, vk.ffi.addressof(info))
+        if result in (vk.VK_ERROR_OUT_OF_DATE_KHR, vk.VK_SUBOPTIMAL_KHR):
+            return False
+        if result != vk.VK_SUCCESS:
+            raise RuntimeError(f"vkQueuePresentKHR failed with VkResult {result}")
+        return True
+
+    def destroy(self) -> None:
+        self.device.wait_idle()
+        self._release()
+        if self.handle is not None:
+            self._destroy_fn(self.device.handle, self.handle, None)
+            self.handle = None
+        self.vk.vkDestroyRenderPass(self.device.handle, self.render_pass, None)
+
+
+def device_proc(device: Device, name: str) -> Any:
+    return device.vk.vkGetDeviceProcAddr(device.handle, name)
+
+
+def raw_device_proc(device: Device, name: str) -> Any:
+    vk = device.vk
+    ptr = vk.lib.vkGetDeviceProcAddr(device.handle, name.encode())
+    return vk.ffi.cast(f"PFN_{name}", ptr)

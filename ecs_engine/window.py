@@ -1,0 +1,153 @@
+"""Windowed runs: a GLFW window with a Vulkan surface and swapchain, keyboard to the fly camera.
+
+The swapchain is recreated when the window is resized; while it is minimised (a framebuffer of
+size 0) the loop waits for events instead of rendering.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable
+from typing import Any
+
+from .app import RunOptions, RunResult, default_schedule, has_lights, scene_builder, summary_line
+from .errors import UsageError
+from .world import World
+
+# GLFW key -> the names FlyCameraSystem reads (the seed's Table 7.1).
+KEY_NAMES = {
+    "KEY_LEFT": "left", "KEY_RIGHT": "right", "KEY_UP": "up", "KEY_DOWN": "down",
+    "KEY_W": "w", "KEY_S": "s", "KEY_A": "a", "KEY_D": "d", "KEY_E": "e", "KEY_Q": "q",
+}
+MAX_DT = 0.1  # a hitch (dragging the window, a breakpoint) must not fling the camera
+
+
+def open_glfw() -> Any | None:
+    """The glfw module, initialised, or None when there is no display to open a window on."""
+    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        return None
+    try:
+        import glfw
+    except ImportError as exc:
+        raise UsageError(f"the Python package `glfw` is missing ({exc}); run `make demo` to install it") from exc
+    glfw.set_error_callback(lambda code, text: None)  # failures are reported through return values
+    if not glfw.init():
+        return None
+    return glfw
+
+
+def run_windowed(options: RunOptions, glfw: Any,
+                 on_frame: Callable[[int, Any, Any], None] | None = None) -> RunResult:
+    """Run until the window closes or `options.frames` frames were presented.
+    `on_frame(frame_index, glfw, window)` is called before each frame (tests drive resizes)."""
+    from .gpu.device import Device
+    from .gpu.instance import Instance
+    from .gpu.swapchain import OutOfDate, Swapchain
+    from .mesh_registry import MeshRegistry
+    from .renderer import Renderer
+    from .systems import InputState
+
+    say = (lambda text: None) if options.quiet else print
+    build = scene_builder(options.scene)
+    result = RunResult()
+    instance = device = swapchain = meshes = renderer = surface = window = None
+    try:
+        glfw.window_hint(glfw.CLIENT_API, glfw.NO_API)
+        window = glfw.create_window(options.width, options.height, f"ecs_engine - {options.scene}", None, None)
+        if not window:
+            raise UsageError("could not open a window (GLFW); run with --headless")
+        extensions = list(glfw.get_required_instance_extensions() or [])
+        instance = Instance(validate=options.validate, extensions=extensions)
+        vk = instance.vk
+        surface_ptr = vk.ffi.new("VkSurfaceKHR*")
+        if glfw.create_window_surface(instance.handle, window, None, surface_ptr) != vk.VK_SUCCESS:
+            raise UsageError("could not create a Vulkan surface for the window; run with --headless")
+        surface = surface_ptr[0]
+        device = Device(instance, surface=surface)
+        result.device = f"{device.info.name} ({device.info.driver_name} {device.info.driver_info})".strip()
+        swapchain = Swapchain(device, surface, lambda: glfw.get_framebuffer_size(window), options.present)
+        meshes = MeshRegistry(device)
+        world = World()
+        build(world, meshes.add, options.path)
+        schedule = default_schedule()
+        renderer = Renderer(device, swapchain, meshes, lights=has_lights(world))
+        keys = world.resources[InputState] = InputState()
+        resized = [False]
+
+        def on_key(_win: Any, key: int, _code: int, action: int, _mods: int) -> None:
+            name = names.get(key)
+            if name is None:
+                if key == glfw.KEY_ESCAPE and action == glfw.PRESS:
+                    glfw.set_window_should_close(window, True)
+                return
+            if action == glfw.PRESS:
+                keys.pressed.add(name)
+            elif action == glfw.RELEASE:
+                keys.pressed.discard(name)
+
+        names = {getattr(glfw, k): v for k, v in KEY_NAMES.items()}
+        glfw.set_key_callback(window, on_key)
+        glfw.set_framebuffer_size_callback(window, lambda *_: resized.__setitem__(0, True))
+        say(f"{options.scene}: window {swapchain.width}x{swapchain.height} on {result.device}, present {options.present}")
+        start = last_report = previous = time.perf_counter()
+        frame_no = 0
+        while not glfw.window_should_close(window) and (options.frames is None or frame_no < options.frames):
+            if on_frame is not None:
+                on_frame(frame_no, glfw, window)
+            glfw.poll_events()
+            w, h = glfw.get_framebuffer_size(window)
+            if w == 0 or h == 0:  # minimised: nothing to draw into
+                glfw.wait_events_timeout(0.05)
+                previous = time.perf_counter()
+                result.minimised_waits += 1
+                continue
+            if resized[0] or (w, h) != (swapchain.width, swapchain.height):
+                resized[0] = False
+                swapchain.recreate()
+            now = time.perf_counter()
+            dt, previous = min(now - previous, MAX_DT), now
+            t0 = now
+            schedule.run(world, dt)
+            frame = renderer.frames.frames[renderer.frames.index]
+            renderer.frames.wait(frame)  # the semaphore below is free once this frame is done
+            try:
+                index, suboptimal = swapchain.acquire(frame.image_available)
+            except OutOfDate:
+                swapchain.recreate()
+                continue
+            stats = renderer.render(world, framebuffer=swapchain.framebuffers[index],
+                                    extent=(swapchain.width, swapchain.height),
+                                    wait=frame.image_available, signal=swapchain.render_finished[index])
+            result.cpu_ms.append((time.perf_counter() - t0) * 1e3)
+            if not swapchain.present(index) or suboptimal:
+                resized[0] = True
+            if stats.gpu_ms is not None:
+                result.gpu_ms.append(stats.gpu_ms)
+            result.last_stats = stats
+            frame_no += 1
+            now = time.perf_counter()
+            if now - last_report >= 1.0:
+                say(summary_line(result, frame_no, now - start))
+                last_report = now
+        device.wait_idle()
+        result.frames = frame_no
+        result.wall_s = time.perf_counter() - start
+        result.recreations = swapchain.recreations
+        if frame_no:
+            say(summary_line(result, frame_no, result.wall_s))
+    finally:
+        for obj in (renderer, meshes, swapchain):
+            if obj is not None:
+                obj.destroy()
+        if device is not None:
+            device.destroy()
+        if surface is not None:
+            instance.proc("vkDestroySurfaceKHR")(instance.handle, surface, None)
+        if instance is not None:
+            instance.destroy()
+            result.validation_messages = list(instance.messages)
+        if window is not None:
+            glfw.destroy_window(window)
+        glfw.terminate()
+    return result

@@ -1,0 +1,114 @@
+"""The demo command: headless runs, fallback without a display, and one clear line for every
+bad input (exit 2, no traceback unless --debug)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+
+def cli(*args, env=None, cwd=None):
+    full_env = dict(os.environ, **(env or {}))
+    return subprocess.run([sys.executable, "-m", "ecs_engine", "demo", *args], capture_output=True, text=True,
+                          timeout=300, env=full_env, cwd=cwd)
+
+
+def one_line_error(proc, *fragments):
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert "Traceback" not in proc.stderr
+    lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1, proc.stderr
+    for fragment in fragments:
+        assert fragment in lines[0]
+
+
+def test_headless_screenshot_with_validation(tmp_path):
+    shot = tmp_path / "grid.png"
+    proc = cli("grid100", "--headless", "--frames", "3", "--width", "96", "--height", "64",
+               "--screenshot", str(shot), "--validate")
+    assert proc.returncode == 0, proc.stderr
+    assert "validation" not in proc.stderr
+    img = np.asarray(Image.open(shot))
+    assert img.shape == (64, 96, 3) and img.max() > 30
+
+
+def test_without_a_display_it_says_so_and_renders_headless(tmp_path):
+    env = {"DISPLAY": "", "WAYLAND_DISPLAY": ""}
+    proc = cli("cube", "--frames", "2", "--width", "64", "--height", "48", env=env, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "no display found" in proc.stdout
+    assert (tmp_path / "cube.png").is_file()
+
+
+BAD_FILES = {
+    "points.obj": ("v 0 0 0\nv 1 0 0\nv 0 1 0\n", "only points/lines"),
+    "lines.obj": ("v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nl 2 3\n", "only points/lines"),
+    "empty.obj": ("# nothing here\n", "no vertices or faces"),
+    "nan.obj": ("v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", "NaN"),
+    "inf.obj": ("v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n", "infinite"),
+    "range.obj": ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "refers to vertex 9"),
+    "garbage.stl": ("this is not an stl file at all", ""),
+    "notamesh.glb": ("hello", ""),
+}
+
+
+@pytest.mark.parametrize("name", sorted(BAD_FILES))
+def test_bad_model_files_give_one_line_naming_the_file(name, tmp_path):
+    text, fragment = BAD_FILES[name]
+    path = tmp_path / name
+    path.write_text(text)
+    proc = cli("model", str(path), "--headless")
+    one_line_error(proc, str(path), fragment)
+
+
+def test_missing_model_file_and_debug_traceback(tmp_path):
+    missing = tmp_path / "nope.obj"
+    one_line_error(cli("model", str(missing), "--headless"), str(missing))
+    proc = cli("model", str(missing), "--headless", "--debug")
+    assert proc.returncode != 0 and "Traceback" in proc.stderr
+
+
+@pytest.mark.parametrize("args, fragment", [
+    (["cube", "--width", "0", "--headless"], "above 0"),
+    (["cube", "--frames", "-2", "--headless"], "above 0"),
+    (["cube", "extra.obj", "--headless"], "only goes with the model scene"),
+    (["cube", "--present", "sometimes"], "invalid choice"),
+])
+def test_bad_flags(args, fragment):
+    proc = cli(*args)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert fragment in proc.stderr
+
+
+def test_screenshot_into_a_missing_folder(tmp_path):
+    target = tmp_path / "no" / "such" / "dir.png"
+    one_line_error(cli("cube", "--headless", "--screenshot", str(target), "--width", "32", "--height", "24"),
+                   "does not exist")
+
+
+def test_no_vulkan_loader_names_the_install_command(tmp_path):
+    """The binding raises OSError at import when libvulkan.so.1 is missing; fake exactly that."""
+    fake = tmp_path / "vulkan"
+    fake.mkdir()
+    (fake / "__init__.py").write_text("raise OSError('Cannot find Vulkan SDK version.')\n")
+    proc = cli("cube", "--headless", env={"PYTHONPATH": str(tmp_path)})
+    one_line_error(proc, "no Vulkan loader", "apt-get install -y libvulkan1")
+
+
+def test_no_vulkan_device_names_the_driver_package(tmp_path):
+    icd = tmp_path / "none.json"
+    icd.write_text('{"file_format_version": "1.0.0", "ICD": {"library_path": "/nonexistent/libnothing.so", "api_version": "1.3.0"}}')
+    proc = cli("cube", "--headless", env={"VK_ICD_FILENAMES": str(icd), "VK_DRIVER_FILES": str(icd)})
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert "mesa-vulkan-drivers" in proc.stderr
+
+
+def test_device_choice_by_name():
+    proc = cli("cube", "--headless", env={"ECS_ENGINE_DEVICE": "no-such-gpu"})
+    one_line_error(proc, "ECS_ENGINE_DEVICE='no-such-gpu'", "devices present")

@@ -1,0 +1,172 @@
+"""Rendering on lavapipe with the validation layers on: every message is a failure.
+
+Golden images: each seed scene rendered headless at 160x120 after 8 fixed steps, compared with
+tests/golden/<scene>.png. Tolerance (documented in tests/golden/README.md): mean absolute
+difference <= 1.5 (of 255) and at most 0.5% of pixels off by more than 24 in any channel,
+which absorbs rasteriser rounding between Mesa versions but not a moved object, a lost light
+or a wrong winding. ECS_ENGINE_UPDATE_GOLDEN=1 rewrites the references.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from ecs_engine import World
+from ecs_engine.app import RunOptions, default_schedule, run
+from ecs_engine.components import Mesh, Transform
+from ecs_engine.demos.scene_kit import add_camera
+from ecs_engine.mesh_data import cube_mesh
+
+GOLDEN = Path(__file__).resolve().parent / "golden"
+SIZE = (160, 120)
+
+
+def image_difference(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
+    diff = np.abs(a.astype(np.int16) - b.astype(np.int16))[..., :3]
+    return float(diff.mean()), float((diff.max(axis=-1) > 24).mean())
+
+
+def assert_close_to_golden(pixels: np.ndarray, name: str) -> None:
+    path = GOLDEN / f"{name}.png"
+    if os.environ.get("ECS_ENGINE_UPDATE_GOLDEN") == "1":
+        Image.fromarray(pixels[..., :3]).save(path)
+    reference = np.asarray(Image.open(path).convert("RGB"))
+    mean, outliers = image_difference(pixels[..., :3], reference)
+    assert mean <= 1.5 and outliers <= 0.005, f"{name}: mean diff {mean:.2f}, {outliers:.2%} pixels off"
+
+
+def render(scene: str, frames: int = 8, **kw) -> object:
+    result = run(RunOptions(scene=scene, width=SIZE[0], height=SIZE[1], frames=frames,
+                            screenshot=kw.pop("screenshot", None), validate=True, quiet=True, **kw))
+    assert result.validation_messages == []
+    return result
+
+
+@pytest.mark.parametrize("scene", ["cube", "grid100", "model"])
+def test_seed_scenes_match_golden_images(scene, tmp_path):
+    shot = tmp_path / f"{scene}.png"
+    result = render(scene, screenshot=str(shot))
+    assert shot.is_file()
+    assert_close_to_golden(result.pixels, scene)
+    stats = result.last_stats
+    assert stats.lights == 6
+    assert stats.instances == {"cube": 1, "grid100": 100, "model": 1}[scene]
+    assert stats.draws == 2  # one instanced draw of the shared mesh, one for the billboards
+
+
+def test_golden_comparison_detects_a_changed_scene():
+    """The tolerance is not so loose that a different picture passes."""
+    cube = np.asarray(Image.open(GOLDEN / "cube.png").convert("RGB"))
+    grid = np.asarray(Image.open(GOLDEN / "grid100.png").convert("RGB"))
+    shifted = np.roll(cube, 6, axis=1)
+    for other in (grid, shifted):
+        mean, outliers = image_difference(other, cube)
+        assert mean > 1.5 or outliers > 0.005
+
+
+def test_gpu_timestamps_and_wall_clock():
+    result = render("grid100", frames=6)
+    assert len(result.gpu_ms) >= 4 and min(result.gpu_ms) > 0.0
+    assert result.fps == pytest.approx(result.frames / result.wall_s)
+
+
+def build_cubes(scales):
+    def build(world: World, add_mesh, path=None) -> None:
+        cube = add_mesh(cube_mesh())
+        for i, s in enumerate(scales):
+            world.spawn(Transform(position=(1.2 * (i - (len(scales) - 1) / 2), 0.0, 0.0), scale=s), Mesh(handle=cube))
+        add_camera(world, eye=(0.4, 0.9, 3.0), target=(0.0, 0.0, 0.0))
+    return build
+
+
+def render_custom(build, monkeypatch, tmp_path) -> np.ndarray:
+    import ecs_engine.app as app
+
+    monkeypatch.setattr(app, "scene_builder", lambda name: build)
+    result = run(RunOptions(scene="cube", width=SIZE[0], height=SIZE[1], frames=1, screenshot=str(tmp_path / "x.png"),
+                            validate=True, quiet=True))
+    assert result.validation_messages == []
+    return result.pixels
+
+
+def test_mirrored_entities_keep_their_outside_faces(monkeypatch, tmp_path):
+    """A cube mirrored in x is the same cube: with the winding not flipped for it, back-face
+    culling would show its inside instead."""
+    plain = render_custom(build_cubes([(1, 1, 1)]), monkeypatch, tmp_path)
+    mirrored = render_custom(build_cubes([(-1, 1, 1)]), monkeypatch, tmp_path)
+    mean, outliers = image_difference(plain, mirrored)
+    assert mean < 0.5 and outliers < 0.002
+    assert plain[..., :3].max() > 30  # something was drawn
+
+
+def test_degenerate_scales_render_without_validation_errors(monkeypatch, tmp_path):
+    pixels = render_custom(build_cubes([(0, 1, 1), (0, 0, 0), (1e-20, 1, 1), (1, 1, 1)]), monkeypatch, tmp_path)
+    assert pixels[..., :3].max() > 30
+
+
+def test_scene_without_lights_builds_no_light_pipeline(monkeypatch):
+    from ecs_engine.gpu.device import Device
+    from ecs_engine.gpu.instance import Instance
+    from ecs_engine.gpu.offscreen import OffscreenTarget
+    from ecs_engine.mesh_registry import MeshRegistry
+    from ecs_engine.renderer import Renderer
+
+    instance = Instance(validate=True)
+    device = Device(instance)
+    target = OffscreenTarget(device, 64, 48)
+    meshes = MeshRegistry(device)
+    world = World()
+    build_cubes([(1, 1, 1)])(world, meshes.add)
+    renderer = Renderer(device, target, meshes, lights=False)
+    try:
+        assert renderer.light_pipeline is None
+        default_schedule().run(world, 0.0)
+        stats = renderer.render(world, readback=True)
+        assert stats.draws == 1 and stats.lights == 0
+        assert target.pixels()[..., :3].max() > 30
+        handle = meshes.add(cube_mesh())
+        assert meshes.add(meshes[handle].data) == handle  # a mesh is uploaded once
+    finally:
+        renderer.destroy()
+        meshes.destroy()
+        target.destroy()
+        device.destroy()
+        instance.destroy()
+    assert instance.messages == []
+
+
+def test_suballocator_serves_many_buffers_from_few_allocations():
+    from ecs_engine.gpu.device import Device
+    from ecs_engine.gpu.instance import Instance
+    from ecs_engine.gpu.memory import DEVICE, HOST, Buffer, upload
+
+    instance = Instance(validate=True)
+    device = Device(instance)
+    vk = device.vk
+    try:
+        buffers = [Buffer(device, 1000 + i, vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, HOST) for i in range(200)]
+        buffers += [Buffer(device, 4096, vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, DEVICE) for _ in range(50)]
+        assert device.allocator.allocate_calls <= 3
+        arr = buffers[3].array(np.float32)
+        arr[:] = np.arange(len(arr))
+        assert buffers[3].array(np.float32)[-1] == len(arr) - 1  # mapped: the same memory
+        spans = sorted((b.allocation.offset, b.allocation.offset + b.size) for b in buffers[:200])
+        assert all(a_end <= b_start for (_, a_end), (b_start, _) in zip(spans, spans[1:]))  # no overlap
+        data = np.arange(1000, dtype=np.uint32)
+        gpu = upload(device, data, vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT)
+        back = Buffer(device, data.nbytes, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
+        region = vk.VkBufferCopy(srcOffset=0, dstOffset=0, size=data.nbytes)
+        device.submit_once(lambda cb: vk.vkCmdCopyBuffer(cb, gpu.handle, back.handle, 1, [region]))
+        assert np.array_equal(back.array(np.uint32, 1000), data)  # the staging upload arrived
+        for b in [*buffers, gpu, back]:
+            b.destroy()
+        assert device.allocator.stats()["used_bytes"] == 0
+    finally:
+        device.destroy()
+        instance.destroy()
+    assert instance.messages == []
