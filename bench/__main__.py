@@ -20,6 +20,7 @@ from .machine import check_slug, describe
 # Benchmark name -> module (imported only when run). Add new benchmarks here.
 REGISTRY: dict[str, str] = {
     "ecs": "bench.ecs",
+    "seed-tables": "bench.seed_tables",
 }
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results"

@@ -44,6 +44,7 @@ class RunResult:
     wall_s: float = 0.0
     cpu_ms: list[float] = field(default_factory=list)
     gpu_ms: list[float] = field(default_factory=list)
+    frame_end: list[float] = field(default_factory=list)  # perf_counter() after each frame's submit
     validation_messages: list[str] = field(default_factory=list)
     device: str = ""
     pixels: np.ndarray | None = None
@@ -54,6 +55,12 @@ class RunResult:
     @property
     def fps(self) -> float:
         return self.frames / self.wall_s if self.wall_s > 0 else 0.0
+
+    def fps_after(self, warmup: int) -> float:
+        """Frames per second of wall clock over the frames after the first `warmup`."""
+        if warmup < 1 or len(self.frame_end) <= warmup:
+            return self.fps
+        return (len(self.frame_end) - warmup) / (self.frame_end[-1] - self.frame_end[warmup - 1])
 
 
 def scene_builder(name: str) -> Callable[..., None]:
@@ -112,6 +119,7 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
             stats = renderer.render(world, readback=last and options.screenshot is not None)
             now = time.perf_counter()
             result.cpu_ms.append((now - t0) * 1e3)
+            result.frame_end.append(now)
             if stats.gpu_ms is not None:
                 result.gpu_ms.append(stats.gpu_ms)
             result.last_stats = stats

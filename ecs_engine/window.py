@@ -120,6 +120,7 @@ def run_windowed(options: RunOptions, glfw: Any,
                                     extent=(swapchain.width, swapchain.height),
                                     wait=frame.image_available, signal=swapchain.render_finished[index])
             result.cpu_ms.append((time.perf_counter() - t0) * 1e3)
+            result.frame_end.append(time.perf_counter())
             if not swapchain.present(index) or suboptimal:
                 resized[0] = True
             if stats.gpu_ms is not None:

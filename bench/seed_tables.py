@@ -1,0 +1,99 @@
+"""The seed's three scenes (1 cube, 100 cubes, OBJ model) headless, beside the seed's Tables 4.1-4.3.
+
+Per scene: warm-up frames, then timed frames with the default schedule and renderer; FPS from
+the wall clock; CPU frame ms (frame start to submit); GPU frame ms from timestamp queries at the
+start and end of the frame's command buffer; CPU system % and process % from psutil over the
+timed frames (process % raw and per core). This first version runs the single-threaded
+recorder only; the multi-threaded modes come with the job-system issue.
+
+JSON (schema_version 1): {"benchmark": "seed-tables", "quick", "machine", "device",
+"config": {"width", "height", "warmup", "frames"}, "results": [{"scene", "mode", "threads",
+"frames", "fps", "cpu_ms_mean", "cpu_ms_p99", "gpu_ms_mean", "gpu_ms_p99", "cpu_system_percent",
+"cpu_process_percent", "cpu_process_percent_per_core", "draws", "triangles"}], "seed": {...}}
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+from typing import Any
+
+import numpy as np
+import psutil
+
+from ecs_engine.app import RunOptions, run as run_scene
+
+THREADS = 1
+SCENES = ("cube", "grid100", "model")
+
+# The seed thesis (i7-11800H, RTX 3070, Windows 11): Tables 4.1, 4.2 and 4.3,
+# (single-threaded, multi-threaded).
+SEED = {
+    "cube": {"fps": (580, 600), "cpu_ms": (1.7, 1.6), "gpu_ms": (0.01, 0.01), "cpu_system": (4.1, 3.2), "cpu_process": (0.5, 0.3)},
+    "grid100": {"fps": (280, 420), "cpu_ms": (3.5, 2.4), "gpu_ms": (0.02, 0.02), "cpu_system": (6.3, 4.5), "cpu_process": (0.9, 0.5)},
+    "model": {"fps": (190, 322), "cpu_ms": (5.2, 3.1), "gpu_ms": (0.05, 0.05), "cpu_system": (8.5, 5.6), "cpu_process": (1.4, 0.7)},
+}
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--width", type=int, default=1280)
+    parser.add_argument("--height", type=int, default=720)
+
+
+def measure(scene: str, width: int, height: int, warmup: int, frames: int) -> dict[str, Any]:
+    proc = psutil.Process()
+    psutil.cpu_percent(None)
+    proc.cpu_percent(None)
+    t0 = time.perf_counter()
+    result = run_scene(RunOptions(scene=scene, width=width, height=height, frames=warmup + frames, quiet=True))
+    system = psutil.cpu_percent(None)
+    process = proc.cpu_percent(None)
+    wall = time.perf_counter() - t0
+    cpu = np.array(result.cpu_ms[warmup:])
+    gpu = np.array(result.gpu_ms[warmup:]) if len(result.gpu_ms) > warmup else np.array(result.gpu_ms)
+    stats = result.last_stats
+    cores = psutil.cpu_count() or 1
+    return {
+        "scene": scene, "mode": "instanced", "threads": 1, "frames": frames,
+        "fps": float(result.fps_after(warmup)),  # wall clock over the timed frames
+        "cpu_ms_mean": float(cpu.mean()), "cpu_ms_p99": float(np.percentile(cpu, 99)),
+        "gpu_ms_mean": float(gpu.mean()) if len(gpu) else None,
+        "gpu_ms_p99": float(np.percentile(gpu, 99)) if len(gpu) else None,
+        "cpu_system_percent": float(system), "cpu_process_percent": float(process),
+        "cpu_process_percent_per_core": float(process / cores),
+        "draws": stats.draws, "triangles": stats.triangles, "entities_drawn": stats.instances,
+        "device": result.device, "validation_messages": len(result.validation_messages),
+        "run_wall_s": wall,
+    }
+
+
+def format_table(doc: dict[str, Any]) -> str:
+    lines = [f"{'scene':8} {'FPS':>8} {'seed FPS':>9} {'CPU ms':>8} {'seed CPU':>9} {'GPU ms':>8} "
+             f"{'seed GPU':>9} {'sys %':>6} {'proc %':>7} {'seed sys/proc %':>16}"]
+    for r in doc["results"]:
+        s = SEED[r["scene"]]
+        gpu = f"{r['gpu_ms_mean']:.3f}" if r["gpu_ms_mean"] is not None else "n/a"
+        lines.append(f"{r['scene']:8} {r['fps']:8.0f} {s['fps'][0]:9} {r['cpu_ms_mean']:8.3f} {s['cpu_ms'][0]:9} "
+                     f"{gpu:>8} {s['gpu_ms'][0]:9} {r['cpu_system_percent']:6.1f} {r['cpu_process_percent']:7.1f} "
+                     f"{s['cpu_system'][0]:>8}/{s['cpu_process'][0]}")
+    lines.append("seed: i7-11800H + RTX 3070, Windows 11, single-threaded columns of Tables 4.1-4.3 "
+                 "(its GPU times read ~0: two adjacent timestamps)")
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dict[str, Any]:
+    warmup, frames = (10, 60) if args.quick else (120, 1200)
+    width, height = (args.width, args.height) if not args.quick else (320, 240)
+    results = []
+    for scene in SCENES:
+        with progress.step(f"{scene}: {warmup} warm-up + {frames} frames at {width}x{height}"):
+            results.append(measure(scene, width, height, warmup, frames))
+    doc = {
+        "benchmark": "seed-tables", "schema_version": 1, "quick": bool(args.quick), "machine": machine,
+        "device": results[0]["device"], "config": {"width": width, "height": height, "warmup": warmup,
+                                                    "frames": frames, "pid": os.getpid()},
+        "results": results, "seed": SEED,
+    }
+    print(format_table(doc))
+    return doc
