@@ -474,6 +474,12 @@ def esper_queries(api: Any, n: int, xs: list[float], runs: int) -> dict[str, tup
             s += pos.x
         return s
 
+    return _time_queries(q1, q2, q3, touch, runs)
+
+
+def _time_queries(q1: Callable[[], Any], q2: Callable[[], Any], q3: Callable[[], Any],
+                  touch: Callable[[], float], runs: int) -> dict[str, tuple[float, float, float | None]]:
+    """(best, first run, checksum) seconds for the three queries and the summing one."""
     out: dict[str, tuple[float, float, float | None]] = {}
     for name, fn in (("query1", q1), ("query2", q2), ("query3", q3)):
         best, first = _time_min(fn, runs)
@@ -508,13 +514,7 @@ def native_queries(n: int, xs: np.ndarray, runs: int) -> dict[str, tuple[float, 
             s += float(b[NPosition].x.sum())
         return s
 
-    out: dict[str, tuple[float, float, float | None]] = {}
-    for name, fn in (("query1", q1), ("query2", q2), ("query3", q3)):
-        best, first = _time_min(fn, runs)
-        out[name] = (best, first, None)
-    best, first = _time_min(touch, runs)
-    out["query1_sum_x"] = (best, first, touch())
-    return out
+    return _time_queries(q1, q2, q3, touch, runs)
 
 
 def run_queries(r: Runner, n: int) -> None:
