@@ -42,7 +42,7 @@ class RunOptions:
 class RunResult:
     frames: int = 0
     wall_s: float = 0.0
-    cpu_ms: list[float] = field(default_factory=list)
+    cpu_ms: list[float] = field(default_factory=list)  # frame start to submit, minus waits for the GPU
     gpu_ms: list[float] = field(default_factory=list)
     frame_end: list[float] = field(default_factory=list)  # perf_counter() after each frame's submit
     validation_messages: list[str] = field(default_factory=list)
@@ -118,7 +118,7 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
             last = i == frames - 1
             stats = renderer.render(world, readback=last and options.screenshot is not None)
             now = time.perf_counter()
-            result.cpu_ms.append((now - t0) * 1e3)
+            result.cpu_ms.append((now - t0) * 1e3 - stats.wait_ms)  # CPU work, not waiting for the GPU
             result.frame_end.append(now)
             if stats.gpu_ms is not None:
                 result.gpu_ms.append(stats.gpu_ms)

@@ -47,6 +47,7 @@ class FrameStats:
     triangles: int
     lights: int
     gpu_ms: float | None  # of an earlier frame: timestamps are read without waiting
+    wait_ms: float = 0.0  # spent waiting for a frame slot (GPU-bound), not CPU work
 
 
 @dataclass
@@ -215,7 +216,7 @@ class Renderer:
             self.frames.wait(frame)
         triangles = sum(self.meshes.triangles(h) * c for h, _, _, c in runs)
         return FrameStats(draws=len(runs) + (1 if len(lights) else 0), instances=len(instances),
-                          triangles=triangles, lights=len(lights), gpu_ms=gpu_ms)
+                          triangles=triangles, lights=len(lights), gpu_ms=gpu_ms, wait_ms=self.frames.last_wait_ms)
 
     def _write_globals(self, pf: _PerFrame, cam: CameraMatrices, light_count: int) -> None:
         raw = pf.globals.bytes()

@@ -110,16 +110,18 @@ def run_windowed(options: RunOptions, glfw: Any,
             t0 = now
             schedule.run(world, dt)
             frame = renderer.frames.frames[renderer.frames.index]
+            w0 = time.perf_counter()
             renderer.frames.wait(frame)  # the semaphore below is free once this frame is done
             try:
-                index, suboptimal = swapchain.acquire(frame.image_available)
+                index, suboptimal = swapchain.acquire(frame.image_available)  # may block on vsync
             except OutOfDate:
                 swapchain.recreate()
                 continue
+            waited_ms = (time.perf_counter() - w0) * 1e3
             stats = renderer.render(world, framebuffer=swapchain.framebuffers[index],
                                     extent=(swapchain.width, swapchain.height),
                                     wait=frame.image_available, signal=swapchain.render_finished[index])
-            result.cpu_ms.append((time.perf_counter() - t0) * 1e3)
+            result.cpu_ms.append((time.perf_counter() - t0) * 1e3 - stats.wait_ms - waited_ms)
             result.frame_end.append(time.perf_counter())
             if not swapchain.present(index) or suboptimal:
                 resized[0] = True

@@ -3,6 +3,7 @@ swapchain semaphores and a timestamp query pool read back without waiting."""
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -29,6 +30,7 @@ class FrameRing:
         self.device = device
         self.frames: list[Frame] = []
         self.index = 0
+        self.last_wait_ms = 0.0  # time begin() spent waiting for the GPU (not CPU work)
         self.timestamps = device.info.timestamp_valid_bits > 0
         for _ in range(count):
             pool = vk.vkCreateCommandPool(device.handle, vk.VkCommandPoolCreateInfo(
@@ -46,7 +48,9 @@ class FrameRing:
         work it last carried, which is complete once its fence is signalled (no extra wait)."""
         vk = self.device.vk
         frame = self.frames[self.index]
+        t0 = time.perf_counter()
         vk.vkWaitForFences(self.device.handle, 1, [frame.fence], vk.VK_TRUE, 2**64 - 1)
+        self.last_wait_ms = (time.perf_counter() - t0) * 1e3
         gpu_ms = self._read_timestamps(frame) if frame.submitted else None
         vk.vkResetCommandPool(self.device.handle, frame.pool, 0)
         vk.vkBeginCommandBuffer(frame.command_buffer, vk.VkCommandBufferBeginInfo(
