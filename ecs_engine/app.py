@@ -36,6 +36,10 @@ class RunOptions:
     validate: bool = False
     present: str = "fifo"
     quiet: bool = False
+    mode: str = "instanced"  # instanced | per_entity
+    threads: int | None = None  # worker pool size, counting the main thread (None: all cores)
+    culling: bool = True
+    chunk_rows: int = 4096  # rows per render job
 
 
 @dataclass
@@ -98,19 +102,23 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
     say = log or (lambda text: None if options.quiet else print(text))
     build = scene_builder(options.scene)
     result = RunResult()
-    instance = device = target = meshes = renderer = None
+    instance = device = target = meshes = renderer = jobs = None
     try:
+        jobs = job_pool(options)
         instance = Instance(validate=options.validate)
         device = Device(instance)
         result.device = f"{device.info.name} ({device.info.driver_name} {device.info.driver_info})".strip()
         target = OffscreenTarget(device, options.width, options.height)
         meshes = MeshRegistry(device)
         world = World()
+        world.resources[type(jobs)] = jobs
         build(world, meshes.add, options.path)
         schedule = default_schedule()
-        renderer = Renderer(device, target, meshes, lights=has_lights(world))
+        renderer = Renderer(device, target, meshes, lights=has_lights(world), mode=options.mode, jobs=jobs,
+                            culling=options.culling, chunk_rows=options.chunk_rows)
         frames = options.frames or 1
-        say(f"{options.scene}: headless {options.width}x{options.height} on {result.device}, {frames} frames")
+        say(f"{options.scene}: headless {options.width}x{options.height} on {result.device}, {frames} frames, "
+            f"mode {options.mode}, {jobs.threads} threads")
         start = last_report = time.perf_counter()
         for i in range(frames):
             t0 = time.perf_counter()
@@ -140,7 +148,16 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
         if instance is not None:
             instance.destroy()
             result.validation_messages = list(instance.messages)
+        if jobs is not None:
+            jobs.close()
     return result
+
+
+def job_pool(options: RunOptions) -> Any:
+    """The run's worker pool (also given to the world, so the stock systems split large tables)."""
+    from .jobs import JobPool
+
+    return JobPool(options.threads)
 
 
 def summary_line(result: RunResult, frames: int, wall_s: float) -> str:
@@ -149,8 +166,8 @@ def summary_line(result: RunResult, frames: int, wall_s: float) -> str:
     stats = result.last_stats
     gpu_text = f"gpu {gpu.mean():.3f} ms" if len(gpu) else "gpu n/a"
     return (f"frame {frames}: {frames / wall_s if wall_s > 0 else 0:.0f} fps (wall clock), cpu {cpu.mean():.3f} ms "
-            f"(p99 {np.percentile(cpu, 99):.3f}), {gpu_text}; {stats.instances} entities drawn in {stats.draws} "
-            f"draws, {stats.triangles} triangles, {stats.lights} lights")
+            f"(p99 {np.percentile(cpu, 99):.3f}), {gpu_text}; {stats.instances} of {stats.candidates} entities "
+            f"drawn in {stats.draws} draws, {stats.triangles} triangles, {stats.lights} lights")
 
 
 def save_png(pixels: np.ndarray, path: str) -> None:

@@ -48,6 +48,10 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--present", choices=("fifo", "mailbox", "immediate"), default="fifo",
                       help="swapchain present mode (windowed)")
     demo.add_argument("--validate", action="store_true", help="enable the Vulkan validation layers")
+    demo.add_argument("--mode", choices=("instanced", "per_entity"), default="instanced",
+                      help="instanced: one draw per mesh per chunk; per_entity: one draw per entity (the seed's way)")
+    demo.add_argument("--threads", type=positive_int, help="worker threads, counting the main one (default: all cores)")
+    demo.add_argument("--no-culling", dest="culling", action="store_false", help="draw everything, skip frustum culling")
     demo.add_argument("--entities", type=positive_int, default=100_000, help="motion scene: entity count")
     demo.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show tracebacks")
     return parser
@@ -71,7 +75,8 @@ def run_scene(args: argparse.Namespace) -> int:
         raise UsageError(f"a model path only goes with the model scene, not {args.scene!r}")
     options = RunOptions(scene=args.scene, path=args.path, headless=args.headless, frames=args.frames,
                          screenshot=args.screenshot, width=args.width, height=args.height,
-                         validate=args.validate, present=args.present)
+                         validate=args.validate, present=args.present, mode=args.mode, threads=args.threads,
+                         culling=args.culling)
     if not args.headless:
         from .window import open_glfw, run_windowed
 

@@ -1,8 +1,17 @@
 """The renderer: reads the world's derived arrays, writes per-frame GPU buffers, records a frame.
 
 Data goes one way: ModelMatrix/Mesh/PointLight/Camera columns -> mapped per-frame buffers ->
-commands. The renderer never writes the world. One instanced draw per (mesh, winding) run of
-entities; mirrored entities (negative determinant) get the pipeline with the opposite front face
+commands. The renderer never writes the world.
+
+The mesh rows are cut into chunks (row ranges of a table); each chunk is one job on the worker
+pool: cull its bounding spheres against the frustum, write its visible rows into its own slice
+of the per-frame instance buffer, record a secondary command buffer. The primary command buffer
+begins the render pass with SECONDARY_COMMAND_BUFFERS contents, executes every chunk's
+secondary in subpass 0 and draws the light billboards inline in subpass 1.
+
+Modes: `instanced` (one instanced draw per (mesh, winding) run of a chunk, rows read from the
+storage buffer) and `per_entity` (the seed's way: the row in push constants, one draw per
+entity). Mirrored entities (negative determinant) get the pipeline with the opposite front face
 so back-face culling stays right. Light billboards are built only when the scene has lights.
 """
 
@@ -13,13 +22,18 @@ from typing import Any
 
 import numpy as np
 
+import time
+
 from .camera_math import CameraMatrices, camera_matrices
 from .components import Mesh, ModelMatrix, PointLight, Transform
+from .culling import bounding_spheres, frustum_planes, spheres_visible
 from .gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
 from .gpu.device import Device
 from .gpu.frames import Frame, FrameRing
 from .gpu.memory import HOST, Buffer
 from .gpu.pipeline import GraphicsPipelineSpec, PipelineCache, graphics_pipeline, pipeline_layout
+from .gpu.secondary import SecondaryBuffers
+from .jobs import JobPool, row_chunks
 from .mesh_registry import VERTEX_STRIDE, MeshRegistry
 from .world import World
 
@@ -28,7 +42,8 @@ LIGHT_DTYPE = np.dtype([("position_radius", np.float32, 4), ("color_intensity", 
 MATERIAL_DTYPE = np.dtype([("color", np.float32, 4), ("specular", np.float32, 4)])
 GLOBALS_BYTES = 3 * 64 + 16 + 16
 MIN_LIGHTS = 256
-
+MODES = ("instanced", "per_entity")
+CHUNK_ROWS = 4096  # rows per job: enough work to outweigh a job's hand-out cost
 # A small default palette (linear RGB); Mesh.material indexes it modulo its length.
 DEFAULT_MATERIALS = [
     ((0.80, 0.80, 0.80), 0.5, 32.0),
@@ -41,13 +56,33 @@ DEFAULT_MATERIALS = [
 
 
 @dataclass
+class Chunk:
+    model: np.ndarray
+    normal: np.ndarray
+    handle: np.ndarray
+    material: np.ndarray
+    offset: int  # first row of this chunk's slice of the instance buffer
+
+
+@dataclass
+class ChunkResult:
+    command_buffer: Any  # None when nothing in the chunk is visible
+    visible: int
+    draws: int
+    triangles: int
+
+
+@dataclass
 class FrameStats:
     draws: int
-    instances: int
+    instances: int  # visible entities drawn
     triangles: int
     lights: int
     gpu_ms: float | None  # of an earlier frame: timestamps are read without waiting
     wait_ms: float = 0.0  # spent waiting for a frame slot (GPU-bound), not CPU work
+    record_ms: float = 0.0  # the chunk jobs: cull, write rows, record secondaries
+    chunks: int = 0
+    candidates: int = 0  # entities with a mesh, before culling
 
 
 @dataclass
@@ -60,9 +95,13 @@ class _PerFrame:
 
 class Renderer:
     def __init__(self, device: Device, target: Any, meshes: MeshRegistry, *, lights: bool,
+                 mode: str = "instanced", jobs: JobPool | None = None, culling: bool = True,
+                 chunk_rows: int = CHUNK_ROWS,
                  clear_color: tuple[float, float, float] = (0.02, 0.02, 0.03),
                  ambient: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 0.06),
                  light_size: float = 0.08) -> None:
+        if mode not in MODES:
+            raise ValueError(f"unknown render mode {mode!r}; modes: {', '.join(MODES)}")
         vk = self.vk = device.vk
         self.device = device
         self.target = target
@@ -71,7 +110,12 @@ class Renderer:
         self.clear_color = clear_color
         self.ambient = ambient
         self.light_size = light_size
+        self.mode = mode
+        self.jobs = jobs
+        self.culling = culling
+        self.chunk_rows = chunk_rows
         self.frames = FrameRing(device)
+        self.secondaries = SecondaryBuffers(device, len(self.frames.frames))
         self.cache = PipelineCache(device)
         stages = vk.VK_SHADER_STAGE_VERTEX_BIT | vk.VK_SHADER_STAGE_FRAGMENT_BIT
         ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
@@ -79,7 +123,9 @@ class Renderer:
             (0, vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, stages), (1, ssbo, stages), (2, ssbo, stages), (3, ssbo, stages)])
         n = len(self.frames.frames)
         self.pool = DescriptorPool(device, n, {vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER: n, ssbo: 3 * n})
-        self.layout = pipeline_layout(device, [self.set_layout.handle], [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, 4)])
+        # one push range for both users: the billboard size (4 bytes), a per_entity row (112)
+        self.layout = pipeline_layout(device, [self.set_layout.handle],
+                                      [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, INSTANCE_DTYPE.itemsize)])
         self.materials = Buffer(device, MATERIAL_DTYPE.itemsize * len(DEFAULT_MATERIALS), vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT)
         table = self.materials.array(MATERIAL_DTYPE, len(DEFAULT_MATERIALS))
         for i, (color, strength, shininess) in enumerate(DEFAULT_MATERIALS):
@@ -111,9 +157,10 @@ class Renderer:
         attrs = [(0, vk.VK_FORMAT_R32G32B32_SFLOAT, 0), (1, vk.VK_FORMAT_R32G32B32_SFLOAT, 12)]
         base = dict(layout=self.layout, render_pass=self.target.render_pass, subpass=0,
                     vertex_stride=VERTEX_STRIDE, vertex_attributes=attrs)
-        self.mesh_pipeline = graphics_pipeline(self.device, self.cache, GraphicsPipelineSpec("mesh.vert", "mesh.frag", **base))
+        vert = "mesh.vert" if self.mode == "instanced" else "mesh_push.vert"
+        self.mesh_pipeline = graphics_pipeline(self.device, self.cache, GraphicsPipelineSpec(vert, "mesh.frag", **base))
         self.mirrored_pipeline = graphics_pipeline(self.device, self.cache, GraphicsPipelineSpec(
-            "mesh.vert", "mesh.frag", front_face_ccw=False, **base))
+            vert, "mesh.frag", front_face_ccw=False, **base))
         self.light_pipeline = None
         if self.with_lights:
             self.light_pipeline = graphics_pipeline(self.device, self.cache, GraphicsPipelineSpec(
@@ -138,41 +185,85 @@ class Renderer:
             self._write_set(pf)
 
     # ------------------------------------------------------------- per frame
-    def gather_instances(self, world: World, out: np.ndarray | None = None) -> tuple[np.ndarray, list[tuple[int, bool, int, int]]]:
-        """Instance rows sorted by (mesh, mirrored) and the draw runs (handle, mirrored, first, count)."""
-        models, normals, handles, materials = [], [], [], []
+    def chunks(self, world: World) -> list[Chunk]:
+        """Row ranges of every table with a ModelMatrix and a Mesh, each with its buffer slice."""
+        out: list[Chunk] = []
+        offset = 0
         for batch in world.query(ModelMatrix, Mesh, write=()):
-            m = batch[ModelMatrix]
-            models.append(m.model)
-            normals.append(m.normal)
-            handles.append(batch[Mesh].handle)
-            materials.append(batch[Mesh].material)
-        if not models:
-            return np.empty(0, INSTANCE_DTYPE), []
-        model = np.concatenate(models)
-        normal = np.concatenate(normals)
-        handle = np.concatenate(handles)
+            m, mesh = batch[ModelMatrix], batch[Mesh]
+            for s in row_chunks(len(batch), self.chunk_rows):
+                out.append(Chunk(m.model[s], m.normal[s], mesh.handle[s], mesh.material[s], offset))
+                offset += s.stop - s.start
+        if out:
+            top = max(int(c.handle.max()) for c in out)
+            if top >= len(self.meshes):
+                raise ValueError(f"Mesh.handle {top} does not name an uploaded mesh ({len(self.meshes)} uploaded)")
+        return out
+
+    def _mesh_bounds(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        n = len(self.meshes)
+        if getattr(self, "_bounds_n", -1) != n:
+            self._bounds = (np.array([self.meshes[h].data.center for h in range(n)], dtype=np.float64).reshape(n, 3),
+                            np.array([self.meshes[h].data.radius for h in range(n)], dtype=np.float64),
+                            np.array([self.meshes[h].index_count for h in range(n)], dtype=np.int64))
+            self._bounds_n = n
+        return self._bounds
+
+    def record_chunk(self, chunk: Chunk, ctx: dict[str, Any]) -> ChunkResult:
+        """One job: cull, write the visible rows into this chunk's slice, record a secondary."""
+        vk = self.vk
+        centers_m, radii_m, index_counts = ctx["bounds"]
+        if ctx["planes"] is not None:
+            centers, radii = bounding_spheres(chunk.model, centers_m[chunk.handle], radii_m[chunk.handle])
+            visible = np.flatnonzero(spheres_visible(centers, radii, ctx["planes"]))
+            if len(visible) == 0:
+                return ChunkResult(None, 0, 0, 0)
+            model, normal = chunk.model[visible], chunk.normal[visible]
+            handle, material = chunk.handle[visible], chunk.material[visible]
+        else:
+            model, normal, handle, material = chunk.model, chunk.normal, chunk.handle, chunk.material
+        n = len(handle)
         m3 = model[:, :3, :3]
         det = (m3[:, 0, 0] * (m3[:, 1, 1] * m3[:, 2, 2] - m3[:, 1, 2] * m3[:, 2, 1])
                - m3[:, 0, 1] * (m3[:, 1, 0] * m3[:, 2, 2] - m3[:, 1, 2] * m3[:, 2, 0])
                + m3[:, 0, 2] * (m3[:, 1, 0] * m3[:, 2, 1] - m3[:, 1, 1] * m3[:, 2, 0]))
         mirrored = det < 0
         order = np.lexsort((mirrored, handle))
-        n = len(order)
-        rows = out[:n] if out is not None else np.empty(n, INSTANCE_DTYPE)
+        rows = ctx["instances"][chunk.offset : chunk.offset + n]
         rows["model"] = model[order, :3, :]
         rows["normal"][:, :, :3] = normal[order]
         rows["normal"][:, :, 3] = 0.0
-        rows["misc"][:, 0] = np.concatenate(materials)[order] % len(DEFAULT_MATERIALS)
+        rows["misc"][:, 0] = material[order] % len(DEFAULT_MATERIALS)
         rows["misc"][:, 1:] = 0
         key = handle[order].astype(np.int64) * 2 + mirrored[order]
         starts = np.flatnonzero(np.diff(key, prepend=-1))
         counts = np.diff(np.append(starts, n))
-        runs = [(int(key[s] // 2), bool(key[s] % 2), int(s), int(c)) for s, c in zip(starts, counts)]
-        for h, _, _, _ in runs:
-            if h >= len(self.meshes):
-                raise ValueError(f"Mesh.handle {h} does not name an uploaded mesh ({len(self.meshes)} uploaded)")
-        return rows, runs
+
+        cb = self.secondaries.begin(ctx["slot"], self.target.render_pass, 0, ctx["framebuffer"])
+        vk.vkCmdSetViewport(cb, 0, 1, [ctx["viewport"]])  # not inherited by secondaries
+        vk.vkCmdSetScissor(cb, 0, 1, [ctx["scissor"]])
+        vk.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1, [ctx["set"]], 0, None)
+        draws = triangles = 0
+        bound = None
+        for start, count in zip(starts.tolist(), counts.tolist()):
+            h, flipped = divmod(int(key[start]), 2)
+            pipeline = self.mirrored_pipeline if flipped else self.mesh_pipeline
+            if pipeline is not bound:
+                vk.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline)
+                bound = pipeline
+            mesh = self.meshes.bind(cb, h)
+            if self.mode == "instanced":
+                vk.vkCmdDrawIndexed(cb, mesh.index_count, count, 0, 0, chunk.offset + start)
+                draws += 1
+            else:
+                for i in range(start, start + count):
+                    vk.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_VERTEX_BIT, 0,
+                                          INSTANCE_DTYPE.itemsize, vk.ffi.from_buffer(rows[i : i + 1]))
+                    vk.vkCmdDrawIndexed(cb, mesh.index_count, 1, 0, 0, 0)
+                draws += count
+            triangles += int(index_counts[h]) // 3 * count
+        vk.vkEndCommandBuffer(cb)
+        return ChunkResult(cb, n, draws, triangles)
 
     def gather_lights(self, world: World, camera_position: np.ndarray) -> np.ndarray:
         """Camera-relative lights sorted far to near (the billboards blend back to front)."""
@@ -196,27 +287,44 @@ class Renderer:
         """Record and submit one frame. Headless targets read the image back when asked."""
         vk = self.vk
         width, height = extent or (self.target.width, self.target.height)
+        framebuffer = framebuffer or self.target.framebuffer
         frame, gpu_ms = self.frames.begin()
-        pf = self.per_frame[self.frames.frames.index(frame)]
+        slot = self.frames.frames.index(frame)
+        pf = self.per_frame[slot]
+        self.secondaries.reset(slot)
         cam = camera_matrices(world, width / height)
         lights = self.gather_lights(world, cam.position) if self.with_lights else np.empty(0, LIGHT_DTYPE)
-        instances, runs = self.gather_instances(world)
-        self._ensure_capacity(pf, len(instances), len(lights))
-        if len(instances):
-            pf.instances.array(INSTANCE_DTYPE, len(instances))[:] = instances
+        chunks = self.chunks(world)
+        candidates = sum(len(c.handle) for c in chunks)
+        self._ensure_capacity(pf, candidates, len(lights))
         if len(lights):
             pf.lights.array(LIGHT_DTYPE, len(lights))[:] = lights
         self._write_globals(pf, cam, len(lights))
+        area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(width, height))
+        ctx = {
+            "slot": slot, "framebuffer": framebuffer, "set": pf.descriptor_set, "scissor": area,
+            "viewport": vk.VkViewport(x=0.0, y=0.0, width=float(width), height=float(height), minDepth=0.0, maxDepth=1.0),
+            "planes": frustum_planes(cam.projection, cam.view) if self.culling else None,
+            "instances": pf.instances.array(INSTANCE_DTYPE, max(candidates, 1)),
+            "bounds": self._mesh_bounds(),
+        }
+        t0 = time.perf_counter()
+        job = lambda chunk: self.record_chunk(chunk, ctx)  # noqa: E731
+        results = self.jobs.map(job, chunks, [f"rows {c.offset}:{c.offset + len(c.handle)}" for c in chunks]) \
+            if self.jobs is not None else [job(c) for c in chunks]
+        record_ms = (time.perf_counter() - t0) * 1e3
         cb = frame.command_buffer
-        self._record(cb, pf, runs, len(lights), framebuffer or self.target.framebuffer, width, height)
+        self._record_primary(cb, [r.command_buffer for r in results if r.command_buffer is not None],
+                             len(lights), framebuffer, area, pf.descriptor_set)
         if readback:
             self.target.record_readback(cb)
         self.frames.end(frame, wait=wait, signal=signal)
         if readback:
             self.frames.wait(frame)
-        triangles = sum(self.meshes.triangles(h) * c for h, _, _, c in runs)
-        return FrameStats(draws=len(runs) + (1 if len(lights) else 0), instances=len(instances),
-                          triangles=triangles, lights=len(lights), gpu_ms=gpu_ms, wait_ms=self.frames.last_wait_ms)
+        return FrameStats(draws=sum(r.draws for r in results) + (1 if len(lights) else 0),
+                          instances=sum(r.visible for r in results), triangles=sum(r.triangles for r in results),
+                          lights=len(lights), gpu_ms=gpu_ms, wait_ms=self.frames.last_wait_ms,
+                          record_ms=record_ms, chunks=len(chunks), candidates=candidates)
 
     def _write_globals(self, pf: _PerFrame, cam: CameraMatrices, light_count: int) -> None:
         raw = pf.globals.bytes()
@@ -227,31 +335,25 @@ class Renderer:
         raw[192:208].view(np.float32)[:] = self.ambient
         raw[208:224].view(np.uint32)[:] = (light_count, 0, 0, 0)
 
-    def _record(self, cb: Any, pf: _PerFrame, runs: list[tuple[int, bool, int, int]], light_count: int,
-                framebuffer: Any, width: int, height: int) -> None:
+    def _record_primary(self, cb: Any, secondaries: list[Any], light_count: int, framebuffer: Any, area: Any,
+                        descriptor_set: Any) -> None:
         vk = self.vk
         clears = [vk.VkClearValue(color=vk.VkClearColorValue(float32=[*self.clear_color, 1.0])),
                   vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=0.0, stencil=0))]  # reverse-Z
-        area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(width, height))
         vk.vkCmdBeginRenderPass(cb, vk.VkRenderPassBeginInfo(
             renderPass=self.target.render_pass, framebuffer=framebuffer, renderArea=area, pClearValues=clears),
-            vk.VK_SUBPASS_CONTENTS_INLINE)
-        viewport = vk.VkViewport(x=0.0, y=0.0, width=float(width), height=float(height), minDepth=0.0, maxDepth=1.0)
-        vk.vkCmdSetViewport(cb, 0, 1, [viewport])
-        vk.vkCmdSetScissor(cb, 0, 1, [area])
-        vk.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1,
-                                   [pf.descriptor_set], 0, None)
-        bound = None
-        for handle, mirrored, first, count in runs:
-            pipeline = self.mirrored_pipeline if mirrored else self.mesh_pipeline
-            if pipeline is not bound:
-                vk.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline)
-                bound = pipeline
-            mesh = self.meshes.bind(cb, handle)
-            vk.vkCmdDrawIndexed(cb, mesh.index_count, count, 0, 0, first)
+            vk.VK_SUBPASS_CONTENTS_SECONDARY_COMMAND_BUFFERS)
+        if secondaries:
+            vk.vkCmdExecuteCommands(cb, len(secondaries), secondaries)
         vk.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
         if light_count and self.light_pipeline is not None:
+            width, height = area.extent.width, area.extent.height
+            viewport = vk.VkViewport(x=0.0, y=0.0, width=float(width), height=float(height), minDepth=0.0, maxDepth=1.0)
+            vk.vkCmdSetViewport(cb, 0, 1, [viewport])
+            vk.vkCmdSetScissor(cb, 0, 1, [area])
             vk.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.light_pipeline)
+            vk.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1,
+                                       [descriptor_set], 0, None)
             size = np.array([self.light_size], dtype=np.float32)
             vk.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_VERTEX_BIT, 0, 4, vk.ffi.from_buffer(size))
             vk.vkCmdDraw(cb, 6, light_count, 0, 0)
@@ -264,6 +366,7 @@ class Renderer:
             if pipeline is not None:
                 vk.vkDestroyPipeline(self.device.handle, pipeline, None)
         vk.vkDestroyPipelineLayout(self.device.handle, self.layout, None)
+        self.secondaries.destroy()
         for pf in self.per_frame:
             pf.globals.destroy()
             pf.lights.destroy()

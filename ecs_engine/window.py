@@ -11,7 +11,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from .app import RunOptions, RunResult, default_schedule, has_lights, scene_builder, summary_line
+from .app import RunOptions, RunResult, default_schedule, has_lights, job_pool, scene_builder, summary_line
 from .errors import UsageError
 from .world import World
 
@@ -51,8 +51,9 @@ def run_windowed(options: RunOptions, glfw: Any,
     say = (lambda text: None) if options.quiet else print
     build = scene_builder(options.scene)
     result = RunResult()
-    instance = device = swapchain = meshes = renderer = surface = window = None
+    instance = device = swapchain = meshes = renderer = surface = window = jobs = None
     try:
+        jobs = job_pool(options)
         glfw.window_hint(glfw.CLIENT_API, glfw.NO_API)
         window = glfw.create_window(options.width, options.height, f"ecs_engine - {options.scene}", None, None)
         if not window:
@@ -69,9 +70,11 @@ def run_windowed(options: RunOptions, glfw: Any,
         swapchain = Swapchain(device, surface, lambda: glfw.get_framebuffer_size(window), options.present)
         meshes = MeshRegistry(device)
         world = World()
+        world.resources[type(jobs)] = jobs
         build(world, meshes.add, options.path)
         schedule = default_schedule()
-        renderer = Renderer(device, swapchain, meshes, lights=has_lights(world))
+        renderer = Renderer(device, swapchain, meshes, lights=has_lights(world), mode=options.mode, jobs=jobs,
+                            culling=options.culling, chunk_rows=options.chunk_rows)
         keys = world.resources[InputState] = InputState()
         resized = [False]
 
@@ -153,4 +156,6 @@ def run_windowed(options: RunOptions, glfw: Any,
         if window is not None:
             glfw.destroy_window(window)
         glfw.terminate()
+        if jobs is not None:
+            jobs.close()
     return result

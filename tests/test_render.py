@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from golden_images import GOLDEN, SIZE, assert_close_to_golden, image_difference
 from PIL import Image
 
 from ecs_engine import World
@@ -21,24 +22,6 @@ from ecs_engine.app import RunOptions, default_schedule, run
 from ecs_engine.components import Mesh, Transform
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.mesh_data import cube_mesh
-
-GOLDEN = Path(__file__).resolve().parent / "golden"
-SIZE = (160, 120)
-
-
-def image_difference(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
-    diff = np.abs(a.astype(np.int16) - b.astype(np.int16))[..., :3]
-    return float(diff.mean()), float((diff.max(axis=-1) > 24).mean())
-
-
-def assert_close_to_golden(pixels: np.ndarray, name: str) -> None:
-    path = GOLDEN / f"{name}.png"
-    if os.environ.get("ECS_ENGINE_UPDATE_GOLDEN") == "1":
-        Image.fromarray(pixels[..., :3]).save(path)
-    reference = np.asarray(Image.open(path).convert("RGB"))
-    mean, outliers = image_difference(pixels[..., :3], reference)
-    assert mean <= 1.5 and outliers <= 0.005, f"{name}: mean diff {mean:.2f}, {outliers:.2%} pixels off"
-
 
 def render(scene: str, frames: int = 8, **kw) -> object:
     result = run(RunOptions(scene=scene, width=SIZE[0], height=SIZE[1], frames=frames,

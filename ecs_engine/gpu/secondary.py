@@ -1,0 +1,61 @@
+"""Secondary command buffers for worker threads: per frame in flight and per thread, one command
+pool (Vulkan pools are not thread-safe) that is reset whole when the frame slot comes round."""
+
+from __future__ import annotations
+
+import threading
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .device import Device
+
+
+class _ThreadPool:
+    def __init__(self, device: Device) -> None:
+        vk = device.vk
+        self.handle = vk.vkCreateCommandPool(device.handle, vk.VkCommandPoolCreateInfo(
+            flags=vk.VK_COMMAND_POOL_CREATE_TRANSIENT_BIT, queueFamilyIndex=device.queue_family), None)
+        self.buffers: list[Any] = []
+        self.used = 0
+
+
+class SecondaryBuffers:
+    def __init__(self, device: Device, frames: int) -> None:
+        self.device = device
+        self._pools: list[dict[int, _ThreadPool]] = [{} for _ in range(frames)]
+        self._lock = threading.Lock()  # only guards the dict when a new thread shows up
+
+    def reset(self, frame: int) -> None:
+        """Main thread, after the frame's fence: every buffer of that slot may be re-recorded."""
+        vk = self.device.vk
+        for pool in self._pools[frame].values():
+            if pool.used:
+                vk.vkResetCommandPool(self.device.handle, pool.handle, 0)
+                pool.used = 0
+
+    def begin(self, frame: int, render_pass: Any, subpass: int, framebuffer: Any) -> Any:
+        """A secondary buffer of the calling thread, begun inside `render_pass`/`subpass`."""
+        vk = self.device.vk
+        pools = self._pools[frame]
+        key = threading.get_ident()
+        pool = pools.get(key)
+        if pool is None:
+            with self._lock:
+                pool = pools[key] = _ThreadPool(self.device)
+        if pool.used == len(pool.buffers):
+            pool.buffers.append(vk.vkAllocateCommandBuffers(self.device.handle, vk.VkCommandBufferAllocateInfo(
+                commandPool=pool.handle, level=vk.VK_COMMAND_BUFFER_LEVEL_SECONDARY, commandBufferCount=1))[0])
+        cb = pool.buffers[pool.used]
+        pool.used += 1
+        inheritance = vk.VkCommandBufferInheritanceInfo(renderPass=render_pass, subpass=subpass, framebuffer=framebuffer)
+        vk.vkBeginCommandBuffer(cb, vk.VkCommandBufferBeginInfo(
+            flags=vk.VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT | vk.VK_COMMAND_BUFFER_USAGE_RENDER_PASS_CONTINUE_BIT,
+            pInheritanceInfo=inheritance))
+        return cb
+
+    def destroy(self) -> None:
+        vk = self.device.vk
+        for pools in self._pools:
+            for pool in pools.values():
+                vk.vkDestroyCommandPool(self.device.handle, pool.handle, None)
+        self._pools = []

@@ -1,0 +1,27 @@
+// The mesh vertex shader body, shared by mesh.vert (instance rows from a storage buffer, one
+// instanced draw per mesh run) and mesh_push.vert (the row in push constants, one draw per
+// entity: the seed's way).
+layout(location = 0) in vec3 in_position;
+layout(location = 1) in vec3 in_normal;
+
+layout(location = 0) out vec3 v_position;
+layout(location = 1) out vec3 v_normal;
+layout(location = 2) flat out uint v_material;
+
+#ifdef PUSH_INSTANCE
+layout(push_constant) uniform Push { Instance row; } push;
+#endif
+
+void main() {
+#ifdef PUSH_INSTANCE
+    Instance inst = push.row;
+#else
+    Instance inst = instances[gl_InstanceIndex];
+#endif
+    vec4 p = vec4(in_position, 1.0);
+    vec3 world = vec3(dot(inst.m0, p), dot(inst.m1, p), dot(inst.m2, p));
+    v_position = world;
+    v_normal = vec3(dot(inst.n0.xyz, in_normal), dot(inst.n1.xyz, in_normal), dot(inst.n2.xyz, in_normal));
+    v_material = inst.misc.x;
+    gl_Position = g.projection * (g.view * vec4(world, 1.0));
+}

@@ -1,0 +1,108 @@
+"""The render system's chunk jobs: every mode, thread count and culling setting draws the same
+image; culling drops what is off screen; a failing job is reported and the next frame renders."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ecs_engine.app import RunOptions, run
+from ecs_engine.jobs import JobError
+
+from golden_images import SIZE, assert_close_to_golden, image_difference
+
+
+def grid(tmp_path, **kw):
+    result = run(RunOptions(scene="grid100", width=SIZE[0], height=SIZE[1], frames=8, validate=True, quiet=True,
+                            screenshot=str(tmp_path / "g.png"), **kw))
+    assert result.validation_messages == []
+    return result
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    return grid(tmp_path_factory.mktemp("ref"), mode="instanced", threads=1).pixels
+
+
+@pytest.mark.parametrize("mode, threads, culling", [
+    ("instanced", 2, True), ("instanced", 4, True), ("per_entity", 1, True), ("per_entity", 2, True),
+    ("per_entity", 4, False), ("instanced", 1, False),
+])
+def test_same_image_in_every_mode_and_thread_count(reference, tmp_path, mode, threads, culling):
+    # chunks of 16 rows: several jobs even for 100 cubes
+    result = grid(tmp_path, mode=mode, threads=threads, culling=culling, chunk_rows=16)
+    mean, outliers = image_difference(result.pixels, reference)
+    assert mean < 0.05 and outliers == 0  # the same picture, not just a similar one
+    assert_close_to_golden(result.pixels, "grid100")
+    stats = result.last_stats
+    assert stats.chunks == 7 and stats.candidates == 100
+    assert stats.draws == (1 + (stats.instances if mode == "per_entity" else stats.chunks))
+
+
+def test_culling_drops_what_is_off_screen(tmp_path, monkeypatch):
+    import ecs_engine.demos.grid100 as grid100
+
+    original = grid100.build
+
+    def build(world, add_mesh, path=None):
+        original(world, add_mesh, path)
+        from ecs_engine.components import Mesh, Transform
+
+        # 50 cubes behind the camera: culled, and the picture does not change
+        world.spawn_batch(50, Transform(position=np.tile([20.0, 10.0, 30.0], (50, 1)) + np.arange(50)[:, None]),
+                          Mesh(handle=0))
+
+    monkeypatch.setattr(grid100, "build", build)
+    culled = grid(tmp_path, threads=2)
+    assert culled.last_stats.candidates == 150 and culled.last_stats.instances <= 100
+    assert_close_to_golden(culled.pixels, "grid100")
+    everything = grid(tmp_path, threads=2, culling=False)
+    assert everything.last_stats.instances == 150
+
+
+def test_a_failing_job_names_its_chunk_and_the_next_frame_renders(monkeypatch):
+    from ecs_engine.app import default_schedule
+    from ecs_engine.gpu.device import Device
+    from ecs_engine.gpu.instance import Instance
+    from ecs_engine.gpu.offscreen import OffscreenTarget
+    from ecs_engine.jobs import JobPool
+    from ecs_engine.mesh_registry import MeshRegistry
+    from ecs_engine.renderer import Renderer
+    from ecs_engine.world import World
+    from ecs_engine.demos import grid100
+
+    instance = Instance(validate=True)
+    device = Device(instance)
+    target = OffscreenTarget(device, 64, 48)
+    meshes = MeshRegistry(device)
+    jobs = JobPool(3)
+    world = World()
+    grid100.build(world, meshes.add)
+    renderer = Renderer(device, target, meshes, lights=True, jobs=jobs, chunk_rows=20)
+    real = renderer.record_chunk
+    calls = {"n": 0}
+
+    def flaky(chunk, ctx):
+        calls["n"] += 1
+        if chunk.offset == 40:
+            raise RuntimeError("boom")
+        return real(chunk, ctx)
+
+    try:
+        default_schedule().run(world, 0.0)
+        monkeypatch.setattr(renderer, "record_chunk", flaky)
+        with pytest.raises(JobError, match=r"chunk rows 40:60 failed: RuntimeError: boom"):
+            renderer.render(world)
+        monkeypatch.setattr(renderer, "record_chunk", real)
+        stats = renderer.render(world, readback=True)
+        assert stats.instances > 0 and target.pixels()[..., :3].max() > 30
+        stats = renderer.render(world, readback=True)
+        assert stats.gpu_ms is None or stats.gpu_ms > 0
+    finally:
+        renderer.destroy()
+        meshes.destroy()
+        target.destroy()
+        device.destroy()
+        instance.destroy()
+        jobs.close()
+    assert instance.messages == []
