@@ -3,8 +3,10 @@
 Per scene: warm-up frames, then timed frames with the default schedule and renderer; FPS from
 the wall clock; CPU frame ms (frame start to submit); GPU frame ms from timestamp queries at the
 start and end of the frame's command buffer; CPU system % and process % from psutil over the
-timed frames (process % raw and per core). This first version runs the single-threaded
-recorder only; the multi-threaded modes come with the job-system issue.
+timed frames (process % raw and per core). Each scene runs in both recording modes
+(`instanced`, `per_entity`) with one thread (the seed's single-threaded column) and with every
+core (its multi-threaded column); the recorder is the Python one (the native recorder comes with
+the job-system issue).
 
 JSON (schema_version 1): {"benchmark": "seed-tables", "quick", "machine", "device",
 "config": {"width", "height", "warmup", "frames"}, "results": [{"scene", "mode", "threads",
@@ -24,8 +26,11 @@ import psutil
 
 from ecs_engine.app import RunOptions, run as run_scene
 
-THREADS = 1
+from ecs_engine.jobs import default_threads
+
+THREADS = default_threads()
 SCENES = ("cube", "grid100", "model")
+MODES = ("instanced", "per_entity")
 
 # The seed thesis (i7-11800H, RTX 3070, Windows 11): Tables 4.1, 4.2 and 4.3,
 # (single-threaded, multi-threaded).
@@ -41,12 +46,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--height", type=int, default=720)
 
 
-def measure(scene: str, width: int, height: int, warmup: int, frames: int) -> dict[str, Any]:
+def measure(scene: str, width: int, height: int, warmup: int, frames: int, mode: str = "instanced",
+            threads: int = 1) -> dict[str, Any]:
     proc = psutil.Process()
     psutil.cpu_percent(None)
     proc.cpu_percent(None)
     t0 = time.perf_counter()
-    result = run_scene(RunOptions(scene=scene, width=width, height=height, frames=warmup + frames, quiet=True))
+    result = run_scene(RunOptions(scene=scene, width=width, height=height, frames=warmup + frames, quiet=True,
+                                  mode=mode, threads=threads))
     system = psutil.cpu_percent(None)
     process = proc.cpu_percent(None)
     wall = time.perf_counter() - t0
@@ -55,11 +62,12 @@ def measure(scene: str, width: int, height: int, warmup: int, frames: int) -> di
     stats = result.last_stats
     cores = psutil.cpu_count() or 1
     return {
-        "scene": scene, "mode": "instanced", "threads": 1, "frames": frames,
+        "scene": scene, "mode": mode, "threads": threads, "frames": frames,
         "fps": float(result.fps_after(warmup)),  # wall clock over the timed frames
         "cpu_ms_mean": float(cpu.mean()), "cpu_ms_p99": float(np.percentile(cpu, 99)),
         "gpu_ms_mean": float(gpu.mean()) if len(gpu) else None,
         "gpu_ms_p99": float(np.percentile(gpu, 99)) if len(gpu) else None,
+        "record_ms_mean": float(result.record_ms_mean(warmup)),
         "cpu_system_percent": float(system), "cpu_process_percent": float(process),
         "cpu_process_percent_per_core": float(process / cores),
         "draws": stats.draws, "triangles": stats.triangles, "entities_drawn": stats.instances,
@@ -69,16 +77,18 @@ def measure(scene: str, width: int, height: int, warmup: int, frames: int) -> di
 
 
 def format_table(doc: dict[str, Any]) -> str:
-    lines = [f"{'scene':8} {'FPS':>8} {'seed FPS':>9} {'CPU ms':>8} {'seed CPU':>9} {'GPU ms':>8} "
-             f"{'seed GPU':>9} {'sys %':>6} {'proc %':>7} {'seed sys/proc %':>16}"]
+    lines = [f"{'scene':8} {'mode':10} {'thr':>3} {'FPS':>7} {'seed':>5} {'CPU ms':>7} {'seed':>5} {'rec ms':>7} "
+             f"{'GPU ms':>7} {'seed':>5} {'sys %':>6} {'proc %':>7} {'seed sys/proc':>14}"]
     for r in doc["results"]:
         s = SEED[r["scene"]]
+        col = 0 if r["threads"] == 1 else 1
         gpu = f"{r['gpu_ms_mean']:.3f}" if r["gpu_ms_mean"] is not None else "n/a"
-        lines.append(f"{r['scene']:8} {r['fps']:8.0f} {s['fps'][0]:9} {r['cpu_ms_mean']:8.3f} {s['cpu_ms'][0]:9} "
-                     f"{gpu:>8} {s['gpu_ms'][0]:9} {r['cpu_system_percent']:6.1f} {r['cpu_process_percent']:7.1f} "
-                     f"{s['cpu_system'][0]:>8}/{s['cpu_process'][0]}")
-    lines.append("seed: i7-11800H + RTX 3070, Windows 11, single-threaded columns of Tables 4.1-4.3 "
-                 "(its GPU times read ~0: two adjacent timestamps)")
+        lines.append(f"{r['scene']:8} {r['mode']:10} {r['threads']:3} {r['fps']:7.0f} {s['fps'][col]:5} "
+                     f"{r['cpu_ms_mean']:7.3f} {s['cpu_ms'][col]:5} {r['record_ms_mean']:7.3f} {gpu:>7} "
+                     f"{s['gpu_ms'][col]:5} {r['cpu_system_percent']:6.1f} {r['cpu_process_percent']:7.1f} "
+                     f"{s['cpu_system'][col]:>8}/{s['cpu_process'][col]}")
+    lines.append("seed: i7-11800H + RTX 3070, Windows 11, Tables 4.1-4.3: 1 thread beside its single-threaded "
+                 "column, more beside its multi-threaded one (its GPU times read ~0: two adjacent timestamps)")
     return "\n".join(lines)
 
 
@@ -86,9 +96,13 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
     warmup, frames = (10, 60) if args.quick else (120, 1200)
     width, height = (args.width, args.height) if not args.quick else (320, 240)
     results = []
+    thread_counts = sorted({1, THREADS})
     for scene in SCENES:
-        with progress.step(f"{scene}: {warmup} warm-up + {frames} frames at {width}x{height}"):
-            results.append(measure(scene, width, height, warmup, frames))
+        for mode in MODES:
+            for threads in thread_counts:
+                with progress.step(f"{scene} {mode} {threads} threads: {warmup} warm-up + {frames} frames at "
+                                   f"{width}x{height}"):
+                    results.append(measure(scene, width, height, warmup, frames, mode, threads))
     doc = {
         "benchmark": "seed-tables", "schema_version": 1, "quick": bool(args.quick), "machine": machine,
         "device": results[0]["device"], "config": {"width": width, "height": height, "warmup": warmup,

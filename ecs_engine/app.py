@@ -49,6 +49,7 @@ class RunResult:
     cpu_ms: list[float] = field(default_factory=list)  # frame start to submit, minus waits for the GPU
     gpu_ms: list[float] = field(default_factory=list)
     frame_end: list[float] = field(default_factory=list)  # perf_counter() after each frame's submit
+    record_ms: list[float] = field(default_factory=list)  # the render jobs of each frame
     validation_messages: list[str] = field(default_factory=list)
     device: str = ""
     pixels: np.ndarray | None = None
@@ -59,6 +60,10 @@ class RunResult:
     @property
     def fps(self) -> float:
         return self.frames / self.wall_s if self.wall_s > 0 else 0.0
+
+    def record_ms_mean(self, warmup: int = 0) -> float:
+        values = self.record_ms[warmup:] or self.record_ms
+        return float(np.mean(values)) if values else 0.0
 
     def fps_after(self, warmup: int) -> float:
         """Frames per second of wall clock over the frames after the first `warmup`."""
@@ -128,6 +133,7 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
             now = time.perf_counter()
             result.cpu_ms.append((now - t0) * 1e3 - stats.wait_ms)  # CPU work, not waiting for the GPU
             result.frame_end.append(now)
+            result.record_ms.append(stats.record_ms)
             if stats.gpu_ms is not None:
                 result.gpu_ms.append(stats.gpu_ms)
             result.last_stats = stats

@@ -126,6 +126,7 @@ def run_windowed(options: RunOptions, glfw: Any,
                                     wait=frame.image_available, signal=swapchain.render_finished[index])
             result.cpu_ms.append((time.perf_counter() - t0) * 1e3 - stats.wait_ms - waited_ms)
             result.frame_end.append(time.perf_counter())
+            result.record_ms.append(stats.record_ms)
             if not swapchain.present(index) or suboptimal:
                 resized[0] = True
             if stats.gpu_ms is not None:

@@ -14,14 +14,18 @@ def test_seed_tables_quick_writes_its_json(tmp_path, monkeypatch):
     import bench.seed_tables as seed_tables
     from bench.__main__ import main
 
-    monkeypatch.setattr(seed_tables, "SCENES", ("cube",))  # one scene keeps CI fast
+    monkeypatch.setattr(seed_tables, "SCENES", ("cube",))  # one scene, one mode, keeps CI fast
+    monkeypatch.setattr(seed_tables, "MODES", ("per_entity",))
+    monkeypatch.setattr(seed_tables, "THREADS", 2)
     assert main(["seed-tables", "--quick", "--out", str(tmp_path), "--machine", "ci"]) == 0
     doc = json.loads((tmp_path / "seed-tables-ci.json").read_text())
     assert doc["benchmark"] == "seed-tables" and doc["quick"] is True
     for key in ("hostname", "cpu_model", "python", "datetime_utc", "threads"):
         assert key in doc["machine"]
-    (row,) = doc["results"]
+    assert [(r["mode"], r["threads"]) for r in doc["results"]] == [("per_entity", 1), ("per_entity", 2)]
+    row = doc["results"][0]
     assert row["scene"] == "cube" and row["frames"] > 0 and row["validation_messages"] == 0
+    assert row["record_ms_mean"] > 0
     assert row["fps"] > 0 and row["cpu_ms_mean"] > 0 and row["gpu_ms_mean"] > 0
     assert 0 <= row["cpu_system_percent"] <= 100 and row["cpu_process_percent"] >= 0
     assert doc["seed"]["grid100"]["cpu_ms"] == [3.5, 2.4]
