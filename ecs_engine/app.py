@@ -40,6 +40,7 @@ class RunOptions:
     threads: int | None = None  # worker pool size, counting the main thread (None: all cores)
     culling: bool = True
     chunk_rows: int = 4096  # rows per render job
+    recorder: str | None = None  # native | python (None: native when numba is there)
 
 
 @dataclass
@@ -120,10 +121,10 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
         build(world, meshes.add, options.path)
         schedule = default_schedule()
         renderer = Renderer(device, target, meshes, lights=has_lights(world), mode=options.mode, jobs=jobs,
-                            culling=options.culling, chunk_rows=options.chunk_rows)
+                            culling=options.culling, chunk_rows=options.chunk_rows, recorder=recorder_for(options))
         frames = options.frames or 1
         say(f"{options.scene}: headless {options.width}x{options.height} on {result.device}, {frames} frames, "
-            f"mode {options.mode}, {jobs.threads} threads")
+            f"mode {options.mode}, {renderer.recorder} recorder, {jobs.threads} threads")
         start = last_report = time.perf_counter()
         for i in range(frames):
             t0 = time.perf_counter()
@@ -157,6 +158,17 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
         if jobs is not None:
             jobs.close()
     return result
+
+
+def recorder_for(options: RunOptions) -> str:
+    from . import native
+
+    if options.recorder is None:
+        return "native" if native.AVAILABLE else "python"
+    if options.recorder == "native" and not native.AVAILABLE:
+        raise UsageError("the native recorder needs numba (pip install numba, and unset ECS_ENGINE_NO_NUMBA); "
+                         "or use --recorder python")
+    return options.recorder
 
 
 def job_pool(options: RunOptions) -> Any:

@@ -51,6 +51,8 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--mode", choices=("instanced", "per_entity"), default="instanced",
                       help="instanced: one draw per mesh per chunk; per_entity: one draw per entity (the seed's way)")
     demo.add_argument("--threads", type=positive_int, help="worker threads, counting the main one (default: all cores)")
+    demo.add_argument("--recorder", choices=("native", "python"),
+                      help="native: numba loop without the GIL (default when numba is installed); python: the binding")
     demo.add_argument("--no-culling", dest="culling", action="store_false", help="draw everything, skip frustum culling")
     demo.add_argument("--entities", type=positive_int, default=100_000, help="motion scene: entity count")
     demo.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show tracebacks")
@@ -76,7 +78,7 @@ def run_scene(args: argparse.Namespace) -> int:
     options = RunOptions(scene=args.scene, path=args.path, headless=args.headless, frames=args.frames,
                          screenshot=args.screenshot, width=args.width, height=args.height,
                          validate=args.validate, present=args.present, mode=args.mode, threads=args.threads,
-                         culling=args.culling)
+                         culling=args.culling, recorder=args.recorder)
     if not args.headless:
         from .window import open_glfw, run_windowed
 

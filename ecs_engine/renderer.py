@@ -43,6 +43,7 @@ MATERIAL_DTYPE = np.dtype([("color", np.float32, 4), ("specular", np.float32, 4)
 GLOBALS_BYTES = 3 * 64 + 16 + 16
 MIN_LIGHTS = 256
 MODES = ("instanced", "per_entity")
+RECORDERS = ("native", "python")
 CHUNK_ROWS = 4096  # rows per job: enough work to outweigh a job's hand-out cost
 # A small default palette (linear RGB); Mesh.material indexes it modulo its length.
 DEFAULT_MATERIALS = [
@@ -96,12 +97,14 @@ class _PerFrame:
 class Renderer:
     def __init__(self, device: Device, target: Any, meshes: MeshRegistry, *, lights: bool,
                  mode: str = "instanced", jobs: JobPool | None = None, culling: bool = True,
-                 chunk_rows: int = CHUNK_ROWS,
+                 chunk_rows: int = CHUNK_ROWS, recorder: str = "native",
                  clear_color: tuple[float, float, float] = (0.02, 0.02, 0.03),
                  ambient: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 0.06),
                  light_size: float = 0.08) -> None:
         if mode not in MODES:
             raise ValueError(f"unknown render mode {mode!r}; modes: {', '.join(MODES)}")
+        if recorder not in RECORDERS:
+            raise ValueError(f"unknown recorder {recorder!r}; recorders: {', '.join(RECORDERS)}")
         vk = self.vk = device.vk
         self.device = device
         self.target = target
@@ -114,6 +117,12 @@ class Renderer:
         self.jobs = jobs
         self.culling = culling
         self.chunk_rows = chunk_rows
+        self.native = None
+        if recorder == "native":
+            from .gpu.native_recorder import NativeRecorder
+
+            self.native = NativeRecorder(device)
+        self.recorder = recorder
         self.frames = FrameRing(device)
         self.secondaries = SecondaryBuffers(device, len(self.frames.frames))
         self.cache = PipelineCache(device)
@@ -243,27 +252,37 @@ class Renderer:
         vk.vkCmdSetViewport(cb, 0, 1, [ctx["viewport"]])  # not inherited by secondaries
         vk.vkCmdSetScissor(cb, 0, 1, [ctx["scissor"]])
         vk.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1, [ctx["set"]], 0, None)
-        draws = triangles = 0
+        run_mesh, flipped = np.divmod(key[starts], 2)
+        instanced = self.mode == "instanced"
+        draws = len(starts) if instanced else n
+        triangles = int((index_counts[run_mesh] // 3 * counts).sum())
+        if self.native is not None:
+            pipes = np.where(flipped == 1, ctx["pipeline_ints"][1], ctx["pipeline_ints"][0]).astype(np.int64)
+            self.native.record(cb, self.layout, vk.VK_SHADER_STAGE_VERTEX_BIT, rows, instanced, chunk.offset,
+                               starts, counts, run_mesh, pipes)
+        else:
+            self._record_runs_python(cb, rows, instanced, chunk.offset, starts, counts, run_mesh, flipped)
+        vk.vkEndCommandBuffer(cb)
+        return ChunkResult(cb, n, draws, triangles)
+
+    def _record_runs_python(self, cb: Any, rows: np.ndarray, instanced: bool, first: int, starts: np.ndarray,
+                            counts: np.ndarray, run_mesh: np.ndarray, flipped: np.ndarray) -> None:
+        """The readable baseline (and fallback without numba): the binding's call per command."""
+        vk = self.vk
         bound = None
-        for start, count in zip(starts.tolist(), counts.tolist()):
-            h, flipped = divmod(int(key[start]), 2)
-            pipeline = self.mirrored_pipeline if flipped else self.mesh_pipeline
+        for start, count, h, mirrored in zip(starts.tolist(), counts.tolist(), run_mesh.tolist(), flipped.tolist()):
+            pipeline = self.mirrored_pipeline if mirrored else self.mesh_pipeline
             if pipeline is not bound:
                 vk.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline)
                 bound = pipeline
             mesh = self.meshes.bind(cb, h)
-            if self.mode == "instanced":
-                vk.vkCmdDrawIndexed(cb, mesh.index_count, count, 0, 0, chunk.offset + start)
-                draws += 1
-            else:
-                for i in range(start, start + count):
-                    vk.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_VERTEX_BIT, 0,
-                                          INSTANCE_DTYPE.itemsize, vk.ffi.from_buffer(rows[i : i + 1]))
-                    vk.vkCmdDrawIndexed(cb, mesh.index_count, 1, 0, 0, 0)
-                draws += count
-            triangles += int(index_counts[h]) // 3 * count
-        vk.vkEndCommandBuffer(cb)
-        return ChunkResult(cb, n, draws, triangles)
+            if instanced:
+                vk.vkCmdDrawIndexed(cb, mesh.index_count, count, 0, 0, first + start)
+                continue
+            for i in range(start, start + count):
+                vk.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_VERTEX_BIT, 0,
+                                      INSTANCE_DTYPE.itemsize, vk.ffi.from_buffer(rows[i : i + 1]))
+                vk.vkCmdDrawIndexed(cb, mesh.index_count, 1, 0, 0, 0)
 
     def gather_lights(self, world: World, camera_position: np.ndarray) -> np.ndarray:
         """Camera-relative lights sorted far to near (the billboards blend back to front)."""
@@ -308,6 +327,14 @@ class Renderer:
             "instances": pf.instances.array(INSTANCE_DTYPE, max(candidates, 1)),
             "bounds": self._mesh_bounds(),
         }
+        if self.native is not None:
+            from .gpu.native_recorder import handle_int
+
+            if self.native.meshes_known != len(self.meshes):
+                gpu = [self.meshes[h] for h in range(len(self.meshes))]
+                self.native.set_meshes([m.vertices.handle for m in gpu], [m.indices.handle for m in gpu],
+                                       [m.index_count for m in gpu])
+            ctx["pipeline_ints"] = (handle_int(vk, self.mesh_pipeline), handle_int(vk, self.mirrored_pipeline))
         t0 = time.perf_counter()
         job = lambda chunk: self.record_chunk(chunk, ctx)  # noqa: E731
         results = self.jobs.map(job, chunks, [f"rows {c.offset}:{c.offset + len(c.handle)}" for c in chunks]) \

@@ -11,7 +11,8 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from .app import RunOptions, RunResult, default_schedule, has_lights, job_pool, scene_builder, summary_line
+from .app import (RunOptions, RunResult, default_schedule, has_lights, job_pool, recorder_for, scene_builder,
+                  summary_line)
 from .errors import UsageError
 from .world import World
 
@@ -74,7 +75,7 @@ def run_windowed(options: RunOptions, glfw: Any,
         build(world, meshes.add, options.path)
         schedule = default_schedule()
         renderer = Renderer(device, swapchain, meshes, lights=has_lights(world), mode=options.mode, jobs=jobs,
-                            culling=options.culling, chunk_rows=options.chunk_rows)
+                            culling=options.culling, chunk_rows=options.chunk_rows, recorder=recorder_for(options))
         keys = world.resources[InputState] = InputState()
         resized = [False]
 

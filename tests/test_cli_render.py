@@ -112,3 +112,8 @@ def test_no_vulkan_device_names_the_driver_package(tmp_path):
 def test_device_choice_by_name():
     proc = cli("cube", "--headless", env={"ECS_ENGINE_DEVICE": "no-such-gpu"})
     one_line_error(proc, "ECS_ENGINE_DEVICE='no-such-gpu'", "devices present")
+
+
+def test_native_recorder_without_numba_is_a_clear_error():
+    proc = cli("cube", "--headless", "--recorder", "native", env={"ECS_ENGINE_NO_NUMBA": "1"})
+    one_line_error(proc, "native recorder needs numba", "--recorder python")

@@ -21,16 +21,19 @@ def grid(tmp_path, **kw):
 
 @pytest.fixture(scope="module")
 def reference(tmp_path_factory):
-    return grid(tmp_path_factory.mktemp("ref"), mode="instanced", threads=1).pixels
+    return grid(tmp_path_factory.mktemp("ref"), mode="instanced", threads=1, recorder="python").pixels
 
 
+@pytest.mark.parametrize("recorder", ["python", "native"])
 @pytest.mark.parametrize("mode, threads, culling", [
-    ("instanced", 2, True), ("instanced", 4, True), ("per_entity", 1, True), ("per_entity", 2, True),
-    ("per_entity", 4, False), ("instanced", 1, False),
+    ("instanced", 1, True), ("instanced", 2, True), ("instanced", 4, True), ("per_entity", 1, True),
+    ("per_entity", 2, True), ("per_entity", 4, False), ("instanced", 1, False),
 ])
-def test_same_image_in_every_mode_and_thread_count(reference, tmp_path, mode, threads, culling):
+def test_same_image_in_every_mode_recorder_and_thread_count(reference, tmp_path, mode, threads, culling, recorder):
+    if recorder == "native":
+        pytest.importorskip("numba")
     # chunks of 16 rows: several jobs even for 100 cubes
-    result = grid(tmp_path, mode=mode, threads=threads, culling=culling, chunk_rows=16)
+    result = grid(tmp_path, mode=mode, threads=threads, culling=culling, chunk_rows=16, recorder=recorder)
     mean, outliers = image_difference(result.pixels, reference)
     assert mean < 0.05 and outliers == 0  # the same picture, not just a similar one
     assert_close_to_golden(result.pixels, "grid100")
