@@ -20,7 +20,7 @@ from .errors import UsageError
 from .schedule import Schedule
 from .world import World
 
-SCENES = ("cube", "grid100", "model")
+SCENES = ("cube", "grid100", "model", "scaling")
 FIXED_DT = 1.0 / 60.0
 
 
@@ -41,6 +41,7 @@ class RunOptions:
     culling: bool = True
     chunk_rows: int = 4096  # rows per render job
     recorder: str | None = None  # native | python (None: native when numba is there)
+    entities: int = 10_000  # the scaling scene's entity count
 
 
 @dataclass
@@ -73,10 +74,13 @@ class RunResult:
         return (len(self.frame_end) - warmup) / (self.frame_end[-1] - self.frame_end[warmup - 1])
 
 
-def scene_builder(name: str) -> Callable[..., None]:
+def scene_builder(name: str, entities: int = 10_000) -> Callable[..., None]:
     if name not in SCENES:
         raise UsageError(f"unknown scene {name!r}; scenes: {', '.join(SCENES)}")
-    return importlib.import_module(f"ecs_engine.demos.{name}").build
+    build = importlib.import_module(f"ecs_engine.demos.{name}").build
+    if name == "scaling":
+        return lambda world, add_mesh, path=None: build(world, add_mesh, path, entities=entities)
+    return build
 
 
 def default_schedule() -> Schedule:
@@ -106,7 +110,7 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
     from .renderer import Renderer
 
     say = log or (lambda text: None if options.quiet else print(text))
-    build = scene_builder(options.scene)
+    build = scene_builder(options.scene, options.entities)
     result = RunResult()
     instance = device = target = meshes = renderer = jobs = None
     try:
@@ -183,8 +187,10 @@ def summary_line(result: RunResult, frames: int, wall_s: float) -> str:
     gpu = np.array(result.gpu_ms[-600:])
     stats = result.last_stats
     gpu_text = f"gpu {gpu.mean():.3f} ms" if len(gpu) else "gpu n/a"
+    record = np.array(result.record_ms[-600:])
     return (f"frame {frames}: {frames / wall_s if wall_s > 0 else 0:.0f} fps (wall clock), cpu {cpu.mean():.3f} ms "
-            f"(p99 {np.percentile(cpu, 99):.3f}), {gpu_text}; {stats.instances} of {stats.candidates} entities "
+            f"(p99 {np.percentile(cpu, 99):.3f}, record {record.mean():.3f}), {gpu_text}; "
+            f"{stats.instances} of {stats.candidates} entities "
             f"drawn in {stats.draws} draws, {stats.triangles} triangles, {stats.lights} lights")
 
 

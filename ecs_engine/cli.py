@@ -19,7 +19,7 @@ def positive_int(text: str) -> int:
     return value
 
 
-SCENES = ("cube", "grid100", "model", "motion")
+SCENES = ("cube", "grid100", "model", "scaling", "motion")
 DEFAULT_SCENE = "grid100"
 HEADLESS_FALLBACK_FRAMES = 300
 
@@ -37,7 +37,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser("demo", help="run a demo scene")
     demo.add_argument("scene", nargs="?", default=DEFAULT_SCENE, choices=SCENES,
-                      help="cube, grid100, model: the seed's scenes; motion: text-mode ECS scene (no rendering)")
+                      help="cube, grid100, model: the seed's scenes; scaling: --entities moving entities; "
+                      "motion: text-mode ECS scene (no rendering)")
     demo.add_argument("path", nargs="?", help="model file for the model scene (OBJ, glTF/GLB, PLY, STL)")
     demo.add_argument("--headless", action="store_true", help="render offscreen, no window (no display needed)")
     demo.add_argument("--frames", type=positive_int, help="frames to run (default: until the window closes; "
@@ -54,7 +55,8 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--recorder", choices=("native", "python"),
                       help="native: numba loop without the GIL (default when numba is installed); python: the binding")
     demo.add_argument("--no-culling", dest="culling", action="store_false", help="draw everything, skip frustum culling")
-    demo.add_argument("--entities", type=positive_int, default=100_000, help="motion scene: entity count")
+    demo.add_argument("--entities", type=positive_int, help="scaling and motion scenes: entity count "
+                      "(default 10,000 and 100,000)")
     demo.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show tracebacks")
     return parser
 
@@ -64,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
         if args.scene == "motion":
             from ecs_engine.demos import motion
 
-            return motion.main(args.entities, args.frames or 300)
+            return motion.main(args.entities or 100_000, args.frames or 300)
         return run_scene(args)
     raise UsageError(f"unknown command {args.command!r}")
 
@@ -78,7 +80,7 @@ def run_scene(args: argparse.Namespace) -> int:
     options = RunOptions(scene=args.scene, path=args.path, headless=args.headless, frames=args.frames,
                          screenshot=args.screenshot, width=args.width, height=args.height,
                          validate=args.validate, present=args.present, mode=args.mode, threads=args.threads,
-                         culling=args.culling, recorder=args.recorder)
+                         culling=args.culling, recorder=args.recorder, entities=args.entities or 10_000)
     if not args.headless:
         from .window import open_glfw, run_windowed
 

@@ -26,7 +26,8 @@ import time
 
 from .camera_math import CameraMatrices, camera_matrices
 from .components import Mesh, ModelMatrix, PointLight, Transform
-from .culling import bounding_spheres, frustum_planes, spheres_visible
+from .culling import frustum_planes
+from .instance_rows import INSTANCE_DTYPE, write_rows
 from .gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
 from .gpu.device import Device
 from .gpu.frames import Frame, FrameRing
@@ -37,7 +38,6 @@ from .jobs import JobPool, row_chunks
 from .mesh_registry import VERTEX_STRIDE, MeshRegistry
 from .world import World
 
-INSTANCE_DTYPE = np.dtype([("model", np.float32, (3, 4)), ("normal", np.float32, (3, 4)), ("misc", np.uint32, 4)])
 LIGHT_DTYPE = np.dtype([("position_radius", np.float32, 4), ("color_intensity", np.float32, 4)])
 MATERIAL_DTYPE = np.dtype([("color", np.float32, 4), ("specular", np.float32, 4)])
 GLOBALS_BYTES = 3 * 64 + 16 + 16
@@ -222,37 +222,20 @@ class Renderer:
         """One job: cull, write the visible rows into this chunk's slice, record a secondary."""
         vk = self.vk
         centers_m, radii_m, index_counts = ctx["bounds"]
-        if ctx["planes"] is not None:
-            centers, radii = bounding_spheres(chunk.model, centers_m[chunk.handle], radii_m[chunk.handle])
-            visible = np.flatnonzero(spheres_visible(centers, radii, ctx["planes"]))
-            if len(visible) == 0:
-                return ChunkResult(None, 0, 0, 0)
-            model, normal = chunk.model[visible], chunk.normal[visible]
-            handle, material = chunk.handle[visible], chunk.material[visible]
-        else:
-            model, normal, handle, material = chunk.model, chunk.normal, chunk.handle, chunk.material
-        n = len(handle)
-        m3 = model[:, :3, :3]
-        det = (m3[:, 0, 0] * (m3[:, 1, 1] * m3[:, 2, 2] - m3[:, 1, 2] * m3[:, 2, 1])
-               - m3[:, 0, 1] * (m3[:, 1, 0] * m3[:, 2, 2] - m3[:, 1, 2] * m3[:, 2, 0])
-               + m3[:, 0, 2] * (m3[:, 1, 0] * m3[:, 2, 1] - m3[:, 1, 1] * m3[:, 2, 0]))
-        mirrored = det < 0
-        order = np.lexsort((mirrored, handle))
-        rows = ctx["instances"][chunk.offset : chunk.offset + n]
-        rows["model"] = model[order, :3, :]
-        rows["normal"][:, :, :3] = normal[order]
-        rows["normal"][:, :, 3] = 0.0
-        rows["misc"][:, 0] = material[order] % len(DEFAULT_MATERIALS)
-        rows["misc"][:, 1:] = 0
-        key = handle[order].astype(np.int64) * 2 + mirrored[order]
-        starts = np.flatnonzero(np.diff(key, prepend=-1))
-        counts = np.diff(np.append(starts, n))
-
+        rows = ctx["instances"][chunk.offset : chunk.offset + len(chunk.handle)]
+        key_counts = np.zeros(2 * len(index_counts), dtype=np.int64)
+        n = write_rows(chunk.model, chunk.normal, chunk.handle, chunk.material, centers_m, radii_m, ctx["planes"],
+                       len(DEFAULT_MATERIALS), rows, key_counts)
+        if n == 0:
+            return ChunkResult(None, 0, 0, 0)
+        keys = np.flatnonzero(key_counts)
+        counts = key_counts[keys]
+        starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
         cb = self.secondaries.begin(ctx["slot"], self.target.render_pass, 0, ctx["framebuffer"])
         vk.vkCmdSetViewport(cb, 0, 1, [ctx["viewport"]])  # not inherited by secondaries
         vk.vkCmdSetScissor(cb, 0, 1, [ctx["scissor"]])
         vk.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1, [ctx["set"]], 0, None)
-        run_mesh, flipped = np.divmod(key[starts], 2)
+        run_mesh, flipped = np.divmod(keys, 2)
         instanced = self.mode == "instanced"
         draws = len(starts) if instanced else n
         triangles = int((index_counts[run_mesh] // 3 * counts).sum())

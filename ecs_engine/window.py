@@ -50,7 +50,7 @@ def run_windowed(options: RunOptions, glfw: Any,
     from .systems import InputState
 
     say = (lambda text: None) if options.quiet else print
-    build = scene_builder(options.scene)
+    build = scene_builder(options.scene, options.entities)
     result = RunResult()
     instance = device = swapchain = meshes = renderer = surface = window = jobs = None
     try:

@@ -70,7 +70,7 @@ def build_cubes(scales):
 def render_custom(build, monkeypatch, tmp_path) -> np.ndarray:
     import ecs_engine.app as app
 
-    monkeypatch.setattr(app, "scene_builder", lambda name: build)
+    monkeypatch.setattr(app, "scene_builder", lambda name, entities=None: build)
     result = run(RunOptions(scene="cube", width=SIZE[0], height=SIZE[1], frames=1, screenshot=str(tmp_path / "x.png"),
                             validate=True, quiet=True))
     assert result.validation_messages == []
