@@ -151,7 +151,7 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
         if options.screenshot is not None:
             result.pixels = target.pixels()
             save_png(result.pixels, options.screenshot)
-        say(summary_line(result, frames, result.wall_s))
+        say(summary_line(result, frames, result.wall_s, final=True))
     finally:
         for obj in (renderer, meshes, target, device):
             if obj is not None:
@@ -182,13 +182,22 @@ def job_pool(options: RunOptions) -> Any:
     return JobPool(options.threads)
 
 
-def summary_line(result: RunResult, frames: int, wall_s: float) -> str:
-    cpu = np.array(result.cpu_ms[-600:])
-    gpu = np.array(result.gpu_ms[-600:])
+WARMUP_FRAMES = 5  # left out of the closing summary: pipeline creation and JIT compiles land there
+
+
+def summary_line(result: RunResult, frames: int, wall_s: float, final: bool = False) -> str:
+    """Means over the last 600 frames; the closing line leaves out the warm-up frames (when
+    there are enough frames) and gives their wall-clock rate."""
+    skip = WARMUP_FRAMES if final and frames > 2 * WARMUP_FRAMES else 0
+    cpu = np.array(result.cpu_ms[skip:][-600:])
+    gpu = np.array(result.gpu_ms[skip:][-600:])
     stats = result.last_stats
     gpu_text = f"gpu {gpu.mean():.3f} ms" if len(gpu) else "gpu n/a"
-    record = np.array(result.record_ms[-600:])
-    return (f"frame {frames}: {frames / wall_s if wall_s > 0 else 0:.0f} fps (wall clock), cpu {cpu.mean():.3f} ms "
+    record = np.array(result.record_ms[skip:][-600:])
+    if skip:
+        frames, wall_s = frames - skip, result.frame_end[-1] - result.frame_end[skip - 1]
+    label = f"{frames} frames after {skip} warm-up" if skip else f"frame {frames}"
+    return (f"{label}: {frames / wall_s if wall_s > 0 else 0:.0f} fps (wall clock), cpu {cpu.mean():.3f} ms "
             f"(p99 {np.percentile(cpu, 99):.3f}, record {record.mean():.3f}), {gpu_text}; "
             f"{stats.instances} of {stats.candidates} entities "
             f"drawn in {stats.draws} draws, {stats.triangles} triangles, {stats.lights} lights")

@@ -143,7 +143,7 @@ def run_windowed(options: RunOptions, glfw: Any,
         result.wall_s = time.perf_counter() - start
         result.recreations = swapchain.recreations
         if frame_no:
-            say(summary_line(result, frame_no, result.wall_s))
+            say(summary_line(result, frame_no, result.wall_s, final=True))
     finally:
         for obj in (renderer, meshes, swapchain):
             if obj is not None:
