@@ -5,8 +5,7 @@ the wall clock; CPU frame ms (frame start to submit); GPU frame ms from timestam
 start and end of the frame's command buffer; CPU system % and process % from psutil over the
 timed frames (process % raw and per core). Each scene runs in both recording modes
 (`instanced`, `per_entity`) with one thread (the seed's single-threaded column) and with every
-core (its multi-threaded column); the recorder is the Python one (the native recorder comes with
-the job-system issue).
+core (its multi-threaded column), with the default recorder (native when numba is installed).
 
 JSON (schema_version 1): {"benchmark": "seed-tables", "quick", "machine", "device",
 "config": {"width", "height", "warmup", "frames"}, "results": [{"scene", "mode", "threads",
