@@ -107,7 +107,6 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
     from .gpu.instance import Instance
     from .gpu.offscreen import OffscreenTarget
     from .mesh_registry import MeshRegistry
-    from .renderer import Renderer
 
     say = log or (lambda text: None if options.quiet else print(text))
     build = scene_builder(options.scene, options.entities)
@@ -117,15 +116,10 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
         jobs = job_pool(options)
         instance = Instance(validate=options.validate)
         device = Device(instance)
-        result.device = f"{device.info.name} ({device.info.driver_name} {device.info.driver_info})".strip()
+        result.device = describe_device(device)
         target = OffscreenTarget(device, options.width, options.height)
         meshes = MeshRegistry(device)
-        world = World()
-        world.resources[type(jobs)] = jobs
-        build(world, meshes.add, options.path)
-        schedule = default_schedule()
-        renderer = Renderer(device, target, meshes, lights=has_lights(world), mode=options.mode, jobs=jobs,
-                            culling=options.culling, chunk_rows=options.chunk_rows, recorder=recorder_for(options))
+        world, schedule, renderer = build_scene(options, build, device, target, meshes, jobs)
         frames = options.frames or 1
         say(f"{options.scene}: headless {options.width}x{options.height} on {result.device}, {frames} frames, "
             f"mode {options.mode}, {renderer.recorder} recorder, {jobs.threads} threads")
@@ -162,6 +156,24 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
         if jobs is not None:
             jobs.close()
     return result
+
+
+def describe_device(device: Any) -> str:
+    return f"{device.info.name} ({device.info.driver_name} {device.info.driver_info})".strip()
+
+
+def build_scene(options: RunOptions, build: Callable[..., None], device: Any, target: Any, meshes: Any,
+                jobs: Any) -> tuple[World, Schedule, Any]:
+    """The scene's world (sharing the run's worker pool), its schedule, and a renderer that
+    builds only what the scene needs."""
+    from .renderer import Renderer
+
+    world = World()
+    world.resources[type(jobs)] = jobs
+    build(world, meshes.add, options.path)
+    renderer = Renderer(device, target, meshes, lights=has_lights(world), mode=options.mode, jobs=jobs,
+                        culling=options.culling, chunk_rows=options.chunk_rows, recorder=recorder_for(options))
+    return world, default_schedule(), renderer
 
 
 def recorder_for(options: RunOptions) -> str:

@@ -11,10 +11,8 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from .app import (RunOptions, RunResult, default_schedule, has_lights, job_pool, recorder_for, scene_builder,
-                  summary_line)
+from .app import RunOptions, RunResult, build_scene, describe_device, job_pool, scene_builder, summary_line
 from .errors import UsageError
-from .world import World
 
 # GLFW key -> the names FlyCameraSystem reads (the seed's Table 7.1).
 KEY_NAMES = {
@@ -46,7 +44,6 @@ def run_windowed(options: RunOptions, glfw: Any,
     from .gpu.instance import Instance
     from .gpu.swapchain import OutOfDate, Swapchain
     from .mesh_registry import MeshRegistry
-    from .renderer import Renderer
     from .systems import InputState
 
     say = (lambda text: None) if options.quiet else print
@@ -67,15 +64,10 @@ def run_windowed(options: RunOptions, glfw: Any,
             raise UsageError("could not create a Vulkan surface for the window; run with --headless")
         surface = surface_ptr[0]
         device = Device(instance, surface=surface)
-        result.device = f"{device.info.name} ({device.info.driver_name} {device.info.driver_info})".strip()
+        result.device = describe_device(device)
         swapchain = Swapchain(device, surface, lambda: glfw.get_framebuffer_size(window), options.present)
         meshes = MeshRegistry(device)
-        world = World()
-        world.resources[type(jobs)] = jobs
-        build(world, meshes.add, options.path)
-        schedule = default_schedule()
-        renderer = Renderer(device, swapchain, meshes, lights=has_lights(world), mode=options.mode, jobs=jobs,
-                            culling=options.culling, chunk_rows=options.chunk_rows, recorder=recorder_for(options))
+        world, schedule, renderer = build_scene(options, build, device, swapchain, meshes, jobs)
         keys = world.resources[InputState] = InputState()
         resized = [False]
 

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from golden_images import GOLDEN, SIZE, assert_close_to_golden, image_difference
+from gpu_context import headless_gpu
 from PIL import Image
 
 from ecs_engine import World
@@ -92,35 +93,21 @@ def test_degenerate_scales_render_without_validation_errors(monkeypatch, tmp_pat
     assert pixels[..., :3].max() > 30
 
 
-def test_scene_without_lights_builds_no_light_pipeline(monkeypatch):
-    from ecs_engine.gpu.device import Device
-    from ecs_engine.gpu.instance import Instance
-    from ecs_engine.gpu.offscreen import OffscreenTarget
-    from ecs_engine.mesh_registry import MeshRegistry
+def test_scene_without_lights_builds_no_light_pipeline():
     from ecs_engine.renderer import Renderer
 
-    instance = Instance(validate=True)
-    device = Device(instance)
-    target = OffscreenTarget(device, 64, 48)
-    meshes = MeshRegistry(device)
-    world = World()
-    build_cubes([(1, 1, 1)])(world, meshes.add)
-    renderer = Renderer(device, target, meshes, lights=False)
-    try:
+    with headless_gpu() as gpu:
+        world = World()
+        build_cubes([(1, 1, 1)])(world, gpu.meshes.add)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, lights=False)
+        gpu.owned.append(renderer)
         assert renderer.light_pipeline is None
         default_schedule().run(world, 0.0)
         stats = renderer.render(world, readback=True)
         assert stats.draws == 1 and stats.lights == 0
-        assert target.pixels()[..., :3].max() > 30
-        handle = meshes.add(cube_mesh())
-        assert meshes.add(meshes[handle].data) == handle  # a mesh is uploaded once
-    finally:
-        renderer.destroy()
-        meshes.destroy()
-        target.destroy()
-        device.destroy()
-        instance.destroy()
-    assert instance.messages == []
+        assert gpu.target.pixels()[..., :3].max() > 30
+        handle = gpu.meshes.add(cube_mesh())
+        assert gpu.meshes.add(gpu.meshes[handle].data) == handle  # a mesh is uploaded once
 
 
 def test_suballocator_serves_many_buffers_from_few_allocations():

@@ -10,6 +10,7 @@ from ecs_engine.app import RunOptions, run
 from ecs_engine.jobs import JobError
 
 from golden_images import SIZE, assert_close_to_golden, image_difference
+from gpu_context import headless_gpu
 
 
 def grid(tmp_path, **kw):
@@ -65,47 +66,31 @@ def test_culling_drops_what_is_off_screen(tmp_path, monkeypatch):
 
 def test_a_failing_job_names_its_chunk_and_the_next_frame_renders(monkeypatch):
     from ecs_engine.app import default_schedule
-    from ecs_engine.gpu.device import Device
-    from ecs_engine.gpu.instance import Instance
-    from ecs_engine.gpu.offscreen import OffscreenTarget
+    from ecs_engine.demos import grid100
     from ecs_engine.jobs import JobPool
-    from ecs_engine.mesh_registry import MeshRegistry
     from ecs_engine.renderer import Renderer
     from ecs_engine.world import World
-    from ecs_engine.demos import grid100
 
-    instance = Instance(validate=True)
-    device = Device(instance)
-    target = OffscreenTarget(device, 64, 48)
-    meshes = MeshRegistry(device)
-    jobs = JobPool(3)
-    world = World()
-    grid100.build(world, meshes.add)
-    renderer = Renderer(device, target, meshes, lights=True, jobs=jobs, chunk_rows=20)
-    real = renderer.record_chunk
-    calls = {"n": 0}
+    with headless_gpu() as gpu:
+        jobs = JobPool(3)
+        gpu.owned.append(jobs)
+        world = World()
+        grid100.build(world, gpu.meshes.add)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, lights=True, jobs=jobs, chunk_rows=20)
+        gpu.owned.append(renderer)
+        real = renderer.record_chunk
 
-    def flaky(chunk, ctx):
-        calls["n"] += 1
-        if chunk.offset == 40:
-            raise RuntimeError("boom")
-        return real(chunk, ctx)
+        def flaky(chunk, ctx):
+            if chunk.offset == 40:
+                raise RuntimeError("boom")
+            return real(chunk, ctx)
 
-    try:
         default_schedule().run(world, 0.0)
         monkeypatch.setattr(renderer, "record_chunk", flaky)
         with pytest.raises(JobError, match=r"chunk rows 40:60 failed: RuntimeError: boom"):
             renderer.render(world)
         monkeypatch.setattr(renderer, "record_chunk", real)
         stats = renderer.render(world, readback=True)
-        assert stats.instances > 0 and target.pixels()[..., :3].max() > 30
+        assert stats.instances > 0 and gpu.target.pixels()[..., :3].max() > 30
         stats = renderer.render(world, readback=True)
         assert stats.gpu_ms is None or stats.gpu_ms > 0
-    finally:
-        renderer.destroy()
-        meshes.destroy()
-        target.destroy()
-        device.destroy()
-        instance.destroy()
-        jobs.close()
-    assert instance.messages == []
