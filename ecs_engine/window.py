@@ -22,6 +22,21 @@ KEY_NAMES = {
 MAX_DT = 0.1  # a hitch (dragging the window, a breakpoint) must not fling the camera
 
 
+def key_names(glfw: Any) -> dict[int, str]:
+    return {getattr(glfw, k): v for k, v in KEY_NAMES.items()}
+
+
+def apply_key(glfw: Any, names: dict[int, str], keys: Any, key: int, action: int) -> None:
+    """A GLFW key event into the InputState resource (key repeat changes nothing)."""
+    name = names.get(key)
+    if name is None:
+        return
+    if action == glfw.PRESS:
+        keys.pressed.add(name)
+    elif action == glfw.RELEASE:
+        keys.pressed.discard(name)
+
+
 def open_glfw() -> Any | None:
     """The glfw module, initialised, or None when there is no display to open a window on."""
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
@@ -71,18 +86,13 @@ def run_windowed(options: RunOptions, glfw: Any,
         keys = world.resources[InputState] = InputState()
         resized = [False]
 
-        def on_key(_win: Any, key: int, _code: int, action: int, _mods: int) -> None:
-            name = names.get(key)
-            if name is None:
-                if key == glfw.KEY_ESCAPE and action == glfw.PRESS:
-                    glfw.set_window_should_close(window, True)
-                return
-            if action == glfw.PRESS:
-                keys.pressed.add(name)
-            elif action == glfw.RELEASE:
-                keys.pressed.discard(name)
+        names = key_names(glfw)
 
-        names = {getattr(glfw, k): v for k, v in KEY_NAMES.items()}
+        def on_key(_win: Any, key: int, _code: int, action: int, _mods: int) -> None:
+            if key == glfw.KEY_ESCAPE and action == glfw.PRESS:
+                glfw.set_window_should_close(window, True)
+            apply_key(glfw, names, keys, key, action)
+
         glfw.set_key_callback(window, on_key)
         glfw.set_framebuffer_size_callback(window, lambda *_: resized.__setitem__(0, True))
         say(f"{options.scene}: window {swapchain.width}x{swapchain.height} on {result.device}, present {options.present}")

@@ -46,3 +46,4 @@ def test_window_renders_resizes_and_survives_minimise(monkeypatch):
     assert result.recreations >= 1  # the resize rebuilt the swapchain
     assert result.minimised_waits >= 4  # no rendering while minimised
     assert len(result.gpu_ms) >= 10 and min(result.gpu_ms) > 0
+
