@@ -231,20 +231,21 @@ class Renderer:
         keys = np.flatnonzero(key_counts)
         counts = key_counts[keys]
         starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-        cb = self.secondaries.begin(ctx["slot"], self.target.render_pass, 0, ctx["framebuffer"])
-        vk.vkCmdSetViewport(cb, 0, 1, [ctx["viewport"]])  # not inherited by secondaries
-        vk.vkCmdSetScissor(cb, 0, 1, [ctx["scissor"]])
-        vk.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1, [ctx["set"]], 0, None)
         run_mesh, flipped = np.divmod(keys, 2)
         instanced = self.mode == "instanced"
         draws = len(starts) if instanced else n
         triangles = int((index_counts[run_mesh] // 3 * counts).sum())
         if self.native is not None:
+            cb = self.secondaries.acquire(ctx["slot"])
             pipes = np.where(flipped == 1, ctx["pipeline_ints"][1], ctx["pipeline_ints"][0]).astype(np.int64)
             self.native.record(cb, self.layout, vk.VK_SHADER_STAGE_VERTEX_BIT, rows, instanced, chunk.offset,
-                               starts, counts, run_mesh, pipes)
-        else:
-            self._record_runs_python(cb, rows, instanced, chunk.offset, starts, counts, run_mesh, flipped)
+                               starts, counts, run_mesh, pipes, ctx["native_frame"])
+            return ChunkResult(cb, n, draws, triangles)
+        cb = self.secondaries.begin(ctx["slot"], ctx["begin_info"])
+        vk.vkCmdSetViewport(cb, 0, 1, [ctx["viewport"]])  # not inherited by secondaries
+        vk.vkCmdSetScissor(cb, 0, 1, [ctx["scissor"]])
+        vk.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1, [ctx["set"]], 0, None)
+        self._record_runs_python(cb, rows, instanced, chunk.offset, starts, counts, run_mesh, flipped)
         vk.vkEndCommandBuffer(cb)
         return ChunkResult(cb, n, draws, triangles)
 
@@ -309,6 +310,7 @@ class Renderer:
             "planes": frustum_planes(cam.projection, cam.view) if self.culling else None,
             "instances": pf.instances.array(INSTANCE_DTYPE, max(candidates, 1)),
             "bounds": self._mesh_bounds(),
+            "begin_info": self.secondaries.begin_info(self.target.render_pass, 0, framebuffer),
         }
         if self.native is not None:
             from .gpu.native_recorder import handle_int
@@ -318,6 +320,7 @@ class Renderer:
                 self.native.set_meshes([m.vertices.handle for m in gpu], [m.indices.handle for m in gpu],
                                        [m.index_count for m in gpu])
             ctx["pipeline_ints"] = (handle_int(vk, self.mesh_pipeline), handle_int(vk, self.mirrored_pipeline))
+            ctx["native_frame"] = self.native.frame_state(ctx["begin_info"], width, height, pf.descriptor_set)
         t0 = time.perf_counter()
         job = lambda chunk: self.record_chunk(chunk, ctx)  # noqa: E731
         results = self.jobs.map(job, chunks, [f"rows {c.offset}:{c.offset + len(c.handle)}" for c in chunks]) \

@@ -28,6 +28,11 @@ _PROTOTYPES = {
     "vkCmdBindIndexBuffer": ctypes.CFUNCTYPE(None, _u64, _u64, _u64, _u32),
     "vkCmdPushConstants": ctypes.CFUNCTYPE(None, _u64, _u64, _u32, _u32, _u32, _u64),
     "vkCmdDrawIndexed": ctypes.CFUNCTYPE(None, _u64, _u32, _u32, _u32, _i32, _u32),
+    "vkBeginCommandBuffer": ctypes.CFUNCTYPE(_i32, _u64, _u64),
+    "vkEndCommandBuffer": ctypes.CFUNCTYPE(_i32, _u64),
+    "vkCmdSetViewport": ctypes.CFUNCTYPE(None, _u64, _u32, _u32, _u64),
+    "vkCmdSetScissor": ctypes.CFUNCTYPE(None, _u64, _u32, _u32, _u64),
+    "vkCmdBindDescriptorSets": ctypes.CFUNCTYPE(None, _u64, _u32, _u64, _u32, _u32, _u64, _u32, _u64),
 }
 INDEX_TYPE_UINT32 = 1
 
@@ -57,11 +62,24 @@ class NativeRecorder:
         bind_index = fns["vkCmdBindIndexBuffer"]
         push = fns["vkCmdPushConstants"]
         draw_indexed = fns["vkCmdDrawIndexed"]
+        begin = fns["vkBeginCommandBuffer"]
+        end = fns["vkEndCommandBuffer"]
+        set_viewport = fns["vkCmdSetViewport"]
+        set_scissor = fns["vkCmdSetScissor"]
+        bind_sets = fns["vkCmdBindDescriptorSets"]
         self._keep = fns  # the ctypes objects own nothing, but keep them with the compiled code
 
         def record(cb, layout, push_stage, row_bytes, rows_addr, instanced, first_instance, run_start,
                    run_count, run_mesh, run_pipeline, vertex_handles_addr, zero_offset_addr, index_handles,
-                   index_counts):  # pragma: no cover - compiled
+                   index_counts, begin_info_addr, viewport_addr, scissor_addr, set_addr):  # pragma: no cover
+            # a secondary sets its own viewport and scissor (they are not inherited) and binds
+            # the frame's descriptor set; returns the first failing VkResult, or 0
+            result = begin(cb, begin_info_addr)
+            if result != 0:
+                return result
+            set_viewport(cb, 0, 1, viewport_addr)
+            set_scissor(cb, 0, 1, scissor_addr)
+            bind_sets(cb, 0, layout, 0, 1, set_addr, 0, 0)
             bound = 0
             for r in range(run_start.shape[0]):  # noqa: B007
                 pipeline = run_pipeline[r]
@@ -78,6 +96,7 @@ class NativeRecorder:
                     for i in range(run_start[r], run_start[r] + run_count[r]):
                         push(cb, layout, push_stage, 0, row_bytes, rows_addr + i * row_bytes)
                         draw_indexed(cb, count, 1, 0, 0, 0)
+            return end(cb)
 
         self._record = numba.njit(nogil=True)(record)
         self._zero = np.zeros(1, dtype=np.int64)
@@ -94,11 +113,26 @@ class NativeRecorder:
     def meshes_known(self) -> int:
         return self._meshes_seen
 
-    def record(self, cb: Any, layout: Any, push_stage: int, rows: np.ndarray, instanced: bool, first_instance: int,
-               run_start: np.ndarray, run_count: np.ndarray, run_mesh: np.ndarray, run_pipeline: np.ndarray) -> None:
-        """Record the binds and draws of one chunk's runs into `cb` (already begun)."""
+    def frame_state(self, begin_info: Any, width: int, height: int, descriptor_set: Any) -> dict[str, Any]:
+        """Per-frame inputs of `record`: the begin info (with render-pass inheritance), viewport,
+        scissor and descriptor set, as memory the native loop reads (kept alive in the dict)."""
         vk = self.vk
-        self._record(handle_int(vk, cb), handle_int(vk, layout), push_stage, rows.dtype.itemsize, rows.ctypes.data,
-                     instanced, first_instance, run_start.astype(np.int64), run_count.astype(np.int64),
-                     run_mesh.astype(np.int64), run_pipeline, self._vertex.ctypes.data, self._zero.ctypes.data,
-                     self._index, self._counts)
+        viewport = np.array([0.0, 0.0, width, height, 0.0, 1.0], dtype=np.float32)
+        scissor = np.array([0, 0, width, height], dtype=np.int32)
+        sets = np.array([handle_int(vk, descriptor_set)], dtype=np.int64)
+        return {"begin_info": begin_info, "begin_addr": handle_int(vk, vk.ffi.addressof(begin_info)),
+                "viewport": viewport, "scissor": scissor, "sets": sets}
+
+    def record(self, cb: Any, layout: Any, push_stage: int, rows: np.ndarray, instanced: bool, first_instance: int,
+               run_start: np.ndarray, run_count: np.ndarray, run_mesh: np.ndarray, run_pipeline: np.ndarray,
+               frame: dict[str, Any]) -> None:
+        """Begin `cb` (an allocated secondary), record one chunk's binds and draws, end it."""
+        vk = self.vk
+        result = self._record(handle_int(vk, cb), handle_int(vk, layout), push_stage, rows.dtype.itemsize,
+                              rows.ctypes.data, instanced, first_instance, run_start.astype(np.int64),
+                              run_count.astype(np.int64), run_mesh.astype(np.int64), run_pipeline,
+                              self._vertex.ctypes.data, self._zero.ctypes.data, self._index, self._counts,
+                              frame["begin_addr"], frame["viewport"].ctypes.data, frame["scissor"].ctypes.data,
+                              frame["sets"].ctypes.data)
+        if result != 0:
+            raise RuntimeError(f"recording a secondary command buffer failed with VkResult {result}")

@@ -33,8 +33,8 @@ class SecondaryBuffers:
                 vk.vkResetCommandPool(self.device.handle, pool.handle, 0)
                 pool.used = 0
 
-    def begin(self, frame: int, render_pass: Any, subpass: int, framebuffer: Any) -> Any:
-        """A secondary buffer of the calling thread, begun inside `render_pass`/`subpass`."""
+    def acquire(self, frame: int) -> Any:
+        """An unused secondary buffer from the calling thread's pool for this frame slot."""
         vk = self.device.vk
         pools = self._pools[frame]
         key = threading.get_ident()
@@ -47,11 +47,21 @@ class SecondaryBuffers:
                 commandPool=pool.handle, level=vk.VK_COMMAND_BUFFER_LEVEL_SECONDARY, commandBufferCount=1))[0])
         cb = pool.buffers[pool.used]
         pool.used += 1
-        inheritance = vk.VkCommandBufferInheritanceInfo(renderPass=render_pass, subpass=subpass, framebuffer=framebuffer)
-        vk.vkBeginCommandBuffer(cb, vk.VkCommandBufferBeginInfo(
-            flags=vk.VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT | vk.VK_COMMAND_BUFFER_USAGE_RENDER_PASS_CONTINUE_BIT,
-            pInheritanceInfo=inheritance))
         return cb
+
+    def begin(self, frame: int, begin_info: Any) -> Any:
+        """`acquire`, then begin it with `begin_info` (see `begin_info`)."""
+        cb = self.acquire(frame)
+        self.device.vk.vkBeginCommandBuffer(cb, begin_info)
+        return cb
+
+    def begin_info(self, render_pass: Any, subpass: int, framebuffer: Any) -> Any:
+        """Begin info for secondaries inside `render_pass`/`subpass` (one per frame, shared)."""
+        vk = self.device.vk
+        inheritance = vk.VkCommandBufferInheritanceInfo(renderPass=render_pass, subpass=subpass, framebuffer=framebuffer)
+        return vk.VkCommandBufferBeginInfo(
+            flags=vk.VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT | vk.VK_COMMAND_BUFFER_USAGE_RENDER_PASS_CONTINUE_BIT,
+            pInheritanceInfo=inheritance)
 
     def destroy(self) -> None:
         vk = self.device.vk
