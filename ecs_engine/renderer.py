@@ -30,8 +30,8 @@ from .culling import frustum_planes
 from .instance_rows import INSTANCE_DTYPE, write_rows
 from .gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
 from .gpu.device import Device
-from .gpu.frames import Frame, FrameRing
-from .gpu.memory import HOST, Buffer
+from .gpu.frames import FrameRing
+from .gpu.memory import Buffer
 from .gpu.pipeline import GraphicsPipelineSpec, PipelineCache, graphics_pipeline, pipeline_layout
 from .gpu.secondary import SecondaryBuffers
 from .jobs import JobPool, row_chunks

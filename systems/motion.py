@@ -20,7 +20,7 @@ class MotionSystem(System):
         pool = world.resources.get(JobPool)
         for batch in world.query(Transform, Velocity):
             pos, lin = batch[Transform].position, batch[Velocity].linear
-            over_rows(pool, len(batch), lambda s: integrate_linear(pos[s], lin[s], dt))
+            over_rows(pool, len(batch), lambda s, pos=pos, lin=lin: integrate_linear(pos[s], lin[s], dt))
         for batch in world.query(Transform, AngularVelocity):
             rot, ang = batch[Transform].rotation, batch[AngularVelocity].angular
-            over_rows(pool, len(batch), lambda s: integrate_angular(rot[s], ang[s], dt))
+            over_rows(pool, len(batch), lambda s, rot=rot, ang=ang: integrate_angular(rot[s], ang[s], dt))

@@ -42,7 +42,7 @@ class TransformSystem(System):
         for batch in batches:
             t = batch[Transform]
             m = batch[ModelMatrix]
-            over_rows(pool, len(batch), lambda s: compose(
+            over_rows(pool, len(batch), lambda s, t=t, m=m: compose(
                 t.position[s], t.rotation[s], t.scale[s], origin, m.model[s], m.normal[s]))
             updated += len(batch)
         self.rows_updated = updated

@@ -9,8 +9,6 @@ or a wrong winding. ECS_ENGINE_UPDATE_GOLDEN=1 rewrites the references.
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
 
 import numpy as np
 import pytest
