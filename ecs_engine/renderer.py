@@ -69,6 +69,22 @@ class Chunk:
 
 
 @dataclass
+class FrameContext:
+    """What every chunk job of one frame reads (never writes, except its slice of `instances`)."""
+
+    slot: int  # frame-in-flight index
+    descriptor_set: Any
+    viewport: Any
+    scissor: Any
+    planes: np.ndarray | None  # None: culling off
+    instances: np.ndarray  # the mapped per-frame instance buffer (INSTANCE_DTYPE rows)
+    bounds: tuple[np.ndarray, np.ndarray, np.ndarray]  # per mesh: centre, radius, index count
+    begin_info: Any
+    pipeline_ints: tuple[int, int] = (0, 0)  # native recorder: plain and mirrored pipelines
+    native_frame: dict[str, Any] | None = None
+
+
+@dataclass
 class ChunkResult:
     command_buffer: Any  # None when nothing in the chunk is visible
     visible: int
@@ -221,13 +237,13 @@ class Renderer:
             self._bounds_n = n
         return self._bounds
 
-    def record_chunk(self, chunk: Chunk, ctx: dict[str, Any]) -> ChunkResult:
+    def record_chunk(self, chunk: Chunk, ctx: FrameContext) -> ChunkResult:
         """One job: cull, write the visible rows into this chunk's slice, record a secondary."""
         vk = self.vk
-        centers_m, radii_m, index_counts = ctx["bounds"]
-        rows = ctx["instances"][chunk.offset : chunk.offset + len(chunk.handle)]
+        centers_m, radii_m, index_counts = ctx.bounds
+        rows = ctx.instances[chunk.offset : chunk.offset + len(chunk.handle)]
         key_counts = np.zeros(2 * len(index_counts), dtype=np.int64)
-        n = write_rows(chunk.model, chunk.normal, chunk.handle, chunk.material, centers_m, radii_m, ctx["planes"],
+        n = write_rows(chunk.model, chunk.normal, chunk.handle, chunk.material, centers_m, radii_m, ctx.planes,
                        len(DEFAULT_MATERIALS), rows, key_counts)
         if n == 0:
             return ChunkResult(None, 0, 0, 0)
@@ -239,15 +255,16 @@ class Renderer:
         draws = len(starts) if instanced else n
         triangles = int((index_counts[run_mesh] // 3 * counts).sum())
         if self.native is not None:
-            cb = self.secondaries.acquire(ctx["slot"])
-            pipes = np.where(flipped == 1, ctx["pipeline_ints"][1], ctx["pipeline_ints"][0]).astype(np.int64)
+            cb = self.secondaries.acquire(ctx.slot)
+            pipes = np.where(flipped == 1, ctx.pipeline_ints[1], ctx.pipeline_ints[0]).astype(np.int64)
             self.native.record(cb, self.layout, vk.VK_SHADER_STAGE_VERTEX_BIT, rows, instanced, chunk.offset,
-                               starts, counts, run_mesh, pipes, ctx["native_frame"])
+                               starts, counts, run_mesh, pipes, ctx.native_frame)
             return ChunkResult(cb, n, draws, triangles)
-        cb = self.secondaries.begin(ctx["slot"], ctx["begin_info"])
-        vk.vkCmdSetViewport(cb, 0, 1, [ctx["viewport"]])  # not inherited by secondaries
-        vk.vkCmdSetScissor(cb, 0, 1, [ctx["scissor"]])
-        vk.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1, [ctx["set"]], 0, None)
+        cb = self.secondaries.begin(ctx.slot, ctx.begin_info)
+        vk.vkCmdSetViewport(cb, 0, 1, [ctx.viewport])  # not inherited by secondaries
+        vk.vkCmdSetScissor(cb, 0, 1, [ctx.scissor])
+        vk.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1, [ctx.descriptor_set],
+                                   0, None)
         self._record_runs_python(cb, rows, instanced, chunk.offset, starts, counts, run_mesh, flipped)
         vk.vkEndCommandBuffer(cb)
         return ChunkResult(cb, n, draws, triangles)
@@ -307,14 +324,14 @@ class Renderer:
             pf.lights.array(LIGHT_DTYPE, len(lights))[:] = lights
         self._write_globals(pf, cam, len(lights))
         area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(width, height))
-        ctx = {
-            "slot": slot, "framebuffer": framebuffer, "set": pf.descriptor_set, "scissor": area,
-            "viewport": vk.VkViewport(x=0.0, y=0.0, width=float(width), height=float(height), minDepth=0.0, maxDepth=1.0),
-            "planes": frustum_planes(cam.projection, cam.view) if self.culling else None,
-            "instances": pf.instances.array(INSTANCE_DTYPE, max(candidates, 1)),
-            "bounds": self._mesh_bounds(),
-            "begin_info": self.secondaries.begin_info(self.target.render_pass, 0, framebuffer),
-        }
+        ctx = FrameContext(
+            slot=slot, descriptor_set=pf.descriptor_set, scissor=area,
+            viewport=vk.VkViewport(x=0.0, y=0.0, width=float(width), height=float(height), minDepth=0.0, maxDepth=1.0),
+            planes=frustum_planes(cam.projection, cam.view) if self.culling else None,
+            instances=pf.instances.array(INSTANCE_DTYPE, max(candidates, 1)),
+            bounds=self._mesh_bounds(),
+            begin_info=self.secondaries.begin_info(self.target.render_pass, 0, framebuffer),
+        )
         if self.native is not None:
             from .gpu.native_recorder import handle_int
 
@@ -322,8 +339,8 @@ class Renderer:
                 gpu = [self.meshes[h] for h in range(len(self.meshes))]
                 self.native.set_meshes([m.vertices.handle for m in gpu], [m.indices.handle for m in gpu],
                                        [m.index_count for m in gpu])
-            ctx["pipeline_ints"] = (handle_int(vk, self.mesh_pipeline), handle_int(vk, self.mirrored_pipeline))
-            ctx["native_frame"] = self.native.frame_state(ctx["begin_info"], width, height, pf.descriptor_set)
+            ctx.pipeline_ints = (handle_int(vk, self.mesh_pipeline), handle_int(vk, self.mirrored_pipeline))
+            ctx.native_frame = self.native.frame_state(ctx.begin_info, width, height, pf.descriptor_set)
         t0 = time.perf_counter()
         job = lambda chunk: self.record_chunk(chunk, ctx)  # noqa: E731
         results = self.jobs.map(job, chunks, [f"rows {c.offset}:{c.offset + len(c.handle)}" for c in chunks]) \
