@@ -21,6 +21,7 @@ from .machine import check_slug, describe
 REGISTRY: dict[str, str] = {
     "ecs": "bench.ecs",
     "seed-tables": "bench.seed_tables",
+    "scaling": "bench.scaling",
 }
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results"

@@ -116,7 +116,7 @@ class _PerFrame:
 class Renderer:
     def __init__(self, device: Device, target: Any, meshes: MeshRegistry, *, lights: bool,
                  mode: str = "instanced", jobs: JobPool | None = None, culling: bool = True,
-                 chunk_rows: int = CHUNK_ROWS, recorder: str = "native",
+                 chunk_rows: int = CHUNK_ROWS, recorder: str = "native", native_recorder: Any = None,
                  clear_color: tuple[float, float, float] = (0.02, 0.02, 0.03),
                  ambient: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 0.06),
                  light_size: float = 0.08) -> None:
@@ -140,7 +140,8 @@ class Renderer:
         if recorder == "native":
             from .gpu.native_recorder import NativeRecorder
 
-            self.native = NativeRecorder(device)
+            # compiling one costs about a second: callers rendering many configurations share one
+            self.native = native_recorder or NativeRecorder(device)
         self.recorder = recorder
         self.frames = FrameRing(device)
         self.secondaries = SecondaryBuffers(device, len(self.frames.frames))

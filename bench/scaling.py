@@ -1,0 +1,177 @@
+"""Render-job scaling: the scaling scene at several entity counts, by threads, mode and recorder,
+headless. Per configuration: CPU record ms (the chunk jobs), CPU frame ms (systems + render,
+minus waits for the GPU), GPU frame ms (timestamps), FPS (wall clock), draws, visible entities.
+
+One device, scene and world per entity count; renderers per (mode, recorder) share one compiled
+native recorder. The Python recorder runs only up to PYTHON_MAX entities (it needs ~9 us a draw).
+
+JSON (schema_version 1): {"benchmark": "scaling", "quick", "machine", "device", "config",
+"results": [{"entities", "threads", "mode", "recorder", "frames", "record_ms", "cpu_ms", "gpu_ms",
+"fps", "draws", "visible", "ns_per_draw_record"}], "targets": [{"name", "target", "measured",
+"unit", "op", "met"}]}; a plot `scaling-<slug>.png` beside it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ecs_engine.jobs import JobPool, default_threads
+
+THREADS = default_threads()
+PYTHON_MAX = 10_000
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--entities", type=int, nargs="*", help="entity counts (default: 1 .. 1,000,000)")
+
+
+def sweep(entities: int, thread_counts: list[int], frames: int, warmup: int, size: tuple[int, int]) -> list[dict[str, Any]]:
+    from ecs_engine.app import RunOptions, default_schedule, describe_device, scene_builder
+    from ecs_engine.gpu.device import Device
+    from ecs_engine.gpu.instance import Instance
+    from ecs_engine.gpu.native_recorder import NativeRecorder
+    from ecs_engine.gpu.offscreen import OffscreenTarget
+    from ecs_engine.mesh_registry import MeshRegistry
+    from ecs_engine.renderer import Renderer
+    from ecs_engine.world import World
+
+    rows = []
+    instance = Instance()
+    device = Device(instance)
+    target = OffscreenTarget(device, *size)
+    meshes = MeshRegistry(device)
+    native = NativeRecorder(device)
+    try:
+        world = World()
+        scene_builder("scaling", entities)(world, meshes.add)
+        schedule = default_schedule()
+        for recorder in ("native", "python"):
+            if recorder == "python" and entities > PYTHON_MAX:
+                continue
+            for mode in ("per_entity", "instanced"):
+                renderer = Renderer(device, target, meshes, lights=True, mode=mode, recorder=recorder,
+                                    native_recorder=native)
+                try:
+                    for threads in thread_counts:
+                        with JobPool(threads) as pool:
+                            world.resources[JobPool] = renderer.jobs = pool
+                            rows.append(measure(world, schedule, renderer, frames, warmup) |
+                                        {"entities": entities, "threads": threads, "mode": mode,
+                                         "recorder": recorder, "device": describe_device(device)})
+                finally:
+                    renderer.destroy()
+    finally:
+        meshes.destroy()
+        target.destroy()
+        device.destroy()
+        instance.destroy()
+    return rows
+
+
+def measure(world: Any, schedule: Any, renderer: Any, frames: int, warmup: int) -> dict[str, Any]:
+    record, cpu, gpu, ends = [], [], [], []
+    for i in range(warmup + frames):
+        t0 = time.perf_counter()
+        schedule.run(world, 1 / 60)
+        stats = renderer.render(world)
+        now = time.perf_counter()
+        if i >= warmup:
+            record.append(stats.record_ms)
+            cpu.append((now - t0) * 1e3 - stats.wait_ms)
+            ends.append(now)
+            if stats.gpu_ms is not None:
+                gpu.append(stats.gpu_ms)
+    renderer.device.wait_idle()
+    wall = ends[-1] - ends[0]
+    rec = float(np.median(record))
+    return {"frames": frames, "record_ms": rec, "cpu_ms": float(np.median(cpu)),
+            "gpu_ms": float(np.median(gpu)) if gpu else None,
+            "fps": (len(ends) - 1) / wall if wall > 0 else 0.0, "draws": stats.draws, "visible": stats.instances,
+            "ns_per_draw_record": rec * 1e6 / max(stats.draws - 1, 1)}
+
+
+def targets(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    out = []
+    by = {(r["entities"], r["threads"], r["mode"], r["recorder"]): r for r in results}
+    n = max(r["entities"] for r in results)
+    tmax = max(r["threads"] for r in results)
+
+    def add(name: str, target: float, measured: float | None, unit: str, op: str) -> None:
+        if measured is None:
+            return
+        met = measured <= target if op == "<=" else measured >= target
+        out.append({"name": name, "target": target, "measured": measured, "unit": unit, "op": op, "met": bool(met)})
+
+    one = by.get((n, 1, "per_entity", "native"))
+    top = by.get((n, tmax, "per_entity", "native"))
+    add(f"per_entity native: record ns per draw, 1 thread, {n:,} entities", 50.0,
+        one["ns_per_draw_record"] if one else None, "ns", "<=")
+    add(f"per_entity native: record speed-up {tmax} threads vs 1, {n:,} entities", 6.0,
+        one["record_ms"] / top["record_ms"] if one and top and tmax > 1 else None, "x", ">=")
+    inst = by.get((n, tmax, "instanced", "native"))
+    add(f"instanced: CPU frame ms, {n:,} moving entities, {tmax} threads", 8.0, inst["cpu_ms"] if inst else None,
+        "ms", "<=")
+    return out
+
+
+def plot(results: list[dict[str, Any]], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    for ax, mode in zip(axes, ("per_entity", "instanced")):
+        for (n, rec) in sorted({(r["entities"], r["recorder"]) for r in results if r["mode"] == mode}):
+            rows = sorted((r for r in results if r["mode"] == mode and r["entities"] == n and r["recorder"] == rec),
+                          key=lambda r: r["threads"])
+            if n >= 1000:
+                ax.plot([r["threads"] for r in rows], [r["record_ms"] for r in rows], marker="o",
+                        linestyle="-" if rec == "native" else "--", label=f"{n:,} {rec}")
+        ax.set_xscale("log", base=2)
+        ax.set_yscale("log")
+        ax.set_xlabel("threads")
+        ax.set_ylabel("record ms per frame (median)")
+        ax.set_title(mode)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dict[str, Any]:
+    if args.quick:
+        counts, frames, warmup, size = [100, 2_000], 4, 2, (160, 120)
+        thread_counts = sorted({1, min(2, THREADS)})
+    else:
+        counts, frames, warmup, size = [1, 100, 1_000, 10_000, 100_000, 1_000_000], 12, 4, (640, 360)
+        thread_counts = [t for t in (1, 2, 4, 8, 16) if t <= THREADS]
+    counts = args.entities or counts
+    results: list[dict[str, Any]] = []
+    for n in counts:
+        with progress.step(f"{n:,} entities: threads {thread_counts}, both modes and recorders"):
+            results.extend(sweep(n, thread_counts, frames, warmup, size))
+    doc = {"benchmark": "scaling", "schema_version": 1, "quick": bool(args.quick), "machine": machine,
+           "device": results[0]["device"] if results else None,
+           "config": {"entities": counts, "threads": thread_counts, "frames": frames, "warmup": warmup,
+                      "size": list(size), "python_max": PYTHON_MAX},
+           "results": results, "targets": targets(results)}
+    out = Path(args.out) / f"scaling-{machine['slug']}.png"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    plot(results, out)
+    print(f"{'entities':>9} {'mode':10} {'rec':6} {'thr':>3} {'record ms':>10} {'cpu ms':>8} {'gpu ms':>8} "
+          f"{'fps':>7} {'draws':>8} {'ns/draw':>8}")
+    for r in results:
+        gpu = f"{r['gpu_ms']:.2f}" if r["gpu_ms"] is not None else "n/a"
+        print(f"{r['entities']:9,} {r['mode']:10} {r['recorder']:6} {r['threads']:3} {r['record_ms']:10.2f} "
+              f"{r['cpu_ms']:8.2f} {gpu:>8} {r['fps']:7.1f} {r['draws']:8} {r['ns_per_draw_record']:8.0f}")
+    for t in doc["targets"]:
+        print(f"target {'MET ' if t['met'] else 'MISS'} {t['name']}: {t['measured']:.3g} {t['unit']} "
+              f"(target {t['op']} {t['target']})")
+    return doc

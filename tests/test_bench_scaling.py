@@ -1,0 +1,24 @@
+"""The scaling benchmark runs (tiny sizes, lavapipe) and writes its JSON and plot."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_scaling_quick_writes_json_and_plot(tmp_path, monkeypatch):
+    monkeypatch.syspath_prepend(str(ROOT))
+    from bench.__main__ import main
+
+    assert main(["scaling", "--quick", "--entities", "60", "--out", str(tmp_path), "--machine", "ci"]) == 0
+    doc = json.loads((tmp_path / "scaling-ci.json").read_text())
+    assert (tmp_path / "scaling-ci.png").stat().st_size > 1000
+    configs = {(r["mode"], r["recorder"], r["threads"]) for r in doc["results"]}
+    assert ("per_entity", "native", 1) in configs and ("instanced", "python", 1) in configs
+    for r in doc["results"]:
+        assert r["entities"] == 60 and r["record_ms"] > 0 and r["cpu_ms"] > 0 and r["fps"] > 0
+        assert r["draws"] == (r["visible"] + 1 if r["mode"] == "per_entity" else r["draws"])
+    names = [t["name"] for t in doc["targets"]]
+    assert any("ns per draw" in n for n in names) and all(type(t["met"]) is bool for t in doc["targets"])
