@@ -31,7 +31,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def sweep(entities: int, thread_counts: list[int], frames: int, warmup: int, size: tuple[int, int]) -> list[dict[str, Any]]:
-    from ecs_engine.app import RunOptions, default_schedule, describe_device, scene_builder
+    from ecs_engine.app import default_schedule, describe_device, scene_builder
     from ecs_engine.gpu.device import Device
     from ecs_engine.gpu.instance import Instance
     from ecs_engine.gpu.native_recorder import NativeRecorder
@@ -130,7 +130,7 @@ def plot(results: list[dict[str, Any]], path: Path) -> None:
         for (n, rec) in sorted({(r["entities"], r["recorder"]) for r in results if r["mode"] == mode}):
             rows = sorted((r for r in results if r["mode"] == mode and r["entities"] == n and r["recorder"] == rec),
                           key=lambda r: r["threads"])
-            if n >= 1000:
+            if n >= 1000 or n == max(r["entities"] for r in results):
                 ax.plot([r["threads"] for r in rows], [r["record_ms"] for r in rows], marker="o",
                         linestyle="-" if rec == "native" else "--", label=f"{n:,} {rec}")
         ax.set_xscale("log", base=2)
