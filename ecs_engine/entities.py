@@ -32,7 +32,6 @@ class EntityIndex:
         self.used = 0  # slots ever handed out
         self._free = np.empty(0, dtype=np.int64)
         self._free_count = 0
-        self.alive_count = 0
 
     # ----------------------------------------------------------------- capacity
     def _ensure(self, needed: int) -> None:
@@ -58,7 +57,6 @@ class EntityIndex:
         fresh = np.arange(self.used, self.used + fresh_n, dtype=np.int64)
         self.used += fresh_n
         index = np.concatenate([reused, fresh]) if take else fresh
-        self.alive_count += n
         return make_ids(index, self.generation[index])
 
     def allocate_one(self) -> int:
@@ -69,7 +67,6 @@ class EntityIndex:
             self._ensure(self.used + 1)
             index = self.used
             self.used += 1
-        self.alive_count += 1
         return (int(self.generation[index]) << INDEX_BITS) | index
 
     def release_one(self, index: int) -> None:
@@ -81,7 +78,6 @@ class EntityIndex:
                 self._free = _grown(self._free, max(2 * len(self._free), 64), 0)
             self._free[self._free_count] = index
             self._free_count += 1
-        self.alive_count -= 1
 
     def shrink_to_fit(self) -> None:
         """Drop capacity above the slots ever used (and spare free-list room)."""
@@ -102,7 +98,6 @@ class EntityIndex:
             self._free = _grown(self._free, max(need, 2 * len(self._free), 64), 0)
         self._free[self._free_count : need] = recyclable
         self._free_count = need
-        self.alive_count -= len(index)
 
     # ------------------------------------------------------------------- lookup
     def split(self, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -96,14 +96,6 @@ class Schedule:
         self.stages[stage].append(sys_)
         return sys_
 
-    def add_stage(self, name: str, after: str | None = None) -> None:
-        if name in self.stages:
-            raise ValueError(f"stage {name!r} exists")
-        items = list(self.stages.items())
-        pos = len(items) if after is None else [k for k, _ in items].index(after) + 1
-        items.insert(pos, (name, []))
-        self.stages = dict(items)
-
     def order(self) -> list[tuple[str, list[str]]]:
         return [(stage, [s.name for s in systems]) for stage, systems in self.stages.items()]
 

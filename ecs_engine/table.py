@@ -36,10 +36,9 @@ class ArchetypeTable:
         self.columns: dict[ColumnKey, np.ndarray] = {
             key: np.empty((0, *f.shape), dtype=f.dtype) for key, f in self.fields.items()
         }
-        # Change detection: world tick of the last write per column, and of the last row
-        # added or removed (rows moved by swap-remove keep their values).
+        # Change detection: world tick of the last write per column (adding rows counts as a
+        # write; rows moved by swap-remove keep their values). Layout changes bump `version`.
         self.column_ticks: dict[ColumnKey, int] = dict.fromkeys(self.columns, 0)
-        self.structure_tick = 0
         # Cached neighbour tables: component type -> table id with that type added/removed.
         self.add_edges: dict[type[Component], int] = {}
         self.remove_edges: dict[type[Component], int] = {}
@@ -53,9 +52,6 @@ class ArchetypeTable:
 
     def nbytes(self) -> int:
         return self.entities.nbytes + sum(c.nbytes for c in self.columns.values())
-
-    def column(self, ct: type[Component], name: str) -> np.ndarray:
-        return self.columns[(ct, name)][: self.count]
 
     # ------------------------------------------------------------------ growth
     def reserve(self, extra: int) -> None:
@@ -113,9 +109,8 @@ class ArchetypeTable:
         self.version += 1
         for key in self.column_ticks:
             self.column_ticks[key] = tick
-        self.structure_tick = tick
 
-    def remove_rows(self, rows: np.ndarray, tick: int) -> tuple[np.ndarray, np.ndarray]:
+    def remove_rows(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Swap-remove `rows` (unique). Returns (ids of rows that moved, their new rows)."""
         n = self.count
         k = len(rows)
@@ -131,11 +126,10 @@ class ArchetypeTable:
         for key in self.object_keys:
             self.columns[key][new_n:n] = None  # drop references held past the end
         self.count = new_n
-        self.structure_tick = tick
         self.version += 1
         return self.entities[holes], holes
 
-    def remove_row(self, row: int, tick: int) -> int:
+    def remove_row(self, row: int) -> int:
         """Swap-remove one row. Returns the id that moved into it, or 0 if none moved."""
         last = self.count - 1
         moved = 0
@@ -147,7 +141,6 @@ class ArchetypeTable:
         for key in self.object_keys:
             self.columns[key][last] = None
         self.count = last
-        self.structure_tick = tick
         self.version += 1
         return moved
 

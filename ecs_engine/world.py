@@ -272,29 +272,24 @@ class World:
 
     def _destroy_one(self, eid: int) -> None:
         table, row = self._locate(eid)
-        tick = self._write_tick()
         self.structure_version += 1
-        moved = table.remove_row(row, tick)
+        moved = table.remove_row(row)
         if moved:
             self._index.row[moved & INDEX_MASK] = row
         self._index.release_one(eid & INDEX_MASK)
 
     def _destroy_now(self, ids: np.ndarray) -> None:
-        index = ids & INDEX_MASK
-        tick = self._write_tick()
-        self.structure_version += 1
         if len(ids) == 1:
-            table = self._tables[int(self._index.table[index[0]])]
-            moved = table.remove_row(int(self._index.row[index[0]]), tick)
-            if moved:
-                self._index.row[moved & INDEX_MASK] = self._index.row[index[0]]
-        else:
-            tables = self._index.table[index]
-            rows = self._index.row[index]
-            for tid in np.unique(tables):
-                sel = tables == tid
-                moved, new_rows = self._tables[tid].remove_rows(rows[sel], tick)
-                self._index.row[moved & INDEX_MASK] = new_rows
+            self._destroy_one(int(ids[0]))
+            return
+        index = ids & INDEX_MASK
+        self.structure_version += 1
+        tables = self._index.table[index]
+        rows = self._index.row[index]
+        for tid in np.unique(tables):
+            sel = tables == tid
+            moved, new_rows = self._tables[tid].remove_rows(rows[sel])
+            self._index.row[moved & INDEX_MASK] = new_rows
         self._index.release(index)
 
     # ------------------------------------------------------------ add/remove
@@ -363,11 +358,11 @@ class World:
             else:
                 col[dst_rows] = dst.fields[key].default
         if len(rows) == 1:
-            moved = src.remove_row(int(rows[0]), tick)
+            moved = src.remove_row(int(rows[0]))
             if moved:
                 self._index.row[moved & INDEX_MASK] = rows[0]
         else:
-            moved_ids, new_rows = src.remove_rows(rows, tick)
+            moved_ids, new_rows = src.remove_rows(rows)
             self._index.row[moved_ids & INDEX_MASK] = new_rows
         index = ids & INDEX_MASK
         self._index.table[index] = dst.id

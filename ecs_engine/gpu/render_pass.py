@@ -11,8 +11,6 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from .device import Device
 
-DEPTH_FORMAT_NAME = "VK_FORMAT_D32_SFLOAT"
-
 
 def create_render_pass(device: Device, color_format: int, final_layout: int) -> Any:
     vk = device.vk
