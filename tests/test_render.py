@@ -18,7 +18,7 @@ from PIL import Image
 
 from ecs_engine import World
 from ecs_engine.app import RunOptions, default_schedule, run
-from ecs_engine.components import Mesh, Transform
+from ecs_engine.components import Mesh, PointLight, Transform
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.mesh_data import cube_mesh
 
@@ -63,25 +63,34 @@ def build_cubes(scales):
         for i, s in enumerate(scales):
             world.spawn(Transform(position=(1.2 * (i - (len(scales) - 1) / 2), 0.0, 0.0), scale=s), Mesh(handle=cube))
         add_camera(world, eye=(0.4, 0.9, 3.0), target=(0.0, 0.0, 0.0))
+        # a light, so faces are shaded by their normals: a cube drawn inside out (wrong winding)
+        # has the same silhouette as the right one and differs only there
+        world.spawn(Transform(position=(1.5, 2.5, 2.5)), PointLight(color=(1.0, 1.0, 1.0), intensity=6.0))
     return build
 
 
-def render_custom(build, monkeypatch, tmp_path) -> np.ndarray:
+def render_custom(build, monkeypatch, tmp_path, mode: str = "instanced") -> np.ndarray:
     import ecs_engine.app as app
 
     monkeypatch.setattr(app, "scene_builder", lambda name, entities=None: build)
     result = run(RunOptions(scene="cube", width=SIZE[0], height=SIZE[1], frames=1, screenshot=str(tmp_path / "x.png"),
-                            validate=True, quiet=True))
+                            validate=True, quiet=True, mode=mode))
     assert result.validation_messages == []
     return result.pixels
 
 
-def test_mirrored_entities_keep_their_outside_faces(monkeypatch, tmp_path):
+@pytest.mark.parametrize("mode", ["instanced", "per_entity", "indirect"])
+def test_mirrored_entities_keep_their_outside_faces(monkeypatch, tmp_path, mode):
     """A cube mirrored in x is the same cube: with the winding not flipped for it, back-face
     culling would show its inside instead."""
-    plain = render_custom(build_cubes([(1, 1, 1)]), monkeypatch, tmp_path)
-    mirrored = render_custom(build_cubes([(-1, 1, 1)]), monkeypatch, tmp_path)
+    plain = render_custom(build_cubes([(1, 1, 1)]), monkeypatch, tmp_path, mode)
+    mirrored = render_custom(build_cubes([(-1, 1, 1)]), monkeypatch, tmp_path, mode)
     mean, outliers = image_difference(plain, mirrored)
+    assert mean < 0.5 and outliers < 0.002
+    # and both are right: the plain cube as the instanced mode draws it (two wrong windings
+    # would also match each other)
+    reference = plain if mode == "instanced" else render_custom(build_cubes([(1, 1, 1)]), monkeypatch, tmp_path)
+    mean, outliers = image_difference(plain, reference)
     assert mean < 0.5 and outliers < 0.002
     assert plain[..., :3].max() > 30  # something was drawn
 
