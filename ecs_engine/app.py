@@ -36,7 +36,7 @@ class RunOptions:
     validate: bool = False
     present: str = "fifo"
     quiet: bool = False
-    mode: str = "instanced"  # instanced | per_entity
+    mode: str = "instanced"  # instanced | per_entity | indirect
     threads: int | None = None  # worker pool size, counting the main thread (None: all cores)
     culling: bool = True
     chunk_rows: int = 32_768  # rows per render job (see renderer.CHUNK_ROWS)
@@ -122,7 +122,7 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
         world, schedule, renderer = build_scene(options, build, device, target, meshes, jobs)
         frames = options.frames or 1
         say(f"{options.scene}: headless {options.width}x{options.height} on {result.device}, {frames} frames, "
-            f"mode {options.mode}, {renderer.recorder} recorder, {jobs.threads} threads")
+            f"mode {options.mode}, {recorder_words(renderer)}, {jobs.threads} threads")
         start = last_report = time.perf_counter()
         for i in range(frames):
             t0 = time.perf_counter()
@@ -174,6 +174,12 @@ def build_scene(options: RunOptions, build: Callable[..., None], device: Any, ta
     renderer = Renderer(device, target, meshes, lights=has_lights(world), mode=options.mode, jobs=jobs,
                         culling=options.culling, chunk_rows=options.chunk_rows, recorder=recorder_for(options))
     return world, default_schedule(), renderer
+
+
+def recorder_words(renderer: Any) -> str:
+    if renderer.mode == "indirect":
+        return "commands written on the GPU"  # the recorder choice does not apply
+    return f"{renderer.recorder} recorder"
 
 
 def recorder_for(options: RunOptions) -> str:

@@ -49,8 +49,9 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--present", choices=("fifo", "mailbox", "immediate"), default="fifo",
                       help="swapchain present mode (windowed)")
     demo.add_argument("--validate", action="store_true", help="enable the Vulkan validation layers")
-    demo.add_argument("--mode", choices=("instanced", "per_entity"), default="instanced",
-                      help="instanced: one draw per mesh per chunk; per_entity: one draw per entity (the seed's way)")
+    demo.add_argument("--mode", choices=("instanced", "per_entity", "indirect"), default="instanced",
+                      help="instanced: one draw per mesh per chunk; per_entity: one draw per entity (the seed's way); "
+                      "indirect: the GPU culls and writes the draws (compute + vkCmdDrawIndexedIndirectCount)")
     demo.add_argument("--threads", type=positive_int, help="worker threads, counting the main one (default: all cores)")
     demo.add_argument("--recorder", choices=("native", "python"),
                       help="native: numba loop without the GIL (default when numba is installed); python: the binding")

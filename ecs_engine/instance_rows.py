@@ -7,7 +7,8 @@ reference. Measured on the GPU host, the NumPy version on 4,096-row chunks cost 
 entity and did not scale with threads (many small calls, each holding the GIL).
 
 Row layout (INSTANCE_DTYPE, 112 bytes = 28 words): model rows 0-2 (12 floats), normal rows 0-2
-padded to 4 (12 floats), material index and 3 zero words.
+padded to 4 (12 floats), material index, key (mesh * 2 + mirrored: the indirect mode's compute
+shader reads it) and 2 zero words.
 """
 
 from __future__ import annotations
@@ -44,7 +45,8 @@ def write_rows_numpy(model: np.ndarray, normal: np.ndarray, handle: np.ndarray, 
     out["normal"][:, :, :3] = normal[order]
     out["normal"][:, :, 3] = 0.0
     out["misc"][:, 0] = material[order] % n_materials
-    out["misc"][:, 1:] = 0
+    out["misc"][:, 1] = key[order]
+    out["misc"][:, 2:] = 0
     key_counts[:] = np.bincount(key, minlength=len(key_counts))[: len(key_counts)]
     return n
 
@@ -101,7 +103,7 @@ def _write_rows_kernel(model, normal, handle, material, centers, radii, planes, 
                 words[j, 12 + 4 * r + c] = nm[r, c]
             words[j, 15 + 4 * r] = 0.0
         uwords[j, 24] = material[i] % n_materials
-        uwords[j, 25] = 0
+        uwords[j, 25] = k
         uwords[j, 26] = 0
         uwords[j, 27] = 0
     return total

@@ -1,4 +1,7 @@
-"""Meshes uploaded once to device-local memory and shared: entities hold only a handle."""
+"""Meshes uploaded once to device-local memory and shared: entities hold only a handle.
+
+The indirect render mode draws every mesh from one vertex and one index buffer (a draw command
+names its mesh by first index and vertex offset): `merged()` builds those on first use."""
 
 from __future__ import annotations
 
@@ -17,6 +20,15 @@ VERTEX_STRIDE = 24  # position xyz, normal xyz, float32
 
 
 @dataclass
+class MergedMeshes:
+    vertices: Buffer
+    indices: Buffer
+    first_index: np.ndarray  # per mesh handle
+    vertex_offset: np.ndarray
+    count: int  # meshes included (handles 0..count-1)
+
+
+@dataclass
 class GpuMesh:
     data: MeshData
     vertices: Buffer
@@ -29,6 +41,7 @@ class MeshRegistry:
         self.device = device
         self._meshes: list[GpuMesh] = []
         self._by_data: dict[int, int] = {}
+        self._merged: MergedMeshes | None = None
 
     def add(self, mesh: MeshData) -> int:
         """Upload `mesh` (once: the same MeshData object gives the same handle)."""
@@ -36,10 +49,7 @@ class MeshRegistry:
         if key in self._by_data and self._meshes[self._by_data[key]].data is mesh:
             return self._by_data[key]
         vk = self.device.vk
-        interleaved = np.empty((len(mesh.positions), 6), dtype=np.float32)
-        interleaved[:, :3] = mesh.positions
-        interleaved[:, 3:] = mesh.normals
-        vertices = upload(self.device, interleaved, vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT)
+        vertices = upload(self.device, _interleaved(mesh), vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT)
         indices = upload(self.device, mesh.indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT)
         handle = len(self._meshes)
         self._meshes.append(GpuMesh(mesh, vertices, indices, len(mesh.indices)))
@@ -62,9 +72,43 @@ class MeshRegistry:
         vk.vkCmdBindIndexBuffer(cb, mesh.indices.handle, 0, vk.VK_INDEX_TYPE_UINT32)
         return mesh
 
+    def merged(self) -> MergedMeshes:
+        """Every mesh in one vertex and one index buffer, rebuilt when meshes were added."""
+        if self._merged is not None and self._merged.count == len(self._meshes):
+            return self._merged
+        vk = self.device.vk
+        if self._merged is not None:
+            self.device.wait_idle()  # a frame in flight may still draw from the old buffers
+            self._destroy_merged()
+        datas = [m.data for m in self._meshes]
+        index_counts = np.array([len(d.indices) for d in datas], dtype=np.int64)
+        vertex_counts = np.array([len(d.positions) for d in datas], dtype=np.int64)
+        first_index = np.concatenate([[0], np.cumsum(index_counts)[:-1]]).astype(np.uint32)
+        vertex_offset = np.concatenate([[0], np.cumsum(vertex_counts)[:-1]]).astype(np.int32)
+        vertices = np.concatenate([_interleaved(d) for d in datas]) if datas else np.zeros((1, 6), np.float32)
+        indices = np.concatenate([d.indices for d in datas]).astype(np.uint32) if datas else np.zeros(1, np.uint32)
+        self._merged = MergedMeshes(upload(self.device, vertices, vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT),
+                                    upload(self.device, indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT),
+                                    first_index, vertex_offset, len(datas))
+        return self._merged
+
+    def _destroy_merged(self) -> None:
+        if self._merged is not None:
+            self._merged.vertices.destroy()
+            self._merged.indices.destroy()
+            self._merged = None
+
     def destroy(self) -> None:
+        self._destroy_merged()
         for mesh in self._meshes:
             mesh.vertices.destroy()
             mesh.indices.destroy()
         self._meshes.clear()
         self._by_data.clear()
+
+
+def _interleaved(mesh: MeshData) -> np.ndarray:
+    out = np.empty((len(mesh.positions), 6), dtype=np.float32)
+    out[:, :3] = mesh.positions
+    out[:, 3:] = mesh.normals
+    return out

@@ -10,8 +10,9 @@ begins the render pass with SECONDARY_COMMAND_BUFFERS contents, executes every c
 secondary in subpass 0 and draws the light billboards inline in subpass 1.
 
 Modes: `instanced` (one instanced draw per (mesh, winding) run of a chunk, rows read from the
-storage buffer) and `per_entity` (the seed's way: the row in push constants, one draw per
-entity). Mirrored entities (negative determinant) get the pipeline with the opposite front face
+storage buffer), `per_entity` (the seed's way: the row in push constants, one draw per
+entity) and `indirect` (chunks write every row uncull'd; compute shaders cull and write the
+draw commands, see indirect_draws.py; one secondary of two indirect draws). Mirrored entities (negative determinant) get the pipeline with the opposite front face
 so back-face culling stays right. Light billboards are built only when the scene has lights.
 """
 
@@ -34,6 +35,7 @@ from .gpu.frames import FrameRing
 from .gpu.memory import Buffer
 from .gpu.pipeline import GraphicsPipelineSpec, PipelineCache, graphics_pipeline, pipeline_layout
 from .gpu.secondary import SecondaryBuffers
+from .indirect_draws import IndirectDraws, check_support
 from .jobs import JobPool, row_chunks
 from .mesh_registry import VERTEX_STRIDE, MeshRegistry
 from .world import World
@@ -42,7 +44,7 @@ LIGHT_DTYPE = np.dtype([("position_radius", np.float32, 4), ("color_intensity", 
 MATERIAL_DTYPE = np.dtype([("color", np.float32, 4), ("specular", np.float32, 4)])
 GLOBALS_BYTES = 3 * 64 + 16 + 16
 MIN_LIGHTS = 256
-MODES = ("instanced", "per_entity")
+MODES = ("instanced", "per_entity", "indirect")
 RECORDERS = ("native", "python")
 # Rows per job. Measured on the H100 host (1M entities, native recorder): 4,096-row chunks were
 # slower on 16 threads than on 4 (per-job Python under GIL contention); 32,768-row chunks scale
@@ -90,10 +92,15 @@ class ChunkResult:
     visible: int
     draws: int
     triangles: int
+    key_counts: np.ndarray | None = None  # indirect mode: candidate rows per key
 
 
 @dataclass
 class FrameStats:
+    """Indirect mode: draws, instances and triangles are counted on the GPU and read back
+    without waiting, so they belong to an earlier frame (like gpu_ms), or to this frame when it
+    was read back."""
+
     draws: int
     instances: int  # visible entities drawn
     triangles: int
@@ -124,6 +131,8 @@ class Renderer:
             raise ValueError(f"unknown render mode {mode!r}; modes: {', '.join(MODES)}")
         if recorder not in RECORDERS:
             raise ValueError(f"unknown recorder {recorder!r}; recorders: {', '.join(RECORDERS)}")
+        if mode == "indirect":
+            check_support(device)  # before anything is created
         vk = self.vk = device.vk
         self.device = device
         self.target = target
@@ -137,7 +146,7 @@ class Renderer:
         self.culling = culling
         self.chunk_rows = chunk_rows
         self.native = None
-        if recorder == "native":
+        if recorder == "native" and mode != "indirect":  # indirect: jobs write rows, record nothing
             from .gpu.native_recorder import NativeRecorder
 
             # compiling one costs about a second: callers rendering many configurations share one
@@ -147,11 +156,15 @@ class Renderer:
         self.secondaries = SecondaryBuffers(device, len(self.frames.frames))
         self.cache = PipelineCache(device)
         stages = vk.VK_SHADER_STAGE_VERTEX_BIT | vk.VK_SHADER_STAGE_FRAGMENT_BIT
+        if mode == "indirect":
+            stages |= vk.VK_SHADER_STAGE_COMPUTE_BIT
         ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
-        self.set_layout = DescriptorSetLayout(device, [
-            (0, vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, stages), (1, ssbo, stages), (2, ssbo, stages), (3, ssbo, stages)])
+        storage = 7 if mode == "indirect" else 3
+        self.set_layout = DescriptorSetLayout(device, [(0, vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, stages)]
+                                              + [(b, ssbo, stages) for b in range(1, storage + 1)])
         n = len(self.frames.frames)
-        self.pool = DescriptorPool(device, n, {vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER: n, ssbo: 3 * n})
+        self.pool = DescriptorPool(device, n, {vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER: n, ssbo: storage * n})
+        self.indirect = IndirectDraws(device, self.cache, self.set_layout, n) if mode == "indirect" else None
         # one push range for both users: the billboard size (4 bytes), a per_entity row (112)
         self.layout = pipeline_layout(device, [self.set_layout.handle],
                                       [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, INSTANCE_DTYPE.itemsize)])
@@ -159,11 +172,11 @@ class Renderer:
         table = self.materials.array(MATERIAL_DTYPE, len(DEFAULT_MATERIALS))
         for i, (color, strength, shininess) in enumerate(DEFAULT_MATERIALS):
             table[i] = ((*color, 1.0), (strength, shininess, 0.0, 0.0))
-        self.per_frame = [self._make_frame_resources() for _ in range(n)]
+        self.per_frame = [self._make_frame_resources(slot) for slot in range(n)]
         self._build_pipelines()
 
     # ----------------------------------------------------------------- set-up
-    def _make_frame_resources(self) -> _PerFrame:
+    def _make_frame_resources(self, slot: int) -> _PerFrame:
         vk = self.vk
         pf = _PerFrame(
             globals=Buffer(self.device, GLOBALS_BYTES, vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT),
@@ -171,22 +184,23 @@ class Renderer:
             instances=Buffer(self.device, INSTANCE_DTYPE.itemsize * 1024, vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT),
             descriptor_set=self.pool.allocate(self.set_layout),
         )
-        self._write_set(pf)
+        self._write_set(pf, slot)
         return pf
 
-    def _write_set(self, pf: _PerFrame) -> None:
+    def _write_set(self, pf: _PerFrame, slot: int) -> None:
         vk = self.vk
         ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
+        extra = self.indirect.bindings(slot) if self.indirect is not None else []
         write_buffers(self.device, pf.descriptor_set, [
             (0, vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, pf.globals), (1, ssbo, pf.lights),
-            (2, ssbo, pf.instances), (3, ssbo, self.materials)])
+            (2, ssbo, pf.instances), (3, ssbo, self.materials)] + extra)
 
     def _build_pipelines(self) -> None:
         vk = self.vk
         attrs = [(0, vk.VK_FORMAT_R32G32B32_SFLOAT, 0), (1, vk.VK_FORMAT_R32G32B32_SFLOAT, 12)]
         base = dict(layout=self.layout, render_pass=self.target.render_pass, subpass=0,
                     vertex_stride=VERTEX_STRIDE, vertex_attributes=attrs)
-        vert = "mesh.vert" if self.mode == "instanced" else "mesh_push.vert"
+        vert = {"instanced": "mesh.vert", "per_entity": "mesh_push.vert", "indirect": "mesh_indirect.vert"}[self.mode]
         self.mesh_pipeline = graphics_pipeline(self.device, self.cache, GraphicsPipelineSpec(vert, "mesh.frag", **base))
         self.mirrored_pipeline = graphics_pipeline(self.device, self.cache, GraphicsPipelineSpec(
             vert, "mesh.frag", front_face_ccw=False, **base))
@@ -196,10 +210,11 @@ class Renderer:
                 "light.vert", "light.frag", layout=self.layout, render_pass=self.target.render_pass, subpass=1,
                 cull_back=False, depth_write=False, alpha_blend=True))
 
-    def _ensure_capacity(self, pf: _PerFrame, instances: int, lights: int) -> None:
+    def _ensure_capacity(self, slot: int, instances: int, lights: int) -> None:
         """Grow a frame's buffers (doubling); safe: this frame's fence has been waited on."""
         vk = self.vk
-        changed = False
+        pf = self.per_frame[slot]
+        changed = self.indirect is not None and self.indirect.ensure_capacity(slot, 2 * len(self.meshes), instances)
         if instances * INSTANCE_DTYPE.itemsize > pf.instances.size:
             pf.instances.destroy()
             size = max(instances, 2 * pf.instances.size // INSTANCE_DTYPE.itemsize)
@@ -211,7 +226,7 @@ class Renderer:
             pf.lights = Buffer(self.device, size * LIGHT_DTYPE.itemsize, vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT)
             changed = True
         if changed:
-            self._write_set(pf)
+            self._write_set(pf, slot)
 
     # ------------------------------------------------------------- per frame
     def chunks(self, world: World) -> list[Chunk]:
@@ -244,8 +259,11 @@ class Renderer:
         centers_m, radii_m, index_counts = ctx.bounds
         rows = ctx.instances[chunk.offset : chunk.offset + len(chunk.handle)]
         key_counts = np.zeros(2 * len(index_counts), dtype=np.int64)
-        n = write_rows(chunk.model, chunk.normal, chunk.handle, chunk.material, centers_m, radii_m, ctx.planes,
+        planes = None if self.indirect is not None else ctx.planes  # indirect: the GPU culls
+        n = write_rows(chunk.model, chunk.normal, chunk.handle, chunk.material, centers_m, radii_m, planes,
                        len(DEFAULT_MATERIALS), rows, key_counts)
+        if self.indirect is not None:
+            return ChunkResult(None, 0, 0, 0, key_counts)
         if n == 0:
             return ChunkResult(None, 0, 0, 0)
         keys = np.flatnonzero(key_counts)
@@ -315,12 +333,13 @@ class Renderer:
         frame, gpu_ms = self.frames.begin()
         slot = self.frames.frames.index(frame)
         pf = self.per_frame[slot]
+        previous = self.indirect.counts(slot, self._mesh_bounds()[2]) if self.indirect is not None else None
         self.secondaries.reset(slot)
         cam = camera_matrices(world, width / height)
         lights = self.gather_lights(world, cam.position) if self.with_lights else np.empty(0, LIGHT_DTYPE)
         chunks = self.chunks(world)
         candidates = sum(len(c.handle) for c in chunks)
-        self._ensure_capacity(pf, candidates, len(lights))
+        self._ensure_capacity(slot, candidates, len(lights))
         if len(lights):
             pf.lights.array(LIGHT_DTYPE, len(lights))[:] = lights
         self._write_globals(pf, cam, len(lights))
@@ -348,17 +367,48 @@ class Renderer:
             if self.jobs is not None else [job(c) for c in chunks]
         record_ms = (time.perf_counter() - t0) * 1e3
         cb = frame.command_buffer
-        self._record_primary(cb, [r.command_buffer for r in results if r.command_buffer is not None],
-                             len(lights), framebuffer, area, pf.descriptor_set)
+        secondaries = [r.command_buffer for r in results if r.command_buffer is not None]
+        if self.indirect is not None:
+            secondaries = self._record_indirect(cb, ctx, results, candidates)
+        self._record_primary(cb, secondaries, len(lights), framebuffer, area, pf.descriptor_set)
         if readback:
             self.target.record_readback(cb)
         self.frames.end(frame, wait=wait, signal=signal)
         if readback:
             self.frames.wait(frame)
-        return FrameStats(draws=sum(r.draws for r in results) + (1 if len(lights) else 0),
-                          instances=sum(r.visible for r in results), triangles=sum(r.triangles for r in results),
-                          lights=len(lights), gpu_ms=gpu_ms, wait_ms=self.frames.last_wait_ms,
-                          record_ms=record_ms, chunks=len(chunks), candidates=candidates)
+        stats = FrameStats(draws=sum(r.draws for r in results), instances=sum(r.visible for r in results),
+                           triangles=sum(r.triangles for r in results), lights=len(lights), gpu_ms=gpu_ms,
+                           wait_ms=self.frames.last_wait_ms, record_ms=record_ms, chunks=len(chunks),
+                           candidates=candidates)
+        if self.indirect is not None:
+            # counted on the GPU: this frame's when it was waited for, else the slot's previous one
+            counts = self.indirect.counts(slot, ctx.bounds[2]) if readback else previous
+            if counts is not None:
+                stats.draws, stats.instances, stats.triangles = counts.draws, counts.visible, counts.triangles
+        stats.draws += 1 if len(lights) else 0
+        return stats
+
+    def _record_indirect(self, cb: Any, ctx: FrameContext, results: list[ChunkResult], candidates: int) -> list[Any]:
+        """The compute passes into the primary (before the render pass) and the one secondary
+        that draws what they wrote."""
+        assert self.indirect is not None
+        keys = 2 * len(self.meshes)
+        key_counts = np.zeros(keys, dtype=np.int64)
+        for r in results:
+            key_counts += r.key_counts
+        merged = self.meshes.merged()
+        self.indirect.prepare(ctx.slot, key_counts, merged, ctx.bounds)
+        self.indirect.record_compute(cb, ctx.slot, ctx.descriptor_set, ctx.planes, candidates, keys)
+        vk = self.vk
+        secondary = self.secondaries.begin(ctx.slot, ctx.begin_info)
+        vk.vkCmdSetViewport(secondary, 0, 1, [ctx.viewport])
+        vk.vkCmdSetScissor(secondary, 0, 1, [ctx.scissor])
+        vk.vkCmdBindDescriptorSets(secondary, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1,
+                                   [ctx.descriptor_set], 0, None)
+        self.indirect.record_draws(secondary, ctx.slot, (self.mesh_pipeline, self.mirrored_pipeline), merged,
+                                   key_counts)
+        vk.vkEndCommandBuffer(secondary)
+        return [secondary]
 
     def _write_globals(self, pf: _PerFrame, cam: CameraMatrices, light_count: int) -> None:
         raw = pf.globals.bytes()
@@ -401,6 +451,8 @@ class Renderer:
                 vk.vkDestroyPipeline(self.device.handle, pipeline, None)
         vk.vkDestroyPipelineLayout(self.device.handle, self.layout, None)
         self.secondaries.destroy()
+        if self.indirect is not None:
+            self.indirect.destroy()
         for pf in self.per_frame:
             pf.globals.destroy()
             pf.lights.destroy()

@@ -1,6 +1,6 @@
 // The mesh vertex shader body, shared by mesh.vert (instance rows from a storage buffer, one
-// instanced draw per mesh run) and mesh_push.vert (the row in push constants, one draw per
-// entity: the seed's way).
+// instanced draw per mesh run), mesh_push.vert (the row in push constants, one draw per
+// entity: the seed's way) and mesh_indirect.vert (the row index from the ids cull.comp wrote).
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
 
@@ -13,8 +13,10 @@ layout(push_constant) uniform Push { Instance row; } push;
 #endif
 
 void main() {
-#ifdef PUSH_INSTANCE
+#if defined(PUSH_INSTANCE)
     Instance inst = push.row;
+#elif defined(INDIRECT_INSTANCE)
+    Instance inst = instances[ids[gl_InstanceIndex]];
 #else
     Instance inst = instances[gl_InstanceIndex];
 #endif

@@ -29,6 +29,7 @@ def reference(tmp_path_factory):
 @pytest.mark.parametrize("mode, threads, culling", [
     ("instanced", 1, True), ("instanced", 2, True), ("instanced", 4, True), ("per_entity", 1, True),
     ("per_entity", 2, True), ("per_entity", 4, False), ("instanced", 1, False),
+    ("indirect", 1, True), ("indirect", 2, True), ("indirect", 4, False),
 ])
 def test_same_image_in_every_mode_recorder_and_thread_count(reference, tmp_path, mode, threads, culling, recorder):
     if recorder == "native":
@@ -40,10 +41,14 @@ def test_same_image_in_every_mode_recorder_and_thread_count(reference, tmp_path,
     assert_close_to_golden(result.pixels, "grid100")
     stats = result.last_stats
     assert stats.chunks == 7 and stats.candidates == 100
-    assert stats.draws == (1 + (stats.instances if mode == "per_entity" else stats.chunks))
+    # per_entity: one per cube; instanced: one per chunk; indirect: one command for the one
+    # mesh (counted on the GPU); each plus the light billboards
+    assert stats.draws == 1 + {"per_entity": stats.instances, "instanced": stats.chunks, "indirect": 1}[mode]
+    assert stats.instances == 100
 
 
-def test_culling_drops_what_is_off_screen(tmp_path, monkeypatch):
+@pytest.mark.parametrize("mode", ["instanced", "indirect"])
+def test_culling_drops_what_is_off_screen(tmp_path, monkeypatch, mode):
     import ecs_engine.demos.grid100 as grid100
 
     original = grid100.build
@@ -57,10 +62,10 @@ def test_culling_drops_what_is_off_screen(tmp_path, monkeypatch):
                           Mesh(handle=0))
 
     monkeypatch.setattr(grid100, "build", build)
-    culled = grid(tmp_path, threads=2)
-    assert culled.last_stats.candidates == 150 and culled.last_stats.instances <= 100
+    culled = grid(tmp_path, threads=2, mode=mode)
+    assert culled.last_stats.candidates == 150 and culled.last_stats.instances == 100
     assert_close_to_golden(culled.pixels, "grid100")
-    everything = grid(tmp_path, threads=2, culling=False)
+    everything = grid(tmp_path, threads=2, culling=False, mode=mode)
     assert everything.last_stats.instances == 150
 
 

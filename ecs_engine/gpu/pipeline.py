@@ -1,4 +1,4 @@
-"""Shader modules, pipeline layouts, graphics pipelines and an on-disk pipeline cache."""
+"""Shader modules, pipeline layouts, graphics and compute pipelines, and an on-disk pipeline cache."""
 
 from __future__ import annotations
 
@@ -146,3 +146,14 @@ def graphics_pipeline(device: Device, cache: PipelineCache, spec: GraphicsPipeli
     finally:
         vk.vkDestroyShaderModule(device.handle, vert, None)
         vk.vkDestroyShaderModule(device.handle, frag, None)
+
+
+def compute_pipeline(device: Device, cache: PipelineCache, shader: str, layout: Any) -> Any:
+    vk = device.vk
+    module = shader_module(device, shader)
+    try:
+        stage = vk.VkPipelineShaderStageCreateInfo(stage=vk.VK_SHADER_STAGE_COMPUTE_BIT, module=module, pName="main")
+        info = vk.VkComputePipelineCreateInfo(stage=stage, layout=layout)
+        return vk.vkCreateComputePipelines(device.handle, cache.handle, 1, [info], None)[0]
+    finally:
+        vk.vkDestroyShaderModule(device.handle, module, None)
