@@ -4,6 +4,9 @@ minus waits for the GPU), GPU frame ms (timestamps), FPS (wall clock), draws, vi
 
 One device, scene and world per entity count; renderers per (mode, recorder) share one compiled
 native recorder. The Python recorder runs only up to PYTHON_MAX entities (it needs ~9 us a draw).
+The indirect mode records no draws on the CPU (compute shaders write them): its rows say
+recorder "gpu", its record_ms is the jobs writing every row, and its draws and visible counts
+come back from the GPU a frame or two late (steady scene: the same numbers).
 
 JSON (schema_version 1): {"benchmark": "scaling", "quick", "machine", "device", "config",
 "results": [{"entities", "threads", "mode", "recorder", "frames", "record_ms", "cpu_ms", "gpu_ms",
@@ -50,21 +53,23 @@ def sweep(entities: int, thread_counts: list[int], frames: int, warmup: int, siz
         world = World()
         scene_builder("scaling", entities)(world, meshes.add)
         schedule = default_schedule()
-        for recorder in ("native", "python"):
-            if recorder == "python" and entities > PYTHON_MAX:
+        configs = [(m, "native") for m in ("per_entity", "instanced")] + [("indirect", "gpu")]
+        if entities <= PYTHON_MAX:
+            configs += [(m, "python") for m in ("per_entity", "instanced")]
+        for mode, recorder in configs:
+            if mode == "indirect" and not device.features.get("drawIndirectCount"):
                 continue
-            for mode in ("per_entity", "instanced"):
-                renderer = Renderer(device, target, meshes, lights=True, mode=mode, recorder=recorder,
-                                    native_recorder=native)
-                try:
-                    for threads in thread_counts:
-                        with JobPool(threads) as pool:
-                            world.resources[JobPool] = renderer.jobs = pool
-                            rows.append(measure(world, schedule, renderer, frames, warmup) |
-                                        {"entities": entities, "threads": threads, "mode": mode,
-                                         "recorder": recorder, "device": describe_device(device)})
-                finally:
-                    renderer.destroy()
+            renderer = Renderer(device, target, meshes, lights=True, mode=mode,
+                                recorder="native" if recorder == "gpu" else recorder, native_recorder=native)
+            try:
+                for threads in thread_counts:
+                    with JobPool(threads) as pool:
+                        world.resources[JobPool] = renderer.jobs = pool
+                        rows.append(measure(world, schedule, renderer, frames, warmup) |
+                                    {"entities": entities, "threads": threads, "mode": mode,
+                                     "recorder": recorder, "device": describe_device(device)})
+            finally:
+                renderer.destroy()
     finally:
         meshes.destroy()
         target.destroy()
@@ -92,7 +97,7 @@ def measure(world: Any, schedule: Any, renderer: Any, frames: int, warmup: int) 
     return {"frames": frames, "record_ms": rec, "cpu_ms": float(np.median(cpu)),
             "gpu_ms": float(np.median(gpu)) if gpu else None,
             "fps": (len(ends) - 1) / wall if wall > 0 else 0.0, "draws": stats.draws, "visible": stats.instances,
-            "ns_per_draw_record": rec * 1e6 / max(stats.draws - 1, 1)}
+            "ns_per_draw_record": None if renderer.mode == "indirect" else rec * 1e6 / max(stats.draws - 1, 1)}
 
 
 def targets(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -116,6 +121,9 @@ def targets(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
     inst = by.get((n, tmax, "instanced", "native"))
     add(f"instanced: CPU frame ms, {n:,} moving entities, {tmax} threads", 8.0, inst["cpu_ms"] if inst else None,
         "ms", "<=")
+    indirect = by.get((n, tmax, "indirect", "gpu"))
+    add(f"indirect (same bar as instanced): CPU frame ms, {n:,} moving entities, {tmax} threads", 8.0,
+        indirect["cpu_ms"] if indirect else None, "ms", "<=")
     return out
 
 
@@ -125,8 +133,8 @@ def plot(results: list[dict[str, Any]], path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
-    for ax, mode in zip(axes, ("per_entity", "instanced")):
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    for ax, mode in zip(axes, ("per_entity", "instanced", "indirect")):
         for (n, rec) in sorted({(r["entities"], r["recorder"]) for r in results if r["mode"] == mode}):
             rows = sorted((r for r in results if r["mode"] == mode and r["entities"] == n and r["recorder"] == rec),
                           key=lambda r: r["threads"])
@@ -136,7 +144,7 @@ def plot(results: list[dict[str, Any]], path: Path) -> None:
         ax.set_xscale("log", base=2)
         ax.set_yscale("log")
         ax.set_xlabel("threads")
-        ax.set_ylabel("record ms per frame (median)")
+        ax.set_ylabel("record ms per frame (median)" if mode != "indirect" else "row-writing jobs ms (median)")
         ax.set_title(mode)
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
@@ -155,7 +163,7 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
     counts = args.entities or counts
     results: list[dict[str, Any]] = []
     for n in counts:
-        with progress.step(f"{n:,} entities: threads {thread_counts}, both modes and recorders"):
+        with progress.step(f"{n:,} entities: threads {thread_counts}, every mode and recorder"):
             results.extend(sweep(n, thread_counts, frames, warmup, size))
     doc = {"benchmark": "scaling", "schema_version": 1, "quick": bool(args.quick), "machine": machine,
            "device": results[0]["device"] if results else None,
@@ -170,7 +178,8 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
     for r in results:
         gpu = f"{r['gpu_ms']:.2f}" if r["gpu_ms"] is not None else "n/a"
         print(f"{r['entities']:9,} {r['mode']:10} {r['recorder']:6} {r['threads']:3} {r['record_ms']:10.2f} "
-              f"{r['cpu_ms']:8.2f} {gpu:>8} {r['fps']:7.1f} {r['draws']:8} {r['ns_per_draw_record']:8.0f}")
+              f"{r['cpu_ms']:8.2f} {gpu:>8} {r['fps']:7.1f} {r['draws']:8} "
+              f"{'-' if r['ns_per_draw_record'] is None else format(r['ns_per_draw_record'], '8.0f'):>8}")
     for t in doc["targets"]:
         print(f"target {'MET ' if t['met'] else 'MISS'} {t['name']}: {t['measured']:.3g} {t['unit']} "
               f"(target {t['op']} {t['target']})")

@@ -29,7 +29,7 @@ from ecs_engine.jobs import default_threads
 
 THREADS = default_threads()
 SCENES = ("cube", "grid100", "model")
-MODES = ("instanced", "per_entity")
+MODES = ("instanced", "per_entity", "indirect")
 
 # The seed thesis (i7-11800H, RTX 3070, Windows 11): Tables 4.1, 4.2 and 4.3,
 # (single-threaded, multi-threaded).

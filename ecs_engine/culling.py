@@ -16,13 +16,10 @@ def frustum_planes(projection: np.ndarray, view: np.ndarray) -> np.ndarray:
     Vulkan clip space: -w <= x, y <= w and 0 <= z <= w; reverse-Z puts the near plane at
     z = w and the far plane at z = 0."""
     m = projection.astype(np.float64) @ view.astype(np.float64)
-    rows = [m[3] + m[0], m[3] - m[0], m[3] + m[1], m[3] - m[1], m[3] - m[2], m[2]]
-    planes = []
-    for p in rows:
-        n = np.linalg.norm(p[:3])
-        if n > 1e-12:
-            planes.append(p / n)
-    return np.array(planes)
+    rows = np.stack([m[3] + m[0], m[3] - m[0], m[3] + m[1], m[3] - m[1], m[3] - m[2], m[2]])
+    norms = np.sqrt((rows[:, :3] ** 2).sum(axis=1))
+    keep = norms > 1e-12
+    return rows[keep] / norms[keep, None]
 
 
 def spheres_visible(centers: np.ndarray, radii: np.ndarray, planes: np.ndarray) -> np.ndarray:

@@ -18,7 +18,7 @@ so back-face culling stays right. Light billboards are built only when the scene
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -113,11 +113,28 @@ class FrameStats:
 
 
 @dataclass
+class _TargetState:
+    """Structs that depend only on the framebuffer and its size, built once: each binding struct
+    costs microseconds of Python, and a small scene's whole frame budget is 250 us."""
+
+    area: Any
+    viewport: Any
+    secondary_begin: Any  # begin info with render-pass inheritance
+    pass_begin: Any  # VkRenderPassBeginInfo with the clear values
+    keep: Any  # what the structs point to
+    area_ptr: Any = None  # pointers to the structs above, for raw calls
+    viewport_ptr: Any = None
+    pass_begin_ptr: Any = None
+    native: dict[int, dict[str, Any]] = field(default_factory=dict)  # per slot: the native recorder's frame state
+
+
+@dataclass
 class _PerFrame:
     globals: Buffer
     lights: Buffer
     instances: Buffer
     descriptor_set: Any
+    set_array: Any = None  # VkDescriptorSet[1] for raw calls
 
 
 class Renderer:
@@ -174,6 +191,9 @@ class Renderer:
             table[i] = ((*color, 1.0), (strength, shininess, 0.0, 0.0))
         self.per_frame = [self._make_frame_resources(slot) for slot in range(n)]
         self._build_pipelines()
+        self._targets: dict[tuple[int, int, int], _TargetState] = {}
+        self._light_size = np.array([light_size], dtype=np.float32)
+        self._light_push = vk.ffi.from_buffer(self._light_size)
 
     # ----------------------------------------------------------------- set-up
     def _make_frame_resources(self, slot: int) -> _PerFrame:
@@ -184,6 +204,7 @@ class Renderer:
             instances=Buffer(self.device, INSTANCE_DTYPE.itemsize * 1024, vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT),
             descriptor_set=self.pool.allocate(self.set_layout),
         )
+        pf.set_array = self.vk.ffi.new("VkDescriptorSet[1]", [pf.descriptor_set])
         self._write_set(pf, slot)
         return pf
 
@@ -209,6 +230,29 @@ class Renderer:
             self.light_pipeline = graphics_pipeline(self.device, self.cache, GraphicsPipelineSpec(
                 "light.vert", "light.frag", layout=self.layout, render_pass=self.target.render_pass, subpass=1,
                 cull_back=False, depth_write=False, alpha_blend=True))
+
+    def _target_state(self, framebuffer: Any, width: int, height: int) -> _TargetState:
+        vk = self.vk
+        key = (int(vk.ffi.cast("uintptr_t", framebuffer)), width, height)
+        state = self._targets.get(key)
+        if state is None:
+            if len(self._targets) > 16:  # swapchains come and go: drop the old framebuffers' entries
+                self._targets.clear()
+            area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(width, height))
+            clears = [vk.VkClearValue(color=vk.VkClearColorValue(float32=[*self.clear_color, 1.0])),
+                      vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=0.0, stencil=0))]  # reverse-Z
+            state = self._targets[key] = _TargetState(
+                area=area,
+                viewport=vk.VkViewport(x=0.0, y=0.0, width=float(width), height=float(height), minDepth=0.0,
+                                       maxDepth=1.0),
+                secondary_begin=self.secondaries.begin_info(self.target.render_pass, 0, framebuffer),
+                pass_begin=vk.VkRenderPassBeginInfo(renderPass=self.target.render_pass, framebuffer=framebuffer,
+                                                    renderArea=area, pClearValues=clears),
+                keep=(clears, framebuffer))
+            state.area_ptr = vk.ffi.addressof(state.area)
+            state.viewport_ptr = vk.ffi.addressof(state.viewport)
+            state.pass_begin_ptr = vk.ffi.addressof(state.pass_begin)
+        return state
 
     def _ensure_capacity(self, slot: int, instances: int, lights: int) -> None:
         """Grow a frame's buffers (doubling); safe: this frame's fence has been waited on."""
@@ -343,14 +387,13 @@ class Renderer:
         if len(lights):
             pf.lights.array(LIGHT_DTYPE, len(lights))[:] = lights
         self._write_globals(pf, cam, len(lights))
-        area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(width, height))
+        target = self._target_state(framebuffer, width, height)
         ctx = FrameContext(
-            slot=slot, descriptor_set=pf.descriptor_set, scissor=area,
-            viewport=vk.VkViewport(x=0.0, y=0.0, width=float(width), height=float(height), minDepth=0.0, maxDepth=1.0),
+            slot=slot, descriptor_set=pf.descriptor_set, scissor=target.area, viewport=target.viewport,
             planes=frustum_planes(cam.projection, cam.view) if self.culling else None,
             instances=pf.instances.array(INSTANCE_DTYPE, max(candidates, 1)),
             bounds=self._mesh_bounds(),
-            begin_info=self.secondaries.begin_info(self.target.render_pass, 0, framebuffer),
+            begin_info=target.secondary_begin,
         )
         if self.native is not None:
             from .gpu.native_recorder import handle_int
@@ -360,7 +403,9 @@ class Renderer:
                 self.native.set_meshes([m.vertices.handle for m in gpu], [m.indices.handle for m in gpu],
                                        [m.index_count for m in gpu])
             ctx.pipeline_ints = (handle_int(vk, self.mesh_pipeline), handle_int(vk, self.mirrored_pipeline))
-            ctx.native_frame = self.native.frame_state(ctx.begin_info, width, height, pf.descriptor_set)
+            if slot not in target.native:
+                target.native[slot] = self.native.frame_state(ctx.begin_info, width, height, pf.descriptor_set)
+            ctx.native_frame = target.native[slot]
         t0 = time.perf_counter()
         job = lambda chunk: self.record_chunk(chunk, ctx)  # noqa: E731
         results = self.jobs.map(job, chunks, [f"rows {c.offset}:{c.offset + len(c.handle)}" for c in chunks]) \
@@ -370,7 +415,7 @@ class Renderer:
         secondaries = [r.command_buffer for r in results if r.command_buffer is not None]
         if self.indirect is not None:
             secondaries = self._record_indirect(cb, ctx, results, candidates)
-        self._record_primary(cb, secondaries, len(lights), framebuffer, area, pf.descriptor_set)
+        self._record_primary(cb, secondaries, len(lights), target, slot)
         if readback:
             self.target.record_readback(cb)
         self.frames.end(frame, wait=wait, signal=signal)
@@ -419,29 +464,25 @@ class Renderer:
         raw[192:208].view(np.float32)[:] = self.ambient
         raw[208:224].view(np.uint32)[:] = (light_count, 0, 0, 0)
 
-    def _record_primary(self, cb: Any, secondaries: list[Any], light_count: int, framebuffer: Any, area: Any,
-                        descriptor_set: Any) -> None:
+    def _record_primary(self, cb: Any, secondaries: list[Any], light_count: int, target: _TargetState,
+                        slot: int) -> None:
+        """Raw cffi calls with structs made once (see gpu/frames.py for why)."""
         vk = self.vk
-        clears = [vk.VkClearValue(color=vk.VkClearColorValue(float32=[*self.clear_color, 1.0])),
-                  vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=0.0, stencil=0))]  # reverse-Z
-        vk.vkCmdBeginRenderPass(cb, vk.VkRenderPassBeginInfo(
-            renderPass=self.target.render_pass, framebuffer=framebuffer, renderArea=area, pClearValues=clears),
-            vk.VK_SUBPASS_CONTENTS_SECONDARY_COMMAND_BUFFERS)
+        lib = vk.lib
+        lib.vkCmdBeginRenderPass(cb, target.pass_begin_ptr, vk.VK_SUBPASS_CONTENTS_SECONDARY_COMMAND_BUFFERS)
         if secondaries:
-            vk.vkCmdExecuteCommands(cb, len(secondaries), secondaries)
-        vk.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
+            lib.vkCmdExecuteCommands(cb, len(secondaries), vk.ffi.new("VkCommandBuffer[]", secondaries))
+        lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
         if light_count and self.light_pipeline is not None:
-            width, height = area.extent.width, area.extent.height
-            viewport = vk.VkViewport(x=0.0, y=0.0, width=float(width), height=float(height), minDepth=0.0, maxDepth=1.0)
-            vk.vkCmdSetViewport(cb, 0, 1, [viewport])
-            vk.vkCmdSetScissor(cb, 0, 1, [area])
-            vk.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.light_pipeline)
-            vk.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1,
-                                       [descriptor_set], 0, None)
-            size = np.array([self.light_size], dtype=np.float32)
-            vk.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_VERTEX_BIT, 0, 4, vk.ffi.from_buffer(size))
-            vk.vkCmdDraw(cb, 6, light_count, 0, 0)
-        vk.vkCmdEndRenderPass(cb)
+            lib.vkCmdSetViewport(cb, 0, 1, target.viewport_ptr)
+            lib.vkCmdSetScissor(cb, 0, 1, target.area_ptr)
+            lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.light_pipeline)
+            lib.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1,
+                                        self.per_frame[slot].set_array, 0, vk.ffi.NULL)
+            self._light_size[0] = self.light_size
+            lib.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_VERTEX_BIT, 0, 4, self._light_push)
+            lib.vkCmdDraw(cb, 6, light_count, 0, 0)
+        lib.vkCmdEndRenderPass(cb)
 
     def destroy(self) -> None:
         vk = self.vk

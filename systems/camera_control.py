@@ -105,7 +105,13 @@ class FlyCameraSystem(System):
 
     def run(self, world: World, dt: float) -> None:
         axes = fly_input(world.resources.get(InputState))
-        for batch in world.query(Transform, FlyCamera):
+        query = world.query(Transform, FlyCamera)
+        # no key held: only cameras whose FlyCamera was changed (yaw, pitch set by code) need
+        # their rotation rebuilt; the others stay put, and their Transform takes no write tick,
+        # so the transform system skips them too
+        idle = all(a == 0 if isinstance(a, float) else not np.any(a) for a in axes)
+        batches = query.iter(changed=[FlyCamera]) if idle else query
+        for batch in batches:
             t = batch[Transform]
             fly = batch[FlyCamera]
             fly_step(fly.yaw, fly.pitch, t.position, t.rotation, fly.move_speed, fly.turn_speed,

@@ -34,6 +34,7 @@ class _Block:
     size: int
     mapped: Any  # cffi buffer over the whole block, or None
     free: list[tuple[int, int]] = field(default_factory=list)  # (offset, size), sorted by offset
+    view: np.ndarray | None = None  # uint8 view of `mapped`, made once (np.frombuffer costs us a call)
 
     def take(self, size: int, alignment: int) -> int | None:
         for i, (off, length) in enumerate(self.free):
@@ -154,8 +155,10 @@ class Buffer:
         if self.where != HOST:
             raise ValueError("only host buffers are mapped")
         start = self.allocation.offset
-        whole = np.frombuffer(self.allocation.block.mapped, dtype=np.uint8)
-        return whole[start : start + self.size]
+        block = self.allocation.block
+        if block.view is None:
+            block.view = np.frombuffer(block.mapped, dtype=np.uint8)
+        return block.view[start : start + self.size]
 
     def array(self, dtype: Any, shape: tuple[int, ...] | int | None = None, offset: int = 0) -> np.ndarray:
         """A NumPy view of the mapped bytes (writes go straight to memory the GPU reads)."""
