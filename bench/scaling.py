@@ -1,6 +1,6 @@
 """Render-job scaling: the scaling scene at several entity counts, by threads, mode and recorder,
-headless. Per configuration: CPU record ms (the chunk jobs), CPU frame ms (systems + render,
-minus waits for the GPU), GPU frame ms (timestamps), FPS (wall clock), draws, visible entities.
+headless. Per configuration: CPU record ms (the chunk jobs), systems ms (the schedule: motion,
+transforms, camera, lights), CPU frame ms (systems + render, minus waits for the GPU), GPU frame ms (timestamps), FPS (wall clock), draws, visible entities.
 
 One device, scene and world per entity count; renderers per (mode, recorder) share one compiled
 native recorder. The Python recorder runs only up to PYTHON_MAX entities (it needs ~9 us a draw).
@@ -9,7 +9,7 @@ recorder "gpu", its record_ms is the jobs writing every row, and its draws and v
 come back from the GPU a frame or two late (steady scene: the same numbers).
 
 JSON (schema_version 1): {"benchmark": "scaling", "quick", "machine", "device", "config",
-"results": [{"entities", "threads", "mode", "recorder", "frames", "record_ms", "cpu_ms", "gpu_ms",
+"results": [{"entities", "threads", "mode", "recorder", "frames", "record_ms", "systems_ms", "cpu_ms", "gpu_ms",
 "fps", "draws", "visible", "ns_per_draw_record"}], "targets": [{"name", "target", "measured",
 "unit", "op", "met"}]}; a plot `scaling-<slug>.png` beside it.
 """
@@ -79,14 +79,16 @@ def sweep(entities: int, thread_counts: list[int], frames: int, warmup: int, siz
 
 
 def measure(world: Any, schedule: Any, renderer: Any, frames: int, warmup: int) -> dict[str, Any]:
-    record, cpu, gpu, ends = [], [], [], []
+    record, systems, cpu, gpu, ends = [], [], [], [], []
     for i in range(warmup + frames):
         t0 = time.perf_counter()
         schedule.run(world, 1 / 60)
+        t1 = time.perf_counter()
         stats = renderer.render(world)
         now = time.perf_counter()
         if i >= warmup:
             record.append(stats.record_ms)
+            systems.append((t1 - t0) * 1e3)
             cpu.append((now - t0) * 1e3 - stats.wait_ms)
             ends.append(now)
             if stats.gpu_ms is not None:
@@ -94,7 +96,7 @@ def measure(world: Any, schedule: Any, renderer: Any, frames: int, warmup: int) 
     renderer.device.wait_idle()
     wall = ends[-1] - ends[0]
     rec = float(np.median(record))
-    return {"frames": frames, "record_ms": rec, "cpu_ms": float(np.median(cpu)),
+    return {"frames": frames, "record_ms": rec, "systems_ms": float(np.median(systems)), "cpu_ms": float(np.median(cpu)),
             "gpu_ms": float(np.median(gpu)) if gpu else None,
             "fps": (len(ends) - 1) / wall if wall > 0 else 0.0, "draws": stats.draws, "visible": stats.instances,
             "ns_per_draw_record": None if renderer.mode == "indirect" else rec * 1e6 / max(stats.draws - 1, 1)}
@@ -173,11 +175,12 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
     out = Path(args.out) / f"scaling-{machine['slug']}.png"
     out.parent.mkdir(parents=True, exist_ok=True)
     plot(results, out)
-    print(f"{'entities':>9} {'mode':10} {'rec':6} {'thr':>3} {'record ms':>10} {'cpu ms':>8} {'gpu ms':>8} "
+    print(f"{'entities':>9} {'mode':10} {'rec':6} {'thr':>3} {'record ms':>10} {'sys ms':>7} {'cpu ms':>8} {'gpu ms':>8} "
           f"{'fps':>7} {'draws':>8} {'ns/draw':>8}")
     for r in results:
         gpu = f"{r['gpu_ms']:.2f}" if r["gpu_ms"] is not None else "n/a"
         print(f"{r['entities']:9,} {r['mode']:10} {r['recorder']:6} {r['threads']:3} {r['record_ms']:10.2f} "
+              f"{r['systems_ms']:7.2f} "
               f"{r['cpu_ms']:8.2f} {gpu:>8} {r['fps']:7.1f} {r['draws']:8} "
               f"{'-' if r['ns_per_draw_record'] is None else format(r['ns_per_draw_record'], '8.0f'):>8}")
     for t in doc["targets"]:

@@ -50,6 +50,8 @@ class _IndirectFrame:
     key_slots: int  # keys the buffers hold
     row_slots: int
     recorded: bool = False  # `readback` holds a frame's counts
+    copy_region: Any = None  # VkBufferCopy* of the whole state buffer
+    written: tuple[bytes, int] | None = None  # (key counts, merged meshes) the key table holds
 
 
 @dataclass
@@ -76,6 +78,20 @@ class IndirectDraws:
         self.compact = compute_pipeline(device, cache, "compact.comp", self.layout)
         self.max_groups = int(device.limits.maxComputeWorkGroupCount[0])
         self.frames = [self._make_frame(2, 1024) for _ in range(frames)]
+        # made once: the per-frame calls go straight to vk.lib (see gpu/frames.py)
+        self._push = np.zeros(PUSH_BYTES // 4, dtype=np.float32)
+        self._push_ptr = vk.ffi.from_buffer(self._push)
+        self._offsets = vk.ffi.new("VkDeviceSize[1]", [0])
+        compute = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
+        shader_rw = vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_SHADER_WRITE_BIT
+        self._barriers = [_Barrier(vk, *b) for b in (
+            (vk.VK_PIPELINE_STAGE_TRANSFER_BIT, compute, vk.VK_ACCESS_TRANSFER_WRITE_BIT, shader_rw),
+            (compute, compute, vk.VK_ACCESS_SHADER_WRITE_BIT, shader_rw),
+            (compute, vk.VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT | vk.VK_PIPELINE_STAGE_VERTEX_SHADER_BIT
+             | vk.VK_PIPELINE_STAGE_TRANSFER_BIT, vk.VK_ACCESS_SHADER_WRITE_BIT,
+             vk.VK_ACCESS_INDIRECT_COMMAND_READ_BIT | vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_TRANSFER_READ_BIT),
+            (vk.VK_PIPELINE_STAGE_TRANSFER_BIT, vk.VK_PIPELINE_STAGE_HOST_BIT, vk.VK_ACCESS_TRANSFER_WRITE_BIT,
+             vk.VK_ACCESS_HOST_READ_BIT))]
 
     def _make_frame(self, keys: int, rows: int) -> _IndirectFrame:
         vk = self.vk
@@ -88,7 +104,8 @@ class IndirectDraws:
                          DEVICE),
             commands=Buffer(self.device, COMMAND_BYTES * keys, ssbo | indirect, DEVICE),
             readback=Buffer(self.device, 4 * (STATE_HEADER + keys), vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST),
-            key_slots=keys, row_slots=rows)
+            key_slots=keys, row_slots=rows,
+            copy_region=vk.ffi.new("VkBufferCopy*", {"srcOffset": 0, "dstOffset": 0, "size": 4 * (STATE_HEADER + keys)}))
 
     def bindings(self, slot: int) -> list[tuple[int, int, Buffer]]:
         """(binding, descriptor type, buffer) of the frame's buffers in the shared set (4-7)."""
@@ -120,10 +137,16 @@ class IndirectDraws:
 
     def prepare(self, slot: int, key_counts: np.ndarray, merged: MergedMeshes,
                 bounds: tuple[np.ndarray, np.ndarray, np.ndarray]) -> None:
-        """Write the key table: each key's mesh and the start of its region of `ids`."""
+        """Write the key table: each key's mesh and the start of its region of `ids` (skipped
+        when the counts and meshes are those the table already holds)."""
+        f = self.frames[slot]
+        written = (key_counts.tobytes(), id(merged))
+        if f.written == written:
+            return
+        f.written = written
         centers, radii, index_counts = bounds
         n = len(key_counts)
-        table = self.frames[slot].keys.array(KEY_DTYPE, n)
+        table = f.keys.array(KEY_DTYPE, n)
         mesh = np.arange(n) // 2
         table["index_count"] = index_counts[mesh]
         table["first_index"] = merged.first_index[mesh]
@@ -132,45 +155,41 @@ class IndirectDraws:
         table["sphere"][:, :3] = centers[mesh]
         table["sphere"][:, 3] = radii[mesh]
 
-    def record_compute(self, cb: Any, slot: int, descriptor_set: Any, planes: np.ndarray | None, rows: int,
+    def record_compute(self, cb: Any, slot: int, set_array: Any, planes: np.ndarray | None, rows: int,
                        keys: int) -> None:
         """Into the primary, before the render pass: zero the counters, cull, write commands,
-        and copy the counters where the CPU can read them."""
+        and copy the counters where the CPU can read them. `set_array`: VkDescriptorSet[1]."""
         vk = self.vk
+        lib = vk.lib
         f = self.frames[slot]
-        compute = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
-        shader_rw = vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_SHADER_WRITE_BIT
+        to_compute, compute_to_compute, to_draw, to_host = self._barriers
+        stage = vk.VK_SHADER_STAGE_COMPUTE_BIT
         # the previous frame in this slot read the commands and ids: its fence covered that
-        vk.vkCmdFillBuffer(cb, f.state.handle, 0, f.state.size, 0)
-        _barrier(vk, cb, vk.VK_PIPELINE_STAGE_TRANSFER_BIT, compute, vk.VK_ACCESS_TRANSFER_WRITE_BIT, shader_rw)
-        vk.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.layout, 0, 1, [descriptor_set], 0, None)
-        vk.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.cull)
-        push = np.zeros(PUSH_BYTES // 4, dtype=np.float32)
+        lib.vkCmdFillBuffer(cb, f.state.handle, 0, f.state.size, 0)
+        to_compute.record(lib, cb)
+        lib.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.layout, 0, 1, set_array, 0, vk.ffi.NULL)
+        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.cull)
+        push = self._push
         words = push.view(np.uint32)
+        words[24] = 0
         if planes is not None:
-            push[: 4 * len(planes)] = planes.astype(np.float32).reshape(-1)
+            push[: 4 * len(planes)] = planes.reshape(-1)
             words[24] = len(planes)
         step = self.max_groups * CULL_GROUP
         for first in range(0, rows, step):
             count = min(step, rows - first)
             words[25] = first + count  # rows below this index exist
             words[26] = first
-            vk.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_COMPUTE_BIT, 0, PUSH_BYTES, vk.ffi.from_buffer(push))
-            vk.vkCmdDispatch(cb, -(-count // CULL_GROUP), 1, 1)
-        _barrier(vk, cb, compute, compute, vk.VK_ACCESS_SHADER_WRITE_BIT, shader_rw)
-        vk.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.compact)
+            lib.vkCmdPushConstants(cb, self.layout, stage, 0, PUSH_BYTES, self._push_ptr)
+            lib.vkCmdDispatch(cb, -(-count // CULL_GROUP), 1, 1)
+        compute_to_compute.record(lib, cb)
+        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.compact)
         words[:2] = (keys, keys // 2)
-        vk.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_COMPUTE_BIT, 0, 8, vk.ffi.from_buffer(push))
-        vk.vkCmdDispatch(cb, -(-keys // COMPACT_GROUP), 1, 1)
-        _barrier(vk, cb, compute,
-                 vk.VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT | vk.VK_PIPELINE_STAGE_VERTEX_SHADER_BIT
-                 | vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
-                 vk.VK_ACCESS_SHADER_WRITE_BIT,
-                 vk.VK_ACCESS_INDIRECT_COMMAND_READ_BIT | vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_TRANSFER_READ_BIT)
-        region = vk.VkBufferCopy(srcOffset=0, dstOffset=0, size=f.state.size)
-        vk.vkCmdCopyBuffer(cb, f.state.handle, f.readback.handle, 1, [region])
-        _barrier(vk, cb, vk.VK_PIPELINE_STAGE_TRANSFER_BIT, vk.VK_PIPELINE_STAGE_HOST_BIT,
-                 vk.VK_ACCESS_TRANSFER_WRITE_BIT, vk.VK_ACCESS_HOST_READ_BIT)
+        lib.vkCmdPushConstants(cb, self.layout, stage, 0, 8, self._push_ptr)
+        lib.vkCmdDispatch(cb, -(-keys // COMPACT_GROUP), 1, 1)
+        to_draw.record(lib, cb)
+        lib.vkCmdCopyBuffer(cb, f.state.handle, f.readback.handle, 1, f.copy_region)
+        to_host.record(lib, cb)
         f.recorded = True
 
     def record_draws(self, cb: Any, slot: int, pipelines: tuple[Any, Any], merged: MergedMeshes,
@@ -178,16 +197,19 @@ class IndirectDraws:
         """Into the frame's secondary (viewport, scissor and set already bound): one indirect
         count draw per winding that has candidates."""
         vk = self.vk
+        lib = vk.lib
         f = self.frames[slot]
         meshes = len(key_counts) // 2
-        vk.vkCmdBindVertexBuffers(cb, 0, 1, [merged.vertices.handle], [0])
-        vk.vkCmdBindIndexBuffer(cb, merged.indices.handle, 0, vk.VK_INDEX_TYPE_UINT32)
+        if merged.vertex_array is None:
+            merged.vertex_array = vk.ffi.new("VkBuffer[1]", [merged.vertices.handle])
+        lib.vkCmdBindVertexBuffers(cb, 0, 1, merged.vertex_array, self._offsets)
+        lib.vkCmdBindIndexBuffer(cb, merged.indices.handle, 0, vk.VK_INDEX_TYPE_UINT32)
         for winding, pipeline in enumerate(pipelines):
             if not key_counts[winding::2].any():
                 continue
-            vk.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline)
-            vk.vkCmdDrawIndexedIndirectCount(cb, f.commands.handle, winding * meshes * COMMAND_BYTES,
-                                             f.state.handle, 4 * winding, meshes, COMMAND_BYTES)
+            lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline)
+            lib.vkCmdDrawIndexedIndirectCount(cb, f.commands.handle, winding * meshes * COMMAND_BYTES,
+                                              f.state.handle, 4 * winding, meshes, COMMAND_BYTES)
 
     def destroy(self) -> None:
         vk = self.vk
@@ -199,6 +221,14 @@ class IndirectDraws:
         vk.vkDestroyPipelineLayout(self.device.handle, self.layout, None)
 
 
-def _barrier(vk: Any, cb: Any, src_stage: int, dst_stage: int, src_access: int, dst_access: int) -> None:
-    barrier = vk.VkMemoryBarrier(srcAccessMask=src_access, dstAccessMask=dst_access)
-    vk.vkCmdPipelineBarrier(cb, src_stage, dst_stage, 0, 1, [barrier], 0, None, 0, None)
+class _Barrier:
+    """A global memory barrier, made once and recorded with a raw call."""
+
+    def __init__(self, vk: Any, src_stage: int, dst_stage: int, src_access: int, dst_access: int) -> None:
+        self.stages = (src_stage, dst_stage)
+        self.barrier = vk.ffi.new("VkMemoryBarrier*", {"sType": vk.VK_STRUCTURE_TYPE_MEMORY_BARRIER,
+                                                       "srcAccessMask": src_access, "dstAccessMask": dst_access})
+        self.null = vk.ffi.NULL
+
+    def record(self, lib: Any, cb: Any) -> None:
+        lib.vkCmdPipelineBarrier(cb, self.stages[0], self.stages[1], 0, 1, self.barrier, 0, self.null, 0, self.null)

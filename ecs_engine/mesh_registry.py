@@ -26,6 +26,7 @@ class MergedMeshes:
     first_index: np.ndarray  # per mesh handle
     vertex_offset: np.ndarray
     count: int  # meshes included (handles 0..count-1)
+    vertex_array: Any = None  # VkBuffer[1] for raw calls, made on first use
 
 
 @dataclass

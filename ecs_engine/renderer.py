@@ -34,7 +34,7 @@ from .gpu.device import Device
 from .gpu.frames import FrameRing
 from .gpu.memory import Buffer
 from .gpu.pipeline import GraphicsPipelineSpec, PipelineCache, graphics_pipeline, pipeline_layout
-from .gpu.secondary import SecondaryBuffers
+from .gpu.secondary import SecondaryBuffers, end_command_buffer
 from .indirect_draws import IndirectDraws, check_support
 from .jobs import JobPool, row_chunks
 from .mesh_registry import VERTEX_STRIDE, MeshRegistry
@@ -443,16 +443,19 @@ class Renderer:
             key_counts += r.key_counts
         merged = self.meshes.merged()
         self.indirect.prepare(ctx.slot, key_counts, merged, ctx.bounds)
-        self.indirect.record_compute(cb, ctx.slot, ctx.descriptor_set, ctx.planes, candidates, keys)
+        set_array = self.per_frame[ctx.slot].set_array
+        planes = None if ctx.planes is None else ctx.planes.astype(np.float32)
+        self.indirect.record_compute(cb, ctx.slot, set_array, planes, candidates, keys)
         vk = self.vk
+        lib = vk.lib
         secondary = self.secondaries.begin(ctx.slot, ctx.begin_info)
-        vk.vkCmdSetViewport(secondary, 0, 1, [ctx.viewport])
-        vk.vkCmdSetScissor(secondary, 0, 1, [ctx.scissor])
-        vk.vkCmdBindDescriptorSets(secondary, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1,
-                                   [ctx.descriptor_set], 0, None)
+        lib.vkCmdSetViewport(secondary, 0, 1, vk.ffi.addressof(ctx.viewport))
+        lib.vkCmdSetScissor(secondary, 0, 1, vk.ffi.addressof(ctx.scissor))
+        lib.vkCmdBindDescriptorSets(secondary, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1, set_array, 0,
+                                    vk.ffi.NULL)
         self.indirect.record_draws(secondary, ctx.slot, (self.mesh_pipeline, self.mirrored_pipeline), merged,
                                    key_counts)
-        vk.vkEndCommandBuffer(secondary)
+        end_command_buffer(vk, secondary)
         return [secondary]
 
     def _write_globals(self, pf: _PerFrame, cam: CameraMatrices, light_count: int) -> None:

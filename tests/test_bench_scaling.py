@@ -20,7 +20,7 @@ def test_scaling_quick_writes_json_and_plot(tmp_path, monkeypatch):
     assert ("indirect", "gpu", 1) in configs
     for r in doc["results"]:
         assert r["entities"] == 60 and r["record_ms"] > 0 and r["cpu_ms"] > 0 and r["fps"] > 0
-        assert r["visible"] > 0
+        assert r["visible"] > 0 and 0 < r["systems_ms"] < r["cpu_ms"]
         if r["mode"] == "per_entity":
             assert r["draws"] == r["visible"] + 1
         if r["mode"] == "indirect":  # (cube, knot) x windings at most, plus the billboards

@@ -63,8 +63,8 @@ class FrameRing:
         # some drivers (lavapipe) still block here until the queries land: count it as waiting
         gpu_ms = self._read_timestamps(frame) if frame.submitted else None
         self.last_wait_ms = (time.perf_counter() - t0) * 1e3
-        _check(vk, lib.vkResetCommandPool(self.device.handle, frame.pool, 0))
-        _check(vk, lib.vkBeginCommandBuffer(frame.command_buffer, self._begin_info_ptr))
+        check(vk, lib.vkResetCommandPool(self.device.handle, frame.pool, 0))
+        check(vk, lib.vkBeginCommandBuffer(frame.command_buffer, self._begin_info_ptr))
         if self.timestamps:
             lib.vkCmdResetQueryPool(frame.command_buffer, frame.queries, 0, 2)
             lib.vkCmdWriteTimestamp(frame.command_buffer, vk.VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, frame.queries, 0)
@@ -75,9 +75,9 @@ class FrameRing:
         lib = vk.lib
         if self.timestamps:
             lib.vkCmdWriteTimestamp(frame.command_buffer, vk.VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, frame.queries, 1)
-        _check(vk, lib.vkEndCommandBuffer(frame.command_buffer))
-        _check(vk, lib.vkResetFences(self.device.handle, 1, frame.fence_array))
-        _check(vk, lib.vkQueueSubmit(self.device.queue, 1, self._submit_info(frame, wait, signal), frame.fence))
+        check(vk, lib.vkEndCommandBuffer(frame.command_buffer))
+        check(vk, lib.vkResetFences(self.device.handle, 1, frame.fence_array))
+        check(vk, lib.vkQueueSubmit(self.device.queue, 1, self._submit_info(frame, wait, signal), frame.fence))
         frame.submitted = self.timestamps
         self.index = (self.index + 1) % len(self.frames)
 
@@ -99,7 +99,7 @@ class FrameRing:
 
     def wait(self, frame: Frame) -> None:
         vk = self.device.vk
-        _check(vk, vk.lib.vkWaitForFences(self.device.handle, 1, frame.fence_array, vk.VK_TRUE, 2**64 - 1))
+        check(vk, vk.lib.vkWaitForFences(self.device.handle, 1, frame.fence_array, vk.VK_TRUE, 2**64 - 1))
 
     def _read_timestamps(self, frame: Frame) -> float | None:
         vk = self.device.vk
@@ -124,7 +124,8 @@ class FrameRing:
         self.frames.clear()
 
 
-def _check(vk: Any, result: int) -> None:
+def check(vk: Any, result: int) -> None:
+    """Raise what the binding's wrapper would have raised for a failed raw call."""
     if result != vk.VK_SUCCESS:
         raise vk.exception_codes[result]
 

@@ -6,6 +6,8 @@ from __future__ import annotations
 import threading
 from typing import TYPE_CHECKING, Any
 
+from .frames import check
+
 if TYPE_CHECKING:
     from .device import Device
 
@@ -50,9 +52,11 @@ class SecondaryBuffers:
         return cb
 
     def begin(self, frame: int, begin_info: Any) -> Any:
-        """`acquire`, then begin it with `begin_info` (see `begin_info`)."""
+        """`acquire`, then begin it with `begin_info` (see `begin_info`); a raw call, as in
+        gpu/frames.py."""
+        vk = self.device.vk
         cb = self.acquire(frame)
-        self.device.vk.vkBeginCommandBuffer(cb, begin_info)
+        check(vk, vk.lib.vkBeginCommandBuffer(cb, vk.ffi.addressof(begin_info)))
         return cb
 
     def begin_info(self, render_pass: Any, subpass: int, framebuffer: Any) -> Any:
@@ -69,3 +73,7 @@ class SecondaryBuffers:
             for pool in pools.values():
                 vk.vkDestroyCommandPool(self.device.handle, pool.handle, None)
         self._pools = []
+
+
+def end_command_buffer(vk: Any, cb: Any) -> None:
+    check(vk, vk.lib.vkEndCommandBuffer(cb))
