@@ -3,7 +3,8 @@ headless. Per configuration: CPU record ms (the chunk jobs), systems ms (the sch
 transforms, camera, lights), CPU frame ms (systems + render, minus waits for the GPU), GPU frame ms (timestamps), FPS (wall clock), draws, visible entities.
 
 One device, scene and world per entity count; renderers per (mode, recorder) share one compiled
-native recorder. The Python recorder runs only up to PYTHON_MAX entities (it needs ~9 us a draw).
+native recorder. The Python recorder runs only up to PYTHON_MAX entities (it needs ~10 us a
+draw), in chunks of PYTHON_CHUNK_ROWS.
 The indirect mode records no draws on the CPU (compute shaders write them): its rows say
 recorder "gpu", its record_ms is the jobs writing every row, and its draws and visible counts
 come back from the GPU a frame or two late (steady scene: the same numbers).
@@ -27,6 +28,9 @@ from ecs_engine.jobs import JobPool, default_threads
 
 THREADS = default_threads()
 PYTHON_MAX = 10_000
+# The Python recorder's rows use small chunks, so that even 10k entities make several jobs and
+# the table shows what threads do for it (the default 32,768 rows would make one job).
+PYTHON_CHUNK_ROWS = 2_048
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -60,7 +64,8 @@ def sweep(entities: int, thread_counts: list[int], frames: int, warmup: int, siz
             if mode == "indirect" and not device.features.get("drawIndirectCount"):
                 continue
             renderer = Renderer(device, target, meshes, lights=True, mode=mode,
-                                recorder="native" if recorder == "gpu" else recorder, native_recorder=native)
+                                recorder="native" if recorder == "gpu" else recorder, native_recorder=native,
+                                **({"chunk_rows": PYTHON_CHUNK_ROWS} if recorder == "python" else {}))
             try:
                 for threads in thread_counts:
                     with JobPool(threads) as pool:
@@ -170,7 +175,8 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
     doc = {"benchmark": "scaling", "schema_version": 1, "quick": bool(args.quick), "machine": machine,
            "device": results[0]["device"] if results else None,
            "config": {"entities": counts, "threads": thread_counts, "frames": frames, "warmup": warmup,
-                      "size": list(size), "python_max": PYTHON_MAX},
+                      "size": list(size), "python_max": PYTHON_MAX,
+                      "python_chunk_rows": PYTHON_CHUNK_ROWS},
            "results": results, "targets": targets(results)}
     out = Path(args.out) / f"scaling-{machine['slug']}.png"
     out.parent.mkdir(parents=True, exist_ok=True)

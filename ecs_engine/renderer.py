@@ -18,12 +18,12 @@ so back-face culling stays right. Light billboards are built only when the scene
 
 from __future__ import annotations
 
+import threading
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-
-import time
 
 from .camera_math import CameraMatrices, camera_matrices
 from .components import Mesh, ModelMatrix, PointLight, Transform
@@ -192,6 +192,7 @@ class Renderer:
         self.per_frame = [self._make_frame_resources(slot) for slot in range(n)]
         self._build_pipelines()
         self._targets: dict[tuple[int, int, int], _TargetState] = {}
+        self._scratch = threading.local()
         self._light_size = np.array([light_size], dtype=np.float32)
         self._light_push = vk.ffi.from_buffer(self._light_size)
 
@@ -288,6 +289,13 @@ class Renderer:
                 raise ValueError(f"Mesh.handle {top} does not name an uploaded mesh ({len(self.meshes)} uploaded)")
         return out
 
+    def _scratch_rows(self, n: int) -> np.ndarray:
+        """This thread's reusable rows (per_entity mode), at least n long."""
+        rows = getattr(self._scratch, "rows", None)
+        if rows is None or len(rows) < n:
+            rows = self._scratch.rows = np.empty(max(n, 1024), INSTANCE_DTYPE)
+        return rows[:n]
+
     def _mesh_bounds(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         n = len(self.meshes)
         if getattr(self, "_bounds_n", -1) != n:
@@ -301,7 +309,12 @@ class Renderer:
         """One job: cull, write the visible rows into this chunk's slice, record a secondary."""
         vk = self.vk
         centers_m, radii_m, index_counts = ctx.bounds
-        rows = ctx.instances[chunk.offset : chunk.offset + len(chunk.handle)]
+        if self.mode == "per_entity":
+            # the rows only feed push constants: write them to cached CPU memory, not to the mapped
+            # buffer, which is write-combined on discrete GPUs and slow to read back
+            rows = self._scratch_rows(len(chunk.handle))
+        else:
+            rows = ctx.instances[chunk.offset : chunk.offset + len(chunk.handle)]
         key_counts = np.zeros(2 * len(index_counts), dtype=np.int64)
         planes = None if self.indirect is not None else ctx.planes  # indirect: the GPU culls
         n = write_rows(chunk.model, chunk.normal, chunk.handle, chunk.material, centers_m, radii_m, planes,
@@ -383,7 +396,7 @@ class Renderer:
         lights = self.gather_lights(world, cam.position) if self.with_lights else np.empty(0, LIGHT_DTYPE)
         chunks = self.chunks(world)
         candidates = sum(len(c.handle) for c in chunks)
-        self._ensure_capacity(slot, candidates, len(lights))
+        self._ensure_capacity(slot, 0 if self.mode == "per_entity" else candidates, len(lights))
         if len(lights):
             pf.lights.array(LIGHT_DTYPE, len(lights))[:] = lights
         self._write_globals(pf, cam, len(lights))
@@ -391,7 +404,7 @@ class Renderer:
         ctx = FrameContext(
             slot=slot, descriptor_set=pf.descriptor_set, scissor=target.area, viewport=target.viewport,
             planes=frustum_planes(cam.projection, cam.view) if self.culling else None,
-            instances=pf.instances.array(INSTANCE_DTYPE, max(candidates, 1)),
+            instances=pf.instances.array(INSTANCE_DTYPE),
             bounds=self._mesh_bounds(),
             begin_info=target.secondary_begin,
         )

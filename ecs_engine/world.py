@@ -39,6 +39,7 @@ class World:
         self._tables: list[ArchetypeTable] = []
         self._table_ids: dict[frozenset[type[Component]], int] = {}
         self._queries: dict[tuple[Any, ...], Query] = {}
+        self._queries_by_call: dict[tuple[Any, ...], Query] = {}  # as called (see query)
         self._closures: dict[frozenset[type[Component]], frozenset[type[Component]]] = {}
         self.tick = 0
         # Bumped by every spawn, destroy, add and remove that is applied (not when queued).
@@ -460,10 +461,18 @@ class World:
     ) -> Query:
         """A cached query. `write` defaults to every required type outside a system and to the
         system's declared writes inside one; other columns come back read-only."""
+        system = self._system
+        fast = None
+        if type(with_) is tuple and type(without) is tuple and (write is None or type(write) is tuple):
+            # the same call from the same place every frame: skip resolving and checking again
+            fast = (required, with_, without, write, system,
+                    None if system is None else (system.reads, system.writes))
+            q = self._queries_by_call.get(fast)
+            if q is not None:
+                return q
         req = tuple(schema_of(t) for t in required)
         w_set = frozenset(schema_of(t) for t in with_)
         wo_set = frozenset(schema_of(t) for t in without)
-        system = self._system
         if write is None:
             writes = frozenset(req)
             if system is not None and system.writes is not None:
@@ -479,6 +488,8 @@ class World:
         q = self._queries.get(key)
         if q is None:
             q = self._queries[key] = Query(self, req, w_set, wo_set, writes)
+        if fast is not None:
+            self._queries_by_call[fast] = q
         return q
 
     def _begin_iteration(self) -> None:
