@@ -147,7 +147,7 @@ def plot(results: list[dict[str, Any]], path: Path) -> None:
                           key=lambda r: r["threads"])
             if n >= 1000 or n == max(r["entities"] for r in results):
                 ax.plot([r["threads"] for r in rows], [r["record_ms"] for r in rows], marker="o",
-                        linestyle="-" if rec == "native" else "--", label=f"{n:,} {rec}")
+                        linestyle="--" if rec == "python" else "-", label=f"{n:,} {rec}")
         ax.set_xscale("log", base=2)
         ax.set_yscale("log")
         ax.set_xlabel("threads")
