@@ -193,6 +193,9 @@ class Renderer:
         self._build_pipelines()
         self._targets: dict[tuple[int, int, int], _TargetState] = {}
         self._scratch = threading.local()
+        # drawn last in the overlay subpass: an object with prepare(slot, frames_in_flight) and
+        # record(cb, slot, width, height), e.g. imgui_vulkan.ImGuiRenderer
+        self.overlay: Any = None
         self._light_size = np.array([light_size], dtype=np.float32)
         self._light_push = vk.ffi.from_buffer(self._light_size)
 
@@ -392,6 +395,8 @@ class Renderer:
         pf = self.per_frame[slot]
         previous = self.indirect.counts(slot, self._mesh_bounds()[2]) if self.indirect is not None else None
         self.secondaries.reset(slot)
+        if self.overlay is not None:
+            self.overlay.prepare(slot, len(self.frames.frames))
         cam = camera_matrices(world, width / height)
         lights = self.gather_lights(world, cam.position) if self.with_lights else np.empty(0, LIGHT_DTYPE)
         chunks = self.chunks(world)
@@ -498,6 +503,8 @@ class Renderer:
             self._light_size[0] = self.light_size
             lib.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_VERTEX_BIT, 0, 4, self._light_push)
             lib.vkCmdDraw(cb, 6, light_count, 0, 0)
+        if self.overlay is not None:
+            self.overlay.record(cb, slot, target.area.extent.width, target.area.extent.height)
         lib.vkCmdEndRenderPass(cb)
 
     def destroy(self) -> None:

@@ -1,0 +1,310 @@
+"""Dear ImGui drawn by the engine's Vulkan renderer: imgui-bundle gives Python ImGui, but no
+Vulkan renderer, so this is one.
+
+Per frame: the draw lists' vertices and indices are copied (memmove from the addresses the
+bindings expose) into this frame slot's mapped buffers; in the render pass's second subpass
+(after the light billboards) each command is one indexed draw with its scissor and texture.
+Textures follow ImGui 1.92's protocol: the backend creates, updates and destroys them as
+`ImDrawData.textures` asks, and hands ImGui an id to put in its commands.
+
+Vertex colours are sRGB and the render targets are sRGB formats, so the vertex shader decodes
+them; textures are sRGB images, decoded by the sampler.
+"""
+
+from __future__ import annotations
+
+import ctypes
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .gpu.memory import HOST, Buffer, Image
+from .gpu.pipeline import GraphicsPipelineSpec, PipelineCache, graphics_pipeline, pipeline_layout
+
+if TYPE_CHECKING:
+    from .gpu.device import Device
+
+VERTEX_BYTES = 20  # ImDrawVert: pos (2 float), uv (2 float), col (RGBA8)
+INDEX_BYTES = 4  # imgui-bundle builds ImGui with 32-bit ImDrawIdx
+SETS_PER_POOL = 64
+
+
+@dataclass
+class _Texture:
+    image: Image
+    descriptor_set: Any
+    set_array: Any  # VkDescriptorSet[1] for raw calls
+    width: int
+    height: int
+
+
+@dataclass
+class _FrameBuffers:
+    vertices: Buffer
+    indices: Buffer
+    vertex_array: Any  # VkBuffer[1]
+
+
+@dataclass
+class OverlayCounts:
+    lists: int = 0
+    commands: int = 0
+    vertices: int = 0
+    indices: int = 0
+
+
+class ImGuiRenderer:
+    def __init__(self, device: Device, render_pass: Any, subpass: int, frames: int) -> None:
+        from imgui_bundle import imgui
+
+        self.imgui = imgui
+        vk = self.vk = device.vk
+        self.device = device
+        io = imgui.get_io()
+        io.backend_flags |= (imgui.BackendFlags_.renderer_has_textures.value
+                             | imgui.BackendFlags_.renderer_has_vtx_offset.value)
+        self.sampler = vk.vkCreateSampler(device.handle, vk.VkSamplerCreateInfo(
+            magFilter=vk.VK_FILTER_LINEAR, minFilter=vk.VK_FILTER_LINEAR, mipmapMode=vk.VK_SAMPLER_MIPMAP_MODE_LINEAR,
+            addressModeU=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, addressModeV=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+            addressModeW=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, maxLod=1.0), None)
+        self.set_layout = vk.vkCreateDescriptorSetLayout(device.handle, vk.VkDescriptorSetLayoutCreateInfo(
+            pBindings=[vk.VkDescriptorSetLayoutBinding(
+                binding=0, descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, descriptorCount=1,
+                stageFlags=vk.VK_SHADER_STAGE_FRAGMENT_BIT)]), None)
+        self._pools: list[Any] = []
+        self._free_sets: list[Any] = []
+        self.layout = pipeline_layout(device, [self.set_layout], [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, 16)])
+        self.cache = PipelineCache(device)
+        self.pipeline = graphics_pipeline(device, self.cache, GraphicsPipelineSpec(
+            "imgui.vert", "imgui.frag", layout=self.layout, render_pass=render_pass, subpass=subpass,
+            vertex_stride=VERTEX_BYTES,
+            vertex_attributes=[(0, vk.VK_FORMAT_R32G32_SFLOAT, 0), (1, vk.VK_FORMAT_R32G32_SFLOAT, 8),
+                               (2, vk.VK_FORMAT_R8G8B8A8_UNORM, 16)],
+            cull_back=False, depth_test=False, depth_write=False, alpha_blend=True))
+        self._textures: dict[int, _Texture] = {}
+        self._next_id = 1  # 0 means "no texture" to ImGui
+        self._frames = [self._frame_buffers(1 << 14, 1 << 15) for _ in range(frames)]
+        self._prepared: dict[int, tuple[list[Any], tuple[float, float, float, float]]] = {}
+        self._push = np.zeros(4, dtype=np.float32)
+        self._push_ptr = vk.ffi.from_buffer(self._push)
+        self._offsets = vk.ffi.new("VkDeviceSize[1]", [0])
+        self._scissor = vk.ffi.new("VkRect2D*")
+        self._viewport = vk.ffi.new("VkViewport*")
+        self.counts = OverlayCounts()
+
+    # ---------------------------------------------------------------- buffers
+    def _frame_buffers(self, vertices: int, indices: int) -> _FrameBuffers:
+        vk = self.vk
+        vb = Buffer(self.device, vertices * VERTEX_BYTES, vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, HOST)
+        ib = Buffer(self.device, indices * INDEX_BYTES, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT, HOST)
+        return _FrameBuffers(vb, ib, vk.ffi.new("VkBuffer[1]", [vb.handle]))
+
+    def _ensure(self, slot: int, vertices: int, indices: int) -> _FrameBuffers:
+        """Grow the slot's buffers (doubling); safe: the slot's fence has been waited on."""
+        fb = self._frames[slot]
+        if vertices * VERTEX_BYTES > fb.vertices.size or indices * INDEX_BYTES > fb.indices.size:
+            v = max(vertices, 2 * fb.vertices.size // VERTEX_BYTES)
+            i = max(indices, 2 * fb.indices.size // INDEX_BYTES)
+            fb.vertices.destroy()
+            fb.indices.destroy()
+            fb = self._frames[slot] = self._frame_buffers(v, i)
+        return fb
+
+    # --------------------------------------------------------------- textures
+    def _allocate_set(self) -> Any:
+        vk = self.vk
+        if not self._free_sets:
+            pool = vk.vkCreateDescriptorPool(self.device.handle, vk.VkDescriptorPoolCreateInfo(
+                maxSets=SETS_PER_POOL, pPoolSizes=[vk.VkDescriptorPoolSize(
+                    type=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, descriptorCount=SETS_PER_POOL)]), None)
+            self._pools.append(pool)
+            layouts = [self.set_layout] * SETS_PER_POOL
+            self._free_sets = list(vk.vkAllocateDescriptorSets(self.device.handle, vk.VkDescriptorSetAllocateInfo(
+                descriptorPool=pool, descriptorSetCount=SETS_PER_POOL, pSetLayouts=layouts)))
+        return self._free_sets.pop()
+
+    def _create_texture(self, tex: Any) -> None:
+        vk = self.vk
+        image = Image(self.device, tex.width, tex.height, vk.VK_FORMAT_R8G8B8A8_SRGB,
+                      vk.VK_IMAGE_USAGE_SAMPLED_BIT | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT, vk.VK_IMAGE_ASPECT_COLOR_BIT)
+        descriptor_set = self._allocate_set()
+        info = vk.VkDescriptorImageInfo(sampler=self.sampler, imageView=image.view,
+                                        imageLayout=vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL)
+        vk.vkUpdateDescriptorSets(self.device.handle, 1, [vk.VkWriteDescriptorSet(
+            dstSet=descriptor_set, dstBinding=0, dstArrayElement=0, descriptorCount=1,
+            descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, pImageInfo=[info])], 0, None)
+        texture = _Texture(image, descriptor_set, vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]),
+                           tex.width, tex.height)
+        tex_id = self._next_id
+        self._next_id += 1
+        self._textures[tex_id] = texture
+        self._upload(texture, tex, [(0, 0, tex.width, tex.height)], fresh=True)
+        tex.set_tex_id(tex_id)
+        tex.set_status(self.imgui.ImTextureStatus.ok)
+
+    def _upload(self, texture: _Texture, tex: Any, rects: list[tuple[int, int, int, int]], fresh: bool) -> None:
+        """Copy rectangles of the texture's pixels to the image, through a staging buffer."""
+        vk = self.vk
+        if tex.bytes_per_pixel != 4:
+            raise ValueError(f"ImGui texture format {tex.format} is not RGBA32")
+        pixels = np.asarray(tex.get_pixels_array(), dtype=np.uint8).reshape(tex.height, tex.width, 4)
+        parts = [np.ascontiguousarray(pixels[y : y + h, x : x + w]) for x, y, w, h in rects]
+        staging = Buffer(self.device, max(sum(p.nbytes for p in parts), 4), vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT, HOST)
+        regions = []
+        offset = 0
+        raw = staging.bytes()
+        for (x, y, w, h), part in zip(rects, parts):
+            raw[offset : offset + part.nbytes] = part.reshape(-1)
+            regions.append(vk.VkBufferImageCopy(
+                bufferOffset=offset, bufferRowLength=0, bufferImageHeight=0,
+                imageSubresource=vk.VkImageSubresourceLayers(aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=0,
+                                                             baseArrayLayer=0, layerCount=1),
+                imageOffset=vk.VkOffset3D(x, y, 0), imageExtent=vk.VkExtent3D(w, h, 1)))
+            offset += part.nbytes
+        old = vk.VK_IMAGE_LAYOUT_UNDEFINED if fresh else vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
+
+        def record(cb: Any) -> None:
+            rng = vk.VkImageSubresourceRange(aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=0, levelCount=1,
+                                             baseArrayLayer=0, layerCount=1)
+            to_copy = vk.VkImageMemoryBarrier(
+                srcAccessMask=0 if fresh else vk.VK_ACCESS_SHADER_READ_BIT, dstAccessMask=vk.VK_ACCESS_TRANSFER_WRITE_BIT,
+                oldLayout=old, newLayout=vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED, dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+                image=texture.image.handle, subresourceRange=rng)
+            vk.vkCmdPipelineBarrier(cb, vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT,
+                                    vk.VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, None, 0, None, 1, [to_copy])
+            vk.vkCmdCopyBufferToImage(cb, staging.handle, texture.image.handle,
+                                      vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, len(regions), regions)
+            to_read = vk.VkImageMemoryBarrier(
+                srcAccessMask=vk.VK_ACCESS_TRANSFER_WRITE_BIT, dstAccessMask=vk.VK_ACCESS_SHADER_READ_BIT,
+                oldLayout=vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, newLayout=vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED, dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+                image=texture.image.handle, subresourceRange=rng)
+            vk.vkCmdPipelineBarrier(cb, vk.VK_PIPELINE_STAGE_TRANSFER_BIT, vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT,
+                                    0, 0, None, 0, None, 1, [to_read])
+
+        try:
+            self.device.submit_once(record)  # rare: the font atlas, new glyphs, user images
+        finally:
+            staging.destroy()
+
+    def _destroy_texture(self, tex_id: int) -> None:
+        texture = self._textures.pop(tex_id, None)
+        if texture is not None:
+            texture.image.destroy()
+            self._free_sets.append(texture.descriptor_set)
+
+    def update_textures(self, textures: Any, frames_in_flight: int) -> None:
+        """Create, update and destroy textures as ImGui asks (ImGui 1.92 texture protocol)."""
+        status = self.imgui.ImTextureStatus
+        for tex in textures:
+            if tex.status == status.want_create:
+                self._create_texture(tex)
+            elif tex.status == status.want_updates:
+                texture = self._textures[int(tex.get_tex_id())]
+                rects = [(r.x, r.y, r.w, r.h) for r in tex.updates] or \
+                    [(tex.update_rect.x, tex.update_rect.y, tex.update_rect.w, tex.update_rect.h)]
+                self._upload(texture, tex, [r for r in rects if r[2] > 0 and r[3] > 0], fresh=False)
+                tex.set_status(status.ok)
+            elif tex.status == status.want_destroy and tex.unused_frames >= frames_in_flight:
+                # no frame in flight uses it any more
+                self._destroy_texture(int(tex.get_tex_id()))
+                tex.set_tex_id(0)
+                tex.set_status(status.destroyed)
+
+    # ------------------------------------------------------------------ frame
+    def prepare(self, slot: int, frames_in_flight: int) -> None:
+        """Textures first, then this frame's geometry (from the last `imgui.render()`) into the
+        slot's mapped buffers and the list of draws for `record`. Called by the renderer after
+        the slot's fence was waited on."""
+        draw_data = self.imgui.get_draw_data()
+        if draw_data is None or not draw_data.valid:
+            self._prepared.pop(slot, None)
+            return
+        if draw_data.textures is not None:
+            self.update_textures(draw_data.textures, frames_in_flight)
+        lists = list(draw_data.cmd_lists)
+        vertices = sum(dl.vtx_buffer.size() for dl in lists)
+        indices = sum(dl.idx_buffer.size() for dl in lists)
+        fb = self._ensure(slot, max(vertices, 1), max(indices, 1))
+        vdst = fb.vertices.bytes().ctypes.data
+        idst = fb.indices.bytes().ctypes.data
+        sx, sy = draw_data.framebuffer_scale.x, draw_data.framebuffer_scale.y
+        px, py = draw_data.display_pos.x, draw_data.display_pos.y
+        draws = []
+        vbase = ibase = 0
+        for dl in lists:
+            nv, ni = dl.vtx_buffer.size(), dl.idx_buffer.size()
+            ctypes.memmove(vdst + vbase * VERTEX_BYTES, dl.vtx_buffer.data_address(), nv * VERTEX_BYTES)
+            ctypes.memmove(idst + ibase * INDEX_BYTES, dl.idx_buffer.data_address(), ni * INDEX_BYTES)
+            for cmd in dl.cmd_buffer:
+                if cmd.elem_count == 0:
+                    continue
+                c = cmd.clip_rect
+                draws.append(((c.x - px) * sx, (c.y - py) * sy, (c.z - px) * sx, (c.w - py) * sy,
+                              int(cmd.get_tex_id()), cmd.elem_count, cmd.idx_offset + ibase, cmd.vtx_offset + vbase))
+            vbase += nv
+            ibase += ni
+        w, h = draw_data.display_size.x, draw_data.display_size.y
+        scale = (2.0 / w, 2.0 / h) if w > 0 and h > 0 else (0.0, 0.0)
+        self._prepared[slot] = (draws, (scale[0], scale[1], -1.0 - px * scale[0], -1.0 - py * scale[1]))
+        self.counts = OverlayCounts(len(lists), len(draws), vertices, indices)
+
+    def record(self, cb: Any, slot: int, width: int, height: int) -> None:
+        """Into the primary's overlay subpass (inline): one indexed draw per ImGui command."""
+        prepared = self._prepared.pop(slot, None)
+        if not prepared or not prepared[0]:
+            return
+        draws, push = prepared
+        vk = self.vk
+        lib = vk.lib
+        fb = self._frames[slot]
+        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.pipeline)
+        lib.vkCmdBindVertexBuffers(cb, 0, 1, fb.vertex_array, self._offsets)
+        lib.vkCmdBindIndexBuffer(cb, fb.indices.handle, 0, vk.VK_INDEX_TYPE_UINT32)
+        vp = self._viewport
+        vp.x, vp.y, vp.width, vp.height, vp.minDepth, vp.maxDepth = 0.0, 0.0, float(width), float(height), 0.0, 1.0
+        lib.vkCmdSetViewport(cb, 0, 1, vp)
+        self._push[:] = push
+        lib.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_VERTEX_BIT, 0, 16, self._push_ptr)
+        bound = None
+        scissor = self._scissor
+        for x0, y0, x1, y1, tex_id, count, first_index, vertex_offset in draws:
+            x0, y0 = max(x0, 0.0), max(y0, 0.0)
+            x1, y1 = min(x1, float(width)), min(y1, float(height))
+            if x1 <= x0 or y1 <= y0:
+                continue
+            texture = self._textures.get(tex_id)
+            if texture is None:
+                continue  # a user texture id this backend does not know
+            if texture is not bound:
+                lib.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1,
+                                            texture.set_array, 0, vk.ffi.NULL)
+                bound = texture
+            scissor.offset.x, scissor.offset.y = int(x0), int(y0)
+            scissor.extent.width, scissor.extent.height = int(x1 - x0), int(y1 - y0)
+            lib.vkCmdSetScissor(cb, 0, 1, scissor)
+            lib.vkCmdDrawIndexed(cb, count, 1, first_index, vertex_offset, 0)
+
+    def destroy(self) -> None:
+        vk = self.vk
+        self.device.wait_idle()
+        for tex_id in list(self._textures):
+            self._destroy_texture(tex_id)
+        for fb in self._frames:
+            fb.vertices.destroy()
+            fb.indices.destroy()
+        for pool in self._pools:
+            vk.vkDestroyDescriptorPool(self.device.handle, pool, None)
+        vk.vkDestroyPipeline(self.device.handle, self.pipeline, None)
+        vk.vkDestroyPipelineLayout(self.device.handle, self.layout, None)
+        vk.vkDestroyDescriptorSetLayout(self.device.handle, self.set_layout, None)
+        vk.vkDestroySampler(self.device.handle, self.sampler, None)
+        self.cache.destroy()
+        # ImGui may still hold ids of the textures just destroyed: mark them so
+        io_textures = self.imgui.get_platform_io().textures
+        for tex in io_textures:
+            if tex.status != self.imgui.ImTextureStatus.destroyed:
+                tex.set_tex_id(0)
+                tex.set_status(self.imgui.ImTextureStatus.destroyed)
