@@ -16,7 +16,7 @@ test: setup
 	$(HEADLESS) $(PY) -m pytest $(PYTEST_ARGS)
 
 demo: setup
-	.venv/bin/ecs-engine demo $(DEMO_ARGS)
+	.venv/bin/ecs-engine editor $(DEMO_ARGS)
 
 # The compiled .spv files and shaders/manifest.json are committed; tests/test_shaders.py fails
 # when a source changed without them. This rebuilds them all.

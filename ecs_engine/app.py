@@ -42,6 +42,9 @@ class RunOptions:
     chunk_rows: int = 32_768  # rows per render job (see renderer.CHUNK_ROWS)
     recorder: str | None = None  # native | python (None: native when numba is there)
     entities: int = 10_000  # the scaling scene's entity count
+    perf_json: str | None = None  # write every frame's perf samples here at the end
+    editor: bool = False  # the ImGui editor and Perf window (headless: drawn into the image)
+    scenes: tuple[str, ...] = ("cube", "grid100", "model")  # the editor's scene switcher
 
 
 @dataclass
@@ -56,6 +59,8 @@ class RunResult:
     device: str = ""
     pixels: np.ndarray | None = None
     last_stats: Any = None
+    perf: Any = None  # the run's perf.PerfMonitor
+    editor: Any = None  # the run's editor_session.EditorSession, while it runs
     recreations: int = 0  # swapchain recreations (windowed)
     minimised_waits: int = 0  # loop turns spent waiting while minimised (windowed)
 
@@ -106,39 +111,53 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
     from .gpu.device import Device
     from .gpu.instance import Instance
     from .gpu.offscreen import OffscreenTarget
+    from .editor_session import EditorSession, SceneState
+    from .jobs import default_threads
     from .mesh_registry import MeshRegistry
+    from .perf import PerfMonitor
 
     say = log or (lambda text: None if options.quiet else print(text))
     build = scene_builder(options.scene, options.entities)
     result = RunResult()
-    instance = device = target = meshes = renderer = jobs = None
+    perf = result.perf = PerfMonitor(log=options.perf_json or False)
+    instance = device = target = meshes = state = session = None
+    jobs = job_pool(options)
     try:
-        jobs = job_pool(options)
         instance = Instance(validate=options.validate)
         device = Device(instance)
         result.device = describe_device(device)
         target = OffscreenTarget(device, options.width, options.height)
         meshes = MeshRegistry(device)
         world, schedule, renderer = build_scene(options, build, device, target, meshes, jobs)
+        state = SceneState(options, world, schedule, renderer, jobs, device, target, meshes)
+        if options.editor:
+            session = result.editor = EditorSession(state, options.scenes, default_threads(),
+                                                    len(renderer.frames.frames))
         frames = options.frames or 1
         say(f"{options.scene}: headless {options.width}x{options.height} on {result.device}, {frames} frames, "
             f"mode {options.mode}, {recorder_words(renderer)}, {jobs.threads} threads")
-        start = last_report = time.perf_counter()
+        start = time.perf_counter()
         for i in range(frames):
             t0 = time.perf_counter()
-            schedule.run(world, FIXED_DT)
+            state.schedule.run(state.world, FIXED_DT)
+            if session is not None:
+                session.build(state, result.last_stats, perf, FIXED_DT, options.width, options.height)
             last = i == frames - 1
-            stats = renderer.render(world, readback=last and options.screenshot is not None)
+            stats = state.renderer.render(state.world, readback=last and options.screenshot is not None)
             now = time.perf_counter()
-            result.cpu_ms.append((now - t0) * 1e3 - stats.wait_ms)  # CPU work, not waiting for the GPU
+            cpu_ms = (now - t0) * 1e3 - stats.wait_ms  # CPU work, not waiting for the GPU
+            result.cpu_ms.append(cpu_ms)
             result.frame_end.append(now)
             result.record_ms.append(stats.record_ms)
             if stats.gpu_ms is not None:
                 result.gpu_ms.append(stats.gpu_ms)
             result.last_stats = stats
-            if now - last_report >= 1.0:
-                say(summary_line(result, i + 1, now - start))
-                last_report = now
+            perf.frame(cpu_ms, stats.record_ms, stats.gpu_ms, stats.wait_ms, draws=stats.draws,
+                       visible=stats.instances)
+            if perf.summary_due():
+                say(perf.summary_line())
+            if session is not None and not last:
+                session.apply_requests(state)
         device.wait_idle()
         result.frames = frames
         result.wall_s = time.perf_counter() - start
@@ -146,16 +165,30 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
             result.pixels = target.pixels()
             save_png(result.pixels, options.screenshot)
         say(summary_line(result, frames, result.wall_s, final=True))
+        if options.perf_json:
+            perf.write_json(meta=run_meta(options, result))
+            say(f"wrote {options.perf_json}")
     finally:
-        for obj in (renderer, meshes, target, device):
+        if session is not None:
+            session.destroy()
+        for obj in (state.renderer if state else None, meshes, target, device):
             if obj is not None:
                 obj.destroy()
         if instance is not None:
             instance.destroy()
             result.validation_messages = list(instance.messages)
-        if jobs is not None:
-            jobs.close()
+        (state.jobs if state else jobs).close()
     return result
+
+
+def run_meta(options: RunOptions, result: RunResult) -> dict[str, Any]:
+    """What a --perf-json file says about its run."""
+    from .jobs import default_threads
+
+    return {"scene": options.scene, "mode": options.mode, "threads": options.threads or default_threads(),
+            "culling": options.culling, "width": options.width, "height": options.height,
+            "headless": options.headless, "device": result.device, "frames": result.frames,
+            "wall_s": result.wall_s, "editor": options.editor}
 
 
 def describe_device(device: Any) -> str:

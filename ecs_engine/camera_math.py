@@ -117,6 +117,26 @@ def yaw_pitch_quat(yaw: float | np.ndarray, pitch: float | np.ndarray) -> np.nda
     return np.stack(np.broadcast_arrays(cy * sp, sy * cp, -sy * sp, cy * cp), axis=-1)
 
 
+def yaw_pitch_roll_quat(yaw: float, pitch: float, roll: float) -> np.ndarray:
+    """Rotation (x, y, z, w): yaw about world +Y, then pitch about the local +X, then roll about
+    the local +Z (R = Ry Rx Rz); roll 0 gives yaw_pitch_quat. For editing, in radians."""
+    sy, cy = math.sin(0.5 * yaw), math.cos(0.5 * yaw)
+    sp, cp = math.sin(0.5 * pitch), math.cos(0.5 * pitch)
+    sr, cr = math.sin(0.5 * roll), math.cos(0.5 * roll)
+    # q_yaw * q_pitch = (cy*sp, sy*cp, -sy*sp, cy*cp), then * q_roll = (0, 0, sr, cr)
+    x, y, z, w = cy * sp, sy * cp, -sy * sp, cy * cp
+    return np.array([x * cr + y * sr, y * cr - x * sr, z * cr + w * sr, w * cr - z * sr])
+
+
+def yaw_pitch_roll(rotation_quat: np.ndarray) -> tuple[float, float, float]:
+    """The angles of `yaw_pitch_roll_quat` for a rotation (radians; pitch in [-pi/2, pi/2])."""
+    r = rotation_matrix(rotation_quat)
+    pitch = math.asin(max(-1.0, min(1.0, -r[1, 2])))
+    if abs(r[1, 2]) > 1.0 - 1e-9:  # looking straight up or down: yaw and roll share one axis
+        return math.atan2(-r[2, 0], r[0, 0]), pitch, 0.0
+    return math.atan2(r[0, 2], r[2, 2]), pitch, math.atan2(r[1, 0], r[1, 1])
+
+
 @dataclass(frozen=True)
 class CameraMatrices:
     """What a frame needs from the active camera. `view` maps camera-relative world directions

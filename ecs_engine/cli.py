@@ -20,6 +20,7 @@ def positive_int(text: str) -> int:
 
 
 SCENES = ("cube", "grid100", "model", "scaling", "motion")
+EDITOR_SCENES = ("cube", "grid100", "model", "scaling")
 DEFAULT_SCENE = "grid100"
 HEADLESS_FALLBACK_FRAMES = 300
 
@@ -31,34 +32,49 @@ def dimension(text: str) -> int:
     return value
 
 
+def render_flags() -> argparse.ArgumentParser:
+    """The flags `demo` and `editor` share."""
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--headless", action="store_true", help="render offscreen, no window (no display needed)")
+    common.add_argument("--frames", type=positive_int, help="frames to run (default: until the window closes; "
+                        f"headless: 1, or {HEADLESS_FALLBACK_FRAMES} when falling back from a window)")
+    common.add_argument("--screenshot", metavar="PNG", help="write the last frame to this PNG (headless)")
+    common.add_argument("--width", type=dimension, default=1280)
+    common.add_argument("--height", type=dimension, default=720)
+    common.add_argument("--present", choices=("fifo", "mailbox", "immediate"), default="fifo",
+                        help="swapchain present mode (windowed)")
+    common.add_argument("--validate", action="store_true", help="enable the Vulkan validation layers")
+    common.add_argument("--mode", choices=("instanced", "per_entity", "indirect"), default="instanced",
+                        help="instanced: one draw per mesh per chunk; per_entity: one draw per entity (the seed's "
+                        "way); indirect: the GPU culls and writes the draws (compute + vkCmdDrawIndexedIndirectCount)")
+    common.add_argument("--threads", type=positive_int,
+                        help="worker threads, counting the main one (default: all cores)")
+    common.add_argument("--recorder", choices=("native", "python"),
+                        help="native: numba loop without the GIL (default when numba is installed); python: the binding")
+    common.add_argument("--no-culling", dest="culling", action="store_false",
+                        help="draw everything, skip frustum culling")
+    common.add_argument("--entities", type=positive_int, help="scaling and motion scenes: entity count "
+                        "(default 10,000 and 100,000)")
+    common.add_argument("--perf-json", metavar="PATH", help="write every frame's perf samples (CPU, GPU, record ms, "
+                        "psutil) to this JSON file at the end")
+    common.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show tracebacks")
+    return common
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="ecs-engine", description=__doc__)
     parser.add_argument("--debug", action="store_true", help="show tracebacks")
     sub = parser.add_subparsers(dest="command", required=True)
-    demo = sub.add_parser("demo", help="run a demo scene")
+    common = render_flags()
+    demo = sub.add_parser("demo", help="run a demo scene", parents=[common])
     demo.add_argument("scene", nargs="?", default=DEFAULT_SCENE, choices=SCENES,
                       help="cube, grid100, model: the seed's scenes; scaling: --entities moving entities; "
                       "motion: text-mode ECS scene (no rendering)")
     demo.add_argument("path", nargs="?", help="model file for the model scene (OBJ, glTF/GLB, PLY, STL)")
-    demo.add_argument("--headless", action="store_true", help="render offscreen, no window (no display needed)")
-    demo.add_argument("--frames", type=positive_int, help="frames to run (default: until the window closes; "
-                      f"headless: 1, or {HEADLESS_FALLBACK_FRAMES} when falling back from a window)")
-    demo.add_argument("--screenshot", metavar="PNG", help="write the last frame to this PNG (headless)")
-    demo.add_argument("--width", type=dimension, default=1280)
-    demo.add_argument("--height", type=dimension, default=720)
-    demo.add_argument("--present", choices=("fifo", "mailbox", "immediate"), default="fifo",
-                      help="swapchain present mode (windowed)")
-    demo.add_argument("--validate", action="store_true", help="enable the Vulkan validation layers")
-    demo.add_argument("--mode", choices=("instanced", "per_entity", "indirect"), default="instanced",
-                      help="instanced: one draw per mesh per chunk; per_entity: one draw per entity (the seed's way); "
-                      "indirect: the GPU culls and writes the draws (compute + vkCmdDrawIndexedIndirectCount)")
-    demo.add_argument("--threads", type=positive_int, help="worker threads, counting the main one (default: all cores)")
-    demo.add_argument("--recorder", choices=("native", "python"),
-                      help="native: numba loop without the GIL (default when numba is installed); python: the binding")
-    demo.add_argument("--no-culling", dest="culling", action="store_false", help="draw everything, skip frustum culling")
-    demo.add_argument("--entities", type=positive_int, help="scaling and motion scenes: entity count "
-                      "(default 10,000 and 100,000)")
-    demo.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show tracebacks")
+    editor = sub.add_parser("editor", help="the ImGui editor and Perf window on demo scenes", parents=[common])
+    editor.add_argument("scenes", nargs="*", choices=EDITOR_SCENES, metavar="SCENE",
+                        help=f"scenes to switch between, the first one opened (default {DEFAULT_SCENE}; "
+                        f"choices: {', '.join(EDITOR_SCENES)})")
     return parser
 
 
@@ -69,19 +85,26 @@ def run(args: argparse.Namespace) -> int:
 
             return motion.main(args.entities or 100_000, args.frames or 300)
         return run_scene(args)
+    if args.command == "editor":
+        scenes = tuple(dict.fromkeys(args.scenes or [DEFAULT_SCENE]))
+        args.scene, args.path = scenes[0], None
+        switcher = tuple(dict.fromkeys(scenes + ("cube", "grid100", "model")))
+        return run_scene(args, editor_scenes=switcher)
     raise UsageError(f"unknown command {args.command!r}")
 
 
-def run_scene(args: argparse.Namespace) -> int:
+def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = None) -> int:
     from .app import RunOptions, report_validation
     from .app import run as run_headless
 
     if args.path is not None and args.scene != "model":
         raise UsageError(f"a model path only goes with the model scene, not {args.scene!r}")
+    editor = editor_scenes is not None
     options = RunOptions(scene=args.scene, path=args.path, headless=args.headless, frames=args.frames,
                          screenshot=args.screenshot, width=args.width, height=args.height,
                          validate=args.validate, present=args.present, mode=args.mode, threads=args.threads,
-                         culling=args.culling, recorder=args.recorder, entities=args.entities or 10_000)
+                         culling=args.culling, recorder=args.recorder, entities=args.entities or 10_000,
+                         perf_json=args.perf_json, editor=editor, scenes=editor_scenes or ())
     if not args.headless:
         from .window import open_glfw, run_windowed
 
@@ -91,8 +114,14 @@ def run_scene(args: argparse.Namespace) -> int:
         options.frames = args.frames or HEADLESS_FALLBACK_FRAMES
         if options.screenshot is None:
             options.screenshot = f"{args.scene}.png"
-        print(f"no display found: rendering {options.frames} frames headless instead "
-              f"(last frame saved to {options.screenshot})")
+        if editor:
+            # the editor needs a window to be used; without one, the scene and its text overlay
+            options.editor = False
+            print(f"no display found: the editor needs a window, so {args.scene} runs headless for "
+                  f"{options.frames} frames with the text perf overlay (last frame saved to {options.screenshot})")
+        else:
+            print(f"no display found: rendering {options.frames} frames headless instead "
+                  f"(last frame saved to {options.screenshot})")
     result = run_headless(options)
     if options.screenshot:
         print(f"wrote {options.screenshot}")

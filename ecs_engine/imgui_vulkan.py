@@ -14,6 +14,7 @@ them; textures are sRGB images, decoded by the sampler.
 from __future__ import annotations
 
 import ctypes
+import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -92,6 +93,7 @@ class ImGuiRenderer:
         self._scissor = vk.ffi.new("VkRect2D*")
         self._viewport = vk.ffi.new("VkViewport*")
         self.counts = OverlayCounts()
+        self.cpu_ms = 0.0  # last frame's prepare + record
 
     # ---------------------------------------------------------------- buffers
     def _frame_buffers(self, vertices: int, indices: int) -> _FrameBuffers:
@@ -218,6 +220,8 @@ class ImGuiRenderer:
         """Textures first, then this frame's geometry (from the last `imgui.render()`) into the
         slot's mapped buffers and the list of draws for `record`. Called by the renderer after
         the slot's fence was waited on."""
+        t0 = time.perf_counter()
+        self.cpu_ms = 0.0
         draw_data = self.imgui.get_draw_data()
         if draw_data is None or not draw_data.valid:
             self._prepared.pop(slot, None)
@@ -250,12 +254,14 @@ class ImGuiRenderer:
         scale = (2.0 / w, 2.0 / h) if w > 0 and h > 0 else (0.0, 0.0)
         self._prepared[slot] = (draws, (scale[0], scale[1], -1.0 - px * scale[0], -1.0 - py * scale[1]))
         self.counts = OverlayCounts(len(lists), len(draws), vertices, indices)
+        self.cpu_ms = (time.perf_counter() - t0) * 1e3
 
     def record(self, cb: Any, slot: int, width: int, height: int) -> None:
         """Into the primary's overlay subpass (inline): one indexed draw per ImGui command."""
         prepared = self._prepared.pop(slot, None)
         if not prepared or not prepared[0]:
             return
+        t0 = time.perf_counter()
         draws, push = prepared
         vk = self.vk
         lib = vk.lib
@@ -286,6 +292,7 @@ class ImGuiRenderer:
             scissor.extent.width, scissor.extent.height = int(x1 - x0), int(y1 - y0)
             lib.vkCmdSetScissor(cb, 0, 1, scissor)
             lib.vkCmdDrawIndexed(cb, count, 1, first_index, vertex_offset, 0)
+        self.cpu_ms += (time.perf_counter() - t0) * 1e3
 
     def destroy(self) -> None:
         vk = self.vk

@@ -11,7 +11,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from .app import RunOptions, RunResult, build_scene, describe_device, job_pool, scene_builder, summary_line
+from .app import RunOptions, RunResult, build_scene, describe_device, job_pool, run_meta, scene_builder, summary_line
 from .errors import UsageError
 
 # GLFW key -> the names FlyCameraSystem reads (the seed's Table 7.1).
@@ -42,6 +42,12 @@ def open_glfw() -> Any | None:
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         return None
     try:
+        # first: imgui-bundle points pyGLFW at its own libglfw, so the editor's ImGui GLFW
+        # backend and our window share one GLFW (two copies would not know each other's windows)
+        import imgui_bundle  # noqa: F401
+    except ImportError:
+        pass
+    try:
         import glfw
     except ImportError as exc:
         raise UsageError(f"the Python package `glfw` is missing ({exc}); run `make demo` to install it") from exc
@@ -55,18 +61,22 @@ def run_windowed(options: RunOptions, glfw: Any,
                  on_frame: Callable[[int, Any, Any], None] | None = None) -> RunResult:
     """Run until the window closes or `options.frames` frames were presented.
     `on_frame(frame_index, glfw, window)` is called before each frame (tests drive resizes)."""
+    from .editor_session import EditorSession, SceneState
     from .gpu.device import Device
     from .gpu.instance import Instance
     from .gpu.swapchain import OutOfDate, Swapchain
+    from .jobs import default_threads
     from .mesh_registry import MeshRegistry
+    from .perf import PerfMonitor
     from .systems import InputState
 
     say = (lambda text: None) if options.quiet else print
     build = scene_builder(options.scene, options.entities)
     result = RunResult()
-    instance = device = swapchain = meshes = renderer = surface = window = jobs = None
+    perf = result.perf = PerfMonitor(log=options.perf_json or False)
+    instance = device = swapchain = meshes = surface = window = state = session = None
+    jobs = job_pool(options)
     try:
-        jobs = job_pool(options)
         glfw.window_hint(glfw.CLIENT_API, glfw.NO_API)
         window = glfw.create_window(options.width, options.height, f"ecs_engine - {options.scene}", None, None)
         if not window:
@@ -95,8 +105,12 @@ def run_windowed(options: RunOptions, glfw: Any,
 
         glfw.set_key_callback(window, on_key)
         glfw.set_framebuffer_size_callback(window, lambda *_: resized.__setitem__(0, True))
+        state = SceneState(options, world, schedule, renderer, jobs, device, swapchain, meshes)
+        if options.editor:  # after our callbacks: ImGui's GLFW backend chains to them
+            session = result.editor = EditorSession(state, options.scenes, default_threads(),
+                                                    len(renderer.frames.frames), window=window)
         say(f"{options.scene}: window {swapchain.width}x{swapchain.height} on {result.device}, present {options.present}")
-        start = last_report = previous = time.perf_counter()
+        start = previous = time.perf_counter()
         frame_no = 0
         while not glfw.window_should_close(window) and (options.frames is None or frame_no < options.frames):
             if on_frame is not None:
@@ -114,7 +128,12 @@ def run_windowed(options: RunOptions, glfw: Any,
             now = time.perf_counter()
             dt, previous = min(now - previous, MAX_DT), now
             t0 = now
-            schedule.run(world, dt)
+            if session is not None:  # keys typed into the UI do not fly the camera
+                keys.keyboard_captured_by_ui = session.wants_keyboard
+            state.schedule.run(state.world, dt)
+            if session is not None:
+                session.build(state, result.last_stats, perf, dt, swapchain.width, swapchain.height)
+            renderer = state.renderer
             frame = renderer.frames.frames[renderer.frames.index]
             w0 = time.perf_counter()
             renderer.frames.wait(frame)  # the semaphore below is free once this frame is done
@@ -124,10 +143,11 @@ def run_windowed(options: RunOptions, glfw: Any,
                 swapchain.recreate()
                 continue
             waited_ms = (time.perf_counter() - w0) * 1e3
-            stats = renderer.render(world, framebuffer=swapchain.framebuffers[index],
+            stats = renderer.render(state.world, framebuffer=swapchain.framebuffers[index],
                                     extent=(swapchain.width, swapchain.height),
                                     wait=frame.image_available, signal=swapchain.render_finished[index])
-            result.cpu_ms.append((time.perf_counter() - t0) * 1e3 - stats.wait_ms - waited_ms)
+            cpu_ms = (time.perf_counter() - t0) * 1e3 - stats.wait_ms - waited_ms
+            result.cpu_ms.append(cpu_ms)
             result.frame_end.append(time.perf_counter())
             result.record_ms.append(stats.record_ms)
             if not swapchain.present(index) or suboptimal:
@@ -136,18 +156,25 @@ def run_windowed(options: RunOptions, glfw: Any,
                 result.gpu_ms.append(stats.gpu_ms)
             result.last_stats = stats
             frame_no += 1
-            now = time.perf_counter()
-            if now - last_report >= 1.0:
-                say(summary_line(result, frame_no, now - start))
-                last_report = now
+            perf.frame(cpu_ms, stats.record_ms, stats.gpu_ms, stats.wait_ms + waited_ms, draws=stats.draws,
+                       visible=stats.instances)
+            if perf.summary_due():
+                say(perf.summary_line())
+            if session is not None and session.apply_requests(state, swapchain):
+                state.world.resources[InputState] = keys
         device.wait_idle()
         result.frames = frame_no
         result.wall_s = time.perf_counter() - start
         result.recreations = swapchain.recreations
         if frame_no:
             say(summary_line(result, frame_no, result.wall_s, final=True))
+        if options.perf_json:
+            perf.write_json(meta=run_meta(options, result))
+            say(f"wrote {options.perf_json}")
     finally:
-        for obj in (renderer, meshes, swapchain):
+        if session is not None:
+            session.destroy()
+        for obj in (state.renderer if state else None, meshes, swapchain):
             if obj is not None:
                 obj.destroy()
         if device is not None:
@@ -160,6 +187,5 @@ def run_windowed(options: RunOptions, glfw: Any,
         if window is not None:
             glfw.destroy_window(window)
         glfw.terminate()
-        if jobs is not None:
-            jobs.close()
+        (state.jobs if state else jobs).close()
     return result

@@ -32,10 +32,8 @@ class Swapchain:
         self._caps = inst.proc("vkGetPhysicalDeviceSurfaceCapabilitiesKHR")
         formats = inst.proc("vkGetPhysicalDeviceSurfaceFormatsKHR")(device.physical, surface)
         modes = inst.proc("vkGetPhysicalDeviceSurfacePresentModesKHR")(device.physical, surface)
-        wanted = getattr(vk, PRESENT_MODES[present])
-        if wanted not in modes:
-            raise UsageError(f"present mode {present!r} is not supported here; try --present fifo")
-        self.present_mode = wanted
+        self._modes = list(modes)
+        self.present_mode = self._present_mode(present)
         srgb = [f for f in formats if f.format in (vk.VK_FORMAT_B8G8R8A8_SRGB, vk.VK_FORMAT_R8G8B8A8_SRGB)
                 and f.colorSpace == vk.VK_COLOR_SPACE_SRGB_NONLINEAR_KHR]
         chosen = srgb[0] if srgb else formats[0]
@@ -107,6 +105,17 @@ class Swapchain:
         if self.depth is not None:
             self.depth.destroy()
             self.depth = None
+
+    def _present_mode(self, present: str) -> int:
+        wanted = getattr(self.vk, PRESENT_MODES[present])
+        if wanted not in self._modes:
+            raise UsageError(f"present mode {present!r} is not supported here; try --present fifo")
+        return wanted
+
+    def set_present(self, present: str) -> None:
+        """Switch present mode (fifo, mailbox, immediate): the swapchain is rebuilt."""
+        self.present_mode = self._present_mode(present)
+        self.recreate()
 
     def recreate(self) -> None:
         self.device.wait_idle()

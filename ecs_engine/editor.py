@@ -1,0 +1,297 @@
+"""The ImGui editor: entity browser, inspector, live render settings, scene switcher and stats.
+
+It only reads the world and writes components through the World API; changes that need new
+engine objects (mode, recorder, threads, present mode, another scene) are returned as requests
+that the frame loop applies between frames (`Editor.take_requests`).
+
+The entity browser stays fast with millions of entities: the filtered id list is a NumPy array
+rebuilt only when the world's structure or the filter changes, and ImGui's list clipper draws
+only the visible rows.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from .camera_math import active_camera, yaw_pitch_roll, yaw_pitch_roll_quat
+from .components import Camera, Mesh, PointLight, Transform
+from .world import World
+
+MODES = ("instanced", "per_entity", "indirect")
+RECORDERS = ("native", "python")
+PRESENT_MODES = ("fifo", "mailbox", "immediate")
+
+
+@dataclass
+class RenderSettings:
+    scene: str
+    mode: str
+    recorder: str
+    threads: int
+    culling: bool
+    present: str | None = None  # None: headless, no swapchain
+
+
+@dataclass
+class SceneStats:
+    entities: int = 0
+    visible: int = 0
+    draws: int = 0
+    triangles: int = 0
+
+
+@dataclass
+class _Browser:
+    search: str = ""
+    component: int = 0  # index into the component names; 0 = any
+    ids: np.ndarray = field(default_factory=lambda: np.empty(0, np.int64))
+    key: Any = None  # (structure version, search, component) the ids were built for
+
+
+class Editor:
+    def __init__(self, settings: RenderSettings, scenes: tuple[str, ...], max_threads: int) -> None:
+        from imgui_bundle import imgui
+
+        self.imgui = imgui
+        self.settings = settings
+        self.requested = replace(settings)
+        self.scenes = scenes
+        self.max_threads = max_threads
+        self.selected: int | None = None
+        self.browser = _Browser()
+        self.status = ""  # the last error from an edit, shown in the inspector
+        self.status_entity: int | None = None  # the entity it is about
+        # screen rectangles (x0, y0, x1, y1) of a few widgets as last drawn: where synthetic
+        # input (tests, scripted demos) should click
+        self.rects: dict[str, tuple[float, float, float, float]] = {}
+
+    # ---------------------------------------------------------------- requests
+    def take_requests(self) -> RenderSettings | None:
+        """Settings the user changed since the last call (the loop applies them), or None."""
+        if self.requested == self.settings:
+            return None
+        self.settings = replace(self.requested)
+        return replace(self.requested)
+
+    # -------------------------------------------------------------------- draw
+    def draw(self, world: World, stats: SceneStats) -> None:
+        """Build this frame's editor windows (between imgui.new_frame() and imgui.render())."""
+        imgui = self.imgui
+        self._settings_window(stats)
+        imgui.set_next_window_pos((10, 330), imgui.Cond_.first_use_ever.value)
+        imgui.set_next_window_size((300, 300), imgui.Cond_.first_use_ever.value)
+        if imgui.begin("Entities")[0]:
+            self._browser(world)
+        imgui.end()
+        imgui.set_next_window_pos((320, 330), imgui.Cond_.first_use_ever.value)
+        imgui.set_next_window_size((340, 300), imgui.Cond_.first_use_ever.value)
+        if imgui.begin("Inspector")[0]:
+            self._inspector(world)
+        imgui.end()
+
+    def _settings_window(self, stats: SceneStats) -> None:
+        imgui = self.imgui
+        req = self.requested
+        imgui.set_next_window_pos((10, 10), imgui.Cond_.first_use_ever.value)
+        imgui.set_next_window_size((300, 310), imgui.Cond_.first_use_ever.value)
+        if imgui.begin("Scene and render")[0]:
+            req.scene = _combo(imgui, "scene", req.scene, self.scenes)
+            req.mode = _combo(imgui, "mode", req.mode, MODES)
+            if req.mode != "indirect":
+                req.recorder = _combo(imgui, "recorder", req.recorder, RECORDERS)
+            _, req.threads = imgui.slider_int("threads", req.threads, 1, max(1, self.max_threads))
+            _, req.culling = imgui.checkbox("frustum culling", req.culling)
+            if req.present is not None:
+                req.present = _combo(imgui, "present", req.present, PRESENT_MODES)
+            imgui.separator()
+            imgui.text(f"entities   {stats.entities:,}")
+            imgui.text(f"visible    {stats.visible:,}")
+            imgui.text(f"draws      {stats.draws:,}")
+            imgui.text(f"triangles  {stats.triangles:,}")
+        imgui.end()
+
+    # ----------------------------------------------------------------- browser
+    def component_names(self, world: World) -> list[str]:
+        names = sorted({t.__name__ for table in world.tables for t in table.type_set})
+        return ["(any component)"] + names
+
+    def filtered_ids(self, world: World) -> np.ndarray:
+        """Entity ids matching the search text (a number: that id or its index) and the
+        component filter; cached until rows come or go or the filter changes."""
+        b = self.browser
+        names = self.component_names(world)
+        b.component = min(b.component, len(names) - 1)
+        # a table's version changes whenever rows come or go
+        key = (tuple((t.id, t.version) for t in world.tables), b.search, names[b.component])
+        if b.key == key:
+            return b.ids
+        if b.component == 0:
+            ids = world.entities()
+        else:
+            wanted = names[b.component]
+            parts = [table.entities[: table.count] for table in world.tables
+                     if table.count and any(t.__name__ == wanted for t in table.type_set)]
+            ids = np.concatenate(parts) if parts else np.empty(0, np.int64)
+        text = b.search.strip()
+        if text:
+            try:
+                number = int(text, 0)
+            except ValueError:
+                ids = ids[:0]
+            else:
+                ids = ids[(ids == number) | ((ids & 0xFFFFFFFF) == number)]
+        b.ids, b.key = np.asarray(ids, dtype=np.int64), key
+        return b.ids
+
+    def _browser(self, world: World) -> None:
+        imgui = self.imgui
+        b = self.browser
+        _, b.search = imgui.input_text("id", b.search)
+        names = self.component_names(world)
+        _, b.component = imgui.combo("with", min(b.component, len(names) - 1), names)
+        ids = self.filtered_ids(world)
+        imgui.text(f"{len(ids):,} entities")
+        if imgui.begin_child("ids"):
+            clipper = imgui.ListClipper()
+            clipper.begin(len(ids))
+            first = True
+            while clipper.step():  # the first step measures one row, later ones the visible rows
+                for row in range(clipper.display_start, clipper.display_end):
+                    eid = int(ids[row])
+                    label = f"{eid & 0xFFFFFFFF} (gen {eid >> 32})##{eid}"
+                    if imgui.selectable(label, eid == self.selected)[0]:
+                        self.selected = eid
+                    if first:
+                        self._remember("first row")
+                        first = False
+            clipper.end()
+        imgui.end_child()
+
+    # --------------------------------------------------------------- inspector
+    def _inspector(self, world: World) -> None:
+        imgui = self.imgui
+        if imgui.button("add cube"):
+            self.selected = self.add_cube(world)
+        imgui.same_line()
+        if imgui.button("add light"):
+            self.selected = self.add_light(world)
+        eid = self.selected
+        if eid is None or not world.is_alive(eid):
+            imgui.text("select an entity")
+            return
+        imgui.same_line()
+        if imgui.button("destroy"):
+            world.destroy(eid)
+            self.selected = None
+            return
+        if self.status_entity != eid:
+            self.status = ""  # an error about another entity
+        imgui.text(f"entity {eid & 0xFFFFFFFF} (gen {eid >> 32})")
+        types = world.components(eid)
+        imgui.text_wrapped(", ".join(t.__name__ for t in types))
+        try:
+            if Transform in types:
+                self._transform(world, eid)
+            if PointLight in types:
+                self._light(world, eid)
+            if Camera in types:
+                self._camera(world, eid)
+        except ValueError as exc:  # the world's checks (e.g. near >= far): keep the old value
+            self.status, self.status_entity = str(exc), eid
+        if self.status:
+            imgui.text_colored((1.0, 0.4, 0.3, 1.0), self.status)
+
+    def _transform(self, world: World, eid: int) -> None:
+        imgui = self.imgui
+        t = world.get(eid, Transform)
+        imgui.separator_text("Transform")
+        changed, pos = imgui.drag_float3("position", [float(v) for v in t.position], 0.05)
+        self._remember("position")
+        if changed:
+            self.set(world, eid, Transform, position=np.array(pos, dtype=np.float64))
+        angles = [math.degrees(a) for a in yaw_pitch_roll(t.rotation)]
+        changed, angles = imgui.drag_float3("yaw pitch roll (deg)", angles, 0.5)
+        if changed:
+            q = yaw_pitch_roll_quat(*(math.radians(a) for a in angles))
+            self.set(world, eid, Transform, rotation=q)
+        changed, scale = imgui.drag_float3("scale", [float(v) for v in t.scale], 0.01)
+        if changed:
+            self.set(world, eid, Transform, scale=np.array(scale, dtype=np.float64))
+
+    def _light(self, world: World, eid: int) -> None:
+        imgui = self.imgui
+        light = world.get(eid, PointLight)
+        imgui.separator_text("PointLight")
+        changed, color = imgui.color_edit3("colour", [float(c) for c in light.color])
+        if changed:
+            self.set(world, eid, PointLight, color=np.array(color, dtype=np.float32))
+        changed, value = imgui.drag_float("intensity", float(light.intensity), 0.1, 0.0, 1e6)
+        if changed:
+            self.set(world, eid, PointLight, intensity=max(value, 0.0))
+        changed, value = imgui.drag_float("radius (0: unbounded)", float(light.radius), 0.1, 0.0, 1e6)
+        if changed:
+            self.set(world, eid, PointLight, radius=max(value, 0.0))
+
+    def _camera(self, world: World, eid: int) -> None:
+        imgui = self.imgui
+        cam = world.get(eid, Camera)
+        imgui.separator_text("Camera")
+        changed, fov = imgui.slider_float("fov (deg)", math.degrees(float(cam.fov_y)), 5.0, 150.0)
+        if changed:
+            self.set(world, eid, Camera, fov_y=math.radians(fov))
+        changed, near = imgui.drag_float("near", float(cam.near), 0.001, 1e-4, 1e6, "%.4f")
+        if changed:
+            self.set(world, eid, Camera, near=max(near, 1e-4))
+        infinite = math.isinf(float(cam.far))
+        changed, infinite_now = imgui.checkbox("infinite far plane", infinite)
+        if changed:
+            self.set(world, eid, Camera, far=math.inf if infinite_now else max(1000.0, float(cam.near) * 10))
+        if not infinite_now:
+            changed, far = imgui.drag_float("far", float(cam.far), 1.0, 0.0, 1e9)
+            if changed:
+                self.set(world, eid, Camera, far=far)
+
+    def _remember(self, name: str) -> None:
+        lo, hi = self.imgui.get_item_rect_min(), self.imgui.get_item_rect_max()
+        self.rects[name] = (lo.x, lo.y, hi.x, hi.y)
+
+    def set(self, world: World, eid: int, component: type, **fields: Any) -> None:
+        """One edit through the World API; a rejected value leaves the component as it was."""
+        try:
+            world.set(eid, component, **fields)
+            self.status = ""
+        except ValueError as exc:
+            self.status, self.status_entity = str(exc), eid
+
+    # -------------------------------------------------------- add entities
+    def _in_front(self, world: World, distance: float = 4.0) -> np.ndarray:
+        try:
+            cam = world.get(active_camera(world), Transform)
+        except Exception:  # noqa: BLE001 - no camera: put it at the origin
+            return np.zeros(3)
+        from .camera_math import rotation_matrix
+
+        forward = rotation_matrix(cam.rotation)[:3, :3] @ np.array([0.0, 0.0, -1.0])
+        return np.asarray(cam.position, dtype=np.float64) + forward * distance
+
+    def add_cube(self, world: World) -> int:
+        handle = 0
+        for table in world.tables:  # the mesh most entities use (the scene's first mesh)
+            if Mesh in table.type_set and table.count:
+                handle = int(table.columns[(Mesh, "handle")][0]) if (Mesh, "handle") in table.columns else 0
+                break
+        return world.spawn(Transform(position=self._in_front(world)), Mesh(handle=handle))
+
+    def add_light(self, world: World) -> int:
+        return world.spawn(Transform(position=self._in_front(world, 2.0)),
+                           PointLight(color=(1.0, 0.9, 0.7), intensity=5.0, radius=0.0))
+
+
+def _combo(imgui: Any, label: str, value: str, choices: tuple[str, ...]) -> str:
+    index = choices.index(value) if value in choices else 0
+    _, index = imgui.combo(label, index, list(choices))
+    return choices[index]

@@ -1,0 +1,236 @@
+"""The ImGui editor and Perf window on the engine's Vulkan renderer (lavapipe, validation on):
+the overlay is drawn, synthetic input edits a component, settings requests rebuild what they
+need, the entity browser stays cheap for large worlds, the texture protocol runs its course."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+pytest.importorskip("imgui_bundle")
+
+from gpu_context import headless_gpu  # noqa: E402
+
+from ecs_engine.app import RunOptions, build_scene, run, scene_builder  # noqa: E402
+from ecs_engine.camera_math import yaw_pitch_quat, yaw_pitch_roll, yaw_pitch_roll_quat  # noqa: E402
+from ecs_engine.components import Camera, Mesh, PointLight, Transform  # noqa: E402
+from ecs_engine.jobs import JobPool  # noqa: E402
+
+W, H = 640, 480
+
+
+def headless(tmp_path, editor: bool, size=(W, H), **kw):
+    result = run(RunOptions(scene="grid100", width=size[0], height=size[1], frames=kw.pop("frames", 6), validate=True,
+                            quiet=True, editor=editor, screenshot=str(tmp_path / f"e{editor}.png"), **kw))
+    assert result.validation_messages == []
+    return result
+
+
+def test_the_overlay_is_drawn_over_the_scene(tmp_path):
+    size = (1280, 720)  # room for the scene between the windows
+    plain = headless(tmp_path, editor=False, size=size)
+    ui = headless(tmp_path, editor=True, size=size, perf_json=str(tmp_path / "perf.json"))
+    diff = np.abs(ui.pixels[..., :3].astype(int) - plain.pixels[..., :3]).max(axis=2) > 24
+    # the settings window (top left) and the Perf window (top right) cover the scene there...
+    # (text, frames and widgets: the windows' dark background is close to the clear colour)
+    assert diff[20:300, 20:300].mean() > 0.05 and diff[20:300, 920:1260].mean() > 0.05
+    assert ui.editor.renderer.counts.commands > 5
+    # ...and the scene is untouched where no window is
+    assert diff[400:700, 700:880].mean() < 0.01
+    doc = json.loads((tmp_path / "perf.json").read_text())
+    assert len(doc["frames"]) == 6 and doc["meta"]["editor"] is True
+
+
+def test_gpu_ms_is_positive_and_fps_is_the_wall_clock_rate(tmp_path):
+    result = headless(tmp_path, editor=True, frames=10)
+    perf = result.perf
+    gpu = perf.series("gpu_ms")
+    assert np.nanmin(gpu) > 0
+    ends = np.array(result.frame_end)
+    wall_fps = (len(ends) - 1) / (ends[-1] - ends[0])
+    assert perf.fps == pytest.approx(wall_fps, rel=0.05)
+
+
+class Scene:
+    """The editor on a headless target, driven frame by frame."""
+
+    def __init__(self, gpu, scene: str = "grid100") -> None:
+        from ecs_engine.editor_session import EditorSession, SceneState
+        from ecs_engine.perf import PerfMonitor
+
+        self.gpu = gpu
+        options = RunOptions(scene=scene, width=W, height=H, threads=2)
+        jobs = JobPool(2)
+        world, schedule, renderer = build_scene(options, scene_builder(scene), gpu.device, gpu.target, gpu.meshes,
+                                                jobs)
+        self.state = SceneState(options, world, schedule, renderer, jobs, gpu.device, gpu.target, gpu.meshes)
+        self.session = EditorSession(self.state, ("cube", "grid100", "model"), 4, len(renderer.frames.frames))
+        self.perf = PerfMonitor()
+        self.stats = None
+        from imgui_bundle import imgui
+
+        self.io = imgui.get_io()
+
+    def frame(self, mouse=None, down=None) -> None:
+        if mouse is not None:
+            self.io.add_mouse_pos_event(*mouse)
+        if down is not None:
+            self.io.add_mouse_button_event(0, down)
+        s = self.state
+        s.schedule.run(s.world, 1 / 60)
+        self.session.build(s, self.stats, self.perf, 1 / 60, W, H)
+        self.stats = s.renderer.render(s.world, readback=True)
+        self.perf.frame(1.0, self.stats.record_ms, self.stats.gpu_ms, draws=self.stats.draws)
+        self.session.apply_requests(s)
+
+    def close(self) -> None:
+        self.session.destroy()
+        self.state.renderer.destroy()
+        self.state.jobs.close()
+
+
+@pytest.fixture
+def scene():
+    with headless_gpu(W, H) as gpu:
+        s = Scene(gpu)
+        try:
+            yield s
+        finally:
+            s.close()
+
+
+def centre(rect):
+    return ((rect[0] + rect[2]) / 2, (rect[1] + rect[3]) / 2)
+
+
+def test_synthetic_input_selects_an_entity_and_drags_its_position(scene):
+    editor = scene.session.editor
+    for _ in range(3):
+        scene.frame()
+    first = int(editor.filtered_ids(scene.state.world)[0])
+    row = centre(editor.rects["first row"])
+    scene.frame(mouse=row)
+    scene.frame(down=True)
+    scene.frame(down=False)
+    assert editor.selected == first
+    before = scene.state.world.get(first, Transform).position.copy()
+    scene.frame()  # the inspector appears
+    x0, y0, x1, y1 = editor.rects["position"]
+    start = (x0 + (x1 - x0) / 6, (y0 + y1) / 2)  # the x field: the first of three
+    scene.frame(mouse=start)
+    scene.frame(down=True)
+    for dx in (10, 20, 30, 40):
+        scene.frame(mouse=(start[0] + dx, start[1]))
+    scene.frame(down=False)
+    after = scene.state.world.get(first, Transform).position
+    assert after[0] > before[0] + 0.5  # dragged right: 0.05 per pixel
+    assert after[1:] == pytest.approx(before[1:])
+    assert scene.session.renderer.counts.commands > 5
+
+
+def test_settings_requests_rebuild_what_they_need(scene):
+    scene.frame()
+    editor = scene.session.editor
+    old = scene.state.renderer
+    editor.requested.mode, editor.requested.threads, editor.requested.culling = "indirect", 3, False
+    scene.frame()  # the request is applied after this frame
+    assert scene.state.renderer is not old and scene.state.renderer.mode == "indirect"
+    assert scene.state.jobs.threads == 3 and scene.state.renderer.culling is False
+    scene.frame()
+    assert scene.stats.instances == 100 and scene.gpu.target.pixels()[..., :3].max() > 30
+    editor.requested.scene = "cube"
+    scene.frame()
+    world = scene.state.world
+    assert world.query(Mesh, write=()).count() == 1 and scene.state.options.scene == "cube"
+    scene.frame()
+    assert scene.stats.instances == 1
+
+
+def test_inspector_edits_go_through_the_world_checks(scene):
+    scene.frame()
+    editor = scene.session.editor
+    world = scene.state.world
+    light = int(world.query(PointLight, write=()).entities()[0])
+    editor.set(world, light, PointLight, intensity=3.5)
+    assert world.get(light, PointLight).intensity == pytest.approx(3.5)
+    cam = int(world.query(Camera, write=()).entities()[0])
+    editor.set(world, cam, Camera, far=50.0)
+    editor.set(world, cam, Camera, near=60.0)  # beyond far: refused, nothing changes
+    assert "near" in editor.status and world.get(cam, Camera).near < 1
+    added = editor.add_light(world)
+    cube = editor.add_cube(world)
+    assert world.has(added, PointLight) and world.has(cube, Mesh)
+    editor.selected = cube
+    scene.frame()  # the inspector draws the new cube
+    assert editor.status == ""
+
+
+def test_browser_filters_and_stays_bounded_for_large_worlds(scene):
+    world = scene.state.world
+    world.spawn_batch(200_000, Transform(position=np.zeros((200_000, 3))))
+    editor = scene.session.editor
+    editor.browser.search = ""
+    ids = editor.filtered_ids(world)
+    assert len(ids) == world.entities().size
+    assert editor.filtered_ids(world) is ids  # cached while nothing changes
+    names = editor.component_names(world)
+    editor.browser.component = names.index("PointLight")
+    assert len(editor.filtered_ids(world)) == 6
+    editor.browser.component = 0
+    editor.browser.search = str(int(ids[-1]) & 0xFFFFFFFF)
+    assert editor.filtered_ids(world).tolist() == [int(ids[-1])]
+    editor.browser.search = ""
+    scene.frame()
+    # the clipper: only the rows on screen became vertices
+    assert scene.session.renderer.counts.vertices < 60_000
+
+
+def test_font_atlas_updates_and_teardown_stay_validation_clean(scene):
+    from imgui_bundle import imgui
+
+    scene.frame()
+    textures = list(imgui.get_platform_io().textures)
+    assert textures and all(t.status == imgui.ImTextureStatus.ok for t in textures)
+    # text at a new size makes ImGui 1.92 bake new glyphs: the backend uploads the changed rects
+    original = scene.session.editor.draw
+
+    def big_text(world, stats):
+        original(world, stats)
+        imgui.begin("big")
+        imgui.push_font(None, 48.0)
+        imgui.text("Large glyphs 0123")
+        imgui.pop_font()
+        imgui.end()
+
+    scene.session.editor.draw = big_text
+    for _ in range(3):
+        scene.frame()
+    assert scene.gpu.target.pixels()[..., :3].max() > 200
+
+
+def test_yaw_pitch_roll_round_trip():
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        angles = rng.uniform(-3.0, 3.0), rng.uniform(-1.5, 1.5), rng.uniform(-3.0, 3.0)
+        q = yaw_pitch_roll_quat(*angles)
+        q2 = yaw_pitch_roll_quat(*yaw_pitch_roll(q))
+        assert min(np.abs(q - q2).max(), np.abs(q + q2).max()) < 1e-9
+    assert yaw_pitch_roll_quat(0.4, -0.2, 0.0) == pytest.approx(yaw_pitch_quat(0.4, -0.2))
+    assert yaw_pitch_roll(yaw_pitch_quat(0.0, math.pi / 2))[1] == pytest.approx(math.pi / 2)
+
+
+def test_windowed_editor_under_xvfb(tmp_path):
+    from ecs_engine.window import open_glfw, run_windowed
+
+    glfw = open_glfw()
+    if glfw is None:
+        pytest.skip("no display (run the suite under xvfb-run)")
+    result = run_windowed(RunOptions(scene="grid100", width=W, height=H, frames=8, validate=True, quiet=True,
+                                     headless=False, editor=True, scenes=("grid100", "cube"),
+                                     perf_json=str(tmp_path / "w.json")), glfw)
+    assert result.frames == 8 and result.validation_messages == []
+    assert json.loads((tmp_path / "w.json").read_text())["meta"]["headless"] is False
+
