@@ -10,7 +10,13 @@ core (its multi-threaded column), with the default recorder (native when numba i
 JSON (schema_version 1): {"benchmark": "seed-tables", "quick", "machine", "device",
 "config": {"width", "height", "warmup", "frames"}, "results": [{"scene", "mode", "threads",
 "frames", "fps", "cpu_ms_mean", "cpu_ms_p99", "gpu_ms_mean", "gpu_ms_p99", "cpu_system_percent",
-"cpu_process_percent", "cpu_process_percent_per_core", "draws", "triangles"}], "seed": {...}}
+"cpu_process_percent", "cpu_process_percent_per_core", "draws", "triangles"}], "seed": {...},
+"overlay": {"scene", "mode", "threads", "cpu_ms_off", "cpu_ms_on", "difference_ms", "ui_ms_mean",
+"target_ms", "met"}}
+
+The overlay entry is the cost of the ImGui editor and Perf window on the 100-cube scene: runs
+with it off and on, alternated twice (the host's drift shows up in both), and the UI's own
+measured time (building it, copying its geometry, recording it).
 """
 
 from __future__ import annotations
@@ -45,14 +51,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--height", type=int, default=720)
 
 
+OVERLAY_TARGET_MS = 0.3
+
+
 def measure(scene: str, width: int, height: int, warmup: int, frames: int, mode: str = "instanced",
-            threads: int = 1) -> dict[str, Any]:
+            threads: int = 1, editor: bool = False) -> dict[str, Any]:
     proc = psutil.Process()
     psutil.cpu_percent(None)
     proc.cpu_percent(None)
     t0 = time.perf_counter()
     result = run_scene(RunOptions(scene=scene, width=width, height=height, frames=warmup + frames, quiet=True,
-                                  mode=mode, threads=threads))
+                                  mode=mode, threads=threads, editor=editor))
     system = psutil.cpu_percent(None)
     process = proc.cpu_percent(None)
     wall = time.perf_counter() - t0
@@ -71,8 +80,21 @@ def measure(scene: str, width: int, height: int, warmup: int, frames: int, mode:
         "cpu_process_percent_per_core": float(process / cores),
         "draws": stats.draws, "triangles": stats.triangles, "entities_drawn": stats.instances,
         "device": result.device, "validation_messages": len(result.validation_messages),
-        "run_wall_s": wall,
+        "run_wall_s": wall, "editor": editor,
+        "ui_ms_mean": float(np.mean(result.ui_ms[warmup:])) if editor else None,
     }
+
+
+def measure_overlay(width: int, height: int, warmup: int, frames: int) -> dict[str, Any]:
+    """The editor's CPU cost on the 100-cube frame: off/on alternated twice."""
+    runs = {False: [], True: []}
+    for editor in (False, True, False, True):
+        runs[editor].append(measure("grid100", width, height, warmup, frames, "instanced", 1, editor))
+    off = float(np.mean([r["cpu_ms_mean"] for r in runs[False]]))
+    on = float(np.mean([r["cpu_ms_mean"] for r in runs[True]]))
+    return {"scene": "grid100", "mode": "instanced", "threads": 1, "cpu_ms_off": off, "cpu_ms_on": on,
+            "difference_ms": on - off, "ui_ms_mean": float(np.mean([r["ui_ms_mean"] for r in runs[True]])),
+            "target_ms": OVERLAY_TARGET_MS, "met": bool(on - off <= OVERLAY_TARGET_MS)}
 
 
 def format_table(doc: dict[str, Any]) -> str:
@@ -102,11 +124,16 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
                 with progress.step(f"{scene} {mode} {threads} threads: {warmup} warm-up + {frames} frames at "
                                    f"{width}x{height}"):
                     results.append(measure(scene, width, height, warmup, frames, mode, threads))
+    with progress.step("editor overlay on and off, 100 cubes, 1 thread, twice each"):
+        overlay = measure_overlay(width, height, warmup, frames)
     doc = {
         "benchmark": "seed-tables", "schema_version": 1, "quick": bool(args.quick), "machine": machine,
         "device": results[0]["device"], "config": {"width": width, "height": height, "warmup": warmup,
                                                     "frames": frames, "pid": os.getpid()},
-        "results": results, "seed": SEED,
+        "results": results, "seed": SEED, "overlay": overlay,
     }
     print(format_table(doc))
+    print(f"overlay (editor + Perf window), 100 cubes, 1 thread: CPU {overlay['cpu_ms_off']:.3f} ms off, "
+          f"{overlay['cpu_ms_on']:.3f} ms on, +{overlay['difference_ms']:.3f} ms (target <= {OVERLAY_TARGET_MS}: "
+          f"{'MET' if overlay['met'] else 'MISS'}); the UI's own time {overlay['ui_ms_mean']:.3f} ms")
     return doc

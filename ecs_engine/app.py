@@ -55,6 +55,7 @@ class RunResult:
     gpu_ms: list[float] = field(default_factory=list)
     frame_end: list[float] = field(default_factory=list)  # perf_counter() after each frame's submit
     record_ms: list[float] = field(default_factory=list)  # the render jobs of each frame
+    ui_ms: list[float] = field(default_factory=list)  # the editor's own CPU time per frame (editor runs)
     validation_messages: list[str] = field(default_factory=list)
     device: str = ""
     pixels: np.ndarray | None = None
@@ -156,6 +157,8 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
                        visible=stats.instances)
             if perf.summary_due():
                 say(perf.summary_line())
+            if session is not None:
+                result.ui_ms.append(session.cost_ms)
             if session is not None and not last:
                 session.apply_requests(state)
         device.wait_idle()

@@ -32,6 +32,13 @@ def dimension(text: str) -> int:
     return value
 
 
+def editor_scene(text: str) -> str:
+    # a type, not choices=: argparse checks an empty nargs="*" list against choices and fails
+    if text not in EDITOR_SCENES:
+        raise argparse.ArgumentTypeError(f"invalid choice: {text!r} (choose from {', '.join(EDITOR_SCENES)})")
+    return text
+
+
 def render_flags() -> argparse.ArgumentParser:
     """The flags `demo` and `editor` share."""
     common = argparse.ArgumentParser(add_help=False)
@@ -72,7 +79,7 @@ def build_parser() -> argparse.ArgumentParser:
                       "motion: text-mode ECS scene (no rendering)")
     demo.add_argument("path", nargs="?", help="model file for the model scene (OBJ, glTF/GLB, PLY, STL)")
     editor = sub.add_parser("editor", help="the ImGui editor and Perf window on demo scenes", parents=[common])
-    editor.add_argument("scenes", nargs="*", choices=EDITOR_SCENES, metavar="SCENE",
+    editor.add_argument("scenes", nargs="*", type=editor_scene, metavar="SCENE",
                         help=f"scenes to switch between, the first one opened (default {DEFAULT_SCENE}; "
                         f"choices: {', '.join(EDITOR_SCENES)})")
     return parser

@@ -29,6 +29,10 @@ def test_seed_tables_quick_writes_its_json(tmp_path, monkeypatch):
     assert row["fps"] > 0 and row["cpu_ms_mean"] > 0 and row["gpu_ms_mean"] > 0
     assert 0 <= row["cpu_system_percent"] <= 100 and row["cpu_process_percent"] >= 0
     assert doc["seed"]["grid100"]["cpu_ms"] == [3.5, 2.4]
+    overlay = doc["overlay"]
+    assert overlay["cpu_ms_on"] > 0 and overlay["cpu_ms_off"] > 0 and overlay["ui_ms_mean"] > 0
+    assert overlay["difference_ms"] == overlay["cpu_ms_on"] - overlay["cpu_ms_off"]
+    assert type(overlay["met"]) is bool and overlay["target_ms"] == 0.3
 
 
 def test_headless_runs_never_load_glfw(tmp_path):

@@ -116,3 +116,42 @@ def test_device_choice_by_name():
 def test_native_recorder_without_numba_is_a_clear_error():
     proc = cli("cube", "--headless", "--recorder", "native", env={"ECS_ENGINE_NO_NUMBA": "1"})
     one_line_error(proc, "native recorder needs numba", "--recorder python")
+
+
+def editor_cli(*args, env=None, cwd=None):
+    full_env = dict(os.environ, **(env or {}))
+    return subprocess.run([sys.executable, "-m", "ecs_engine", "editor", *args], capture_output=True, text=True,
+                          timeout=300, env=full_env, cwd=cwd)
+
+
+def test_editor_headless_draws_the_ui_and_writes_perf_json(tmp_path):
+    import json
+
+    shot, perf = tmp_path / "ed.png", tmp_path / "perf.json"
+    proc = editor_cli("grid100", "cube", "--headless", "--frames", "4", "--width", "480", "--height", "320",
+                      "--screenshot", str(shot), "--perf-json", str(perf), "--validate")
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(perf.read_text())
+    assert len(doc["frames"]) == 4 and doc["meta"]["scene"] == "grid100" and doc["meta"]["editor"] is True
+    assert all(f["cpu_ms"] > 0 for f in doc["frames"]) and doc["psutil"]
+    assert np.asarray(Image.open(shot)).shape == (320, 480, 3)
+
+
+def test_editor_without_a_display_runs_headless_with_the_text_overlay(tmp_path):
+    env = {"DISPLAY": "", "WAYLAND_DISPLAY": ""}
+    proc = editor_cli("--frames", "3", "--width", "64", "--height", "48", env=env, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "no display found: the editor needs a window" in proc.stdout
+    assert (tmp_path / "grid100.png").is_file()
+
+
+def test_perf_json_into_a_missing_folder_fails_before_running(tmp_path):
+    target = tmp_path / "missing" / "perf.json"
+    proc = cli("cube", "--headless", "--perf-json", str(target), "--width", "32", "--height", "24")
+    one_line_error(proc, str(target))
+    assert "headless" not in proc.stdout  # refused before the scene started
+
+
+def test_editor_rejects_unknown_scenes():
+    proc = editor_cli("motion", "--headless")
+    assert proc.returncode == 2 and "invalid choice" in proc.stderr

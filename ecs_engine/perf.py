@@ -1,0 +1,422 @@
+"""The numbers behind the performance overlay: frame rate, CPU/GPU frame times, CPU use, memory.
+
+FPS comes from the wall-clock time between successive `frame()` calls, never from CPU time: a
+frame that waits for vsync or the GPU is still a frame that took that long. The CPU, record, GPU
+and wait times are measured by the renderer and handed in; GPU time may be missing (timestamps
+of an earlier frame come back late or not at all) and is then left out of its statistics only.
+
+Samples go into preallocated NumPy ring buffers holding the last `window_s` seconds, which grow
+by doubling up to what `max_fps` needs, so a frame costs a few microseconds and a long run does
+not grow memory. psutil is asked about 4 times a second, not every frame: a sample costs about
+0.1 ms. With a log (`--perf-json`) every frame is also kept, in chunks, for the file
+written at the end. Clock and sampler are injectable so tests run on simulated time.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, NamedTuple, Protocol
+
+import numpy as np
+import psutil
+
+from .errors import UsageError
+
+SCHEMA_VERSION = 1
+
+# Columns of the ring and of the log, one row per frame; METRICS are what stats()/series() know.
+_COLUMNS = ("t", "frame_ms", "cpu_ms", "record_ms", "gpu_ms", "wait_ms", "overhead_ms")
+METRICS = _COLUMNS[1:]
+_COL = {name: k for k, name in enumerate(_COLUMNS)}
+_T, _FRAME, _OVERHEAD = _COL["t"], _COL["frame_ms"], _COL["overhead_ms"]
+_START_ROWS = 1024  # 5 s at 200 fps before the first doubling
+_SLACK_ROWS = 16  # rounding at the window's edge never costs a sample
+_NAN = math.nan
+
+
+class Stats(NamedTuple):
+    """Window statistics of one metric; all NaN when it has no value in the window."""
+    min: float
+    mean: float
+    p99: float
+
+
+class ProcessSample(NamedTuple):
+    cpu_system_percent: float  # whole machine, 0-100
+    cpu_process_percent: float  # this process, 100 per busy core (can exceed 100)
+    rss_bytes: int
+
+
+class Sampler(Protocol):
+    """What PerfMonitor asks a few times a second; tests pass a fake with fixed values."""
+    cores: int  # logical cores, to turn the process % into a per-core %
+
+    def sample(self) -> ProcessSample: ...
+
+
+class PsutilSampler:
+    """psutil's view of the machine and of this process.
+
+    `cpu_percent(interval=None)` reports the time since its previous call, and its first call
+    returns a meaningless 0.0, so that first call is made here: the first sample covers the
+    time since the sampler (and the monitor owning it) was made."""
+
+    def __init__(self) -> None:
+        self._process = psutil.Process()
+        self.cores = psutil.cpu_count(logical=True) or 1
+        psutil.cpu_percent(interval=None)
+        self._process.cpu_percent(interval=None)
+
+    def sample(self) -> ProcessSample:
+        with self._process.oneshot():
+            process = self._process.cpu_percent(interval=None)
+            rss = self._process.memory_info().rss
+        return ProcessSample(psutil.cpu_percent(interval=None), process, rss)
+
+
+def check_writable(path: str | os.PathLike[str]) -> Path:
+    """The path as a Path if a file can be written there, else UsageError in one line.
+
+    Called when the run starts, so a long run does not end by losing its data: a scratch file
+    is created (and removed) next to the target, as write_json will do."""
+    if not str(path):
+        raise UsageError("the performance log path is empty")
+    target = Path(path)
+    if target.is_dir():
+        raise UsageError(f"{target}: is a directory, not a file to write the performance log to")
+    probe = target.with_name(f".{target.name}.{os.getpid()}.probe")
+    try:
+        with open(probe, "w"):
+            pass
+        probe.unlink()
+    except OSError as exc:
+        raise UsageError(f"{target}: cannot write the performance log there: {exc.strerror or exc}") from None
+    return target
+
+
+def _stats(values: np.ndarray) -> Stats:
+    """min, mean and 99th percentile ignoring NaNs. The percentile is np.percentile's default
+    (linear interpolation) from one partition: np.percentile costs ~75 us even on 300 values,
+    too much for an overlay that asks every frame."""
+    values = values[~np.isnan(values)]  # a copy, partitioned in place below
+    n = values.size
+    if n == 0:
+        return Stats(_NAN, _NAN, _NAN)
+    low, mean = float(values.min()), float(values.mean())
+    pos = 0.99 * (n - 1)
+    k = int(pos)
+    values.partition(k)
+    p99 = float(values[k])
+    if k + 1 < n:  # everything after k is >= values[k]; the next order statistic is their min
+        p99 += (float(values[k + 1:].min()) - p99) * (pos - k)
+    return Stats(low, mean, p99)
+
+
+def _rate(frame_ms: np.ndarray) -> float:
+    """Frames per second from wall intervals: intervals counted / their total time."""
+    intervals = frame_ms[~np.isnan(frame_ms)]
+    total = float(intervals.sum())
+    return intervals.size * 1e3 / total if intervals.size and total > 0 else _NAN
+
+
+def _remove(path: Path) -> None:
+    try:
+        path.unlink()
+    except OSError:
+        pass
+
+
+def _json_number(x: float) -> float | None:
+    return None if math.isnan(x) else x
+
+
+class PerfLog:
+    """Every frame of the run (not just the window), for `--perf-json`.
+
+    Rows go into (CHUNK, columns) float64 blocks, a new block every CHUNK frames: ~60 bytes a
+    frame and no per-frame allocation. Counters get a NaN-filled column per block the first
+    time a block sees their name."""
+
+    CHUNK = 8192
+
+    def __init__(self, path: str | os.PathLike[str] | None = None) -> None:
+        self.path = None if path is None else check_writable(path)
+        self._blocks: list[np.ndarray] = []
+        self._block_counters: list[dict[str, np.ndarray]] = []
+        self._rows = np.empty((0, len(_COLUMNS)))
+        self._counters: dict[str, np.ndarray] = {}
+        self._j = self.CHUNK  # the first append opens a block
+        self.samples: list[tuple[float, ProcessSample]] = []
+
+    def __len__(self) -> int:
+        return (len(self._blocks) - 1) * self.CHUNK + self._j if self._blocks else 0
+
+    def append(self, row: tuple[float, ...], counters: dict[str, int]) -> None:
+        j = self._j
+        if j == self.CHUNK:
+            self._rows = np.empty((self.CHUNK, len(_COLUMNS)))
+            self._counters = {}
+            self._blocks.append(self._rows)
+            self._block_counters.append(self._counters)
+            j = 0
+        self._rows[j] = row
+        for name, value in counters.items():
+            column = self._counters.get(name)
+            if column is None:
+                column = self._counters[name] = np.full(self.CHUNK, _NAN)
+            column[j] = value
+        self._j = j + 1
+
+    def set_overhead(self, ms: float) -> None:
+        """The monitor's own cost for the last frame, known only once it is done."""
+        self._rows[self._j - 1, _OVERHEAD] = ms
+
+    def add_sample(self, t: float, sample: ProcessSample) -> None:
+        self.samples.append((t, sample))
+
+    def columns(self) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """All rows (frames, columns) and the counters (NaN where a frame had none)."""
+        n = len(self)
+        if n == 0:
+            return np.empty((0, len(_COLUMNS))), {}
+        rows = np.concatenate(self._blocks)[:n]
+        names = dict.fromkeys(name for block in self._block_counters for name in block)
+        counters = {name: np.concatenate([block.get(name, np.full(self.CHUNK, _NAN))
+                                          for block in self._block_counters])[:n] for name in names}
+        return rows, counters
+
+    def to_dict(self, meta: dict[str, Any], cores: int) -> dict[str, Any]:
+        """The JSON document (schema_version 1); NaN becomes null."""
+        rows, counters = self.columns()
+        fields = _COLUMNS[:_OVERHEAD]  # the per-frame cost is only summarised
+        columns = [[_json_number(x) for x in rows[:, k].tolist()] for k in range(len(fields))]
+        frames = [dict(zip(fields, values, strict=True)) for values in zip(*columns, strict=True)]
+        for name, column in counters.items():
+            for frame, value in zip(frames, column.tolist(), strict=True):
+                if not math.isnan(value):
+                    frame[name] = int(value)
+        psutil_rows = [{"t": t, "cpu_system_percent": s.cpu_system_percent,
+                        "cpu_process_percent": s.cpu_process_percent,
+                        "cpu_process_percent_per_core": s.cpu_process_percent / cores,
+                        "rss_bytes": int(s.rss_bytes)} for t, s in self.samples]
+        summary = {name: {k: _json_number(v) for k, v in _stats(rows[:, _COL[name]])._asdict().items()}
+                   for name in METRICS}
+        return {"schema_version": SCHEMA_VERSION, "meta": meta, "frames": frames, "psutil": psutil_rows,
+                "summary": summary, "fps": _json_number(_rate(rows[:, _FRAME]))}
+
+    def write_json(self, path: str | os.PathLike[str], meta: dict[str, Any], cores: int) -> None:
+        """Write to a temporary file in the same folder, then rename over the target: a reader
+        (or a crash) never sees half a file."""
+        target = Path(path)
+        document = self.to_dict(meta, cores)
+        tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+        try:
+            with open(tmp, "w") as f:
+                json.dump(document, f, allow_nan=False)
+            os.replace(tmp, target)
+        except BaseException as exc:
+            _remove(tmp)
+            if isinstance(exc, OSError):
+                raise UsageError(f"{target}: cannot write the performance log: {exc.strerror or exc}") from None
+            raise
+
+
+class PerfMonitor:
+    """Per-frame samples over a rolling window, plus psutil samples a few times a second.
+
+    Call `frame()` once per frame after submitting it. `log` keeps every frame for
+    `write_json`: True in memory, or a path, checked for writability now and used by
+    `write_json()` when it gets none."""
+
+    def __init__(self, window_s: float = 5.0, sample_hz: float = 4.0,
+                 clock: Callable[[], float] = time.perf_counter, sampler: Sampler | None = None,
+                 log: bool | str | os.PathLike[str] = False, max_fps: float = 4000.0) -> None:
+        if not (window_s > 0 and sample_hz > 0 and max_fps > 0):
+            raise ValueError("window_s, sample_hz and max_fps must be positive, "
+                             f"got {window_s}, {sample_hz}, {max_fps}")
+        self.window_s = float(window_s)
+        self.sample_hz = float(sample_hz)
+        self.log = None if log is False else PerfLog(None if log is True else log)
+        self._clock = clock
+        self._sampler = PsutilSampler() if sampler is None else sampler
+        self.cores = max(1, int(self._sampler.cores))
+        # beyond max_fps the ring keeps the last max_rows frames: a shorter window, same rates
+        self.max_rows = math.ceil(self.window_s * max_fps) + _SLACK_ROWS
+        self._ring = np.full((min(_START_ROWS, self.max_rows), len(_COLUMNS)), _NAN)
+        self._next = 0  # row written next; the oldest row once the ring is full
+        self._rows = 0
+        self._cache = (-1, 0)  # (frame_count, first window row in age order)
+        self.frame_count = 0
+        self.overhead_total_s = 0.0
+        self.counters: dict[str, int] = {}
+        self.sample: ProcessSample | None = None
+        self._start = clock()
+        self._last_t = _NAN
+        self._next_sample_t = 0.0  # the first frame samples
+        self._next_summary_t = 1.0
+
+    def frame(self, cpu_ms: float, record_ms: float = 0.0, gpu_ms: float | None = None,
+              wait_ms: float = 0.0, **counters: int) -> None:
+        """Record one frame. cpu_ms: frame start to submit; record_ms: command recording;
+        gpu_ms: GPU time of the frame whose timestamps just came back, None if none did;
+        wait_ms: time blocked on fences/acquire; counters: draws, visible, triangles, ..."""
+        start = time.perf_counter()  # the monitor's own cost is real time, whatever the clock
+        t = self._clock() - self._start
+        row = (t, (t - self._last_t) * 1e3, cpu_ms, record_ms, _NAN if gpu_ms is None else gpu_ms, wait_ms, 0.0)
+        self._last_t = t
+        ring = self._ring
+        if self._rows < len(ring):
+            self._rows += 1
+        elif len(ring) < self.max_rows and ring[self._next, _T] > t - self.window_s:
+            ring = self._grow()  # the oldest row is still inside the window
+            self._rows += 1
+        i = self._next
+        ring[i] = row
+        self._next = i + 1 if i + 1 < len(ring) else 0
+        self.frame_count += 1
+        self.counters = counters
+        log = self.log
+        if log is not None:
+            log.append(row, counters)
+        if t >= self._next_sample_t:
+            self._take_sample(t)
+        ms = (time.perf_counter() - start) * 1e3
+        ring[i, _OVERHEAD] = ms
+        self.overhead_total_s += ms * 1e-3
+        if log is not None:
+            log.set_overhead(ms)
+
+    def _take_sample(self, t: float) -> None:
+        self.sample = self._sampler.sample()
+        if self.log is not None:
+            self.log.add_sample(t, self.sample)
+        period = 1.0 / self.sample_hz
+        self._next_sample_t += period
+        if self._next_sample_t <= t:  # after a stall: carry on at the rate, no burst of samples
+            self._next_sample_t = t + period
+
+    def _grow(self) -> np.ndarray:
+        """Double the ring (up to max_rows), rows in age order; happens a few times a run."""
+        grown = np.full((min(2 * len(self._ring), self.max_rows), len(_COLUMNS)), _NAN)
+        grown[:self._rows] = np.concatenate((self._ring[self._next:], self._ring[:self._next]))
+        self._ring = grown
+        self._next = self._rows
+        return grown
+
+    @property
+    def capacity(self) -> int:
+        """Rows the ring holds now (grows by doubling up to max_rows)."""
+        return len(self._ring)
+
+    def _window(self, column: int) -> np.ndarray:
+        """One column over the window, oldest first (a copy)."""
+        ring, n = self._ring, self._rows
+        cap = len(ring)
+        base = self._next if n == cap else 0  # ring row of the oldest frame
+        if self._cache[0] != self.frame_count:  # the overlay asks for several metrics a frame
+            times = np.concatenate((ring[base:n, _T], ring[:base, _T]))
+            first = int(np.searchsorted(times, self._last_t - self.window_s, side="right")) if n else 0
+            self._cache = (self.frame_count, first)
+        start = base + self._cache[1]
+        if start >= cap:
+            return ring[start - cap:base, column].copy()
+        if n < cap:
+            return ring[start:n, column].copy()
+        return np.concatenate((ring[start:, column], ring[:base, column]))
+
+    def series(self, name: str) -> np.ndarray:
+        """float64 values of a metric over the window, oldest first, for the plots (NaN where
+        unknown: the first frame's interval, missing GPU times)."""
+        return self._window(self._column(name))
+
+    def times(self) -> np.ndarray:
+        """Seconds since the monitor was made of the frames in the window, aligned with series()."""
+        return self._window(_T)
+
+    def stats(self, name: str) -> Stats:
+        """min, mean, p99 of a metric over the window, NaNs (missing GPU times) left out."""
+        return _stats(self.series(name))
+
+    @staticmethod
+    def _column(name: str) -> int:
+        if name not in METRICS:
+            raise ValueError(f"unknown metric {name!r}; known: {', '.join(METRICS)}")
+        return _COL[name]
+
+    @property
+    def fps(self) -> float:
+        """Frames per second over the window, from wall-clock intervals; NaN before two frames."""
+        return _rate(self._window(_FRAME))
+
+    @property
+    def overhead_ms(self) -> float:
+        """Mean time per frame spent inside frame() (psutil sampling included) over the window."""
+        return float(self._window(_OVERHEAD).mean()) if self._rows else _NAN
+
+    @property
+    def cpu_system_percent(self) -> float:
+        return self.sample.cpu_system_percent if self.sample else _NAN
+
+    @property
+    def cpu_process_percent(self) -> float:
+        """100 per fully busy core: above 100 when several threads work."""
+        return self.sample.cpu_process_percent if self.sample else _NAN
+
+    @property
+    def cpu_process_percent_per_core(self) -> float:
+        """The process % over all logical cores (0-100), comparable with the system %."""
+        return self.cpu_process_percent / self.cores
+
+    @property
+    def rss_bytes(self) -> int:
+        """Resident memory at the latest sample; 0 before the first frame."""
+        return int(self.sample.rss_bytes) if self.sample else 0
+
+    def summary_due(self) -> bool:
+        """True once per second of clock time: a headless run prints summary_line() then."""
+        now = self._clock() - self._start
+        if now < self._next_summary_t:
+            return False
+        self._next_summary_t += 1.0
+        if self._next_summary_t <= now:
+            self._next_summary_t = now + 1.0
+        return True
+
+    def summary_line(self) -> str:
+        """One line over the window, e.g. `fps 1234 | cpu 0.41 ms (p99 0.62) | record 0.08 |
+        gpu 0.37 ms | sys 6% proc 101% (6.3%/core) | rss 210 MiB | 100 drawn in 2 draws`."""
+        cpu, record, gpu = self.stats("cpu_ms"), self.stats("record_ms"), self.stats("gpu_ms")
+        parts = [f"fps {_fmt(self.fps, '.0f')}",
+                 f"cpu {_fmt(cpu.mean, '.2f')} ms (p99 {_fmt(cpu.p99, '.2f')})",
+                 f"record {_fmt(record.mean, '.2f')}",
+                 f"gpu {_fmt(gpu.mean, '.2f')} ms" if not math.isnan(gpu.mean) else "gpu n/a"]
+        if self.sample is None:
+            parts.append("sys n/a")
+        else:
+            parts.append(f"sys {self.cpu_system_percent:.0f}% proc {self.cpu_process_percent:.0f}% "
+                         f"({self.cpu_process_percent_per_core:.1f}%/core)")
+            parts.append(f"rss {self.rss_bytes / 2**20:.0f} MiB")
+        counters = dict(self.counters)
+        if "visible" in counters and "draws" in counters:
+            parts.append(f"{counters.pop('visible')} drawn in {counters.pop('draws')} draws")
+        parts.extend(f"{name} {value}" for name, value in counters.items())
+        return " | ".join(parts)
+
+    def write_json(self, path: str | os.PathLike[str] | None = None, meta: dict[str, Any] | None = None) -> None:
+        """Write every frame of the run (`--perf-json`); needs log=True or a log path. A path
+        that cannot be written raises UsageError naming it."""
+        if self.log is None:
+            raise ValueError("write_json needs a PerfMonitor made with log=True or log=PATH")
+        target = path if path is not None else self.log.path
+        if target is None:
+            raise ValueError("write_json needs a path: the monitor was made with log=True, not a path")
+        self.log.write_json(target, {"logical_cores": self.cores, **(meta or {})}, self.cores)
+
+
+def _fmt(x: float, spec: str) -> str:
+    return "n/a" if math.isnan(x) else format(x, spec)
