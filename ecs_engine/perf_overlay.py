@@ -1,5 +1,9 @@
 """The Perf window: the PerfMonitor's numbers as ImGui text and implot rolling plots.
 
+The numbers and plot lines are refreshed a few times a second, not every frame: reading the
+window's statistics costs ~0.3 ms at 1,000 FPS (percentiles over 5,000 rows), more than the
+whole overlay may cost.
+
 FPS is wall clock; CPU frame, record and GPU ms (timestamps) come with min, mean and 99th
 percentile over the window; CPU system and process % (raw and per core) and resident memory
 come from psutil samples taken about 4 times a second; the overlay's own cost is shown too.
@@ -7,11 +11,14 @@ come from psutil samples taken about 4 times a second; the overlay's own cost is
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from .perf import PerfMonitor
 
 PLOTTED = (("frame_ms", "frame (wall)"), ("cpu_ms", "CPU"), ("gpu_ms", "GPU"), ("record_ms", "record"))
+REFRESH_S = 0.25
 
 
 class PerfOverlay:
@@ -20,6 +27,32 @@ class PerfOverlay:
 
         self.imgui = imgui
         self.implot = implot
+        self._next_refresh = 0.0
+        self._fps = float("nan")
+        self._rows: list[tuple[str, str, str, str]] = []
+        self._lines: list[tuple[str, np.ndarray, np.ndarray]] = []
+        self._limits = (0.0, 1.0, 1.0)  # x from, x to, y top
+
+    def _refresh(self, perf: PerfMonitor) -> None:
+        now = time.perf_counter()
+        if now < self._next_refresh:
+            return
+        self._next_refresh = now + REFRESH_S
+        self._fps = perf.fps
+        self._rows = []
+        for name, label in PLOTTED[1:]:
+            s = perf.stats(name)
+            self._rows.append((label, _ms(s.min), _ms(s.mean), _ms(s.p99)))
+        t = perf.times()
+        self._lines = []
+        top = 1.0
+        for name, label in PLOTTED:
+            y = perf.series(name)
+            ok = np.isfinite(y)
+            if ok.sum() > 1:
+                self._lines.append((label, np.ascontiguousarray(t[ok]), np.ascontiguousarray(y[ok])))
+                top = max(top, float(np.percentile(y[ok], 99)) * 1.2)
+        self._limits = (float(t[0]), float(t[-1]), top) if len(t) > 1 else (0.0, 1.0, 1.0)
 
     def draw(self, perf: PerfMonitor, overlay_ms: float) -> None:
         """The Perf window; `overlay_ms`: what the UI cost last frame (build, copy, record)."""
@@ -27,16 +60,16 @@ class PerfOverlay:
         io = imgui.get_io()
         imgui.set_next_window_pos((io.display_size.x - 370, 10), imgui.Cond_.first_use_ever.value)
         imgui.set_next_window_size((360, 330), imgui.Cond_.first_use_ever.value)
+        self._refresh(perf)
         if imgui.begin("Perf")[0]:
-            imgui.text(f"FPS {perf.fps:7.1f}   (wall clock)")
+            imgui.text(f"FPS {self._fps:7.1f}   (wall clock)")
             if imgui.begin_table("ms", 4, imgui.TableFlags_.borders_inner_h.value):
                 for title in ("ms", "min", "mean", "p99"):
                     imgui.table_setup_column(title)
                 imgui.table_headers_row()
-                for name, label in PLOTTED[1:]:
-                    s = perf.stats(name)
+                for row in self._rows:
                     imgui.table_next_row()
-                    for i, text in enumerate((label, _ms(s.min), _ms(s.mean), _ms(s.p99))):
+                    for i, text in enumerate(row):
                         imgui.table_set_column_index(i)
                         imgui.text(text)
                 imgui.end_table()
@@ -49,22 +82,14 @@ class PerfOverlay:
 
     def _plot(self, perf: PerfMonitor) -> None:
         implot = self.implot
-        t = perf.times()
-        if len(t) < 2:
+        if not self._lines:
             return
-        lines = []
-        top = 1.0
-        for name, label in PLOTTED:
-            y = perf.series(name)
-            ok = np.isfinite(y)
-            if ok.any():
-                lines.append((label, np.ascontiguousarray(t[ok]), np.ascontiguousarray(y[ok])))
-                top = max(top, float(np.percentile(y[ok], 99)) * 1.2)
+        x0, x1, top = self._limits
         if implot.begin_plot("##frame times", (-1, 150)):
             implot.setup_axes("s", "ms")
-            implot.setup_axis_limits(implot.ImAxis_.x1.value, float(t[0]), float(t[-1]), implot.Cond_.always.value)
+            implot.setup_axis_limits(implot.ImAxis_.x1.value, x0, x1, implot.Cond_.always.value)
             implot.setup_axis_limits(implot.ImAxis_.y1.value, 0.0, top, implot.Cond_.always.value)
-            for label, x, y in lines:
+            for label, x, y in self._lines:
                 implot.plot_line(label, x, y)
             implot.end_plot()
 
