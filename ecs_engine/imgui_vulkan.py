@@ -87,6 +87,7 @@ class ImGuiRenderer:
         self._next_id = 1  # 0 means "no texture" to ImGui
         self._frames = [self._frame_buffers(1 << 14, 1 << 15) for _ in range(frames)]
         self._prepared: dict[int, tuple[list[Any], tuple[float, float, float, float]]] = {}
+        self._last: tuple[int, list[Any], tuple[float, float, float, float]] | None = None  # frame, draws, push
         self._push = np.zeros(4, dtype=np.float32)
         self._push_ptr = vk.ffi.from_buffer(self._push)
         self._offsets = vk.ffi.new("VkDeviceSize[1]", [0])
@@ -226,7 +227,9 @@ class ImGuiRenderer:
         if draw_data is None or not draw_data.valid:
             self._prepared.pop(slot, None)
             return
-        if draw_data.textures is not None:
+        frame = self.imgui.get_frame_count()
+        again = self._last is not None and self._last[0] == frame  # no new UI: draw the last one
+        if draw_data.textures is not None and not again:
             self.update_textures(draw_data.textures, frames_in_flight)
         lists = list(draw_data.cmd_lists)
         vertices = sum(dl.vtx_buffer.size() for dl in lists)
@@ -242,7 +245,7 @@ class ImGuiRenderer:
             nv, ni = dl.vtx_buffer.size(), dl.idx_buffer.size()
             ctypes.memmove(vdst + vbase * VERTEX_BYTES, dl.vtx_buffer.data_address(), nv * VERTEX_BYTES)
             ctypes.memmove(idst + ibase * INDEX_BYTES, dl.idx_buffer.data_address(), ni * INDEX_BYTES)
-            for cmd in dl.cmd_buffer:
+            for cmd in ([] if again else dl.cmd_buffer):
                 if cmd.elem_count == 0:
                     continue
                 c = cmd.clip_rect
@@ -250,9 +253,14 @@ class ImGuiRenderer:
                               int(cmd.get_tex_id()), cmd.elem_count, cmd.idx_offset + ibase, cmd.vtx_offset + vbase))
             vbase += nv
             ibase += ni
-        w, h = draw_data.display_size.x, draw_data.display_size.y
-        scale = (2.0 / w, 2.0 / h) if w > 0 and h > 0 else (0.0, 0.0)
-        self._prepared[slot] = (draws, (scale[0], scale[1], -1.0 - px * scale[0], -1.0 - py * scale[1]))
+        if again:
+            _, draws, push = self._last
+        else:
+            w, h = draw_data.display_size.x, draw_data.display_size.y
+            scale = (2.0 / w, 2.0 / h) if w > 0 and h > 0 else (0.0, 0.0)
+            push = (scale[0], scale[1], -1.0 - px * scale[0], -1.0 - py * scale[1])
+            self._last = (frame, draws, push)
+        self._prepared[slot] = (draws, push)
         self.counts = OverlayCounts(len(lists), len(draws), vertices, indices)
         self.cpu_ms = (time.perf_counter() - t0) * 1e3
 

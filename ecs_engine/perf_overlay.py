@@ -19,6 +19,7 @@ from .perf import PerfMonitor
 
 PLOTTED = (("frame_ms", "frame (wall)"), ("cpu_ms", "CPU"), ("gpu_ms", "GPU"), ("record_ms", "record"))
 REFRESH_S = 0.25
+PLOT_POINTS = 120  # per line: implot's cost and the UI's vertex count grow with points drawn
 
 
 class PerfOverlay:
@@ -50,7 +51,7 @@ class PerfOverlay:
             y = perf.series(name)
             ok = np.isfinite(y)
             if ok.sum() > 1:
-                self._lines.append((label, np.ascontiguousarray(t[ok]), np.ascontiguousarray(y[ok])))
+                self._lines.append((label, *_peaks(t[ok], y[ok], PLOT_POINTS)))
                 top = max(top, float(np.percentile(y[ok], 99)) * 1.2)
         self._limits = (float(t[0]), float(t[-1]), top) if len(t) > 1 else (0.0, 1.0, 1.0)
 
@@ -92,6 +93,14 @@ class PerfOverlay:
             for label, x, y in self._lines:
                 implot.plot_line(label, x, y)
             implot.end_plot()
+
+
+def _peaks(t: np.ndarray, y: np.ndarray, points: int) -> tuple[np.ndarray, np.ndarray]:
+    """At most `points` samples: the largest of each run of neighbours, so a spike stays visible."""
+    if len(y) <= points:
+        return np.ascontiguousarray(t), np.ascontiguousarray(y)
+    starts = np.linspace(0, len(y), points, endpoint=False).astype(np.int64)
+    return np.ascontiguousarray(t[starts]), np.maximum.reduceat(y, starts)
 
 
 def _ms(value: float) -> str:
