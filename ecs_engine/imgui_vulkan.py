@@ -87,11 +87,12 @@ class ImGuiRenderer:
         self._next_id = 1  # 0 means "no texture" to ImGui
         self._frames = [self._frame_buffers(1 << 14, 1 << 15) for _ in range(frames)]
         self._prepared: dict[int, tuple[list[Any], tuple[float, float, float, float]]] = {}
-        self._last: tuple[int, list[Any], tuple[float, float, float, float]] | None = None  # frame, draws, push
+        # the last UI's (ImGui frame, draws, push constants, draw lists, vertex and index counts)
+        self._last: tuple[Any, ...] | None = None
+        self._copied: dict[int, int] = {}  # per slot: the ImGui frame whose geometry it holds
         self._push = np.zeros(4, dtype=np.float32)
         self._push_ptr = vk.ffi.from_buffer(self._push)
         self._offsets = vk.ffi.new("VkDeviceSize[1]", [0])
-        self._scissor = vk.ffi.new("VkRect2D*")
         self._viewport = vk.ffi.new("VkViewport*")
         self.counts = OverlayCounts()
         self.cpu_ms = 0.0  # last frame's prepare + record
@@ -219,8 +220,9 @@ class ImGuiRenderer:
     # ------------------------------------------------------------------ frame
     def prepare(self, slot: int, frames_in_flight: int) -> None:
         """Textures first, then this frame's geometry (from the last `imgui.render()`) into the
-        slot's mapped buffers and the list of draws for `record`. Called by the renderer after
-        the slot's fence was waited on."""
+        slot's mapped buffers, and the draws for `record`. Called by the renderer after the slot's
+        fence was waited on. When the UI was not rebuilt since (see EditorSession's rate limit),
+        the draws are the last ones, and a slot that already holds that geometry copies nothing."""
         t0 = time.perf_counter()
         self.cpu_ms = 0.0
         draw_data = self.imgui.get_draw_data()
@@ -228,41 +230,58 @@ class ImGuiRenderer:
             self._prepared.pop(slot, None)
             return
         frame = self.imgui.get_frame_count()
-        again = self._last is not None and self._last[0] == frame  # no new UI: draw the last one
-        if draw_data.textures is not None and not again:
-            self.update_textures(draw_data.textures, frames_in_flight)
-        lists = list(draw_data.cmd_lists)
-        vertices = sum(dl.vtx_buffer.size() for dl in lists)
-        indices = sum(dl.idx_buffer.size() for dl in lists)
-        fb = self._ensure(slot, max(vertices, 1), max(indices, 1))
-        vdst = fb.vertices.bytes().ctypes.data
-        idst = fb.indices.bytes().ctypes.data
-        sx, sy = draw_data.framebuffer_scale.x, draw_data.framebuffer_scale.y
-        px, py = draw_data.display_pos.x, draw_data.display_pos.y
-        draws = []
-        vbase = ibase = 0
-        for dl in lists:
-            nv, ni = dl.vtx_buffer.size(), dl.idx_buffer.size()
-            ctypes.memmove(vdst + vbase * VERTEX_BYTES, dl.vtx_buffer.data_address(), nv * VERTEX_BYTES)
-            ctypes.memmove(idst + ibase * INDEX_BYTES, dl.idx_buffer.data_address(), ni * INDEX_BYTES)
-            for cmd in ([] if again else dl.cmd_buffer):
-                if cmd.elem_count == 0:
-                    continue
-                c = cmd.clip_rect
-                draws.append(((c.x - px) * sx, (c.y - py) * sy, (c.z - px) * sx, (c.w - py) * sy,
-                              int(cmd.get_tex_id()), cmd.elem_count, cmd.idx_offset + ibase, cmd.vtx_offset + vbase))
-            vbase += nv
-            ibase += ni
-        if again:
-            _, draws, push = self._last
-        else:
-            w, h = draw_data.display_size.x, draw_data.display_size.y
-            scale = (2.0 / w, 2.0 / h) if w > 0 and h > 0 else (0.0, 0.0)
-            push = (scale[0], scale[1], -1.0 - px * scale[0], -1.0 - py * scale[1])
-            self._last = (frame, draws, push)
+        if self._last is None or self._last[0] != frame:
+            if draw_data.textures is not None:
+                self.update_textures(draw_data.textures, frames_in_flight)
+            self._last = (frame, *self._draw_list(draw_data))
+        _, draws, push, lists, vertices, indices = self._last
+        if self._copied.get(slot) != frame:
+            fb = self._ensure(slot, max(vertices, 1), max(indices, 1))
+            vdst = fb.vertices.bytes().ctypes.data
+            idst = fb.indices.bytes().ctypes.data
+            vbase = ibase = 0
+            for dl in lists:
+                nv, ni = dl.vtx_buffer.size(), dl.idx_buffer.size()
+                ctypes.memmove(vdst + vbase * VERTEX_BYTES, dl.vtx_buffer.data_address(), nv * VERTEX_BYTES)
+                ctypes.memmove(idst + ibase * INDEX_BYTES, dl.idx_buffer.data_address(), ni * INDEX_BYTES)
+                vbase += nv
+                ibase += ni
+            self._copied[slot] = frame
         self._prepared[slot] = (draws, push)
         self.counts = OverlayCounts(len(lists), len(draws), vertices, indices)
         self.cpu_ms = (time.perf_counter() - t0) * 1e3
+
+    def _draw_list(self, draw_data: Any) -> tuple[list[Any], tuple[float, ...], list[Any], int, int]:
+        """Per command: (VkRect2D* scissor, VkDescriptorSet[1], index count, first index,
+        vertex offset), scissors clamped to the display and empty ones dropped; made once per UI."""
+        vk = self.vk
+        sx, sy = draw_data.framebuffer_scale.x, draw_data.framebuffer_scale.y
+        px, py = draw_data.display_pos.x, draw_data.display_pos.y
+        w, h = draw_data.display_size.x * sx, draw_data.display_size.y * sy
+        lists = list(draw_data.cmd_lists)
+        draws = []
+        vbase = ibase = 0
+        for dl in lists:
+            for cmd in dl.cmd_buffer:
+                if cmd.elem_count == 0:
+                    continue
+                texture = self._textures.get(int(cmd.get_tex_id()))
+                if texture is None:
+                    continue  # a user texture id this backend does not know
+                c = cmd.clip_rect
+                x0, y0 = max((c.x - px) * sx, 0.0), max((c.y - py) * sy, 0.0)
+                x1, y1 = min((c.z - px) * sx, w), min((c.w - py) * sy, h)
+                if x1 <= x0 or y1 <= y0:
+                    continue
+                scissor = vk.ffi.new("VkRect2D*", {"offset": {"x": int(x0), "y": int(y0)},
+                                                   "extent": {"width": int(x1 - x0), "height": int(y1 - y0)}})
+                draws.append((scissor, texture.set_array, cmd.elem_count, cmd.idx_offset + ibase,
+                              cmd.vtx_offset + vbase))
+            vbase += dl.vtx_buffer.size()
+            ibase += dl.idx_buffer.size()
+        scale = (2.0 / w * sx, 2.0 / h * sy) if w > 0 and h > 0 else (0.0, 0.0)
+        push = (scale[0], scale[1], -1.0 - px * scale[0], -1.0 - py * scale[1])
+        return draws, push, lists, vbase, ibase
 
     def record(self, cb: Any, slot: int, width: int, height: int) -> None:
         """Into the primary's overlay subpass (inline): one indexed draw per ImGui command."""
@@ -274,7 +293,8 @@ class ImGuiRenderer:
         vk = self.vk
         lib = vk.lib
         fb = self._frames[slot]
-        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.pipeline)
+        graphics = vk.VK_PIPELINE_BIND_POINT_GRAPHICS
+        lib.vkCmdBindPipeline(cb, graphics, self.pipeline)
         lib.vkCmdBindVertexBuffers(cb, 0, 1, fb.vertex_array, self._offsets)
         lib.vkCmdBindIndexBuffer(cb, fb.indices.handle, 0, vk.VK_INDEX_TYPE_UINT32)
         vp = self._viewport
@@ -283,23 +303,14 @@ class ImGuiRenderer:
         self._push[:] = push
         lib.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_VERTEX_BIT, 0, 16, self._push_ptr)
         bound = None
-        scissor = self._scissor
-        for x0, y0, x1, y1, tex_id, count, first_index, vertex_offset in draws:
-            x0, y0 = max(x0, 0.0), max(y0, 0.0)
-            x1, y1 = min(x1, float(width)), min(y1, float(height))
-            if x1 <= x0 or y1 <= y0:
-                continue
-            texture = self._textures.get(tex_id)
-            if texture is None:
-                continue  # a user texture id this backend does not know
-            if texture is not bound:
-                lib.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1,
-                                            texture.set_array, 0, vk.ffi.NULL)
-                bound = texture
-            scissor.offset.x, scissor.offset.y = int(x0), int(y0)
-            scissor.extent.width, scissor.extent.height = int(x1 - x0), int(y1 - y0)
-            lib.vkCmdSetScissor(cb, 0, 1, scissor)
-            lib.vkCmdDrawIndexed(cb, count, 1, first_index, vertex_offset, 0)
+        layout, null = self.layout, vk.ffi.NULL
+        set_scissor, draw = lib.vkCmdSetScissor, lib.vkCmdDrawIndexed
+        for scissor, sets, count, first_index, vertex_offset in draws:
+            if sets is not bound:
+                lib.vkCmdBindDescriptorSets(cb, graphics, layout, 0, 1, sets, 0, null)
+                bound = sets
+            set_scissor(cb, 0, 1, scissor)
+            draw(cb, count, 1, first_index, vertex_offset, 0)
         self.cpu_ms += (time.perf_counter() - t0) * 1e3
 
     def destroy(self) -> None:
