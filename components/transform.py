@@ -10,11 +10,13 @@ from ecs_engine.schema import Component, Field
 class Transform(Component):
     """Position stays float64 so a world 10,000 km across keeps millimetre precision; the
     renderer subtracts the camera position before casting to float32. The rotation is a unit
-    quaternion (x, y, z, w), normalised on write; a zero-length one is rejected."""
+    quaternion (x, y, z, w), normalised on write; a zero-length one is rejected. Position and
+    scale components stay within +-1e30 (LIMIT), so the float32 matrices made from them stay
+    finite (float32 ends at 3.4e38) and no infinity or NaN reaches the GPU."""
 
-    position = Field(np.float64, (3,), default=(0.0, 0.0, 0.0), finite=True)
+    position = Field(np.float64, (3,), default=(0.0, 0.0, 0.0), finite=True, minimum=-1e30, maximum=1e30)
     rotation = Field(np.float64, (4,), default=(0.0, 0.0, 0.0, 1.0), finite=True, unit=True)
-    scale = Field(np.float64, (3,), default=(1.0, 1.0, 1.0), finite=True)
+    scale = Field(np.float64, (3,), default=(1.0, 1.0, 1.0), finite=True, minimum=-1e30, maximum=1e30)
 
 
 class ModelMatrix(Component):

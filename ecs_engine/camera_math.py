@@ -152,6 +152,15 @@ class CameraMatrices:
     entity: int
 
 
+def view_from_origin(cam: CameraMatrices, origin: np.ndarray) -> np.ndarray:
+    """The view matrix (4, 4) float32 for model matrices made relative to `origin`: the camera's
+    rotation, and the translation from origin to camera (made in float64, cast once). With the
+    origin at the camera (camera-relative rendering) the translation is exactly zero."""
+    view = cam.view.astype(np.float64)
+    view[:3, 3] = view[:3, :3] @ (np.asarray(origin, dtype=np.float64) - cam.position)
+    return view.astype(np.float32)
+
+
 def active_camera(world: World) -> int:
     """The entity to render from: the only one with Camera and Transform, or else the only one
     of those also tagged ActiveCamera. Raises UsageError otherwise."""

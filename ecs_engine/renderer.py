@@ -25,9 +25,10 @@ from typing import Any
 
 import numpy as np
 
-from .camera_math import CameraMatrices, camera_matrices
+from .camera_math import CameraMatrices, camera_matrices, view_from_origin
 from .components import Mesh, ModelMatrix, PointLight, Transform
 from .culling import frustum_planes
+from .systems.transform import render_origin
 from .instance_rows import INSTANCE_DTYPE, write_rows
 from .gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
 from .gpu.device import Device
@@ -42,7 +43,7 @@ from .world import World
 
 LIGHT_DTYPE = np.dtype([("position_radius", np.float32, 4), ("color_intensity", np.float32, 4)])
 MATERIAL_DTYPE = np.dtype([("color", np.float32, 4), ("specular", np.float32, 4)])
-GLOBALS_BYTES = 3 * 64 + 16 + 16
+GLOBALS_BYTES = 2 * 64 + 3 * 16  # projection, view, eye, ambient, counts (common.glsl)
 MIN_LIGHTS = 256
 MODES = ("instanced", "per_entity", "indirect")
 RECORDERS = ("native", "python")
@@ -367,13 +368,14 @@ class Renderer:
                                       INSTANCE_DTYPE.itemsize, vk.ffi.from_buffer(rows[i : i + 1]))
                 vk.vkCmdDrawIndexed(cb, mesh.index_count, 1, 0, 0, 0)
 
-    def gather_lights(self, world: World, camera_position: np.ndarray) -> np.ndarray:
-        """Camera-relative lights sorted far to near (the billboards blend back to front)."""
+    def gather_lights(self, world: World, origin: np.ndarray, eye: np.ndarray | None = None) -> np.ndarray:
+        """Lights relative to the render origin (the camera, by default), sorted far to near
+        from the camera (the billboards blend back to front)."""
         parts = []
         for batch in world.query(PointLight, Transform, write=()):
             light, t = batch[PointLight], batch[Transform]
             rows = np.empty(len(batch), LIGHT_DTYPE)
-            rows["position_radius"][:, :3] = t.position - camera_position
+            rows["position_radius"][:, :3] = t.position - origin
             rows["position_radius"][:, 3] = light.radius
             rows["color_intensity"][:, :3] = light.color
             rows["color_intensity"][:, 3] = light.intensity
@@ -381,7 +383,8 @@ class Renderer:
         if not parts:
             return np.empty(0, LIGHT_DTYPE)
         lights = np.concatenate(parts)
-        dist = np.einsum("ij,ij->i", lights["position_radius"][:, :3], lights["position_radius"][:, :3])
+        rel = lights["position_radius"][:, :3] - (np.zeros(3) if eye is None else eye)
+        dist = np.einsum("ij,ij->i", rel, rel)
         return lights[np.argsort(-dist, kind="stable")]
 
     def render(self, world: World, readback: bool = False, framebuffer: Any = None,
@@ -398,17 +401,20 @@ class Renderer:
         if self.overlay is not None:
             self.overlay.prepare(slot, len(self.frames.frames))
         cam = camera_matrices(world, width / height)
-        lights = self.gather_lights(world, cam.position) if self.with_lights else np.empty(0, LIGHT_DTYPE)
+        origin = render_origin(world)
+        view = view_from_origin(cam, origin)
+        lights = self.gather_lights(world, origin, cam.position - origin) if self.with_lights \
+            else np.empty(0, LIGHT_DTYPE)
         chunks = self.chunks(world)
         candidates = sum(len(c.handle) for c in chunks)
         self._ensure_capacity(slot, 0 if self.mode == "per_entity" else candidates, len(lights))
         if len(lights):
             pf.lights.array(LIGHT_DTYPE, len(lights))[:] = lights
-        self._write_globals(pf, cam, len(lights))
+        self._write_globals(pf, cam, view, origin, len(lights))
         target = self._target_state(framebuffer, width, height)
         ctx = FrameContext(
             slot=slot, descriptor_set=pf.descriptor_set, scissor=target.area, viewport=target.viewport,
-            planes=frustum_planes(cam.projection, cam.view) if self.culling else None,
+            planes=frustum_planes(cam.projection, view) if self.culling else None,
             instances=pf.instances.array(INSTANCE_DTYPE),
             bounds=self._mesh_bounds(),
             begin_info=target.secondary_begin,
@@ -476,14 +482,15 @@ class Renderer:
         end_command_buffer(vk, secondary)
         return [secondary]
 
-    def _write_globals(self, pf: _PerFrame, cam: CameraMatrices, light_count: int) -> None:
+    def _write_globals(self, pf: _PerFrame, cam: CameraMatrices, view: np.ndarray, origin: np.ndarray,
+                       light_count: int) -> None:
         raw = pf.globals.bytes()
-        mats = raw[:192].view(np.float32).reshape(3, 4, 4)
+        mats = raw[:128].view(np.float32).reshape(2, 4, 4)
         mats[0] = cam.projection.T  # column-major for GLSL
-        mats[1] = cam.view.T
-        mats[2] = cam.inverse_view.T
-        raw[192:208].view(np.float32)[:] = self.ambient
-        raw[208:224].view(np.uint32)[:] = (light_count, 0, 0, 0)
+        mats[1] = view.T
+        raw[128:140].view(np.float32)[:] = cam.position - origin  # float64 difference, then the cast
+        raw[144:160].view(np.float32)[:] = self.ambient
+        raw[160:176].view(np.uint32)[:] = (light_count, 0, 0, 0)
 
     def _record_primary(self, cb: Any, secondaries: list[Any], light_count: int, target: _TargetState,
                         slot: int) -> None:

@@ -1,9 +1,11 @@
 // Shared declarations. Matrices come from NumPy [row, col] arrays uploaded transposed, so they
-// arrive column-major as GLSL expects. Positions are camera-relative (the camera sits at 0).
+// arrive column-major as GLSL expects. Positions are relative to the render origin, which is the
+// camera unless RenderOrigin is pinned (then g.eye says where the camera is).
 layout(set = 0, binding = 0) uniform Globals {
     mat4 projection;    // reverse-Z: near -> depth 1, far/infinity -> 0
-    mat4 view;          // rotation only
-    mat4 inverse_view;
+    mat4 view;          // rotation, and the translation from the render origin to the camera
+                        // (zero when rendering camera-relative, the default)
+    vec4 eye;           // xyz: the camera relative to the render origin (zero by default)
     vec4 ambient;       // rgb, intensity
     uvec4 counts;       // x: number of lights
 } g;

@@ -18,8 +18,9 @@ void main() {
         n2 = dot(n, n);
     }
     n = n2 > 1e-24 ? n * inversesqrt(n2) : vec3(0.0, 0.0, 1.0);
-    float e2 = dot(v_position, v_position);
-    vec3 to_eye = e2 > 1e-24 ? -v_position * inversesqrt(e2) : vec3(0.0, 0.0, 1.0);
+    vec3 eye = g.eye.xyz - v_position;
+    float e2 = dot(eye, eye);
+    vec3 to_eye = e2 > 1e-24 ? eye * inversesqrt(e2) : vec3(0.0, 0.0, 1.0);
 
     Material m = materials[v_material];
     vec3 color = g.ambient.rgb * g.ambient.a * m.color.rgb;
@@ -34,7 +35,8 @@ void main() {
             window = clamp(1.0 - q * q, 0.0, 1.0);
             window *= window;
         }
-        float energy = l.color_intensity.w * window / max(d2, 1e-4);
+        // capped: an infinite energy times a zero diffuse term would be NaN
+        float energy = min(l.color_intensity.w * window / max(d2, 1e-4), 65504.0);
         vec3 dir = d2 > 1e-24 ? to_light * inversesqrt(d2) : n;
         float diffuse = max(dot(n, dir), 0.0);
         vec3 h = dir + to_eye;
@@ -45,5 +47,5 @@ void main() {
         }
         color += l.color_intensity.rgb * energy * (diffuse * m.color.rgb + spec);
     }
-    out_color = vec4(color, 1.0);
+    out_color = vec4(min(color, vec3(65504.0)), 1.0);  // thousands of bright lights: finite
 }

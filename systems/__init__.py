@@ -3,6 +3,7 @@
 from .camera_control import FlyCameraSystem, InputState
 from .motion import MotionSystem
 from .orbit import OrbitSystem
-from .transform import RenderOrigin, RenderOriginSystem, TransformSystem
+from .transform import RenderOrigin, RenderOriginSystem, TransformSystem, render_origin
 
-__all__ = ["FlyCameraSystem", "InputState", "MotionSystem", "OrbitSystem", "RenderOrigin", "RenderOriginSystem", "TransformSystem"]
+__all__ = ["FlyCameraSystem", "InputState", "MotionSystem", "OrbitSystem", "RenderOrigin", "RenderOriginSystem", "TransformSystem",
+           "render_origin"]

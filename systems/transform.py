@@ -15,9 +15,19 @@ from ecs_engine.world import World
 
 @dataclass
 class RenderOrigin:
-    """World resource: the float64 point matrices are made relative to (the camera position)."""
+    """World resource: the float64 point that model matrices are made relative to before the
+    cast to float32. RenderOriginSystem keeps it at the active camera (camera-relative
+    rendering); `follow_camera=False` pins it (at the world origin: classic float32 world-space
+    rendering, which jitters far from the origin; kept for comparison and measurement)."""
 
     position: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    follow_camera: bool = True
+
+
+def render_origin(world: World) -> np.ndarray:
+    """The RenderOrigin resource's position (float64), or the world origin without one."""
+    resource = world.resources.get(RenderOrigin)
+    return np.zeros(3) if resource is None else np.asarray(resource.position, dtype=np.float64)
 
 
 class TransformSystem(System):
@@ -31,8 +41,7 @@ class TransformSystem(System):
         self.rows_updated = 0
 
     def run(self, world: World, dt: float) -> None:
-        resource = world.resources.get(RenderOrigin)
-        origin = np.zeros(3) if resource is None else np.asarray(resource.position, dtype=np.float64)
+        origin = render_origin(world)
         moved = self._origin is None or not np.array_equal(origin, self._origin)
         self._origin = origin.copy()
         query = world.query(Transform, ModelMatrix)
@@ -60,6 +69,9 @@ class RenderOriginSystem(System):
     def run(self, world: World, dt: float) -> None:
         from ecs_engine.camera_math import active_camera
 
+        current = world.resources.get(RenderOrigin)
+        if current is not None and not current.follow_camera:
+            return  # pinned
         if world.query(*self.reads, write=()).count() == 0:
             return  # nothing to follow (a scene without a camera renders nothing)
         position = world.get(active_camera(world), Transform).position
