@@ -4,7 +4,7 @@ from .camera import ORTHOGRAPHIC, PERSPECTIVE, Camera
 from .camera_control import ActiveCamera, FlyCamera
 from .light import PointLight
 from .mesh import Mesh
-from .motion import AngularVelocity, Velocity
+from .motion import AngularVelocity, Spring, Velocity
 from .orbit import Orbit
 from .transform import ModelMatrix, Transform
 
@@ -19,6 +19,7 @@ __all__ = [
     "ModelMatrix",
     "Orbit",
     "PointLight",
+    "Spring",
     "Transform",
     "Velocity",
 ]

@@ -17,3 +17,14 @@ class AngularVelocity(Component):
     """World-frame rotation rate: axis times radians per second."""
 
     angular = Field(np.float64, (3,), default=(0.0, 0.0, 0.0), finite=True)
+
+
+class Spring(Component):
+    """A damped spring pulling the entity's position toward `anchor`: force -k (x - anchor) - c v
+    on a mass m, integrated by SpringSystem (which needs Velocity too). Camera follow or a bobbing
+    object: move the anchor, the spring does the rest."""
+
+    anchor = Field(np.float64, (3,), default=(0.0, 0.0, 0.0), finite=True, minimum=-1e30, maximum=1e30)
+    stiffness = Field(np.float64, default=10.0, finite=True, minimum=0.0)
+    damping = Field(np.float64, default=1.0, finite=True, minimum=0.0)
+    mass = Field(np.float64, default=1.0, finite=True, minimum=0.0, min_exclusive=True)

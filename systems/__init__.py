@@ -1,9 +1,11 @@
-"""Stock systems: motion, transform (matrices), fly camera, orbits."""
+"""Stock systems: motion, springs, transform (matrices), fly camera, orbits."""
 
 from .camera_control import FlyCameraSystem, InputState
 from .motion import MotionSystem
 from .orbit import OrbitSystem
+from .spring import SpringSystem
 from .transform import RenderOrigin, RenderOriginSystem, TransformSystem, render_origin
 
-__all__ = ["FlyCameraSystem", "InputState", "MotionSystem", "OrbitSystem", "RenderOrigin", "RenderOriginSystem", "TransformSystem",
+__all__ = ["FlyCameraSystem", "InputState", "MotionSystem", "OrbitSystem", "RenderOrigin", "RenderOriginSystem", "SpringSystem",
+           "TransformSystem",
            "render_origin"]
