@@ -90,12 +90,17 @@ def scene_builder(name: str, entities: int = 10_000) -> Callable[..., None]:
 
 
 def default_schedule() -> Schedule:
-    from .systems import FlyCameraSystem, MotionSystem, OrbitSystem, RenderOriginSystem, TransformSystem
+    """Simulation (orbits, motion, springs) in the fixed-step stage, the camera per frame, then
+    render origin and matrices. `Schedule.run` runs every stage once; the frame loops use
+    `Schedule.run_frame` with a FixedTimestep."""
+    from .systems import (FlyCameraSystem, MotionSystem, OrbitSystem, RenderOriginSystem, SpringSystem,
+                          TransformSystem)
 
-    schedule = Schedule(("update", "post_update"))
+    schedule = Schedule(("fixed", "update", "post_update"))
+    schedule.add(OrbitSystem(), "fixed")
+    schedule.add(MotionSystem(), "fixed")
+    schedule.add(SpringSystem(), "fixed")
     schedule.add(FlyCameraSystem(), "update")
-    schedule.add(OrbitSystem(), "update")
-    schedule.add(MotionSystem(), "update")
     schedule.add(RenderOriginSystem(), "post_update")
     schedule.add(TransformSystem(), "post_update")
     return schedule
@@ -116,6 +121,7 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
     from .jobs import default_threads
     from .mesh_registry import MeshRegistry
     from .perf import PerfMonitor
+    from .timestep import FixedTimestep
 
     say = log or (lambda text: None if options.quiet else print(text))
     build = scene_builder(options.scene, options.entities)
@@ -135,12 +141,13 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
             session = result.editor = EditorSession(state, options.scenes, default_threads(),
                                                     len(renderer.frames.frames))
         frames = options.frames or 1
+        clock = FixedTimestep(FIXED_DT)  # one step a frame: a headless run is reproducible
         say(f"{options.scene}: headless {options.width}x{options.height} on {result.device}, {frames} frames, "
             f"mode {options.mode}, {recorder_words(renderer)}, {jobs.threads} threads")
         start = time.perf_counter()
         for i in range(frames):
             t0 = time.perf_counter()
-            state.schedule.run(state.world, FIXED_DT)
+            state.schedule.run_frame(state.world, FIXED_DT, clock)
             if session is not None:
                 session.build(state, result.last_stats, perf, FIXED_DT, options.width, options.height)
             last = i == frames - 1

@@ -99,6 +99,36 @@ class Schedule:
     def order(self) -> list[tuple[str, list[str]]]:
         return [(stage, [s.name for s in systems]) for stage, systems in self.stages.items()]
 
+    def run_frame(self, world: World, frame_dt: float, clock: Any, fixed_stage: str = "fixed",
+                  max_frame_dt: float = 0.1) -> int:
+        """One frame with a fixed-step stage: `fixed_stage` runs clock.advance(frame_dt) times
+        with dt = clock.step (after copying Transform into PreviousTransform, where an entity
+        has both); the other stages run once with frame_dt, at most `max_frame_dt` (a hitch
+        must not fling a per-frame camera); the Interpolation resource gets the frame's alpha.
+        `clock` is a timestep.FixedTimestep. Returns the steps run."""
+        from .timestep import Interpolation
+
+        if fixed_stage not in self.stages:
+            raise ValueError(f"unknown stage {fixed_stage!r}; stages are {list(self.stages)}")
+        if world.deferring:
+            raise EcsError("Schedule.run_frame() cannot be called from inside a system or a query loop")
+        world.flush()
+        steps = clock.advance(frame_dt)
+        for _ in range(steps):
+            _snapshot_transforms(world)
+            for sys_ in self.stages[fixed_stage]:
+                world.run_system(sys_, clock.step)
+            world.flush()
+        world.resources[Interpolation] = Interpolation(clock.alpha)
+        variable_dt = min(float(frame_dt), max_frame_dt)
+        for name, systems in self.stages.items():
+            if name == fixed_stage:
+                continue
+            for sys_ in systems:
+                world.run_system(sys_, variable_dt)
+            world.flush()
+        return steps
+
     def run(self, world: World, dt: float) -> None:
         if world.deferring:
             raise EcsError("Schedule.run() cannot be called from inside a system or a query loop")
@@ -107,3 +137,13 @@ class Schedule:
             for sys_ in systems:
                 world.run_system(sys_, dt)
             world.flush()
+
+
+def _snapshot_transforms(world: World) -> None:
+    from .components import Transform
+    from .timestep import PreviousTransform
+
+    for batch in world.query(Transform, PreviousTransform, write=(PreviousTransform,)):
+        t, prev = batch[Transform], batch[PreviousTransform]
+        prev.position[...] = t.position
+        prev.rotation[...] = t.rotation

@@ -19,7 +19,8 @@ KEY_NAMES = {
     "KEY_LEFT": "left", "KEY_RIGHT": "right", "KEY_UP": "up", "KEY_DOWN": "down",
     "KEY_W": "w", "KEY_S": "s", "KEY_A": "a", "KEY_D": "d", "KEY_E": "e", "KEY_Q": "q",
 }
-MAX_DT = 0.1  # a hitch (dragging the window, a breakpoint) must not fling the camera
+MAX_DT = 0.1  # a hitch (dragging the window, a breakpoint) must not fling the camera (per-frame stages)
+SIM_STEP = 1.0 / 120.0  # the fixed simulation step of windowed runs (timestep.FixedTimestep)
 
 
 def key_names(glfw: Any) -> dict[int, str]:
@@ -69,6 +70,7 @@ def run_windowed(options: RunOptions, glfw: Any,
     from .mesh_registry import MeshRegistry
     from .perf import PerfMonitor
     from .systems import InputState
+    from .timestep import FixedTimestep
 
     say = (lambda text: None) if options.quiet else print
     build = scene_builder(options.scene, options.entities)
@@ -110,6 +112,7 @@ def run_windowed(options: RunOptions, glfw: Any,
             session = result.editor = EditorSession(state, options.scenes, default_threads(),
                                                     len(renderer.frames.frames), window=window)
         say(f"{options.scene}: window {swapchain.width}x{swapchain.height} on {result.device}, present {options.present}")
+        clock = FixedTimestep(SIM_STEP)
         start = previous = time.perf_counter()
         frame_no = 0
         while not glfw.window_should_close(window) and (options.frames is None or frame_no < options.frames):
@@ -126,11 +129,11 @@ def run_windowed(options: RunOptions, glfw: Any,
                 resized[0] = False
                 swapchain.recreate()
             now = time.perf_counter()
-            dt, previous = min(now - previous, MAX_DT), now
+            dt, previous = now - previous, now
             t0 = now
             if session is not None:  # keys typed into the UI do not fly the camera
                 keys.keyboard_captured_by_ui = session.wants_keyboard
-            state.schedule.run(state.world, dt)
+            state.schedule.run_frame(state.world, dt, clock, max_frame_dt=MAX_DT)
             if session is not None:
                 session.build(state, result.last_stats, perf, dt, swapchain.width, swapchain.height)
             renderer = state.renderer

@@ -9,6 +9,7 @@ import numpy as np
 from ecs_engine.components import ModelMatrix, Transform
 from ecs_engine.jobs import JobPool, over_rows
 from ecs_engine.schedule import System
+from ecs_engine.timestep import Interpolation, PreviousTransform
 from ecs_engine.transform_math import compose
 from ecs_engine.world import World
 
@@ -33,10 +34,14 @@ def render_origin(world: World) -> np.ndarray:
 class TransformSystem(System):
     """Rebuilds ModelMatrix only in tables whose Transform changed since its last run, unless
     the render origin moved (then every table). Large tables are split across the world's
-    JobPool resource, if it has one."""
+    JobPool resource, if it has one.
+
+    With fixed-step simulation (an Interpolation resource, see ecs_engine.timestep), entities
+    that also have PreviousTransform are drawn between their last two steps, every frame:
+    position interpolated linearly, rotation by normalised lerp."""
 
     def __init__(self) -> None:
-        super().__init__(reads=[Transform], writes=[ModelMatrix], name="transform")
+        super().__init__(reads=[Transform, PreviousTransform], writes=[ModelMatrix], name="transform")
         self._origin: np.ndarray | None = None
         self.rows_updated = 0
 
@@ -44,7 +49,9 @@ class TransformSystem(System):
         origin = render_origin(world)
         moved = self._origin is None or not np.array_equal(origin, self._origin)
         self._origin = origin.copy()
-        query = world.query(Transform, ModelMatrix)
+        interpolation = world.resources.get(Interpolation)
+        without = (PreviousTransform,) if interpolation is not None else ()
+        query = world.query(Transform, ModelMatrix, without=without)
         batches = query.iter() if moved else query.iter(changed=[Transform])
         pool = world.resources.get(JobPool)
         updated = 0
@@ -54,7 +61,22 @@ class TransformSystem(System):
             over_rows(pool, len(batch), lambda s, t=t, m=m: compose(
                 t.position[s], t.rotation[s], t.scale[s], origin, m.model[s], m.normal[s]))
             updated += len(batch)
+        if interpolation is not None:
+            alpha = float(interpolation.alpha)
+            for batch in world.query(Transform, PreviousTransform, ModelMatrix):
+                t, prev, m = batch[Transform], batch[PreviousTransform], batch[ModelMatrix]
+                position = prev.position + (t.position - prev.position) * alpha
+                compose(position, nlerp(prev.rotation, t.rotation, alpha), t.scale, origin, m.model, m.normal)
+                updated += len(batch)
         self.rows_updated = updated
+
+
+def nlerp(a: np.ndarray, b: np.ndarray, alpha: float) -> np.ndarray:
+    """Normalised lerp of (n, 4) quaternions along the shorter arc."""
+    sign = np.where(np.einsum("ij,ij->i", a, b) < 0.0, -1.0, 1.0)[:, None]
+    q = a * (1.0 - alpha) + b * sign * alpha
+    norm = np.linalg.norm(q, axis=1, keepdims=True)
+    return np.where(norm > 0, q / np.where(norm > 0, norm, 1.0), b)
 
 
 class RenderOriginSystem(System):
