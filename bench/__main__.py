@@ -22,6 +22,7 @@ REGISTRY: dict[str, str] = {
     "ecs": "bench.ecs",
     "seed-tables": "bench.seed_tables",
     "scaling": "bench.scaling",
+    "numerics": "bench.numerics",
 }
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results"
