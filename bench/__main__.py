@@ -17,15 +17,18 @@ from typing import Any
 from . import Progress
 from .machine import check_slug, describe
 
-# Benchmark name -> module (imported only when run). Add new benchmarks here.
+# Benchmark name -> module of this package (imported only when run). Add new benchmarks here.
+# The package is `bench` in the repository and `ecs_engine.bench` once installed.
 REGISTRY: dict[str, str] = {
-    "ecs": "bench.ecs",
-    "seed-tables": "bench.seed_tables",
-    "scaling": "bench.scaling",
-    "numerics": "bench.numerics",
+    "ecs": "ecs",
+    "seed-tables": "seed_tables",
+    "scaling": "scaling",
+    "numerics": "numerics",
 }
 
-DEFAULT_OUT = Path(__file__).resolve().parent / "results"
+# In a checkout: the committed results folder; installed: ./bench-results
+_RESULTS = Path(__file__).resolve().parent / "results"
+DEFAULT_OUT = _RESULTS if _RESULTS.is_dir() else Path.cwd() / "bench-results"
 
 
 def _usage_line() -> str:
@@ -50,7 +53,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"bench: unknown benchmark {name!r}; known benchmarks: {', '.join(sorted(REGISTRY))}",
               file=sys.stderr)
         return 2
-    module = importlib.import_module(REGISTRY[name])
+    module = importlib.import_module(f"{__package__ or 'bench'}.{REGISTRY[name]}")
 
     parser = argparse.ArgumentParser(prog=f"python -m bench {name}",
                                      description=(module.__doc__ or "").strip().splitlines()[0])

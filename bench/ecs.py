@@ -716,7 +716,8 @@ def numpy_fallback_rows(sizes: Sizes) -> list[dict[str, Any]] | str:
     # Same cwd and the repo root last on the path: an installed ecs_engine must keep winning over
     # the source folder (whose components/ and systems/ only map into ecs_engine when installed).
     env["PYTHONPATH"] = os.pathsep.join([p for p in [env.get("PYTHONPATH")] if p] + [str(ROOT)])
-    cmd = [sys.executable, "-m", "bench.ecs", "--worker", json.dumps({"task": "transform", "plan": plan})]
+    cmd = [sys.executable, "-m", f"{__package__ or 'bench'}.ecs", "--worker",
+           json.dumps({"task": "transform", "plan": plan})]
     proc = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=None, text=True)
     if proc.returncode != 0:
         return f"numpy-fallback worker exited with {proc.returncode}"

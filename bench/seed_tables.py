@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 import os
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -98,19 +99,52 @@ def measure_overlay(width: int, height: int, warmup: int, frames: int) -> dict[s
 
 
 def format_table(doc: dict[str, Any]) -> str:
-    lines = [f"{'scene':8} {'mode':10} {'thr':>3} {'FPS':>7} {'seed':>5} {'CPU ms':>7} {'seed':>5} {'rec ms':>7} "
-             f"{'GPU ms':>7} {'seed':>5} {'sys %':>6} {'proc %':>7} {'seed sys/proc':>14}"]
+    """Ours beside the seed's, with the ratios (FPS ours/seed; CPU ms seed/ours: above 1 = we
+    are faster)."""
+    lines = [f"{'scene':8} {'mode':10} {'thr':>3} {'FPS':>7} {'seed':>5} {'x':>5} {'CPU ms':>7} {'seed':>5} {'x':>5} "
+             f"{'rec ms':>7} {'GPU ms':>7} {'seed':>5} {'sys %':>6} {'proc %':>7} {'seed sys/proc':>14}"]
     for r in doc["results"]:
         s = SEED[r["scene"]]
         col = 0 if r["threads"] == 1 else 1
         gpu = f"{r['gpu_ms_mean']:.3f}" if r["gpu_ms_mean"] is not None else "n/a"
         lines.append(f"{r['scene']:8} {r['mode']:10} {r['threads']:3} {r['fps']:7.0f} {s['fps'][col]:5} "
-                     f"{r['cpu_ms_mean']:7.3f} {s['cpu_ms'][col]:5} {r['record_ms_mean']:7.3f} {gpu:>7} "
+                     f"{r['fps'] / s['fps'][col]:5.1f} {r['cpu_ms_mean']:7.3f} {s['cpu_ms'][col]:5} "
+                     f"{s['cpu_ms'][col] / r['cpu_ms_mean']:5.1f} {r['record_ms_mean']:7.3f} {gpu:>7} "
                      f"{s['gpu_ms'][col]:5} {r['cpu_system_percent']:6.1f} {r['cpu_process_percent']:7.1f} "
                      f"{s['cpu_system'][col]:>8}/{s['cpu_process'][col]}")
     lines.append("seed: i7-11800H + RTX 3070, Windows 11, Tables 4.1-4.3: 1 thread beside its single-threaded "
                  "column, more beside its multi-threaded one (its GPU times read ~0: two adjacent timestamps)")
     return "\n".join(lines)
+
+
+def plot(doc: dict[str, Any], path: Path) -> None:
+    """FPS and CPU ms per scene, ours (each mode) beside the seed's, single- and multi-threaded."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(13, 4.4))
+    scenes = list(dict.fromkeys(r["scene"] for r in doc["results"]))
+    modes = list(dict.fromkeys(r["mode"] for r in doc["results"]))
+    threads = sorted({r["threads"] for r in doc["results"]})
+    labels = [f"{sc}\n{'1 thread' if t == 1 else f'{t} threads'}" for sc in scenes for t in threads]
+    width = 0.8 / (len(modes) + 1)
+    for ax, key, seed_key, title in ((axes[0], "fps", "fps", "FPS (wall clock), higher is better"),
+                                     (axes[1], "cpu_ms_mean", "cpu_ms", "CPU ms per frame, lower is better")):
+        for i, mode in enumerate(modes):
+            values = [next((r[key] for r in doc["results"] if r["scene"] == sc and r["threads"] == t
+                            and r["mode"] == mode), 0.0) for sc in scenes for t in threads]
+            ax.bar(np.arange(len(labels)) + i * width, values, width, label=f"ecs_engine {mode}")
+        seed = [SEED[sc][seed_key][0 if t == 1 else 1] for sc in scenes for t in threads]
+        ax.bar(np.arange(len(labels)) + len(modes) * width, seed, width, label="seed (C++, RTX 3070)", color="gray")
+        ax.set_xticks(np.arange(len(labels)) + 0.4 - width / 2, labels, fontsize=8)
+        ax.set_title(title)
+        ax.grid(True, axis="y", alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dict[str, Any]:
@@ -133,6 +167,9 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
         "results": results, "seed": SEED, "overlay": overlay,
     }
     print(format_table(doc))
+    out = Path(args.out) / f"seed-tables-{machine['slug']}.png"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    plot(doc, out)
     print(f"overlay (editor + Perf window), 100 cubes, 1 thread: CPU {overlay['cpu_ms_off']:.3f} ms off, "
           f"{overlay['cpu_ms_on']:.3f} ms on, +{overlay['difference_ms']:.3f} ms (target <= {OVERLAY_TARGET_MS}: "
           f"{'MET' if overlay['met'] else 'MISS'}); the UI's own time {overlay['ui_ms_mean']:.3f} ms")

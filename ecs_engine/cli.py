@@ -82,6 +82,9 @@ def build_parser() -> argparse.ArgumentParser:
     editor.add_argument("scenes", nargs="*", type=editor_scene, metavar="SCENE",
                         help=f"scenes to switch between, the first one opened (default {DEFAULT_SCENE}; "
                         f"choices: {', '.join(EDITOR_SCENES)})")
+    bench = sub.add_parser("bench", help="run a benchmark (python -m bench NAME ...): ecs, seed-tables, scaling, "
+                           "numerics", add_help=False)
+    bench.add_argument("bench_args", nargs=argparse.REMAINDER)
     return parser
 
 
@@ -92,6 +95,10 @@ def run(args: argparse.Namespace) -> int:
 
             return motion.main(args.entities or 100_000, args.frames or 300)
         return run_scene(args)
+    if args.command == "bench":
+        from ecs_engine.bench.__main__ import main as bench_main
+
+        return bench_main(list(args.bench_args))
     if args.command == "editor":
         scenes = tuple(dict.fromkeys(args.scenes or [DEFAULT_SCENE]))
         args.scene, args.path = scenes[0], None

@@ -19,6 +19,7 @@ def test_seed_tables_quick_writes_its_json(tmp_path, monkeypatch):
     monkeypatch.setattr(seed_tables, "THREADS", 2)
     assert main(["seed-tables", "--quick", "--out", str(tmp_path), "--machine", "ci"]) == 0
     doc = json.loads((tmp_path / "seed-tables-ci.json").read_text())
+    assert (tmp_path / "seed-tables-ci.png").stat().st_size > 1000
     assert doc["benchmark"] == "seed-tables" and doc["quick"] is True
     for key in ("hostname", "cpu_model", "python", "datetime_utc", "threads"):
         assert key in doc["machine"]
