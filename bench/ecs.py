@@ -1158,7 +1158,42 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
     if problems:  # a bug in this file: fail loudly rather than write a malformed document
         raise RuntimeError("benchmark document does not match its schema: " + "; ".join(problems))
     print(format_table(doc))
+    out = Path(args.out) / f"ecs-{machine['slug']}.png"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    plot(doc, out)
     return doc
+
+
+def plot(doc: dict[str, Any], path: Path) -> None:
+    """Nanoseconds per entity for each workload at its largest size, one bar per engine (log)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = doc["results"]
+    workloads = [w for w in dict.fromkeys(r["workload"] for r in rows) if w != "query_overhead"]
+    engines = list(dict.fromkeys(r["engine"] for r in rows))
+    fig, ax = plt.subplots(figsize=(12, 4.6))
+    width = 0.8 / max(len(engines), 1)
+    labels = []
+    for i, w in enumerate(workloads):
+        n = max(r["entities"] for r in rows if r["workload"] == w)
+        labels.append(f"{w}\n{n:,}")
+        for j, e in enumerate(engines):
+            hit = [r for r in rows if r["workload"] == w and r["engine"] == e and r["entities"] == n]
+            if hit and hit[0]["ns_per_entity"] > 0:
+                ax.bar(i + j * width, hit[0]["ns_per_entity"], width, color=f"C{j}", label=e if i == 0 or
+                       e not in ax.get_legend_handles_labels()[1] else None)
+    ax.set_yscale("log")
+    ax.set_xticks(np.arange(len(workloads)) + 0.4 - width / 2, labels, fontsize=7)
+    ax.set_ylabel("ns per entity (lower is better)")
+    ax.set_title("ECS workloads: ecs_engine (native, multi-threaded, NumPy fallback, esper adapter) against esper")
+    ax.grid(True, axis="y", which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 if __name__ == "__main__":

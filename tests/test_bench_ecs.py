@@ -29,6 +29,7 @@ def _run(out: Path, *extra: str) -> dict:
     assert rc == 0
     path = out / f"ecs-{SLUG}.json"
     assert path.is_file()
+    assert (out / f"ecs-{SLUG}.png").stat().st_size > 1000  # the plot beside it
     return json.loads(path.read_text(encoding="utf-8"))
 
 
