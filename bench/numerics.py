@@ -13,10 +13,17 @@ the worst vertex error in pixels, over 64 camera positions 1 mm apart (the jitte
 camera shows). `camera_relative`: the position minus the camera in float64, then the cast (what
 the engine does); `world_space`: positions cast to float32 first (RenderOrigin pinned at 0).
 
+Rendered images: the scaling scene through each render mode, with and without culling, against
+the most direct path (per-entity draws through the Python recorder, no culling): RMSE and PSNR
+of the image against that reference, beside the frame's CPU and GPU time (needs a Vulkan device;
+without one the section says {"skipped": why}).
+
 JSON (schema_version 1): {"benchmark": "numerics", "quick", "machine", "config",
 "integrators": [{"case", "stiffness", "damping", "integrator", "dt", "k_dt2", "error",
 "ms_per_step", "unstable"}], "render_precision": [{"distance", "camera_relative_px",
-"world_space_px"}], "findings": [str]}; a plot `numerics-<slug>.png` beside it.
+"world_space_px"}], "render_error": {"skipped"} | {"entities", "size", "reference", "rows": [{"mode",
+"recorder", "culling", "rmse", "psnr_db", "cpu_ms", "gpu_ms", "visible"}]}, "findings": [str]};
+a plot `numerics-<slug>.png` beside it.
 """
 
 from __future__ import annotations
@@ -130,6 +137,41 @@ def render_error_px(distance: float, mode: str, positions: int = 64) -> float:
     return worst
 
 
+RENDER_CONFIGS = (("per_entity", "python", False), ("per_entity", "native", False), ("per_entity", "native", True),
+                  ("instanced", "native", False), ("instanced", "native", True), ("indirect", "native", False),
+                  ("indirect", "native", True))
+
+
+def render_error(entities: int, size: tuple[int, int], frames: int, warmup: int) -> dict[str, Any] | None:
+    """Each render configuration's image against the first (the direct path), with its times."""
+    import tempfile
+
+    from ecs_engine.app import RunOptions, run as run_scene
+    from ecs_engine.errors import UsageError
+
+    rows = []
+    reference = None
+    with tempfile.TemporaryDirectory() as tmp:
+        for mode, recorder, culling in RENDER_CONFIGS:
+            try:
+                result = run_scene(RunOptions(scene="scaling", entities=entities, width=size[0], height=size[1],
+                                              frames=warmup + frames, quiet=True, mode=mode, recorder=recorder,
+                                              culling=culling, screenshot=str(Path(tmp) / "shot.png")))
+            except UsageError as exc:  # no Vulkan loader or device here
+                return {"skipped": str(exc)}
+            pixels = result.pixels[..., :3].astype(np.float64)
+            if reference is None:
+                reference = pixels
+            rmse = float(np.sqrt(np.mean((pixels - reference) ** 2)))
+            gpu = result.gpu_ms[warmup:] or result.gpu_ms
+            rows.append({"mode": mode, "recorder": recorder, "culling": culling, "rmse": rmse,
+                         "psnr_db": None if rmse == 0 else float(20 * np.log10(255.0 / rmse)),
+                         "cpu_ms": float(np.mean(result.cpu_ms[warmup:])),
+                         "gpu_ms": float(np.mean(gpu)) if gpu else None, "visible": result.last_stats.instances})
+    return {"entities": entities, "size": list(size), "reference": "per_entity, python recorder, no culling",
+            "rows": rows}
+
+
 def plot(doc: dict[str, Any], path: Path) -> None:
     import matplotlib
 
@@ -137,7 +179,7 @@ def plot(doc: dict[str, Any], path: Path) -> None:
     import matplotlib.pyplot as plt
     import matplotlib.ticker
 
-    fig, axes = plt.subplots(1, 3, figsize=(16, 4.4))
+    fig, axes = plt.subplots(1, 4, figsize=(21, 4.4))
     markers = dict(zip(INTEGRATORS, "osD^*"))
     for ax, case in zip(axes[:2], CASES):
         rows = [r for r in doc["integrators"] if r["case"] == case]
@@ -174,6 +216,18 @@ def plot(doc: dict[str, Any], path: Path) -> None:
     ax.set_title("rendering precision")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
+    ax = axes[3]
+    render = doc.get("render_error") or {}
+    for r in render.get("rows", []):
+        t = r["cpu_ms"] + (r["gpu_ms"] or 0.0)
+        ax.plot([t], [r["rmse"]], marker="o")
+        ax.annotate(f"{r['mode']} {r['recorder']}{' cull' if r['culling'] else ''}", (t, r["rmse"]), fontsize=7,
+                    rotation=30, xytext=(3, 3), textcoords="offset points")
+    ax.set_xscale("log")
+    ax.set_xlabel("CPU + GPU ms per frame")
+    ax.set_ylabel("image RMSE against the direct path (0-255)")
+    ax.set_title(f"render paths, scaling scene ({render.get('entities', 0):,} entities)")
+    ax.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -191,6 +245,13 @@ def findings(doc: dict[str, Any]) -> list[str]:
                            f"(k dt^2 = {CASES[case][0] * min(bad) ** 2:.3g})")
             else:
                 out.append(f"{case}: {integ} stable at every dt tried")
+    render = doc.get("render_error") or {}
+    if render.get("rows"):
+        worst = max(render["rows"], key=lambda r: r["rmse"])
+        fastest = min(render["rows"], key=lambda r: r["cpu_ms"] + (r["gpu_ms"] or 0.0))
+        out.append(f"render paths: largest image RMSE against the direct path {worst['rmse']:.3g} "
+                   f"({worst['mode']}, culling {'on' if worst['culling'] else 'off'}); fastest: "
+                   f"{fastest['mode']} {fastest['recorder']}, culling {'on' if fastest['culling'] else 'off'}")
     far = doc["render_precision"][-1]
     out.append(f"at {far['distance']:g} units from the origin: {far['camera_relative_px']:.2g} px camera-relative, "
                f"{far['world_space_px']:.3g} px in float32 world space")
@@ -219,10 +280,13 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
         for d in DISTANCES[::2] if quick else DISTANCES:
             precision.append({"distance": d, "camera_relative_px": render_error_px(d, "camera_relative"),
                               "world_space_px": render_error_px(d, "world_space")})
+    with progress.step("rendered images: each render path against the direct one"):
+        render = render_error(300 if quick else 20_000, (160, 120) if quick else (1280, 720), 3 if quick else 12,
+                              1 if quick else 4)
     doc = {"benchmark": "numerics", "schema_version": 1, "quick": quick, "machine": machine,
            "config": {"sim_seconds": seconds, "error_entities": error_entities, "step_entities": step_entities,
                       "repeats": repeats, "dts": list(dts), "size": [WIDTH, HEIGHT]},
-           "integrators": rows, "render_precision": precision}
+           "integrators": rows, "render_precision": precision, "render_error": render}
     plot_doc = dict(doc, integrators=[dict(r, error=r["error"] if r["error"] is not None else 0.0) for r in rows])
     doc["findings"] = findings(plot_doc)
     out = Path(args.out) / f"numerics-{machine['slug']}.png"
@@ -236,6 +300,10 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
     for p in precision:
         print(f"distance {p['distance']:9.0e}: camera-relative {p['camera_relative_px']:.3g} px, "
               f"world space {p['world_space_px']:.3g} px")
+    for r in (render or {}).get("rows", []):
+        gpu = "n/a" if r["gpu_ms"] is None else f"{r['gpu_ms']:.2f}"
+        print(f"{r['mode']:10} {r['recorder']:6} culling {'on ' if r['culling'] else 'off'}: RMSE {r['rmse']:.3g}, "
+              f"cpu {r['cpu_ms']:.2f} ms, gpu {gpu} ms, {r['visible']} drawn")
     for line in doc["findings"]:
         print(line)
     return doc

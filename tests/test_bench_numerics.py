@@ -28,3 +28,7 @@ def test_numerics_quick_writes_json_and_plot(tmp_path, monkeypatch):
     far = doc["render_precision"][-1]
     assert far["distance"] >= 1e7 and far["camera_relative_px"] < 0.01 and far["world_space_px"] > 10
     assert math.isfinite(far["world_space_px"]) and any("camera-relative" in f for f in doc["findings"])
+    # every render path draws the direct path's image (lavapipe here)
+    render = doc["render_error"]
+    assert len(render["rows"]) == 7 and render["rows"][0]["rmse"] == 0.0
+    assert all(r["rmse"] < 1.0 and r["cpu_ms"] > 0 and r["visible"] > 0 for r in render["rows"])
