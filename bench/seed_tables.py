@@ -12,7 +12,11 @@ JSON (schema_version 1): {"benchmark": "seed-tables", "quick", "machine", "devic
 "frames", "fps", "cpu_ms_mean", "cpu_ms_p99", "gpu_ms_mean", "gpu_ms_p99", "cpu_system_percent",
 "cpu_process_percent", "cpu_process_percent_per_core", "draws", "triangles"}], "seed": {...},
 "overlay": {"scene", "mode", "threads", "cpu_ms_off", "cpu_ms_on", "difference_ms", "ui_ms_mean",
-"target_ms", "met"}}
+"target_ms", "met"}, "windowed": {"skipped": why} | {"rows": [the results' fields, "window": true,
+"present"]}}
+
+Windowed rows (instanced, 1 thread, each scene) run only where a display exists, presenting
+with vsync off where the surface allows (immediate, else mailbox, else fifo).
 
 The overlay entry is the cost of the ImGui editor and Perf window on the 100-cube scene: runs
 with it off and on, alternated twice (the host's drift shows up in both), and the UI's own
@@ -56,13 +60,32 @@ OVERLAY_TARGET_MS = 0.3
 
 
 def measure(scene: str, width: int, height: int, warmup: int, frames: int, mode: str = "instanced",
-            threads: int = 1, editor: bool = False) -> dict[str, Any]:
+            threads: int = 1, editor: bool = False, glfw: Any = None) -> dict[str, Any]:
+    """One configuration; with `glfw` (an opened GLFW module) in a window, presenting with
+    vsync off (immediate, else mailbox, else fifo: whatever the surface offers)."""
     proc = psutil.Process()
     psutil.cpu_percent(None)
     proc.cpu_percent(None)
     t0 = time.perf_counter()
-    result = run_scene(RunOptions(scene=scene, width=width, height=height, frames=warmup + frames, quiet=True,
-                                  mode=mode, threads=threads, editor=editor))
+    options = RunOptions(scene=scene, width=width, height=height, frames=warmup + frames, quiet=True,
+                         mode=mode, threads=threads, editor=editor)
+    present = None
+    if glfw is None:
+        result = run_scene(options)
+    else:
+        from ecs_engine.errors import UsageError
+        from ecs_engine.window import run_windowed
+
+        options.headless = False
+        for present in ("immediate", "mailbox", "fifo"):
+            options.present = present
+            try:
+                result = run_windowed(options, glfw)
+                break
+            except UsageError as exc:
+                if "present mode" not in str(exc) or present == "fifo":
+                    raise
+            glfw = _reopen(glfw)
     system = psutil.cpu_percent(None)
     process = proc.cpu_percent(None)
     wall = time.perf_counter() - t0
@@ -81,9 +104,27 @@ def measure(scene: str, width: int, height: int, warmup: int, frames: int, mode:
         "cpu_process_percent_per_core": float(process / cores),
         "draws": stats.draws, "triangles": stats.triangles, "entities_drawn": stats.instances,
         "device": result.device, "validation_messages": len(result.validation_messages),
-        "run_wall_s": wall, "editor": editor,
+        "run_wall_s": wall, "editor": editor, "window": glfw is not None, "present": present,
         "ui_ms_mean": float(np.mean(result.ui_ms[warmup:])) if editor else None,
     }
+
+
+def _reopen(glfw: Any) -> Any:
+    from ecs_engine.window import open_glfw
+
+    return open_glfw()  # run_windowed terminates GLFW when it ends
+
+
+def measure_windowed(width: int, height: int, warmup: int, frames: int) -> dict[str, Any]:
+    """The seed's scenes in a window (instanced, 1 thread) when a display exists."""
+    from ecs_engine.window import open_glfw
+
+    if open_glfw() is None:
+        return {"skipped": "no display"}
+    rows = []
+    for scene in SCENES:
+        rows.append(measure(scene, width, height, warmup, frames, "instanced", 1, glfw=open_glfw()))
+    return {"rows": rows}
 
 
 def measure_overlay(width: int, height: int, warmup: int, frames: int) -> dict[str, Any]:
@@ -158,18 +199,25 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
                 with progress.step(f"{scene} {mode} {threads} threads: {warmup} warm-up + {frames} frames at "
                                    f"{width}x{height}"):
                     results.append(measure(scene, width, height, warmup, frames, mode, threads))
+    with progress.step("the seed's scenes in a window, if there is a display"):
+        windowed = measure_windowed(width, height, warmup, frames)
     with progress.step("editor overlay on and off, 100 cubes, 1 thread, twice each"):
         overlay = measure_overlay(width, height, warmup, frames)
     doc = {
         "benchmark": "seed-tables", "schema_version": 1, "quick": bool(args.quick), "machine": machine,
         "device": results[0]["device"], "config": {"width": width, "height": height, "warmup": warmup,
                                                     "frames": frames, "pid": os.getpid()},
-        "results": results, "seed": SEED, "overlay": overlay,
+        "results": results, "seed": SEED, "overlay": overlay, "windowed": windowed,
     }
     print(format_table(doc))
     out = Path(args.out) / f"seed-tables-{machine['slug']}.png"
     out.parent.mkdir(parents=True, exist_ok=True)
     plot(doc, out)
+    for r in windowed.get("rows", []):
+        print(f"windowed {r['scene']:8} instanced 1 thread, present {r['present']}: {r['fps']:.0f} FPS, "
+              f"CPU {r['cpu_ms_mean']:.3f} ms, GPU {r['gpu_ms_mean'] or float('nan'):.3f} ms")
+    if "skipped" in windowed:
+        print(f"windowed rows skipped: {windowed['skipped']}")
     print(f"overlay (editor + Perf window), 100 cubes, 1 thread: CPU {overlay['cpu_ms_off']:.3f} ms off, "
           f"{overlay['cpu_ms_on']:.3f} ms on, +{overlay['difference_ms']:.3f} ms (target <= {OVERLAY_TARGET_MS}: "
           f"{'MET' if overlay['met'] else 'MISS'}); the UI's own time {overlay['ui_ms_mean']:.3f} ms")

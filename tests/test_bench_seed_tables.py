@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -30,6 +31,13 @@ def test_seed_tables_quick_writes_its_json(tmp_path, monkeypatch):
     assert row["fps"] > 0 and row["cpu_ms_mean"] > 0 and row["gpu_ms_mean"] > 0
     assert 0 <= row["cpu_system_percent"] <= 100 and row["cpu_process_percent"] >= 0
     assert doc["seed"]["grid100"]["cpu_ms"] == [3.5, 2.4]
+    windowed = doc["windowed"]
+    if os.environ.get("DISPLAY"):  # under xvfb-run (make test): a window on lavapipe
+        assert [r["scene"] for r in windowed["rows"]] == ["cube"]
+        row = windowed["rows"][0]
+        assert row["window"] is True and row["present"] in ("immediate", "mailbox", "fifo") and row["fps"] > 0
+    else:
+        assert windowed == {"skipped": "no display"}
     overlay = doc["overlay"]
     assert overlay["cpu_ms_on"] > 0 and overlay["cpu_ms_off"] > 0 and overlay["ui_ms_mean"] > 0
     assert overlay["difference_ms"] == overlay["cpu_ms_on"] - overlay["cpu_ms_off"]
