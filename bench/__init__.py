@@ -12,11 +12,12 @@ import sys
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import TextIO
+from typing import Any, TextIO
 
 
 class Progress:
-    """Progress lines on stderr: one line when a step starts, one with its elapsed time."""
+    """Progress lines on stderr: one line when a step starts, one with its elapsed time; with
+    `total` steps set (a benchmark that knows them sets it), a bar of the steps done."""
 
     def __init__(self, name: str, stream: TextIO | None = None, enabled: bool = True) -> None:
         self.name = name
@@ -24,11 +25,17 @@ class Progress:
         self.enabled = enabled
         self.start = time.perf_counter()
         self.steps = 0
+        self.total: int | None = None
+        self.done = 0
 
     def _write(self, text: str) -> None:
         if self.enabled:
             stream = self.stream if self.stream is not None else sys.stderr
-            print(f"[{self.name} {time.perf_counter() - self.start:7.1f}s] {text}", file=stream, flush=True)
+            bar = ""
+            if self.total:
+                filled = round(20 * min(self.done, self.total) / self.total)
+                bar = f" [{'#' * filled}{'.' * (20 - filled)}] {self.done}/{self.total}"
+            print(f"[{self.name} {time.perf_counter() - self.start:7.1f}s{bar}] {text}", file=stream, flush=True)
 
     def note(self, text: str) -> None:
         self._write(text)
@@ -39,4 +46,24 @@ class Progress:
         self._write(f"{what} ...")
         t0 = time.perf_counter()
         yield
+        self.done += 1
         self._write(f"{what}: {time.perf_counter() - t0:.2f} s")
+
+
+def pyplot() -> Any:
+    """matplotlib's pyplot on the Agg backend: plots are written as PNG, no display needed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save_figure(fig: Any, path: Any) -> None:
+    """Lay out, write the PNG beside the benchmark's JSON, and free the figure."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

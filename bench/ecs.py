@@ -1166,10 +1166,9 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
 
 def plot(doc: dict[str, Any], path: Path) -> None:
     """Nanoseconds per entity for each workload at its largest size, one bar per engine (log)."""
-    import matplotlib
+    from . import pyplot, save_figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     rows = doc["results"]
     workloads = [w for w in dict.fromkeys(r["workload"] for r in rows) if w != "query_overhead"]
@@ -1191,9 +1190,7 @@ def plot(doc: dict[str, Any], path: Path) -> None:
     ax.set_title("ECS workloads: ecs_engine (native, multi-threaded, NumPy fallback, esper adapter) against esper")
     ax.grid(True, axis="y", which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 if __name__ == "__main__":

@@ -173,11 +173,11 @@ def render_error(entities: int, size: tuple[int, int], frames: int, warmup: int)
 
 
 def plot(doc: dict[str, Any], path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     import matplotlib.ticker
+
+    from . import pyplot, save_figure
+
+    plt = pyplot()
 
     fig, axes = plt.subplots(1, 4, figsize=(21, 4.4))
     markers = dict(zip(INTEGRATORS, "osD^*"))
@@ -228,9 +228,7 @@ def plot(doc: dict[str, Any], path: Path) -> None:
     ax.set_ylabel("image RMSE against the direct path (0-255)")
     ax.set_title(f"render paths, scaling scene ({render.get('entities', 0):,} entities)")
     ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def findings(doc: dict[str, Any]) -> list[str]:
@@ -266,6 +264,7 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
     error_entities = 100 if quick else ERROR_ENTITIES
     repeats = 2 if quick else 5
     rows = []
+    progress.total = len(CASES) + 2
     for case, (k, c) in CASES.items():
         with progress.step(f"{case} spring: {len(INTEGRATORS)} integrators x {len(dts)} steps"):
             for integ in INTEGRATORS:

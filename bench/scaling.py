@@ -135,10 +135,9 @@ def targets(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def plot(results: list[dict[str, Any]], path: Path) -> None:
-    import matplotlib
+    from . import pyplot, save_figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
     for ax, mode in zip(axes, ("per_entity", "instanced", "indirect")):
@@ -155,9 +154,7 @@ def plot(results: list[dict[str, Any]], path: Path) -> None:
         ax.set_title(mode)
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dict[str, Any]:
@@ -169,6 +166,7 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
         thread_counts = [t for t in (1, 2, 4, 8, 16) if t <= THREADS]
     counts = args.entities or counts
     results: list[dict[str, Any]] = []
+    progress.total = len(counts)
     for n in counts:
         with progress.step(f"{n:,} entities: threads {thread_counts}, every mode and recorder"):
             results.extend(sweep(n, thread_counts, frames, warmup, size))

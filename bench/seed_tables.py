@@ -160,10 +160,9 @@ def format_table(doc: dict[str, Any]) -> str:
 
 def plot(doc: dict[str, Any], path: Path) -> None:
     """FPS and CPU ms per scene, ours (each mode) beside the seed's, single- and multi-threaded."""
-    import matplotlib
+    from . import pyplot, save_figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, axes = plt.subplots(1, 2, figsize=(13, 4.4))
     scenes = list(dict.fromkeys(r["scene"] for r in doc["results"]))
@@ -183,9 +182,7 @@ def plot(doc: dict[str, Any], path: Path) -> None:
         ax.set_title(title)
         ax.grid(True, axis="y", alpha=0.3)
         ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dict[str, Any]:
@@ -193,6 +190,7 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
     width, height = (args.width, args.height) if not args.quick else (320, 240)
     results = []
     thread_counts = sorted({1, THREADS})
+    progress.total = len(SCENES) * len(MODES) * len(thread_counts) + 2
     for scene in SCENES:
         for mode in MODES:
             for threads in thread_counts:

@@ -32,3 +32,20 @@ def test_numerics_quick_writes_json_and_plot(tmp_path, monkeypatch):
     render = doc["render_error"]
     assert len(render["rows"]) == 7 and render["rows"][0]["rmse"] == 0.0
     assert all(r["rmse"] < 1.0 and r["cpu_ms"] > 0 and r["visible"] > 0 for r in render["rows"])
+
+
+def test_progress_bar_counts_steps(monkeypatch):
+    import io
+
+    monkeypatch.syspath_prepend(str(ROOT))
+    from bench import Progress
+
+    out = io.StringIO()
+    progress = Progress("x", stream=out)
+    progress.total = 2
+    for what in ("a", "b"):
+        with progress.step(what):
+            pass
+    lines = out.getvalue().splitlines()
+    assert "[..........................] " not in lines[0]
+    assert "[####################] 2/2] b:" in lines[-1] and "[##########..........] 1/2] a:" in lines[1]
