@@ -194,6 +194,8 @@ class Renderer:
         self._build_pipelines()
         self._targets: dict[tuple[int, int, int], _TargetState] = {}
         self._scratch = threading.local()
+        self._planes_key: bytes = b""
+        self._planes_value = np.zeros((0, 4))
         # drawn last in the overlay subpass: an object with prepare(slot, frames_in_flight) and
         # record(cb, slot, width, height), e.g. imgui_vulkan.ImGuiRenderer
         self.overlay: Any = None
@@ -292,6 +294,13 @@ class Renderer:
             if top >= len(self.meshes):
                 raise ValueError(f"Mesh.handle {top} does not name an uploaded mesh ({len(self.meshes)} uploaded)")
         return out
+
+    def _planes(self, projection: np.ndarray, view: np.ndarray) -> np.ndarray:
+        """Frustum planes, kept while the camera's matrices stay the same (a still camera)."""
+        key = projection.tobytes() + view.tobytes()
+        if key != self._planes_key:
+            self._planes_key, self._planes_value = key, frustum_planes(projection, view)
+        return self._planes_value
 
     def _scratch_rows(self, n: int) -> np.ndarray:
         """This thread's reusable rows (per_entity mode), at least n long."""
@@ -414,7 +423,7 @@ class Renderer:
         target = self._target_state(framebuffer, width, height)
         ctx = FrameContext(
             slot=slot, descriptor_set=pf.descriptor_set, scissor=target.area, viewport=target.viewport,
-            planes=frustum_planes(cam.projection, view) if self.culling else None,
+            planes=self._planes(cam.projection, view) if self.culling else None,
             instances=pf.instances.array(INSTANCE_DTYPE),
             bounds=self._mesh_bounds(),
             begin_info=target.secondary_begin,
