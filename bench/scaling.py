@@ -29,7 +29,7 @@ from ecs_engine.jobs import JobPool, default_threads
 THREADS = default_threads()
 PYTHON_MAX = 10_000
 # The Python recorder's rows use small chunks, so that even 10k entities make several jobs and
-# the table shows what threads do for it (the default 65,536 rows would make one job).
+# the table shows what threads do for it (by default 10k rows would make one job).
 PYTHON_CHUNK_ROWS = 2_048
 
 

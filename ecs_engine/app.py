@@ -39,7 +39,7 @@ class RunOptions:
     mode: str = "instanced"  # instanced | per_entity | indirect
     threads: int | None = None  # worker pool size, counting the main thread (None: all cores)
     culling: bool = True
-    chunk_rows: int = 65_536  # rows per render job (see renderer.CHUNK_ROWS)
+    chunk_rows: int | None = None  # rows per render job (None: about one per thread, renderer.MIN_CHUNK_ROWS)
     recorder: str | None = None  # native | python (None: native when numba is there)
     entities: int = 10_000  # the scaling scene's entity count
     perf_json: str | None = None  # write every frame's perf samples here at the end

@@ -47,11 +47,12 @@ GLOBALS_BYTES = 2 * 64 + 3 * 16  # projection, view, eye, ambient, counts (commo
 MIN_LIGHTS = 256
 MODES = ("instanced", "per_entity", "indirect")
 RECORDERS = ("native", "python")
-# Rows per job. Measured on the H100 host (1M entities, native recorder, 16 threads): 4,096-row
-# chunks were slower on 16 threads than on 4 (per-job Python under GIL contention); 32,768 rows
-# gave a 17.98 ms instanced CPU frame, 65,536 rows 14.06 ms (about one job per core at 1M) and
-# 16,384 rows 21.49 ms.
-CHUNK_ROWS = 65_536
+# Rows per job, by default about one job per thread but never under MIN_CHUNK_ROWS. Measured on
+# the H100 host (native recorder): 4,096-row jobs were slower on 16 threads than on 4 (per-job
+# Python under GIL contention); at 1M entities and 16 threads the instanced CPU frame took
+# 21.49 ms with 16,384-row jobs, 17.98 ms with 32,768 and 14.06 ms with 65,536 (one per core);
+# but fixed 65,536-row jobs leave 100k entities in two jobs, so the size follows the thread count.
+MIN_CHUNK_ROWS = 16_384
 # A small default palette (linear RGB); Mesh.material indexes it modulo its length.
 DEFAULT_MATERIALS = [
     ((0.80, 0.80, 0.80), 0.5, 32.0),
@@ -142,7 +143,7 @@ class _PerFrame:
 class Renderer:
     def __init__(self, device: Device, target: Any, meshes: MeshRegistry, *, lights: bool,
                  mode: str = "instanced", jobs: JobPool | None = None, culling: bool = True,
-                 chunk_rows: int = CHUNK_ROWS, recorder: str = "native", native_recorder: Any = None,
+                 chunk_rows: int | None = None, recorder: str = "native", native_recorder: Any = None,
                  clear_color: tuple[float, float, float] = (0.02, 0.02, 0.03),
                  ambient: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 0.06),
                  light_size: float = 0.08) -> None:
@@ -163,7 +164,7 @@ class Renderer:
         self.mode = mode
         self.jobs = jobs
         self.culling = culling
-        self.chunk_rows = chunk_rows
+        self.chunk_rows = chunk_rows  # None: about one job per thread (see MIN_CHUNK_ROWS)
         self.native = None
         if recorder == "native" and mode != "indirect":  # indirect: jobs write rows, record nothing
             from .gpu.native_recorder import NativeRecorder
@@ -287,7 +288,7 @@ class Renderer:
         offset = 0
         for batch in world.query(ModelMatrix, Mesh, write=()):
             m, mesh = batch[ModelMatrix], batch[Mesh]
-            for s in row_chunks(len(batch), self.chunk_rows):
+            for s in row_chunks(len(batch), self._rows_per_job(len(batch))):
                 out.append(Chunk(m.model[s], m.normal[s], mesh.handle[s], mesh.material[s], offset))
                 offset += s.stop - s.start
         if out:
@@ -295,6 +296,12 @@ class Renderer:
             if top >= len(self.meshes):
                 raise ValueError(f"Mesh.handle {top} does not name an uploaded mesh ({len(self.meshes)} uploaded)")
         return out
+
+    def _rows_per_job(self, rows: int) -> int:
+        if self.chunk_rows is not None:
+            return self.chunk_rows
+        threads = self.jobs.threads if self.jobs is not None else 1
+        return max(MIN_CHUNK_ROWS, -(-rows // threads))
 
     def _planes(self, projection: np.ndarray, view: np.ndarray) -> np.ndarray:
         """Frustum planes, kept while the camera's matrices stay the same (a still camera)."""

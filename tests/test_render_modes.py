@@ -99,3 +99,17 @@ def test_a_failing_job_names_its_chunk_and_the_next_frame_renders(monkeypatch):
         assert stats.instances > 0 and gpu.target.pixels()[..., :3].max() > 30
         stats = renderer.render(world, readback=True)
         assert stats.gpu_ms is None or stats.gpu_ms > 0
+
+
+def test_jobs_are_about_one_per_thread_but_never_tiny():
+    from types import SimpleNamespace
+
+    from ecs_engine.renderer import MIN_CHUNK_ROWS, Renderer
+
+    def rows(n, threads, chunk_rows=None):
+        fake = SimpleNamespace(chunk_rows=chunk_rows, jobs=SimpleNamespace(threads=threads))
+        return Renderer._rows_per_job(fake, n)
+
+    assert rows(1_000_000, 16) == 62_500  # 16 jobs
+    assert rows(100_000, 16) == MIN_CHUNK_ROWS  # 7 jobs, not 16 of 6,250 rows
+    assert rows(100, 1) == MIN_CHUNK_ROWS and rows(100, 4, chunk_rows=16) == 16
