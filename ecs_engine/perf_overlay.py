@@ -57,7 +57,7 @@ class PerfOverlay:
 
     def draw(self, perf: PerfMonitor, overlay_ms: float) -> None:
         """The Perf window; `overlay_ms`: what the UI cost last frame (build, copy, record)."""
-        imgui, implot = self.imgui, self.implot
+        imgui = self.imgui
         io = imgui.get_io()
         imgui.set_next_window_pos((io.display_size.x - 370, 10), imgui.Cond_.first_use_ever.value)
         imgui.set_next_window_size((360, 330), imgui.Cond_.first_use_ever.value)
