@@ -103,12 +103,18 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from ecs_engine.components import (
+    AngularVelocity,
+    Mesh,
+    ModelMatrix,
+    Transform,
+    Velocity,
+)
+from ecs_engine.systems import MotionSystem, TransformSystem
 
 import ecs_engine
 from ecs_engine import Component, Field, Schedule, World, native
-from ecs_engine.components import AngularVelocity, Mesh, ModelMatrix, Transform, Velocity
 from ecs_engine.jobs import JobPool, default_threads
-from ecs_engine.systems import MotionSystem, TransformSystem
 
 try:
     import esper
@@ -366,7 +372,7 @@ def adapter_class() -> tuple[Any, str | None]:
     """(EsperWorld, None) if ecs_engine.esper_compat imports, else (None, reason)."""
     try:
         from ecs_engine.esper_compat import EsperWorld  # type: ignore[import-not-found]
-    except Exception as exc:  # noqa: BLE001 - any import failure means "no adapter column"
+    except Exception as exc:
         return None, f"{type(exc).__name__}: {exc}"
     return EsperWorld, None
 
@@ -410,7 +416,7 @@ class Runner:
             try:
                 with adapter_world(self.adapter_cls) as api:
                     fn(api)
-            except Exception as exc:  # noqa: BLE001
+            except Exception as exc:
                 msg = f"adapter {what}: {type(exc).__name__}: {exc}"
                 self.errors.append(msg)
                 self.progress.note(f"  FAILED: {msg}")

@@ -34,8 +34,8 @@ from typing import Any
 import numpy as np
 import psutil
 
-from ecs_engine.app import RunOptions, run as run_scene
-
+from ecs_engine.app import RunOptions
+from ecs_engine.app import run as run_scene
 from ecs_engine.jobs import default_threads
 
 THREADS = default_threads()

@@ -6,10 +6,10 @@ from __future__ import annotations
 import time
 
 import numpy as np
-
-from ecs_engine import Schedule, World
 from ecs_engine.components import AngularVelocity, Mesh, Transform, Velocity
 from ecs_engine.systems import MotionSystem, TransformSystem
+
+from ecs_engine import Schedule, World
 
 
 def build(world: World, n: int, seed: int = 1) -> np.ndarray:

@@ -93,8 +93,14 @@ def default_schedule() -> Schedule:
     """Simulation (orbits, motion, springs) in the fixed-step stage, the camera per frame, then
     render origin and matrices. `Schedule.run` runs every stage once; the frame loops use
     `Schedule.run_frame` with a FixedTimestep."""
-    from .systems import (FlyCameraSystem, MotionSystem, OrbitSystem, RenderOriginSystem, SpringSystem,
-                          TransformSystem)
+    from .systems import (
+        FlyCameraSystem,
+        MotionSystem,
+        OrbitSystem,
+        RenderOriginSystem,
+        SpringSystem,
+        TransformSystem,
+    )
 
     schedule = Schedule(("fixed", "update", "post_update"))
     schedule.add(OrbitSystem(), "fixed")
@@ -114,10 +120,10 @@ def has_lights(world: World) -> bool:
 
 def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunResult:
     """Build the scene and run it; headless only here (the window path lives in window.py)."""
+    from .editor_session import EditorSession, SceneState
     from .gpu.device import Device
     from .gpu.instance import Instance
     from .gpu.offscreen import OffscreenTarget
-    from .editor_session import EditorSession, SceneState
     from .jobs import default_threads
     from .mesh_registry import MeshRegistry
     from .perf import PerfMonitor

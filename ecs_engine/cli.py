@@ -9,6 +9,7 @@ from collections.abc import Sequence
 
 from .errors import EcsError, UsageError
 
+
 def positive_int(text: str) -> int:
     try:
         value = int(text)
@@ -154,7 +155,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt:
         return 130
-    except Exception as exc:  # noqa: BLE001 - last resort: one line unless --debug
+    except Exception as exc:
         if args.debug:
             raise
         print(f"ecs-engine: internal error: {type(exc).__name__}: {exc} (run with --debug for the traceback)",

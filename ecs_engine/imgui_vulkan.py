@@ -21,7 +21,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .gpu.memory import HOST, Buffer, Image
-from .gpu.pipeline import GraphicsPipelineSpec, PipelineCache, graphics_pipeline, pipeline_layout
+from .gpu.pipeline import (
+    GraphicsPipelineSpec,
+    PipelineCache,
+    graphics_pipeline,
+    pipeline_layout,
+)
 
 if TYPE_CHECKING:
     from .gpu.device import Device

@@ -48,12 +48,12 @@ class JobPool:
         first_error: BaseException | None = None
         try:
             results[0] = self._call(fn, chunks[0], 0, names)
-        except BaseException as exc:  # noqa: BLE001 - re-raised below once the others finished
+        except BaseException as exc:
             first_error = exc
         for i, fut in enumerate(futures, 1):
             try:
                 results[i] = fut.result()
-            except BaseException as exc:  # noqa: BLE001
+            except BaseException as exc:
                 first_error = first_error or exc
         if first_error is not None:
             raise first_error

@@ -280,7 +280,7 @@ def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[_Part], bool]:
         raise
     except FileNotFoundError as exc:  # a glTF's buffer or image file is not next to it
         raise UsageError(f"{file}: refers to a file that is missing: {exc.filename or exc}") from None
-    except Exception as exc:  # noqa: BLE001 - trimesh raises anything on bad input; the user gets one line
+    except Exception as exc:
         reason = (str(exc).strip().splitlines() or [""])[0] or type(exc).__name__
         raise UsageError(f"{file}: not a valid {fmt} file ({reason})") from None
     return parts, non_mesh > 0 and not any(len(f) for _, f, _ in parts)

@@ -28,17 +28,22 @@ import numpy as np
 from .camera_math import CameraMatrices, camera_matrices, view_from_origin
 from .components import Mesh, ModelMatrix, PointLight, Transform
 from .culling import frustum_planes
-from .systems.transform import render_origin
-from .instance_rows import INSTANCE_DTYPE, write_rows
 from .gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
 from .gpu.device import Device
 from .gpu.frames import FrameRing
 from .gpu.memory import Buffer
-from .gpu.pipeline import GraphicsPipelineSpec, PipelineCache, graphics_pipeline, pipeline_layout
+from .gpu.pipeline import (
+    GraphicsPipelineSpec,
+    PipelineCache,
+    graphics_pipeline,
+    pipeline_layout,
+)
 from .gpu.secondary import SecondaryBuffers, end_command_buffer
 from .indirect_draws import IndirectDraws, check_support
+from .instance_rows import INSTANCE_DTYPE, write_rows
 from .jobs import JobPool, row_chunks
 from .mesh_registry import VERTEX_STRIDE, MeshRegistry
+from .systems.transform import render_origin
 from .world import World
 
 LIGHT_DTYPE = np.dtype([("position_radius", np.float32, 4), ("color_intensity", np.float32, 4)])
@@ -448,7 +453,7 @@ class Renderer:
                 target.native[slot] = self.native.frame_state(ctx.begin_info, width, height, pf.descriptor_set)
             ctx.native_frame = target.native[slot]
         t0 = time.perf_counter()
-        job = lambda chunk: self.record_chunk(chunk, ctx)  # noqa: E731
+        job = lambda chunk: self.record_chunk(chunk, ctx)
         results = self.jobs.map(job, chunks, [f"rows {c.offset}:{c.offset + len(c.handle)}" for c in chunks]) \
             if self.jobs is not None else [job(c) for c in chunks]
         record_ms = (time.perf_counter() - t0) * 1e3

@@ -11,7 +11,16 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from .app import RunOptions, RunResult, build_scene, describe_device, job_pool, run_meta, scene_builder, summary_line
+from .app import (
+    RunOptions,
+    RunResult,
+    build_scene,
+    describe_device,
+    job_pool,
+    run_meta,
+    scene_builder,
+    summary_line,
+)
 from .errors import UsageError
 
 # GLFW key -> the names FlyCameraSystem reads (the seed's Table 7.1).
@@ -45,7 +54,7 @@ def open_glfw() -> Any | None:
     try:
         # first: imgui-bundle points pyGLFW at its own libglfw, so the editor's ImGui GLFW
         # backend and our window share one GLFW (two copies would not know each other's windows)
-        import imgui_bundle  # noqa: F401
+        import imgui_bundle
     except ImportError:
         pass
     try:

@@ -9,7 +9,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .entities import INDEX_MASK, RESERVED, EntityIndex
-from .errors import AccessError, DeadEntityError, EcsError, MissingComponentError, describe_entity
+from .errors import (
+    AccessError,
+    DeadEntityError,
+    EcsError,
+    MissingComponentError,
+    describe_entity,
+)
 from .query import Query, check_access
 from .schema import Component, ObjectStore, closure, object_component
 from .table import ArchetypeTable

@@ -14,10 +14,10 @@ from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
-
-from ecs_engine.camera_math import yaw_pitch_quat
 from ecs_engine.components.camera_control import FlyCamera
 from ecs_engine.components.transform import Transform
+
+from ecs_engine.camera_math import yaw_pitch_quat
 from ecs_engine.schedule import System
 from ecs_engine.world import World
 

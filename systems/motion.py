@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from ecs_engine.components import AngularVelocity, Transform, Velocity
+
 from ecs_engine.jobs import JobPool, over_rows
 from ecs_engine.schedule import System
 from ecs_engine.transform_math import integrate_angular, integrate_linear

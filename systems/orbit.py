@@ -5,9 +5,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
 from ecs_engine.components.orbit import Orbit
 from ecs_engine.components.transform import Transform
+
 from ecs_engine.schedule import System
 from ecs_engine.world import World
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from ecs_engine.components import Spring, Transform, Velocity
+
 from ecs_engine.schedule import System
 from ecs_engine.spring_math import INTEGRATORS, step
 from ecs_engine.world import World

@@ -5,8 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-
 from ecs_engine.components import ModelMatrix, Transform
+
 from ecs_engine.jobs import JobPool, over_rows
 from ecs_engine.schedule import System
 from ecs_engine.timestep import Interpolation, PreviousTransform

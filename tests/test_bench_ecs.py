@@ -18,8 +18,8 @@ ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:  # `bench` is a folder of the repository, not an installed package
     sys.path.insert(0, str(ROOT))
 
-from bench import __main__ as bench_main  # noqa: E402
-from bench import ecs, machine  # noqa: E402
+from bench import __main__ as bench_main
+from bench import ecs, machine
 
 SLUG = "test-box-2c"
 

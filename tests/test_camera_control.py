@@ -7,9 +7,6 @@ import math
 
 import numpy as np
 import pytest
-
-from ecs_engine import Schedule, World
-from ecs_engine.camera_math import yaw_pitch_quat
 from ecs_engine.components.camera import Camera
 from ecs_engine.components.camera_control import ActiveCamera, FlyCamera
 from ecs_engine.components.transform import Transform
@@ -23,6 +20,9 @@ from ecs_engine.systems.camera_control import (
     fly_step,
     wrap_angle,
 )
+
+from ecs_engine import Schedule, World
+from ecs_engine.camera_math import yaw_pitch_quat
 from ecs_engine.transform_math import quat_to_mat3
 
 SPEED, TURN, DT = 2.0, 1.0, 0.25

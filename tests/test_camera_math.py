@@ -7,6 +7,9 @@ import math
 
 import numpy as np
 import pytest
+from ecs_engine.components.camera import ORTHOGRAPHIC, Camera
+from ecs_engine.components.camera_control import ActiveCamera
+from ecs_engine.components.transform import Transform
 
 from ecs_engine import World
 from ecs_engine.camera_math import (
@@ -16,9 +19,6 @@ from ecs_engine.camera_math import (
     view_rotation,
     yaw_pitch_quat,
 )
-from ecs_engine.components.camera import ORTHOGRAPHIC, Camera
-from ecs_engine.components.camera_control import ActiveCamera
-from ecs_engine.components.transform import Transform
 from ecs_engine.errors import UsageError
 from ecs_engine.transform_math import quat_to_mat3
 

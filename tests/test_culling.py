@@ -8,7 +8,12 @@ import math
 import numpy as np
 import pytest
 
-from ecs_engine.camera_math import perspective, view_rotation, yaw_pitch_quat, rotation_matrix
+from ecs_engine.camera_math import (
+    perspective,
+    rotation_matrix,
+    view_rotation,
+    yaw_pitch_quat,
+)
 from ecs_engine.culling import bounding_spheres, frustum_planes, spheres_visible
 
 FOV, ASPECT, NEAR, FAR = math.radians(60.0), 16 / 9, 0.1, 50.0

@@ -12,12 +12,12 @@ import pytest
 
 pytest.importorskip("imgui_bundle")
 
-from gpu_context import headless_gpu  # noqa: E402
+from ecs_engine.components import Camera, Mesh, PointLight, Transform
+from gpu_context import headless_gpu
 
-from ecs_engine.app import RunOptions, build_scene, run, scene_builder  # noqa: E402
-from ecs_engine.camera_math import yaw_pitch_quat, yaw_pitch_roll, yaw_pitch_roll_quat  # noqa: E402
-from ecs_engine.components import Camera, Mesh, PointLight, Transform  # noqa: E402
-from ecs_engine.jobs import JobPool  # noqa: E402
+from ecs_engine.app import RunOptions, build_scene, run, scene_builder
+from ecs_engine.camera_math import yaw_pitch_quat, yaw_pitch_roll, yaw_pitch_roll_quat
+from ecs_engine.jobs import JobPool
 
 W, H = 640, 480
 

@@ -11,10 +11,10 @@ from dataclasses import dataclass
 import esper as real_esper
 import numpy as np
 import pytest
+from ecs_engine.components import Camera, Mesh, ModelMatrix, Transform
 
 import ecs_engine.esper_compat as compat
 from ecs_engine import DeadEntityError, EcsError, MissingComponentError, World
-from ecs_engine.components import Camera, Mesh, ModelMatrix, Transform
 from ecs_engine.esper_compat import (
     ComponentNotFoundError,
     ComponentProxy,

@@ -7,16 +7,16 @@ import math
 
 import numpy as np
 import pytest
+from ecs_engine.components import Camera, Mesh, ModelMatrix, PointLight, Transform
+from ecs_engine.demos.scene_kit import add_camera
+from ecs_engine.systems import RenderOrigin
 from golden_images import image_difference
 from gpu_context import headless_gpu
 
 from ecs_engine import World
 from ecs_engine.app import default_schedule
-from ecs_engine.components import Camera, Mesh, ModelMatrix, PointLight, Transform
-from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.instance_rows import INSTANCE_DTYPE, write_rows
 from ecs_engine.mesh_data import cube_mesh
-from ecs_engine.systems import RenderOrigin
 
 W, H = 160, 120
 

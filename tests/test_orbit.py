@@ -7,12 +7,12 @@ import math
 
 import numpy as np
 import pytest
-
-from ecs_engine import Schedule, World
 from ecs_engine.components.light import PointLight
 from ecs_engine.components.orbit import Orbit
 from ecs_engine.components.transform import Transform
 from ecs_engine.systems.orbit import OrbitSystem
+
+from ecs_engine import Schedule, World
 
 
 def expected(center, radius, height, phase):

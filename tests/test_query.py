@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from ecs_engine.components import Mesh, Transform, Velocity
 
 from ecs_engine import AccessError, Component, EcsError, Field, World
-from ecs_engine.components import Mesh, Transform, Velocity
 
 
 class Health(Component):

@@ -12,6 +12,6 @@ def test_readme_example_runs():
     assert blocks, "README has no python example"
     code = blocks[0].replace("1_000_000", "5_000")
     scope: dict = {}
-    exec(compile(code, "README.md", "exec"), scope)  # noqa: S102 - our own documentation
+    exec(compile(code, "README.md", "exec"), scope)
     world = scope["world"]
     assert len(world) == 5_000

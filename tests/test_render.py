@@ -9,18 +9,18 @@ or a wrong winding. ECS_ENGINE_UPDATE_GOLDEN=1 rewrites the references.
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
+from ecs_engine.components import Mesh, PointLight, Transform
+from ecs_engine.demos.scene_kit import add_camera
 from golden_images import GOLDEN, SIZE, assert_close_to_golden, image_difference
 from gpu_context import headless_gpu
 from PIL import Image
 
 from ecs_engine import World
 from ecs_engine.app import RunOptions, default_schedule, run
-from ecs_engine.components import Mesh, PointLight, Transform
-from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.mesh_data import cube_mesh
+
 
 def render(scene: str, frames: int = 8, **kw) -> object:
     result = run(RunOptions(scene=scene, width=SIZE[0], height=SIZE[1], frames=frames,

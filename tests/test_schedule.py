@@ -4,10 +4,16 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from ecs_engine.components import (
+    AngularVelocity,
+    Mesh,
+    ModelMatrix,
+    Transform,
+    Velocity,
+)
+from ecs_engine.systems import MotionSystem, RenderOrigin, TransformSystem
 
 from ecs_engine import AccessError, EcsError, Schedule, System, World, system
-from ecs_engine.components import AngularVelocity, Mesh, ModelMatrix, Transform, Velocity
-from ecs_engine.systems import MotionSystem, RenderOrigin, TransformSystem
 
 
 def test_systems_run_in_stated_order_with_sync_points():

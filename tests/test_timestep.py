@@ -6,13 +6,13 @@ import math
 
 import numpy as np
 import pytest
+from ecs_engine.components import ModelMatrix, Spring, Transform, Velocity
+from ecs_engine.systems import MotionSystem, SpringSystem, TransformSystem
+from ecs_engine.systems.camera_control import FlyInput, fly_step
 
 from ecs_engine import World
 from ecs_engine.camera_math import yaw_pitch_quat
-from ecs_engine.components import ModelMatrix, Spring, Transform, Velocity
 from ecs_engine.schedule import Schedule
-from ecs_engine.systems import MotionSystem, SpringSystem, TransformSystem
-from ecs_engine.systems.camera_control import FlyInput, fly_step
 from ecs_engine.timestep import FixedTimestep, PreviousTransform
 from ecs_engine.transform_math import integrate_angular
 

@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ecs_engine import native, transform_math as tm
+from ecs_engine import native
+from ecs_engine import transform_math as tm
 
 rng = np.random.default_rng(7)
 

@@ -6,12 +6,11 @@ from __future__ import annotations
 def test_glfw_keys_drive_the_fly_camera_with_the_seed_key_map():
     """The window's key events go through apply_key into InputState, which the fly camera reads."""
     import glfw
-
     import numpy as np
-
-    from ecs_engine import Schedule, World
     from ecs_engine.components import Camera, FlyCamera, Transform
     from ecs_engine.systems import FlyCameraSystem, InputState
+
+    from ecs_engine import Schedule, World
     from ecs_engine.window import apply_key, key_names
 
     names = key_names(glfw)

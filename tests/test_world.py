@@ -4,9 +4,23 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from ecs_engine.components import (
+    Camera,
+    Mesh,
+    ModelMatrix,
+    PointLight,
+    Transform,
+    Velocity,
+)
 
-from ecs_engine import Component, DeadEntityError, EcsError, Field, MissingComponentError, World
-from ecs_engine.components import Camera, Mesh, ModelMatrix, PointLight, Transform, Velocity
+from ecs_engine import (
+    Component,
+    DeadEntityError,
+    EcsError,
+    Field,
+    MissingComponentError,
+    World,
+)
 from ecs_engine.entities import INDEX_MASK, MAX_GENERATION
 
 

@@ -81,7 +81,7 @@ class NativeRecorder:
             set_scissor(cb, 0, 1, scissor_addr)
             bind_sets(cb, 0, layout, 0, 1, set_addr, 0, 0)
             bound = 0
-            for r in range(run_start.shape[0]):  # noqa: B007
+            for r in range(run_start.shape[0]):
                 pipeline = run_pipeline[r]
                 if pipeline != bound:
                     bind_pipeline(cb, 0, pipeline)
