@@ -36,7 +36,7 @@ COMMAND_BYTES = 20  # VkDrawIndexedIndirectCommand
 STATE_HEADER = 4  # uints before the per-key counters: draw count per winding, 2 unused
 CULL_GROUP = 256  # cull.comp local_size_x
 COMPACT_GROUP = 64  # compact.comp local_size_x
-PUSH_BYTES = 112  # the graphics layout's range; the compute one matches it
+PUSH_BYTES = 112  # the compute layout's range: 6 planes and 3 uints (cull.comp)
 FEATURES = ("drawIndirectCount", "multiDrawIndirect", "drawIndirectFirstInstance")
 
 

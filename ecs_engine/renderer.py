@@ -72,7 +72,6 @@ DEFAULT_MATERIALS = [
 @dataclass
 class Chunk:
     model: np.ndarray
-    normal: np.ndarray
     handle: np.ndarray
     material: np.ndarray
     offset: int  # first row of this chunk's slice of the instance buffer
@@ -190,7 +189,7 @@ class Renderer:
         n = len(self.frames.frames)
         self.pool = DescriptorPool(device, n, {vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER: n, ssbo: storage * n})
         self.indirect = IndirectDraws(device, self.cache, self.set_layout, n) if mode == "indirect" else None
-        # one push range for both users: the billboard size (4 bytes), a per_entity row (112)
+        # one push range for both users: the billboard size (4 bytes), a per_entity row (64)
         self.layout = pipeline_layout(device, [self.set_layout.handle],
                                       [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, INSTANCE_DTYPE.itemsize)])
         self.materials = Buffer(device, MATERIAL_DTYPE.itemsize * len(DEFAULT_MATERIALS), vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT)
@@ -294,7 +293,7 @@ class Renderer:
         for batch in world.query(ModelMatrix, Mesh, write=()):
             m, mesh = batch[ModelMatrix], batch[Mesh]
             for s in row_chunks(len(batch), self._rows_per_job(len(batch))):
-                out.append(Chunk(m.model[s], m.normal[s], mesh.handle[s], mesh.material[s], offset))
+                out.append(Chunk(m.model[s], mesh.handle[s], mesh.material[s], offset))
                 offset += s.stop - s.start
         if out:
             top = max(int(c.handle.max()) for c in out)
@@ -343,7 +342,7 @@ class Renderer:
             rows = ctx.instances[chunk.offset : chunk.offset + len(chunk.handle)]
         key_counts = np.zeros(2 * len(index_counts), dtype=np.int64)
         planes = None if self.indirect is not None else ctx.planes  # indirect: the GPU culls
-        n = write_rows(chunk.model, chunk.normal, chunk.handle, chunk.material, centers_m, radii_m, planes,
+        n = write_rows(chunk.model, chunk.handle, chunk.material, centers_m, radii_m, planes,
                        len(DEFAULT_MATERIALS), rows, key_counts)
         if self.indirect is not None:
             return ChunkResult(None, 0, 0, 0, key_counts)

@@ -16,9 +16,8 @@ struct Light {
 };
 layout(std430, set = 0, binding = 1) readonly buffer Lights { Light lights[]; };
 
-struct Instance {           // 112 bytes: model and normal matrix rows, material
+struct Instance {           // 64 bytes: model matrix rows, material (the normal matrix is derived)
     vec4 m0, m1, m2;        // rows of the camera-relative model matrix (last row is 0 0 0 1)
-    vec4 n0, n1, n2;        // rows of the normal matrix (xyz)
     uvec4 misc;             // x: material index, y: key = mesh * 2 + mirrored
 };
 layout(std430, set = 0, binding = 2) readonly buffer Instances { Instance instances[]; };

@@ -12,6 +12,26 @@ layout(location = 2) flat out uint v_material;
 layout(push_constant) uniform Push { Instance row; } push;
 #endif
 
+// The normal matrix: the cofactor of the model's 3x3 part (det * inverse transpose), made from
+// columns scaled by the largest one (so huge scales do not overflow and tiny ones do not all
+// vanish), its sign flipped for mirrored matrices. Finite for zero scales too: a flattened axis
+// gives a zero term and the fragment shader falls back to the face normal. The same formula as
+// transform_math.normal_scale, per vertex instead of per entity on the CPU.
+mat3 normal_matrix(Instance inst) {
+    vec3 c0 = vec3(inst.m0.x, inst.m1.x, inst.m2.x);
+    vec3 c1 = vec3(inst.m0.y, inst.m1.y, inst.m2.y);
+    vec3 c2 = vec3(inst.m0.z, inst.m1.z, inst.m2.z);
+    vec3 top = max(max(abs(c0), abs(c1)), abs(c2));
+    float peak = max(max(top.x, top.y), top.z);
+    if (peak > 0.0) {
+        float s = 1.0 / peak;
+        c0 *= s; c1 *= s; c2 *= s;
+    }
+    vec3 x = cross(c1, c2), y = cross(c2, c0), z = cross(c0, c1);
+    float sign_det = dot(c0, x) < 0.0 ? -1.0 : 1.0;
+    return mat3(x, y, z) * sign_det;
+}
+
 void main() {
 #if defined(PUSH_INSTANCE)
     Instance inst = push.row;
@@ -23,7 +43,7 @@ void main() {
     vec4 p = vec4(in_position, 1.0);
     vec3 world = vec3(dot(inst.m0, p), dot(inst.m1, p), dot(inst.m2, p));
     v_position = world;
-    v_normal = vec3(dot(inst.n0.xyz, in_normal), dot(inst.n1.xyz, in_normal), dot(inst.n2.xyz, in_normal));
+    v_normal = normal_matrix(inst) * in_normal;
     v_material = inst.misc.x;
     gl_Position = g.projection * (g.view * vec4(world, 1.0));
 }

@@ -24,14 +24,14 @@ def chunk(n=3000, meshes=3):
     material = rng.integers(0, 50, size=n).astype(np.uint32)
     centers = rng.normal(scale=0.1, size=(meshes, 3))
     radii = rng.uniform(0.5, 1.5, size=meshes)
-    return model, normal, handle, material, centers, radii
+    return model, handle, material, centers, radii
 
 
 @pytest.mark.parametrize("cull", [True, False])
 def test_kernel_matches_reference(cull):
     if ir._write_rows_native is None:
         pytest.skip("numba not available")
-    model, normal, handle, material, centers, radii = chunk()
+    model, handle, material, centers, radii = chunk()
     planes = frustum_planes(perspective(1.0, 1.5, 0.1), view_rotation(yaw_pitch_quat(0.4, 0.1))) if cull else None
     out = []
     for fn in (ir.write_rows, ir.write_rows_numpy):
@@ -39,7 +39,7 @@ def test_kernel_matches_reference(cull):
         rows.view(np.uint8)[:] = 0xAB  # poison: every written byte must be overwritten
         counts = np.full(6, -1, np.int64)
         p = ir.NO_PLANES if planes is None else planes
-        n = fn(model, normal, handle, material, centers, radii, p, 6, rows, counts)
+        n = fn(model, handle, material, centers, radii, p, 6, rows, counts)
         out.append((n, rows[:n].copy(), counts))
     (n1, r1, c1), (n2, r2, c2) = out
     assert n1 == n2 and np.array_equal(c1, c2) and c1.sum() == n1
