@@ -37,10 +37,11 @@ import psutil
 from ecs_engine.app import RunOptions
 from ecs_engine.app import run as run_scene
 from ecs_engine.jobs import default_threads
+from ecs_engine.renderer import MODES as RENDER_MODES
 
 THREADS = default_threads()
 SCENES = ("cube", "grid100", "model")
-MODES = ("instanced", "per_entity", "indirect")
+MODES = RENDER_MODES  # every mode the renderer has
 
 # The seed thesis (i7-11800H, RTX 3070, Windows 11): Tables 4.1, 4.2 and 4.3,
 # (single-threaded, multi-threaded).

@@ -19,11 +19,11 @@ import numpy as np
 
 from .camera_math import active_camera, yaw_pitch_roll, yaw_pitch_roll_quat
 from .components import Camera, Mesh, PointLight, Transform
+from .gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
+from .renderer import MODES, RECORDERS
 from .world import World
 
-MODES = ("instanced", "per_entity", "indirect")
-RECORDERS = ("native", "python")
-PRESENT_MODES = ("fifo", "mailbox", "immediate")
+PRESENT_MODES = tuple(SWAPCHAIN_PRESENT_MODES)
 
 
 @dataclass

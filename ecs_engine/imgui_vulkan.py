@@ -41,8 +41,6 @@ class _Texture:
     image: Image
     descriptor_set: Any
     set_array: Any  # VkDescriptorSet[1] for raw calls
-    width: int
-    height: int
 
 
 @dataclass
@@ -143,8 +141,7 @@ class ImGuiRenderer:
         vk.vkUpdateDescriptorSets(self.device.handle, 1, [vk.VkWriteDescriptorSet(
             dstSet=descriptor_set, dstBinding=0, dstArrayElement=0, descriptorCount=1,
             descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, pImageInfo=[info])], 0, None)
-        texture = _Texture(image, descriptor_set, vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]),
-                           tex.width, tex.height)
+        texture = _Texture(image, descriptor_set, vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]))
         tex_id = self._next_id
         self._next_id += 1
         self._textures[tex_id] = texture
