@@ -69,6 +69,27 @@ class RunResult:
     def fps(self) -> float:
         return self.frames / self.wall_s if self.wall_s > 0 else 0.0
 
+    def add_frame(self, stats: Any, cpu_ms: float, end: float, waited_ms: float = 0.0,
+                  ui_ms: float | None = None) -> None:
+        """One frame's figures, into the lists and the perf monitor. `waited_ms`: time blocked
+        outside the renderer (the swapchain), on top of `stats.wait_ms`."""
+        self.cpu_ms.append(cpu_ms)
+        self.frame_end.append(end)
+        self.record_ms.append(stats.record_ms)
+        if stats.gpu_ms is not None:
+            self.gpu_ms.append(stats.gpu_ms)
+        if ui_ms is not None:
+            self.ui_ms.append(ui_ms)
+        self.last_stats = stats
+        self.perf.frame(cpu_ms, stats.record_ms, stats.gpu_ms, stats.wait_ms + waited_ms, draws=stats.draws,
+                        visible=stats.instances)
+
+    def write_perf_json(self, options: RunOptions, say: Callable[[str], None]) -> None:
+        """`--perf-json`: every frame's samples, with what the run was."""
+        if options.perf_json:
+            self.perf.write_json(meta=run_meta(options, self))
+            say(f"wrote {options.perf_json}")
+
     def record_ms_mean(self, warmup: int = 0) -> float:
         values = self.record_ms[warmup:] or self.record_ms
         return float(np.mean(values)) if values else 0.0
@@ -159,19 +180,11 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
             last = i == frames - 1
             stats = state.renderer.render(state.world, readback=last and options.screenshot is not None)
             now = time.perf_counter()
-            cpu_ms = (now - t0) * 1e3 - stats.wait_ms  # CPU work, not waiting for the GPU
-            result.cpu_ms.append(cpu_ms)
-            result.frame_end.append(now)
-            result.record_ms.append(stats.record_ms)
-            if stats.gpu_ms is not None:
-                result.gpu_ms.append(stats.gpu_ms)
-            result.last_stats = stats
-            perf.frame(cpu_ms, stats.record_ms, stats.gpu_ms, stats.wait_ms, draws=stats.draws,
-                       visible=stats.instances)
+            # CPU work, not waiting for the GPU
+            result.add_frame(stats, (now - t0) * 1e3 - stats.wait_ms, now,
+                             ui_ms=session.cost_ms if session is not None else None)
             if perf.summary_due():
                 say(perf.summary_line())
-            if session is not None:
-                result.ui_ms.append(session.cost_ms)
             if session is not None and not last:
                 session.apply_requests(state)
         device.wait_idle()
@@ -181,9 +194,7 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
             result.pixels = target.pixels()
             save_png(result.pixels, options.screenshot)
         say(summary_line(result, frames, result.wall_s, final=True))
-        if options.perf_json:
-            perf.write_json(meta=run_meta(options, result))
-            say(f"wrote {options.perf_json}")
+        result.write_perf_json(options, say)
     finally:
         if session is not None:
             session.destroy()

@@ -6,21 +6,13 @@ size 0) the loop waits for events instead of rendering.
 
 from __future__ import annotations
 
+import importlib
 import os
 import time
 from collections.abc import Callable
 from typing import Any
 
-from .app import (
-    RunOptions,
-    RunResult,
-    build_scene,
-    describe_device,
-    job_pool,
-    run_meta,
-    scene_builder,
-    summary_line,
-)
+from .app import RunOptions, RunResult, build_scene, describe_device, job_pool, scene_builder, summary_line
 from .errors import UsageError
 
 # GLFW key -> the names FlyCameraSystem reads (the seed's Table 7.1).
@@ -54,7 +46,7 @@ def open_glfw() -> Any | None:
     try:
         # first: imgui-bundle points pyGLFW at its own libglfw, so the editor's ImGui GLFW
         # backend and our window share one GLFW (two copies would not know each other's windows)
-        import imgui_bundle
+        importlib.import_module("imgui_bundle")  # imported for that side effect only
     except ImportError:
         pass
     try:
@@ -158,18 +150,12 @@ def run_windowed(options: RunOptions, glfw: Any,
             stats = renderer.render(state.world, framebuffer=swapchain.framebuffers[index],
                                     extent=(swapchain.width, swapchain.height),
                                     wait=frame.image_available, signal=swapchain.render_finished[index])
-            cpu_ms = (time.perf_counter() - t0) * 1e3 - stats.wait_ms - waited_ms
-            result.cpu_ms.append(cpu_ms)
-            result.frame_end.append(time.perf_counter())
-            result.record_ms.append(stats.record_ms)
+            end = time.perf_counter()
+            result.add_frame(stats, (end - t0) * 1e3 - stats.wait_ms - waited_ms, end, waited_ms,
+                             ui_ms=session.cost_ms if session is not None else None)
             if not swapchain.present(index) or suboptimal:
                 resized[0] = True
-            if stats.gpu_ms is not None:
-                result.gpu_ms.append(stats.gpu_ms)
-            result.last_stats = stats
             frame_no += 1
-            perf.frame(cpu_ms, stats.record_ms, stats.gpu_ms, stats.wait_ms + waited_ms, draws=stats.draws,
-                       visible=stats.instances)
             if perf.summary_due():
                 say(perf.summary_line())
             if session is not None and session.apply_requests(state, swapchain):
@@ -180,9 +166,7 @@ def run_windowed(options: RunOptions, glfw: Any,
         result.recreations = swapchain.recreations
         if frame_no:
             say(summary_line(result, frame_no, result.wall_s, final=True))
-        if options.perf_json:
-            perf.write_json(meta=run_meta(options, result))
-            say(f"wrote {options.perf_json}")
+        result.write_perf_json(options, say)
     finally:
         if session is not None:
             session.destroy()
