@@ -116,17 +116,12 @@ class Schedule:
         steps = clock.advance(frame_dt)
         for _ in range(steps):
             _snapshot_transforms(world)
-            for sys_ in self.stages[fixed_stage]:
-                world.run_system(sys_, clock.step)
-            world.flush()
+            _run_stage(world, self.stages[fixed_stage], clock.step)
         world.resources[Interpolation] = Interpolation(clock.alpha)
         variable_dt = min(float(frame_dt), max_frame_dt)
         for name, systems in self.stages.items():
-            if name == fixed_stage:
-                continue
-            for sys_ in systems:
-                world.run_system(sys_, variable_dt)
-            world.flush()
+            if name != fixed_stage:
+                _run_stage(world, systems, variable_dt)
         return steps
 
     def run(self, world: World, dt: float) -> None:
@@ -134,9 +129,14 @@ class Schedule:
             raise EcsError("Schedule.run() cannot be called from inside a system or a query loop")
         world.flush()
         for systems in self.stages.values():
-            for sys_ in systems:
-                world.run_system(sys_, dt)
-            world.flush()
+            _run_stage(world, systems, dt)
+
+
+def _run_stage(world: World, systems: list[System], dt: float) -> None:
+    """A stage's systems in order, then the sync point (deferred structural changes applied)."""
+    for sys_ in systems:
+        world.run_system(sys_, dt)
+    world.flush()
 
 
 def _snapshot_transforms(world: World) -> None:
