@@ -417,7 +417,9 @@ class Renderer:
         frame, gpu_ms = self.frames.begin()
         slot = self.frames.frames.index(frame)
         pf = self.per_frame[slot]
-        previous = self.indirect.counts(slot, self._mesh_bounds()[2]) if self.indirect is not None else None
+        # indirect mode: the slot's last counts, before this frame overwrites them (a read-back
+        # frame reads its own counts after the wait instead)
+        previous = None if self.indirect is None or readback else self.indirect.counts(slot, self._mesh_bounds()[2])
         self.secondaries.reset(slot)
         if self.overlay is not None:
             self.overlay.prepare(slot, len(self.frames.frames))
