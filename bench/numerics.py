@@ -105,11 +105,10 @@ def projected_pixels(vertices: np.ndarray, center: np.ndarray, eye: np.ndarray, 
     """(8, 2) pixel positions of the cube's corners through the emulated float32 path."""
     from ecs_engine.camera_math import perspective
 
-    proj = perspective(math.radians(50.0), WIDTH / HEIGHT, 0.05).astype(np.float32)
+    proj = perspective(math.radians(50.0), WIDTH / HEIGHT, 0.05)  # float32, as the GPU gets it
     if mode == "exact":
         world = vertices.astype(np.float64) + center
-        clip = perspective(math.radians(50.0), WIDTH / HEIGHT, 0.05).astype(np.float64) @ (
-            _look_at_view(eye, center, np.float64) @ np.c_[world, np.ones(8)].T)
+        clip = proj.astype(np.float64) @ (_look_at_view(eye, center, np.float64) @ np.c_[world, np.ones(8)].T)
     else:
         if mode == "camera_relative":
             origin = eye  # subtract in float64, then cast
