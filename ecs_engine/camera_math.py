@@ -14,10 +14,15 @@ float64, see systems/transform.py), so the view matrix is a pure rotation with n
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+from ecs_engine.components.camera import ORTHOGRAPHIC, Camera
+from ecs_engine.components.camera_control import ActiveCamera
+from ecs_engine.components.transform import Transform
 
 from .errors import UsageError
 
@@ -164,17 +169,18 @@ def view_from_origin(cam: CameraMatrices, origin: np.ndarray) -> np.ndarray:
 def active_camera(world: World) -> int:
     """The entity to render from: the only one with Camera and Transform, or else the only one
     of those also tagged ActiveCamera. Raises UsageError otherwise."""
-    from ecs_engine.components.camera import Camera
-    from ecs_engine.components.camera_control import ActiveCamera
-    from ecs_engine.components.transform import Transform
-
+    cached = _ACTIVE.get(world)
+    if cached is not None and cached[0] == world.structure_version:
+        return cached[1]  # which entity it is can only change with the world's structure
     cameras = world.query(Camera, Transform, write=()).entities()
     if len(cameras) == 1:
+        _ACTIVE[world] = (world.structure_version, int(cameras[0]))
         return int(cameras[0])
     if len(cameras) == 0:
         raise UsageError("no camera: spawn an entity with Camera and Transform components")
     tagged = world.query(Camera, Transform, with_=[ActiveCamera], write=()).entities()
     if len(tagged) == 1:
+        _ACTIVE[world] = (world.structure_version, int(tagged[0]))
         return int(tagged[0])
     if len(tagged) == 0:
         raise UsageError(
@@ -188,13 +194,30 @@ def active_camera(world: World) -> int:
 
 def camera_matrices(world: World, viewport_aspect: float) -> CameraMatrices:
     """Projection, view and position of the active camera (see `active_camera`).
-    Camera.aspect 0 means "use viewport_aspect" (width / height of the render target)."""
-    from ecs_engine.components.camera import ORTHOGRAPHIC, Camera
-    from ecs_engine.components.transform import Transform
+    Camera.aspect 0 means "use viewport_aspect" (width / height of the render target).
 
+    The result is kept until the camera's Camera or Transform columns are written (see
+    World.change_stamp), so a still camera costs a lookup; its arrays are read-only."""
     viewport_aspect = float(viewport_aspect)
     _check_positive("viewport_aspect", viewport_aspect)
     eid = active_camera(world)
+    stamp = (world.change_stamp(eid, Camera, Transform), viewport_aspect)
+    cached = _MATRICES.get(world)
+    if cached is not None and cached[0] == stamp:
+        return cached[1]
+    matrices = _camera_matrices(world, eid, viewport_aspect)
+    for array in (matrices.projection, matrices.view, matrices.inverse_view, matrices.position):
+        array.flags.writeable = False
+    _MATRICES[world] = (stamp, matrices)
+    return matrices
+
+
+# per world: (structure_version, active camera) and (change stamp, CameraMatrices)
+_ACTIVE: weakref.WeakKeyDictionary[Any, tuple[int, int]] = weakref.WeakKeyDictionary()
+_MATRICES: weakref.WeakKeyDictionary[Any, tuple[Any, CameraMatrices]] = weakref.WeakKeyDictionary()
+
+
+def _camera_matrices(world: World, eid: int, viewport_aspect: float) -> CameraMatrices:
     cam = world.get(eid, Camera)
     transform = world.get(eid, Transform)
     aspect = float(cam.aspect) or viewport_aspect

@@ -36,9 +36,11 @@ class JobPool:
         self._executor = (ThreadPoolExecutor(self.threads - 1, thread_name_prefix="ecs-job")
                           if self.threads > 1 else None)
 
-    def map(self, fn: Callable[[T], R], chunks: Sequence[T], names: Sequence[str] | None = None) -> list[R]:
+    def map(self, fn: Callable[[T], R], chunks: Sequence[T],
+            names: Sequence[str] | Callable[[T], str] | None = None) -> list[R]:
         """fn(chunk) for every chunk, in parallel; results in chunk order. The calling thread
-        works too (it runs the first chunk), so `threads` counts it."""
+        works too (it runs the first chunk), so `threads` counts it. `names` (a list, or a
+        function of the chunk, called only when its job fails) name chunks in errors."""
         if not chunks:
             return []
         if self._executor is None or len(chunks) == 1:
@@ -60,13 +62,13 @@ class JobPool:
         return results
 
     @staticmethod
-    def _call(fn: Callable[[T], R], chunk: T, i: int, names: Sequence[str] | None) -> R:
+    def _call(fn: Callable[[T], R], chunk: T, i: int, names: Sequence[str] | Callable[[T], str] | None) -> R:
         try:
             return fn(chunk)
         except JobError:
             raise
         except Exception as exc:
-            name = names[i] if names is not None else f"#{i}"
+            name = f"#{i}" if names is None else names(chunk) if callable(names) else names[i]
             raise JobError(f"job for chunk {name} failed: {type(exc).__name__}: {exc}") from exc
 
     def close(self) -> None:

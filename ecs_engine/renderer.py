@@ -42,14 +42,15 @@ from .gpu.secondary import SecondaryBuffers, end_command_buffer
 from .indirect_draws import IndirectDraws, check_support
 from .instance_rows import INSTANCE_DTYPE, write_rows
 from .jobs import JobPool, row_chunks
+from .light_rows import LIGHT_DTYPE, write_lights
 from .mesh_registry import VERTEX_STRIDE, MeshRegistry
 from .systems.transform import render_origin
 from .world import World
 
-LIGHT_DTYPE = np.dtype([("position_radius", np.float32, 4), ("color_intensity", np.float32, 4)])
 MATERIAL_DTYPE = np.dtype([("color", np.float32, 4), ("specular", np.float32, 4)])
 GLOBALS_BYTES = 2 * 64 + 3 * 16  # projection, view, eye, ambient, counts (common.glsl)
 MIN_LIGHTS = 256
+_HANDLE = (Mesh, "handle")  # the column whose writes make the renderer check mesh handles again
 MODES = ("instanced", "per_entity", "indirect")
 RECORDERS = ("native", "python")
 # Rows per job, by default about one job per thread but never under MIN_CHUNK_ROWS. Measured on
@@ -89,7 +90,6 @@ class FrameContext:
     instances: np.ndarray  # the mapped per-frame instance buffer (INSTANCE_DTYPE rows)
     bounds: tuple[np.ndarray, np.ndarray, np.ndarray]  # per mesh: centre, radius, index count
     begin_info: Any
-    pipeline_ints: tuple[int, int] = (0, 0)  # native recorder: plain and mirrored pipelines
     native_frame: dict[str, Any] | None = None
 
 
@@ -142,6 +142,10 @@ class _PerFrame:
     instances: Buffer
     descriptor_set: Any
     set_array: Any = None  # VkDescriptorSet[1] for raw calls
+
+
+def _chunk_name(chunk: Chunk) -> str:
+    return f"rows {chunk.offset}:{chunk.offset + len(chunk.handle)}"
 
 
 class Renderer:
@@ -202,6 +206,10 @@ class Renderer:
         self._scratch = threading.local()
         self._planes_key: bytes = b""
         self._planes_value = np.zeros((0, 4))
+        self._view_cache: tuple[CameraMatrices, bytes, np.ndarray] | None = None
+        self._globals_written: list[tuple[Any, ...] | None] = [None] * n  # per slot: what its buffer holds
+        self._chunks_key: tuple[Any, ...] = ()
+        self._chunks: list[Chunk] = []
         # drawn last in the overlay subpass: an object with prepare(slot, frames_in_flight) and
         # record(cb, slot, width, height), e.g. imgui_vulkan.ImGuiRenderer
         self.overlay: Any = None
@@ -287,10 +295,18 @@ class Renderer:
 
     # ------------------------------------------------------------- per frame
     def chunks(self, world: World) -> list[Chunk]:
-        """Row ranges of every table with a ModelMatrix and a Mesh, each with its buffer slice."""
+        """Row ranges of every table with a ModelMatrix and a Mesh, each with its buffer slice.
+        Kept while those tables keep their rows, layout and Mesh.handle column (the views stay
+        valid and see every value written since)."""
+        query = world.query(ModelMatrix, Mesh, write=())
+        tables = query.tables
+        key = (self.chunk_rows, self.jobs.threads if self.jobs is not None else 1, len(self.meshes),
+               *[(t.id, t.version, t.count, t.column_ticks[_HANDLE]) for t in tables])
+        if key == self._chunks_key:
+            return self._chunks
         out: list[Chunk] = []
         offset = 0
-        for batch in world.query(ModelMatrix, Mesh, write=()):
+        for batch in query:
             m, mesh = batch[ModelMatrix], batch[Mesh]
             for s in row_chunks(len(batch), self._rows_per_job(len(batch))):
                 out.append(Chunk(m.model[s], mesh.handle[s], mesh.material[s], offset))
@@ -299,6 +315,7 @@ class Renderer:
             top = max(int(c.handle.max()) for c in out)
             if top >= len(self.meshes):
                 raise ValueError(f"Mesh.handle {top} does not name an uploaded mesh ({len(self.meshes)} uploaded)")
+        self._chunks_key, self._chunks = key, out
         return out
 
     def _rows_per_job(self, rows: int) -> int:
@@ -313,6 +330,13 @@ class Renderer:
         if key != self._planes_key:
             self._planes_key, self._planes_value = key, frustum_planes(projection, view)
         return self._planes_value
+
+    def _view(self, cam: CameraMatrices, origin: np.ndarray, origin_key: bytes) -> np.ndarray:
+        """view_from_origin, kept while the camera matrices and the origin stay the same."""
+        cached = self._view_cache
+        if cached is None or cached[0] is not cam or cached[1] != origin_key:
+            cached = self._view_cache = (cam, origin_key, view_from_origin(cam, origin))
+        return cached[2]
 
     def _scratch_rows(self, n: int) -> np.ndarray:
         """This thread's reusable rows (per_entity mode), at least n long."""
@@ -348,19 +372,17 @@ class Renderer:
             return ChunkResult(None, 0, 0, 0, key_counts)
         if n == 0:
             return ChunkResult(None, 0, 0, 0)
+        instanced = self.mode == "instanced"
+        if self.native is not None:
+            cb = self.secondaries.acquire(ctx.slot)
+            draws, triangles = self.native.record(cb, rows, instanced, chunk.offset, key_counts, ctx.native_frame)
+            return ChunkResult(cb, n, draws, triangles)
         keys = np.flatnonzero(key_counts)
         counts = key_counts[keys]
         starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
         run_mesh, flipped = np.divmod(keys, 2)
-        instanced = self.mode == "instanced"
         draws = len(starts) if instanced else n
         triangles = int((index_counts[run_mesh] // 3 * counts).sum())
-        if self.native is not None:
-            cb = self.secondaries.acquire(ctx.slot)
-            pipes = np.where(flipped == 1, ctx.pipeline_ints[1], ctx.pipeline_ints[0]).astype(np.int64)
-            self.native.record(cb, self.layout, vk.VK_SHADER_STAGE_VERTEX_BIT, rows, instanced, chunk.offset,
-                               starts, counts, run_mesh, pipes, ctx.native_frame)
-            return ChunkResult(cb, n, draws, triangles)
         cb = self.secondaries.begin(ctx.slot, ctx.begin_info)
         vk.vkCmdSetViewport(cb, 0, 1, [ctx.viewport])  # not inherited by secondaries
         vk.vkCmdSetScissor(cb, 0, 1, [ctx.scissor])
@@ -389,24 +411,14 @@ class Renderer:
                                       INSTANCE_DTYPE.itemsize, vk.ffi.from_buffer(rows[i : i + 1]))
                 vk.vkCmdDrawIndexed(cb, mesh.index_count, 1, 0, 0, 0)
 
-    def gather_lights(self, world: World, origin: np.ndarray, eye: np.ndarray | None = None) -> np.ndarray:
-        """Lights relative to the render origin (the camera, by default), sorted far to near
-        from the camera (the billboards blend back to front)."""
-        parts = []
+    @staticmethod
+    def light_columns(world: World) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+        """Per table of lights: position, radius, color and intensity columns (see write_lights)."""
+        out = []
         for batch in world.query(PointLight, Transform, write=()):
-            light, t = batch[PointLight], batch[Transform]
-            rows = np.empty(len(batch), LIGHT_DTYPE)
-            rows["position_radius"][:, :3] = t.position - origin
-            rows["position_radius"][:, 3] = light.radius
-            rows["color_intensity"][:, :3] = light.color
-            rows["color_intensity"][:, 3] = light.intensity
-            parts.append(rows)
-        if not parts:
-            return np.empty(0, LIGHT_DTYPE)
-        lights = np.concatenate(parts)
-        rel = lights["position_radius"][:, :3] - (np.zeros(3) if eye is None else eye)
-        dist = np.einsum("ij,ij->i", rel, rel)
-        return lights[np.argsort(-dist, kind="stable")]
+            light = batch[PointLight]
+            out.append((batch[Transform].position, light.radius, light.color, light.intensity))
+        return out
 
     def render(self, world: World, readback: bool = False, framebuffer: Any = None,
                extent: tuple[int, int] | None = None, wait: Any = None, signal: Any = None) -> FrameStats:
@@ -425,15 +437,17 @@ class Renderer:
             self.overlay.prepare(slot, len(self.frames.frames))
         cam = camera_matrices(world, width / height)
         origin = render_origin(world)
-        view = view_from_origin(cam, origin)
-        lights = self.gather_lights(world, origin, cam.position - origin) if self.with_lights \
-            else np.empty(0, LIGHT_DTYPE)
+        origin_key = origin.tobytes()
+        view = self._view(cam, origin, origin_key)
+        lights = self.light_columns(world) if self.with_lights else []
+        light_count = sum(len(part[0]) for part in lights)
         chunks = self.chunks(world)
         candidates = sum(len(c.handle) for c in chunks)
-        self._ensure_capacity(slot, 0 if self.mode == "per_entity" else candidates, len(lights))
-        if len(lights):
-            pf.lights.array(LIGHT_DTYPE, len(lights))[:] = lights
-        self._write_globals(pf, cam, view, origin, len(lights))
+        self._ensure_capacity(slot, 0 if self.mode == "per_entity" else candidates, light_count)
+        if light_count:
+            write_lights(lights, origin, cam.position - origin,
+                         pf.lights.array(np.float32, (light_count, LIGHT_DTYPE.itemsize // 4)))
+        self._write_globals(slot, cam, view, origin, origin_key, light_count)
         target = self._target_state(framebuffer, width, height)
         ctx = FrameContext(
             slot=slot, descriptor_set=pf.descriptor_set, scissor=target.area, viewport=target.viewport,
@@ -443,33 +457,32 @@ class Renderer:
             begin_info=target.secondary_begin,
         )
         if self.native is not None:
-            from .gpu.native_recorder import handle_int
-
             if self.native.meshes_known != len(self.meshes):
                 gpu = [self.meshes[h] for h in range(len(self.meshes))]
                 self.native.set_meshes([m.vertices.handle for m in gpu], [m.indices.handle for m in gpu],
                                        [m.index_count for m in gpu])
-            ctx.pipeline_ints = (handle_int(vk, self.mesh_pipeline), handle_int(vk, self.mirrored_pipeline))
             if slot not in target.native:
-                target.native[slot] = self.native.frame_state(ctx.begin_info, width, height, pf.descriptor_set)
+                target.native[slot] = self.native.frame_state(
+                    ctx.begin_info, width, height, pf.descriptor_set, self.layout, vk.VK_SHADER_STAGE_VERTEX_BIT,
+                    (self.mesh_pipeline, self.mirrored_pipeline))
             ctx.native_frame = target.native[slot]
         t0 = time.perf_counter()
         job = lambda chunk: self.record_chunk(chunk, ctx)
-        results = self.jobs.map(job, chunks, [f"rows {c.offset}:{c.offset + len(c.handle)}" for c in chunks]) \
+        results = self.jobs.map(job, chunks, _chunk_name) \
             if self.jobs is not None else [job(c) for c in chunks]
         record_ms = (time.perf_counter() - t0) * 1e3
         cb = frame.command_buffer
         secondaries = [r.command_buffer for r in results if r.command_buffer is not None]
         if self.indirect is not None:
             secondaries = self._record_indirect(cb, ctx, results, candidates)
-        self._record_primary(cb, secondaries, len(lights), target, slot)
+        self._record_primary(cb, secondaries, light_count, target, slot)
         if readback:
             self.target.record_readback(cb)
         self.frames.end(frame, wait=wait, signal=signal)
         if readback:
             self.frames.wait(frame)
         stats = FrameStats(draws=sum(r.draws for r in results), instances=sum(r.visible for r in results),
-                           triangles=sum(r.triangles for r in results), lights=len(lights), gpu_ms=gpu_ms,
+                           triangles=sum(r.triangles for r in results), lights=light_count, gpu_ms=gpu_ms,
                            wait_ms=self.frames.last_wait_ms, record_ms=record_ms, chunks=len(chunks),
                            candidates=candidates)
         if self.indirect is not None:
@@ -477,7 +490,7 @@ class Renderer:
             counts = self.indirect.counts(slot, ctx.bounds[2]) if readback else previous
             if counts is not None:
                 stats.draws, stats.instances, stats.triangles = counts.draws, counts.visible, counts.triangles
-        stats.draws += 1 if len(lights) else 0
+        stats.draws += 1 if light_count else 0
         return stats
 
     def _record_indirect(self, cb: Any, ctx: FrameContext, results: list[ChunkResult], candidates: int) -> list[Any]:
@@ -505,15 +518,22 @@ class Renderer:
         end_command_buffer(vk, secondary)
         return [secondary]
 
-    def _write_globals(self, pf: _PerFrame, cam: CameraMatrices, view: np.ndarray, origin: np.ndarray,
-                       light_count: int) -> None:
-        raw = pf.globals.bytes()
+    def _write_globals(self, slot: int, cam: CameraMatrices, view: np.ndarray, origin: np.ndarray,
+                       origin_key: bytes, light_count: int) -> None:
+        """The frame's uniforms, rewritten only when something in them changed (the slot's
+        mapped buffer keeps what was last written there)."""
+        written = (cam, origin_key, light_count, tuple(self.ambient))
+        last = self._globals_written[slot]
+        if last is not None and last[0] is cam and last[1:] == written[1:]:
+            return
+        raw = self.per_frame[slot].globals.bytes()
         mats = raw[:128].view(np.float32).reshape(2, 4, 4)
         mats[0] = cam.projection.T  # column-major for GLSL
         mats[1] = view.T
         raw[128:140].view(np.float32)[:] = cam.position - origin  # float64 difference, then the cast
         raw[144:160].view(np.float32)[:] = self.ambient
         raw[160:176].view(np.uint32)[:] = (light_count, 0, 0, 0)
+        self._globals_written[slot] = written
 
     def _record_primary(self, cb: Any, secondaries: list[Any], light_count: int, target: _TargetState,
                         slot: int) -> None:

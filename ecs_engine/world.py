@@ -46,6 +46,7 @@ class World:
         self._table_ids: dict[frozenset[type[Component]], int] = {}
         self._queries: dict[tuple[Any, ...], Query] = {}
         self._queries_by_call: dict[tuple[Any, ...], Query] = {}  # as called (see query)
+        self._stamp_keys: dict[tuple[type, ...], list[tuple[Any, str]]] = {}  # see change_stamp
         self._closures: dict[frozenset[type[Component]], frozenset[type[Component]]] = {}
         self.tick = 0
         # Bumped by every spawn, destroy, add and remove that is applied (not when queued).
@@ -99,6 +100,23 @@ class World:
     def components(self, eid: int) -> tuple[type[Component], ...]:
         table, _ = self._locate(int(eid))
         return table.types
+
+    def change_stamp(self, eid: int, *component_types: type) -> tuple[int, ...]:
+        """A value that stays equal while none of these components of this entity can have
+        changed: where it lives (table, row, layout) and the last write tick of each column.
+        Ticks belong to tables, not rows, so a write to another entity of the same table changes
+        the stamp too (never the reverse). For caching what is derived from one entity."""
+        table, row = self._locate(int(eid))
+        keys = self._stamp_keys.get(component_types)
+        if keys is None:
+            keys = self._stamp_keys[component_types] = [
+                (ct, name) for ct in map(schema_of, component_types) for name in ct.__fields__]
+        ticks = table.column_ticks
+        try:
+            return (table.id, table.version, row, *[ticks[k] for k in keys])
+        except KeyError:
+            missing = next(ct for ct in map(schema_of, component_types) if not table.has(ct))
+            raise MissingComponentError(f"{describe_entity(int(eid))} has no {missing.__name__}") from None
 
     # ----------------------------------------------------------------- ticks
     def _write_tick(self) -> int:

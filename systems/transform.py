@@ -5,8 +5,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from ecs_engine.components import ModelMatrix, Transform
+from ecs_engine.components import Camera, ModelMatrix, Transform
 
+from ecs_engine.camera_math import active_camera
+from ecs_engine.errors import UsageError
 from ecs_engine.jobs import JobPool, over_rows
 from ecs_engine.schedule import System
 from ecs_engine.timestep import Interpolation, PreviousTransform
@@ -42,13 +44,14 @@ class TransformSystem(System):
 
     def __init__(self) -> None:
         super().__init__(reads=[Transform, PreviousTransform], writes=[ModelMatrix], name="transform")
-        self._origin: np.ndarray | None = None
+        self._origin: bytes | None = None  # the origin of the last run, as bytes
         self.rows_updated = 0
 
     def run(self, world: World, dt: float) -> None:
         origin = render_origin(world)
-        moved = self._origin is None or not np.array_equal(origin, self._origin)
-        self._origin = origin.copy()
+        key = origin.tobytes()
+        moved = key != self._origin
+        self._origin = key
         interpolation = world.resources.get(Interpolation)
         without = (PreviousTransform,) if interpolation is not None else ()
         query = world.query(Transform, ModelMatrix, without=without)
@@ -84,17 +87,23 @@ class RenderOriginSystem(System):
     system runs, so this frame's matrices are relative to this frame's camera."""
 
     def __init__(self) -> None:
-        from ecs_engine.components import Camera
-
         super().__init__(reads=[Camera, Transform], writes=[], name="render_origin")
+        self._set: RenderOrigin | None = None
+        self._stamp: tuple[int, ...] = ()
 
     def run(self, world: World, dt: float) -> None:
-        from ecs_engine.camera_math import active_camera
-
         current = world.resources.get(RenderOrigin)
         if current is not None and not current.follow_camera:
             return  # pinned
-        if world.query(*self.reads, write=()).count() == 0:
-            return  # nothing to follow (a scene without a camera renders nothing)
-        position = world.get(active_camera(world), Transform).position
-        world.resources[RenderOrigin] = RenderOrigin(position)
+        try:
+            eid = active_camera(world)
+        except UsageError:
+            if world.query(*self.reads, write=()).count() == 0:
+                return  # nothing to follow (a scene without a camera renders nothing)
+            raise
+        stamp = world.change_stamp(eid, Transform)
+        if current is not None and current is self._set and stamp == self._stamp:
+            return  # the camera has not moved since this system set the origin
+        position = world.get(eid, Transform).position
+        self._set = world.resources[RenderOrigin] = RenderOrigin(position)
+        self._stamp = stamp

@@ -264,3 +264,25 @@ def test_camera_matrices_rejects_bad_viewport_aspect():
     for bad in (0.0, -1.0, math.nan, math.inf):
         with pytest.raises(ValueError):
             camera_matrices(w, bad)
+
+
+def test_camera_matrices_are_kept_while_the_camera_is_still_and_remade_when_it_changes():
+    w = World()
+    e = w.spawn(Camera(fov_y=FOV), Transform(position=(1.0, 2.0, 3.0)))
+    w.spawn(Transform(position=(5.0, 0.0, 0.0)))  # another table: its writes do not matter
+    first = camera_matrices(w, 1.5)
+    assert camera_matrices(w, 1.5) is first  # nothing changed: the same object
+    assert not first.projection.flags.writeable and not first.position.flags.writeable
+    assert camera_matrices(w, 2.0).projection[0, 0] != first.projection[0, 0]  # the viewport
+    w.set(e, Transform, position=(4.0, 5.0, 6.0))
+    moved = camera_matrices(w, 1.5)
+    assert moved.position.tolist() == [4.0, 5.0, 6.0]
+    q = yaw_pitch_quat(0.3, 0.0)
+    w.set(e, Transform, rotation=q)
+    assert np.array_equal(camera_matrices(w, 1.5).view, view_rotation(q))
+    w.set(e, Camera, fov_y=FOV / 2)
+    assert np.array_equal(camera_matrices(w, 1.5).projection, perspective(FOV / 2, 1.5, 0.1))
+    other = w.spawn(Camera(near=0.5), Transform(), ActiveCamera())  # structure changed
+    assert camera_matrices(w, 1.5).entity == other
+    w.destroy(other)
+    assert camera_matrices(w, 1.5).entity == e

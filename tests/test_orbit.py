@@ -72,3 +72,19 @@ def test_orbit_only_moves_position_and_validates_values():
     for bad in (dict(radius=-1.0), dict(angular_speed=math.inf), dict(center=(0.0, math.nan, 0.0))):
         with pytest.raises(ValueError):
             w.spawn(Orbit(**bad))
+
+
+def test_native_step_matches_the_numpy_reference():
+    from ecs_engine.systems.orbit import orbit_step, orbit_step_numpy
+
+    rng = np.random.default_rng(3)
+    n = 40
+    args = [rng.normal(size=(n, 3)), rng.uniform(0, 5, n), rng.uniform(-4, 4, n)]
+    height = rng.normal(size=n)
+    phases = [rng.uniform(-20, 20, n) for _ in range(2)]
+    positions = [np.zeros((n, 3)) for _ in range(2)]
+    phases[1][:] = phases[0]
+    orbit_step(*args, phases[0], height, positions[0], 0.37)
+    orbit_step_numpy(*args, phases[1], height, positions[1], 0.37)
+    assert np.allclose(phases[0], phases[1], atol=1e-12)
+    assert np.allclose(positions[0], positions[1], atol=1e-12)

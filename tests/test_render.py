@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from ecs_engine.components import Mesh, PointLight, Transform
+from ecs_engine.components import Camera, Mesh, PointLight, Transform
 from ecs_engine.demos.scene_kit import add_camera
 from golden_images import GOLDEN, SIZE, assert_close_to_golden, image_difference
 from gpu_context import headless_gpu
@@ -147,3 +147,46 @@ def test_suballocator_serves_many_buffers_from_few_allocations():
         device.destroy()
         instance.destroy()
     assert instance.messages == []
+
+
+def test_what_the_renderer_keeps_between_frames_follows_the_world():
+    """Chunks, uniforms and camera matrices are kept while unchanged: each change must show."""
+    from ecs_engine.renderer import Renderer
+
+    with headless_gpu(80, 60) as gpu:
+        world = World()
+        build_cubes([(1, 1, 1)])(world, gpu.meshes.add)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, lights=True)
+        gpu.owned.append(renderer)
+        schedule = default_schedule()
+
+        def frame() -> tuple[object, np.ndarray]:
+            schedule.run(world, 0.0)
+            stats = renderer.render(world, readback=True)
+            return stats, gpu.target.pixels()[..., :3].astype(int)
+
+        for _ in range(3):  # every frame slot holds this state
+            stats, base = frame()
+        assert stats.instances == 1 and stats.lights == 1
+        cube = world.query(Mesh).entities()[0]
+        handle = int(world.get(cube, Mesh).handle)
+        world.spawn(Transform(position=(-1.0, 0.5, 0.0), scale=(0.5, 0.5, 0.5)), Mesh(handle=handle))
+        stats, more = frame()
+        assert stats.instances == 2 and np.abs(more - base).max() > 30
+        renderer.ambient = (1.0, 1.0, 1.0, 0.9)
+        frame()
+        stats, brighter = frame()  # both slots rewritten
+        assert brighter.sum() > more.sum() * 1.2
+        world.spawn(Transform(position=(-2.0, -2.0, 2.0)), PointLight(color=(1.0, 0.2, 0.2), intensity=6.0))
+        stats, lit = frame()
+        assert stats.lights == 2 and np.abs(lit - brighter).max() > 10
+        camera = world.query(Camera).entities()[0]
+        world.set(camera, Transform, position=world.get(camera, Transform).position + (0.0, 0.0, 3.0))
+        stats, away = frame()
+        covered = lambda image: (np.abs(image - image[0, 0]).max(axis=-1) > 8).sum()
+        assert covered(away) < 0.8 * covered(lit)  # the cubes look smaller
+        world.set(cube, Mesh, handle=99)
+        with pytest.raises(ValueError, match="Mesh.handle 99"):
+            frame()
+        world.set(cube, Mesh, handle=handle)
+        frame()

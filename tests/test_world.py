@@ -342,3 +342,28 @@ def test_cross_field_check_camera_near_below_far():
     w.set(e, Camera, far=np.inf)
     w.set(e, Camera, near=1000.0)
     assert w.get(e, Camera).near == 1000.0
+
+
+def test_change_stamp_moves_with_writes_and_structure_only():
+    w = World()
+    a, b = w.spawn_batch(2, Transform(), Health())
+    other = w.spawn(Transform())  # another table
+    stamp = w.change_stamp(a, Transform)
+    assert w.change_stamp(a, Transform) == stamp
+    w.set(other, Transform, position=(1.0, 0.0, 0.0))
+    w.set(a, Health, hp=5.0)
+    assert w.change_stamp(a, Transform) == stamp  # other tables and components
+    assert w.change_stamp(a, Transform, Health) != w.change_stamp(a, Transform)
+    w.set(b, Transform, position=(2.0, 0.0, 0.0))
+    moved = w.change_stamp(a, Transform)
+    assert moved != stamp  # ticks are per table: a neighbour's write counts too
+    for q in w.query(Transform, Health):
+        q[Transform].scale[...] = 2.0  # a write through a query view
+    assert w.change_stamp(a, Transform) != moved
+    settled = w.change_stamp(a, Transform)
+    w.destroy(b)  # structure: rows may move
+    assert w.change_stamp(a, Transform) != settled
+    with pytest.raises(MissingComponentError, match="Velocity"):
+        w.change_stamp(a, Transform, Velocity)
+    with pytest.raises(DeadEntityError):
+        w.change_stamp(b, Transform)

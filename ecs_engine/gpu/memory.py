@@ -9,6 +9,7 @@ persistently; a buffer's `array()` is an `np.frombuffer` view straight into GPU-
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -167,7 +168,7 @@ class Buffer:
         if shape is None:
             return raw[: len(raw) // dt.itemsize * dt.itemsize].view(dt)
         shape = (shape,) if isinstance(shape, int) else shape
-        count = int(np.prod(shape)) * dt.itemsize
+        count = math.prod(shape) * dt.itemsize
         return raw[:count].view(dt).reshape(shape)
 
     def descriptor(self, offset: int = 0, size: int | None = None) -> Any:

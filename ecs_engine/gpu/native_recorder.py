@@ -69,11 +69,13 @@ class NativeRecorder:
         bind_sets = fns["vkCmdBindDescriptorSets"]
         self._keep = fns  # the ctypes objects own nothing, but keep them with the compiled code
 
-        def record(cb, layout, push_stage, row_bytes, rows_addr, instanced, first_instance, run_start,
-                   run_count, run_mesh, run_pipeline, vertex_handles_addr, zero_offset_addr, index_handles,
-                   index_counts, begin_info_addr, viewport_addr, scissor_addr, set_addr):  # pragma: no cover
+        def record(cb, layout, push_stage, row_bytes, rows_addr, instanced, first_instance, key_counts,
+                   pipelines, vertex_handles_addr, zero_offset_addr, index_handles, index_counts,
+                   begin_info_addr, viewport_addr, scissor_addr, set_addr, out):  # pragma: no cover
             # a secondary sets its own viewport and scissor (they are not inherited) and binds
-            # the frame's descriptor set; returns the first failing VkResult, or 0
+            # the frame's descriptor set. The rows are sorted by key = mesh * 2 + mirrored, with
+            # key_counts[key] rows each: one run per non-empty key, drawn with pipelines[mirrored].
+            # Writes (draws, triangles) to out; returns the first failing VkResult, or 0.
             result = begin(cb, begin_info_addr)
             if result != 0:
                 return result
@@ -81,21 +83,33 @@ class NativeRecorder:
             set_scissor(cb, 0, 1, scissor_addr)
             bind_sets(cb, 0, layout, 0, 1, set_addr, 0, 0)
             bound = 0
-            for r in range(run_start.shape[0]):
-                pipeline = run_pipeline[r]
+            start = 0
+            draws = 0
+            triangles = 0
+            for k in range(key_counts.shape[0]):
+                count = key_counts[k]
+                if count == 0:
+                    continue
+                pipeline = pipelines[k & 1]
                 if pipeline != bound:
                     bind_pipeline(cb, 0, pipeline)
                     bound = pipeline
-                h = run_mesh[r]
+                h = k >> 1
                 bind_vertex(cb, 0, 1, vertex_handles_addr + 8 * h, zero_offset_addr)
                 bind_index(cb, index_handles[h], 0, INDEX_TYPE_UINT32)
-                count = index_counts[h]
+                indices = index_counts[h]
                 if instanced:
-                    draw_indexed(cb, count, run_count[r], 0, 0, first_instance + run_start[r])
+                    draw_indexed(cb, indices, count, 0, 0, first_instance + start)
+                    draws += 1
                 else:
-                    for i in range(run_start[r], run_start[r] + run_count[r]):
+                    for i in range(start, start + count):
                         push(cb, layout, push_stage, 0, row_bytes, rows_addr + i * row_bytes)
-                        draw_indexed(cb, count, 1, 0, 0, 0)
+                        draw_indexed(cb, indices, 1, 0, 0, 0)
+                    draws += count
+                triangles += indices // 3 * count
+                start += count
+            out[0] = draws
+            out[1] = triangles
             return end(cb)
 
         self._record = numba.njit(nogil=True)(record)
@@ -106,33 +120,42 @@ class NativeRecorder:
         vk = self.vk
         self._vertex = np.array([handle_int(vk, h) for h in vertex_handles], dtype=np.int64)
         self._index = np.array([handle_int(vk, h) for h in index_handles], dtype=np.int64)
-        self._counts = np.array(index_counts, dtype=np.uint32)
+        self._counts = np.array(index_counts, dtype=np.int64)
         self._meshes_seen = len(vertex_handles)
 
     @property
     def meshes_known(self) -> int:
         return self._meshes_seen
 
-    def frame_state(self, begin_info: Any, width: int, height: int, descriptor_set: Any) -> dict[str, Any]:
+    def frame_state(self, begin_info: Any, width: int, height: int, descriptor_set: Any, layout: Any,
+                    push_stage: int, pipelines: tuple[Any, Any]) -> dict[str, Any]:
         """Per-frame inputs of `record`: the begin info (with render-pass inheritance), viewport,
-        scissor and descriptor set, as memory the native loop reads (kept alive in the dict)."""
+        scissor, descriptor set, pipeline layout and the plain and mirrored pipelines, as memory
+        and integers the native loop reads (kept alive in the dict). Made once per target and
+        frame slot."""
         vk = self.vk
         viewport = np.array([0.0, 0.0, width, height, 0.0, 1.0], dtype=np.float32)
         scissor = np.array([0, 0, width, height], dtype=np.int32)
         sets = np.array([handle_int(vk, descriptor_set)], dtype=np.int64)
         return {"begin_info": begin_info, "begin_addr": handle_int(vk, vk.ffi.addressof(begin_info)),
-                "viewport": viewport, "scissor": scissor, "sets": sets}
+                "viewport": viewport, "scissor": scissor, "sets": sets, "layout": handle_int(vk, layout),
+                "push_stage": int(push_stage),
+                "pipelines": np.array([handle_int(vk, p) for p in pipelines], dtype=np.int64),
+                "viewport_addr": viewport.ctypes.data, "scissor_addr": scissor.ctypes.data,
+                "sets_addr": sets.ctypes.data}
 
-    def record(self, cb: Any, layout: Any, push_stage: int, rows: np.ndarray, instanced: bool, first_instance: int,
-               run_start: np.ndarray, run_count: np.ndarray, run_mesh: np.ndarray, run_pipeline: np.ndarray,
-               frame: dict[str, Any]) -> None:
-        """Begin `cb` (an allocated secondary), record one chunk's binds and draws, end it."""
+    def record(self, cb: Any, rows: np.ndarray, instanced: bool, first_instance: int, key_counts: np.ndarray,
+               frame: dict[str, Any]) -> tuple[int, int]:
+        """Begin `cb` (an allocated secondary), record one chunk's binds and draws, end it.
+        `rows` are sorted by key (mesh * 2 + mirrored), `key_counts[key]` of each. Returns
+        (draws, triangles). Threads may share one frame state."""
         vk = self.vk
-        result = self._record(handle_int(vk, cb), handle_int(vk, layout), push_stage, rows.dtype.itemsize,
-                              rows.ctypes.data, instanced, first_instance, run_start.astype(np.int64),
-                              run_count.astype(np.int64), run_mesh.astype(np.int64), run_pipeline,
+        out = np.empty(2, dtype=np.int64)
+        result = self._record(handle_int(vk, cb), frame["layout"], frame["push_stage"], rows.dtype.itemsize,
+                              rows.ctypes.data, instanced, first_instance, key_counts, frame["pipelines"],
                               self._vertex.ctypes.data, self._zero.ctypes.data, self._index, self._counts,
-                              frame["begin_addr"], frame["viewport"].ctypes.data, frame["scissor"].ctypes.data,
-                              frame["sets"].ctypes.data)
+                              frame["begin_addr"], frame["viewport_addr"], frame["scissor_addr"],
+                              frame["sets_addr"], out)
         if result != 0:
             raise RuntimeError(f"recording a secondary command buffer failed with VkResult {result}")
+        return int(out[0]), int(out[1])

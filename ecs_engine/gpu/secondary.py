@@ -29,10 +29,10 @@ class SecondaryBuffers:
 
     def reset(self, frame: int) -> None:
         """Main thread, after the frame's fence: every buffer of that slot may be re-recorded."""
-        vk = self.device.vk
+        lib = self.device.vk.lib
         for pool in self._pools[frame].values():
             if pool.used:
-                vk.vkResetCommandPool(self.device.handle, pool.handle, 0)
+                check(self.device.vk, lib.vkResetCommandPool(self.device.handle, pool.handle, 0))
                 pool.used = 0
 
     def acquire(self, frame: int) -> Any:
