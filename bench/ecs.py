@@ -32,7 +32,9 @@ Workloads ("workload" in the JSON rows); N = entities in the world
                   uses world.destroy(id) and two world.spawn(...) calls (single-entity API).
                   (esper's script calls create_entities(world, 1), which creates nothing since
                   1 // 2 == 0; we create the pair as intended.)
-    transform_frame  N entities with Transform, Velocity, AngularVelocity, Mesh (+ModelMatrix).
+    transform_frame  N entities with Transform, Velocity, AngularVelocity, Mesh (+ModelMatrix) and
+                  NormalMatrix (opt-in since the renderer stopped reading it; kept here so both
+                  engines make the same two matrices).
                   Native: Schedule(MotionSystem @update, TransformSystem @post_update),
                   frame = schedule.run(world, 1/60). esper: two processors doing the same work per
                   entity in plain Python (position += v*dt; the exact quaternion step of
@@ -107,6 +109,7 @@ from ecs_engine.components import (
     AngularVelocity,
     Mesh,
     ModelMatrix,
+    NormalMatrix,
     Transform,
     Velocity,
 )
@@ -640,6 +643,7 @@ def native_transform_world(data: dict[str, np.ndarray]) -> tuple[World, Schedule
         Velocity(linear=data["linear"]),
         AngularVelocity(angular=data["angular"]),
         Mesh(),
+        NormalMatrix(),  # the seed's transform made normal matrices too: the same work in both
     )
     schedule = Schedule()
     schedule.add(MotionSystem(), "update")
@@ -708,10 +712,10 @@ def check_transform(n: int = 64, frames: int = 3) -> float:
             api.process(DT)
         diff = 0.0
         for nid, eid in zip(nids.tolist(), eids):
-            mm = world.get(nid, ModelMatrix)
+            mm, nm = world.get(nid, ModelMatrix), world.get(nid, NormalMatrix)
             pm = api.component_for_entity(eid, PModelMatrix)
             diff = max(diff, float(np.abs(mm.model.astype(np.float64) - np.reshape(pm.model, (4, 4))).max()),
-                       float(np.abs(mm.normal.astype(np.float64) - np.reshape(pm.normal, (3, 3))).max()))
+                       float(np.abs(nm.normal.astype(np.float64) - np.reshape(pm.normal, (3, 3))).max()))
     return diff
 
 

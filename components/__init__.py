@@ -6,7 +6,7 @@ from .light import PointLight
 from .mesh import Mesh
 from .motion import AngularVelocity, Spring, Velocity
 from .orbit import Orbit
-from .transform import ModelMatrix, Transform
+from .transform import ModelMatrix, NormalMatrix, Transform
 
 __all__ = [
     "ORTHOGRAPHIC",
@@ -17,6 +17,7 @@ __all__ = [
     "FlyCamera",
     "Mesh",
     "ModelMatrix",
+    "NormalMatrix",
     "Orbit",
     "PointLight",
     "Spring",

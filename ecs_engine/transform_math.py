@@ -47,17 +47,18 @@ def normal_scale(scale: np.ndarray) -> np.ndarray:
 
 
 def compose_numpy(position: np.ndarray, rotation: np.ndarray, scale: np.ndarray, origin: np.ndarray,
-                  model_out: np.ndarray, normal_out: np.ndarray) -> None:
+                  model_out: np.ndarray, normal_out: np.ndarray | None = None) -> None:
     """Reference version of `compose` in plain NumPy."""
     rot = quat_to_mat3(rotation)
     model_out[:, :3, :3] = rot * scale[:, None, :]
     model_out[:, :3, 3] = position - origin
     model_out[:, 3, :3] = 0.0
     model_out[:, 3, 3] = 1.0
-    normal_out[...] = rot * normal_scale(scale)[:, None, :]
+    if normal_out is not None:
+        normal_out[...] = rot * normal_scale(scale)[:, None, :]
 
 
-def _compose_kernel(position, rotation, scale, origin, model_out, normal_out):  # pragma: no cover
+def _compose_kernel(position, rotation, scale, origin, model_out, normal_out, with_normal):  # pragma: no cover
     ox, oy, oz = origin[0], origin[1], origin[2]
     for i in range(position.shape[0]):
         x, y, z, w = rotation[i, 0], rotation[i, 1], rotation[i, 2], rotation[i, 3]
@@ -90,6 +91,8 @@ def _compose_kernel(position, rotation, scale, origin, model_out, normal_out):  
         m[3, 1] = 0.0
         m[3, 2] = 0.0
         m[3, 3] = 1.0
+        if not with_normal:
+            continue
         c0 = sy * sz
         c1 = sx * sz
         c2 = sx * sy
@@ -118,17 +121,23 @@ _compose_native = native.njit(_compose_kernel)
 
 
 def compose(position: np.ndarray, rotation: np.ndarray, scale: np.ndarray, origin: np.ndarray,
-            model_out: np.ndarray, normal_out: np.ndarray) -> None:
-    """Write camera-relative model matrices and normal matrices for every row.
+            model_out: np.ndarray, normal_out: np.ndarray | None = None) -> None:
+    """Write camera-relative model matrices, and normal matrices when `normal_out` is given,
+    for every row.
 
     position, rotation, scale: (n, 3), (n, 4), (n, 3) float64; origin: (3,) float64;
     model_out: (n, 4, 4) float32; normal_out: (n, 3, 3) float32. Releases the GIL with numba.
     """
     origin = np.asarray(origin, dtype=np.float64)
     if _compose_native is not None:
-        _compose_native(position, rotation, scale, origin, model_out, normal_out)
+        with_normal = normal_out is not None
+        _compose_native(position, rotation, scale, origin, model_out, normal_out if with_normal else _NO_NORMALS,
+                        with_normal)
     else:
         compose_numpy(position, rotation, scale, origin, model_out, normal_out)
+
+
+_NO_NORMALS = np.empty((0, 3, 3), dtype=np.float32)
 
 
 # --------------------------------------------------------------------------- motion

@@ -1,11 +1,13 @@
-"""Transform columns -> camera-relative float32 model and normal matrices (ModelMatrix)."""
+"""Transform columns -> camera-relative float32 model matrices (ModelMatrix), and normal
+matrices for entities that opt in with NormalMatrix."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
-from ecs_engine.components import Camera, ModelMatrix, Transform
+from ecs_engine.components import Camera, ModelMatrix, NormalMatrix, Transform
 
 from ecs_engine.camera_math import active_camera
 from ecs_engine.errors import UsageError
@@ -43,7 +45,7 @@ class TransformSystem(System):
     position interpolated linearly, rotation by normalised lerp."""
 
     def __init__(self) -> None:
-        super().__init__(reads=[Transform, PreviousTransform], writes=[ModelMatrix], name="transform")
+        super().__init__(reads=[Transform, PreviousTransform], writes=[ModelMatrix, NormalMatrix], name="transform")
         self._origin: bytes | None = None  # the origin of the last run, as bytes
         self.rows_updated = 0
 
@@ -53,25 +55,34 @@ class TransformSystem(System):
         moved = key != self._origin
         self._origin = key
         interpolation = world.resources.get(Interpolation)
-        without = (PreviousTransform,) if interpolation is not None else ()
-        query = world.query(Transform, ModelMatrix, without=without)
-        batches = query.iter() if moved else query.iter(changed=[Transform])
+        interpolated = (PreviousTransform,) if interpolation is not None else ()
         pool = world.resources.get(JobPool)
         updated = 0
-        for batch in batches:
-            t = batch[Transform]
-            m = batch[ModelMatrix]
-            over_rows(pool, len(batch), lambda s, t=t, m=m: compose(
-                t.position[s], t.rotation[s], t.scale[s], origin, m.model[s], m.normal[s]))
-            updated += len(batch)
-        if interpolation is not None:
-            alpha = float(interpolation.alpha)
-            for batch in world.query(Transform, PreviousTransform, ModelMatrix):
-                t, prev, m = batch[Transform], batch[PreviousTransform], batch[ModelMatrix]
-                position = prev.position + (t.position - prev.position) * alpha
-                compose(position, nlerp(prev.rotation, t.rotation, alpha), t.scale, origin, m.model, m.normal)
+        for with_normal in (False, True):
+            query = _matrix_query(world, with_normal, (), interpolated)
+            for batch in query.iter() if moved else query.iter(changed=[Transform]):
+                t = batch[Transform]
+                model = batch[ModelMatrix].model
+                normal = batch[NormalMatrix].normal if with_normal else None
+                over_rows(pool, len(batch), lambda s, t=t, m=model, n=normal: compose(
+                    t.position[s], t.rotation[s], t.scale[s], origin, m[s], None if n is None else n[s]))
                 updated += len(batch)
+            if interpolation is not None:
+                alpha = float(interpolation.alpha)
+                for batch in _matrix_query(world, with_normal, (PreviousTransform,), ()):
+                    t, prev = batch[Transform], batch[PreviousTransform]
+                    position = prev.position + (t.position - prev.position) * alpha
+                    compose(position, nlerp(prev.rotation, t.rotation, alpha), t.scale, origin,
+                            batch[ModelMatrix].model, batch[NormalMatrix].normal if with_normal else None)
+                    updated += len(batch)
         self.rows_updated = updated
+
+
+def _matrix_query(world: World, with_normal: bool, extra: tuple[type, ...], without: tuple[type, ...]) -> Any:
+    """Tables with Transform and ModelMatrix (and `extra`), with or without NormalMatrix."""
+    if with_normal:
+        return world.query(Transform, ModelMatrix, NormalMatrix, *extra, without=without)
+    return world.query(Transform, ModelMatrix, *extra, without=(*without, NormalMatrix))
 
 
 def nlerp(a: np.ndarray, b: np.ndarray, alpha: float) -> np.ndarray:

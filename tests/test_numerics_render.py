@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from ecs_engine.components import Camera, Mesh, ModelMatrix, PointLight, Transform
+from ecs_engine.components import Camera, Mesh, ModelMatrix, NormalMatrix, PointLight, Transform
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.systems import RenderOrigin
 from golden_images import image_difference
@@ -97,11 +97,11 @@ def test_degenerate_transforms_reach_the_gpu_finite():
     quats = [(0, 0, 0, 5.0), (1e-12, 0, 0, 1e-12), (3, -4, 0, 0), (0.1, 0.2, 0.3, 0.4), (0, 0, 0, 1), (1, 1, 1, 1),
              (0, 1e-6, 0, 1e-6)]
     world.spawn_batch(len(scales), Transform(position=np.full((len(scales), 3), 1e30), rotation=np.array(quats),
-                                             scale=np.array(scales, dtype=float)), Mesh(handle=0))
+                                             scale=np.array(scales, dtype=float)), Mesh(handle=0), NormalMatrix())
     world.run_system(TransformSystem(), 0.0)
-    for batch in world.query(ModelMatrix, Mesh, write=()):
+    for batch in world.query(ModelMatrix, NormalMatrix, Mesh, write=()):
         m = batch[ModelMatrix]
-        assert np.isfinite(m.model).all() and np.isfinite(m.normal).all()
+        assert np.isfinite(m.model).all() and np.isfinite(batch[NormalMatrix].normal).all()
         rows = np.zeros(len(batch), INSTANCE_DTYPE)
         n = write_rows(m.model, batch[Mesh].handle, batch[Mesh].material, np.zeros((1, 3)),
                        np.ones(1), None, 6, rows, np.zeros(2, np.int64))

@@ -173,3 +173,26 @@ def test_stock_systems_split_across_a_job_pool_give_the_same_result():
         out.append(w.query(ModelMatrix, write=()).column(ModelMatrix.model))
         w.resources[JobPool].close()
     assert np.array_equal(out[0], out[1])
+
+
+def test_normal_matrices_are_written_only_for_entities_that_ask_for_them():
+    from ecs_engine.components import NormalMatrix
+    from ecs_engine.timestep import Interpolation, PreviousTransform
+    from ecs_engine.transform_math import compose_numpy
+
+    w = World()
+    q = np.array([0.1, 0.7, -0.2, 0.6])
+    t = Transform(position=(1, 2, 3), rotation=q, scale=(2.0, 0.5, -1.0))
+    plain = w.spawn(t, Mesh())
+    both = w.spawn(t, Mesh(), NormalMatrix())
+    smooth = w.spawn(t, Mesh(), NormalMatrix(), PreviousTransform(position=(1, 2, 3), rotation=q))
+    model, normal = np.zeros((1, 4, 4), np.float32), np.zeros((1, 3, 3), np.float32)
+    stored = w.get(plain, Transform)
+    compose_numpy(stored.position[None], stored.rotation[None], stored.scale[None], np.zeros(3), model, normal)
+    w.resources[Interpolation] = Interpolation(0.5)
+    w.run_system(TransformSystem(), 0.0)
+    for e in (plain, both, smooth):
+        assert np.allclose(w.get(e, ModelMatrix).model, model[0], atol=1e-6)
+    for e in (both, smooth):
+        assert np.allclose(w.get(e, NormalMatrix).normal, normal[0], atol=1e-6)
+    assert not w.has(plain, NormalMatrix)

@@ -35,6 +35,9 @@ def compose_both(pos, q, scale, origin):
         normal = np.full((n, 3, 3), np.nan, dtype=np.float32)
         fn(pos, q, scale, origin, model, normal)
         out.append((model, normal))
+        alone = np.full((n, 4, 4), np.nan, dtype=np.float32)
+        fn(pos, q, scale, origin, alone)  # no normal matrices asked for: the same model matrices
+        assert np.array_equal(alone, model)
     return out
 
 
