@@ -7,7 +7,14 @@ import math
 
 import numpy as np
 import pytest
-from ecs_engine.components import Camera, Mesh, ModelMatrix, NormalMatrix, PointLight, Transform
+from ecs_engine.components import (
+    Camera,
+    Mesh,
+    ModelMatrix,
+    NormalMatrix,
+    PointLight,
+    Transform,
+)
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.systems import RenderOrigin
 from golden_images import image_difference

@@ -177,6 +177,7 @@ def test_stock_systems_split_across_a_job_pool_give_the_same_result():
 
 def test_normal_matrices_are_written_only_for_entities_that_ask_for_them():
     from ecs_engine.components import NormalMatrix
+
     from ecs_engine.timestep import Interpolation, PreviousTransform
     from ecs_engine.transform_math import compose_numpy
 
