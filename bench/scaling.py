@@ -11,8 +11,9 @@ come back from the GPU a frame or two late (steady scene: the same numbers).
 
 JSON (schema_version 1): {"benchmark": "scaling", "quick", "machine", "device", "config",
 "results": [{"entities", "threads", "mode", "recorder", "frames", "record_ms", "systems_ms", "cpu_ms", "gpu_ms",
-"fps", "draws", "visible", "ns_per_draw_record"}], "targets": [{"name", "target", "measured",
-"unit", "op", "met"}]}; a plot `scaling-<slug>.png` beside it.
+"fps", "draws", "visible", "ns_per_draw_record"}], "driver_floor": {...} (bench/driver_floor.py),
+"targets": [{"name", "target", "measured", "unit", "op", "met"}]}; a plot `scaling-<slug>.png`
+beside it.
 """
 
 from __future__ import annotations
@@ -28,6 +29,11 @@ from ecs_engine.jobs import JobPool, default_threads
 
 THREADS = default_threads()
 PYTHON_MAX = 10_000
+# Up to SMALL_MAX entities a configuration runs SMALL_FRAMES timed frames (a 100-entity frame
+# takes ~0.2 ms, and 12 frames gave medians that moved by 2x between runs).
+SMALL_MAX = 10_000
+SMALL_FRAMES = 300
+SMALL_WARMUP = 30
 # The Python recorder's rows use small chunks, so that even 10k entities make several jobs and
 # the table shows what threads do for it (by default 10k rows would make one job).
 PYTHON_CHUNK_ROWS = 2_048
@@ -166,16 +172,22 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
         thread_counts = [t for t in (1, 2, 4, 8, 16) if t <= THREADS]
     counts = args.entities or counts
     results: list[dict[str, Any]] = []
-    progress.total = len(counts)
+    progress.total = len(counts) + 1
     for n in counts:
+        # small scenes take well under a millisecond a frame: more frames steady their medians
+        n_frames, n_warmup = (SMALL_FRAMES, SMALL_WARMUP) if n <= SMALL_MAX and not args.quick else (frames, warmup)
         with progress.step(f"{n:,} entities: threads {thread_counts}, every mode and recorder"):
-            results.extend(sweep(n, thread_counts, frames, warmup, size))
+            results.extend(sweep(n, thread_counts, n_frames, n_warmup, size))
+    floor_draws = 20_000 if args.quick else 1_000_000
+    with progress.step(f"driver floor: {floor_draws:,} bare push + draw calls, 1 thread"):
+        floor = measure_driver_floor(floor_draws, size)
     doc = {"benchmark": "scaling", "schema_version": 1, "quick": bool(args.quick), "machine": machine,
            "device": results[0]["device"] if results else None,
            "config": {"entities": counts, "threads": thread_counts, "frames": frames, "warmup": warmup,
+                      "small_max": SMALL_MAX, "small_frames": SMALL_FRAMES, "small_warmup": SMALL_WARMUP,
                       "size": list(size), "python_max": PYTHON_MAX,
                       "python_chunk_rows": PYTHON_CHUNK_ROWS},
-           "results": results, "targets": targets(results)}
+           "results": results, "driver_floor": floor, "targets": targets(results)}
     out = Path(args.out) / f"scaling-{machine['slug']}.png"
     out.parent.mkdir(parents=True, exist_ok=True)
     plot(results, out)
@@ -187,7 +199,34 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
               f"{r['systems_ms']:7.2f} "
               f"{r['cpu_ms']:8.2f} {gpu:>8} {r['fps']:7.1f} {r['draws']:8} "
               f"{'-' if r['ns_per_draw_record'] is None else format(r['ns_per_draw_record'], '8.0f'):>8}")
+    print(f"driver floor, 1 thread, {floor['draws']:,} calls in secondaries of {floor['per_buffer']:,}: "
+          f"push + draw {floor['push_draw_ns']:.0f} ns, draw alone {floor['draw_ns']:.0f} ns, "
+          f"push alone {floor['push_ns']:.0f} ns")
     for t in doc["targets"]:
         print(f"target {'MET ' if t['met'] else 'MISS'} {t['name']}: {t['measured']:.3g} {t['unit']} "
               f"(target {t['op']} {t['target']})")
     return doc
+
+
+def measure_driver_floor(draws: int, size: tuple[int, int]) -> dict[str, Any]:
+    """See bench/driver_floor.py: what the driver alone costs per per_entity draw."""
+    from ecs_engine.gpu.device import Device
+    from ecs_engine.gpu.instance import Instance
+    from ecs_engine.gpu.offscreen import OffscreenTarget
+    from ecs_engine.mesh_data import cube_mesh
+    from ecs_engine.mesh_registry import MeshRegistry
+
+    from .driver_floor import measure as floor
+
+    instance = Instance()
+    device = Device(instance)
+    target = OffscreenTarget(device, *size)
+    meshes = MeshRegistry(device)
+    try:
+        meshes.add(cube_mesh())
+        return floor(device, target, meshes, draws)
+    finally:
+        meshes.destroy()
+        target.destroy()
+        device.destroy()
+        instance.destroy()

@@ -27,3 +27,8 @@ def test_scaling_quick_writes_json_and_plot(tmp_path, monkeypatch):
             assert 2 <= r["draws"] <= 5 and r["ns_per_draw_record"] is None
     names = [t["name"] for t in doc["targets"]]
     assert any("ns per draw" in n for n in names) and all(type(t["met"]) is bool for t in doc["targets"])
+    floor = doc["driver_floor"]
+    assert floor["draws"] == 20_000 and floor["per_buffer"] > 0
+    for key in ("push_draw_ns", "draw_ns", "push_ns"):
+        assert 0 < floor[key] < 100_000
+    assert floor["push_draw_ns"] > floor["draw_ns"]  # pushing costs something
