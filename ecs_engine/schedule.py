@@ -5,7 +5,10 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any
 
+from ecs_engine.components.transform import Transform
+
 from .errors import EcsError
+from .timestep import Interpolation, PreviousTransform
 
 if TYPE_CHECKING:
     from .world import World
@@ -106,8 +109,6 @@ class Schedule:
         has both); the other stages run once with frame_dt, at most `max_frame_dt` (a hitch
         must not fling a per-frame camera); the Interpolation resource gets the frame's alpha.
         `clock` is a timestep.FixedTimestep. Returns the steps run."""
-        from .timestep import Interpolation
-
         if fixed_stage not in self.stages:
             raise ValueError(f"unknown stage {fixed_stage!r}; stages are {list(self.stages)}")
         if world.deferring:
@@ -140,9 +141,6 @@ def _run_stage(world: World, systems: list[System], dt: float) -> None:
 
 
 def _snapshot_transforms(world: World) -> None:
-    from .components import Transform
-    from .timestep import PreviousTransform
-
     for batch in world.query(Transform, PreviousTransform, write=(PreviousTransform,)):
         t, prev = batch[Transform], batch[PreviousTransform]
         prev.position[...] = t.position
