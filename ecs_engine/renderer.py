@@ -296,11 +296,11 @@ class Renderer:
     # ------------------------------------------------------------- per frame
     def chunks(self, world: World) -> list[Chunk]:
         """Row ranges of every table with a ModelMatrix and a Mesh, each with its buffer slice.
-        Kept while those tables keep their rows, layout and Mesh.handle column (the views stay
-        valid and see every value written since)."""
+        Kept while the world is the same and its tables keep their rows, layout and Mesh.handle
+        column (the views stay valid and see every value written since)."""
         query = world.query(ModelMatrix, Mesh, write=())
         tables = query.tables
-        key = (self.chunk_rows, self.jobs.threads if self.jobs is not None else 1, len(self.meshes),
+        key = (world, self.chunk_rows, self.jobs.threads if self.jobs is not None else 1, len(self.meshes),
                *[(t.id, t.version, t.count, t.column_ticks[_HANDLE]) for t in tables])
         if key == self._chunks_key:
             return self._chunks

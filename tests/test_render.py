@@ -190,3 +190,25 @@ def test_what_the_renderer_keeps_between_frames_follows_the_world():
             frame()
         world.set(cube, Mesh, handle=handle)
         frame()
+
+
+def test_a_renderer_switched_to_another_world_draws_that_world():
+    """Two worlds built the same way have tables with the same ids, layouts and ticks: what the
+    renderer keeps from one must not be used for the other (the editor's scene switcher)."""
+    from ecs_engine.renderer import Renderer
+
+    with headless_gpu(80, 60) as gpu:
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, lights=False)
+        gpu.owned.append(renderer)
+        cube = gpu.meshes.add(cube_mesh())
+        sides = []
+        for x in (-1.2, 1.2):
+            world = World()
+            world.spawn(Transform(position=(x, 0.0, 0.0)), Mesh(handle=cube))
+            add_camera(world, eye=(0.0, 0.0, 4.0), target=(0.0, 0.0, 0.0))
+            default_schedule().run(world, 0.0)  # systems belong to one world (change ticks)
+            renderer.render(world, readback=True)
+            image = gpu.target.pixels()[..., :3].astype(int)
+            covered = np.abs(image - image[0, 0]).max(axis=-1) > 8
+            sides.append(np.argwhere(covered)[:, 1].mean())
+        assert sides[0] < 40 < sides[1]  # left of centre, then right
