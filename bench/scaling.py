@@ -63,6 +63,7 @@ def sweep(entities: int, thread_counts: list[int], frames: int, warmup: int, siz
         world = World()
         scene_builder("scaling", entities)(world, meshes.add)
         schedule = default_schedule()
+        start = snapshot(world)
         configs = [(m, "native") for m in ("per_entity", "instanced")] + [("indirect", "gpu")]
         if entities <= PYTHON_MAX:
             configs += [(m, "python") for m in ("per_entity", "instanced")]
@@ -74,6 +75,7 @@ def sweep(entities: int, thread_counts: list[int], frames: int, warmup: int, siz
                                 **({"chunk_rows": PYTHON_CHUNK_ROWS} if recorder == "python" else {}))
             try:
                 for threads in thread_counts:
+                    restore(world, start)  # every configuration starts from the same scene
                     with JobPool(threads) as pool:
                         world.resources[JobPool] = renderer.jobs = pool
                         rows.append(measure(world, schedule, renderer, frames, warmup) |
@@ -87,6 +89,30 @@ def sweep(entities: int, thread_counts: list[int], frames: int, warmup: int, siz
         device.destroy()
         instance.destroy()
     return rows
+
+
+def snapshot(world: Any) -> list[np.ndarray]:
+    """What the scene's systems move (transforms, orbit phases), to put back between runs: 330
+    frames of motion carry entities out of view and would make later configurations cheaper."""
+    from ecs_engine.components import Orbit, Transform
+
+    saved = []
+    for batch in world.query(Transform, write=()):
+        saved += [batch[Transform].position.copy(), batch[Transform].rotation.copy()]
+    for batch in world.query(Orbit, write=()):
+        saved.append(batch[Orbit].phase.copy())
+    return saved
+
+
+def restore(world: Any, saved: list[np.ndarray]) -> None:
+    from ecs_engine.components import Orbit, Transform
+
+    values = iter(saved)
+    for batch in world.query(Transform):
+        batch[Transform].position[...] = next(values)
+        batch[Transform].rotation[...] = next(values)
+    for batch in world.query(Orbit):
+        batch[Orbit].phase[...] = next(values)
 
 
 def measure(world: Any, schedule: Any, renderer: Any, frames: int, warmup: int) -> dict[str, Any]:

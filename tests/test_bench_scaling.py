@@ -32,3 +32,27 @@ def test_scaling_quick_writes_json_and_plot(tmp_path, monkeypatch):
     for key in ("push_draw_ns", "draw_ns", "push_ns"):
         assert 0 < floor[key] < 100_000
     assert floor["push_draw_ns"] > floor["draw_ns"]  # pushing costs something
+
+
+def test_each_configuration_starts_from_the_same_scene(monkeypatch):
+    monkeypatch.syspath_prepend(str(ROOT))
+    import numpy as np
+    from ecs_engine.components import Orbit, Transform
+
+    from bench.scaling import restore, snapshot
+    from ecs_engine import World
+    from ecs_engine.app import default_schedule, scene_builder
+
+    world = World()
+    scene_builder("scaling", 50)(world, lambda mesh: 0)
+    start = snapshot(world)
+    before = [world.query(Transform, write=()).column(Transform.position),
+              world.query(Orbit, write=()).column(Orbit.phase)]
+    schedule = default_schedule()
+    for _ in range(20):
+        schedule.run(world, 1 / 60)
+    moved = world.query(Transform, write=()).column(Transform.position)
+    assert not np.array_equal(moved, before[0])
+    restore(world, start)
+    assert np.array_equal(world.query(Transform, write=()).column(Transform.position), before[0])
+    assert np.array_equal(world.query(Orbit, write=()).column(Orbit.phase), before[1])
