@@ -14,14 +14,13 @@ from typing import Any
 
 import numpy as np
 
-from ecs_engine.gpu.native_recorder import _PROTOTYPES, handle_int
+from ecs_engine.gpu.native_recorder import device_functions, handle_int
 
 
-def _loops(vk: Any, device: Any) -> dict[str, Any]:
+def _loops(device: Any) -> dict[str, Any]:
     import numba
 
-    fns = {name: proto(handle_int(vk, vk.lib.vkGetDeviceProcAddr(device.handle, name.encode())))
-           for name, proto in _PROTOTYPES.items() if name in ("vkCmdPushConstants", "vkCmdDrawIndexed")}
+    fns = device_functions(device, ("vkCmdPushConstants", "vkCmdDrawIndexed"))
     push, draw = fns["vkCmdPushConstants"], fns["vkCmdDrawIndexed"]
 
     def push_draw(cb, layout, stage, addr, n, indices):  # pragma: no cover - compiled
@@ -48,7 +47,7 @@ def measure(device: Any, target: Any, meshes: Any, draws: int, per_buffer: int =
     vk = device.vk
     renderer = Renderer(device, target, meshes, lights=False, mode="per_entity")
     try:
-        loops = _loops(vk, device)
+        loops = _loops(device)
         rows = np.zeros((draws, 16), np.float32)
         rows[:, 0] = rows[:, 5] = rows[:, 10] = 1.0
         state = renderer._target_state(target.framebuffer, target.width, target.height)

@@ -43,6 +43,19 @@ def handle_int(vk: Any, handle: Any) -> int:
     return value - (1 << 64) if value >= 1 << 63 else value
 
 
+def device_functions(device: Device, names: Any) -> dict[str, Any]:
+    """The device's entry points for `names` (keys of _PROTOTYPES) as typed ctypes functions that
+    numba-compiled code can call."""
+    vk = device.vk
+    fns = {}
+    for name in names:
+        address = handle_int(vk, vk.lib.vkGetDeviceProcAddr(device.handle, name.encode()))
+        if not address:
+            raise RuntimeError(f"{name} has no device entry point")
+        fns[name] = _PROTOTYPES[name](address)
+    return fns
+
+
 class NativeRecorder:
     def __init__(self, device: Device) -> None:
         if not native.AVAILABLE:
@@ -51,12 +64,7 @@ class NativeRecorder:
 
         vk = device.vk
         self.vk = vk
-        fns = {}
-        for name, proto in _PROTOTYPES.items():
-            address = handle_int(vk, vk.lib.vkGetDeviceProcAddr(device.handle, name.encode()))
-            if not address:
-                raise RuntimeError(f"{name} has no device entry point")
-            fns[name] = proto(address)
+        fns = device_functions(device, _PROTOTYPES)
         bind_pipeline = fns["vkCmdBindPipeline"]
         bind_vertex = fns["vkCmdBindVertexBuffers"]
         bind_index = fns["vkCmdBindIndexBuffer"]
