@@ -204,7 +204,7 @@ class Renderer:
         self._build_pipelines()
         self._targets: dict[tuple[int, int, int], _TargetState] = {}
         self._scratch = threading.local()
-        self._planes_key: bytes = b""
+        self._planes_for: np.ndarray | None = None  # the view matrix the planes were made with
         self._planes_value = np.zeros((0, 4))
         self._view_cache: tuple[CameraMatrices, bytes, np.ndarray] | None = None
         self._globals_written: list[tuple[Any, ...] | None] = [None] * n  # per slot: what its buffer holds
@@ -325,10 +325,10 @@ class Renderer:
         return max(MIN_CHUNK_ROWS, -(-rows // threads))
 
     def _planes(self, projection: np.ndarray, view: np.ndarray) -> np.ndarray:
-        """Frustum planes, kept while the camera's matrices stay the same (a still camera)."""
-        key = projection.tobytes() + view.tobytes()
-        if key != self._planes_key:
-            self._planes_key, self._planes_value = key, frustum_planes(projection, view)
+        """Frustum planes, kept while the view is the same object: `_view` makes a new one
+        whenever the camera matrices (projection included) or the origin change."""
+        if view is not self._planes_for:
+            self._planes_for, self._planes_value = view, frustum_planes(projection, view)
         return self._planes_value
 
     def _view(self, cam: CameraMatrices, origin: np.ndarray, origin_key: bytes) -> np.ndarray:
