@@ -151,6 +151,33 @@ def test_angular_integration_is_exact_for_constant_rate_and_paths_agree():
     assert np.allclose(np.linalg.norm(a, axis=1), 1.0)
 
 
+def test_motion_integrates_strided_views_in_place():
+    """The native kernels take flat contiguous arrays; a strided view must still be updated in
+    place (through the NumPy path), never a silent copy."""
+    rot = rng.normal(size=(40, 4))
+    pos = rng.normal(size=(40, 3))
+    ang = rng.normal(size=(20, 3))
+    expected_rot, expected_pos = rot.copy(), pos.copy()
+    tm.integrate_angular_numpy(expected_rot[::2], ang, 0.1)
+    tm.integrate_linear_numpy(expected_pos[::2], ang, 0.1)
+    tm.integrate_angular(rot[::2], ang, 0.1)
+    tm.integrate_linear(pos[::2], ang, 0.1)
+    assert np.allclose(rot, expected_rot, atol=1e-14) and np.array_equal(rot[1::2], expected_rot[1::2])
+    assert np.allclose(pos, expected_pos, atol=1e-14)
+
+
+def test_angular_rows_of_both_paths_in_one_array_agree_with_reference():
+    """Slow and fast rates mixed row by row: the vectorised pass leaves the fast rows for the
+    sin/cos pass, which must find each of them (and leave the others alone)."""
+    n = 1000
+    rot = rng.normal(size=(n, 4))
+    ang = rng.normal(size=(n, 3)) * np.where(rng.random((n, 1)) < 0.3, 500.0, 1.0)
+    a, b = rot.copy(), rot.copy()
+    tm.integrate_angular(a, ang, 1 / 60)
+    tm.integrate_angular_numpy(b, ang, 1 / 60)
+    assert np.allclose(a, b, atol=1e-13)
+
+
 def test_many_small_rotation_steps_do_not_drift_off_unit_length():
     rot = np.array([[0.0, 0.0, 0.0, 1.0]])
     ang = np.array([[0.3, -1.2, 0.7]])
