@@ -4,17 +4,26 @@ Threads only pay when a job runs without the GIL (numba nogil kernels, large Num
 so jobs are whole chunks, never single entities. With one thread everything runs inline on the
 calling thread. A job that raises is re-raised on the calling thread naming its chunk, after
 every other job of the batch has finished (no job is left running against freed data).
+
+A batch costs little to hand out, because a frame hands out several (motion, transforms, render
+jobs) and at 16 threads concurrent.futures cost ~0.36 ms a batch on the GPU host. Here the
+calling thread wakes each helper by releasing its lock and the threads take chunk indices from
+one shared counter: no future or queue item per chunk, and a thread that starts late takes
+fewer chunks.
 """
 
 from __future__ import annotations
 
+import itertools
 import os
+import threading
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
-from typing import Any, TypeVar
+from typing import Any, Generic, TypeVar
 
 T = TypeVar("T")
 R = TypeVar("R")
+
+Names = Sequence[str] | Callable[[Any], str] | None
 
 
 class JobError(RuntimeError):
@@ -28,59 +37,109 @@ def default_threads() -> int:
         return os.cpu_count() or 1
 
 
+class _Batch(Generic[T, R]):
+    """One map call: chunks handed out by a shared counter (next() on itertools.count is atomic
+    under the GIL); the last helper to run out of chunks releases `done`."""
+
+    def __init__(self, fn: Callable[[T], R], chunks: Sequence[T], names: Names, helpers: int) -> None:
+        self.fn, self.chunks, self.names, self.helpers = fn, chunks, names, helpers
+        self.results: list[Any] = [None] * len(chunks)
+        self.errors: dict[int, BaseException] = {}
+        self._next = itertools.count()
+        self._finished = itertools.count(1)
+        self.done = threading.Lock()
+        self.done.acquire()
+
+    def work(self) -> None:
+        n = len(self.chunks)
+        while (i := next(self._next)) < n:
+            try:
+                self.results[i] = _call(self.fn, self.chunks[i], i, self.names)
+            except BaseException as exc:  # noqa: BLE001 - re-raised on the calling thread
+                self.errors[i] = exc
+
+    def help(self) -> None:
+        try:
+            self.work()
+        finally:
+            if next(self._finished) == self.helpers:
+                self.done.release()
+
+
 class JobPool:
     def __init__(self, threads: int | None = None) -> None:
         self.threads = default_threads() if threads is None else int(threads)
         if self.threads < 1:
             raise ValueError(f"threads must be at least 1, got {self.threads}")
-        self._executor = (ThreadPoolExecutor(self.threads - 1, thread_name_prefix="ecs-job")
-                          if self.threads > 1 else None)
+        self._batch: _Batch[Any, Any] | None = None
+        self._busy = threading.Lock()  # held by the map call in progress
+        self._wakes: list[threading.Lock] = []
+        self._workers: list[threading.Thread] = []
+        for k in range(self.threads - 1):
+            wake = threading.Lock()
+            wake.acquire()
+            worker = threading.Thread(target=self._work, args=(wake,), name=f"ecs-job-{k}", daemon=True)
+            self._wakes.append(wake)
+            self._workers.append(worker)
+            worker.start()
 
-    def map(self, fn: Callable[[T], R], chunks: Sequence[T],
-            names: Sequence[str] | Callable[[T], str] | None = None) -> list[R]:
+    def _work(self, wake: threading.Lock) -> None:
+        while True:
+            wake.acquire()  # blocks without the GIL until map() (or close()) releases it
+            batch = self._batch
+            if batch is None:
+                return
+            batch.help()
+
+    def map(self, fn: Callable[[T], R], chunks: Sequence[T], names: Names = None) -> list[R]:
         """fn(chunk) for every chunk, in parallel; results in chunk order. The calling thread
-        works too (it runs the first chunk), so `threads` counts it. `names` (a list, or a
-        function of the chunk, called only when its job fails) name chunks in errors."""
+        works too, so `threads` counts it. `names` (a list, or a function of the chunk, called
+        only when its job fails) name chunks in errors. A map called from inside a job (or
+        from a second thread while one runs) runs its chunks inline on the caller."""
         if not chunks:
             return []
-        if self._executor is None or len(chunks) == 1:
-            return [self._call(fn, c, i, names) for i, c in enumerate(chunks)]
-        futures = [self._executor.submit(self._call, fn, c, i, names) for i, c in enumerate(chunks[1:], 1)]
-        results: list[Any] = [None] * len(chunks)
-        first_error: BaseException | None = None
+        if not self._workers or len(chunks) == 1 or not self._busy.acquire(blocking=False):
+            return [_call(fn, c, i, names) for i, c in enumerate(chunks)]
         try:
-            results[0] = self._call(fn, chunks[0], 0, names)
-        except BaseException as exc:
-            first_error = exc
-        for i, fut in enumerate(futures, 1):
-            try:
-                results[i] = fut.result()
-            except BaseException as exc:
-                first_error = first_error or exc
-        if first_error is not None:
-            raise first_error
-        return results
-
-    @staticmethod
-    def _call(fn: Callable[[T], R], chunk: T, i: int, names: Sequence[str] | Callable[[T], str] | None) -> R:
-        try:
-            return fn(chunk)
-        except JobError:
-            raise
-        except Exception as exc:
-            name = f"#{i}" if names is None else names(chunk) if callable(names) else names[i]
-            raise JobError(f"job for chunk {name} failed: {type(exc).__name__}: {exc}") from exc
+            helpers = min(len(self._workers), len(chunks) - 1)
+            batch = self._batch = _Batch(fn, chunks, names, helpers)
+            for wake in self._wakes[:helpers]:
+                wake.release()
+            batch.work()
+            batch.done.acquire()  # every helper has finished: no job outlives the call
+        finally:
+            self._batch = None
+            self._busy.release()
+        if batch.errors:
+            raise batch.errors[min(batch.errors)]
+        return batch.results
 
     def close(self) -> None:
-        if self._executor is not None:
-            self._executor.shutdown(wait=True)
-            self._executor = None
+        if not self._workers:
+            return
+        with self._busy:
+            self._batch = None
+            for wake in self._wakes:
+                wake.release()
+            for worker in self._workers:
+                worker.join()
+        self._workers, self._wakes = [], []
 
     def __enter__(self) -> JobPool:
         return self
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _call(fn: Callable[[T], R], chunk: T, i: int, names: Names) -> R:
+    try:
+        return fn(chunk)
+    except JobError:
+        raise
+    except Exception as exc:
+        name = f"#{i}" if names is None else names(chunk) if callable(names) else names[i]
+        raise JobError(f"job for chunk {name} failed: {type(exc).__name__}: {exc}") from exc
 
 
 def row_chunks(count: int, chunk_rows: int) -> list[slice]:

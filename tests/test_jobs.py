@@ -58,3 +58,41 @@ def test_row_chunks_and_over_rows_cover_every_row_once():
     with JobPool(4) as pool:
         over_rows(pool, 100_000, job, chunk_rows=1000)
     assert sorted(covered) == list(range(100_000))
+
+
+def test_a_map_inside_a_job_runs_inline_instead_of_deadlocking():
+    with JobPool(4) as pool:
+        def job(x):
+            return sum(pool.map(lambda y: x * y, [1, 2, 3]))
+
+        assert pool.map(job, list(range(8))) == [6 * x for x in range(8)]
+
+
+def test_maps_from_two_threads_at_once_both_complete():
+    with JobPool(4) as pool:
+        out = {}
+
+        def caller(tag):
+            out[tag] = [pool.map(lambda x: (tag, x), list(range(20))) for _ in range(50)][-1]
+
+        threads = [threading.Thread(target=caller, args=(t,)) for t in "ab"]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(timeout=30)
+        assert out == {t: [(t, x) for x in range(20)] for t in "ab"}
+
+
+def test_the_lowest_failing_chunk_is_reported_and_close_stops_the_workers():
+    def job(x):
+        if x in (2, 5):
+            raise KeyError(x)
+        return x
+
+    pool = JobPool(3)
+    with pytest.raises(JobError, match=r"chunk #2 failed"):
+        pool.map(job, list(range(8)))
+    workers = list(pool._workers)
+    pool.close()
+    assert workers and not any(w.is_alive() for w in workers)
+    assert pool.map(job, [0, 1]) == [0, 1]  # a closed pool still runs, inline
