@@ -175,6 +175,33 @@ def test_stock_systems_split_across_a_job_pool_give_the_same_result():
     assert np.array_equal(out[0], out[1])
 
 
+def test_motion_moves_entities_with_either_rate_or_both():
+    from ecs_engine.transform_math import integrate_angular_numpy, integrate_linear_numpy
+
+    rng = np.random.default_rng(8)
+    w = World()
+    n = 50
+    pos, rot = rng.normal(size=(3, n, 3)), rng.normal(size=(3, n, 4))
+    rot /= np.linalg.norm(rot, axis=2, keepdims=True)
+    lin, ang = rng.normal(size=(3, n, 3)), rng.normal(size=(3, n, 3))
+    ids = [w.spawn_batch(n, Transform(position=pos[0], rotation=rot[0]), Velocity(linear=lin[0]),
+                         AngularVelocity(angular=ang[0])),
+           w.spawn_batch(n, Transform(position=pos[1], rotation=rot[1]), Velocity(linear=lin[1])),
+           w.spawn_batch(n, Transform(position=pos[2], rotation=rot[2]), AngularVelocity(angular=ang[2]))]
+    s = Schedule()
+    s.add(MotionSystem())
+    s.run(w, 0.1)
+    for k, (moves, turns) in enumerate([(True, True), (True, False), (False, True)]):
+        p, r = pos[k].copy(), rot[k].copy()
+        if moves:
+            integrate_linear_numpy(p, lin[k], 0.1)
+        if turns:
+            integrate_angular_numpy(r, ang[k], 0.1)
+        got = [w.get(int(e), Transform) for e in ids[k]]
+        assert np.allclose([t.position for t in got], p, atol=1e-12)
+        assert np.allclose([t.rotation for t in got], r, atol=1e-12)
+
+
 def test_normal_matrices_are_written_only_for_entities_that_ask_for_them():
     from ecs_engine.components import NormalMatrix
 
