@@ -93,17 +93,23 @@ def _cull_run_kernel(model, e0, e1, e2, radius, planes, key0, keys):  # pragma: 
     return plain, mirrored
 
 
-def _write_rows_kernel(model, handle, material, centers, radii, planes, n_materials, rows,
+def _write_rows_kernel(model_4x4, handle, material, centers, radii, planes, n_materials, rows,
                        key_counts):  # pragma: no cover - compiled
     # Pass 1 culls and keys the rows, one run of equal meshes at a time (vectorised, see above),
     # and counts rows per key. Pass 2 writes the visible ones by key (a counting sort), 8 bytes
-    # at a time: `model` and `rows` are flat uint64 views (8 words a row). The current key's
-    # cursor stays in a register while the key repeats (rows of one mesh come in runs).
+    # at a time: `rows` is a flat uint64 view (8 words a row), and so is `model` below. The
+    # current key's cursor stays in a register while the key repeats (rows of one mesh come in
+    # runs). `planes` (k <= 6, 4) are padded to six by repeating the last; none keep every row.
     n = handle.shape[0]
+    floats = model_4x4.reshape(model_4x4.size)
+    model = floats.view(np.uint64)
+    six = np.empty(24)
+    for p in range(6):
+        for c in range(4):
+            six[4 * p + c] = planes[min(p, planes.shape[0] - 1), c] if planes.shape[0] > 0 else (1.0 if c == 3 else 0.0)
     keys = np.empty(n, np.int32)
     for k in range(key_counts.shape[0]):
         key_counts[k] = 0
-    floats = model.view(np.float32)
     i = 0
     while i < n:
         h = handle[i]
@@ -111,7 +117,7 @@ def _write_rows_kernel(model, handle, material, centers, radii, planes, n_materi
         while j < n and handle[j] == h:
             j += 1
         plain, mirrored = _cull_run(floats[16 * i : 16 * j], centers[h, 0], centers[h, 1], centers[h, 2], radii[h],
-                                    planes, np.int32(2 * h), keys[i:j])
+                                    six, np.int32(2 * h), keys[i:j])
         key_counts[2 * h] += plain
         key_counts[2 * h + 1] += mirrored
         i = j
@@ -144,22 +150,6 @@ def _write_rows_kernel(model, handle, material, centers, radii, planes, n_materi
 _cull_run = native.njit(_cull_run_kernel)
 _write_rows_native = native.njit(_write_rows_kernel)
 
-# With no culling (the indirect mode: the GPU culls) every row faces six planes that keep
-# everything: 0*x + 0*y + 0*z + 1 >= 0.
-_KEEP_ALL = np.tile(np.array([0.0, 0.0, 0.0, 1.0]), 6)
-
-
-def _six_planes(planes: np.ndarray) -> np.ndarray:
-    """(k <= 6, 4) planes as 24 float64, padded by repeating the first (the minimum over the
-    planes is unchanged); no planes keeps every row."""
-    if len(planes) == 0:
-        return _KEEP_ALL
-    if len(planes) > 6:
-        raise ValueError(f"at most 6 frustum planes, got {len(planes)}")
-    padded = np.concatenate([planes, np.repeat(planes[:1], 6 - len(planes), axis=0)]).astype(np.float64)
-    return padded.reshape(24)
-
-
 def write_rows(model: np.ndarray, handle: np.ndarray, material: np.ndarray,
                centers: np.ndarray, radii: np.ndarray, planes: np.ndarray | None, n_materials: int,
                rows: np.ndarray, key_counts: np.ndarray) -> int:
@@ -169,6 +159,9 @@ def write_rows(model: np.ndarray, handle: np.ndarray, material: np.ndarray,
     planes = NO_PLANES if planes is None else planes
     if _write_rows_native is None or not rows.flags.c_contiguous:
         return write_rows_numpy(model, handle, material, centers, radii, planes, n_materials, rows, key_counts)
-    model_words = np.ascontiguousarray(model).view(np.uint64).reshape(-1)
-    return int(_write_rows_native(model_words, handle, material, centers, radii, _six_planes(planes),
-                                  np.uint32(n_materials), rows.view(np.uint64).reshape(-1), key_counts))
+    if len(planes) > 6:
+        raise ValueError(f"at most 6 frustum planes, got {len(planes)}")
+    if not model.flags.c_contiguous:
+        model = np.ascontiguousarray(model)
+    return int(_write_rows_native(model, handle, material, centers, radii, planes, np.uint32(n_materials),
+                                  rows.view(np.uint64), key_counts))

@@ -166,21 +166,26 @@ def integrate_angular_numpy(rotation: np.ndarray, angular: np.ndarray, dt: float
     rotation[:, 3] = nw / norm
 
 
+# The motion kernels index flat views of their C-contiguous (n, 3) and (n, 4) arrays: numba
+# indexes 2-D arrays in a way LLVM does not vectorise, flat ones it does (angular motion:
+# 11.7 -> 5.2 ms per 1M rows on the dev box).
 def _linear_kernel(position, linear, dt):  # pragma: no cover
-    for j in range(position.shape[0]):  # flat (3n,) arrays
-        position[j] += linear[j] * dt
+    p = position.reshape(position.size)
+    v = linear.reshape(linear.size)
+    for j in range(p.shape[0]):
+        p[j] += v[j] * dt
 
 
-# The kernels below take flat (4n,) quaternions and (3n,) rates: numba indexes 2-D arrays in a
-# way LLVM does not vectorise, flat ones it does (11.7 -> 4.6 ms per 1M rows on the dev box).
 _SMALL_H2 = 0.01  # (half angle)^2 below which the Taylor series are exact to rounding
 
 
-def _angular_small_kernel(rotation, angular, dt):  # pragma: no cover
+def _angular_small_kernel(rotation_2d, angular_2d, dt):  # pragma: no cover
     # Every row whose |half angle| < 0.1 (almost all at frame rates): the Taylor series of
     # cos(h) and sin(h)/h, exact to rounding (next terms below 3e-17) and ~4x cheaper than libm.
     # Other rows (and NaN rates) are left as they are and counted for _angular_large_kernel:
     # with the sin/cos branch inside, this loop would not vectorise.
+    rotation = rotation_2d.reshape(rotation_2d.size)
+    angular = angular_2d.reshape(angular_2d.size)
     large = 0
     for i in range(rotation.shape[0] // 4):
         ax, ay, az = angular[3 * i], angular[3 * i + 1], angular[3 * i + 2]
@@ -202,8 +207,10 @@ def _angular_small_kernel(rotation, angular, dt):  # pragma: no cover
     return large
 
 
-def _angular_large_kernel(rotation, angular, dt):  # pragma: no cover
+def _angular_large_kernel(rotation_2d, angular_2d, dt):  # pragma: no cover
     # The rows _angular_small_kernel left: libm's sin and cos.
+    rotation = rotation_2d.reshape(rotation_2d.size)
+    angular = angular_2d.reshape(angular_2d.size)
     for i in range(rotation.shape[0] // 4):
         ax, ay, az = angular[3 * i], angular[3 * i + 1], angular[3 * i + 2]
         r2 = ax * ax + ay * ay + az * az
@@ -239,16 +246,11 @@ _angular_large = native.njit(_angular_large_kernel)
 _angular_native = _angular_small  # what the test of compiled kernels looks for
 
 
-def _flat(a: np.ndarray) -> np.ndarray | None:
-    """A writable 1-D view of a C-contiguous array, or None (the caller falls back to NumPy)."""
-    return a.reshape(-1) if a.flags.c_contiguous else None
-
-
 def integrate_linear(position: np.ndarray, linear: np.ndarray, dt: float) -> None:
     """position += linear * dt, in place (GIL released with numba)."""
-    flat = _flat(position) if _linear_native is not None else None
-    if flat is not None:
-        _linear_native(flat, np.ascontiguousarray(linear).reshape(-1), float(dt))
+    if (_linear_native is not None and linear.shape == position.shape and position.flags.c_contiguous
+            and linear.flags.c_contiguous):
+        _linear_native(position, linear, float(dt))
     else:
         integrate_linear_numpy(position, linear, float(dt))
 
@@ -256,10 +258,8 @@ def integrate_linear(position: np.ndarray, linear: np.ndarray, dt: float) -> Non
 def integrate_angular(rotation: np.ndarray, angular: np.ndarray, dt: float) -> None:
     """rotation <- exp(angular*dt/2) * rotation, re-normalised, in place. `angular` is a
     world-frame rate (axis * rad/s); the step is exact for a rate constant over dt."""
-    flat = _flat(rotation) if _angular_small is not None else None
-    if flat is None:
-        integrate_angular_numpy(rotation, angular, float(dt))
-        return
-    rates = np.ascontiguousarray(angular).reshape(-1)
-    if _angular_small(flat, rates, float(dt)):
-        _angular_large(flat, rates, float(dt))
+    if (_angular_small is None or angular.shape != (len(rotation), 3) or not rotation.flags.c_contiguous
+            or not angular.flags.c_contiguous):
+        integrate_angular_numpy(rotation, angular, float(dt))  # strided views: still in place
+    elif _angular_small(rotation, angular, float(dt)):
+        _angular_large(rotation, angular, float(dt))
