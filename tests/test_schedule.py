@@ -176,7 +176,10 @@ def test_stock_systems_split_across_a_job_pool_give_the_same_result():
 
 
 def test_motion_moves_entities_with_either_rate_or_both():
-    from ecs_engine.transform_math import integrate_angular_numpy, integrate_linear_numpy
+    from ecs_engine.transform_math import (
+        integrate_angular_numpy,
+        integrate_linear_numpy,
+    )
 
     rng = np.random.default_rng(8)
     w = World()
