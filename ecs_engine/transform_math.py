@@ -243,7 +243,6 @@ _turn = native.njit(_turn_kernel)
 _linear_native = native.njit(_linear_kernel)
 _angular_small = native.njit(_angular_small_kernel)
 _angular_large = native.njit(_angular_large_kernel)
-_angular_native = _angular_small  # what the test of compiled kernels looks for
 
 
 def integrate_linear(position: np.ndarray, linear: np.ndarray, dt: float) -> None:

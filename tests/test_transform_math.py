@@ -203,7 +203,7 @@ def test_native_kernels_are_compiled_when_numba_is_present():
     pytest.importorskip("numba")
     if not native.AVAILABLE:
         pytest.skip("ECS_ENGINE_NO_NUMBA set")
-    assert tm._compose_native is not None and tm._angular_native is not None
+    assert tm._compose_native is not None and tm._angular_small is not None and tm._linear_native is not None
 
 
 def test_systems_give_the_same_result_without_numba(tmp_path):
