@@ -150,6 +150,7 @@ def _write_rows_kernel(model_4x4, handle, material, centers, radii, planes, n_ma
 _cull_run = native.njit(_cull_run_kernel)
 _write_rows_native = native.njit(_write_rows_kernel)
 
+
 def write_rows(model: np.ndarray, handle: np.ndarray, material: np.ndarray,
                centers: np.ndarray, radii: np.ndarray, planes: np.ndarray | None, n_materials: int,
                rows: np.ndarray, key_counts: np.ndarray) -> int:
