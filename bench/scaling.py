@@ -51,7 +51,7 @@ def sweep(entities: int, thread_counts: list[int], frames: int, warmup: int, siz
     from ecs_engine.gpu.offscreen import OffscreenTarget
     from ecs_engine.mesh_registry import MeshRegistry
     from ecs_engine.renderer import Renderer
-    from ecs_engine.world import World
+    from ecs_engine.ecs.world import World
 
     rows = []
     instance = Instance()

@@ -6,7 +6,7 @@ from .light import PointLight
 from .mesh import Mesh
 from .motion import AngularVelocity, Spring, Velocity
 from .orbit import Orbit
-from .transform import ModelMatrix, NormalMatrix, Transform
+from .transform import ModelMatrix, NormalMatrix, PreviousTransform, Transform
 
 __all__ = [
     "ORTHOGRAPHIC",
@@ -20,6 +20,7 @@ __all__ = [
     "NormalMatrix",
     "Orbit",
     "PointLight",
+    "PreviousTransform",
     "Spring",
     "Transform",
     "Velocity",

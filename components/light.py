@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ecs_engine.schema import Component, Field
+from ecs_engine.ecs.schema import Component, Field
 
 
 class PointLight(Component):

@@ -10,11 +10,23 @@ Rules of use, in short:
   write through views are trusted.
 """
 
-from .errors import AccessError, DeadEntityError, EcsError, MissingComponentError
-from .query import Batch, ComponentView, Query
-from .schedule import FunctionSystem, Schedule, System, system
-from .schema import Component, Field
-from .world import World
+from .ecs import (
+    AccessError,
+    Batch,
+    Component,
+    ComponentView,
+    DeadEntityError,
+    EcsError,
+    Field,
+    FixedTimestep,
+    FunctionSystem,
+    MissingComponentError,
+    Query,
+    Schedule,
+    System,
+    World,
+    system,
+)
 
 __version__ = "0.1.0"
 
@@ -26,6 +38,7 @@ __all__ = [
     "DeadEntityError",
     "EcsError",
     "Field",
+    "FixedTimestep",
     "FunctionSystem",
     "MissingComponentError",
     "Query",

@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 
 from .errors import UsageError
-from .schedule import Schedule
-from .world import World
+from .ecs.schedule import Schedule
+from .ecs.world import World
 
 SCENES = ("cube", "grid100", "model", "scaling")
 FIXED_DT = 1.0 / 60.0
@@ -119,11 +119,13 @@ def default_schedule() -> Schedule:
         MotionSystem,
         OrbitSystem,
         RenderOriginSystem,
+        SnapshotSystem,
         SpringSystem,
         TransformSystem,
     )
 
     schedule = Schedule(("fixed", "update", "post_update"))
+    schedule.add(SnapshotSystem(), "fixed")  # first: what each step starts from, for interpolation
     schedule.add(OrbitSystem(), "fixed")
     schedule.add(MotionSystem(), "fixed")
     schedule.add(SpringSystem(), "fixed")
@@ -148,7 +150,7 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
     from .jobs import default_threads
     from .mesh_registry import MeshRegistry
     from .perf import PerfMonitor
-    from .timestep import FixedTimestep
+    from .ecs.timestep import FixedTimestep
 
     say = log or (lambda text: None if options.quiet else print(text))
     build = scene_builder(options.scene, options.entities)

@@ -27,7 +27,7 @@ from ecs_engine.components.transform import Transform
 from .errors import UsageError
 
 if TYPE_CHECKING:
-    from .world import World
+    from .ecs.world import World
 
 
 def _check_positive(name: str, value: float) -> None:

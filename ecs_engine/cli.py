@@ -7,7 +7,8 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from .errors import EcsError, UsageError
+from .ecs.errors import EcsError
+from .errors import UsageError
 
 
 def positive_int(text: str) -> int:

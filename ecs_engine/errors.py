@@ -1,4 +1,4 @@
-"""Exceptions a user of the world can cause. Each message names the entity and the field."""
+"""Errors a user of the engine can cause outside the ECS API (the ECS's own are in ecs.errors)."""
 
 from __future__ import annotations
 
@@ -6,25 +6,3 @@ from __future__ import annotations
 class UsageError(Exception):
     """A problem with what the user asked for (bad file, bad value, no GPU): the CLI prints the
     message as one line and exits 2."""
-
-
-class EcsError(Exception):
-    """Base class for errors raised by the ECS API."""
-
-
-class DeadEntityError(EcsError, LookupError):
-    """An entity id that was destroyed (or never existed) was used."""
-
-
-class MissingComponentError(EcsError, LookupError):
-    """The entity exists but does not have the requested component."""
-
-
-class AccessError(EcsError, PermissionError):
-    """A system asked for access it did not declare."""
-
-
-def describe_entity(eid: int) -> str:
-    """Human form of a 64-bit id: the raw value plus its index and generation."""
-    eid = int(eid)
-    return f"entity {eid} (index {eid & 0xFFFFFFFF}, generation {eid >> 32})"

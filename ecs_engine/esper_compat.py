@@ -53,9 +53,10 @@ from weakref import WeakMethod, ref
 
 import numpy as np
 
-from .errors import DeadEntityError, MissingComponentError
-from .schema import Component, ObjectStore, object_component
-from .world import World, schema_of
+from .ecs.errors import DeadEntityError, MissingComponentError
+from .ecs.schema import Component, ObjectStore, object_component
+from .ecs.schema import schema_of
+from .ecs.world import World
 
 __all__ = [
     "ComponentNotFoundError",
@@ -155,7 +156,7 @@ class ComponentProxy:
     def _locate(self) -> tuple[Any, int]:
         world = self._world
         try:
-            table, row = world._locate(self._entity)
+            table, row = world.locate(self._entity)
         except DeadEntityError as exc:
             raise EntityNotFoundError(str(exc)) from None
         if not table.has(self._schema):
@@ -175,7 +176,7 @@ class ComponentProxy:
         col = table.columns[key]
         if f.shape:
             # A writable view: mark the column changed, as a writable query view does.
-            table.column_ticks[key] = self._world._write_tick()
+            table.column_ticks[key] = self._world.write_tick()
             return col[row]
         value = col[row]
         return value if f.is_object else value.item()
@@ -256,7 +257,7 @@ class EsperWorld:
     # ------------------------------------------------------------------ helpers
     def _locate(self, entity: int) -> tuple[Any, int]:
         try:
-            return self.world._locate(int(entity))
+            return self.world.locate(int(entity))
         except DeadEntityError as exc:
             raise EntityNotFoundError(str(exc)) from None
 
@@ -352,7 +353,7 @@ class EsperWorld:
         """The component, or None if the entity does not exist or lacks it."""
         ct = _schema(component_type)
         try:
-            table, row = self.world._locate(int(entity))
+            table, row = self.world.locate(int(entity))
         except DeadEntityError:
             return None
         return self._out(int(entity), ct, table, row) if table.has(ct) else None
@@ -361,7 +362,7 @@ class EsperWorld:
         """The components, or None if the entity does not exist or lacks one of them."""
         cts = [_schema(t) for t in component_types]
         try:
-            table, row = self.world._locate(int(entity))
+            table, row = self.world.locate(int(entity))
         except DeadEntityError:
             return None
         if not all(table.has(ct) for ct in cts):

@@ -45,7 +45,7 @@ from .jobs import JobPool, row_chunks
 from .light_rows import LIGHT_DTYPE, write_lights
 from .mesh_registry import VERTEX_STRIDE, MeshRegistry
 from .systems.transform import render_origin
-from .world import World
+from .ecs.world import World
 
 MATERIAL_DTYPE = np.dtype([("color", np.float32, 4), ("specular", np.float32, 4)])
 GLOBALS_BYTES = 2 * 64 + 3 * 16  # projection, view, eye, ambient, counts (common.glsl)

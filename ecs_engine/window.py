@@ -71,7 +71,7 @@ def run_windowed(options: RunOptions, glfw: Any,
     from .mesh_registry import MeshRegistry
     from .perf import PerfMonitor
     from .systems import InputState
-    from .timestep import FixedTimestep
+    from .ecs.timestep import FixedTimestep
 
     say = (lambda text: None) if options.quiet else print
     build = scene_builder(options.scene, options.entities)

@@ -18,8 +18,8 @@ from ecs_engine.components.camera_control import FlyCamera
 from ecs_engine.components.transform import Transform
 
 from ecs_engine.camera_math import yaw_pitch_quat
-from ecs_engine.schedule import System
-from ecs_engine.world import World
+from ecs_engine.ecs.schedule import System
+from ecs_engine.ecs.world import World
 
 # Pitch stops this short of straight up/down: at the pole yaw and roll coincide and the view
 # would flip when it is crossed.

@@ -5,9 +5,9 @@ from __future__ import annotations
 from ecs_engine.components import AngularVelocity, Transform, Velocity
 
 from ecs_engine.jobs import JobPool, over_rows
-from ecs_engine.schedule import System
+from ecs_engine.ecs.schedule import System
 from ecs_engine.transform_math import integrate_angular, integrate_linear
-from ecs_engine.world import World
+from ecs_engine.ecs.world import World
 
 
 class MotionSystem(System):

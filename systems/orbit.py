@@ -9,8 +9,8 @@ from ecs_engine.components.orbit import Orbit
 from ecs_engine.components.transform import Transform
 
 from ecs_engine import native
-from ecs_engine.schedule import System
-from ecs_engine.world import World
+from ecs_engine.ecs.schedule import System
+from ecs_engine.ecs.world import World
 
 TAU = 2.0 * math.pi
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from ecs_engine.components import Spring, Transform, Velocity
 
-from ecs_engine.schedule import System
+from ecs_engine.ecs.schedule import System
 from ecs_engine.spring_math import INTEGRATORS, step
-from ecs_engine.world import World
+from ecs_engine.ecs.world import World
 
 
 class SpringSystem(System):

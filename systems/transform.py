@@ -7,15 +7,15 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from ecs_engine.components import Camera, ModelMatrix, NormalMatrix, Transform
+from ecs_engine.components import Camera, ModelMatrix, NormalMatrix, PreviousTransform, Transform
 
 from ecs_engine.camera_math import active_camera
 from ecs_engine.errors import UsageError
 from ecs_engine.jobs import JobPool, over_rows
-from ecs_engine.schedule import System
-from ecs_engine.timestep import Interpolation, PreviousTransform
+from ecs_engine.ecs.schedule import System
+from ecs_engine.ecs.timestep import Interpolation
 from ecs_engine.transform_math import compose
-from ecs_engine.world import World
+from ecs_engine.ecs.world import World
 
 
 @dataclass
@@ -40,7 +40,7 @@ class TransformSystem(System):
     the render origin moved (then every table). Large tables are split across the world's
     JobPool resource, if it has one.
 
-    With fixed-step simulation (an Interpolation resource, see ecs_engine.timestep), entities
+    With fixed-step simulation (an Interpolation resource, see ecs_engine.ecs.timestep), entities
     that also have PreviousTransform are drawn between their last two steps, every frame:
     position interpolated linearly, rotation by normalised lerp."""
 

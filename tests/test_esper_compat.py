@@ -22,7 +22,7 @@ from ecs_engine.esper_compat import (
     EsperWorld,
     Processor,
 )
-from ecs_engine.schema import Field
+from ecs_engine.ecs.schema import Field
 
 
 @dataclass
@@ -277,7 +277,7 @@ def test_query_results_are_built_from_columns(ew, monkeypatch):
 
     monkeypatch.setattr(ew.world, "get", no_lookup)
     monkeypatch.setattr(ew.world, "has", no_lookup)
-    monkeypatch.setattr(ew.world, "_locate", no_lookup)
+    monkeypatch.setattr(ew.world, "locate", no_lookup)
     rows = ew.get_components(Position, Transform)
     assert sorted(p.x for _, (p, _) in rows) == list(range(20))
 

@@ -74,7 +74,7 @@ def test_a_failing_job_names_its_chunk_and_the_next_frame_renders(monkeypatch):
     from ecs_engine.app import default_schedule
     from ecs_engine.jobs import JobPool
     from ecs_engine.renderer import Renderer
-    from ecs_engine.world import World
+    from ecs_engine.ecs.world import World
 
     with headless_gpu() as gpu:
         jobs = JobPool(3)

@@ -206,9 +206,9 @@ def test_motion_moves_entities_with_either_rate_or_both():
 
 
 def test_normal_matrices_are_written_only_for_entities_that_ask_for_them():
-    from ecs_engine.components import NormalMatrix
+    from ecs_engine.components import NormalMatrix, PreviousTransform
 
-    from ecs_engine.timestep import Interpolation, PreviousTransform
+    from ecs_engine.ecs.timestep import Interpolation
     from ecs_engine.transform_math import compose_numpy
 
     w = World()

@@ -6,14 +6,14 @@ import math
 
 import numpy as np
 import pytest
-from ecs_engine.components import ModelMatrix, Spring, Transform, Velocity
-from ecs_engine.systems import MotionSystem, SpringSystem, TransformSystem
+from ecs_engine.components import ModelMatrix, PreviousTransform, Spring, Transform, Velocity
+from ecs_engine.systems import MotionSystem, SnapshotSystem, SpringSystem, TransformSystem
 from ecs_engine.systems.camera_control import FlyInput, fly_step
 
 from ecs_engine import World
 from ecs_engine.camera_math import yaw_pitch_quat
-from ecs_engine.schedule import Schedule
-from ecs_engine.timestep import FixedTimestep, PreviousTransform
+from ecs_engine.ecs.schedule import Schedule
+from ecs_engine.ecs.timestep import FixedTimestep
 from ecs_engine.transform_math import integrate_angular
 
 
@@ -33,6 +33,7 @@ def test_accumulator_steps_alpha_and_cap():
 
 def schedule() -> Schedule:
     s = Schedule(("fixed", "post_update"))
+    s.add(SnapshotSystem(), "fixed")
     s.add(MotionSystem(), "fixed")
     s.add(SpringSystem("implicit"), "fixed")
     s.add(TransformSystem(), "post_update")
@@ -71,6 +72,17 @@ def test_rendering_interpolates_between_fixed_steps():
     assert sorted(set(np.round(np.diff(xs_stepped), 6))) == [0.0, 0.1]  # jumps once per step
     # interpolated: drawn between the last two steps, never ahead of the simulation
     assert xs_smooth[-1] <= world.get(smooth, Transform).position[0] + 1e-9
+
+
+def test_without_the_snapshot_system_nothing_is_remembered():
+    """The schedule knows no stock component: the snapshot is the stock system's job."""
+    world = World()
+    e = world.spawn(Transform(), Velocity(linear=(1.0, 0.0, 0.0)), PreviousTransform(), ModelMatrix())
+    s = Schedule(("fixed", "post_update"))
+    s.add(MotionSystem(), "fixed")
+    s.run_frame(world, 0.25, FixedTimestep(step=0.1))
+    assert world.get(e, PreviousTransform).position.tolist() == [0.0, 0.0, 0.0]
+    assert world.get(e, Transform).position[0] == pytest.approx(0.2)
 
 
 def test_million_rotation_steps_do_not_drift():

@@ -21,7 +21,7 @@ from ecs_engine import (
     MissingComponentError,
     World,
 )
-from ecs_engine.entities import INDEX_MASK, MAX_GENERATION
+from ecs_engine.ecs.entities import INDEX_MASK, MAX_GENERATION
 
 
 class Health(Component):
@@ -64,7 +64,7 @@ def test_ids_are_64_bit_with_generation_and_never_reused():
 def test_slot_is_retired_when_generation_overflows():
     w = World()
     a = w.spawn(Tag())
-    w._index.generation[a & INDEX_MASK] = MAX_GENERATION  # pretend it was reused 2**31 times
+    w.storage.index.generation[a & INDEX_MASK] = MAX_GENERATION  # pretend it was reused 2**31 times
     a = (MAX_GENERATION << 32) | (a & INDEX_MASK)
     w.destroy(a)
     b = w.spawn(Tag())
@@ -237,7 +237,7 @@ def test_batch_error_names_the_failing_row_and_spawns_nothing():
     pos[17, 1] = np.nan
     with pytest.raises(ValueError, match=r"row 17 of the batch.*Transform\.position"):
         w.spawn_batch(50, Transform(position=pos))
-    assert len(w) == 0 and w._index.used == 0
+    assert len(w) == 0 and w.storage.index.used == 0
 
 
 def test_batch_set_error_names_the_entity():

@@ -1,104 +1,103 @@
-"""The world: entities in archetype tables, structural changes, queries and change ticks."""
+"""The world: the API over the storage. It checks values where they enter, defers structural
+changes while systems and query loops run (a typed command queue, see commands.py), hands out
+cached queries and keeps the change ticks of the running system."""
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 
-from .entities import INDEX_MASK, RESERVED, EntityIndex
-from .errors import (
-    AccessError,
-    DeadEntityError,
-    EcsError,
-    MissingComponentError,
-    describe_entity,
-)
+from .commands import Add, CommandQueue, Destroy, Remove, Set, Spawn
+from .entities import INDEX_MASK
+from .errors import AccessError, DeadEntityError, EcsError, MissingComponentError, describe_entity
 from .query import Query, check_access
-from .schema import Component, ObjectStore, closure, object_component
+from .schema import Component, ObjectStore, closure, object_component, schema_of
+from .storage import Checked, Storage
 from .table import ArchetypeTable
 
-if TYPE_CHECKING:
-    from .schedule import System
 
-Checked = dict[type[Component], dict[str, np.ndarray]]
+class RunningSystem(Protocol):
+    """What the world needs of a system while it runs it (see schedule.System)."""
+
+    name: str
+    reads: frozenset[type] | None
+    writes: frozenset[type] | None
+    last_run_tick: int
+
+    def run(self, world: Any, dt: float) -> None: ...
 
 
 def _new_entity(row: int) -> str:
     return "new entity" if row == 0 else f"new entity (row {row} of the batch)"
 
 
-def schema_of(t: Any) -> type[Component]:
-    """The storage schema for a component type; plain Python classes map to an object column."""
-    if isinstance(t, type):
-        return t if issubclass(t, Component) else object_component(t)
-    raise TypeError(f"expected a component type (a class), got {t!r}")
-
-
 class World:
     """Holds every entity and component. See the package docstring for the rules of use."""
 
     def __init__(self) -> None:
-        self._index = EntityIndex()
-        self._tables: list[ArchetypeTable] = []
-        self._table_ids: dict[frozenset[type[Component]], int] = {}
+        self.storage = Storage()
         self._queries: dict[tuple[Any, ...], Query] = {}
         self._queries_by_call: dict[tuple[Any, ...], Query] = {}  # as called (see query)
         self._stamp_keys: dict[tuple[type, ...], list[tuple[Any, str]]] = {}  # see change_stamp
         self._closures: dict[frozenset[type[Component]], frozenset[type[Component]]] = {}
         self.tick = 0
-        # Bumped by every spawn, destroy, add and remove that is applied (not when queued).
-        self.structure_version = 0
-        self._commands: list[tuple[Any, ...]] = []
-        self._pending_destroy: set[int] = set()
+        self._commands = CommandQueue()
         self._iter_depth = 0
         self._defer_depth = 0
-        self._system: System | None = None
+        self._system: RunningSystem | None = None
         self._system_tick = 0
         # Singletons shared by systems (render origin, input state, ...), keyed by type.
         self.resources: dict[Any, Any] = {}
-        self._table_for(frozenset())
 
     schema_of = staticmethod(schema_of)
 
     # ------------------------------------------------------------------ state
     def __len__(self) -> int:
         """Entities placed in tables (spawns still deferred are not counted)."""
-        return sum(t.count for t in self._tables)
+        return sum(t.count for t in self.storage.tables)
 
     @property
     def tables(self) -> tuple[ArchetypeTable, ...]:
-        return tuple(self._tables)
+        return tuple(self.storage.tables)
+
+    @property
+    def structure_version(self) -> int:
+        """Bumped by every spawn, destroy, add and remove that is applied (not when queued)."""
+        return self.storage.structure_version
 
     @property
     def deferring(self) -> bool:
         return self._iter_depth > 0 or self._defer_depth > 0 or self._system is not None
 
     def entities(self) -> np.ndarray:
-        parts = [t.entities[: t.count] for t in self._tables if t.count]
+        parts = [t.entities[: t.count] for t in self.storage.tables if t.count]
         return np.concatenate(parts) if parts else np.empty(0, dtype=np.int64)
 
     def memory_bytes(self) -> int:
         """Bytes held by columns, id columns and the entity index."""
-        return self._index.nbytes() + sum(t.nbytes() for t in self._tables)
+        return self.storage.nbytes()
 
     def shrink_to_fit(self) -> None:
         """Release the spare capacity that growth by doubling leaves behind."""
-        for t in self._tables:
-            t.shrink_to_fit()
-        self._index.shrink_to_fit()
+        self.storage.shrink_to_fit()
 
     def is_alive(self, eid: int) -> bool:
-        return self._index.valid_one(int(eid)) and int(self._index.table[int(eid) & INDEX_MASK]) >= 0
+        index = self.storage.index
+        return index.valid_one(int(eid)) and int(index.table[int(eid) & INDEX_MASK]) >= 0
+
+    def locate(self, eid: int) -> tuple[ArchetypeTable, int]:
+        """The table and row holding a live entity (valid until the next structural change)."""
+        return self.storage.locate(int(eid))
 
     def has(self, eid: int, component_type: type) -> bool:
-        table, _ = self._locate(int(eid))
+        table, _ = self.storage.locate(int(eid))
         return table.has(schema_of(component_type))
 
     def components(self, eid: int) -> tuple[type[Component], ...]:
-        table, _ = self._locate(int(eid))
+        table, _ = self.storage.locate(int(eid))
         return table.types
 
     def change_stamp(self, eid: int, *component_types: type) -> tuple[int, ...]:
@@ -106,7 +105,7 @@ class World:
         changed: where it lives (table, row, layout) and the last write tick of each column.
         Ticks belong to tables, not rows, so a write to another entity of the same table changes
         the stamp too (never the reverse). For caching what is derived from one entity."""
-        table, row = self._locate(int(eid))
+        table, row = self.storage.locate(int(eid))
         keys = self._stamp_keys.get(component_types)
         if keys is None:
             keys = self._stamp_keys[component_types] = [
@@ -119,7 +118,8 @@ class World:
             raise MissingComponentError(f"{describe_entity(int(eid))} has no {missing.__name__}") from None
 
     # ----------------------------------------------------------------- ticks
-    def _write_tick(self) -> int:
+    def write_tick(self) -> int:
+        """The change tick for a write now: the running system's, else a new one."""
         if self._system is not None:
             return self._system_tick
         self.tick += 1
@@ -129,36 +129,6 @@ class World:
         if self._system is None:
             raise EcsError("a `changed` filter outside a system needs an explicit since=tick")
         return self._system.last_run_tick
-
-    # ---------------------------------------------------------------- tables
-    def _table_for(self, types: frozenset[type[Component]]) -> ArchetypeTable:
-        tid = self._table_ids.get(types)
-        if tid is not None:
-            return self._tables[tid]
-        ordered = tuple(sorted(types, key=lambda t: t.component_id))
-        table = ArchetypeTable(len(self._tables), ordered)
-        self._tables.append(table)
-        self._table_ids[types] = table.id
-        return table
-
-    def _with(self, table: ArchetypeTable, ct: type[Component]) -> ArchetypeTable:
-        tid = table.add_edges.get(ct)
-        if tid is None:
-            dst = self._table_for(frozenset(closure(set(table.type_set) | {ct})))
-            table.add_edges[ct] = dst.id
-            return dst
-        return self._tables[tid]
-
-    def _without(self, table: ArchetypeTable, ct: type[Component]) -> ArchetypeTable:
-        tid = table.remove_edges.get(ct)
-        if tid is None:
-            needs = [t.__name__ for t in table.types if ct in t.required]
-            if needs:
-                raise EcsError(f"cannot remove {ct.__name__}: {', '.join(needs)} requires it")
-            dst = self._table_for(table.type_set - {ct})
-            table.remove_edges[ct] = dst.id
-            return dst
-        return self._tables[tid]
 
     # ------------------------------------------------------------ checking
     def _bundles(self, values: Iterable[Any], n: int, who: Any) -> Checked:
@@ -191,29 +161,20 @@ class World:
         if ids.dtype.kind not in "iu":
             raise TypeError(f"entity ids must be integers, got {ids.dtype}")
         ids = ids.astype(np.int64, copy=False).reshape(-1)
-        ok = self._index.valid(ids)
+        index = self.storage.index
+        ok = index.valid(ids)
         if not allow_reserved:
-            ok &= self._index.table[np.where(ok, ids & INDEX_MASK, 0)] >= 0
+            ok &= index.table[np.where(ok, ids & INDEX_MASK, 0)] >= 0
         if not ok.all():
             bad = int(ids[~ok][0])
-            raise DeadEntityError(self._dead_message(bad))
+            raise DeadEntityError(self.storage.dead_message(bad))
         if len(ids) > 1 and len(np.unique(ids)) != len(ids):
             raise ValueError("the same entity id appears more than once")
-        if self._pending_destroy and np.isin(ids, list(self._pending_destroy)).any():
-            bad = int(ids[np.isin(ids, list(self._pending_destroy))][0])
+        pending = self._commands.pending_destroy
+        if pending and np.isin(ids, list(pending)).any():
+            bad = int(ids[np.isin(ids, list(pending))][0])
             raise DeadEntityError(f"{describe_entity(bad)} is already queued for destruction")
         return ids
-
-    def _dead_message(self, eid: int) -> str:
-        if self._index.valid_one(eid) and int(self._index.table[eid & INDEX_MASK]) == RESERVED:
-            return f"{describe_entity(eid)} is spawned at the next sync point; it cannot be read yet"
-        return f"{describe_entity(eid)} is not alive (destroyed, or never created)"
-
-    def _locate(self, eid: int) -> tuple[ArchetypeTable, int]:
-        index = eid & INDEX_MASK
-        if not self._index.valid_one(eid) or int(self._index.table[index]) < 0:
-            raise DeadEntityError(self._dead_message(eid))
-        return self._tables[int(self._index.table[index])], int(self._index.row[index])
 
     def _check_write_access(self, ct: type[Component]) -> None:
         system = self._system
@@ -225,12 +186,12 @@ class World:
         """Create one entity from component values; returns its id."""
         checked = self._bundles(values, 1, _new_entity)
         types = self._closure(checked)
-        eid = self._index.allocate_one()
+        eid = self.storage.index.allocate_one()
         if self.deferring:
-            self._index.table[eid & INDEX_MASK] = RESERVED
-            self._commands.append(("spawn", np.array([eid], dtype=np.int64), types, checked))
+            self.storage.index.reserve(np.array([eid], dtype=np.int64))
+            self._commands.push(Spawn(np.array([eid], dtype=np.int64), types, checked))
         else:
-            self._place_one(eid, types, checked)
+            self.storage.place_one(eid, types, checked, self.write_tick())
         return eid
 
     def _closure(self, checked: Checked) -> frozenset[type[Component]]:
@@ -247,75 +208,25 @@ class World:
             raise ValueError(f"cannot spawn a negative number of entities ({n})")
         checked = self._bundles(values, n, _new_entity)
         types = self._closure(checked)
-        ids = self._index.allocate(n)
+        ids = self.storage.index.allocate(n)
         if self.deferring:
-            self._index.table[ids & INDEX_MASK] = RESERVED
-            self._commands.append(("spawn", ids, types, checked))
+            self.storage.index.reserve(ids)
+            self._commands.push(Spawn(ids, types, checked))
         else:
-            self._place(ids, types, checked)
+            self.storage.place(ids, types, checked, self.write_tick())
         return ids
-
-    def _place_one(self, eid: int, types: frozenset[type[Component]], checked: Checked) -> None:
-        table = self._table_for(types)
-        tick = self._write_tick()
-        self.structure_version += 1
-        row = table.push_one(eid, tick)
-        columns = table.columns
-        for key, f in table.fields.items():
-            vals = checked.get(key[0])
-            columns[key][row] = vals[key[1]][0] if vals is not None else f.default
-        index = eid & INDEX_MASK
-        self._index.table[index] = table.id
-        self._index.row[index] = row
-
-    def _place(self, ids: np.ndarray, types: frozenset[type[Component]], checked: Checked) -> None:
-        table = self._table_for(types)
-        tick = self._write_tick()
-        self.structure_version += 1
-        rows = table.push(ids, tick)
-        given = {(ct, name) for ct, vals in checked.items() for name in vals}
-        table.fill_defaults(rows, exclude=given)
-        for ct, vals in checked.items():
-            for name, arr in vals.items():
-                table.columns[(ct, name)][rows] = arr
-        index = ids & INDEX_MASK
-        self._index.table[index] = table.id
-        self._index.row[index] = np.arange(rows.start, rows.stop)
 
     # --------------------------------------------------------------- destroy
     def destroy(self, target: Any) -> None:
         """Destroy one entity or an array of them. Their ids never name an entity again."""
         if isinstance(target, (int, np.integer)) and not self.deferring:
-            self._destroy_one(int(target))
+            self.storage.destroy_one(int(target))
             return
         ids = self._ids(target, allow_reserved=self.deferring)
         if self.deferring:
-            self._pending_destroy.update(ids.tolist())
-            self._commands.append(("destroy", ids))
+            self._commands.push(Destroy(ids))
             return
-        self._destroy_now(ids)
-
-    def _destroy_one(self, eid: int) -> None:
-        table, row = self._locate(eid)
-        self.structure_version += 1
-        moved = table.remove_row(row)
-        if moved:
-            self._index.row[moved & INDEX_MASK] = row
-        self._index.release_one(eid & INDEX_MASK)
-
-    def _destroy_now(self, ids: np.ndarray) -> None:
-        if len(ids) == 1:
-            self._destroy_one(int(ids[0]))
-            return
-        index = ids & INDEX_MASK
-        self.structure_version += 1
-        tables = self._index.table[index]
-        rows = self._index.row[index]
-        for tid in np.unique(tables):
-            sel = tables == tid
-            moved, new_rows = self._tables[tid].remove_rows(rows[sel])
-            self._index.row[moved & INDEX_MASK] = new_rows
-        self._index.release(index)
+        self.storage.destroy(ids)
 
     # ------------------------------------------------------------ add/remove
     def add(self, target: Any, value: Any) -> None:
@@ -324,82 +235,25 @@ class World:
         checked = self._bundles([value], 1 if len(ids) == 1 else len(ids), self._who(ids))
         ((ct, vals),) = checked.items()
         if self.deferring:
-            self._commands.append(("add", ids, ct, vals))
+            self._commands.push(Add(ids, ct, vals))
             return
-        self._add_now(ids, ct, vals)
-
-    def _add_now(self, ids: np.ndarray, ct: type[Component], vals: dict[str, np.ndarray]) -> None:
-        tick = self._write_tick()
-        for src, rows, sel in self._groups(ids):
-            sub = _select(vals, sel, len(ids))
-            if src.has(ct):
-                src.write(rows, ct, sub, tick)
-                continue
-            dst = self._with(src, ct)
-            dst_rows = self._move(src, dst, rows, ids[sel] if sel is not None else ids, tick)
-            dst.write(dst_rows, ct, sub, tick)
+        self.storage.add(ids, ct, vals, self.write_tick())
 
     def remove(self, target: Any, component_type: type) -> None:
         """Remove a component from one entity or many; raises if one of them lacks it."""
         ct = schema_of(component_type)
         ids = self._ids(target, allow_reserved=self.deferring)
         if self.deferring:
-            self._commands.append(("remove", ids, ct))
+            self._commands.push(Remove(ids, ct))
             return
-        self._remove_now(ids, ct, strict=True)
-
-    def _remove_now(self, ids: np.ndarray, ct: type[Component], strict: bool) -> None:
-        groups = list(self._groups(ids))
-        if strict:
-            for src, rows, _ in groups:
-                if not src.has(ct):
-                    eid = int(src.entities[rows[0]])
-                    raise MissingComponentError(f"{describe_entity(eid)} has no {ct.__name__} to remove")
-        targets = [(src, self._without(src, ct), rows, sel) for src, rows, sel in groups if src.has(ct)]
-        tick = self._write_tick()
-        for src, dst, rows, sel in targets:
-            self._move(src, dst, rows, ids[sel] if sel is not None else ids, tick)
-
-    def _groups(self, ids: np.ndarray) -> Iterator[tuple[ArchetypeTable, np.ndarray, np.ndarray | None]]:
-        """(table, rows, selector into ids) for each table holding some of `ids`."""
-        index = ids & INDEX_MASK
-        tables = self._index.table[index]
-        rows = self._index.row[index]
-        if len(ids) == 1 or (tables == tables[0]).all():
-            yield self._tables[int(tables[0])], rows, None
-            return
-        for tid in np.unique(tables):
-            sel = tables == tid
-            yield self._tables[tid], rows[sel], sel
-
-    def _move(self, src: ArchetypeTable, dst: ArchetypeTable, rows: np.ndarray, ids: np.ndarray, tick: int) -> slice:
-        """Copy rows to `dst` (new columns get defaults), swap-remove them from `src`."""
-        self.structure_version += 1
-        dst_rows = dst.push(ids, tick)
-        for key, col in dst.columns.items():
-            source = src.columns.get(key)
-            if source is not None:
-                col[dst_rows] = source[rows]
-            else:
-                col[dst_rows] = dst.fields[key].default
-        if len(rows) == 1:
-            moved = src.remove_row(int(rows[0]))
-            if moved:
-                self._index.row[moved & INDEX_MASK] = rows[0]
-        else:
-            moved_ids, new_rows = src.remove_rows(rows)
-            self._index.row[moved_ids & INDEX_MASK] = new_rows
-        index = ids & INDEX_MASK
-        self._index.table[index] = dst.id
-        self._index.row[index] = np.arange(dst_rows.start, dst_rows.stop)
-        return dst_rows
+        self.storage.remove(ids, ct, True, self.write_tick())
 
     # --------------------------------------------------------------- get/set
     def get(self, eid: int, component_type: type) -> Any:
         """A copy of one entity's component (for a plain Python class: the stored object)."""
         eid = int(eid)
         ct = schema_of(component_type)
-        table, row = self._locate(eid)
+        table, row = self.storage.locate(eid)
         if not table.has(ct):
             raise MissingComponentError(f"{describe_entity(eid)} has no {ct.__name__}")
         if issubclass(ct, ObjectStore):
@@ -438,39 +292,17 @@ class World:
         n = len(ids)
         who = self._who(ids)
         vals = {name: ct.__fields__[name].coerce(v, n, who) for name, v in raw.items()}
-        placed = self._index.table[ids & INDEX_MASK] >= 0
-        if len(vals) < len(ct.__fields__) and placed.all() and self._all_have(ids, ct):
+        storage = self.storage
+        placed = storage.placed(ids).all()
+        if len(vals) < len(ct.__fields__) and placed and storage.all_have(ids, ct):
             # partial write: cross-field checks see the stored values of the other fields
-            ct.check({**self._stored(ids, ct), **vals}, who)
+            ct.check({**storage.stored(ids, ct), **vals}, who)
         elif len(vals) == len(ct.__fields__):
             ct.check(vals, who)
-        if self.deferring and (not placed.all() or not self._all_have(ids, ct)):
-            self._commands.append(("set", ids, ct, vals))
+        if self.deferring and (not placed or not storage.all_have(ids, ct)):
+            self._commands.push(Set(ids, ct, vals))
             return
-        self._set_now(ids, ct, vals)
-
-    def _stored(self, ids: np.ndarray, ct: type[Component]) -> dict[str, np.ndarray]:
-        index = ids & INDEX_MASK
-        out = {}
-        for name in ct.__fields__:
-            out[name] = np.stack([
-                self._tables[int(t)].columns[(ct, name)][int(r)]
-                for t, r in zip(self._index.table[index], self._index.row[index])
-            ])
-        return out
-
-    def _all_have(self, ids: np.ndarray, ct: type[Component]) -> bool:
-        return all(src.has(ct) for src, _, _ in self._groups(ids))
-
-    def _set_now(self, ids: np.ndarray, ct: type[Component], vals: dict[str, np.ndarray]) -> None:
-        groups = list(self._groups(ids))
-        for src, rows, _ in groups:
-            if not src.has(ct):
-                eid = int(src.entities[rows[0]])
-                raise MissingComponentError(f"{describe_entity(eid)} has no {ct.__name__}")
-        tick = self._write_tick()
-        for src, rows, sel in groups:
-            src.write(rows, ct, _select(vals, sel, len(ids)), tick)
+        storage.write(ids, ct, vals, self.write_tick())
 
     def _who(self, ids: np.ndarray) -> Any:
         return lambda row: describe_entity(int(ids[row]))
@@ -511,15 +343,16 @@ class World:
         key = (req, w_set, wo_set, writes)
         q = self._queries.get(key)
         if q is None:
-            q = self._queries[key] = Query(self, req, w_set, wo_set, writes)
+            q = self._queries[key] = Query(self, self.storage.tables, req, w_set, wo_set, writes)
         if fast is not None:
             self._queries_by_call[fast] = q
         return q
 
-    def _begin_iteration(self) -> None:
+    def begin_iteration(self) -> None:
+        """A query loop starts: structural changes wait until the last loop ends."""
         self._iter_depth += 1
 
-    def _end_iteration(self) -> None:
+    def end_iteration(self) -> None:
         self._iter_depth -= 1
         if not self.deferring and self._commands:
             self.flush()
@@ -544,30 +377,10 @@ class World:
         """
         if self._iter_depth or self._system is not None:
             raise EcsError("flush() cannot run while a system or a query loop is active")
-        commands, self._commands = self._commands, []
-        self._pending_destroy.clear()
-        errors: list[Exception] = []
-        for cmd in commands:
-            try:
-                kind = cmd[0]
-                if kind == "spawn":
-                    self._place(cmd[1], cmd[2], cmd[3])
-                elif kind == "destroy":
-                    self._destroy_now(cmd[1])
-                elif kind == "add":
-                    self._add_now(cmd[1], cmd[2], cmd[3])
-                elif kind == "remove":
-                    self._remove_now(cmd[1], cmd[2], strict=False)
-                else:
-                    self._set_now(cmd[1], cmd[2], cmd[3])
-            except EcsError as exc:
-                errors.append(exc)
-        if errors:
-            more = f" (and {len(errors) - 1} more failed commands)" if len(errors) > 1 else ""
-            raise type(errors[0])(f"{errors[0]}{more}")
+        self._commands.apply(self.storage, self.write_tick)
 
     # ---------------------------------------------------------------- systems
-    def run_system(self, system: System, dt: float) -> None:
+    def run_system(self, system: RunningSystem, dt: float) -> None:
         """Run one system with its own change tick; structural changes wait for a flush."""
         if self._system is not None:
             raise EcsError(f"system {system.name} started inside system {self._system.name}")
@@ -581,9 +394,3 @@ class World:
             self._system = None
             system.last_run_tick = tick
 
-
-def _select(vals: dict[str, np.ndarray], sel: np.ndarray | None, n: int) -> dict[str, np.ndarray]:
-    """The rows of per-entity value arrays picked by `sel`; shared values pass unchanged."""
-    if sel is None:
-        return vals
-    return {name: arr[sel] if arr.shape[0] == n and n > 1 else arr for name, arr in vals.items()}

@@ -3,22 +3,27 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from typing import TYPE_CHECKING, Any
-
-from ecs_engine.components.transform import Transform
+from typing import Any, Protocol
 
 from .errors import EcsError
-from .timestep import Interpolation, PreviousTransform
+from .schema import schema_of
+from .timestep import Interpolation
+from .world import World
 
-if TYPE_CHECKING:
-    from .world import World
+
+class FixedClock(Protocol):
+    """How many fixed steps a frame takes, and where it lies between the last two (see
+    timestep.FixedTimestep)."""
+
+    step: float
+    alpha: float
+
+    def advance(self, frame_dt: float) -> int: ...
 
 
 def _types(items: Iterable[type] | None) -> frozenset[type] | None:
     if items is None:
         return None
-    from .world import schema_of
-
     return frozenset(schema_of(t) for t in items)
 
 
@@ -102,13 +107,14 @@ class Schedule:
     def order(self) -> list[tuple[str, list[str]]]:
         return [(stage, [s.name for s in systems]) for stage, systems in self.stages.items()]
 
-    def run_frame(self, world: World, frame_dt: float, clock: Any, fixed_stage: str = "fixed",
+    def run_frame(self, world: World, frame_dt: float, clock: FixedClock, fixed_stage: str = "fixed",
                   max_frame_dt: float = 0.1) -> int:
         """One frame with a fixed-step stage: `fixed_stage` runs clock.advance(frame_dt) times
-        with dt = clock.step (after copying Transform into PreviousTransform, where an entity
-        has both); the other stages run once with frame_dt, at most `max_frame_dt` (a hitch
-        must not fling a per-frame camera); the Interpolation resource gets the frame's alpha.
-        `clock` is a timestep.FixedTimestep. Returns the steps run."""
+        with dt = clock.step; the other stages run once with frame_dt, at most `max_frame_dt` (a
+        hitch must not fling a per-frame camera); the Interpolation resource gets the frame's
+        alpha. What a fixed step must remember for interpolated drawing (the stock
+        systems.SnapshotSystem) is a system at the head of the fixed stage. `clock` is a
+        timestep.FixedTimestep. Returns the steps run."""
         if fixed_stage not in self.stages:
             raise ValueError(f"unknown stage {fixed_stage!r}; stages are {list(self.stages)}")
         if world.deferring:
@@ -116,7 +122,6 @@ class Schedule:
         world.flush()
         steps = clock.advance(frame_dt)
         for _ in range(steps):
-            _snapshot_transforms(world)
             _run_stage(world, self.stages[fixed_stage], clock.step)
         world.resources[Interpolation] = Interpolation(clock.alpha)
         variable_dt = min(float(frame_dt), max_frame_dt)
@@ -139,9 +144,3 @@ def _run_stage(world: World, systems: list[System], dt: float) -> None:
         world.run_system(sys_, dt)
     world.flush()
 
-
-def _snapshot_transforms(world: World) -> None:
-    for batch in world.query(Transform, PreviousTransform, write=(PreviousTransform,)):
-        t, prev = batch[Transform], batch[PreviousTransform]
-        prev.position[...] = t.position
-        prev.rotation[...] = t.rotation

@@ -258,6 +258,13 @@ def object_component(py_type: type) -> type[Component]:
 _object_schemas: dict[type, type[Component]] = {}
 
 
+def schema_of(t: Any) -> type[Component]:
+    """The storage schema for a component type; plain Python classes map to an object column."""
+    if isinstance(t, type):
+        return t if issubclass(t, Component) else object_component(t)
+    raise TypeError(f"expected a component type (a class), got {t!r}")
+
+
 def closure(types: set[type[Component]]) -> set[type[Component]]:
     """`types` plus every component they require, transitively."""
     out = set(types)

@@ -69,6 +69,10 @@ class EntityIndex:
             self.used += 1
         return (int(self.generation[index]) << INDEX_BITS) | index
 
+    def reserve(self, ids: np.ndarray) -> None:
+        """Mark freshly allocated ids as waiting for a deferred spawn (alive, in no table yet)."""
+        self.table[ids & INDEX_MASK] = RESERVED
+
     def release_one(self, index: int) -> None:
         self.table[index] = FREE
         gen = int(self.generation[index]) + 1

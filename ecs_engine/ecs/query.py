@@ -3,16 +3,26 @@
 from __future__ import annotations
 
 from collections.abc import Iterator
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 
 from .errors import AccessError
-from .schema import Component, Field, ObjectStore
+from .schema import Component, Field, ObjectStore, schema_of
 from .table import ArchetypeTable, ColumnKey
 
-if TYPE_CHECKING:
-    from .world import World
+
+class QueryHost(Protocol):
+    """What a query needs of its world: change ticks and the deferral of structural changes
+    while its loop runs (World provides them)."""
+
+    def write_tick(self) -> int: ...
+
+    def system_last_run_tick(self) -> int: ...
+
+    def begin_iteration(self) -> None: ...
+
+    def end_iteration(self) -> None: ...
 
 
 class ComponentView:
@@ -68,7 +78,7 @@ class Batch:
         view = self._views.get(component)
         if view is not None:
             return view
-        ct = self._query._world.schema_of(component)
+        ct = schema_of(component)
         if ct not in self._query.access:
             raise AccessError(f"query over {self._query.describe()} does not include {ct.__name__}")
         writable = ct in self._query.write
@@ -93,13 +103,15 @@ class Query:
 
     def __init__(
         self,
-        world: World,
+        world: QueryHost,
+        tables: list[ArchetypeTable],
         required: tuple[type[Component], ...],
         with_: frozenset[type[Component]],
         without: frozenset[type[Component]],
         write: frozenset[type[Component]],
     ) -> None:
         self._world = world
+        self._all_tables = tables  # the storage's list, appended to as tables appear
         self.required = required
         self.with_ = with_
         self.without = without
@@ -120,7 +132,7 @@ class Query:
         return "(" + "; ".join(parts) + ")"
 
     def _refresh(self) -> list[ArchetypeTable]:
-        tables = self._world._tables
+        tables = self._all_tables
         if self._scanned < len(tables):
             for table in tables[self._scanned :]:
                 if self._all <= table.type_set and not (self.without & table.type_set):
@@ -145,10 +157,10 @@ class Query:
             if since is None:
                 since = world.system_last_run_tick()
             for t in changed:
-                ct = world.schema_of(t)
+                ct = schema_of(t)
                 changed_keys.extend((ct, name) for name in ct.__fields__)
-        tick = world._write_tick() if self._write_keys else 0
-        world._begin_iteration()
+        tick = world.write_tick() if self._write_keys else 0
+        world.begin_iteration()
         try:
             for table in tables:
                 if table.count == 0:
@@ -162,7 +174,7 @@ class Query:
                     cached = self._batches[table.id] = (table.version, Batch(table, self))
                 yield cached[1]
         finally:
-            world._end_iteration()
+            world.end_iteration()
 
     def count(self) -> int:
         return sum(t.count for t in self._refresh())

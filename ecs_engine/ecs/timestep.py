@@ -12,24 +12,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
-from .schema import Component, Field
-
 
 @dataclass
 class Interpolation:
     """World resource for the frame: render at prev + alpha (current - prev), alpha in [0, 1)."""
 
     alpha: float = 1.0
-
-
-class PreviousTransform(Component):
-    """Position and rotation at the start of the last fixed step; an entity with it is drawn
-    interpolated between the two (see systems.transform)."""
-
-    position = Field(np.float64, (3,), default=(0.0, 0.0, 0.0), finite=True)
-    rotation = Field(np.float64, (4,), default=(0.0, 0.0, 0.0, 1.0), finite=True)
 
 
 class FixedTimestep:

@@ -1,0 +1,30 @@
+"""The ECS core: entities, component schemas, archetype storage, the world, queries, systems,
+the schedule and the fixed step. It imports nothing from rendering, the app, or the stock
+components and systems (they build on it)."""
+
+from .errors import AccessError, DeadEntityError, EcsError, MissingComponentError
+from .query import Batch, ComponentView, Query
+from .schedule import FunctionSystem, Schedule, System, system
+from .schema import Component, Field, schema_of
+from .timestep import FixedTimestep, Interpolation
+from .world import World
+
+__all__ = [
+    "AccessError",
+    "Batch",
+    "Component",
+    "ComponentView",
+    "DeadEntityError",
+    "EcsError",
+    "Field",
+    "FixedTimestep",
+    "FunctionSystem",
+    "Interpolation",
+    "MissingComponentError",
+    "Query",
+    "Schedule",
+    "System",
+    "World",
+    "schema_of",
+    "system",
+]

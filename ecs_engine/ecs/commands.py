@@ -1,0 +1,103 @@
+"""Structural changes requested while systems or query loops run: a typed command queue (as in
+Bevy), applied in request order at the next sync point.
+
+Each command holds values the world has already checked and applies itself to the storage, so
+the queue needs no dispatch on a kind string and a new command is one small class.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from .errors import EcsError
+from .schema import Component
+from .storage import Checked, Storage, Values
+
+Tick = Callable[[], int]  # the change tick for the columns a command writes
+
+
+class Command(Protocol):
+    def apply(self, storage: Storage, tick: Tick) -> None: ...
+
+
+@dataclass(slots=True)
+class Spawn:
+    ids: np.ndarray
+    types: frozenset[type[Component]]
+    checked: Checked
+
+    def apply(self, storage: Storage, tick: Tick) -> None:
+        storage.place(self.ids, self.types, self.checked, tick())
+
+
+@dataclass(slots=True)
+class Destroy:
+    ids: np.ndarray
+
+    def apply(self, storage: Storage, tick: Tick) -> None:
+        storage.destroy(self.ids)
+
+
+@dataclass(slots=True)
+class Add:
+    ids: np.ndarray
+    component: type[Component]
+    values: Values
+
+    def apply(self, storage: Storage, tick: Tick) -> None:
+        storage.add(self.ids, self.component, self.values, tick())
+
+
+@dataclass(slots=True)
+class Remove:
+    """A queued remove of a component the entity no longer has is skipped."""
+
+    ids: np.ndarray
+    component: type[Component]
+
+    def apply(self, storage: Storage, tick: Tick) -> None:
+        storage.remove(self.ids, self.component, False, tick())
+
+
+@dataclass(slots=True)
+class Set:
+    ids: np.ndarray
+    component: type[Component]
+    values: Values
+
+    def apply(self, storage: Storage, tick: Tick) -> None:
+        storage.write(self.ids, self.component, self.values, tick())
+
+
+class CommandQueue:
+    """Commands in request order, and the ids queued for destruction (using one raises)."""
+
+    def __init__(self) -> None:
+        self._commands: list[Command] = []
+        self.pending_destroy: set[int] = set()
+
+    def __len__(self) -> int:
+        return len(self._commands)
+
+    def push(self, command: Command) -> None:
+        if isinstance(command, Destroy):
+            self.pending_destroy.update(command.ids.tolist())
+        self._commands.append(command)
+
+    def apply(self, storage: Storage, tick: Tick) -> None:
+        """Apply every command; one that fails is reported after all the others were applied."""
+        commands, self._commands = self._commands, []
+        self.pending_destroy.clear()
+        errors: list[EcsError] = []
+        for command in commands:
+            try:
+                command.apply(storage, tick)
+            except EcsError as exc:
+                errors.append(exc)
+        if errors:
+            more = f" (and {len(errors) - 1} more failed commands)" if len(errors) > 1 else ""
+            raise type(errors[0])(f"{errors[0]}{more}")
