@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from ecs_engine.spring_math import INTEGRATORS, exact_coefficients, step
+from ecs_engine.maths.spring import INTEGRATORS, exact_coefficients, step
 
 THREADS = 1
 CASES = {"soft": (10.0, 0.5), "stiff": (1e4, 10.0)}  # stiffness, damping (mass 1)
@@ -103,7 +103,7 @@ def _look_at_view(eye: np.ndarray, target: np.ndarray, dtype: Any) -> np.ndarray
 
 def projected_pixels(vertices: np.ndarray, center: np.ndarray, eye: np.ndarray, mode: str) -> np.ndarray:
     """(8, 2) pixel positions of the cube's corners through the emulated float32 path."""
-    from ecs_engine.camera_math import perspective
+    from ecs_engine.maths.camera import perspective
 
     proj = perspective(math.radians(50.0), WIDTH / HEIGHT, 0.05)  # float32, as the GPU gets it
     if mode == "exact":

@@ -1,7 +1,15 @@
 """Stock component schemas. Declare your own the same way: subclass Component, add Fields."""
 
-from .camera import ORTHOGRAPHIC, PERSPECTIVE, Camera
-from .camera_control import ActiveCamera, FlyCamera
+from .camera import (
+    ORTHOGRAPHIC,
+    PERSPECTIVE,
+    ActiveCamera,
+    Camera,
+    RenderOrigin,
+    active_camera,
+    render_origin,
+)
+from .camera_control import FlyCamera
 from .light import PointLight
 from .mesh import Mesh
 from .motion import AngularVelocity, Spring, Velocity
@@ -21,7 +29,10 @@ __all__ = [
     "Orbit",
     "PointLight",
     "PreviousTransform",
+    "RenderOrigin",
     "Spring",
     "Transform",
     "Velocity",
+    "active_camera",
+    "render_origin",
 ]

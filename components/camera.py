@@ -1,10 +1,23 @@
-"""Cameras (position and orientation come from the entity's Transform)."""
+"""Cameras (position and orientation come from the entity's Transform), which one renders, and
+the render origin that matrices are made relative to.
+
+`active_camera` and `render_origin` are read by the stock systems and by the renderer alike,
+so they live with the data they read rather than in either of them.
+"""
 
 from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from ecs_engine.ecs.schema import Component, Field
+from ecs_engine.ecs.world import World
+from ecs_engine.errors import UsageError
+
+from .transform import Transform
 
 PERSPECTIVE = 0
 ORTHOGRAPHIC = 1
@@ -30,3 +43,54 @@ class Camera(Component):
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
             raise ValueError(f"{who(row)}: Camera.near ({near[row]}) must be less than Camera.far ({far[row]})")
+
+
+class ActiveCamera(Component):
+    """Tag: with several Camera entities, the one to render from (exactly one may carry it)."""
+
+
+def active_camera(world: World) -> int:
+    """The entity to render from: the only one with Camera and Transform, or else the only one
+    of those also tagged ActiveCamera. Raises UsageError otherwise."""
+    cached = _ACTIVE.get(world)
+    if cached is not None and cached[0] == world.structure_version:
+        return cached[1]  # which entity it is can only change with the world's structure
+    cameras = world.query(Camera, Transform, write=()).entities()
+    if len(cameras) == 1:
+        _ACTIVE[world] = (world.structure_version, int(cameras[0]))
+        return int(cameras[0])
+    if len(cameras) == 0:
+        raise UsageError("no camera: spawn an entity with Camera and Transform components")
+    tagged = world.query(Camera, Transform, with_=[ActiveCamera], write=()).entities()
+    if len(tagged) == 1:
+        _ACTIVE[world] = (world.structure_version, int(tagged[0]))
+        return int(tagged[0])
+    if len(tagged) == 0:
+        raise UsageError(
+            f"{len(cameras)} entities have Camera and Transform and none is tagged ActiveCamera: "
+            "add ActiveCamera() to the one to render from"
+        )
+    raise UsageError(
+        f"{len(tagged)} cameras are tagged ActiveCamera: remove the tag from all but one"
+    )
+
+
+# per world: (structure_version, active camera)
+_ACTIVE: weakref.WeakKeyDictionary[Any, tuple[int, int]] = weakref.WeakKeyDictionary()
+
+
+@dataclass
+class RenderOrigin:
+    """World resource: the float64 point that model matrices are made relative to before the
+    cast to float32. RenderOriginSystem keeps it at the active camera (camera-relative
+    rendering); `follow_camera=False` pins it (at the world origin: classic float32 world-space
+    rendering, which jitters far from the origin; kept for comparison and measurement)."""
+
+    position: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    follow_camera: bool = True
+
+
+def render_origin(world: World) -> np.ndarray:
+    """The RenderOrigin resource's position (float64), or the world origin without one."""
+    resource = world.resources.get(RenderOrigin)
+    return np.zeros(3) if resource is None else np.asarray(resource.position, dtype=np.float64)

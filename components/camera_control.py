@@ -1,4 +1,4 @@
-"""Which camera renders (ActiveCamera) and the state of a keyboard-driven fly camera."""
+"""The state of a keyboard-driven fly camera."""
 
 from __future__ import annotations
 
@@ -7,10 +7,6 @@ import numpy as np
 from ecs_engine.ecs.schema import Component, Field
 
 from .transform import Transform
-
-
-class ActiveCamera(Component):
-    """Tag: with several Camera entities, the one to render from (exactly one may carry it)."""
 
 
 class FlyCamera(Component):

@@ -21,7 +21,7 @@ class Transform(Component):
 
 class ModelMatrix(Component):
     """Written by the transform system: the camera-relative model matrix, float32, indexed
-    [row, column] (see ecs_engine.transform_math). The renderer reads only this: its vertex
+    [row, column] (see ecs_engine.maths.transform). The renderer reads only this: its vertex
     shader derives the normal matrix."""
 
     model = Field(np.float32, (4, 4), default=np.eye(4))

@@ -8,7 +8,7 @@ import numpy as np
 from ecs_engine.components import Camera, FlyCamera, Orbit, PointLight, Transform
 
 from ecs_engine import World
-from ecs_engine.camera_math import yaw_pitch_quat
+from ecs_engine.maths.camera import yaw_pitch_quat
 
 # The seed's light colours: one per light, six around the scene.
 LIGHT_COLORS = [(1.0, 0.1, 0.1), (0.1, 0.1, 1.0), (0.1, 1.0, 0.1), (1.0, 1.0, 0.1), (0.1, 1.0, 1.0), (1.0, 1.0, 1.0)]

@@ -17,7 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from .camera_math import active_camera, yaw_pitch_roll, yaw_pitch_roll_quat
+from .components import active_camera
+from .maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
 from .components import Camera, Mesh, PointLight, Transform
 from .gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
 from .renderer import MODES, RECORDERS
@@ -273,7 +274,7 @@ class Editor:
             cam = world.get(active_camera(world), Transform)
         except Exception:
             return np.zeros(3)
-        from .camera_math import rotation_matrix
+        from .maths.camera import rotation_matrix
 
         forward = rotation_matrix(cam.rotation)[:3, :3] @ np.array([0.0, 0.0, -1.0])
         return np.asarray(cam.position, dtype=np.float64) + forward * distance

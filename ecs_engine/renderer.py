@@ -25,9 +25,9 @@ from typing import Any
 
 import numpy as np
 
-from .camera_math import CameraMatrices, camera_matrices, view_from_origin
+from .render.camera import CameraMatrices, camera_matrices, view_from_origin
 from .components import Mesh, ModelMatrix, PointLight, Transform
-from .culling import frustum_planes
+from .maths.culling import frustum_planes
 from .gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
 from .gpu.device import Device
 from .gpu.frames import FrameRing
@@ -44,7 +44,7 @@ from .instance_rows import INSTANCE_DTYPE, write_rows
 from .jobs import JobPool, row_chunks
 from .light_rows import LIGHT_DTYPE, write_lights
 from .mesh_registry import VERTEX_STRIDE, MeshRegistry
-from .systems.transform import render_origin
+from .components import render_origin
 from .ecs.world import World
 
 MATERIAL_DTYPE = np.dtype([("color", np.float32, 4), ("specular", np.float32, 4)])

@@ -5,8 +5,7 @@ from .interpolation import SnapshotSystem
 from .motion import MotionSystem
 from .orbit import OrbitSystem
 from .spring import SpringSystem
-from .transform import RenderOrigin, RenderOriginSystem, TransformSystem, render_origin
+from .transform import RenderOriginSystem, TransformSystem
 
-__all__ = ["FlyCameraSystem", "InputState", "MotionSystem", "OrbitSystem", "RenderOrigin", "RenderOriginSystem", "SnapshotSystem", "SpringSystem",
-           "TransformSystem",
-           "render_origin"]
+__all__ = ["FlyCameraSystem", "InputState", "MotionSystem", "OrbitSystem", "RenderOriginSystem", "SnapshotSystem", "SpringSystem",
+           "TransformSystem"]

@@ -17,7 +17,7 @@ import numpy as np
 from ecs_engine.components.camera_control import FlyCamera
 from ecs_engine.components.transform import Transform
 
-from ecs_engine.camera_math import yaw_pitch_quat
+from ecs_engine.maths.camera import yaw_pitch_quat
 from ecs_engine.ecs.schedule import System
 from ecs_engine.ecs.world import World
 

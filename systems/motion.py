@@ -6,7 +6,7 @@ from ecs_engine.components import AngularVelocity, Transform, Velocity
 
 from ecs_engine.jobs import JobPool, over_rows
 from ecs_engine.ecs.schedule import System
-from ecs_engine.transform_math import integrate_angular, integrate_linear
+from ecs_engine.maths.transform import integrate_angular, integrate_linear
 from ecs_engine.ecs.world import World
 
 

@@ -5,12 +5,12 @@ from __future__ import annotations
 from ecs_engine.components import Spring, Transform, Velocity
 
 from ecs_engine.ecs.schedule import System
-from ecs_engine.spring_math import INTEGRATORS, step
+from ecs_engine.maths.spring import INTEGRATORS, step
 from ecs_engine.ecs.world import World
 
 
 class SpringSystem(System):
-    """One step of every spring per run, with the chosen integrator (see ecs_engine.spring_math).
+    """One step of every spring per run, with the chosen integrator (see ecs_engine.maths.spring).
     The default, `implicit`, stays stable however stiff the spring and however long the step;
     `exact` is exact for constant anchors; the others are there to compare."""
 

@@ -3,36 +3,26 @@ matrices for entities that opt in with NormalMatrix."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from ecs_engine.components import Camera, ModelMatrix, NormalMatrix, PreviousTransform, Transform
+from ecs_engine.components import (
+    Camera,
+    ModelMatrix,
+    NormalMatrix,
+    PreviousTransform,
+    RenderOrigin,
+    Transform,
+    active_camera,
+    render_origin,
+)
 
-from ecs_engine.camera_math import active_camera
 from ecs_engine.errors import UsageError
 from ecs_engine.jobs import JobPool, over_rows
 from ecs_engine.ecs.schedule import System
 from ecs_engine.ecs.timestep import Interpolation
-from ecs_engine.transform_math import compose
+from ecs_engine.maths.transform import compose
 from ecs_engine.ecs.world import World
-
-
-@dataclass
-class RenderOrigin:
-    """World resource: the float64 point that model matrices are made relative to before the
-    cast to float32. RenderOriginSystem keeps it at the active camera (camera-relative
-    rendering); `follow_camera=False` pins it (at the world origin: classic float32 world-space
-    rendering, which jitters far from the origin; kept for comparison and measurement)."""
-
-    position: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    follow_camera: bool = True
-
-
-def render_origin(world: World) -> np.ndarray:
-    """The RenderOrigin resource's position (float64), or the world origin without one."""
-    resource = world.resources.get(RenderOrigin)
-    return np.zeros(3) if resource is None else np.asarray(resource.position, dtype=np.float64)
 
 
 class TransformSystem(System):

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 from ecs_engine.components.camera import Camera
-from ecs_engine.components.camera_control import ActiveCamera, FlyCamera
+from ecs_engine.components import ActiveCamera, FlyCamera
 from ecs_engine.components.transform import Transform
 from ecs_engine.systems.camera_control import (
     KEYS,
@@ -22,8 +22,8 @@ from ecs_engine.systems.camera_control import (
 )
 
 from ecs_engine import Schedule, World
-from ecs_engine.camera_math import yaw_pitch_quat
-from ecs_engine.transform_math import quat_to_mat3
+from ecs_engine.maths.camera import yaw_pitch_quat
+from ecs_engine.maths.transform import quat_to_mat3
 
 SPEED, TURN, DT = 2.0, 1.0, 0.25
 

@@ -8,19 +8,14 @@ import math
 import numpy as np
 import pytest
 from ecs_engine.components.camera import ORTHOGRAPHIC, Camera
-from ecs_engine.components.camera_control import ActiveCamera
+from ecs_engine.components import ActiveCamera
 from ecs_engine.components.transform import Transform
 
 from ecs_engine import World
-from ecs_engine.camera_math import (
-    camera_matrices,
-    orthographic,
-    perspective,
-    view_rotation,
-    yaw_pitch_quat,
-)
+from ecs_engine.maths.camera import orthographic, perspective, view_rotation, yaw_pitch_quat
+from ecs_engine.render.camera import camera_matrices
 from ecs_engine.errors import UsageError
-from ecs_engine.transform_math import quat_to_mat3
+from ecs_engine.maths.transform import quat_to_mat3
 
 FOV = math.radians(60.0)
 

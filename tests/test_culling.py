@@ -8,13 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from ecs_engine.camera_math import (
-    perspective,
-    rotation_matrix,
-    view_rotation,
-    yaw_pitch_quat,
-)
-from ecs_engine.culling import bounding_spheres, frustum_planes, spheres_visible
+from ecs_engine.maths.camera import perspective, rotation_matrix, view_rotation, yaw_pitch_quat
+from ecs_engine.maths.culling import bounding_spheres, frustum_planes, spheres_visible
 
 FOV, ASPECT, NEAR, FAR = math.radians(60.0), 16 / 9, 0.1, 50.0
 

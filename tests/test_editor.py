@@ -16,7 +16,7 @@ from ecs_engine.components import Camera, Mesh, PointLight, Transform
 from gpu_context import headless_gpu
 
 from ecs_engine.app import RunOptions, build_scene, run, scene_builder
-from ecs_engine.camera_math import yaw_pitch_quat, yaw_pitch_roll, yaw_pitch_roll_quat
+from ecs_engine.maths.camera import yaw_pitch_quat, yaw_pitch_roll, yaw_pitch_roll_quat
 from ecs_engine.jobs import JobPool
 
 W, H = 640, 480

@@ -12,8 +12,8 @@ from gpu_context import headless_gpu
 
 from ecs_engine import World
 from ecs_engine.app import default_schedule
-from ecs_engine.camera_math import camera_matrices
-from ecs_engine.culling import bounding_spheres, frustum_planes, spheres_visible
+from ecs_engine.render.camera import camera_matrices
+from ecs_engine.maths.culling import bounding_spheres, frustum_planes, spheres_visible
 from ecs_engine.mesh_data import DEFAULT_MODEL, cube_mesh, load_mesh, normalized
 
 W, H = 64, 48

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from ecs_engine import instance_rows as ir
-from ecs_engine.camera_math import perspective, view_rotation, yaw_pitch_quat
-from ecs_engine.culling import frustum_planes
-from ecs_engine.transform_math import compose
+from ecs_engine.maths.camera import perspective, view_rotation, yaw_pitch_quat
+from ecs_engine.maths.culling import frustum_planes
+from ecs_engine.maths.transform import compose
 
 rng = np.random.default_rng(4)
 

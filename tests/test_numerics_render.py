@@ -16,7 +16,7 @@ from ecs_engine.components import (
     Transform,
 )
 from ecs_engine.demos.scene_kit import add_camera
-from ecs_engine.systems import RenderOrigin
+from ecs_engine.components import RenderOrigin
 from golden_images import image_difference
 from gpu_context import headless_gpu
 

@@ -11,7 +11,8 @@ from ecs_engine.components import (
     Transform,
     Velocity,
 )
-from ecs_engine.systems import MotionSystem, RenderOrigin, TransformSystem
+from ecs_engine.components import RenderOrigin
+from ecs_engine.systems import MotionSystem, TransformSystem
 
 from ecs_engine import AccessError, EcsError, Schedule, System, World, system
 
@@ -176,10 +177,7 @@ def test_stock_systems_split_across_a_job_pool_give_the_same_result():
 
 
 def test_motion_moves_entities_with_either_rate_or_both():
-    from ecs_engine.transform_math import (
-        integrate_angular_numpy,
-        integrate_linear_numpy,
-    )
+    from ecs_engine.maths.transform import integrate_angular_numpy, integrate_linear_numpy
 
     rng = np.random.default_rng(8)
     w = World()
@@ -209,7 +207,7 @@ def test_normal_matrices_are_written_only_for_entities_that_ask_for_them():
     from ecs_engine.components import NormalMatrix, PreviousTransform
 
     from ecs_engine.ecs.timestep import Interpolation
-    from ecs_engine.transform_math import compose_numpy
+    from ecs_engine.maths.transform import compose_numpy
 
     w = World()
     q = np.array([0.1, 0.7, -0.2, 0.6])

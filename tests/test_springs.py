@@ -9,7 +9,7 @@ from ecs_engine.components import Spring, Transform, Velocity
 from ecs_engine.systems import SpringSystem
 
 from ecs_engine import World
-from ecs_engine.spring_math import INTEGRATORS, exact_coefficients, step
+from ecs_engine.maths.spring import INTEGRATORS, exact_coefficients, step
 
 
 def analytic(x0: float, v0: float, k: float, c: float, m: float, t: float) -> float:

@@ -11,10 +11,10 @@ from ecs_engine.systems import MotionSystem, SnapshotSystem, SpringSystem, Trans
 from ecs_engine.systems.camera_control import FlyInput, fly_step
 
 from ecs_engine import World
-from ecs_engine.camera_math import yaw_pitch_quat
+from ecs_engine.maths.camera import yaw_pitch_quat
 from ecs_engine.ecs.schedule import Schedule
 from ecs_engine.ecs.timestep import FixedTimestep
-from ecs_engine.transform_math import integrate_angular
+from ecs_engine.maths.transform import integrate_angular
 
 
 def test_accumulator_steps_alpha_and_cap():

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from ecs_engine import native
-from ecs_engine import transform_math as tm
+from ecs_engine.maths import transform as tm
 
 rng = np.random.default_rng(7)
 

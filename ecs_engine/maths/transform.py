@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import native
+from .. import native
 
 
 def quat_to_mat3(q: np.ndarray) -> np.ndarray:

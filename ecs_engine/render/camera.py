@@ -1,0 +1,92 @@
+"""The active camera's matrices for a frame: what its Camera and Transform components make of the
+projections in maths/camera.py, kept while neither component changes."""
+
+from __future__ import annotations
+
+import math
+import weakref
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ecs_engine.components.camera import ORTHOGRAPHIC, Camera, active_camera
+from ecs_engine.components.transform import Transform
+
+from ..ecs.world import World
+from ..errors import UsageError
+from ..maths.camera import check_positive, orthographic, perspective, rotation_matrix
+
+
+@dataclass(frozen=True)
+class CameraMatrices:
+    """What a frame needs from the active camera. `view` maps camera-relative world directions
+    to view space (rotation only); `inverse_view` maps back; `position` (float64) is the render
+    origin to subtract from world positions before the cast to float32."""
+
+    projection: np.ndarray
+    view: np.ndarray
+    inverse_view: np.ndarray
+    position: np.ndarray
+    near: float
+    far: float
+    entity: int
+
+
+def view_from_origin(cam: CameraMatrices, origin: np.ndarray) -> np.ndarray:
+    """The view matrix (4, 4) float32 for model matrices made relative to `origin`: the camera's
+    rotation, and the translation from origin to camera (made in float64, cast once). With the
+    origin at the camera (camera-relative rendering) the translation is exactly zero."""
+    view = cam.view.astype(np.float64)
+    view[:3, 3] = view[:3, :3] @ (np.asarray(origin, dtype=np.float64) - cam.position)
+    return view.astype(np.float32)
+
+
+def camera_matrices(world: World, viewport_aspect: float) -> CameraMatrices:
+    """Projection, view and position of the active camera (see `active_camera`).
+    Camera.aspect 0 means "use viewport_aspect" (width / height of the render target).
+
+    The result is kept until the camera's Camera or Transform columns are written (see
+    World.change_stamp), so a still camera costs a lookup; its arrays are read-only."""
+    viewport_aspect = float(viewport_aspect)
+    check_positive("viewport_aspect", viewport_aspect)
+    eid = active_camera(world)
+    stamp = (world.change_stamp(eid, Camera, Transform), viewport_aspect)
+    cached = _MATRICES.get(world)
+    if cached is not None and cached[0] == stamp:
+        return cached[1]
+    matrices = _camera_matrices(world, eid, viewport_aspect)
+    for array in (matrices.projection, matrices.view, matrices.inverse_view, matrices.position):
+        array.flags.writeable = False
+    _MATRICES[world] = (stamp, matrices)
+    return matrices
+
+
+# per world: (change stamp, CameraMatrices)
+_MATRICES: weakref.WeakKeyDictionary[Any, tuple[Any, CameraMatrices]] = weakref.WeakKeyDictionary()
+
+
+def _camera_matrices(world: World, eid: int, viewport_aspect: float) -> CameraMatrices:
+    cam = world.get(eid, Camera)
+    transform = world.get(eid, Transform)
+    aspect = float(cam.aspect) or viewport_aspect
+    near, far = float(cam.near), float(cam.far)
+    if int(cam.projection) == ORTHOGRAPHIC:
+        if math.isinf(far):
+            raise UsageError(
+                f"the orthographic camera (entity {eid}) has an infinite far plane: "
+                "set Camera.far to a finite distance"
+            )
+        projection = orthographic(float(cam.height), aspect, near, far)
+    else:
+        projection = perspective(float(cam.fov_y), aspect, near, far)
+    rotation = rotation_matrix(transform.rotation)
+    return CameraMatrices(
+        projection=projection,
+        view=rotation.T.astype(np.float32),
+        inverse_view=rotation.astype(np.float32),
+        position=np.array(transform.position, dtype=np.float64),
+        near=near,
+        far=far,
+        entity=eid,
+    )
