@@ -49,8 +49,8 @@ def sweep(entities: int, thread_counts: list[int], frames: int, warmup: int, siz
     from ecs_engine.gpu.instance import Instance
     from ecs_engine.gpu.native_recorder import NativeRecorder
     from ecs_engine.gpu.offscreen import OffscreenTarget
-    from ecs_engine.mesh_registry import MeshRegistry
-    from ecs_engine.renderer import Renderer
+    from ecs_engine.render.mesh_registry import MeshRegistry
+    from ecs_engine.render.renderer import Renderer
     from ecs_engine.ecs.world import World
 
     rows = []
@@ -242,8 +242,8 @@ def measure_driver_floor(draws: int, size: tuple[int, int]) -> dict[str, Any]:
     from ecs_engine.gpu.device import Device
     from ecs_engine.gpu.instance import Instance
     from ecs_engine.gpu.offscreen import OffscreenTarget
-    from ecs_engine.mesh_data import cube_mesh
-    from ecs_engine.mesh_registry import MeshRegistry
+    from ecs_engine.render.mesh_data import cube_mesh
+    from ecs_engine.render.mesh_registry import MeshRegistry
 
     from .driver_floor import measure as floor
 

@@ -37,7 +37,7 @@ import psutil
 from ecs_engine.app import RunOptions
 from ecs_engine.app import run as run_scene
 from ecs_engine.jobs import default_threads
-from ecs_engine.renderer import MODES as RENDER_MODES
+from ecs_engine.render.renderer import MODES as RENDER_MODES
 
 THREADS = default_threads()
 SCENES = ("cube", "grid100", "model")

@@ -9,13 +9,7 @@ import numpy as np
 from ecs_engine.components import AngularVelocity, Mesh, Transform, Velocity
 
 from ecs_engine import World
-from ecs_engine.mesh_data import (
-    DEFAULT_MODEL,
-    MeshData,
-    cube_mesh,
-    load_mesh,
-    normalized,
-)
+from ecs_engine.render.mesh_data import DEFAULT_MODEL, MeshData, cube_mesh, load_mesh, normalized
 
 from .scene_kit import add_camera, add_orbiting_lights
 

@@ -148,7 +148,7 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
     from .gpu.instance import Instance
     from .gpu.offscreen import OffscreenTarget
     from .jobs import default_threads
-    from .mesh_registry import MeshRegistry
+    from .render.mesh_registry import MeshRegistry
     from .perf import PerfMonitor
     from .ecs.timestep import FixedTimestep
 
@@ -228,7 +228,7 @@ def build_scene(options: RunOptions, build: Callable[..., None], device: Any, ta
                 jobs: Any) -> tuple[World, Schedule, Any]:
     """The scene's world (sharing the run's worker pool), its schedule, and a renderer that
     builds only what the scene needs."""
-    from .renderer import Renderer
+    from .render.renderer import Renderer
 
     world = World()
     world.resources[type(jobs)] = jobs

@@ -21,7 +21,7 @@ from .components import active_camera
 from .maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
 from .components import Camera, Mesh, PointLight, Transform
 from .gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
-from .renderer import MODES, RECORDERS
+from .render.renderer import MODES, RECORDERS
 from .ecs.world import World
 
 PRESENT_MODES = tuple(SWAPCHAIN_PRESENT_MODES)

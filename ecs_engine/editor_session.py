@@ -107,7 +107,7 @@ class EditorSession:
             return False
         from .app import build_scene, scene_builder
         from .jobs import JobPool
-        from .renderer import Renderer
+        from .render.renderer import Renderer
 
         o = state.options
         rebuilt = False

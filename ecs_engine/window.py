@@ -68,7 +68,7 @@ def run_windowed(options: RunOptions, glfw: Any,
     from .gpu.instance import Instance
     from .gpu.swapchain import OutOfDate, Swapchain
     from .jobs import default_threads
-    from .mesh_registry import MeshRegistry
+    from .render.mesh_registry import MeshRegistry
     from .perf import PerfMonitor
     from .systems import InputState
     from .ecs.timestep import FixedTimestep

@@ -23,7 +23,7 @@ def headless_gpu(width: int = 64, height: int = 48) -> Iterator[Gpu]:
     from ecs_engine.gpu.device import Device
     from ecs_engine.gpu.instance import Instance
     from ecs_engine.gpu.offscreen import OffscreenTarget
-    from ecs_engine.mesh_registry import MeshRegistry
+    from ecs_engine.render.mesh_registry import MeshRegistry
 
     instance = Instance(validate=True)
     device = Device(instance)

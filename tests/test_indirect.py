@@ -14,13 +14,13 @@ from ecs_engine import World
 from ecs_engine.app import default_schedule
 from ecs_engine.render.camera import camera_matrices
 from ecs_engine.maths.culling import bounding_spheres, frustum_planes, spheres_visible
-from ecs_engine.mesh_data import DEFAULT_MODEL, cube_mesh, load_mesh, normalized
+from ecs_engine.render.mesh_data import DEFAULT_MODEL, cube_mesh, load_mesh, normalized
 
 W, H = 64, 48
 
 
 def indirect_renderer(gpu, **kw):
-    from ecs_engine.renderer import Renderer
+    from ecs_engine.render.renderer import Renderer
 
     renderer = Renderer(gpu.device, gpu.target, gpu.meshes, lights=False, mode="indirect", **kw)
     gpu.owned.append(renderer)

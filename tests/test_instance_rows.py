@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ecs_engine import instance_rows as ir
+from ecs_engine.render import instance_rows as ir
 from ecs_engine.maths.camera import perspective, view_rotation, yaw_pitch_quat
 from ecs_engine.maths.culling import frustum_planes
 from ecs_engine.maths.transform import compose

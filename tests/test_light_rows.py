@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ecs_engine import light_rows
-from ecs_engine.light_rows import LIGHT_DTYPE, write_lights, write_lights_numpy
+from ecs_engine.render import light_rows
+from ecs_engine.render.light_rows import LIGHT_DTYPE, write_lights, write_lights_numpy
 
 
 def parts(rng: np.random.Generator, sizes: list[int]) -> list[tuple[np.ndarray, ...]]:

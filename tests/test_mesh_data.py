@@ -14,14 +14,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from ecs_engine.errors import UsageError
-from ecs_engine.mesh_data import (
-    DEFAULT_MODEL,
-    MeshData,
-    bounding_sphere,
-    cube_mesh,
-    load_mesh,
-    normalized,
-)
+from ecs_engine.render.mesh_data import DEFAULT_MODEL, MeshData, bounding_sphere, cube_mesh, load_mesh, normalized
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -22,14 +22,14 @@ from gpu_context import headless_gpu
 
 from ecs_engine import World
 from ecs_engine.app import default_schedule
-from ecs_engine.instance_rows import INSTANCE_DTYPE, write_rows
-from ecs_engine.mesh_data import cube_mesh
+from ecs_engine.render.instance_rows import INSTANCE_DTYPE, write_rows
+from ecs_engine.render.mesh_data import cube_mesh
 
 W, H = 160, 120
 
 
 def render(gpu, world: World, frames: int = 1) -> np.ndarray:
-    from ecs_engine.renderer import Renderer
+    from ecs_engine.render.renderer import Renderer
 
     renderer = Renderer(gpu.device, gpu.target, gpu.meshes, lights=True)
     try:

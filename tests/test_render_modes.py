@@ -73,7 +73,7 @@ def test_a_failing_job_names_its_chunk_and_the_next_frame_renders(monkeypatch):
 
     from ecs_engine.app import default_schedule
     from ecs_engine.jobs import JobPool
-    from ecs_engine.renderer import Renderer
+    from ecs_engine.render.renderer import Renderer
     from ecs_engine.ecs.world import World
 
     with headless_gpu() as gpu:
@@ -104,7 +104,7 @@ def test_a_failing_job_names_its_chunk_and_the_next_frame_renders(monkeypatch):
 def test_jobs_are_about_one_per_thread_but_never_tiny():
     from types import SimpleNamespace
 
-    from ecs_engine.renderer import MIN_CHUNK_ROWS, Renderer
+    from ecs_engine.render.renderer import MIN_CHUNK_ROWS, Renderer
 
     def rows(n, threads, chunk_rows=None):
         fake = SimpleNamespace(chunk_rows=chunk_rows, jobs=SimpleNamespace(threads=threads))

@@ -10,11 +10,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .gpu.memory import Buffer, upload
+from ..gpu.memory import Buffer, upload
 from .mesh_data import MeshData
 
 if TYPE_CHECKING:
-    from .gpu.device import Device
+    from ..gpu.device import Device
 
 VERTEX_STRIDE = 24  # position xyz, normal xyz, float32
 

@@ -25,27 +25,22 @@ from typing import Any
 
 import numpy as np
 
-from .render.camera import CameraMatrices, camera_matrices, view_from_origin
-from .components import Mesh, ModelMatrix, PointLight, Transform
-from .maths.culling import frustum_planes
-from .gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
-from .gpu.device import Device
-from .gpu.frames import FrameRing
-from .gpu.memory import Buffer
-from .gpu.pipeline import (
-    GraphicsPipelineSpec,
-    PipelineCache,
-    graphics_pipeline,
-    pipeline_layout,
-)
-from .gpu.secondary import SecondaryBuffers, end_command_buffer
+from .camera import CameraMatrices, camera_matrices, view_from_origin
+from ..components import Mesh, ModelMatrix, PointLight, Transform
+from ..maths.culling import frustum_planes
+from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
+from ..gpu.device import Device
+from ..gpu.frames import FrameRing
+from ..gpu.memory import Buffer
+from ..gpu.pipeline import GraphicsPipelineSpec, PipelineCache, graphics_pipeline, pipeline_layout
+from ..gpu.secondary import SecondaryBuffers, end_command_buffer
 from .indirect_draws import IndirectDraws, check_support
 from .instance_rows import INSTANCE_DTYPE, write_rows
-from .jobs import JobPool, row_chunks
+from ..jobs import JobPool, row_chunks
 from .light_rows import LIGHT_DTYPE, write_lights
 from .mesh_registry import VERTEX_STRIDE, MeshRegistry
-from .components import render_origin
-from .ecs.world import World
+from ..components import render_origin
+from ..ecs.world import World
 
 MATERIAL_DTYPE = np.dtype([("color", np.float32, 4), ("specular", np.float32, 4)])
 GLOBALS_BYTES = 2 * 64 + 3 * 16  # projection, view, eye, ambient, counts (common.glsl)
@@ -175,7 +170,7 @@ class Renderer:
         self.chunk_rows = chunk_rows  # None: about one job per thread (see MIN_CHUNK_ROWS)
         self.native = None
         if recorder == "native" and mode != "indirect":  # indirect: jobs write rows, record nothing
-            from .gpu.native_recorder import NativeRecorder
+            from ..gpu.native_recorder import NativeRecorder
 
             # compiling one costs about a second: callers rendering many configurations share one
             self.native = native_recorder or NativeRecorder(device)

@@ -13,7 +13,7 @@ from typing import Final
 
 import numpy as np
 
-from .errors import UsageError
+from ..errors import UsageError
 
 __all__ = ["DEFAULT_MODEL", "SUPPORTED_FORMATS", "MeshData", "bounding_sphere", "cube_mesh", "load_mesh",
            "normalized"]

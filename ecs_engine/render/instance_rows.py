@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import native
-from .maths.culling import bounding_spheres, spheres_visible
+from .. import native
+from ..maths.culling import bounding_spheres, spheres_visible
 
 INSTANCE_DTYPE = np.dtype([("model", np.float32, (3, 4)), ("misc", np.uint32, 4)])
 NO_PLANES = np.zeros((0, 4), dtype=np.float64)

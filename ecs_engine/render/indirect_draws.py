@@ -22,12 +22,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .errors import UsageError
-from .gpu.memory import DEVICE, HOST, Buffer
-from .gpu.pipeline import PipelineCache, compute_pipeline, pipeline_layout
+from ..errors import UsageError
+from ..gpu.memory import DEVICE, HOST, Buffer
+from ..gpu.pipeline import PipelineCache, compute_pipeline, pipeline_layout
 
 if TYPE_CHECKING:
-    from .gpu.device import Device
+    from ..gpu.device import Device
     from .mesh_registry import MergedMeshes
 
 KEY_DTYPE = np.dtype([("index_count", np.uint32), ("first_index", np.uint32), ("vertex_offset", np.int32),

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import native
+from .. import native
 
 LIGHT_DTYPE = np.dtype([("position_radius", np.float32, 4), ("color_intensity", np.float32, 4)])
 
