@@ -34,8 +34,8 @@ from typing import Any
 import numpy as np
 import psutil
 
-from ecs_engine.app import RunOptions
-from ecs_engine.app import run as run_scene
+from ecs_engine.app.run import RunOptions
+from ecs_engine.app.run import run as run_scene
 from ecs_engine.jobs import default_threads
 from ecs_engine.render.renderer import MODES as RENDER_MODES
 
@@ -75,7 +75,7 @@ def measure(scene: str, width: int, height: int, warmup: int, frames: int, mode:
         result = run_scene(options)
     else:
         from ecs_engine.errors import UsageError
-        from ecs_engine.window import run_windowed
+        from ecs_engine.app.window import run_windowed
 
         options.headless = False
         for present in ("immediate", "mailbox", "fifo"):
@@ -111,14 +111,14 @@ def measure(scene: str, width: int, height: int, warmup: int, frames: int, mode:
 
 
 def _reopen(glfw: Any) -> Any:
-    from ecs_engine.window import open_glfw
+    from ecs_engine.app.window import open_glfw
 
     return open_glfw()  # run_windowed terminates GLFW when it ends
 
 
 def measure_windowed(width: int, height: int, warmup: int, frames: int) -> dict[str, Any]:
     """The seed's scenes in a window (instanced, 1 thread) when a display exists."""
-    from ecs_engine.window import open_glfw
+    from ecs_engine.app.window import open_glfw
 
     if open_glfw() is None:
         return {"skipped": "no display"}

@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from ecs_engine import cli
+from ecs_engine.app import cli
 
 
 def run_cli(*args):

@@ -15,7 +15,7 @@ pytest.importorskip("imgui_bundle")
 from ecs_engine.components import Camera, Mesh, PointLight, Transform
 from gpu_context import headless_gpu
 
-from ecs_engine.app import RunOptions, build_scene, run, scene_builder
+from ecs_engine.app.run import RunOptions, build_scene, run, scene_builder
 from ecs_engine.maths.camera import yaw_pitch_quat, yaw_pitch_roll, yaw_pitch_roll_quat
 from ecs_engine.jobs import JobPool
 
@@ -58,8 +58,8 @@ class Scene:
     """The editor on a headless target, driven frame by frame."""
 
     def __init__(self, gpu, scene: str = "grid100") -> None:
-        from ecs_engine.editor_session import EditorSession, SceneState
-        from ecs_engine.perf import PerfMonitor
+        from ecs_engine.app.editor_session import EditorSession, SceneState
+        from ecs_engine.app.perf import PerfMonitor
 
         self.gpu = gpu
         options = RunOptions(scene=scene, width=W, height=H, threads=2)
@@ -225,7 +225,7 @@ def test_yaw_pitch_roll_round_trip():
 
 
 def test_windowed_editor_under_xvfb(tmp_path):
-    from ecs_engine.window import open_glfw, run_windowed
+    from ecs_engine.app.window import open_glfw, run_windowed
 
     glfw = open_glfw()
     if glfw is None:

@@ -13,15 +13,7 @@ import numpy as np
 import pytest
 
 from ecs_engine.errors import UsageError
-from ecs_engine.perf import (
-    METRICS,
-    PerfLog,
-    PerfMonitor,
-    ProcessSample,
-    PsutilSampler,
-    Stats,
-    check_writable,
-)
+from ecs_engine.app.perf import METRICS, PerfLog, PerfMonitor, ProcessSample, PsutilSampler, Stats, check_writable
 
 MiB = 2**20
 

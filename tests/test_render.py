@@ -18,7 +18,7 @@ from gpu_context import headless_gpu
 from PIL import Image
 
 from ecs_engine import World
-from ecs_engine.app import RunOptions, default_schedule, run
+from ecs_engine.app.run import RunOptions, default_schedule, run
 from ecs_engine.render.mesh_data import cube_mesh
 
 
@@ -70,7 +70,7 @@ def build_cubes(scales):
 
 
 def render_custom(build, monkeypatch, tmp_path, mode: str = "instanced") -> np.ndarray:
-    import ecs_engine.app as app
+    import ecs_engine.app.run as app
 
     monkeypatch.setattr(app, "scene_builder", lambda name, entities=None: build)
     result = run(RunOptions(scene="cube", width=SIZE[0], height=SIZE[1], frames=1, screenshot=str(tmp_path / "x.png"),

@@ -6,8 +6,8 @@ import os
 
 import pytest
 
-from ecs_engine.app import RunOptions
-from ecs_engine.window import open_glfw, run_windowed
+from ecs_engine.app.run import RunOptions
+from ecs_engine.app.window import open_glfw, run_windowed
 
 pytestmark = pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs a display (make test runs under Xvfb)")
 

@@ -11,7 +11,7 @@ def test_glfw_keys_drive_the_fly_camera_with_the_seed_key_map():
     from ecs_engine.systems import FlyCameraSystem, InputState
 
     from ecs_engine import Schedule, World
-    from ecs_engine.window import apply_key, key_names
+    from ecs_engine.app.window import apply_key, key_names
 
     names = key_names(glfw)
     assert sorted(names.values()) == sorted(["left", "right", "up", "down", "w", "s", "a", "d", "e", "q"])

@@ -25,7 +25,7 @@ from typing import Any, NamedTuple, Protocol
 import numpy as np
 import psutil
 
-from .errors import UsageError
+from ..errors import UsageError
 
 SCHEMA_VERSION = 1
 

@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from .errors import UsageError
-from .ecs.schedule import Schedule
-from .ecs.world import World
+from ..errors import UsageError
+from ..ecs.schedule import Schedule
+from ..ecs.world import World
 
 SCENES = ("cube", "grid100", "model", "scaling")
 FIXED_DT = 1.0 / 60.0
@@ -114,15 +114,7 @@ def default_schedule() -> Schedule:
     """Simulation (orbits, motion, springs) in the fixed-step stage, the camera per frame, then
     render origin and matrices. `Schedule.run` runs every stage once; the frame loops use
     `Schedule.run_frame` with a FixedTimestep."""
-    from .systems import (
-        FlyCameraSystem,
-        MotionSystem,
-        OrbitSystem,
-        RenderOriginSystem,
-        SnapshotSystem,
-        SpringSystem,
-        TransformSystem,
-    )
+    from ..systems import FlyCameraSystem, MotionSystem, OrbitSystem, RenderOriginSystem, SnapshotSystem, SpringSystem, TransformSystem
 
     schedule = Schedule(("fixed", "update", "post_update"))
     schedule.add(SnapshotSystem(), "fixed")  # first: what each step starts from, for interpolation
@@ -136,7 +128,7 @@ def default_schedule() -> Schedule:
 
 
 def has_lights(world: World) -> bool:
-    from .components import PointLight
+    from ..components import PointLight
 
     return world.query(PointLight, write=()).count() > 0
 
@@ -144,13 +136,13 @@ def has_lights(world: World) -> bool:
 def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunResult:
     """Build the scene and run it; headless only here (the window path lives in window.py)."""
     from .editor_session import EditorSession, SceneState
-    from .gpu.device import Device
-    from .gpu.instance import Instance
-    from .gpu.offscreen import OffscreenTarget
-    from .jobs import default_threads
-    from .render.mesh_registry import MeshRegistry
+    from ..gpu.device import Device
+    from ..gpu.instance import Instance
+    from ..gpu.offscreen import OffscreenTarget
+    from ..jobs import default_threads
+    from ..render.mesh_registry import MeshRegistry
     from .perf import PerfMonitor
-    from .ecs.timestep import FixedTimestep
+    from ..ecs.timestep import FixedTimestep
 
     say = log or (lambda text: None if options.quiet else print(text))
     build = scene_builder(options.scene, options.entities)
@@ -212,7 +204,7 @@ def run(options: RunOptions, log: Callable[[str], None] | None = None) -> RunRes
 
 def run_meta(options: RunOptions, result: RunResult) -> dict[str, Any]:
     """What a --perf-json file says about its run."""
-    from .jobs import default_threads
+    from ..jobs import default_threads
 
     return {"scene": options.scene, "mode": options.mode, "threads": options.threads or default_threads(),
             "culling": options.culling, "width": options.width, "height": options.height,
@@ -228,7 +220,7 @@ def build_scene(options: RunOptions, build: Callable[..., None], device: Any, ta
                 jobs: Any) -> tuple[World, Schedule, Any]:
     """The scene's world (sharing the run's worker pool), its schedule, and a renderer that
     builds only what the scene needs."""
-    from .render.renderer import Renderer
+    from ..render.renderer import Renderer
 
     world = World()
     world.resources[type(jobs)] = jobs
@@ -245,7 +237,7 @@ def recorder_words(renderer: Any) -> str:
 
 
 def recorder_for(options: RunOptions) -> str:
-    from . import native
+    from .. import native
 
     if options.recorder is None:
         return "native" if native.AVAILABLE else "python"
@@ -257,7 +249,7 @@ def recorder_for(options: RunOptions) -> str:
 
 def job_pool(options: RunOptions) -> Any:
     """The run's worker pool (also given to the world, so the stock systems split large tables)."""
-    from .jobs import JobPool
+    from ..jobs import JobPool
 
     return JobPool(options.threads)
 

@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from .editor import Editor, RenderSettings, SceneStats
-from .imgui_vulkan import ImGuiRenderer
+from ..render.imgui_pass import ImGuiRenderer
 from .perf import PerfMonitor
 from .perf_overlay import PerfOverlay
 
@@ -105,9 +105,9 @@ class EditorSession:
         req = self.editor.take_requests()
         if req is None:
             return False
-        from .app import build_scene, scene_builder
-        from .jobs import JobPool
-        from .render.renderer import Renderer
+        from .run import build_scene, scene_builder
+        from ..jobs import JobPool
+        from ..render.renderer import Renderer
 
         o = state.options
         rebuilt = False

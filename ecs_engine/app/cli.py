@@ -7,8 +7,8 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from .ecs.errors import EcsError
-from .errors import UsageError
+from ..ecs.errors import EcsError
+from ..errors import UsageError
 
 
 def positive_int(text: str) -> int:
@@ -93,12 +93,12 @@ def build_parser() -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     if args.command == "demo":
         if args.scene == "motion":
-            from ecs_engine.demos import motion
+            from ..demos import motion
 
             return motion.main(args.entities or 100_000, args.frames or 300)
         return run_scene(args)
     if args.command == "bench":
-        from ecs_engine.bench.__main__ import main as bench_main
+        from ..bench.__main__ import main as bench_main
 
         return bench_main(list(args.bench_args))
     if args.command == "editor":
@@ -110,8 +110,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = None) -> int:
-    from .app import RunOptions, report_validation
-    from .app import run as run_headless
+    from .run import RunOptions, report_validation
+    from .run import run as run_headless
 
     if args.path is not None and args.scene != "model":
         raise UsageError(f"a model path only goes with the model scene, not {args.scene!r}")

@@ -20,16 +20,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .gpu.memory import HOST, Buffer, Image
-from .gpu.pipeline import (
-    GraphicsPipelineSpec,
-    PipelineCache,
-    graphics_pipeline,
-    pipeline_layout,
-)
+from ..gpu.memory import HOST, Buffer, Image
+from ..gpu.pipeline import GraphicsPipelineSpec, PipelineCache, graphics_pipeline, pipeline_layout
 
 if TYPE_CHECKING:
-    from .gpu.device import Device
+    from ..gpu.device import Device
 
 VERTEX_BYTES = 20  # ImDrawVert: pos (2 float), uv (2 float), col (RGBA8)
 INDEX_BYTES = 4  # imgui-bundle builds ImGui with 32-bit ImDrawIdx

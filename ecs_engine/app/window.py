@@ -12,8 +12,8 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from .app import RunOptions, RunResult, build_scene, describe_device, job_pool, scene_builder, summary_line
-from .errors import UsageError
+from .run import RunOptions, RunResult, build_scene, describe_device, job_pool, scene_builder, summary_line
+from ..errors import UsageError
 
 # GLFW key -> the names FlyCameraSystem reads (the seed's Table 7.1).
 KEY_NAMES = {
@@ -64,14 +64,14 @@ def run_windowed(options: RunOptions, glfw: Any,
     """Run until the window closes or `options.frames` frames were presented.
     `on_frame(frame_index, glfw, window)` is called before each frame (tests drive resizes)."""
     from .editor_session import EditorSession, SceneState
-    from .gpu.device import Device
-    from .gpu.instance import Instance
-    from .gpu.swapchain import OutOfDate, Swapchain
-    from .jobs import default_threads
-    from .render.mesh_registry import MeshRegistry
+    from ..gpu.device import Device
+    from ..gpu.instance import Instance
+    from ..gpu.swapchain import OutOfDate, Swapchain
+    from ..jobs import default_threads
+    from ..render.mesh_registry import MeshRegistry
     from .perf import PerfMonitor
-    from .systems import InputState
-    from .ecs.timestep import FixedTimestep
+    from ..systems import InputState
+    from ..ecs.timestep import FixedTimestep
 
     say = (lambda text: None) if options.quiet else print
     build = scene_builder(options.scene, options.entities)

@@ -17,12 +17,12 @@ from typing import Any
 
 import numpy as np
 
-from .components import active_camera
-from .maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
-from .components import Camera, Mesh, PointLight, Transform
-from .gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
-from .render.renderer import MODES, RECORDERS
-from .ecs.world import World
+from ..components import active_camera
+from ..maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
+from ..components import Camera, Mesh, PointLight, Transform
+from ..gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
+from ..render.renderer import MODES, RECORDERS
+from ..ecs.world import World
 
 PRESENT_MODES = tuple(SWAPCHAIN_PRESENT_MODES)
 
@@ -274,7 +274,7 @@ class Editor:
             cam = world.get(active_camera(world), Transform)
         except Exception:
             return np.zeros(3)
-        from .maths.camera import rotation_matrix
+        from ..maths.camera import rotation_matrix
 
         forward = rotation_matrix(cam.rotation)[:3, :3] @ np.array([0.0, 0.0, -1.0])
         return np.asarray(cam.position, dtype=np.float64) + forward * distance
