@@ -14,13 +14,13 @@ from typing import Any
 
 import numpy as np
 
-from ecs_engine.gpu.native_recorder import device_functions, handle_int
+from ecs_engine.gpu.functions import handle_int, native_device_functions
 
 
 def _loops(device: Any) -> dict[str, Any]:
     import numba
 
-    fns = device_functions(device, ("vkCmdPushConstants", "vkCmdDrawIndexed"))
+    fns = native_device_functions(device, ("vkCmdPushConstants", "vkCmdDrawIndexed"))
     push, draw = fns["vkCmdPushConstants"], fns["vkCmdDrawIndexed"]
 
     def push_draw(cb, layout, stage, addr, n, indices):  # pragma: no cover - compiled

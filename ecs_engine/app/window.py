@@ -65,6 +65,7 @@ def run_windowed(options: RunOptions, glfw: Any,
     `on_frame(frame_index, glfw, window)` is called before each frame (tests drive resizes)."""
     from .editor_session import EditorSession, SceneState
     from ..gpu.device import Device
+    from ..gpu.functions import instance_function
     from ..gpu.instance import Instance
     from ..gpu.swapchain import OutOfDate, Swapchain
     from ..jobs import default_threads
@@ -176,7 +177,7 @@ def run_windowed(options: RunOptions, glfw: Any,
         if device is not None:
             device.destroy()
         if surface is not None:
-            instance.proc("vkDestroySurfaceKHR")(instance.handle, surface, None)
+            instance_function(instance, "vkDestroySurfaceKHR")(instance.handle, surface, None)
         if instance is not None:
             instance.destroy()
             result.validation_messages = list(instance.messages)

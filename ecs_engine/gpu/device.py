@@ -8,7 +8,10 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..errors import UsageError
+from .allocator import BlockAllocator
+from .functions import instance_function
 from .instance import Instance
+from .pipeline_cache import PipelineCache
 
 # Preference order by VkPhysicalDeviceType: discrete, integrated, virtual, CPU, other.
 _TYPE_RANK = {2: 0, 1: 1, 3: 2, 4: 3, 0: 4}
@@ -95,9 +98,15 @@ class Device:
         self._pool = vk.vkCreateCommandPool(self.handle, vk.VkCommandPoolCreateInfo(
             flags=vk.VK_COMMAND_POOL_CREATE_TRANSIENT_BIT, queueFamilyIndex=self.queue_family), None)
         self.info = self._describe(props)
-        from .memory import BlockAllocator  # late import: memory needs a device
+        self.allocator = BlockAllocator(vk, self.handle, self.memory_properties, props.deviceName)
+        self._pipeline_cache: PipelineCache | None = None
 
-        self.allocator = BlockAllocator(self)
+    @property
+    def pipeline_cache(self) -> PipelineCache:
+        """The one pipeline cache of this device, made on first use, saved when it is destroyed."""
+        if self._pipeline_cache is None:
+            self._pipeline_cache = PipelineCache(self.vk, self.handle, self.info)
+        return self._pipeline_cache
 
     def _graphics_family(self, pd: Any, surface: Any) -> int | None:
         vk = self.vk
@@ -105,7 +114,7 @@ class Device:
             if not q.queueFlags & vk.VK_QUEUE_GRAPHICS_BIT:
                 continue
             if surface is not None:
-                present = self.instance.proc("vkGetPhysicalDeviceSurfaceSupportKHR")(pd, i, surface)
+                present = instance_function(self.instance, "vkGetPhysicalDeviceSurfaceSupportKHR")(pd, i, surface)
                 if not present:
                     continue
             return i
@@ -154,6 +163,8 @@ class Device:
             return
         vk = self.vk
         vk.vkDeviceWaitIdle(self.handle)
+        if self._pipeline_cache is not None:
+            self._pipeline_cache.destroy()
         self.allocator.destroy()
         vk.vkDestroyCommandPool(self.handle, self._pool, None)
         vk.vkDestroyDevice(self.handle, None)

@@ -6,6 +6,7 @@ from collections.abc import Iterable
 from typing import Any
 
 from ..errors import UsageError
+from .functions import instance_function
 from .loader import load_vulkan
 
 VALIDATION_LAYER = "VK_LAYER_KHRONOS_validation"
@@ -63,17 +64,14 @@ class Instance:
             raise UsageError(f"could not create a Vulkan instance ({type(exc).__name__}): is a Vulkan driver installed? "
                              "sudo apt-get install -y mesa-vulkan-drivers") from exc
         if debug_info is not None:
-            create = vk.vkGetInstanceProcAddr(self.handle, "vkCreateDebugUtilsMessengerEXT")
+            create = instance_function(self, "vkCreateDebugUtilsMessengerEXT")
             self._messenger = create(self.handle, debug_info, None)
         self._debug_info = debug_info  # keep the callback's owner alive
-
-    def proc(self, name: str) -> Any:
-        return self.vk.vkGetInstanceProcAddr(self.handle, name)
 
     def destroy(self) -> None:
         vk = self.vk
         if self._messenger is not None:
-            self.proc("vkDestroyDebugUtilsMessengerEXT")(self.handle, self._messenger, None)
+            instance_function(self, "vkDestroyDebugUtilsMessengerEXT")(self.handle, self._messenger, None)
             self._messenger = None
         if self.handle is not None:
             vk.vkDestroyInstance(self.handle, None)

@@ -5,55 +5,24 @@ Through the `vulkan` binding each command costs microseconds of Python and holds
 threads cannot help; here the loop runs without the GIL at tens of nanoseconds a command.
 Handles and addresses travel as signed 64-bit integers (dispatchable handles are pointers,
 non-dispatchable ones 64-bit values; the C calling convention passes int64 and uint64 alike),
-so the loop's arithmetic never mixes signed and unsigned (which numba would turn into floats). The entry-point addresses are baked into the compiled loop,
-so it is compiled once per device (about a second) and not cached on disk.
+so the loop's arithmetic never mixes signed and unsigned (which numba would turn into floats).
+The entry-point addresses (gpu/functions.py) are baked into the compiled loop, so it is compiled
+once per device (about a second) and not cached on disk.
 """
 
 from __future__ import annotations
 
-import ctypes
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .. import native
+from .functions import NATIVE_PROTOTYPES, handle_int, native_device_functions
 
 if TYPE_CHECKING:
     from .device import Device
 
-_u64, _u32, _i32 = ctypes.c_int64, ctypes.c_uint32, ctypes.c_int32
-_PROTOTYPES = {
-    "vkCmdBindPipeline": ctypes.CFUNCTYPE(None, _u64, _u32, _u64),
-    "vkCmdBindVertexBuffers": ctypes.CFUNCTYPE(None, _u64, _u32, _u32, _u64, _u64),
-    "vkCmdBindIndexBuffer": ctypes.CFUNCTYPE(None, _u64, _u64, _u64, _u32),
-    "vkCmdPushConstants": ctypes.CFUNCTYPE(None, _u64, _u64, _u32, _u32, _u32, _u64),
-    "vkCmdDrawIndexed": ctypes.CFUNCTYPE(None, _u64, _u32, _u32, _u32, _i32, _u32),
-    "vkBeginCommandBuffer": ctypes.CFUNCTYPE(_i32, _u64, _u64),
-    "vkEndCommandBuffer": ctypes.CFUNCTYPE(_i32, _u64),
-    "vkCmdSetViewport": ctypes.CFUNCTYPE(None, _u64, _u32, _u32, _u64),
-    "vkCmdSetScissor": ctypes.CFUNCTYPE(None, _u64, _u32, _u32, _u64),
-    "vkCmdBindDescriptorSets": ctypes.CFUNCTYPE(None, _u64, _u32, _u64, _u32, _u32, _u64, _u32, _u64),
-}
 INDEX_TYPE_UINT32 = 1
-
-
-def handle_int(vk: Any, handle: Any) -> int:
-    """A handle or pointer as a signed 64-bit value (same bits)."""
-    value = int(vk.ffi.cast("uintptr_t", handle))
-    return value - (1 << 64) if value >= 1 << 63 else value
-
-
-def device_functions(device: Device, names: Any) -> dict[str, Any]:
-    """The device's entry points for `names` (keys of _PROTOTYPES) as typed ctypes functions that
-    numba-compiled code can call."""
-    vk = device.vk
-    fns = {}
-    for name in names:
-        address = handle_int(vk, vk.lib.vkGetDeviceProcAddr(device.handle, name.encode()))
-        if not address:
-            raise RuntimeError(f"{name} has no device entry point")
-        fns[name] = _PROTOTYPES[name](address)
-    return fns
 
 
 class NativeRecorder:
@@ -64,7 +33,7 @@ class NativeRecorder:
 
         vk = device.vk
         self.vk = vk
-        fns = device_functions(device, _PROTOTYPES)
+        fns = native_device_functions(device, NATIVE_PROTOTYPES)
         bind_pipeline = fns["vkCmdBindPipeline"]
         bind_vertex = fns["vkCmdBindVertexBuffers"]
         bind_index = fns["vkCmdBindIndexBuffer"]

@@ -1,9 +1,9 @@
-"""Shader modules, pipeline layouts, graphics and compute pipelines, and an on-disk pipeline cache."""
+"""Shader modules, pipeline layouts, graphics and compute pipelines (made through the device's one
+pipeline cache, see pipeline_cache.py)."""
 
 from __future__ import annotations
 
 import importlib.resources
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,50 +23,6 @@ def shader_path(name: str) -> Path:
     if not path.is_file():
         raise UsageError(f"compiled shader {path} is missing: run `make shaders`")
     return path
-
-
-class PipelineCache:
-    """VkPipelineCache loaded from and saved to ~/.cache/ecs_engine, one file per device and
-    driver (the driver rejects a foreign cache itself, but one file each keeps them useful)."""
-
-    def __init__(self, device: Device) -> None:
-        vk = device.vk
-        self.device = device
-        info = device.info
-        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "ecs_engine"
-        self.path = base / f"pipelines-{info.vendor_id:04x}-{info.device_id:04x}-{info.driver_version:08x}.bin"
-        data = b""
-        try:
-            data = self.path.read_bytes()
-        except OSError:
-            pass
-        if data:
-            self.handle = vk.vkCreatePipelineCache(device.handle, vk.VkPipelineCacheCreateInfo(
-                initialDataSize=len(data), pInitialData=vk.ffi.from_buffer(data)), None)
-        else:
-            self.handle = vk.vkCreatePipelineCache(device.handle, vk.VkPipelineCacheCreateInfo(), None)
-
-    def save(self) -> None:
-        vk = self.device.vk
-        size = vk.ffi.new("size_t*")  # the binding has no wrapper for this call: use the raw one
-        if vk.lib.vkGetPipelineCacheData(self.device.handle, self.handle, size, vk.ffi.NULL) != vk.VK_SUCCESS:
-            return
-        buf = vk.ffi.new("char[]", size[0])
-        if vk.lib.vkGetPipelineCacheData(self.device.handle, self.handle, size, buf) != vk.VK_SUCCESS:
-            return
-        try:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = self.path.with_suffix(f".{os.getpid()}.tmp")
-            tmp.write_bytes(bytes(vk.ffi.buffer(buf, size[0])))
-            os.replace(tmp, self.path)
-        except OSError:
-            pass  # a cache that cannot be written only costs start-up time
-
-    def destroy(self) -> None:
-        if self.handle is not None:
-            self.save()
-            self.device.vk.vkDestroyPipelineCache(self.device.handle, self.handle, None)
-            self.handle = None
 
 
 def shader_module(device: Device, name: str) -> Any:
@@ -99,7 +55,7 @@ class GraphicsPipelineSpec:
     alpha_blend: bool = False
 
 
-def graphics_pipeline(device: Device, cache: PipelineCache, spec: GraphicsPipelineSpec) -> Any:
+def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
     """A pipeline with dynamic viewport and scissor and reverse-Z depth (compare GREATER)."""
     vk = device.vk
     vert = shader_module(device, spec.vertex_shader)
@@ -142,18 +98,18 @@ def graphics_pipeline(device: Device, cache: PipelineCache, spec: GraphicsPipeli
                 pDynamicStates=[vk.VK_DYNAMIC_STATE_VIEWPORT, vk.VK_DYNAMIC_STATE_SCISSOR]),
             layout=spec.layout, renderPass=spec.render_pass, subpass=spec.subpass,
         )
-        return vk.vkCreateGraphicsPipelines(device.handle, cache.handle, 1, [info], None)[0]
+        return vk.vkCreateGraphicsPipelines(device.handle, device.pipeline_cache.handle, 1, [info], None)[0]
     finally:
         vk.vkDestroyShaderModule(device.handle, vert, None)
         vk.vkDestroyShaderModule(device.handle, frag, None)
 
 
-def compute_pipeline(device: Device, cache: PipelineCache, shader: str, layout: Any) -> Any:
+def compute_pipeline(device: Device, shader: str, layout: Any) -> Any:
     vk = device.vk
     module = shader_module(device, shader)
     try:
         stage = vk.VkPipelineShaderStageCreateInfo(stage=vk.VK_SHADER_STAGE_COMPUTE_BIT, module=module, pName="main")
         info = vk.VkComputePipelineCreateInfo(stage=stage, layout=layout)
-        return vk.vkCreateComputePipelines(device.handle, cache.handle, 1, [info], None)[0]
+        return vk.vkCreateComputePipelines(device.handle, device.pipeline_cache.handle, 1, [info], None)[0]
     finally:
         vk.vkDestroyShaderModule(device.handle, module, None)

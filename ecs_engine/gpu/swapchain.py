@@ -7,6 +7,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from ..errors import UsageError
+from .functions import device_function, instance_function, raw_device_function
 from .memory import Image
 from .render_pass import create_framebuffer, create_render_pass
 
@@ -29,9 +30,9 @@ class Swapchain:
         self.surface = surface
         self.framebuffer_size = framebuffer_size
         inst = device.instance
-        self._caps = inst.proc("vkGetPhysicalDeviceSurfaceCapabilitiesKHR")
-        formats = inst.proc("vkGetPhysicalDeviceSurfaceFormatsKHR")(device.physical, surface)
-        modes = inst.proc("vkGetPhysicalDeviceSurfacePresentModesKHR")(device.physical, surface)
+        self._caps = instance_function(inst, "vkGetPhysicalDeviceSurfaceCapabilitiesKHR")
+        formats = instance_function(inst, "vkGetPhysicalDeviceSurfaceFormatsKHR")(device.physical, surface)
+        modes = instance_function(inst, "vkGetPhysicalDeviceSurfacePresentModesKHR")(device.physical, surface)
         self._modes = list(modes)
         self.present_mode = self._present_mode(present)
         srgb = [f for f in formats if f.format in (vk.VK_FORMAT_B8G8R8A8_SRGB, vk.VK_FORMAT_R8G8B8A8_SRGB)
@@ -39,13 +40,13 @@ class Swapchain:
         chosen = srgb[0] if srgb else formats[0]
         self.color_format, self.color_space = chosen.format, chosen.colorSpace
         self.render_pass = create_render_pass(device, self.color_format, vk.VK_IMAGE_LAYOUT_PRESENT_SRC_KHR)
-        self._create_fn = device_proc(device, "vkCreateSwapchainKHR")
-        self._destroy_fn = device_proc(device, "vkDestroySwapchainKHR")
-        self._images_fn = device_proc(device, "vkGetSwapchainImagesKHR")
+        self._create_fn = device_function(device, "vkCreateSwapchainKHR")
+        self._destroy_fn = device_function(device, "vkDestroySwapchainKHR")
+        self._images_fn = device_function(device, "vkGetSwapchainImagesKHR")
         # raw entry points: the binding's wrappers raise on VK_SUBOPTIMAL_KHR, a success code
         # that still acquires an image and signals the semaphore
-        self._acquire_raw = raw_device_proc(device, "vkAcquireNextImageKHR")
-        self._present_raw = raw_device_proc(device, "vkQueuePresentKHR")
+        self._acquire_raw = raw_device_function(device, "vkAcquireNextImageKHR")
+        self._present_raw = raw_device_function(device, "vkQueuePresentKHR")
         self._index = vk.ffi.new("uint32_t*")
         self.handle = None
         self.views: list[Any] = []
@@ -153,12 +154,3 @@ class Swapchain:
             self.handle = None
         self.vk.vkDestroyRenderPass(self.device.handle, self.render_pass, None)
 
-
-def device_proc(device: Device, name: str) -> Any:
-    return device.vk.vkGetDeviceProcAddr(device.handle, name)
-
-
-def raw_device_proc(device: Device, name: str) -> Any:
-    vk = device.vk
-    ptr = vk.lib.vkGetDeviceProcAddr(device.handle, name.encode())
-    return vk.ffi.cast(f"PFN_{name}", ptr)

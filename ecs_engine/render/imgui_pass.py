@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..gpu.memory import HOST, Buffer, Image
-from ..gpu.pipeline import GraphicsPipelineSpec, PipelineCache, graphics_pipeline, pipeline_layout
+from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
 
 if TYPE_CHECKING:
     from ..gpu.device import Device
@@ -74,8 +74,7 @@ class ImGuiRenderer:
         self._pools: list[Any] = []
         self._free_sets: list[Any] = []
         self.layout = pipeline_layout(device, [self.set_layout], [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, 16)])
-        self.cache = PipelineCache(device)
-        self.pipeline = graphics_pipeline(device, self.cache, GraphicsPipelineSpec(
+        self.pipeline = graphics_pipeline(device, GraphicsPipelineSpec(
             "imgui.vert", "imgui.frag", layout=self.layout, render_pass=render_pass, subpass=subpass,
             vertex_stride=VERTEX_BYTES,
             vertex_attributes=[(0, vk.VK_FORMAT_R32G32_SFLOAT, 0), (1, vk.VK_FORMAT_R32G32_SFLOAT, 8),
@@ -105,12 +104,10 @@ class ImGuiRenderer:
     def _ensure(self, slot: int, vertices: int, indices: int) -> _FrameBuffers:
         """Grow the slot's buffers (doubling); safe: the slot's fence has been waited on."""
         fb = self._frames[slot]
-        if vertices * VERTEX_BYTES > fb.vertices.size or indices * INDEX_BYTES > fb.indices.size:
-            v = max(vertices, 2 * fb.vertices.size // VERTEX_BYTES)
-            i = max(indices, 2 * fb.indices.size // INDEX_BYTES)
-            fb.vertices.destroy()
-            fb.indices.destroy()
-            fb = self._frames[slot] = self._frame_buffers(v, i)
+        fb.indices = fb.indices.grown(indices * INDEX_BYTES)
+        vertex_buffer = fb.vertices.grown(vertices * VERTEX_BYTES)
+        if vertex_buffer is not fb.vertices:
+            fb.vertices, fb.vertex_array = vertex_buffer, self.vk.ffi.new("VkBuffer[1]", [vertex_buffer.handle])
         return fb
 
     # --------------------------------------------------------------- textures
@@ -324,7 +321,6 @@ class ImGuiRenderer:
         vk.vkDestroyPipelineLayout(self.device.handle, self.layout, None)
         vk.vkDestroyDescriptorSetLayout(self.device.handle, self.set_layout, None)
         vk.vkDestroySampler(self.device.handle, self.sampler, None)
-        self.cache.destroy()
         # ImGui may still hold ids of the textures just destroyed: mark them so
         io_textures = self.imgui.get_platform_io().textures
         for tex in io_textures:

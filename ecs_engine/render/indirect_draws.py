@@ -24,7 +24,7 @@ import numpy as np
 
 from ..errors import UsageError
 from ..gpu.memory import DEVICE, HOST, Buffer
-from ..gpu.pipeline import PipelineCache, compute_pipeline, pipeline_layout
+from ..gpu.pipeline import compute_pipeline, pipeline_layout
 
 if TYPE_CHECKING:
     from ..gpu.device import Device
@@ -69,13 +69,13 @@ def check_support(device: Device) -> None:
 
 
 class IndirectDraws:
-    def __init__(self, device: Device, cache: PipelineCache, set_layout: Any, frames: int) -> None:
+    def __init__(self, device: Device, set_layout: Any, frames: int) -> None:
         check_support(device)
         vk = self.vk = device.vk
         self.device = device
         self.layout = pipeline_layout(device, [set_layout.handle], [(vk.VK_SHADER_STAGE_COMPUTE_BIT, 0, PUSH_BYTES)])
-        self.cull = compute_pipeline(device, cache, "cull.comp", self.layout)
-        self.compact = compute_pipeline(device, cache, "compact.comp", self.layout)
+        self.cull = compute_pipeline(device, "cull.comp", self.layout)
+        self.compact = compute_pipeline(device, "compact.comp", self.layout)
         self.max_groups = int(device.limits.maxComputeWorkGroupCount[0])
         self.frames = [self._make_frame(2, 1024) for _ in range(frames)]
         # made once: the per-frame calls go straight to vk.lib (see gpu/frames.py)

@@ -32,7 +32,7 @@ from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
 from ..gpu.device import Device
 from ..gpu.frames import FrameRing
 from ..gpu.memory import Buffer
-from ..gpu.pipeline import GraphicsPipelineSpec, PipelineCache, graphics_pipeline, pipeline_layout
+from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
 from ..gpu.secondary import SecondaryBuffers, end_command_buffer
 from .indirect_draws import IndirectDraws, check_support
 from .instance_rows import INSTANCE_DTYPE, write_rows
@@ -177,7 +177,6 @@ class Renderer:
         self.recorder = recorder
         self.frames = FrameRing(device)
         self.secondaries = SecondaryBuffers(device, len(self.frames.frames))
-        self.cache = PipelineCache(device)
         stages = vk.VK_SHADER_STAGE_VERTEX_BIT | vk.VK_SHADER_STAGE_FRAGMENT_BIT
         if mode == "indirect":
             stages |= vk.VK_SHADER_STAGE_COMPUTE_BIT
@@ -187,7 +186,7 @@ class Renderer:
                                               + [(b, ssbo, stages) for b in range(1, storage + 1)])
         n = len(self.frames.frames)
         self.pool = DescriptorPool(device, n, {vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER: n, ssbo: storage * n})
-        self.indirect = IndirectDraws(device, self.cache, self.set_layout, n) if mode == "indirect" else None
+        self.indirect = IndirectDraws(device, self.set_layout, n) if mode == "indirect" else None
         # one push range for both users: the billboard size (4 bytes), a per_entity row (64)
         self.layout = pipeline_layout(device, [self.set_layout.handle],
                                       [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, INSTANCE_DTYPE.itemsize)])
@@ -238,12 +237,12 @@ class Renderer:
         base = dict(layout=self.layout, render_pass=self.target.render_pass, subpass=0,
                     vertex_stride=VERTEX_STRIDE, vertex_attributes=attrs)
         vert = {"instanced": "mesh.vert", "per_entity": "mesh_push.vert", "indirect": "mesh_indirect.vert"}[self.mode]
-        self.mesh_pipeline = graphics_pipeline(self.device, self.cache, GraphicsPipelineSpec(vert, "mesh.frag", **base))
-        self.mirrored_pipeline = graphics_pipeline(self.device, self.cache, GraphicsPipelineSpec(
+        self.mesh_pipeline = graphics_pipeline(self.device, GraphicsPipelineSpec(vert, "mesh.frag", **base))
+        self.mirrored_pipeline = graphics_pipeline(self.device, GraphicsPipelineSpec(
             vert, "mesh.frag", front_face_ccw=False, **base))
         self.light_pipeline = None
         if self.with_lights:
-            self.light_pipeline = graphics_pipeline(self.device, self.cache, GraphicsPipelineSpec(
+            self.light_pipeline = graphics_pipeline(self.device, GraphicsPipelineSpec(
                 "light.vert", "light.frag", layout=self.layout, render_pass=self.target.render_pass, subpass=1,
                 cull_back=False, depth_write=False, alpha_blend=True))
 
@@ -569,5 +568,4 @@ class Renderer:
         self.materials.destroy()
         self.pool.destroy()
         self.set_layout.destroy()
-        self.cache.destroy()
         self.frames.destroy()
