@@ -45,13 +45,13 @@ def measure(device: Any, target: Any, meshes: Any, draws: int, per_buffer: int =
     from ecs_engine.render.renderer import Renderer
 
     vk = device.vk
-    renderer = Renderer(device, target, meshes, lights=False, mode="per_entity")
+    renderer = Renderer(device, target, meshes, mode="per_entity")
     try:
         loops = _loops(device)
         rows = np.zeros((draws, 16), np.float32)
         rows[:, 0] = rows[:, 5] = rows[:, 10] = 1.0
         state = renderer._target_state(target.framebuffer, target.width, target.height)
-        layout = handle_int(vk, renderer.layout)
+        layout = handle_int(vk, renderer.path.layout)
         stage = vk.VK_SHADER_STAGE_VERTEX_BIT
         mesh = meshes[0]
         out: dict[str, Any] = {"draws": draws, "per_buffer": per_buffer}
@@ -65,7 +65,7 @@ def measure(device: Any, target: Any, meshes: Any, draws: int, per_buffer: int =
                 spent = 0.0
                 for start in range(0, draws, per_buffer):
                     cb = renderer.secondaries.begin(slot, state.secondary_begin)
-                    vk.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, renderer.mesh_pipeline)
+                    vk.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, renderer.path.pipelines[0])
                     meshes.bind(cb, 0)
                     handle = handle_int(vk, cb)
                     t0 = time.perf_counter()

@@ -70,7 +70,7 @@ def sweep(entities: int, thread_counts: list[int], frames: int, warmup: int, siz
         for mode, recorder in configs:
             if mode == "indirect" and not device.features.get("drawIndirectCount"):
                 continue
-            renderer = Renderer(device, target, meshes, lights=True, mode=mode,
+            renderer = Renderer(device, target, meshes, mode=mode,
                                 recorder="native" if recorder == "gpu" else recorder, native_recorder=native,
                                 **({"chunk_rows": PYTHON_CHUNK_ROWS} if recorder == "python" else {}))
             try:

@@ -1,8 +1,10 @@
-"""Compile shaders/*.vert|frag|comp to SPIR-V with glslc and record shaders/manifest.json.
+"""Write shaders/layouts.glsl from ecs_engine/render/layouts.py, compile shaders/*.vert|frag|comp
+to SPIR-V with glslc and record shaders/manifest.json.
 
-The manifest holds, per shader, the sha256 of its source together with the shared include
-(common.glsl) and of the SPIR-V written; tests/test_shaders.py fails when a source no longer
-matches its manifest entry (a stale .spv), without depending on the exact glslc version.
+The manifest holds, per shader, the sha256 of its source together with the shared includes
+(*.glsl) and of the SPIR-V written; tests/test_shaders.py fails when a source no longer matches
+its manifest entry (a stale .spv), without depending on the exact glslc version, and when
+layouts.glsl differs from what the dtypes give.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from pathlib import Path
 
 SHADERS = Path(__file__).resolve().parent.parent / "shaders"
 STAGES = (".vert", ".frag", ".comp")
+LAYOUTS = SHADERS / "layouts.glsl"
 
 
 def source_digest(src: Path) -> str:
@@ -31,6 +34,9 @@ def main() -> int:
     except (OSError, subprocess.CalledProcessError):
         print("compile_shaders: glslc not found: sudo apt-get install -y glslc", file=sys.stderr)
         return 2
+    from ecs_engine.render import layouts
+
+    LAYOUTS.write_text(layouts.glsl())
     manifest = {"glslc": version, "shaders": {}}
     for src in sorted(p for p in SHADERS.iterdir() if p.suffix in STAGES):
         out = src.with_name(src.name + ".spv")

@@ -6,13 +6,8 @@
 #define IDS_WRITABLE 1
 #include "indirect.glsl"
 
-layout(local_size_x = 256) in;
-layout(push_constant) uniform Cull {
-    vec4 planes[6];
-    uint plane_count;   // 0: culling off
-    uint row_end;       // rows [first_row, row_end) in this dispatch (large counts take several)
-    uint first_row;
-} pc;
+layout(local_size_x = CULL_GROUP) in;
+layout(push_constant) uniform Cull { CullPush pc; };
 
 void main() {
     uint i = pc.first_row + gl_GlobalInvocationID.x;
@@ -21,10 +16,10 @@ void main() {
     uint key = inst.misc.y;
     vec4 s = keys[key].sphere;
     vec4 c = vec4(s.xyz, 1.0);
-    vec3 center = vec3(dot(inst.m0, c), dot(inst.m1, c), dot(inst.m2, c));
-    vec3 c0 = vec3(inst.m0.x, inst.m1.x, inst.m2.x);
-    vec3 c1 = vec3(inst.m0.y, inst.m1.y, inst.m2.y);
-    vec3 c2 = vec3(inst.m0.z, inst.m1.z, inst.m2.z);
+    vec3 center = vec3(dot(inst.model[0], c), dot(inst.model[1], c), dot(inst.model[2], c));
+    vec3 c0 = vec3(inst.model[0].x, inst.model[1].x, inst.model[2].x);
+    vec3 c1 = vec3(inst.model[0].y, inst.model[1].y, inst.model[2].y);
+    vec3 c2 = vec3(inst.model[0].z, inst.model[1].z, inst.model[2].z);
     float r = s.w * sqrt(max(dot(c0, c0), max(dot(c1, c1), dot(c2, c2))));
     for (uint p = 0; p < pc.plane_count; ++p) {
         if (dot(pc.planes[p].xyz, center) + pc.planes[p].w < -r) return;

@@ -1,4 +1,6 @@
 #version 450
+#extension GL_GOOGLE_include_directive : require
+#include "layouts.glsl"
 // Dear ImGui's vertices: pixel positions (origin top-left, y down, as Vulkan's clip space),
 // texture coordinates, sRGB colour. The targets are sRGB formats that encode on write, so the
 // colour is decoded to linear here and comes out as ImGui meant it.
@@ -6,10 +8,7 @@ layout(location = 0) in vec2 in_position;
 layout(location = 1) in vec2 in_uv;
 layout(location = 2) in vec4 in_color;
 
-layout(push_constant) uniform Push {
-    vec2 scale;      // 2 / display size
-    vec2 translate;  // -1 - display pos * scale
-} push;
+layout(push_constant) uniform Push { ImGuiPush push; };
 
 layout(location = 0) out vec4 v_color;
 layout(location = 1) out vec2 v_uv;

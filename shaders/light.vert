@@ -4,7 +4,7 @@
 
 // One camera-facing quad per light (6 vertices made here, no vertex buffer). Lights arrive
 // sorted far to near, so alpha blending composes them in the right order.
-layout(push_constant) uniform Push { float size; } push;  // offset 0 of the shared 64-byte range
+layout(push_constant) uniform Push { BillboardPush push; };
 
 layout(location = 0) out vec2 v_offset;
 layout(location = 1) flat out vec3 v_color;

@@ -18,9 +18,9 @@ layout(push_constant) uniform Push { Instance row; } push;
 // gives a zero term and the fragment shader falls back to the face normal. The same formula as
 // transform_math.normal_scale, per vertex instead of per entity on the CPU.
 mat3 normal_matrix(Instance inst) {
-    vec3 c0 = vec3(inst.m0.x, inst.m1.x, inst.m2.x);
-    vec3 c1 = vec3(inst.m0.y, inst.m1.y, inst.m2.y);
-    vec3 c2 = vec3(inst.m0.z, inst.m1.z, inst.m2.z);
+    vec3 c0 = vec3(inst.model[0].x, inst.model[1].x, inst.model[2].x);
+    vec3 c1 = vec3(inst.model[0].y, inst.model[1].y, inst.model[2].y);
+    vec3 c2 = vec3(inst.model[0].z, inst.model[1].z, inst.model[2].z);
     vec3 top = max(max(abs(c0), abs(c1)), abs(c2));
     float peak = max(max(top.x, top.y), top.z);
     if (peak > 0.0) {
@@ -41,7 +41,7 @@ void main() {
     Instance inst = instances[gl_InstanceIndex];
 #endif
     vec4 p = vec4(in_position, 1.0);
-    vec3 world = vec3(dot(inst.m0, p), dot(inst.m1, p), dot(inst.m2, p));
+    vec3 world = vec3(dot(inst.model[0], p), dot(inst.model[1], p), dot(inst.model[2], p));
     v_position = world;
     v_normal = normal_matrix(inst) * in_normal;
     v_material = inst.misc.x;

@@ -136,10 +136,11 @@ def test_synthetic_input_selects_an_entity_and_drags_its_position(scene):
 def test_settings_requests_rebuild_what_they_need(scene):
     scene.frame()
     editor = scene.session.editor
-    old = scene.state.renderer
+    renderer, path = scene.state.renderer, scene.state.renderer.path
     editor.requested.mode, editor.requested.threads, editor.requested.culling = "indirect", 3, False
     scene.frame()  # the request is applied after this frame
-    assert scene.state.renderer is not old and scene.state.renderer.mode == "indirect"
+    # the path is swapped; the renderer, its frame slots and buffers stay
+    assert scene.state.renderer is renderer and renderer.path is not path and renderer.mode == "indirect"
     assert scene.state.jobs.threads == 3 and scene.state.renderer.culling is False
     scene.frame()
     assert scene.stats.instances == 100 and scene.gpu.target.pixels()[..., :3].max() > 30

@@ -22,7 +22,7 @@ W, H = 64, 48
 def indirect_renderer(gpu, **kw):
     from ecs_engine.render.renderer import Renderer
 
-    renderer = Renderer(gpu.device, gpu.target, gpu.meshes, lights=False, mode="indirect", **kw)
+    renderer = Renderer(gpu.device, gpu.target, gpu.meshes, mode="indirect", **kw)
     gpu.owned.append(renderer)
     return renderer
 

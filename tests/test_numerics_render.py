@@ -31,7 +31,7 @@ W, H = 160, 120
 def render(gpu, world: World, frames: int = 1) -> np.ndarray:
     from ecs_engine.render.renderer import Renderer
 
-    renderer = Renderer(gpu.device, gpu.target, gpu.meshes, lights=True)
+    renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
     try:
         schedule = default_schedule()
         for _ in range(frames):

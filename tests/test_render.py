@@ -106,12 +106,16 @@ def test_scene_without_lights_builds_no_light_pipeline():
     with headless_gpu() as gpu:
         world = World()
         build_cubes([(1, 1, 1)])(world, gpu.meshes.add)
-        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, lights=False)
+        world.destroy(world.query(PointLight).entities())
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
         gpu.owned.append(renderer)
-        assert renderer.light_pipeline is None
         default_schedule().run(world, 0.0)
         stats = renderer.render(world, readback=True)
         assert stats.draws == 1 and stats.lights == 0
+        assert renderer.light_pass.pipeline is None  # made the first frame a scene has lights
+        world.spawn(Transform(position=(1.5, 2.5, 2.5)), PointLight())
+        stats = renderer.render(world, readback=True)
+        assert stats.draws == 2 and stats.lights == 1 and renderer.light_pass.pipeline is not None
         assert gpu.target.pixels()[..., :3].max() > 30
         handle = gpu.meshes.add(cube_mesh())
         assert gpu.meshes.add(gpu.meshes[handle].data) == handle  # a mesh is uploaded once
@@ -156,7 +160,7 @@ def test_what_the_renderer_keeps_between_frames_follows_the_world():
     with headless_gpu(80, 60) as gpu:
         world = World()
         build_cubes([(1, 1, 1)])(world, gpu.meshes.add)
-        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, lights=True)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
         gpu.owned.append(renderer)
         schedule = default_schedule()
 
@@ -198,7 +202,7 @@ def test_a_renderer_switched_to_another_world_draws_that_world():
     from ecs_engine.render.renderer import Renderer
 
     with headless_gpu(80, 60) as gpu:
-        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, lights=False)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
         gpu.owned.append(renderer)
         cube = gpu.meshes.add(cube_mesh())
         sides = []

@@ -81,9 +81,9 @@ def test_a_failing_job_names_its_chunk_and_the_next_frame_renders(monkeypatch):
         gpu.owned.append(jobs)
         world = World()
         grid100.build(world, gpu.meshes.add)
-        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, lights=True, jobs=jobs, chunk_rows=20)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, jobs=jobs, chunk_rows=20)
         gpu.owned.append(renderer)
-        real = renderer.record_chunk
+        real = renderer.path.record_chunk
 
         def flaky(chunk, ctx):
             if chunk.offset == 40:
@@ -91,10 +91,10 @@ def test_a_failing_job_names_its_chunk_and_the_next_frame_renders(monkeypatch):
             return real(chunk, ctx)
 
         default_schedule().run(world, 0.0)
-        monkeypatch.setattr(renderer, "record_chunk", flaky)
+        monkeypatch.setattr(renderer.path, "record_chunk", flaky)
         with pytest.raises(JobError, match=r"chunk rows 40:60 failed: RuntimeError: boom"):
             renderer.render(world)
-        monkeypatch.setattr(renderer, "record_chunk", real)
+        monkeypatch.setattr(renderer.path, "record_chunk", real)
         stats = renderer.render(world, readback=True)
         assert stats.instances > 0 and gpu.target.pixels()[..., :3].max() > 30
         stats = renderer.render(world, readback=True)
@@ -102,13 +102,10 @@ def test_a_failing_job_names_its_chunk_and_the_next_frame_renders(monkeypatch):
 
 
 def test_jobs_are_about_one_per_thread_but_never_tiny():
-    from types import SimpleNamespace
-
-    from ecs_engine.render.renderer import MIN_CHUNK_ROWS, Renderer
+    from ecs_engine.render.frame_data import MIN_CHUNK_ROWS, FrameExtractor
 
     def rows(n, threads, chunk_rows=None):
-        fake = SimpleNamespace(chunk_rows=chunk_rows, jobs=SimpleNamespace(threads=threads))
-        return Renderer._rows_per_job(fake, n)
+        return FrameExtractor(lambda: threads, chunk_rows).rows_per_job(n)
 
     assert rows(1_000_000, 16) == 62_500  # 16 jobs
     assert rows(100_000, 16) == MIN_CHUNK_ROWS  # 7 jobs, not 16 of 6,250 rows

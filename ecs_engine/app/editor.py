@@ -21,7 +21,7 @@ from ..components import active_camera
 from ..maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
 from ..components import Camera, Mesh, PointLight, Transform
 from ..gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
-from ..render.renderer import MODES, RECORDERS
+from ..render.renderer import MODES, RECORDER_NAMES
 from ..ecs.world import World
 
 PRESENT_MODES = tuple(SWAPCHAIN_PRESENT_MODES)
@@ -103,7 +103,7 @@ class Editor:
             req.scene = _combo(imgui, "scene", req.scene, self.scenes)
             req.mode = _combo(imgui, "mode", req.mode, MODES)
             if req.mode != "indirect":
-                req.recorder = _combo(imgui, "recorder", req.recorder, RECORDERS)
+                req.recorder = _combo(imgui, "recorder", req.recorder, RECORDER_NAMES)
             _, req.threads = imgui.slider_int("threads", req.threads, 1, max(1, self.max_threads))
             _, req.culling = imgui.checkbox("frustum culling", req.culling)
             if req.present is not None:

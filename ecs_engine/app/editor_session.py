@@ -131,13 +131,8 @@ class EditorSession:
             self.editor.selected = None
             rebuilt = True
         elif req.mode != state.renderer.mode or (req.mode != "indirect" and req.recorder != state.renderer.recorder):
-            old = state.renderer
-            old.destroy()
-            state.renderer = Renderer(state.device, state.target, state.meshes, lights=old.with_lights,
-                                      mode=req.mode, jobs=state.jobs, culling=req.culling, chunk_rows=old.chunk_rows,
-                                      recorder=req.recorder)
+            state.renderer.set_path(req.mode, req.recorder)
             o.mode, o.recorder = req.mode, req.recorder
-            rebuilt = True
         state.renderer.culling = o.culling = req.culling
         state.renderer.overlay = self.renderer
         return rebuilt

@@ -225,7 +225,7 @@ def build_scene(options: RunOptions, build: Callable[..., None], device: Any, ta
     world = World()
     world.resources[type(jobs)] = jobs
     build(world, meshes.add, options.path)
-    renderer = Renderer(device, target, meshes, lights=has_lights(world), mode=options.mode, jobs=jobs,
+    renderer = Renderer(device, target, meshes, mode=options.mode, jobs=jobs,
                         culling=options.culling, chunk_rows=options.chunk_rows, recorder=recorder_for(options))
     return world, default_schedule(), renderer
 

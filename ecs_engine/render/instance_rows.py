@@ -6,7 +6,7 @@ cull and count, one to write; a counting sort over the few (mesh, winding) keys)
 reference. Measured on the GPU host, the NumPy version on 4,096-row chunks cost ~0.58 us per
 entity and did not scale with threads (many small calls, each holding the GIL).
 
-Row layout (INSTANCE_DTYPE, 64 bytes = 16 words): model rows 0-2 (12 floats), material index,
+Row layout (layouts.INSTANCE, 64 bytes = 16 words): model rows 0-2 (12 floats), material index,
 key (mesh * 2 + mirrored: the indirect mode's compute shader reads it) and 2 zero words. The
 vertex shader derives the normal matrix from the model matrix (its cofactor), so rows carry no
 normal matrix: at a million entities the jobs write 45 MB a frame instead of 79 MB, and a
@@ -19,8 +19,11 @@ import numpy as np
 
 from .. import native
 from ..maths.culling import bounding_spheres, spheres_visible
+from .layouts import INSTANCE
 
-INSTANCE_DTYPE = np.dtype([("model", np.float32, (3, 4)), ("misc", np.uint32, 4)])
+INSTANCE_DTYPE = INSTANCE.dtype
+# the kernel writes a row as 8 uint64 words: model rows in words 0-5, misc.xy in word 6, zw in 7
+assert INSTANCE.size == 64 and INSTANCE.offset("model") == 0 and INSTANCE.offset("misc") == 48, INSTANCE.glsl()
 NO_PLANES = np.zeros((0, 4), dtype=np.float64)
 
 

@@ -12,8 +12,11 @@ from __future__ import annotations
 import numpy as np
 
 from .. import native
+from .layouts import LIGHT
 
-LIGHT_DTYPE = np.dtype([("position_radius", np.float32, 4), ("color_intensity", np.float32, 4)])
+LIGHT_DTYPE = LIGHT.dtype
+# written as 8 floats a light: position and radius, then colour and intensity
+assert LIGHT.size == 32 and LIGHT.offset("color_intensity") == 16, LIGHT.glsl()
 
 
 def write_lights_numpy(position: np.ndarray, radius: np.ndarray, color: np.ndarray, intensity: np.ndarray,

@@ -1,0 +1,211 @@
+"""The render paths that record draws on the CPU, one secondary command buffer per chunk job:
+
+- `instanced`: one instanced draw per (mesh, winding) run of a chunk, the rows read by the
+  vertex shader from the frame's instance buffer;
+- `per_entity`: the seed's way, the row in push constants and one draw per entity.
+
+Each job culls its rows, writes the visible ones sorted by key (mesh * 2 + mirrored; see
+instance_rows.py) and records them with a recorder picked from RECORDERS: `native` (a numba
+loop calling the driver without the GIL, gpu/native_recorder.py) or `python` (the binding's
+call per command: the readable baseline). Mirrored rows (negative determinant) use the pipeline
+with the opposite front face, so back-face culling stays right.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any, ClassVar
+
+import numpy as np
+
+from ..errors import UsageError
+from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
+from ..gpu.secondary import end_command_buffer
+from .frame_data import Chunk
+from .instance_rows import write_rows
+from .layouts import INSTANCE
+from .mesh_registry import VERTEX_STRIDE
+from .path import ChunkResult, FrameInputs, PathContext, summed_counts
+
+
+def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple[Any, Any]:
+    """The (plain, mirrored) mesh pipelines of a path: the same but for the front face."""
+    vk = ctx.device.vk
+    base = dict(layout=layout, render_pass=ctx.render_pass, subpass=0, vertex_stride=VERTEX_STRIDE,
+                vertex_attributes=[(0, vk.VK_FORMAT_R32G32B32_SFLOAT, 0), (1, vk.VK_FORMAT_R32G32B32_SFLOAT, 12)])
+    return (graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, "mesh.frag", **base)),
+            graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, "mesh.frag", front_face_ccw=False,
+                                                               **base)))
+
+
+class PythonRecorder:
+    """The readable baseline (and the fallback without numba): the binding's call per command."""
+
+    def __init__(self, path: ChunkPath) -> None:
+        self.path = path
+
+    def frame_state(self, frame: FrameInputs) -> None:
+        return None
+
+    def record(self, rows: np.ndarray, key_counts: np.ndarray, first_instance: int,
+               frame: FrameInputs) -> tuple[Any, int, int]:
+        path = self.path
+        vk = path.vk
+        index_counts = frame.bounds[2]
+        keys = np.flatnonzero(key_counts)
+        counts = key_counts[keys]
+        starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        run_mesh, flipped = np.divmod(keys, 2)
+        draws = len(starts) if path.instanced else int(counts.sum())
+        triangles = int((index_counts[run_mesh] // 3 * counts).sum())
+        cb = path.ctx.secondaries.begin(frame.slot, frame.target.secondary_begin)
+        vk.vkCmdSetViewport(cb, 0, 1, [frame.target.viewport])  # not inherited by secondaries
+        vk.vkCmdSetScissor(cb, 0, 1, [frame.target.area])
+        vk.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, path.layout, 0, 1,
+                                   [frame.descriptor_set], 0, None)
+        bound = None
+        for start, count, h, mirrored in zip(starts.tolist(), counts.tolist(), run_mesh.tolist(), flipped.tolist()):
+            pipeline = path.pipelines[mirrored]
+            if pipeline is not bound:
+                vk.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline)
+                bound = pipeline
+            mesh = path.ctx.meshes.bind(cb, h)
+            if path.instanced:
+                vk.vkCmdDrawIndexed(cb, mesh.index_count, count, 0, 0, first_instance + start)
+                continue
+            for i in range(start, start + count):
+                vk.vkCmdPushConstants(cb, path.layout, vk.VK_SHADER_STAGE_VERTEX_BIT, 0,
+                                      INSTANCE.size, vk.ffi.from_buffer(rows[i : i + 1]))
+                vk.vkCmdDrawIndexed(cb, mesh.index_count, 1, 0, 0, 0)
+        end_command_buffer(vk, cb)
+        return cb, draws, triangles
+
+
+class NativeRecorder:
+    """The numba loop of gpu/native_recorder.py, with its per-target, per-slot frame state."""
+
+    def __init__(self, path: ChunkPath) -> None:
+        if path.ctx.native_recorder is None:
+            raise UsageError("the native recorder needs numba (pip install numba, and unset ECS_ENGINE_NO_NUMBA); "
+                             "or use --recorder python")
+        self.path = path
+        self.compiled = path.ctx.native_recorder
+        self._frames: dict[tuple[tuple[int, int, int], int], dict[str, Any]] = {}
+
+    def frame_state(self, frame: FrameInputs) -> dict[str, Any]:
+        """Made once per target and slot (and after meshes were added)."""
+        compiled, meshes = self.compiled, self.path.ctx.meshes
+        if compiled.meshes_known != len(meshes):
+            gpu = [meshes[h] for h in range(len(meshes))]
+            compiled.set_meshes([m.vertices.handle for m in gpu], [m.indices.handle for m in gpu],
+                                [m.index_count for m in gpu])
+        key = (frame.target.key, frame.slot)
+        state = self._frames.get(key)
+        if state is None:
+            if len(self._frames) > 32:  # swapchains come and go: drop the old framebuffers' entries
+                self._frames.clear()
+            vk = self.path.vk
+            _, width, height = frame.target.key
+            state = self._frames[key] = compiled.frame_state(
+                frame.target.secondary_begin, width, height, frame.descriptor_set, self.path.layout,
+                vk.VK_SHADER_STAGE_VERTEX_BIT, self.path.pipelines)
+        return state
+
+    def record(self, rows: np.ndarray, key_counts: np.ndarray, first_instance: int,
+               frame: FrameInputs) -> tuple[Any, int, int]:
+        cb = self.path.ctx.secondaries.acquire(frame.slot)
+        draws, triangles = self.compiled.record(cb, rows, self.path.instanced, first_instance, key_counts,
+                                                frame.path_state)
+        return cb, draws, triangles
+
+
+RECORDERS: dict[str, type[PythonRecorder] | type[NativeRecorder]] = {"native": NativeRecorder,
+                                                                     "python": PythonRecorder}
+
+
+class ChunkPath:
+    """A CPU-recorded path; subclasses say how a row reaches the vertex shader."""
+
+    name: ClassVar[str]
+    vertex_shader: ClassVar[str]
+    instanced: ClassVar[bool]
+    push_bytes: ClassVar[int]  # push constant range of the mesh pipelines (0: none)
+
+    def __init__(self, ctx: PathContext, recorder: str) -> None:
+        if recorder not in RECORDERS:
+            raise ValueError(f"unknown recorder {recorder!r}; recorders: {', '.join(RECORDERS)}")
+        self.ctx = ctx
+        self.vk = vk = ctx.device.vk
+        push = [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, self.push_bytes)] if self.push_bytes else []
+        self.layout = pipeline_layout(ctx.device, [ctx.frame_set_layout], push)
+        self.pipelines = mesh_pipelines(ctx, self.layout, self.vertex_shader)
+        self.recorder = recorder
+        self._recorder = RECORDERS[recorder](self)
+
+    def set_recorder(self, recorder: str) -> None:
+        if recorder != self.recorder:
+            self._recorder = RECORDERS[recorder](self)  # raises before anything changes
+            self.recorder = recorder
+
+    def rows_needed(self, candidates: int) -> int:
+        return candidates
+
+    def begin_frame(self, frame: FrameInputs) -> None:
+        frame.path_state = self._recorder.frame_state(frame)
+
+    def rows_for(self, chunk: Chunk, frame: FrameInputs) -> np.ndarray:
+        return frame.instances[chunk.offset : chunk.offset + len(chunk.handle)]
+
+    def record_chunk(self, chunk: Chunk, frame: FrameInputs) -> ChunkResult:
+        """One job: cull, write the visible rows sorted by key, record a secondary."""
+        centers, radii, index_counts = frame.bounds
+        rows = self.rows_for(chunk, frame)
+        key_counts = np.zeros(2 * len(index_counts), dtype=np.int64)
+        n = write_rows(chunk.model, chunk.handle, chunk.material, centers, radii, frame.planes,
+                       self.ctx.material_count, rows, key_counts)
+        if n == 0:
+            return ChunkResult(None, 0, 0, 0)
+        cb, draws, triangles = self._recorder.record(rows, key_counts, chunk.offset, frame)
+        return ChunkResult(cb, n, draws, triangles)
+
+    def finish(self, cb: Any, frame: FrameInputs, results: list[ChunkResult], candidates: int) -> list[Any]:
+        return [r.command_buffer for r in results if r.command_buffer is not None]
+
+    def counts(self, frame: FrameInputs, results: list[ChunkResult]) -> tuple[int, int, int]:
+        return summed_counts(results)
+
+    def destroy(self) -> None:
+        device = self.ctx.device
+        for pipeline in self.pipelines:
+            self.vk.vkDestroyPipeline(device.handle, pipeline, None)
+        self.vk.vkDestroyPipelineLayout(device.handle, self.layout, None)
+
+
+class InstancedPath(ChunkPath):
+    name = "instanced"
+    vertex_shader = "mesh.vert"
+    instanced = True
+    push_bytes = 0
+
+
+class PerEntityPath(ChunkPath):
+    name = "per_entity"
+    vertex_shader = "mesh_push.vert"
+    instanced = False
+    push_bytes = INSTANCE.size
+
+    def __init__(self, ctx: PathContext, recorder: str) -> None:
+        super().__init__(ctx, recorder)
+        self._scratch = threading.local()
+
+    def rows_needed(self, candidates: int) -> int:
+        return 0  # the rows only feed push constants
+
+    def rows_for(self, chunk: Chunk, frame: FrameInputs) -> np.ndarray:
+        """This thread's reusable rows: cached CPU memory, not the mapped buffer, which is
+        write-combined on discrete GPUs and slow to read back for the pushes."""
+        n = len(chunk.handle)
+        rows = getattr(self._scratch, "rows", None)
+        if rows is None or len(rows) < n:
+            rows = self._scratch.rows = np.empty(max(n, 1024), INSTANCE.dtype)
+        return rows[:n]

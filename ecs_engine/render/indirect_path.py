@@ -1,0 +1,314 @@
+"""The `indirect` render path: compute shaders cull and write the draw commands, and
+vkCmdDrawIndexedIndirectCount draws them.
+
+The CPU chunk jobs write every candidate row (no CPU culling) with its key, mesh * 2 + mirrored,
+and count rows per key; from those counts each key gets a region of the `ids` buffer. On the GPU:
+1. cull.comp, one invocation per row: bounding sphere against the frustum planes; a visible row
+   appends its index to its key's region (an atomic counter per key).
+2. compact.comp, one invocation per key: a non-empty key becomes one instanced DrawCommand
+   (first_instance = the region's start), appended to the list of its winding; the list lengths
+   are the counts vkCmdDrawIndexedIndirectCount reads.
+3. In the frame's one secondary: per winding, one vkCmdDrawIndexedIndirectCount over the merged
+   mesh buffers; the vertex shader reads instances[ids[gl_InstanceIndex]].
+
+The path's buffers are descriptor set 1 (layouts.py). Visible counts exist only on the GPU: they
+are copied to a mapped buffer and read once the frame's fence has signalled (an earlier frame's,
+or this one's after a readback wait).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import UsageError
+from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
+from ..gpu.device import Device
+from ..gpu.memory import DEVICE, HOST, Buffer
+from ..gpu.pipeline import compute_pipeline, pipeline_layout
+from ..gpu.secondary import end_command_buffer
+from .chunk_paths import mesh_pipelines
+from .frame_data import Chunk
+from .instance_rows import write_rows
+from .layouts import (
+    BINDING_COMMANDS,
+    BINDING_DRAW_STATE,
+    BINDING_IDS,
+    BINDING_KEYS,
+    COMPACT_GROUP,
+    COMPACT_PUSH,
+    CULL_GROUP,
+    CULL_PUSH,
+    DRAW_COMMAND,
+    DRAW_STATE,
+    KEY_INFO,
+)
+from .mesh_registry import MergedMeshes
+from .path import ChunkResult, FrameInputs, MeshBounds, PathContext
+
+STATE_HEADER = DRAW_STATE.size // 4  # uints before the per-key counters
+FEATURES = ("drawIndirectCount", "multiDrawIndirect", "drawIndirectFirstInstance")
+
+
+@dataclass
+class _IndirectFrame:
+    descriptor_set: Any  # set 1
+    keys: Buffer  # HOST, KEY_INFO per key, written each frame
+    ids: Buffer  # DEVICE, one uint per candidate row
+    state: Buffer  # DEVICE, DRAW_STATE header then visible rows per key (zeroed each frame)
+    commands: Buffer  # DEVICE, 2 lists of `meshes` commands
+    readback: Buffer  # HOST, the state as the frame left it
+    key_slots: int  # keys the buffers hold
+    recorded: bool = False  # `readback` holds a frame's counts
+    copy_region: Any = None  # VkBufferCopy* of the whole state buffer
+    written: tuple[bytes, int] | None = None  # (key counts, merged meshes) the key table holds
+    previous: tuple[int, int, int] | None = None  # the counts of the slot's last frame, read at begin_frame
+
+
+def check_support(device: Device) -> None:
+    missing = [f for f in FEATURES if not device.features.get(f)]
+    if missing:
+        raise UsageError(f"{device.info.name} lacks {', '.join(missing)}: the indirect mode needs it; "
+                         "use --mode instanced")
+
+
+class IndirectPath:
+    name = "indirect"
+    recorder = "gpu"
+
+    def __init__(self, ctx: PathContext, recorder: str | None = None) -> None:
+        check_support(ctx.device)  # before anything is created
+        self.ctx = ctx
+        device = ctx.device
+        vk = self.vk = device.vk
+        ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
+        stages = vk.VK_SHADER_STAGE_VERTEX_BIT | vk.VK_SHADER_STAGE_COMPUTE_BIT
+        self.set_layout = DescriptorSetLayout(device, [(b, ssbo, stages) for b in (
+            BINDING_IDS, BINDING_KEYS, BINDING_DRAW_STATE, BINDING_COMMANDS)])
+        n = ctx.frames_in_flight
+        self.pool = DescriptorPool(device, n, {ssbo: 4 * n})
+        sets = [ctx.frame_set_layout, self.set_layout.handle]
+        self.layout = pipeline_layout(device, sets)
+        self.pipelines = mesh_pipelines(ctx, self.layout, "mesh_indirect.vert")
+        self.compute_layout = pipeline_layout(device, sets, [(vk.VK_SHADER_STAGE_COMPUTE_BIT, 0, CULL_PUSH.size)])
+        self.cull = compute_pipeline(device, "cull.comp", self.compute_layout)
+        self.compact = compute_pipeline(device, "compact.comp", self.compute_layout)
+        self.max_groups = int(device.limits.maxComputeWorkGroupCount[0])
+        self.frames = [self._make_frame(self.pool.allocate(self.set_layout), 2, 1024) for _ in range(n)]
+        # made once: the per-frame calls go straight to vk.lib (see gpu/frames.py)
+        self._push = np.zeros(1, dtype=CULL_PUSH.dtype)
+        self._compact_push = np.zeros(1, dtype=COMPACT_PUSH.dtype)
+        self._push_ptr = vk.ffi.from_buffer(self._push)
+        self._compact_ptr = vk.ffi.from_buffer(self._compact_push)
+        self._sets = vk.ffi.new("VkDescriptorSet[2]")
+        self._offsets = vk.ffi.new("VkDeviceSize[1]", [0])
+        compute = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
+        shader_rw = vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_SHADER_WRITE_BIT
+        self._barriers = [_Barrier(vk, *b) for b in (
+            (vk.VK_PIPELINE_STAGE_TRANSFER_BIT, compute, vk.VK_ACCESS_TRANSFER_WRITE_BIT, shader_rw),
+            (compute, compute, vk.VK_ACCESS_SHADER_WRITE_BIT, shader_rw),
+            (compute, vk.VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT | vk.VK_PIPELINE_STAGE_VERTEX_SHADER_BIT
+             | vk.VK_PIPELINE_STAGE_TRANSFER_BIT, vk.VK_ACCESS_SHADER_WRITE_BIT,
+             vk.VK_ACCESS_INDIRECT_COMMAND_READ_BIT | vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_TRANSFER_READ_BIT),
+            (vk.VK_PIPELINE_STAGE_TRANSFER_BIT, vk.VK_PIPELINE_STAGE_HOST_BIT, vk.VK_ACCESS_TRANSFER_WRITE_BIT,
+             vk.VK_ACCESS_HOST_READ_BIT))]
+
+    # ---------------------------------------------------------------- buffers
+    def _make_frame(self, descriptor_set: Any, keys: int, rows: int) -> _IndirectFrame:
+        vk = self.vk
+        device = self.ctx.device
+        ssbo = vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT
+        indirect = vk.VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT
+        state_bytes = DRAW_STATE.size + 4 * keys
+        f = _IndirectFrame(
+            descriptor_set=descriptor_set,
+            keys=Buffer(device, KEY_INFO.size * keys, ssbo),
+            ids=Buffer(device, 4 * rows, ssbo, DEVICE),
+            state=Buffer(device, state_bytes, ssbo | indirect | vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT, DEVICE),
+            commands=Buffer(device, DRAW_COMMAND.size * keys, ssbo | indirect, DEVICE),
+            readback=Buffer(device, state_bytes, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST),
+            key_slots=keys,
+            copy_region=vk.ffi.new("VkBufferCopy*", {"srcOffset": 0, "dstOffset": 0, "size": state_bytes}))
+        self._write_set(f)
+        return f
+
+    def _write_set(self, f: _IndirectFrame) -> None:
+        ssbo = self.vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
+        write_buffers(self.ctx.device, f.descriptor_set, [
+            (BINDING_IDS, ssbo, f.ids), (BINDING_KEYS, ssbo, f.keys), (BINDING_DRAW_STATE, ssbo, f.state),
+            (BINDING_COMMANDS, ssbo, f.commands)])
+
+    def _ensure_capacity(self, slot: int, keys: int, rows: int) -> None:
+        """Grow the frame's buffers; safe: the frame's fence has been waited on."""
+        f = self.frames[slot]
+        if keys > f.key_slots:
+            for b in (f.keys, f.ids, f.state, f.commands, f.readback):
+                b.destroy()
+            f = self.frames[slot] = self._make_frame(f.descriptor_set, keys, max(rows, f.ids.size // 4))
+        ids = f.ids.grown(4 * rows)
+        if ids is not f.ids:
+            f.ids = ids
+            self._write_set(f)
+
+    # -------------------------------------------------------------- the path
+    def rows_needed(self, candidates: int) -> int:
+        return candidates
+
+    def begin_frame(self, frame: FrameInputs) -> None:
+        """The slot's last counts, before this frame overwrites them (a read-back frame reads its
+        own counts after the wait instead)."""
+        f = self.frames[frame.slot]
+        f.previous = None if frame.readback else self._read_counts(frame.slot, frame.bounds[2])
+
+    def record_chunk(self, chunk: Chunk, frame: FrameInputs) -> ChunkResult:
+        """One job: write every row (the GPU culls) and count rows per key."""
+        centers, radii, index_counts = frame.bounds
+        rows = frame.instances[chunk.offset : chunk.offset + len(chunk.handle)]
+        key_counts = np.zeros(2 * len(index_counts), dtype=np.int64)
+        write_rows(chunk.model, chunk.handle, chunk.material, centers, radii, None, self.ctx.material_count,
+                   rows, key_counts)
+        return ChunkResult(None, 0, 0, 0, key_counts)
+
+    def finish(self, cb: Any, frame: FrameInputs, results: list[ChunkResult], candidates: int) -> list[Any]:
+        """The compute passes into the primary (before the render pass) and the one secondary
+        that draws what they wrote."""
+        keys = 2 * len(self.ctx.meshes)
+        key_counts = np.zeros(keys, dtype=np.int64)
+        for r in results:
+            key_counts += r.key_counts
+        self._ensure_capacity(frame.slot, keys, candidates)
+        merged = self.ctx.meshes.merged()
+        self._write_key_table(frame.slot, key_counts, merged, frame.bounds)
+        self._sets[0], self._sets[1] = frame.descriptor_set, self.frames[frame.slot].descriptor_set
+        planes = None if frame.planes is None else frame.planes.astype(np.float32)
+        self._record_compute(cb, frame.slot, planes, candidates, keys)
+        vk = self.vk
+        lib = vk.lib
+        secondary = self.ctx.secondaries.begin(frame.slot, frame.target.secondary_begin)
+        lib.vkCmdSetViewport(secondary, 0, 1, frame.target.viewport_ptr)
+        lib.vkCmdSetScissor(secondary, 0, 1, frame.target.area_ptr)
+        lib.vkCmdBindDescriptorSets(secondary, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 2, self._sets, 0,
+                                    vk.ffi.NULL)
+        self._record_draws(secondary, frame.slot, merged, key_counts)
+        end_command_buffer(vk, secondary)
+        return [secondary]
+
+    def counts(self, frame: FrameInputs, results: list[ChunkResult]) -> tuple[int, int, int]:
+        """Counted on the GPU: this frame's when it was waited for, else the slot's previous one."""
+        f = self.frames[frame.slot]
+        counts = self._read_counts(frame.slot, frame.bounds[2]) if frame.readback else f.previous
+        return counts if counts is not None else (0, 0, 0)
+
+    # ------------------------------------------------------------ GPU work
+    def _read_counts(self, slot: int, index_counts: np.ndarray) -> tuple[int, int, int] | None:
+        """(draws, visible rows, triangles) of the last frame this slot carried, once its fence
+        has signalled; None before the slot's first frame."""
+        f = self.frames[slot]
+        if not f.recorded:
+            return None
+        raw = f.readback.array(np.uint32, STATE_HEADER + f.key_slots)
+        visible = raw[STATE_HEADER : STATE_HEADER + 2 * len(index_counts)].astype(np.int64)
+        per_mesh = np.repeat(index_counts // 3, 2)
+        return int(raw[0]) + int(raw[1]), int(visible.sum()), int((visible * per_mesh).sum())
+
+    def _write_key_table(self, slot: int, key_counts: np.ndarray, merged: MergedMeshes, bounds: MeshBounds) -> None:
+        """Each key's mesh and the start of its region of `ids` (skipped when the counts and
+        meshes are those the table already holds)."""
+        f = self.frames[slot]
+        written = (key_counts.tobytes(), id(merged))
+        if f.written == written:
+            return
+        f.written = written
+        centers, radii, index_counts = bounds
+        n = len(key_counts)
+        table = f.keys.array(KEY_INFO.dtype, n)
+        mesh = np.arange(n) // 2
+        table["index_count"] = index_counts[mesh]
+        table["first_index"] = merged.first_index[mesh]
+        table["vertex_offset"] = merged.vertex_offset[mesh]
+        table["base"] = np.concatenate([[0], np.cumsum(key_counts)[:-1]])
+        table["sphere"][:, :3] = centers[mesh]
+        table["sphere"][:, 3] = radii[mesh]
+
+    def _record_compute(self, cb: Any, slot: int, planes: np.ndarray | None, rows: int, keys: int) -> None:
+        """Into the primary, before the render pass: zero the counters, cull, write commands,
+        and copy the counters where the CPU can read them."""
+        vk = self.vk
+        lib = vk.lib
+        f = self.frames[slot]
+        to_compute, compute_to_compute, to_draw, to_host = self._barriers
+        stage = vk.VK_SHADER_STAGE_COMPUTE_BIT
+        # the previous frame in this slot read the commands and ids: its fence covered that
+        lib.vkCmdFillBuffer(cb, f.state.handle, 0, f.state.size, 0)
+        to_compute.record(lib, cb)
+        lib.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.compute_layout, 0, 2, self._sets, 0,
+                                    vk.ffi.NULL)
+        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.cull)
+        push = self._push
+        push["plane_count"] = 0
+        if planes is not None:
+            push["planes"][0, : len(planes)] = planes
+            push["plane_count"] = len(planes)
+        step = self.max_groups * CULL_GROUP
+        for first in range(0, rows, step):
+            count = min(step, rows - first)
+            push["row_end"] = first + count  # rows below this index exist
+            push["first_row"] = first
+            lib.vkCmdPushConstants(cb, self.compute_layout, stage, 0, CULL_PUSH.size, self._push_ptr)
+            lib.vkCmdDispatch(cb, -(-count // CULL_GROUP), 1, 1)
+        compute_to_compute.record(lib, cb)
+        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.compact)
+        self._compact_push["key_count"], self._compact_push["mesh_count"] = keys, keys // 2
+        lib.vkCmdPushConstants(cb, self.compute_layout, stage, 0, COMPACT_PUSH.size, self._compact_ptr)
+        lib.vkCmdDispatch(cb, -(-keys // COMPACT_GROUP), 1, 1)
+        to_draw.record(lib, cb)
+        lib.vkCmdCopyBuffer(cb, f.state.handle, f.readback.handle, 1, f.copy_region)
+        to_host.record(lib, cb)
+        f.recorded = True
+
+    def _record_draws(self, cb: Any, slot: int, merged: MergedMeshes, key_counts: np.ndarray) -> None:
+        """Into the frame's secondary (viewport, scissor and sets already bound): one indirect
+        count draw per winding that has candidates."""
+        vk = self.vk
+        lib = vk.lib
+        f = self.frames[slot]
+        meshes = len(key_counts) // 2
+        if merged.vertex_array is None:
+            merged.vertex_array = vk.ffi.new("VkBuffer[1]", [merged.vertices.handle])
+        lib.vkCmdBindVertexBuffers(cb, 0, 1, merged.vertex_array, self._offsets)
+        lib.vkCmdBindIndexBuffer(cb, merged.indices.handle, 0, vk.VK_INDEX_TYPE_UINT32)
+        for winding, pipeline in enumerate(self.pipelines):
+            if not key_counts[winding::2].any():
+                continue
+            lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline)
+            lib.vkCmdDrawIndexedIndirectCount(cb, f.commands.handle, winding * meshes * DRAW_COMMAND.size,
+                                              f.state.handle, DRAW_STATE.offset("draw_counts") + 4 * winding,
+                                              meshes, DRAW_COMMAND.size)
+
+    def destroy(self) -> None:
+        vk = self.vk
+        handle = self.ctx.device.handle
+        for f in self.frames:
+            for b in (f.keys, f.ids, f.state, f.commands, f.readback):
+                b.destroy()
+        for pipeline in (*self.pipelines, self.cull, self.compact):
+            vk.vkDestroyPipeline(handle, pipeline, None)
+        vk.vkDestroyPipelineLayout(handle, self.layout, None)
+        vk.vkDestroyPipelineLayout(handle, self.compute_layout, None)
+        self.pool.destroy()
+        self.set_layout.destroy()
+
+
+class _Barrier:
+    """A global memory barrier, made once and recorded with a raw call."""
+
+    def __init__(self, vk: Any, src_stage: int, dst_stage: int, src_access: int, dst_access: int) -> None:
+        self.stages = (src_stage, dst_stage)
+        self.barrier = vk.ffi.new("VkMemoryBarrier*", {"sType": vk.VK_STRUCTURE_TYPE_MEMORY_BARRIER,
+                                                       "srcAccessMask": src_access, "dstAccessMask": dst_access})
+        self.null = vk.ffi.NULL
+
+    def record(self, lib: Any, cb: Any) -> None:
+        lib.vkCmdPipelineBarrier(cb, self.stages[0], self.stages[1], 0, 1, self.barrier, 0, self.null, 0, self.null)

@@ -1,0 +1,106 @@
+"""The interface every render path implements, and what the renderer hands a path each frame.
+
+A render path is one way of drawing the scene's mesh rows: `instanced` and `per_entity`
+(chunk_paths.py) record draws on the CPU, `indirect` (indirect_path.py) lets compute shaders
+write them. The renderer picks one from its table by name and swaps it when the mode changes;
+everything else (frame slots, per-frame buffers, the light pass, the overlay) stays.
+
+Per frame:
+1. `rows_needed(candidates)`: instance rows the path writes into the frame's mapped buffer;
+2. `record_chunk(chunk, frame)` for every chunk, on the worker pool (cull, write rows, record a
+   secondary command buffer, or only write rows);
+3. `finish(cb, frame, results)` on the main thread: commands for the primary before the render
+   pass (compute), and the secondaries to execute in the mesh subpass;
+4. after submit, `counts(frame, results)`: draws, visible rows and triangles.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+from ..gpu.device import Device
+from ..gpu.secondary import SecondaryBuffers
+from .frame_data import Chunk
+from .mesh_registry import MeshRegistry
+
+MeshBounds = tuple[np.ndarray, np.ndarray, np.ndarray]  # per mesh: centre (n, 3), radius, index count
+
+
+@dataclass
+class TargetState:
+    """Structs that depend only on the framebuffer and its size, built once: each binding struct
+    costs microseconds of Python, and a small scene's whole frame budget is 250 us."""
+
+    key: tuple[int, int, int]  # framebuffer address, width, height
+    area: Any
+    viewport: Any
+    secondary_begin: Any  # begin info with render-pass inheritance
+    pass_begin: Any  # VkRenderPassBeginInfo with the clear values
+    keep: Any  # what the structs point to
+    area_ptr: Any = None  # pointers to the structs above, for raw calls
+    viewport_ptr: Any = None
+    pass_begin_ptr: Any = None
+
+
+@dataclass
+class FrameInputs:
+    """What every chunk job of one frame reads (never writes, except its slice of `instances`)."""
+
+    slot: int  # frame-in-flight index
+    descriptor_set: Any  # the frame's set 0
+    set_array: Any  # VkDescriptorSet[1] of it, for raw calls
+    target: TargetState
+    planes: np.ndarray | None  # None: culling off
+    instances: np.ndarray  # the mapped per-frame instance buffer (INSTANCE rows)
+    bounds: MeshBounds
+    readback: bool  # the frame is waited for: the path may read back what it counted on the GPU
+    path_state: Any = None  # what the path's begin_frame keeps for its jobs
+
+
+@dataclass
+class ChunkResult:
+    command_buffer: Any  # None when nothing in the chunk is visible (or the GPU records it)
+    visible: int
+    draws: int
+    triangles: int
+    key_counts: np.ndarray | None = None  # rows per key (indirect: the GPU's regions)
+
+
+@dataclass
+class PathContext:
+    """What paths are built from: shared by every path of one renderer."""
+
+    device: Device
+    meshes: MeshRegistry
+    render_pass: Any
+    frame_set_layout: Any  # set 0's VkDescriptorSetLayout
+    secondaries: SecondaryBuffers
+    frames_in_flight: int
+    material_count: int
+    native_recorder: Any = None  # gpu.native_recorder.NativeRecorder, compiled once per device
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+class RenderPath(Protocol):
+    name: str
+    recorder: str  # "native" or "python"; "gpu" when the GPU writes the draws
+
+    def rows_needed(self, candidates: int) -> int: ...
+
+    def begin_frame(self, frame: FrameInputs) -> None: ...
+
+    def record_chunk(self, chunk: Chunk, frame: FrameInputs) -> ChunkResult: ...
+
+    def finish(self, cb: Any, frame: FrameInputs, results: list[ChunkResult], candidates: int) -> list[Any]: ...
+
+    def counts(self, frame: FrameInputs, results: list[ChunkResult]) -> tuple[int, int, int]: ...
+
+    def destroy(self) -> None: ...
+
+
+def summed_counts(results: list[ChunkResult]) -> tuple[int, int, int]:
+    """(draws, visible, triangles) over the chunks recorded on the CPU."""
+    return (sum(r.draws for r in results), sum(r.visible for r in results), sum(r.triangles for r in results))

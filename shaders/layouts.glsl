@@ -1,0 +1,89 @@
+// Generated from ecs_engine/render/layouts.py by scripts/compile_shaders.py: do not edit.
+#ifndef LAYOUTS_GLSL
+#define LAYOUTS_GLSL
+
+#define SET_FRAME 0
+#define SET_INDIRECT 1
+#define BINDING_GLOBALS 0
+#define BINDING_LIGHTS 1
+#define BINDING_INSTANCES 2
+#define BINDING_MATERIALS 3
+#define BINDING_IDS 0
+#define BINDING_KEYS 1
+#define BINDING_DRAW_STATE 2
+#define BINDING_COMMANDS 3
+#define CULL_GROUP 256
+#define COMPACT_GROUP 64
+
+// The frame's uniforms. Positions are relative to the render origin (the camera, unless
+// RenderOrigin is pinned).
+struct Globals {  // 176 bytes, std140
+    mat4 projection;            // offset 0: reverse-Z: near -> depth 1, far/infinity -> 0
+    mat4 view;                  // offset 64: rotation, and the translation from the render origin to the camera
+    vec4 eye;                   // offset 128: xyz: the camera relative to the render origin (zero by default)
+    vec4 ambient;               // offset 144: rgb, intensity
+    uvec4 counts;               // offset 160: x: number of lights
+};
+
+struct Light {  // 32 bytes, std430
+    vec4 position_radius;       // offset 0: relative to the render origin; radius (0: unbounded)
+    vec4 color_intensity;       // offset 16: linear rgb, intensity
+};
+
+// One entity's row: 64 bytes (the normal matrix is derived in the vertex shader).
+struct Instance {  // 64 bytes, std430
+    vec4 model[3];              // offset 0: rows of the camera-relative model matrix (the last row is 0 0 0 1)
+    uvec4 misc;                 // offset 48: x: material index, y: key = mesh * 2 + mirrored, zw: 0
+};
+
+struct Material {  // 32 bytes, std430
+    vec4 color;                 // offset 0: linear rgb, unused
+    vec4 specular;              // offset 16: strength, shininess, unused, unused
+};
+
+// The indirect path's key table: one row per key = mesh * 2 + mirrored.
+struct KeyInfo {  // 32 bytes, std430
+    uint index_count;           // offset 0
+    uint first_index;           // offset 4: of the mesh in the merged index buffer
+    int vertex_offset;          // offset 8: of the mesh in the merged vertex buffer
+    uint base;                  // offset 12: first slot of this key's region of ids
+    vec4 sphere;                // offset 16: the mesh's bounding sphere: centre xyz, radius
+};
+
+// Head of the indirect path's draw state buffer; visible rows per key follow it.
+struct DrawStateHeader {  // 16 bytes, std430
+    uint draw_counts[2];        // offset 0: commands per winding: the count buffer of vkCmdDrawIndexedIndirectCount
+    uint pad[2];                // offset 8
+};
+
+// VkDrawIndexedIndirectCommand.
+struct DrawCommand {  // 20 bytes, std430
+    uint index_count;           // offset 0
+    uint instance_count;        // offset 4
+    uint first_index;           // offset 8
+    int vertex_offset;          // offset 12
+    uint first_instance;        // offset 16
+};
+
+struct CullPush {  // 112 bytes, std430
+    vec4 planes[6];             // offset 0: frustum planes (camera-relative, pointing inwards)
+    uint plane_count;           // offset 96: 0: culling off
+    uint row_end;               // offset 100: rows [first_row, row_end) in this dispatch (large counts take several)
+    uint first_row;             // offset 104
+};
+
+struct CompactPush {  // 8 bytes, std430
+    uint key_count;             // offset 0
+    uint mesh_count;            // offset 4: commands per winding list
+};
+
+struct BillboardPush {  // 4 bytes, std430
+    float size;                 // offset 0: half the quad's side, in view units
+};
+
+struct ImGuiPush {  // 16 bytes, std430
+    vec2 scale;                 // offset 0: 2 / display size
+    vec2 translate;             // offset 8: -1 - display pos * scale
+};
+
+#endif
