@@ -145,8 +145,8 @@ def render_error(entities: int, size: tuple[int, int], frames: int, warmup: int)
     """Each render configuration's image against the first (the direct path), with its times."""
     import tempfile
 
-    from ecs_engine.app.run import RunOptions
-    from ecs_engine.app.run import run as run_scene
+    from ecs_engine.app.settings import RunOptions
+    from ecs_engine.app.loop import run as run_scene
     from ecs_engine.errors import UsageError
 
     rows = []

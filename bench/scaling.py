@@ -44,7 +44,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def sweep(entities: int, thread_counts: list[int], frames: int, warmup: int, size: tuple[int, int]) -> list[dict[str, Any]]:
-    from ecs_engine.app.run import default_schedule, describe_device, scene_builder
+    from ecs_engine.app.scenes import default_schedule, scene_builder
+    from ecs_engine.app.report import describe_device
     from ecs_engine.gpu.device import Device
     from ecs_engine.gpu.instance import Instance
     from ecs_engine.gpu.native_recorder import NativeRecorder

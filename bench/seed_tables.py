@@ -28,14 +28,15 @@ from __future__ import annotations
 import argparse
 import os
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import psutil
 
-from ecs_engine.app.run import RunOptions
-from ecs_engine.app.run import run as run_scene
+from ecs_engine.app.settings import RunOptions
+from ecs_engine.app.loop import run as run_scene
 from ecs_engine.jobs import default_threads
 from ecs_engine.render.renderer import MODES as RENDER_MODES
 
@@ -77,11 +78,9 @@ def measure(scene: str, width: int, height: int, warmup: int, frames: int, mode:
         from ecs_engine.errors import UsageError
         from ecs_engine.app.window import run_windowed
 
-        options.headless = False
         for present in ("immediate", "mailbox", "fifo"):
-            options.present = present
             try:
-                result = run_windowed(options, glfw)
+                result = run_windowed(replace(options, present=present), glfw)
                 break
             except UsageError as exc:
                 if "present mode" not in str(exc) or present == "fifo":

@@ -67,15 +67,27 @@ class _Batch(Generic[T, R]):
 
 
 class JobPool:
+    """One per run, shared by the world (a resource) and the renderer; `resize` changes the
+    thread count in place, so everything holding the pool sees the new count."""
+
     def __init__(self, threads: int | None = None) -> None:
-        self.threads = default_threads() if threads is None else int(threads)
-        if self.threads < 1:
-            raise ValueError(f"threads must be at least 1, got {self.threads}")
         self._batch: _Batch[Any, Any] | None = None
         self._busy = threading.Lock()  # held by the map call in progress
         self._wakes: list[threading.Lock] = []
         self._workers: list[threading.Thread] = []
-        for k in range(self.threads - 1):
+        self.threads = 1
+        self.resize(default_threads() if threads is None else threads)
+
+    def resize(self, threads: int) -> None:
+        """Run with `threads` threads (counting the caller's) from the next map on."""
+        threads = int(threads)
+        if threads < 1:
+            raise ValueError(f"threads must be at least 1, got {threads}")
+        if threads == self.threads and len(self._workers) == threads - 1:
+            return
+        self.close()
+        self.threads = threads
+        for k in range(threads - 1):
             wake = threading.Lock()
             wake.acquire()
             worker = threading.Thread(target=self._work, args=(wake,), name=f"ecs-job-{k}", daemon=True)

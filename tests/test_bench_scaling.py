@@ -41,7 +41,7 @@ def test_each_configuration_starts_from_the_same_scene(monkeypatch):
 
     from bench.scaling import restore, snapshot
     from ecs_engine import World
-    from ecs_engine.app.run import default_schedule, scene_builder
+    from ecs_engine.app.scenes import default_schedule, scene_builder
 
     world = World()
     scene_builder("scaling", 50)(world, lambda mesh: 0)

@@ -13,9 +13,12 @@ import pytest
 pytest.importorskip("imgui_bundle")
 
 from ecs_engine.components import Camera, Mesh, PointLight, Transform
-from gpu_context import headless_gpu
 
-from ecs_engine.app.run import RunOptions, build_scene, run, scene_builder
+from ecs_engine.app.settings import RunOptions
+
+from ecs_engine.app.loop import run
+
+from ecs_engine.app.scenes import scene_builder
 from ecs_engine.maths.camera import yaw_pitch_quat, yaw_pitch_roll, yaw_pitch_roll_quat
 from ecs_engine.jobs import JobPool
 
@@ -55,21 +58,19 @@ def test_gpu_ms_is_positive_and_fps_is_the_wall_clock_rate(tmp_path):
 
 
 class Scene:
-    """The editor on a headless target, driven frame by frame."""
+    """The editor on a headless session, driven frame by frame."""
 
-    def __init__(self, gpu, scene: str = "grid100") -> None:
-        from ecs_engine.app.editor_session import EditorSession, SceneState
+    def __init__(self, scene: str = "grid100") -> None:
+        from ecs_engine.app.editor_session import EditorSession
+        from ecs_engine.app.offscreen import OffscreenSource
         from ecs_engine.app.perf import PerfMonitor
+        from ecs_engine.app.session import Session
 
-        self.gpu = gpu
-        options = RunOptions(scene=scene, width=W, height=H, threads=2)
-        jobs = JobPool(2)
-        world, schedule, renderer = build_scene(options, scene_builder(scene), gpu.device, gpu.target, gpu.meshes,
-                                                jobs)
-        self.state = SceneState(options, world, schedule, renderer, jobs, gpu.device, gpu.target, gpu.meshes)
+        self.source = OffscreenSource()
+        self.state = Session(RunOptions(scene=scene, width=W, height=H, threads=2, validate=True), self.source)
+        self.gpu = self.state.gpu
         # every frame builds the UI (the default rate limit would drop clicks on a fast machine)
-        self.session = EditorSession(self.state, ("cube", "grid100", "model"), 4, len(renderer.frames.frames),
-                                     max_ui_hz=None)
+        self.session = EditorSession(self.state, ("cube", "grid100", "model"), 4, max_ui_hz=None)
         self.perf = PerfMonitor()
         self.stats = None
         from imgui_bundle import imgui
@@ -83,25 +84,26 @@ class Scene:
             self.io.add_mouse_button_event(0, down)
         s = self.state
         s.schedule.run(s.world, 1 / 60)
-        self.session.build(s, self.stats, self.perf, 1 / 60, W, H)
+        self.session.build(s.world, self.stats, self.perf, 1 / 60, W, H)
         self.stats = s.renderer.render(s.world, readback=True)
         self.perf.frame(1.0, self.stats.record_ms, self.stats.gpu_ms, draws=self.stats.draws)
-        self.session.apply_requests(s)
+        wanted = self.session.take_requests()
+        if wanted is not None:
+            s.apply(wanted)
 
     def close(self) -> None:
         self.session.destroy()
-        self.state.renderer.destroy()
-        self.state.jobs.close()
+        self.state.close()
+        assert self.source.instance.messages == []
 
 
 @pytest.fixture
 def scene():
-    with headless_gpu(W, H) as gpu:
-        s = Scene(gpu)
-        try:
-            yield s
-        finally:
-            s.close()
+    s = Scene()
+    try:
+        yield s
+    finally:
+        s.close()
 
 
 def centre(rect):
@@ -141,13 +143,14 @@ def test_settings_requests_rebuild_what_they_need(scene):
     scene.frame()  # the request is applied after this frame
     # the path is swapped; the renderer, its frame slots and buffers stay
     assert scene.state.renderer is renderer and renderer.path is not path and renderer.mode == "indirect"
-    assert scene.state.jobs.threads == 3 and scene.state.renderer.culling is False
+    assert scene.state.pool.threads == 3 and scene.state.renderer.culling is False
+    assert scene.state.world.resources[JobPool] is scene.state.pool  # one pool, resized in place
     scene.frame()
     assert scene.stats.instances == 100 and scene.gpu.target.pixels()[..., :3].max() > 30
     editor.requested.scene = "cube"
     scene.frame()
     world = scene.state.world
-    assert world.query(Mesh, write=()).count() == 1 and scene.state.options.scene == "cube"
+    assert world.query(Mesh, write=()).count() == 1 and scene.state.settings.scene == "cube"
     scene.frame()
     assert scene.stats.instances == 1
 

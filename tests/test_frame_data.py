@@ -9,7 +9,7 @@ from ecs_engine.components import Mesh, PointLight, Transform
 from ecs_engine.demos.scene_kit import add_camera
 
 from ecs_engine import World
-from ecs_engine.app.run import default_schedule
+from ecs_engine.app.scenes import default_schedule
 from ecs_engine.render.frame_data import MIN_CHUNK_ROWS, FrameExtractor
 
 

@@ -11,7 +11,7 @@ from ecs_engine.demos.scene_kit import add_camera
 from gpu_context import headless_gpu
 
 from ecs_engine import World
-from ecs_engine.app.run import default_schedule
+from ecs_engine.app.scenes import default_schedule
 from ecs_engine.render.camera import camera_matrices
 from ecs_engine.maths.culling import bounding_spheres, frustum_planes, spheres_visible
 from ecs_engine.render.mesh_data import DEFAULT_MODEL, cube_mesh, load_mesh, normalized

@@ -96,3 +96,28 @@ def test_the_lowest_failing_chunk_is_reported_and_close_stops_the_workers():
     pool.close()
     assert workers and not any(w.is_alive() for w in workers)
     assert pool.map(job, [0, 1]) == [0, 1]  # a closed pool still runs, inline
+
+
+def test_resize_changes_the_thread_count_in_place():
+    import threading
+
+    pool = JobPool(2)
+    try:
+        seen = set()
+        barrier = threading.Barrier(4, timeout=5)
+
+        def job(_: int) -> None:
+            seen.add(threading.get_ident())
+            barrier.wait()  # four chunks only finish if four threads run them at once
+
+        pool.resize(4)
+        assert pool.threads == 4
+        pool.map(job, list(range(4)))
+        assert len(seen) == 4
+        pool.resize(1)
+        assert pool.threads == 1 and pool.map(lambda x: x * 2, [1, 2, 3]) == [2, 4, 6]
+        with pytest.raises(ValueError, match="at least 1"):
+            pool.resize(0)
+        assert pool.threads == 1
+    finally:
+        pool.close()

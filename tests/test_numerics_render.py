@@ -21,7 +21,7 @@ from golden_images import image_difference
 from gpu_context import headless_gpu
 
 from ecs_engine import World
-from ecs_engine.app.run import default_schedule
+from ecs_engine.app.scenes import default_schedule
 from ecs_engine.render.instance_rows import INSTANCE_DTYPE, write_rows
 from ecs_engine.render.mesh_data import cube_mesh
 

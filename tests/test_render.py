@@ -18,7 +18,9 @@ from gpu_context import headless_gpu
 from PIL import Image
 
 from ecs_engine import World
-from ecs_engine.app.run import RunOptions, default_schedule, run
+from ecs_engine.app.settings import RunOptions
+from ecs_engine.app.scenes import default_schedule
+from ecs_engine.app.loop import run
 from ecs_engine.render.mesh_data import cube_mesh
 
 
@@ -70,9 +72,9 @@ def build_cubes(scales):
 
 
 def render_custom(build, monkeypatch, tmp_path, mode: str = "instanced") -> np.ndarray:
-    import ecs_engine.app.run as app
+    import ecs_engine.app.session as session
 
-    monkeypatch.setattr(app, "scene_builder", lambda name, entities=None: build)
+    monkeypatch.setattr(session, "scene_builder", lambda name, entities=None: build)
     result = run(RunOptions(scene="cube", width=SIZE[0], height=SIZE[1], frames=1, screenshot=str(tmp_path / "x.png"),
                             validate=True, quiet=True, mode=mode))
     assert result.validation_messages == []

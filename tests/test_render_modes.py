@@ -8,7 +8,9 @@ import pytest
 from golden_images import SIZE, assert_close_to_golden, image_difference
 from gpu_context import headless_gpu
 
-from ecs_engine.app.run import RunOptions, run
+from ecs_engine.app.settings import RunOptions
+
+from ecs_engine.app.loop import run
 from ecs_engine.jobs import JobError
 
 
@@ -71,7 +73,7 @@ def test_culling_drops_what_is_off_screen(tmp_path, monkeypatch, mode):
 def test_a_failing_job_names_its_chunk_and_the_next_frame_renders(monkeypatch):
     from ecs_engine.demos import grid100
 
-    from ecs_engine.app.run import default_schedule
+    from ecs_engine.app.scenes import default_schedule
     from ecs_engine.jobs import JobPool
     from ecs_engine.render.renderer import Renderer
     from ecs_engine.ecs.world import World

@@ -6,7 +6,7 @@ import os
 
 import pytest
 
-from ecs_engine.app.run import RunOptions
+from ecs_engine.app.settings import RunOptions
 from ecs_engine.app.window import open_glfw, run_windowed
 
 pytestmark = pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs a display (make test runs under Xvfb)")

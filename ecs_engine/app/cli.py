@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from dataclasses import replace
 
 from ..ecs.errors import EcsError
 from ..errors import UsageError
@@ -110,8 +111,9 @@ def run(args: argparse.Namespace) -> int:
 
 
 def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = None) -> int:
-    from .run import RunOptions, report_validation
-    from .run import run as run_headless
+    from .loop import run
+    from .report import report_validation
+    from .settings import RunOptions
 
     if args.path is not None and args.scene != "model":
         raise UsageError(f"a model path only goes with the model scene, not {args.scene!r}")
@@ -122,23 +124,22 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
                          culling=args.culling, recorder=args.recorder, entities=args.entities or 10_000,
                          perf_json=args.perf_json, editor=editor, scenes=editor_scenes or ())
     if not args.headless:
-        from .window import open_glfw, run_windowed
+        from .window import WindowSource, open_glfw
 
         glfw = open_glfw()
         if glfw is not None:
-            return report_validation(run_windowed(options, glfw))
-        options.frames = args.frames or HEADLESS_FALLBACK_FRAMES
-        if options.screenshot is None:
-            options.screenshot = f"{args.scene}.png"
+            return report_validation(run(options, WindowSource(glfw)))
+        options = replace(options, headless=True, frames=args.frames or HEADLESS_FALLBACK_FRAMES,
+                          screenshot=options.screenshot or f"{args.scene}.png")
         if editor:
             # the editor needs a window to be used; without one, the scene and its text overlay
-            options.editor = False
+            options = replace(options, editor=False)
             print(f"no display found: the editor needs a window, so {args.scene} runs headless for "
                   f"{options.frames} frames with the text perf overlay (last frame saved to {options.screenshot})")
         else:
             print(f"no display found: rendering {options.frames} frames headless instead "
                   f"(last frame saved to {options.screenshot})")
-    result = run_headless(options)
+    result = run(options)
     if options.screenshot:
         print(f"wrote {options.screenshot}")
     return report_validation(result)

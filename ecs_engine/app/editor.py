@@ -22,19 +22,10 @@ from ..maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
 from ..components import Camera, Mesh, PointLight, Transform
 from ..gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
 from ..render.renderer import MODES, RECORDER_NAMES
+from .settings import Settings
 from ..ecs.world import World
 
 PRESENT_MODES = tuple(SWAPCHAIN_PRESENT_MODES)
-
-
-@dataclass
-class RenderSettings:
-    scene: str
-    mode: str
-    recorder: str
-    threads: int
-    culling: bool
-    present: str | None = None  # None: headless, no swapchain
 
 
 @dataclass
@@ -54,7 +45,7 @@ class _Browser:
 
 
 class Editor:
-    def __init__(self, settings: RenderSettings, scenes: tuple[str, ...], max_threads: int) -> None:
+    def __init__(self, settings: Settings, scenes: tuple[str, ...], max_threads: int) -> None:
         from imgui_bundle import imgui
 
         self.imgui = imgui
@@ -71,7 +62,7 @@ class Editor:
         self.rects: dict[str, tuple[float, float, float, float]] = {}
 
     # ---------------------------------------------------------------- requests
-    def take_requests(self) -> RenderSettings | None:
+    def take_requests(self) -> Settings | None:
         """Settings the user changed since the last call (the loop applies them), or None."""
         if self.requested == self.settings:
             return None

@@ -1,8 +1,6 @@
-"""One run's ImGui: the context, the Vulkan renderer for it, the editor and the Perf window,
-and the code that applies the editor's requests (rebuilding what a setting needs).
-
-The frame loops (app.run headless, window.run_windowed) hold a `SceneState` and call
-`EditorSession.build` before rendering and `EditorSession.apply_requests` after.
+"""One run's ImGui: the context, the Vulkan renderer for it (the renderer's overlay pass), the
+editor and the Perf window. The editor only produces requests: the run loop calls
+`EditorSession.build` before rendering and hands `take_requests()` to `Session.apply` after.
 
 The UI is rebuilt at most `max_ui_hz` times a second (default 120, a fast monitor's refresh);
 frames in between draw the last UI again. A scene running at 2,000 FPS would otherwise spend
@@ -14,39 +12,26 @@ from __future__ import annotations
 
 import ctypes
 import time
-from dataclasses import dataclass, replace
 from typing import Any
 
-from .editor import Editor, RenderSettings, SceneStats
+from ..ecs.world import World
 from ..render.imgui_pass import ImGuiRenderer
+from .editor import Editor, SceneStats
 from .perf import PerfMonitor
 from .perf_overlay import PerfOverlay
+from .session import Session
+from .settings import Settings
 
 
-@dataclass
-class SceneState:
-    """What the loop renders; replaced pieces are swapped in place by `apply_requests`."""
-
-    options: Any  # app.RunOptions
-    world: Any
-    schedule: Any
-    renderer: Any
-    jobs: Any
-    device: Any
-    target: Any  # OffscreenTarget or Swapchain
-    meshes: Any
-
-
-def scene_stats(world: Any, stats: Any) -> SceneStats:
+def scene_stats(world: World, stats: Any) -> SceneStats:
     if stats is None:
-        return SceneStats(entities=sum(t.count for t in world.tables))
-    return SceneStats(entities=sum(t.count for t in world.tables), visible=stats.instances, draws=stats.draws,
-                      triangles=stats.triangles)
+        return SceneStats(entities=len(world))
+    return SceneStats(entities=len(world), visible=stats.instances, draws=stats.draws, triangles=stats.triangles)
 
 
 class EditorSession:
-    def __init__(self, state: SceneState, scenes: tuple[str, ...], max_threads: int, frames_in_flight: int,
-                 window: Any = None, max_ui_hz: float | None = 120.0) -> None:
+    def __init__(self, session: Session, scenes: tuple[str, ...], max_threads: int, window: Any = None,
+                 max_ui_hz: float | None = 120.0) -> None:
         from imgui_bundle import imgui, implot
 
         self.imgui, self.implot = imgui, implot
@@ -58,17 +43,15 @@ class EditorSession:
         if self.windowed:
             # our key callbacks are already set: the backend chains to them
             imgui.backends.glfw_init_for_vulkan(ctypes.cast(window, ctypes.c_void_p).value, True)
-        self.renderer = ImGuiRenderer(state.device, state.target.render_pass, 1, frames_in_flight)
-        o = state.options
-        present = getattr(o, "present", None) if self.windowed else None
-        self.editor = Editor(RenderSettings(o.scene, o.mode, state.renderer.recorder, state.jobs.threads, o.culling,
-                                            present), scenes, max_threads)
+        renderer = session.renderer
+        self.renderer = ImGuiRenderer(session.device, session.gpu.target.render_pass, 1, len(renderer.frames.frames))
+        self.editor = Editor(session.settings, scenes, max_threads)
         self.overlay = PerfOverlay()
         self.build_ms = 0.0
         self.min_interval_s = 0.0 if not max_ui_hz else 1.0 / max_ui_hz
         self._last_build = -1e9
         self.builds = 0
-        state.renderer.overlay = self.renderer
+        renderer.overlay = self.renderer  # the renderer stays for the whole run: attached once
 
     @property
     def cost_ms(self) -> float:
@@ -79,7 +62,7 @@ class EditorSession:
     def wants_keyboard(self) -> bool:
         return bool(self.imgui.get_io().want_capture_keyboard)
 
-    def build(self, state: SceneState, stats: Any, perf: PerfMonitor, dt: float, width: int, height: int) -> None:
+    def build(self, world: World, stats: Any, perf: PerfMonitor, dt: float, width: int, height: int) -> None:
         """This frame's UI, up to imgui.render(); the renderer draws it in the overlay subpass."""
         imgui = self.imgui
         t0 = time.perf_counter()
@@ -95,47 +78,14 @@ class EditorSession:
             io.display_size = (float(width), float(height))
             io.delta_time = max(float(dt), 1e-6)
         imgui.new_frame()
-        self.editor.draw(state.world, scene_stats(state.world, stats))
+        self.editor.draw(world, scene_stats(world, stats))
         self.overlay.draw(perf, self.cost_ms)
         imgui.render()
         self.build_ms = (time.perf_counter() - t0) * 1e3
 
-    def apply_requests(self, state: SceneState, swapchain: Any = None) -> bool:
-        """Apply what the user changed in the editor; True when the renderer was replaced."""
-        req = self.editor.take_requests()
-        if req is None:
-            return False
-        from .run import build_scene, scene_builder
-        from ..jobs import JobPool
-        from ..render.renderer import Renderer
-
-        o = state.options
-        rebuilt = False
-        if req.threads != state.jobs.threads:
-            state.device.wait_idle()
-            state.jobs.close()
-            state.jobs = JobPool(req.threads)
-            state.world.resources[JobPool] = state.jobs
-            state.renderer.jobs = state.jobs
-            o.threads = req.threads
-        if req.present is not None and swapchain is not None and req.present != o.present:
-            swapchain.set_present(req.present)
-            o.present = req.present
-        if req.scene != o.scene:
-            state.renderer.destroy()
-            state.options = o = replace(o, scene=req.scene, path=None, mode=req.mode, recorder=req.recorder,
-                                        culling=req.culling)
-            build = scene_builder(o.scene, o.entities)
-            state.world, state.schedule, state.renderer = build_scene(o, build, state.device, state.target,
-                                                                      state.meshes, state.jobs)
-            self.editor.selected = None
-            rebuilt = True
-        elif req.mode != state.renderer.mode or (req.mode != "indirect" and req.recorder != state.renderer.recorder):
-            state.renderer.set_path(req.mode, req.recorder)
-            o.mode, o.recorder = req.mode, req.recorder
-        state.renderer.culling = o.culling = req.culling
-        state.renderer.overlay = self.renderer
-        return rebuilt
+    def take_requests(self) -> Settings | None:
+        """What the user changed in the editor since the last call, or None."""
+        return self.editor.take_requests()
 
     def destroy(self) -> None:
         self.renderer.destroy()

@@ -1,7 +1,8 @@
-"""Windowed runs: a GLFW window with a Vulkan surface and swapchain, keyboard to the fly camera.
+"""The window frame source: a GLFW window with a Vulkan surface and swapchain, keyboard to the
+fly camera (an InputState resource in the session's world), wall-clock time.
 
 The swapchain is recreated when the window is resized; while it is minimised (a framebuffer of
-size 0) the loop waits for events instead of rendering.
+size 0) no frame is drawn and the loop waits for events.
 """
 
 from __future__ import annotations
@@ -12,16 +13,23 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from .run import RunOptions, RunResult, build_scene, describe_device, job_pool, scene_builder, summary_line
+from ..ecs.timestep import FixedTimestep
+from ..ecs.world import World
 from ..errors import UsageError
+from ..gpu.device import Device
+from ..gpu.functions import instance_function
+from ..gpu.instance import Instance
+from ..gpu.swapchain import OutOfDate, Swapchain
+from ..render.mesh_registry import MeshRegistry
+from ..systems import InputState
+from .session import FrameTarget, Gpu, Session
+from .settings import MAX_DT, SIM_STEP, RunOptions
 
 # GLFW key -> the names FlyCameraSystem reads (the seed's Table 7.1).
 KEY_NAMES = {
     "KEY_LEFT": "left", "KEY_RIGHT": "right", "KEY_UP": "up", "KEY_DOWN": "down",
     "KEY_W": "w", "KEY_S": "s", "KEY_A": "a", "KEY_D": "d", "KEY_E": "e", "KEY_Q": "q",
 }
-MAX_DT = 0.1  # a hitch (dragging the window, a breakpoint) must not fling the camera (per-frame stages)
-SIM_STEP = 1.0 / 120.0  # the fixed simulation step of windowed runs (timestep.FixedTimestep)
 
 
 def key_names(glfw: Any) -> dict[int, str]:
@@ -59,130 +67,136 @@ def open_glfw() -> Any | None:
     return glfw
 
 
-def run_windowed(options: RunOptions, glfw: Any,
-                 on_frame: Callable[[int, Any, Any], None] | None = None) -> RunResult:
-    """Run until the window closes or `options.frames` frames were presented.
-    `on_frame(frame_index, glfw, window)` is called before each frame (tests drive resizes)."""
-    from .editor_session import EditorSession, SceneState
-    from ..gpu.device import Device
-    from ..gpu.functions import instance_function
-    from ..gpu.instance import Instance
-    from ..gpu.swapchain import OutOfDate, Swapchain
-    from ..jobs import default_threads
-    from ..render.mesh_registry import MeshRegistry
-    from .perf import PerfMonitor
-    from ..systems import InputState
-    from ..ecs.timestep import FixedTimestep
+class WindowSource:
+    """`on_frame(frames_done, glfw, window)` runs at the top of each loop turn, also the turns
+    spent minimised (tests drive resizes with it)."""
 
-    say = (lambda text: None) if options.quiet else print
-    build = scene_builder(options.scene, options.entities)
-    result = RunResult()
-    perf = result.perf = PerfMonitor(log=options.perf_json or False)
-    instance = device = swapchain = meshes = surface = window = state = session = None
-    jobs = job_pool(options)
-    try:
+    def __init__(self, glfw: Any, on_frame: Callable[[int, Any, Any], None] | None = None) -> None:
+        self.glfw = glfw
+        self.on_frame = on_frame
+        self.clock = FixedTimestep(SIM_STEP)
+        self.max_frame_dt = MAX_DT
+        self.window: Any = None
+        self.input = InputState()
+        self.frames: int | None = None
+        self.minimised_waits = 0
+        self.instance: Instance | None = None  # its validation messages outlive the run
+        self._surface: Any = None
+        self._opened: list[Any] = []  # device-level objects to destroy, in the order made
+        self._resized = False
+        self._previous = time.perf_counter()
+
+    # ----------------------------------------------------------------- set-up
+    def open(self, options: RunOptions) -> Gpu:
+        glfw = self.glfw
+        self.frames = options.frames
         glfw.window_hint(glfw.CLIENT_API, glfw.NO_API)
-        window = glfw.create_window(options.width, options.height, f"ecs_engine - {options.scene}", None, None)
-        if not window:
+        self.window = glfw.create_window(options.width, options.height, f"ecs_engine - {options.scene}", None, None)
+        if not self.window:
             raise UsageError("could not open a window (GLFW); run with --headless")
         extensions = list(glfw.get_required_instance_extensions() or [])
-        instance = Instance(validate=options.validate, extensions=extensions)
+        instance = self.instance = Instance(validate=options.validate, extensions=extensions)
         vk = instance.vk
-        surface_ptr = vk.ffi.new("VkSurfaceKHR*")
-        if glfw.create_window_surface(instance.handle, window, None, surface_ptr) != vk.VK_SUCCESS:
+        surface = vk.ffi.new("VkSurfaceKHR*")
+        if glfw.create_window_surface(instance.handle, self.window, None, surface) != vk.VK_SUCCESS:
             raise UsageError("could not create a Vulkan surface for the window; run with --headless")
-        surface = surface_ptr[0]
-        device = Device(instance, surface=surface)
-        result.device = describe_device(device)
-        swapchain = Swapchain(device, surface, lambda: glfw.get_framebuffer_size(window), options.present)
-        meshes = MeshRegistry(device)
-        world, schedule, renderer = build_scene(options, build, device, swapchain, meshes, jobs)
-        keys = world.resources[InputState] = InputState()
-        resized = [False]
+        self._surface = surface[0]
+        device = self._keep(Device(instance, surface=self._surface))
+        window = self.window
+        swapchain = self._keep(Swapchain(device, self._surface, lambda: glfw.get_framebuffer_size(window),
+                                         options.present))
+        meshes = self._keep(MeshRegistry(device))
+        self.swapchain = swapchain
+        return Gpu(instance, device, swapchain, meshes)
 
+    def _keep(self, obj: Any) -> Any:
+        self._opened.append(obj)
+        return obj
+
+    def attach(self, session: Session) -> None:
+        """Keys go to the InputState resource of whichever world the session runs."""
+        glfw = self.glfw
         names = key_names(glfw)
 
         def on_key(_win: Any, key: int, _code: int, action: int, _mods: int) -> None:
             if key == glfw.KEY_ESCAPE and action == glfw.PRESS:
-                glfw.set_window_should_close(window, True)
-            apply_key(glfw, names, keys, key, action)
+                glfw.set_window_should_close(self.window, True)
+            apply_key(glfw, names, self.input, key, action)
 
-        glfw.set_key_callback(window, on_key)
-        glfw.set_framebuffer_size_callback(window, lambda *_: resized.__setitem__(0, True))
-        state = SceneState(options, world, schedule, renderer, jobs, device, swapchain, meshes)
-        if options.editor:  # after our callbacks: ImGui's GLFW backend chains to them
-            session = result.editor = EditorSession(state, options.scenes, default_threads(),
-                                                    len(renderer.frames.frames), window=window)
-        say(f"{options.scene}: window {swapchain.width}x{swapchain.height} on {result.device}, present {options.present}")
-        clock = FixedTimestep(SIM_STEP)
-        start = previous = time.perf_counter()
-        frame_no = 0
-        while not glfw.window_should_close(window) and (options.frames is None or frame_no < options.frames):
-            if on_frame is not None:
-                on_frame(frame_no, glfw, window)
-            glfw.poll_events()
-            w, h = glfw.get_framebuffer_size(window)
-            if w == 0 or h == 0:  # minimised: nothing to draw into
-                glfw.wait_events_timeout(0.05)
-                previous = time.perf_counter()
-                result.minimised_waits += 1
-                continue
-            if resized[0] or (w, h) != (swapchain.width, swapchain.height):
-                resized[0] = False
-                swapchain.recreate()
-            now = time.perf_counter()
-            dt, previous = now - previous, now
-            t0 = now
-            if session is not None:  # keys typed into the UI do not fly the camera
-                keys.keyboard_captured_by_ui = session.wants_keyboard
-            state.schedule.run_frame(state.world, dt, clock, max_frame_dt=MAX_DT)
-            if session is not None:
-                session.build(state, result.last_stats, perf, dt, swapchain.width, swapchain.height)
-            renderer = state.renderer
-            frame = renderer.frames.frames[renderer.frames.index]
-            w0 = time.perf_counter()
-            renderer.frames.wait(frame)  # the semaphore below is free once this frame is done
-            try:
-                index, suboptimal = swapchain.acquire(frame.image_available)  # may block on vsync
-            except OutOfDate:
-                swapchain.recreate()
-                continue
-            waited_ms = (time.perf_counter() - w0) * 1e3
-            stats = renderer.render(state.world, framebuffer=swapchain.framebuffers[index],
-                                    extent=(swapchain.width, swapchain.height),
-                                    wait=frame.image_available, signal=swapchain.render_finished[index])
-            end = time.perf_counter()
-            result.add_frame(stats, (end - t0) * 1e3 - stats.wait_ms - waited_ms, end, waited_ms,
-                             ui_ms=session.cost_ms if session is not None else None)
-            if not swapchain.present(index) or suboptimal:
-                resized[0] = True
-            frame_no += 1
-            if perf.summary_due():
-                say(perf.summary_line())
-            if session is not None and session.apply_requests(state, swapchain):
-                state.world.resources[InputState] = keys
-        device.wait_idle()
-        result.frames = frame_no
-        result.wall_s = time.perf_counter() - start
-        result.recreations = swapchain.recreations
-        if frame_no:
-            say(summary_line(result, frame_no, result.wall_s, final=True))
-        result.write_perf_json(options, say)
-    finally:
-        if session is not None:
-            session.destroy()
-        for obj in (state.renderer if state else None, meshes, swapchain):
-            if obj is not None:
-                obj.destroy()
-        if device is not None:
-            device.destroy()
-        if surface is not None:
-            instance_function(instance, "vkDestroySurfaceKHR")(instance.handle, surface, None)
-        if instance is not None:
-            instance.destroy()
-            result.validation_messages = list(instance.messages)
-        if window is not None:
-            glfw.destroy_window(window)
-        glfw.terminate()
-        (state.jobs if state else jobs).close()
-    return result
+        def give_input(world: World) -> None:
+            world.resources[InputState] = self.input
+
+        glfw.set_key_callback(self.window, on_key)
+        glfw.set_framebuffer_size_callback(self.window, lambda *_: setattr(self, "_resized", True))
+        give_input(session.world)
+        session.on_world.append(give_input)
+        self._previous = time.perf_counter()
+
+    # -------------------------------------------------------------- per frame
+    def running(self, frames_done: int) -> bool:
+        return not self.glfw.window_should_close(self.window) and (self.frames is None or frames_done < self.frames)
+
+    def begin(self, session: Session, frames_done: int) -> FrameTarget | None:
+        """Events, resize, then the next swapchain image; None when there is nothing to draw
+        into this turn (minimised, or the swapchain went out of date)."""
+        glfw, swapchain = self.glfw, self.swapchain
+        if self.on_frame is not None:
+            self.on_frame(frames_done, glfw, self.window)
+        glfw.poll_events()
+        w, h = glfw.get_framebuffer_size(self.window)
+        if w == 0 or h == 0:  # minimised: nothing to draw into
+            glfw.wait_events_timeout(0.05)
+            self._previous = time.perf_counter()
+            self.minimised_waits += 1
+            return None
+        if self._resized or (w, h) != (swapchain.width, swapchain.height):
+            self._resized = False
+            swapchain.recreate()
+        now = time.perf_counter()
+        dt, self._previous = now - self._previous, now
+        frames = session.renderer.frames
+        frame = frames.frames[frames.index]
+        frames.wait(frame)  # the semaphore below is free once this frame is done
+        try:
+            index, suboptimal = swapchain.acquire(frame.image_available)  # may block on vsync
+        except OutOfDate:
+            swapchain.recreate()
+            return None
+        return FrameTarget(dt=dt, framebuffer=swapchain.framebuffers[index], extent=(swapchain.width, swapchain.height),
+                           wait=frame.image_available, signal=swapchain.render_finished[index],
+                           waited_ms=(time.perf_counter() - now) * 1e3, image=index, suboptimal=suboptimal)
+
+    def end(self, session: Session, target: FrameTarget) -> None:
+        if not self.swapchain.present(target.image) or target.suboptimal:
+            self._resized = True
+
+    def describe(self, session: Session) -> str:
+        return (f"{session.scene}: window {self.swapchain.width}x{self.swapchain.height}, "
+                f"present {self.swapchain.present_name}")
+
+    @property
+    def recreations(self) -> int:
+        swapchain = getattr(self, "swapchain", None)
+        return swapchain.recreations if swapchain is not None else 0
+
+    def close(self) -> None:
+        while self._opened:
+            self._opened.pop().destroy()
+        if self._surface is not None and self.instance is not None:
+            instance_function(self.instance, "vkDestroySurfaceKHR")(self.instance.handle, self._surface, None)
+            self._surface = None
+        if self.instance is not None:
+            self.instance.destroy()
+        if self.window is not None:
+            self.glfw.destroy_window(self.window)
+            self.window = None
+        self.glfw.terminate()
+
+
+def run_windowed(options: RunOptions, glfw: Any, on_frame: Callable[[int, Any, Any], None] | None = None) -> Any:
+    """`loop.run` in a window (GLFW already opened with `open_glfw`); closes GLFW at the end."""
+    from dataclasses import replace
+
+    from .loop import run
+
+    return run(replace(options, headless=False), WindowSource(glfw, on_frame))

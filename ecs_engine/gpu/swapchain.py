@@ -34,6 +34,7 @@ class Swapchain:
         formats = instance_function(inst, "vkGetPhysicalDeviceSurfaceFormatsKHR")(device.physical, surface)
         modes = instance_function(inst, "vkGetPhysicalDeviceSurfacePresentModesKHR")(device.physical, surface)
         self._modes = list(modes)
+        self.present_name = present  # fifo, mailbox or immediate
         self.present_mode = self._present_mode(present)
         srgb = [f for f in formats if f.format in (vk.VK_FORMAT_B8G8R8A8_SRGB, vk.VK_FORMAT_R8G8B8A8_SRGB)
                 and f.colorSpace == vk.VK_COLOR_SPACE_SRGB_NONLINEAR_KHR]
@@ -116,6 +117,7 @@ class Swapchain:
     def set_present(self, present: str) -> None:
         """Switch present mode (fifo, mailbox, immediate): the swapchain is rebuilt."""
         self.present_mode = self._present_mode(present)
+        self.present_name = present
         self.recreate()
 
     def recreate(self) -> None:

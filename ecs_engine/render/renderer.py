@@ -151,6 +151,7 @@ class Renderer:
 
     @property
     def recorder(self) -> str:
+        """The path's: native or python, or gpu when the GPU writes the draws (indirect)."""
         return self.path.recorder
 
     @property
@@ -158,20 +159,29 @@ class Renderer:
         return self.extractor.chunk_rows
 
     def set_path(self, mode: str, recorder: str | None = None) -> None:
-        """Draw with another path (or recorder) from the next frame; nothing else is rebuilt."""
-        recorder = recorder or (self.recorder if self.recorder in RECORDERS else default_recorder())
-        if mode == self.mode and (mode == "indirect" or recorder == self.recorder):
+        """Draw with another path (or recorder) from the next frame; nothing else is rebuilt.
+        The recorder is kept for the CPU paths while the indirect one draws."""
+        recorder = recorder or self.cpu_recorder
+        if mode == self.mode and recorder == self.cpu_recorder:
             return
         if mode not in PATHS:
             raise ValueError(f"unknown render mode {mode!r}; modes: {', '.join(MODES)}")
+        if mode == self.mode and mode == "indirect":
+            self._check_recorder(recorder)
+            self.cpu_recorder = recorder
+            return
         new = self._make_path(mode, recorder)  # raises before the old one goes
         self.device.wait_idle()  # frames in flight may still use the old path's pipelines
         self.path.destroy()
         self.path = new
 
-    def _make_path(self, mode: str, recorder: str) -> RenderPath:
+    @staticmethod
+    def _check_recorder(recorder: str) -> None:
         if recorder not in RECORDERS:
             raise ValueError(f"unknown recorder {recorder!r}; recorders: {', '.join(RECORDERS)}")
+
+    def _make_path(self, mode: str, recorder: str) -> RenderPath:
+        self._check_recorder(recorder)
         if recorder == "native" and mode != "indirect" and self._native is None:
             if not native.AVAILABLE:
                 raise UsageError("the native recorder needs numba (pip install numba, and unset "
@@ -183,7 +193,9 @@ class Renderer:
                           frame_set_layout=self.set_layout.handle, secondaries=self.secondaries,
                           frames_in_flight=len(self.frames.frames), material_count=len(DEFAULT_MATERIALS),
                           native_recorder=self._native)
-        return PATHS[mode](ctx, recorder)
+        path = PATHS[mode](ctx, recorder)
+        self.cpu_recorder = recorder
+        return path
 
     # ----------------------------------------------------------------- set-up
     def _make_frame_resources(self) -> _PerFrame:

@@ -1,0 +1,85 @@
+"""The one run loop, for every frame source: headless (offscreen image, fixed dt) and windowed
+(swapchain, wall-clock dt) differ only in the source's open, begin, end and close.
+
+One turn: the source gives a frame target (or None: minimised, nothing to draw), the schedule
+runs (fixed steps, then the per-frame stages), the editor builds its UI, the renderer records
+and submits, the source presents, and the editor's requests are applied between frames.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+from ..jobs import default_threads
+from .editor_session import EditorSession
+from .offscreen import OffscreenSource
+from .perf import PerfMonitor
+from .report import RunResult, describe_device, save_png, summary_line
+from .session import FrameSource, Session
+from .settings import RunOptions
+
+
+def run(options: RunOptions, source: FrameSource | None = None, log: Callable[[str], None] | None = None,
+        max_ui_hz: float | None = 120.0) -> RunResult:
+    """Open the source, run `options.frames` frames (a window: until it closes), close it.
+    Headless by default; pass a window.WindowSource to draw in a window."""
+    say = log or (lambda text: None if options.quiet else print(text))
+    source = source or OffscreenSource()
+    result = RunResult()
+    perf = result.perf = PerfMonitor(log=options.perf_json or False)
+    session = editor = None
+    try:
+        session = Session(options, source)
+        result.device = describe_device(session.device)
+        if options.editor:  # after the source's key callbacks: ImGui's GLFW backend chains to them
+            editor = result.editor = EditorSession(session, options.scenes, default_threads(), source.window,
+                                                   max_ui_hz)
+        say(f"{source.describe(session)} on {result.device}")
+        start = time.perf_counter()
+        frames = 0
+        while source.running(frames):
+            t0 = time.perf_counter()
+            target = source.begin(session, frames)
+            if target is None:
+                continue
+            if editor is not None and source.input is not None:
+                source.input.keyboard_captured_by_ui = editor.wants_keyboard  # keys typed into the UI
+            session.schedule.run_frame(session.world, target.dt, source.clock, max_frame_dt=source.max_frame_dt)
+            if editor is not None:
+                width, height = target.extent or (options.width, options.height)
+                editor.build(session.world, result.last_stats, perf, target.dt, width, height)
+            stats = session.renderer.render(session.world, readback=target.readback, framebuffer=target.framebuffer,
+                                            extent=target.extent, wait=target.wait, signal=target.signal)
+            end = time.perf_counter()
+            # CPU work: not the waits for the GPU (renderer) or for an image (source)
+            result.add_frame(stats, (end - t0) * 1e3 - stats.wait_ms - target.waited_ms, end, target.waited_ms,
+                             ui_ms=editor.cost_ms if editor is not None else None)
+            source.end(session, target)
+            frames += 1
+            if perf.summary_due():
+                say(perf.summary_line())
+            if editor is not None and source.running(frames):
+                wanted = editor.take_requests()
+                if wanted is not None:
+                    session.apply(wanted)
+        session.device.wait_idle()
+        result.frames = frames
+        result.wall_s = time.perf_counter() - start
+        result.settings = session.settings
+        result.recreations = getattr(source, "recreations", 0)
+        result.minimised_waits = getattr(source, "minimised_waits", 0)
+        if options.screenshot is not None and isinstance(source, OffscreenSource):
+            result.pixels = source.pixels()
+            save_png(result.pixels, options.screenshot)
+        if frames:
+            say(summary_line(result, frames, result.wall_s, final=True))
+        result.write_perf_json(options, say)
+    finally:
+        if editor is not None:
+            editor.destroy()
+        if session is not None:
+            session.close()  # a Session that failed half-built has closed its source already
+        if source.instance is not None:
+            result.validation_messages = list(source.instance.messages)
+    return result

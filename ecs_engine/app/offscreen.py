@@ -1,0 +1,69 @@
+"""The headless frame source: an offscreen image, no window, surface or swapchain (no display
+needed), and a fixed time step, so a run is reproducible frame for frame."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..ecs.timestep import FixedTimestep
+from ..gpu.device import Device
+from ..gpu.instance import Instance
+from ..gpu.offscreen import OffscreenTarget
+from ..render.mesh_registry import MeshRegistry
+from .report import recorder_words
+from .session import FrameTarget, Gpu, Session
+from .settings import FIXED_DT, RunOptions
+
+
+class OffscreenSource:
+    window: Any = None
+    input: Any = None
+
+    def __init__(self) -> None:
+        self.clock = FixedTimestep(FIXED_DT)  # one step a frame
+        self.max_frame_dt = FIXED_DT
+        self.frames = 1
+        self.readback_last = False
+        self._gpu: Gpu | None = None
+        self.instance: Instance | None = None  # its validation messages outlive the run
+        self._opened: list[Any] = []  # what to destroy, in the order made
+
+    def open(self, options: RunOptions) -> Gpu:
+        self.frames = options.frames or 1
+        self.readback_last = options.screenshot is not None
+        self.width, self.height = options.width, options.height
+        instance = self.instance = self._keep(Instance(validate=options.validate))
+        device = self._keep(Device(instance))
+        target = self._keep(OffscreenTarget(device, options.width, options.height))
+        meshes = self._keep(MeshRegistry(device))
+        self._gpu = Gpu(instance, device, target, meshes)
+        return self._gpu
+
+    def _keep(self, obj: Any) -> Any:
+        self._opened.append(obj)
+        return obj
+
+    def attach(self, session: Session) -> None:
+        pass
+
+    def running(self, frames_done: int) -> bool:
+        return frames_done < self.frames
+
+    def begin(self, session: Session, frames_done: int) -> FrameTarget:
+        return FrameTarget(dt=FIXED_DT, readback=self.readback_last and frames_done == self.frames - 1)
+
+    def end(self, session: Session, target: FrameTarget) -> None:
+        pass
+
+    def describe(self, session: Session) -> str:
+        s = session.settings
+        return (f"{s.scene}: headless {self.width}x{self.height}, {self.frames} frames, mode {s.mode}, "
+                f"{recorder_words(s.mode, s.recorder)}, {s.threads} threads")
+
+    def pixels(self) -> Any:
+        assert self._gpu is not None
+        return self._gpu.target.pixels()
+
+    def close(self) -> None:
+        while self._opened:
+            self._opened.pop().destroy()

@@ -1,0 +1,47 @@
+"""The demo scenes by name, and the stock schedule they run with."""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable
+
+from ..ecs.schedule import Schedule
+from ..errors import UsageError
+
+SCENES = ("cube", "grid100", "model", "scaling")
+
+SceneBuilder = Callable[..., None]  # build(world, add_mesh, path=None)
+
+
+def scene_builder(name: str, entities: int = 10_000) -> SceneBuilder:
+    if name not in SCENES:
+        raise UsageError(f"unknown scene {name!r}; scenes: {', '.join(SCENES)}")
+    build = importlib.import_module(f"ecs_engine.demos.{name}").build
+    if name == "scaling":
+        return lambda world, add_mesh, path=None: build(world, add_mesh, path, entities=entities)
+    return build
+
+
+def default_schedule() -> Schedule:
+    """Simulation (snapshot for interpolation, orbits, motion, springs) in the fixed-step stage,
+    the camera per frame, then render origin and matrices. `Schedule.run` runs every stage
+    once; the run loop uses `Schedule.run_frame` with a FixedTimestep."""
+    from ..systems import (
+        FlyCameraSystem,
+        MotionSystem,
+        OrbitSystem,
+        RenderOriginSystem,
+        SnapshotSystem,
+        SpringSystem,
+        TransformSystem,
+    )
+
+    schedule = Schedule(("fixed", "update", "post_update"))
+    schedule.add(SnapshotSystem(), "fixed")  # first: what each step starts from, for interpolation
+    schedule.add(OrbitSystem(), "fixed")
+    schedule.add(MotionSystem(), "fixed")
+    schedule.add(SpringSystem(), "fixed")
+    schedule.add(FlyCameraSystem(), "update")
+    schedule.add(RenderOriginSystem(), "post_update")
+    schedule.add(TransformSystem(), "post_update")
+    return schedule

@@ -1,0 +1,145 @@
+"""A session: everything one run draws with and updates, in one owner.
+
+It owns the Vulkan objects (opened by a frame source: offscreen or a window), the mesh
+registry, the worker pool, the world with its schedule, and the renderer. `apply(settings)`
+makes live changes (mode, recorder, threads, culling, present mode, scene) by changing their one
+owner each: the renderer's path, the pool (resized in place), the swapchain, a new world. The
+current settings are read back from those owners, never kept twice.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+from ..ecs.schedule import Schedule
+from ..ecs.timestep import FixedTimestep
+from ..ecs.world import World
+from ..gpu.device import Device
+from ..gpu.instance import Instance
+from ..jobs import JobPool
+from ..render.mesh_registry import MeshRegistry
+from ..render.renderer import Renderer
+from .scenes import default_schedule, scene_builder
+from .settings import RunOptions, Settings
+
+
+@dataclass
+class Gpu:
+    """The Vulkan objects of a run, opened by its frame source."""
+
+    instance: Instance
+    device: Device
+    target: Any  # gpu.offscreen.OffscreenTarget or gpu.swapchain.Swapchain
+    meshes: MeshRegistry
+
+
+@dataclass
+class FrameTarget:
+    """Where one frame goes: the renderer's `render` arguments, and the source's bookkeeping."""
+
+    dt: float  # seconds of simulation this frame
+    framebuffer: Any = None  # None: the offscreen target's own
+    extent: tuple[int, int] | None = None
+    wait: Any = None  # semaphore the frame waits for (the acquired swapchain image)
+    signal: Any = None  # semaphore it signals (for presenting)
+    readback: bool = False  # wait for the frame and copy the image to the host
+    waited_ms: float = 0.0  # blocked in the source (acquire), not CPU work
+    image: int = 0  # the swapchain image index
+    suboptimal: bool = False
+
+
+class FrameSource(Protocol):
+    """Offscreen (app/offscreen.py) or a window (app/window.py)."""
+
+    clock: FixedTimestep
+    max_frame_dt: float
+    window: Any  # the GLFW window, or None
+    input: Any  # the InputState resource keys go to, or None
+    instance: Instance | None  # once opened; its validation messages outlive the run
+
+    def open(self, options: RunOptions) -> Gpu: ...
+
+    def attach(self, session: Session) -> None: ...
+
+    def running(self, frames_done: int) -> bool: ...
+
+    def begin(self, session: Session, frames_done: int) -> FrameTarget | None: ...
+
+    def end(self, session: Session, target: FrameTarget) -> None: ...
+
+    def describe(self, session: Session) -> str: ...
+
+    def close(self) -> None: ...
+
+
+class Session:
+    def __init__(self, options: RunOptions, source: FrameSource) -> None:
+        self.options = options
+        self.source = source
+        # called with the new world whenever a scene is loaded (the window puts its InputState there)
+        self.on_world: list[Callable[[World], None]] = []
+        try:
+            self.gpu = source.open(options)
+            start = options.settings()
+            self.pool = JobPool(start.threads)
+            self.renderer = Renderer(self.gpu.device, self.gpu.target, self.gpu.meshes, mode=start.mode,
+                                     recorder=start.recorder, jobs=self.pool, culling=start.culling,
+                                     chunk_rows=options.chunk_rows)
+            self.scene = start.scene
+            self.world, self.schedule = self._load(start.scene, options.path)
+            source.attach(self)
+        except BaseException:
+            self.close()
+            raise
+
+    @property
+    def device(self) -> Device:
+        return self.gpu.device
+
+    @property
+    def settings(self) -> Settings:
+        """The settings in force, read from their owners."""
+        present = getattr(self.gpu.target, "present_name", None)
+        return Settings(scene=self.scene, mode=self.renderer.mode, recorder=self.renderer.cpu_recorder,
+                        threads=self.pool.threads, culling=self.renderer.culling, present=present)
+
+    def _load(self, scene: str, path: str | None) -> tuple[World, Schedule]:
+        """A new world for `scene` (sharing the run's pool and meshes) and its schedule."""
+        world = World()
+        world.resources[JobPool] = self.pool
+        scene_builder(scene, self.options.entities)(world, self.gpu.meshes.add, path)
+        for hook in self.on_world:
+            hook(world)
+        return world, default_schedule()
+
+    def apply(self, wanted: Settings) -> None:
+        """Make `wanted` the settings in force, changing only what differs."""
+        renderer, pool = self.renderer, self.pool
+        if wanted.threads != pool.threads:
+            pool.resize(wanted.threads)
+        target = self.gpu.target
+        if wanted.present is not None and hasattr(target, "set_present") and wanted.present != target.present_name:
+            target.set_present(wanted.present)
+        if wanted.scene != self.scene:
+            self.world, self.schedule = self._load(wanted.scene, None)
+            self.scene = wanted.scene
+        renderer.set_path(wanted.mode, wanted.recorder)
+        renderer.culling = wanted.culling
+
+    def close(self) -> None:
+        """Tear down in reverse: renderer, pool, then the source's Vulkan objects."""
+        renderer, pool = self.__dict__.pop("renderer", None), self.__dict__.pop("pool", None)
+        if renderer is not None:
+            renderer.destroy()
+        if pool is not None:
+            pool.close()
+        self.source.close()
+
+
+    def __enter__(self) -> Session:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
