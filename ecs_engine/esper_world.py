@@ -1,0 +1,478 @@
+"""The object-oriented half of the esper adapter: `EsperWorld` and its helper classes.
+
+`EsperWorld` offers esper 3.x's functions as methods over an ecs_engine `World`; schema components
+come back as `ComponentProxy` objects, and missing entities/components raise the KeyError
+subclasses `EntityNotFoundError` / `ComponentNotFoundError`. Kept apart from `esper_compat`, which
+holds the module-level "current world" functions and re-exports these classes, so that each stays
+a readable size; docs/esper.md and esper_compat's docstring describe the differences from esper.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from collections.abc import Callable, Iterator
+from types import MethodType
+from typing import Any
+from weakref import WeakMethod, ref
+
+import numpy as np
+
+from .ecs.errors import DeadEntityError, MissingComponentError
+from .ecs.schema import Component, ObjectStore, object_component
+from .ecs.schema import schema_of
+from .ecs.world import World
+
+__all__ = [
+    "ComponentNotFoundError",
+    "ComponentProxy",
+    "EntityNotFoundError",
+    "EsperWorld",
+    "Processor",
+]
+
+
+# ---------------------------------------------------------------------------- errors
+class EntityNotFoundError(DeadEntityError, KeyError):
+    """The entity does not exist (destroyed or never created). A KeyError, as in esper."""
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""
+
+
+class ComponentNotFoundError(MissingComponentError, KeyError):
+    """The entity exists but lacks the component. A KeyError, as in esper."""
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""
+
+
+def _key_error(exc: Exception) -> Exception:
+    if isinstance(exc, DeadEntityError):
+        return EntityNotFoundError(str(exc))
+    if isinstance(exc, MissingComponentError):
+        return ComponentNotFoundError(str(exc))
+    return exc
+
+
+def _is_object(ct: type[Component]) -> bool:
+    return issubclass(ct, ObjectStore)
+
+
+def _schema(component_type: Any) -> type[Component]:
+    try:
+        return schema_of(component_type)
+    except TypeError:
+        raise TypeError(f"expected a component type (a class), got {component_type!r}") from None
+
+
+# ---------------------------------------------------------------------------- proxy
+class ComponentProxy:
+    """One entity's component of an engine schema, read and written in place.
+
+    ``proxy.field`` reads the entity's current row (a writable NumPy view for array fields, a
+    Python scalar for shape-() fields); ``proxy.field = value`` writes through `World.set`. The
+    row is looked up on every access, so the proxy survives rows moving; once the entity or the
+    component is gone, access raises EntityNotFoundError / ComponentNotFoundError (KeyErrors).
+    ``copy.copy`` gives another proxy of the same component, ``copy.deepcopy`` and ``_copy()`` a
+    detached `Component` value. Proxies of the same component compare equal.
+    """
+
+    __slots__ = ("_world", "_entity", "_schema")
+
+    def __init__(self, world: World, entity: int, schema: type[Component]) -> None:
+        object.__setattr__(self, "_world", world)
+        object.__setattr__(self, "_entity", int(entity))
+        object.__setattr__(self, "_schema", schema)
+
+    def _locate(self) -> tuple[Any, int]:
+        world = self._world
+        try:
+            table, row = world.locate(self._entity)
+        except DeadEntityError as exc:
+            raise EntityNotFoundError(str(exc)) from None
+        if not table.has(self._schema):
+            raise ComponentNotFoundError(
+                f"entity {self._entity} no longer has {self._schema.__name__}"
+            )
+        return table, row
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("_"):  # slots not set yet (copy, pickle) or private lookups
+            raise AttributeError(name)
+        f = self._schema.__fields__.get(name)
+        if f is None:
+            raise AttributeError(f"{self._schema.__name__} has no field {name!r}")
+        table, row = self._locate()
+        key = (self._schema, name)
+        col = table.columns[key]
+        if f.shape:
+            # A writable view: mark the column changed, as a writable query view does.
+            table.column_ticks[key] = self._world.write_tick()
+            return col[row]
+        value = col[row]
+        return value if f.is_object else value.item()
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name not in self._schema.__fields__:
+            raise AttributeError(f"{self._schema.__name__} has no field {name!r}")
+        try:
+            self._world.set(self._entity, self._schema, **{name: value})
+        except (DeadEntityError, MissingComponentError) as exc:
+            raise _key_error(exc) from None
+
+    def __delattr__(self, name: str) -> None:
+        raise AttributeError("component fields cannot be deleted")
+
+    def __dir__(self) -> list[str]:
+        return sorted(set(super().__dir__()) | set(self._schema.__fields__))
+
+    def _copy(self) -> Component:
+        """A detached copy of the current values (a `Component` instance)."""
+        self._locate()
+        return self._world.get(self._entity, self._schema)
+
+    def __copy__(self) -> ComponentProxy:
+        return ComponentProxy(self._world, self._entity, self._schema)
+
+    def __deepcopy__(self, memo: dict[int, Any]) -> Component:
+        return self._copy()  # a snapshot of the values, detached from the World
+
+    def __reduce__(self) -> Any:
+        raise TypeError("a ComponentProxy cannot be pickled; pickle proxy._copy() instead")
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, ComponentProxy):
+            return (other._world is self._world and other._entity == self._entity
+                    and other._schema is self._schema)
+        if isinstance(other, Component):
+            return self._copy() == other
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash((id(self._world), self._entity, self._schema))
+
+    def __repr__(self) -> str:
+        try:
+            inner = repr(self._copy())
+        except KeyError:
+            inner = f"{self._schema.__name__} (gone)"
+        return f"<proxy of entity {self._entity}: {inner}>"
+
+
+# ---------------------------------------------------------------------------- processor
+class Processor:
+    """Base class of processors, as in esper: define ``process(self, *args, **kwargs)``."""
+
+    priority = 0
+
+    def process(self, *args: Any, **kwargs: Any) -> None:
+        raise NotImplementedError
+
+
+# ---------------------------------------------------------------------------- world
+class EsperWorld:
+    """esper 3.x's functions over an ecs_engine `World` (given, or a new one)."""
+
+    def __init__(self, world: World | None = None) -> None:
+        self.world = world if world is not None else World()
+        self._dead: set[int] = set()
+        self._processors: list[Any] = []
+        self._processors_dict: dict[type, Any] = {}
+        self.process_times: dict[str, int] = {}
+        self.event_registry: dict[str, set[Any]] = {}
+        self._c1: dict[Any, tuple[list[Any], Any, tuple[Any, ...], tuple[int, ...]]] = {}
+        self._cn: dict[Any, tuple[list[Any], Any, tuple[Any, ...], tuple[int, ...]]] = {}
+        self._cache_version = -1
+        self._cache_dirty = False
+
+    # ------------------------------------------------------------------ helpers
+    def _locate(self, entity: int) -> tuple[Any, int]:
+        try:
+            return self.world.locate(int(entity))
+        except DeadEntityError as exc:
+            raise EntityNotFoundError(str(exc)) from None
+
+    def _out(self, entity: int, ct: type[Component], table: Any, row: int) -> Any:
+        if _is_object(ct):
+            return table.columns[(ct, "value")][row]
+        return ComponentProxy(self.world, entity, ct)
+
+    def _changed(self) -> None:
+        self._cache_dirty = True
+
+    # ------------------------------------------------------------------ entities
+    def create_entity(self, *components: Any) -> int:
+        """Create an entity with the given component instances; returns its (64-bit) id.
+        Two components of the same type: the last one wins, as in esper."""
+        by_schema: dict[type[Component], Any] = {}
+        for c in components:
+            if isinstance(c, type):
+                raise TypeError(f"pass a component instance such as {c.__name__}(), not the class")
+            by_schema[type(c) if isinstance(c, Component) else object_component(type(c))] = c
+        eid = self.world.spawn(*by_schema.values())
+        self._changed()
+        return eid
+
+    def delete_entity(self, entity: int, immediate: bool = False) -> None:
+        """Delete an entity: at the next `process`/`clear_dead_entities`, or now if
+        ``immediate``. Raises KeyError at once if the entity does not exist."""
+        entity = int(entity)
+        if entity in self._dead and self.world.is_alive(entity):
+            if not immediate:
+                return
+        else:
+            self._locate(entity)
+        if immediate:
+            self._dead.discard(entity)
+            self.world.destroy(entity)
+            self._changed()
+        else:
+            self._dead.add(entity)
+
+    def entity_exists(self, entity: int) -> bool:
+        """True for a live entity not queued for deletion."""
+        try:
+            return self.world.is_alive(int(entity)) and int(entity) not in self._dead
+        except (TypeError, ValueError, OverflowError):
+            return False
+
+    def get_entities(self) -> Iterator[int]:
+        """Every live entity id (including those queued for deletion), in table order."""
+        yield from self.world.entities().tolist()
+
+    def clear_dead_entities(self) -> None:
+        """Destroy the entities queued by `delete_entity`."""
+        if not self._dead:
+            return
+        alive = [e for e in self._dead if self.world.is_alive(e)]
+        self._dead.clear()
+        if alive:
+            self.world.destroy(np.array(alive, dtype=np.int64))
+        self._changed()
+
+    def clear_database(self) -> None:
+        """Destroy every entity of the World (processors stay). Ids are not reused."""
+        ids = self.world.entities()
+        self._dead.clear()
+        if len(ids):
+            self.world.destroy(ids)
+        self._changed()
+
+    # ------------------------------------------------------------------ components
+    def component_for_entity(self, entity: int, component_type: type) -> Any:
+        """The entity's component of this type; KeyError if either is missing."""
+        ct = _schema(component_type)
+        table, row = self._locate(entity)
+        if not table.has(ct):
+            raise ComponentNotFoundError(f"entity {int(entity)} has no {ct.__name__}")
+        return self._out(int(entity), ct, table, row)
+
+    def components_for_entity(self, entity: int) -> tuple[Any, ...]:
+        """All the entity's components (table order); KeyError if it does not exist."""
+        table, row = self._locate(entity)
+        return tuple(self._out(int(entity), ct, table, row) for ct in table.types)
+
+    def has_component(self, entity: int, component_type: type) -> bool:
+        table, _ = self._locate(entity)
+        return table.has(_schema(component_type))
+
+    def has_components(self, entity: int, *component_types: type) -> bool:
+        table, _ = self._locate(entity)
+        return all(table.has(_schema(t)) for t in component_types)
+
+    def try_component(self, entity: int, component_type: type) -> Any | None:
+        """The component, or None if the entity does not exist or lacks it."""
+        ct = _schema(component_type)
+        try:
+            table, row = self.world.locate(int(entity))
+        except DeadEntityError:
+            return None
+        return self._out(int(entity), ct, table, row) if table.has(ct) else None
+
+    def try_components(self, entity: int, *component_types: type) -> tuple[Any, ...] | None:
+        """The components, or None if the entity does not exist or lacks one of them."""
+        cts = [_schema(t) for t in component_types]
+        try:
+            table, row = self.world.locate(int(entity))
+        except DeadEntityError:
+            return None
+        if not all(table.has(ct) for ct in cts):
+            return None
+        return tuple(self._out(int(entity), ct, table, row) for ct in cts)
+
+    def add_component(self, entity: int, component_instance: Any, type_alias: type | None = None) -> None:
+        """Add a component (replacing one of the same type), optionally under ``type_alias``."""
+        value = component_instance
+        if isinstance(value, type):
+            raise TypeError(f"pass a component instance such as {value.__name__}(), not the class")
+        if type_alias is not None:
+            if not isinstance(type_alias, type):
+                raise TypeError(f"type_alias must be a class, got {type_alias!r}")
+            if issubclass(type_alias, Component):
+                if not isinstance(value, type_alias):
+                    raise TypeError(
+                        f"type_alias {type_alias.__name__} is an engine schema: the instance must be "
+                        f"a {type_alias.__name__} (or a subclass), got {type(value).__name__}"
+                    )
+                if type(value) is not type_alias:
+                    value = type_alias(**{n: getattr(value, n) for n in type_alias.__fields__})
+            else:
+                value = object_component(type_alias)(value=value)
+        self._locate(entity)
+        self.world.add(int(entity), value)
+        self._changed()
+
+    def remove_component(self, entity: int, component_type: type) -> Any:
+        """Remove a component and return it (a plain object itself; a schema as a copy)."""
+        ct = _schema(component_type)
+        table, row = self._locate(entity)
+        if not table.has(ct):
+            raise ComponentNotFoundError(f"entity {int(entity)} has no {ct.__name__} to remove")
+        old = table.columns[(ct, "value")][row] if _is_object(ct) else self.world.get(int(entity), ct)
+        self.world.remove(int(entity), ct)
+        self._changed()
+        return old
+
+    def try_remove_component(self, entity: int, component_type: type) -> Any | None:
+        """Like `remove_component`, but None when the entity lacks the component (a missing
+        entity still raises KeyError, as esper does once the type is in use)."""
+        table, _ = self._locate(entity)
+        if not table.has(_schema(component_type)):
+            return None
+        return self.remove_component(entity, component_type)
+
+    # ------------------------------------------------------------------ queries
+    def clear_cache(self) -> None:
+        """Drop the get_component(s) cache (never needed; for benchmarks and debugging)."""
+        self._cache_dirty = True
+
+    def _check_cache(self) -> None:
+        version = self.world.structure_version
+        if self._cache_dirty or version != self._cache_version:
+            self._c1.clear()
+            self._cn.clear()
+            self._cache_version = version
+            self._cache_dirty = False
+
+    @staticmethod
+    def _stamp(query: Any, object_keys: tuple[Any, ...]) -> tuple[int, ...]:
+        # Plain objects are cached by identity: a World.set/add that replaces one (no structural
+        # change) is seen through the column's write tick.
+        if not object_keys:
+            return ()
+        return tuple(t.column_ticks[k] for t in query.tables for k in object_keys)
+
+    def _lookup(self, cache: dict[Any, Any], key: Any) -> list[Any] | None:
+        self._check_cache()
+        entry = cache.get(key)
+        if entry is not None:
+            result, query, object_keys, stamp = entry
+            if self._stamp(query, object_keys) == stamp:
+                return result  # type: ignore[no-any-return]
+        return None
+
+    def _build(self, types: tuple[type, ...], single: bool) -> tuple[list[Any], Any, tuple[Any, ...]]:
+        schemas = [_schema(t) for t in types]
+        query = self.world.query(*schemas, write=())
+        world = self.world
+        out: list[Any] = []
+        for batch in query:
+            ids = batch.entities.tolist()
+            cols = []
+            for ct in schemas:
+                if _is_object(ct):
+                    cols.append(batch[ct].tolist())
+                else:
+                    cols.append([ComponentProxy(world, e, ct) for e in ids])
+            if single:
+                out.extend(zip(ids, cols[0]))
+            else:
+                out.extend(zip(ids, zip(*cols)))
+        object_keys = tuple(dict.fromkeys((ct, "value") for ct in schemas if _is_object(ct)))
+        return out, query, object_keys
+
+    def get_component(self, component_type: type) -> list[tuple[int, Any]]:
+        """[(entity, component)] for every entity with this component (cached)."""
+        cached = self._lookup(self._c1, component_type)
+        if cached is not None:
+            return cached
+        result, query, keys = self._build((component_type,), single=True)
+        self._c1[component_type] = (result, query, keys, self._stamp(query, keys))
+        return result
+
+    def get_components(self, *component_types: type) -> list[tuple[int, tuple[Any, ...]]]:
+        """[(entity, (components...))] for every entity with all these components (cached)."""
+        if not component_types:
+            return []
+        cached = self._lookup(self._cn, component_types)
+        if cached is not None:
+            return cached
+        result, query, keys = self._build(component_types, single=False)
+        self._cn[component_types] = (result, query, keys, self._stamp(query, keys))
+        return result
+
+    # ------------------------------------------------------------------ processors
+    def add_processor(self, processor_instance: Any, priority: int = 0) -> None:
+        """Add a processor; higher priority runs first (equal priorities: order added)."""
+        processor_instance.priority = priority
+        self._processors.append(processor_instance)
+        self._processors.sort(key=lambda proc: proc.priority, reverse=True)
+        self._processors_dict[type(processor_instance)] = processor_instance
+
+    def remove_processor(self, processor_type: type) -> None:
+        processor = self._processors_dict.pop(processor_type, None)
+        if processor is not None:
+            self._processors.remove(processor)
+
+    def get_processor(self, processor_type: type) -> Any | None:
+        return self._processors_dict.get(processor_type)
+
+    def process(self, *args: Any, **kwargs: Any) -> None:
+        """Destroy entities queued for deletion, then run every processor in priority order."""
+        self.clear_dead_entities()
+        for processor in list(self._processors):
+            processor.process(*args, **kwargs)
+
+    def timed_process(self, *args: Any, **kwargs: Any) -> None:
+        """`process`, recording each processor's CPU time (ms, int) in ``process_times``."""
+        self.clear_dead_entities()
+        for processor in list(self._processors):
+            start = _time.process_time()
+            processor.process(*args, **kwargs)
+            self.process_times[processor.__class__.__name__] = int((_time.process_time() - start) * 1000)
+
+    # ------------------------------------------------------------------ events
+    def set_handler(self, name: str, func: Callable[..., Any]) -> None:
+        """Register a handler for an event; only a weak reference is kept, as in esper."""
+        handlers = self.event_registry.setdefault(name, set())
+        registry = self.event_registry
+
+        def forget(weak: Any) -> None:
+            live = registry.get(name)
+            if live is not None:
+                live.discard(weak)
+                if not live:
+                    del registry[name]
+
+        if isinstance(func, MethodType):
+            handlers.add(WeakMethod(func, forget))
+        else:
+            handlers.add(ref(func, forget))
+
+    def remove_handler(self, name: str, func: Callable[..., Any]) -> None:
+        """Unregister a handler (functions and bound methods); unknown ones pass silently."""
+        handlers = self.event_registry.get(name)
+        if not handlers:
+            return
+        for weak in list(handlers):
+            if weak() == func:
+                handlers.discard(weak)
+        if not handlers:
+            del self.event_registry[name]
+
+    def dispatch_event(self, name: str, *args: Any) -> None:
+        """Call every live handler of the event with ``args``."""
+        for weak in list(self.event_registry.get(name, ())):
+            func = weak()
+            if func is not None:
+                func(*args)
