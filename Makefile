@@ -12,7 +12,11 @@ HEADLESS = $$([ -z "$$DISPLAY" ] && command -v xvfb-run >/dev/null && echo xvfb-
 setup:
 	@bash scripts/bootstrap.sh
 
+# lint, format and type checks first (seconds), then the suite
 test: setup
+	$(PY) -m ruff check .
+	$(PY) -m ruff format --check .
+	$(PY) -m mypy
 	$(HEADLESS) $(PY) -m pytest $(PYTEST_ARGS)
 
 demo: setup

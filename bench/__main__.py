@@ -32,7 +32,8 @@ DEFAULT_OUT = _RESULTS if _RESULTS.is_dir() else Path.cwd() / "bench-results"
 
 
 def _usage_line() -> str:
-    return f"usage: python -m bench NAME [--quick] [--out DIR] [--machine SLUG]; known benchmarks: {', '.join(sorted(REGISTRY))}"
+    known = ", ".join(sorted(REGISTRY))
+    return f"usage: python -m bench NAME [--quick] [--out DIR] [--machine SLUG]; known benchmarks: {known}"
 
 
 def write_json(doc: dict[str, Any], path: Path) -> None:
@@ -50,17 +51,18 @@ def main(argv: list[str] | None = None) -> int:
         return 2 if not argv else 0
     name = argv[0]
     if name not in REGISTRY:
-        print(f"bench: unknown benchmark {name!r}; known benchmarks: {', '.join(sorted(REGISTRY))}",
-              file=sys.stderr)
+        print(f"bench: unknown benchmark {name!r}; known benchmarks: {', '.join(sorted(REGISTRY))}", file=sys.stderr)
         return 2
     module = importlib.import_module(f"{__package__ or 'bench'}.{REGISTRY[name]}")
 
-    parser = argparse.ArgumentParser(prog=f"python -m bench {name}",
-                                     description=(module.__doc__ or "").strip().splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=f"python -m bench {name}", description=(module.__doc__ or "").strip().splitlines()[0]
+    )
     parser.add_argument("--quick", action="store_true", help="tiny sizes: a smoke run in seconds")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"output folder (default {DEFAULT_OUT})")
-    parser.add_argument("--machine", metavar="SLUG", default=None,
-                        help="machine slug used in the output file name (default: derived)")
+    parser.add_argument(
+        "--machine", metavar="SLUG", default=None, help="machine slug used in the output file name (default: derived)"
+    )
     if hasattr(module, "add_arguments"):
         module.add_arguments(parser)
     args = parser.parse_args(argv[1:])
@@ -73,8 +75,10 @@ def main(argv: list[str] | None = None) -> int:
 
     machine = describe(threads=getattr(module, "THREADS", 1), slug=args.machine)
     progress = Progress(name)
-    progress.note(f"machine {machine['slug']}: {machine['cpu_model']}, {machine['cpu_affinity']} cores"
-                  + (f", {machine['gpu']['name']}" if machine["gpu"] else ""))
+    progress.note(
+        f"machine {machine['slug']}: {machine['cpu_model']}, {machine['cpu_affinity']} cores"
+        + (f", {machine['gpu']['name']}" if machine["gpu"] else "")
+    )
     doc = module.run(args, machine, progress)
     path = Path(args.out) / f"{name}-{machine['slug']}.json"
     write_json(doc, path)

@@ -40,8 +40,9 @@ def _loops(device: Any) -> dict[str, Any]:
     return {"push_draw_ns": jit(push_draw), "draw_ns": jit(draw_only), "push_ns": jit(push_only), "_keep": fns}
 
 
-def measure(device: Any, target: Any, meshes: Any, draws: int, per_buffer: int = 16_384,
-            repeats: int = 5) -> dict[str, Any]:
+def measure(
+    device: Any, target: Any, meshes: Any, draws: int, per_buffer: int = 16_384, repeats: int = 5
+) -> dict[str, Any]:
     from ecs_engine.render.renderer import Renderer
 
     vk = device.vk
@@ -69,8 +70,14 @@ def measure(device: Any, target: Any, meshes: Any, draws: int, per_buffer: int =
                     meshes.bind(cb, 0)
                     handle = handle_int(vk, cb)
                     t0 = time.perf_counter()
-                    loop(handle, layout, stage, rows.ctypes.data + start * 64, min(per_buffer, draws - start),
-                         mesh.index_count)
+                    loop(
+                        handle,
+                        layout,
+                        stage,
+                        rows.ctypes.data + start * 64,
+                        min(per_buffer, draws - start),
+                        mesh.index_count,
+                    )
                     spent += time.perf_counter() - t0
                     vk.vkEndCommandBuffer(cb)
                 renderer.frames.end(frame)  # recorded, never executed: only the recording is timed

@@ -67,7 +67,10 @@ def gpus() -> list[dict[str, str]] | None:
     try:
         out = subprocess.run(
             [exe, "--query-gpu=name,driver_version", "--format=csv,noheader"],
-            capture_output=True, text=True, timeout=20, check=True,
+            capture_output=True,
+            text=True,
+            timeout=20,
+            check=True,
         ).stdout
     except (OSError, subprocess.SubprocessError):
         return None
@@ -93,7 +96,7 @@ def _clean(text: str) -> str:
 
 
 def gpu_slug(name: str) -> str:
-    """"NVIDIA H100 80GB HBM3" -> "h100"; "NVIDIA GeForce RTX 4090" -> "rtx4090"."""
+    """ "NVIDIA H100 80GB HBM3" -> "h100"; "NVIDIA GeForce RTX 4090" -> "rtx4090"."""
     tokens = [t for t in re.split(r"[\s_-]+", name.lower()) if t and t not in _VENDOR_WORDS]
     keep: list[str] = []
     for tok in tokens:
@@ -107,10 +110,13 @@ def gpu_slug(name: str) -> str:
 
 
 def cpu_slug(model: str) -> str:
-    """"Intel(R) Xeon(R) Platinum 8480+" -> "xeon-platinum-8480"; "AMD EPYC 7763 ..." -> "epyc-7763"."""
+    """ "Intel(R) Xeon(R) Platinum 8480+" -> "xeon-platinum-8480"; "AMD EPYC 7763 ..." -> "epyc-7763"."""
     text = re.sub(r"\((r|tm)\)", " ", model.lower()).split("@")[0]
-    tokens = [t for t in re.split(r"[^a-z0-9]+", text)
-              if t and t not in _CPU_STOP and not re.fullmatch(r"\d+(st|nd|rd|th)|gen", t)]
+    tokens = [
+        t
+        for t in re.split(r"[^a-z0-9]+", text)
+        if t and t not in _CPU_STOP and not re.fullmatch(r"\d+(st|nd|rd|th)|gen", t)
+    ]
     keep: list[str] = []
     for tok in tokens:
         keep.append(tok)
@@ -156,7 +162,7 @@ def describe(threads: int = 1, slug: str | None = None) -> dict[str, Any]:
         "numpy": _version("numpy"),
         "numba": _version("numba"),
         "gpu": dict(gpu_list[0], count=len(gpu_list)) if gpu_list else None,
-        "datetime_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "datetime_utc": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
         "threads": int(threads),
         "slug": check_slug(slug) if slug else make_slug(model, gpu_list, cores),
     }

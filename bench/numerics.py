@@ -136,17 +136,23 @@ def render_error_px(distance: float, mode: str, positions: int = 64) -> float:
     return worst
 
 
-RENDER_CONFIGS = (("per_entity", "python", False), ("per_entity", "native", False), ("per_entity", "native", True),
-                  ("instanced", "native", False), ("instanced", "native", True), ("indirect", "native", False),
-                  ("indirect", "native", True))
+RENDER_CONFIGS = (
+    ("per_entity", "python", False),
+    ("per_entity", "native", False),
+    ("per_entity", "native", True),
+    ("instanced", "native", False),
+    ("instanced", "native", True),
+    ("indirect", "native", False),
+    ("indirect", "native", True),
+)
 
 
 def render_error(entities: int, size: tuple[int, int], frames: int, warmup: int) -> dict[str, Any] | None:
     """Each render configuration's image against the first (the direct path), with its times."""
     import tempfile
 
-    from ecs_engine.app.settings import RunOptions
     from ecs_engine.app.loop import run as run_scene
+    from ecs_engine.app.settings import RunOptions
     from ecs_engine.errors import UsageError
 
     rows = []
@@ -154,9 +160,20 @@ def render_error(entities: int, size: tuple[int, int], frames: int, warmup: int)
     with tempfile.TemporaryDirectory() as tmp:
         for mode, recorder, culling in RENDER_CONFIGS:
             try:
-                result = run_scene(RunOptions(scene="scaling", entities=entities, width=size[0], height=size[1],
-                                              frames=warmup + frames, quiet=True, mode=mode, recorder=recorder,
-                                              culling=culling, screenshot=str(Path(tmp) / "shot.png")))
+                result = run_scene(
+                    RunOptions(
+                        scene="scaling",
+                        entities=entities,
+                        width=size[0],
+                        height=size[1],
+                        frames=warmup + frames,
+                        quiet=True,
+                        mode=mode,
+                        recorder=recorder,
+                        culling=culling,
+                        screenshot=str(Path(tmp) / "shot.png"),
+                    )
+                )
             except UsageError as exc:  # no Vulkan loader or device here
                 return {"skipped": str(exc)}
             pixels = result.pixels[..., :3].astype(np.float64)
@@ -164,12 +181,24 @@ def render_error(entities: int, size: tuple[int, int], frames: int, warmup: int)
                 reference = pixels
             rmse = float(np.sqrt(np.mean((pixels - reference) ** 2)))
             gpu = result.gpu_ms[warmup:] or result.gpu_ms
-            rows.append({"mode": mode, "recorder": recorder, "culling": culling, "rmse": rmse,
-                         "psnr_db": None if rmse == 0 else float(20 * np.log10(255.0 / rmse)),
-                         "cpu_ms": float(np.mean(result.cpu_ms[warmup:])),
-                         "gpu_ms": float(np.mean(gpu)) if gpu else None, "visible": result.last_stats.instances})
-    return {"entities": entities, "size": list(size), "reference": "per_entity, python recorder, no culling",
-            "rows": rows}
+            rows.append(
+                {
+                    "mode": mode,
+                    "recorder": recorder,
+                    "culling": culling,
+                    "rmse": rmse,
+                    "psnr_db": None if rmse == 0 else float(20 * np.log10(255.0 / rmse)),
+                    "cpu_ms": float(np.mean(result.cpu_ms[warmup:])),
+                    "gpu_ms": float(np.mean(gpu)) if gpu else None,
+                    "visible": result.last_stats.instances,
+                }
+            )
+    return {
+        "entities": entities,
+        "size": list(size),
+        "reference": "per_entity, python recorder, no culling",
+        "rows": rows,
+    }
 
 
 def plot(doc: dict[str, Any], path: Path) -> None:
@@ -189,7 +218,7 @@ def plot(doc: dict[str, Any], path: Path) -> None:
             rr = sorted((r for r in rows if r["integrator"] == integ), key=lambda r: r["dt"])
             xs = [r["ms_per_step"] for r in rr]
             ys = [max(r["error"], 1e-16) if not r["unstable"] else top for r in rr]
-            line, = ax.plot(xs, ys, marker=markers[integ], label=integ, alpha=0.85)
+            ax.plot(xs, ys, marker=markers[integ], label=integ, alpha=0.85)
             for r, x in zip(rr, xs):
                 if r["unstable"]:
                     ax.plot([x], [top], marker="x", color="red", markersize=10)
@@ -205,10 +234,18 @@ def plot(doc: dict[str, Any], path: Path) -> None:
         ax.legend(fontsize=7)
     ax = axes[2]
     rp = doc["render_precision"]
-    ax.plot([r["distance"] for r in rp], [max(r["camera_relative_px"], 1e-6) for r in rp], marker="o",
-            label="camera-relative (the engine)")
-    ax.plot([r["distance"] for r in rp], [max(r["world_space_px"], 1e-6) for r in rp], marker="s",
-            label="float32 world space")
+    ax.plot(
+        [r["distance"] for r in rp],
+        [max(r["camera_relative_px"], 1e-6) for r in rp],
+        marker="o",
+        label="camera-relative (the engine)",
+    )
+    ax.plot(
+        [r["distance"] for r in rp],
+        [max(r["world_space_px"], 1e-6) for r in rp],
+        marker="s",
+        label="float32 world space",
+    )
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("distance from the world origin")
@@ -221,8 +258,14 @@ def plot(doc: dict[str, Any], path: Path) -> None:
     for r in render.get("rows", []):
         t = r["cpu_ms"] + (r["gpu_ms"] or 0.0)
         ax.plot([t], [r["rmse"]], marker="o")
-        ax.annotate(f"{r['mode']} {r['recorder']}{' cull' if r['culling'] else ''}", (t, r["rmse"]), fontsize=7,
-                    rotation=30, xytext=(3, 3), textcoords="offset points")
+        ax.annotate(
+            f"{r['mode']} {r['recorder']}{' cull' if r['culling'] else ''}",
+            (t, r["rmse"]),
+            fontsize=7,
+            rotation=30,
+            xytext=(3, 3),
+            textcoords="offset points",
+        )
     ax.set_xscale("log")
     ax.set_xlabel("CPU + GPU ms per frame")
     ax.set_ylabel("image RMSE against the direct path (0-255)")
@@ -239,20 +282,26 @@ def findings(doc: dict[str, Any]) -> list[str]:
             rr = [r for r in rows if r["integrator"] == integ]
             bad = [r["dt"] for r in rr if r["unstable"]]
             if bad:
-                out.append(f"{case}: {integ} unstable from dt = 1/{round(1 / min(bad))} "
-                           f"(k dt^2 = {CASES[case][0] * min(bad) ** 2:.3g})")
+                out.append(
+                    f"{case}: {integ} unstable from dt = 1/{round(1 / min(bad))} "
+                    f"(k dt^2 = {CASES[case][0] * min(bad) ** 2:.3g})"
+                )
             else:
                 out.append(f"{case}: {integ} stable at every dt tried")
     render = doc.get("render_error") or {}
     if render.get("rows"):
         worst = max(render["rows"], key=lambda r: r["rmse"])
         fastest = min(render["rows"], key=lambda r: r["cpu_ms"] + (r["gpu_ms"] or 0.0))
-        out.append(f"render paths: largest image RMSE against the direct path {worst['rmse']:.3g} "
-                   f"({worst['mode']}, culling {'on' if worst['culling'] else 'off'}); fastest: "
-                   f"{fastest['mode']} {fastest['recorder']}, culling {'on' if fastest['culling'] else 'off'}")
+        out.append(
+            f"render paths: largest image RMSE against the direct path {worst['rmse']:.3g} "
+            f"({worst['mode']}, culling {'on' if worst['culling'] else 'off'}); fastest: "
+            f"{fastest['mode']} {fastest['recorder']}, culling {'on' if fastest['culling'] else 'off'}"
+        )
     far = doc["render_precision"][-1]
-    out.append(f"at {far['distance']:g} units from the origin: {far['camera_relative_px']:.2g} px camera-relative, "
-               f"{far['world_space_px']:.3g} px in float32 world space")
+    out.append(
+        f"at {far['distance']:g} units from the origin: {far['camera_relative_px']:.2g} px camera-relative, "
+        f"{far['world_space_px']:.3g} px in float32 world space"
+    )
     return out
 
 
@@ -270,22 +319,50 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
             for integ in INTEGRATORS:
                 for dt in dts:
                     error, unstable = integrator_error(integ, k, c, dt, seconds, error_entities)
-                    rows.append({"case": case, "stiffness": k, "damping": c, "integrator": integ, "dt": dt,
-                                 "k_dt2": k * dt * dt, "error": None if unstable else error,
-                                 "ms_per_step": step_time_ms(integ, k, c, dt, step_entities, repeats),
-                                 "unstable": unstable})
+                    rows.append(
+                        {
+                            "case": case,
+                            "stiffness": k,
+                            "damping": c,
+                            "integrator": integ,
+                            "dt": dt,
+                            "k_dt2": k * dt * dt,
+                            "error": None if unstable else error,
+                            "ms_per_step": step_time_ms(integ, k, c, dt, step_entities, repeats),
+                            "unstable": unstable,
+                        }
+                    )
     precision = []
     with progress.step("rendering precision against distance"):
         for d in DISTANCES[::2] if quick else DISTANCES:
-            precision.append({"distance": d, "camera_relative_px": render_error_px(d, "camera_relative"),
-                              "world_space_px": render_error_px(d, "world_space")})
+            precision.append(
+                {
+                    "distance": d,
+                    "camera_relative_px": render_error_px(d, "camera_relative"),
+                    "world_space_px": render_error_px(d, "world_space"),
+                }
+            )
     with progress.step("rendered images: each render path against the direct one"):
-        render = render_error(300 if quick else 20_000, (160, 120) if quick else (1280, 720), 3 if quick else 12,
-                              1 if quick else 4)
-    doc = {"benchmark": "numerics", "schema_version": 1, "quick": quick, "machine": machine,
-           "config": {"sim_seconds": seconds, "error_entities": error_entities, "step_entities": step_entities,
-                      "repeats": repeats, "dts": list(dts), "size": [WIDTH, HEIGHT]},
-           "integrators": rows, "render_precision": precision, "render_error": render}
+        render = render_error(
+            300 if quick else 20_000, (160, 120) if quick else (1280, 720), 3 if quick else 12, 1 if quick else 4
+        )
+    doc = {
+        "benchmark": "numerics",
+        "schema_version": 1,
+        "quick": quick,
+        "machine": machine,
+        "config": {
+            "sim_seconds": seconds,
+            "error_entities": error_entities,
+            "step_entities": step_entities,
+            "repeats": repeats,
+            "dts": list(dts),
+            "size": [WIDTH, HEIGHT],
+        },
+        "integrators": rows,
+        "render_precision": precision,
+        "render_error": render,
+    }
     plot_doc = dict(doc, integrators=[dict(r, error=r["error"] if r["error"] is not None else 0.0) for r in rows])
     doc["findings"] = findings(plot_doc)
     out = Path(args.out) / f"numerics-{machine['slug']}.png"
@@ -294,15 +371,21 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
     print(f"{'case':6} {'integrator':14} {'dt':>9} {'k dt^2':>9} {'error':>10} {'ms/step':>9}")
     for r in rows:
         err = "unstable" if r["unstable"] else f"{r['error']:.2e}"
-        print(f"{r['case']:6} {r['integrator']:14} 1/{round(1 / r['dt']):<7} {r['k_dt2']:9.3g} {err:>10} "
-              f"{r['ms_per_step']:9.3f}")
+        print(
+            f"{r['case']:6} {r['integrator']:14} 1/{round(1 / r['dt']):<7} {r['k_dt2']:9.3g} {err:>10} "
+            f"{r['ms_per_step']:9.3f}"
+        )
     for p in precision:
-        print(f"distance {p['distance']:9.0e}: camera-relative {p['camera_relative_px']:.3g} px, "
-              f"world space {p['world_space_px']:.3g} px")
+        print(
+            f"distance {p['distance']:9.0e}: camera-relative {p['camera_relative_px']:.3g} px, "
+            f"world space {p['world_space_px']:.3g} px"
+        )
     for r in (render or {}).get("rows", []):
         gpu = "n/a" if r["gpu_ms"] is None else f"{r['gpu_ms']:.2f}"
-        print(f"{r['mode']:10} {r['recorder']:6} culling {'on ' if r['culling'] else 'off'}: RMSE {r['rmse']:.3g}, "
-              f"cpu {r['cpu_ms']:.2f} ms, gpu {gpu} ms, {r['visible']} drawn")
+        print(
+            f"{r['mode']:10} {r['recorder']:6} culling {'on ' if r['culling'] else 'off'}: RMSE {r['rmse']:.3g}, "
+            f"cpu {r['cpu_ms']:.2f} ms, gpu {gpu} ms, {r['visible']} drawn"
+        )
     for line in doc["findings"]:
         print(line)
     return doc

@@ -1,6 +1,7 @@
 """Render-job scaling: the scaling scene at several entity counts, by threads, mode and recorder,
 headless. Per configuration: CPU record ms (the chunk jobs), systems ms (the schedule: motion,
-transforms, camera, lights), CPU frame ms (systems + render, minus waits for the GPU), GPU frame ms (timestamps), FPS (wall clock), draws, visible entities.
+transforms, camera, lights), CPU frame ms (systems + render, minus waits for the GPU), GPU frame ms
+(timestamps), FPS (wall clock), draws, visible entities.
 
 One device, scene and world per entity count; renderers per (mode, recorder) share one compiled
 native recorder. The Python recorder runs only up to PYTHON_MAX entities (it needs ~10 us a
@@ -43,16 +44,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--entities", type=int, nargs="*", help="entity counts (default: 1 .. 1,000,000)")
 
 
-def sweep(entities: int, thread_counts: list[int], frames: int, warmup: int, size: tuple[int, int]) -> list[dict[str, Any]]:
-    from ecs_engine.app.scenes import default_schedule, scene_builder
+def sweep(
+    entities: int, thread_counts: list[int], frames: int, warmup: int, size: tuple[int, int]
+) -> list[dict[str, Any]]:
     from ecs_engine.app.report import describe_device
+    from ecs_engine.app.scenes import default_schedule, scene_builder
+    from ecs_engine.ecs.world import World
     from ecs_engine.gpu.device import Device
     from ecs_engine.gpu.instance import Instance
     from ecs_engine.gpu.native_recorder import NativeRecorder
     from ecs_engine.gpu.offscreen import OffscreenTarget
     from ecs_engine.render.mesh_registry import MeshRegistry
     from ecs_engine.render.renderer import Renderer
-    from ecs_engine.ecs.world import World
 
     rows = []
     instance = Instance()
@@ -71,17 +74,30 @@ def sweep(entities: int, thread_counts: list[int], frames: int, warmup: int, siz
         for mode, recorder in configs:
             if mode == "indirect" and not device.features.get("drawIndirectCount"):
                 continue
-            renderer = Renderer(device, target, meshes, mode=mode,
-                                recorder="native" if recorder == "gpu" else recorder, native_recorder=native,
-                                **({"chunk_rows": PYTHON_CHUNK_ROWS} if recorder == "python" else {}))
+            renderer = Renderer(
+                device,
+                target,
+                meshes,
+                mode=mode,
+                recorder="native" if recorder == "gpu" else recorder,
+                native_recorder=native,
+                **({"chunk_rows": PYTHON_CHUNK_ROWS} if recorder == "python" else {}),
+            )
             try:
                 for threads in thread_counts:
                     restore(world, start)  # every configuration starts from the same scene
                     with JobPool(threads) as pool:
                         world.resources[JobPool] = renderer.jobs = pool
-                        rows.append(measure(world, schedule, renderer, frames, warmup) |
-                                    {"entities": entities, "threads": threads, "mode": mode,
-                                     "recorder": recorder, "device": describe_device(device)})
+                        rows.append(
+                            measure(world, schedule, renderer, frames, warmup)
+                            | {
+                                "entities": entities,
+                                "threads": threads,
+                                "mode": mode,
+                                "recorder": recorder,
+                                "device": describe_device(device),
+                            }
+                        )
             finally:
                 renderer.destroy()
     finally:
@@ -134,10 +150,17 @@ def measure(world: Any, schedule: Any, renderer: Any, frames: int, warmup: int) 
     renderer.device.wait_idle()
     wall = ends[-1] - ends[0]
     rec = float(np.median(record))
-    return {"frames": frames, "record_ms": rec, "systems_ms": float(np.median(systems)), "cpu_ms": float(np.median(cpu)),
-            "gpu_ms": float(np.median(gpu)) if gpu else None,
-            "fps": (len(ends) - 1) / wall if wall > 0 else 0.0, "draws": stats.draws, "visible": stats.instances,
-            "ns_per_draw_record": None if renderer.mode == "indirect" else rec * 1e6 / max(stats.draws - 1, 1)}
+    return {
+        "frames": frames,
+        "record_ms": rec,
+        "systems_ms": float(np.median(systems)),
+        "cpu_ms": float(np.median(cpu)),
+        "gpu_ms": float(np.median(gpu)) if gpu else None,
+        "fps": (len(ends) - 1) / wall if wall > 0 else 0.0,
+        "draws": stats.draws,
+        "visible": stats.instances,
+        "ns_per_draw_record": None if renderer.mode == "indirect" else rec * 1e6 / max(stats.draws - 1, 1),
+    }
 
 
 def targets(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -153,20 +176,45 @@ def targets(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
         out.append({"name": name, "target": target, "measured": measured, "unit": unit, "op": op, "met": bool(met)})
 
     small = by.get((100, 1, "instanced", "native"))
-    add("instanced: CPU frame ms, 100 entities (cubes and lights), 1 thread", 0.25,
-        small["cpu_ms"] if small else None, "ms", "<=")
+    add(
+        "instanced: CPU frame ms, 100 entities (cubes and lights), 1 thread",
+        0.25,
+        small["cpu_ms"] if small else None,
+        "ms",
+        "<=",
+    )
     one = by.get((n, 1, "per_entity", "native"))
     top = by.get((n, tmax, "per_entity", "native"))
-    add(f"per_entity native: record ns per draw, 1 thread, {n:,} entities", 50.0,
-        one["ns_per_draw_record"] if one else None, "ns", "<=")
-    add(f"per_entity native: record speed-up {tmax} threads vs 1, {n:,} entities", 6.0,
-        one["record_ms"] / top["record_ms"] if one and top and tmax > 1 else None, "x", ">=")
+    add(
+        f"per_entity native: record ns per draw, 1 thread, {n:,} entities",
+        50.0,
+        one["ns_per_draw_record"] if one else None,
+        "ns",
+        "<=",
+    )
+    add(
+        f"per_entity native: record speed-up {tmax} threads vs 1, {n:,} entities",
+        6.0,
+        one["record_ms"] / top["record_ms"] if one and top and tmax > 1 else None,
+        "x",
+        ">=",
+    )
     inst = by.get((n, tmax, "instanced", "native"))
-    add(f"instanced: CPU frame ms, {n:,} moving entities, {tmax} threads", 8.0, inst["cpu_ms"] if inst else None,
-        "ms", "<=")
+    add(
+        f"instanced: CPU frame ms, {n:,} moving entities, {tmax} threads",
+        8.0,
+        inst["cpu_ms"] if inst else None,
+        "ms",
+        "<=",
+    )
     indirect = by.get((n, tmax, "indirect", "gpu"))
-    add(f"indirect (same bar as instanced): CPU frame ms, {n:,} moving entities, {tmax} threads", 8.0,
-        indirect["cpu_ms"] if indirect else None, "ms", "<=")
+    add(
+        f"indirect (same bar as instanced): CPU frame ms, {n:,} moving entities, {tmax} threads",
+        8.0,
+        indirect["cpu_ms"] if indirect else None,
+        "ms",
+        "<=",
+    )
     return out
 
 
@@ -177,12 +225,19 @@ def plot(results: list[dict[str, Any]], path: Path) -> None:
 
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
     for ax, mode in zip(axes, ("per_entity", "instanced", "indirect")):
-        for (n, rec) in sorted({(r["entities"], r["recorder"]) for r in results if r["mode"] == mode}):
-            rows = sorted((r for r in results if r["mode"] == mode and r["entities"] == n and r["recorder"] == rec),
-                          key=lambda r: r["threads"])
+        for n, rec in sorted({(r["entities"], r["recorder"]) for r in results if r["mode"] == mode}):
+            rows = sorted(
+                (r for r in results if r["mode"] == mode and r["entities"] == n and r["recorder"] == rec),
+                key=lambda r: r["threads"],
+            )
             if n >= 1000 or n == max(r["entities"] for r in results):
-                ax.plot([r["threads"] for r in rows], [r["record_ms"] for r in rows], marker="o",
-                        linestyle="--" if rec == "python" else "-", label=f"{n:,} {rec}")
+                ax.plot(
+                    [r["threads"] for r in rows],
+                    [r["record_ms"] for r in rows],
+                    marker="o",
+                    linestyle="--" if rec == "python" else "-",
+                    label=f"{n:,} {rec}",
+                )
         ax.set_xscale("log", base=2)
         ax.set_yscale("log")
         ax.set_xlabel("threads")
@@ -211,30 +266,53 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
     floor_draws = 20_000 if args.quick else 1_000_000
     with progress.step(f"driver floor: {floor_draws:,} bare push + draw calls, 1 thread"):
         floor = measure_driver_floor(floor_draws, size)
-    doc = {"benchmark": "scaling", "schema_version": 1, "quick": bool(args.quick), "machine": machine,
-           "device": results[0]["device"] if results else None,
-           "config": {"entities": counts, "threads": thread_counts, "frames": frames, "warmup": warmup,
-                      "small_max": SMALL_MAX, "small_frames": SMALL_FRAMES, "small_warmup": SMALL_WARMUP,
-                      "size": list(size), "python_max": PYTHON_MAX,
-                      "python_chunk_rows": PYTHON_CHUNK_ROWS},
-           "results": results, "driver_floor": floor, "targets": targets(results)}
+    doc = {
+        "benchmark": "scaling",
+        "schema_version": 1,
+        "quick": bool(args.quick),
+        "machine": machine,
+        "device": results[0]["device"] if results else None,
+        "config": {
+            "entities": counts,
+            "threads": thread_counts,
+            "frames": frames,
+            "warmup": warmup,
+            "small_max": SMALL_MAX,
+            "small_frames": SMALL_FRAMES,
+            "small_warmup": SMALL_WARMUP,
+            "size": list(size),
+            "python_max": PYTHON_MAX,
+            "python_chunk_rows": PYTHON_CHUNK_ROWS,
+        },
+        "results": results,
+        "driver_floor": floor,
+        "targets": targets(results),
+    }
     out = Path(args.out) / f"scaling-{machine['slug']}.png"
     out.parent.mkdir(parents=True, exist_ok=True)
     plot(results, out)
-    print(f"{'entities':>9} {'mode':10} {'rec':6} {'thr':>3} {'record ms':>10} {'sys ms':>7} {'cpu ms':>8} {'gpu ms':>8} "
-          f"{'fps':>7} {'draws':>8} {'ns/draw':>8}")
+    print(
+        f"{'entities':>9} {'mode':10} {'rec':6} {'thr':>3} {'record ms':>10} {'sys ms':>7} {'cpu ms':>8} {'gpu ms':>8} "
+        f"{'fps':>7} {'draws':>8} {'ns/draw':>8}"
+    )
     for r in results:
         gpu = f"{r['gpu_ms']:.2f}" if r["gpu_ms"] is not None else "n/a"
-        print(f"{r['entities']:9,} {r['mode']:10} {r['recorder']:6} {r['threads']:3} {r['record_ms']:10.2f} "
-              f"{r['systems_ms']:7.2f} "
-              f"{r['cpu_ms']:8.2f} {gpu:>8} {r['fps']:7.1f} {r['draws']:8} "
-              f"{'-' if r['ns_per_draw_record'] is None else format(r['ns_per_draw_record'], '8.0f'):>8}")
-    print(f"driver floor, 1 thread, {floor['draws']:,} calls in secondaries of {floor['per_buffer']:,}: "
-          f"push + draw {floor['push_draw_ns']:.0f} ns, draw alone {floor['draw_ns']:.0f} ns, "
-          f"push alone {floor['push_ns']:.0f} ns")
+        print(
+            f"{r['entities']:9,} {r['mode']:10} {r['recorder']:6} {r['threads']:3} {r['record_ms']:10.2f} "
+            f"{r['systems_ms']:7.2f} "
+            f"{r['cpu_ms']:8.2f} {gpu:>8} {r['fps']:7.1f} {r['draws']:8} "
+            f"{'-' if r['ns_per_draw_record'] is None else format(r['ns_per_draw_record'], '8.0f'):>8}"
+        )
+    print(
+        f"driver floor, 1 thread, {floor['draws']:,} calls in secondaries of {floor['per_buffer']:,}: "
+        f"push + draw {floor['push_draw_ns']:.0f} ns, draw alone {floor['draw_ns']:.0f} ns, "
+        f"push alone {floor['push_ns']:.0f} ns"
+    )
     for t in doc["targets"]:
-        print(f"target {'MET ' if t['met'] else 'MISS'} {t['name']}: {t['measured']:.3g} {t['unit']} "
-              f"(target {t['op']} {t['target']})")
+        print(
+            f"target {'MET ' if t['met'] else 'MISS'} {t['name']}: {t['measured']:.3g} {t['unit']} "
+            f"(target {t['op']} {t['target']})"
+        )
     return doc
 
 

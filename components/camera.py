@@ -29,8 +29,9 @@ class Camera(Component):
     `height` is the view height of an orthographic camera."""
 
     projection = Field(np.uint8, default=PERSPECTIVE, maximum=ORTHOGRAPHIC)
-    fov_y = Field(np.float64, default=np.radians(50.0), finite=True, minimum=0.0, min_exclusive=True,
-                  maximum=np.pi - 1e-6)
+    fov_y = Field(
+        np.float64, default=np.radians(50.0), finite=True, minimum=0.0, min_exclusive=True, maximum=np.pi - 1e-6
+    )
     near = Field(np.float64, default=0.1, finite=True, minimum=0.0, min_exclusive=True)
     far = Field(np.float64, default=np.inf, finite=True, allow_posinf=True, minimum=0.0, min_exclusive=True)
     aspect = Field(np.float64, default=0.0, finite=True, minimum=0.0)
@@ -70,9 +71,7 @@ def active_camera(world: World) -> int:
             f"{len(cameras)} entities have Camera and Transform and none is tagged ActiveCamera: "
             "add ActiveCamera() to the one to render from"
         )
-    raise UsageError(
-        f"{len(tagged)} cameras are tagged ActiveCamera: remove the tag from all but one"
-    )
+    raise UsageError(f"{len(tagged)} cameras are tagged ActiveCamera: remove the tag from all but one")
 
 
 # per world: (structure_version, active camera)

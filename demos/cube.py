@@ -5,9 +5,9 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from ecs_engine.components import Mesh, Transform
 
 from ecs_engine import World
+from ecs_engine.components import Mesh, Transform
 from ecs_engine.render.mesh_data import MeshData, cube_mesh
 
 from .scene_kit import add_camera, add_orbiting_lights

@@ -5,9 +5,9 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from ecs_engine.components import Mesh, Transform
 
 from ecs_engine import World
+from ecs_engine.components import Mesh, Transform
 from ecs_engine.render.mesh_data import MeshData, cube_mesh
 
 from .scene_kit import add_camera, add_orbiting_lights
@@ -25,7 +25,8 @@ def build(world: World, add_mesh: Callable[[MeshData], int], path: str | None = 
     cube = add_mesh(cube_mesh())
     pos = grid_positions()
     n = len(pos)
-    world.spawn_batch(n, Transform(position=pos, scale=(0.7, 0.7, 0.7)),
-                      Mesh(handle=cube, material=np.arange(n, dtype=np.uint32) % 6))
+    world.spawn_batch(
+        n, Transform(position=pos, scale=(0.7, 0.7, 0.7)), Mesh(handle=cube, material=np.arange(n, dtype=np.uint32) % 6)
+    )
     add_camera(world, eye=(7.0, 5.5, 9.0), target=(0.0, -0.3, 0.0), move_speed=6.0)
     add_orbiting_lights(world, radius=5.0, height=3.5, intensity=6.0)

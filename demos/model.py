@@ -5,9 +5,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ecs_engine.components import Mesh, Transform
-
 from ecs_engine import World
+from ecs_engine.components import Mesh, Transform
 from ecs_engine.render.mesh_data import DEFAULT_MODEL, MeshData, load_mesh, normalized
 
 from .scene_kit import add_camera, add_orbiting_lights

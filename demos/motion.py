@@ -6,10 +6,10 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from ecs_engine.components import AngularVelocity, Mesh, Transform, Velocity
-from ecs_engine.systems import MotionSystem, TransformSystem
 
 from ecs_engine import Schedule, World
+from ecs_engine.components import AngularVelocity, Mesh, Transform, Velocity
+from ecs_engine.systems import MotionSystem, TransformSystem
 
 
 def build(world: World, n: int, seed: int = 1) -> np.ndarray:
@@ -44,7 +44,9 @@ def main(entities: int, frames: int) -> int:
             last_report = now
     ms = np.array(times) * 1e3
     print(f"{entities} entities spawned in {spawn_s * 1e3:.1f} ms; {frames} frames of motion + transform:")
-    print(f"  mean {ms.mean():.2f} ms  min {ms.min():.2f} ms  p99 {np.percentile(ms, 99):.2f} ms  "
-          f"({ms.mean() * 1e6 / entities:.1f} ns per entity)")
+    print(
+        f"  mean {ms.mean():.2f} ms  min {ms.min():.2f} ms  p99 {np.percentile(ms, 99):.2f} ms  "
+        f"({ms.mean() * 1e6 / entities:.1f} ns per entity)"
+    )
     print(f"  world memory {world.memory_bytes() / 2**20:.1f} MiB")
     return 0

@@ -5,17 +5,18 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from ecs_engine.components import Camera, FlyCamera, Orbit, PointLight, Transform
 
 from ecs_engine import World
+from ecs_engine.components import Camera, FlyCamera, Orbit, PointLight, Transform
 from ecs_engine.maths.camera import yaw_pitch_quat
 
 # The seed's light colours: one per light, six around the scene.
 LIGHT_COLORS = [(1.0, 0.1, 0.1), (0.1, 0.1, 1.0), (0.1, 1.0, 0.1), (1.0, 1.0, 0.1), (0.1, 1.0, 1.0), (1.0, 1.0, 1.0)]
 
 
-def add_camera(world: World, eye: tuple[float, float, float], target: tuple[float, float, float],
-               move_speed: float = 3.0) -> int:
+def add_camera(
+    world: World, eye: tuple[float, float, float], target: tuple[float, float, float], move_speed: float = 3.0
+) -> int:
     eye_a, target_a = np.asarray(eye, dtype=np.float64), np.asarray(target, dtype=np.float64)
     d = target_a - eye_a
     yaw = math.atan2(-d[0], -d[2])
@@ -27,8 +28,14 @@ def add_camera(world: World, eye: tuple[float, float, float], target: tuple[floa
     )
 
 
-def add_orbiting_lights(world: World, radius: float, height: float, intensity: float,
-                        center: tuple[float, float, float] = (0.0, 0.0, 0.0), speed: float = 0.6) -> np.ndarray:
+def add_orbiting_lights(
+    world: World,
+    radius: float,
+    height: float,
+    intensity: float,
+    center: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    speed: float = 0.6,
+) -> np.ndarray:
     n = len(LIGHT_COLORS)
     phase = np.arange(n) * (2 * math.pi / n)
     return world.spawn_batch(

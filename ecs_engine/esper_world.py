@@ -18,8 +18,7 @@ from weakref import WeakMethod, ref
 import numpy as np
 
 from .ecs.errors import DeadEntityError, MissingComponentError
-from .ecs.schema import Component, ObjectStore, object_component
-from .ecs.schema import schema_of
+from .ecs.schema import Component, ObjectStore, object_component, schema_of
 from .ecs.world import World
 
 __all__ = [
@@ -77,7 +76,7 @@ class ComponentProxy:
     detached `Component` value. Proxies of the same component compare equal.
     """
 
-    __slots__ = ("_world", "_entity", "_schema")
+    __slots__ = ("_entity", "_schema", "_world")
 
     def __init__(self, world: World, entity: int, schema: type[Component]) -> None:
         object.__setattr__(self, "_world", world)
@@ -91,9 +90,7 @@ class ComponentProxy:
         except DeadEntityError as exc:
             raise EntityNotFoundError(str(exc)) from None
         if not table.has(self._schema):
-            raise ComponentNotFoundError(
-                f"entity {self._entity} no longer has {self._schema.__name__}"
-            )
+            raise ComponentNotFoundError(f"entity {self._entity} no longer has {self._schema.__name__}")
         return table, row
 
     def __getattr__(self, name: str) -> Any:
@@ -142,8 +139,7 @@ class ComponentProxy:
 
     def __eq__(self, other: object) -> bool:
         if isinstance(other, ComponentProxy):
-            return (other._world is self._world and other._entity == self._entity
-                    and other._schema is self._schema)
+            return other._world is self._world and other._entity == self._entity and other._schema is self._schema
         if isinstance(other, Component):
             return self._copy() == other
         return NotImplemented

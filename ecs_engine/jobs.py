@@ -55,7 +55,7 @@ class _Batch(Generic[T, R]):
         while (i := next(self._next)) < n:
             try:
                 self.results[i] = _call(self.fn, self.chunks[i], i, self.names)
-            except BaseException as exc:  # noqa: BLE001 - re-raised on the calling thread
+            except BaseException as exc:
                 self.errors[i] = exc
 
     def help(self) -> None:

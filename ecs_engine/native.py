@@ -9,6 +9,7 @@ import os
 from collections.abc import Callable
 from typing import Any
 
+_numba: Any
 try:
     import numba as _numba
 except ImportError:  # pragma: no cover - exercised only where numba is not installed
@@ -30,3 +31,9 @@ def njit(fn: Callable[..., Any]) -> Callable[..., Any] | None:
     if not AVAILABLE:
         return None
     return _numba.njit(nogil=True, cache=True, error_model="numpy", fastmath=FASTMATH)(fn)
+
+
+def inner(fn: Callable[..., Any]) -> Callable[..., Any]:
+    """Like `njit`, for a kernel that only other compiled kernels call: without numba it stays
+    the plain function (nothing calls it then), so it is never None."""
+    return njit(fn) or fn

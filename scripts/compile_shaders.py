@@ -30,7 +30,9 @@ def source_digest(src: Path) -> str:
 
 def main() -> int:
     try:
-        version = subprocess.run(["glslc", "--version"], capture_output=True, text=True, check=True).stdout.splitlines()[0]
+        version = subprocess.run(
+            ["glslc", "--version"], capture_output=True, text=True, check=True
+        ).stdout.splitlines()[0]
     except (OSError, subprocess.CalledProcessError):
         print("compile_shaders: glslc not found: sudo apt-get install -y glslc", file=sys.stderr)
         return 2
@@ -41,8 +43,10 @@ def main() -> int:
     for src in sorted(p for p in SHADERS.iterdir() if p.suffix in STAGES):
         out = src.with_name(src.name + ".spv")
         subprocess.run(["glslc", "--target-env=vulkan1.2", "-O", str(src), "-o", str(out)], check=True)
-        manifest["shaders"][src.name] = {"source_sha256": source_digest(src),
-                                         "spirv_sha256": hashlib.sha256(out.read_bytes()).hexdigest()}
+        manifest["shaders"][src.name] = {
+            "source_sha256": source_digest(src),
+            "spirv_sha256": hashlib.sha256(out.read_bytes()).hexdigest(),
+        }
     (SHADERS / "manifest.json").write_text(json.dumps(manifest, indent=2) + "\n")
     print(f"compiled {len(manifest['shaders'])} shaders with {version}")
     return 0

@@ -7,5 +7,13 @@ from .orbit import OrbitSystem
 from .spring import SpringSystem
 from .transform import RenderOriginSystem, TransformSystem
 
-__all__ = ["FlyCameraSystem", "InputState", "MotionSystem", "OrbitSystem", "RenderOriginSystem", "SnapshotSystem", "SpringSystem",
-           "TransformSystem"]
+__all__ = [
+    "FlyCameraSystem",
+    "InputState",
+    "MotionSystem",
+    "OrbitSystem",
+    "RenderOriginSystem",
+    "SnapshotSystem",
+    "SpringSystem",
+    "TransformSystem",
+]

@@ -1,10 +1,10 @@
 """Keyboard fly camera (the seed thesis's key map, Table 7.1) and the input resource it reads.
 
-    Left / Right arrows   yaw left / right (about world +Y)
-    Up / Down arrows      pitch up / down (about the camera's +X)
-    W / S                 forward / back along the view direction
-    A / D                 strafe left / right
-    E / Q                 up / down along world +Y
+Left / Right arrows   yaw left / right (about world +Y)
+Up / Down arrows      pitch up / down (about the camera's +X)
+W / S                 forward / back along the view direction
+A / D                 strafe left / right
+E / Q                 up / down along world +Y
 """
 
 from __future__ import annotations
@@ -14,12 +14,12 @@ from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
+
 from ecs_engine.components.camera_control import FlyCamera
 from ecs_engine.components.transform import Transform
-
-from ecs_engine.maths.camera import yaw_pitch_quat
 from ecs_engine.ecs.schedule import System
 from ecs_engine.ecs.world import World
+from ecs_engine.maths.camera import yaw_pitch_quat
 
 # Pitch stops this short of straight up/down: at the pole yaw and roll coincide and the view
 # would flip when it is crossed.
@@ -59,8 +59,7 @@ def fly_input(state: InputState | None) -> FlyInput:
     def axis(plus: str, minus: str) -> float:
         return float(plus in keys) - float(minus in keys)
 
-    return FlyInput(axis("left", "right"), axis("up", "down"), axis("w", "s"), axis("d", "a"),
-                    axis("e", "q"))
+    return FlyInput(axis("left", "right"), axis("up", "down"), axis("w", "s"), axis("d", "a"), axis("e", "q"))
 
 
 def wrap_angle(angle: np.ndarray) -> np.ndarray:
@@ -70,8 +69,16 @@ def wrap_angle(angle: np.ndarray) -> np.ndarray:
     return np.where(inside, angle, math.pi - np.remainder(math.pi - angle, TAU))
 
 
-def fly_step(yaw: np.ndarray, pitch: np.ndarray, position: np.ndarray, rotation: np.ndarray,
-             move_speed: np.ndarray, turn_speed: np.ndarray, axes: FlyInput, dt: float) -> None:
+def fly_step(
+    yaw: np.ndarray,
+    pitch: np.ndarray,
+    position: np.ndarray,
+    rotation: np.ndarray,
+    move_speed: np.ndarray,
+    turn_speed: np.ndarray,
+    axes: FlyInput,
+    dt: float,
+) -> None:
     """One frame for n cameras, in place: turn, then move along the new orientation.
 
     yaw, pitch, move_speed, turn_speed: (n,); position: (n, 3); rotation: (n, 4). The rotation
@@ -110,9 +117,8 @@ class FlyCameraSystem(System):
         # their rotation rebuilt; the others stay put, and their Transform takes no write tick,
         # so the transform system skips them too
         idle = all(a == 0 if isinstance(a, float) else not np.any(a) for a in axes)
-        batches = query.iter(changed=[FlyCamera]) if idle else query
+        batches = query.iter(changed=(FlyCamera,)) if idle else query
         for batch in batches:
             t = batch[Transform]
             fly = batch[FlyCamera]
-            fly_step(fly.yaw, fly.pitch, t.position, t.rotation, fly.move_speed, fly.turn_speed,
-                     axes, float(dt))
+            fly_step(fly.yaw, fly.pitch, t.position, t.rotation, fly.move_speed, fly.turn_speed, axes, float(dt))

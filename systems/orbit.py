@@ -5,18 +5,25 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from ecs_engine.components.orbit import Orbit
-from ecs_engine.components.transform import Transform
 
 from ecs_engine import native
+from ecs_engine.components.orbit import Orbit
+from ecs_engine.components.transform import Transform
 from ecs_engine.ecs.schedule import System
 from ecs_engine.ecs.world import World
 
 TAU = 2.0 * math.pi
 
 
-def orbit_step(center: np.ndarray, radius: np.ndarray, angular_speed: np.ndarray, phase: np.ndarray,
-               height: np.ndarray, position: np.ndarray, dt: float) -> None:
+def orbit_step(
+    center: np.ndarray,
+    radius: np.ndarray,
+    angular_speed: np.ndarray,
+    phase: np.ndarray,
+    height: np.ndarray,
+    position: np.ndarray,
+    dt: float,
+) -> None:
     """Advance phase (kept in [0, 2*pi)) and write the positions, in place, for n rows. One
     native call (a handful of lights would pay ~10 us for the NumPy version's calls)."""
     if _orbit_native is not None:
@@ -25,8 +32,15 @@ def orbit_step(center: np.ndarray, radius: np.ndarray, angular_speed: np.ndarray
         orbit_step_numpy(center, radius, angular_speed, phase, height, position, dt)
 
 
-def orbit_step_numpy(center: np.ndarray, radius: np.ndarray, angular_speed: np.ndarray, phase: np.ndarray,
-                     height: np.ndarray, position: np.ndarray, dt: float) -> None:
+def orbit_step_numpy(
+    center: np.ndarray,
+    radius: np.ndarray,
+    angular_speed: np.ndarray,
+    phase: np.ndarray,
+    height: np.ndarray,
+    position: np.ndarray,
+    dt: float,
+) -> None:
     """Reference version of `orbit_step`."""
     phase += angular_speed * dt
     np.remainder(phase, TAU, out=phase)
@@ -56,5 +70,4 @@ class OrbitSystem(System):
     def run(self, world: World, dt: float) -> None:
         for batch in world.query(Orbit, Transform):
             o = batch[Orbit]
-            orbit_step(o.center, o.radius, o.angular_speed, o.phase, o.height,
-                       batch[Transform].position, float(dt))
+            orbit_step(o.center, o.radius, o.angular_speed, o.phase, o.height, batch[Transform].position, float(dt))

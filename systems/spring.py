@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 from ecs_engine.components import Spring, Transform, Velocity
-
 from ecs_engine.ecs.schedule import System
-from ecs_engine.maths.spring import INTEGRATORS, step
 from ecs_engine.ecs.world import World
+from ecs_engine.maths.spring import INTEGRATORS, step
 
 
 class SpringSystem(System):
@@ -23,5 +22,13 @@ class SpringSystem(System):
     def run(self, world: World, dt: float) -> None:
         for batch in world.query(Transform, Velocity, Spring):
             s = batch[Spring]
-            step(self.integrator, batch[Transform].position, batch[Velocity].linear, s.anchor, s.stiffness,
-                 s.damping, s.mass, float(dt))
+            step(
+                self.integrator,
+                batch[Transform].position,
+                batch[Velocity].linear,
+                s.anchor,
+                s.stiffness,
+                s.damping,
+                s.mass,
+                float(dt),
+            )

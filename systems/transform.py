@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+
 from ecs_engine.components import (
     Camera,
     ModelMatrix,
@@ -16,13 +17,12 @@ from ecs_engine.components import (
     active_camera,
     render_origin,
 )
-
-from ecs_engine.errors import UsageError
-from ecs_engine.jobs import JobPool, over_rows
 from ecs_engine.ecs.schedule import System
 from ecs_engine.ecs.timestep import Interpolation
-from ecs_engine.maths.transform import compose
 from ecs_engine.ecs.world import World
+from ecs_engine.errors import UsageError
+from ecs_engine.jobs import JobPool, over_rows
+from ecs_engine.maths.transform import compose
 
 
 class TransformSystem(System):
@@ -50,20 +50,29 @@ class TransformSystem(System):
         updated = 0
         for with_normal in (False, True):
             query = _matrix_query(world, with_normal, (), interpolated)
-            for batch in query.iter() if moved else query.iter(changed=[Transform]):
+            for batch in query.iter() if moved else query.iter(changed=(Transform,)):
                 t = batch[Transform]
                 model = batch[ModelMatrix].model
                 normal = batch[NormalMatrix].normal if with_normal else None
-                over_rows(pool, len(batch), lambda s, t=t, m=model, n=normal: compose(
-                    t.position[s], t.rotation[s], t.scale[s], origin, m[s], None if n is None else n[s]))
+
+                def rows(s: slice, t: Any = t, m: np.ndarray = model, n: np.ndarray | None = normal) -> None:
+                    compose(t.position[s], t.rotation[s], t.scale[s], origin, m[s], None if n is None else n[s])
+
+                over_rows(pool, len(batch), rows)
                 updated += len(batch)
             if interpolation is not None:
                 alpha = float(interpolation.alpha)
                 for batch in _matrix_query(world, with_normal, (PreviousTransform,), ()):
                     t, prev = batch[Transform], batch[PreviousTransform]
                     position = prev.position + (t.position - prev.position) * alpha
-                    compose(position, nlerp(prev.rotation, t.rotation, alpha), t.scale, origin,
-                            batch[ModelMatrix].model, batch[NormalMatrix].normal if with_normal else None)
+                    compose(
+                        position,
+                        nlerp(prev.rotation, t.rotation, alpha),
+                        t.scale,
+                        origin,
+                        batch[ModelMatrix].model,
+                        batch[NormalMatrix].normal if with_normal else None,
+                    )
                     updated += len(batch)
         self.rows_updated = updated
 
@@ -99,7 +108,7 @@ class RenderOriginSystem(System):
         try:
             eid = active_camera(world)
         except UsageError:
-            if world.query(*self.reads, write=()).count() == 0:
+            if world.query(Camera, Transform, write=()).count() == 0:
                 return  # nothing to follow (a scene without a camera renders nothing)
             raise
         stamp = world.change_stamp(eid, Transform)

@@ -37,17 +37,19 @@ def test_scaling_quick_writes_json_and_plot(tmp_path, monkeypatch):
 def test_each_configuration_starts_from_the_same_scene(monkeypatch):
     monkeypatch.syspath_prepend(str(ROOT))
     import numpy as np
-    from ecs_engine.components import Orbit, Transform
 
     from bench.scaling import restore, snapshot
     from ecs_engine import World
     from ecs_engine.app.scenes import default_schedule, scene_builder
+    from ecs_engine.components import Orbit, Transform
 
     world = World()
     scene_builder("scaling", 50)(world, lambda mesh: 0)
     start = snapshot(world)
-    before = [world.query(Transform, write=()).column(Transform.position),
-              world.query(Orbit, write=()).column(Orbit.phase)]
+    before = [
+        world.query(Transform, write=()).column(Transform.position),
+        world.query(Orbit, write=()).column(Orbit.phase),
+    ]
     schedule = default_schedule()
     for _ in range(20):
         schedule.run(world, 1 / 60)

@@ -47,8 +47,10 @@ def test_seed_tables_quick_writes_its_json(tmp_path, monkeypatch):
 def test_headless_runs_never_load_glfw(tmp_path):
     import subprocess
 
-    code = ("import sys; from ecs_engine.app.loop import run; from ecs_engine.app.settings import RunOptions; "
-            "run(RunOptions(scene='cube', width=32, height=24, frames=1, quiet=True)); "
-            "print('glfw' in sys.modules)")
+    code = (
+        "import sys; from ecs_engine.app.loop import run; from ecs_engine.app.settings import RunOptions; "
+        "run(RunOptions(scene='cube', width=32, height=24, frames=1, quiet=True)); "
+        "print('glfw' in sys.modules)"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"

@@ -7,9 +7,13 @@ import math
 
 import numpy as np
 import pytest
-from ecs_engine.components.camera import Camera
+
+from ecs_engine import Schedule, World
 from ecs_engine.components import ActiveCamera, FlyCamera
+from ecs_engine.components.camera import Camera
 from ecs_engine.components.transform import Transform
+from ecs_engine.maths.camera import yaw_pitch_quat
+from ecs_engine.maths.transform import quat_to_mat3
 from ecs_engine.systems.camera_control import (
     KEYS,
     PITCH_LIMIT,
@@ -21,17 +25,17 @@ from ecs_engine.systems.camera_control import (
     wrap_angle,
 )
 
-from ecs_engine import Schedule, World
-from ecs_engine.maths.camera import yaw_pitch_quat
-from ecs_engine.maths.transform import quat_to_mat3
-
 SPEED, TURN, DT = 2.0, 1.0, 0.25
 
 
 def make_world(yaw=0.0, pitch=0.0, position=(0.0, 0.0, 0.0)):
     w = World()
-    cam = w.spawn(Camera(), ActiveCamera(), Transform(position=position),
-                  FlyCamera(yaw=yaw, pitch=pitch, move_speed=SPEED, turn_speed=TURN))
+    cam = w.spawn(
+        Camera(),
+        ActiveCamera(),
+        Transform(position=position),
+        FlyCamera(yaw=yaw, pitch=pitch, move_speed=SPEED, turn_speed=TURN),
+    )
     schedule = Schedule()
     schedule.add(FlyCameraSystem())
     return w, cam, schedule
@@ -55,15 +59,13 @@ def position(w, cam):
 # ------------------------------------------------------------------------ movement keys
 @pytest.mark.parametrize(
     "key, expected",
-    [("w", (0, 0, -1)), ("s", (0, 0, 1)), ("a", (-1, 0, 0)), ("d", (1, 0, 0)),
-     ("e", (0, 1, 0)), ("q", (0, -1, 0))],
+    [("w", (0, 0, -1)), ("s", (0, 0, 1)), ("a", (-1, 0, 0)), ("d", (1, 0, 0)), ("e", (0, 1, 0)), ("q", (0, -1, 0))],
 )
 def test_each_move_key_at_yaw_0(key, expected):
     w, cam, schedule = make_world(position=(10.0, 20.0, 30.0))
     press(w, schedule, {key})
     step = SPEED * DT
-    assert np.allclose(position(w, cam), np.array([10.0, 20.0, 30.0]) + step * np.array(expected),
-                       atol=1e-12)
+    assert np.allclose(position(w, cam), np.array([10.0, 20.0, 30.0]) + step * np.array(expected), atol=1e-12)
     assert w.get(cam, FlyCamera).yaw == 0.0 and w.get(cam, FlyCamera).pitch == 0.0
 
 

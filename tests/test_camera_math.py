@@ -7,15 +7,15 @@ import math
 
 import numpy as np
 import pytest
-from ecs_engine.components.camera import ORTHOGRAPHIC, Camera
-from ecs_engine.components import ActiveCamera
-from ecs_engine.components.transform import Transform
 
 from ecs_engine import World
-from ecs_engine.maths.camera import orthographic, perspective, view_rotation, yaw_pitch_quat
-from ecs_engine.render.camera import camera_matrices
+from ecs_engine.components import ActiveCamera
+from ecs_engine.components.camera import ORTHOGRAPHIC, Camera
+from ecs_engine.components.transform import Transform
 from ecs_engine.errors import UsageError
+from ecs_engine.maths.camera import orthographic, perspective, view_rotation, yaw_pitch_quat
 from ecs_engine.maths.transform import quat_to_mat3
+from ecs_engine.render.camera import camera_matrices
 
 FOV = math.radians(60.0)
 
@@ -127,8 +127,15 @@ def test_the_precision_test_fails_for_conventional_depth():
 
 @pytest.mark.parametrize(
     "args",
-    [(0.0, 1.0, 0.1, 10.0), (math.pi, 1.0, 0.1, 10.0), (FOV, 0.0, 0.1, 10.0), (FOV, 1.0, 0.0, 10.0),
-     (FOV, 1.0, 1.0, 1.0), (FOV, 1.0, 0.1, math.nan), (FOV, math.inf, 0.1, 10.0)],
+    [
+        (0.0, 1.0, 0.1, 10.0),
+        (math.pi, 1.0, 0.1, 10.0),
+        (FOV, 0.0, 0.1, 10.0),
+        (FOV, 1.0, 0.0, 10.0),
+        (FOV, 1.0, 1.0, 1.0),
+        (FOV, 1.0, 0.1, math.nan),
+        (FOV, math.inf, 0.1, 10.0),
+    ],
 )
 def test_perspective_rejects_bad_parameters(args):
     with pytest.raises(ValueError):

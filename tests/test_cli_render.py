@@ -3,6 +3,7 @@ bad input (exit 2, no traceback unless --debug)."""
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -14,8 +15,14 @@ from PIL import Image
 
 def cli(*args, env=None, cwd=None):
     full_env = dict(os.environ, **(env or {}))
-    return subprocess.run([sys.executable, "-m", "ecs_engine", "demo", *args], capture_output=True, text=True,
-                          timeout=300, env=full_env, cwd=cwd)
+    return subprocess.run(
+        [sys.executable, "-m", "ecs_engine", "demo", *args],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=full_env,
+        cwd=cwd,
+    )
 
 
 def one_line_error(proc, *fragments):
@@ -29,8 +36,19 @@ def one_line_error(proc, *fragments):
 
 def test_headless_screenshot_with_validation(tmp_path):
     shot = tmp_path / "grid.png"
-    proc = cli("grid100", "--headless", "--frames", "3", "--width", "96", "--height", "64",
-               "--screenshot", str(shot), "--validate")
+    proc = cli(
+        "grid100",
+        "--headless",
+        "--frames",
+        "3",
+        "--width",
+        "96",
+        "--height",
+        "64",
+        "--screenshot",
+        str(shot),
+        "--validate",
+    )
     assert proc.returncode == 0, proc.stderr
     assert "validation" not in proc.stderr
     img = np.asarray(Image.open(shot))
@@ -73,12 +91,15 @@ def test_missing_model_file_and_debug_traceback(tmp_path):
     assert proc.returncode != 0 and "Traceback" in proc.stderr
 
 
-@pytest.mark.parametrize("args, fragment", [
-    (["cube", "--width", "0", "--headless"], "above 0"),
-    (["cube", "--frames", "-2", "--headless"], "above 0"),
-    (["cube", "extra.obj", "--headless"], "only goes with the model scene"),
-    (["cube", "--present", "sometimes"], "invalid choice"),
-])
+@pytest.mark.parametrize(
+    "args, fragment",
+    [
+        (["cube", "--width", "0", "--headless"], "above 0"),
+        (["cube", "--frames", "-2", "--headless"], "above 0"),
+        (["cube", "extra.obj", "--headless"], "only goes with the model scene"),
+        (["cube", "--present", "sometimes"], "invalid choice"),
+    ],
+)
 def test_bad_flags(args, fragment):
     proc = cli(*args)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
@@ -87,8 +108,9 @@ def test_bad_flags(args, fragment):
 
 def test_screenshot_into_a_missing_folder(tmp_path):
     target = tmp_path / "no" / "such" / "dir.png"
-    one_line_error(cli("cube", "--headless", "--screenshot", str(target), "--width", "32", "--height", "24"),
-                   "does not exist")
+    one_line_error(
+        cli("cube", "--headless", "--screenshot", str(target), "--width", "32", "--height", "24"), "does not exist"
+    )
 
 
 def test_no_vulkan_loader_names_the_install_command(tmp_path):
@@ -102,7 +124,14 @@ def test_no_vulkan_loader_names_the_install_command(tmp_path):
 
 def test_no_vulkan_device_names_the_driver_package(tmp_path):
     icd = tmp_path / "none.json"
-    icd.write_text('{"file_format_version": "1.0.0", "ICD": {"library_path": "/nonexistent/libnothing.so", "api_version": "1.3.0"}}')
+    icd.write_text(
+        json.dumps(
+            {
+                "file_format_version": "1.0.0",
+                "ICD": {"library_path": "/nonexistent/libnothing.so", "api_version": "1.3.0"},
+            }
+        )
+    )
     proc = cli("cube", "--headless", env={"VK_ICD_FILENAMES": str(icd), "VK_DRIVER_FILES": str(icd)})
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert "mesa-vulkan-drivers" in proc.stderr
@@ -120,16 +149,36 @@ def test_native_recorder_without_numba_is_a_clear_error():
 
 def editor_cli(*args, env=None, cwd=None):
     full_env = dict(os.environ, **(env or {}))
-    return subprocess.run([sys.executable, "-m", "ecs_engine", "editor", *args], capture_output=True, text=True,
-                          timeout=300, env=full_env, cwd=cwd)
+    return subprocess.run(
+        [sys.executable, "-m", "ecs_engine", "editor", *args],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=full_env,
+        cwd=cwd,
+    )
 
 
 def test_editor_headless_draws_the_ui_and_writes_perf_json(tmp_path):
     import json
 
     shot, perf = tmp_path / "ed.png", tmp_path / "perf.json"
-    proc = editor_cli("grid100", "cube", "--headless", "--frames", "4", "--width", "480", "--height", "320",
-                      "--screenshot", str(shot), "--perf-json", str(perf), "--validate")
+    proc = editor_cli(
+        "grid100",
+        "cube",
+        "--headless",
+        "--frames",
+        "4",
+        "--width",
+        "480",
+        "--height",
+        "320",
+        "--screenshot",
+        str(shot),
+        "--perf-json",
+        str(perf),
+        "--validate",
+    )
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(perf.read_text())
     assert len(doc["frames"]) == 4 and doc["meta"]["scene"] == "grid100" and doc["meta"]["editor"] is True

@@ -12,22 +12,29 @@ import pytest
 
 pytest.importorskip("imgui_bundle")
 
-from ecs_engine.components import Camera, Mesh, PointLight, Transform
-
-from ecs_engine.app.settings import RunOptions
-
 from ecs_engine.app.loop import run
-
-from ecs_engine.app.scenes import scene_builder
-from ecs_engine.maths.camera import yaw_pitch_quat, yaw_pitch_roll, yaw_pitch_roll_quat
+from ecs_engine.app.settings import RunOptions
+from ecs_engine.components import Camera, Mesh, PointLight, Transform
 from ecs_engine.jobs import JobPool
+from ecs_engine.maths.camera import yaw_pitch_quat, yaw_pitch_roll, yaw_pitch_roll_quat
 
 W, H = 640, 480
 
 
 def headless(tmp_path, editor: bool, size=(W, H), **kw):
-    result = run(RunOptions(scene="grid100", width=size[0], height=size[1], frames=kw.pop("frames", 6), validate=True,
-                            quiet=True, editor=editor, screenshot=str(tmp_path / f"e{editor}.png"), **kw))
+    result = run(
+        RunOptions(
+            scene="grid100",
+            width=size[0],
+            height=size[1],
+            frames=kw.pop("frames", 6),
+            validate=True,
+            quiet=True,
+            editor=editor,
+            screenshot=str(tmp_path / f"e{editor}.png"),
+            **kw,
+        )
+    )
     assert result.validation_messages == []
     return result
 
@@ -234,12 +241,23 @@ def test_windowed_editor_under_xvfb(tmp_path):
     glfw = open_glfw()
     if glfw is None:
         pytest.skip("no display (run the suite under xvfb-run)")
-    result = run_windowed(RunOptions(scene="grid100", width=W, height=H, frames=8, validate=True, quiet=True,
-                                     headless=False, editor=True, scenes=("grid100", "cube"),
-                                     perf_json=str(tmp_path / "w.json")), glfw)
+    result = run_windowed(
+        RunOptions(
+            scene="grid100",
+            width=W,
+            height=H,
+            frames=8,
+            validate=True,
+            quiet=True,
+            headless=False,
+            editor=True,
+            scenes=("grid100", "cube"),
+            perf_json=str(tmp_path / "w.json"),
+        ),
+        glfw,
+    )
     assert result.frames == 8 and result.validation_messages == []
     assert json.loads((tmp_path / "w.json").read_text())["meta"]["headless"] is False
-
 
 
 def test_ui_rate_limit_draws_the_last_ui_between_builds(scene):

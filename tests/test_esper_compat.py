@@ -11,10 +11,11 @@ from dataclasses import dataclass
 import esper as real_esper
 import numpy as np
 import pytest
-from ecs_engine.components import Camera, Mesh, ModelMatrix, Transform
 
 import ecs_engine.esper_compat as compat
 from ecs_engine import DeadEntityError, EcsError, MissingComponentError, World
+from ecs_engine.components import Camera, Mesh, ModelMatrix, Transform
+from ecs_engine.ecs.schema import Field
 from ecs_engine.esper_compat import (
     ComponentNotFoundError,
     ComponentProxy,
@@ -22,7 +23,6 @@ from ecs_engine.esper_compat import (
     EsperWorld,
     Processor,
 )
-from ecs_engine.ecs.schema import Field
 
 
 @dataclass
@@ -336,7 +336,7 @@ def test_proxy_reads_views_and_writes_through(ew):
     cam.near = 0.25
     assert ew.world.get(e, Camera).near == 0.25
     with pytest.raises(AttributeError):
-        t.nonsense
+        _ = t.nonsense
     with pytest.raises(AttributeError):
         t.nonsense = 1
 
@@ -371,12 +371,12 @@ def test_proxy_stays_correct_when_rows_move(ew):
     ew.add_component(ids[3], Position())
     assert proxies[ids[3]].position[0] == 3
     with pytest.raises(EntityNotFoundError):
-        proxies[ids[0]].position
+        _ = proxies[ids[0]].position
     with pytest.raises(KeyError):
         proxies[ids[2]].position = (0, 0, 0)
     ew.remove_component(ids[4], Transform)
     with pytest.raises(ComponentNotFoundError):
-        proxies[ids[4]].position
+        _ = proxies[ids[4]].position
 
 
 def test_proxy_view_read_marks_column_changed(ew):

@@ -5,11 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from ecs_engine.components import Mesh, PointLight, Transform
-from ecs_engine.demos.scene_kit import add_camera
 
 from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
+from ecs_engine.components import Mesh, PointLight, Transform
+from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.render.frame_data import MIN_CHUNK_ROWS, FrameExtractor
 
 
@@ -51,7 +51,7 @@ def test_what_is_kept_is_the_same_object_until_the_world_changes_it():
 
 def test_a_mesh_handle_beyond_the_uploaded_meshes_is_named():
     world = scene()
-    with pytest.raises(ValueError, match="Mesh.handle 1 does not name an uploaded mesh"):
+    with pytest.raises(ValueError, match=r"Mesh\.handle 1 does not name an uploaded mesh"):
         FrameExtractor(lambda: 1).extract(world, 1.0, mesh_count=1, culling=True)
 
 

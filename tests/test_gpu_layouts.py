@@ -21,7 +21,8 @@ SOURCES = sorted(p for p in SHADERS.iterdir() if p.suffix in (".vert", ".frag", 
 
 def test_generated_header_is_current():
     assert (SHADERS / "layouts.glsl").read_text() == layouts.glsl(), (
-        "shaders/layouts.glsl differs from ecs_engine/render/layouts.py: run `make shaders`")
+        "shaders/layouts.glsl differs from ecs_engine/render/layouts.py: run `make shaders`"
+    )
 
 
 def test_std430_and_std140_rules():
@@ -68,9 +69,11 @@ def test_every_shared_struct_matches_what_the_shaders_compile_to(tmp_path):
 @pytest.mark.skipif(shutil.which("glslc") is None, reason="glslc not installed")
 def test_the_check_catches_a_shifted_field(tmp_path):
     src = tmp_path / "probe.comp"
-    src.write_text("#version 450\nstruct Instance { vec4 model[3]; uint extra; uvec4 misc; };\n"
-                   "layout(std430, binding = 0) buffer B { Instance rows[]; };\n"
-                   "layout(local_size_x = 1) in;\nvoid main() { rows[0].extra = 1u; }\n")
+    src.write_text(
+        "#version 450\nstruct Instance { vec4 model[3]; uint extra; uvec4 misc; };\n"
+        "layout(std430, binding = 0) buffer B { Instance rows[]; };\n"
+        "layout(local_size_x = 1) in;\nvoid main() { rows[0].extra = 1u; }\n"
+    )
     out = tmp_path / "probe.spv"
     subprocess.run(["glslc", "--target-env=vulkan1.2", str(src), "-o", str(out)], check=True)
     layout = struct_layouts(out)["Instance"]

@@ -6,14 +6,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from ecs_engine.components import Mesh, ModelMatrix, Transform
-from ecs_engine.demos.scene_kit import add_camera
 from gpu_context import headless_gpu
 
 from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
-from ecs_engine.render.camera import camera_matrices
+from ecs_engine.components import Mesh, ModelMatrix, Transform
+from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.maths.culling import bounding_spheres, frustum_planes, spheres_visible
+from ecs_engine.render.camera import camera_matrices
 from ecs_engine.render.mesh_data import DEFAULT_MODEL, cube_mesh, load_mesh, normalized
 
 W, H = 64, 48
@@ -48,8 +48,11 @@ def test_gpu_culling_matches_brute_force_with_two_meshes_and_mirrored_entities()
         world = World()
         n = 3000
         scale = rng.uniform(0.2, 1.0, size=(n, 3)) * np.where(rng.random((n, 1)) < 0.2, -1.0, 1.0)
-        world.spawn_batch(n, Transform(position=rng.uniform(-40, 40, size=(n, 3)), scale=scale),
-                          Mesh(handle=np.where(rng.random(n) < 0.5, cube, knot)))
+        world.spawn_batch(
+            n,
+            Transform(position=rng.uniform(-40, 40, size=(n, 3)), scale=scale),
+            Mesh(handle=np.where(rng.random(n) < 0.5, cube, knot)),
+        )
         add_camera(world, eye=(0.0, 2.0, 25.0), target=(5.0, 0.0, 0.0))
         default_schedule().run(world, 0.0)
         renderer = indirect_renderer(gpu, chunk_rows=700)
@@ -112,7 +115,7 @@ def test_a_mesh_added_between_frames_is_drawn():
         assert (second.instances, second.draws) == (2, 2)
         changed = np.abs(gpu.target.pixels()[..., :3].astype(int) - before[..., :3]).max(axis=2) > 4
         # no lights: ambient only, so dim; the knot appeared on the right, the cube stayed
-        assert changed[:, W // 2 + 4:].sum() > 50 and changed[:, : W // 2 - 4].sum() == 0
+        assert changed[:, W // 2 + 4 :].sum() > 50 and changed[:, : W // 2 - 4].sum() == 0
 
 
 def test_a_device_without_indirect_count_gets_one_clear_error():
@@ -120,5 +123,5 @@ def test_a_device_without_indirect_count_gets_one_clear_error():
 
     with headless_gpu(W, H) as gpu:
         gpu.device.features["drawIndirectCount"] = False
-        with pytest.raises(UsageError, match="lacks drawIndirectCount.*--mode instanced"):
+        with pytest.raises(UsageError, match=r"lacks drawIndirectCount.*--mode instanced"):
             indirect_renderer(gpu)

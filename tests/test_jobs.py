@@ -62,6 +62,7 @@ def test_row_chunks_and_over_rows_cover_every_row_once():
 
 def test_a_map_inside_a_job_runs_inline_instead_of_deadlocking():
     with JobPool(4) as pool:
+
         def job(x):
             return sum(pool.map(lambda y: x * y, [1, 2, 3]))
 

@@ -11,9 +11,15 @@ from ecs_engine.render.light_rows import LIGHT_DTYPE, write_lights, write_lights
 
 
 def parts(rng: np.random.Generator, sizes: list[int]) -> list[tuple[np.ndarray, ...]]:
-    return [(rng.normal(scale=50.0, size=(n, 3)) + 1e7, rng.uniform(1, 9, n).astype(np.float32),
-             rng.uniform(0, 1, (n, 3)).astype(np.float32), rng.uniform(0, 5, n).astype(np.float32))
-            for n in sizes]
+    return [
+        (
+            rng.normal(scale=50.0, size=(n, 3)) + 1e7,
+            rng.uniform(1, 9, n).astype(np.float32),
+            rng.uniform(0, 1, (n, 3)).astype(np.float32),
+            rng.uniform(0, 5, n).astype(np.float32),
+        )
+        for n in sizes
+    ]
 
 
 @pytest.mark.parametrize("sizes", [[1], [7], [5, 3, 40]])
@@ -39,8 +45,14 @@ def test_rows_are_relative_and_sorted_far_to_near(sizes):
 
 
 def test_equal_distances_keep_their_order():
-    columns = [(np.array([[1.0, 0, 0], [0, 1.0, 0], [0, 0, 1.0], [0, 0, 3.0]]), np.arange(4, dtype=np.float32),
-                np.zeros((4, 3), np.float32), np.ones(4, np.float32))]
+    columns = [
+        (
+            np.array([[1.0, 0, 0], [0, 1.0, 0], [0, 0, 1.0], [0, 0, 3.0]]),
+            np.arange(4, dtype=np.float32),
+            np.zeros((4, 3), np.float32),
+            np.ones(4, np.float32),
+        )
+    ]
     out = np.zeros((4, 8), np.float32)
     write_lights(columns, np.zeros(3), np.zeros(3), out)
     assert out[:, 3].tolist() == [3.0, 0.0, 1.0, 2.0]

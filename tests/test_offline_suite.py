@@ -14,8 +14,9 @@ SCRIPT = ROOT / "scripts" / "offline_suite.sh"
 
 
 def script(*args, env=None):
-    return subprocess.run(["bash", str(SCRIPT), *args], capture_output=True, text=True, timeout=120,
-                          env=dict(os.environ, **(env or {})))
+    return subprocess.run(
+        ["bash", str(SCRIPT), *args], capture_output=True, text=True, timeout=120, env=dict(os.environ, **(env or {}))
+    )
 
 
 def test_help_and_bad_use():
@@ -46,8 +47,12 @@ def test_run_refuses_a_folder_without_the_kit(tmp_path):
 
 
 def test_cli_bench_runs_a_benchmark(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "ecs_engine", "bench", "numerics", "--quick", "--out", str(tmp_path),
-                           "--machine", "ci"], capture_output=True, text=True, timeout=300)
+    proc = subprocess.run(
+        [sys.executable, "-m", "ecs_engine", "bench", "numerics", "--quick", "--out", str(tmp_path), "--machine", "ci"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert proc.returncode == 0, proc.stderr
     assert json.loads((tmp_path / "numerics-ci.json").read_text())["benchmark"] == "numerics"
     bad = subprocess.run([sys.executable, "-m", "ecs_engine", "bench", "nope"], capture_output=True, text=True)

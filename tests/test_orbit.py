@@ -7,17 +7,18 @@ import math
 
 import numpy as np
 import pytest
+
+from ecs_engine import Schedule, World
 from ecs_engine.components.light import PointLight
 from ecs_engine.components.orbit import Orbit
 from ecs_engine.components.transform import Transform
 from ecs_engine.systems.orbit import OrbitSystem
 
-from ecs_engine import Schedule, World
-
 
 def expected(center, radius, height, phase):
-    return np.stack([center[:, 0] + radius * np.cos(phase), center[:, 1] + height,
-                     center[:, 2] + radius * np.sin(phase)], axis=1)
+    return np.stack(
+        [center[:, 0] + radius * np.cos(phase), center[:, 1] + height, center[:, 2] + radius * np.sin(phase)], axis=1
+    )
 
 
 def test_positions_follow_the_formula_over_several_steps_and_tables():
@@ -29,8 +30,7 @@ def test_positions_follow_the_formula_over_several_steps_and_tables():
     phase0 = rng.uniform(-10.0, 10.0, n)
     height = rng.uniform(-2.0, 5.0, n)
     w = World()
-    ids = w.spawn_batch(n, Orbit(center=center, radius=radius, angular_speed=speed, phase=phase0,
-                                 height=height))
+    ids = w.spawn_batch(n, Orbit(center=center, radius=radius, angular_speed=speed, phase=phase0, height=height))
     lights = w.spawn_batch(3, Orbit(radius=2.0, angular_speed=0.5, height=1.0), PointLight())
     schedule = Schedule()
     schedule.add(OrbitSystem())

@@ -12,8 +12,8 @@ import warnings
 import numpy as np
 import pytest
 
-from ecs_engine.errors import UsageError
 from ecs_engine.app.perf import METRICS, PerfLog, PerfMonitor, ProcessSample, PsutilSampler, Stats, check_writable
+from ecs_engine.errors import UsageError
 
 MiB = 2**20
 
@@ -29,8 +29,14 @@ class FakeClock:
 class FakeSampler:
     """Fixed values; remembers the clock time of every call."""
 
-    def __init__(self, clock: FakeClock | None = None, cores: int = 16, system: float = 6.0,
-                 process: float = 101.0, rss: int = 210 * MiB) -> None:
+    def __init__(
+        self,
+        clock: FakeClock | None = None,
+        cores: int = 16,
+        system: float = 6.0,
+        process: float = 101.0,
+        rss: int = 210 * MiB,
+    ) -> None:
         self.clock = clock
         self.cores = cores
         self.value = ProcessSample(system, process, rss)
@@ -54,6 +60,7 @@ def run(mon: PerfMonitor, clock: FakeClock, frames: int, dt: float, **frame_args
 
 
 # -- frame rate and window -----------------------------------------------------------------------
+
 
 def test_fps_is_frames_over_wall_time_and_ignores_cpu_time():
     rates = []
@@ -216,6 +223,7 @@ def test_latest_counters_are_those_of_the_last_frame():
 
 # -- ring capacity ---------------------------------------------------------------------------------
 
+
 def test_ring_keeps_every_sample_of_the_window_at_4000_fps():
     clock = FakeClock()
     mon, _ = monitor(clock, window_s=5.0)
@@ -261,6 +269,7 @@ def test_ring_grows_in_age_order_when_the_rate_rises_mid_run():
 
 
 # -- psutil sampling --------------------------------------------------------------------------------
+
 
 def test_psutil_is_sampled_about_four_times_a_second_not_every_frame():
     clock = FakeClock()
@@ -315,6 +324,7 @@ def test_psutil_sampler_primes_cpu_percent_so_later_samples_measure_work():
 
 # -- overhead and summary ------------------------------------------------------------------------------
 
+
 def test_overhead_is_measured_and_small():
     clock = FakeClock()
     mon, _ = monitor(clock)
@@ -356,8 +366,10 @@ def test_summary_line_has_the_numbers():
     mon, _ = monitor(clock)
     assert mon.summary_line() == "fps n/a | cpu n/a ms (p99 n/a) | record n/a | gpu n/a | sys n/a"
     run(mon, clock, 500, 0.001, cpu_ms=0.41, record_ms=0.08, gpu_ms=0.37, draws=2, visible=100)
-    assert mon.summary_line() == ("fps 1000 | cpu 0.41 ms (p99 0.41) | record 0.08 | gpu 0.37 ms | "
-                                  "sys 6% proc 101% (6.3%/core) | rss 210 MiB | 100 drawn in 2 draws")
+    assert mon.summary_line() == (
+        "fps 1000 | cpu 0.41 ms (p99 0.41) | record 0.08 | gpu 0.37 ms | "
+        "sys 6% proc 101% (6.3%/core) | rss 210 MiB | 100 drawn in 2 draws"
+    )
     clock.t += 0.001
     mon.frame(cpu_ms=5.0, entities=7)
     line = mon.summary_line()
@@ -367,6 +379,7 @@ def test_summary_line_has_the_numbers():
 
 
 # -- the --perf-json log -----------------------------------------------------------------------------
+
 
 def test_json_round_trip(tmp_path):
     path = tmp_path / "perf.json"
@@ -392,11 +405,26 @@ def test_json_round_trip(tmp_path):
     assert isinstance(frames[5]["draws"], int)
     assert [f["t"] for f in frames] == pytest.approx(times)
     assert frames[1500]["frame_ms"] == pytest.approx(4.0)
-    assert frames[3] == pytest.approx({"t": 0.008, "frame_ms": 2.0, "cpu_ms": 4.0, "record_ms": 0.25,
-                                       "gpu_ms": 0.25, "wait_ms": 0.125, "draws": 2, "visible": 3})
+    assert frames[3] == pytest.approx(
+        {
+            "t": 0.008,
+            "frame_ms": 2.0,
+            "cpu_ms": 4.0,
+            "record_ms": 0.25,
+            "gpu_ms": 0.25,
+            "wait_ms": 0.125,
+            "draws": 2,
+            "visible": 3,
+        }
+    )
     assert len(doc["psutil"]) == len(sampler.calls)
-    assert doc["psutil"][0] == {"t": pytest.approx(0.002), "cpu_system_percent": 6.0, "cpu_process_percent": 101.0,
-                                "cpu_process_percent_per_core": pytest.approx(101.0 / 16), "rss_bytes": 210 * MiB}
+    assert doc["psutil"][0] == {
+        "t": pytest.approx(0.002),
+        "cpu_system_percent": 6.0,
+        "cpu_process_percent": 101.0,
+        "cpu_process_percent_per_core": pytest.approx(101.0 / 16),
+        "rss_bytes": 210 * MiB,
+    }
     cpu = np.array([1.0 + k % 7 for k in range(2000)])
     assert doc["summary"]["cpu_ms"] == pytest.approx({"min": 1.0, "mean": cpu.mean(), "p99": np.percentile(cpu, 99)})
     gpu_p99 = np.percentile([0.5, 0.25] * 500, 99)
@@ -420,8 +448,9 @@ def test_json_has_nulls_not_nan_and_replaces_an_old_file(tmp_path):
     doc = json.loads(text)
     assert doc["fps"] is None
     assert doc["summary"]["gpu_ms"] == {"min": None, "mean": None, "p99": None}
-    assert doc["frames"] == [{"t": pytest.approx(0.01), "frame_ms": None, "cpu_ms": 1.0, "record_ms": 0.0,
-                              "gpu_ms": None, "wait_ms": 0.0}]
+    assert doc["frames"] == [
+        {"t": pytest.approx(0.01), "frame_ms": None, "cpu_ms": 1.0, "record_ms": 0.0, "gpu_ms": None, "wait_ms": 0.0}
+    ]
     assert doc["meta"] == {"logical_cores": 16}
 
 
@@ -438,8 +467,8 @@ def test_log_keeps_every_frame_across_chunks():
     rows, counters = log.columns()
     assert len(log) == n == rows.shape[0]
     assert rows[:, 2].tolist() == list(range(n))
-    assert np.isnan(counters["visible"][:PerfLog.CHUNK]).all()
-    assert counters["visible"][PerfLog.CHUNK:].tolist() == list(range(PerfLog.CHUNK, n))
+    assert np.isnan(counters["visible"][: PerfLog.CHUNK]).all()
+    assert counters["visible"][PerfLog.CHUNK :].tolist() == list(range(PerfLog.CHUNK, n))
     assert (rows[:, -1] > 0).all()  # each frame's own cost is recorded
 
 

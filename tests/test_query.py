@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from ecs_engine.components import Mesh, Transform, Velocity
 
 from ecs_engine import AccessError, Component, EcsError, Field, World
+from ecs_engine.components import Mesh, Transform, Velocity
 
 
 class Health(Component):
@@ -26,7 +26,7 @@ def make_world():
 
 
 def test_query_matches_tables_with_filters():
-    w, a, b, c = make_world()
+    w, a, _b, _c = make_world()
     assert w.query(Transform).count() == 12
     assert w.query(Transform, Velocity).count() == 8
     assert w.query(Transform, without=[Frozen]).count() == 9
@@ -75,10 +75,10 @@ def test_write_must_be_queried():
 
 
 def test_structural_changes_in_a_loop_are_deferred_then_applied():
-    w, a, b, c = make_world()
+    w, a, b, _c = make_world()
     spawned = []
     for batch in w.query(Transform, Velocity):
-        for e in batch.entities:
+        for _ in batch.entities:
             spawned.append(w.spawn(Health(hp=1)))
         w.destroy(batch.entities[0])
         w.add(batch.entities[1], Health(hp=3))
@@ -140,7 +140,7 @@ def test_breaking_out_of_a_loop_ends_the_deferral():
 
 
 def test_change_ticks_skip_unchanged_tables():
-    w, a, b, c = make_world()
+    w, a, _b, c = make_world()
     since = w.tick
     assert list(w.query(Transform).iter(changed=[Transform], since=since)) == []
     w.set(c[0], Health, hp=5)  # another component
@@ -166,7 +166,7 @@ def test_changed_without_since_outside_a_system_is_an_error():
 
 
 def test_query_column_concatenates_and_entities_match():
-    w, a, b, c = make_world()
+    w, _a, _b, _c = make_world()
     q = w.query(Transform, Velocity, write=())
     lin = q.column(Velocity.linear)
     assert lin.shape == (8, 3) and sorted(lin[:, 0].tolist()) == [1] * 5 + [2] * 3

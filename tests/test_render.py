@@ -9,24 +9,36 @@ or a wrong winding. ECS_ENGINE_UPDATE_GOLDEN=1 rewrites the references.
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
-from ecs_engine.components import Camera, Mesh, PointLight, Transform
-from ecs_engine.demos.scene_kit import add_camera
 from golden_images import GOLDEN, SIZE, assert_close_to_golden, image_difference
 from gpu_context import headless_gpu
 from PIL import Image
 
 from ecs_engine import World
-from ecs_engine.app.settings import RunOptions
-from ecs_engine.app.scenes import default_schedule
 from ecs_engine.app.loop import run
+from ecs_engine.app.scenes import default_schedule
+from ecs_engine.app.settings import RunOptions
+from ecs_engine.components import Camera, Mesh, PointLight, Transform
+from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.render.mesh_data import cube_mesh
 
 
 def render(scene: str, frames: int = 8, **kw) -> object:
-    result = run(RunOptions(scene=scene, width=SIZE[0], height=SIZE[1], frames=frames,
-                            screenshot=kw.pop("screenshot", None), validate=True, quiet=True, **kw))
+    result = run(
+        RunOptions(
+            scene=scene,
+            width=SIZE[0],
+            height=SIZE[1],
+            frames=frames,
+            screenshot=kw.pop("screenshot", None),
+            validate=True,
+            quiet=True,
+            **kw,
+        )
+    )
     assert result.validation_messages == []
     return result
 
@@ -68,6 +80,7 @@ def build_cubes(scales):
         # a light, so faces are shaded by their normals: a cube drawn inside out (wrong winding)
         # has the same silhouette as the right one and differs only there
         world.spawn(Transform(position=(1.5, 2.5, 2.5)), PointLight(color=(1.0, 1.0, 1.0), intensity=6.0))
+
     return build
 
 
@@ -75,8 +88,18 @@ def render_custom(build, monkeypatch, tmp_path, mode: str = "instanced") -> np.n
     import ecs_engine.app.session as session
 
     monkeypatch.setattr(session, "scene_builder", lambda name, entities=None: build)
-    result = run(RunOptions(scene="cube", width=SIZE[0], height=SIZE[1], frames=1, screenshot=str(tmp_path / "x.png"),
-                            validate=True, quiet=True, mode=mode))
+    result = run(
+        RunOptions(
+            scene="cube",
+            width=SIZE[0],
+            height=SIZE[1],
+            frames=1,
+            screenshot=str(tmp_path / "x.png"),
+            validate=True,
+            quiet=True,
+            mode=mode,
+        )
+    )
     assert result.validation_messages == []
     return result.pixels
 
@@ -139,7 +162,7 @@ def test_suballocator_serves_many_buffers_from_few_allocations():
         arr[:] = np.arange(len(arr))
         assert buffers[3].array(np.float32)[-1] == len(arr) - 1  # mapped: the same memory
         spans = sorted((b.allocation.offset, b.allocation.offset + b.size) for b in buffers[:200])
-        assert all(a_end <= b_start for (_, a_end), (b_start, _) in zip(spans, spans[1:]))  # no overlap
+        assert all(a_end <= b_start for (_, a_end), (b_start, _) in itertools.pairwise(spans))  # no overlap
         data = np.arange(1000, dtype=np.uint32)
         gpu = upload(device, data, vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT)
         back = Buffer(device, data.nbytes, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
@@ -192,7 +215,7 @@ def test_what_the_renderer_keeps_between_frames_follows_the_world():
         covered = lambda image: (np.abs(image - image[0, 0]).max(axis=-1) > 8).sum()
         assert covered(away) < 0.8 * covered(lit)  # the cubes look smaller
         world.set(cube, Mesh, handle=99)
-        with pytest.raises(ValueError, match="Mesh.handle 99"):
+        with pytest.raises(ValueError, match=r"Mesh\.handle 99"):
             frame()
         world.set(cube, Mesh, handle=handle)
         frame()

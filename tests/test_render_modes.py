@@ -8,15 +8,24 @@ import pytest
 from golden_images import SIZE, assert_close_to_golden, image_difference
 from gpu_context import headless_gpu
 
-from ecs_engine.app.settings import RunOptions
-
 from ecs_engine.app.loop import run
+from ecs_engine.app.settings import RunOptions
 from ecs_engine.jobs import JobError
 
 
 def grid(tmp_path, **kw):
-    result = run(RunOptions(scene="grid100", width=SIZE[0], height=SIZE[1], frames=8, validate=True, quiet=True,
-                            screenshot=str(tmp_path / "g.png"), **kw))
+    result = run(
+        RunOptions(
+            scene="grid100",
+            width=SIZE[0],
+            height=SIZE[1],
+            frames=8,
+            validate=True,
+            quiet=True,
+            screenshot=str(tmp_path / "g.png"),
+            **kw,
+        )
+    )
     assert result.validation_messages == []
     return result
 
@@ -27,11 +36,21 @@ def reference(tmp_path_factory):
 
 
 @pytest.mark.parametrize("recorder", ["python", "native"])
-@pytest.mark.parametrize("mode, threads, culling", [
-    ("instanced", 1, True), ("instanced", 2, True), ("instanced", 4, True), ("per_entity", 1, True),
-    ("per_entity", 2, True), ("per_entity", 4, False), ("instanced", 1, False),
-    ("indirect", 1, True), ("indirect", 2, True), ("indirect", 4, False),
-])
+@pytest.mark.parametrize(
+    "mode, threads, culling",
+    [
+        ("instanced", 1, True),
+        ("instanced", 2, True),
+        ("instanced", 4, True),
+        ("per_entity", 1, True),
+        ("per_entity", 2, True),
+        ("per_entity", 4, False),
+        ("instanced", 1, False),
+        ("indirect", 1, True),
+        ("indirect", 2, True),
+        ("indirect", 4, False),
+    ],
+)
 def test_same_image_in_every_mode_recorder_and_thread_count(reference, tmp_path, mode, threads, culling, recorder):
     if recorder == "native":
         pytest.importorskip("numba")
@@ -59,8 +78,9 @@ def test_culling_drops_what_is_off_screen(tmp_path, monkeypatch, mode):
         from ecs_engine.components import Mesh, Transform
 
         # 50 cubes behind the camera: culled, and the picture does not change
-        world.spawn_batch(50, Transform(position=np.tile([20.0, 10.0, 30.0], (50, 1)) + np.arange(50)[:, None]),
-                          Mesh(handle=0))
+        world.spawn_batch(
+            50, Transform(position=np.tile([20.0, 10.0, 30.0], (50, 1)) + np.arange(50)[:, None]), Mesh(handle=0)
+        )
 
     monkeypatch.setattr(grid100, "build", build)
     culled = grid(tmp_path, threads=2, mode=mode)
@@ -71,12 +91,11 @@ def test_culling_drops_what_is_off_screen(tmp_path, monkeypatch, mode):
 
 
 def test_a_failing_job_names_its_chunk_and_the_next_frame_renders(monkeypatch):
-    from ecs_engine.demos import grid100
-
     from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.demos import grid100
+    from ecs_engine.ecs.world import World
     from ecs_engine.jobs import JobPool
     from ecs_engine.render.renderer import Renderer
-    from ecs_engine.ecs.world import World
 
     with headless_gpu() as gpu:
         jobs = JobPool(3)

@@ -4,17 +4,17 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
+from ecs_engine import AccessError, EcsError, Schedule, System, World, system
 from ecs_engine.components import (
     AngularVelocity,
     Mesh,
     ModelMatrix,
+    RenderOrigin,
     Transform,
     Velocity,
 )
-from ecs_engine.components import RenderOrigin
 from ecs_engine.systems import MotionSystem, TransformSystem
-
-from ecs_engine import AccessError, EcsError, Schedule, System, World, system
 
 
 def test_systems_run_in_stated_order_with_sync_points():
@@ -129,8 +129,9 @@ def test_schedule_cannot_run_inside_a_loop():
 
 def test_motion_and_transform_systems():
     w = World()
-    e = w.spawn(Transform(position=(1, 0, 0)), Velocity(linear=(0, 2, 0)),
-                AngularVelocity(angular=(0, 0, np.pi)), Mesh())
+    e = w.spawn(
+        Transform(position=(1, 0, 0)), Velocity(linear=(0, 2, 0)), AngularVelocity(angular=(0, 0, np.pi)), Mesh()
+    )
     s = Schedule()
     s.add(MotionSystem())
     ts = s.add(TransformSystem(), "post_update")
@@ -158,14 +159,23 @@ def test_stock_systems_split_across_a_job_pool_give_the_same_result():
 
     rng = np.random.default_rng(5)
     n = 40_000  # above two chunks, so the pool really splits the tables
-    data = dict(position=rng.normal(size=(n, 3)), rotation=rng.normal(size=(n, 4)),
-                linear=rng.normal(size=(n, 3)), angular=rng.normal(size=(n, 3)))
+    data = dict(
+        position=rng.normal(size=(n, 3)),
+        rotation=rng.normal(size=(n, 4)),
+        linear=rng.normal(size=(n, 3)),
+        angular=rng.normal(size=(n, 3)),
+    )
     out = []
     for threads in (1, 3):
         w = World()
         w.resources[JobPool] = JobPool(threads)
-        w.spawn_batch(n, Transform(position=data["position"], rotation=data["rotation"]),
-                      Velocity(linear=data["linear"]), AngularVelocity(angular=data["angular"]), Mesh())
+        w.spawn_batch(
+            n,
+            Transform(position=data["position"], rotation=data["rotation"]),
+            Velocity(linear=data["linear"]),
+            AngularVelocity(angular=data["angular"]),
+            Mesh(),
+        )
         s = Schedule()
         s.add(MotionSystem())
         s.add(TransformSystem(), "post_update")
@@ -185,10 +195,13 @@ def test_motion_moves_entities_with_either_rate_or_both():
     pos, rot = rng.normal(size=(3, n, 3)), rng.normal(size=(3, n, 4))
     rot /= np.linalg.norm(rot, axis=2, keepdims=True)
     lin, ang = rng.normal(size=(3, n, 3)), rng.normal(size=(3, n, 3))
-    ids = [w.spawn_batch(n, Transform(position=pos[0], rotation=rot[0]), Velocity(linear=lin[0]),
-                         AngularVelocity(angular=ang[0])),
-           w.spawn_batch(n, Transform(position=pos[1], rotation=rot[1]), Velocity(linear=lin[1])),
-           w.spawn_batch(n, Transform(position=pos[2], rotation=rot[2]), AngularVelocity(angular=ang[2]))]
+    ids = [
+        w.spawn_batch(
+            n, Transform(position=pos[0], rotation=rot[0]), Velocity(linear=lin[0]), AngularVelocity(angular=ang[0])
+        ),
+        w.spawn_batch(n, Transform(position=pos[1], rotation=rot[1]), Velocity(linear=lin[1])),
+        w.spawn_batch(n, Transform(position=pos[2], rotation=rot[2]), AngularVelocity(angular=ang[2])),
+    ]
     s = Schedule()
     s.add(MotionSystem())
     s.run(w, 0.1)
@@ -205,7 +218,6 @@ def test_motion_moves_entities_with_either_rate_or_both():
 
 def test_normal_matrices_are_written_only_for_entities_that_ask_for_them():
     from ecs_engine.components import NormalMatrix, PreviousTransform
-
     from ecs_engine.ecs.timestep import Interpolation
     from ecs_engine.maths.transform import compose_numpy
 

@@ -30,7 +30,8 @@ def test_every_source_has_an_entry():
 def test_spirv_is_not_stale(src):
     entry = MANIFEST["shaders"][src.name]
     assert compile_shaders.source_digest(src) == entry["source_sha256"], (
-        f"{src.name} changed since its SPIR-V was built: run `make shaders`")
+        f"{src.name} changed since its SPIR-V was built: run `make shaders`"
+    )
     spv = src.with_name(src.name + ".spv").read_bytes()
     assert spv[:4] == b"\x03\x02\x23\x07"  # SPIR-V magic, little-endian
     assert hashlib.sha256(spv).hexdigest() == entry["spirv_sha256"], f"{src.name}.spv was edited by hand"

@@ -5,11 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from ecs_engine.components import Spring, Transform, Velocity
-from ecs_engine.systems import SpringSystem
 
 from ecs_engine import World
+from ecs_engine.components import Spring, Transform, Velocity
 from ecs_engine.maths.spring import INTEGRATORS, exact_coefficients, step
+from ecs_engine.systems import SpringSystem
 
 
 def analytic(x0: float, v0: float, k: float, c: float, m: float, t: float) -> float:
@@ -43,7 +43,7 @@ def test_accuracy_order_on_a_soft_spring(integrator, order):
         x, _ = simulate(integrator, k, c, m, t / n, n)
         errors.append(abs(x - exact_x))
     ratios = [errors[0] / errors[1], errors[1] / errors[2]]
-    assert all(2 ** order * 0.8 < r < 2 ** order * 1.25 for r in ratios), (errors, ratios)
+    assert all(2**order * 0.8 < r < 2**order * 1.25 for r in ratios), (errors, ratios)
 
 
 def test_exact_step_is_exact_for_any_dt():
@@ -78,8 +78,9 @@ def test_stiff_spring_at_a_long_step(integrator):
 
 def test_spring_system_pulls_toward_the_anchor_and_survives_a_hitch():
     world = World()
-    eid = world.spawn(Transform(position=(5.0, 0.0, 0.0)), Velocity(),
-                      Spring(anchor=(0.0, 2.0, 0.0), stiffness=400.0, damping=4.0))
+    eid = world.spawn(
+        Transform(position=(5.0, 0.0, 0.0)), Velocity(), Spring(anchor=(0.0, 2.0, 0.0), stiffness=400.0, damping=4.0)
+    )
     system = SpringSystem()
     for _ in range(600):
         world.run_system(system, 1 / 60)

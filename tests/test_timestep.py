@@ -6,15 +6,15 @@ import math
 
 import numpy as np
 import pytest
-from ecs_engine.components import ModelMatrix, PreviousTransform, Spring, Transform, Velocity
-from ecs_engine.systems import MotionSystem, SnapshotSystem, SpringSystem, TransformSystem
-from ecs_engine.systems.camera_control import FlyInput, fly_step
 
 from ecs_engine import World
-from ecs_engine.maths.camera import yaw_pitch_quat
+from ecs_engine.components import ModelMatrix, PreviousTransform, Spring, Transform, Velocity
 from ecs_engine.ecs.schedule import Schedule
 from ecs_engine.ecs.timestep import FixedTimestep
+from ecs_engine.maths.camera import yaw_pitch_quat
 from ecs_engine.maths.transform import integrate_angular
+from ecs_engine.systems import MotionSystem, SnapshotSystem, SpringSystem, TransformSystem
+from ecs_engine.systems.camera_control import FlyInput, fly_step
 
 
 def test_accumulator_steps_alpha_and_cap():
@@ -43,8 +43,9 @@ def schedule() -> Schedule:
 def test_a_hitch_of_seconds_does_not_explode_motion():
     world = World()
     mover = world.spawn(Transform(), Velocity(linear=(1.0, 0.0, 0.0)))
-    stiff = world.spawn(Transform(position=(3.0, 0.0, 0.0)), Velocity(),
-                        Spring(anchor=(0.0, 0.0, 0.0), stiffness=1e5, damping=5.0))
+    stiff = world.spawn(
+        Transform(position=(3.0, 0.0, 0.0)), Velocity(), Spring(anchor=(0.0, 0.0, 0.0), stiffness=1e5, damping=5.0)
+    )
     clock = FixedTimestep(step=1 / 60, max_steps=8)
     s = schedule()
     assert s.run_frame(world, 5.0, clock) == 8

@@ -97,7 +97,15 @@ def test_normal_matrix_transforms_normals_like_inverse_transpose():
 
 @pytest.mark.parametrize(
     "scale",
-    [(0.0, 1.0, 1.0), (0.0, 0.0, 1.0), (0.0, 0.0, 0.0), (-1.0, 1.0, 1.0), (-2.0, -3.0, -4.0), (1e30, 1e30, 1e30), (1e-30, 1e-30, 1e-30)],
+    [
+        (0.0, 1.0, 1.0),
+        (0.0, 0.0, 1.0),
+        (0.0, 0.0, 0.0),
+        (-1.0, 1.0, 1.0),
+        (-2.0, -3.0, -4.0),
+        (1e30, 1e30, 1e30),
+        (1e-30, 1e-30, 1e-30),
+    ],
 )
 def test_degenerate_scales_give_finite_bounded_normals(scale):
     pos = np.zeros((1, 3))
@@ -233,7 +241,9 @@ def test_systems_give_the_same_result_without_numba(tmp_path):
     for flag in ("0", "1"):
         env = dict(os.environ, ECS_ENGINE_NO_NUMBA=flag)
         out = tmp_path / f"m{flag}.npy"
-        proc = subprocess.run([sys.executable, str(script), str(out)], env=env, capture_output=True, text=True, check=True)
+        proc = subprocess.run(
+            [sys.executable, str(script), str(out)], env=env, capture_output=True, text=True, check=True
+        )
         results[flag] = (proc.stdout.strip(), np.load(out))
     assert results["1"][0] == "False"
     assert np.allclose(results["0"][1], results["1"][1], atol=1e-5)

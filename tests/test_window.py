@@ -39,11 +39,11 @@ def test_window_renders_resizes_and_survives_minimise(monkeypatch):
                 state["minimised"] = False
                 state["done"] = True
 
-    result = run_windowed(RunOptions(scene="cube", width=320, height=240, frames=16, validate=True, quiet=True),
-                          glfw, on_frame=script)
+    result = run_windowed(
+        RunOptions(scene="cube", width=320, height=240, frames=16, validate=True, quiet=True), glfw, on_frame=script
+    )
     assert result.validation_messages == []
     assert result.frames == 16
     assert result.recreations >= 1  # the resize rebuilt the swapchain
     assert result.minimised_waits >= 4  # no rendering while minimised
     assert len(result.gpu_ms) >= 10 and min(result.gpu_ms) > 0
-

@@ -7,11 +7,11 @@ def test_glfw_keys_drive_the_fly_camera_with_the_seed_key_map():
     """The window's key events go through apply_key into InputState, which the fly camera reads."""
     import glfw
     import numpy as np
-    from ecs_engine.components import Camera, FlyCamera, Transform
-    from ecs_engine.systems import FlyCameraSystem, InputState
 
     from ecs_engine import Schedule, World
     from ecs_engine.app.window import apply_key, key_names
+    from ecs_engine.components import Camera, FlyCamera, Transform
+    from ecs_engine.systems import FlyCameraSystem, InputState
 
     names = key_names(glfw)
     assert sorted(names.values()) == sorted(["left", "right", "up", "down", "w", "s", "a", "d", "e", "q"])

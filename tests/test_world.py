@@ -4,14 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from ecs_engine.components import (
-    Camera,
-    Mesh,
-    ModelMatrix,
-    PointLight,
-    Transform,
-    Velocity,
-)
 
 from ecs_engine import (
     Component,
@@ -20,6 +12,14 @@ from ecs_engine import (
     Field,
     MissingComponentError,
     World,
+)
+from ecs_engine.components import (
+    Camera,
+    Mesh,
+    ModelMatrix,
+    PointLight,
+    Transform,
+    Velocity,
 )
 from ecs_engine.ecs.entities import INDEX_MASK, MAX_GENERATION
 
@@ -327,7 +327,9 @@ def test_memory_of_bulk_spawn_is_close_to_raw_columns():
     w = World()
     n = 100_000
     w.spawn_batch(n, Transform(), Velocity(), Mesh())
-    raw = sum(t.count * col.dtype.itemsize * int(np.prod(col.shape[1:])) for t in w.tables for col in t.columns.values())
+    raw = sum(
+        t.count * col.dtype.itemsize * int(np.prod(col.shape[1:])) for t in w.tables for col in t.columns.values()
+    )
     assert w.memory_bytes() / raw < 1.5
 
 

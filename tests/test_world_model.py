@@ -45,7 +45,8 @@ def value_of(ct, n):
         return st.lists(small, min_size=n, max_size=n).map(lambda v: Hp(hp=np.array(v)))
     if ct is Pos:
         return st.lists(st.tuples(small, small, small), min_size=n, max_size=n).map(
-            lambda v: Pos(xyz=np.array(v, dtype=np.float64).reshape(n, 3)))
+            lambda v: Pos(xyz=np.array(v, dtype=np.float64).reshape(n, 3))
+        )
     if ct is Flag:
         return st.just(Flag())
     return st.text(max_size=3).map(Label)
@@ -211,7 +212,9 @@ class WorldMachine(RuleBasedStateMachine):
 
 
 WorldMachine.TestCase.settings = settings(
-    max_examples=60, stateful_step_count=40, deadline=None,
+    max_examples=60,
+    stateful_step_count=40,
+    deadline=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much],
 )
 TestWorldAgainstModel = WorldMachine.TestCase

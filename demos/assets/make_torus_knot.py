@@ -13,15 +13,21 @@ import numpy as np
 OUT = Path(__file__).with_name("torus_knot.obj")
 
 
-def torus_knot(p: int = 2, q: int = 3, segments: int = 256, sides: int = 24, tube: float = 0.4,
-               size: float = 2.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def torus_knot(
+    p: int = 2, q: int = 3, segments: int = 256, sides: int = 24, tube: float = 0.4, size: float = 2.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Positions (segments*sides, 3), unit normals and counter-clockwise triangles (0-based) of the tube."""
     t = np.arange(segments) * (2 * np.pi / segments)
     r = 2 + np.cos(q * t)
     curve = np.stack([r * np.cos(p * t), r * np.sin(p * t), -np.sin(q * t)], 1)
-    tangent = np.stack([-q * np.sin(q * t) * np.cos(p * t) - p * r * np.sin(p * t),
-                        -q * np.sin(q * t) * np.sin(p * t) + p * r * np.cos(p * t),
-                        -q * np.cos(q * t)], 1)
+    tangent = np.stack(
+        [
+            -q * np.sin(q * t) * np.cos(p * t) - p * r * np.sin(p * t),
+            -q * np.sin(q * t) * np.sin(p * t) + p * r * np.cos(p * t),
+            -q * np.cos(q * t),
+        ],
+        1,
+    )
     tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
     # Frame by parallel transport (project the previous normal), so the tube does not twist ...
     normal = np.empty_like(curve)
@@ -34,10 +40,12 @@ def torus_knot(p: int = 2, q: int = 3, segments: int = 256, sides: int = 24, tub
     gap = np.arctan2(np.cross(normal[0], end) @ tangent[0], normal[0] @ end)
     angle = -gap * np.arange(segments) / segments
     binormal = np.cross(tangent, normal)
-    normal, binormal = (np.cos(angle)[:, None] * normal + np.sin(angle)[:, None] * binormal,
-                        -np.sin(angle)[:, None] * normal + np.cos(angle)[:, None] * binormal)
+    normal, binormal = (
+        np.cos(angle)[:, None] * normal + np.sin(angle)[:, None] * binormal,
+        -np.sin(angle)[:, None] * normal + np.cos(angle)[:, None] * binormal,
+    )
     theta = np.arange(sides) * (2 * np.pi / sides)
-    normals = (np.cos(theta)[None, :, None] * normal[:, None] + np.sin(theta)[None, :, None] * binormal[:, None])
+    normals = np.cos(theta)[None, :, None] * normal[:, None] + np.sin(theta)[None, :, None] * binormal[:, None]
     positions = (curve[:, None] + tube * normals).reshape(-1, 3)
     normals = normals.reshape(-1, 3)
     lo, hi = positions.min(0), positions.max(0)
@@ -52,6 +60,7 @@ def torus_knot(p: int = 2, q: int = 3, segments: int = 256, sides: int = 24, tub
 
 def obj_text(positions: np.ndarray, normals: np.ndarray, faces: np.ndarray) -> str:
     """OBJ with 6 decimals; vertex k uses normal k, so faces are written `f k//k ...`."""
+
     def fmt(values: np.ndarray) -> np.ndarray:
         return np.round(values, 6) + 0.0  # + 0.0 turns -0.0 into 0.0
 

@@ -1,1 +1,2 @@
-"""The application: a session (device, target, pool, world, schedule, renderer), the run loop, the window, the CLI, the editor and the perf overlay."""
+"""The application: a session (device, target, pool, world, schedule, renderer), the run loop
+and its frame sources (offscreen, window), the CLI, the editor and the perf overlay."""

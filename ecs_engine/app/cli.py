@@ -46,27 +46,45 @@ def render_flags() -> argparse.ArgumentParser:
     """The flags `demo` and `editor` share."""
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--headless", action="store_true", help="render offscreen, no window (no display needed)")
-    common.add_argument("--frames", type=positive_int, help="frames to run (default: until the window closes; "
-                        f"headless: 1, or {HEADLESS_FALLBACK_FRAMES} when falling back from a window)")
+    common.add_argument(
+        "--frames",
+        type=positive_int,
+        help="frames to run (default: until the window closes; "
+        f"headless: 1, or {HEADLESS_FALLBACK_FRAMES} when falling back from a window)",
+    )
     common.add_argument("--screenshot", metavar="PNG", help="write the last frame to this PNG (headless)")
     common.add_argument("--width", type=dimension, default=1280)
     common.add_argument("--height", type=dimension, default=720)
-    common.add_argument("--present", choices=("fifo", "mailbox", "immediate"), default="fifo",
-                        help="swapchain present mode (windowed)")
+    common.add_argument(
+        "--present", choices=("fifo", "mailbox", "immediate"), default="fifo", help="swapchain present mode (windowed)"
+    )
     common.add_argument("--validate", action="store_true", help="enable the Vulkan validation layers")
-    common.add_argument("--mode", choices=("instanced", "per_entity", "indirect"), default="instanced",
-                        help="instanced: one draw per mesh per chunk; per_entity: one draw per entity (the seed's "
-                        "way); indirect: the GPU culls and writes the draws (compute + vkCmdDrawIndexedIndirectCount)")
-    common.add_argument("--threads", type=positive_int,
-                        help="worker threads, counting the main one (default: all cores)")
-    common.add_argument("--recorder", choices=("native", "python"),
-                        help="native: numba loop without the GIL (default when numba is installed); python: the binding")
-    common.add_argument("--no-culling", dest="culling", action="store_false",
-                        help="draw everything, skip frustum culling")
-    common.add_argument("--entities", type=positive_int, help="scaling and motion scenes: entity count "
-                        "(default 10,000 and 100,000)")
-    common.add_argument("--perf-json", metavar="PATH", help="write every frame's perf samples (CPU, GPU, record ms, "
-                        "psutil) to this JSON file at the end")
+    common.add_argument(
+        "--mode",
+        choices=("instanced", "per_entity", "indirect"),
+        default="instanced",
+        help="instanced: one draw per mesh per chunk; per_entity: one draw per entity (the seed's "
+        "way); indirect: the GPU culls and writes the draws (compute + vkCmdDrawIndexedIndirectCount)",
+    )
+    common.add_argument(
+        "--threads", type=positive_int, help="worker threads, counting the main one (default: all cores)"
+    )
+    common.add_argument(
+        "--recorder",
+        choices=("native", "python"),
+        help="native: numba loop without the GIL (default when numba is installed); python: the binding",
+    )
+    common.add_argument(
+        "--no-culling", dest="culling", action="store_false", help="draw everything, skip frustum culling"
+    )
+    common.add_argument(
+        "--entities", type=positive_int, help="scaling and motion scenes: entity count (default 10,000 and 100,000)"
+    )
+    common.add_argument(
+        "--perf-json",
+        metavar="PATH",
+        help="write every frame's perf samples (CPU, GPU, record ms, psutil) to this JSON file at the end",
+    )
     common.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show tracebacks")
     return common
 
@@ -77,16 +95,27 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     common = render_flags()
     demo = sub.add_parser("demo", help="run a demo scene", parents=[common])
-    demo.add_argument("scene", nargs="?", default=DEFAULT_SCENE, choices=SCENES,
-                      help="cube, grid100, model: the seed's scenes; scaling: --entities moving entities; "
-                      "motion: text-mode ECS scene (no rendering)")
+    demo.add_argument(
+        "scene",
+        nargs="?",
+        default=DEFAULT_SCENE,
+        choices=SCENES,
+        help="cube, grid100, model: the seed's scenes; scaling: --entities moving entities; "
+        "motion: text-mode ECS scene (no rendering)",
+    )
     demo.add_argument("path", nargs="?", help="model file for the model scene (OBJ, glTF/GLB, PLY, STL)")
     editor = sub.add_parser("editor", help="the ImGui editor and Perf window on demo scenes", parents=[common])
-    editor.add_argument("scenes", nargs="*", type=editor_scene, metavar="SCENE",
-                        help=f"scenes to switch between, the first one opened (default {DEFAULT_SCENE}; "
-                        f"choices: {', '.join(EDITOR_SCENES)})")
-    bench = sub.add_parser("bench", help="run a benchmark (python -m bench NAME ...): ecs, seed-tables, scaling, "
-                           "numerics", add_help=False)
+    editor.add_argument(
+        "scenes",
+        nargs="*",
+        type=editor_scene,
+        metavar="SCENE",
+        help=f"scenes to switch between, the first one opened (default {DEFAULT_SCENE}; "
+        f"choices: {', '.join(EDITOR_SCENES)})",
+    )
+    bench = sub.add_parser(
+        "bench", help="run a benchmark (python -m bench NAME ...): ecs, seed-tables, scaling, numerics", add_help=False
+    )
     bench.add_argument("bench_args", nargs=argparse.REMAINDER)
     return parser
 
@@ -118,27 +147,49 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
     if args.path is not None and args.scene != "model":
         raise UsageError(f"a model path only goes with the model scene, not {args.scene!r}")
     editor = editor_scenes is not None
-    options = RunOptions(scene=args.scene, path=args.path, headless=args.headless, frames=args.frames,
-                         screenshot=args.screenshot, width=args.width, height=args.height,
-                         validate=args.validate, present=args.present, mode=args.mode, threads=args.threads,
-                         culling=args.culling, recorder=args.recorder, entities=args.entities or 10_000,
-                         perf_json=args.perf_json, editor=editor, scenes=editor_scenes or ())
+    options = RunOptions(
+        scene=args.scene,
+        path=args.path,
+        headless=args.headless,
+        frames=args.frames,
+        screenshot=args.screenshot,
+        width=args.width,
+        height=args.height,
+        validate=args.validate,
+        present=args.present,
+        mode=args.mode,
+        threads=args.threads,
+        culling=args.culling,
+        recorder=args.recorder,
+        entities=args.entities or 10_000,
+        perf_json=args.perf_json,
+        editor=editor,
+        scenes=editor_scenes or (),
+    )
     if not args.headless:
         from .window import WindowSource, open_glfw
 
         glfw = open_glfw()
         if glfw is not None:
             return report_validation(run(options, WindowSource(glfw)))
-        options = replace(options, headless=True, frames=args.frames or HEADLESS_FALLBACK_FRAMES,
-                          screenshot=options.screenshot or f"{args.scene}.png")
+        options = replace(
+            options,
+            headless=True,
+            frames=args.frames or HEADLESS_FALLBACK_FRAMES,
+            screenshot=options.screenshot or f"{args.scene}.png",
+        )
         if editor:
             # the editor needs a window to be used; without one, the scene and its text overlay
             options = replace(options, editor=False)
-            print(f"no display found: the editor needs a window, so {args.scene} runs headless for "
-                  f"{options.frames} frames with the text perf overlay (last frame saved to {options.screenshot})")
+            print(
+                f"no display found: the editor needs a window, so {args.scene} runs headless for "
+                f"{options.frames} frames with the text perf overlay (last frame saved to {options.screenshot})"
+            )
         else:
-            print(f"no display found: rendering {options.frames} frames headless instead "
-                  f"(last frame saved to {options.screenshot})")
+            print(
+                f"no display found: rendering {options.frames} frames headless instead "
+                f"(last frame saved to {options.screenshot})"
+            )
     result = run(options)
     if options.screenshot:
         print(f"wrote {options.screenshot}")
@@ -160,8 +211,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Exception as exc:
         if args.debug:
             raise
-        print(f"ecs-engine: internal error: {type(exc).__name__}: {exc} (run with --debug for the traceback)",
-              file=sys.stderr)
+        print(
+            f"ecs-engine: internal error: {type(exc).__name__}: {exc} (run with --debug for the traceback)",
+            file=sys.stderr,
+        )
         return 1
 
 

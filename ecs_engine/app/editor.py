@@ -17,13 +17,12 @@ from typing import Any
 
 import numpy as np
 
-from ..components import active_camera
-from ..maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
-from ..components import Camera, Mesh, PointLight, Transform
+from ..components import Camera, Mesh, PointLight, Transform, active_camera
+from ..ecs.world import World
 from ..gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
+from ..maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
 from ..render.renderer import MODES, RECORDER_NAMES
 from .settings import Settings
-from ..ecs.world import World
 
 PRESENT_MODES = tuple(SWAPCHAIN_PRESENT_MODES)
 
@@ -125,8 +124,11 @@ class Editor:
             ids = world.entities()
         else:
             wanted = names[b.component]
-            parts = [table.entities[: table.count] for table in world.tables
-                     if table.count and any(t.__name__ == wanted for t in table.type_set)]
+            parts = [
+                table.entities[: table.count]
+                for table in world.tables
+                if table.count and any(t.__name__ == wanted for t in table.type_set)
+            ]
             ids = np.concatenate(parts) if parts else np.empty(0, np.int64)
         text = b.search.strip()
         if text:
@@ -279,8 +281,9 @@ class Editor:
         return world.spawn(Transform(position=self._in_front(world)), Mesh(handle=handle))
 
     def add_light(self, world: World) -> int:
-        return world.spawn(Transform(position=self._in_front(world, 2.0)),
-                           PointLight(color=(1.0, 0.9, 0.7), intensity=5.0, radius=0.0))
+        return world.spawn(
+            Transform(position=self._in_front(world, 2.0)), PointLight(color=(1.0, 0.9, 0.7), intensity=5.0, radius=0.0)
+        )
 
 
 def _combo(imgui: Any, label: str, value: str, choices: tuple[str, ...]) -> str:

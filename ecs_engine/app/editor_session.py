@@ -30,8 +30,14 @@ def scene_stats(world: World, stats: Any) -> SceneStats:
 
 
 class EditorSession:
-    def __init__(self, session: Session, scenes: tuple[str, ...], max_threads: int, window: Any = None,
-                 max_ui_hz: float | None = 120.0) -> None:
+    def __init__(
+        self,
+        session: Session,
+        scenes: tuple[str, ...],
+        max_threads: int,
+        window: Any = None,
+        max_ui_hz: float | None = 120.0,
+    ) -> None:
         from imgui_bundle import imgui, implot
 
         self.imgui, self.implot = imgui, implot

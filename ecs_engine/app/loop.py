@@ -20,8 +20,12 @@ from .session import FrameSource, Session
 from .settings import RunOptions
 
 
-def run(options: RunOptions, source: FrameSource | None = None, log: Callable[[str], None] | None = None,
-        max_ui_hz: float | None = 120.0) -> RunResult:
+def run(
+    options: RunOptions,
+    source: FrameSource | None = None,
+    log: Callable[[str], None] | None = None,
+    max_ui_hz: float | None = 120.0,
+) -> RunResult:
     """Open the source, run `options.frames` frames (a window: until it closes), close it.
     Headless by default; pass a window.WindowSource to draw in a window."""
     say = log or (lambda text: None if options.quiet else print(text))
@@ -33,8 +37,7 @@ def run(options: RunOptions, source: FrameSource | None = None, log: Callable[[s
         session = Session(options, source)
         result.device = describe_device(session.device)
         if options.editor:  # after the source's key callbacks: ImGui's GLFW backend chains to them
-            editor = result.editor = EditorSession(session, options.scenes, default_threads(), source.window,
-                                                   max_ui_hz)
+            editor = result.editor = EditorSession(session, options.scenes, default_threads(), source.window, max_ui_hz)
         say(f"{source.describe(session)} on {result.device}")
         start = time.perf_counter()
         frames = 0
@@ -49,12 +52,23 @@ def run(options: RunOptions, source: FrameSource | None = None, log: Callable[[s
             if editor is not None:
                 width, height = target.extent or (options.width, options.height)
                 editor.build(session.world, result.last_stats, perf, target.dt, width, height)
-            stats = session.renderer.render(session.world, readback=target.readback, framebuffer=target.framebuffer,
-                                            extent=target.extent, wait=target.wait, signal=target.signal)
+            stats = session.renderer.render(
+                session.world,
+                readback=target.readback,
+                framebuffer=target.framebuffer,
+                extent=target.extent,
+                wait=target.wait,
+                signal=target.signal,
+            )
             end = time.perf_counter()
             # CPU work: not the waits for the GPU (renderer) or for an image (source)
-            result.add_frame(stats, (end - t0) * 1e3 - stats.wait_ms - target.waited_ms, end, target.waited_ms,
-                             ui_ms=editor.cost_ms if editor is not None else None)
+            result.add_frame(
+                stats,
+                (end - t0) * 1e3 - stats.wait_ms - target.waited_ms,
+                end,
+                target.waited_ms,
+                ui_ms=editor.cost_ms if editor is not None else None,
+            )
             source.end(session, target)
             frames += 1
             if perf.summary_due():

@@ -57,8 +57,10 @@ class OffscreenSource:
 
     def describe(self, session: Session) -> str:
         s = session.settings
-        return (f"{s.scene}: headless {self.width}x{self.height}, {self.frames} frames, mode {s.mode}, "
-                f"{recorder_words(s.mode, s.recorder)}, {s.threads} threads")
+        return (
+            f"{s.scene}: headless {self.width}x{self.height}, {self.frames} frames, mode {s.mode}, "
+            f"{recorder_words(s.mode, s.recorder)}, {s.threads} threads"
+        )
 
     def pixels(self) -> Any:
         assert self._gpu is not None

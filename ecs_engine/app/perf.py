@@ -41,6 +41,7 @@ _NAN = math.nan
 
 class Stats(NamedTuple):
     """Window statistics of one metric; all NaN when it has no value in the window."""
+
     min: float
     mean: float
     p99: float
@@ -54,6 +55,7 @@ class ProcessSample(NamedTuple):
 
 class Sampler(Protocol):
     """What PerfMonitor asks a few times a second; tests pass a fake with fixed values."""
+
     cores: int  # logical cores, to turn the process % into a per-core %
 
     def sample(self) -> ProcessSample: ...
@@ -113,7 +115,7 @@ def _stats(values: np.ndarray) -> Stats:
     values.partition(k)
     p99 = float(values[k])
     if k + 1 < n:  # everything after k is >= values[k]; the next order statistic is their min
-        p99 += (float(values[k + 1:].min()) - p99) * (pos - k)
+        p99 += (float(values[k + 1 :].min()) - p99) * (pos - k)
     return Stats(low, mean, p99)
 
 
@@ -186,8 +188,10 @@ class PerfLog:
             return np.empty((0, len(_COLUMNS))), {}
         rows = np.concatenate(self._blocks)[:n]
         names = dict.fromkeys(name for block in self._block_counters for name in block)
-        counters = {name: np.concatenate([block.get(name, np.full(self.CHUNK, _NAN))
-                                          for block in self._block_counters])[:n] for name in names}
+        counters = {
+            name: np.concatenate([block.get(name, np.full(self.CHUNK, _NAN)) for block in self._block_counters])[:n]
+            for name in names
+        }
         return rows, counters
 
     def to_dict(self, meta: dict[str, Any], cores: int) -> dict[str, Any]:
@@ -200,14 +204,27 @@ class PerfLog:
             for frame, value in zip(frames, column.tolist(), strict=True):
                 if not math.isnan(value):
                     frame[name] = int(value)
-        psutil_rows = [{"t": t, "cpu_system_percent": s.cpu_system_percent,
-                        "cpu_process_percent": s.cpu_process_percent,
-                        "cpu_process_percent_per_core": s.cpu_process_percent / cores,
-                        "rss_bytes": int(s.rss_bytes)} for t, s in self.samples]
-        summary = {name: {k: _json_number(v) for k, v in _stats(rows[:, _COL[name]])._asdict().items()}
-                   for name in METRICS}
-        return {"schema_version": SCHEMA_VERSION, "meta": meta, "frames": frames, "psutil": psutil_rows,
-                "summary": summary, "fps": _json_number(_rate(rows[:, _FRAME]))}
+        psutil_rows = [
+            {
+                "t": t,
+                "cpu_system_percent": s.cpu_system_percent,
+                "cpu_process_percent": s.cpu_process_percent,
+                "cpu_process_percent_per_core": s.cpu_process_percent / cores,
+                "rss_bytes": int(s.rss_bytes),
+            }
+            for t, s in self.samples
+        ]
+        summary = {
+            name: {k: _json_number(v) for k, v in _stats(rows[:, _COL[name]])._asdict().items()} for name in METRICS
+        }
+        return {
+            "schema_version": SCHEMA_VERSION,
+            "meta": meta,
+            "frames": frames,
+            "psutil": psutil_rows,
+            "summary": summary,
+            "fps": _json_number(_rate(rows[:, _FRAME])),
+        }
 
     def write_json(self, path: str | os.PathLike[str], meta: dict[str, Any], cores: int) -> None:
         """Write to a temporary file in the same folder, then rename over the target: a reader
@@ -233,12 +250,19 @@ class PerfMonitor:
     `write_json`: True in memory, or a path, checked for writability now and used by
     `write_json()` when it gets none."""
 
-    def __init__(self, window_s: float = 5.0, sample_hz: float = 4.0,
-                 clock: Callable[[], float] = time.perf_counter, sampler: Sampler | None = None,
-                 log: bool | str | os.PathLike[str] = False, max_fps: float = 4000.0) -> None:
+    def __init__(
+        self,
+        window_s: float = 5.0,
+        sample_hz: float = 4.0,
+        clock: Callable[[], float] = time.perf_counter,
+        sampler: Sampler | None = None,
+        log: bool | str | os.PathLike[str] = False,
+        max_fps: float = 4000.0,
+    ) -> None:
         if not (window_s > 0 and sample_hz > 0 and max_fps > 0):
-            raise ValueError("window_s, sample_hz and max_fps must be positive, "
-                             f"got {window_s}, {sample_hz}, {max_fps}")
+            raise ValueError(
+                f"window_s, sample_hz and max_fps must be positive, got {window_s}, {sample_hz}, {max_fps}"
+            )
         self.window_s = float(window_s)
         self.sample_hz = float(sample_hz)
         self.log = None if log is False else PerfLog(None if log is True else log)
@@ -260,8 +284,9 @@ class PerfMonitor:
         self._next_sample_t = 0.0  # the first frame samples
         self._next_summary_t = 1.0
 
-    def frame(self, cpu_ms: float, record_ms: float = 0.0, gpu_ms: float | None = None,
-              wait_ms: float = 0.0, **counters: int) -> None:
+    def frame(
+        self, cpu_ms: float, record_ms: float = 0.0, gpu_ms: float | None = None, wait_ms: float = 0.0, **counters: int
+    ) -> None:
         """Record one frame. cpu_ms: frame start to submit; record_ms: command recording;
         gpu_ms: GPU time of the frame whose timestamps just came back, None if none did;
         wait_ms: time blocked on fences/acquire; counters: draws, visible, triangles, ..."""
@@ -303,7 +328,7 @@ class PerfMonitor:
     def _grow(self) -> np.ndarray:
         """Double the ring (up to max_rows), rows in age order; happens a few times a run."""
         grown = np.full((min(2 * len(self._ring), self.max_rows), len(_COLUMNS)), _NAN)
-        grown[:self._rows] = np.concatenate((self._ring[self._next:], self._ring[:self._next]))
+        grown[: self._rows] = np.concatenate((self._ring[self._next :], self._ring[: self._next]))
         self._ring = grown
         self._next = self._rows
         return grown
@@ -324,7 +349,7 @@ class PerfMonitor:
             self._cache = (self.frame_count, first)
         start = base + self._cache[1]
         if start >= cap:
-            return ring[start - cap:base, column].copy()
+            return ring[start - cap : base, column].copy()
         if n < cap:
             return ring[start:n, column].copy()
         return np.concatenate((ring[start:, column], ring[:base, column]))
@@ -391,15 +416,19 @@ class PerfMonitor:
         """One line over the window, e.g. `fps 1234 | cpu 0.41 ms (p99 0.62) | record 0.08 |
         gpu 0.37 ms | sys 6% proc 101% (6.3%/core) | rss 210 MiB | 100 drawn in 2 draws`."""
         cpu, record, gpu = self.stats("cpu_ms"), self.stats("record_ms"), self.stats("gpu_ms")
-        parts = [f"fps {_fmt(self.fps, '.0f')}",
-                 f"cpu {_fmt(cpu.mean, '.2f')} ms (p99 {_fmt(cpu.p99, '.2f')})",
-                 f"record {_fmt(record.mean, '.2f')}",
-                 f"gpu {_fmt(gpu.mean, '.2f')} ms" if not math.isnan(gpu.mean) else "gpu n/a"]
+        parts = [
+            f"fps {_fmt(self.fps, '.0f')}",
+            f"cpu {_fmt(cpu.mean, '.2f')} ms (p99 {_fmt(cpu.p99, '.2f')})",
+            f"record {_fmt(record.mean, '.2f')}",
+            f"gpu {_fmt(gpu.mean, '.2f')} ms" if not math.isnan(gpu.mean) else "gpu n/a",
+        ]
         if self.sample is None:
             parts.append("sys n/a")
         else:
-            parts.append(f"sys {self.cpu_system_percent:.0f}% proc {self.cpu_process_percent:.0f}% "
-                         f"({self.cpu_process_percent_per_core:.1f}%/core)")
+            parts.append(
+                f"sys {self.cpu_system_percent:.0f}% proc {self.cpu_process_percent:.0f}% "
+                f"({self.cpu_process_percent_per_core:.1f}%/core)"
+            )
             parts.append(f"rss {self.rss_bytes / 2**20:.0f} MiB")
         counters = dict(self.counters)
         if "visible" in counters and "draws" in counters:

@@ -74,8 +74,10 @@ class PerfOverlay:
                         imgui.table_set_column_index(i)
                         imgui.text(text)
                 imgui.end_table()
-            imgui.text(f"CPU system {perf.cpu_system_percent:5.1f}%   process {perf.cpu_process_percent:6.1f}% "
-                       f"({perf.cpu_process_percent_per_core:4.1f}%/core)")
+            imgui.text(
+                f"CPU system {perf.cpu_system_percent:5.1f}%   process {perf.cpu_process_percent:6.1f}% "
+                f"({perf.cpu_process_percent_per_core:4.1f}%/core)"
+            )
             imgui.text(f"resident memory {perf.rss_bytes / 2**20:7.1f} MiB")
             imgui.text(f"overlay cost {overlay_ms:.3f} ms   monitor {perf.overhead_ms * 1e3:.1f} us")
             self._plot(perf)
@@ -105,4 +107,3 @@ def _peaks(t: np.ndarray, y: np.ndarray, points: int) -> tuple[np.ndarray, np.nd
 
 def _ms(value: float) -> str:
     return "-" if not np.isfinite(value) else f"{value:.3f}"
-

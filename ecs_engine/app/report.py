@@ -38,8 +38,9 @@ class RunResult:
     def fps(self) -> float:
         return self.frames / self.wall_s if self.wall_s > 0 else 0.0
 
-    def add_frame(self, stats: Any, cpu_ms: float, end: float, waited_ms: float = 0.0,
-                  ui_ms: float | None = None) -> None:
+    def add_frame(
+        self, stats: Any, cpu_ms: float, end: float, waited_ms: float = 0.0, ui_ms: float | None = None
+    ) -> None:
         """One frame's figures, into the lists and the perf monitor. `waited_ms`: time blocked
         outside the renderer (the swapchain), on top of `stats.wait_ms`."""
         self.cpu_ms.append(cpu_ms)
@@ -50,8 +51,9 @@ class RunResult:
         if ui_ms is not None:
             self.ui_ms.append(ui_ms)
         self.last_stats = stats
-        self.perf.frame(cpu_ms, stats.record_ms, stats.gpu_ms, stats.wait_ms + waited_ms, draws=stats.draws,
-                        visible=stats.instances)
+        self.perf.frame(
+            cpu_ms, stats.record_ms, stats.gpu_ms, stats.wait_ms + waited_ms, draws=stats.draws, visible=stats.instances
+        )
 
     def write_perf_json(self, options: RunOptions, say: Callable[[str], None]) -> None:
         """`--perf-json`: every frame's samples, with what the run was."""
@@ -62,9 +64,19 @@ class RunResult:
     def meta(self, options: RunOptions) -> dict[str, Any]:
         """What a --perf-json file says about its run (the settings it ended with)."""
         s = self.settings or options.settings()
-        return {"scene": s.scene, "mode": s.mode, "threads": s.threads, "culling": s.culling,
-                "width": options.width, "height": options.height, "headless": options.headless,
-                "device": self.device, "frames": self.frames, "wall_s": self.wall_s, "editor": options.editor}
+        return {
+            "scene": s.scene,
+            "mode": s.mode,
+            "threads": s.threads,
+            "culling": s.culling,
+            "width": options.width,
+            "height": options.height,
+            "headless": options.headless,
+            "device": self.device,
+            "frames": self.frames,
+            "wall_s": self.wall_s,
+            "editor": options.editor,
+        }
 
     def record_ms_mean(self, warmup: int = 0) -> float:
         values = self.record_ms[warmup:] or self.record_ms
@@ -102,10 +114,12 @@ def summary_line(result: RunResult, frames: int, wall_s: float, final: bool = Fa
     if skip:
         frames, wall_s = frames - skip, result.frame_end[-1] - result.frame_end[skip - 1]
     label = f"{frames} frames after {skip} warm-up" if skip else f"frame {frames}"
-    return (f"{label}: {frames / wall_s if wall_s > 0 else 0:.0f} fps (wall clock), cpu {cpu.mean():.3f} ms "
-            f"(p99 {np.percentile(cpu, 99):.3f}, record {record.mean():.3f}), {gpu_text}; "
-            f"{stats.instances} of {stats.candidates} entities "
-            f"drawn in {stats.draws} draws, {stats.triangles} triangles, {stats.lights} lights")
+    return (
+        f"{label}: {frames / wall_s if wall_s > 0 else 0:.0f} fps (wall clock), cpu {cpu.mean():.3f} ms "
+        f"(p99 {np.percentile(cpu, 99):.3f}, record {record.mean():.3f}), {gpu_text}; "
+        f"{stats.instances} of {stats.candidates} entities "
+        f"drawn in {stats.draws} draws, {stats.triangles} triangles, {stats.lights} lights"
+    )
 
 
 def save_png(pixels: np.ndarray, path: str) -> None:

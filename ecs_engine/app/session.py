@@ -10,7 +10,7 @@ current settings are read back from those owners, never kept twice.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Protocol
 
 from ..ecs.schedule import Schedule
@@ -84,9 +84,16 @@ class Session:
             self.gpu = source.open(options)
             start = options.settings()
             self.pool = JobPool(start.threads)
-            self.renderer = Renderer(self.gpu.device, self.gpu.target, self.gpu.meshes, mode=start.mode,
-                                     recorder=start.recorder, jobs=self.pool, culling=start.culling,
-                                     chunk_rows=options.chunk_rows)
+            self.renderer = Renderer(
+                self.gpu.device,
+                self.gpu.target,
+                self.gpu.meshes,
+                mode=start.mode,
+                recorder=start.recorder,
+                jobs=self.pool,
+                culling=start.culling,
+                chunk_rows=options.chunk_rows,
+            )
             self.scene = start.scene
             self.world, self.schedule = self._load(start.scene, options.path)
             source.attach(self)
@@ -102,8 +109,14 @@ class Session:
     def settings(self) -> Settings:
         """The settings in force, read from their owners."""
         present = getattr(self.gpu.target, "present_name", None)
-        return Settings(scene=self.scene, mode=self.renderer.mode, recorder=self.renderer.cpu_recorder,
-                        threads=self.pool.threads, culling=self.renderer.culling, present=present)
+        return Settings(
+            scene=self.scene,
+            mode=self.renderer.mode,
+            recorder=self.renderer.cpu_recorder,
+            threads=self.pool.threads,
+            culling=self.renderer.culling,
+            present=present,
+        )
 
     def _load(self, scene: str, path: str | None) -> tuple[World, Schedule]:
         """A new world for `scene` (sharing the run's pool and meshes) and its schedule."""
@@ -136,7 +149,6 @@ class Session:
         if pool is not None:
             pool.close()
         self.source.close()
-
 
     def __enter__(self) -> Session:
         return self

@@ -54,6 +54,11 @@ class RunOptions:
     scenes: tuple[str, ...] = ("cube", "grid100", "model")  # the editor's scene switcher
 
     def settings(self) -> Settings:
-        return Settings(scene=self.scene, mode=self.mode, recorder=self.recorder or default_recorder(),
-                        threads=self.threads or default_threads(), culling=self.culling,
-                        present=None if self.headless else self.present)
+        return Settings(
+            scene=self.scene,
+            mode=self.mode,
+            recorder=self.recorder or default_recorder(),
+            threads=self.threads or default_threads(),
+            culling=self.culling,
+            present=None if self.headless else self.present,
+        )

@@ -27,8 +27,16 @@ from .settings import MAX_DT, SIM_STEP, RunOptions
 
 # GLFW key -> the names FlyCameraSystem reads (the seed's Table 7.1).
 KEY_NAMES = {
-    "KEY_LEFT": "left", "KEY_RIGHT": "right", "KEY_UP": "up", "KEY_DOWN": "down",
-    "KEY_W": "w", "KEY_S": "s", "KEY_A": "a", "KEY_D": "d", "KEY_E": "e", "KEY_Q": "q",
+    "KEY_LEFT": "left",
+    "KEY_RIGHT": "right",
+    "KEY_UP": "up",
+    "KEY_DOWN": "down",
+    "KEY_W": "w",
+    "KEY_S": "s",
+    "KEY_A": "a",
+    "KEY_D": "d",
+    "KEY_E": "e",
+    "KEY_Q": "q",
 }
 
 
@@ -103,8 +111,9 @@ class WindowSource:
         self._surface = surface[0]
         device = self._keep(Device(instance, surface=self._surface))
         window = self.window
-        swapchain = self._keep(Swapchain(device, self._surface, lambda: glfw.get_framebuffer_size(window),
-                                         options.present))
+        swapchain = self._keep(
+            Swapchain(device, self._surface, lambda: glfw.get_framebuffer_size(window), options.present)
+        )
         meshes = self._keep(MeshRegistry(device))
         self.swapchain = swapchain
         return Gpu(instance, device, swapchain, meshes)
@@ -162,17 +171,26 @@ class WindowSource:
         except OutOfDate:
             swapchain.recreate()
             return None
-        return FrameTarget(dt=dt, framebuffer=swapchain.framebuffers[index], extent=(swapchain.width, swapchain.height),
-                           wait=frame.image_available, signal=swapchain.render_finished[index],
-                           waited_ms=(time.perf_counter() - now) * 1e3, image=index, suboptimal=suboptimal)
+        return FrameTarget(
+            dt=dt,
+            framebuffer=swapchain.framebuffers[index],
+            extent=(swapchain.width, swapchain.height),
+            wait=frame.image_available,
+            signal=swapchain.render_finished[index],
+            waited_ms=(time.perf_counter() - now) * 1e3,
+            image=index,
+            suboptimal=suboptimal,
+        )
 
     def end(self, session: Session, target: FrameTarget) -> None:
         if not self.swapchain.present(target.image) or target.suboptimal:
             self._resized = True
 
     def describe(self, session: Session) -> str:
-        return (f"{session.scene}: window {self.swapchain.width}x{self.swapchain.height}, "
-                f"present {self.swapchain.present_name}")
+        return (
+            f"{session.scene}: window {self.swapchain.width}x{self.swapchain.height}, "
+            f"present {self.swapchain.present_name}"
+        )
 
     @property
     def recreations(self) -> int:

@@ -31,6 +31,8 @@ class ComponentView:
     Fields are plain instance attributes (fast to read). Assigning one writes into the column
     (`view.position = p` copies p in) instead of rebinding, so no update is silently lost."""
 
+    _component: type[Component]
+
     def __init__(self, component: type[Component], arrays: dict[str, np.ndarray]) -> None:
         self.__dict__.update(arrays)
         object.__setattr__(self, "_component", component)
@@ -53,7 +55,7 @@ class Batch:
     A query keeps its batches while their table's layout is unchanged (same rows, same
     arrays), so iterating an unchanged world costs little more than a loop over tables."""
 
-    __slots__ = ("table", "entities", "_query", "_views")
+    __slots__ = ("_query", "_views", "entities", "table")
 
     def __init__(self, table: ArchetypeTable, query: Query) -> None:
         self.table = table
@@ -202,8 +204,8 @@ def _changed(table: ArchetypeTable, keys: list[ColumnKey], since: int) -> bool:
 
 def check_access(
     system_name: str,
-    reads: frozenset[type[Component]],
-    writes: frozenset[type[Component]],
+    reads: frozenset[type],
+    writes: frozenset[type],
     required: tuple[type[Component], ...],
     write: frozenset[type[Component]],
 ) -> None:

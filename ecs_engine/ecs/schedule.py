@@ -40,8 +40,9 @@ class System:
     writes: frozenset[type] | None = frozenset()
     last_run_tick: int = 0
 
-    def __init__(self, reads: Iterable[type] | None = (), writes: Iterable[type] | None = (),
-                 name: str | None = None) -> None:
+    def __init__(
+        self, reads: Iterable[type] | None = (), writes: Iterable[type] | None = (), name: str | None = None
+    ) -> None:
         self.reads = _types(reads)
         self.writes = _types(writes)
         self.name = name or type(self).__name__
@@ -58,8 +59,13 @@ class System:
 
 
 class FunctionSystem(System):
-    def __init__(self, fn: Callable[[World, float], Any], reads: Iterable[type] | None = (),
-                 writes: Iterable[type] | None = (), name: str | None = None) -> None:
+    def __init__(
+        self,
+        fn: Callable[[World, float], Any],
+        reads: Iterable[type] | None = (),
+        writes: Iterable[type] | None = (),
+        name: str | None = None,
+    ) -> None:
         super().__init__(reads, writes, name or getattr(fn, "__name__", "system"))
         self.fn = fn
 
@@ -67,8 +73,9 @@ class FunctionSystem(System):
         self.fn(world, dt)
 
 
-def system(reads: Iterable[type] = (), writes: Iterable[type] = (),
-           name: str | None = None) -> Callable[[Callable[[World, float], Any]], FunctionSystem]:
+def system(
+    reads: Iterable[type] = (), writes: Iterable[type] = (), name: str | None = None
+) -> Callable[[Callable[[World, float], Any]], FunctionSystem]:
     """Decorator: `@system(reads=[Velocity], writes=[Transform])` over `def f(world, dt)`."""
 
     def wrap(fn: Callable[[World, float], Any]) -> FunctionSystem:
@@ -107,8 +114,9 @@ class Schedule:
     def order(self) -> list[tuple[str, list[str]]]:
         return [(stage, [s.name for s in systems]) for stage, systems in self.stages.items()]
 
-    def run_frame(self, world: World, frame_dt: float, clock: FixedClock, fixed_stage: str = "fixed",
-                  max_frame_dt: float = 0.1) -> int:
+    def run_frame(
+        self, world: World, frame_dt: float, clock: FixedClock, fixed_stage: str = "fixed", max_frame_dt: float = 0.1
+    ) -> int:
         """One frame with a fixed-step stage: `fixed_stage` runs clock.advance(frame_dt) times
         with dt = clock.step; the other stages run once with frame_dt, at most `max_frame_dt` (a
         hitch must not fling a per-frame camera); the Interpolation resource gets the frame's
@@ -143,4 +151,3 @@ def _run_stage(world: World, systems: list[System], dt: float) -> None:
     for sys_ in systems:
         world.run_system(sys_, dt)
     world.flush()
-

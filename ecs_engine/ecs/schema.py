@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable
-from typing import Any, ClassVar
+from typing import Any, ClassVar, cast
 
 import numpy as np
 
@@ -65,7 +65,7 @@ class Field:
 
     def __set_name__(self, owner: type, name: str) -> None:
         self.name = name
-        self.component = owner  # type: ignore[assignment]
+        self.component = cast("type[Component]", owner)  # set on Component subclasses only
 
     @property
     def qualname(self) -> str:
@@ -134,7 +134,7 @@ class Field:
         """Collapse a per-element mask to a per-row mask (shape () means one row)."""
         extra = len(self.shape)
         if mask.ndim > extra:
-            return mask.reshape(mask.shape[0], -1).any(axis=1)
+            return np.asarray(mask.reshape(mask.shape[0], -1).any(axis=1))
         return np.atleast_1d(mask.any()) if extra else np.atleast_1d(mask)
 
     def _fail(self, rows: np.ndarray, arr: np.ndarray, who: Callable[[int], str], what: str) -> None:
@@ -200,8 +200,7 @@ class Component:
         unknown = set(values) - set(self.__fields__)
         if unknown:
             raise TypeError(
-                f"{type(self).__name__} has no field(s) {sorted(unknown)}; "
-                f"its fields are {list(self.__fields__)}"
+                f"{type(self).__name__} has no field(s) {sorted(unknown)}; its fields are {list(self.__fields__)}"
             )
         for name, f in self.__fields__.items():
             setattr(self, name, values[name] if name in values else f.default)

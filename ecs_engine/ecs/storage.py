@@ -10,6 +10,7 @@ writes, so it never needs to know which system is running.
 from __future__ import annotations
 
 from collections.abc import Iterator
+
 import numpy as np
 
 from .entities import INDEX_MASK, RESERVED, EntityIndex
@@ -96,9 +97,15 @@ class Storage:
     def stored(self, ids: np.ndarray, ct: type[Component]) -> Values:
         """The current values of `ct` for placed entities that all have it, one row each."""
         index = ids & INDEX_MASK
-        return {name: np.stack([self.tables[int(t)].columns[(ct, name)][int(r)]
-                                for t, r in zip(self.index.table[index], self.index.row[index])])
-                for name in ct.__fields__}
+        return {
+            name: np.stack(
+                [
+                    self.tables[int(t)].columns[(ct, name)][int(r)]
+                    for t, r in zip(self.index.table[index], self.index.row[index])
+                ]
+            )
+            for name in ct.__fields__
+        }
 
     # ------------------------------------------------------------------ spawn
     def place_one(self, eid: int, types: frozenset[type[Component]], checked: Checked, tick: int) -> None:

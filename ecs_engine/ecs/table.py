@@ -29,9 +29,7 @@ class ArchetypeTable:
         # version may be stale.
         self.version = 0
         self.entities = np.empty(0, dtype=np.int64)
-        self.fields: dict[ColumnKey, Field] = {
-            (ct, name): f for ct in types for name, f in ct.__fields__.items()
-        }
+        self.fields: dict[ColumnKey, Field] = {(ct, name): f for ct in types for name, f in ct.__fields__.items()}
         self.object_keys = [key for key, f in self.fields.items() if f.is_object]
         self.columns: dict[ColumnKey, np.ndarray] = {
             key: np.empty((0, *f.shape), dtype=f.dtype) for key, f in self.fields.items()

@@ -109,7 +109,8 @@ class World:
         keys = self._stamp_keys.get(component_types)
         if keys is None:
             keys = self._stamp_keys[component_types] = [
-                (ct, name) for ct in map(schema_of, component_types) for name in ct.__fields__]
+                (ct, name) for ct in map(schema_of, component_types) for name in ct.__fields__
+            ]
         ticks = table.column_ticks
         try:
             return (table.id, table.version, row, *[ticks[k] for k in keys])
@@ -135,9 +136,7 @@ class World:
         checked: Checked = {}
         for value in values:
             if isinstance(value, type):
-                raise TypeError(
-                    f"pass a component value such as {value.__name__}(), not the class itself"
-                )
+                raise TypeError(f"pass a component value such as {value.__name__}(), not the class itself")
             if isinstance(value, Component):
                 ct = type(value)
             else:
@@ -321,8 +320,7 @@ class World:
         fast = None
         if type(with_) is tuple and type(without) is tuple and (write is None or type(write) is tuple):
             # the same call from the same place every frame: skip resolving and checking again
-            fast = (required, with_, without, write, system,
-                    None if system is None else (system.reads, system.writes))
+            fast = (required, with_, without, write, system, None if system is None else (system.reads, system.writes))
             q = self._queries_by_call.get(fast)
             if q is not None:
                 return q
@@ -339,7 +337,8 @@ class World:
             if extra:
                 raise ValueError(f"write={sorted(t.__name__ for t in extra)} must also be queried")
         if system is not None and system.writes is not None:
-            check_access(system.name, system.reads, system.writes, req, writes)
+            reads = system.reads if system.reads is not None else frozenset(req)  # None: reads anything
+            check_access(system.name, reads, system.writes, req, writes)
         key = (req, w_set, wo_set, writes)
         q = self._queries.get(key)
         if q is None:
@@ -393,4 +392,3 @@ class World:
         finally:
             self._system = None
             system.last_run_tick = tick
-

@@ -106,8 +106,9 @@ class BlockAllocator:
                 return Allocation(block, offset, size)
         block_size = max(BLOCK_SIZE, _align(size, 2**20))
         try:
-            memory = vk.vkAllocateMemory(self.device_handle, vk.VkMemoryAllocateInfo(
-                allocationSize=block_size, memoryTypeIndex=type_index), None)
+            memory = vk.vkAllocateMemory(
+                self.device_handle, vk.VkMemoryAllocateInfo(allocationSize=block_size, memoryTypeIndex=type_index), None
+            )
         except (vk.VkErrorOutOfDeviceMemory, vk.VkErrorOutOfHostMemory) as exc:
             raise UsageError(f"out of GPU memory allocating {block_size / 2**20:.0f} MiB") from exc
         self.allocate_calls += 1
@@ -123,8 +124,12 @@ class BlockAllocator:
 
     def stats(self) -> dict[str, int]:
         blocks = [b for bs in self._blocks.values() for b in bs]
-        return {"blocks": len(blocks), "allocate_calls": self.allocate_calls,
-                "reserved_bytes": sum(b.size for b in blocks), "used_bytes": sum(b.used for b in blocks)}
+        return {
+            "blocks": len(blocks),
+            "allocate_calls": self.allocate_calls,
+            "reserved_bytes": sum(b.size for b in blocks),
+            "used_bytes": sum(b.used for b in blocks),
+        }
 
     def destroy(self) -> None:
         vk = self.vk

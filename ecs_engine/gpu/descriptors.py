@@ -17,9 +17,16 @@ class DescriptorSetLayout:
         vk = device.vk
         self.device = device
         self.bindings = list(bindings)
-        self.handle = vk.vkCreateDescriptorSetLayout(device.handle, vk.VkDescriptorSetLayoutCreateInfo(
-            pBindings=[vk.VkDescriptorSetLayoutBinding(binding=b, descriptorType=t, descriptorCount=1, stageFlags=s)
-                       for b, t, s in self.bindings]), None)
+        self.handle = vk.vkCreateDescriptorSetLayout(
+            device.handle,
+            vk.VkDescriptorSetLayoutCreateInfo(
+                pBindings=[
+                    vk.VkDescriptorSetLayoutBinding(binding=b, descriptorType=t, descriptorCount=1, stageFlags=s)
+                    for b, t, s in self.bindings
+                ]
+            ),
+            None,
+        )
 
     def destroy(self) -> None:
         if self.handle is not None:
@@ -31,14 +38,23 @@ class DescriptorPool:
     def __init__(self, device: Device, max_sets: int, sizes: dict[int, int]) -> None:
         vk = device.vk
         self.device = device
-        self.handle = vk.vkCreateDescriptorPool(device.handle, vk.VkDescriptorPoolCreateInfo(
-            maxSets=max_sets,
-            pPoolSizes=[vk.VkDescriptorPoolSize(type=t, descriptorCount=n) for t, n in sizes.items()]), None)
+        self.handle = vk.vkCreateDescriptorPool(
+            device.handle,
+            vk.VkDescriptorPoolCreateInfo(
+                maxSets=max_sets,
+                pPoolSizes=[vk.VkDescriptorPoolSize(type=t, descriptorCount=n) for t, n in sizes.items()],
+            ),
+            None,
+        )
 
     def allocate(self, layout: DescriptorSetLayout) -> Any:
         vk = self.device.vk
-        return vk.vkAllocateDescriptorSets(self.device.handle, vk.VkDescriptorSetAllocateInfo(
-            descriptorPool=self.handle, descriptorSetCount=1, pSetLayouts=[layout.handle]))[0]
+        return vk.vkAllocateDescriptorSets(
+            self.device.handle,
+            vk.VkDescriptorSetAllocateInfo(
+                descriptorPool=self.handle, descriptorSetCount=1, pSetLayouts=[layout.handle]
+            ),
+        )[0]
 
     def destroy(self) -> None:
         if self.handle is not None:
@@ -49,7 +65,20 @@ class DescriptorPool:
 def write_buffers(device: Device, descriptor_set: Any, writes: Sequence[tuple[int, int, Buffer]]) -> None:
     """Point bindings of a set at whole buffers: (binding, descriptor type, buffer)."""
     vk = device.vk
-    vk.vkUpdateDescriptorSets(device.handle, len(writes), [
-        vk.VkWriteDescriptorSet(dstSet=descriptor_set, dstBinding=binding, dstArrayElement=0, descriptorCount=1,
-                                descriptorType=kind, pBufferInfo=[buffer.descriptor()])
-        for binding, kind, buffer in writes], 0, None)
+    vk.vkUpdateDescriptorSets(
+        device.handle,
+        len(writes),
+        [
+            vk.VkWriteDescriptorSet(
+                dstSet=descriptor_set,
+                dstBinding=binding,
+                dstArrayElement=0,
+                descriptorCount=1,
+                descriptorType=kind,
+                pBufferInfo=[buffer.descriptor()],
+            )
+            for binding, kind, buffer in writes
+        ],
+        0,
+        None,
+    )

@@ -36,15 +36,18 @@ class Device:
     """Picks a physical device (discrete, then integrated, then CPU; ECS_ENGINE_DEVICE=substring
     picks by name), creates the logical device and exposes the graphics queue."""
 
-    def __init__(self, instance: Instance, surface: Any = None, prefer: str | None = None,
-                 extensions: tuple[str, ...] = ()) -> None:
+    def __init__(
+        self, instance: Instance, surface: Any = None, prefer: str | None = None, extensions: tuple[str, ...] = ()
+    ) -> None:
         vk = self.vk = instance.vk
         self.instance = instance
         prefer = prefer if prefer is not None else os.environ.get("ECS_ENGINE_DEVICE") or None
         physical = vk.vkEnumeratePhysicalDevices(instance.handle)
         if not physical:
-            raise UsageError("no Vulkan device found: install a driver, e.g. "
-                             "`sudo apt-get install -y mesa-vulkan-drivers` for the CPU driver (lavapipe)")
+            raise UsageError(
+                "no Vulkan device found: install a driver, e.g. "
+                "`sudo apt-get install -y mesa-vulkan-drivers` for the CPU driver (lavapipe)"
+            )
         candidates = []
         for pd in physical:
             props = vk.vkGetPhysicalDeviceProperties(pd)
@@ -74,13 +77,15 @@ class Device:
         f12 = vk.VkPhysicalDeviceVulkan12Features()
         vk.vkGetPhysicalDeviceFeatures2(self.physical, vk.VkPhysicalDeviceFeatures2(pNext=f12))
         want12 = vk.VkPhysicalDeviceVulkan12Features(
-            drawIndirectCount=f12.drawIndirectCount, hostQueryReset=f12.hostQueryReset,
+            drawIndirectCount=f12.drawIndirectCount,
+            hostQueryReset=f12.hostQueryReset,
         )
         self.features = {"drawIndirectCount": bool(f12.drawIndirectCount), "hostQueryReset": bool(f12.hostQueryReset)}
         base = vk.vkGetPhysicalDeviceFeatures(self.physical)
         # the indirect render mode needs all three (checked there, with one message if one lacks)
-        features = vk.VkPhysicalDeviceFeatures(multiDrawIndirect=base.multiDrawIndirect,
-                                               drawIndirectFirstInstance=base.drawIndirectFirstInstance)
+        features = vk.VkPhysicalDeviceFeatures(
+            multiDrawIndirect=base.multiDrawIndirect, drawIndirectFirstInstance=base.drawIndirectFirstInstance
+        )
         self.features["multiDrawIndirect"] = bool(base.multiDrawIndirect)
         self.features["drawIndirectFirstInstance"] = bool(base.drawIndirectFirstInstance)
         # Keep nested structs in locals until the call: the binding copies a list of structs into
@@ -95,8 +100,13 @@ class Device:
         )
         self.handle = vk.vkCreateDevice(self.physical, info, None)
         self.queue = vk.vkGetDeviceQueue(self.handle, self.queue_family, 0)
-        self._pool = vk.vkCreateCommandPool(self.handle, vk.VkCommandPoolCreateInfo(
-            flags=vk.VK_COMMAND_POOL_CREATE_TRANSIENT_BIT, queueFamilyIndex=self.queue_family), None)
+        self._pool = vk.vkCreateCommandPool(
+            self.handle,
+            vk.VkCommandPoolCreateInfo(
+                flags=vk.VK_COMMAND_POOL_CREATE_TRANSIENT_BIT, queueFamilyIndex=self.queue_family
+            ),
+            None,
+        )
         self.info = self._describe(props)
         self.allocator = BlockAllocator(vk, self.handle, self.memory_properties, props.deviceName)
         self._pipeline_cache: PipelineCache | None = None
@@ -142,11 +152,17 @@ class Device:
     def submit_once(self, record: Callable[[Any], None]) -> None:
         """Record with `record(command_buffer)`, submit, and wait (uploads, readbacks)."""
         vk = self.vk
-        cb = vk.vkAllocateCommandBuffers(self.handle, vk.VkCommandBufferAllocateInfo(
-            commandPool=self._pool, level=vk.VK_COMMAND_BUFFER_LEVEL_PRIMARY, commandBufferCount=1))[0]
+        cb = vk.vkAllocateCommandBuffers(
+            self.handle,
+            vk.VkCommandBufferAllocateInfo(
+                commandPool=self._pool, level=vk.VK_COMMAND_BUFFER_LEVEL_PRIMARY, commandBufferCount=1
+            ),
+        )[0]
         fence = vk.vkCreateFence(self.handle, vk.VkFenceCreateInfo(), None)
         try:
-            vk.vkBeginCommandBuffer(cb, vk.VkCommandBufferBeginInfo(flags=vk.VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT))
+            vk.vkBeginCommandBuffer(
+                cb, vk.VkCommandBufferBeginInfo(flags=vk.VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT)
+            )
             record(cb)
             vk.vkEndCommandBuffer(cb)
             vk.vkQueueSubmit(self.queue, 1, [vk.VkSubmitInfo(pCommandBuffers=[cb])], fence)

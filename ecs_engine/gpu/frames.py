@@ -41,14 +41,24 @@ class FrameRing:
         self._begin_info_ptr = vk.ffi.addressof(self._begin_info)
         self._stamps = vk.ffi.new("uint64_t[2]")
         for _ in range(count):
-            pool = vk.vkCreateCommandPool(device.handle, vk.VkCommandPoolCreateInfo(
-                flags=vk.VK_COMMAND_POOL_CREATE_TRANSIENT_BIT, queueFamilyIndex=device.queue_family), None)
-            cb = vk.vkAllocateCommandBuffers(device.handle, vk.VkCommandBufferAllocateInfo(
-                commandPool=pool, level=vk.VK_COMMAND_BUFFER_LEVEL_PRIMARY, commandBufferCount=1))[0]
+            pool = vk.vkCreateCommandPool(
+                device.handle,
+                vk.VkCommandPoolCreateInfo(
+                    flags=vk.VK_COMMAND_POOL_CREATE_TRANSIENT_BIT, queueFamilyIndex=device.queue_family
+                ),
+                None,
+            )
+            cb = vk.vkAllocateCommandBuffers(
+                device.handle,
+                vk.VkCommandBufferAllocateInfo(
+                    commandPool=pool, level=vk.VK_COMMAND_BUFFER_LEVEL_PRIMARY, commandBufferCount=1
+                ),
+            )[0]
             fence = vk.vkCreateFence(device.handle, vk.VkFenceCreateInfo(flags=vk.VK_FENCE_CREATE_SIGNALED_BIT), None)
             sem = [vk.vkCreateSemaphore(device.handle, vk.VkSemaphoreCreateInfo(), None) for _ in range(2)]
-            queries = vk.vkCreateQueryPool(device.handle, vk.VkQueryPoolCreateInfo(
-                queryType=vk.VK_QUERY_TYPE_TIMESTAMP, queryCount=2), None)
+            queries = vk.vkCreateQueryPool(
+                device.handle, vk.VkQueryPoolCreateInfo(queryType=vk.VK_QUERY_TYPE_TIMESTAMP, queryCount=2), None
+            )
             self.frames.append(Frame(pool, cb, fence, sem[0], sem[1], queries, vk.ffi.new("VkFence[1]", [fence])))
         self._submits: dict[tuple[int, int, int], Any] = {}
 
@@ -93,7 +103,8 @@ class FrameRing:
                 pCommandBuffers=[frame.command_buffer],
                 pWaitSemaphores=[wait] if wait is not None else None,
                 pWaitDstStageMask=[vk.VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT] if wait is not None else None,
-                pSignalSemaphores=[signal] if signal is not None else None)
+                pSignalSemaphores=[signal] if signal is not None else None,
+            )
             info = self._submits[key] = (made, vk.ffi.addressof(made))
         return info[1]
 
@@ -104,8 +115,9 @@ class FrameRing:
     def _read_timestamps(self, frame: Frame) -> float | None:
         vk = self.device.vk
         data = self._stamps
-        result = vk.lib.vkGetQueryPoolResults(self.device.handle, frame.queries, 0, 2, 16, data, 8,
-                                              vk.VK_QUERY_RESULT_64_BIT)
+        result = vk.lib.vkGetQueryPoolResults(
+            self.device.handle, frame.queries, 0, 2, 16, data, 8, vk.VK_QUERY_RESULT_64_BIT
+        )
         if result != vk.VK_SUCCESS:
             return None
         bits = self.device.info.timestamp_valid_bits

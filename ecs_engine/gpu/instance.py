@@ -51,18 +51,25 @@ class Instance:
                 pUserData=self._handle,
             )
         app = vk.VkApplicationInfo(
-            pApplicationName="ecs_engine", applicationVersion=1, pEngineName="ecs_engine",
-            engineVersion=1, apiVersion=vk.VK_MAKE_VERSION(*API_VERSION),
+            pApplicationName="ecs_engine",
+            applicationVersion=1,
+            pEngineName="ecs_engine",
+            engineVersion=1,
+            apiVersion=vk.VK_MAKE_VERSION(*API_VERSION),
         )
         info = vk.VkInstanceCreateInfo(
-            pApplicationInfo=app, ppEnabledLayerNames=layers, ppEnabledExtensionNames=exts,
+            pApplicationInfo=app,
+            ppEnabledLayerNames=layers,
+            ppEnabledExtensionNames=exts,
             pNext=debug_info,  # also covers vkCreateInstance/vkDestroyInstance themselves
         )
         try:
             self.handle = vk.vkCreateInstance(info, None)
         except vk.VkError as exc:
-            raise UsageError(f"could not create a Vulkan instance ({type(exc).__name__}): is a Vulkan driver installed? "
-                             "sudo apt-get install -y mesa-vulkan-drivers") from exc
+            raise UsageError(
+                f"could not create a Vulkan instance ({type(exc).__name__}): is a Vulkan driver installed? "
+                "sudo apt-get install -y mesa-vulkan-drivers"
+            ) from exc
         if debug_info is not None:
             create = instance_function(self, "vkCreateDebugUtilsMessengerEXT")
             self._messenger = create(self.handle, debug_info, None)

@@ -18,9 +18,15 @@ import numpy as np
 
 # GLSL type: (NumPy scalar type, shape of one element, alignment, size), std430
 _TYPES: dict[str, tuple[str, tuple[int, ...], int, int]] = {
-    "float": ("f4", (), 4, 4), "int": ("i4", (), 4, 4), "uint": ("u4", (), 4, 4),
-    "vec2": ("f4", (2,), 8, 8), "vec3": ("f4", (3,), 16, 12), "vec4": ("f4", (4,), 16, 16),
-    "ivec4": ("i4", (4,), 16, 16), "uvec2": ("u4", (2,), 8, 8), "uvec4": ("u4", (4,), 16, 16),
+    "float": ("f4", (), 4, 4),
+    "int": ("i4", (), 4, 4),
+    "uint": ("u4", (), 4, 4),
+    "vec2": ("f4", (2,), 8, 8),
+    "vec3": ("f4", (3,), 16, 12),
+    "vec4": ("f4", (4,), 16, 16),
+    "ivec4": ("i4", (4,), 16, 16),
+    "uvec2": ("u4", (2,), 8, 8),
+    "uvec4": ("u4", (4,), 16, 16),
     "mat4": ("f4", (4, 4), 16, 64),  # column-major in GLSL: write a NumPy [row, col] matrix as .T
 }
 _ARRAY = re.compile(r"^(\w+)\[(\d+)\]$")
@@ -61,8 +67,9 @@ class Struct:
         if self.std140:
             biggest = max(biggest, 16)
         self.members = members
-        self.dtype = np.dtype({"names": names, "formats": formats, "offsets": offsets,
-                               "itemsize": -(-offset // biggest) * biggest})
+        self.dtype = np.dtype(
+            {"names": names, "formats": formats, "offsets": offsets, "itemsize": -(-offset // biggest) * biggest}
+        )
 
     @property
     def size(self) -> int:
@@ -76,8 +83,8 @@ class Struct:
         lines = [f"// {line}" for line in self.doc.splitlines()] if self.doc else []
         lines.append(f"struct {self.name} {{  // {self.size} bytes, {'std140' if self.std140 else 'std430'}")
         for m in self.members:
-            kind, count = _ARRAY.match(m.glsl).groups() if _ARRAY.match(m.glsl) else (m.glsl, None)
-            decl = f"    {kind} {m.name}{f'[{count}]' if count else ''};"
+            array = _ARRAY.match(m.glsl)
+            decl = f"    {array.group(1)} {m.name}[{array.group(2)}];" if array else f"    {m.glsl} {m.name};"
             note = f"offset {m.offset}" + (f": {m.comment}" if m.comment else "")
             lines.append(f"{decl:<32}// {note}")
         lines.append("};")
@@ -103,8 +110,12 @@ def _describe(glsl: str, std140: bool) -> tuple[str, tuple[int, ...], int, int]:
 
 def glsl_header(structs: list[Struct], defines: dict[str, int], source: str) -> str:
     """A GLSL include with #defines (binding numbers, group sizes) and the struct declarations."""
-    out = [f"// Generated from {source} by scripts/compile_shaders.py: do not edit.",
-           "#ifndef LAYOUTS_GLSL", "#define LAYOUTS_GLSL", ""]
+    out = [
+        f"// Generated from {source} by scripts/compile_shaders.py: do not edit.",
+        "#ifndef LAYOUTS_GLSL",
+        "#define LAYOUTS_GLSL",
+        "",
+    ]
     out += [f"#define {name} {value}" for name, value in defines.items()]
     for struct in structs:
         out += ["", struct.glsl()]

@@ -29,8 +29,11 @@ class Buffer:
         self.where = where
         if where == DEVICE:
             usage |= vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
-        self.handle = vk.vkCreateBuffer(device.handle, vk.VkBufferCreateInfo(
-            size=max(self.size, 4), usage=usage, sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE), None)
+        self.handle = vk.vkCreateBuffer(
+            device.handle,
+            vk.VkBufferCreateInfo(size=max(self.size, 4), usage=usage, sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE),
+            None,
+        )
         req = vk.vkGetBufferMemoryRequirements(device.handle, self.handle)
         self.allocation = device.allocator.allocate(req, where, "buffer")
         vk.vkBindBufferMemory(device.handle, self.handle, self.allocation.memory, self.allocation.offset)
@@ -98,17 +101,37 @@ class Image:
         vk = device.vk
         self.device = device
         self.width, self.height, self.format = width, height, fmt
-        self.handle = vk.vkCreateImage(device.handle, vk.VkImageCreateInfo(
-            imageType=vk.VK_IMAGE_TYPE_2D, format=fmt, extent=vk.VkExtent3D(width, height, 1),
-            mipLevels=1, arrayLayers=1, samples=vk.VK_SAMPLE_COUNT_1_BIT, tiling=vk.VK_IMAGE_TILING_OPTIMAL,
-            usage=usage, sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE, initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED), None)
+        self.handle = vk.vkCreateImage(
+            device.handle,
+            vk.VkImageCreateInfo(
+                imageType=vk.VK_IMAGE_TYPE_2D,
+                format=fmt,
+                extent=vk.VkExtent3D(width, height, 1),
+                mipLevels=1,
+                arrayLayers=1,
+                samples=vk.VK_SAMPLE_COUNT_1_BIT,
+                tiling=vk.VK_IMAGE_TILING_OPTIMAL,
+                usage=usage,
+                sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE,
+                initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
+            ),
+            None,
+        )
         req = vk.vkGetImageMemoryRequirements(device.handle, self.handle)
         self.allocation = device.allocator.allocate(req, DEVICE, "image")
         vk.vkBindImageMemory(device.handle, self.handle, self.allocation.memory, self.allocation.offset)
-        self.view = vk.vkCreateImageView(device.handle, vk.VkImageViewCreateInfo(
-            image=self.handle, viewType=vk.VK_IMAGE_VIEW_TYPE_2D, format=fmt,
-            subresourceRange=vk.VkImageSubresourceRange(aspectMask=aspect, baseMipLevel=0, levelCount=1,
-                                                        baseArrayLayer=0, layerCount=1)), None)
+        self.view = vk.vkCreateImageView(
+            device.handle,
+            vk.VkImageViewCreateInfo(
+                image=self.handle,
+                viewType=vk.VK_IMAGE_VIEW_TYPE_2D,
+                format=fmt,
+                subresourceRange=vk.VkImageSubresourceRange(
+                    aspectMask=aspect, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=1
+                ),
+            ),
+            None,
+        )
 
     def destroy(self) -> None:
         if self.handle is None:

@@ -46,9 +46,26 @@ class NativeRecorder:
         bind_sets = fns["vkCmdBindDescriptorSets"]
         self._keep = fns  # the ctypes objects own nothing, but keep them with the compiled code
 
-        def record(cb, layout, push_stage, row_bytes, rows_addr, instanced, first_instance, key_counts,
-                   pipelines, vertex_handles_addr, zero_offset_addr, index_handles, index_counts,
-                   begin_info_addr, viewport_addr, scissor_addr, set_addr, out):  # pragma: no cover
+        def record(
+            cb,
+            layout,
+            push_stage,
+            row_bytes,
+            rows_addr,
+            instanced,
+            first_instance,
+            key_counts,
+            pipelines,
+            vertex_handles_addr,
+            zero_offset_addr,
+            index_handles,
+            index_counts,
+            begin_info_addr,
+            viewport_addr,
+            scissor_addr,
+            set_addr,
+            out,
+        ):  # pragma: no cover
             # a secondary sets its own viewport and scissor (they are not inherited) and binds
             # the frame's descriptor set. The rows are sorted by key = mesh * 2 + mirrored, with
             # key_counts[key] rows each: one run per non-empty key, drawn with pipelines[mirrored].
@@ -104,8 +121,16 @@ class NativeRecorder:
     def meshes_known(self) -> int:
         return self._meshes_seen
 
-    def frame_state(self, begin_info: Any, width: int, height: int, descriptor_set: Any, layout: Any,
-                    push_stage: int, pipelines: tuple[Any, Any]) -> dict[str, Any]:
+    def frame_state(
+        self,
+        begin_info: Any,
+        width: int,
+        height: int,
+        descriptor_set: Any,
+        layout: Any,
+        push_stage: int,
+        pipelines: tuple[Any, Any],
+    ) -> dict[str, Any]:
         """Per-frame inputs of `record`: the begin info (with render-pass inheritance), viewport,
         scissor, descriptor set, pipeline layout and the plain and mirrored pipelines, as memory
         and integers the native loop reads (kept alive in the dict). Made once per target and
@@ -114,25 +139,54 @@ class NativeRecorder:
         viewport = np.array([0.0, 0.0, width, height, 0.0, 1.0], dtype=np.float32)
         scissor = np.array([0, 0, width, height], dtype=np.int32)
         sets = np.array([handle_int(vk, descriptor_set)], dtype=np.int64)
-        return {"begin_info": begin_info, "begin_addr": handle_int(vk, vk.ffi.addressof(begin_info)),
-                "viewport": viewport, "scissor": scissor, "sets": sets, "layout": handle_int(vk, layout),
-                "push_stage": int(push_stage),
-                "pipelines": np.array([handle_int(vk, p) for p in pipelines], dtype=np.int64),
-                "viewport_addr": viewport.ctypes.data, "scissor_addr": scissor.ctypes.data,
-                "sets_addr": sets.ctypes.data}
+        return {
+            "begin_info": begin_info,
+            "begin_addr": handle_int(vk, vk.ffi.addressof(begin_info)),
+            "viewport": viewport,
+            "scissor": scissor,
+            "sets": sets,
+            "layout": handle_int(vk, layout),
+            "push_stage": int(push_stage),
+            "pipelines": np.array([handle_int(vk, p) for p in pipelines], dtype=np.int64),
+            "viewport_addr": viewport.ctypes.data,
+            "scissor_addr": scissor.ctypes.data,
+            "sets_addr": sets.ctypes.data,
+        }
 
-    def record(self, cb: Any, rows: np.ndarray, instanced: bool, first_instance: int, key_counts: np.ndarray,
-               frame: dict[str, Any]) -> tuple[int, int]:
+    def record(
+        self,
+        cb: Any,
+        rows: np.ndarray,
+        instanced: bool,
+        first_instance: int,
+        key_counts: np.ndarray,
+        frame: dict[str, Any],
+    ) -> tuple[int, int]:
         """Begin `cb` (an allocated secondary), record one chunk's binds and draws, end it.
         `rows` are sorted by key (mesh * 2 + mirrored), `key_counts[key]` of each. Returns
         (draws, triangles). Threads may share one frame state."""
         vk = self.vk
         out = np.empty(2, dtype=np.int64)
-        result = self._record(handle_int(vk, cb), frame["layout"], frame["push_stage"], rows.dtype.itemsize,
-                              rows.ctypes.data, instanced, first_instance, key_counts, frame["pipelines"],
-                              self._vertex.ctypes.data, self._zero.ctypes.data, self._index, self._counts,
-                              frame["begin_addr"], frame["viewport_addr"], frame["scissor_addr"],
-                              frame["sets_addr"], out)
+        result = self._record(
+            handle_int(vk, cb),
+            frame["layout"],
+            frame["push_stage"],
+            rows.dtype.itemsize,
+            rows.ctypes.data,
+            instanced,
+            first_instance,
+            key_counts,
+            frame["pipelines"],
+            self._vertex.ctypes.data,
+            self._zero.ctypes.data,
+            self._index,
+            self._counts,
+            frame["begin_addr"],
+            frame["viewport_addr"],
+            frame["scissor_addr"],
+            frame["sets_addr"],
+            out,
+        )
         if result != 0:
             raise RuntimeError(f"recording a secondary command buffer failed with VkResult {result}")
         return int(out[0]), int(out[1])

@@ -25,30 +25,55 @@ class OffscreenTarget:
         self.width, self.height = width, height
         self.color_format = vk.VK_FORMAT_R8G8B8A8_SRGB
         self.render_pass = create_render_pass(device, self.color_format, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL)
-        self.color = Image(device, width, height, self.color_format,
-                           vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                           vk.VK_IMAGE_ASPECT_COLOR_BIT)
-        self.depth = Image(device, width, height, vk.VK_FORMAT_D32_SFLOAT,
-                           vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, vk.VK_IMAGE_ASPECT_DEPTH_BIT)
-        self.framebuffer = create_framebuffer(device, self.render_pass, [self.color.view, self.depth.view], width, height)
+        self.color = Image(
+            device,
+            width,
+            height,
+            self.color_format,
+            vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+            vk.VK_IMAGE_ASPECT_COLOR_BIT,
+        )
+        self.depth = Image(
+            device,
+            width,
+            height,
+            vk.VK_FORMAT_D32_SFLOAT,
+            vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+            vk.VK_IMAGE_ASPECT_DEPTH_BIT,
+        )
+        self.framebuffer = create_framebuffer(
+            device, self.render_pass, [self.color.view, self.depth.view], width, height
+        )
         self.readback = Buffer(device, width * height * 4, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
 
     def record_readback(self, cb: Any) -> None:
         """After the render pass (image in TRANSFER_SRC layout): copy it to the host buffer."""
         vk = self.device.vk
         region = vk.VkBufferImageCopy(
-            bufferOffset=0, bufferRowLength=0, bufferImageHeight=0,
-            imageSubresource=vk.VkImageSubresourceLayers(aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=0,
-                                                         baseArrayLayer=0, layerCount=1),
-            imageOffset=vk.VkOffset3D(0, 0, 0), imageExtent=vk.VkExtent3D(self.width, self.height, 1))
-        vk.vkCmdCopyImageToBuffer(cb, self.color.handle, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-                                  self.readback.handle, 1, [region])
+            bufferOffset=0,
+            bufferRowLength=0,
+            bufferImageHeight=0,
+            imageSubresource=vk.VkImageSubresourceLayers(
+                aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=0, baseArrayLayer=0, layerCount=1
+            ),
+            imageOffset=vk.VkOffset3D(0, 0, 0),
+            imageExtent=vk.VkExtent3D(self.width, self.height, 1),
+        )
+        vk.vkCmdCopyImageToBuffer(
+            cb, self.color.handle, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, self.readback.handle, 1, [region]
+        )
         barrier = vk.VkBufferMemoryBarrier(
-            srcAccessMask=vk.VK_ACCESS_TRANSFER_WRITE_BIT, dstAccessMask=vk.VK_ACCESS_HOST_READ_BIT,
-            srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED, dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            buffer=self.readback.handle, offset=0, size=self.readback.size)
-        vk.vkCmdPipelineBarrier(cb, vk.VK_PIPELINE_STAGE_TRANSFER_BIT, vk.VK_PIPELINE_STAGE_HOST_BIT, 0,
-                                0, None, 1, [barrier], 0, None)
+            srcAccessMask=vk.VK_ACCESS_TRANSFER_WRITE_BIT,
+            dstAccessMask=vk.VK_ACCESS_HOST_READ_BIT,
+            srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+            dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+            buffer=self.readback.handle,
+            offset=0,
+            size=self.readback.size,
+        )
+        vk.vkCmdPipelineBarrier(
+            cb, vk.VK_PIPELINE_STAGE_TRANSFER_BIT, vk.VK_PIPELINE_STAGE_HOST_BIT, 0, 0, None, 1, [barrier], 0, None
+        )
 
     def pixels(self) -> np.ndarray:
         """(height, width, 4) uint8 RGBA (sRGB-encoded), a copy of the last readback."""

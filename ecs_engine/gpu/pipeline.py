@@ -31,12 +31,19 @@ def shader_module(device: Device, name: str) -> Any:
     return vk.vkCreateShaderModule(device.handle, vk.VkShaderModuleCreateInfo(codeSize=len(code), pCode=code), None)
 
 
-def pipeline_layout(device: Device, set_layouts: Sequence[Any], push_constants: Sequence[tuple[int, int, int]] = ()) -> Any:
+def pipeline_layout(
+    device: Device, set_layouts: Sequence[Any], push_constants: Sequence[tuple[int, int, int]] = ()
+) -> Any:
     """push_constants: (stage flags, offset, size)."""
     vk = device.vk
-    return vk.vkCreatePipelineLayout(device.handle, vk.VkPipelineLayoutCreateInfo(
-        pSetLayouts=list(set_layouts),
-        pPushConstantRanges=[vk.VkPushConstantRange(stageFlags=s, offset=o, size=n) for s, o, n in push_constants]), None)
+    return vk.vkCreatePipelineLayout(
+        device.handle,
+        vk.VkPipelineLayoutCreateInfo(
+            pSetLayouts=list(set_layouts),
+            pPushConstantRanges=[vk.VkPushConstantRange(stageFlags=s, offset=o, size=n) for s, o, n in push_constants],
+        ),
+        None,
+    )
 
 
 @dataclass
@@ -67,36 +74,54 @@ def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
         ]
         if spec.vertex_stride:
             vertex_input = vk.VkPipelineVertexInputStateCreateInfo(
-                pVertexBindingDescriptions=[vk.VkVertexInputBindingDescription(
-                    binding=0, stride=spec.vertex_stride, inputRate=vk.VK_VERTEX_INPUT_RATE_VERTEX)],
-                pVertexAttributeDescriptions=[vk.VkVertexInputAttributeDescription(
-                    location=loc, binding=0, format=fmt, offset=off) for loc, fmt, off in spec.vertex_attributes])
+                pVertexBindingDescriptions=[
+                    vk.VkVertexInputBindingDescription(
+                        binding=0, stride=spec.vertex_stride, inputRate=vk.VK_VERTEX_INPUT_RATE_VERTEX
+                    )
+                ],
+                pVertexAttributeDescriptions=[
+                    vk.VkVertexInputAttributeDescription(location=loc, binding=0, format=fmt, offset=off)
+                    for loc, fmt, off in spec.vertex_attributes
+                ],
+            )
         else:
             vertex_input = vk.VkPipelineVertexInputStateCreateInfo()
         blend = vk.VkPipelineColorBlendAttachmentState(
             blendEnable=vk.VK_TRUE if spec.alpha_blend else vk.VK_FALSE,
-            srcColorBlendFactor=vk.VK_BLEND_FACTOR_SRC_ALPHA, dstColorBlendFactor=vk.VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
-            colorBlendOp=vk.VK_BLEND_OP_ADD, srcAlphaBlendFactor=vk.VK_BLEND_FACTOR_ONE,
-            dstAlphaBlendFactor=vk.VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA, alphaBlendOp=vk.VK_BLEND_OP_ADD,
-            colorWriteMask=0xF)
+            srcColorBlendFactor=vk.VK_BLEND_FACTOR_SRC_ALPHA,
+            dstColorBlendFactor=vk.VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
+            colorBlendOp=vk.VK_BLEND_OP_ADD,
+            srcAlphaBlendFactor=vk.VK_BLEND_FACTOR_ONE,
+            dstAlphaBlendFactor=vk.VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
+            alphaBlendOp=vk.VK_BLEND_OP_ADD,
+            colorWriteMask=0xF,
+        )
         info = vk.VkGraphicsPipelineCreateInfo(
             pStages=stages,
             pVertexInputState=vertex_input,
-            pInputAssemblyState=vk.VkPipelineInputAssemblyStateCreateInfo(topology=vk.VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST),
+            pInputAssemblyState=vk.VkPipelineInputAssemblyStateCreateInfo(
+                topology=vk.VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST
+            ),
             pViewportState=vk.VkPipelineViewportStateCreateInfo(viewportCount=1, scissorCount=1),
             pRasterizationState=vk.VkPipelineRasterizationStateCreateInfo(
-                polygonMode=vk.VK_POLYGON_MODE_FILL, lineWidth=1.0,
+                polygonMode=vk.VK_POLYGON_MODE_FILL,
+                lineWidth=1.0,
                 cullMode=vk.VK_CULL_MODE_BACK_BIT if spec.cull_back else vk.VK_CULL_MODE_NONE,
-                frontFace=vk.VK_FRONT_FACE_COUNTER_CLOCKWISE if spec.front_face_ccw else vk.VK_FRONT_FACE_CLOCKWISE),
+                frontFace=vk.VK_FRONT_FACE_COUNTER_CLOCKWISE if spec.front_face_ccw else vk.VK_FRONT_FACE_CLOCKWISE,
+            ),
             pMultisampleState=vk.VkPipelineMultisampleStateCreateInfo(rasterizationSamples=vk.VK_SAMPLE_COUNT_1_BIT),
             pDepthStencilState=vk.VkPipelineDepthStencilStateCreateInfo(
                 depthTestEnable=vk.VK_TRUE if spec.depth_test else vk.VK_FALSE,
                 depthWriteEnable=vk.VK_TRUE if spec.depth_write else vk.VK_FALSE,
-                depthCompareOp=vk.VK_COMPARE_OP_GREATER),
+                depthCompareOp=vk.VK_COMPARE_OP_GREATER,
+            ),
             pColorBlendState=vk.VkPipelineColorBlendStateCreateInfo(pAttachments=[blend]),
             pDynamicState=vk.VkPipelineDynamicStateCreateInfo(
-                pDynamicStates=[vk.VK_DYNAMIC_STATE_VIEWPORT, vk.VK_DYNAMIC_STATE_SCISSOR]),
-            layout=spec.layout, renderPass=spec.render_pass, subpass=spec.subpass,
+                pDynamicStates=[vk.VK_DYNAMIC_STATE_VIEWPORT, vk.VK_DYNAMIC_STATE_SCISSOR]
+            ),
+            layout=spec.layout,
+            renderPass=spec.render_pass,
+            subpass=spec.subpass,
         )
         return vk.vkCreateGraphicsPipelines(device.handle, device.pipeline_cache.handle, 1, [info], None)[0]
     finally:

@@ -26,8 +26,11 @@ class PipelineCache:
         except OSError:
             pass
         if data:
-            self.handle = vk.vkCreatePipelineCache(device_handle, vk.VkPipelineCacheCreateInfo(
-                initialDataSize=len(data), pInitialData=vk.ffi.from_buffer(data)), None)
+            self.handle = vk.vkCreatePipelineCache(
+                device_handle,
+                vk.VkPipelineCacheCreateInfo(initialDataSize=len(data), pInitialData=vk.ffi.from_buffer(data)),
+                None,
+            )
         else:
             self.handle = vk.vkCreatePipelineCache(device_handle, vk.VkPipelineCacheCreateInfo(), None)
 

@@ -15,8 +15,13 @@ if TYPE_CHECKING:
 class _ThreadPool:
     def __init__(self, device: Device) -> None:
         vk = device.vk
-        self.handle = vk.vkCreateCommandPool(device.handle, vk.VkCommandPoolCreateInfo(
-            flags=vk.VK_COMMAND_POOL_CREATE_TRANSIENT_BIT, queueFamilyIndex=device.queue_family), None)
+        self.handle = vk.vkCreateCommandPool(
+            device.handle,
+            vk.VkCommandPoolCreateInfo(
+                flags=vk.VK_COMMAND_POOL_CREATE_TRANSIENT_BIT, queueFamilyIndex=device.queue_family
+            ),
+            None,
+        )
         self.buffers: list[Any] = []
         self.used = 0
 
@@ -45,8 +50,14 @@ class SecondaryBuffers:
             with self._lock:
                 pool = pools[key] = _ThreadPool(self.device)
         if pool.used == len(pool.buffers):
-            pool.buffers.append(vk.vkAllocateCommandBuffers(self.device.handle, vk.VkCommandBufferAllocateInfo(
-                commandPool=pool.handle, level=vk.VK_COMMAND_BUFFER_LEVEL_SECONDARY, commandBufferCount=1))[0])
+            pool.buffers.append(
+                vk.vkAllocateCommandBuffers(
+                    self.device.handle,
+                    vk.VkCommandBufferAllocateInfo(
+                        commandPool=pool.handle, level=vk.VK_COMMAND_BUFFER_LEVEL_SECONDARY, commandBufferCount=1
+                    ),
+                )[0]
+            )
         cb = pool.buffers[pool.used]
         pool.used += 1
         return cb
@@ -62,10 +73,13 @@ class SecondaryBuffers:
     def begin_info(self, render_pass: Any, subpass: int, framebuffer: Any) -> Any:
         """Begin info for secondaries inside `render_pass`/`subpass` (one per frame, shared)."""
         vk = self.device.vk
-        inheritance = vk.VkCommandBufferInheritanceInfo(renderPass=render_pass, subpass=subpass, framebuffer=framebuffer)
+        inheritance = vk.VkCommandBufferInheritanceInfo(
+            renderPass=render_pass, subpass=subpass, framebuffer=framebuffer
+        )
         return vk.VkCommandBufferBeginInfo(
             flags=vk.VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT | vk.VK_COMMAND_BUFFER_USAGE_RENDER_PASS_CONTINUE_BIT,
-            pInheritanceInfo=inheritance)
+            pInheritanceInfo=inheritance,
+        )
 
     def destroy(self) -> None:
         vk = self.device.vk

@@ -14,8 +14,11 @@ from .render_pass import create_framebuffer, create_render_pass
 if TYPE_CHECKING:
     from .device import Device
 
-PRESENT_MODES = {"fifo": "VK_PRESENT_MODE_FIFO_KHR", "mailbox": "VK_PRESENT_MODE_MAILBOX_KHR",
-                 "immediate": "VK_PRESENT_MODE_IMMEDIATE_KHR"}
+PRESENT_MODES = {
+    "fifo": "VK_PRESENT_MODE_FIFO_KHR",
+    "mailbox": "VK_PRESENT_MODE_MAILBOX_KHR",
+    "immediate": "VK_PRESENT_MODE_IMMEDIATE_KHR",
+}
 
 
 class OutOfDate(Exception):
@@ -23,8 +26,9 @@ class OutOfDate(Exception):
 
 
 class Swapchain:
-    def __init__(self, device: Device, surface: Any, framebuffer_size: Callable[[], tuple[int, int]],
-                 present: str = "fifo") -> None:
+    def __init__(
+        self, device: Device, surface: Any, framebuffer_size: Callable[[], tuple[int, int]], present: str = "fifo"
+    ) -> None:
         vk = self.vk = device.vk
         self.device = device
         self.surface = surface
@@ -36,8 +40,12 @@ class Swapchain:
         self._modes = list(modes)
         self.present_name = present  # fifo, mailbox or immediate
         self.present_mode = self._present_mode(present)
-        srgb = [f for f in formats if f.format in (vk.VK_FORMAT_B8G8R8A8_SRGB, vk.VK_FORMAT_R8G8B8A8_SRGB)
-                and f.colorSpace == vk.VK_COLOR_SPACE_SRGB_NONLINEAR_KHR]
+        srgb = [
+            f
+            for f in formats
+            if f.format in (vk.VK_FORMAT_B8G8R8A8_SRGB, vk.VK_FORMAT_R8G8B8A8_SRGB)
+            and f.colorSpace == vk.VK_COLOR_SPACE_SRGB_NONLINEAR_KHR
+        ]
         chosen = srgb[0] if srgb else formats[0]
         self.color_format, self.color_space = chosen.format, chosen.colorSpace
         self.render_pass = create_render_pass(device, self.color_format, vk.VK_IMAGE_LAYOUT_PRESENT_SRC_KHR)
@@ -71,26 +79,58 @@ class Swapchain:
         if caps.maxImageCount:
             count = min(count, caps.maxImageCount)
         old = self.handle
-        self.handle = self._create_fn(self.device.handle, vk.VkSwapchainCreateInfoKHR(
-            surface=self.surface, minImageCount=count, imageFormat=self.color_format, imageColorSpace=self.color_space,
-            imageExtent=vk.VkExtent2D(width, height), imageArrayLayers=1,
-            imageUsage=vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, imageSharingMode=vk.VK_SHARING_MODE_EXCLUSIVE,
-            preTransform=caps.currentTransform, compositeAlpha=vk.VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR,
-            presentMode=self.present_mode, clipped=vk.VK_TRUE, oldSwapchain=old), None)
+        self.handle = self._create_fn(
+            self.device.handle,
+            vk.VkSwapchainCreateInfoKHR(
+                surface=self.surface,
+                minImageCount=count,
+                imageFormat=self.color_format,
+                imageColorSpace=self.color_space,
+                imageExtent=vk.VkExtent2D(width, height),
+                imageArrayLayers=1,
+                imageUsage=vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
+                imageSharingMode=vk.VK_SHARING_MODE_EXCLUSIVE,
+                preTransform=caps.currentTransform,
+                compositeAlpha=vk.VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR,
+                presentMode=self.present_mode,
+                clipped=vk.VK_TRUE,
+                oldSwapchain=old,
+            ),
+            None,
+        )
         if old is not None:
             self._destroy_fn(self.device.handle, old, None)
         self.width, self.height = width, height
         self.images = self._images_fn(self.device.handle, self.handle)
-        self.depth = Image(self.device, width, height, vk.VK_FORMAT_D32_SFLOAT,
-                           vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, vk.VK_IMAGE_ASPECT_DEPTH_BIT)
+        self.depth = Image(
+            self.device,
+            width,
+            height,
+            vk.VK_FORMAT_D32_SFLOAT,
+            vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+            vk.VK_IMAGE_ASPECT_DEPTH_BIT,
+        )
         for image in self.images:
-            view = vk.vkCreateImageView(self.device.handle, vk.VkImageViewCreateInfo(
-                image=image, viewType=vk.VK_IMAGE_VIEW_TYPE_2D, format=self.color_format,
-                subresourceRange=vk.VkImageSubresourceRange(aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=0,
-                                                            levelCount=1, baseArrayLayer=0, layerCount=1)), None)
+            view = vk.vkCreateImageView(
+                self.device.handle,
+                vk.VkImageViewCreateInfo(
+                    image=image,
+                    viewType=vk.VK_IMAGE_VIEW_TYPE_2D,
+                    format=self.color_format,
+                    subresourceRange=vk.VkImageSubresourceRange(
+                        aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT,
+                        baseMipLevel=0,
+                        levelCount=1,
+                        baseArrayLayer=0,
+                        layerCount=1,
+                    ),
+                ),
+                None,
+            )
             self.views.append(view)
-            self.framebuffers.append(create_framebuffer(self.device, self.render_pass, [view, self.depth.view],
-                                                        width, height))
+            self.framebuffers.append(
+                create_framebuffer(self.device, self.render_pass, [view, self.depth.view], width, height)
+            )
             # one per image: a semaphore waited on by present is free again only once that image
             # is acquired again
             self.render_finished.append(vk.vkCreateSemaphore(self.device.handle, vk.VkSemaphoreCreateInfo(), None))
@@ -139,8 +179,9 @@ class Swapchain:
     def present(self, index: int) -> bool:
         """Queue the image; False when the swapchain should be recreated."""
         vk = self.vk
-        info = vk.VkPresentInfoKHR(pWaitSemaphores=[self.render_finished[index]], pSwapchains=[self.handle],
-                                   pImageIndices=[index])
+        info = vk.VkPresentInfoKHR(
+            pWaitSemaphores=[self.render_finished[index]], pSwapchains=[self.handle], pImageIndices=[index]
+        )
         result = self._present_raw(self.device.queue, vk.ffi.addressof(info))
         if result in (vk.VK_ERROR_OUT_OF_DATE_KHR, vk.VK_SUBOPTIMAL_KHR):
             return False
@@ -155,4 +196,3 @@ class Swapchain:
             self._destroy_fn(self.device.handle, self.handle, None)
             self.handle = None
         self.vk.vkDestroyRenderPass(self.device.handle, self.render_pass, None)
-

@@ -61,9 +61,7 @@ def orthographic(height: float, aspect: float, near: float, far: float) -> np.nd
     check_positive("height", height)
     check_positive("aspect", aspect)
     if not (math.isfinite(near) and math.isfinite(far)) or far <= near:
-        raise ValueError(
-            f"an orthographic projection needs finite near < far, got near={near!r}, far={far!r}"
-        )
+        raise ValueError(f"an orthographic projection needs finite near < far, got near={near!r}, far={far!r}")
     m = np.zeros((4, 4), dtype=np.float64)
     m[0, 0] = 2.0 / (height * aspect)
     m[1, 1] = -2.0 / height  # Vulkan y flip
@@ -84,11 +82,14 @@ def rotation_matrix(rotation_quat: np.ndarray) -> np.ndarray:
     if not math.isfinite(n2) or n2 == 0.0:
         raise ValueError(f"rotation must be a finite non-zero quaternion, got {q.tolist()}")
     s = 2.0 / n2
-    return np.array([
-        [1 - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w), 0.0],
-        [s * (x * y + z * w), 1 - s * (x * x + z * z), s * (y * z - x * w), 0.0],
-        [s * (x * z - y * w), s * (y * z + x * w), 1 - s * (x * x + y * y), 0.0],
-        [0.0, 0.0, 0.0, 1.0]])
+    return np.array(
+        [
+            [1 - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w), 0.0],
+            [s * (x * y + z * w), 1 - s * (x * x + z * z), s * (y * z - x * w), 0.0],
+            [s * (x * z - y * w), s * (y * z + x * w), 1 - s * (x * x + y * y), 0.0],
+            [0.0, 0.0, 0.0, 1.0],
+        ]
+    )
 
 
 def view_rotation(rotation_quat: np.ndarray) -> np.ndarray:

@@ -28,7 +28,9 @@ def spheres_visible(centers: np.ndarray, radii: np.ndarray, planes: np.ndarray) 
     return (dist >= -radii[:, None]).all(axis=1)
 
 
-def bounding_spheres(model: np.ndarray, mesh_center: np.ndarray, mesh_radius: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def bounding_spheres(
+    model: np.ndarray, mesh_center: np.ndarray, mesh_radius: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """World (camera-relative) spheres of mesh instances: centre transformed by the model matrix,
     radius scaled by the largest column length of its 3x3 part (covers any non-uniform scale)."""
     m3 = model[:, :3, :3].astype(np.float64)

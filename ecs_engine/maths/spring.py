@@ -20,35 +20,45 @@ from collections.abc import Callable
 
 import numpy as np
 
+Coefficient = np.ndarray | float  # per spring (n,) or one for all
+
 INTEGRATORS = ("explicit", "semi_implicit", "implicit", "rk4", "exact")
 
 
-def _col(a: np.ndarray | float) -> np.ndarray:
+def _col(a: Coefficient) -> np.ndarray:
     a = np.asarray(a, dtype=np.float64)
     return a[:, None] if a.ndim == 1 else a
 
 
-def explicit(x: np.ndarray, v: np.ndarray, anchor: np.ndarray, k, c, m, dt: float) -> None:
+def explicit(
+    x: np.ndarray, v: np.ndarray, anchor: np.ndarray, k: Coefficient, c: Coefficient, m: Coefficient, dt: float
+) -> None:
     kk, cc, mm = _col(k), _col(c), _col(m)
     a = (-kk * (x - anchor) - cc * v) / mm
     x += v * dt
     v += a * dt
 
 
-def semi_implicit(x: np.ndarray, v: np.ndarray, anchor: np.ndarray, k, c, m, dt: float) -> None:
+def semi_implicit(
+    x: np.ndarray, v: np.ndarray, anchor: np.ndarray, k: Coefficient, c: Coefficient, m: Coefficient, dt: float
+) -> None:
     kk, cc, mm = _col(k), _col(c), _col(m)
     v += (-kk * (x - anchor) - cc * v) / mm * dt
     x += v * dt
 
 
-def implicit(x: np.ndarray, v: np.ndarray, anchor: np.ndarray, k, c, m, dt: float) -> None:
+def implicit(
+    x: np.ndarray, v: np.ndarray, anchor: np.ndarray, k: Coefficient, c: Coefficient, m: Coefficient, dt: float
+) -> None:
     """v1 = v0 + dt a(x1, v1), x1 = x0 + dt v1, solved for v1 (one division per row)."""
     kk, cc, mm = _col(k), _col(c), _col(m)
     v[...] = (v - dt * kk / mm * (x - anchor)) / (1.0 + dt * cc / mm + dt * dt * kk / mm)
     x += v * dt
 
 
-def rk4(x: np.ndarray, v: np.ndarray, anchor: np.ndarray, k, c, m, dt: float) -> None:
+def rk4(
+    x: np.ndarray, v: np.ndarray, anchor: np.ndarray, k: Coefficient, c: Coefficient, m: Coefficient, dt: float
+) -> None:
     kk, cc, mm = _col(k), _col(c), _col(m)
 
     def acc(xx: np.ndarray, vv: np.ndarray) -> np.ndarray:
@@ -65,7 +75,9 @@ def rk4(x: np.ndarray, v: np.ndarray, anchor: np.ndarray, k, c, m, dt: float) ->
     v += dt / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
 
 
-def exact_coefficients(k, c, m, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def exact_coefficients(
+    k: Coefficient, c: Coefficient, m: Coefficient, dt: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """exp(M dt) for M = [[0, 1], [-w2, -b]] (w2 = k/m, b = c/m), as (p00, p01, p10, p11):
     x1 - anchor = p00 (x0 - anchor) + p01 v0, v1 = p10 (x0 - anchor) + p11 v0.
 
@@ -103,7 +115,9 @@ def exact_coefficients(k, c, m, dt: float) -> tuple[np.ndarray, np.ndarray, np.n
     return p00, p01, p10, p11
 
 
-def exact(x: np.ndarray, v: np.ndarray, anchor: np.ndarray, k, c, m, dt: float) -> None:
+def exact(
+    x: np.ndarray, v: np.ndarray, anchor: np.ndarray, k: Coefficient, c: Coefficient, m: Coefficient, dt: float
+) -> None:
     p00, p01, p10, p11 = (_col(p) for p in exact_coefficients(k, c, m, dt))
     d = x - anchor
     x[...] = anchor + p00 * d + p01 * v
@@ -111,10 +125,24 @@ def exact(x: np.ndarray, v: np.ndarray, anchor: np.ndarray, k, c, m, dt: float) 
 
 
 STEPS: dict[str, Callable[..., None]] = {
-    "explicit": explicit, "semi_implicit": semi_implicit, "implicit": implicit, "rk4": rk4, "exact": exact}
+    "explicit": explicit,
+    "semi_implicit": semi_implicit,
+    "implicit": implicit,
+    "rk4": rk4,
+    "exact": exact,
+}
 
 
-def step(integrator: str, x: np.ndarray, v: np.ndarray, anchor: np.ndarray, k, c, m, dt: float) -> None:
+def step(
+    integrator: str,
+    x: np.ndarray,
+    v: np.ndarray,
+    anchor: np.ndarray,
+    k: Coefficient,
+    c: Coefficient,
+    m: Coefficient,
+    dt: float,
+) -> None:
     try:
         fn = STEPS[integrator]
     except KeyError:

@@ -46,8 +46,14 @@ def normal_scale(scale: np.ndarray) -> np.ndarray:
     return cof * factor[:, None]
 
 
-def compose_numpy(position: np.ndarray, rotation: np.ndarray, scale: np.ndarray, origin: np.ndarray,
-                  model_out: np.ndarray, normal_out: np.ndarray | None = None) -> None:
+def compose_numpy(
+    position: np.ndarray,
+    rotation: np.ndarray,
+    scale: np.ndarray,
+    origin: np.ndarray,
+    model_out: np.ndarray,
+    normal_out: np.ndarray | None = None,
+) -> None:
     """Reference version of `compose` in plain NumPy."""
     rot = quat_to_mat3(rotation)
     model_out[:, :3, :3] = rot * scale[:, None, :]
@@ -120,8 +126,14 @@ def _compose_kernel(position, rotation, scale, origin, model_out, normal_out, wi
 _compose_native = native.njit(_compose_kernel)
 
 
-def compose(position: np.ndarray, rotation: np.ndarray, scale: np.ndarray, origin: np.ndarray,
-            model_out: np.ndarray, normal_out: np.ndarray | None = None) -> None:
+def compose(
+    position: np.ndarray,
+    rotation: np.ndarray,
+    scale: np.ndarray,
+    origin: np.ndarray,
+    model_out: np.ndarray,
+    normal_out: np.ndarray | None = None,
+) -> None:
     """Write camera-relative model matrices, and normal matrices when `normal_out` is given,
     for every row.
 
@@ -131,8 +143,9 @@ def compose(position: np.ndarray, rotation: np.ndarray, scale: np.ndarray, origi
     origin = np.asarray(origin, dtype=np.float64)
     if _compose_native is not None:
         with_normal = normal_out is not None
-        _compose_native(position, rotation, scale, origin, model_out, normal_out if with_normal else _NO_NORMALS,
-                        with_normal)
+        _compose_native(
+            position, rotation, scale, origin, model_out, normal_out if with_normal else _NO_NORMALS, with_normal
+        )
     else:
         compose_numpy(position, rotation, scale, origin, model_out, normal_out)
 
@@ -239,7 +252,7 @@ def _turn_kernel(rotation, o, dx, dy, dz, dw):  # pragma: no cover
     return 1.0 / np.sqrt(n2) if n2 > 0.0 else 1.0
 
 
-_turn = native.njit(_turn_kernel)
+_turn = native.inner(_turn_kernel)
 _linear_native = native.njit(_linear_kernel)
 _angular_small = native.njit(_angular_small_kernel)
 _angular_large = native.njit(_angular_large_kernel)
@@ -247,8 +260,12 @@ _angular_large = native.njit(_angular_large_kernel)
 
 def integrate_linear(position: np.ndarray, linear: np.ndarray, dt: float) -> None:
     """position += linear * dt, in place (GIL released with numba)."""
-    if (_linear_native is not None and linear.shape == position.shape and position.flags.c_contiguous
-            and linear.flags.c_contiguous):
+    if (
+        _linear_native is not None
+        and linear.shape == position.shape
+        and position.flags.c_contiguous
+        and linear.flags.c_contiguous
+    ):
         _linear_native(position, linear, float(dt))
     else:
         integrate_linear_numpy(position, linear, float(dt))
@@ -257,8 +274,13 @@ def integrate_linear(position: np.ndarray, linear: np.ndarray, dt: float) -> Non
 def integrate_angular(rotation: np.ndarray, angular: np.ndarray, dt: float) -> None:
     """rotation <- exp(angular*dt/2) * rotation, re-normalised, in place. `angular` is a
     world-frame rate (axis * rad/s); the step is exact for a rate constant over dt."""
-    if (_angular_small is None or angular.shape != (len(rotation), 3) or not rotation.flags.c_contiguous
-            or not angular.flags.c_contiguous):
+    if (
+        _angular_small is None
+        or _angular_large is None
+        or angular.shape != (len(rotation), 3)
+        or not rotation.flags.c_contiguous
+        or not angular.flags.c_contiguous
+    ):
         integrate_angular_numpy(rotation, angular, float(dt))  # strided views: still in place
     elif _angular_small(rotation, angular, float(dt)):
         _angular_large(rotation, angular, float(dt))

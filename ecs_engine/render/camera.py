@@ -74,8 +74,7 @@ def _camera_matrices(world: World, eid: int, viewport_aspect: float) -> CameraMa
     if int(cam.projection) == ORTHOGRAPHIC:
         if math.isinf(far):
             raise UsageError(
-                f"the orthographic camera (entity {eid}) has an infinite far plane: "
-                "set Camera.far to a finite distance"
+                f"the orthographic camera (entity {eid}) has an infinite far plane: set Camera.far to a finite distance"
             )
         projection = orthographic(float(cam.height), aspect, near, far)
     else:

@@ -31,11 +31,17 @@ from .path import ChunkResult, FrameInputs, PathContext, summed_counts
 def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple[Any, Any]:
     """The (plain, mirrored) mesh pipelines of a path: the same but for the front face."""
     vk = ctx.device.vk
-    base = dict(layout=layout, render_pass=ctx.render_pass, subpass=0, vertex_stride=VERTEX_STRIDE,
-                vertex_attributes=[(0, vk.VK_FORMAT_R32G32B32_SFLOAT, 0), (1, vk.VK_FORMAT_R32G32B32_SFLOAT, 12)])
-    return (graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, "mesh.frag", **base)),
-            graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, "mesh.frag", front_face_ccw=False,
-                                                               **base)))
+    base = dict(
+        layout=layout,
+        render_pass=ctx.render_pass,
+        subpass=0,
+        vertex_stride=VERTEX_STRIDE,
+        vertex_attributes=[(0, vk.VK_FORMAT_R32G32B32_SFLOAT, 0), (1, vk.VK_FORMAT_R32G32B32_SFLOAT, 12)],
+    )
+    return (
+        graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, "mesh.frag", **base)),
+        graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, "mesh.frag", front_face_ccw=False, **base)),
+    )
 
 
 class PythonRecorder:
@@ -47,8 +53,9 @@ class PythonRecorder:
     def frame_state(self, frame: FrameInputs) -> None:
         return None
 
-    def record(self, rows: np.ndarray, key_counts: np.ndarray, first_instance: int,
-               frame: FrameInputs) -> tuple[Any, int, int]:
+    def record(
+        self, rows: np.ndarray, key_counts: np.ndarray, first_instance: int, frame: FrameInputs
+    ) -> tuple[Any, int, int]:
         path = self.path
         vk = path.vk
         index_counts = frame.bounds[2]
@@ -61,8 +68,9 @@ class PythonRecorder:
         cb = path.ctx.secondaries.begin(frame.slot, frame.target.secondary_begin)
         vk.vkCmdSetViewport(cb, 0, 1, [frame.target.viewport])  # not inherited by secondaries
         vk.vkCmdSetScissor(cb, 0, 1, [frame.target.area])
-        vk.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, path.layout, 0, 1,
-                                   [frame.descriptor_set], 0, None)
+        vk.vkCmdBindDescriptorSets(
+            cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, path.layout, 0, 1, [frame.descriptor_set], 0, None
+        )
         bound = None
         for start, count, h, mirrored in zip(starts.tolist(), counts.tolist(), run_mesh.tolist(), flipped.tolist()):
             pipeline = path.pipelines[mirrored]
@@ -74,8 +82,14 @@ class PythonRecorder:
                 vk.vkCmdDrawIndexed(cb, mesh.index_count, count, 0, 0, first_instance + start)
                 continue
             for i in range(start, start + count):
-                vk.vkCmdPushConstants(cb, path.layout, vk.VK_SHADER_STAGE_VERTEX_BIT, 0,
-                                      INSTANCE.size, vk.ffi.from_buffer(rows[i : i + 1]))
+                vk.vkCmdPushConstants(
+                    cb,
+                    path.layout,
+                    vk.VK_SHADER_STAGE_VERTEX_BIT,
+                    0,
+                    INSTANCE.size,
+                    vk.ffi.from_buffer(rows[i : i + 1]),
+                )
                 vk.vkCmdDrawIndexed(cb, mesh.index_count, 1, 0, 0, 0)
         end_command_buffer(vk, cb)
         return cb, draws, triangles
@@ -86,8 +100,10 @@ class NativeRecorder:
 
     def __init__(self, path: ChunkPath) -> None:
         if path.ctx.native_recorder is None:
-            raise UsageError("the native recorder needs numba (pip install numba, and unset ECS_ENGINE_NO_NUMBA); "
-                             "or use --recorder python")
+            raise UsageError(
+                "the native recorder needs numba (pip install numba, and unset ECS_ENGINE_NO_NUMBA); "
+                "or use --recorder python"
+            )
         self.path = path
         self.compiled = path.ctx.native_recorder
         self._frames: dict[tuple[tuple[int, int, int], int], dict[str, Any]] = {}
@@ -97,8 +113,9 @@ class NativeRecorder:
         compiled, meshes = self.compiled, self.path.ctx.meshes
         if compiled.meshes_known != len(meshes):
             gpu = [meshes[h] for h in range(len(meshes))]
-            compiled.set_meshes([m.vertices.handle for m in gpu], [m.indices.handle for m in gpu],
-                                [m.index_count for m in gpu])
+            compiled.set_meshes(
+                [m.vertices.handle for m in gpu], [m.indices.handle for m in gpu], [m.index_count for m in gpu]
+            )
         key = (frame.target.key, frame.slot)
         state = self._frames.get(key)
         if state is None:
@@ -107,20 +124,27 @@ class NativeRecorder:
             vk = self.path.vk
             _, width, height = frame.target.key
             state = self._frames[key] = compiled.frame_state(
-                frame.target.secondary_begin, width, height, frame.descriptor_set, self.path.layout,
-                vk.VK_SHADER_STAGE_VERTEX_BIT, self.path.pipelines)
+                frame.target.secondary_begin,
+                width,
+                height,
+                frame.descriptor_set,
+                self.path.layout,
+                vk.VK_SHADER_STAGE_VERTEX_BIT,
+                self.path.pipelines,
+            )
         return state
 
-    def record(self, rows: np.ndarray, key_counts: np.ndarray, first_instance: int,
-               frame: FrameInputs) -> tuple[Any, int, int]:
+    def record(
+        self, rows: np.ndarray, key_counts: np.ndarray, first_instance: int, frame: FrameInputs
+    ) -> tuple[Any, int, int]:
         cb = self.path.ctx.secondaries.acquire(frame.slot)
-        draws, triangles = self.compiled.record(cb, rows, self.path.instanced, first_instance, key_counts,
-                                                frame.path_state)
+        draws, triangles = self.compiled.record(
+            cb, rows, self.path.instanced, first_instance, key_counts, frame.path_state
+        )
         return cb, draws, triangles
 
 
-RECORDERS: dict[str, type[PythonRecorder] | type[NativeRecorder]] = {"native": NativeRecorder,
-                                                                     "python": PythonRecorder}
+RECORDERS: dict[str, type[PythonRecorder] | type[NativeRecorder]] = {"native": NativeRecorder, "python": PythonRecorder}
 
 
 class ChunkPath:
@@ -161,8 +185,17 @@ class ChunkPath:
         centers, radii, index_counts = frame.bounds
         rows = self.rows_for(chunk, frame)
         key_counts = np.zeros(2 * len(index_counts), dtype=np.int64)
-        n = write_rows(chunk.model, chunk.handle, chunk.material, centers, radii, frame.planes,
-                       self.ctx.material_count, rows, key_counts)
+        n = write_rows(
+            chunk.model,
+            chunk.handle,
+            chunk.material,
+            centers,
+            radii,
+            frame.planes,
+            self.ctx.material_count,
+            rows,
+            key_counts,
+        )
         if n == 0:
             return ChunkResult(None, 0, 0, 0)
         cb, draws, triangles = self._recorder.record(rows, key_counts, chunk.offset, frame)

@@ -78,10 +78,17 @@ class FrameExtractor:
         view = self.view(cam, origin, origin_key)
         light_columns = self.lights(world) if lights else []
         chunks = self.chunks(world, mesh_count)
-        return FrameData(camera=cam, origin=origin, origin_key=origin_key, view=view,
-                         planes=self.planes(cam.projection, view) if culling else None,
-                         lights=light_columns, light_count=sum(len(part[0]) for part in light_columns),
-                         chunks=chunks, candidates=sum(len(c.handle) for c in chunks))
+        return FrameData(
+            camera=cam,
+            origin=origin,
+            origin_key=origin_key,
+            view=view,
+            planes=self.planes(cam.projection, view) if culling else None,
+            lights=light_columns,
+            light_count=sum(len(part[0]) for part in light_columns),
+            chunks=chunks,
+            candidates=sum(len(c.handle) for c in chunks),
+        )
 
     def view(self, cam: CameraMatrices, origin: np.ndarray, origin_key: bytes) -> np.ndarray:
         """view_from_origin, kept while the camera matrices and the origin stay the same (a new
@@ -111,8 +118,13 @@ class FrameExtractor:
         column (the views stay valid and see every value written since)."""
         query = world.query(ModelMatrix, Mesh, write=())
         tables = query.tables
-        key = (world, mesh_count, self.chunk_rows, self.threads(),
-               *[(t.id, t.version, t.count, t.column_ticks[_HANDLE]) for t in tables])
+        key = (
+            world,
+            mesh_count,
+            self.chunk_rows,
+            self.threads(),
+            *[(t.id, t.version, t.count, t.column_ticks[_HANDLE]) for t in tables],
+        )
         if key == self._chunks_key:
             return self._chunks
         out: list[Chunk] = []

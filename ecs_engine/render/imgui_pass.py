@@ -61,25 +61,59 @@ class ImGuiRenderer:
         vk = self.vk = device.vk
         self.device = device
         io = imgui.get_io()
-        io.backend_flags |= (imgui.BackendFlags_.renderer_has_textures.value
-                             | imgui.BackendFlags_.renderer_has_vtx_offset.value)
-        self.sampler = vk.vkCreateSampler(device.handle, vk.VkSamplerCreateInfo(
-            magFilter=vk.VK_FILTER_LINEAR, minFilter=vk.VK_FILTER_LINEAR, mipmapMode=vk.VK_SAMPLER_MIPMAP_MODE_LINEAR,
-            addressModeU=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, addressModeV=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-            addressModeW=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, maxLod=1.0), None)
-        self.set_layout = vk.vkCreateDescriptorSetLayout(device.handle, vk.VkDescriptorSetLayoutCreateInfo(
-            pBindings=[vk.VkDescriptorSetLayoutBinding(
-                binding=0, descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, descriptorCount=1,
-                stageFlags=vk.VK_SHADER_STAGE_FRAGMENT_BIT)]), None)
+        io.backend_flags |= (
+            imgui.BackendFlags_.renderer_has_textures.value | imgui.BackendFlags_.renderer_has_vtx_offset.value
+        )
+        self.sampler = vk.vkCreateSampler(
+            device.handle,
+            vk.VkSamplerCreateInfo(
+                magFilter=vk.VK_FILTER_LINEAR,
+                minFilter=vk.VK_FILTER_LINEAR,
+                mipmapMode=vk.VK_SAMPLER_MIPMAP_MODE_LINEAR,
+                addressModeU=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+                addressModeV=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+                addressModeW=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+                maxLod=1.0,
+            ),
+            None,
+        )
+        self.set_layout = vk.vkCreateDescriptorSetLayout(
+            device.handle,
+            vk.VkDescriptorSetLayoutCreateInfo(
+                pBindings=[
+                    vk.VkDescriptorSetLayoutBinding(
+                        binding=0,
+                        descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+                        descriptorCount=1,
+                        stageFlags=vk.VK_SHADER_STAGE_FRAGMENT_BIT,
+                    )
+                ]
+            ),
+            None,
+        )
         self._pools: list[Any] = []
         self._free_sets: list[Any] = []
         self.layout = pipeline_layout(device, [self.set_layout], [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, 16)])
-        self.pipeline = graphics_pipeline(device, GraphicsPipelineSpec(
-            "imgui.vert", "imgui.frag", layout=self.layout, render_pass=render_pass, subpass=subpass,
-            vertex_stride=VERTEX_BYTES,
-            vertex_attributes=[(0, vk.VK_FORMAT_R32G32_SFLOAT, 0), (1, vk.VK_FORMAT_R32G32_SFLOAT, 8),
-                               (2, vk.VK_FORMAT_R8G8B8A8_UNORM, 16)],
-            cull_back=False, depth_test=False, depth_write=False, alpha_blend=True))
+        self.pipeline = graphics_pipeline(
+            device,
+            GraphicsPipelineSpec(
+                "imgui.vert",
+                "imgui.frag",
+                layout=self.layout,
+                render_pass=render_pass,
+                subpass=subpass,
+                vertex_stride=VERTEX_BYTES,
+                vertex_attributes=[
+                    (0, vk.VK_FORMAT_R32G32_SFLOAT, 0),
+                    (1, vk.VK_FORMAT_R32G32_SFLOAT, 8),
+                    (2, vk.VK_FORMAT_R8G8B8A8_UNORM, 16),
+                ],
+                cull_back=False,
+                depth_test=False,
+                depth_write=False,
+                alpha_blend=True,
+            ),
+        )
         self._textures: dict[int, _Texture] = {}
         self._next_id = 1  # 0 means "no texture" to ImGui
         self._frames = [self._frame_buffers(1 << 14, 1 << 15) for _ in range(frames)]
@@ -114,25 +148,60 @@ class ImGuiRenderer:
     def _allocate_set(self) -> Any:
         vk = self.vk
         if not self._free_sets:
-            pool = vk.vkCreateDescriptorPool(self.device.handle, vk.VkDescriptorPoolCreateInfo(
-                maxSets=SETS_PER_POOL, pPoolSizes=[vk.VkDescriptorPoolSize(
-                    type=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, descriptorCount=SETS_PER_POOL)]), None)
+            pool = vk.vkCreateDescriptorPool(
+                self.device.handle,
+                vk.VkDescriptorPoolCreateInfo(
+                    maxSets=SETS_PER_POOL,
+                    pPoolSizes=[
+                        vk.VkDescriptorPoolSize(
+                            type=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, descriptorCount=SETS_PER_POOL
+                        )
+                    ],
+                ),
+                None,
+            )
             self._pools.append(pool)
             layouts = [self.set_layout] * SETS_PER_POOL
-            self._free_sets = list(vk.vkAllocateDescriptorSets(self.device.handle, vk.VkDescriptorSetAllocateInfo(
-                descriptorPool=pool, descriptorSetCount=SETS_PER_POOL, pSetLayouts=layouts)))
+            self._free_sets = list(
+                vk.vkAllocateDescriptorSets(
+                    self.device.handle,
+                    vk.VkDescriptorSetAllocateInfo(
+                        descriptorPool=pool, descriptorSetCount=SETS_PER_POOL, pSetLayouts=layouts
+                    ),
+                )
+            )
         return self._free_sets.pop()
 
     def _create_texture(self, tex: Any) -> None:
         vk = self.vk
-        image = Image(self.device, tex.width, tex.height, vk.VK_FORMAT_R8G8B8A8_SRGB,
-                      vk.VK_IMAGE_USAGE_SAMPLED_BIT | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT, vk.VK_IMAGE_ASPECT_COLOR_BIT)
+        image = Image(
+            self.device,
+            tex.width,
+            tex.height,
+            vk.VK_FORMAT_R8G8B8A8_SRGB,
+            vk.VK_IMAGE_USAGE_SAMPLED_BIT | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+            vk.VK_IMAGE_ASPECT_COLOR_BIT,
+        )
         descriptor_set = self._allocate_set()
-        info = vk.VkDescriptorImageInfo(sampler=self.sampler, imageView=image.view,
-                                        imageLayout=vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL)
-        vk.vkUpdateDescriptorSets(self.device.handle, 1, [vk.VkWriteDescriptorSet(
-            dstSet=descriptor_set, dstBinding=0, dstArrayElement=0, descriptorCount=1,
-            descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, pImageInfo=[info])], 0, None)
+        info = vk.VkDescriptorImageInfo(
+            sampler=self.sampler, imageView=image.view, imageLayout=vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
+        )
+        vk.vkUpdateDescriptorSets(
+            self.device.handle,
+            1,
+            [
+                vk.VkWriteDescriptorSet(
+                    dstSet=descriptor_set,
+                    dstBinding=0,
+                    dstArrayElement=0,
+                    descriptorCount=1,
+                    descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+                    pImageInfo=[info],
+                )
+            ],
+            0,
+            None,
+        )
         texture = _Texture(image, descriptor_set, vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]))
         tex_id = self._next_id
         self._next_id += 1
@@ -154,33 +223,72 @@ class ImGuiRenderer:
         raw = staging.bytes()
         for (x, y, w, h), part in zip(rects, parts):
             raw[offset : offset + part.nbytes] = part.reshape(-1)
-            regions.append(vk.VkBufferImageCopy(
-                bufferOffset=offset, bufferRowLength=0, bufferImageHeight=0,
-                imageSubresource=vk.VkImageSubresourceLayers(aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=0,
-                                                             baseArrayLayer=0, layerCount=1),
-                imageOffset=vk.VkOffset3D(x, y, 0), imageExtent=vk.VkExtent3D(w, h, 1)))
+            regions.append(
+                vk.VkBufferImageCopy(
+                    bufferOffset=offset,
+                    bufferRowLength=0,
+                    bufferImageHeight=0,
+                    imageSubresource=vk.VkImageSubresourceLayers(
+                        aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=0, baseArrayLayer=0, layerCount=1
+                    ),
+                    imageOffset=vk.VkOffset3D(x, y, 0),
+                    imageExtent=vk.VkExtent3D(w, h, 1),
+                )
+            )
             offset += part.nbytes
         old = vk.VK_IMAGE_LAYOUT_UNDEFINED if fresh else vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
 
         def record(cb: Any) -> None:
-            rng = vk.VkImageSubresourceRange(aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=0, levelCount=1,
-                                             baseArrayLayer=0, layerCount=1)
+            rng = vk.VkImageSubresourceRange(
+                aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=1
+            )
             to_copy = vk.VkImageMemoryBarrier(
-                srcAccessMask=0 if fresh else vk.VK_ACCESS_SHADER_READ_BIT, dstAccessMask=vk.VK_ACCESS_TRANSFER_WRITE_BIT,
-                oldLayout=old, newLayout=vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED, dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                image=texture.image.handle, subresourceRange=rng)
-            vk.vkCmdPipelineBarrier(cb, vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT,
-                                    vk.VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, None, 0, None, 1, [to_copy])
-            vk.vkCmdCopyBufferToImage(cb, staging.handle, texture.image.handle,
-                                      vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, len(regions), regions)
+                srcAccessMask=0 if fresh else vk.VK_ACCESS_SHADER_READ_BIT,
+                dstAccessMask=vk.VK_ACCESS_TRANSFER_WRITE_BIT,
+                oldLayout=old,
+                newLayout=vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+                dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+                image=texture.image.handle,
+                subresourceRange=rng,
+            )
+            vk.vkCmdPipelineBarrier(
+                cb,
+                vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT,
+                vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
+                0,
+                0,
+                None,
+                0,
+                None,
+                1,
+                [to_copy],
+            )
+            vk.vkCmdCopyBufferToImage(
+                cb, staging.handle, texture.image.handle, vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, len(regions), regions
+            )
             to_read = vk.VkImageMemoryBarrier(
-                srcAccessMask=vk.VK_ACCESS_TRANSFER_WRITE_BIT, dstAccessMask=vk.VK_ACCESS_SHADER_READ_BIT,
-                oldLayout=vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, newLayout=vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED, dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                image=texture.image.handle, subresourceRange=rng)
-            vk.vkCmdPipelineBarrier(cb, vk.VK_PIPELINE_STAGE_TRANSFER_BIT, vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT,
-                                    0, 0, None, 0, None, 1, [to_read])
+                srcAccessMask=vk.VK_ACCESS_TRANSFER_WRITE_BIT,
+                dstAccessMask=vk.VK_ACCESS_SHADER_READ_BIT,
+                oldLayout=vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                newLayout=vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+                dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+                image=texture.image.handle,
+                subresourceRange=rng,
+            )
+            vk.vkCmdPipelineBarrier(
+                cb,
+                vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
+                vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT,
+                0,
+                0,
+                None,
+                0,
+                None,
+                1,
+                [to_read],
+            )
 
         try:
             self.device.submit_once(record)  # rare: the font atlas, new glyphs, user images
@@ -201,8 +309,9 @@ class ImGuiRenderer:
                 self._create_texture(tex)
             elif tex.status == status.want_updates:
                 texture = self._textures[int(tex.get_tex_id())]
-                rects = [(r.x, r.y, r.w, r.h) for r in tex.updates] or \
-                    [(tex.update_rect.x, tex.update_rect.y, tex.update_rect.w, tex.update_rect.h)]
+                rects = [(r.x, r.y, r.w, r.h) for r in tex.updates] or [
+                    (tex.update_rect.x, tex.update_rect.y, tex.update_rect.w, tex.update_rect.h)
+                ]
                 self._upload(texture, tex, [r for r in rects if r[2] > 0 and r[3] > 0], fresh=False)
                 tex.set_status(status.ok)
             elif tex.status == status.want_destroy and tex.unused_frames >= frames_in_flight:
@@ -267,10 +376,13 @@ class ImGuiRenderer:
                 x1, y1 = min((c.z - px) * sx, w), min((c.w - py) * sy, h)
                 if x1 <= x0 or y1 <= y0:
                     continue
-                scissor = vk.ffi.new("VkRect2D*", {"offset": {"x": int(x0), "y": int(y0)},
-                                                   "extent": {"width": int(x1 - x0), "height": int(y1 - y0)}})
-                draws.append((scissor, texture.set_array, cmd.elem_count, cmd.idx_offset + ibase,
-                              cmd.vtx_offset + vbase))
+                scissor = vk.ffi.new(
+                    "VkRect2D*",
+                    {"offset": {"x": int(x0), "y": int(y0)}, "extent": {"width": int(x1 - x0), "height": int(y1 - y0)}},
+                )
+                draws.append(
+                    (scissor, texture.set_array, cmd.elem_count, cmd.idx_offset + ibase, cmd.vtx_offset + vbase)
+                )
             vbase += dl.vtx_buffer.size()
             ibase += dl.idx_buffer.size()
         scale = (2.0 / w * sx, 2.0 / h * sy) if w > 0 and h > 0 else (0.0, 0.0)

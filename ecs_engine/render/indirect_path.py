@@ -70,8 +70,9 @@ class _IndirectFrame:
 def check_support(device: Device) -> None:
     missing = [f for f in FEATURES if not device.features.get(f)]
     if missing:
-        raise UsageError(f"{device.info.name} lacks {', '.join(missing)}: the indirect mode needs it; "
-                         "use --mode instanced")
+        raise UsageError(
+            f"{device.info.name} lacks {', '.join(missing)}: the indirect mode needs it; use --mode instanced"
+        )
 
 
 class IndirectPath:
@@ -85,8 +86,9 @@ class IndirectPath:
         vk = self.vk = device.vk
         ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
         stages = vk.VK_SHADER_STAGE_VERTEX_BIT | vk.VK_SHADER_STAGE_COMPUTE_BIT
-        self.set_layout = DescriptorSetLayout(device, [(b, ssbo, stages) for b in (
-            BINDING_IDS, BINDING_KEYS, BINDING_DRAW_STATE, BINDING_COMMANDS)])
+        self.set_layout = DescriptorSetLayout(
+            device, [(b, ssbo, stages) for b in (BINDING_IDS, BINDING_KEYS, BINDING_DRAW_STATE, BINDING_COMMANDS)]
+        )
         n = ctx.frames_in_flight
         self.pool = DescriptorPool(device, n, {ssbo: 4 * n})
         sets = [ctx.frame_set_layout, self.set_layout.handle]
@@ -106,14 +108,29 @@ class IndirectPath:
         self._offsets = vk.ffi.new("VkDeviceSize[1]", [0])
         compute = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
         shader_rw = vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_SHADER_WRITE_BIT
-        self._barriers = [_Barrier(vk, *b) for b in (
-            (vk.VK_PIPELINE_STAGE_TRANSFER_BIT, compute, vk.VK_ACCESS_TRANSFER_WRITE_BIT, shader_rw),
-            (compute, compute, vk.VK_ACCESS_SHADER_WRITE_BIT, shader_rw),
-            (compute, vk.VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT | vk.VK_PIPELINE_STAGE_VERTEX_SHADER_BIT
-             | vk.VK_PIPELINE_STAGE_TRANSFER_BIT, vk.VK_ACCESS_SHADER_WRITE_BIT,
-             vk.VK_ACCESS_INDIRECT_COMMAND_READ_BIT | vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_TRANSFER_READ_BIT),
-            (vk.VK_PIPELINE_STAGE_TRANSFER_BIT, vk.VK_PIPELINE_STAGE_HOST_BIT, vk.VK_ACCESS_TRANSFER_WRITE_BIT,
-             vk.VK_ACCESS_HOST_READ_BIT))]
+        self._barriers = [
+            _Barrier(vk, *b)
+            for b in (
+                (vk.VK_PIPELINE_STAGE_TRANSFER_BIT, compute, vk.VK_ACCESS_TRANSFER_WRITE_BIT, shader_rw),
+                (compute, compute, vk.VK_ACCESS_SHADER_WRITE_BIT, shader_rw),
+                (
+                    compute,
+                    vk.VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT
+                    | vk.VK_PIPELINE_STAGE_VERTEX_SHADER_BIT
+                    | vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
+                    vk.VK_ACCESS_SHADER_WRITE_BIT,
+                    vk.VK_ACCESS_INDIRECT_COMMAND_READ_BIT
+                    | vk.VK_ACCESS_SHADER_READ_BIT
+                    | vk.VK_ACCESS_TRANSFER_READ_BIT,
+                ),
+                (
+                    vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
+                    vk.VK_PIPELINE_STAGE_HOST_BIT,
+                    vk.VK_ACCESS_TRANSFER_WRITE_BIT,
+                    vk.VK_ACCESS_HOST_READ_BIT,
+                ),
+            )
+        ]
 
     # ---------------------------------------------------------------- buffers
     def _make_frame(self, descriptor_set: Any, keys: int, rows: int) -> _IndirectFrame:
@@ -130,15 +147,23 @@ class IndirectPath:
             commands=Buffer(device, DRAW_COMMAND.size * keys, ssbo | indirect, DEVICE),
             readback=Buffer(device, state_bytes, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST),
             key_slots=keys,
-            copy_region=vk.ffi.new("VkBufferCopy*", {"srcOffset": 0, "dstOffset": 0, "size": state_bytes}))
+            copy_region=vk.ffi.new("VkBufferCopy*", {"srcOffset": 0, "dstOffset": 0, "size": state_bytes}),
+        )
         self._write_set(f)
         return f
 
     def _write_set(self, f: _IndirectFrame) -> None:
         ssbo = self.vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
-        write_buffers(self.ctx.device, f.descriptor_set, [
-            (BINDING_IDS, ssbo, f.ids), (BINDING_KEYS, ssbo, f.keys), (BINDING_DRAW_STATE, ssbo, f.state),
-            (BINDING_COMMANDS, ssbo, f.commands)])
+        write_buffers(
+            self.ctx.device,
+            f.descriptor_set,
+            [
+                (BINDING_IDS, ssbo, f.ids),
+                (BINDING_KEYS, ssbo, f.keys),
+                (BINDING_DRAW_STATE, ssbo, f.state),
+                (BINDING_COMMANDS, ssbo, f.commands),
+            ],
+        )
 
     def _ensure_capacity(self, slot: int, keys: int, rows: int) -> None:
         """Grow the frame's buffers; safe: the frame's fence has been waited on."""
@@ -167,8 +192,9 @@ class IndirectPath:
         centers, radii, index_counts = frame.bounds
         rows = frame.instances[chunk.offset : chunk.offset + len(chunk.handle)]
         key_counts = np.zeros(2 * len(index_counts), dtype=np.int64)
-        write_rows(chunk.model, chunk.handle, chunk.material, centers, radii, None, self.ctx.material_count,
-                   rows, key_counts)
+        write_rows(
+            chunk.model, chunk.handle, chunk.material, centers, radii, None, self.ctx.material_count, rows, key_counts
+        )
         return ChunkResult(None, 0, 0, 0, key_counts)
 
     def finish(self, cb: Any, frame: FrameInputs, results: list[ChunkResult], candidates: int) -> list[Any]:
@@ -177,7 +203,8 @@ class IndirectPath:
         keys = 2 * len(self.ctx.meshes)
         key_counts = np.zeros(keys, dtype=np.int64)
         for r in results:
-            key_counts += r.key_counts
+            if r.key_counts is not None:
+                key_counts += r.key_counts
         self._ensure_capacity(frame.slot, keys, candidates)
         merged = self.ctx.meshes.merged()
         self._write_key_table(frame.slot, key_counts, merged, frame.bounds)
@@ -189,8 +216,9 @@ class IndirectPath:
         secondary = self.ctx.secondaries.begin(frame.slot, frame.target.secondary_begin)
         lib.vkCmdSetViewport(secondary, 0, 1, frame.target.viewport_ptr)
         lib.vkCmdSetScissor(secondary, 0, 1, frame.target.area_ptr)
-        lib.vkCmdBindDescriptorSets(secondary, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 2, self._sets, 0,
-                                    vk.ffi.NULL)
+        lib.vkCmdBindDescriptorSets(
+            secondary, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 2, self._sets, 0, vk.ffi.NULL
+        )
         self._record_draws(secondary, frame.slot, merged, key_counts)
         end_command_buffer(vk, secondary)
         return [secondary]
@@ -243,8 +271,9 @@ class IndirectPath:
         # the previous frame in this slot read the commands and ids: its fence covered that
         lib.vkCmdFillBuffer(cb, f.state.handle, 0, f.state.size, 0)
         to_compute.record(lib, cb)
-        lib.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.compute_layout, 0, 2, self._sets, 0,
-                                    vk.ffi.NULL)
+        lib.vkCmdBindDescriptorSets(
+            cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.compute_layout, 0, 2, self._sets, 0, vk.ffi.NULL
+        )
         lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.cull)
         push = self._push
         push["plane_count"] = 0
@@ -283,9 +312,15 @@ class IndirectPath:
             if not key_counts[winding::2].any():
                 continue
             lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline)
-            lib.vkCmdDrawIndexedIndirectCount(cb, f.commands.handle, winding * meshes * DRAW_COMMAND.size,
-                                              f.state.handle, DRAW_STATE.offset("draw_counts") + 4 * winding,
-                                              meshes, DRAW_COMMAND.size)
+            lib.vkCmdDrawIndexedIndirectCount(
+                cb,
+                f.commands.handle,
+                winding * meshes * DRAW_COMMAND.size,
+                f.state.handle,
+                DRAW_STATE.offset("draw_counts") + 4 * winding,
+                meshes,
+                DRAW_COMMAND.size,
+            )
 
     def destroy(self) -> None:
         vk = self.vk
@@ -306,8 +341,10 @@ class _Barrier:
 
     def __init__(self, vk: Any, src_stage: int, dst_stage: int, src_access: int, dst_access: int) -> None:
         self.stages = (src_stage, dst_stage)
-        self.barrier = vk.ffi.new("VkMemoryBarrier*", {"sType": vk.VK_STRUCTURE_TYPE_MEMORY_BARRIER,
-                                                       "srcAccessMask": src_access, "dstAccessMask": dst_access})
+        self.barrier = vk.ffi.new(
+            "VkMemoryBarrier*",
+            {"sType": vk.VK_STRUCTURE_TYPE_MEMORY_BARRIER, "srcAccessMask": src_access, "dstAccessMask": dst_access},
+        )
         self.null = vk.ffi.NULL
 
     def record(self, lib: Any, cb: Any) -> None:

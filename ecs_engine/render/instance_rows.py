@@ -28,14 +28,24 @@ NO_PLANES = np.zeros((0, 4), dtype=np.float64)
 
 
 def _determinant3(m3: np.ndarray) -> np.ndarray:
-    return (m3[:, 0, 0] * (m3[:, 1, 1] * m3[:, 2, 2] - m3[:, 1, 2] * m3[:, 2, 1])
-            - m3[:, 0, 1] * (m3[:, 1, 0] * m3[:, 2, 2] - m3[:, 1, 2] * m3[:, 2, 0])
-            + m3[:, 0, 2] * (m3[:, 1, 0] * m3[:, 2, 1] - m3[:, 1, 1] * m3[:, 2, 0]))
+    return (
+        m3[:, 0, 0] * (m3[:, 1, 1] * m3[:, 2, 2] - m3[:, 1, 2] * m3[:, 2, 1])
+        - m3[:, 0, 1] * (m3[:, 1, 0] * m3[:, 2, 2] - m3[:, 1, 2] * m3[:, 2, 0])
+        + m3[:, 0, 2] * (m3[:, 1, 0] * m3[:, 2, 1] - m3[:, 1, 1] * m3[:, 2, 0])
+    )
 
 
-def write_rows_numpy(model: np.ndarray, handle: np.ndarray, material: np.ndarray,
-                     centers: np.ndarray, radii: np.ndarray, planes: np.ndarray, n_materials: int,
-                     rows: np.ndarray, key_counts: np.ndarray) -> int:
+def write_rows_numpy(
+    model: np.ndarray,
+    handle: np.ndarray,
+    material: np.ndarray,
+    centers: np.ndarray,
+    radii: np.ndarray,
+    planes: np.ndarray,
+    n_materials: int,
+    rows: np.ndarray,
+    key_counts: np.ndarray,
+) -> int:
     """Reference version of `write_rows`."""
     if len(planes):
         c, r = bounding_spheres(model, centers[handle], radii[handle])
@@ -96,8 +106,9 @@ def _cull_run_kernel(model, e0, e1, e2, radius, planes, key0, keys):  # pragma: 
     return plain, mirrored
 
 
-def _write_rows_kernel(model_4x4, handle, material, centers, radii, planes, n_materials, rows,
-                       key_counts):  # pragma: no cover - compiled
+def _write_rows_kernel(
+    model_4x4, handle, material, centers, radii, planes, n_materials, rows, key_counts
+):  # pragma: no cover - compiled
     # Pass 1 culls and keys the rows, one run of equal meshes at a time (vectorised, see above),
     # and counts rows per key. Pass 2 writes the visible ones by key (a counting sort), 8 bytes
     # at a time: `rows` is a flat uint64 view (8 words a row), and so is `model` below. The
@@ -119,8 +130,16 @@ def _write_rows_kernel(model_4x4, handle, material, centers, radii, planes, n_ma
         j = i + 1
         while j < n and handle[j] == h:
             j += 1
-        plain, mirrored = _cull_run(floats[16 * i : 16 * j], centers[h, 0], centers[h, 1], centers[h, 2], radii[h],
-                                    six, np.int32(2 * h), keys[i:j])
+        plain, mirrored = _cull_run(
+            floats[16 * i : 16 * j],
+            centers[h, 0],
+            centers[h, 1],
+            centers[h, 2],
+            radii[h],
+            six,
+            np.int32(2 * h),
+            keys[i:j],
+        )
         key_counts[2 * h] += plain
         key_counts[2 * h + 1] += mirrored
         i = j
@@ -150,13 +169,21 @@ def _write_rows_kernel(model_4x4, handle, material, centers, radii, planes, n_ma
     return total
 
 
-_cull_run = native.njit(_cull_run_kernel)
+_cull_run = native.inner(_cull_run_kernel)
 _write_rows_native = native.njit(_write_rows_kernel)
 
 
-def write_rows(model: np.ndarray, handle: np.ndarray, material: np.ndarray,
-               centers: np.ndarray, radii: np.ndarray, planes: np.ndarray | None, n_materials: int,
-               rows: np.ndarray, key_counts: np.ndarray) -> int:
+def write_rows(
+    model: np.ndarray,
+    handle: np.ndarray,
+    material: np.ndarray,
+    centers: np.ndarray,
+    radii: np.ndarray,
+    planes: np.ndarray | None,
+    n_materials: int,
+    rows: np.ndarray,
+    key_counts: np.ndarray,
+) -> int:
     """Cull (when `planes` is given), then write the visible rows into `rows` (INSTANCE_DTYPE,
     at least len(handle) long) sorted by key = mesh * 2 + mirrored, counting rows per key into
     `key_counts`. Returns the number written. Releases the GIL with numba."""
@@ -167,5 +194,8 @@ def write_rows(model: np.ndarray, handle: np.ndarray, material: np.ndarray,
         raise ValueError(f"at most 6 frustum planes, got {len(planes)}")
     if not model.flags.c_contiguous:
         model = np.ascontiguousarray(model)
-    return int(_write_rows_native(model, handle, material, centers, radii, planes, np.uint32(n_materials),
-                                  rows.view(np.uint64), key_counts))
+    return int(
+        _write_rows_native(
+            model, handle, material, centers, radii, planes, np.uint32(n_materials), rows.view(np.uint64), key_counts
+        )
+    )

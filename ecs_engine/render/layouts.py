@@ -9,69 +9,105 @@ from __future__ import annotations
 
 from ..gpu.layout import Struct, glsl_header
 
-GLOBALS = Struct("Globals", [
-    ("projection", "mat4", "reverse-Z: near -> depth 1, far/infinity -> 0"),
-    ("view", "mat4", "rotation, and the translation from the render origin to the camera"),
-    ("eye", "vec4", "xyz: the camera relative to the render origin (zero by default)"),
-    ("ambient", "vec4", "rgb, intensity"),
-    ("counts", "uvec4", "x: number of lights"),
-], std140=True, doc="The frame's uniforms. Positions are relative to the render origin (the camera, unless\n"
-                    "RenderOrigin is pinned).")
+GLOBALS = Struct(
+    "Globals",
+    [
+        ("projection", "mat4", "reverse-Z: near -> depth 1, far/infinity -> 0"),
+        ("view", "mat4", "rotation, and the translation from the render origin to the camera"),
+        ("eye", "vec4", "xyz: the camera relative to the render origin (zero by default)"),
+        ("ambient", "vec4", "rgb, intensity"),
+        ("counts", "uvec4", "x: number of lights"),
+    ],
+    std140=True,
+    doc="The frame's uniforms. Positions are relative to the render origin (the camera, unless\n"
+    "RenderOrigin is pinned).",
+)
 
-LIGHT = Struct("Light", [
-    ("position_radius", "vec4", "relative to the render origin; radius (0: unbounded)"),
-    ("color_intensity", "vec4", "linear rgb, intensity"),
-])
+LIGHT = Struct(
+    "Light",
+    [
+        ("position_radius", "vec4", "relative to the render origin; radius (0: unbounded)"),
+        ("color_intensity", "vec4", "linear rgb, intensity"),
+    ],
+)
 
-INSTANCE = Struct("Instance", [
-    ("model", "vec4[3]", "rows of the camera-relative model matrix (the last row is 0 0 0 1)"),
-    ("misc", "uvec4", "x: material index, y: key = mesh * 2 + mirrored, zw: 0"),
-], doc="One entity's row: 64 bytes (the normal matrix is derived in the vertex shader).")
+INSTANCE = Struct(
+    "Instance",
+    [
+        ("model", "vec4[3]", "rows of the camera-relative model matrix (the last row is 0 0 0 1)"),
+        ("misc", "uvec4", "x: material index, y: key = mesh * 2 + mirrored, zw: 0"),
+    ],
+    doc="One entity's row: 64 bytes (the normal matrix is derived in the vertex shader).",
+)
 
-MATERIAL = Struct("Material", [
-    ("color", "vec4", "linear rgb, unused"),
-    ("specular", "vec4", "strength, shininess, unused, unused"),
-])
+MATERIAL = Struct(
+    "Material",
+    [
+        ("color", "vec4", "linear rgb, unused"),
+        ("specular", "vec4", "strength, shininess, unused, unused"),
+    ],
+)
 
-KEY_INFO = Struct("KeyInfo", [
-    ("index_count", "uint"),
-    ("first_index", "uint", "of the mesh in the merged index buffer"),
-    ("vertex_offset", "int", "of the mesh in the merged vertex buffer"),
-    ("base", "uint", "first slot of this key's region of ids"),
-    ("sphere", "vec4", "the mesh's bounding sphere: centre xyz, radius"),
-], doc="The indirect path's key table: one row per key = mesh * 2 + mirrored.")
+KEY_INFO = Struct(
+    "KeyInfo",
+    [
+        ("index_count", "uint"),
+        ("first_index", "uint", "of the mesh in the merged index buffer"),
+        ("vertex_offset", "int", "of the mesh in the merged vertex buffer"),
+        ("base", "uint", "first slot of this key's region of ids"),
+        ("sphere", "vec4", "the mesh's bounding sphere: centre xyz, radius"),
+    ],
+    doc="The indirect path's key table: one row per key = mesh * 2 + mirrored.",
+)
 
-DRAW_STATE = Struct("DrawStateHeader", [
-    ("draw_counts", "uint[2]", "commands per winding: the count buffer of vkCmdDrawIndexedIndirectCount"),
-    ("pad", "uint[2]"),
-], doc="Head of the indirect path's draw state buffer; visible rows per key follow it.")
+DRAW_STATE = Struct(
+    "DrawStateHeader",
+    [
+        ("draw_counts", "uint[2]", "commands per winding: the count buffer of vkCmdDrawIndexedIndirectCount"),
+        ("pad", "uint[2]"),
+    ],
+    doc="Head of the indirect path's draw state buffer; visible rows per key follow it.",
+)
 
-DRAW_COMMAND = Struct("DrawCommand", [
-    ("index_count", "uint"),
-    ("instance_count", "uint"),
-    ("first_index", "uint"),
-    ("vertex_offset", "int"),
-    ("first_instance", "uint"),
-], doc="VkDrawIndexedIndirectCommand.")
+DRAW_COMMAND = Struct(
+    "DrawCommand",
+    [
+        ("index_count", "uint"),
+        ("instance_count", "uint"),
+        ("first_index", "uint"),
+        ("vertex_offset", "int"),
+        ("first_instance", "uint"),
+    ],
+    doc="VkDrawIndexedIndirectCommand.",
+)
 
-CULL_PUSH = Struct("CullPush", [
-    ("planes", "vec4[6]", "frustum planes (camera-relative, pointing inwards)"),
-    ("plane_count", "uint", "0: culling off"),
-    ("row_end", "uint", "rows [first_row, row_end) in this dispatch (large counts take several)"),
-    ("first_row", "uint"),
-])
+CULL_PUSH = Struct(
+    "CullPush",
+    [
+        ("planes", "vec4[6]", "frustum planes (camera-relative, pointing inwards)"),
+        ("plane_count", "uint", "0: culling off"),
+        ("row_end", "uint", "rows [first_row, row_end) in this dispatch (large counts take several)"),
+        ("first_row", "uint"),
+    ],
+)
 
-COMPACT_PUSH = Struct("CompactPush", [
-    ("key_count", "uint"),
-    ("mesh_count", "uint", "commands per winding list"),
-])
+COMPACT_PUSH = Struct(
+    "CompactPush",
+    [
+        ("key_count", "uint"),
+        ("mesh_count", "uint", "commands per winding list"),
+    ],
+)
 
 BILLBOARD_PUSH = Struct("BillboardPush", [("size", "float", "half the quad's side, in view units")])
 
-IMGUI_PUSH = Struct("ImGuiPush", [
-    ("scale", "vec2", "2 / display size"),
-    ("translate", "vec2", "-1 - display pos * scale"),
-])
+IMGUI_PUSH = Struct(
+    "ImGuiPush",
+    [
+        ("scale", "vec2", "2 / display size"),
+        ("translate", "vec2", "-1 - display pos * scale"),
+    ],
+)
 
 SET_FRAME, SET_INDIRECT = 0, 1
 BINDING_GLOBALS, BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS = 0, 1, 2, 3
@@ -79,14 +115,32 @@ BINDING_IDS, BINDING_KEYS, BINDING_DRAW_STATE, BINDING_COMMANDS = 0, 1, 2, 3
 CULL_GROUP = 256  # cull.comp's local size
 COMPACT_GROUP = 64  # compact.comp's local size
 
-STRUCTS = [GLOBALS, LIGHT, INSTANCE, MATERIAL, KEY_INFO, DRAW_STATE, DRAW_COMMAND, CULL_PUSH, COMPACT_PUSH,
-           BILLBOARD_PUSH, IMGUI_PUSH]
+STRUCTS = [
+    GLOBALS,
+    LIGHT,
+    INSTANCE,
+    MATERIAL,
+    KEY_INFO,
+    DRAW_STATE,
+    DRAW_COMMAND,
+    CULL_PUSH,
+    COMPACT_PUSH,
+    BILLBOARD_PUSH,
+    IMGUI_PUSH,
+]
 DEFINES = {
-    "SET_FRAME": SET_FRAME, "SET_INDIRECT": SET_INDIRECT,
-    "BINDING_GLOBALS": BINDING_GLOBALS, "BINDING_LIGHTS": BINDING_LIGHTS,
-    "BINDING_INSTANCES": BINDING_INSTANCES, "BINDING_MATERIALS": BINDING_MATERIALS,
-    "BINDING_IDS": BINDING_IDS, "BINDING_KEYS": BINDING_KEYS, "BINDING_DRAW_STATE": BINDING_DRAW_STATE,
-    "BINDING_COMMANDS": BINDING_COMMANDS, "CULL_GROUP": CULL_GROUP, "COMPACT_GROUP": COMPACT_GROUP,
+    "SET_FRAME": SET_FRAME,
+    "SET_INDIRECT": SET_INDIRECT,
+    "BINDING_GLOBALS": BINDING_GLOBALS,
+    "BINDING_LIGHTS": BINDING_LIGHTS,
+    "BINDING_INSTANCES": BINDING_INSTANCES,
+    "BINDING_MATERIALS": BINDING_MATERIALS,
+    "BINDING_IDS": BINDING_IDS,
+    "BINDING_KEYS": BINDING_KEYS,
+    "BINDING_DRAW_STATE": BINDING_DRAW_STATE,
+    "BINDING_COMMANDS": BINDING_COMMANDS,
+    "CULL_GROUP": CULL_GROUP,
+    "COMPACT_GROUP": COMPACT_GROUP,
 }
 
 

@@ -15,15 +15,17 @@ from .path import TargetState
 
 
 class LightPass:
-    def __init__(self, device: Device, frame_set_layout: Any, render_pass: Any, subpass: int,
-                 size: float = 0.08) -> None:
+    def __init__(
+        self, device: Device, frame_set_layout: Any, render_pass: Any, subpass: int, size: float = 0.08
+    ) -> None:
         vk = self.vk = device.vk
         self.device = device
         self.render_pass = render_pass
         self.subpass = subpass
         self.size = size
-        self.layout = pipeline_layout(device, [frame_set_layout],
-                                      [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, BILLBOARD_PUSH.size)])
+        self.layout = pipeline_layout(
+            device, [frame_set_layout], [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, BILLBOARD_PUSH.size)]
+        )
         self.pipeline: Any = None
         self._push = np.zeros(1, dtype=BILLBOARD_PUSH.dtype)
         self._push_ptr = vk.ffi.from_buffer(self._push)
@@ -35,14 +37,25 @@ class LightPass:
         vk = self.vk
         lib = vk.lib
         if self.pipeline is None:
-            self.pipeline = graphics_pipeline(self.device, GraphicsPipelineSpec(
-                "light.vert", "light.frag", layout=self.layout, render_pass=self.render_pass, subpass=self.subpass,
-                cull_back=False, depth_write=False, alpha_blend=True))
+            self.pipeline = graphics_pipeline(
+                self.device,
+                GraphicsPipelineSpec(
+                    "light.vert",
+                    "light.frag",
+                    layout=self.layout,
+                    render_pass=self.render_pass,
+                    subpass=self.subpass,
+                    cull_back=False,
+                    depth_write=False,
+                    alpha_blend=True,
+                ),
+            )
         lib.vkCmdSetViewport(cb, 0, 1, target.viewport_ptr)
         lib.vkCmdSetScissor(cb, 0, 1, target.area_ptr)
         lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.pipeline)
-        lib.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1, set_array, 0,
-                                    vk.ffi.NULL)
+        lib.vkCmdBindDescriptorSets(
+            cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1, set_array, 0, vk.ffi.NULL
+        )
         self._push["size"] = self.size
         lib.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_VERTEX_BIT, 0, BILLBOARD_PUSH.size, self._push_ptr)
         lib.vkCmdDraw(cb, 6, count, 0, 0)

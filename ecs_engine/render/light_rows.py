@@ -19,8 +19,15 @@ LIGHT_DTYPE = LIGHT.dtype
 assert LIGHT.size == 32 and LIGHT.offset("color_intensity") == 16, LIGHT.glsl()
 
 
-def write_lights_numpy(position: np.ndarray, radius: np.ndarray, color: np.ndarray, intensity: np.ndarray,
-                       origin: np.ndarray, eye: np.ndarray, out: np.ndarray) -> None:
+def write_lights_numpy(
+    position: np.ndarray,
+    radius: np.ndarray,
+    color: np.ndarray,
+    intensity: np.ndarray,
+    origin: np.ndarray,
+    eye: np.ndarray,
+    out: np.ndarray,
+) -> None:
     """Reference version of `write_lights`."""
     rel = position - origin
     to_eye = rel - eye
@@ -53,8 +60,12 @@ def _write_lights_kernel(position, radius, color, intensity, origin, eye, out): 
 _write_lights_native = native.njit(_write_lights_kernel)
 
 
-def write_lights(parts: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]], origin: np.ndarray,
-                 eye: np.ndarray, out: np.ndarray) -> None:
+def write_lights(
+    parts: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
+    origin: np.ndarray,
+    eye: np.ndarray,
+    out: np.ndarray,
+) -> None:
     """Write the lights of `parts` (per table: position (n, 3) float64, radius, color (n, 3),
     intensity) into `out`, a (total, 8) float32 array (LIGHT_DTYPE rows seen as floats),
     relative to `origin` and sorted by distance from `eye` (relative to `origin`), far first."""

@@ -15,12 +15,10 @@ import numpy as np
 
 from ..errors import UsageError
 
-__all__ = ["DEFAULT_MODEL", "SUPPORTED_FORMATS", "MeshData", "bounding_sphere", "cube_mesh", "load_mesh",
-           "normalized"]
+__all__ = ["DEFAULT_MODEL", "SUPPORTED_FORMATS", "MeshData", "bounding_sphere", "cube_mesh", "load_mesh", "normalized"]
 
 #: File extension -> format name, in the order error messages list them.
-SUPPORTED_FORMATS: Final[dict[str, str]] = {".obj": "OBJ", ".gltf": "glTF", ".glb": "GLB", ".ply": "PLY",
-                                            ".stl": "STL"}
+SUPPORTED_FORMATS: Final[dict[str, str]] = {".obj": "OBJ", ".gltf": "glTF", ".glb": "GLB", ".ply": "PLY", ".stl": "STL"}
 
 #: The model demos show when given none: a (2,3) torus knot, centred, largest extent 2.0. It lives in the
 #: repo's demos/assets/, which installs as package data of `ecs_engine.demos`.
@@ -33,11 +31,16 @@ _DEGENERATE_AREA: Final = 1e-12
 
 def _frozen(values: object, dtype: type, name: str) -> np.ndarray:
     """A C-contiguous, read-only array of `dtype`; arrays we froze earlier are shared, not copied."""
-    if (isinstance(values, np.ndarray) and values.dtype == dtype and values.flags.c_contiguous
-            and not values.flags.writeable and values.base is None):
+    if (
+        isinstance(values, np.ndarray)
+        and values.dtype == dtype
+        and values.flags.c_contiguous
+        and not values.flags.writeable
+        and values.base is None
+    ):
         return values
     try:
-        array = np.array(values, dtype=dtype, order="C", copy=True)
+        array: np.ndarray = np.array(values, dtype=dtype, order="C", copy=True)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"MeshData.{name}: {exc}") from None
     array.setflags(write=False)
@@ -59,17 +62,25 @@ class MeshData:
     radius: float
 
     def __post_init__(self) -> None:
-        for field, dtype in (("positions", np.float32), ("normals", np.float32), ("indices", np.uint32),
-                             ("center", np.float32)):
+        for field, dtype in (
+            ("positions", np.float32),
+            ("normals", np.float32),
+            ("indices", np.uint32),
+            ("center", np.float32),
+        ):
             object.__setattr__(self, field, _frozen(getattr(self, field), dtype, field))
         object.__setattr__(self, "radius", float(self.radius))
         v = self.positions.shape[0] if self.positions.ndim == 2 else -1
         if self.positions.shape != (v, 3) or self.normals.shape != (v, 3):
-            raise ValueError(f"MeshData {self.name!r}: positions and normals must both be (V, 3), got "
-                             f"{self.positions.shape} and {self.normals.shape}")
+            raise ValueError(
+                f"MeshData {self.name!r}: positions and normals must both be (V, 3), got "
+                f"{self.positions.shape} and {self.normals.shape}"
+            )
         if self.indices.ndim != 1 or self.indices.size % 3:
-            raise ValueError(f"MeshData {self.name!r}: indices must be a flat triangle list (length a multiple "
-                             f"of 3), got shape {self.indices.shape}")
+            raise ValueError(
+                f"MeshData {self.name!r}: indices must be a flat triangle list (length a multiple "
+                f"of 3), got shape {self.indices.shape}"
+            )
         if self.indices.size and int(self.indices.max()) >= v:
             raise ValueError(f"MeshData {self.name!r}: index {int(self.indices.max())} out of range for {v} vertices")
         if not np.isfinite(self.positions).all():
@@ -123,7 +134,9 @@ def bounding_sphere(points: np.ndarray) -> tuple[np.ndarray, float]:
 def cube_mesh() -> MeshData:
     """Unit cube centred at the origin: 24 vertices (4 per face, so normals stay flat), 36 indices,
     counter-clockwise from outside. The fallback model, needing no file."""
-    positions, normals, indices = [], [], []
+    positions: list[np.ndarray] = []
+    normals: list[np.ndarray] = []
+    indices: list[int] = []
     for axis in range(3):
         for sign in (1.0, -1.0):
             n = np.zeros(3)
@@ -247,8 +260,9 @@ def _check_obj_faces(file: Path, text: str) -> None:
             if k > vertices:
                 raise UsageError(f"{file}: {where} refers to vertex {k} but the file has only {vertices} vertices")
             if k < 0 and before + k < 0:
-                raise UsageError(f"{file}: {where} refers to vertex {k} (counted back), but only {before} "
-                                 f"vertices come before it")
+                raise UsageError(
+                    f"{file}: {where} refers to vertex {k} (counted back), but only {before} vertices come before it"
+                )
 
 
 _Part = tuple[np.ndarray, np.ndarray, "np.ndarray | None"]  # positions (V,3) f8, faces (F,3) i8, normals or None
@@ -260,8 +274,12 @@ def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[_Part], bool]:
     try:
         import trimesh
 
-        scene = trimesh.load_scene(io.BytesIO(data), file_type=fmt.lower(), process=False,
-                                   resolver=trimesh.resolvers.FilePathResolver(str(file)))
+        scene = trimesh.load_scene(
+            io.BytesIO(data),
+            file_type=fmt.lower(),
+            process=False,
+            resolver=trimesh.resolvers.FilePathResolver(str(file)),
+        )
         parts: list[_Part] = []
         non_mesh = 0
         for node in scene.graph.nodes_geometry:
@@ -272,10 +290,14 @@ def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[_Part], bool]:
                 continue
             # trimesh keeps normals read from the file in its cache; asking `vertex_normals` would compute them.
             normals = geometry._cache["vertex_normals"] if "vertex_normals" in geometry._cache else None
-            parts.append(_transformed(np.array(geometry.vertices, np.float64),
-                                      np.array(geometry.faces, np.int64).reshape(-1, 3),
-                                      None if normals is None else np.array(normals, np.float64),
-                                      np.asarray(transform, np.float64)))
+            parts.append(
+                _transformed(
+                    np.array(geometry.vertices, np.float64),
+                    np.array(geometry.faces, np.int64).reshape(-1, 3),
+                    None if normals is None else np.array(normals, np.float64),
+                    np.asarray(transform, np.float64),
+                )
+            )
     except UsageError:
         raise
     except FileNotFoundError as exc:  # a glTF's buffer or image file is not next to it
@@ -286,8 +308,7 @@ def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[_Part], bool]:
     return parts, non_mesh > 0 and not any(len(f) for _, f, _ in parts)
 
 
-def _transformed(positions: np.ndarray, faces: np.ndarray, normals: np.ndarray | None,
-                 transform: np.ndarray) -> _Part:
+def _transformed(positions: np.ndarray, faces: np.ndarray, normals: np.ndarray | None, transform: np.ndarray) -> _Part:
     """Apply a 4x4 node transform; normals use the inverse transpose, mirroring flips the winding."""
     if np.array_equal(transform, np.eye(4)):
         return positions, faces, normals
@@ -311,8 +332,9 @@ def _assemble(file: Path, parts: list[_Part]) -> MeshData:
         if faces.size and (faces.min() < 0 or faces.max() >= len(positions)):
             i = int(np.argmax(((faces < 0) | (faces >= len(positions))).any(axis=1)))
             k = int(faces[i][(faces[i] < 0) | (faces[i] >= len(positions))][0])
-            raise UsageError(f"{file}: face {i + 1} refers to vertex {k} but the file has only "
-                             f"{len(positions)} vertices")
+            raise UsageError(
+                f"{file}: face {i + 1} refers to vertex {k} but the file has only {len(positions)} vertices"
+            )
     everything = np.concatenate([p for p, _, _ in parts])
     size = float((everything.max(0) - everything.min(0)).max())
     out_p, out_n, out_i, offset, total = [], [], [], 0, 0

@@ -88,9 +88,13 @@ class MeshRegistry:
         vertex_offset = np.concatenate([[0], np.cumsum(vertex_counts)[:-1]]).astype(np.int32)
         vertices = np.concatenate([_interleaved(d) for d in datas]) if datas else np.zeros((1, 6), np.float32)
         indices = np.concatenate([d.indices for d in datas]).astype(np.uint32) if datas else np.zeros(1, np.uint32)
-        self._merged = MergedMeshes(upload(self.device, vertices, vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT),
-                                    upload(self.device, indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT),
-                                    first_index, vertex_offset, len(datas))
+        self._merged = MergedMeshes(
+            upload(self.device, vertices, vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT),
+            upload(self.device, indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT),
+            first_index,
+            vertex_offset,
+            len(datas),
+        )
         return self._merged
 
     def _destroy_merged(self) -> None:

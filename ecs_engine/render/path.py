@@ -16,7 +16,7 @@ Per frame:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np
@@ -81,12 +81,16 @@ class PathContext:
     frames_in_flight: int
     material_count: int
     native_recorder: Any = None  # gpu.native_recorder.NativeRecorder, compiled once per device
-    extra: dict[str, Any] = field(default_factory=dict)
 
 
 class RenderPath(Protocol):
-    name: str
-    recorder: str  # "native" or "python"; "gpu" when the GPU writes the draws
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def recorder(self) -> str:
+        """native or python; gpu when the GPU writes the draws."""
+        ...
 
     def rows_needed(self, candidates: int) -> int: ...
 

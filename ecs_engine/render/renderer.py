@@ -49,7 +49,10 @@ from .mesh_registry import MeshRegistry
 from .path import ChunkResult, FrameInputs, MeshBounds, PathContext, RenderPath, TargetState
 
 PATHS: dict[str, type[InstancedPath] | type[PerEntityPath] | type[IndirectPath]] = {
-    "instanced": InstancedPath, "per_entity": PerEntityPath, "indirect": IndirectPath}
+    "instanced": InstancedPath,
+    "per_entity": PerEntityPath,
+    "indirect": IndirectPath,
+}
 MODES = tuple(PATHS)
 RECORDER_NAMES = tuple(RECORDERS)
 MIN_LIGHTS = 256
@@ -100,12 +103,22 @@ def default_recorder() -> str:
 
 
 class Renderer:
-    def __init__(self, device: Device, target: Any, meshes: MeshRegistry, *, mode: str = "instanced",
-                 recorder: str | None = None, jobs: JobPool | None = None, culling: bool = True,
-                 chunk_rows: int | None = None, native_recorder: Any = None,
-                 clear_color: tuple[float, float, float] = (0.02, 0.02, 0.03),
-                 ambient: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 0.06),
-                 light_size: float = 0.08) -> None:
+    def __init__(
+        self,
+        device: Device,
+        target: Any,
+        meshes: MeshRegistry,
+        *,
+        mode: str = "instanced",
+        recorder: str | None = None,
+        jobs: JobPool | None = None,
+        culling: bool = True,
+        chunk_rows: int | None = None,
+        native_recorder: Any = None,
+        clear_color: tuple[float, float, float] = (0.02, 0.02, 0.03),
+        ambient: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 0.06),
+        light_size: float = 0.08,
+    ) -> None:
         if mode not in PATHS:
             raise ValueError(f"unknown render mode {mode!r}; modes: {', '.join(MODES)}")
         vk = self.vk = device.vk
@@ -118,14 +131,17 @@ class Renderer:
         self.culling = culling
         self.extractor = FrameExtractor(lambda: self.jobs.threads if self.jobs is not None else 1, chunk_rows)
         self._native = native_recorder  # compiling one costs about a second: callers may share one
+        self.cpu_recorder = recorder or default_recorder()  # the CPU paths' recorder, kept while indirect draws
         self.frames = FrameRing(device)
         n = len(self.frames.frames)
         self.secondaries = SecondaryBuffers(device, n)
         stages = vk.VK_SHADER_STAGE_VERTEX_BIT | vk.VK_SHADER_STAGE_FRAGMENT_BIT | vk.VK_SHADER_STAGE_COMPUTE_BIT
         ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
-        self.set_layout = DescriptorSetLayout(device, [(BINDING_GLOBALS, vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, stages)]
-                                              + [(b, ssbo, stages) for b in (BINDING_LIGHTS, BINDING_INSTANCES,
-                                                                              BINDING_MATERIALS)])
+        self.set_layout = DescriptorSetLayout(
+            device,
+            [(BINDING_GLOBALS, vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, stages)]
+            + [(b, ssbo, stages) for b in (BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS)],
+        )
         self.pool = DescriptorPool(device, n, {vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER: n, ssbo: 3 * n})
         self.materials = Buffer(device, MATERIAL.size * len(DEFAULT_MATERIALS), vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT)
         table = self.materials.array(MATERIAL.dtype, len(DEFAULT_MATERIALS))
@@ -184,15 +200,23 @@ class Renderer:
         self._check_recorder(recorder)
         if recorder == "native" and mode != "indirect" and self._native is None:
             if not native.AVAILABLE:
-                raise UsageError("the native recorder needs numba (pip install numba, and unset "
-                                 "ECS_ENGINE_NO_NUMBA); or use --recorder python")
+                raise UsageError(
+                    "the native recorder needs numba (pip install numba, and unset "
+                    "ECS_ENGINE_NO_NUMBA); or use --recorder python"
+                )
             from ..gpu.native_recorder import NativeRecorder
 
             self._native = NativeRecorder(self.device)
-        ctx = PathContext(device=self.device, meshes=self.meshes, render_pass=self.target.render_pass,
-                          frame_set_layout=self.set_layout.handle, secondaries=self.secondaries,
-                          frames_in_flight=len(self.frames.frames), material_count=len(DEFAULT_MATERIALS),
-                          native_recorder=self._native)
+        ctx = PathContext(
+            device=self.device,
+            meshes=self.meshes,
+            render_pass=self.target.render_pass,
+            frame_set_layout=self.set_layout.handle,
+            secondaries=self.secondaries,
+            frames_in_flight=len(self.frames.frames),
+            material_count=len(DEFAULT_MATERIALS),
+            native_recorder=self._native,
+        )
         path = PATHS[mode](ctx, recorder)
         self.cpu_recorder = recorder
         return path
@@ -202,19 +226,29 @@ class Renderer:
         vk = self.vk
         ssbo = vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT
         descriptor_set = self.pool.allocate(self.set_layout)
-        pf = _PerFrame(globals=Buffer(self.device, GLOBALS.size, vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT),
-                       lights=Buffer(self.device, LIGHT.size * MIN_LIGHTS, ssbo),
-                       instances=Buffer(self.device, INSTANCE.size * 1024, ssbo),
-                       descriptor_set=descriptor_set, set_array=vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]))
+        pf = _PerFrame(
+            globals=Buffer(self.device, GLOBALS.size, vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT),
+            lights=Buffer(self.device, LIGHT.size * MIN_LIGHTS, ssbo),
+            instances=Buffer(self.device, INSTANCE.size * 1024, ssbo),
+            descriptor_set=descriptor_set,
+            set_array=vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]),
+        )
         self._write_set(pf)
         return pf
 
     def _write_set(self, pf: _PerFrame) -> None:
         vk = self.vk
         ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
-        write_buffers(self.device, pf.descriptor_set, [
-            (BINDING_GLOBALS, vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, pf.globals), (BINDING_LIGHTS, ssbo, pf.lights),
-            (BINDING_INSTANCES, ssbo, pf.instances), (BINDING_MATERIALS, ssbo, self.materials)])
+        write_buffers(
+            self.device,
+            pf.descriptor_set,
+            [
+                (BINDING_GLOBALS, vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, pf.globals),
+                (BINDING_LIGHTS, ssbo, pf.lights),
+                (BINDING_INSTANCES, ssbo, pf.instances),
+                (BINDING_MATERIALS, ssbo, self.materials),
+            ],
+        )
 
     def _ensure_capacity(self, pf: _PerFrame, instances: int, lights: int) -> None:
         """Grow a frame's buffers; safe: this frame's fence has been waited on."""
@@ -231,16 +265,22 @@ class Renderer:
             if len(self._targets) > 16:  # swapchains come and go: drop the old framebuffers' entries
                 self._targets.clear()
             area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(width, height))
-            clears = [vk.VkClearValue(color=vk.VkClearColorValue(float32=[*self.clear_color, 1.0])),
-                      vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=0.0, stencil=0))]  # reverse-Z
+            clears = [
+                vk.VkClearValue(color=vk.VkClearColorValue(float32=[*self.clear_color, 1.0])),
+                vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=0.0, stencil=0)),
+            ]  # reverse-Z
             state = self._targets[key] = TargetState(
-                key=key, area=area,
-                viewport=vk.VkViewport(x=0.0, y=0.0, width=float(width), height=float(height), minDepth=0.0,
-                                       maxDepth=1.0),
+                key=key,
+                area=area,
+                viewport=vk.VkViewport(
+                    x=0.0, y=0.0, width=float(width), height=float(height), minDepth=0.0, maxDepth=1.0
+                ),
                 secondary_begin=self.secondaries.begin_info(self.target.render_pass, 0, framebuffer),
-                pass_begin=vk.VkRenderPassBeginInfo(renderPass=self.target.render_pass, framebuffer=framebuffer,
-                                                    renderArea=area, pClearValues=clears),
-                keep=(clears, framebuffer))
+                pass_begin=vk.VkRenderPassBeginInfo(
+                    renderPass=self.target.render_pass, framebuffer=framebuffer, renderArea=area, pClearValues=clears
+                ),
+                keep=(clears, framebuffer),
+            )
             state.area_ptr = vk.ffi.addressof(state.area)
             state.viewport_ptr = vk.ffi.addressof(state.viewport)
             state.pass_begin_ptr = vk.ffi.addressof(state.pass_begin)
@@ -251,17 +291,29 @@ class Renderer:
         n = len(self.meshes)
         if self._bounds is None or self._bounds[0] != n:
             meshes = [self.meshes[h] for h in range(n)]
-            self._bounds = (n, (np.array([m.data.center for m in meshes], dtype=np.float64).reshape(n, 3),
-                                np.array([m.data.radius for m in meshes], dtype=np.float64),
-                                np.array([m.index_count for m in meshes], dtype=np.int64)))
+            self._bounds = (
+                n,
+                (
+                    np.array([m.data.center for m in meshes], dtype=np.float64).reshape(n, 3),
+                    np.array([m.data.radius for m in meshes], dtype=np.float64),
+                    np.array([m.index_count for m in meshes], dtype=np.int64),
+                ),
+            )
         return self._bounds[1]
 
     # -------------------------------------------------------------- per frame
     def extract(self, world: World, width: int, height: int) -> FrameData:
         return self.extractor.extract(world, width / height, len(self.meshes), self.culling)
 
-    def render(self, world: World, readback: bool = False, framebuffer: Any = None,
-               extent: tuple[int, int] | None = None, wait: Any = None, signal: Any = None) -> FrameStats:
+    def render(
+        self,
+        world: World,
+        readback: bool = False,
+        framebuffer: Any = None,
+        extent: tuple[int, int] | None = None,
+        wait: Any = None,
+        signal: Any = None,
+    ) -> FrameStats:
         """Record and submit one frame. Headless targets read the image back when asked."""
         width, height = extent or (self.target.width, self.target.height)
         data = self.extract(world, width, height)  # before any GPU state is touched: a bad world fails here
@@ -270,25 +322,37 @@ class Renderer:
         pf = self.per_frame[slot]
         self._ensure_capacity(pf, self.path.rows_needed(data.candidates), data.light_count)
         target = self._target_state(framebuffer or self.target.framebuffer, width, height)
-        inputs = FrameInputs(slot=slot, descriptor_set=pf.descriptor_set, set_array=pf.set_array, target=target,
-                             planes=data.planes, instances=pf.instances.array(INSTANCE.dtype),
-                             bounds=self._mesh_bounds(), readback=readback)
+        inputs = FrameInputs(
+            slot=slot,
+            descriptor_set=pf.descriptor_set,
+            set_array=pf.set_array,
+            target=target,
+            planes=data.planes,
+            instances=pf.instances.array(INSTANCE.dtype),
+            bounds=self._mesh_bounds(),
+            readback=readback,
+        )
         path = self.path
         path.begin_frame(inputs)
         self.secondaries.reset(slot)
         if self.overlay is not None:
             self.overlay.prepare(slot, len(self.frames.frames))
         if data.light_count:
-            write_lights(data.lights, data.origin, data.camera.position - data.origin,
-                         pf.lights.array(np.float32, (data.light_count, LIGHT.size // 4)))
+            write_lights(
+                data.lights,
+                data.origin,
+                data.camera.position - data.origin,
+                pf.lights.array(np.float32, (data.light_count, LIGHT.size // 4)),
+            )
         self._write_globals(pf, data.camera, data.view, data.origin, data.origin_key, data.light_count)
         t0 = time.perf_counter()
 
         def job(chunk: Chunk) -> ChunkResult:
             return path.record_chunk(chunk, inputs)
 
-        results = self.jobs.map(job, data.chunks, _chunk_name) if self.jobs is not None \
-            else [job(c) for c in data.chunks]
+        results = (
+            self.jobs.map(job, data.chunks, _chunk_name) if self.jobs is not None else [job(c) for c in data.chunks]
+        )
         record_ms = (time.perf_counter() - t0) * 1e3
         cb = frame.command_buffer
         secondaries = path.finish(cb, inputs, results, data.candidates)
@@ -299,12 +363,27 @@ class Renderer:
         if readback:
             self.frames.wait(frame)
         draws, visible, triangles = path.counts(inputs, results)
-        return FrameStats(draws=draws + light_draws, instances=visible, triangles=triangles,
-                          lights=data.light_count, gpu_ms=gpu_ms, wait_ms=self.frames.last_wait_ms,
-                          record_ms=record_ms, chunks=len(data.chunks), candidates=data.candidates)
+        return FrameStats(
+            draws=draws + light_draws,
+            instances=visible,
+            triangles=triangles,
+            lights=data.light_count,
+            gpu_ms=gpu_ms,
+            wait_ms=self.frames.last_wait_ms,
+            record_ms=record_ms,
+            chunks=len(data.chunks),
+            candidates=data.candidates,
+        )
 
-    def _write_globals(self, pf: _PerFrame, cam: CameraMatrices, view: np.ndarray, origin: np.ndarray,
-                       origin_key: bytes, light_count: int) -> None:
+    def _write_globals(
+        self,
+        pf: _PerFrame,
+        cam: CameraMatrices,
+        view: np.ndarray,
+        origin: np.ndarray,
+        origin_key: bytes,
+        light_count: int,
+    ) -> None:
         """The frame's uniforms, rewritten only when something in them changed (the slot's
         mapped buffer keeps what was last written there)."""
         written = (cam, origin_key, light_count, tuple(self.ambient))
@@ -319,8 +398,9 @@ class Renderer:
         g["counts"] = (light_count, 0, 0, 0)
         pf.written = written
 
-    def _record_primary(self, cb: Any, secondaries: list[Any], light_count: int, target: TargetState,
-                        pf: _PerFrame, slot: int) -> int:
+    def _record_primary(
+        self, cb: Any, secondaries: list[Any], light_count: int, target: TargetState, pf: _PerFrame, slot: int
+    ) -> int:
         """Raw cffi calls with structs made once (see gpu/frames.py for why). Returns the light
         pass's draws."""
         vk = self.vk
