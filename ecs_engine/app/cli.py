@@ -10,6 +10,9 @@ from dataclasses import replace
 
 from ..ecs.errors import EcsError
 from ..errors import UsageError
+from ..gpu.swapchain import PRESENT_MODES
+from ..render.renderer import MODES, RECORDER_NAMES
+from .scenes import SCENES as RENDERED_SCENES
 
 
 def positive_int(text: str) -> int:
@@ -22,8 +25,10 @@ def positive_int(text: str) -> int:
     return value
 
 
-SCENES = ("cube", "grid100", "model", "scaling", "motion")
-EDITOR_SCENES = ("cube", "grid100", "model", "scaling")
+# the lists come from their owners: the scenes module, the renderer's path table, its recorders,
+# the swapchain's present modes
+SCENES = (*RENDERED_SCENES, "motion")  # motion: the text-mode ECS scene, no rendering
+EDITOR_SCENES = RENDERED_SCENES
 DEFAULT_SCENE = "grid100"
 HEADLESS_FALLBACK_FRAMES = 300
 
@@ -56,12 +61,12 @@ def render_flags() -> argparse.ArgumentParser:
     common.add_argument("--width", type=dimension, default=1280)
     common.add_argument("--height", type=dimension, default=720)
     common.add_argument(
-        "--present", choices=("fifo", "mailbox", "immediate"), default="fifo", help="swapchain present mode (windowed)"
+        "--present", choices=tuple(PRESENT_MODES), default="fifo", help="swapchain present mode (windowed)"
     )
     common.add_argument("--validate", action="store_true", help="enable the Vulkan validation layers")
     common.add_argument(
         "--mode",
-        choices=("instanced", "per_entity", "indirect"),
+        choices=MODES,
         default="instanced",
         help="instanced: one draw per mesh per chunk; per_entity: one draw per entity (the seed's "
         "way); indirect: the GPU culls and writes the draws (compute + vkCmdDrawIndexedIndirectCount)",
@@ -71,7 +76,7 @@ def render_flags() -> argparse.ArgumentParser:
     )
     common.add_argument(
         "--recorder",
-        choices=("native", "python"),
+        choices=RECORDER_NAMES,
         help="native: numba loop without the GIL (default when numba is installed); python: the binding",
     )
     common.add_argument(
