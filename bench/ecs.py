@@ -118,8 +118,24 @@ from .ecs_report import SCHEMA_VERSION, format_table, plot, ratios, targets, val
 from .ecs_spawn import run_spawn_memory
 from .ecs_transform import _worker, run_transform
 
-__all__ = ["FULL", "QUICK", "SCHEMA_VERSION", "THREADS", "TINY", "Runner", "Sizes", "adapter_class",
-           "add_arguments", "esper", "format_table", "plot", "ratios", "run", "targets", "validate"]
+__all__ = [
+    "FULL",
+    "QUICK",
+    "SCHEMA_VERSION",
+    "THREADS",
+    "TINY",
+    "Runner",
+    "Sizes",
+    "adapter_class",
+    "add_arguments",
+    "esper",
+    "format_table",
+    "plot",
+    "ratios",
+    "run",
+    "targets",
+    "validate",
+]
 
 THREADS = default_threads()  # the most any row uses (native-mt); each row records its own
 
@@ -153,13 +169,18 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
         "schema_version": SCHEMA_VERSION,
         "quick": bool(args.quick or tiny),
         "machine": machine,
-        "versions": {"ecs_engine": ecs_engine.__version__,
-                     "esper": getattr(esper, "__version__", None) if esper is not None else None,
-                     "numba_enabled": bool(native.AVAILABLE)},
+        "versions": {
+            "ecs_engine": ecs_engine.__version__,
+            "esper": getattr(esper, "__version__", None) if esper is not None else None,
+            "numba_enabled": bool(native.AVAILABLE),
+        },
         "adapter": {"available": r.adapter_cls is not None, "reason": r.adapter_reason},
-        "config": {k: v for k, v in asdict(sizes).items()
-                   if k in ("entities", "query_runs", "frames", "transform_warmup", "spawn", "archetypes",
-                            "rows_per_archetype")},
+        "config": {
+            k: v
+            for k, v in asdict(sizes).items()
+            if k
+            in ("entities", "query_runs", "frames", "transform_warmup", "spawn", "archetypes", "rows_per_archetype")
+        },
         "results": r.results,
         "ratios": ratios(r.results),
         "memory": memory,

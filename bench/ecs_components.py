@@ -76,11 +76,21 @@ class NDamageable(Component):
 
 # Plain-Python transform components for the esper frame (fastest honest plain Python: slots).
 class PTransform:
-    __slots__ = ("x", "y", "z", "qx", "qy", "qz", "qw", "sx", "sy", "sz")
+    __slots__ = ("x", "y", "z", "qx", "qy", "qz", "qw", "sx", "sy", "sz")  # noqa: RUF023 - constructor order
 
-    def __init__(self, x: float = 0.0, y: float = 0.0, z: float = 0.0, qx: float = 0.0,
-                 qy: float = 0.0, qz: float = 0.0, qw: float = 1.0, sx: float = 1.0,
-                 sy: float = 1.0, sz: float = 1.0) -> None:
+    def __init__(
+        self,
+        x: float = 0.0,
+        y: float = 0.0,
+        z: float = 0.0,
+        qx: float = 0.0,
+        qy: float = 0.0,
+        qz: float = 0.0,
+        qw: float = 1.0,
+        sx: float = 1.0,
+        sy: float = 1.0,
+        sz: float = 1.0,
+    ) -> None:
         self.x, self.y, self.z = x, y, z
         self.qx, self.qy, self.qz, self.qw = qx, qy, qz, qw
         self.sx, self.sy, self.sz = sx, sy, sz
@@ -182,10 +192,24 @@ class TransformProcessor(_ProcessorBase):  # type: ignore[misc, valid-type]
             r21 = yz + wx
             r22 = 1.0 - (xx + yy)
             sx, sy, sz = t.sx, t.sy, t.sz
-            m.model = (r00 * sx, r01 * sy, r02 * sz, t.x - ox,
-                       r10 * sx, r11 * sy, r12 * sz, t.y - oy,
-                       r20 * sx, r21 * sy, r22 * sz, t.z - oz,
-                       0.0, 0.0, 0.0, 1.0)
+            m.model = (
+                r00 * sx,
+                r01 * sy,
+                r02 * sz,
+                t.x - ox,
+                r10 * sx,
+                r11 * sy,
+                r12 * sz,
+                t.y - oy,
+                r20 * sx,
+                r21 * sy,
+                r22 * sz,
+                t.z - oz,
+                0.0,
+                0.0,
+                0.0,
+                1.0,
+            )
             c0 = sy * sz
             c1 = sx * sz
             c2 = sx * sy
@@ -204,9 +228,7 @@ class TransformProcessor(_ProcessorBase):  # type: ignore[misc, valid-type]
             c0 *= f
             c1 *= f
             c2 *= f
-            m.normal = (r00 * c0, r01 * c1, r02 * c2,
-                        r10 * c0, r11 * c1, r12 * c2,
-                        r20 * c0, r21 * c1, r22 * c2)
+            m.normal = (r00 * c0, r01 * c1, r02 * c2, r10 * c0, r11 * c1, r12 * c2, r20 * c0, r21 * c1, r22 * c2)
 
 
 # ============================================================== esper's benchmark world
@@ -220,10 +242,10 @@ def populate_esper(api: Any, n: int, xs: list[float]) -> list[int]:
 
 
 def populate_native(world: World, n: int, xs: np.ndarray) -> list[int]:
-    enemies = world.spawn_batch(n // 2, NPosition(x=xs[0:2 * (n // 2):2], y=0.0), NVelocity(),
-                                NHealth(), NCommand())
-    things = world.spawn_batch(n // 2, NPosition(x=xs[1:2 * (n // 2):2], y=0.0), NHealth(),
-                               NDamageable())
+    enemies = world.spawn_batch(
+        n // 2, NPosition(x=xs[0 : 2 * (n // 2) : 2], y=0.0), NVelocity(), NHealth(), NCommand()
+    )
+    things = world.spawn_batch(n // 2, NPosition(x=xs[1 : 2 * (n // 2) : 2], y=0.0), NHealth(), NDamageable())
     order = np.empty(2 * (n // 2), dtype=np.int64)
     order[0::2] = enemies
     order[1::2] = things

@@ -85,9 +85,16 @@ def run_dynamic(r: Runner, n: int) -> None:
 
     def record(engine: str, times: list[float]) -> None:
         mean = statistics.fmean(times)
-        r.row("dynamic_world", n, engine, mean, n, frames=frames,
-              static_seconds=statistics.fmean(times[:half]) if half else None,
-              dynamic_seconds=statistics.fmean(times[half:]))
+        r.row(
+            "dynamic_world",
+            n,
+            engine,
+            mean,
+            n,
+            frames=frames,
+            static_seconds=statistics.fmean(times[:half]) if half else None,
+            dynamic_seconds=statistics.fmean(times[half:]),
+        )
 
     if r.esper is not None:
         with r.progress.step(f"dynamic world N={n}, {frames} frames [esper]"), esper_world() as api:

@@ -33,13 +33,28 @@ class Sizes:
     dynamic_max: int = 100_000
 
 
-FULL = Sizes(entities=[10_000, 100_000, 1_000_000], query_runs=20, frames=500, transform_warmup=3,
-             transform_max_frames=50, spawn=1_000_000)
-QUICK = Sizes(entities=[1_000, 5_000], query_runs=20, frames=100, transform_warmup=2,
-              transform_max_frames=5, spawn=100_000)
+FULL = Sizes(
+    entities=[10_000, 100_000, 1_000_000],
+    query_runs=20,
+    frames=500,
+    transform_warmup=3,
+    transform_max_frames=50,
+    spawn=1_000_000,
+)
+QUICK = Sizes(
+    entities=[1_000, 5_000], query_runs=20, frames=100, transform_warmup=2, transform_max_frames=5, spawn=100_000
+)
 # Test knob (--tiny, hidden): the smallest run that still exercises every code path.
-TINY = Sizes(entities=[300], query_runs=3, frames=20, transform_warmup=1, transform_max_frames=2,
-             spawn=2_000, overhead_repeats=2, esper_memory_max=1_000)
+TINY = Sizes(
+    entities=[300],
+    query_runs=3,
+    frames=20,
+    transform_warmup=1,
+    transform_max_frames=2,
+    spawn=2_000,
+    overhead_repeats=2,
+    esper_memory_max=1_000,
+)
 
 
 class Runner:
@@ -55,12 +70,17 @@ class Runner:
         self.adapter_cls, self.adapter_reason = adapter
         self.checks: dict[str, Any] = {"query_sums_match": None, "transform_max_abs_diff": None}
 
-    def row(self, workload: str, entities: int, engine: str, seconds: float, matched: int,
-            **extra: Any) -> dict[str, Any]:
-        row = {"workload": workload, "entities": int(entities), "engine": engine,
-               "seconds": float(seconds),
-               "ns_per_entity": float(seconds) / max(int(matched), 1) * 1e9,
-               "matched": int(matched)}
+    def row(
+        self, workload: str, entities: int, engine: str, seconds: float, matched: int, **extra: Any
+    ) -> dict[str, Any]:
+        row = {
+            "workload": workload,
+            "entities": int(entities),
+            "engine": engine,
+            "seconds": float(seconds),
+            "ns_per_entity": float(seconds) / max(int(matched), 1) * 1e9,
+            "matched": int(matched),
+        }
         row.update(extra)
         self.results.append(row)
         return row

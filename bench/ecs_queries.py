@@ -76,8 +76,9 @@ def esper_queries(api: Any, n: int, xs: list[float], runs: int) -> dict[str, tup
     return _time_queries(q1, q2, q3, touch, runs)
 
 
-def _time_queries(q1: Callable[[], Any], q2: Callable[[], Any], q3: Callable[[], Any],
-                  touch: Callable[[], float], runs: int) -> dict[str, tuple[float, float, float | None]]:
+def _time_queries(
+    q1: Callable[[], Any], q2: Callable[[], Any], q3: Callable[[], Any], touch: Callable[[], float], runs: int
+) -> dict[str, tuple[float, float, float | None]]:
     """(best, first run, checksum) seconds for the three queries and the summing one."""
     out: dict[str, tuple[float, float, float | None]] = {}
     for name, fn in (("query1", q1), ("query2", q2), ("query3", q3)):

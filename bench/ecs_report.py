@@ -25,8 +25,9 @@ def ratios(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
             continue
         base = by.get((workload, n, "esper"))
         if base is not None and sec > 0:
-            out.append({"workload": workload, "entities": n, "numerator": "esper", "denominator": engine,
-                        "ratio": base / sec})
+            out.append(
+                {"workload": workload, "entities": n, "numerator": "esper", "denominator": engine, "ratio": base / sec}
+            )
     return out
 
 
@@ -35,16 +36,30 @@ def targets(results: list[dict[str, Any]], memory: dict[str, Any]) -> list[dict[
 
     def add(name: str, target: float, measured: float, unit: str, op: str, entities: int) -> None:
         met = {"<": measured < target, "<=": measured <= target, ">=": measured >= target}[op]
-        out.append({"name": name, "target": target, "measured": measured, "unit": unit, "op": op,
-                    "met": bool(met), "entities": int(entities)})
+        out.append(
+            {
+                "name": name,
+                "target": target,
+                "measured": measured,
+                "unit": unit,
+                "op": op,
+                "met": bool(met),
+                "entities": int(entities),
+            }
+        )
 
     spawn = next(x for x in results if x["workload"] == "spawn" and x["engine"] == "native")
-    add("spawn_batch of 1M entities (Transform, Velocity, Mesh)", 1.0,
-        spawn["seconds"] * 1_000_000 / spawn["entities"], "s per 1M entities", "<", spawn["entities"])
+    add(
+        "spawn_batch of 1M entities (Transform, Velocity, Mesh)",
+        1.0,
+        spawn["seconds"] * 1_000_000 / spawn["entities"],
+        "s per 1M entities",
+        "<",
+        spawn["entities"],
+    )
     ov = next(x for x in results if x["workload"] == "query_overhead")
     add("query overhead per matched table", 5.0, ov["us_per_table"], "us/table", "<", ov["entities"])
-    add("memory_bytes / raw column bytes after spawn_batch", 1.5, memory["ratio"], "x", "<=",
-        memory["entities"])
+    add("memory_bytes / raw column bytes after spawn_batch", 1.5, memory["ratio"], "x", "<=", memory["entities"])
     frames = {(x["entities"], x["engine"]): x for x in results if x["workload"] == "transform_frame"}
     n = 100_000 if (100_000, "esper") in frames else max((k[0] for k in frames if k[1] == "esper"), default=0)
     esp = frames.get((n, "esper"))
@@ -52,15 +67,28 @@ def targets(results: list[dict[str, Any]], memory: dict[str, Any]) -> list[dict[
         eng = frames.get((n, engine))
         if esp and eng:
             threads = eng.get("threads", 1)
-            add(f"transform frame speed-up over esper ({label}: {threads})", 100.0,
-                esp["seconds"] / eng["seconds"], "x", ">=", n)
+            add(
+                f"transform frame speed-up over esper ({label}: {threads})",
+                100.0,
+                esp["seconds"] / eng["seconds"],
+                "x",
+                ">=",
+                n,
+            )
     return out
 
 
-_UNITS = {"query1": ("ns/entity", 1.0), "query2": ("ns/entity", 1.0), "query3": ("ns/entity", 1.0),
-          "query1_sum_x": ("ns/entity", 1.0), "dynamic_world": ("ms/frame", 1e3),
-          "transform_frame": ("ms/frame", 1e3), "spawn": ("s", 1.0), "spawn_10_batches": ("s", 1.0),
-          "query_overhead": ("us/table", 1.0)}
+_UNITS = {
+    "query1": ("ns/entity", 1.0),
+    "query2": ("ns/entity", 1.0),
+    "query3": ("ns/entity", 1.0),
+    "query1_sum_x": ("ns/entity", 1.0),
+    "dynamic_world": ("ms/frame", 1e3),
+    "transform_frame": ("ms/frame", 1e3),
+    "spawn": ("s", 1.0),
+    "spawn_10_batches": ("s", 1.0),
+    "query_overhead": ("us/table", 1.0),
+}
 
 
 def _value(row: dict[str, Any]) -> float:
@@ -100,33 +128,50 @@ def format_table(doc: dict[str, Any]) -> str:
             eng = engines.get(engine)
             adp = engines.get("adapter") if engine == "native" else None
             ratio = esp["seconds"] / eng["seconds"] if esp and eng and eng["seconds"] > 0 else None
-            lines.append([label, f"{n:,}", unit, _fmt(_value(esp)) if esp else "-",
-                          _fmt(_value(eng)) if eng else "-", _fmt(_value(adp)) if adp else "-",
-                          f"{ratio:.1f}x" if ratio is not None else "-"])
+            lines.append(
+                [
+                    label,
+                    f"{n:,}",
+                    unit,
+                    _fmt(_value(esp)) if esp else "-",
+                    _fmt(_value(eng)) if eng else "-",
+                    _fmt(_value(adp)) if adp else "-",
+                    f"{ratio:.1f}x" if ratio is not None else "-",
+                ]
+            )
     widths = [max(len(line[i]) for line in lines) for i in range(len(header))]
     out = []
     for j, line in enumerate(lines):
-        out.append("  ".join(c.ljust(w) if i == 0 or i == 2 else c.rjust(w)
-                             for i, (c, w) in enumerate(zip(line, widths))))
+        out.append(
+            "  ".join(c.ljust(w) if i == 0 or i == 2 else c.rjust(w) for i, (c, w) in enumerate(zip(line, widths)))
+        )
         if j == 0:
             out.append("  ".join("-" * w for w in widths))
     mem = doc["memory"]
     b10 = mem["batches10"]
     out.append("")
-    out.append(f"memory after spawn_batch({mem['entities']:,}): {mem['memory_bytes'] / 1e6:.1f} MB held, "
-               f"{mem['raw_column_bytes'] / 1e6:.1f} MB raw columns (x{mem['ratio']:.2f}); tracemalloc: "
-               f"{mem['tracemalloc_retained_bytes'] / 1e6:.1f} MB retained, "
-               f"{mem['tracemalloc_peak_bytes'] / 1e6:.1f} MB peak")
-    out.append(f"memory after 10 spawn_batch calls: x{b10['ratio']:.2f} of raw, x{b10['ratio_shrunk']:.2f} "
-               "after shrink_to_fit()")
+    out.append(
+        f"memory after spawn_batch({mem['entities']:,}): {mem['memory_bytes'] / 1e6:.1f} MB held, "
+        f"{mem['raw_column_bytes'] / 1e6:.1f} MB raw columns (x{mem['ratio']:.2f}); tracemalloc: "
+        f"{mem['tracemalloc_retained_bytes'] / 1e6:.1f} MB retained, "
+        f"{mem['tracemalloc_peak_bytes'] / 1e6:.1f} MB peak"
+    )
+    out.append(
+        f"memory after 10 spawn_batch calls: x{b10['ratio']:.2f} of raw, x{b10['ratio_shrunk']:.2f} "
+        "after shrink_to_fit()"
+    )
     if mem["esper_tracemalloc_bytes_per_entity"] is not None:
         native_per = mem["tracemalloc_retained_bytes"] / mem["entities"]
-        out.append(f"bytes per entity (tracemalloc): esper {mem['esper_tracemalloc_bytes_per_entity']:.0f}, "
-                   f"engine {native_per:.0f}")
+        out.append(
+            f"bytes per entity (tracemalloc): esper {mem['esper_tracemalloc_bytes_per_entity']:.0f}, "
+            f"engine {native_per:.0f}"
+        )
     out.append("")
     for t in doc["targets"]:
-        out.append(f"target {'MET ' if t['met'] else 'MISS'}  {t['name']}: {t['measured']:.3g} {t['unit']} "
-                   f"(target {t['op']} {t['target']:g}, N={t['entities']:,})")
+        out.append(
+            f"target {'MET ' if t['met'] else 'MISS'}  {t['name']}: {t['measured']:.3g} {t['unit']} "
+            f"(target {t['op']} {t['target']:g}, N={t['entities']:,})"
+        )
     adapter = doc["adapter"]
     if not adapter["available"]:
         out.append(f"adapter column skipped: ecs_engine.esper_compat not importable ({adapter['reason']})")
@@ -138,8 +183,7 @@ def format_table(doc: dict[str, Any]) -> str:
 
 
 # ============================================================== schema
-_ROW_KEYS = {"workload": str, "entities": int, "engine": str, "seconds": float, "ns_per_entity": float,
-             "matched": int}
+_ROW_KEYS = {"workload": str, "entities": int, "engine": str, "seconds": float, "ns_per_entity": float, "matched": int}
 ENGINES = ("esper", "native", "native-mt", "native-numpy", "adapter")
 
 
@@ -168,8 +212,16 @@ def validate(doc: dict[str, Any]) -> list[str]:
         bad.append(f"doc.schema_version must be {SCHEMA_VERSION}")
     need(doc, "quick", bool, "doc")
     machine = need(doc, "machine", dict, "doc") or {}
-    for key, typ in (("hostname", str), ("cpu_model", str), ("cpu_affinity", int), ("python", str),
-                     ("numpy", str), ("datetime_utc", str), ("threads", int), ("slug", str)):
+    for key, typ in (
+        ("hostname", str),
+        ("cpu_model", str),
+        ("cpu_affinity", int),
+        ("python", str),
+        ("numpy", str),
+        ("datetime_utc", str),
+        ("threads", int),
+        ("slug", str),
+    ):
         need(machine, key, typ, "machine")
     if "gpu" not in machine:
         bad.append("machine: missing 'gpu'")
@@ -186,8 +238,13 @@ def validate(doc: dict[str, Any]) -> list[str]:
         if isinstance(row, dict) and row.get("engine") not in ENGINES:
             bad.append(f"results[{i}].engine: {row.get('engine')!r} not in {ENGINES}")
     for i, ratio in enumerate(need(doc, "ratios", list, "doc") or []):
-        for key, typ in (("workload", str), ("entities", int), ("numerator", str), ("denominator", str),
-                         ("ratio", float)):
+        for key, typ in (
+            ("workload", str),
+            ("entities", int),
+            ("numerator", str),
+            ("denominator", str),
+            ("ratio", float),
+        ):
             need(ratio, key, typ, f"ratios[{i}]")
     memory = need(doc, "memory", dict, "doc") or {}
     for key in ("entities", "memory_bytes", "raw_column_bytes"):
@@ -201,8 +258,15 @@ def validate(doc: dict[str, Any]) -> list[str]:
     if not tlist:
         bad.append("doc.targets is empty")
     for i, t in enumerate(tlist):
-        for key, typ in (("name", str), ("target", float), ("measured", float), ("unit", str), ("op", str),
-                         ("met", bool), ("entities", int)):
+        for key, typ in (
+            ("name", str),
+            ("target", float),
+            ("measured", float),
+            ("unit", str),
+            ("op", str),
+            ("met", bool),
+            ("entities", int),
+        ):
             need(t, key, typ, f"targets[{i}]")
     need(doc, "errors", list, "doc")
     return bad
@@ -226,8 +290,13 @@ def plot(doc: dict[str, Any], path: Path) -> None:
         for j, e in enumerate(engines):
             hit = [r for r in rows if r["workload"] == w and r["engine"] == e and r["entities"] == n]
             if hit and hit[0]["ns_per_entity"] > 0:
-                ax.bar(i + j * width, hit[0]["ns_per_entity"], width, color=f"C{j}", label=e if i == 0 or
-                       e not in ax.get_legend_handles_labels()[1] else None)
+                ax.bar(
+                    i + j * width,
+                    hit[0]["ns_per_entity"],
+                    width,
+                    color=f"C{j}",
+                    label=e if i == 0 or e not in ax.get_legend_handles_labels()[1] else None,
+                )
     ax.set_yscale("log")
     ax.set_xticks(np.arange(len(workloads)) + 0.4 - width / 2, labels, fontsize=7)
     ax.set_ylabel("ns per entity (lower is better)")

@@ -88,7 +88,7 @@ def run_spawn_memory(r: Runner) -> dict[str, Any]:
         gc.collect()
         t0 = time.perf_counter()
         for i in range(10):
-            _spawn_native(world, pos[i * k:(i + 1) * k])
+            _spawn_native(world, pos[i * k : (i + 1) * k])
         elapsed = time.perf_counter() - t0
         r.row("spawn_10_batches", 10 * k, "native", elapsed, 10 * k)
         raw = raw_column_bytes(world)

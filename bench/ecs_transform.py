@@ -84,8 +84,13 @@ def native_transform_world(data: dict[str, np.ndarray]) -> tuple[World, Schedule
 def esper_transform_world(api: Any, data: dict[str, np.ndarray]) -> list[int]:
     create = api.create_entity
     ids = []
-    for p, q, s, v, a in zip(data["position"].tolist(), data["rotation"].tolist(), data["scale"].tolist(),
-                             data["linear"].tolist(), data["angular"].tolist()):
+    for p, q, s, v, a in zip(
+        data["position"].tolist(),
+        data["rotation"].tolist(),
+        data["scale"].tolist(),
+        data["linear"].tolist(),
+        data["angular"].tolist(),
+    ):
         ids.append(create(PTransform(*p, *q, *s), PVelocity(*v), PAngularVelocity(*a), PMesh(), PModelMatrix()))
     api.add_processor(MotionProcessor(api), priority=1)
     api.add_processor(TransformProcessor(api), priority=0)
@@ -111,8 +116,15 @@ def native_transform(n: int, warmup: int, frames: int, threads: int = 1) -> dict
         schedule.run(world, DT)
         times.append(time.perf_counter() - t0)
     pool.close()
-    return {"seconds": statistics.median(times), "frames": frames, "warmup": warmup, "threads": threads,
-            "first_frame_seconds": first, "numba": native.AVAILABLE, "min_seconds": min(times)}
+    return {
+        "seconds": statistics.median(times),
+        "frames": frames,
+        "warmup": warmup,
+        "threads": threads,
+        "first_frame_seconds": first,
+        "numba": native.AVAILABLE,
+        "min_seconds": min(times),
+    }
 
 
 def esper_transform(api: Any, n: int, warmup: int, frames: int) -> dict[str, Any]:
@@ -125,8 +137,7 @@ def esper_transform(api: Any, n: int, warmup: int, frames: int) -> dict[str, Any
         t0 = time.perf_counter()
         api.process(DT)
         times.append(time.perf_counter() - t0)
-    return {"seconds": statistics.median(times), "frames": frames, "warmup": warmup,
-            "min_seconds": min(times)}
+    return {"seconds": statistics.median(times), "frames": frames, "warmup": warmup, "min_seconds": min(times)}
 
 
 def check_transform(n: int = 64, frames: int = 3) -> float:
@@ -144,8 +155,11 @@ def check_transform(n: int = 64, frames: int = 3) -> float:
         for nid, eid in zip(nids.tolist(), eids):
             mm, nm = world.get(nid, ModelMatrix), world.get(nid, NormalMatrix)
             pm = api.component_for_entity(eid, PModelMatrix)
-            diff = max(diff, float(np.abs(mm.model.astype(np.float64) - np.reshape(pm.model, (4, 4))).max()),
-                       float(np.abs(nm.normal.astype(np.float64) - np.reshape(pm.normal, (3, 3))).max()))
+            diff = max(
+                diff,
+                float(np.abs(mm.model.astype(np.float64) - np.reshape(pm.model, (4, 4))).max()),
+                float(np.abs(nm.normal.astype(np.float64) - np.reshape(pm.normal, (3, 3))).max()),
+            )
     return diff
 
 
@@ -156,8 +170,13 @@ def numpy_fallback_rows(sizes: Sizes) -> list[dict[str, Any]] | str:
     # Same cwd and the repo root last on the path: an installed ecs_engine must keep winning over
     # the source folder (whose components/ and systems/ only map into ecs_engine when installed).
     env["PYTHONPATH"] = os.pathsep.join([p for p in [env.get("PYTHONPATH")] if p] + [str(ROOT)])
-    cmd = [sys.executable, "-m", f"{__package__ or 'bench'}.ecs_transform", "--worker",
-           json.dumps({"task": "transform", "plan": plan})]
+    cmd = [
+        sys.executable,
+        "-m",
+        f"{__package__ or 'bench'}.ecs_transform",
+        "--worker",
+        json.dumps({"task": "transform", "plan": plan}),
+    ]
     proc = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=None, text=True)
     if proc.returncode != 0:
         return f"numpy-fallback worker exited with {proc.returncode}"
@@ -176,8 +195,12 @@ def _worker(spec: dict[str, Any]) -> None:
         res = native_transform(int(n), int(warmup), int(frames))
         res["entities"] = int(n)
         rows.append(res)
-        print(f"[ecs worker] transform frame N={n} [native-numpy, numba={native.AVAILABLE}]: "
-              f"{time.perf_counter() - t0:.2f} s", file=sys.stderr, flush=True)
+        print(
+            f"[ecs worker] transform frame N={n} [native-numpy, numba={native.AVAILABLE}]: "
+            f"{time.perf_counter() - t0:.2f} s",
+            file=sys.stderr,
+            flush=True,
+        )
     print(json.dumps({"rows": rows}))
 
 

@@ -18,8 +18,8 @@ ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:  # `bench` is a folder of the repository, not an installed package
     sys.path.insert(0, str(ROOT))
 
-from bench import __main__ as bench_main
-from bench import ecs, machine
+from bench import __main__ as bench_main  # noqa: E402 - after the sys.path line above
+from bench import ecs, machine  # noqa: E402
 
 SLUG = "test-box-2c"
 
@@ -49,8 +49,20 @@ def test_document_matches_schema(doc: dict) -> None:
     assert doc["quick"] is True
     assert doc["machine"]["slug"] == SLUG
     assert doc["machine"]["threads"] == ecs.THREADS
-    for key in ("hostname", "cpu_model", "cpu_count", "cpu_affinity", "memory_bytes", "os", "kernel",
-                "python", "numpy", "numba", "gpu", "datetime_utc"):
+    for key in (
+        "hostname",
+        "cpu_model",
+        "cpu_count",
+        "cpu_affinity",
+        "memory_bytes",
+        "os",
+        "kernel",
+        "python",
+        "numpy",
+        "numba",
+        "gpu",
+        "datetime_utc",
+    ):
         assert key in doc["machine"], key
     assert isinstance(doc["errors"], list)
 
@@ -77,7 +89,8 @@ def test_targets_and_memory(doc: dict) -> None:
     names = [t["name"] for t in doc["targets"]]
     assert len(names) >= 3 + (1 if any(r["engine"] == "esper" for r in doc["results"]) else 0)
     assert any(n.startswith("transform frame speed-up over esper (1 thread") for n in names) or not any(
-        r["engine"] == "esper" for r in doc["results"])
+        r["engine"] == "esper" for r in doc["results"]
+    )
     ops = {"<": lambda m, t: m < t, "<=": lambda m, t: m <= t, ">=": lambda m, t: m >= t}
     for t in doc["targets"]:
         assert isinstance(t["name"], str) and isinstance(t["unit"], str)
@@ -125,8 +138,7 @@ def test_runs_without_esper_or_adapter(tmp_path: Path, monkeypatch: pytest.Monke
     engines = {r["engine"] for r in doc["results"]}
     assert {"native", "native-numpy"} <= engines <= {"native", "native-mt", "native-numpy"}
     assert doc["ratios"] == []
-    assert doc["versions"]["esper"] is None and doc["adapter"] == {"available": False,
-                                                                   "reason": "disabled by the test"}
+    assert doc["versions"]["esper"] is None and doc["adapter"] == {"available": False, "reason": "disabled by the test"}
 
 
 def test_unknown_benchmark_is_one_line(capsys: pytest.CaptureFixture[str]) -> None:
@@ -143,8 +155,12 @@ def test_bad_machine_slug(tmp_path: Path, capsys: pytest.CaptureFixture[str]) ->
 
 def test_machine_slugs() -> None:
     assert machine.gpu_slug("NVIDIA H100 80GB HBM3") == "h100"
-    assert machine.make_slug("AMD EPYC 9654 96-Core Processor",
-                             [{"name": "NVIDIA H100 80GB HBM3", "driver": "550.54"}], 16) == "h100-16c"
+    assert (
+        machine.make_slug(
+            "AMD EPYC 9654 96-Core Processor", [{"name": "NVIDIA H100 80GB HBM3", "driver": "550.54"}], 16
+        )
+        == "h100-16c"
+    )
     assert machine.make_slug("Intel(R) Xeon(R) Platinum 8480+", None, 16) == "xeon-platinum-8480-16c"
     info = machine.describe(threads=1)
     assert machine.SLUG_RE.match(info["slug"])
