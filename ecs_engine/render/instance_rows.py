@@ -23,7 +23,8 @@ from .layouts import INSTANCE
 
 INSTANCE_DTYPE = INSTANCE.dtype
 # the kernel writes a row as 8 uint64 words: model rows in words 0-5, misc.xy in word 6, zw in 7
-assert INSTANCE.size == 64 and INSTANCE.offset("model") == 0 and INSTANCE.offset("misc") == 48, INSTANCE.glsl()
+if not (INSTANCE.size == 64 and INSTANCE.offset("model") == 0 and INSTANCE.offset("misc") == 48):
+    raise RuntimeError(f"the row-writing kernel assumes 64-byte rows, misc at byte 48:\n{INSTANCE.glsl()}")
 NO_PLANES = np.zeros((0, 4), dtype=np.float64)
 
 

@@ -16,7 +16,8 @@ from .layouts import LIGHT
 
 LIGHT_DTYPE = LIGHT.dtype
 # written as 8 floats a light: position and radius, then colour and intensity
-assert LIGHT.size == 32 and LIGHT.offset("color_intensity") == 16, LIGHT.glsl()
+if not (LIGHT.size == 32 and LIGHT.offset("color_intensity") == 16):
+    raise RuntimeError(f"the light kernel assumes 8 floats a light:\n{LIGHT.glsl()}")
 
 
 def write_lights_numpy(
