@@ -125,3 +125,24 @@ def test_a_device_without_indirect_count_gets_one_clear_error():
         gpu.device.features["drawIndirectCount"] = False
         with pytest.raises(UsageError, match=r"lacks drawIndirectCount.*--mode instanced"):
             indirect_renderer(gpu)
+
+
+def test_counts_read_back_late_survive_meshes_added_between_frames():
+    """Frames that are not waited for report the slot's previous counts: read with the mesh list
+    that frame had, also after meshes were added (the editor's scene switch adds them)."""
+    with headless_gpu(W, H) as gpu:
+        cube = gpu.meshes.add(cube_mesh())
+        world = World()
+        world.spawn(Transform(position=(-1.0, 0.0, 0.0)), Mesh(handle=cube))
+        add_camera(world, eye=(0.0, 0.5, 4.0), target=(0.0, 0.0, 0.0))
+        renderer = indirect_renderer(gpu)
+        default_schedule().run(world, 0.0)
+        assert [renderer.render(world).instances for _ in range(3)][-1] == 1
+        for size in (0.8, 0.6):  # each time a mesh more: the key table and its buffers grow
+            knot = gpu.meshes.add(normalized(load_mesh(DEFAULT_MODEL), size=size))
+            world.spawn(Transform(position=(1.0, 0.0, 0.0)), Mesh(handle=knot))
+            default_schedule().run(world, 0.0)
+            late = [renderer.render(world) for _ in range(3)]
+            assert late[0].instances == world.query(Mesh).count() - 1  # an earlier frame's count
+            assert late[-1].instances == world.query(Mesh).count()
+        assert renderer.render(world, readback=True).draws == 3  # one command per mesh drawn

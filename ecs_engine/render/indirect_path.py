@@ -61,7 +61,9 @@ class _IndirectFrame:
     commands: Buffer  # DEVICE, 2 lists of `meshes` commands
     readback: Buffer  # HOST, the state as the frame left it
     key_slots: int  # keys the buffers hold
-    recorded: bool = False  # `readback` holds a frame's counts
+    # per mesh, the triangles of one instance, of the frame whose counts `readback` holds (None:
+    # no frame yet); its length says how many keys that frame had (meshes may be added since)
+    recorded: np.ndarray | None = None
     copy_region: Any = None  # VkBufferCopy* of the whole state buffer
     written: tuple[bytes, int] | None = None  # (key counts, merged meshes) the key table holds
     previous: tuple[int, int, int] | None = None  # the counts of the slot's last frame, read at begin_frame
@@ -171,7 +173,9 @@ class IndirectPath:
         if keys > f.key_slots:
             for b in (f.keys, f.ids, f.state, f.commands, f.readback):
                 b.destroy()
+            previous = f.previous  # read at begin_frame, before the buffers went
             f = self.frames[slot] = self._make_frame(f.descriptor_set, keys, max(rows, f.ids.size // 4))
+            f.previous = previous
         ids = f.ids.grown(4 * rows)
         if ids is not f.ids:
             f.ids = ids
@@ -185,7 +189,7 @@ class IndirectPath:
         """The slot's last counts, before this frame overwrites them (a read-back frame reads its
         own counts after the wait instead)."""
         f = self.frames[frame.slot]
-        f.previous = None if frame.readback else self._read_counts(frame.slot, frame.bounds[2])
+        f.previous = None if frame.readback else self._read_counts(frame.slot)
 
     def record_chunk(self, chunk: Chunk, frame: FrameInputs) -> ChunkResult:
         """One job: write every row (the GPU culls) and count rows per key."""
@@ -211,6 +215,7 @@ class IndirectPath:
         self._sets[0], self._sets[1] = frame.descriptor_set, self.frames[frame.slot].descriptor_set
         planes = None if frame.planes is None else frame.planes.astype(np.float32)
         self._record_compute(cb, frame.slot, planes, candidates, keys)
+        self.frames[frame.slot].recorded = frame.bounds[2] // 3  # the triangles the counts will weigh
         vk = self.vk
         lib = vk.lib
         secondary = self.ctx.secondaries.begin(frame.slot, frame.target.secondary_begin)
@@ -226,20 +231,20 @@ class IndirectPath:
     def counts(self, frame: FrameInputs, results: list[ChunkResult]) -> tuple[int, int, int]:
         """Counted on the GPU: this frame's when it was waited for, else the slot's previous one."""
         f = self.frames[frame.slot]
-        counts = self._read_counts(frame.slot, frame.bounds[2]) if frame.readback else f.previous
+        counts = self._read_counts(frame.slot) if frame.readback else f.previous
         return counts if counts is not None else (0, 0, 0)
 
     # ------------------------------------------------------------ GPU work
-    def _read_counts(self, slot: int, index_counts: np.ndarray) -> tuple[int, int, int] | None:
+    def _read_counts(self, slot: int) -> tuple[int, int, int] | None:
         """(draws, visible rows, triangles) of the last frame this slot carried, once its fence
-        has signalled; None before the slot's first frame."""
+        has signalled; None before the slot's first frame. Read with that frame's mesh list."""
         f = self.frames[slot]
-        if not f.recorded:
+        if f.recorded is None:
             return None
-        raw = f.readback.array(np.uint32, STATE_HEADER + f.key_slots)
-        visible = raw[STATE_HEADER : STATE_HEADER + 2 * len(index_counts)].astype(np.int64)
-        per_mesh = np.repeat(index_counts // 3, 2)
-        return int(raw[0]) + int(raw[1]), int(visible.sum()), int((visible * per_mesh).sum())
+        per_key = np.repeat(f.recorded, 2)
+        raw = f.readback.array(np.uint32, STATE_HEADER + len(per_key))
+        visible = raw[STATE_HEADER:].astype(np.int64)
+        return int(raw[0]) + int(raw[1]), int(visible.sum()), int((visible * per_key).sum())
 
     def _write_key_table(self, slot: int, key_counts: np.ndarray, merged: MergedMeshes, bounds: MeshBounds) -> None:
         """Each key's mesh and the start of its region of `ids` (skipped when the counts and
@@ -295,7 +300,6 @@ class IndirectPath:
         to_draw.record(lib, cb)
         lib.vkCmdCopyBuffer(cb, f.state.handle, f.readback.handle, 1, f.copy_region)
         to_host.record(lib, cb)
-        f.recorded = True
 
     def _record_draws(self, cb: Any, slot: int, merged: MergedMeshes, key_counts: np.ndarray) -> None:
         """Into the frame's secondary (viewport, scissor and sets already bound): one indirect
