@@ -51,7 +51,7 @@ def measure(
         loops = _loops(device)
         rows = np.zeros((draws, 16), np.float32)
         rows[:, 0] = rows[:, 5] = rows[:, 10] = 1.0
-        state = renderer._target_state(target.framebuffer, target.width, target.height)
+        state = renderer.target_state(target.framebuffer, target.width, target.height)
         layout = handle_int(vk, renderer.path.layout)
         stage = vk.VK_SHADER_STAGE_VERTEX_BIT
         mesh = meshes[0]

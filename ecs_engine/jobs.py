@@ -76,6 +76,7 @@ class JobPool:
         self._wakes: list[threading.Lock] = []
         self._workers: list[threading.Thread] = []
         self.threads = 1
+        self.generation = 0  # bumped when the threads are replaced (per-thread resources elsewhere may go)
         self.resize(default_threads() if threads is None else threads)
 
     def resize(self, threads: int) -> None:
@@ -87,6 +88,7 @@ class JobPool:
             return
         self.close()
         self.threads = threads
+        self.generation += 1
         for k in range(threads - 1):
             wake = threading.Lock()
             wake.acquire()

@@ -78,3 +78,18 @@ def test_a_session_that_cannot_be_built_closes_what_it_opened():
         Session(options(scene="nope"), source)
     assert source.instance is not None and source.instance.handle is None  # destroyed
     assert source.instance.messages == []  # nothing leaked (validation reports leaks at destroy)
+
+
+def test_resizing_the_pool_frees_the_old_threads_command_pools():
+    source = OffscreenSource()
+    with Session(options(scene="grid100", chunk_rows=16), source) as session:
+        draw(session)
+        draw(session)
+        before = session.renderer.secondaries.pool_count()
+        for threads in (4, 3, 4, 2):
+            session.apply(replace(session.settings, threads=threads))
+            draw(session)
+            draw(session)
+        # per frame slot at most one pool per thread that ran jobs (the caller's included)
+        assert session.renderer.secondaries.pool_count() <= max(before, 2 * 2)
+    assert source.instance.messages == []

@@ -68,8 +68,9 @@ class Buffer:
         that named it (the handle changes)."""
         if needed <= self.size:
             return self
+        bigger = Buffer(self.device, max(needed, 2 * self.size), self.usage, self.where)  # may fail: keep this one
         self.destroy()
-        return Buffer(self.device, max(needed, 2 * self.size), self.usage, self.where)
+        return bigger
 
     def destroy(self) -> None:
         if self.handle is None:

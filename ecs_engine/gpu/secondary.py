@@ -81,6 +81,17 @@ class SecondaryBuffers:
             pInheritanceInfo=inheritance,
         )
 
+    def keep_threads(self, alive: set[int]) -> None:
+        """Destroy the pools of threads that are gone (a resized worker pool); the device must be
+        idle: their buffers may belong to frames in flight."""
+        vk = self.device.vk
+        for pools in self._pools:
+            for ident in [k for k in pools if k not in alive]:
+                vk.vkDestroyCommandPool(self.device.handle, pools.pop(ident).handle, None)
+
+    def pool_count(self) -> int:
+        return sum(len(pools) for pools in self._pools)
+
     def destroy(self) -> None:
         vk = self.device.vk
         for pools in self._pools:

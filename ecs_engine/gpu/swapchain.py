@@ -39,7 +39,7 @@ class Swapchain:
         modes = instance_function(inst, "vkGetPhysicalDeviceSurfacePresentModesKHR")(device.physical, surface)
         self._modes = list(modes)
         self.present_name = present  # fifo, mailbox or immediate
-        self.present_mode = self._present_mode(present)
+        self.present_mode = self.present_mode_for(present)
         srgb = [
             f
             for f in formats
@@ -148,7 +148,8 @@ class Swapchain:
             self.depth.destroy()
             self.depth = None
 
-    def _present_mode(self, present: str) -> int:
+    def present_mode_for(self, present: str) -> int:
+        """The VkPresentModeKHR of a name; UsageError when the surface does not offer it."""
         wanted = getattr(self.vk, PRESENT_MODES[present])
         if wanted not in self._modes:
             raise UsageError(f"present mode {present!r} is not supported here; try --present fifo")
@@ -156,7 +157,7 @@ class Swapchain:
 
     def set_present(self, present: str) -> None:
         """Switch present mode (fifo, mailbox, immediate): the swapchain is rebuilt."""
-        self.present_mode = self._present_mode(present)
+        self.present_mode = self.present_mode_for(present)
         self.present_name = present
         self.recreate()
 

@@ -14,34 +14,40 @@ with the opposite front face, so back-face culling stays right.
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 from typing import Any, ClassVar
 
 import numpy as np
 
-from ..errors import UsageError
 from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
 from ..gpu.secondary import end_command_buffer
 from .frame_data import Chunk
 from .instance_rows import write_rows
-from .layouts import INSTANCE
-from .mesh_registry import VERTEX_STRIDE
+from .layouts import INSTANCE, MESH_VERTEX
 from .path import ChunkResult, FrameInputs, PathContext, summed_counts
 
 
 def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple[Any, Any]:
     """The (plain, mirrored) mesh pipelines of a path: the same but for the front face."""
     vk = ctx.device.vk
+    vec3 = vk.VK_FORMAT_R32G32B32_SFLOAT
+    offset = {name: MESH_VERTEX.fields[name][1] for name in ("position", "normal")} if MESH_VERTEX.fields else {}
     base = dict(
         layout=layout,
         render_pass=ctx.render_pass,
         subpass=0,
-        vertex_stride=VERTEX_STRIDE,
-        vertex_attributes=[(0, vk.VK_FORMAT_R32G32B32_SFLOAT, 0), (1, vk.VK_FORMAT_R32G32B32_SFLOAT, 12)],
+        vertex_stride=MESH_VERTEX.itemsize,
+        vertex_attributes=[(0, vec3, offset["position"]), (1, vec3, offset["normal"])],
     )
-    return (
-        graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, "mesh.frag", **base)),
-        graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, "mesh.frag", front_face_ccw=False, **base)),
-    )
+    plain = graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, "mesh.frag", **base))
+    try:
+        mirrored = graphics_pipeline(
+            ctx.device, GraphicsPipelineSpec(vertex_shader, "mesh.frag", front_face_ccw=False, **base)
+        )
+    except BaseException:
+        vk.vkDestroyPipeline(ctx.device.handle, plain, None)
+        raise
+    return plain, mirrored
 
 
 class PythonRecorder:
@@ -96,17 +102,12 @@ class PythonRecorder:
 
 
 class NativeRecorder:
-    """The numba loop of gpu/native_recorder.py, with its per-target, per-slot frame state."""
+    """The numba loop of gpu/native_recorder.py; its per-slot frame state lives with the target
+    (TargetState.path_state), so both are dropped together when the framebuffer goes."""
 
     def __init__(self, path: ChunkPath) -> None:
-        if path.ctx.native_recorder is None:
-            raise UsageError(
-                "the native recorder needs numba (pip install numba, and unset ECS_ENGINE_NO_NUMBA); "
-                "or use --recorder python"
-            )
         self.path = path
-        self.compiled = path.ctx.native_recorder
-        self._frames: dict[tuple[tuple[int, int, int], int], dict[str, Any]] = {}
+        self.compiled = path.ctx.native_recorder()  # compiled once per device; UsageError without numba
 
     def frame_state(self, frame: FrameInputs) -> dict[str, Any]:
         """Made once per target and slot (and after meshes were added)."""
@@ -116,14 +117,12 @@ class NativeRecorder:
             compiled.set_meshes(
                 [m.vertices.handle for m in gpu], [m.indices.handle for m in gpu], [m.index_count for m in gpu]
             )
-        key = (frame.target.key, frame.slot)
-        state = self._frames.get(key)
+        key = (self, frame.slot)  # this recorder (not its id: a later one may get the same id)
+        state = frame.target.path_state.get(key)
         if state is None:
-            if len(self._frames) > 32:  # swapchains come and go: drop the old framebuffers' entries
-                self._frames.clear()
             vk = self.path.vk
             _, width, height = frame.target.key
-            state = self._frames[key] = compiled.frame_state(
+            state = frame.target.path_state[key] = compiled.frame_state(
                 frame.target.secondary_begin,
                 width,
                 height,
@@ -144,32 +143,39 @@ class NativeRecorder:
         return cb, draws, triangles
 
 
-RECORDERS: dict[str, type[PythonRecorder] | type[NativeRecorder]] = {"native": NativeRecorder, "python": PythonRecorder}
+RECORDERS: dict[str, Callable[[ChunkPath], PythonRecorder | NativeRecorder]] = {
+    "native": NativeRecorder,
+    "python": PythonRecorder,
+}
+
+
+def check_recorder(name: str) -> None:
+    if name not in RECORDERS:
+        raise ValueError(f"unknown recorder {name!r}; recorders: {', '.join(RECORDERS)}")
 
 
 class ChunkPath:
     """A CPU-recorded path; subclasses say how a row reaches the vertex shader."""
 
     name: ClassVar[str]
+    uses_recorder: ClassVar[bool] = True  # the CPU records the draws, with one of RECORDERS
     vertex_shader: ClassVar[str]
     instanced: ClassVar[bool]
     push_bytes: ClassVar[int]  # push constant range of the mesh pipelines (0: none)
 
     def __init__(self, ctx: PathContext, recorder: str) -> None:
-        if recorder not in RECORDERS:
-            raise ValueError(f"unknown recorder {recorder!r}; recorders: {', '.join(RECORDERS)}")
+        check_recorder(recorder)
         self.ctx = ctx
         self.vk = vk = ctx.device.vk
+        self.recorder = recorder
+        self._recorder = RECORDERS[recorder](self)  # first: it may refuse (no numba) before anything is made
         push = [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, self.push_bytes)] if self.push_bytes else []
         self.layout = pipeline_layout(ctx.device, [ctx.frame_set_layout], push)
-        self.pipelines = mesh_pipelines(ctx, self.layout, self.vertex_shader)
-        self.recorder = recorder
-        self._recorder = RECORDERS[recorder](self)
-
-    def set_recorder(self, recorder: str) -> None:
-        if recorder != self.recorder:
-            self._recorder = RECORDERS[recorder](self)  # raises before anything changes
-            self.recorder = recorder
+        try:
+            self.pipelines = mesh_pipelines(ctx, self.layout, self.vertex_shader)
+        except BaseException:
+            vk.vkDestroyPipelineLayout(ctx.device.handle, self.layout, None)
+            raise
 
     def rows_needed(self, candidates: int) -> int:
         return candidates

@@ -71,12 +71,12 @@ class FrameExtractor:
         self._chunks_key: tuple[object, ...] = ()
         self._chunks: list[Chunk] = []
 
-    def extract(self, world: World, aspect: float, mesh_count: int, culling: bool, lights: bool = True) -> FrameData:
+    def extract(self, world: World, aspect: float, mesh_count: int, culling: bool) -> FrameData:
         cam = camera_matrices(world, aspect)
         origin = render_origin(world)
         origin_key = origin.tobytes()
         view = self.view(cam, origin, origin_key)
-        light_columns = self.lights(world) if lights else []
+        light_columns = self.lights(world)
         chunks = self.chunks(world, mesh_count)
         return FrameData(
             camera=cam,

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..gpu.memory import HOST, Buffer, Image
 from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
+from .layouts import IMGUI_PUSH
 
 if TYPE_CHECKING:
     from ..gpu.device import Device
@@ -93,7 +94,7 @@ class ImGuiRenderer:
         )
         self._pools: list[Any] = []
         self._free_sets: list[Any] = []
-        self.layout = pipeline_layout(device, [self.set_layout], [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, 16)])
+        self.layout = pipeline_layout(device, [self.set_layout], [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, IMGUI_PUSH.size)])
         self.pipeline = graphics_pipeline(
             device,
             GraphicsPipelineSpec(
@@ -121,7 +122,7 @@ class ImGuiRenderer:
         # the last UI's (ImGui frame, draws, push constants, draw lists, vertex and index counts)
         self._last: tuple[Any, ...] | None = None
         self._copied: dict[int, int] = {}  # per slot: the ImGui frame whose geometry it holds
-        self._push = np.zeros(4, dtype=np.float32)
+        self._push = np.zeros(1, dtype=IMGUI_PUSH.dtype)
         self._push_ptr = vk.ffi.from_buffer(self._push)
         self._offsets = vk.ffi.new("VkDeviceSize[1]", [0])
         self._viewport = vk.ffi.new("VkViewport*")
@@ -406,8 +407,8 @@ class ImGuiRenderer:
         vp = self._viewport
         vp.x, vp.y, vp.width, vp.height, vp.minDepth, vp.maxDepth = 0.0, 0.0, float(width), float(height), 0.0, 1.0
         lib.vkCmdSetViewport(cb, 0, 1, vp)
-        self._push[:] = push
-        lib.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_VERTEX_BIT, 0, 16, self._push_ptr)
+        self._push["scale"], self._push["translate"] = push[:2], push[2:]
+        lib.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_VERTEX_BIT, 0, IMGUI_PUSH.size, self._push_ptr)
         bound = None
         layout, null = self.layout, vk.ffi.NULL
         set_scissor, draw = lib.vkCmdSetScissor, lib.vkCmdDrawIndexed

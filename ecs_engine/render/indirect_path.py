@@ -44,11 +44,12 @@ from .layouts import (
     DRAW_COMMAND,
     DRAW_STATE,
     KEY_INFO,
+    UINT_BYTES,
 )
 from .mesh_registry import MergedMeshes
 from .path import ChunkResult, FrameInputs, MeshBounds, PathContext
 
-STATE_HEADER = DRAW_STATE.size // 4  # uints before the per-key counters
+STATE_HEADER = DRAW_STATE.size // UINT_BYTES  # uints before the per-key counters
 FEATURES = ("drawIndirectCount", "multiDrawIndirect", "drawIndirectFirstInstance")
 
 
@@ -80,27 +81,36 @@ def check_support(device: Device) -> None:
 class IndirectPath:
     name = "indirect"
     recorder = "gpu"
+    uses_recorder = False  # compute shaders write the draws
 
     def __init__(self, ctx: PathContext, recorder: str | None = None) -> None:
         check_support(ctx.device)  # before anything is created
         self.ctx = ctx
-        device = ctx.device
-        vk = self.vk = device.vk
+        self.vk = ctx.device.vk
+        self.frames: list[_IndirectFrame] = []
+        try:
+            self._build(ctx)
+        except BaseException:
+            self.destroy()  # what was made so far
+            raise
+
+    def _build(self, ctx: PathContext) -> None:
+        device, vk = ctx.device, self.vk
         ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
         stages = vk.VK_SHADER_STAGE_VERTEX_BIT | vk.VK_SHADER_STAGE_COMPUTE_BIT
-        self.set_layout = DescriptorSetLayout(
-            device, [(b, ssbo, stages) for b in (BINDING_IDS, BINDING_KEYS, BINDING_DRAW_STATE, BINDING_COMMANDS)]
-        )
+        bindings = (BINDING_IDS, BINDING_KEYS, BINDING_DRAW_STATE, BINDING_COMMANDS)
+        self.set_layout = DescriptorSetLayout(device, [(b, ssbo, stages) for b in bindings])
         n = ctx.frames_in_flight
-        self.pool = DescriptorPool(device, n, {ssbo: 4 * n})
+        self.pool = DescriptorPool(device, n, {ssbo: len(bindings) * n})
         sets = [ctx.frame_set_layout, self.set_layout.handle]
         self.layout = pipeline_layout(device, sets)
-        self.pipelines = mesh_pipelines(ctx, self.layout, "mesh_indirect.vert")
         self.compute_layout = pipeline_layout(device, sets, [(vk.VK_SHADER_STAGE_COMPUTE_BIT, 0, CULL_PUSH.size)])
+        self.pipelines = mesh_pipelines(ctx, self.layout, "mesh_indirect.vert")
         self.cull = compute_pipeline(device, "cull.comp", self.compute_layout)
         self.compact = compute_pipeline(device, "compact.comp", self.compute_layout)
         self.max_groups = int(device.limits.maxComputeWorkGroupCount[0])
-        self.frames = [self._make_frame(self.pool.allocate(self.set_layout), 2, 1024) for _ in range(n)]
+        for _ in range(n):
+            self.frames.append(self._make_frame(self.pool.allocate(self.set_layout), 2, 1024))
         # made once: the per-frame calls go straight to vk.lib (see gpu/frames.py)
         self._push = np.zeros(1, dtype=CULL_PUSH.dtype)
         self._compact_push = np.zeros(1, dtype=COMPACT_PUSH.dtype)
@@ -140,11 +150,11 @@ class IndirectPath:
         device = self.ctx.device
         ssbo = vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT
         indirect = vk.VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT
-        state_bytes = DRAW_STATE.size + 4 * keys
+        state_bytes = DRAW_STATE.size + UINT_BYTES * keys
         f = _IndirectFrame(
             descriptor_set=descriptor_set,
             keys=Buffer(device, KEY_INFO.size * keys, ssbo),
-            ids=Buffer(device, 4 * rows, ssbo, DEVICE),
+            ids=Buffer(device, UINT_BYTES * rows, ssbo, DEVICE),
             state=Buffer(device, state_bytes, ssbo | indirect | vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT, DEVICE),
             commands=Buffer(device, DRAW_COMMAND.size * keys, ssbo | indirect, DEVICE),
             readback=Buffer(device, state_bytes, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST),
@@ -174,9 +184,9 @@ class IndirectPath:
             for b in (f.keys, f.ids, f.state, f.commands, f.readback):
                 b.destroy()
             previous = f.previous  # read at begin_frame, before the buffers went
-            f = self.frames[slot] = self._make_frame(f.descriptor_set, keys, max(rows, f.ids.size // 4))
+            f = self.frames[slot] = self._make_frame(f.descriptor_set, keys, max(rows, f.ids.size // UINT_BYTES))
             f.previous = previous
-        ids = f.ids.grown(4 * rows)
+        ids = f.ids.grown(UINT_BYTES * rows)
         if ids is not f.ids:
             f.ids = ids
             self._write_set(f)
@@ -321,23 +331,31 @@ class IndirectPath:
                 f.commands.handle,
                 winding * meshes * DRAW_COMMAND.size,
                 f.state.handle,
-                DRAW_STATE.offset("draw_counts") + 4 * winding,
+                DRAW_STATE.offset("draw_counts") + UINT_BYTES * winding,
                 meshes,
                 DRAW_COMMAND.size,
             )
 
     def destroy(self) -> None:
+        """Also for a path half built (its constructor failed): what exists goes."""
         vk = self.vk
         handle = self.ctx.device.handle
         for f in self.frames:
             for b in (f.keys, f.ids, f.state, f.commands, f.readback):
                 b.destroy()
-        for pipeline in (*self.pipelines, self.cull, self.compact):
-            vk.vkDestroyPipeline(handle, pipeline, None)
-        vk.vkDestroyPipelineLayout(handle, self.layout, None)
-        vk.vkDestroyPipelineLayout(handle, self.compute_layout, None)
-        self.pool.destroy()
-        self.set_layout.destroy()
+        self.frames = []
+        for name in ("pipelines", "cull", "compact"):
+            made = self.__dict__.pop(name, None)
+            for pipeline in made if isinstance(made, tuple) else (made,) if made is not None else ():
+                vk.vkDestroyPipeline(handle, pipeline, None)
+        for name in ("layout", "compute_layout"):
+            layout = self.__dict__.pop(name, None)
+            if layout is not None:
+                vk.vkDestroyPipelineLayout(handle, layout, None)
+        for name in ("pool", "set_layout"):
+            owned = self.__dict__.pop(name, None)
+            if owned is not None:
+                owned.destroy()
 
 
 class _Barrier:

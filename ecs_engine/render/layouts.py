@@ -7,7 +7,14 @@ set 1 belongs to the indirect path (ids, key table, draw state, commands).
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..gpu.layout import Struct, glsl_header
+
+# A mesh vertex as the vertex buffers hold it (tightly packed: vertex input, not a buffer block);
+# the pipelines take the stride and attribute offsets from here, mesh.vert reads locations 0, 1.
+MESH_VERTEX = np.dtype([("position", np.float32, 3), ("normal", np.float32, 3)])
+UINT_BYTES = np.dtype(np.uint32).itemsize  # one visible-row id, one per-key counter (indirect path)
 
 GLOBALS = Struct(
     "Globals",

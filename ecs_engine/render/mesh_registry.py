@@ -11,12 +11,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..gpu.memory import Buffer, upload
+from .layouts import MESH_VERTEX
 from .mesh_data import MeshData
 
 if TYPE_CHECKING:
     from ..gpu.device import Device
-
-VERTEX_STRIDE = 24  # position xyz, normal xyz, float32
 
 
 @dataclass
@@ -86,7 +85,7 @@ class MeshRegistry:
         vertex_counts = np.array([len(d.positions) for d in datas], dtype=np.int64)
         first_index = np.concatenate([[0], np.cumsum(index_counts)[:-1]]).astype(np.uint32)
         vertex_offset = np.concatenate([[0], np.cumsum(vertex_counts)[:-1]]).astype(np.int32)
-        vertices = np.concatenate([_interleaved(d) for d in datas]) if datas else np.zeros((1, 6), np.float32)
+        vertices = np.concatenate([_interleaved(d) for d in datas]) if datas else np.zeros(1, MESH_VERTEX)
         indices = np.concatenate([d.indices for d in datas]).astype(np.uint32) if datas else np.zeros(1, np.uint32)
         self._merged = MergedMeshes(
             upload(self.device, vertices, vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT),
@@ -113,7 +112,7 @@ class MeshRegistry:
 
 
 def _interleaved(mesh: MeshData) -> np.ndarray:
-    out = np.empty((len(mesh.positions), 6), dtype=np.float32)
-    out[:, :3] = mesh.positions
-    out[:, 3:] = mesh.normals
+    out = np.empty(len(mesh.positions), dtype=MESH_VERTEX)
+    out["position"] = mesh.positions
+    out["normal"] = mesh.normals
     return out

@@ -9,14 +9,15 @@ Per frame:
 1. `rows_needed(candidates)`: instance rows the path writes into the frame's mapped buffer;
 2. `record_chunk(chunk, frame)` for every chunk, on the worker pool (cull, write rows, record a
    secondary command buffer, or only write rows);
-3. `finish(cb, frame, results)` on the main thread: commands for the primary before the render
+3. `finish(cb, frame, results, candidates)` on the main thread: commands for the primary before the render
    pass (compute), and the secondaries to execute in the mesh subpass;
 4. after submit, `counts(frame, results)`: draws, visible rows and triangles.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
@@ -43,6 +44,7 @@ class TargetState:
     area_ptr: Any = None  # pointers to the structs above, for raw calls
     viewport_ptr: Any = None
     pass_begin_ptr: Any = None
+    path_state: dict[Any, Any] = field(default_factory=dict)  # what paths keep per target and slot
 
 
 @dataclass
@@ -80,12 +82,17 @@ class PathContext:
     secondaries: SecondaryBuffers
     frames_in_flight: int
     material_count: int
-    native_recorder: Any = None  # gpu.native_recorder.NativeRecorder, compiled once per device
+    native_recorder: Callable[[], Any]  # gpu.native_recorder.NativeRecorder, compiled on first call, once a device
 
 
 class RenderPath(Protocol):
     @property
     def name(self) -> str: ...
+
+    @property
+    def uses_recorder(self) -> bool:
+        """Whether the CPU records the draws (with the renderer's recorder setting)."""
+        ...
 
     @property
     def recorder(self) -> str:
@@ -108,3 +115,11 @@ class RenderPath(Protocol):
 def summed_counts(results: list[ChunkResult]) -> tuple[int, int, int]:
     """(draws, visible, triangles) over the chunks recorded on the CPU."""
     return (sum(r.draws for r in results), sum(r.visible for r in results), sum(r.triangles for r in results))
+
+
+class PathFactory(Protocol):
+    """A render path class, as the renderer's table holds it."""
+
+    uses_recorder: bool
+
+    def __call__(self, ctx: PathContext, recorder: str) -> RenderPath: ...

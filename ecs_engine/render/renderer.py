@@ -14,8 +14,10 @@ light pass and overlay stay.
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass
+from operator import attrgetter
 from typing import Any
 
 import numpy as np
@@ -30,7 +32,7 @@ from ..gpu.memory import Buffer
 from ..gpu.secondary import SecondaryBuffers
 from ..jobs import JobPool
 from .camera import CameraMatrices
-from .chunk_paths import RECORDERS, InstancedPath, PerEntityPath
+from .chunk_paths import RECORDERS, InstancedPath, PerEntityPath, check_recorder
 from .frame_data import Chunk, FrameData, FrameExtractor
 from .indirect_path import IndirectPath
 from .layouts import (
@@ -46,9 +48,9 @@ from .layouts import (
 from .light_pass import LightPass
 from .light_rows import write_lights
 from .mesh_registry import MeshRegistry
-from .path import ChunkResult, FrameInputs, MeshBounds, PathContext, RenderPath, TargetState
+from .path import ChunkResult, FrameInputs, MeshBounds, PathContext, PathFactory, RenderPath, TargetState
 
-PATHS: dict[str, type[InstancedPath] | type[PerEntityPath] | type[IndirectPath]] = {
+PATHS: dict[str, PathFactory] = {
     "instanced": InstancedPath,
     "per_entity": PerEntityPath,
     "indirect": IndirectPath,
@@ -94,10 +96,6 @@ class _PerFrame:
     written: tuple[Any, ...] | None = None  # what the globals buffer holds
 
 
-def _chunk_name(chunk: Chunk) -> str:
-    return chunk.name
-
-
 def default_recorder() -> str:
     return "native" if native.AVAILABLE else "python"
 
@@ -128,6 +126,7 @@ class Renderer:
         self.clear_color = clear_color
         self.ambient = ambient
         self.jobs = jobs
+        self._jobs_generation = jobs.generation if jobs is not None else 0
         self.culling = culling
         self.extractor = FrameExtractor(lambda: self.jobs.threads if self.jobs is not None else 1, chunk_rows)
         self._native = native_recorder  # compiling one costs about a second: callers may share one
@@ -182,8 +181,8 @@ class Renderer:
             return
         if mode not in PATHS:
             raise ValueError(f"unknown render mode {mode!r}; modes: {', '.join(MODES)}")
-        if mode == self.mode and mode == "indirect":
-            self._check_recorder(recorder)
+        if mode == self.mode and not self.path.uses_recorder:
+            check_recorder(recorder)  # kept for when a CPU path draws again
             self.cpu_recorder = recorder
             return
         new = self._make_path(mode, recorder)  # raises before the old one goes
@@ -191,14 +190,9 @@ class Renderer:
         self.path.destroy()
         self.path = new
 
-    @staticmethod
-    def _check_recorder(recorder: str) -> None:
-        if recorder not in RECORDERS:
-            raise ValueError(f"unknown recorder {recorder!r}; recorders: {', '.join(RECORDERS)}")
-
-    def _make_path(self, mode: str, recorder: str) -> RenderPath:
-        self._check_recorder(recorder)
-        if recorder == "native" and mode != "indirect" and self._native is None:
+    def _native_recorder(self) -> Any:
+        """The native recorder compiled for this device, made on first use (about a second)."""
+        if self._native is None:
             if not native.AVAILABLE:
                 raise UsageError(
                     "the native recorder needs numba (pip install numba, and unset "
@@ -207,6 +201,10 @@ class Renderer:
             from ..gpu.native_recorder import NativeRecorder
 
             self._native = NativeRecorder(self.device)
+        return self._native
+
+    def _make_path(self, mode: str, recorder: str) -> RenderPath:
+        check_recorder(recorder)
         ctx = PathContext(
             device=self.device,
             meshes=self.meshes,
@@ -215,7 +213,7 @@ class Renderer:
             secondaries=self.secondaries,
             frames_in_flight=len(self.frames.frames),
             material_count=len(DEFAULT_MATERIALS),
-            native_recorder=self._native,
+            native_recorder=self._native_recorder,
         )
         path = PATHS[mode](ctx, recorder)
         self.cpu_recorder = recorder
@@ -252,12 +250,16 @@ class Renderer:
 
     def _ensure_capacity(self, pf: _PerFrame, instances: int, lights: int) -> None:
         """Grow a frame's buffers; safe: this frame's fence has been waited on."""
-        grown = (pf.instances.grown(instances * INSTANCE.size), pf.lights.grown(lights * LIGHT.size))
-        if grown != (pf.instances, pf.lights):
-            pf.instances, pf.lights = grown
-            self._write_set(pf)
+        before = (pf.instances, pf.lights)
+        try:
+            pf.instances = pf.instances.grown(instances * INSTANCE.size)
+            pf.lights = pf.lights.grown(lights * LIGHT.size)
+        finally:
+            if (pf.instances, pf.lights) != before:
+                self._write_set(pf)
 
-    def _target_state(self, framebuffer: Any, width: int, height: int) -> TargetState:
+    def target_state(self, framebuffer: Any, width: int, height: int) -> TargetState:
+        """What a framebuffer of this size needs per frame, made once (kept for 16 framebuffers)."""
         vk = self.vk
         key = (int(vk.ffi.cast("uintptr_t", framebuffer)), width, height)
         state = self._targets.get(key)
@@ -301,6 +303,21 @@ class Renderer:
             )
         return self._bounds[1]
 
+    def next_image_semaphore(self) -> Any:
+        """The semaphore the next frame waits on for a swapchain image, once that frame slot's
+        last use is done (so the semaphore is free to be signalled again)."""
+        frame = self.frames.frames[self.frames.index]
+        self.frames.wait(frame)
+        return frame.image_available
+
+    def _forget_old_threads(self) -> None:
+        """The pool's threads were replaced: the old threads' command pools go (after the GPU is
+        done with what they recorded)."""
+        assert self.jobs is not None
+        self.device.wait_idle()
+        self.secondaries.keep_threads({t.ident for t in threading.enumerate() if t.ident is not None})
+        self._jobs_generation = self.jobs.generation
+
     # -------------------------------------------------------------- per frame
     def extract(self, world: World, width: int, height: int) -> FrameData:
         return self.extractor.extract(world, width / height, len(self.meshes), self.culling)
@@ -317,11 +334,13 @@ class Renderer:
         """Record and submit one frame. Headless targets read the image back when asked."""
         width, height = extent or (self.target.width, self.target.height)
         data = self.extract(world, width, height)  # before any GPU state is touched: a bad world fails here
+        if self.jobs is not None and self.jobs.generation != self._jobs_generation:
+            self._forget_old_threads()
         frame, gpu_ms = self.frames.begin()
         slot = self.frames.frames.index(frame)
         pf = self.per_frame[slot]
         self._ensure_capacity(pf, self.path.rows_needed(data.candidates), data.light_count)
-        target = self._target_state(framebuffer or self.target.framebuffer, width, height)
+        target = self.target_state(framebuffer or self.target.framebuffer, width, height)
         inputs = FrameInputs(
             slot=slot,
             descriptor_set=pf.descriptor_set,
@@ -351,7 +370,9 @@ class Renderer:
             return path.record_chunk(chunk, inputs)
 
         results = (
-            self.jobs.map(job, data.chunks, _chunk_name) if self.jobs is not None else [job(c) for c in data.chunks]
+            self.jobs.map(job, data.chunks, attrgetter("name"))
+            if self.jobs is not None
+            else [job(c) for c in data.chunks]
         )
         record_ms = (time.perf_counter() - t0) * 1e3
         cb = frame.command_buffer
