@@ -38,7 +38,7 @@ Workloads ("workload" in the JSON rows); N = entities in the world
                   Native: Schedule(MotionSystem @update, TransformSystem @post_update),
                   frame = schedule.run(world, 1/60). esper: two processors doing the same work per
                   entity in plain Python (position += v*dt; the exact quaternion step of
-                  transform_math._angular_kernel; 4x4 camera-relative model matrix as a tuple of 16
+                  maths.transform._angular_kernel; 4x4 camera-relative model matrix as a tuple of 16
                   floats, origin 0; 3x3 cofactor normal matrix as a tuple of 9). Components use
                   __slots__; the motion processor keeps MotionSystem's two loops (linear over
                   Transform+Velocity, angular over Transform+AngularVelocity; fusing them saves

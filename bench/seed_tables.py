@@ -36,12 +36,13 @@ import numpy as np
 import psutil
 
 from ecs_engine.app.loop import run as run_scene
+from ecs_engine.app.scenes import SEED_SCENES
 from ecs_engine.app.settings import RunOptions
 from ecs_engine.jobs import default_threads
 from ecs_engine.render.renderer import MODES as RENDER_MODES
 
 THREADS = default_threads()
-SCENES = ("cube", "grid100", "model")
+SCENES = SEED_SCENES  # the seed thesis measured these three
 MODES = RENDER_MODES  # every mode the renderer has
 
 # The seed thesis (i7-11800H, RTX 3070, Windows 11): Tables 4.1, 4.2 and 4.3,

@@ -364,7 +364,7 @@ class EsperWorld:
         if entry is not None:
             result, query, object_keys, stamp = entry
             if self._stamp(query, object_keys) == stamp:
-                return result  # type: ignore[no-any-return]
+                return result
         return None
 
     def _build(self, types: tuple[type, ...], single: bool) -> tuple[list[Any], Any, tuple[Any, ...]]:

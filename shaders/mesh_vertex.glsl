@@ -16,7 +16,7 @@ layout(push_constant) uniform Push { Instance row; } push;
 // columns scaled by the largest one (so huge scales do not overflow and tiny ones do not all
 // vanish), its sign flipped for mirrored matrices. Finite for zero scales too: a flattened axis
 // gives a zero term and the fragment shader falls back to the face normal. The same formula as
-// transform_math.normal_scale, per vertex instead of per entity on the CPU.
+// maths.transform.normal_scale, per vertex instead of per entity on the CPU.
 mat3 normal_matrix(Instance inst) {
     vec3 c0 = vec3(inst.model[0].x, inst.model[1].x, inst.model[2].x);
     vec3 c1 = vec3(inst.model[0].y, inst.model[1].y, inst.model[2].y);

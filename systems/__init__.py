@@ -1,4 +1,5 @@
-"""Stock systems: motion, springs, transform (matrices), fly camera, orbits."""
+"""Stock systems: the fixed step's snapshot for interpolation, motion, springs, orbits, the fly
+camera, the render origin and the transform (matrices)."""
 
 from .camera_control import FlyCameraSystem, InputState
 from .interpolation import SnapshotSystem

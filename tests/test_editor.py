@@ -12,7 +12,7 @@ import pytest
 
 pytest.importorskip("imgui_bundle")
 
-from ecs_engine.app.loop import run
+from ecs_engine.app.loop import apply_requests, run
 from ecs_engine.app.settings import RunOptions
 from ecs_engine.components import Camera, Mesh, PointLight, Transform
 from ecs_engine.jobs import JobPool
@@ -94,9 +94,7 @@ class Scene:
         self.session.build(s.world, self.stats, self.perf, 1 / 60, W, H)
         self.stats = s.renderer.render(s.world, readback=True)
         self.perf.frame(1.0, self.stats.record_ms, self.stats.gpu_ms, draws=self.stats.draws)
-        wanted = self.session.take_requests()
-        if wanted is not None:
-            s.apply(wanted)
+        apply_requests(s, self.session)  # as the run loop does
 
     def close(self) -> None:
         self.session.destroy()
@@ -154,12 +152,27 @@ def test_settings_requests_rebuild_what_they_need(scene):
     assert scene.state.world.resources[JobPool] is scene.state.pool  # one pool, resized in place
     scene.frame()
     assert scene.stats.instances == 100 and scene.gpu.target.pixels()[..., :3].max() > 30
+    editor.selected = int(scene.state.world.entities()[5])
     editor.requested.scene = "cube"
     scene.frame()
     world = scene.state.world
     assert world.query(Mesh, write=()).count() == 1 and scene.state.settings.scene == "cube"
+    assert editor.selected is None  # ids of the old world name other entities in the new one
     scene.frame()
-    assert scene.stats.instances == 1
+    assert scene.stats.instances == 1  # the indirect path counts the new scene's mesh
+
+
+def test_a_request_the_session_refuses_changes_nothing_and_says_why(scene):
+    scene.frame()
+    editor = scene.session.editor
+    scene.state.device.features["drawIndirectCount"] = False  # as on a device without it
+    editor.requested.mode, editor.requested.threads = "indirect", 3
+    scene.frame()
+    assert "lacks drawIndirectCount" in editor.settings_status
+    assert scene.state.renderer.mode == "instanced" and scene.state.pool.threads == 2  # nothing applied
+    assert editor.requested == scene.state.settings  # the editor shows what is in force
+    scene.frame()
+    assert scene.stats.instances == 100
 
 
 def test_inspector_edits_go_through_the_world_checks(scene):

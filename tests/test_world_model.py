@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, rule
 
 from ecs_engine import Component, DeadEntityError, Field, MissingComponentError, World
+from ecs_engine.ecs.schema import schema_of
 
 
 class Hp(Component):
@@ -198,7 +199,7 @@ class WorldMachine(RuleBasedStateMachine):
         assert sorted(w.entities().tolist()) == self.alive()
         for eid, comps in self.model.items():
             assert w.is_alive(eid)
-            assert set(w.components(eid)) == {w.schema_of(t) for t in comps}
+            assert set(w.components(eid)) == {schema_of(t) for t in comps}
             for ct, v in comps.items():
                 assert world_value(w, eid, ct) == v, (eid, ct)
         for ct in TYPES:

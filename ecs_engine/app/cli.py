@@ -13,6 +13,7 @@ from ..errors import UsageError
 from ..gpu.swapchain import PRESENT_MODES
 from ..render.renderer import MODES, RECORDER_NAMES
 from .scenes import SCENES as RENDERED_SCENES
+from .scenes import SEED_SCENES
 
 
 def positive_int(text: str) -> int:
@@ -139,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
     if args.command == "editor":
         scenes = tuple(dict.fromkeys(args.scenes or [DEFAULT_SCENE]))
         args.scene, args.path = scenes[0], None
-        switcher = tuple(dict.fromkeys(scenes + ("cube", "grid100", "model")))
+        switcher = tuple(dict.fromkeys(scenes + SEED_SCENES))
         return run_scene(args, editor_scenes=switcher)
     raise UsageError(f"unknown command {args.command!r}")
 

@@ -21,7 +21,7 @@ from ..components import Camera, Mesh, PointLight, Transform, active_camera
 from ..ecs.world import World
 from ..gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
 from ..maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
-from ..render.renderer import MODES, RECORDER_NAMES
+from ..render.renderer import MODES, PATHS, RECORDER_NAMES
 from .settings import Settings
 
 PRESENT_MODES = tuple(SWAPCHAIN_PRESENT_MODES)
@@ -55,6 +55,7 @@ class Editor:
         self.selected: int | None = None
         self.browser = _Browser()
         self.status = ""  # the last error from an edit, shown in the inspector
+        self.settings_status = ""  # the last refused settings request, shown under the settings
         self.status_entity: int | None = None  # the entity it is about
         # screen rectangles (x0, y0, x1, y1) of a few widgets as last drawn: where synthetic
         # input (tests, scripted demos) should click
@@ -67,6 +68,20 @@ class Editor:
             return None
         self.settings = replace(self.requested)
         return replace(self.requested)
+
+    def in_force(self, settings: Settings) -> None:
+        """What the session runs with after applying the requests (it may have refused some)."""
+        self.settings = replace(settings)
+        self.requested = replace(settings)
+
+    def refused(self, message: str) -> None:
+        self.settings_status = message
+
+    def forget_world(self) -> None:
+        """A new scene: its ids name other entities, so nothing stays selected or cached."""
+        self.selected = None
+        self.status, self.status_entity = "", None
+        self.browser.key = None
 
     # -------------------------------------------------------------------- draw
     def draw(self, world: World, stats: SceneStats) -> None:
@@ -92,7 +107,7 @@ class Editor:
         if imgui.begin("Scene and render")[0]:
             req.scene = _combo(imgui, "scene", req.scene, self.scenes)
             req.mode = _combo(imgui, "mode", req.mode, MODES)
-            if req.mode != "indirect":
+            if PATHS[req.mode].uses_recorder:
                 req.recorder = _combo(imgui, "recorder", req.recorder, RECORDER_NAMES)
             _, req.threads = imgui.slider_int("threads", req.threads, 1, max(1, self.max_threads))
             _, req.culling = imgui.checkbox("frustum culling", req.culling)
@@ -103,6 +118,8 @@ class Editor:
             imgui.text(f"visible    {stats.visible:,}")
             imgui.text(f"draws      {stats.draws:,}")
             imgui.text(f"triangles  {stats.triangles:,}")
+            if self.settings_status:
+                imgui.text_colored((1.0, 0.4, 0.3, 1.0), self.settings_status)
         imgui.end()
 
     # ----------------------------------------------------------------- browser

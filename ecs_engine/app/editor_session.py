@@ -48,7 +48,7 @@ class EditorSession:
         self.windowed = window is not None
         if self.windowed:
             # our key callbacks are already set: the backend chains to them
-            imgui.backends.glfw_init_for_vulkan(ctypes.cast(window, ctypes.c_void_p).value, True)
+            imgui.backends.glfw_init_for_vulkan(ctypes.cast(window, ctypes.c_void_p).value or 0, True)
         renderer = session.renderer
         self.renderer = ImGuiRenderer(session.device, session.gpu.target.render_pass, 1, len(renderer.frames.frames))
         self.editor = Editor(session.settings, scenes, max_threads)
@@ -58,6 +58,7 @@ class EditorSession:
         self._last_build = -1e9
         self.builds = 0
         renderer.overlay = self.renderer  # the renderer stays for the whole run: attached once
+        session.on_world.append(lambda world: self.editor.forget_world())
 
     @property
     def cost_ms(self) -> float:
@@ -92,6 +93,12 @@ class EditorSession:
     def take_requests(self) -> Settings | None:
         """What the user changed in the editor since the last call, or None."""
         return self.editor.take_requests()
+
+    def in_force(self, settings: Settings) -> None:
+        self.editor.in_force(settings)
+
+    def refused(self, message: str) -> None:
+        self.editor.refused(message)
 
     def destroy(self) -> None:
         self.renderer.destroy()

@@ -11,6 +11,8 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
+from ..ecs.errors import EcsError
+from ..errors import UsageError
 from ..jobs import default_threads
 from .editor_session import EditorSession
 from .offscreen import OffscreenSource
@@ -42,10 +44,10 @@ def run(
         start = time.perf_counter()
         frames = 0
         while source.running(frames):
-            t0 = time.perf_counter()
-            target = source.begin(session, frames)
+            target = source.begin(session, frames)  # events, resize, acquire: not the frame's CPU work
             if target is None:
                 continue
+            t0 = time.perf_counter()
             if editor is not None and source.input is not None:
                 source.input.keyboard_captured_by_ui = editor.wants_keyboard  # keys typed into the UI
             session.schedule.run_frame(session.world, target.dt, source.clock, max_frame_dt=source.max_frame_dt)
@@ -61,10 +63,10 @@ def run(
                 signal=target.signal,
             )
             end = time.perf_counter()
-            # CPU work: not the waits for the GPU (renderer) or for an image (source)
+            # CPU work: not the waits for the GPU (renderer); the wait for an image came before t0
             result.add_frame(
                 stats,
-                (end - t0) * 1e3 - stats.wait_ms - target.waited_ms,
+                (end - t0) * 1e3 - stats.wait_ms,
                 end,
                 target.waited_ms,
                 ui_ms=editor.cost_ms if editor is not None else None,
@@ -74,18 +76,17 @@ def run(
             if perf.summary_due():
                 say(perf.summary_line())
             if editor is not None and source.running(frames):
-                wanted = editor.take_requests()
-                if wanted is not None:
-                    session.apply(wanted)
+                apply_requests(session, editor)
         session.device.wait_idle()
         result.frames = frames
         result.wall_s = time.perf_counter() - start
         result.settings = session.settings
-        result.recreations = getattr(source, "recreations", 0)
-        result.minimised_waits = getattr(source, "minimised_waits", 0)
-        if options.screenshot is not None and isinstance(source, OffscreenSource):
+        result.recreations = source.recreations
+        result.minimised_waits = source.minimised_waits
+        if options.screenshot is not None:
             result.pixels = source.pixels()
-            save_png(result.pixels, options.screenshot)
+            if result.pixels is not None:
+                save_png(result.pixels, options.screenshot)
         if frames:
             say(summary_line(result, frames, result.wall_s, final=True))
         result.write_perf_json(options, say)
@@ -97,3 +98,16 @@ def run(
         if source.instance is not None:
             result.validation_messages = list(source.instance.messages)
     return result
+
+
+def apply_requests(session: Session, editor: EditorSession) -> None:
+    """The editor's requests, between frames. One the session refuses (a mode this device lacks,
+    a scene that fails to load) changes nothing and is shown in the editor, not raised."""
+    wanted = editor.take_requests()
+    if wanted is None:
+        return
+    try:
+        session.apply(wanted)
+    except (UsageError, EcsError, ValueError) as exc:
+        editor.refused(str(exc))
+    editor.in_force(session.settings)

@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 from ..ecs.timestep import FixedTimestep
+from ..errors import UsageError
 from ..gpu.device import Device
 from ..gpu.instance import Instance
 from ..gpu.offscreen import OffscreenTarget
@@ -18,6 +19,9 @@ from .settings import FIXED_DT, RunOptions
 class OffscreenSource:
     window: Any = None
     input: Any = None
+    present_mode: str | None = None  # no swapchain
+    recreations = 0
+    minimised_waits = 0
 
     def __init__(self) -> None:
         self.clock = FixedTimestep(FIXED_DT)  # one step a frame
@@ -62,7 +66,14 @@ class OffscreenSource:
             f"{recorder_words(s.mode, s.recorder)}, {s.threads} threads"
         )
 
+    def check_present(self, present: str) -> None:
+        raise UsageError("a headless run has no swapchain, so no present mode")
+
+    def set_present(self, present: str) -> None:
+        self.check_present(present)
+
     def pixels(self) -> Any:
+        """The image of the last frame rendered with readback (the screenshot's frame)."""
         assert self._gpu is not None
         return self._gpu.target.pixels()
 

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import UsageError
+from ..render.renderer import PATHS
 from .settings import RunOptions
 
 
@@ -94,9 +95,8 @@ def describe_device(device: Any) -> str:
 
 
 def recorder_words(mode: str, recorder: str) -> str:
-    if mode == "indirect":
-        return "commands written on the GPU"  # the recorder choice does not apply
-    return f"{recorder} recorder"
+    """How a run's draws are recorded: by the recorder setting, or on the GPU."""
+    return f"{recorder} recorder" if PATHS[mode].uses_recorder else "commands written on the GPU"
 
 
 WARMUP_FRAMES = 5  # left out of the closing summary: pipeline creation and JIT compiles land there

@@ -9,6 +9,7 @@ from ..ecs.schedule import Schedule
 from ..errors import UsageError
 
 SCENES = ("cube", "grid100", "model", "scaling")
+SEED_SCENES = SCENES[:3]  # the seed thesis's three: 1 cube, 100 cubes, an OBJ model
 
 SceneBuilder = Callable[..., None]  # build(world, add_mesh, path=None)
 

@@ -58,6 +58,27 @@ class FrameSource(Protocol):
     window: Any  # the GLFW window, or None
     input: Any  # the InputState resource keys go to, or None
     instance: Instance | None  # once opened; its validation messages outlive the run
+    minimised_waits: int  # loop turns spent minimised (0 offscreen)
+
+    @property
+    def recreations(self) -> int:
+        """Swapchain recreations (0 offscreen)."""
+        ...
+
+    @property
+    def present_mode(self) -> str | None:
+        """fifo, mailbox or immediate; None without a swapchain."""
+        ...
+
+    def check_present(self, present: str) -> None:
+        """Raise UsageError unless `present` can be used."""
+        ...
+
+    def set_present(self, present: str) -> None: ...
+
+    def pixels(self) -> Any:
+        """The last frame's image (RGBA), where the source read it back; else None."""
+        ...
 
     def open(self, options: RunOptions) -> Gpu: ...
 
@@ -95,7 +116,7 @@ class Session:
                 chunk_rows=options.chunk_rows,
             )
             self.scene = start.scene
-            self.world, self.schedule = self._load(start.scene, options.path)
+            self.world, self.schedule = self._build(start.scene, options.path)
             source.attach(self)
         except BaseException:
             self.close()
@@ -108,38 +129,43 @@ class Session:
     @property
     def settings(self) -> Settings:
         """The settings in force, read from their owners."""
-        present = getattr(self.gpu.target, "present_name", None)
         return Settings(
             scene=self.scene,
             mode=self.renderer.mode,
             recorder=self.renderer.cpu_recorder,
             threads=self.pool.threads,
             culling=self.renderer.culling,
-            present=present,
+            present=self.source.present_mode,
         )
 
-    def _load(self, scene: str, path: str | None) -> tuple[World, Schedule]:
+    def _build(self, scene: str, path: str | None) -> tuple[World, Schedule]:
         """A new world for `scene` (sharing the run's pool and meshes) and its schedule."""
         world = World()
         world.resources[JobPool] = self.pool
         scene_builder(scene, self.options.entities)(world, self.gpu.meshes.add, path)
-        for hook in self.on_world:
-            hook(world)
         return world, default_schedule()
 
     def apply(self, wanted: Settings) -> None:
-        """Make `wanted` the settings in force, changing only what differs."""
-        renderer, pool = self.renderer, self.pool
-        if wanted.threads != pool.threads:
-            pool.resize(wanted.threads)
-        target = self.gpu.target
-        if wanted.present is not None and hasattr(target, "set_present") and wanted.present != target.present_name:
-            target.set_present(wanted.present)
-        if wanted.scene != self.scene:
-            self.world, self.schedule = self._load(wanted.scene, None)
-            self.scene = wanted.scene
-        renderer.set_path(wanted.mode, wanted.recorder)
+        """Make `wanted` the settings in force, changing only what differs. All or nothing: what
+        can be refused (a thread count, a present mode or render path the device lacks, a scene
+        that fails to build) is checked before anything changes."""
+        renderer, pool, source = self.renderer, self.pool, self.source
+        if wanted.threads < 1:
+            raise ValueError(f"threads must be at least 1, got {wanted.threads}")
+        present = wanted.present if wanted.present != source.present_mode else None
+        if present is not None:
+            source.check_present(present)
+        scene = self._build(wanted.scene, None) if wanted.scene != self.scene else None
+        renderer.set_path(wanted.mode, wanted.recorder)  # checks, then swaps
         renderer.culling = wanted.culling
+        pool.resize(wanted.threads)
+        if present is not None:
+            source.set_present(present)
+        if scene is not None:
+            self.world, self.schedule = scene
+            self.scene = wanted.scene
+            for hook in self.on_world:
+                hook(self.world)
 
     def close(self) -> None:
         """Tear down in reverse: renderer, pool, then the source's Vulkan objects."""

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 from ..jobs import default_threads
 from ..render.renderer import default_recorder
+from .scenes import SEED_SCENES
 
 FIXED_DT = 1.0 / 60.0  # headless runs: one fixed step a frame, so a run is reproducible frame for frame
 SIM_STEP = 1.0 / 120.0  # windowed runs: the fixed simulation step (ecs.FixedTimestep)
@@ -51,7 +52,7 @@ class RunOptions:
     entities: int = 10_000  # the scaling scene's entity count
     perf_json: str | None = None  # write every frame's perf samples here at the end
     editor: bool = False  # the ImGui editor and Perf window (headless: drawn into the image)
-    scenes: tuple[str, ...] = ("cube", "grid100", "model")  # the editor's scene switcher
+    scenes: tuple[str, ...] = SEED_SCENES  # the editor's scene switcher
 
     def settings(self) -> Settings:
         return Settings(

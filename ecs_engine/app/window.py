@@ -163,11 +163,9 @@ class WindowSource:
             swapchain.recreate()
         now = time.perf_counter()
         dt, self._previous = now - self._previous, now
-        frames = session.renderer.frames
-        frame = frames.frames[frames.index]
-        frames.wait(frame)  # the semaphore below is free once this frame is done
+        image_available = session.renderer.next_image_semaphore()  # waits until the next frame slot is free
         try:
-            index, suboptimal = swapchain.acquire(frame.image_available)  # may block on vsync
+            index, suboptimal = swapchain.acquire(image_available)  # may block on vsync
         except OutOfDate:
             swapchain.recreate()
             return None
@@ -175,7 +173,7 @@ class WindowSource:
             dt=dt,
             framebuffer=swapchain.framebuffers[index],
             extent=(swapchain.width, swapchain.height),
-            wait=frame.image_available,
+            wait=image_available,
             signal=swapchain.render_finished[index],
             waited_ms=(time.perf_counter() - now) * 1e3,
             image=index,
@@ -196,6 +194,19 @@ class WindowSource:
     def recreations(self) -> int:
         swapchain = getattr(self, "swapchain", None)
         return swapchain.recreations if swapchain is not None else 0
+
+    @property
+    def present_mode(self) -> str | None:
+        return self.swapchain.present_name
+
+    def check_present(self, present: str) -> None:
+        self.swapchain.present_mode_for(present)
+
+    def set_present(self, present: str) -> None:
+        self.swapchain.set_present(present)
+
+    def pixels(self) -> Any:
+        return None  # what a window showed is not read back (yet)
 
     def close(self) -> None:
         while self._opened:

@@ -16,7 +16,9 @@ class FixedClock(Protocol):
     timestep.FixedTimestep)."""
 
     step: float
-    alpha: float
+
+    @property
+    def alpha(self) -> float: ...
 
     def advance(self, frame_dt: float) -> int: ...
 

@@ -52,8 +52,6 @@ class World:
         # Singletons shared by systems (render origin, input state, ...), keyed by type.
         self.resources: dict[Any, Any] = {}
 
-    schema_of = staticmethod(schema_of)
-
     # ------------------------------------------------------------------ state
     def __len__(self) -> int:
         """Entities placed in tables (spawns still deferred are not counted)."""

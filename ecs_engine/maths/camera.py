@@ -75,7 +75,7 @@ def rotation_matrix(rotation_quat: np.ndarray) -> np.ndarray:
     """(4, 4) float64 rotation of a quaternion (x, y, z, w); non-unit input is normalised.
 
     Scalar Python arithmetic: for one quaternion a frame, NumPy's per-call overhead made this
-    ~40 us; the same formula as transform_math.quat_to_mat3."""
+    ~40 us; the same formula as maths.transform.quat_to_mat3."""
     q = np.asarray(rotation_quat, dtype=np.float64).reshape(4)
     x, y, z, w = q.tolist()
     n2 = x * x + y * y + z * z + w * w
