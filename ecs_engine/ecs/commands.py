@@ -65,12 +65,19 @@ class Remove:
 
 @dataclass(slots=True)
 class Set:
+    """A partial set is checked against the other fields' values when it is applied: they may
+    have been spawned or added by earlier commands of the same queue."""
+
     ids: np.ndarray
     component: type[Component]
     values: Values
+    who: Callable[[int], str]
 
     def apply(self, storage: Storage, tick: Tick) -> None:
-        storage.write(self.ids, self.component, self.values, tick())
+        ct = self.component
+        if len(self.values) < len(ct.__fields__) and storage.all_have(self.ids, ct):
+            ct.check({**storage.stored(self.ids, ct), **self.values}, self.who)
+        storage.write(self.ids, ct, self.values, tick())
 
 
 class CommandQueue:
@@ -79,24 +86,32 @@ class CommandQueue:
     def __init__(self) -> None:
         self._commands: list[Command] = []
         self.pending_destroy: set[int] = set()
+        self._touched: set[int] = set()  # every id a queued command names
 
     def __len__(self) -> int:
         return len(self._commands)
 
-    def push(self, command: Command) -> None:
+    def push(self, command: Spawn | Destroy | Add | Remove | Set) -> None:
         if isinstance(command, Destroy):
             self.pending_destroy.update(command.ids.tolist())
+        self._touched.update(command.ids.tolist())
         self._commands.append(command)
 
+    def touches(self, ids: np.ndarray) -> bool:
+        """Whether a queued command names one of `ids` (so a later write must queue behind it)."""
+        return bool(self._touched) and not self._touched.isdisjoint(ids.tolist())
+
     def apply(self, storage: Storage, tick: Tick) -> None:
-        """Apply every command; one that fails is reported after all the others were applied."""
+        """Apply every command; one that fails changes nothing and is reported (the first, with a
+        count of the others) after all the others were applied."""
         commands, self._commands = self._commands, []
         self.pending_destroy.clear()
-        errors: list[EcsError] = []
+        self._touched.clear()
+        errors: list[Exception] = []
         for command in commands:
             try:
                 command.apply(storage, tick)
-            except EcsError as exc:
+            except (EcsError, ValueError) as exc:  # a missing entity or component, a failed check
                 errors.append(exc)
         if errors:
             more = f" (and {len(errors) - 1} more failed commands)" if len(errors) > 1 else ""

@@ -35,7 +35,7 @@ class Field:
         self,
         dtype: Any,
         shape: tuple[int, ...] | int = (),
-        default: Any = 0,
+        default: Any = ...,
         *,
         finite: bool = False,
         allow_posinf: bool = False,
@@ -56,8 +56,12 @@ class Field:
         self.doc = doc
         self.name = "?"
         self.component: type[Component] | None = None
+        if default is ...:
+            default = None if self.dtype == object else 0  # no value: None for objects, zero for numbers
         if self.dtype == object:
             self.default = default
+            self._default_row = np.empty(1, dtype=object)  # one value for every row, even a list
+            self._default_row[0] = default
         else:
             self.default = np.broadcast_to(np.asarray(default, dtype=self.dtype), self.shape).copy()
             self.default.flags.writeable = False
@@ -71,6 +75,12 @@ class Field:
     def qualname(self) -> str:
         owner = self.component.__name__ if self.component is not None else "?"
         return f"{owner}.{self.name}"
+
+    @property
+    def fill_value(self) -> Any:
+        """What `column[rows] = ...` takes to give every row the default (an object field's
+        default may itself be a sequence, so it goes in a one-element object array)."""
+        return self._default_row if self.is_object else self.default
 
     @property
     def is_object(self) -> bool:
@@ -120,14 +130,13 @@ class Field:
         return arr.astype(target)
 
     def _coerce_object(self, value: Any, n: int) -> np.ndarray:
-        out = np.empty(n, dtype=object)
-        if n == 1:
-            out[0] = value
-            return out
-        seq = list(value)
-        if len(seq) != n:
-            raise ValueError(f"{self.qualname} needs one object per entity ({n}); got {len(seq)}")
-        out[:] = seq
+        """The rule for object fields, the same for every n: a NumPy object array of shape (n,)
+        gives one value per row; any other value (a string, a list, None, ...) is one value
+        shared by every row. Returns shape (n,) or (1,) (shared)."""
+        if isinstance(value, np.ndarray) and value.dtype == object and value.shape == (n,):
+            return value
+        out = np.empty(1, dtype=object)
+        out[0] = value
         return out
 
     def _rows(self, mask: np.ndarray) -> np.ndarray:
@@ -168,11 +177,16 @@ class Field:
                 self._fail(rows, arr, who, f"must be <= {self.maximum}")
 
     def _normalise(self, arr: np.ndarray, who: Callable[[int], str]) -> np.ndarray:
-        norm = np.linalg.norm(arr, axis=-1, keepdims=True)
-        rows = np.atleast_1d(norm[..., 0] < UNIT_EPSILON)
+        """Unit length per row. Scaled by the largest component first, so huge finite values
+        (1e200) do not overflow the squares and tiny ones do not underflow them."""
+        peak = np.max(np.abs(arr), axis=-1, keepdims=True)
+        safe = np.where(peak > 0.0, peak, 1.0)
+        scaled = arr / safe
+        norm = np.linalg.norm(scaled, axis=-1, keepdims=True)
+        rows = np.atleast_1d(peak[..., 0] < UNIT_EPSILON)  # the length lies between peak and 2 * peak
         if rows.any():
             self._fail(rows, arr, who, "must have non-zero length (it is normalised on write)")
-        return arr / norm
+        return scaled / norm
 
 
 class Component:

@@ -199,7 +199,7 @@ class Storage:
             if source is not None:
                 col[dst_rows] = source[rows]
             else:
-                col[dst_rows] = dst.fields[key].default
+                col[dst_rows] = dst.fields[key].fill_value
         if len(rows) == 1:
             moved = src.remove_row(int(rows[0]))
             if moved:

@@ -96,7 +96,7 @@ class ArchetypeTable:
     def fill_defaults(self, rows: slice, exclude: set[ColumnKey]) -> None:
         for key, f in self.fields.items():
             if key not in exclude:
-                self.columns[key][rows] = f.default
+                self.columns[key][rows] = f.fill_value
 
     def write(self, rows: Any, ct: type[Component], values: dict[str, np.ndarray], tick: int) -> None:
         for name, arr in values.items():

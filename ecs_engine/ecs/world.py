@@ -30,6 +30,13 @@ class RunningSystem(Protocol):
     def run(self, world: Any, dt: float) -> None: ...
 
 
+def entity_id(eid: Any) -> int:
+    """One entity id as a Python int; integers only (one rule for every call that takes one)."""
+    if isinstance(eid, (int, np.integer)) and not isinstance(eid, (bool, np.bool_)):
+        return int(eid)
+    raise TypeError(f"entity ids must be integers, got {type(eid).__name__} {eid!r}")
+
+
 def _new_entity(row: int) -> str:
     return "new entity" if row == 0 else f"new entity (row {row} of the batch)"
 
@@ -83,19 +90,20 @@ class World:
         self.storage.shrink_to_fit()
 
     def is_alive(self, eid: int) -> bool:
+        eid = entity_id(eid)
         index = self.storage.index
-        return index.valid_one(int(eid)) and int(index.table[int(eid) & INDEX_MASK]) >= 0
+        return index.valid_one(eid) and int(index.table[eid & INDEX_MASK]) >= 0
 
     def locate(self, eid: int) -> tuple[ArchetypeTable, int]:
         """The table and row holding a live entity (valid until the next structural change)."""
-        return self.storage.locate(int(eid))
+        return self.storage.locate(entity_id(eid))
 
     def has(self, eid: int, component_type: type) -> bool:
-        table, _ = self.storage.locate(int(eid))
+        table, _ = self.storage.locate(entity_id(eid))
         return table.has(schema_of(component_type))
 
     def components(self, eid: int) -> tuple[type[Component], ...]:
-        table, _ = self.storage.locate(int(eid))
+        table, _ = self.storage.locate(entity_id(eid))
         return table.types
 
     def change_stamp(self, eid: int, *component_types: type) -> tuple[int, ...]:
@@ -103,7 +111,7 @@ class World:
         changed: where it lives (table, row, layout) and the last write tick of each column.
         Ticks belong to tables, not rows, so a write to another entity of the same table changes
         the stamp too (never the reverse). For caching what is derived from one entity."""
-        table, row = self.storage.locate(int(eid))
+        table, row = self.storage.locate(entity_id(eid))
         keys = self._stamp_keys.get(component_types)
         if keys is None:
             keys = self._stamp_keys[component_types] = [
@@ -217,9 +225,11 @@ class World:
     def destroy(self, target: Any) -> None:
         """Destroy one entity or an array of them. Their ids never name an entity again."""
         if isinstance(target, (int, np.integer)) and not self.deferring:
-            self.storage.destroy_one(int(target))
+            self.storage.destroy_one(entity_id(target))
             return
         ids = self._ids(target, allow_reserved=self.deferring)
+        if not len(ids):
+            return
         if self.deferring:
             self._commands.push(Destroy(ids))
             return
@@ -231,6 +241,8 @@ class World:
         ids = self._ids(target, allow_reserved=self.deferring)
         checked = self._bundles([value], 1 if len(ids) == 1 else len(ids), self._who(ids))
         ((ct, vals),) = checked.items()
+        if not len(ids):
+            return  # no entities: nothing to do (the value was still checked)
         if self.deferring:
             self._commands.push(Add(ids, ct, vals))
             return
@@ -240,6 +252,8 @@ class World:
         """Remove a component from one entity or many; raises if one of them lacks it."""
         ct = schema_of(component_type)
         ids = self._ids(target, allow_reserved=self.deferring)
+        if not len(ids):
+            return
         if self.deferring:
             self._commands.push(Remove(ids, ct))
             return
@@ -248,7 +262,7 @@ class World:
     # --------------------------------------------------------------- get/set
     def get(self, eid: int, component_type: type) -> Any:
         """A copy of one entity's component (for a plain Python class: the stored object)."""
-        eid = int(eid)
+        eid = entity_id(eid)
         ct = schema_of(component_type)
         table, row = self.storage.locate(eid)
         if not table.has(ct):
@@ -258,7 +272,7 @@ class World:
         out = ct.__new__(ct)
         for name, f in ct.__fields__.items():
             v = table.columns[(ct, name)][row]
-            setattr(out, name, v.copy() if f.shape else v.item())
+            setattr(out, name, v if f.is_object else v.copy() if f.shape else v.item())
         return out
 
     def set(self, target: Any, value: Any, /, **fields: Any) -> None:
@@ -289,6 +303,8 @@ class World:
         n = len(ids)
         who = self._who(ids)
         vals = {name: ct.__fields__[name].coerce(v, n, who) for name, v in raw.items()}
+        if not n:
+            return  # no entities: nothing to do (the values were still checked)
         storage = self.storage
         placed = storage.placed(ids).all()
         if len(vals) < len(ct.__fields__) and placed and storage.all_have(ids, ct):
@@ -296,8 +312,10 @@ class World:
             ct.check({**storage.stored(ids, ct), **vals}, who)
         elif len(vals) == len(ct.__fields__):
             ct.check(vals, who)
-        if self.deferring and (not placed or not storage.all_have(ids, ct)):
-            self._commands.push(Set(ids, ct, vals))
+        # while deferring, a set waits behind earlier queued commands on these entities (a
+        # queued add then a set: the set must win), or for their spawn or add
+        if self.deferring and (not placed or not storage.all_have(ids, ct) or self._commands.touches(ids)):
+            self._commands.push(Set(ids, ct, vals, who))  # a partial one is checked again when applied
             return
         storage.write(ids, ct, vals, self.write_tick())
 
