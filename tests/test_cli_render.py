@@ -204,3 +204,51 @@ def test_perf_json_into_a_missing_folder_fails_before_running(tmp_path):
 def test_editor_rejects_unknown_scenes():
     proc = editor_cli("motion", "--headless")
     assert proc.returncode == 2 and "invalid choice" in proc.stderr
+
+
+def test_a_folder_as_screenshot_is_refused_before_the_run(tmp_path):
+    proc = cli("cube", "--headless", "--screenshot", str(tmp_path), "--width", "32", "--height", "24")
+    one_line_error(proc, f"{tmp_path}: is a directory, not a file to write the screenshot to")
+
+
+@pytest.mark.parametrize(
+    "args, words",
+    [
+        (["scaling", "--entities", str(10**12)], "needs about"),
+        (["scaling", "--threads", "100000"], "--threads 100000: choose 1 to"),
+    ],
+)
+def test_impossible_sizes_are_refused_at_once(args, words):
+    import time
+
+    start = time.perf_counter()
+    proc = cli(*args, "--headless")
+    one_line_error(proc, words)
+    assert time.perf_counter() - start < 20  # refused before anything is allocated or started
+
+
+def test_one_failing_output_does_not_lose_the_other(tmp_path, monkeypatch):
+    import json
+
+    import ecs_engine.app.loop as loop
+    from ecs_engine.app.settings import RunOptions
+    from ecs_engine.errors import UsageError
+
+    def broken(pixels, path):
+        raise UsageError(f"cannot write {path}: disk full")
+
+    monkeypatch.setattr(loop, "save_png", broken)
+    perf = tmp_path / "perf.json"
+    with pytest.raises(UsageError, match="disk full"):
+        loop.run(
+            RunOptions(
+                scene="cube",
+                width=32,
+                height=24,
+                frames=2,
+                quiet=True,
+                screenshot=str(tmp_path / "x.png"),
+                perf_json=str(perf),
+            )
+        )
+    assert len(json.loads(perf.read_text())["frames"]) == 2  # the log was written all the same

@@ -47,3 +47,35 @@ def test_window_renders_resizes_and_survives_minimise(monkeypatch):
     assert result.recreations >= 1  # the resize rebuilt the swapchain
     assert result.minimised_waits >= 4  # no rendering while minimised
     assert len(result.gpu_ms) >= 10 and min(result.gpu_ms) > 0
+
+
+def test_screenshot_of_a_window_is_the_presented_image(tmp_path, monkeypatch):
+    """--screenshot in a window writes the last frame as presented (read back from the
+    swapchain image); F12 writes one at any time."""
+    from dataclasses import replace
+
+    import numpy as np
+    from PIL import Image
+
+    from ecs_engine.app.loop import run
+    from ecs_engine.app.window import WindowSource
+
+    glfw = open_glfw()
+    assert glfw is not None
+    monkeypatch.chdir(tmp_path)
+    holder = {}
+
+    def press_f12(frame, glfw_, window):
+        if frame == 3:
+            holder["source"].request_screenshot()
+
+    source = holder["source"] = WindowSource(glfw, on_frame=press_f12)
+    shot = tmp_path / "window.png"
+    options = RunOptions(scene="cube", width=200, height=150, frames=8, validate=True, quiet=True, screenshot=str(shot))
+    result = run(replace(options, headless=False), source)
+    assert result.validation_messages == [] and result.frames == 8
+    image = np.asarray(Image.open(shot))
+    assert image.shape == (150, 200, 3) and image.max() > 30  # the cube, lit
+    assert len(source.shots) == 1  # F12 with --screenshot writes to that path too
+    r, _g, b = image[0, 0].astype(int)
+    assert abs(r - 39) <= 3 and abs(b - 48) <= 3 and b > r  # the clear colour (sRGB), in RGB order, not BGR

@@ -16,7 +16,7 @@ from ..errors import UsageError
 from ..jobs import default_threads
 from .editor_session import EditorSession
 from .offscreen import OffscreenSource
-from .perf import PerfMonitor
+from .perf import PerfMonitor, check_writable
 from .report import RunResult, describe_device, save_png, summary_line
 from .session import FrameSource, Session
 from .settings import RunOptions
@@ -32,8 +32,10 @@ def run(
     Headless by default; pass a window.WindowSource to draw in a window."""
     say = log or (lambda text: None if options.quiet else print(text))
     source = source or OffscreenSource()
+    if options.screenshot is not None:
+        check_writable(options.screenshot, "the screenshot")  # now, not after the whole run
     result = RunResult()
-    perf = result.perf = PerfMonitor(log=options.perf_json or False)
+    perf = result.perf = PerfMonitor(log=options.perf_json or False)  # checks its path too
     session = editor = None
     try:
         session = Session(options, source)
@@ -85,11 +87,9 @@ def run(
         result.minimised_waits = source.minimised_waits
         if options.screenshot is not None:
             result.pixels = source.pixels()
-            if result.pixels is not None:
-                save_png(result.pixels, options.screenshot)
         if frames:
             say(summary_line(result, frames, result.wall_s, final=True))
-        result.write_perf_json(options, say)
+        write_outputs(options, result, say)
     finally:
         if editor is not None:
             editor.destroy()
@@ -111,3 +111,21 @@ def apply_requests(session: Session, editor: EditorSession) -> None:
     except (UsageError, EcsError, ValueError) as exc:
         editor.refused(str(exc))
     editor.in_force(session.settings)
+
+
+def write_outputs(options: RunOptions, result: RunResult, say: Callable[[str], None]) -> None:
+    """The perf log, then the screenshot: each is written even when the other fails, and the
+    failures are reported together after both."""
+    failed = []
+    for write in (lambda: result.write_perf_json(options, say), lambda: _screenshot(options, result, say)):
+        try:
+            write()
+        except UsageError as exc:
+            failed.append(str(exc))
+    if failed:
+        raise UsageError("; ".join(failed))
+
+
+def _screenshot(options: RunOptions, result: RunResult, say: Callable[[str], None]) -> None:
+    if options.screenshot is not None and result.pixels is not None:
+        save_png(result.pixels, options.screenshot)

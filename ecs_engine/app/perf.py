@@ -81,23 +81,25 @@ class PsutilSampler:
         return ProcessSample(psutil.cpu_percent(interval=None), process, rss)
 
 
-def check_writable(path: str | os.PathLike[str]) -> Path:
+def check_writable(path: str | os.PathLike[str], what: str = "the performance log") -> Path:
     """The path as a Path if a file can be written there, else UsageError in one line.
 
     Called when the run starts, so a long run does not end by losing its data: a scratch file
-    is created (and removed) next to the target, as write_json will do."""
+    is created (and removed) next to the target, as the final write will do."""
     if not str(path):
-        raise UsageError("the performance log path is empty")
+        raise UsageError(f"the path for {what} is empty")
     target = Path(path)
     if target.is_dir():
-        raise UsageError(f"{target}: is a directory, not a file to write the performance log to")
+        raise UsageError(f"{target}: is a directory, not a file to write {what} to")
+    if not target.parent.is_dir():
+        raise UsageError(f"{target}: cannot write {what} there: folder {target.parent} does not exist")
     probe = target.with_name(f".{target.name}.{os.getpid()}.probe")
     try:
         with open(probe, "w"):
             pass
         probe.unlink()
     except OSError as exc:
-        raise UsageError(f"{target}: cannot write the performance log there: {exc.strerror or exc}") from None
+        raise UsageError(f"{target}: cannot write {what} there: {exc.strerror or exc}") from None
     return target
 
 

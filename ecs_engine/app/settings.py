@@ -10,6 +10,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import psutil
+
+from ..errors import UsageError
 from ..jobs import default_threads
 from ..render.renderer import default_recorder
 from .scenes import SEED_SCENES
@@ -54,6 +57,10 @@ class RunOptions:
     editor: bool = False  # the ImGui editor and Perf window (headless: drawn into the image)
     scenes: tuple[str, ...] = SEED_SCENES  # the editor's scene switcher
 
+    def __post_init__(self) -> None:
+        check_threads(self.threads)
+        check_entities(self.entities)
+
     def settings(self) -> Settings:
         return Settings(
             scene=self.scene,
@@ -63,3 +70,40 @@ class RunOptions:
             culling=self.culling,
             present=None if self.headless else self.present,
         )
+
+
+# Bytes one scaling-scene entity needs at its peak, measured from its columns: Transform (80),
+# Velocity and AngularVelocity (48), Mesh (8), ModelMatrix (64), the id column and entity index
+# (28), the arrays its spawn call builds (~150), and two frame slots of 64-byte instance rows.
+BYTES_PER_ENTITY = 500
+MAX_ENTITIES = (1 << 32) - 1  # entity slots are 32-bit
+
+
+def max_threads() -> int:
+    """More threads than this only add hand-off cost (the jobs are per core)."""
+    return max(64, 4 * default_threads())
+
+
+def check_threads(threads: int | None) -> None:
+    if threads is not None and not 1 <= threads <= max_threads():
+        raise UsageError(f"--threads {threads}: choose 1 to {max_threads()} (at most 4 per core, "
+                         f"{default_threads()} cores here, or 64)")
+
+
+def check_entities(entities: int, available: int | None = None) -> None:
+    """Refuse a count the machine cannot hold before anything is allocated."""
+    free = psutil.virtual_memory().available if available is None else available
+    need = entities * BYTES_PER_ENTITY
+    if need > free:
+        raise UsageError(f"--entities {entities:,} needs about {_size(need)} of memory "
+                         f"({BYTES_PER_ENTITY} bytes each); {_size(free)} is free")
+    if entities > MAX_ENTITIES:
+        raise UsageError(f"--entities {entities:,}: at most {MAX_ENTITIES:,} (entity slots are 32-bit)")
+
+
+def _size(n: float) -> str:
+    for unit in ("bytes", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if n < 1024 or unit == "PiB":
+            return f"{n:,.0f} {unit}" if unit == "bytes" else f"{n:,.1f} {unit}"
+        n /= 1024
+    return f"{n:.1f} PiB"

@@ -22,6 +22,7 @@ from ..gpu.instance import Instance
 from ..gpu.swapchain import OutOfDate, Swapchain
 from ..render.mesh_registry import MeshRegistry
 from ..systems import InputState
+from .report import save_png
 from .session import FrameTarget, Gpu, Session
 from .settings import MAX_DT, SIM_STEP, RunOptions
 
@@ -77,7 +78,11 @@ def open_glfw() -> Any | None:
 
 class WindowSource:
     """`on_frame(frames_done, glfw, window)` runs at the top of each loop turn, also the turns
-    spent minimised (tests drive resizes with it)."""
+    spent minimised (tests drive resizes with it).
+
+    Screenshots read the presented image back: with --screenshot, the last frame (one more frame
+    is drawn when the window is closed, so it is what the user saw); F12 writes one at any time,
+    to the --screenshot path or to ecs_engine-<time>.png in the current folder."""
 
     def __init__(self, glfw: Any, on_frame: Callable[[int, Any, Any], None] | None = None) -> None:
         self.glfw = glfw
@@ -93,11 +98,17 @@ class WindowSource:
         self._opened: list[Any] = []  # device-level objects to destroy, in the order made
         self._resized = False
         self._previous = time.perf_counter()
+        self.screenshot: str | None = None  # the --screenshot path
+        self._shot_requested = False  # F12: read back the next frame and write it
+        self._final_shot = False  # the window closes: one more frame, read back
+        self._took_final = False
+        self.shots: list[str] = []  # files F12 wrote
 
     # ----------------------------------------------------------------- set-up
     def open(self, options: RunOptions) -> Gpu:
         glfw = self.glfw
         self.frames = options.frames
+        self.screenshot = options.screenshot
         glfw.window_hint(glfw.CLIENT_API, glfw.NO_API)
         self.window = glfw.create_window(options.width, options.height, f"ecs_engine - {options.scene}", None, None)
         if not self.window:
@@ -130,6 +141,8 @@ class WindowSource:
         def on_key(_win: Any, key: int, _code: int, action: int, _mods: int) -> None:
             if key == glfw.KEY_ESCAPE and action == glfw.PRESS:
                 glfw.set_window_should_close(self.window, True)
+            if key == glfw.KEY_F12 and action == glfw.PRESS:
+                self.request_screenshot()
             apply_key(glfw, names, self.input, key, action)
 
         def give_input(world: World) -> None:
@@ -143,7 +156,17 @@ class WindowSource:
 
     # -------------------------------------------------------------- per frame
     def running(self, frames_done: int) -> bool:
-        return not self.glfw.window_should_close(self.window) and (self.frames is None or frames_done < self.frames)
+        closing = self.glfw.window_should_close(self.window) or (
+            self.frames is not None and frames_done >= self.frames - (1 if self.screenshot else 0)
+        )
+        if closing and self.screenshot is not None and not self._took_final:
+            self._final_shot = True  # one more frame, read back: the --screenshot
+            return True
+        return not closing
+
+    def request_screenshot(self) -> None:
+        """Read the next presented frame back and write it (F12)."""
+        self._shot_requested = True
 
     def begin(self, session: Session, frames_done: int) -> FrameTarget | None:
         """Events, resize, then the next swapchain image; None when there is nothing to draw
@@ -169,7 +192,11 @@ class WindowSource:
         except OutOfDate:
             swapchain.recreate()
             return None
+        readback = self._final_shot or self._shot_requested
+        if readback:
+            swapchain.readback_image = index
         return FrameTarget(
+            readback=readback,
             dt=dt,
             framebuffer=swapchain.framebuffers[index],
             extent=(swapchain.width, swapchain.height),
@@ -183,6 +210,16 @@ class WindowSource:
     def end(self, session: Session, target: FrameTarget) -> None:
         if not self.swapchain.present(target.image) or target.suboptimal:
             self._resized = True
+        if self._final_shot:
+            self._final_shot, self._took_final = False, True
+        if self._shot_requested and target.readback:  # the renderer waited for the frame
+            self._shot_requested = False
+            path = self.screenshot or time.strftime("ecs_engine-%Y%m%d-%H%M%S.png")
+            pixels = self.swapchain.pixels()
+            if pixels is not None:
+                save_png(pixels, path)
+                self.shots.append(path)
+                print(f"wrote {path}")
 
     def describe(self, session: Session) -> str:
         return (
@@ -206,7 +243,8 @@ class WindowSource:
         self.swapchain.set_present(present)
 
     def pixels(self) -> Any:
-        return None  # what a window showed is not read back (yet)
+        """The last frame read back (the --screenshot frame), as presented."""
+        return self.swapchain.pixels()
 
     def close(self) -> None:
         while self._opened:

@@ -6,9 +6,11 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from ..errors import UsageError
 from .functions import device_function, instance_function, raw_device_function
-from .memory import Image
+from .memory import HOST, Buffer, Image
 from .render_pass import create_framebuffer, create_render_pass
 
 if TYPE_CHECKING:
@@ -64,6 +66,12 @@ class Swapchain:
         self.depth: Image | None = None
         self.width = self.height = 0
         self.recreations = 0
+        # screenshots: an image can be copied out when the surface allows TRANSFER_SRC
+        supported = self._caps(device.physical, surface).supportedUsageFlags
+        self.copy_usage = supported & vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT
+        self.readback_image: int | None = None  # the image index the next record_readback copies
+        self._readback: Buffer | None = None
+        self._readback_size: tuple[int, int] = (0, 0)
         self._build()
 
     def _build(self) -> None:
@@ -88,7 +96,7 @@ class Swapchain:
                 imageColorSpace=self.color_space,
                 imageExtent=vk.VkExtent2D(width, height),
                 imageArrayLayers=1,
-                imageUsage=vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
+                imageUsage=vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | self.copy_usage,
                 imageSharingMode=vk.VK_SHARING_MODE_EXCLUSIVE,
                 preTransform=caps.currentTransform,
                 compositeAlpha=vk.VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR,
@@ -190,8 +198,102 @@ class Swapchain:
             raise RuntimeError(f"vkQueuePresentKHR failed with VkResult {result}")
         return True
 
+    def record_readback(self, cb: Any) -> None:
+        """After the render pass: copy image `readback_image` (in PRESENT_SRC layout) to a host
+        buffer and put it back for presenting; `pixels()` reads it once the frame is done."""
+        if self.readback_image is None:
+            return
+        if not self.copy_usage:
+            raise UsageError(
+                "this window's swapchain images cannot be copied (no TRANSFER_SRC usage): "
+                "no screenshot; run with --headless for one"
+            )
+        vk = self.vk
+        size = (self.width, self.height)
+        if self._readback is None:
+            self._readback = Buffer(self.device, 4 * size[0] * size[1], vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
+        self._readback = self._readback.grown(4 * size[0] * size[1])
+        self._readback_size = size
+        image = self.images[self.readback_image]
+        self.readback_image = None
+        color = vk.VkImageSubresourceRange(
+            aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=1
+        )
+
+        def layout(old: int, new: int, src_access: int, dst_access: int) -> Any:
+            return vk.VkImageMemoryBarrier(
+                srcAccessMask=src_access,
+                dstAccessMask=dst_access,
+                oldLayout=old,
+                newLayout=new,
+                srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+                dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+                image=image,
+                subresourceRange=color,
+            )
+
+        present, transfer = vk.VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
+        vk.vkCmdPipelineBarrier(
+            cb,
+            vk.VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
+            vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
+            0,
+            0,
+            None,
+            0,
+            None,
+            1,
+            [layout(present, transfer, vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT, vk.VK_ACCESS_TRANSFER_READ_BIT)],
+        )
+        region = vk.VkBufferImageCopy(
+            bufferOffset=0,
+            bufferRowLength=0,
+            bufferImageHeight=0,
+            imageSubresource=vk.VkImageSubresourceLayers(
+                aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=0, baseArrayLayer=0, layerCount=1
+            ),
+            imageOffset=vk.VkOffset3D(0, 0, 0),
+            imageExtent=vk.VkExtent3D(size[0], size[1], 1),
+        )
+        vk.vkCmdCopyImageToBuffer(cb, image, transfer, self._readback.handle, 1, [region])
+        to_host = vk.VkBufferMemoryBarrier(
+            srcAccessMask=vk.VK_ACCESS_TRANSFER_WRITE_BIT,
+            dstAccessMask=vk.VK_ACCESS_HOST_READ_BIT,
+            srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+            dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+            buffer=self._readback.handle,
+            offset=0,
+            size=self._readback.size,
+        )
+        vk.vkCmdPipelineBarrier(
+            cb,
+            vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
+            vk.VK_PIPELINE_STAGE_HOST_BIT | vk.VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT,
+            0,
+            0,
+            None,
+            1,
+            [to_host],
+            1,
+            [layout(transfer, present, vk.VK_ACCESS_TRANSFER_READ_BIT, 0)],
+        )
+
+    def pixels(self) -> np.ndarray | None:
+        """(height, width, 4) uint8 RGBA of the last image read back (after its frame's fence),
+        or None when none was."""
+        if self._readback is None:
+            return None
+        width, height = self._readback_size
+        raw = self._readback.bytes()[: 4 * width * height].reshape(height, width, 4)
+        if self.color_format in (self.vk.VK_FORMAT_B8G8R8A8_SRGB, self.vk.VK_FORMAT_B8G8R8A8_UNORM):
+            return raw[..., [2, 1, 0, 3]].copy()
+        return raw.copy()
+
     def destroy(self) -> None:
         self.device.wait_idle()
+        if self._readback is not None:
+            self._readback.destroy()
+            self._readback = None
         self._release()
         if self.handle is not None:
             self._destroy_fn(self.device.handle, self.handle, None)
