@@ -86,8 +86,10 @@ def max_threads() -> int:
 
 def check_threads(threads: int | None) -> None:
     if threads is not None and not 1 <= threads <= max_threads():
-        raise UsageError(f"--threads {threads}: choose 1 to {max_threads()} (at most 4 per core, "
-                         f"{default_threads()} cores here, or 64)")
+        raise UsageError(
+            f"--threads {threads}: choose 1 to {max_threads()} (at most 4 per core, "
+            f"{default_threads()} cores here, or 64)"
+        )
 
 
 def check_entities(entities: int, available: int | None = None) -> None:
@@ -95,8 +97,10 @@ def check_entities(entities: int, available: int | None = None) -> None:
     free = psutil.virtual_memory().available if available is None else available
     need = entities * BYTES_PER_ENTITY
     if need > free:
-        raise UsageError(f"--entities {entities:,} needs about {_size(need)} of memory "
-                         f"({BYTES_PER_ENTITY} bytes each); {_size(free)} is free")
+        raise UsageError(
+            f"--entities {entities:,} needs about {_size(need)} of memory "
+            f"({BYTES_PER_ENTITY} bytes each); {_size(free)} is free"
+        )
     if entities > MAX_ENTITIES:
         raise UsageError(f"--entities {entities:,}: at most {MAX_ENTITIES:,} (entity slots are 32-bit)")
 
