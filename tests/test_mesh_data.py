@@ -250,6 +250,11 @@ BAD_FILES = [
     ("nan.obj", "v 0 0 nan\nv 1 0 0\nv 0 1 inf\nf 1 2 3\n", "2 vertices have NaN or infinite coordinates"),
     ("inf.obj", "v 0 0 0\nv 1 -inf 0\nv 0 1 0\nf 1 2 3\n", "1 vertex has NaN or infinite coordinates"),
     (
+        "huge.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1e39 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n",
+        "vertex 3 has the coordinate 1e+39, outside float32's range (-3.4e+38 to 3.4e+38)",
+    ),
+    (
         "past_end.obj",
         TRIANGLE + "f 1 2 3\nf 1 2 7\n",
         "face 2 (line 5) refers to vertex 7 but the file has only 3 vertices",

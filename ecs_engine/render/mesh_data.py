@@ -328,6 +328,19 @@ def _assemble(file: Path, parts: list[_Part]) -> MeshData:
     if bad:
         what = "vertex has" if bad == 1 else "vertices have"
         raise UsageError(f"{file}: {bad} {what} NaN or infinite coordinates")
+    limit = float(np.finfo(np.float32).max)  # vertices are uploaded as float32
+    first = 0  # vertex numbers count across the file's parts, from 1 as in OBJ
+    for positions, _, _ in parts:
+        huge = (np.abs(positions) > limit).any(axis=1)
+        if huge.any():
+            i = int(np.argmax(huge))
+            value = float(positions[i][np.abs(positions[i]) > limit][0])
+            more = f" ({int(huge.sum())} vertices)" if huge.sum() > 1 else ""
+            raise UsageError(
+                f"{file}: vertex {first + i + 1} has the coordinate {value:g}, outside float32's range "
+                f"(-{limit:.3g} to {limit:.3g}){more}"
+            )
+        first += len(positions)
     for positions, faces, _ in parts:
         if faces.size and (faces.min() < 0 or faces.max() >= len(positions)):
             i = int(np.argmax(((faces < 0) | (faces >= len(positions))).any(axis=1)))
