@@ -57,11 +57,21 @@ def _is_object(ct: type[Component]) -> bool:
     return issubclass(ct, ObjectStore)
 
 
-def _schema(component_type: Any) -> type[Component]:
-    try:
+def _key(component_type: Any) -> type[Component] | None:
+    """The schema of a component class; None for anything else (an instance passed as a type),
+    which esper, looking it up in dicts, finds on no entity: unhashable raises TypeError there."""
+    if isinstance(component_type, type):
         return schema_of(component_type)
-    except TypeError:
-        raise TypeError(f"expected a component type (a class), got {component_type!r}") from None
+    hash(component_type)
+    return None
+
+
+def _has(table: Any, ct: type[Component] | None) -> bool:
+    return ct is not None and table.has(ct)
+
+
+def _name(ct: type[Component] | None, component_type: Any) -> str:
+    return ct.__name__ if ct is not None else repr(component_type)
 
 
 # ---------------------------------------------------------------------------- proxy
@@ -257,10 +267,10 @@ class EsperWorld:
     # ------------------------------------------------------------------ components
     def component_for_entity(self, entity: int, component_type: type) -> Any:
         """The entity's component of this type; KeyError if either is missing."""
-        ct = _schema(component_type)
         table, row = self._locate(entity)
-        if not table.has(ct):
-            raise ComponentNotFoundError(f"entity {int(entity)} has no {ct.__name__}")
+        ct = _key(component_type)
+        if ct is None or not table.has(ct):
+            raise ComponentNotFoundError(f"entity {int(entity)} has no {_name(ct, component_type)}")
         return self._out(int(entity), ct, table, row)
 
     def components_for_entity(self, entity: int) -> tuple[Any, ...]:
@@ -270,31 +280,31 @@ class EsperWorld:
 
     def has_component(self, entity: int, component_type: type) -> bool:
         table, _ = self._locate(entity)
-        return table.has(_schema(component_type))
+        return _has(table, _key(component_type))
 
     def has_components(self, entity: int, *component_types: type) -> bool:
         table, _ = self._locate(entity)
-        return all(table.has(_schema(t)) for t in component_types)
+        return all(_has(table, _key(t)) for t in component_types)
 
     def try_component(self, entity: int, component_type: type) -> Any | None:
         """The component, or None if the entity does not exist or lacks it."""
-        ct = _schema(component_type)
         try:
             table, row = self.world.locate(int(entity))
         except DeadEntityError:
             return None
-        return self._out(int(entity), ct, table, row) if table.has(ct) else None
+        ct = _key(component_type)
+        return self._out(int(entity), ct, table, row) if ct is not None and table.has(ct) else None
 
     def try_components(self, entity: int, *component_types: type) -> tuple[Any, ...] | None:
         """The components, or None if the entity does not exist or lacks one of them."""
-        cts = [_schema(t) for t in component_types]
         try:
             table, row = self.world.locate(int(entity))
         except DeadEntityError:
             return None
-        if not all(table.has(ct) for ct in cts):
+        cts = [_key(t) for t in component_types]
+        if not all(_has(table, ct) for ct in cts):
             return None
-        return tuple(self._out(int(entity), ct, table, row) for ct in cts)
+        return tuple(self._out(int(entity), ct, table, row) for ct in cts if ct is not None)
 
     def add_component(self, entity: int, component_instance: Any, type_alias: type | None = None) -> None:
         """Add a component (replacing one of the same type), optionally under ``type_alias``."""
@@ -320,10 +330,10 @@ class EsperWorld:
 
     def remove_component(self, entity: int, component_type: type) -> Any:
         """Remove a component and return it (a plain object itself; a schema as a copy)."""
-        ct = _schema(component_type)
+        ct = _key(component_type)
         table, row = self._locate(entity)
-        if not table.has(ct):
-            raise ComponentNotFoundError(f"entity {int(entity)} has no {ct.__name__} to remove")
+        if ct is None or not table.has(ct):
+            raise ComponentNotFoundError(f"entity {int(entity)} has no {_name(ct, component_type)} to remove")
         old = table.columns[(ct, "value")][row] if _is_object(ct) else self.world.get(int(entity), ct)
         self.world.remove(int(entity), ct)
         self._changed()
@@ -333,7 +343,7 @@ class EsperWorld:
         """Like `remove_component`, but None when the entity lacks the component (a missing
         entity still raises KeyError, as esper does once the type is in use)."""
         table, _ = self._locate(entity)
-        if not table.has(_schema(component_type)):
+        if not _has(table, _key(component_type)):
             return None
         return self.remove_component(entity, component_type)
 
@@ -368,7 +378,10 @@ class EsperWorld:
         return None
 
     def _build(self, types: tuple[type, ...], single: bool) -> tuple[list[Any], Any, tuple[Any, ...]]:
-        schemas = [_schema(t) for t in types]
+        keys = [_key(t) for t in types]
+        schemas = [ct for ct in keys if ct is not None]
+        if len(schemas) < len(keys):
+            return [], None, ()  # no entity has an instance as a component type, as in esper
         query = self.world.query(*schemas, write=())
         world = self.world
         out: list[Any] = []

@@ -745,3 +745,50 @@ def test_add_and_remove_keep_other_entities_intact(ew):
         if i:
             assert ew.component_for_entity(e, Transform).position[0] == i
     assert sorted(p.x for _, (p, v) in ew.get_components(Position, Velocity)) == [0, 2, 3, 4]
+
+
+# ------------------------------------------------------------------------ esper's own test suite
+def _outcome(call, *args):
+    try:
+        return "returns", call(*args)
+    except (KeyError, TypeError) as exc:
+        return "raises", KeyError if isinstance(exc, KeyError) else TypeError
+
+
+def test_an_instance_where_a_type_is_expected_acts_as_in_esper(mod):
+    """esper looks types up in dicts: an instance is a key nothing has (False, None, [] or
+    KeyError), and an unhashable one raises TypeError. esper's suite passes ComponentD()."""
+    calls = {
+        "has_component": lambda m, e, gone: m.has_component(e, Circle()),
+        "has_component unhashable": lambda m, e, gone: m.has_component(e, Position()),
+        "has_component gone": lambda m, e, gone: m.has_component(gone, Circle()),
+        "has_components": lambda m, e, gone: m.has_components(e, Position, Circle()),
+        "try_component": lambda m, e, gone: m.try_component(e, Circle()),
+        "try_component gone": lambda m, e, gone: m.try_component(gone, Circle()),
+        "try_components": lambda m, e, gone: m.try_components(e, Position, Circle()),
+        "component_for_entity": lambda m, e, gone: m.component_for_entity(e, Circle()),
+        "component_for_entity unhashable": lambda m, e, gone: m.component_for_entity(e, Position()),
+        "remove_component": lambda m, e, gone: m.remove_component(e, Circle()),
+        "remove_component unhashable": lambda m, e, gone: m.remove_component(e, Position(1)),
+        "try_remove_component": lambda m, e, gone: m.try_remove_component(e, Circle()),
+        "get_component": lambda m, e, gone: m.get_component(Circle()),
+        "get_component unhashable": lambda m, e, gone: m.get_component(Position()),
+        "get_components": lambda m, e, gone: m.get_components(Position, Circle()),
+        "get_processor": lambda m, e, gone: m.get_processor(Processor()),
+        "remove_processor": lambda m, e, gone: m.remove_processor(Processor()),
+    }
+    name = f"instances-{next(_names)}"
+    real_esper.switch_world(name)
+    try:
+        results = []
+        for m in (real_esper, mod):
+            e = m.create_entity(Position(1), Circle())
+            gone = m.create_entity()
+            m.delete_entity(gone, immediate=True)
+            results.append({label: _outcome(call, m, e, gone) for label, call in calls.items()})
+            assert m.has_components(e, Position, Circle)  # nothing was removed
+        expected, got = results
+        assert got == expected
+    finally:
+        real_esper.switch_world("default")
+        real_esper.delete_world(name)
