@@ -1,5 +1,9 @@
-"""A validated headless device for tests that drive the renderer directly; on exit everything
-is destroyed and any validation message fails the test."""
+"""One validated Vulkan instance and device for the whole test run, and what tests draw with.
+
+Every test that renders headless shares them (conftest.py hands them to each OffscreenSource and
+checks, around each test, that no validation message arrived and no GPU memory stayed
+allocated): NVIDIA's driver refuses new instances after about 30 in one process, which the
+suite passes by far. `headless_gpu()` gives a test its own target and meshes on that device."""
 
 from __future__ import annotations
 
@@ -7,6 +11,32 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any
+
+_shared: list[Any] = []  # [instance, device] once made
+
+
+def shared_device() -> Any:
+    """The run's device, made on first use (a run of CPU-only tests makes none)."""
+    if not _shared:
+        from ecs_engine.gpu.device import Device
+        from ecs_engine.gpu.instance import Instance
+
+        instance = Instance(validate=True)
+        _shared.extend([instance, Device(instance)])
+    return _shared[1]
+
+
+def shared_instance() -> Any | None:
+    return _shared[0] if _shared else None
+
+
+def close_shared() -> None:
+    if _shared:
+        instance, device = _shared
+        device.destroy()
+        instance.destroy()
+        _shared.clear()
+        assert instance.messages == [], instance.messages  # leaks are reported at destroy
 
 
 @dataclass
@@ -20,14 +50,11 @@ class Gpu:
 
 @contextmanager
 def headless_gpu(width: int = 64, height: int = 48) -> Iterator[Gpu]:
-    from ecs_engine.gpu.device import Device
-    from ecs_engine.gpu.instance import Instance
     from ecs_engine.gpu.offscreen import OffscreenTarget
     from ecs_engine.render.mesh_registry import MeshRegistry
 
-    instance = Instance(validate=True)
-    device = Device(instance)
-    gpu = Gpu(instance, device, OffscreenTarget(device, width, height), MeshRegistry(device))
+    device = shared_device()
+    gpu = Gpu(device.instance, device, OffscreenTarget(device, width, height), MeshRegistry(device))
     try:
         yield gpu
     finally:
@@ -35,6 +62,3 @@ def headless_gpu(width: int = 64, height: int = 48) -> Iterator[Gpu]:
             (obj.destroy if hasattr(obj, "destroy") else obj.close)()
         gpu.meshes.destroy()
         gpu.target.destroy()
-        device.destroy()
-        instance.destroy()
-    assert instance.messages == []

@@ -99,7 +99,7 @@ class Scene:
     def close(self) -> None:
         self.session.destroy()
         self.state.close()
-        assert self.source.instance.messages == []
+        assert self.source.validation_messages() == []
 
 
 @pytest.fixture
@@ -162,10 +162,10 @@ def test_settings_requests_rebuild_what_they_need(scene):
     assert scene.stats.instances == 1  # the indirect path counts the new scene's mesh
 
 
-def test_a_request_the_session_refuses_changes_nothing_and_says_why(scene):
+def test_a_request_the_session_refuses_changes_nothing_and_says_why(scene, monkeypatch):
     scene.frame()
     editor = scene.session.editor
-    scene.state.device.features["drawIndirectCount"] = False  # as on a device without it
+    monkeypatch.setitem(scene.state.device.features, "drawIndirectCount", False)  # a device without it
     editor.requested.mode, editor.requested.threads = "indirect", 3
     scene.frame()
     assert "lacks drawIndirectCount" in editor.settings_status

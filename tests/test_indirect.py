@@ -118,11 +118,11 @@ def test_a_mesh_added_between_frames_is_drawn():
         assert changed[:, W // 2 + 4 :].sum() > 50 and changed[:, : W // 2 - 4].sum() == 0
 
 
-def test_a_device_without_indirect_count_gets_one_clear_error():
+def test_a_device_without_indirect_count_gets_one_clear_error(monkeypatch):
     from ecs_engine.errors import UsageError
 
     with headless_gpu(W, H) as gpu:
-        gpu.device.features["drawIndirectCount"] = False
+        monkeypatch.setitem(gpu.device.features, "drawIndirectCount", False)
         with pytest.raises(UsageError, match=r"lacks drawIndirectCount.*--mode instanced"):
             indirect_renderer(gpu)
 

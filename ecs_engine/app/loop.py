@@ -95,8 +95,7 @@ def run(
             editor.destroy()
         if session is not None:
             session.close()  # a Session that failed half-built has closed its source already
-        if source.instance is not None:
-            result.validation_messages = list(source.instance.messages)
+        result.validation_messages = source.validation_messages()
     return result
 
 

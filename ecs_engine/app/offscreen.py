@@ -1,8 +1,15 @@
 """The headless frame source: an offscreen image, no window, surface or swapchain (no display
-needed), and a fixed time step, so a run is reproducible frame for frame."""
+needed), and a fixed time step, so a run is reproducible frame for frame.
+
+A source opens its own Vulkan instance and device, or draws on one it is given (`device=`, or
+every source made inside `sharing(...)`): some drivers refuse new instances after about 30 in one
+process (NVIDIA's did, on the GPU host), which a test suite of many runs reaches.
+"""
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import Any
 
 from ..ecs.timestep import FixedTimestep
@@ -16,6 +23,21 @@ from .session import FrameTarget, Gpu, Session
 from .settings import FIXED_DT, RunOptions
 
 
+_shared: Callable[[], Device] | None = None
+
+
+@contextmanager
+def sharing(device: Callable[[], Device]) -> Iterator[None]:
+    """Sources made inside the block draw on `device()` (called when one opens; the caller owns
+    the device and destroys it) instead of opening an instance and device each."""
+    global _shared
+    before, _shared = _shared, device
+    try:
+        yield
+    finally:
+        _shared = before
+
+
 class OffscreenSource:
     window: Any = None
     input: Any = None
@@ -23,21 +45,28 @@ class OffscreenSource:
     recreations = 0
     minimised_waits = 0
 
-    def __init__(self) -> None:
+    def __init__(self, device: Device | None = None) -> None:
+        self._borrowed: Callable[[], Device] | None = (lambda: device) if device is not None else _shared
         self.clock = FixedTimestep(FIXED_DT)  # one step a frame
         self.max_frame_dt = FIXED_DT
         self.frames = 1
         self.readback_last = False
         self._gpu: Gpu | None = None
         self.instance: Instance | None = None  # its validation messages outlive the run
+        self._first_message = 0  # on a borrowed device: the instance's messages before this run
         self._opened: list[Any] = []  # what to destroy, in the order made
 
     def open(self, options: RunOptions) -> Gpu:
         self.frames = options.frames or 1
         self.readback_last = options.screenshot is not None
         self.width, self.height = options.width, options.height
-        instance = self.instance = self._keep(Instance(validate=options.validate))
-        device = self._keep(Device(instance))
+        if self._borrowed is not None:
+            device = self._borrowed()
+            instance = self.instance = device.instance
+            self._first_message = len(instance.messages)
+        else:
+            instance = self.instance = self._keep(Instance(validate=options.validate))
+            device = self._keep(Device(instance))
         target = self._keep(OffscreenTarget(device, options.width, options.height))
         meshes = self._keep(MeshRegistry(device))
         self._gpu = Gpu(instance, device, target, meshes)
@@ -65,6 +94,11 @@ class OffscreenSource:
             f"{s.scene}: headless {self.width}x{self.height}, {self.frames} frames, mode {s.mode}, "
             f"{recorder_words(s.mode, s.recorder)}, {s.threads} threads"
         )
+
+    def validation_messages(self) -> list[str]:
+        """What the validation layers said during this run (on a shared instance: only since
+        this source opened)."""
+        return [] if self.instance is None else self.instance.messages[self._first_message :]
 
     def check_present(self, present: str) -> None:
         raise UsageError("a headless run has no swapchain, so no present mode")

@@ -242,6 +242,9 @@ class WindowSource:
     def set_present(self, present: str) -> None:
         self.swapchain.set_present(present)
 
+    def validation_messages(self) -> list[str]:
+        return [] if self.instance is None else list(self.instance.messages)
+
     def pixels(self) -> Any:
         """The last frame read back (the --screenshot frame), as presented."""
         return self.swapchain.pixels()
