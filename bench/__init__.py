@@ -1,9 +1,11 @@
-"""Benchmarks for ecs_engine: `python -m bench NAME [--quick] [--out DIR] [--machine SLUG]`.
+"""Benchmarks for ecs_engine: `ecs-engine bench NAME [--quick] [--out DIR] [--machine SLUG]` (or
+`python -m ecs_engine.bench ...`; `ecs-engine bench --help` lists them).
 
 Each benchmark is a module registered in `bench.__main__.REGISTRY`. It provides
 `add_arguments(parser)` (optional, for its own options), `THREADS` (the thread count it uses,
-recorded in the machine description) and `run(args, progress) -> dict` returning the JSON
-document that `bench.__main__` writes to `<out>/<name>-<slug>.json`.
+recorded in the machine description) and `run(args, machine, progress) -> dict` returning the JSON
+document that `bench.__main__` writes to `<out>/<name>-<slug>.json`. Anything else it writes (a
+plot) goes under `args.out` too, never beside the code.
 """
 
 from __future__ import annotations

@@ -1,7 +1,10 @@
-"""`python -m bench NAME [--quick] [--out DIR] [--machine SLUG]`
+"""`ecs-engine bench NAME [--quick] [--out DIR] [--machine SLUG]`, or `python -m ecs_engine.bench ...`
+(both work from any folder; `python -m bench` only inside the checkout).
 
 Runs one registered benchmark, prints its table on stdout (progress goes to stderr) and writes
-`<out>/<NAME>-<slug>.json` (default out: bench/results). Exit codes: 0 done, 2 usage error.
+`<out>/<NAME>-<slug>.json` with its plot beside it. The default out is a folder in the user's cache
+(`default_out()`), so a run never changes a checkout; `--out bench/results` updates the committed
+results. Exit codes: 0 done (or --help), 2 usage error.
 """
 
 from __future__ import annotations
@@ -26,14 +29,41 @@ REGISTRY: dict[str, str] = {
     "numerics": "numerics",
 }
 
-# In a checkout: the committed results folder; installed: ./bench-results
-_RESULTS = Path(__file__).resolve().parent / "results"
-DEFAULT_OUT = _RESULTS if _RESULTS.is_dir() else Path.cwd() / "bench-results"
+# One line each for the list in the usage text (the modules are not imported to print it).
+SUMMARY: dict[str, str] = {
+    "ecs": "ECS queries, spawns and transform frames: ecs_engine against esper (CPU only)",
+    "seed-tables": "the seed's three scenes headless, beside the seed's Tables 4.1-4.3 (Vulkan)",
+    "scaling": "render-job scaling by entities, threads, mode and recorder (Vulkan)",
+    "numerics": "spring integrators' error against run time, render precision against distance",
+}
+
+# The commands that work from any folder once ecs_engine is installed.
+COMMANDS = ("ecs-engine bench", "python -m ecs_engine.bench")
+OPTIONS = "NAME [--quick] [--out DIR] [--machine SLUG]"
 
 
-def _usage_line() -> str:
-    known = ", ".join(sorted(REGISTRY))
-    return f"usage: python -m bench NAME [--quick] [--out DIR] [--machine SLUG]; known benchmarks: {known}"
+def default_out() -> Path:
+    """The user's cache, never the package folder: a quick run must leave a checkout unchanged."""
+    cache = os.environ.get("XDG_CACHE_HOME", "")
+    if not os.path.isabs(cache):  # unset, empty or relative: the XDG spec says to ignore it
+        try:
+            cache = str(Path.home() / ".cache")
+        except RuntimeError:  # no home directory to be found
+            return Path.cwd() / "bench-results"
+    return Path(cache) / "ecs_engine" / "bench-results"
+
+
+def usage() -> str:
+    """The usage lines, the benchmarks and where results go (what --help and a bare call print)."""
+    width = max(map(len, REGISTRY))
+    names = "\n".join(f"  {name:{width}}  {SUMMARY.get(name, '')}".rstrip() for name in sorted(REGISTRY))
+    return (
+        f"usage: {COMMANDS[0]} {OPTIONS}\n   or: {COMMANDS[1]} {OPTIONS}\n\n"
+        f"benchmarks:\n{names}\n\n"
+        f"Writes <out>/NAME-<machine>.json and its plot; out defaults to {default_out()}\n"
+        "(--out bench/results in a checkout updates the committed results).\n"
+        f"`{COMMANDS[0]} NAME --help` lists a benchmark's own options."
+    )
 
 
 def write_json(doc: dict[str, Any], path: Path) -> None:
@@ -44,22 +74,35 @@ def write_json(doc: dict[str, Any], path: Path) -> None:
     os.replace(tmp, path)
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str = COMMANDS[1]) -> int:
+    """Run one benchmark; `prog` is the command named in its --help (the CLI passes its own)."""
     argv = list(sys.argv[1:] if argv is None else argv)
-    if not argv or argv[0] in ("-h", "--help"):
-        print(_usage_line(), file=sys.stderr if not argv else sys.stdout)
-        return 2 if not argv else 0
+    if argv[:1] in (["-h"], ["--help"]):
+        print(usage())
+        return 0
+    if not argv:
+        print(usage(), file=sys.stderr)
+        return 2
     name = argv[0]
+    known = ", ".join(sorted(REGISTRY))
+    if name.startswith("-"):
+        print(f"bench: the benchmark name comes first ({COMMANDS[0]} {OPTIONS}); known: {known}", file=sys.stderr)
+        return 2
     if name not in REGISTRY:
-        print(f"bench: unknown benchmark {name!r}; known benchmarks: {', '.join(sorted(REGISTRY))}", file=sys.stderr)
+        print(f"bench: unknown benchmark {name!r}; known benchmarks: {known}", file=sys.stderr)
         return 2
     module = importlib.import_module(f"{__package__ or 'bench'}.{REGISTRY[name]}")
 
-    parser = argparse.ArgumentParser(
-        prog=f"python -m bench {name}", description=(module.__doc__ or "").strip().splitlines()[0]
-    )
+    out = default_out()
+    parser = argparse.ArgumentParser(prog=f"{prog} {name}", description=(module.__doc__ or "").strip().splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="tiny sizes: a smoke run in seconds")
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"output folder (default {DEFAULT_OUT})")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=out,
+        metavar="DIR",
+        help=f"output folder (default {out}; --out bench/results updates the committed results)",
+    )
     parser.add_argument(
         "--machine", metavar="SLUG", default=None, help="machine slug used in the output file name (default: derived)"
     )
@@ -79,10 +122,11 @@ def main(argv: list[str] | None = None) -> int:
         f"machine {machine['slug']}: {machine['cpu_model']}, {machine['cpu_affinity']} cores"
         + (f", {machine['gpu']['name']}" if machine["gpu"] else "")
     )
+    progress.note(f"results go to {Path(args.out).resolve()}")
     doc = module.run(args, machine, progress)
     path = Path(args.out) / f"{name}-{machine['slug']}.json"
     write_json(doc, path)
-    progress.note(f"wrote {path}")
+    progress.note(f"wrote {path.resolve()}")
     return 0
 
 

@@ -1,6 +1,6 @@
 """ECS benchmark: esper 3.x against ecs_engine's native API (and its esper adapter, if present).
 
-Run: `python -m bench ecs [--quick] [--out DIR] [--machine SLUG]`. Everything runs in this one
+Run: `ecs-engine bench ecs [--quick] [--out DIR] [--machine SLUG]`. Everything runs in this one
 process, single-threaded, except the "numpy fallback" engine rows, which run in a subprocess with
 ECS_ENGINE_NO_NUMBA=1 (numba's switch is read at import time).
 
@@ -204,5 +204,5 @@ if __name__ == "__main__":
     if len(sys.argv) == 3 and sys.argv[1] == "--worker":
         _worker(json.loads(sys.argv[2]))
     else:
-        print("use: python -m bench ecs [--quick]", file=sys.stderr)
+        print("use: ecs-engine bench ecs [--quick]", file=sys.stderr)
         sys.exit(2)

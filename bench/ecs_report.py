@@ -2,7 +2,7 @@
 
 Everything here reads the rows the workloads produced and measures nothing itself: `ratios`
 (esper seconds over each other engine's), `targets` (the engine's goals, met or not),
-`format_table` (what `python -m bench ecs` prints), `validate` (schema_version 1, described in
+`format_table` (what `ecs-engine bench ecs` prints), `validate` (schema_version 1, described in
 bench/ecs.py's docstring) and `plot` (ns per entity per workload, one bar per engine).
 """
 

@@ -251,5 +251,5 @@ if __name__ == "__main__":
     if len(sys.argv) == 3 and sys.argv[1] == "--worker":
         _worker(json.loads(sys.argv[2]))
     else:
-        print("use: python -m bench ecs [--quick]", file=sys.stderr)
+        print("use: ecs-engine bench ecs [--quick]", file=sys.stderr)
         sys.exit(2)

@@ -1,4 +1,4 @@
-"""The ECS benchmark (`python -m bench ecs`) runs end to end and writes a well-formed document.
+"""The ECS benchmark (`ecs-engine bench ecs`) runs end to end and writes a well-formed document.
 
 Runs in-process with the hidden --tiny sizes (a few seconds); timings are not checked, only the
 shape of the output.

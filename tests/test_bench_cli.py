@@ -1,0 +1,61 @@
+"""How benchmarks are started (issue 19): `ecs-engine bench --help` and `python -m ecs_engine.bench`
+work from any folder, a run without --out writes to the user's cache (never into the checkout) and
+says where, and `make bench` without BENCH prints the list instead of failing."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+NAMES = ("ecs", "numerics", "scaling", "seed-tables")
+
+
+def run(*args: str, cwd: Path, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    env = dict(os.environ if env is None else env, COLUMNS="200")  # help lines unwrapped, whatever the terminal
+    return subprocess.run(
+        [sys.executable, *args], cwd=cwd, env=env, capture_output=True, text=True, timeout=300, check=False
+    )
+
+
+def results_listing() -> set[str]:
+    return {str(p.relative_to(ROOT)) for p in (ROOT / "bench" / "results").rglob("*")}
+
+
+def test_python_m_ecs_engine_bench_works_outside_the_checkout(tmp_path: Path) -> None:
+    proc = run("-m", "ecs_engine.bench", "--help", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "python -m ecs_engine.bench" in proc.stdout and "ecs-engine bench" in proc.stdout
+    assert "python -m bench " not in proc.stdout  # that one only works inside the checkout
+    proc = run("-m", "ecs_engine.bench", "ecs", "--help", cwd=tmp_path)
+    assert proc.returncode == 0 and "usage: python -m ecs_engine.bench ecs" in proc.stdout, proc.stderr
+
+
+def test_default_out_follows_xdg_cache_home(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    monkeypatch.syspath_prepend(str(ROOT))
+    from bench.__main__ import default_out
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    assert default_out() == tmp_path / "ecs_engine" / "bench-results"
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    for unset in ("", "relative/cache"):  # the XDG spec says to ignore a relative path
+        monkeypatch.setenv("XDG_CACHE_HOME", unset)
+        assert default_out() == tmp_path / "home" / ".cache" / "ecs_engine" / "bench-results"
+
+
+def test_quick_run_without_out_writes_to_the_cache_and_says_where(tmp_path: Path) -> None:
+    cache, work = tmp_path / "cache", tmp_path / "work"
+    work.mkdir()
+    before = results_listing()
+    env = dict(os.environ, XDG_CACHE_HOME=str(cache))
+    proc = run("-m", "ecs_engine", "bench", "ecs", "--quick", "--tiny", "--machine", "ci", cwd=work, env=env)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    out = cache / "ecs_engine" / "bench-results"
+    assert (out / "ecs-ci.json").is_file() and (out / "ecs-ci.png").is_file()
+    assert str(out / "ecs-ci.json") in proc.stderr
+    assert not list(work.iterdir())  # nothing in the current folder either
+    assert results_listing() == before
