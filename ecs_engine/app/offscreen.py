@@ -22,7 +22,6 @@ from .report import recorder_words
 from .session import FrameTarget, Gpu, Session
 from .settings import FIXED_DT, RunOptions
 
-
 _shared: Callable[[], Device] | None = None
 
 
