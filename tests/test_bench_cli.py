@@ -26,6 +26,32 @@ def results_listing() -> set[str]:
     return {str(p.relative_to(ROOT)) for p in (ROOT / "bench" / "results").rglob("*")}
 
 
+@pytest.mark.parametrize("flag", ["--help", "-h"])
+def test_ecs_engine_bench_help_lists_the_benchmarks(tmp_path: Path, flag: str) -> None:
+    proc = run("-m", "ecs_engine", "bench", flag, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "ecs-engine bench NAME" in proc.stdout and "python -m ecs_engine.bench" in proc.stdout
+    assert all(name in proc.stdout for name in NAMES), proc.stdout
+
+
+def test_ecs_engine_bench_without_a_name_lists_them_and_exits_2(tmp_path: Path) -> None:
+    proc = run("-m", "ecs_engine", "bench", cwd=tmp_path)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert all(name in proc.stderr for name in NAMES), proc.stderr
+
+
+def test_ecs_engine_bench_name_help_shows_its_options(tmp_path: Path) -> None:
+    proc = run("-m", "ecs_engine", "bench", "numerics", "--help", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "usage: ecs-engine bench numerics" in proc.stdout
+    assert "--quick" in proc.stdout and "--out" in proc.stdout and "bench-results" in proc.stdout
+
+
+def test_top_level_help_names_every_benchmark(tmp_path: Path) -> None:
+    proc = run("-m", "ecs_engine", "--help", cwd=tmp_path)
+    assert proc.returncode == 0 and all(name in proc.stdout for name in NAMES), proc.stdout
+
+
 def test_python_m_ecs_engine_bench_works_outside_the_checkout(tmp_path: Path) -> None:
     proc = run("-m", "ecs_engine.bench", "--help", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr

@@ -119,8 +119,13 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"scenes to switch between, the first one opened (default {DEFAULT_SCENE}; "
         f"choices: {', '.join(EDITOR_SCENES)})",
     )
+    # Every argument goes to the benchmark runner, --help first included: REMAINDER skips a leading
+    # option, so this parser has a prefix no argument can start with ("\0") and sees none.
     bench = sub.add_parser(
-        "bench", help="run a benchmark (python -m bench NAME ...): ecs, seed-tables, scaling, numerics", add_help=False
+        "bench",
+        help="run a benchmark: ecs, seed-tables, scaling, numerics (ecs-engine bench --help for more)",
+        add_help=False,
+        prefix_chars="\0",
     )
     bench.add_argument("bench_args", nargs=argparse.REMAINDER)
     return parser
@@ -136,7 +141,7 @@ def run(args: argparse.Namespace) -> int:
     if args.command == "bench":
         from ..bench.__main__ import main as bench_main
 
-        return bench_main(list(args.bench_args))
+        return bench_main(list(args.bench_args), prog="ecs-engine bench")
     if args.command == "editor":
         scenes = tuple(dict.fromkeys(args.scenes or [DEFAULT_SCENE]))
         args.scene, args.path = scenes[0], None
