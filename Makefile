@@ -1,5 +1,5 @@
 # `make demo` and `make test` install everything (scripts/bootstrap.sh) and then run.
-# Variables: PYTEST_ARGS="-k world", DEMO_ARGS="...", BENCH="...", PYTHON=python3.12 (new .venv only).
+# Variables: PYTEST_ARGS="-k world", DEMO_ARGS="...", BENCH="ecs --quick", PYTHON=python3.12 (new .venv only).
 PY      := .venv/bin/python
 PYTEST_ARGS ?=
 DEMO_ARGS   ?=
@@ -27,9 +27,17 @@ demo: setup
 shaders: setup
 	$(PY) scripts/compile_shaders.py
 
+# `make bench` lists the benchmarks (installs nothing; any python3 can print the list);
+# `make bench BENCH="ecs --quick"` installs the bench extras, then runs one. Results go to
+# ~/.cache/ecs_engine/bench-results (printed) unless BENCH has --out, e.g. --out bench/results.
+ifeq ($(strip $(BENCH)),)
+bench:
+	@$(if $(wildcard $(PY)),$(PY),python3) -m bench --help
+else
 bench:
 	@bash scripts/bootstrap.sh --extras dev,bench
 	$(PY) -m bench $(BENCH)
+endif
 
 clean:
 	rm -rf .venv *.egg-info

@@ -5,6 +5,7 @@ says where, and `make bench` without BENCH prints the list instead of failing.""
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -85,3 +86,26 @@ def test_quick_run_without_out_writes_to_the_cache_and_says_where(tmp_path: Path
     assert str(out / "ecs-ci.json") in proc.stderr
     assert not list(work.iterdir())  # nothing in the current folder either
     assert results_listing() == before
+
+
+def make_bench(*args: str) -> subprocess.CompletedProcess[str]:
+    env = {k: v for k, v in os.environ.items() if k not in ("BENCH", "MAKEFLAGS", "MFLAGS", "MAKELEVEL")}
+    return subprocess.run(
+        ["make", "--no-print-directory", "-C", str(ROOT), "bench", *args],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+
+
+@pytest.mark.skipif(shutil.which("make") is None, reason="make is not installed")
+def test_make_bench_without_bench_prints_the_list_and_installs_nothing() -> None:
+    # dry runs first: only the BENCH=... recipe may run scripts/bootstrap.sh (which can install)
+    dry = make_bench("-n")
+    assert dry.returncode == 0 and "bootstrap" not in dry.stdout, dry.stdout
+    assert "bootstrap.sh --extras dev,bench" in make_bench("-n", "BENCH=ecs --quick").stdout
+    proc = make_bench(f"PY={sys.executable}")
+    assert proc.returncode == 0, proc.stderr
+    assert all(name in proc.stdout for name in NAMES), proc.stdout
