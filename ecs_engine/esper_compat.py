@@ -39,6 +39,8 @@ Differences from esper (docs/esper.md explains each):
 - `remove_handler` also removes bound-method handlers (esper 3.9 silently keeps them).
 - The cache is also invalidated by changes made directly on the World (structure_version and,
   for plain-object columns, the column's write tick).
+- The internals esper's own tests read are provided: ``_context_map`` (name -> EsperWorld, not
+  esper's state tuples), ``_current_world``, ``_processors`` and ``_entities`` (a read-only view).
 - Call these functions outside engine systems and query loops: there the World defers
   structural changes, so a new entity cannot be read until the next sync point.
 
@@ -49,9 +51,11 @@ re-exported here.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
+from numbers import Integral
 from typing import Any
 
+from .ecs.schema import ObjectStore
 from .ecs.world import World
 from .esper_world import (
     ComponentNotFoundError,
@@ -104,9 +108,43 @@ __all__ = [
 
 
 # ---------------------------------------------------------------------------- module level
-_worlds: dict[str, EsperWorld] = {"default": EsperWorld()}
+class _EntityMap(Mapping[int, dict[type, Any]]):
+    """esper's ``_entities`` (entity -> {type: component}) as a read-only live view of one world,
+    for code that reads it (esper's own tests do). Like esper's, it still holds the entities
+    queued by `delete_entity` until `process`/`clear_dead_entities`."""
+
+    def __init__(self, esper_world: EsperWorld) -> None:
+        self._ew = esper_world
+
+    def __getitem__(self, entity: int) -> dict[type, Any]:
+        if entity not in self:
+            raise KeyError(entity)
+        values = self._ew.components_for_entity(entity)
+        types = self._ew.world.components(int(entity))
+        # an object column stands for the plain class (or alias) it wraps
+        return {getattr(t, "wraps", t) if issubclass(t, ObjectStore) else t: v for t, v in zip(types, values)}
+
+    def __contains__(self, entity: object) -> bool:
+        try:
+            return isinstance(entity, Integral) and self._ew.world.is_alive(int(entity))
+        except (ValueError, OverflowError):
+            return False
+
+    def __iter__(self) -> Iterator[int]:
+        return self._ew.get_entities()
+
+    def __len__(self) -> int:
+        return len(self._ew.world)
+
+
+# esper's module state, under esper's names: _context_map (name -> world) and, for the current
+# world, _current_world, _processors and _entities, rebound by switch_world as esper's are.
+_context_map: dict[str, EsperWorld] = {"default": EsperWorld()}
+_current_world: str | None = "default"
 current_world: str = "default"
-_current: EsperWorld = _worlds["default"]
+_current: EsperWorld = _context_map["default"]
+_processors: list[Any] = _current._processors
+_entities: Mapping[int, dict[type, Any]] = _EntityMap(_current)
 process_times: dict[str, int] = _current.process_times
 event_registry: dict[str, set[Any]] = _current.event_registry
 
@@ -114,31 +152,37 @@ event_registry: dict[str, set[Any]] = _current.event_registry
 def switch_world(name: str, world: World | EsperWorld | None = None) -> None:
     """Make the named world current, creating it if needed. Extension: ``world`` binds a new
     name to an existing engine World (or EsperWorld)."""
-    global _current, current_world, process_times, event_registry
-    if name not in _worlds:
+    global _current, _current_world, current_world, _processors, _entities, process_times, event_registry
+    if _current_world is not None:
+        # esper writes the current world back first: clearing _context_map forgets the others,
+        # and only with _current_world = None (esper's test fixture) the current one too
+        _context_map[_current_world] = _current
+    if name not in _context_map:
         if world is None:
-            _worlds[name] = EsperWorld()
+            _context_map[name] = EsperWorld()
         else:
-            _worlds[name] = world if isinstance(world, EsperWorld) else EsperWorld(world)
+            _context_map[name] = world if isinstance(world, EsperWorld) else EsperWorld(world)
     elif world is not None:
-        bound = _worlds[name]
+        bound = _context_map[name]
         if world is not bound and world is not bound.world:
             raise ValueError(f"world {name!r} exists and wraps another World")
-    _current = _worlds[name]
-    current_world = name
+    _current = _context_map[name]
+    _current_world = current_world = name
+    _processors = _current._processors
+    _entities = _EntityMap(_current)
     process_times = _current.process_times
     event_registry = _current.event_registry
 
 
 def list_worlds() -> list[str]:
-    return list(_worlds)
+    return list(_context_map)
 
 
 def delete_world(name: str) -> None:
     """Forget a world (PermissionError for the current one, KeyError for an unknown one)."""
-    if name == current_world:
+    if name == _current_world:
         raise PermissionError("The active World context cannot be deleted.")
-    del _worlds[name]
+    del _context_map[name]
 
 
 def get_world() -> EsperWorld:

@@ -792,3 +792,39 @@ def test_an_instance_where_a_type_is_expected_acts_as_in_esper(mod):
     finally:
         real_esper.switch_world("default")
         real_esper.delete_world(name)
+
+
+def test_module_internals_that_esper_tests_read(mod):
+    """esper's own suite clears _context_map, resets _current_world and reads _processors and
+    _entities (entity -> {type: component}, still holding entities queued for deletion)."""
+    name = mod.current_world
+    assert mod._current_world == name and mod._context_map[name] is mod.get_world()
+    proc = Processor()
+    mod.add_processor(proc)
+    assert mod._processors == [proc]
+    e = mod.create_entity(Position(1), Transform())
+    assert e in mod._entities and list(mod._entities) == [e] and len(mod._entities) == 1
+    comps = mod._entities[e]
+    assert comps[Position].x == 1 and isinstance(comps[Transform], ComponentProxy) and len(comps) == 2
+    mod.delete_entity(e)
+    assert e in mod._entities
+    mod.clear_dead_entities()
+    assert e not in mod._entities and 1 not in mod._entities and "x" not in mod._entities
+    with pytest.raises(KeyError):
+        mod._entities[e]
+    saved = dict(mod._context_map)
+    try:
+        mod._context_map.clear()  # esper's fixture: every world goes, a new default comes
+        assert mod.list_worlds() == []
+        mod._current_world = None
+        mod.switch_world("default")
+        assert mod.list_worlds() == ["default"] and mod.get_world() is not saved["default"]
+        assert mod._processors == [] and len(mod._entities) == 0 and mod.event_registry == {}
+        mod._context_map.clear()  # without the reset, esper puts the current world back
+        mod.switch_world("other")
+        assert mod.list_worlds() == ["default", "other"] and mod._current_world == "other"
+    finally:
+        mod._context_map.clear()
+        mod._context_map.update(saved)
+        mod._current_world = None
+        mod.switch_world(name)
