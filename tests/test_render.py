@@ -144,6 +144,8 @@ def test_scene_without_lights_builds_no_light_pipeline():
         assert gpu.target.pixels()[..., :3].max() > 30
         handle = gpu.meshes.add(cube_mesh())
         assert gpu.meshes.add(gpu.meshes[handle].data) == handle  # a mesh is uploaded once
+        count = len(gpu.meshes)
+        assert gpu.meshes.add(cube_mesh()) == handle and len(gpu.meshes) == count  # an equal one too
 
 
 def test_suballocator_serves_many_buffers_from_few_allocations():

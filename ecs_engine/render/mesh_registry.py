@@ -5,6 +5,7 @@ names its mesh by first index and vertex offset): `merged()` builds those on fir
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -40,20 +41,26 @@ class MeshRegistry:
     def __init__(self, device: Device) -> None:
         self.device = device
         self._meshes: list[GpuMesh] = []
-        self._by_data: dict[int, int] = {}
+        self._by_data: dict[int, int] = {}  # id(MeshData) -> handle: the same object again
+        self._by_content: dict[bytes, int] = {}  # digest of the arrays -> handle: an equal mesh again
         self._merged: MergedMeshes | None = None
 
     def add(self, mesh: MeshData) -> int:
-        """Upload `mesh` (once: the same MeshData object gives the same handle)."""
+        """Upload `mesh` once: the same MeshData, or an equal one (the same vertices and indices,
+        as a scene built again makes), gives the same handle. Without this, switching scenes in
+        the editor uploaded their meshes again every time."""
         key = id(mesh)
         if key in self._by_data and self._meshes[self._by_data[key]].data is mesh:
             return self._by_data[key]
+        digest = _digest(mesh)
+        if digest in self._by_content:
+            return self._by_content[digest]
         vk = self.device.vk
         vertices = upload(self.device, _interleaved(mesh), vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT)
         indices = upload(self.device, mesh.indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT)
         handle = len(self._meshes)
         self._meshes.append(GpuMesh(mesh, vertices, indices, len(mesh.indices)))
-        self._by_data[key] = handle
+        self._by_data[key] = self._by_content[digest] = handle
         return handle
 
     def __getitem__(self, handle: int) -> GpuMesh:
@@ -109,6 +116,7 @@ class MeshRegistry:
             mesh.indices.destroy()
         self._meshes.clear()
         self._by_data.clear()
+        self._by_content.clear()
 
 
 def _interleaved(mesh: MeshData) -> np.ndarray:
@@ -116,3 +124,11 @@ def _interleaved(mesh: MeshData) -> np.ndarray:
     out["position"] = mesh.positions
     out["normal"] = mesh.normals
     return out
+
+
+def _digest(mesh: MeshData) -> bytes:
+    h = hashlib.blake2b(digest_size=16)
+    for array in (mesh.positions, mesh.normals, mesh.indices):
+        h.update(str(array.shape).encode())
+        h.update(np.ascontiguousarray(array).tobytes())
+    return h.digest()
