@@ -92,3 +92,16 @@ def test_resizing_the_pool_frees_the_old_threads_command_pools():
         # per frame slot at most one pool per thread that ran jobs (the caller's included)
         assert session.renderer.secondaries.pool_count() <= max(before, 2 * 2)
     assert source.validation_messages() == []
+
+
+def test_switching_paths_keeps_nothing_of_the_old_ones():
+    pytest.importorskip("numba")
+    source = OffscreenSource()
+    with Session(options(), source) as session:
+        for mode in ("per_entity", "instanced", "per_entity", "instanced") * 2:
+            session.apply(replace(session.settings, mode=mode, recorder="native"))
+            draw(session)
+            draw(session)
+        target = session.gpu.target
+        state = session.renderer.target_state(target.framebuffer, target.width, target.height).path_state
+        assert len(state) == 2  # the path in use keeps one per frame slot; the old paths' are gone

@@ -188,6 +188,8 @@ class Renderer:
         new = self._make_path(mode, recorder)  # raises before the old one goes
         self.device.wait_idle()  # frames in flight may still use the old path's pipelines
         self.path.destroy()
+        for target in self._targets.values():
+            target.path_state.clear()  # what the old path kept per target (its recorder's frame states)
         self.path = new
 
     def _native_recorder(self) -> Any:
