@@ -27,6 +27,7 @@ REGISTRY: dict[str, str] = {
     "seed-tables": "seed_tables",
     "scaling": "scaling",
     "numerics": "numerics",
+    "soak": "soak",
 }
 
 # One line each for the list in the usage text (the modules are not imported to print it).
@@ -35,6 +36,7 @@ SUMMARY: dict[str, str] = {
     "seed-tables": "the seed's three scenes headless, beside the seed's Tables 4.1-4.3 (Vulkan)",
     "scaling": "render-job scaling by entities, threads, mode and recorder (Vulkan)",
     "numerics": "spring integrators' error against run time, render precision against distance",
+    "soak": "the editor's scene for 100,000 frames with churn and settings switches: memory flat? (Vulkan)",
 }
 
 # The commands that work from any folder once ecs_engine is installed.
