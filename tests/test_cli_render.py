@@ -118,7 +118,12 @@ def test_no_vulkan_loader_names_the_install_command(tmp_path):
     fake = tmp_path / "vulkan"
     fake.mkdir()
     (fake / "__init__.py").write_text("raise OSError('Cannot find Vulkan SDK version.')\n")
-    proc = cli("cube", "--headless", env={"PYTHONPATH": str(tmp_path)})
+    # in front of the rest of the path (where the engine may be installed, as on the GPU host)
+    proc = cli(
+        "cube",
+        "--headless",
+        env={"PYTHONPATH": os.pathsep.join(filter(None, [str(tmp_path), os.environ.get("PYTHONPATH")]))},
+    )
     one_line_error(proc, "no Vulkan loader", "apt-get install -y libvulkan1")
 
 
