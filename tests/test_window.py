@@ -79,3 +79,47 @@ def test_screenshot_of_a_window_is_the_presented_image(tmp_path, monkeypatch):
     assert len(source.shots) == 1  # F12 with --screenshot writes to that path too
     r, _g, b = image[0, 0].astype(int)
     assert abs(r - 39) <= 3 and abs(b - 48) <= 3 and b > r  # the clear colour (sRGB), in RGB order, not BGR
+
+
+def test_two_hundred_resizes_and_minimises_while_rendering(monkeypatch):
+    """Sizes from 1x1 up, back to the start, minimised and restored in between: no crash, no
+    validation message, and the same GPU memory in use at the end as at the start."""
+    glfw = open_glfw()
+    assert glfw is not None
+    real_size = glfw.get_framebuffer_size
+    state = {"minimised": 0}
+    monkeypatch.setattr(glfw, "get_framebuffer_size", lambda w: (0, 0) if state["minimised"] else real_size(w))
+    sizes = [(1, 1), (2, 1), (1, 3)] + [(1 + (i * 37) % 400, 1 + (i * 53) % 300) for i in range(197)]
+    used = {}
+    holder = {}
+    seen = set()  # swapchain sizes drawn at
+
+    def script(frame, glfw_, window):
+        source = holder["source"]
+        seen.add((source.swapchain.width, source.swapchain.height))
+        if state["minimised"]:
+            state["minimised"] -= 1  # stays minimised for a few turns, then restored
+            return
+        if frame == 2:
+            used["start"] = source.swapchain.device.allocator.stats()["used_bytes"]
+        if 3 <= frame < 3 + len(sizes):
+            glfw_.set_window_size(window, *sizes[frame - 3])
+            if frame % 40 == 0:
+                state["minimised"] = 3
+        if frame == 3 + len(sizes):
+            glfw_.set_window_size(window, 160, 120)  # back to the start
+        if frame == 6 + len(sizes):
+            used["end"] = source.swapchain.device.allocator.stats()["used_bytes"]
+
+    from dataclasses import replace
+
+    from ecs_engine.app.loop import run
+    from ecs_engine.app.window import WindowSource
+
+    source = holder["source"] = WindowSource(glfw, on_frame=script)
+    options = RunOptions(scene="cube", width=160, height=120, frames=8 + len(sizes), validate=True, quiet=True)
+    result = run(replace(options, headless=False), source)
+    assert result.validation_messages == [] and result.frames == 8 + len(sizes)
+    assert result.recreations >= 150 and result.minimised_waits >= 10
+    assert used["end"] == used["start"]
+    assert (1, 1) in seen and len(seen) > 150  # it really drew at 1x1 and at the other sizes
