@@ -4,8 +4,9 @@ PY      := .venv/bin/python
 PYTEST_ARGS ?=
 DEMO_ARGS   ?=
 BENCH       ?=
-# Without a display (CI, ssh) run under xvfb-run -a; decided when the recipe runs, i.e. after setup.
-HEADLESS = $$([ -z "$$DISPLAY" ] && command -v xvfb-run >/dev/null && echo xvfb-run -a)
+# Without a display (CI, ssh) the tests run under xvfb-run -a; decided when the recipe runs, after
+# setup installed it. The recipe prints the command it runs, not this shell test.
+HEADLESS = $$([ -z "$$DISPLAY" ] && command -v xvfb-run >/dev/null && echo "xvfb-run -a ")
 
 .PHONY: setup test demo shaders bench clean
 
@@ -17,7 +18,7 @@ test: setup
 	$(PY) -m ruff check .
 	$(PY) -m ruff format --check .
 	$(PY) -m mypy
-	$(HEADLESS) $(PY) -m pytest $(PYTEST_ARGS)
+	@run="$(HEADLESS)$(PY) -m pytest $(PYTEST_ARGS)"; echo "$$run"; $$run
 
 demo: setup
 	.venv/bin/ecs-engine editor $(DEMO_ARGS)

@@ -7,6 +7,8 @@ import argparse
 import sys
 from collections.abc import Sequence
 from dataclasses import replace
+from pathlib import Path
+from typing import NoReturn
 
 from ..ecs.errors import EcsError
 from ..errors import UsageError
@@ -14,6 +16,7 @@ from ..gpu.swapchain import PRESENT_MODES
 from ..render.renderer import MODES, RECORDER_NAMES
 from .scenes import SCENES as RENDERED_SCENES
 from .scenes import SEED_SCENES
+from .settings import check_entities, check_threads
 
 
 def positive_int(text: str) -> int:
@@ -48,9 +51,16 @@ def editor_scene(text: str) -> str:
     return text
 
 
-def render_flags() -> argparse.ArgumentParser:
+class OneLineParser(argparse.ArgumentParser):
+    """argparse's errors as one line with a pointer to --help (not seven lines of usage)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def render_flags() -> OneLineParser:
     """The flags `demo` and `editor` share."""
-    common = argparse.ArgumentParser(add_help=False)
+    common = OneLineParser(add_help=False)
     common.add_argument("--headless", action="store_true", help="render offscreen, no window (no display needed)")
     common.add_argument(
         "--frames",
@@ -96,9 +106,9 @@ def render_flags() -> argparse.ArgumentParser:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="ecs-engine", description=__doc__)
+    parser = OneLineParser(prog="ecs-engine", description=__doc__)
     parser.add_argument("--debug", action="store_true", help="show tracebacks")
-    sub = parser.add_subparsers(dest="command", required=True)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
     common = render_flags()
     demo = sub.add_parser("demo", help="run a demo scene", parents=[common])
     demo.add_argument(
@@ -136,7 +146,10 @@ def run(args: argparse.Namespace) -> int:
         if args.scene == "motion":
             from ..demos import motion
 
-            return motion.main(args.entities or 100_000, args.frames or 300)
+            refuse_unused(args, MOTION_FLAGS, "motion is a text-mode ECS scene (no rendering)")
+            check_entities(args.entities or 100_000)
+            check_threads(args.threads)
+            return motion.main(args.entities or 100_000, args.frames or 300, args.threads)
         return run_scene(args)
     if args.command == "bench":
         from ..bench.__main__ import main as bench_main
@@ -148,6 +161,22 @@ def run(args: argparse.Namespace) -> int:
         switcher = tuple(dict.fromkeys(scenes + SEED_SCENES))
         return run_scene(args, editor_scenes=switcher)
     raise UsageError(f"unknown command {args.command!r}")
+
+
+# the flags the text-mode motion demo uses; any other given is refused, not ignored
+MOTION_FLAGS = ("entities", "frames", "threads", "debug")
+
+
+def refuse_unused(args: argparse.Namespace, used: tuple[str, ...], why: str) -> None:
+    """UsageError naming every render flag given that `used` does not include."""
+    defaults = vars(render_flags().parse_args([]))
+    given = [
+        f"--{name.replace('_', '-')}"
+        for name, default in defaults.items()
+        if name not in used and getattr(args, name, default) != default
+    ]
+    if given:
+        raise UsageError(f"{why}: {', '.join(given)} do{'es' if len(given) == 1 else ''} not apply")
 
 
 def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = None) -> int:
@@ -189,18 +218,17 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
             frames=args.frames or HEADLESS_FALLBACK_FRAMES,
             screenshot=options.screenshot or f"{args.scene}.png",
         )
+        shot = Path(options.screenshot or "").resolve()
+        saved = f"last frame saved to {shot}" + (" (replacing the file there)" if shot.exists() else "")
         if editor:
             # the editor needs a window to be used; without one, the scene and its text overlay
             options = replace(options, editor=False)
             print(
                 f"no display found: the editor needs a window, so {args.scene} runs headless for "
-                f"{options.frames} frames with the text perf overlay (last frame saved to {options.screenshot})"
+                f"{options.frames} frames with the text perf overlay ({saved})"
             )
         else:
-            print(
-                f"no display found: rendering {options.frames} frames headless instead "
-                f"(last frame saved to {options.screenshot})"
-            )
+            print(f"no display found: rendering {options.frames} frames headless instead ({saved})")
     result = run(options)
     if options.screenshot:
         print(f"wrote {options.screenshot}")
