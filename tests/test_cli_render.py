@@ -105,6 +105,18 @@ def test_bad_flags(args, fragment):
     one_line_error(proc, fragment)  # argparse's too: one line, not the usage text
 
 
+@pytest.mark.parametrize(
+    "args, fragment",
+    [
+        (["cube", "--entities", "50", "--headless"], "--entities sizes the scaling and motion scenes"),
+        (["cube", "--headless", "--present", "mailbox"], "a --headless run has no window"),
+        (["cube", "--headless", "--mode", "indirect", "--recorder", "python"], "--recorder does not apply"),
+    ],
+)
+def test_a_flag_that_would_change_nothing_is_refused(args, fragment):
+    one_line_error(cli(*args), fragment)
+
+
 def test_argparse_errors_point_to_help():
     one_line_error(cli("cube", "--width", "x"), "argument --width", "(see ecs-engine demo --help)")
 

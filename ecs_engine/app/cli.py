@@ -13,7 +13,7 @@ from typing import NoReturn
 from ..ecs.errors import EcsError
 from ..errors import UsageError
 from ..gpu.swapchain import PRESENT_MODES
-from ..render.renderer import MODES, RECORDER_NAMES
+from ..render.renderer import MODES, PATHS, RECORDER_NAMES
 from .scenes import SCENES as RENDERED_SCENES
 from .scenes import SEED_SCENES
 from .settings import check_entities, check_threads
@@ -179,6 +179,16 @@ def refuse_unused(args: argparse.Namespace, used: tuple[str, ...], why: str) -> 
         raise UsageError(f"{why}: {', '.join(given)} do{'es' if len(given) == 1 else ''} not apply")
 
 
+def check_flags_apply(args: argparse.Namespace, scenes: tuple[str, ...], editor: bool) -> None:
+    """Refuse a flag that would change nothing in this run, instead of ignoring it."""
+    if args.entities is not None and "scaling" not in scenes:
+        raise UsageError(f"--entities sizes the scaling and motion scenes; {', '.join(scenes)} has fixed content")
+    if args.headless and args.present != "fifo":
+        raise UsageError("--present chooses a window's present mode; a --headless run has no window")
+    if args.recorder is not None and not editor and not PATHS[args.mode].uses_recorder:
+        raise UsageError(f"--recorder does not apply to --mode {args.mode}: the GPU writes its draws")
+
+
 def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = None) -> int:
     from .loop import run
     from .report import report_validation
@@ -187,6 +197,7 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
     if args.path is not None and args.scene != "model":
         raise UsageError(f"a model path only goes with the model scene, not {args.scene!r}")
     editor = editor_scenes is not None
+    check_flags_apply(args, editor_scenes or (args.scene,), editor)
     options = RunOptions(
         scene=args.scene,
         path=args.path,
