@@ -321,8 +321,8 @@ def measure_driver_floor(draws: int, size: tuple[int, int]) -> dict[str, Any]:
     from ecs_engine.gpu.device import Device
     from ecs_engine.gpu.instance import Instance
     from ecs_engine.gpu.offscreen import OffscreenTarget
-    from ecs_engine.render.mesh_data import cube_mesh
     from ecs_engine.render.mesh_registry import MeshRegistry
+    from ecs_engine.render.primitives import cube_mesh
 
     from .driver_floor import measure as floor
 

@@ -7,7 +7,8 @@ from collections.abc import Callable
 
 from ecs_engine import World
 from ecs_engine.components import Mesh, Transform
-from ecs_engine.render.mesh_data import DEFAULT_MODEL, MeshData, load_mesh, normalized
+from ecs_engine.render.mesh_data import MeshData, normalized
+from ecs_engine.render.mesh_loading import DEFAULT_MODEL, load_mesh
 
 from .scene_kit import add_camera, add_orbiting_lights
 

@@ -14,7 +14,9 @@ from ecs_engine.components import Mesh, ModelMatrix, Transform
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.maths.culling import bounding_spheres, frustum_planes, spheres_visible
 from ecs_engine.render.camera import camera_matrices
-from ecs_engine.render.mesh_data import DEFAULT_MODEL, cube_mesh, load_mesh, normalized
+from ecs_engine.render.mesh_data import normalized
+from ecs_engine.render.mesh_loading import DEFAULT_MODEL, load_mesh
+from ecs_engine.render.primitives import cube_mesh
 
 W, H = 64, 48
 

@@ -14,7 +14,9 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from ecs_engine.errors import UsageError
-from ecs_engine.render.mesh_data import DEFAULT_MODEL, MeshData, bounding_sphere, cube_mesh, load_mesh, normalized
+from ecs_engine.render.mesh_data import MeshData, bounding_sphere, normalized
+from ecs_engine.render.mesh_loading import DEFAULT_MODEL, load_mesh
+from ecs_engine.render.primitives import cube_mesh
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -23,7 +23,7 @@ from ecs_engine.components import (
 )
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.render.instance_rows import INSTANCE_DTYPE, write_rows
-from ecs_engine.render.mesh_data import cube_mesh
+from ecs_engine.render.primitives import cube_mesh
 
 W, H = 160, 120
 

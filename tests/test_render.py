@@ -23,7 +23,7 @@ from ecs_engine.app.scenes import default_schedule
 from ecs_engine.app.settings import RunOptions
 from ecs_engine.components import Camera, Mesh, PointLight, Transform
 from ecs_engine.demos.scene_kit import add_camera
-from ecs_engine.render.mesh_data import cube_mesh
+from ecs_engine.render.primitives import cube_mesh
 
 
 def render(scene: str, frames: int = 8, **kw) -> object:

@@ -26,19 +26,30 @@ from .instance_rows import write_rows
 from .layouts import INSTANCE, MESH_VERTEX
 from .path import ChunkResult, FrameInputs, PathContext, summed_counts
 
+# The MESH_VERTEX fields mesh_vertex.glsl reads, at locations 0, 1, ...: only those are bound (an
+# attribute the shader does not read is a validation performance warning).
+VERTEX_INPUTS = ("position", "normal")
+
+
+def vertex_attributes(vk: Any) -> list[tuple[int, int, int]]:
+    """(location, format, offset) of the vertex inputs."""
+    formats = {2: vk.VK_FORMAT_R32G32_SFLOAT, 3: vk.VK_FORMAT_R32G32B32_SFLOAT, 4: vk.VK_FORMAT_R32G32B32A32_SFLOAT}
+    fields: dict[str, Any] = dict(MESH_VERTEX.fields or {})
+    return [
+        (location, formats[fields[name][0].shape[0]], fields[name][1]) for location, name in enumerate(VERTEX_INPUTS)
+    ]
+
 
 def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple[Any, Any]:
     """The (plain, mirrored) mesh pipelines of a path: the same but for the front face."""
-    vk = ctx.device.vk
-    vec3 = vk.VK_FORMAT_R32G32B32_SFLOAT
-    offset = {name: MESH_VERTEX.fields[name][1] for name in ("position", "normal")} if MESH_VERTEX.fields else {}
     base = dict(
         layout=layout,
         render_pass=ctx.render_pass,
         subpass=0,
         vertex_stride=MESH_VERTEX.itemsize,
-        vertex_attributes=[(0, vec3, offset["position"]), (1, vec3, offset["normal"])],
+        vertex_attributes=vertex_attributes(ctx.device.vk),
     )
+    vk = ctx.device.vk
     plain = graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, "mesh.frag", **base))
     try:
         mirrored = graphics_pipeline(

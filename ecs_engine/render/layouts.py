@@ -12,8 +12,16 @@ import numpy as np
 from ..gpu.layout import Struct, glsl_header
 
 # A mesh vertex as the vertex buffers hold it (tightly packed: vertex input, not a buffer block);
-# the pipelines take the stride and attribute offsets from here, mesh.vert reads locations 0, 1.
-MESH_VERTEX = np.dtype([("position", np.float32, 3), ("normal", np.float32, 3)])
+# the pipelines take the stride and attribute offsets from here (chunk_paths.VERTEX_INPUTS names
+# the fields mesh_vertex.glsl reads). 48 bytes; 24 before texture coordinates and tangents.
+MESH_VERTEX = np.dtype(
+    [
+        ("position", np.float32, 3),
+        ("normal", np.float32, 3),
+        ("uv", np.float32, 2),  # (0, 0): the image's top-left corner
+        ("tangent", np.float32, 4),  # xyz along +u, w: handedness (mesh_data.py)
+    ]
+)
 UINT_BYTES = np.dtype(np.uint32).itemsize  # one visible-row id, one per-key counter (indirect path)
 
 GLOBALS = Struct(

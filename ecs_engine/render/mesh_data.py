@@ -1,32 +1,20 @@
-"""Mesh data the renderer uploads once and many entities share: loading (OBJ, glTF/GLB, PLY, STL via
-trimesh), checks that turn every bad file into one-line `UsageError`s, a unit cube, and resizing."""
+"""Mesh data the renderer uploads once and many entities share: positions, normals, texture
+coordinates and tangents, checked and frozen; bounding spheres; tangent generation; resizing.
+
+Loading files is in mesh_loading.py, the shapes (cube, sphere, ...) in primitives.py.
+
+Texture coordinates follow glTF and Vulkan: (0, 0) is the image's top-left corner. Tangents are
+(x, y, z, w), as glTF defines them: a unit vector along +u in the surface, and w = +1 or -1, the
+handedness, so that the bitangent w * cross(normal, tangent) points up the image (towards -v),
+where a normal map's green channel points (MikkTSpace in OpenGL's v-up coordinates)."""
 
 from __future__ import annotations
 
-import importlib.resources
-import io
-import json
-import os
 from dataclasses import dataclass
-from pathlib import Path
-from typing import Final
 
 import numpy as np
 
-from ..errors import UsageError
-
-__all__ = ["DEFAULT_MODEL", "SUPPORTED_FORMATS", "MeshData", "bounding_sphere", "cube_mesh", "load_mesh", "normalized"]
-
-#: File extension -> format name, in the order error messages list them.
-SUPPORTED_FORMATS: Final[dict[str, str]] = {".obj": "OBJ", ".gltf": "glTF", ".glb": "GLB", ".ply": "PLY", ".stl": "STL"}
-
-#: The model demos show when given none: a (2,3) torus knot, centred, largest extent 2.0. It lives in the
-#: repo's demos/assets/, which installs as package data of `ecs_engine.demos`.
-DEFAULT_MODEL: Final[Path] = Path(str(importlib.resources.files("ecs_engine.demos") / "assets" / "torus_knot.obj"))
-
-# A triangle counts as degenerate when twice its area is below this fraction of the mesh's squared size:
-# such triangles have no usable normal and nothing to draw.
-_DEGENERATE_AREA: Final = 1e-12
+__all__ = ["MeshData", "bounding_sphere", "normalized", "tangent_frames"]
 
 
 def _frozen(values: object, dtype: type, name: str) -> np.ndarray:
@@ -52,7 +40,8 @@ class MeshData:
     """One triangle mesh, immutable because many entities share it and the GPU copy is made once.
 
     `center`/`radius` are a bounding sphere enclosing every vertex, for culling and camera framing.
-    Build one with `MeshData.from_arrays`, which computes the sphere."""
+    Build one with `MeshData.from_arrays`, which computes the sphere (and the tangents). Without
+    texture coordinates every vertex gets (0, 0) and tangents any unit vector across the normal."""
 
     positions: np.ndarray  # (V, 3) float32
     normals: np.ndarray  # (V, 3) float32, unit length
@@ -60,6 +49,8 @@ class MeshData:
     name: str
     center: np.ndarray  # (3,) float32
     radius: float
+    uvs: np.ndarray = None  # type: ignore[assignment]  # (V, 2) float32; None: zeros
+    tangents: np.ndarray = None  # type: ignore[assignment]  # (V, 4) float32; None: made by tangent_frames
 
     def __post_init__(self) -> None:
         for field, dtype in (
@@ -76,6 +67,11 @@ class MeshData:
                 f"MeshData {self.name!r}: positions and normals must both be (V, 3), got "
                 f"{self.positions.shape} and {self.normals.shape}"
             )
+        if self.uvs is None:
+            object.__setattr__(self, "uvs", np.zeros((v, 2), np.float32))
+        object.__setattr__(self, "uvs", _frozen(self.uvs, np.float32, "uvs"))
+        if self.uvs.shape != (v, 2) or not np.isfinite(self.uvs).all():
+            raise ValueError(f"MeshData {self.name!r}: uvs must be finite and (V, 2), got shape {self.uvs.shape}")
         if self.indices.ndim != 1 or self.indices.size % 3:
             raise ValueError(
                 f"MeshData {self.name!r}: indices must be a flat triangle list (length a multiple "
@@ -89,13 +85,33 @@ class MeshData:
             raise ValueError(f"MeshData {self.name!r}: normals must be unit length")
         if self.center.shape != (3,) or not np.isfinite(self.center).all() or not 0.0 <= self.radius < np.inf:
             raise ValueError(f"MeshData {self.name!r}: bad bounding sphere {self.center}, {self.radius}")
+        if self.tangents is None:
+            tangents = tangent_frames(self.positions, self.normals, self.uvs, self.indices)
+            object.__setattr__(self, "tangents", tangents)
+        object.__setattr__(self, "tangents", _frozen(self.tangents, np.float32, "tangents"))
+        t = self.tangents
+        if t.shape != (v, 4) or not np.isfinite(t).all():
+            raise ValueError(f"MeshData {self.name!r}: tangents must be finite and (V, 4), got shape {t.shape}")
+        if v and not (
+            np.allclose(np.linalg.norm(t[:, :3], axis=1), 1.0, atol=1e-3) and np.isin(t[:, 3], (-1.0, 1.0)).all()
+        ):
+            raise ValueError(f"MeshData {self.name!r}: tangents must be unit xyz with w = +1 or -1")
 
     @classmethod
-    def from_arrays(cls, positions: np.ndarray, normals: np.ndarray, indices: np.ndarray, name: str) -> MeshData:
-        """Validate and freeze the arrays and compute the bounding sphere."""
+    def from_arrays(
+        cls,
+        positions: np.ndarray,
+        normals: np.ndarray,
+        indices: np.ndarray,
+        name: str,
+        uvs: np.ndarray | None = None,
+        tangents: np.ndarray | None = None,
+    ) -> MeshData:
+        """Validate and freeze the arrays and compute the bounding sphere (and, when not given,
+        the tangents from the texture coordinates)."""
         positions = _frozen(positions, np.float32, "positions")
         center, radius = bounding_sphere(positions)
-        return cls(positions, normals, np.asarray(indices).reshape(-1), name, center, radius)
+        return cls(positions, normals, np.asarray(indices).reshape(-1), name, center, radius, uvs, tangents)  # type: ignore[arg-type]
 
     @property
     def vertex_count(self) -> int:
@@ -131,27 +147,6 @@ def bounding_sphere(points: np.ndarray) -> tuple[np.ndarray, float]:
     return candidates[best], radii[best] * (1 + 1e-6)
 
 
-def cube_mesh() -> MeshData:
-    """Unit cube centred at the origin: 24 vertices (4 per face, so normals stay flat), 36 indices,
-    counter-clockwise from outside. The fallback model, needing no file."""
-    positions: list[np.ndarray] = []
-    normals: list[np.ndarray] = []
-    indices: list[int] = []
-    for axis in range(3):
-        for sign in (1.0, -1.0):
-            n = np.zeros(3)
-            n[axis] = sign
-            u = np.zeros(3)
-            u[(axis + 1) % 3] = 1.0
-            v = np.cross(n, u)  # u x v == n, so corners in (u, v) order wind counter-clockwise around n
-            base = len(positions)
-            for du, dv in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
-                positions.append((n + du * u + dv * v) / 2)
-                normals.append(n)
-            indices += [base, base + 1, base + 2, base, base + 2, base + 3]
-    return MeshData.from_arrays(np.array(positions), np.array(normals), np.array(indices), "cube")
-
-
 def normalized(mesh: MeshData, size: float = 1.0) -> MeshData:
     """A copy centred on its bounding-box centre, uniformly scaled so its largest extent is `size`,
     so demos can show any model at a known size."""
@@ -161,237 +156,45 @@ def normalized(mesh: MeshData, size: float = 1.0) -> MeshData:
     lo, hi = p.min(0), p.max(0)
     extent = float((hi - lo).max())
     scale = size / extent if extent > 0 else 1.0
-    return MeshData.from_arrays((p - (lo + hi) / 2) * scale, mesh.normals, mesh.indices, mesh.name)
+    return MeshData.from_arrays(
+        (p - (lo + hi) / 2) * scale, mesh.normals, mesh.indices, mesh.name, mesh.uvs, mesh.tangents
+    )
 
 
-# ---------------------------------------------------------------------------------------------- loading
-
-
-def load_mesh(path: str | os.PathLike[str], *, max_triangles: int | None = None) -> MeshData:
-    """Load a triangle mesh from OBJ, glTF/GLB, PLY or STL; scenes are flattened with their transforms.
-
-    Polygons are triangulated, zero-area triangles dropped, files without normals get smooth ones.
-    Any problem with the file (or more than `max_triangles` triangles) raises `UsageError` with one
-    line naming the file, so the CLI can show it without a traceback."""
-    if max_triangles is not None and max_triangles < 1:
-        raise ValueError(f"max_triangles must be at least 1, got {max_triangles}")
-    file = Path(path)
-    fmt = _check_path(file)
-    try:
-        data = file.read_bytes()
-    except OSError as exc:
-        raise UsageError(f"{file}: cannot read the file: {exc.strerror or exc}") from None
-    if not data.strip():
-        raise UsageError(f"{file}: the file is empty")
-    _sniff(file, fmt, data)
-    parts, only_points_or_lines = _read_parts(file, fmt, data)
-    faces_total = sum(len(f) for _, f, _ in parts)
-    if faces_total == 0:
-        if only_points_or_lines:
-            raise UsageError(f"{file}: has no triangles (only points/lines)")
-        raise UsageError(f"{file}: contains no triangles (an empty mesh, or not a valid {fmt} file)")
-    if max_triangles is not None and faces_total > max_triangles:
-        raise UsageError(f"{file}: has {faces_total} triangles, more than the limit of {max_triangles}")
-    return _assemble(file, parts)
-
-
-def _check_path(file: Path) -> str:
-    """Reject what cannot be a mesh file before reading it; return the format name."""
-    if not file.exists():
-        raise UsageError(f"{file}: no such file")
-    if file.is_dir():
-        raise UsageError(f"{file}: is a directory, not a mesh file")
-    fmt = SUPPORTED_FORMATS.get(file.suffix.lower())
-    if fmt is None:
-        what = f"format '{file.suffix}'" if file.suffix else "file type (no extension)"
-        raise UsageError(f"{file}: unsupported mesh {what}; supported: {', '.join(SUPPORTED_FORMATS)}")
-    return fmt
-
-
-def _sniff(file: Path, fmt: str, data: bytes) -> None:
-    """Cheap format checks that give a clear message where trimesh would crash, guess, or stay silent."""
-    if fmt == "OBJ":
-        if b"\0" in data:
-            raise UsageError(f"{file}: is binary data, not a text OBJ file")
-        _check_obj_faces(file, data.decode("utf-8", errors="replace"))
-    elif fmt == "STL":
-        # Binary STL: an 84-byte header whose triangle count matches the size; otherwise ASCII "solid ...".
-        binary = len(data) >= 84 and len(data) == 84 + 50 * int.from_bytes(data[80:84], "little")
-        if not binary and not data.lstrip()[:5].lower() == b"solid":
-            raise UsageError(f"{file}: not a valid STL file (neither binary STL nor ASCII 'solid ...' text)")
-    elif fmt == "glTF":
-        try:
-            json.loads(data)
-        except ValueError as exc:
-            raise UsageError(f"{file}: not a valid glTF file (not JSON: {exc})") from None
-
-
-def _check_obj_faces(file: Path, text: str) -> None:
-    """Check every OBJ face index: trimesh crashes on indices past the end and silently wraps 0 and
-    too-negative ones to other vertices, so the user would get a traceback or a wrong mesh."""
-    vertices = 0
-    faces: list[tuple[int, int, int, list[str]]] = []  # (face number, line number, vertices so far, tokens)
-    other = 0  # points and lines
-    for line_no, line in enumerate(text.splitlines(), 1):
-        tokens = line.split()
-        if not tokens:
-            continue
-        if tokens[0] == "v":
-            vertices += 1
-        elif tokens[0] == "f":
-            faces.append((len(faces) + 1, line_no, vertices, tokens[1:]))
-        elif tokens[0] in ("l", "p"):
-            other += 1
-    if not faces:
-        if vertices or other:
-            raise UsageError(f"{file}: has no triangles (only points/lines)")
-        raise UsageError(f"{file}: contains no vertices or faces (an empty mesh, or not an OBJ file)")
-    for face_no, line_no, before, tokens in faces:
-        where = f"face {face_no} (line {line_no})"
-        if len(tokens) < 3:
-            raise UsageError(f"{file}: {where} has {len(tokens)} vertices; a face needs at least 3")
-        for token in tokens:
-            try:
-                k = int(token.split("/")[0])
-            except ValueError:
-                raise UsageError(f"{file}: {where} has an unreadable vertex reference {token!r}") from None
-            if k == 0:
-                raise UsageError(f"{file}: {where} refers to vertex 0, but OBJ vertex numbers start at 1")
-            if k > vertices:
-                raise UsageError(f"{file}: {where} refers to vertex {k} but the file has only {vertices} vertices")
-            if k < 0 and before + k < 0:
-                raise UsageError(
-                    f"{file}: {where} refers to vertex {k} (counted back), but only {before} vertices come before it"
-                )
-
-
-_Part = tuple[np.ndarray, np.ndarray, "np.ndarray | None"]  # positions (V,3) f8, faces (F,3) i8, normals or None
-
-
-def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[_Part], bool]:
-    """Parse with trimesh (unprocessed, so NaNs and bad indices stay visible to our checks) and bake each
-    scene node's transform into its geometry. Also says whether the file held only points/lines."""
-    try:
-        import trimesh
-
-        scene = trimesh.load_scene(
-            io.BytesIO(data),
-            file_type=fmt.lower(),
-            process=False,
-            resolver=trimesh.resolvers.FilePathResolver(str(file)),
-        )
-        parts: list[_Part] = []
-        non_mesh = 0
-        for node in scene.graph.nodes_geometry:
-            transform, geometry_name = scene.graph[node]
-            geometry = scene.geometry[geometry_name]
-            if not isinstance(geometry, trimesh.Trimesh):
-                non_mesh += 1
-                continue
-            # trimesh keeps normals read from the file in its cache; asking `vertex_normals` would compute them.
-            normals = geometry._cache["vertex_normals"] if "vertex_normals" in geometry._cache else None
-            parts.append(
-                _transformed(
-                    np.array(geometry.vertices, np.float64),
-                    np.array(geometry.faces, np.int64).reshape(-1, 3),
-                    None if normals is None else np.array(normals, np.float64),
-                    np.asarray(transform, np.float64),
-                )
-            )
-    except UsageError:
-        raise
-    except FileNotFoundError as exc:  # a glTF's buffer or image file is not next to it
-        raise UsageError(f"{file}: refers to a file that is missing: {exc.filename or exc}") from None
-    except Exception as exc:
-        reason = (str(exc).strip().splitlines() or [""])[0] or type(exc).__name__
-        raise UsageError(f"{file}: not a valid {fmt} file ({reason})") from None
-    return parts, non_mesh > 0 and not any(len(f) for _, f, _ in parts)
-
-
-def _transformed(positions: np.ndarray, faces: np.ndarray, normals: np.ndarray | None, transform: np.ndarray) -> _Part:
-    """Apply a 4x4 node transform; normals use the inverse transpose, mirroring flips the winding."""
-    if np.array_equal(transform, np.eye(4)):
-        return positions, faces, normals
-    linear = transform[:3, :3]
-    positions = positions @ linear.T + transform[:3, 3]
-    det = float(np.linalg.det(linear)) if np.isfinite(linear).all() else 0.0
-    if det < 0:
-        faces = faces[:, ::-1]
-    if normals is not None:
-        normals = normals @ np.linalg.inv(linear) if abs(det) > 1e-300 else None
-    return positions, faces, normals
-
-
-def _assemble(file: Path, parts: list[_Part]) -> MeshData:
-    """Check values, drop zero-area triangles and unused vertices, fill in normals, build the MeshData."""
-    bad = sum(int((~np.isfinite(p)).any(axis=1).sum()) for p, _, _ in parts)
-    if bad:
-        what = "vertex has" if bad == 1 else "vertices have"
-        raise UsageError(f"{file}: {bad} {what} NaN or infinite coordinates")
-    limit = float(np.finfo(np.float32).max)  # vertices are uploaded as float32
-    first = 0  # vertex numbers count across the file's parts, from 1 as in OBJ
-    for positions, _, _ in parts:
-        huge = (np.abs(positions) > limit).any(axis=1)
-        if huge.any():
-            i = int(np.argmax(huge))
-            value = float(positions[i][np.abs(positions[i]) > limit][0])
-            more = f" ({int(huge.sum())} vertices)" if huge.sum() > 1 else ""
-            raise UsageError(
-                f"{file}: vertex {first + i + 1} has the coordinate {value:g}, outside float32's range "
-                f"(-{limit:.3g} to {limit:.3g}){more}"
-            )
-        first += len(positions)
-    for positions, faces, _ in parts:
-        if faces.size and (faces.min() < 0 or faces.max() >= len(positions)):
-            i = int(np.argmax(((faces < 0) | (faces >= len(positions))).any(axis=1)))
-            k = int(faces[i][(faces[i] < 0) | (faces[i] >= len(positions))][0])
-            raise UsageError(
-                f"{file}: face {i + 1} refers to vertex {k} but the file has only {len(positions)} vertices"
-            )
-    everything = np.concatenate([p for p, _, _ in parts])
-    size = float((everything.max(0) - everything.min(0)).max())
-    out_p, out_n, out_i, offset, total = [], [], [], 0, 0
-    for positions, faces, normals in parts:
-        total += len(faces)
-        if normals is None:  # no normals in the file: weld equal positions so the computed ones are smooth
-            positions, inverse = np.unique(positions, axis=0, return_inverse=True)
-            faces = inverse.reshape(-1)[faces]
-        cross = _face_cross(positions, faces)
-        keep = np.linalg.norm(cross, axis=1) > _DEGENERATE_AREA * size * size
-        faces, cross = faces[keep], cross[keep]
-        used, faces = np.unique(faces, return_inverse=True)
-        faces = faces.reshape(-1, 3)
-        positions = positions[used]
-        normals = _vertex_normals(len(positions), faces, cross, None if normals is None else normals[used])
-        out_p.append(positions)
-        out_n.append(normals)
-        out_i.append(faces + offset)
-        offset += len(positions)
-    if offset == 0:
-        raise UsageError(f"{file}: all {total} triangles are degenerate (zero area)")
-    return MeshData.from_arrays(np.concatenate(out_p), np.concatenate(out_n), np.concatenate(out_i), file.stem)
-
-
-def _face_cross(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """(v1 - v0) x (v2 - v0) per face: along the outward normal for counter-clockwise faces, length 2x area."""
-    v0, v1, v2 = (positions[faces[:, k]] for k in range(3))
-    return np.cross(v1 - v0, v2 - v0)
-
-
-def _vertex_normals(count: int, faces: np.ndarray, cross: np.ndarray, given: np.ndarray | None) -> np.ndarray:
-    """Unit normals per vertex: the file's where usable, else area-weighted face normals; where those cancel
-    (a two-sided sheet) fall back to one adjacent face's normal. Every vertex here has a non-degenerate face."""
-    flat = faces.reshape(-1)
-    smooth = np.stack([np.bincount(flat, weights=np.repeat(cross[:, k], 3), minlength=count) for k in range(3)], 1)
-    unit_faces = cross / np.linalg.norm(cross, axis=1, keepdims=True)
-    fallback = np.zeros((count, 3))
-    fallback[flat] = np.repeat(unit_faces, 3, axis=0)
-    result = fallback
-    for candidate in (smooth, given):
-        if candidate is None:
-            continue
-        with np.errstate(invalid="ignore", over="ignore"):
-            length = np.linalg.norm(candidate, axis=1, keepdims=True)
-            ok = (np.isfinite(length) & (length > 1e-12)).reshape(-1)
-            result = np.where(ok[:, None], candidate / np.where(ok[:, None], length, 1.0), result)
-    return result
+def tangent_frames(positions: np.ndarray, normals: np.ndarray, uvs: np.ndarray, indices: np.ndarray) -> np.ndarray:
+    """Per-vertex tangents (V, 4) from the texture coordinates (Lengyel's method): each triangle's
+    directions of +u and +v in space, summed over the triangles at a vertex, made perpendicular to
+    its normal; w is the handedness (see the module's note). Where the coordinates give no direction (no UVs, degenerate
+    ones) the tangent is any unit vector across the normal, with w = 1."""
+    p = np.asarray(positions, np.float64)
+    n = np.asarray(normals, np.float64)
+    uv = np.asarray(uvs, np.float64)
+    tris = np.asarray(indices, np.int64).reshape(-1, 3)
+    count = len(p)
+    t_sum = np.zeros((count, 3))
+    b_sum = np.zeros((count, 3))
+    if len(tris):
+        e1, e2 = p[tris[:, 1]] - p[tris[:, 0]], p[tris[:, 2]] - p[tris[:, 0]]
+        d1, d2 = uv[tris[:, 1]] - uv[tris[:, 0]], uv[tris[:, 2]] - uv[tris[:, 0]]
+        r = d1[:, 0] * d2[:, 1] - d2[:, 0] * d1[:, 1]
+        ok = np.abs(r) > 1e-20
+        inv = np.where(ok, 1.0 / np.where(ok, r, 1.0), 0.0)[:, None]
+        t_face = (e1 * d2[:, 1:2] - e2 * d1[:, 1:2]) * inv
+        b_face = (e2 * d1[:, 0:1] - e1 * d2[:, 0:1]) * inv
+        flat = tris.reshape(-1)
+        for k in range(3):
+            t_sum[:, k] = np.bincount(flat, weights=np.repeat(t_face[:, k], 3), minlength=count)
+            b_sum[:, k] = np.bincount(flat, weights=np.repeat(b_face[:, k], 3), minlength=count)
+    t = t_sum - n * (n * t_sum).sum(1, keepdims=True)
+    length = np.linalg.norm(t, axis=1, keepdims=True)
+    # any perpendicular: the axis least along the normal, crossed with it
+    axis = np.eye(3)[np.argmin(np.abs(n), axis=1)]
+    other = np.cross(n, axis)
+    other /= np.maximum(np.linalg.norm(other, axis=1, keepdims=True), 1e-300)
+    good = (length > 1e-12 * np.maximum(np.linalg.norm(t_sum, axis=1, keepdims=True), 1e-300)) & (length > 0)
+    t = np.where(good, t / np.where(good, length, 1.0), other)
+    w = np.where((np.cross(n, t) * b_sum).sum(1) > 0.0, -1.0, 1.0)  # w * cross(n, t) points up the image
+    out = np.empty((count, 4), np.float32)
+    out[:, :3] = t
+    out[:, 3] = w
+    return out

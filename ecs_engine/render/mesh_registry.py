@@ -123,12 +123,14 @@ def _interleaved(mesh: MeshData) -> np.ndarray:
     out = np.empty(len(mesh.positions), dtype=MESH_VERTEX)
     out["position"] = mesh.positions
     out["normal"] = mesh.normals
+    out["uv"] = mesh.uvs
+    out["tangent"] = mesh.tangents
     return out
 
 
 def _digest(mesh: MeshData) -> bytes:
     h = hashlib.blake2b(digest_size=16)
-    for array in (mesh.positions, mesh.normals, mesh.indices):
+    for array in (mesh.positions, mesh.normals, mesh.uvs, mesh.tangents, mesh.indices):
         h.update(str(array.shape).encode())
         h.update(np.ascontiguousarray(array).tobytes())
     return h.digest()

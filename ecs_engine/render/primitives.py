@@ -1,0 +1,183 @@
+"""Shapes for scenes and games, made in code: cube, sphere, plane, cylinder, cone, torus.
+
+Each is centred on the origin, fits the unit box (largest extent 1, like the cube), winds
+counter-clockwise seen from outside, and has texture coordinates ((0, 0) at the image's top-left,
+glTF's convention) and tangents along +u. Seams are split (the first column of vertices is
+repeated with u = 1) so a texture wraps once around without a smeared column, and hard edges (the
+cube's, a cylinder's rims) have their own vertices so normals stay flat there.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .mesh_data import MeshData
+
+__all__ = ["PRIMITIVES", "cone_mesh", "cube_mesh", "cylinder_mesh", "plane_mesh", "sphere_mesh", "torus_mesh"]
+
+
+def _grid_indices(rows: int, cols: int, first: int = 0) -> np.ndarray:
+    """Two triangles per cell of a (rows + 1) x (cols + 1) vertex grid laid out row by row, counter-
+    clockwise when the rows run along -v and the columns along +u seen from the front."""
+    r, c = np.meshgrid(np.arange(rows), np.arange(cols), indexing="ij")
+    a = first + r * (cols + 1) + c  # (row, col)
+    b = a + 1  # (row, col + 1)
+    d = a + cols + 1  # (row + 1, col)
+    e = d + 1
+    return np.stack([a, d, b, b, d, e], axis=-1).reshape(-1)
+
+
+def _checked(count: int, name: str, least: int) -> int:
+    if not isinstance(count, (int, np.integer)) or count < least:
+        raise ValueError(f"{name} must be an integer of at least {least}, got {count!r}")
+    return int(count)
+
+
+def cube_mesh() -> MeshData:
+    """Unit cube centred at the origin: 24 vertices (4 per face, so normals stay flat), 36 indices,
+    counter-clockwise from outside; each face maps the whole texture. The fallback model."""
+    positions: list[np.ndarray] = []
+    normals: list[np.ndarray] = []
+    uvs: list[tuple[float, float]] = []
+    indices: list[int] = []
+    for axis in range(3):
+        for sign in (1.0, -1.0):
+            n = np.zeros(3)
+            n[axis] = sign
+            u = np.zeros(3)
+            u[(axis + 1) % 3] = 1.0
+            v = np.cross(n, u)  # u x v == n, so corners in (u, v) order wind counter-clockwise around n
+            base = len(positions)
+            for du, dv in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+                positions.append((n + du * u + dv * v) / 2)
+                normals.append(n)
+                uvs.append(((du + 1) / 2, (1 - dv) / 2))  # +v in space is up the image
+            indices += [base, base + 1, base + 2, base, base + 2, base + 3]
+    return MeshData.from_arrays(np.array(positions), np.array(normals), np.array(indices), "cube", np.array(uvs))
+
+
+def sphere_mesh(segments: int = 32, rings: int = 16, radius: float = 0.5) -> MeshData:
+    """A UV sphere: `segments` around the Y axis, `rings` from pole to pole; u runs around (from +X
+    towards -Z, counter-clockwise seen from above), v from the north pole (0) to the south (1)."""
+    segments, rings = _checked(segments, "segments", 3), _checked(rings, "rings", 2)
+    theta = np.linspace(0.0, np.pi, rings + 1)[:, None]  # from +Y
+    phi = np.linspace(0.0, 2 * np.pi, segments + 1)[None, :]
+    normals = np.stack(
+        np.broadcast_arrays(np.sin(theta) * np.cos(phi), np.cos(theta), -np.sin(theta) * np.sin(phi)), -1
+    ).reshape(-1, 3)
+    u, v = np.meshgrid(np.linspace(0, 1, segments + 1), np.linspace(0, 1, rings + 1))
+    tris = _grid_indices(rings, segments).reshape(-1, 3)
+    # the cells touching a pole have two vertices at the pole: keep their one real triangle
+    p = normals[tris]
+    area = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+    return MeshData.from_arrays(
+        normals * radius, normals, tris[area > 1e-12], "sphere", np.stack([u.ravel(), v.ravel()], -1)
+    )
+
+
+def plane_mesh(size: float = 1.0, subdivisions: int = 1) -> MeshData:
+    """A square in the XZ plane facing +Y, `size` on a side, cut into `subdivisions`^2 cells (more
+    cells give per-vertex lighting and spot lights something to work with). u along +X, v along +Z."""
+    n = _checked(subdivisions, "subdivisions", 1)
+    if not 0.0 < size < np.inf:
+        raise ValueError(f"size must be a finite number above 0, got {size}")
+    s = np.linspace(0.0, 1.0, n + 1)
+    u, v = np.meshgrid(s, s)  # rows along +v (+Z), columns along +u (+X)
+    positions = np.stack([(u - 0.5) * size, np.zeros_like(u), (v - 0.5) * size], -1).reshape(-1, 3)
+    normals = np.tile([0.0, 1.0, 0.0], (len(positions), 1))
+    tris = _grid_indices(n, n).reshape(-1, 3)  # seen from +Y: +X right, +Z down the image
+    return MeshData.from_arrays(positions, normals, tris, "plane", np.stack([u.ravel(), v.ravel()], -1))
+
+
+def _cap(y: float, radius: float, segments: int, first: int) -> tuple[np.ndarray, ...]:
+    """A disc at height y facing up (y > 0) or down: a centre and a rim of its own vertices."""
+    up = 1.0 if y > 0 else -1.0
+    phi = np.linspace(0.0, 2 * np.pi, segments + 1)[:-1]
+    rim = np.stack([np.cos(phi), np.full_like(phi, y / radius), -np.sin(phi)], -1) * radius
+    positions = np.concatenate([[[0.0, y, 0.0]], rim])
+    normals = np.tile([0.0, up, 0.0], (segments + 1, 1))
+    uvs = np.concatenate([[[0.5, 0.5]], np.stack([0.5 + 0.5 * np.cos(phi), 0.5 - 0.5 * up * np.sin(phi)], -1)])
+    k = np.arange(segments)
+    a, b = first + 1 + k, first + 1 + (k + 1) % segments
+    tris = np.stack([np.full(segments, first), a, b] if up > 0 else [np.full(segments, first), b, a], -1)
+    return positions, normals, uvs, tris
+
+
+def _solid_of_revolution(
+    name: str, radius_at: np.ndarray, heights: np.ndarray, slope: float, segments: int, caps: list[tuple[float, float]]
+) -> MeshData:
+    """A side surface through rings of radius `radius_at[i]` at `heights[i]` (top first), its normals
+    tilted by `slope` (d radius / d height), plus flat caps (height, radius)."""
+    phi = np.linspace(0.0, 2 * np.pi, segments + 1)
+    rings = len(heights)
+    r = radius_at[:, None]
+    positions = np.stack(np.broadcast_arrays(r * np.cos(phi), heights[:, None], -r * np.sin(phi)), -1).reshape(-1, 3)
+    normal = np.stack(np.broadcast_arrays(np.cos(phi), -slope + 0 * heights[:, None], -np.sin(phi)), -1)
+    normals = (normal / np.linalg.norm(normal, axis=-1, keepdims=True)).reshape(-1, 3)
+    u, v = np.meshgrid(np.linspace(0, 1, segments + 1), np.linspace(0, 1, rings))
+    parts_p, parts_n, parts_uv = [positions], [normals], [np.stack([u.ravel(), v.ravel()], -1)]
+    tris = _grid_indices(rings - 1, segments).reshape(-1, 3)
+    p = positions[tris]
+    parts_t = [tris[np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1) > 1e-12]]
+    first = len(positions)
+    for y, radius in caps:
+        cp, cn, cuv, ct = _cap(y, radius, segments, first)
+        parts_p.append(cp)
+        parts_n.append(cn)
+        parts_uv.append(cuv)
+        parts_t.append(ct)
+        first += len(cp)
+    return MeshData.from_arrays(
+        np.concatenate(parts_p), np.concatenate(parts_n), np.concatenate(parts_t), name, np.concatenate(parts_uv)
+    )
+
+
+def cylinder_mesh(segments: int = 32, radius: float = 0.5, height: float = 1.0, caps: bool = True) -> MeshData:
+    """A cylinder along Y; u runs around the side, v from the top rim (0) to the bottom (1); the
+    caps map a disc of the texture."""
+    segments = _checked(segments, "segments", 3)
+    h = height / 2
+    return _solid_of_revolution(
+        "cylinder",
+        np.array([radius, radius]),
+        np.array([h, -h]),
+        0.0,
+        segments,
+        [(h, radius), (-h, radius)] if caps else [],
+    )
+
+
+def cone_mesh(segments: int = 32, radius: float = 0.5, height: float = 1.0, rings: int = 8) -> MeshData:
+    """A cone along Y with its apex up and a base cap; the side has `rings` bands so its normals
+    (tilted by radius / height) interpolate smoothly towards the apex."""
+    segments, rings = _checked(segments, "segments", 3), _checked(rings, "rings", 1)
+    t = np.linspace(0.0, 1.0, rings + 1)
+    h = height / 2
+    return _solid_of_revolution("cone", radius * t, h - height * t, -radius / height, segments, [(-h, radius)])
+
+
+def torus_mesh(segments: int = 48, sides: int = 24, major: float = 0.35, minor: float = 0.15) -> MeshData:
+    """A torus around Y: `segments` around the ring (u), `sides` around the tube (v, from the
+    outer equator down and under)."""
+    segments, sides = _checked(segments, "segments", 3), _checked(sides, "sides", 3)
+    if not 0.0 < minor < major:
+        raise ValueError(f"the tube radius must be above 0 and below the ring's, got {minor} and {major}")
+    phi = np.linspace(0.0, 2 * np.pi, segments + 1)[None, :]
+    psi = np.linspace(0.0, 2 * np.pi, sides + 1)[:, None]
+    ring = np.stack(np.broadcast_arrays(np.cos(phi), 0 * psi, -np.sin(phi)), -1)
+    normals = (ring * np.cos(psi)[..., None] + np.array([0.0, 1.0, 0.0]) * np.sin(psi)[..., None]).reshape(-1, 3)
+    positions = (ring * major).reshape(-1, 3) + normals * minor
+    u, v = np.meshgrid(np.linspace(0, 1, segments + 1), np.linspace(1, 0, sides + 1))  # rows run over the top
+    tris = _grid_indices(sides, segments).reshape(-1, 3)[:, ::-1]
+    return MeshData.from_arrays(positions, normals, tris, "torus", np.stack([u.ravel(), v.ravel()], -1))
+
+
+#: name -> maker with its defaults, for scenes and the editor
+PRIMITIVES = {
+    "cube": cube_mesh,
+    "sphere": sphere_mesh,
+    "plane": plane_mesh,
+    "cylinder": cylinder_mesh,
+    "cone": cone_mesh,
+    "torus": torus_mesh,
+}
