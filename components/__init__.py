@@ -10,7 +10,7 @@ from .camera import (
     render_origin,
 )
 from .camera_control import FlyCamera
-from .light import PointLight
+from .light import DirectionalLight, PointLight, SpotLight
 from .mesh import Mesh
 from .motion import AngularVelocity, Spring, Velocity
 from .orbit import Orbit
@@ -22,6 +22,7 @@ __all__ = [
     "ActiveCamera",
     "AngularVelocity",
     "Camera",
+    "DirectionalLight",
     "FlyCamera",
     "Mesh",
     "ModelMatrix",
@@ -30,6 +31,7 @@ __all__ = [
     "PointLight",
     "PreviousTransform",
     "RenderOrigin",
+    "SpotLight",
     "Spring",
     "Transform",
     "Velocity",

@@ -1,4 +1,12 @@
-"""Point lights (position comes from the entity's Transform)."""
+"""Lights. A point or spot light's position is its entity's Transform position; a spot or
+directional light shines along its Transform's local -Z axis (glTF's and Bevy's convention), so a
+rotation aims it.
+
+Units follow one convention: a white Lambert surface facing a light head-on has the radiance
+`illuminance` (directional) or `intensity / distance^2` (point, spot), times the light's colour.
+Physically that folds the 1/pi of a Lambert BRDF into the light: the shaders multiply every BRDF
+by pi (see shaders/shading.glsl), so lights keep the brightness they had before materials.
+"""
 
 from __future__ import annotations
 
@@ -8,8 +16,40 @@ from ecs_engine.ecs.schema import Component, Field
 
 
 class PointLight(Component):
-    """Linear RGB colour, intensity multiplier and radius of influence (0 means unbounded)."""
+    """Linear RGB colour, intensity and radius of influence (0 means unbounded). Within the
+    radius the light falls off as 1/d^2 times a window that reaches 0 at the radius."""
 
     color = Field(np.float32, (3,), default=(1.0, 1.0, 1.0), finite=True, minimum=0.0)
     intensity = Field(np.float32, default=1.0, finite=True, minimum=0.0)
     radius = Field(np.float32, default=10.0, finite=True, minimum=0.0)
+
+
+class SpotLight(Component):
+    """A point light limited to a cone around the entity's -Z axis: full within `inner_angle`
+    of the axis, fading (smoothly, as glTF's KHR_lights_punctual) to none at `outer_angle`
+    (radians, 0 <= inner < outer <= pi/2). `radius` is its range, as PointLight's."""
+
+    color = Field(np.float32, (3,), default=(1.0, 1.0, 1.0), finite=True, minimum=0.0)
+    intensity = Field(np.float32, default=1.0, finite=True, minimum=0.0)
+    radius = Field(np.float32, default=10.0, finite=True, minimum=0.0)
+    inner_angle = Field(np.float32, default=0.0, finite=True, minimum=0.0, maximum=np.pi / 2)
+    outer_angle = Field(np.float32, default=np.pi / 4, finite=True, minimum=0.0, maximum=np.pi / 2)
+
+    @classmethod
+    def check(cls, values, who):
+        inner, outer = np.broadcast_arrays(values["inner_angle"], values["outer_angle"])
+        bad = inner >= outer
+        if bad.any():
+            row = int(np.flatnonzero(bad)[0])
+            raise ValueError(
+                f"{who(row)}: SpotLight.inner_angle ({inner[row]:g}) must be less than "
+                f"SpotLight.outer_angle ({outer[row]:g})"
+            )
+
+
+class DirectionalLight(Component):
+    """Light from far away (the sun) along the entity's -Z axis: linear RGB colour and
+    illuminance, the same everywhere in the scene."""
+
+    color = Field(np.float32, (3,), default=(1.0, 1.0, 1.0), finite=True, minimum=0.0)
+    illuminance = Field(np.float32, default=1.0, finite=True, minimum=0.0)

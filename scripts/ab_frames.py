@@ -1,10 +1,12 @@
 """Old code against new on the frames that matter: one process per (code, repetition), alternated,
 so the GPU host's drift (30-50% between runs) hits both alike.
 
-Each process builds the scaling scene (bench/scaling.py's) at 100 and 1,000,000 entities,
-headless 640x360, and prints one JSON line per configuration: the median over its timed frames
-of systems ms, record ms and CPU frame ms (systems + render, minus waits for the GPU). It runs
-against the API of the code it finds, old (before the issue-13 refactor, commit f7a779d) or new.
+Each process builds the seed's three scenes and the scaling scene (bench/scaling.py's) at 100 and
+1,000,000 entities, headless (640x360, or the size given as a third argument), and prints one
+JSON line per configuration: the median over its timed frames of systems ms, record ms, CPU
+frame ms (systems + render, minus waits for the GPU) and GPU ms (timestamps, a frame late). It
+runs against the API of the code it finds, old (before the issue-13 refactor, commit f7a779d) or
+new (issue 14 compared e7d674c, before materials, with the materials code).
 
     pip install --no-deps --no-build-isolation --target /tmp/old <old checkout>
     pip install --no-deps --no-build-isolation --target /tmp/new .
@@ -23,12 +25,15 @@ import sys
 import time
 from typing import Any
 
-# (entities, mode, threads, timed frames, warm-up frames)
+# (scene, entities, mode, threads, timed frames, warm-up frames)
 CONFIGS = [
-    (100, "instanced", 1, 300, 50),
-    (1_000_000, "instanced", 16, 40, 8),
-    (1_000_000, "indirect", 16, 40, 8),
-    (1_000_000, "instanced", 1, 16, 4),
+    ("cube", 1, "instanced", 1, 300, 50),
+    ("grid100", 100, "instanced", 1, 300, 50),
+    ("model", 1, "instanced", 1, 300, 50),
+    ("scaling", 100, "instanced", 1, 300, 50),
+    ("scaling", 1_000_000, "instanced", 16, 40, 8),
+    ("scaling", 1_000_000, "indirect", 16, 40, 8),
+    ("scaling", 1_000_000, "instanced", 1, 16, 4),
 ]
 
 
@@ -52,6 +57,7 @@ def engine_api() -> tuple[Any, ...]:
 
 def main() -> None:
     version, rep = sys.argv[1], int(sys.argv[2])
+    width, height = (int(v) for v in (sys.argv[3] if len(sys.argv) > 3 else "640x360").split("x"))
     default_schedule, scene_builder, MeshRegistry, Renderer, World, extra = engine_api()
     from ecs_engine.gpu.device import Device
     from ecs_engine.gpu.instance import Instance
@@ -60,19 +66,19 @@ def main() -> None:
 
     instance = Instance()
     device = Device(instance)
-    target = OffscreenTarget(device, 640, 360)
+    target = OffscreenTarget(device, width, height)
     meshes = MeshRegistry(device)
-    worlds: dict[int, Any] = {}
-    for n, mode, threads, frames, warmup in CONFIGS:
+    worlds: dict[tuple[str, int], Any] = {}
+    for scene, n, mode, threads, frames, warmup in CONFIGS:
         pool = JobPool(threads)
-        if n not in worlds:
-            worlds[n] = World()
-            scene_builder("scaling", n)(worlds[n], meshes.add)
-        world = worlds[n]
+        if (scene, n) not in worlds:
+            worlds[scene, n] = World()
+            scene_builder(scene, n)(worlds[scene, n], meshes.add)
+        world = worlds[scene, n]
         world.resources[JobPool] = pool
         renderer = Renderer(device, target, meshes, mode=mode, jobs=pool, **extra)
         schedule = default_schedule()
-        systems, record, cpu = [], [], []
+        systems, record, cpu, gpu = [], [], [], []
         for i in range(warmup + frames):
             t0 = time.perf_counter()
             schedule.run(world, 1 / 60)
@@ -83,18 +89,23 @@ def main() -> None:
                 systems.append((t1 - t0) * 1e3)
                 record.append(stats.record_ms)
                 cpu.append((t2 - t0) * 1e3 - stats.wait_ms)
+                if stats.gpu_ms is not None:
+                    gpu.append(stats.gpu_ms)
         device.wait_idle()
         renderer.destroy()
         pool.close()
         row = {
             "version": version,
             "rep": rep,
+            "scene": scene,
+            "size": f"{width}x{height}",
             "entities": n,
             "mode": mode,
             "threads": threads,
             "systems_ms": statistics.median(systems),
             "record_ms": statistics.median(record),
             "cpu_ms": statistics.median(cpu),
+            "gpu_ms": statistics.median(gpu) if gpu else None,
         }
         print(json.dumps(row), flush=True)
     meshes.destroy()

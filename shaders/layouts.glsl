@@ -12,6 +12,20 @@
 #define BINDING_KEYS 1
 #define BINDING_DRAW_STATE 2
 #define BINDING_COMMANDS 3
+#define MODEL_UNLIT 0
+#define MODEL_LAMBERT 1
+#define MODEL_OREN_NAYAR 2
+#define MODEL_PHONG 3
+#define MODEL_BLINN_PHONG 4
+#define MODEL_COOK_TORRANCE 5
+#define FEATURE_ALPHA_MASK 65536
+#define ALPHA_OPAQUE 0
+#define ALPHA_MASK 1
+#define ALPHA_BLEND 2
+#define LIGHT_POINT 0
+#define LIGHT_SPOT 1
+#define LIGHT_DIRECTIONAL 2
+#define NO_TEXTURE 4294967295u
 #define CULL_GROUP 256
 #define COMPACT_GROUP 64
 
@@ -22,12 +36,15 @@ struct Globals {  // 176 bytes, std140
     mat4 view;                  // offset 64: rotation, and the translation from the render origin to the camera
     vec4 eye;                   // offset 128: xyz: the camera relative to the render origin (zero by default)
     vec4 ambient;               // offset 144: rgb, intensity
-    uvec4 counts;               // offset 160: x: number of lights
+    uvec4 counts;               // offset 160: x: lights, y: point and spot lights (first in the buffer, drawn as billboards)
 };
 
-struct Light {  // 32 bytes, std430
+// Point and spot lights first (sorted far to near from the camera), then directional ones.
+struct Light {  // 64 bytes, std430
     vec4 position_radius;       // offset 0: relative to the render origin; radius (0: unbounded)
-    vec4 color_intensity;       // offset 16: linear rgb, intensity
+    vec4 color_intensity;       // offset 16: linear rgb, intensity (directional: illuminance)
+    vec4 direction_kind;        // offset 32: xyz: where the light shines (spot, directional); w: LIGHT_POINT/SPOT/DIRECTIONAL
+    vec4 cone;                  // offset 48: spot: x cos(outer angle), y 1 / (cos(inner) - cos(outer)); zw: 0
 };
 
 // One entity's row: 64 bytes (the normal matrix is derived in the vertex shader).
@@ -36,9 +53,15 @@ struct Instance {  // 64 bytes, std430
     uvec4 misc;                 // offset 48: x: material index, y: key = mesh * 2 + mirrored, zw: 0
 };
 
-struct Material {  // 32 bytes, std430
-    vec4 color;                 // offset 0: linear rgb, unused
-    vec4 specular;              // offset 16: strength, shininess, unused, unused
+// A material (render/materials.py): what the fragment shader's shading model reads.
+struct Material {  // 112 bytes, std430
+    vec4 base_color;            // offset 0: linear rgba
+    vec4 emissive;              // offset 16: linear rgb, w: 0
+    vec4 surface;               // offset 32: x metallic, y roughness, z shininess, w specular strength
+    vec4 params;                // offset 48: x alpha cutoff, y normal scale, z occlusion strength, w 0
+    uvec4 kind;                 // offset 64: x shading model (MODEL_*), y ALPHA_* mode, z double-sided, w 0
+    uvec4 textures;             // offset 80: base colour, metallic-roughness, normal, emissive: texture index or NO_TEXTURE
+    uvec4 textures2;            // offset 96: x occlusion texture index or NO_TEXTURE; yzw: NO_TEXTURE
 };
 
 // The indirect path's key table: one row per key = mesh * 2 + mirrored.

@@ -77,7 +77,8 @@ class Scene:
         self.state = Session(RunOptions(scene=scene, width=W, height=H, threads=2, validate=True), self.source)
         self.gpu = self.state.gpu
         # every frame builds the UI (the default rate limit would drop clicks on a fast machine)
-        self.session = EditorSession(self.state, ("cube", "grid100", "model"), 4, max_ui_hz=None)
+        scenes = tuple(dict.fromkeys((scene, "cube", "grid100", "model")))  # as the CLI: the opened one first
+        self.session = EditorSession(self.state, scenes, 4, max_ui_hz=None)
         self.perf = PerfMonitor()
         self.stats = None
         from imgui_bundle import imgui
@@ -289,3 +290,39 @@ def test_ui_rate_limit_draws_the_last_ui_between_builds(scene):
     scene.frame()
     assert scene.session.builds == builds + 1
     assert scene.session.renderer.counts.commands > 5
+
+
+def test_materials_window_and_light_sections_draw_and_edit():
+    from ecs_engine.components import DirectionalLight, SpotLight
+    from ecs_engine.render.materials import materials
+
+    scene = Scene("materials")
+    try:
+        editor = scene.session.editor
+        world = scene.state.world
+        library = materials(world)
+        scene.frame()
+        sphere = int(world.query(Mesh, write=()).entities()[0])
+        sun = int(world.query(DirectionalLight, write=()).entities()[0])
+        spot = world.spawn(Transform(position=(0.0, 2.0, 2.0)), SpotLight(intensity=5.0))
+        for selected in (sphere, sun, spot):  # the Mesh, DirectionalLight and SpotLight sections
+            editor.selected = selected
+            scene.frame()
+            assert editor.status == ""
+        editor.set(world, spot, SpotLight, inner_angle=1.0, outer_angle=0.5)  # refused: inner >= outer
+        assert "inner_angle" in editor.status and world.get(spot, SpotLight).outer_angle > 0.7
+        handle = len(library) - 2  # a Cook-Torrance sphere: the sliders for metallic and roughness
+        editor.show_material(handle)
+        scene.frame()
+        scene.frame()  # ImGui shows a tab selected by code from the next frame
+        assert editor.open_tab is None and "metallic" in editor.materials.rects  # the tab was drawn
+        before = scene.gpu.target.pixels()[..., :3].copy()
+        assert editor.materials.apply(library, handle, {"base_color": (0.0, 1.0, 0.0, 1.0), "roughness": 0.2})
+        assert library[handle].roughness == pytest.approx(0.2)
+        scene.frame()
+        assert (scene.gpu.target.pixels()[..., :3] != before).any()  # the edit shows on the next frame
+        assert editor.materials.apply(library, handle, {"roughness": 3.0}) is None
+        assert "roughness" in editor.materials.status and library[handle].roughness == pytest.approx(0.2)
+        scene.frame()
+    finally:
+        scene.close()

@@ -30,7 +30,7 @@ def test_extraction_reads_chunks_lights_and_camera_from_the_world():
     assert data.candidates == 53 and [len(c.handle) for c in data.chunks] == [16, 16, 16, 5]
     assert [c.offset for c in data.chunks] == [0, 16, 32, 48]  # each chunk's slice of the buffer
     assert data.chunks[-1].handle.tolist() == [0, 0, 1, 1, 1] and data.chunks[-1].material.tolist() == [0, 0, 2, 2, 2]
-    assert data.light_count == 1 and data.lights[0][3].tolist() == [2.0]
+    assert data.light_count == 1 and data.lights[0].intensity.tolist() == [2.0]
     assert data.camera.position.tolist() == [0.0, 1.0, 10.0]
     assert np.allclose(data.origin, data.camera.position)  # camera-relative by default
     assert data.planes.shape == (5, 4)  # infinite far plane: five planes

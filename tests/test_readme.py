@@ -15,3 +15,17 @@ def test_readme_example_runs():
     exec(compile(code, "README.md", "exec"), scope)
     world = scope["world"]
     assert len(world) == 5_000
+
+
+def test_readme_materials_example_runs():
+    text = (Path(__file__).resolve().parent.parent / "README.md").read_text()
+    blocks = [b for b in re.findall(r"```python\n(.*?)```", text, re.S) if "Material(" in b]
+    assert len(blocks) == 1, "README has no materials example"
+    scope: dict = {}
+    exec(compile(blocks[0], "README.md", "exec"), scope)
+    from ecs_engine.components import DirectionalLight, SpotLight
+    from ecs_engine.render.materials import materials
+
+    world = scope["world"]
+    assert materials(world)[scope["gold"]].roughness == 0.6
+    assert world.query(DirectionalLight).count() == 1 and world.query(SpotLight).count() == 1

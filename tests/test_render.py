@@ -55,6 +55,13 @@ def test_seed_scenes_match_golden_images(scene, tmp_path):
     assert stats.draws == 2  # one instanced draw of the shared mesh, one for the billboards
 
 
+@pytest.mark.parametrize("scene, lights, instances", [("materials", 3, 37)])
+def test_demo_scenes_match_golden_images(scene, lights, instances, tmp_path):
+    result = render(scene, screenshot=str(tmp_path / f"{scene}.png"))
+    assert_close_to_golden(result.pixels, scene)
+    assert (result.last_stats.lights, result.last_stats.instances) == (lights, instances)
+
+
 def test_golden_comparison_detects_a_changed_scene():
     """The tolerance is not so loose that a different picture passes."""
     cube = np.asarray(Image.open(GOLDEN / "cube.png").convert("RGB"))

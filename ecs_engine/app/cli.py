@@ -117,7 +117,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=DEFAULT_SCENE,
         choices=SCENES,
         help="cube, grid100, model: the seed's scenes; scaling: --entities moving entities; "
-        "motion: text-mode ECS scene (no rendering)",
+        "materials: the shading models side by side; motion: text-mode ECS scene (no rendering)",
     )
     demo.add_argument("path", nargs="?", help="model file for the model scene (OBJ, glTF/GLB, PLY, STL)")
     editor = sub.add_parser("editor", help="the ImGui editor and Perf window on demo scenes", parents=[common])

@@ -22,6 +22,8 @@ from ..ecs.world import World
 from ..gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
 from ..maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
 from ..render.renderer import MODES, PATHS, RECORDER_NAMES
+from .editor_lights import LIGHT_SECTIONS
+from .editor_materials import MaterialsPanel, mesh_section
 from .settings import Settings
 
 PRESENT_MODES = tuple(SWAPCHAIN_PRESENT_MODES)
@@ -54,6 +56,8 @@ class Editor:
         self.max_threads = max_threads
         self.selected: int | None = None
         self.browser = _Browser()
+        self.materials = MaterialsPanel()
+        self.open_tab: str | None = None  # the Inspector's tab to bring forward on the next frame
         self.status = ""  # the last error from an edit, shown in the inspector
         self.settings_status = ""  # the last refused settings request, shown under the settings
         self.status_entity: int | None = None  # the entity it is about
@@ -82,6 +86,7 @@ class Editor:
         self.selected = None
         self.status, self.status_entity = "", None
         self.browser.key = None
+        self.materials = MaterialsPanel()
 
     # -------------------------------------------------------------------- draw
     def draw(self, world: World, stats: SceneStats) -> None:
@@ -95,8 +100,14 @@ class Editor:
         imgui.end()
         imgui.set_next_window_pos((320, 330), imgui.Cond_.first_use_ever.value)
         imgui.set_next_window_size((340, 300), imgui.Cond_.first_use_ever.value)
-        if imgui.begin("Inspector")[0]:
-            self._inspector(world)
+        if imgui.begin("Inspector")[0] and imgui.begin_tab_bar("inspector tabs"):
+            for name, draw in (("Entity", self._inspector), ("Materials", self._materials)):
+                flags = imgui.TabItemFlags_.set_selected.value if self.open_tab == name else 0
+                if imgui.begin_tab_item(name, None, flags)[0]:
+                    draw(world)
+                    imgui.end_tab_item()
+            self.open_tab = None
+            imgui.end_tab_bar()
         imgui.end()
 
     def _settings_window(self, stats: SceneStats) -> None:
@@ -207,14 +218,25 @@ class Editor:
         try:
             if Transform in types:
                 self._transform(world, eid)
-            if PointLight in types:
-                self._light(world, eid)
+            if Mesh in types:
+                mesh_section(self, world, eid)
+            for light, section in LIGHT_SECTIONS.items():
+                if light in types:
+                    section(self, world, eid)
             if Camera in types:
                 self._camera(world, eid)
         except ValueError as exc:  # the world's checks (e.g. near >= far): keep the old value
             self.status, self.status_entity = str(exc), eid
         if self.status:
             imgui.text_colored((1.0, 0.4, 0.3, 1.0), self.status)
+
+    def _materials(self, world: World) -> None:
+        self.materials.draw(self.imgui, world)
+
+    def show_material(self, handle: int) -> None:
+        """Select a material and bring the Materials tab forward."""
+        self.materials.selected, self.materials.status = handle, ""
+        self.open_tab = "Materials"
 
     def _transform(self, world: World, eid: int) -> None:
         imgui = self.imgui
@@ -232,20 +254,6 @@ class Editor:
         changed, scale = imgui.drag_float3("scale", [float(v) for v in t.scale], 0.01)
         if changed:
             self.set(world, eid, Transform, scale=np.array(scale, dtype=np.float64))
-
-    def _light(self, world: World, eid: int) -> None:
-        imgui = self.imgui
-        light = world.get(eid, PointLight)
-        imgui.separator_text("PointLight")
-        changed, color = imgui.color_edit3("colour", [float(c) for c in light.color])
-        if changed:
-            self.set(world, eid, PointLight, color=np.array(color, dtype=np.float32))
-        changed, value = imgui.drag_float("intensity", float(light.intensity), 0.1, 0.0, 1e6)
-        if changed:
-            self.set(world, eid, PointLight, intensity=max(value, 0.0))
-        changed, value = imgui.drag_float("radius (0: unbounded)", float(light.radius), 0.1, 0.0, 1e6)
-        if changed:
-            self.set(world, eid, PointLight, radius=max(value, 0.0))
 
     def _camera(self, world: World, eid: int) -> None:
         imgui = self.imgui

@@ -116,7 +116,8 @@ def glsl_header(structs: list[Struct], defines: dict[str, int], source: str) -> 
         "#define LAYOUTS_GLSL",
         "",
     ]
-    out += [f"#define {name} {value}" for name, value in defines.items()]
+    # values past int's range are written unsigned (GLSL rejects them as int literals)
+    out += [f"#define {name} {value}{'u' if value > 0x7FFFFFFF else ''}" for name, value in defines.items()]
     for struct in structs:
         out += ["", struct.glsl()]
     return "\n".join([*out, "", "#endif"]) + "\n"

@@ -60,6 +60,17 @@ class GraphicsPipelineSpec:
     depth_test: bool = True
     depth_write: bool = True
     alpha_blend: bool = False
+    fragment_constants: tuple[int, ...] = ()  # uint specialisation constants, constant_id 0, 1, ...
+
+
+def specialization(vk: Any, values: tuple[int, ...]) -> tuple[Any, Any]:
+    """VkSpecializationInfo for uint constants with constant_id 0, 1, ... (None when there are
+    none), and the cffi array it points into: keep that alive until the pipeline is made."""
+    if not values:
+        return None, None
+    data = vk.ffi.new("uint32_t[]", [int(v) & 0xFFFFFFFF for v in values])
+    entries = [vk.VkSpecializationMapEntry(constantID=i, offset=4 * i, size=4) for i in range(len(values))]
+    return vk.VkSpecializationInfo(pMapEntries=entries, dataSize=4 * len(values), pData=data), data
 
 
 def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
@@ -68,9 +79,12 @@ def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
     vert = shader_module(device, spec.vertex_shader)
     frag = shader_module(device, spec.fragment_shader)
     try:
+        constants, _constant_data = specialization(vk, spec.fragment_constants)
         stages = [
             vk.VkPipelineShaderStageCreateInfo(stage=vk.VK_SHADER_STAGE_VERTEX_BIT, module=vert, pName="main"),
-            vk.VkPipelineShaderStageCreateInfo(stage=vk.VK_SHADER_STAGE_FRAGMENT_BIT, module=frag, pName="main"),
+            vk.VkPipelineShaderStageCreateInfo(
+                stage=vk.VK_SHADER_STAGE_FRAGMENT_BIT, module=frag, pName="main", pSpecializationInfo=constants
+            ),
         ]
         if spec.vertex_stride:
             vertex_input = vk.VkPipelineVertexInputStateCreateInfo(

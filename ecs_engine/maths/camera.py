@@ -130,3 +130,12 @@ def yaw_pitch_roll(rotation_quat: np.ndarray) -> tuple[float, float, float]:
     if abs(r[1, 2]) > 1.0 - 1e-9:  # looking straight up or down: yaw and roll share one axis
         return math.atan2(-r[2, 0], r[0, 0]), pitch, 0.0
     return math.atan2(r[0, 2], r[2, 2]), pitch, math.atan2(r[1, 0], r[1, 1])
+
+
+def look_rotation(direction: np.ndarray | tuple[float, float, float]) -> np.ndarray:
+    """The rotation (x, y, z, w) whose local -Z axis points along `direction` and whose +X stays
+    level (yaw, then pitch, as yaw_pitch_quat): how cameras, spot and directional lights aim."""
+    d = np.asarray(direction, dtype=np.float64)
+    if d.shape != (3,) or not np.isfinite(d).all() or not d.any():
+        raise ValueError(f"direction must be 3 finite numbers, not all 0, got {direction!r}")
+    return yaw_pitch_quat(math.atan2(-d[0], -d[2]), math.atan2(d[1], math.hypot(d[0], d[2])))

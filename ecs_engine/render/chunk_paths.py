@@ -48,6 +48,7 @@ def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple[A
         subpass=0,
         vertex_stride=MESH_VERTEX.itemsize,
         vertex_attributes=vertex_attributes(ctx.device.vk),
+        fragment_constants=(ctx.material_features,),  # mesh.frag's MATERIAL_FEATURES
     )
     vk = ctx.device.vk
     plain = graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, "mesh.frag", **base))
@@ -209,7 +210,7 @@ class ChunkPath:
             centers,
             radii,
             frame.planes,
-            self.ctx.material_count,
+            frame.material_count,
             rows,
             key_counts,
         )

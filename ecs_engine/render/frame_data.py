@@ -14,21 +14,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..components import Mesh, ModelMatrix, PointLight, Transform, render_origin
+from ..components import DirectionalLight, Mesh, ModelMatrix, PointLight, SpotLight, Transform, render_origin
 from ..ecs.world import World
 from ..jobs import row_chunks
 from ..maths.culling import frustum_planes
 from .camera import CameraMatrices, camera_matrices, view_from_origin
+from .light_rows import DirectionalLights, PositionalLights, local_minus_z, spot_cones
 
-_HANDLE = (Mesh, "handle")  # the column whose writes make the extractor check mesh handles again
+_HANDLE = (Mesh, "handle")  # the columns whose writes make the extractor check handles again
+_MATERIAL = (Mesh, "material")
 # Rows per job, by default about one job per thread but never under MIN_CHUNK_ROWS. Measured on
 # the H100 host (native recorder): 4,096-row jobs were slower on 16 threads than on 4 (per-job
 # Python under GIL contention); at 1M entities and 16 threads the instanced CPU frame took
 # 21.49 ms with 16,384-row jobs, 17.98 ms with 32,768 and 14.06 ms with 65,536 (one per core);
 # but fixed 65,536-row jobs leave 100k entities in two jobs, so the size follows the thread count.
 MIN_CHUNK_ROWS = 16_384
-
-LightColumns = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]  # position, radius, color, intensity
 
 
 @dataclass
@@ -52,8 +52,9 @@ class FrameData:
     origin_key: bytes
     view: np.ndarray  # float32 (4, 4): the camera's view for matrices relative to `origin`
     planes: np.ndarray | None  # frustum planes (k, 4) float64, or None: culling off
-    lights: list[LightColumns]  # per table of lights
-    light_count: int
+    lights: list[PositionalLights]  # per table of point or spot lights
+    directional: list[DirectionalLights]
+    light_count: int  # of every kind
     chunks: list[Chunk]
     candidates: int  # rows with a mesh, before culling
 
@@ -71,21 +72,24 @@ class FrameExtractor:
         self._chunks_key: tuple[object, ...] = ()
         self._chunks: list[Chunk] = []
 
-    def extract(self, world: World, aspect: float, mesh_count: int, culling: bool) -> FrameData:
+    def extract(
+        self, world: World, aspect: float, mesh_count: int, culling: bool, material_count: int = 1 << 32
+    ) -> FrameData:
         cam = camera_matrices(world, aspect)
         origin = render_origin(world)
         origin_key = origin.tobytes()
         view = self.view(cam, origin, origin_key)
-        light_columns = self.lights(world)
-        chunks = self.chunks(world, mesh_count)
+        positional, directional = self.lights(world)
+        chunks = self.chunks(world, mesh_count, material_count)
         return FrameData(
             camera=cam,
             origin=origin,
             origin_key=origin_key,
             view=view,
             planes=self.planes(cam.projection, view) if culling else None,
-            lights=light_columns,
-            light_count=sum(len(part[0]) for part in light_columns),
+            lights=positional,
+            directional=directional,
+            light_count=sum(len(p) for p in positional) + sum(len(d) for d in directional),
             chunks=chunks,
             candidates=sum(len(c.handle) for c in chunks),
         )
@@ -104,26 +108,44 @@ class FrameExtractor:
         return self._planes
 
     @staticmethod
-    def lights(world: World) -> list[LightColumns]:
-        """Per table of lights: position, radius, color and intensity columns (see write_lights)."""
-        out = []
+    def lights(world: World) -> tuple[list[PositionalLights], list[DirectionalLights]]:
+        """Per table: point lights (views of their columns), spot lights (with the direction each
+        shines, from its rotation, and its cone) and directional lights (see light_rows.py)."""
+        positional = []
         for batch in world.query(PointLight, Transform, write=()):
             light = batch[PointLight]
-            out.append((batch[Transform].position, light.radius, light.color, light.intensity))
-        return out
+            positional.append(PositionalLights(batch[Transform].position, light.radius, light.color, light.intensity))
+        for batch in world.query(SpotLight, Transform, write=()):
+            spot, transform = batch[SpotLight], batch[Transform]
+            positional.append(
+                PositionalLights(
+                    transform.position,
+                    spot.radius,
+                    spot.color,
+                    spot.intensity,
+                    local_minus_z(transform.rotation),
+                    spot_cones(spot.inner_angle, spot.outer_angle),
+                )
+            )
+        directional = []
+        for batch in world.query(DirectionalLight, Transform, write=()):
+            sun = batch[DirectionalLight]
+            directional.append(DirectionalLights(local_minus_z(batch[Transform].rotation), sun.color, sun.illuminance))
+        return positional, directional
 
-    def chunks(self, world: World, mesh_count: int) -> list[Chunk]:
+    def chunks(self, world: World, mesh_count: int, material_count: int = 1 << 32) -> list[Chunk]:
         """Row ranges of every table with a ModelMatrix and a Mesh, each with its buffer slice.
-        Kept while the world is the same and its tables keep their rows, layout and Mesh.handle
-        column (the views stay valid and see every value written since)."""
+        Kept while the world is the same and its tables keep their rows, layout and Mesh
+        columns (the views stay valid and see every value written since)."""
         query = world.query(ModelMatrix, Mesh, write=())
         tables = query.tables
         key = (
             world,
             mesh_count,
+            material_count,
             self.chunk_rows,
             self.threads(),
-            *[(t.id, t.version, t.count, t.column_ticks[_HANDLE]) for t in tables],
+            *[(t.id, t.version, t.count, t.column_ticks[_HANDLE], t.column_ticks[_MATERIAL]) for t in tables],
         )
         if key == self._chunks_key:
             return self._chunks
@@ -138,6 +160,12 @@ class FrameExtractor:
             top = max(int(c.handle.max()) for c in out)
             if top >= mesh_count:
                 raise ValueError(f"Mesh.handle {top} does not name an uploaded mesh ({mesh_count} uploaded)")
+            top = max(int(c.material.max()) for c in out)
+            if top >= material_count:
+                raise ValueError(
+                    f"Mesh.material {top} does not name a material (the world has {material_count}: "
+                    "add materials with ecs_engine.render.materials.materials(world).add)"
+                )
         self._chunks_key, self._chunks = key, out
         return out
 

@@ -207,7 +207,7 @@ class IndirectPath:
         rows = frame.instances[chunk.offset : chunk.offset + len(chunk.handle)]
         key_counts = np.zeros(2 * len(index_counts), dtype=np.int64)
         write_rows(
-            chunk.model, chunk.handle, chunk.material, centers, radii, None, self.ctx.material_count, rows, key_counts
+            chunk.model, chunk.handle, chunk.material, centers, radii, None, frame.material_count, rows, key_counts
         )
         return ChunkResult(None, 0, 0, 0, key_counts)
 

@@ -31,7 +31,7 @@ GLOBALS = Struct(
         ("view", "mat4", "rotation, and the translation from the render origin to the camera"),
         ("eye", "vec4", "xyz: the camera relative to the render origin (zero by default)"),
         ("ambient", "vec4", "rgb, intensity"),
-        ("counts", "uvec4", "x: number of lights"),
+        ("counts", "uvec4", "x: lights, y: point and spot lights (first in the buffer, drawn as billboards)"),
     ],
     std140=True,
     doc="The frame's uniforms. Positions are relative to the render origin (the camera, unless\n"
@@ -42,8 +42,11 @@ LIGHT = Struct(
     "Light",
     [
         ("position_radius", "vec4", "relative to the render origin; radius (0: unbounded)"),
-        ("color_intensity", "vec4", "linear rgb, intensity"),
+        ("color_intensity", "vec4", "linear rgb, intensity (directional: illuminance)"),
+        ("direction_kind", "vec4", "xyz: where the light shines (spot, directional); w: LIGHT_POINT/SPOT/DIRECTIONAL"),
+        ("cone", "vec4", "spot: x cos(outer angle), y 1 / (cos(inner) - cos(outer)); zw: 0"),
     ],
+    doc="Point and spot lights first (sorted far to near from the camera), then directional ones.",
 )
 
 INSTANCE = Struct(
@@ -58,9 +61,15 @@ INSTANCE = Struct(
 MATERIAL = Struct(
     "Material",
     [
-        ("color", "vec4", "linear rgb, unused"),
-        ("specular", "vec4", "strength, shininess, unused, unused"),
+        ("base_color", "vec4", "linear rgba"),
+        ("emissive", "vec4", "linear rgb, w: 0"),
+        ("surface", "vec4", "x metallic, y roughness, z shininess, w specular strength"),
+        ("params", "vec4", "x alpha cutoff, y normal scale, z occlusion strength, w 0"),
+        ("kind", "uvec4", "x shading model (MODEL_*), y ALPHA_* mode, z double-sided, w 0"),
+        ("textures", "uvec4", "base colour, metallic-roughness, normal, emissive: texture index or NO_TEXTURE"),
+        ("textures2", "uvec4", "x occlusion texture index or NO_TEXTURE; yzw: NO_TEXTURE"),
     ],
+    doc="A material (render/materials.py): what the fragment shader's shading model reads.",
 )
 
 KEY_INFO = Struct(
@@ -127,6 +136,14 @@ IMGUI_PUSH = Struct(
 SET_FRAME, SET_INDIRECT = 0, 1
 BINDING_GLOBALS, BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS = 0, 1, 2, 3
 BINDING_IDS, BINDING_KEYS, BINDING_DRAW_STATE, BINDING_COMMANDS = 0, 1, 2, 3
+# shading models: the values of Material.kind.x and bits 0-5 of the mesh pipelines' MATERIAL_FEATURES
+# specialisation constant (FEATURE_* are its other bits); their names are render/materials.py's
+# SHADING_MODELS, in this order
+MODEL_UNLIT, MODEL_LAMBERT, MODEL_OREN_NAYAR, MODEL_PHONG, MODEL_BLINN_PHONG, MODEL_COOK_TORRANCE = range(6)
+FEATURE_ALPHA_MASK = 1 << 16  # some material is drawn with alpha_mode mask
+ALPHA_OPAQUE, ALPHA_MASK, ALPHA_BLEND = range(3)
+LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL = range(3)
+NO_TEXTURE = 0xFFFFFFFF
 CULL_GROUP = 256  # cull.comp's local size
 COMPACT_GROUP = 64  # compact.comp's local size
 
@@ -154,6 +171,20 @@ DEFINES = {
     "BINDING_KEYS": BINDING_KEYS,
     "BINDING_DRAW_STATE": BINDING_DRAW_STATE,
     "BINDING_COMMANDS": BINDING_COMMANDS,
+    "MODEL_UNLIT": MODEL_UNLIT,
+    "MODEL_LAMBERT": MODEL_LAMBERT,
+    "MODEL_OREN_NAYAR": MODEL_OREN_NAYAR,
+    "MODEL_PHONG": MODEL_PHONG,
+    "MODEL_BLINN_PHONG": MODEL_BLINN_PHONG,
+    "MODEL_COOK_TORRANCE": MODEL_COOK_TORRANCE,
+    "FEATURE_ALPHA_MASK": FEATURE_ALPHA_MASK,
+    "ALPHA_OPAQUE": ALPHA_OPAQUE,
+    "ALPHA_MASK": ALPHA_MASK,
+    "ALPHA_BLEND": ALPHA_BLEND,
+    "LIGHT_POINT": LIGHT_POINT,
+    "LIGHT_SPOT": LIGHT_SPOT,
+    "LIGHT_DIRECTIONAL": LIGHT_DIRECTIONAL,
+    "NO_TEXTURE": NO_TEXTURE,
     "CULL_GROUP": CULL_GROUP,
     "COMPACT_GROUP": COMPACT_GROUP,
 }

@@ -1,35 +1,86 @@
-"""Point-light rows for the per-frame light buffer: position relative to the render origin
-(float64 difference, then the cast), radius, colour and intensity, sorted far to near from the
-camera (the billboards blend back to front).
+"""Light rows for the per-frame light buffer (layouts.LIGHT, 16 floats a light).
 
-A numba kernel writes them straight into the mapped buffer in one call; the NumPy reference
-gives the same rows. The kernel exists for small scenes: the NumPy version's dozen array
+Point and spot lights come first: position relative to the render origin (float64 difference,
+then the cast), radius, colour, intensity, the direction a spot light shines and its cone, sorted
+far to near from the camera (their billboards blend back to front). Directional lights follow,
+in world order.
+
+A numba kernel writes the positional rows straight into the mapped buffer in one call; the NumPy
+reference gives the same rows. The kernel exists for small scenes: the NumPy version's dozen array
 operations cost ~25 us a frame for 8 lights, a tenth of the 100-cube frame's budget.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from .. import native
-from .layouts import LIGHT
+from .layouts import LIGHT, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT
 
 LIGHT_DTYPE = LIGHT.dtype
-# written as 8 floats a light: position and radius, then colour and intensity
-if not (LIGHT.size == 32 and LIGHT.offset("color_intensity") == 16):
-    raise RuntimeError(f"the light kernel assumes 8 floats a light:\n{LIGHT.glsl()}")
+FLOATS = 16  # a light's row seen as float32s
+if not (
+    LIGHT.size == 4 * FLOATS
+    and [LIGHT.offset(n) for n in ("position_radius", "color_intensity", "direction_kind", "cone")] == [0, 16, 32, 48]
+):
+    raise RuntimeError(f"the light kernel assumes 16 floats a light in this order:\n{LIGHT.glsl()}")
+NO_CONE = (-2.0, 0.0)  # cos(outer) below -1: every direction is inside
 
 
-def write_lights_numpy(
+@dataclass
+class PositionalLights:
+    """One table's point or spot lights: views into the world's columns, or arrays made for the frame."""
+
+    position: np.ndarray  # (n, 3) float64
+    radius: np.ndarray  # (n,)
+    color: np.ndarray  # (n, 3)
+    intensity: np.ndarray  # (n,)
+    direction: np.ndarray | None = None  # (n, 3) where a spot light shines; None: point lights
+    cone: np.ndarray | None = None  # (n, 2): cos(outer), 1 / (cos(inner) - cos(outer))
+
+    def __len__(self) -> int:
+        return len(self.radius)
+
+
+@dataclass
+class DirectionalLights:
+    direction: np.ndarray  # (n, 3): where the light shines
+    color: np.ndarray  # (n, 3)
+    illuminance: np.ndarray  # (n,)
+
+    def __len__(self) -> int:
+        return len(self.illuminance)
+
+
+def local_minus_z(rotation: np.ndarray) -> np.ndarray:
+    """Where unit quaternions (n, 4), (x, y, z, w), turn the local -Z axis: -(third column)."""
+    x, y, z, w = (rotation[:, k] for k in range(4))
+    return -np.stack([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)], axis=1)
+
+
+def spot_cones(inner: np.ndarray, outer: np.ndarray) -> np.ndarray:
+    """(n, 2) rows of (cos(outer), 1 / (cos(inner) - cos(outer))), as KHR_lights_punctual's
+    reference shader: the falloff is clamp((cos - cos_outer) * scale, 0, 1)^2."""
+    cos_outer = np.cos(np.asarray(outer, np.float64))
+    cos_inner = np.cos(np.asarray(inner, np.float64))
+    return np.stack([cos_outer, 1.0 / np.maximum(cos_inner - cos_outer, 1e-4)], axis=1)
+
+
+def write_positional_numpy(
     position: np.ndarray,
     radius: np.ndarray,
     color: np.ndarray,
     intensity: np.ndarray,
+    direction: np.ndarray,
+    cone: np.ndarray,
+    kind: np.ndarray,
     origin: np.ndarray,
     eye: np.ndarray,
     out: np.ndarray,
 ) -> None:
-    """Reference version of `write_lights`."""
+    """Reference version of the positional kernel: `out` is (n, 16) float32."""
     rel = position - origin
     to_eye = rel - eye
     order = np.argsort(-np.einsum("ij,ij->i", to_eye, to_eye), kind="stable")
@@ -37,9 +88,15 @@ def write_lights_numpy(
     out[:, 3] = radius[order]
     out[:, 4:7] = color[order]
     out[:, 7] = intensity[order]
+    out[:, 8:11] = direction[order]
+    out[:, 11] = kind[order]
+    out[:, 12:14] = cone[order]
+    out[:, 14:] = 0
 
 
-def _write_lights_kernel(position, radius, color, intensity, origin, eye, out):  # pragma: no cover
+def _write_positional_kernel(
+    position, radius, color, intensity, direction, cone, kind, origin, eye, out
+):  # pragma: no cover
     n = position.shape[0]
     minus_dist = np.empty(n)
     for i in range(n):
@@ -54,30 +111,72 @@ def _write_lights_kernel(position, radius, color, intensity, origin, eye, out): 
         for c in range(3):
             out[j, c] = position[i, c] - origin[c]
             out[j, 4 + c] = color[i, c]
+            out[j, 8 + c] = direction[i, c]
         out[j, 3] = radius[i]
         out[j, 7] = intensity[i]
+        out[j, 11] = kind[i]
+        out[j, 12] = cone[i, 0]
+        out[j, 13] = cone[i, 1]
+        out[j, 14] = 0.0
+        out[j, 15] = 0.0
 
 
-_write_lights_native = native.njit(_write_lights_kernel)
+_write_positional_native = native.njit(_write_positional_kernel)
+
+
+_Columns = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+
+
+def _columns(parts: list[PositionalLights]) -> _Columns:
+    """The parts' columns, concatenated (a single part's are used as they are)."""
+    directions: list[np.ndarray] = []
+    cones: list[np.ndarray] = []
+    kinds: list[np.ndarray] = []
+    for p in parts:
+        spot = p.direction is not None and p.cone is not None
+        directions.append(p.direction if p.direction is not None else np.zeros((len(p), 3)))
+        cones.append(p.cone if p.cone is not None else np.broadcast_to(NO_CONE, (len(p), 2)))
+        kinds.append(np.full(len(p), LIGHT_SPOT if spot else LIGHT_POINT, np.float32))
+    if len(parts) == 1:
+        p = parts[0]
+        return p.position, p.radius, p.color, p.intensity, directions[0], cones[0], kinds[0]
+    return (
+        np.concatenate([p.position for p in parts]),
+        np.concatenate([p.radius for p in parts]),
+        np.concatenate([p.color for p in parts]),
+        np.concatenate([p.intensity for p in parts]),
+        np.concatenate(directions),
+        np.concatenate(cones),
+        np.concatenate(kinds),
+    )
 
 
 def write_lights(
-    parts: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
+    positional: list[PositionalLights],
+    directional: list[DirectionalLights],
     origin: np.ndarray,
     eye: np.ndarray,
     out: np.ndarray,
-) -> None:
-    """Write the lights of `parts` (per table: position (n, 3) float64, radius, color (n, 3),
-    intensity) into `out`, a (total, 8) float32 array (LIGHT_DTYPE rows seen as floats),
-    relative to `origin` and sorted by distance from `eye` (relative to `origin`), far first."""
-    if len(parts) == 1:
-        columns = parts[0]
-    else:
-        columns = tuple(np.concatenate([p[k] for p in parts]) for k in range(4))  # type: ignore[assignment]
-    position, radius, color, intensity = columns
+) -> int:
+    """Write every light into `out`, a (total, 16) float32 array (LIGHT_DTYPE rows seen as
+    floats): point and spot lights relative to `origin`, sorted by distance from `eye` (relative
+    to `origin`), far first; then the directional ones. Returns the positional count."""
     origin = np.asarray(origin, dtype=np.float64)
     eye = np.asarray(eye, dtype=np.float64)
-    if _write_lights_native is None:
-        write_lights_numpy(position, radius, color, intensity, origin, eye, out)
-    else:
-        _write_lights_native(position, radius, color, intensity, origin, eye, out)
+    count = sum(len(p) for p in positional)
+    if count:
+        columns = _columns(positional)
+        if _write_positional_native is None:
+            write_positional_numpy(*columns, origin, eye, out[:count])
+        else:
+            _write_positional_native(*(np.ascontiguousarray(c) for c in columns), origin, eye, out[:count])
+    row = count
+    for d in directional:
+        rows = out[row : row + len(d)]
+        rows[:] = 0
+        rows[:, 4:7] = d.color
+        rows[:, 7] = d.illuminance
+        rows[:, 8:11] = d.direction
+        rows[:, 11] = LIGHT_DIRECTIONAL
+        row += len(d)
+    return count

@@ -59,6 +59,7 @@ class FrameInputs:
     instances: np.ndarray  # the mapped per-frame instance buffer (INSTANCE rows)
     bounds: MeshBounds
     readback: bool  # the frame is waited for: the path may read back what it counted on the GPU
+    material_count: int = 1  # Mesh.material is below it (the extractor checked)
     path_state: Any = None  # what the path's begin_frame keeps for its jobs
 
 
@@ -81,7 +82,7 @@ class PathContext:
     frame_set_layout: Any  # set 0's VkDescriptorSetLayout
     secondaries: SecondaryBuffers
     frames_in_flight: int
-    material_count: int
+    material_features: int  # what the mesh pipelines are specialised for (Materials.features)
     native_recorder: Callable[[], Any]  # gpu.native_recorder.NativeRecorder, compiled on first call, once a device
 
 

@@ -47,6 +47,7 @@ from .layouts import (
 )
 from .light_pass import LightPass
 from .light_rows import write_lights
+from .materials import Materials
 from .mesh_registry import MeshRegistry
 from .path import ChunkResult, FrameInputs, MeshBounds, PathContext, PathFactory, RenderPath, TargetState
 
@@ -58,15 +59,7 @@ PATHS: dict[str, PathFactory] = {
 MODES = tuple(PATHS)
 RECORDER_NAMES = tuple(RECORDERS)
 MIN_LIGHTS = 256
-# A small default palette (linear RGB); Mesh.material indexes it modulo its length.
-DEFAULT_MATERIALS = [
-    ((0.80, 0.80, 0.80), 0.5, 32.0),
-    ((0.85, 0.35, 0.25), 0.6, 48.0),
-    ((0.25, 0.55, 0.85), 0.6, 48.0),
-    ((0.35, 0.75, 0.35), 0.5, 32.0),
-    ((0.90, 0.75, 0.30), 0.7, 64.0),
-    ((0.65, 0.40, 0.80), 0.5, 32.0),
-]
+MIN_MATERIALS = 64
 
 
 @dataclass
@@ -91,9 +84,11 @@ class _PerFrame:
     globals: Buffer
     lights: Buffer
     instances: Buffer
+    materials: Buffer
     descriptor_set: Any
     set_array: Any  # VkDescriptorSet[1] for raw calls
     written: tuple[Any, ...] | None = None  # what the globals buffer holds
+    materials_written: tuple[int, int] | None = None  # (id of the Materials, its version) in `materials`
 
 
 def default_recorder() -> str:
@@ -142,10 +137,11 @@ class Renderer:
             + [(b, ssbo, stages) for b in (BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS)],
         )
         self.pool = DescriptorPool(device, n, {vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER: n, ssbo: 3 * n})
-        self.materials = Buffer(device, MATERIAL.size * len(DEFAULT_MATERIALS), vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT)
-        table = self.materials.array(MATERIAL.dtype, len(DEFAULT_MATERIALS))
-        for i, (color, strength, shininess) in enumerate(DEFAULT_MATERIALS):
-            table[i] = ((*color, 1.0), (strength, shininess, 0.0, 0.0))
+        # a world without a Materials resource draws with the default palette
+        self.default_materials = Materials()
+        # what the mesh pipelines were specialised for (Materials.features): grown, never shrunk,
+        # when a world's materials use another shading model (a pipeline rebuild, as a mode switch)
+        self.material_features = self.default_materials.features
         self.per_frame = [self._make_frame_resources() for _ in range(n)]
         self.light_pass = LightPass(device, self.set_layout.handle, target.render_pass, 1, light_size)
         self._targets: dict[tuple[int, int, int], TargetState] = {}
@@ -185,7 +181,9 @@ class Renderer:
             check_recorder(recorder)  # kept for when a CPU path draws again
             self.cpu_recorder = recorder
             return
-        new = self._make_path(mode, recorder)  # raises before the old one goes
+        self._swap_path(self._make_path(mode, recorder))  # raises before the old one goes
+
+    def _swap_path(self, new: RenderPath) -> None:
         self.device.wait_idle()  # frames in flight may still use the old path's pipelines
         self.path.destroy()
         for target in self._targets.values():
@@ -214,7 +212,7 @@ class Renderer:
             frame_set_layout=self.set_layout.handle,
             secondaries=self.secondaries,
             frames_in_flight=len(self.frames.frames),
-            material_count=len(DEFAULT_MATERIALS),
+            material_features=self.material_features,
             native_recorder=self._native_recorder,
         )
         path = PATHS[mode](ctx, recorder)
@@ -230,6 +228,7 @@ class Renderer:
             globals=Buffer(self.device, GLOBALS.size, vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT),
             lights=Buffer(self.device, LIGHT.size * MIN_LIGHTS, ssbo),
             instances=Buffer(self.device, INSTANCE.size * 1024, ssbo),
+            materials=Buffer(self.device, MATERIAL.size * MIN_MATERIALS, ssbo),
             descriptor_set=descriptor_set,
             set_array=vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]),
         )
@@ -246,19 +245,39 @@ class Renderer:
                 (BINDING_GLOBALS, vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, pf.globals),
                 (BINDING_LIGHTS, ssbo, pf.lights),
                 (BINDING_INSTANCES, ssbo, pf.instances),
-                (BINDING_MATERIALS, ssbo, self.materials),
+                (BINDING_MATERIALS, ssbo, pf.materials),
             ],
         )
 
-    def _ensure_capacity(self, pf: _PerFrame, instances: int, lights: int) -> None:
+    def _ensure_capacity(self, pf: _PerFrame, instances: int, lights: int, materials: int) -> None:
         """Grow a frame's buffers; safe: this frame's fence has been waited on."""
-        before = (pf.instances, pf.lights)
+        before = (pf.instances, pf.lights, pf.materials)
         try:
             pf.instances = pf.instances.grown(instances * INSTANCE.size)
             pf.lights = pf.lights.grown(lights * LIGHT.size)
+            pf.materials = pf.materials.grown(materials * MATERIAL.size)
         finally:
-            if (pf.instances, pf.lights) != before:
+            if (pf.instances, pf.lights, pf.materials) != before:
+                if pf.materials is not before[2]:
+                    pf.materials_written = None
                 self._write_set(pf)
+
+    def _write_materials(self, pf: _PerFrame, materials: Materials) -> None:
+        """The world's material table into this frame's copy, when it changed since last written
+        there (each frame slot has its own: the editor edits while frames are in flight)."""
+        key = (id(materials), materials.version)
+        if pf.materials_written != key:
+            rows = materials.rows()
+            pf.materials.array(MATERIAL.dtype, len(rows))[:] = rows
+            pf.materials_written = key
+
+    def _check_material_features(self, materials: Materials) -> None:
+        """Rebuild the path's pipelines when the world's materials use a shading model (or alpha
+        mask) they were specialised without."""
+        wanted = self.material_features | materials.features
+        if wanted != self.material_features:
+            self.material_features = wanted
+            self._swap_path(self._make_path(self.mode, self.cpu_recorder))
 
     def target_state(self, framebuffer: Any, width: int, height: int) -> TargetState:
         """What a framebuffer of this size needs per frame, made once (kept for 16 framebuffers)."""
@@ -321,8 +340,14 @@ class Renderer:
         self._jobs_generation = self.jobs.generation
 
     # -------------------------------------------------------------- per frame
+    def materials(self, world: World) -> Materials:
+        """The world's materials, or the default palette."""
+        found = world.resources.get(Materials)
+        return found if found is not None else self.default_materials
+
     def extract(self, world: World, width: int, height: int) -> FrameData:
-        return self.extractor.extract(world, width / height, len(self.meshes), self.culling)
+        count = len(self.materials(world))
+        return self.extractor.extract(world, width / height, len(self.meshes), self.culling, count)
 
     def render(
         self,
@@ -336,12 +361,15 @@ class Renderer:
         """Record and submit one frame. Headless targets read the image back when asked."""
         width, height = extent or (self.target.width, self.target.height)
         data = self.extract(world, width, height)  # before any GPU state is touched: a bad world fails here
+        materials = self.materials(world)
+        self._check_material_features(materials)
         if self.jobs is not None and self.jobs.generation != self._jobs_generation:
             self._forget_old_threads()
         frame, gpu_ms = self.frames.begin()
         slot = self.frames.frames.index(frame)
         pf = self.per_frame[slot]
-        self._ensure_capacity(pf, self.path.rows_needed(data.candidates), data.light_count)
+        self._ensure_capacity(pf, self.path.rows_needed(data.candidates), data.light_count, len(materials))
+        self._write_materials(pf, materials)
         target = self.target_state(framebuffer or self.target.framebuffer, width, height)
         inputs = FrameInputs(
             slot=slot,
@@ -352,20 +380,23 @@ class Renderer:
             instances=pf.instances.array(INSTANCE.dtype),
             bounds=self._mesh_bounds(),
             readback=readback,
+            material_count=len(materials),
         )
         path = self.path
         path.begin_frame(inputs)
         self.secondaries.reset(slot)
         if self.overlay is not None:
             self.overlay.prepare(slot, len(self.frames.frames))
+        positional = 0
         if data.light_count:
-            write_lights(
+            positional = write_lights(
                 data.lights,
+                data.directional,
                 data.origin,
                 data.camera.position - data.origin,
                 pf.lights.array(np.float32, (data.light_count, LIGHT.size // 4)),
             )
-        self._write_globals(pf, data.camera, data.view, data.origin, data.origin_key, data.light_count)
+        self._write_globals(pf, data.camera, data.view, data.origin, data.origin_key, data.light_count, positional)
         t0 = time.perf_counter()
 
         def job(chunk: Chunk) -> ChunkResult:
@@ -379,7 +410,7 @@ class Renderer:
         record_ms = (time.perf_counter() - t0) * 1e3
         cb = frame.command_buffer
         secondaries = path.finish(cb, inputs, results, data.candidates)
-        light_draws = self._record_primary(cb, secondaries, data.light_count, target, pf, slot)
+        light_draws = self._record_primary(cb, secondaries, positional, target, pf, slot)
         if readback:
             self.target.record_readback(cb)
         self.frames.end(frame, wait=wait, signal=signal)
@@ -406,10 +437,11 @@ class Renderer:
         origin: np.ndarray,
         origin_key: bytes,
         light_count: int,
+        positional: int,
     ) -> None:
         """The frame's uniforms, rewritten only when something in them changed (the slot's
         mapped buffer keeps what was last written there)."""
-        written = (cam, origin_key, light_count, tuple(self.ambient))
+        written = (cam, origin_key, light_count, positional, tuple(self.ambient))
         last = pf.written
         if last is not None and last[0] is cam and last[1:] == written[1:]:
             return
@@ -418,21 +450,21 @@ class Renderer:
         g["view"] = view.T
         g["eye"][0, :3] = cam.position - origin  # float64 difference, then the cast
         g["ambient"] = self.ambient
-        g["counts"] = (light_count, 0, 0, 0)
+        g["counts"] = (light_count, positional, 0, 0)
         pf.written = written
 
     def _record_primary(
-        self, cb: Any, secondaries: list[Any], light_count: int, target: TargetState, pf: _PerFrame, slot: int
+        self, cb: Any, secondaries: list[Any], billboards: int, target: TargetState, pf: _PerFrame, slot: int
     ) -> int:
-        """Raw cffi calls with structs made once (see gpu/frames.py for why). Returns the light
-        pass's draws."""
+        """Raw cffi calls with structs made once (see gpu/frames.py for why); `billboards` point
+        and spot lights get one. Returns the light pass's draws."""
         vk = self.vk
         lib = vk.lib
         lib.vkCmdBeginRenderPass(cb, target.pass_begin_ptr, vk.VK_SUBPASS_CONTENTS_SECONDARY_COMMAND_BUFFERS)
         if secondaries:
             lib.vkCmdExecuteCommands(cb, len(secondaries), vk.ffi.new("VkCommandBuffer[]", secondaries))
         lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
-        draws = self.light_pass.record(cb, target, pf.set_array, light_count)
+        draws = self.light_pass.record(cb, target, pf.set_array, billboards)
         if self.overlay is not None:
             self.overlay.record(cb, slot, target.area.extent.width, target.area.extent.height)
         lib.vkCmdEndRenderPass(cb)
@@ -450,7 +482,7 @@ class Renderer:
             pf.globals.destroy()
             pf.lights.destroy()
             pf.instances.destroy()
-        self.materials.destroy()
+            pf.materials.destroy()
         self.pool.destroy()
         self.set_layout.destroy()
         self.frames.destroy()

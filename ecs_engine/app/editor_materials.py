@@ -1,0 +1,113 @@
+"""The editor's Materials window: the world's materials listed by handle and name, the selected one
+edited live (the renderer uploads the table on the next frame), and the inspector's Mesh section
+that picks an entity's material. Edits go through `Materials.update`, which checks them: a refused
+value leaves the material as it was and the window shows why."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..components import Mesh
+from ..ecs.world import World
+from ..render.materials import ALPHA_MODES, SHADING_MODELS, Material, Materials, materials
+from .editor_lights import Editor
+
+_ALPHA_EDITABLE = ("opaque", "mask")  # blend needs the transparent pass
+assert set(_ALPHA_EDITABLE) <= set(ALPHA_MODES)
+
+
+@dataclass
+class MaterialsPanel:
+    selected: int = 0
+    status: str = ""
+    # screen rectangles of widgets as last drawn (where synthetic input should click)
+    rects: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
+
+    def draw(self, imgui: Any, world: World) -> None:
+        library = materials(world)
+        if imgui.begin_child("list", (0, 120)):
+            for handle, material in enumerate(library):
+                clicked, _ = imgui.selectable(f"{handle}: {material.name} ({material.model})", handle == self.selected)
+                if clicked:
+                    self.selected, self.status = handle, ""
+        imgui.end_child()
+        if not 0 <= self.selected < len(library):
+            self.selected = 0
+        self.edit(imgui, library, self.selected)
+        if self.status:
+            imgui.text_colored((1.0, 0.4, 0.3, 1.0), self.status)
+
+    def edit(self, imgui: Any, library: Materials, handle: int) -> None:
+        m = library[handle]
+        imgui.separator_text(m.name)
+        changes: dict[str, Any] = {}
+        models = tuple(SHADING_MODELS)
+        changed, index = imgui.combo("shading model", models.index(m.model), list(models))
+        if changed:
+            changes["model"] = models[index]
+        changed, color = imgui.color_edit4("base colour", list(m.base_color))
+        if changed:
+            changes["base_color"] = tuple(color)
+        if m.model == "cook_torrance":
+            changed, value = imgui.slider_float("metallic", m.metallic, 0.0, 1.0)
+            self.rects["metallic"] = _rect(imgui)
+            if changed:
+                changes["metallic"] = value
+        if m.model in ("cook_torrance", "oren_nayar"):
+            changed, value = imgui.slider_float("roughness", m.roughness, 0.0, 1.0)
+            if changed:
+                changes["roughness"] = value
+        if m.model in ("phong", "blinn_phong"):
+            changed, value = imgui.slider_float(
+                "shininess", m.shininess, 1.0, 1024.0, "%.1f", imgui.SliderFlags_.logarithmic.value
+            )
+            if changed:
+                changes["shininess"] = value
+            changed, value = imgui.slider_float("specular", m.specular, 0.0, 2.0)
+            if changed:
+                changes["specular"] = value
+        changed, emissive = imgui.color_edit3("emissive", list(m.emissive))
+        if changed:
+            changes["emissive"] = tuple(emissive)
+        alpha = _ALPHA_EDITABLE.index(m.alpha_mode) if m.alpha_mode in _ALPHA_EDITABLE else 0
+        changed, alpha = imgui.combo("alpha mode", alpha, list(_ALPHA_EDITABLE))
+        if changed:
+            changes["alpha_mode"] = _ALPHA_EDITABLE[alpha]
+        if m.alpha_mode == "mask":
+            changed, value = imgui.slider_float("alpha cutoff", m.alpha_cutoff, 0.0, 1.0)
+            if changed:
+                changes["alpha_cutoff"] = value
+        if changes:
+            self.apply(library, handle, changes)
+
+    def apply(self, library: Materials, handle: int, changes: dict[str, Any]) -> Material | None:
+        try:
+            material = library.update(handle, **changes)
+        except (ValueError, TypeError) as exc:
+            self.status = str(exc)
+            return None
+        self.status = ""
+        return material
+
+
+def mesh_section(editor: Editor, world: World, eid: int) -> None:
+    """The inspector's Mesh section: which material the entity is drawn with."""
+    imgui = editor.imgui
+    mesh = world.get(eid, Mesh)
+    library = materials(world)
+    imgui.separator_text("Mesh")
+    imgui.text(f"mesh {int(mesh.handle)}")
+    names = [f"{h}: {m.name}" for h, m in enumerate(library)]
+    current = int(mesh.material) if int(mesh.material) < len(names) else 0
+    changed, index = imgui.combo("material", current, names)
+    if changed:
+        editor.set(world, eid, Mesh, material=index)
+    imgui.same_line()
+    if imgui.button("edit"):
+        editor.show_material(current)
+
+
+def _rect(imgui: Any) -> tuple[float, float, float, float]:
+    lo, hi = imgui.get_item_rect_min(), imgui.get_item_rect_max()
+    return (lo.x, lo.y, hi.x, hi.y)

@@ -1,0 +1,216 @@
+"""Materials: shared assets that entities name by handle (`Mesh.material`), like meshes.
+
+A world's materials live in its `Materials` resource (`materials(world)` makes it on first use);
+handles 0-5 are the default palette, the six looks every scene had before materials, so scenes
+that set `Mesh.material` to 0-5 look as they did. `Materials.add` returns a handle; `update`
+changes a material in place and the renderer uploads the table again (the editor edits live).
+
+Shading models (the `model` field), each a branch of one fragment shader that a pipeline
+specialisation constant keeps only when some material uses it (see shaders/shading.glsl):
+
+- `unlit`: the base colour, as is;
+- `lambert`: ideal diffuse;
+- `oren_nayar`: rough diffuse (Oren-Nayar's qualitative model, sigma = `roughness` radians);
+- `phong`: Lambert plus normalised Phong, (s + 2) / (2 pi) (r.v)^s times `specular`;
+- `blinn_phong`: Lambert plus normalised Blinn-Phong, (s + 8) / (8 pi) (n.h)^s times `specular`;
+- `cook_torrance`: glTF's metallic-roughness BRDF: GGX, height-correlated Smith, Schlick Fresnel,
+  with the diffuse lobe weighted by 1 - F(n.v) so that it reflects no more than it receives.
+
+Colours are linear RGB (the render target's sRGB encoding happens on write).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass, fields, replace
+from typing import Any, Final
+
+import numpy as np
+
+from ..ecs.world import World
+from .layouts import (
+    ALPHA_BLEND,
+    ALPHA_MASK,
+    ALPHA_OPAQUE,
+    FEATURE_ALPHA_MASK,
+    MATERIAL,
+    MODEL_BLINN_PHONG,
+    MODEL_COOK_TORRANCE,
+    MODEL_LAMBERT,
+    MODEL_OREN_NAYAR,
+    MODEL_PHONG,
+    MODEL_UNLIT,
+    NO_TEXTURE,
+)
+
+__all__ = ["ALPHA_MODES", "DEFAULT_PALETTE", "SHADING_MODELS", "Material", "Materials", "materials"]
+
+#: name -> the shader's MODEL_* value
+SHADING_MODELS: Final[dict[str, int]] = {
+    "unlit": MODEL_UNLIT,
+    "lambert": MODEL_LAMBERT,
+    "oren_nayar": MODEL_OREN_NAYAR,
+    "phong": MODEL_PHONG,
+    "blinn_phong": MODEL_BLINN_PHONG,
+    "cook_torrance": MODEL_COOK_TORRANCE,
+}
+#: name -> the shader's ALPHA_* value. `blend` is refused until the transparent pass exists.
+ALPHA_MODES: Final[dict[str, int]] = {"opaque": ALPHA_OPAQUE, "mask": ALPHA_MASK, "blend": ALPHA_BLEND}
+_DRAWABLE_ALPHA = ("opaque", "mask")
+MAX_SHININESS: Final = 1e4
+
+
+@dataclass(frozen=True)
+class Material:
+    """One look. Immutable: change a registered one with `Materials.update(handle, ...)`."""
+
+    name: str = "material"
+    model: str = "cook_torrance"
+    base_color: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)  # linear RGBA
+    metallic: float = 0.0  # cook_torrance
+    roughness: float = 0.5  # cook_torrance (perceptual, alpha = roughness^2); oren_nayar: sigma
+    shininess: float = 32.0  # phong, blinn_phong: the exponent
+    specular: float = 0.5  # phong, blinn_phong: the specular colour's strength (white)
+    emissive: tuple[float, float, float] = (0.0, 0.0, 0.0)  # linear RGB radiance added as is
+    alpha_mode: str = "opaque"  # opaque or mask (alpha below alpha_cutoff is not drawn)
+    alpha_cutoff: float = 0.5
+
+    def __post_init__(self) -> None:
+        for name, size in (("base_color", 4), ("emissive", 3)):
+            value = getattr(self, name)
+            try:
+                values = tuple(float(v) for v in value)
+            except (TypeError, ValueError):
+                raise ValueError(f"material {self.name!r}: {name} must be {size} numbers, got {value!r}") from None
+            if len(values) != size or not all(math.isfinite(v) and v >= 0 for v in values):
+                raise ValueError(
+                    f"material {self.name!r}: {name} must be {size} finite numbers of at least 0, got {value!r}"
+                )
+            object.__setattr__(self, name, values)
+        if self.model not in SHADING_MODELS:
+            raise ValueError(
+                f"material {self.name!r}: unknown shading model {self.model!r}; models: {', '.join(SHADING_MODELS)}"
+            )
+        if self.alpha_mode not in _DRAWABLE_ALPHA:
+            extra = (
+                " (blended materials need the transparent pass, not built yet)" if self.alpha_mode == "blend" else ""
+            )
+            raise ValueError(
+                f"material {self.name!r}: alpha_mode must be one of {', '.join(_DRAWABLE_ALPHA)}, "
+                f"got {self.alpha_mode!r}{extra}"
+            )
+        if self.base_color[3] > 1:
+            raise ValueError(f"material {self.name!r}: base_color's alpha must be at most 1, got {self.base_color[3]}")
+        for name, low, high in (
+            ("metallic", 0.0, 1.0),
+            ("roughness", 0.0, 1.0),
+            ("shininess", 1.0, MAX_SHININESS),
+            ("specular", 0.0, math.inf),
+            ("alpha_cutoff", 0.0, 1.0),
+        ):
+            value = getattr(self, name)
+            if not isinstance(value, (int, float, np.number)) or not (math.isfinite(value) and low <= value <= high):
+                raise ValueError(
+                    f"material {self.name!r}: {name} must be a finite number in [{low}, {high}], got {value!r}"
+                )
+            object.__setattr__(self, name, float(value))
+
+    def row(self) -> np.ndarray:
+        """This material as one MATERIAL row, as the shader reads it."""
+        out = np.zeros((), MATERIAL.dtype)
+        out["base_color"] = self.base_color
+        out["emissive"][:3] = self.emissive
+        out["surface"] = (self.metallic, self.roughness, self.shininess, self.specular)
+        out["params"] = (self.alpha_cutoff, 1.0, 1.0, 0.0)
+        out["kind"] = (SHADING_MODELS[self.model], ALPHA_MODES[self.alpha_mode], 0, 0)
+        out["textures"] = NO_TEXTURE
+        out["textures2"] = NO_TEXTURE
+        return out
+
+
+def _palette_entry(name: str, color: tuple[float, float, float], strength: float, shininess: float) -> Material:
+    # Before materials, specular was pow(n.h, s) * strength; normalised Blinn-Phong multiplies by
+    # (s + 8) / 8, so the palette's strengths are divided by it to keep the seed scenes' highlights.
+    return Material(
+        name, "blinn_phong", (*color, 1.0), shininess=shininess, specular=strength * 8.0 / (shininess + 8.0)
+    )
+
+
+#: The looks of handles 0-5 (linear RGB, specular strength and shininess as before materials)
+DEFAULT_PALETTE: Final[tuple[Material, ...]] = (
+    _palette_entry("grey", (0.80, 0.80, 0.80), 0.5, 32.0),
+    _palette_entry("red", (0.85, 0.35, 0.25), 0.6, 48.0),
+    _palette_entry("blue", (0.25, 0.55, 0.85), 0.6, 48.0),
+    _palette_entry("green", (0.35, 0.75, 0.35), 0.5, 32.0),
+    _palette_entry("gold", (0.90, 0.75, 0.30), 0.7, 64.0),
+    _palette_entry("purple", (0.65, 0.40, 0.80), 0.5, 32.0),
+)
+
+
+class Materials:
+    """A world's materials by handle, and the table the renderer uploads (`table`, rewritten on
+    every change; `version` counts the changes)."""
+
+    def __init__(self, palette: tuple[Material, ...] = DEFAULT_PALETTE) -> None:
+        self._materials: list[Material] = []
+        self.table = np.zeros(max(len(palette), 1), MATERIAL.dtype)
+        self.version = 0
+        self.features = 0  # what the shader needs: bit per shading model some material uses, FEATURE_*
+        for material in palette:
+            self.add(material)
+
+    def add(self, material: Material) -> int:
+        if not isinstance(material, Material):
+            raise TypeError(f"Materials.add takes a Material, got {type(material).__name__}")
+        handle = len(self._materials)
+        if handle >= len(self.table):
+            grown = np.zeros(2 * len(self.table), MATERIAL.dtype)
+            grown[:handle] = self.table[:handle]
+            self.table = grown
+        self._materials.append(material)
+        self._write(handle)
+        return handle
+
+    def update(self, handle: int, **changes: Any) -> Material:
+        """Replace fields of the material at `handle` (checked like a new one); returns it."""
+        old = self[handle]
+        known = {f.name for f in fields(Material)}
+        unknown = set(changes) - known
+        if unknown:
+            raise TypeError(f"Material has no field(s) {sorted(unknown)}; its fields are {sorted(known)}")
+        new = replace(old, **changes)
+        self._materials[handle] = new
+        self._write(handle)
+        return new
+
+    def _write(self, handle: int) -> None:
+        self.table[handle] = self._materials[handle].row()
+        material = self._materials[handle]
+        self.features |= 1 << SHADING_MODELS[material.model]
+        if material.alpha_mode == "mask":
+            self.features |= FEATURE_ALPHA_MASK
+        self.version += 1
+
+    def __getitem__(self, handle: int) -> Material:
+        if not isinstance(handle, (int, np.integer)) or not 0 <= handle < len(self._materials):
+            raise KeyError(f"no material {handle!r}; materials are 0 to {len(self._materials) - 1}")
+        return self._materials[int(handle)]
+
+    def __len__(self) -> int:
+        return len(self._materials)
+
+    def __iter__(self) -> Iterator[Material]:
+        return iter(self._materials)
+
+    def rows(self) -> np.ndarray:
+        """The table's used rows (a view)."""
+        return self.table[: len(self._materials)]
+
+
+def materials(world: World) -> Materials:
+    """The world's materials, made (with the default palette) on first use."""
+    found = world.resources.get(Materials)
+    if found is None:
+        found = world.resources[Materials] = Materials()
+    return found

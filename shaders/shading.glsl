@@ -1,0 +1,97 @@
+// Shading models and light falloff, for mesh.frag. The model is the material's (Material.kind.x);
+// MATERIAL_FEATURES, a specialisation constant, has a bit per model some material of the scene
+// uses, so the driver compiles only those branches (render/materials.py keeps the bits).
+//
+// Units (components/light.py): a light delivers E = intensity * window / d^2 (point, spot) or
+// E = illuminance (directional), and a surface sends back E * (n.l) * pi * f(l, v), f the BRDF.
+// The pi folded in keeps a white Lambert surface at E head-on, as before materials.
+layout(constant_id = 0) const uint MATERIAL_FEATURES = 0xFFFFFFFFu;
+
+const float PI = 3.14159265358979;
+// Cook-Torrance: roughness below this is drawn as this (Filament's clamp): a smaller GGX lobe
+// is narrower than a pixel and its peak overflows half floats
+const float MIN_ROUGHNESS = 0.045;
+
+vec3 schlick(vec3 f0, float cosine) {
+    float w = 1.0 - clamp(cosine, 0.0, 1.0);  // pow of a negative 1 - cos, from rounding, is NaN
+    return f0 + (1.0 - f0) * (w * w * w * w * w);
+}
+
+bool model_is(uint model, uint which) {
+    return (MATERIAL_FEATURES & (1u << which)) != 0u && model == which;
+}
+
+// pi * BRDF for unit normal n, direction to the light l, direction to the eye v; nl = n.l > 0.
+vec3 brdf_pi(Material m, uint model, vec3 n, vec3 l, vec3 v, float nl) {
+    vec3 base = m.base_color.rgb;
+    float nv = clamp(dot(n, v), 0.0, 1.0);
+    if (model_is(model, MODEL_OREN_NAYAR)) {
+        // the qualitative model in vector form: s / t = cos(phi_i - phi_r) sin(alpha) tan(beta)
+        float s2 = m.surface.y * m.surface.y;
+        float a = 1.0 - 0.5 * s2 / (s2 + 0.33);
+        float b = 0.45 * s2 / (s2 + 0.09);
+        float s = dot(l, v) - nl * nv;
+        float t = s > 0.0 ? max(nl, nv) : 1.0;
+        return base * (a + b * max(s, 0.0) / t);
+    }
+    if (model_is(model, MODEL_PHONG)) {
+        float e = m.surface.z;
+        float rv = max(dot(reflect(-l, n), v), 0.0);
+        return base + vec3(m.surface.w * (e + 2.0) / 2.0 * pow(rv, e));
+    }
+    if (model_is(model, MODEL_BLINN_PHONG)) {
+        float e = m.surface.z;
+        vec3 h = l + v;
+        float h2 = dot(h, h);
+        float nh = h2 > 1e-24 ? max(dot(n, h * inversesqrt(h2)), 0.0) : 0.0;
+        return base + vec3(m.surface.w * (e + 8.0) / 8.0 * pow(nh, e));
+    }
+    if (model_is(model, MODEL_COOK_TORRANCE)) {
+        float metallic = m.surface.x;
+        float r = max(m.surface.y, MIN_ROUGHNESS);
+        float a2 = r * r * r * r;  // alpha = roughness^2
+        vec3 h = l + v;
+        float h2 = dot(h, h);
+        h = h2 > 1e-24 ? h * inversesqrt(h2) : n;
+        float nh = max(dot(n, h), 0.0);
+        float vh = dot(v, h);
+        float q = nh * nh * (a2 - 1.0) + 1.0;
+        float d = a2 / (PI * q * q);
+        float nv_ = max(nv, 1e-4);
+        float vis = 0.5 / (nl * sqrt(nv_ * nv_ * (1.0 - a2) + a2) + nv_ * sqrt(nl * nl * (1.0 - a2) + a2));
+        vec3 f0 = mix(vec3(0.04), base, metallic);
+        vec3 f = schlick(f0, vh);
+        // the diffuse lobe gets what the specular one leaves at this view: 1 - F(n.v). glTF's
+        // sample mix, 1 - F(v.h) per light, reflects up to 30% more than it receives at grazing
+        // views (a white dielectric of roughness 0.3 seen at 85 degrees: albedo 1.30, integrated
+        // in NumPy); this one stays within 0.1% (tests/test_shading_models.py)
+        return (1.0 - schlick(f0, nv)) * (1.0 - metallic) * base + PI * d * vis * f;
+    }
+    return base;  // lambert
+}
+
+// The light's E at `p` and the unit direction towards it (`l`); E = 0 when out of reach.
+float light_at(Light light, vec3 p, vec3 fallback, out vec3 l) {
+    uint kind = uint(light.direction_kind.w);
+    if (kind == LIGHT_DIRECTIONAL) {
+        l = -light.direction_kind.xyz;
+        return light.color_intensity.w;
+    }
+    vec3 to_light = light.position_radius.xyz - p;
+    float d2 = dot(to_light, to_light);
+    float r = light.position_radius.w;
+    float window = 1.0;
+    if (r > 0.0) {
+        float q = d2 / (r * r);
+        window = clamp(1.0 - q * q, 0.0, 1.0);
+        window *= window;
+    }
+    l = d2 > 1e-24 ? to_light * inversesqrt(d2) : fallback;
+    float energy = light.color_intensity.w * window / max(d2, 1e-4);
+    if (kind == LIGHT_SPOT) {
+        float t = clamp((dot(light.direction_kind.xyz, -l) - light.cone.x) * light.cone.y, 0.0, 1.0);
+        energy *= t * t;
+    }
+    // capped: thousands of bright lights stay finite
+    return min(energy, 65504.0);
+}
