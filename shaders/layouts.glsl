@@ -8,6 +8,8 @@
 #define BINDING_LIGHTS 1
 #define BINDING_INSTANCES 2
 #define BINDING_MATERIALS 3
+#define BINDING_TEXTURES 4
+#define TEXTURE_PAGES 18
 #define BINDING_IDS 0
 #define BINDING_KEYS 1
 #define BINDING_DRAW_STATE 2
@@ -19,6 +21,7 @@
 #define MODEL_BLINN_PHONG 4
 #define MODEL_COOK_TORRANCE 5
 #define FEATURE_ALPHA_MASK 65536
+#define FEATURE_TEXTURES 131072
 #define ALPHA_OPAQUE 0
 #define ALPHA_MASK 1
 #define ALPHA_BLEND 2
@@ -60,8 +63,8 @@ struct Material {  // 112 bytes, std430
     vec4 surface;               // offset 32: x metallic, y roughness, z shininess, w specular strength
     vec4 params;                // offset 48: x alpha cutoff, y normal scale, z occlusion strength, w 0
     uvec4 kind;                 // offset 64: x shading model (MODEL_*), y ALPHA_* mode, z double-sided, w 0
-    uvec4 textures;             // offset 80: base colour, metallic-roughness, normal, emissive: texture index or NO_TEXTURE
-    uvec4 textures2;            // offset 96: x occlusion texture index or NO_TEXTURE; yzw: NO_TEXTURE
+    uvec4 textures;             // offset 80: base colour, metallic-roughness, normal, emissive: page << 16 | layer, or NO_TEXTURE
+    uvec4 textures2;            // offset 96: x occlusion texture (as above); yzw: NO_TEXTURE
 };
 
 // The indirect path's key table: one row per key = mesh * 2 + mirrored.

@@ -11,18 +11,19 @@ if TYPE_CHECKING:
 
 
 class DescriptorSetLayout:
-    """bindings: (binding, descriptor type, shader stage flags), one descriptor each."""
+    """bindings: (binding, descriptor type, shader stage flags), one descriptor each, or
+    (binding, type, stages, count) for an array of `count`."""
 
-    def __init__(self, device: Device, bindings: Sequence[tuple[int, int, int]]) -> None:
+    def __init__(self, device: Device, bindings: Sequence[tuple[int, ...]]) -> None:
         vk = device.vk
         self.device = device
-        self.bindings = list(bindings)
+        self.bindings = [(*b, 1) if len(b) == 3 else tuple(b) for b in bindings]
         self.handle = vk.vkCreateDescriptorSetLayout(
             device.handle,
             vk.VkDescriptorSetLayoutCreateInfo(
                 pBindings=[
-                    vk.VkDescriptorSetLayoutBinding(binding=b, descriptorType=t, descriptorCount=1, stageFlags=s)
-                    for b, t, s in self.bindings
+                    vk.VkDescriptorSetLayoutBinding(binding=b, descriptorType=t, descriptorCount=n, stageFlags=s)
+                    for b, t, s, n in self.bindings
                 ]
             ),
             None,
@@ -78,6 +79,27 @@ def write_buffers(device: Device, descriptor_set: Any, writes: Sequence[tuple[in
                 pBufferInfo=[buffer.descriptor()],
             )
             for binding, kind, buffer in writes
+        ],
+        0,
+        None,
+    )
+
+
+def write_images(device: Device, descriptor_set: Any, binding: int, infos: Sequence[Any]) -> None:
+    """Point a combined image sampler array binding at `infos` (VkDescriptorImageInfo), from element 0."""
+    vk = device.vk
+    vk.vkUpdateDescriptorSets(
+        device.handle,
+        1,
+        [
+            vk.VkWriteDescriptorSet(
+                dstSet=descriptor_set,
+                dstBinding=binding,
+                dstArrayElement=0,
+                descriptorCount=len(infos),
+                descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+                pImageInfo=list(infos),
+            )
         ],
         0,
         None,

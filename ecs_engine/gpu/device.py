@@ -83,11 +83,10 @@ class Device:
         self.features = {"drawIndirectCount": bool(f12.drawIndirectCount), "hostQueryReset": bool(f12.hostQueryReset)}
         base = vk.vkGetPhysicalDeviceFeatures(self.physical)
         # the indirect render mode needs all three (checked there, with one message if one lacks)
-        features = vk.VkPhysicalDeviceFeatures(
-            multiDrawIndirect=base.multiDrawIndirect, drawIndirectFirstInstance=base.drawIndirectFirstInstance
-        )
-        self.features["multiDrawIndirect"] = bool(base.multiDrawIndirect)
-        self.features["drawIndirectFirstInstance"] = bool(base.drawIndirectFirstInstance)
+        # anisotropic texture filtering and wireframe/point fill where the device has them
+        optional = ("multiDrawIndirect", "drawIndirectFirstInstance", "samplerAnisotropy", "fillModeNonSolid")
+        features = vk.VkPhysicalDeviceFeatures(**{name: getattr(base, name) for name in optional})
+        self.features.update({name: bool(getattr(base, name)) for name in optional})
         # Keep nested structs in locals until the call: the binding copies a list of structs into
         # an array, and what an element points to (here its priorities) lives only as long as
         # the Python object of that element.

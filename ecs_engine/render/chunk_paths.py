@@ -23,38 +23,43 @@ from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_lay
 from ..gpu.secondary import end_command_buffer
 from .frame_data import Chunk
 from .instance_rows import write_rows
-from .layouts import INSTANCE, MESH_VERTEX
+from .layouts import FEATURE_TEXTURES, INSTANCE, MESH_VERTEX
 from .path import ChunkResult, FrameInputs, PathContext, summed_counts
 
 # The MESH_VERTEX fields mesh_vertex.glsl reads, at locations 0, 1, ...: only those are bound (an
-# attribute the shader does not read is a validation performance warning).
+# attribute the shader does not read is a validation performance warning). The textured variants
+# (some material has a texture: FEATURE_TEXTURES) read all four.
 VERTEX_INPUTS = ("position", "normal")
+TEXTURED_VERTEX_INPUTS = ("position", "normal", "uv", "tangent")
 
 
-def vertex_attributes(vk: Any) -> list[tuple[int, int, int]]:
+def vertex_attributes(vk: Any, inputs: tuple[str, ...] = VERTEX_INPUTS) -> list[tuple[int, int, int]]:
     """(location, format, offset) of the vertex inputs."""
     formats = {2: vk.VK_FORMAT_R32G32_SFLOAT, 3: vk.VK_FORMAT_R32G32B32_SFLOAT, 4: vk.VK_FORMAT_R32G32B32A32_SFLOAT}
     fields: dict[str, Any] = dict(MESH_VERTEX.fields or {})
-    return [
-        (location, formats[fields[name][0].shape[0]], fields[name][1]) for location, name in enumerate(VERTEX_INPUTS)
-    ]
+    return [(location, formats[fields[name][0].shape[0]], fields[name][1]) for location, name in enumerate(inputs)]
 
 
 def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple[Any, Any]:
-    """The (plain, mirrored) mesh pipelines of a path: the same but for the front face."""
+    """The (plain, mirrored) mesh pipelines of a path: the same but for the front face. Textured
+    materials take the `_textured` variants of both shaders (`mesh.vert` -> `mesh_textured.vert`)."""
+    textured = bool(ctx.material_features & FEATURE_TEXTURES)
+    fragment_shader = "mesh_textured.frag" if textured else "mesh.frag"
+    if textured:
+        vertex_shader = vertex_shader.replace(".vert", "_textured.vert")
     base = dict(
         layout=layout,
         render_pass=ctx.render_pass,
         subpass=0,
         vertex_stride=MESH_VERTEX.itemsize,
-        vertex_attributes=vertex_attributes(ctx.device.vk),
+        vertex_attributes=vertex_attributes(ctx.device.vk, TEXTURED_VERTEX_INPUTS if textured else VERTEX_INPUTS),
         fragment_constants=(ctx.material_features,),  # mesh.frag's MATERIAL_FEATURES
     )
     vk = ctx.device.vk
-    plain = graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, "mesh.frag", **base))
+    plain = graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, fragment_shader, **base))
     try:
         mirrored = graphics_pipeline(
-            ctx.device, GraphicsPipelineSpec(vertex_shader, "mesh.frag", front_face_ccw=False, **base)
+            ctx.device, GraphicsPipelineSpec(vertex_shader, fragment_shader, front_face_ccw=False, **base)
         )
     except BaseException:
         vk.vkDestroyPipeline(ctx.device.handle, plain, None)

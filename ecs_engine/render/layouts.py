@@ -1,7 +1,7 @@
 """Every layout the CPU and the shaders share, declared once (see gpu/layout.py): the NumPy dtypes
 below are what the engine writes, and shaders/layouts.glsl is generated from them.
 
-Set 0 is the frame's (globals, lights, instance rows, materials), shared by every pass and path;
+Set 0 is the frame's (globals, lights, instance rows, materials, texture pages), shared by every pass and path;
 set 1 belongs to the indirect path (ids, key table, draw state, commands).
 """
 
@@ -66,8 +66,8 @@ MATERIAL = Struct(
         ("surface", "vec4", "x metallic, y roughness, z shininess, w specular strength"),
         ("params", "vec4", "x alpha cutoff, y normal scale, z occlusion strength, w 0"),
         ("kind", "uvec4", "x shading model (MODEL_*), y ALPHA_* mode, z double-sided, w 0"),
-        ("textures", "uvec4", "base colour, metallic-roughness, normal, emissive: texture index or NO_TEXTURE"),
-        ("textures2", "uvec4", "x occlusion texture index or NO_TEXTURE; yzw: NO_TEXTURE"),
+        ("textures", "uvec4", "base colour, metallic-roughness, normal, emissive: page << 16 | layer, or NO_TEXTURE"),
+        ("textures2", "uvec4", "x occlusion texture (as above); yzw: NO_TEXTURE"),
     ],
     doc="A material (render/materials.py): what the fragment shader's shading model reads.",
 )
@@ -134,13 +134,15 @@ IMGUI_PUSH = Struct(
 )
 
 SET_FRAME, SET_INDIRECT = 0, 1
-BINDING_GLOBALS, BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS = 0, 1, 2, 3
+BINDING_GLOBALS, BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS, BINDING_TEXTURES = 0, 1, 2, 3, 4
+TEXTURE_PAGES = 18  # texture_pages.py: two views (sRGB, UNORM) per size class, 16 to 4096 texels
 BINDING_IDS, BINDING_KEYS, BINDING_DRAW_STATE, BINDING_COMMANDS = 0, 1, 2, 3
 # shading models: the values of Material.kind.x and bits 0-5 of the mesh pipelines' MATERIAL_FEATURES
 # specialisation constant (FEATURE_* are its other bits); their names are render/materials.py's
 # SHADING_MODELS, in this order
 MODEL_UNLIT, MODEL_LAMBERT, MODEL_OREN_NAYAR, MODEL_PHONG, MODEL_BLINN_PHONG, MODEL_COOK_TORRANCE = range(6)
 FEATURE_ALPHA_MASK = 1 << 16  # some material is drawn with alpha_mode mask
+FEATURE_TEXTURES = 1 << 17  # some material has a texture: the textured shader variants (uv, tangents)
 ALPHA_OPAQUE, ALPHA_MASK, ALPHA_BLEND = range(3)
 LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL = range(3)
 NO_TEXTURE = 0xFFFFFFFF
@@ -167,6 +169,8 @@ DEFINES = {
     "BINDING_LIGHTS": BINDING_LIGHTS,
     "BINDING_INSTANCES": BINDING_INSTANCES,
     "BINDING_MATERIALS": BINDING_MATERIALS,
+    "BINDING_TEXTURES": BINDING_TEXTURES,
+    "TEXTURE_PAGES": TEXTURE_PAGES,
     "BINDING_IDS": BINDING_IDS,
     "BINDING_KEYS": BINDING_KEYS,
     "BINDING_DRAW_STATE": BINDING_DRAW_STATE,
@@ -178,6 +182,7 @@ DEFINES = {
     "MODEL_BLINN_PHONG": MODEL_BLINN_PHONG,
     "MODEL_COOK_TORRANCE": MODEL_COOK_TORRANCE,
     "FEATURE_ALPHA_MASK": FEATURE_ALPHA_MASK,
+    "FEATURE_TEXTURES": FEATURE_TEXTURES,
     "ALPHA_OPAQUE": ALPHA_OPAQUE,
     "ALPHA_MASK": ALPHA_MASK,
     "ALPHA_BLEND": ALPHA_BLEND,

@@ -17,6 +17,12 @@ specialisation constant keeps only when some material uses it (see shaders/shadi
   with the diffuse lobe weighted by 1 - F(n.v) so that it reflects no more than it receives.
 
 Colours are linear RGB (the render target's sRGB encoding happens on write).
+
+Textures (glTF's set): `*_texture` fields hold handles into the same `Materials.textures`
+registry. The base colour texture multiplies `base_color` (alpha too); metallic-roughness reads
+roughness from G and metallic from B, multiplying `roughness` and `metallic`; the normal map is
+tangent-space (+Y up the image, glTF's convention), its xy scaled by `normal_scale`; emissive
+multiplies `emissive`; occlusion (R) darkens the ambient light by `occlusion_strength`.
 """
 
 from __future__ import annotations
@@ -34,6 +40,7 @@ from .layouts import (
     ALPHA_MASK,
     ALPHA_OPAQUE,
     FEATURE_ALPHA_MASK,
+    FEATURE_TEXTURES,
     MATERIAL,
     MODEL_BLINN_PHONG,
     MODEL_COOK_TORRANCE,
@@ -43,8 +50,9 @@ from .layouts import (
     MODEL_UNLIT,
     NO_TEXTURE,
 )
+from .textures import Textures
 
-__all__ = ["ALPHA_MODES", "DEFAULT_PALETTE", "SHADING_MODELS", "Material", "Materials", "materials"]
+__all__ = ["ALPHA_MODES", "DEFAULT_PALETTE", "SHADING_MODELS", "TEXTURE_FIELDS", "Material", "Materials", "materials"]
 
 #: name -> the shader's MODEL_* value
 SHADING_MODELS: Final[dict[str, int]] = {
@@ -59,6 +67,14 @@ SHADING_MODELS: Final[dict[str, int]] = {
 ALPHA_MODES: Final[dict[str, int]] = {"opaque": ALPHA_OPAQUE, "mask": ALPHA_MASK, "blend": ALPHA_BLEND}
 _DRAWABLE_ALPHA = ("opaque", "mask")
 MAX_SHININESS: Final = 1e4
+#: the texture fields, in the order of the row's `textures` then `textures2.x`
+TEXTURE_FIELDS: Final = (
+    "base_color_texture",
+    "metallic_roughness_texture",
+    "normal_texture",
+    "emissive_texture",
+    "occlusion_texture",
+)
 
 
 @dataclass(frozen=True)
@@ -75,6 +91,13 @@ class Material:
     emissive: tuple[float, float, float] = (0.0, 0.0, 0.0)  # linear RGB radiance added as is
     alpha_mode: str = "opaque"  # opaque or mask (alpha below alpha_cutoff is not drawn)
     alpha_cutoff: float = 0.5
+    base_color_texture: int | None = None  # sRGB
+    metallic_roughness_texture: int | None = None  # linear: G roughness, B metallic
+    normal_texture: int | None = None  # linear, tangent space
+    emissive_texture: int | None = None  # sRGB
+    occlusion_texture: int | None = None  # linear: R
+    normal_scale: float = 1.0
+    occlusion_strength: float = 1.0
 
     def __post_init__(self) -> None:
         for name, size in (("base_color", 4), ("emissive", 3)):
@@ -108,6 +131,8 @@ class Material:
             ("shininess", 1.0, MAX_SHININESS),
             ("specular", 0.0, math.inf),
             ("alpha_cutoff", 0.0, 1.0),
+            ("normal_scale", -1e3, 1e3),
+            ("occlusion_strength", 0.0, 1.0),
         ):
             value = getattr(self, name)
             if not isinstance(value, (int, float, np.number)) or not (math.isfinite(value) and low <= value <= high):
@@ -115,6 +140,16 @@ class Material:
                     f"material {self.name!r}: {name} must be a finite number in [{low}, {high}], got {value!r}"
                 )
             object.__setattr__(self, name, float(value))
+        for name in TEXTURE_FIELDS:
+            value = getattr(self, name)
+            if value is not None and (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0):
+                raise ValueError(f"material {self.name!r}: {name} must be a texture handle (an int >= 0) or None")
+            if value is not None:
+                object.__setattr__(self, name, int(value))
+
+    @property
+    def textured(self) -> bool:
+        return any(getattr(self, name) is not None for name in TEXTURE_FIELDS)
 
     def row(self) -> np.ndarray:
         """This material as one MATERIAL row, as the shader reads it."""
@@ -122,10 +157,11 @@ class Material:
         out["base_color"] = self.base_color
         out["emissive"][:3] = self.emissive
         out["surface"] = (self.metallic, self.roughness, self.shininess, self.specular)
-        out["params"] = (self.alpha_cutoff, 1.0, 1.0, 0.0)
+        out["params"] = (self.alpha_cutoff, self.normal_scale, self.occlusion_strength, 0.0)
         out["kind"] = (SHADING_MODELS[self.model], ALPHA_MODES[self.alpha_mode], 0, 0)
-        out["textures"] = NO_TEXTURE
-        out["textures2"] = NO_TEXTURE
+        handles = [NO_TEXTURE if (h := getattr(self, name)) is None else h for name in TEXTURE_FIELDS]
+        out["textures"] = handles[:4]
+        out["textures2"] = (handles[4], NO_TEXTURE, NO_TEXTURE, NO_TEXTURE)
         return out
 
 
@@ -154,6 +190,7 @@ class Materials:
 
     def __init__(self, palette: tuple[Material, ...] = DEFAULT_PALETTE) -> None:
         self._materials: list[Material] = []
+        self.textures = Textures()  # what the materials' *_texture handles name
         self.table = np.zeros(max(len(palette), 1), MATERIAL.dtype)
         self.version = 0
         self.features = 0  # what the shader needs: bit per shading model some material uses, FEATURE_*
@@ -163,6 +200,7 @@ class Materials:
     def add(self, material: Material) -> int:
         if not isinstance(material, Material):
             raise TypeError(f"Materials.add takes a Material, got {type(material).__name__}")
+        self._check_textures(material)
         handle = len(self._materials)
         if handle >= len(self.table):
             grown = np.zeros(2 * len(self.table), MATERIAL.dtype)
@@ -180,9 +218,19 @@ class Materials:
         if unknown:
             raise TypeError(f"Material has no field(s) {sorted(unknown)}; its fields are {sorted(known)}")
         new = replace(old, **changes)
+        self._check_textures(new)
         self._materials[handle] = new
         self._write(handle)
         return new
+
+    def _check_textures(self, material: Material) -> None:
+        for name in TEXTURE_FIELDS:
+            h = getattr(material, name)
+            if h is not None and h >= len(self.textures):
+                raise ValueError(
+                    f"material {material.name!r}: {name} {h} is not a texture of this registry "
+                    f"({len(self.textures)} textures; add them with Materials.textures)"
+                )
 
     def _write(self, handle: int) -> None:
         self.table[handle] = self._materials[handle].row()
@@ -190,6 +238,8 @@ class Materials:
         self.features |= 1 << SHADING_MODELS[material.model]
         if material.alpha_mode == "mask":
             self.features |= FEATURE_ALPHA_MASK
+        if material.textured:
+            self.features |= FEATURE_TEXTURES
         self.version += 1
 
     def __getitem__(self, handle: int) -> Material:

@@ -25,31 +25,33 @@ import numpy as np
 from .. import native
 from ..ecs.world import World
 from ..errors import UsageError
-from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
+from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_images
 from ..gpu.device import Device
 from ..gpu.frames import FrameRing
-from ..gpu.memory import Buffer
 from ..gpu.secondary import SecondaryBuffers
 from ..jobs import JobPool
 from .camera import CameraMatrices
 from .chunk_paths import RECORDERS, InstancedPath, PerEntityPath, check_recorder
 from .frame_data import Chunk, FrameData, FrameExtractor
+from .frame_resources import FrameResources
 from .indirect_path import IndirectPath
 from .layouts import (
     BINDING_GLOBALS,
     BINDING_INSTANCES,
     BINDING_LIGHTS,
     BINDING_MATERIALS,
+    BINDING_TEXTURES,
     GLOBALS,
     INSTANCE,
     LIGHT,
-    MATERIAL,
+    TEXTURE_PAGES,
 )
 from .light_pass import LightPass
 from .light_rows import write_lights
 from .materials import Materials
 from .mesh_registry import MeshRegistry
 from .path import ChunkResult, FrameInputs, MeshBounds, PathContext, PathFactory, RenderPath, TargetState
+from .texture_pages import TexturePages
 
 PATHS: dict[str, PathFactory] = {
     "instanced": InstancedPath,
@@ -58,8 +60,6 @@ PATHS: dict[str, PathFactory] = {
 }
 MODES = tuple(PATHS)
 RECORDER_NAMES = tuple(RECORDERS)
-MIN_LIGHTS = 256
-MIN_MATERIALS = 64
 
 
 @dataclass
@@ -77,18 +77,6 @@ class FrameStats:
     record_ms: float = 0.0  # the chunk jobs: cull, write rows, record secondaries
     chunks: int = 0
     candidates: int = 0  # entities with a mesh, before culling
-
-
-@dataclass
-class _PerFrame:
-    globals: Buffer
-    lights: Buffer
-    instances: Buffer
-    materials: Buffer
-    descriptor_set: Any
-    set_array: Any  # VkDescriptorSet[1] for raw calls
-    written: tuple[Any, ...] | None = None  # what the globals buffer holds
-    materials_written: tuple[int, int] | None = None  # (id of the Materials, its version) in `materials`
 
 
 def default_recorder() -> str:
@@ -131,18 +119,23 @@ class Renderer:
         self.secondaries = SecondaryBuffers(device, n)
         stages = vk.VK_SHADER_STAGE_VERTEX_BIT | vk.VK_SHADER_STAGE_FRAGMENT_BIT | vk.VK_SHADER_STAGE_COMPUTE_BIT
         ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
+        sampler = vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
         self.set_layout = DescriptorSetLayout(
             device,
             [(BINDING_GLOBALS, vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, stages)]
-            + [(b, ssbo, stages) for b in (BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS)],
+            + [(b, ssbo, stages) for b in (BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS)]
+            + [(BINDING_TEXTURES, sampler, vk.VK_SHADER_STAGE_FRAGMENT_BIT, TEXTURE_PAGES)],
         )
-        self.pool = DescriptorPool(device, n, {vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER: n, ssbo: 3 * n})
+        self.pool = DescriptorPool(
+            device, n, {vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER: n, ssbo: 3 * n, sampler: TEXTURE_PAGES * n}
+        )
+        self.texture_pages = TexturePages(device)
         # a world without a Materials resource draws with the default palette
         self.default_materials = Materials()
         # what the mesh pipelines were specialised for (Materials.features): grown, never shrunk,
         # when a world's materials use another shading model (a pipeline rebuild, as a mode switch)
         self.material_features = self.default_materials.features
-        self.per_frame = [self._make_frame_resources() for _ in range(n)]
+        self.per_frame = [FrameResources.make(device, self.pool, self.set_layout, self.texture_pages) for _ in range(n)]
         self.light_pass = LightPass(device, self.set_layout.handle, target.render_pass, 1, light_size)
         self._targets: dict[tuple[int, int, int], TargetState] = {}
         self._bounds: tuple[int, MeshBounds] | None = None
@@ -220,56 +213,13 @@ class Renderer:
         return path
 
     # ----------------------------------------------------------------- set-up
-    def _make_frame_resources(self) -> _PerFrame:
-        vk = self.vk
-        ssbo = vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT
-        descriptor_set = self.pool.allocate(self.set_layout)
-        pf = _PerFrame(
-            globals=Buffer(self.device, GLOBALS.size, vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT),
-            lights=Buffer(self.device, LIGHT.size * MIN_LIGHTS, ssbo),
-            instances=Buffer(self.device, INSTANCE.size * 1024, ssbo),
-            materials=Buffer(self.device, MATERIAL.size * MIN_MATERIALS, ssbo),
-            descriptor_set=descriptor_set,
-            set_array=vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]),
-        )
-        self._write_set(pf)
-        return pf
-
-    def _write_set(self, pf: _PerFrame) -> None:
-        vk = self.vk
-        ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
-        write_buffers(
-            self.device,
-            pf.descriptor_set,
-            [
-                (BINDING_GLOBALS, vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, pf.globals),
-                (BINDING_LIGHTS, ssbo, pf.lights),
-                (BINDING_INSTANCES, ssbo, pf.instances),
-                (BINDING_MATERIALS, ssbo, pf.materials),
-            ],
-        )
-
-    def _ensure_capacity(self, pf: _PerFrame, instances: int, lights: int, materials: int) -> None:
-        """Grow a frame's buffers; safe: this frame's fence has been waited on."""
-        before = (pf.instances, pf.lights, pf.materials)
-        try:
-            pf.instances = pf.instances.grown(instances * INSTANCE.size)
-            pf.lights = pf.lights.grown(lights * LIGHT.size)
-            pf.materials = pf.materials.grown(materials * MATERIAL.size)
-        finally:
-            if (pf.instances, pf.lights, pf.materials) != before:
-                if pf.materials is not before[2]:
-                    pf.materials_written = None
-                self._write_set(pf)
-
-    def _write_materials(self, pf: _PerFrame, materials: Materials) -> None:
-        """The world's material table into this frame's copy, when it changed since last written
-        there (each frame slot has its own: the editor edits while frames are in flight)."""
-        key = (id(materials), materials.version)
-        if pf.materials_written != key:
-            rows = materials.rows()
-            pf.materials.array(MATERIAL.dtype, len(rows))[:] = rows
-            pf.materials_written = key
+    def _sync_textures(self, materials: Materials) -> None:
+        """Upload textures the materials' registry added; then every frame's set names the new
+        pages (the upload waited for the GPU, so no frame in flight reads the old ones)."""
+        if self.texture_pages.sync(materials.textures):
+            infos = self.texture_pages.image_infos()
+            for pf in self.per_frame:
+                write_images(self.device, pf.descriptor_set, BINDING_TEXTURES, infos)
 
     def _check_material_features(self, materials: Materials) -> None:
         """Rebuild the path's pipelines when the world's materials use a shading model (or alpha
@@ -363,13 +313,16 @@ class Renderer:
         data = self.extract(world, width, height)  # before any GPU state is touched: a bad world fails here
         materials = self.materials(world)
         self._check_material_features(materials)
+        self._sync_textures(materials)
         if self.jobs is not None and self.jobs.generation != self._jobs_generation:
             self._forget_old_threads()
         frame, gpu_ms = self.frames.begin()
         slot = self.frames.frames.index(frame)
         pf = self.per_frame[slot]
-        self._ensure_capacity(pf, self.path.rows_needed(data.candidates), data.light_count, len(materials))
-        self._write_materials(pf, materials)
+        pf.ensure_capacity(
+            self.device, self.texture_pages, self.path.rows_needed(data.candidates), data.light_count, len(materials)
+        )
+        pf.write_materials(materials, self.texture_pages)
         target = self.target_state(framebuffer or self.target.framebuffer, width, height)
         inputs = FrameInputs(
             slot=slot,
@@ -431,7 +384,7 @@ class Renderer:
 
     def _write_globals(
         self,
-        pf: _PerFrame,
+        pf: FrameResources,
         cam: CameraMatrices,
         view: np.ndarray,
         origin: np.ndarray,
@@ -454,7 +407,7 @@ class Renderer:
         pf.written = written
 
     def _record_primary(
-        self, cb: Any, secondaries: list[Any], billboards: int, target: TargetState, pf: _PerFrame, slot: int
+        self, cb: Any, secondaries: list[Any], billboards: int, target: TargetState, pf: FrameResources, slot: int
     ) -> int:
         """Raw cffi calls with structs made once (see gpu/frames.py for why); `billboards` point
         and spot lights get one. Returns the light pass's draws."""
@@ -477,12 +430,10 @@ class Renderer:
 
     def _destroy_shared(self) -> None:
         self.light_pass.destroy()
+        self.texture_pages.destroy()
         self.secondaries.destroy()
         for pf in self.per_frame:
-            pf.globals.destroy()
-            pf.lights.destroy()
-            pf.instances.destroy()
-            pf.materials.destroy()
+            pf.destroy()
         self.pool.destroy()
         self.set_layout.destroy()
         self.frames.destroy()

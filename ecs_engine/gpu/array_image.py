@@ -1,0 +1,186 @@
+"""A sampled 2D array image with a full mip chain and two views of the same texels: sRGB (the
+sampler decodes to linear before filtering) and UNORM (data read as stored). Layers are uploaded
+from NumPy mip chains through a bounded staging buffer."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from .allocator import DEVICE
+from .device import Device
+from .memory import HOST, Buffer
+
+_STAGING_BYTES = 64 * 2**20  # one submit copies at most this much (a 4096^2 layer's chain is 85 MiB: alone)
+
+
+class ArrayImage:
+    """side x side texels, `levels` mips, `layers` layers; `srgb_view` and `unorm_view`."""
+
+    def __init__(self, device: Device, side: int, layers: int) -> None:
+        vk = device.vk
+        self.device = device
+        self.side, self.layers = side, layers
+        self.levels = side.bit_length()  # side is a power of two: log2(side) + 1
+        self.handle = vk.vkCreateImage(
+            device.handle,
+            vk.VkImageCreateInfo(
+                flags=vk.VK_IMAGE_CREATE_MUTABLE_FORMAT_BIT,
+                imageType=vk.VK_IMAGE_TYPE_2D,
+                format=vk.VK_FORMAT_R8G8B8A8_UNORM,
+                extent=vk.VkExtent3D(side, side, 1),
+                mipLevels=self.levels,
+                arrayLayers=layers,
+                samples=vk.VK_SAMPLE_COUNT_1_BIT,
+                tiling=vk.VK_IMAGE_TILING_OPTIMAL,
+                usage=vk.VK_IMAGE_USAGE_SAMPLED_BIT | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE,
+                initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
+            ),
+            None,
+        )
+        self.views: list[Any] = []
+        self.allocation = None
+        try:
+            req = vk.vkGetImageMemoryRequirements(device.handle, self.handle)
+            self.allocation = device.allocator.allocate(req, DEVICE, "image")
+            vk.vkBindImageMemory(device.handle, self.handle, self.allocation.memory, self.allocation.offset)
+            for fmt in (vk.VK_FORMAT_R8G8B8A8_SRGB, vk.VK_FORMAT_R8G8B8A8_UNORM):
+                self.views.append(
+                    vk.vkCreateImageView(
+                        device.handle,
+                        vk.VkImageViewCreateInfo(
+                            image=self.handle,
+                            viewType=vk.VK_IMAGE_VIEW_TYPE_2D_ARRAY,
+                            format=fmt,
+                            subresourceRange=self._range(),
+                        ),
+                        None,
+                    )
+                )
+        except BaseException:
+            self.destroy()
+            raise
+
+    @property
+    def srgb_view(self) -> Any:
+        return self.views[0]
+
+    @property
+    def unorm_view(self) -> Any:
+        return self.views[1]
+
+    def _range(self) -> Any:
+        vk = self.device.vk
+        return vk.VkImageSubresourceRange(
+            aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT,
+            baseMipLevel=0,
+            levelCount=self.levels,
+            baseArrayLayer=0,
+            layerCount=self.layers,
+        )
+
+    def upload(self, chains: Sequence[Sequence[np.ndarray]]) -> None:
+        """Fill layers 0.. with `chains` (per layer: its levels, RGBA8, largest first); the rest
+        of the layers stay undefined. Ends with every layer ready for sampling."""
+        vk = self.device.vk
+        if len(chains) > self.layers:
+            raise ValueError(f"{len(chains)} layers for an image of {self.layers}")
+        self._barrier(vk.VK_IMAGE_LAYOUT_UNDEFINED, vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL)
+        batch: list[tuple[int, int, np.ndarray]] = []
+        size = 0
+        for layer, chain in enumerate(chains):
+            if len(chain) != self.levels or chain[0].shape != (self.side, self.side, 4):
+                raise ValueError(f"layer {layer}: needs {self.levels} levels from {self.side} x {self.side} RGBA8")
+            nbytes = sum(level.nbytes for level in chain)
+            if batch and size + nbytes > _STAGING_BYTES:
+                self._copy(batch, size)
+                batch, size = [], 0
+            batch.extend((layer, level, pixels) for level, pixels in enumerate(chain))
+            size += nbytes
+        if batch:
+            self._copy(batch, size)
+        self._barrier(vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL)
+
+    def _copy(self, batch: list[tuple[int, int, np.ndarray]], size: int) -> None:
+        vk = self.device.vk
+        staging = Buffer(self.device, size, vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT, HOST)
+        try:
+            raw = staging.bytes()
+            regions = []
+            offset = 0
+            for layer, level, pixels in batch:
+                raw[offset : offset + pixels.nbytes] = np.ascontiguousarray(pixels).reshape(-1)
+                side = pixels.shape[0]
+                regions.append(
+                    vk.VkBufferImageCopy(
+                        bufferOffset=offset,
+                        bufferRowLength=0,
+                        bufferImageHeight=0,
+                        imageSubresource=vk.VkImageSubresourceLayers(
+                            aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=level, baseArrayLayer=layer, layerCount=1
+                        ),
+                        imageOffset=vk.VkOffset3D(0, 0, 0),
+                        imageExtent=vk.VkExtent3D(side, side, 1),
+                    )
+                )
+                offset += pixels.nbytes
+            self.device.submit_once(
+                lambda cb: vk.vkCmdCopyBufferToImage(
+                    cb, staging.handle, self.handle, vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, len(regions), regions
+                )
+            )
+        finally:
+            staging.destroy()
+
+    def _barrier(self, old: int, new: int) -> None:
+        vk = self.device.vk
+        to_read = new == vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
+        barrier = vk.VkImageMemoryBarrier(
+            srcAccessMask=vk.VK_ACCESS_TRANSFER_WRITE_BIT if to_read else 0,
+            dstAccessMask=vk.VK_ACCESS_SHADER_READ_BIT if to_read else vk.VK_ACCESS_TRANSFER_WRITE_BIT,
+            oldLayout=old,
+            newLayout=new,
+            srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+            dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+            image=self.handle,
+            subresourceRange=self._range(),
+        )
+        src = vk.VK_PIPELINE_STAGE_TRANSFER_BIT if to_read else vk.VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT
+        dst = vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT if to_read else vk.VK_PIPELINE_STAGE_TRANSFER_BIT
+        self.device.submit_once(lambda cb: vk.vkCmdPipelineBarrier(cb, src, dst, 0, 0, None, 0, None, 1, [barrier]))
+
+    def destroy(self) -> None:
+        if self.handle is None:
+            return
+        vk = self.device.vk
+        for view in self.views:
+            vk.vkDestroyImageView(self.device.handle, view, None)
+        vk.vkDestroyImage(self.device.handle, self.handle, None)
+        if self.allocation is not None:
+            self.device.allocator.free(self.allocation)
+        self.handle = None
+
+
+def texture_sampler(device: Device) -> Any:
+    """Trilinear, repeating, with the device's anisotropy (up to 16x) where it has the feature."""
+    vk = device.vk
+    anisotropy = min(16.0, float(device.limits.maxSamplerAnisotropy)) if device.features.get("samplerAnisotropy") else 0
+    return vk.vkCreateSampler(
+        device.handle,
+        vk.VkSamplerCreateInfo(
+            magFilter=vk.VK_FILTER_LINEAR,
+            minFilter=vk.VK_FILTER_LINEAR,
+            mipmapMode=vk.VK_SAMPLER_MIPMAP_MODE_LINEAR,
+            addressModeU=vk.VK_SAMPLER_ADDRESS_MODE_REPEAT,
+            addressModeV=vk.VK_SAMPLER_ADDRESS_MODE_REPEAT,
+            addressModeW=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+            anisotropyEnable=vk.VK_TRUE if anisotropy > 1 else vk.VK_FALSE,
+            maxAnisotropy=max(anisotropy, 1.0),
+            minLod=0.0,
+            maxLod=vk.VK_LOD_CLAMP_NONE,
+        ),
+        None,
+    )

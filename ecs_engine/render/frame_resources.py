@@ -1,0 +1,104 @@
+"""What each frame slot owns: its mapped buffers (globals, lights, instance rows, materials) and
+its set 0, which names them and the texture pages. A slot's buffers are written only after its
+fence was waited on, so the editor can edit materials while other frames are in flight."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers, write_images
+from ..gpu.device import Device
+from ..gpu.memory import Buffer
+from .layouts import (
+    BINDING_GLOBALS,
+    BINDING_INSTANCES,
+    BINDING_LIGHTS,
+    BINDING_MATERIALS,
+    BINDING_TEXTURES,
+    GLOBALS,
+    INSTANCE,
+    LIGHT,
+    MATERIAL,
+)
+from .materials import Materials
+from .texture_pages import TexturePages
+
+MIN_LIGHTS = 256
+MIN_MATERIALS = 64
+
+
+@dataclass
+class FrameResources:
+    globals: Buffer
+    lights: Buffer
+    instances: Buffer
+    materials: Buffer
+    descriptor_set: Any
+    set_array: Any  # VkDescriptorSet[1] for raw calls
+    written: tuple[Any, ...] | None = None  # what the globals buffer holds
+    # (the Materials, its version, the texture pages' generation) in `materials`: the object
+    # itself, not its id, which a new registry could reuse once the old one is freed
+    materials_written: tuple[Materials, int, int] | None = None
+
+    @classmethod
+    def make(
+        cls, device: Device, pool: DescriptorPool, layout: DescriptorSetLayout, pages: TexturePages
+    ) -> FrameResources:
+        vk = device.vk
+        ssbo = vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT
+        descriptor_set = pool.allocate(layout)
+        frame = cls(
+            globals=Buffer(device, GLOBALS.size, vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT),
+            lights=Buffer(device, LIGHT.size * MIN_LIGHTS, ssbo),
+            instances=Buffer(device, INSTANCE.size * 1024, ssbo),
+            materials=Buffer(device, MATERIAL.size * MIN_MATERIALS, ssbo),
+            descriptor_set=descriptor_set,
+            set_array=vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]),
+        )
+        frame.write_set(device, pages)
+        return frame
+
+    def write_set(self, device: Device, pages: TexturePages) -> None:
+        vk = device.vk
+        ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
+        write_buffers(
+            device,
+            self.descriptor_set,
+            [
+                (BINDING_GLOBALS, vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, self.globals),
+                (BINDING_LIGHTS, ssbo, self.lights),
+                (BINDING_INSTANCES, ssbo, self.instances),
+                (BINDING_MATERIALS, ssbo, self.materials),
+            ],
+        )
+        write_images(device, self.descriptor_set, BINDING_TEXTURES, pages.image_infos())
+
+    def ensure_capacity(self, device: Device, pages: TexturePages, instances: int, lights: int, materials: int) -> None:
+        """Grow the buffers (and name the new ones in the set)."""
+        before = (self.instances, self.lights, self.materials)
+        try:
+            self.instances = self.instances.grown(instances * INSTANCE.size)
+            self.lights = self.lights.grown(lights * LIGHT.size)
+            self.materials = self.materials.grown(materials * MATERIAL.size)
+        finally:
+            if (self.instances, self.lights, self.materials) != before:
+                if self.materials is not before[2]:
+                    self.materials_written = None
+                self.write_set(device, pages)
+
+    def write_materials(self, materials: Materials, pages: TexturePages) -> None:
+        """The world's material table into this slot's copy, when it changed since last written
+        here; texture handles become the pages' refs."""
+        key = (materials, materials.version, pages.generation)
+        last = self.materials_written
+        if last is None or last[0] is not materials or last[1:] != key[1:]:
+            rows = materials.rows()
+            out = self.materials.array(MATERIAL.dtype, len(rows))
+            out[:] = rows
+            pages.map_rows(out)
+            self.materials_written = key
+
+    def destroy(self) -> None:
+        for buffer in (self.globals, self.lights, self.instances, self.materials):
+            buffer.destroy()

@@ -1,0 +1,94 @@
+// The mesh fragment shader body: mesh.frag, and mesh_textured.frag (TEXTURED: the material's
+// textures, sampled from the texture pages; render/texture_pages.py says why pages).
+layout(location = 0) in vec3 v_position;
+layout(location = 1) in vec3 v_normal;
+layout(location = 2) flat in uint v_material;
+#ifdef TEXTURED
+layout(location = 3) in vec2 v_uv;
+layout(location = 4) in vec4 v_tangent;
+
+layout(set = SET_FRAME, binding = BINDING_TEXTURES) uniform sampler2DArray texture_pages[TEXTURE_PAGES];
+
+// A texture ref is page << 16 | layer. Constant indices in a switch, and explicit gradients taken
+// before any branch: legal on every device, descriptor indexing or not.
+#define PAGE(i) case i: return textureGrad(texture_pages[i], at, dx, dy);
+vec4 sample_texture(uint ref, vec2 uv, vec2 dx, vec2 dy) {
+    vec3 at = vec3(uv, float(ref & 0xFFFFu));
+    switch (ref >> 16) {
+        PAGE(0) PAGE(1) PAGE(2) PAGE(3) PAGE(4) PAGE(5) PAGE(6) PAGE(7) PAGE(8)
+        PAGE(9) PAGE(10) PAGE(11) PAGE(12) PAGE(13) PAGE(14) PAGE(15) PAGE(16) PAGE(17)
+    }
+    return vec4(1.0);
+}
+#endif
+
+layout(location = 0) out vec4 out_color;
+
+// The material's shading model, per fragment, over every light. Every division is guarded, so a
+// fragment at a light's centre, a light of radius or intensity 0, or a degenerate normal stays finite.
+void main() {
+    Material m = materials[v_material];
+    float occlusion = 1.0;
+    vec3 n = v_normal;
+#ifdef TEXTURED
+    vec2 dx = dFdx(v_uv), dy = dFdy(v_uv);
+    if (m.textures.x != NO_TEXTURE) {
+        m.base_color *= sample_texture(m.textures.x, v_uv, dx, dy);
+    }
+    if (m.textures.y != NO_TEXTURE) {
+        vec4 mr = sample_texture(m.textures.y, v_uv, dx, dy);
+        m.surface.y *= mr.g;
+        m.surface.x *= mr.b;
+    }
+    if (m.textures.w != NO_TEXTURE) {
+        m.emissive.rgb *= sample_texture(m.textures.w, v_uv, dx, dy).rgb;
+    }
+    if (m.textures2.x != NO_TEXTURE) {
+        occlusion = 1.0 + m.params.z * (sample_texture(m.textures2.x, v_uv, dx, dy).r - 1.0);
+    }
+#endif
+    if ((MATERIAL_FEATURES & FEATURE_ALPHA_MASK) != 0u && m.kind.y == ALPHA_MASK && m.base_color.a < m.params.x) {
+        discard;
+    }
+    uint model = m.kind.x;
+    vec3 color = m.base_color.rgb;
+    if (!model_is(model, MODEL_UNLIT)) {
+        float n2 = dot(n, n);
+        if (n2 < 1e-24) {
+            n = cross(dFdx(v_position), dFdy(v_position));   // flattened geometry: face normal
+            n2 = dot(n, n);
+        }
+        n = n2 > 1e-24 ? n * inversesqrt(n2) : vec3(0.0, 0.0, 1.0);
+#ifdef TEXTURED
+        if (m.textures.z != NO_TEXTURE) {
+            // tangent-space normal: x along +u, y along the bitangent w * cross(n, t) (glTF)
+            vec3 t = v_tangent.xyz - n * dot(n, v_tangent.xyz);
+            float t2 = dot(t, t);
+            if (t2 > 1e-24) {
+                t *= inversesqrt(t2);
+                vec3 b = v_tangent.w * cross(n, t);
+                vec3 tn = sample_texture(m.textures.z, v_uv, dx, dy).xyz * 2.0 - 1.0;
+                tn.xy *= m.params.y;
+                vec3 mapped = t * tn.x + b * tn.y + n * tn.z;
+                float m2 = dot(mapped, mapped);
+                n = m2 > 1e-24 ? mapped * inversesqrt(m2) : n;
+            }
+        }
+#endif
+        vec3 eye = g.eye.xyz - v_position;
+        float e2 = dot(eye, eye);
+        vec3 to_eye = e2 > 1e-24 ? eye * inversesqrt(e2) : vec3(0.0, 0.0, 1.0);
+        color = g.ambient.rgb * (g.ambient.a * occlusion) * m.base_color.rgb;
+        for (uint i = 0u; i < g.counts.x; ++i) {
+            Light light = lights[i];
+            vec3 l;
+            float energy = light_at(light, v_position, n, l);
+            float nl = dot(n, l);
+            if (nl > 0.0 && energy > 0.0) {
+                color += light.color_intensity.rgb * (energy * nl) * brdf_pi(m, model, n, l, to_eye, nl);
+            }
+        }
+    }
+    color += m.emissive.rgb;
+    out_color = vec4(min(color, vec3(65504.0)), 1.0);
+}
