@@ -150,15 +150,25 @@ def bounding_sphere(points: np.ndarray) -> tuple[np.ndarray, float]:
 def normalized(mesh: MeshData, size: float = 1.0) -> MeshData:
     """A copy centred on its bounding-box centre, uniformly scaled so its largest extent is `size`,
     so demos can show any model at a known size."""
+    return normalized_together([mesh], size)[0]
+
+
+def normalized_together(meshes: list[MeshData], size: float = 1.0) -> list[MeshData]:
+    """The parts of one model, moved and scaled as one (`normalized` of their union)."""
     if not 0.0 < size < np.inf:
         raise ValueError(f"size must be a finite number above 0, got {size}")
-    p = mesh.positions.astype(np.float64)
-    lo, hi = p.min(0), p.max(0)
+    if not meshes:
+        return []
+    lo = np.min([m.positions.astype(np.float64).min(0) for m in meshes], axis=0)
+    hi = np.max([m.positions.astype(np.float64).max(0) for m in meshes], axis=0)
     extent = float((hi - lo).max())
     scale = size / extent if extent > 0 else 1.0
-    return MeshData.from_arrays(
-        (p - (lo + hi) / 2) * scale, mesh.normals, mesh.indices, mesh.name, mesh.uvs, mesh.tangents
-    )
+    return [
+        MeshData.from_arrays(
+            (m.positions.astype(np.float64) - (lo + hi) / 2) * scale, m.normals, m.indices, m.name, m.uvs, m.tangents
+        )
+        for m in meshes
+    ]
 
 
 def tangent_frames(positions: np.ndarray, normals: np.ndarray, uvs: np.ndarray, indices: np.ndarray) -> np.ndarray:

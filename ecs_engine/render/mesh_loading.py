@@ -15,7 +15,7 @@ import numpy as np
 from ..errors import UsageError
 from .mesh_data import MeshData
 
-__all__ = ["DEFAULT_MODEL", "SUPPORTED_FORMATS", "load_mesh"]
+__all__ = ["DEFAULT_MODEL", "SUPPORTED_FORMATS", "Part", "assemble", "load_mesh", "read_parts"]
 
 #: File extension -> format name, in the order error messages list them.
 SUPPORTED_FORMATS: Final[dict[str, str]] = {".obj": "OBJ", ".gltf": "glTF", ".glb": "GLB", ".ply": "PLY", ".stl": "STL"}
@@ -36,6 +36,15 @@ def load_mesh(path: str | os.PathLike[str], *, max_triangles: int | None = None)
     texture coordinates are kept (flipped to glTF's top-left origin) and tangents made from them.
     Any problem with the file (or more than `max_triangles` triangles) raises `UsageError` with one
     line naming the file, so the CLI can show it without a traceback."""
+    file, parts, _ = read_parts(path, max_triangles)
+    return assemble(file, parts)
+
+
+def read_parts(
+    path: str | os.PathLike[str], max_triangles: int | None = None
+) -> tuple[Path, list[Part], list[object | None]]:
+    """The file's geometry as parts (one per scene node), each with trimesh's material for it
+    (None where it has none), checked as `load_mesh` says; `assemble` makes a MeshData of parts."""
     if max_triangles is not None and max_triangles < 1:
         raise ValueError(f"max_triangles must be at least 1, got {max_triangles}")
     file = Path(path)
@@ -47,7 +56,7 @@ def load_mesh(path: str | os.PathLike[str], *, max_triangles: int | None = None)
     if not data.strip():
         raise UsageError(f"{file}: the file is empty")
     _sniff(file, fmt, data)
-    parts, only_points_or_lines = _read_parts(file, fmt, data)
+    parts, materials, only_points_or_lines = _read_parts(file, fmt, data)
     faces_total = sum(len(f) for _, f, _, _ in parts)
     if faces_total == 0:
         if only_points_or_lines:
@@ -55,7 +64,8 @@ def load_mesh(path: str | os.PathLike[str], *, max_triangles: int | None = None)
         raise UsageError(f"{file}: contains no triangles (an empty mesh, or not a valid {fmt} file)")
     if max_triangles is not None and faces_total > max_triangles:
         raise UsageError(f"{file}: has {faces_total} triangles, more than the limit of {max_triangles}")
-    return _assemble(file, parts)
+    _check_values(file, parts)
+    return file, parts, materials
 
 
 def _check_path(file: Path) -> str:
@@ -129,12 +139,13 @@ def _check_obj_faces(file: Path, text: str) -> None:
 
 
 # positions (V,3) f8, faces (F,3) i8, normals (V,3) or None, texture coordinates (V,2) or None
-_Part = tuple[np.ndarray, np.ndarray, "np.ndarray | None", "np.ndarray | None"]
+Part = tuple[np.ndarray, np.ndarray, "np.ndarray | None", "np.ndarray | None"]
 
 
-def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[_Part], bool]:
+def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[Part], list[object | None], bool]:
     """Parse with trimesh (unprocessed, so NaNs and bad indices stay visible to our checks) and bake each
-    scene node's transform into its geometry. Also says whether the file held only points/lines."""
+    scene node's transform into its geometry; each part's trimesh material beside it. Also says
+    whether the file held only points/lines."""
     try:
         import trimesh
 
@@ -144,7 +155,8 @@ def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[_Part], bool]:
             process=False,
             resolver=trimesh.resolvers.FilePathResolver(str(file)),
         )
-        parts: list[_Part] = []
+        parts: list[Part] = []
+        materials: list[object | None] = []
         non_mesh = 0
         for node in scene.graph.nodes_geometry:
             transform, geometry_name = scene.graph[node]
@@ -161,6 +173,7 @@ def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[_Part], bool]:
                 np.asarray(transform, np.float64),
             )
             parts.append((positions, faces, normals, _uvs(geometry, len(positions))))
+            materials.append(getattr(getattr(geometry, "visual", None), "material", None))
     except UsageError:
         raise
     except FileNotFoundError as exc:  # a glTF's buffer or image file is not next to it
@@ -168,7 +181,7 @@ def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[_Part], bool]:
     except Exception as exc:
         reason = (str(exc).strip().splitlines() or [""])[0] or type(exc).__name__
         raise UsageError(f"{file}: not a valid {fmt} file ({reason})") from None
-    return parts, non_mesh > 0 and not any(len(f) for _, f, _, _ in parts)
+    return parts, materials, non_mesh > 0 and not any(len(f) for _, f, _, _ in parts)
 
 
 def _uvs(geometry: object, count: int) -> np.ndarray | None:
@@ -200,9 +213,9 @@ def _transformed(
     return positions, faces, normals
 
 
-def _assemble(file: Path, parts: list[_Part]) -> MeshData:
-    """Check values, drop zero-area triangles and unused vertices, fill in normals, build the MeshData."""
-    _check_values(file, parts)
+def assemble(file: Path, parts: list[Part], name: str | None = None) -> MeshData:
+    """Drop zero-area triangles and unused vertices, fill in normals, build one MeshData of `parts`
+    (checked by read_parts)."""
     everything = np.concatenate([p for p, _, _, _ in parts])
     size = float((everything.max(0) - everything.min(0)).max())
     has_uvs = any(uv is not None for _, _, _, uv in parts)
@@ -237,12 +250,12 @@ def _assemble(file: Path, parts: list[_Part]) -> MeshData:
         np.concatenate(out_p),
         np.concatenate(out_n),
         np.concatenate(out_i),
-        file.stem,
+        name or file.stem,
         uvs=np.concatenate(out_uv) if has_uvs else None,
     )
 
 
-def _check_values(file: Path, parts: list[_Part]) -> None:
+def _check_values(file: Path, parts: list[Part]) -> None:
     """Non-finite, float32-overflowing and out-of-range values: one line naming the first."""
     bad = sum(int((~np.isfinite(p)).any(axis=1).sum()) for p, _, _, _ in parts)
     if bad:
