@@ -324,5 +324,17 @@ def test_materials_window_and_light_sections_draw_and_edit():
         assert editor.materials.apply(library, handle, {"roughness": 3.0}) is None
         assert "roughness" in editor.materials.status and library[handle].roughness == pytest.approx(0.2)
         scene.frame()
+        # a texture set from the panel shows on the next frame; a handle the registry lacks is refused
+        from ecs_engine.render.textures import Texture
+
+        red = library.textures.add(Texture("red", np.full((16, 16, 3), (255, 0, 0), np.uint8)))
+        before = scene.gpu.target.pixels()[..., :3].copy()
+        assert editor.materials.apply(library, handle, {"base_color_texture": red, "normal_texture": red})
+        scene.frame()
+        scene.frame()  # the textures section, with its normal-scale slider, drawn for a textured material
+        assert editor.materials.status == ""
+        assert (scene.gpu.target.pixels()[..., :3] != before).any()
+        assert editor.materials.apply(library, handle, {"occlusion_texture": 99}) is None
+        assert "not a texture" in editor.materials.status
     finally:
         scene.close()

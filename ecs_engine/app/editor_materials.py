@@ -10,7 +10,7 @@ from typing import Any
 
 from ..components import Mesh
 from ..ecs.world import World
-from ..render.materials import ALPHA_MODES, SHADING_MODELS, Material, Materials, materials
+from ..render.materials import ALPHA_MODES, SHADING_MODELS, TEXTURE_FIELDS, Material, Materials, materials
 from .editor_lights import Editor
 
 _ALPHA_EDITABLE = ("opaque", "mask")  # blend needs the transparent pass
@@ -78,6 +78,7 @@ class MaterialsPanel:
             changed, value = imgui.slider_float("alpha cutoff", m.alpha_cutoff, 0.0, 1.0)
             if changed:
                 changes["alpha_cutoff"] = value
+        changes.update(texture_slots(imgui, library, m))
         if changes:
             self.apply(library, handle, changes)
 
@@ -89,6 +90,35 @@ class MaterialsPanel:
             return None
         self.status = ""
         return material
+
+
+def texture_slots(imgui: Any, library: Materials, m: Material) -> dict[str, Any]:
+    """A combo per texture field (none, or one of the registry's textures by handle and name),
+    and the normal scale and occlusion strength where those maps are set."""
+    changes: dict[str, Any] = {}
+    textures = library.textures
+    names = ["none"] + [f"{h}: {textures[h].name}" for h in range(len(textures))]
+    used = sum(getattr(m, f) is not None for f in TEXTURE_FIELDS)
+    if imgui.tree_node_ex(f"textures ({used})###textures", imgui.TreeNodeFlags_.default_open.value):
+        for name in TEXTURE_FIELDS:
+            current = getattr(m, name)
+            changed, index = imgui.combo(
+                name.removesuffix("_texture").replace("_", " "),
+                0 if current is None else current + 1,
+                names,
+            )
+            if changed:
+                changes[name] = None if index == 0 else index - 1
+        if m.normal_texture is not None:
+            changed, value = imgui.slider_float("normal scale", m.normal_scale, 0.0, 2.0)
+            if changed:
+                changes["normal_scale"] = value
+        if m.occlusion_texture is not None:
+            changed, value = imgui.slider_float("occlusion strength", m.occlusion_strength, 0.0, 1.0)
+            if changed:
+                changes["occlusion_strength"] = value
+        imgui.tree_pop()
+    return changes
 
 
 def mesh_section(editor: Editor, world: World, eid: int) -> None:
