@@ -63,4 +63,5 @@ void main() {
     v_tangent = vec4(t, in_tangent.w * mirrored);
 #endif
     gl_Position = g.projection * (g.view * vec4(world, 1.0));
+    gl_PointSize = 1.0;  // --fill points draws the vertices: one pixel each
 }

@@ -105,3 +105,18 @@ def test_switching_paths_keeps_nothing_of_the_old_ones():
         target = session.gpu.target
         state = session.renderer.target_state(target.framebuffer, target.width, target.height).path_state
         assert len(state) == 2  # the path in use keeps one per frame slot; the old paths' are gone
+
+
+def test_fill_changes_live_and_a_bad_one_changes_nothing():
+    source = OffscreenSource()
+    with Session(options(fill="wireframe"), source) as session:
+        assert session.settings.fill == "wireframe"
+        wire = draw(session)[..., :3].copy()
+        session.apply(replace(session.settings, fill="solid"))
+        assert session.settings.fill == "solid" and session.renderer.fill == "solid"
+        solid = draw(session)[..., :3]
+        assert (solid != wire).any()
+        with pytest.raises(UsageError, match="unknown fill"):
+            session.apply(replace(session.settings, fill="dots", scene="cube", threads=1))
+        assert session.settings.scene == "grid100" and session.pool.threads == 2  # all or nothing
+    assert source.validation_messages() == []

@@ -94,6 +94,12 @@ def render_flags() -> OneLineParser:
         "--no-culling", dest="culling", action="store_false", help="draw everything, skip frustum culling"
     )
     common.add_argument(
+        "--fill",
+        choices=("solid", "wireframe", "points"),
+        default="solid",
+        help="how meshes are rasterised (wireframe and points where the device has fillModeNonSolid)",
+    )
+    common.add_argument(
         "--entities", type=positive_int, help="scaling and motion scenes: entity count (default 10,000 and 100,000)"
     )
     common.add_argument(
@@ -211,6 +217,7 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
         mode=args.mode,
         threads=args.threads,
         culling=args.culling,
+        fill=args.fill,
         recorder=args.recorder,
         entities=args.entities or 10_000,
         perf_json=args.perf_json,

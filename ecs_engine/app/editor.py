@@ -21,6 +21,7 @@ from ..components import Camera, Mesh, PointLight, Transform, active_camera
 from ..ecs.world import World
 from ..gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
 from ..maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
+from ..render.path import FILL_MODES
 from ..render.renderer import MODES, PATHS, RECORDER_NAMES
 from .editor_lights import LIGHT_SECTIONS
 from .editor_materials import MaterialsPanel, mesh_section
@@ -122,6 +123,7 @@ class Editor:
                 req.recorder = _combo(imgui, "recorder", req.recorder, RECORDER_NAMES)
             _, req.threads = imgui.slider_int("threads", req.threads, 1, max(1, self.max_threads))
             _, req.culling = imgui.checkbox("frustum culling", req.culling)
+            req.fill = _combo(imgui, "fill", req.fill, tuple(FILL_MODES))
             if req.present is not None:
                 req.present = _combo(imgui, "present", req.present, PRESENT_MODES)
             imgui.separator()

@@ -118,6 +118,7 @@ class Session:
                 jobs=self.pool,
                 culling=start.culling,
                 chunk_rows=options.chunk_rows,
+                fill=start.fill,
             )
             self.scene = start.scene
             self.world, self.schedule = self._build(start.scene, options.path)
@@ -140,6 +141,7 @@ class Session:
             threads=self.pool.threads,
             culling=self.renderer.culling,
             present=self.source.present_mode,
+            fill=self.renderer.fill,
         )
 
     def _build(self, scene: str, path: str | None) -> tuple[World, Schedule]:
@@ -159,8 +161,10 @@ class Session:
         present = wanted.present if wanted.present != source.present_mode else None
         if present is not None:
             source.check_present(present)
+        renderer.check_fill(wanted.fill)
         scene = self._build(wanted.scene, None) if wanted.scene != self.scene else None
         renderer.set_path(wanted.mode, wanted.recorder)  # checks, then swaps
+        renderer.set_fill(wanted.fill)
         renderer.culling = wanted.culling
         pool.resize(wanted.threads)
         if present is not None:

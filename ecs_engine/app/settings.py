@@ -30,6 +30,7 @@ class Settings:
     threads: int  # worker pool size, counting the main thread
     culling: bool
     present: str | None  # fifo | mailbox | immediate; None: headless, no swapchain
+    fill: str = "solid"  # solid | wireframe | points
 
 
 @dataclass(frozen=True)
@@ -50,6 +51,7 @@ class RunOptions:
     mode: str = "instanced"  # instanced | per_entity | indirect
     threads: int | None = None  # None: all cores
     culling: bool = True
+    fill: str = "solid"  # solid | wireframe | points (render/path.py's FILL_MODES)
     chunk_rows: int | None = None  # rows per render job (None: about one per thread, frame_data.MIN_CHUNK_ROWS)
     recorder: str | None = None  # native | python (None: native when numba is there)
     entities: int = 10_000  # the scaling scene's entity count
@@ -69,6 +71,7 @@ class RunOptions:
             threads=self.threads or default_threads(),
             culling=self.culling,
             present=None if self.headless else self.present,
+            fill=self.fill,
         )
 
 

@@ -61,6 +61,7 @@ class GraphicsPipelineSpec:
     depth_write: bool = True
     alpha_blend: bool = False
     fragment_constants: tuple[int, ...] = ()  # uint specialisation constants, constant_id 0, 1, ...
+    polygon_mode: int = 0  # VK_POLYGON_MODE_FILL; LINE (1) and POINT (2) need fillModeNonSolid
 
 
 def specialization(vk: Any, values: tuple[int, ...]) -> tuple[Any, Any]:
@@ -118,7 +119,7 @@ def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
             ),
             pViewportState=vk.VkPipelineViewportStateCreateInfo(viewportCount=1, scissorCount=1),
             pRasterizationState=vk.VkPipelineRasterizationStateCreateInfo(
-                polygonMode=vk.VK_POLYGON_MODE_FILL,
+                polygonMode=spec.polygon_mode,
                 lineWidth=1.0,
                 cullMode=vk.VK_CULL_MODE_BACK_BIT if spec.cull_back else vk.VK_CULL_MODE_NONE,
                 frontFace=vk.VK_FRONT_FACE_COUNTER_CLOCKWISE if spec.front_face_ccw else vk.VK_FRONT_FACE_CLOCKWISE,

@@ -24,7 +24,7 @@ from ..gpu.secondary import end_command_buffer
 from .frame_data import Chunk
 from .instance_rows import write_rows
 from .layouts import FEATURE_TEXTURES, INSTANCE, MESH_VERTEX
-from .path import ChunkResult, FrameInputs, PathContext, summed_counts
+from .path import FILL_MODES, ChunkResult, FrameInputs, PathContext, summed_counts
 
 # The MESH_VERTEX fields mesh_vertex.glsl reads, at locations 0, 1, ...: only those are bound (an
 # attribute the shader does not read is a validation performance warning). The textured variants
@@ -54,6 +54,7 @@ def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple[A
         vertex_stride=MESH_VERTEX.itemsize,
         vertex_attributes=vertex_attributes(ctx.device.vk, TEXTURED_VERTEX_INPUTS if textured else VERTEX_INPUTS),
         fragment_constants=(ctx.material_features,),  # mesh.frag's MATERIAL_FEATURES
+        polygon_mode=FILL_MODES[ctx.fill],
     )
     vk = ctx.device.vk
     plain = graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, fragment_shader, **base))

@@ -27,6 +27,9 @@ from ..gpu.secondary import SecondaryBuffers
 from .frame_data import Chunk
 from .mesh_registry import MeshRegistry
 
+#: --fill: name -> VkPolygonMode (wireframe and points need the device's fillModeNonSolid)
+FILL_MODES = {"solid": 0, "wireframe": 1, "points": 2}
+
 MeshBounds = tuple[np.ndarray, np.ndarray, np.ndarray]  # per mesh: centre (n, 3), radius, index count
 
 
@@ -83,6 +86,7 @@ class PathContext:
     secondaries: SecondaryBuffers
     frames_in_flight: int
     material_features: int  # what the mesh pipelines are specialised for (Materials.features)
+    fill: str  # FILL_MODES: how the mesh pipelines rasterise triangles
     native_recorder: Callable[[], Any]  # gpu.native_recorder.NativeRecorder, compiled on first call, once a device
 
 

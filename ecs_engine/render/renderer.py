@@ -50,7 +50,7 @@ from .light_pass import LightPass
 from .light_rows import write_lights
 from .materials import Materials
 from .mesh_registry import MeshRegistry
-from .path import ChunkResult, FrameInputs, MeshBounds, PathContext, PathFactory, RenderPath, TargetState
+from .path import FILL_MODES, ChunkResult, FrameInputs, MeshBounds, PathContext, PathFactory, RenderPath, TargetState
 from .texture_pages import TexturePages
 
 PATHS: dict[str, PathFactory] = {
@@ -99,11 +99,13 @@ class Renderer:
         clear_color: tuple[float, float, float] = (0.02, 0.02, 0.03),
         ambient: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 0.06),
         light_size: float = 0.08,
+        fill: str = "solid",
     ) -> None:
         if mode not in PATHS:
             raise ValueError(f"unknown render mode {mode!r}; modes: {', '.join(MODES)}")
         vk = self.vk = device.vk
         self.device = device
+        self.check_fill(fill)  # before anything is made: a refusal leaves nothing to destroy
         self.target = target
         self.meshes = meshes
         self.clear_color = clear_color
@@ -135,6 +137,7 @@ class Renderer:
         # what the mesh pipelines were specialised for (Materials.features): grown, never shrunk,
         # when a world's materials use another shading model (a pipeline rebuild, as a mode switch)
         self.material_features = self.default_materials.features
+        self.fill = fill
         self.per_frame = [FrameResources.make(device, self.pool, self.set_layout, self.texture_pages) for _ in range(n)]
         self.light_pass = LightPass(device, self.set_layout.handle, target.render_pass, 1, light_size)
         self._targets: dict[tuple[int, int, int], TargetState] = {}
@@ -206,6 +209,7 @@ class Renderer:
             secondaries=self.secondaries,
             frames_in_flight=len(self.frames.frames),
             material_features=self.material_features,
+            fill=self.fill,
             native_recorder=self._native_recorder,
         )
         path = PATHS[mode](ctx, recorder)
@@ -220,6 +224,27 @@ class Renderer:
             infos = self.texture_pages.image_infos()
             for pf in self.per_frame:
                 write_images(self.device, pf.descriptor_set, BINDING_TEXTURES, infos)
+
+    def check_fill(self, fill: str) -> None:
+        """Raise (UsageError) unless this device can draw meshes with `fill`."""
+        if fill not in FILL_MODES:
+            raise UsageError(f"unknown fill {fill!r}; fills: {', '.join(FILL_MODES)}")
+        if fill != "solid" and not self.device.features.get("fillModeNonSolid"):
+            raise UsageError(
+                f"{self.device.info.name} cannot draw {fill} (it lacks fillModeNonSolid); use --fill solid"
+            )
+
+    def set_fill(self, fill: str) -> None:
+        """Rasterise meshes as `fill` from the next frame (the path's pipelines are rebuilt)."""
+        self.check_fill(fill)
+        if fill != self.fill:
+            old = self.fill
+            self.fill = fill
+            try:
+                self._swap_path(self._make_path(self.mode, self.cpu_recorder))
+            except BaseException:
+                self.fill = old
+                raise
 
     def _check_material_features(self, materials: Materials) -> None:
         """Rebuild the path's pipelines when the world's materials use a shading model (or alpha
