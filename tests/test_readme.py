@@ -28,4 +28,5 @@ def test_readme_materials_example_runs():
 
     world = scope["world"]
     assert materials(world)[scope["gold"]].roughness == 0.6
+    assert materials(world)[scope["floor"]].base_color_texture == scope["tiles"]
     assert world.query(DirectionalLight).count() == 1 and world.query(SpotLight).count() == 1
