@@ -1,0 +1,33 @@
+#!/bin/bash
+# The GPU host run for issue 14 (device tool): A/B of e7d674c against the working tree, the
+# texture/material tests on NVIDIA, and the materials demo under validation. Prepare here, once:
+#   .gl/  the Vulkan loader and validation layers as .deb files (the device README: apt-get download
+#         libvulkan1 ... vulkan-validationlayers), .whl/ wheels of vulkan cffi pycparser glfw trimesh
+#         imgui-bundle esper for Python 3.12, .ab/base = `git archive e7d674c` unpacked;
+# then run `bash scripts/device_run.sh all` with carry [".gl", ".whl", ".ab/base"]. Results in $OUT.
+set -u
+export PYTHONUNBUFFERED=1
+for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig
+export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+export VK_LAYER_PATH=/usr/share/vulkan/explicit_layer.d
+python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl || exit 1
+export PYTHONPATH=/tmp/site
+python3 -m pip install -q --no-deps --no-build-isolation --no-index --target /tmp/new . >/dev/null 2>&1 || { echo "install new failed"; exit 1; }
+python3 -m pip install -q --no-deps --no-build-isolation --no-index --target /tmp/old .ab/base >/dev/null 2>&1 || { echo "install old failed"; exit 1; }
+{ nvidia-smi --query-gpu=name,driver_version --format=csv,noheader; nproc; date -u +%FT%TZ; python3 --version; } > $OUT/machine.txt
+cat $OUT/machine.txt
+MODE=${1:-all}
+if [ "$MODE" = all ] || [ "$MODE" = tests ]; then
+  PYTHONPATH=/tmp/new:/tmp/site timeout 240 python3 -m pytest -q -p no:cacheprovider tests/test_textures.py tests/test_model_loading.py tests/test_shading_models.py tests/test_materials.py tests/test_render.py tests/test_light_rows.py tests/test_primitives.py tests/test_fill.py > $OUT/gpu_tests.txt 2>&1
+  tail -3 $OUT/gpu_tests.txt
+  PYTHONPATH=/tmp/new:/tmp/site timeout 60 python3 -m ecs_engine demo materials --headless --frames 30 --width 1280 --height 720 --validate --screenshot $OUT/materials-h100.png 2>&1 | tail -3
+fi
+if [ "$MODE" = all ] || [ "$MODE" = ab ]; then
+  for rep in 1 2 3; do
+    if [ $((rep % 2)) = 1 ]; then order="new old"; else order="old new"; fi
+    for v in $order; do
+      (cd /tmp && PYTHONPATH=/tmp/$v:/tmp/site timeout 150 python3 $OLDPWD/scripts/ab_frames.py $v $rep 1280x720 >> $OUT/ab.jsonl 2>> $OUT/ab.err)
+    done
+  done
+  wc -l $OUT/ab.jsonl
+fi
