@@ -30,6 +30,12 @@ void main() {
     Material m = materials[v_material];
     float occlusion = 1.0;
     vec3 n = v_normal;
+    if ((MATERIAL_FEATURES & FEATURE_DOUBLE_SIDED) != 0u && !gl_FrontFacing) {
+        if (m.kind.z == 0u) {
+            discard;  // culling is off for the double-sided: a single-sided back face is not drawn
+        }
+        n = -n;  // glTF: the back face is lit with the normal reversed (the bitangent follows it)
+    }
 #ifdef TEXTURED
     vec2 dx = dFdx(v_uv), dy = dFdy(v_uv);
     if (m.textures.x != NO_TEXTURE) {

@@ -155,6 +155,7 @@ def test_gltf_pbr_material_and_textures(tmp_path, caplog):
         emissiveFactor=[0.1, 0.2, 0.3],
         alphaMode="MASK",
         alphaCutoff=0.4,
+        doubleSided=True,
     )
     registry = Materials()
     with caplog.at_level(logging.WARNING, logger="ecs_engine"):
@@ -169,7 +170,7 @@ def test_gltf_pbr_material_and_textures(tmp_path, caplog):
     assert (registry.textures[m.base_color_texture].pixels == colour).all()
     assert registry.textures[m.base_color_texture].color
     assert not registry.textures[m.metallic_roughness_texture].color
-    assert m.normal_texture is None
+    assert m.normal_texture is None and m.double_sided
 
 
 def test_gltf_with_a_missing_image_file(tmp_path, caplog):

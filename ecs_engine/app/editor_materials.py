@@ -78,6 +78,9 @@ class MaterialsPanel:
             changed, value = imgui.slider_float("alpha cutoff", m.alpha_cutoff, 0.0, 1.0)
             if changed:
                 changes["alpha_cutoff"] = value
+        changed, value = imgui.checkbox("double-sided", m.double_sided)
+        if changed:
+            changes["double_sided"] = value
         changes.update(texture_slots(imgui, library, m))
         if changes:
             self.apply(library, handle, changes)

@@ -23,7 +23,7 @@ from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_lay
 from ..gpu.secondary import end_command_buffer
 from .frame_data import Chunk
 from .instance_rows import write_rows
-from .layouts import FEATURE_TEXTURES, INSTANCE, MESH_VERTEX
+from .layouts import FEATURE_DOUBLE_SIDED, FEATURE_TEXTURES, INSTANCE, MESH_VERTEX
 from .path import FILL_MODES, ChunkResult, FrameInputs, PathContext, summed_counts
 
 # The MESH_VERTEX fields mesh_vertex.glsl reads, at locations 0, 1, ...: only those are bound (an
@@ -55,6 +55,9 @@ def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple[A
         vertex_attributes=vertex_attributes(ctx.device.vk, TEXTURED_VERTEX_INPUTS if textured else VERTEX_INPUTS),
         fragment_constants=(ctx.material_features,),  # mesh.frag's MATERIAL_FEATURES
         polygon_mode=FILL_MODES[ctx.fill],
+        # a double-sided material somewhere: back faces reach the fragment shader, which drops
+        # those of single-sided materials (one pipeline for all; draws stay split by mesh only)
+        cull_back=not ctx.material_features & FEATURE_DOUBLE_SIDED,
     )
     vk = ctx.device.vk
     plain = graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, fragment_shader, **base))

@@ -40,6 +40,7 @@ from .layouts import (
     ALPHA_MASK,
     ALPHA_OPAQUE,
     FEATURE_ALPHA_MASK,
+    FEATURE_DOUBLE_SIDED,
     FEATURE_TEXTURES,
     MATERIAL,
     MODEL_BLINN_PHONG,
@@ -91,6 +92,7 @@ class Material:
     emissive: tuple[float, float, float] = (0.0, 0.0, 0.0)  # linear RGB radiance added as is
     alpha_mode: str = "opaque"  # opaque or mask (alpha below alpha_cutoff is not drawn)
     alpha_cutoff: float = 0.5
+    double_sided: bool = False  # back faces drawn too, lit with the normal reversed (glTF)
     base_color_texture: int | None = None  # sRGB
     metallic_roughness_texture: int | None = None  # linear: G roughness, B metallic
     normal_texture: int | None = None  # linear, tangent space
@@ -140,6 +142,9 @@ class Material:
                     f"material {self.name!r}: {name} must be a finite number in [{low}, {high}], got {value!r}"
                 )
             object.__setattr__(self, name, float(value))
+        if not isinstance(self.double_sided, (bool, np.bool_)):
+            raise ValueError(f"material {self.name!r}: double_sided must be True or False, got {self.double_sided!r}")
+        object.__setattr__(self, "double_sided", bool(self.double_sided))
         for name in TEXTURE_FIELDS:
             value = getattr(self, name)
             if value is not None and (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0):
@@ -158,7 +163,7 @@ class Material:
         out["emissive"][:3] = self.emissive
         out["surface"] = (self.metallic, self.roughness, self.shininess, self.specular)
         out["params"] = (self.alpha_cutoff, self.normal_scale, self.occlusion_strength, 0.0)
-        out["kind"] = (SHADING_MODELS[self.model], ALPHA_MODES[self.alpha_mode], 0, 0)
+        out["kind"] = (SHADING_MODELS[self.model], ALPHA_MODES[self.alpha_mode], int(self.double_sided), 0)
         handles = [NO_TEXTURE if (h := getattr(self, name)) is None else h for name in TEXTURE_FIELDS]
         out["textures"] = handles[:4]
         out["textures2"] = (handles[4], NO_TEXTURE, NO_TEXTURE, NO_TEXTURE)
@@ -240,6 +245,8 @@ class Materials:
             self.features |= FEATURE_ALPHA_MASK
         if material.textured:
             self.features |= FEATURE_TEXTURES
+        if material.double_sided:
+            self.features |= FEATURE_DOUBLE_SIDED
         self.version += 1
 
     def __getitem__(self, handle: int) -> Material:

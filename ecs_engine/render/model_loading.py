@@ -184,6 +184,7 @@ class _GltfMaterials:
                 emissive=(0.0, 0.0, 0.0) if emissive is None else _rgb(emissive, _positive),
                 alpha_mode="mask" if mode == "MASK" else "opaque",
                 alpha_cutoff=_unit(_or(getattr(pbr, "alphaCutoff", None), 0.5)),
+                double_sided=bool(getattr(pbr, "doubleSided", False)),
                 normal_scale=self._normal_scale(name),
                 **fields,
             )
