@@ -17,16 +17,21 @@ python3 -m pip install -q --no-deps --no-build-isolation --no-index --target /tm
 { nvidia-smi --query-gpu=name,driver_version --format=csv,noheader; nproc; date -u +%FT%TZ; python3 --version; } > $OUT/machine.txt
 cat $OUT/machine.txt
 MODE=${1:-all}
+REPO=$PWD
 if [ "$MODE" = all ] || [ "$MODE" = tests ]; then
-  PYTHONPATH=/tmp/new:/tmp/site timeout 240 python3 -m pytest -q -p no:cacheprovider tests/test_textures.py tests/test_model_loading.py tests/test_shading_models.py tests/test_materials.py tests/test_render.py tests/test_light_rows.py tests/test_primitives.py tests/test_fill.py > $OUT/gpu_tests.txt 2>&1
+  # from a copy outside the checkout: in its root, `ecs_engine` would be the source folder, not the
+  # installed package (whose components/ and systems/ live inside it)
+  rm -rf /tmp/t && cp -r tests /tmp/t && cd /tmp
+  PYTHONPATH=/tmp/new:/tmp/site timeout 300 python3 -m pytest -q -p no:cacheprovider /tmp/t/test_textures.py /tmp/t/test_model_loading.py /tmp/t/test_shading_models.py /tmp/t/test_materials.py /tmp/t/test_render.py /tmp/t/test_light_rows.py /tmp/t/test_primitives.py /tmp/t/test_fill.py /tmp/t/test_double_sided.py > $OUT/gpu_tests.txt 2>&1
   tail -3 $OUT/gpu_tests.txt
   PYTHONPATH=/tmp/new:/tmp/site timeout 60 python3 -m ecs_engine demo materials --headless --frames 30 --width 1280 --height 720 --validate --screenshot $OUT/materials-h100.png 2>&1 | tail -3
+  cd $REPO
 fi
 if [ "$MODE" = all ] || [ "$MODE" = ab ]; then
-  for rep in 1 2 3; do
+  for rep in 1 2 3 4 5 6; do
     if [ $((rep % 2)) = 1 ]; then order="new old"; else order="old new"; fi
     for v in $order; do
-      (cd /tmp && PYTHONPATH=/tmp/$v:/tmp/site timeout 150 python3 $OLDPWD/scripts/ab_frames.py $v $rep 1280x720 >> $OUT/ab.jsonl 2>> $OUT/ab.err)
+      (cd /tmp && PYTHONPATH=/tmp/$v:/tmp/site timeout 150 python3 $REPO/scripts/ab_frames.py $v $rep 1280x720 >> $OUT/ab.jsonl 2>> $OUT/ab.err)
     done
   done
   wc -l $OUT/ab.jsonl

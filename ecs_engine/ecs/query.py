@@ -154,6 +154,8 @@ class Query:
         after tick `since` (inside a system, `since` defaults to its last run)."""
         world = self._world
         tables = self._refresh()
+        if not tables:
+            return  # no table matches: nothing to yield, no iteration to open (a per-frame saving)
         changed_keys: list[ColumnKey] = []
         if changed:
             if since is None:

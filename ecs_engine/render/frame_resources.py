@@ -76,6 +76,12 @@ class FrameResources:
 
     def ensure_capacity(self, device: Device, pages: TexturePages, instances: int, lights: int, materials: int) -> None:
         """Grow the buffers (and name the new ones in the set)."""
+        if (
+            instances * INSTANCE.size <= self.instances.size
+            and lights * LIGHT.size <= self.lights.size
+            and materials * MATERIAL.size <= self.materials.size
+        ):
+            return  # the usual frame: three comparisons, not three calls
         before = (self.instances, self.lights, self.materials)
         try:
             self.instances = self.instances.grown(instances * INSTANCE.size)

@@ -127,16 +127,41 @@ _write_positional_native = native.njit(_write_positional_kernel)
 _Columns = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 
+_POINT_COLUMNS: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+
+
+def _point_columns(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Direction, cone and kind columns of n point lights: made once per count and kept (read
+    only), since allocating them each frame cost a small scene ~30 us (measured on the H100 host:
+    the model scene's CPU frame went from 0.20 to 0.29 ms with materials)."""
+    found = _POINT_COLUMNS.get(n)
+    if found is None:
+        if len(_POINT_COLUMNS) > 64:
+            _POINT_COLUMNS.clear()
+        found = (
+            np.zeros((n, 3)),
+            np.ascontiguousarray(np.broadcast_to(NO_CONE, (n, 2))),
+            np.full(n, LIGHT_POINT, np.float32),
+        )
+        for array in found:
+            array.flags.writeable = False
+        _POINT_COLUMNS[n] = found
+    return found
+
+
 def _columns(parts: list[PositionalLights]) -> _Columns:
     """The parts' columns, concatenated (a single part's are used as they are)."""
     directions: list[np.ndarray] = []
     cones: list[np.ndarray] = []
     kinds: list[np.ndarray] = []
     for p in parts:
-        spot = p.direction is not None and p.cone is not None
-        directions.append(p.direction if p.direction is not None else np.zeros((len(p), 3)))
-        cones.append(p.cone if p.cone is not None else np.broadcast_to(NO_CONE, (len(p), 2)))
-        kinds.append(np.full(len(p), LIGHT_SPOT if spot else LIGHT_POINT, np.float32))
+        if p.direction is None or p.cone is None:
+            direction, cone, kind = _point_columns(len(p))
+        else:
+            direction, cone, kind = p.direction, p.cone, np.full(len(p), LIGHT_SPOT, np.float32)
+        directions.append(direction)
+        cones.append(cone)
+        kinds.append(kind)
     if len(parts) == 1:
         p = parts[0]
         return p.position, p.radius, p.color, p.intensity, directions[0], cones[0], kinds[0]
@@ -169,7 +194,8 @@ def write_lights(
         if _write_positional_native is None:
             write_positional_numpy(*columns, origin, eye, out[:count])
         else:
-            _write_positional_native(*(np.ascontiguousarray(c) for c in columns), origin, eye, out[:count])
+            contiguous = [c if c.flags.c_contiguous else np.ascontiguousarray(c) for c in columns]
+            _write_positional_native(*contiguous, origin, eye, out[:count])
     row = count
     for d in directional:
         rows = out[row : row + len(d)]

@@ -320,8 +320,8 @@ class Renderer:
         found = world.resources.get(Materials)
         return found if found is not None else self.default_materials
 
-    def extract(self, world: World, width: int, height: int) -> FrameData:
-        count = len(self.materials(world))
+    def extract(self, world: World, width: int, height: int, material_count: int | None = None) -> FrameData:
+        count = len(self.materials(world)) if material_count is None else material_count
         return self.extractor.extract(world, width / height, len(self.meshes), self.culling, count)
 
     def render(
@@ -335,8 +335,9 @@ class Renderer:
     ) -> FrameStats:
         """Record and submit one frame. Headless targets read the image back when asked."""
         width, height = extent or (self.target.width, self.target.height)
-        data = self.extract(world, width, height)  # before any GPU state is touched: a bad world fails here
         materials = self.materials(world)
+        material_count = len(materials)
+        data = self.extract(world, width, height, material_count)  # before any GPU state: a bad world fails here
         self._check_material_features(materials)
         self._sync_textures(materials)
         if self.jobs is not None and self.jobs.generation != self._jobs_generation:
@@ -345,7 +346,7 @@ class Renderer:
         slot = self.frames.frames.index(frame)
         pf = self.per_frame[slot]
         pf.ensure_capacity(
-            self.device, self.texture_pages, self.path.rows_needed(data.candidates), data.light_count, len(materials)
+            self.device, self.texture_pages, self.path.rows_needed(data.candidates), data.light_count, material_count
         )
         pf.write_materials(materials, self.texture_pages)
         target = self.target_state(framebuffer or self.target.framebuffer, width, height)
@@ -358,7 +359,7 @@ class Renderer:
             instances=pf.instances.array(INSTANCE.dtype),
             bounds=self._mesh_bounds(),
             readback=readback,
-            material_count=len(materials),
+            material_count=material_count,
         )
         path = self.path
         path.begin_frame(inputs)
