@@ -29,6 +29,9 @@
 #define LIGHT_POINT 0
 #define LIGHT_SPOT 1
 #define LIGHT_DIRECTIONAL 2
+#define TONE_MAP_CLAMP 0
+#define TONE_MAP_ACES 1
+#define TONE_MAP_REINHARD 2
 #define NO_TEXTURE 4294967295u
 #define CULL_GROUP 256
 #define COMPACT_GROUP 64
@@ -106,6 +109,11 @@ struct CompactPush {  // 8 bytes, std430
 
 struct BillboardPush {  // 4 bytes, std430
     float size;                 // offset 0: half the quad's side, in view units
+};
+
+struct ToneMapPush {  // 8 bytes, std430
+    float exposure;             // offset 0: linear scale before the curve (2^EV)
+    uint operator;              // offset 4: TONE_MAP_* (render/tone_map.py)
 };
 
 struct ImGuiPush {  // 16 bytes, std430

@@ -123,3 +123,21 @@ def test_two_hundred_resizes_and_minimises_while_rendering(monkeypatch):
     assert result.recreations >= 150 and result.minimised_waits >= 10
     assert used["end"] == used["start"]
     assert (1, 1) in seen and len(seen) > 150  # it really drew at 1x1 and at the other sizes
+
+
+def test_a_window_with_msaa_and_a_filmic_tone_map_resizes_cleanly():
+    """The swapchain's shared attachments (multisampled depth and HDR colour, the resolve) are
+    made again on resize, with validation on."""
+    glfw = open_glfw()
+    assert glfw is not None
+
+    def script(frame, glfw_, window):
+        if frame == 3:
+            glfw_.set_window_size(window, 300, 200)
+
+    options = RunOptions(
+        scene="cube", width=240, height=180, frames=8, validate=True, quiet=True, msaa=4, tone_map="aces"
+    )
+    result = run_windowed(options, glfw, on_frame=script)
+    assert result.validation_messages == [] and result.frames == 8
+    assert result.recreations >= 1

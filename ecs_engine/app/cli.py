@@ -100,6 +100,18 @@ def render_flags() -> OneLineParser:
         help="how meshes are rasterised (wireframe and points where the device has fillModeNonSolid)",
     )
     common.add_argument(
+        "--tone-map",
+        choices=("clamp", "aces", "reinhard"),
+        default="clamp",
+        help="how the HDR colour maps to the display: clamp (default), aces (filmic), reinhard",
+    )
+    common.add_argument(
+        "--exposure", type=float, default=0.0, help="stops: the scene's colour times 2^EV before the tone map"
+    )
+    common.add_argument(
+        "--msaa", type=int, choices=(1, 2, 4, 8), default=1, help="samples per pixel (default 1: no MSAA)"
+    )
+    common.add_argument(
         "--entities", type=positive_int, help="scaling and motion scenes: entity count (default 10,000 and 100,000)"
     )
     common.add_argument(
@@ -218,6 +230,9 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
         threads=args.threads,
         culling=args.culling,
         fill=args.fill,
+        tone_map=args.tone_map,
+        exposure=args.exposure,
+        msaa=args.msaa,
         recorder=args.recorder,
         entities=args.entities or 10_000,
         perf_json=args.perf_json,

@@ -23,6 +23,7 @@ from ..gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
 from ..maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
 from ..render.path import FILL_MODES
 from ..render.renderer import MODES, PATHS, RECORDER_NAMES
+from ..render.tone_map import TONE_MAPS
 from .editor_lights import LIGHT_SECTIONS
 from .editor_materials import MaterialsPanel, mesh_section
 from .settings import Settings
@@ -124,6 +125,8 @@ class Editor:
             _, req.threads = imgui.slider_int("threads", req.threads, 1, max(1, self.max_threads))
             _, req.culling = imgui.checkbox("frustum culling", req.culling)
             req.fill = _combo(imgui, "fill", req.fill, tuple(FILL_MODES))
+            req.tone_map = _combo(imgui, "tone map", req.tone_map, tuple(TONE_MAPS))
+            _, req.exposure = imgui.slider_float("exposure (EV)", req.exposure, -8.0, 8.0)
             if req.present is not None:
                 req.present = _combo(imgui, "present", req.present, PRESENT_MODES)
             imgui.separator()

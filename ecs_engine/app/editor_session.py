@@ -15,6 +15,7 @@ import time
 from typing import Any
 
 from ..ecs.world import World
+from ..gpu.render_pass import SUBPASS_OUTPUT
 from ..render.imgui_pass import ImGuiRenderer
 from .editor import Editor, SceneStats
 from .perf import PerfMonitor
@@ -50,7 +51,9 @@ class EditorSession:
             # our key callbacks are already set: the backend chains to them
             imgui.backends.glfw_init_for_vulkan(ctypes.cast(window, ctypes.c_void_p).value or 0, True)
         renderer = session.renderer
-        self.renderer = ImGuiRenderer(session.device, session.gpu.target.render_pass, 1, len(renderer.frames.frames))
+        self.renderer = ImGuiRenderer(
+            session.device, session.gpu.target.render_pass, SUBPASS_OUTPUT, len(renderer.frames.frames)
+        )
         self.editor = Editor(session.settings, scenes, max_threads)
         self.overlay = PerfOverlay()
         self.build_ms = 0.0

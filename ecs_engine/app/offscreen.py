@@ -17,6 +17,7 @@ from ..errors import UsageError
 from ..gpu.device import Device
 from ..gpu.instance import Instance
 from ..gpu.offscreen import OffscreenTarget
+from ..gpu.render_pass import check_samples
 from ..render.mesh_registry import MeshRegistry
 from .report import recorder_words
 from .session import FrameTarget, Gpu, Session
@@ -66,7 +67,8 @@ class OffscreenSource:
         else:
             instance = self.instance = self._keep(Instance(validate=options.validate))
             device = self._keep(Device(instance))
-        target = self._keep(OffscreenTarget(device, options.width, options.height))
+        check_samples(device, options.msaa)
+        target = self._keep(OffscreenTarget(device, options.width, options.height, options.msaa))
         meshes = self._keep(MeshRegistry(device))
         self._gpu = Gpu(instance, device, target, meshes)
         return self._gpu

@@ -21,6 +21,7 @@ from ..gpu.instance import Instance
 from ..jobs import JobPool
 from ..render.mesh_registry import MeshRegistry
 from ..render.renderer import Renderer
+from ..render.tone_map import check_tone_map
 from .scenes import default_schedule, scene_builder
 from .settings import RunOptions, Settings
 
@@ -119,6 +120,8 @@ class Session:
                 culling=start.culling,
                 chunk_rows=options.chunk_rows,
                 fill=start.fill,
+                tone_map=start.tone_map,
+                exposure=start.exposure,
             )
             self.scene = start.scene
             self.world, self.schedule = self._build(start.scene, options.path)
@@ -142,6 +145,8 @@ class Session:
             culling=self.renderer.culling,
             present=self.source.present_mode,
             fill=self.renderer.fill,
+            tone_map=self.renderer.tone_map,
+            exposure=self.renderer.exposure,
         )
 
     def _build(self, scene: str, path: str | None) -> tuple[World, Schedule]:
@@ -162,9 +167,11 @@ class Session:
         if present is not None:
             source.check_present(present)
         renderer.check_fill(wanted.fill)
+        check_tone_map(wanted.tone_map, wanted.exposure)
         scene = self._build(wanted.scene, None) if wanted.scene != self.scene else None
         renderer.set_path(wanted.mode, wanted.recorder)  # checks, then swaps
         renderer.set_fill(wanted.fill)
+        renderer.tone_map, renderer.exposure = wanted.tone_map, float(wanted.exposure)
         renderer.culling = wanted.culling
         pool.resize(wanted.threads)
         if present is not None:

@@ -15,6 +15,7 @@ import psutil
 from ..errors import UsageError
 from ..jobs import default_threads
 from ..render.renderer import default_recorder
+from ..render.tone_map import check_tone_map
 from .scenes import SEED_SCENES
 
 FIXED_DT = 1.0 / 60.0  # headless runs: one fixed step a frame, so a run is reproducible frame for frame
@@ -31,6 +32,8 @@ class Settings:
     culling: bool
     present: str | None  # fifo | mailbox | immediate; None: headless, no swapchain
     fill: str = "solid"  # solid | wireframe | points
+    tone_map: str = "clamp"  # clamp | aces | reinhard (render/tone_map.py)
+    exposure: float = 0.0  # stops
 
 
 @dataclass(frozen=True)
@@ -52,6 +55,9 @@ class RunOptions:
     threads: int | None = None  # None: all cores
     culling: bool = True
     fill: str = "solid"  # solid | wireframe | points (render/path.py's FILL_MODES)
+    tone_map: str = "clamp"  # clamp | aces | reinhard
+    exposure: float = 0.0  # stops: the HDR colour times 2^exposure before the tone map
+    msaa: int = 1  # samples per pixel of the scene (1, 2, 4, 8), fixed for the run
     chunk_rows: int | None = None  # rows per render job (None: about one per thread, frame_data.MIN_CHUNK_ROWS)
     recorder: str | None = None  # native | python (None: native when numba is there)
     entities: int = 10_000  # the scaling scene's entity count
@@ -62,6 +68,7 @@ class RunOptions:
     def __post_init__(self) -> None:
         check_threads(self.threads)
         check_entities(self.entities)
+        check_tone_map(self.tone_map, self.exposure)
 
     def settings(self) -> Settings:
         return Settings(
@@ -72,6 +79,8 @@ class RunOptions:
             culling=self.culling,
             present=None if self.headless else self.present,
             fill=self.fill,
+            tone_map=self.tone_map,
+            exposure=self.exposure,
         )
 
 

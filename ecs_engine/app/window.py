@@ -19,6 +19,7 @@ from ..errors import UsageError
 from ..gpu.device import Device
 from ..gpu.functions import instance_function
 from ..gpu.instance import Instance
+from ..gpu.render_pass import check_samples
 from ..gpu.swapchain import OutOfDate, Swapchain
 from ..render.mesh_registry import MeshRegistry
 from ..systems import InputState
@@ -122,8 +123,9 @@ class WindowSource:
         self._surface = surface[0]
         device = self._keep(Device(instance, surface=self._surface))
         window = self.window
+        check_samples(device, options.msaa)
         swapchain = self._keep(
-            Swapchain(device, self._surface, lambda: glfw.get_framebuffer_size(window), options.present)
+            Swapchain(device, self._surface, lambda: glfw.get_framebuffer_size(window), options.present, options.msaa)
         )
         meshes = self._keep(MeshRegistry(device))
         self.swapchain = swapchain

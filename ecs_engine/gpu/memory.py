@@ -98,7 +98,9 @@ def upload(device: Device, data: np.ndarray, usage: int) -> Buffer:
 class Image:
     """A 2D device-local image with one view (colour or depth attachments, readback source)."""
 
-    def __init__(self, device: Device, width: int, height: int, fmt: int, usage: int, aspect: int) -> None:
+    def __init__(
+        self, device: Device, width: int, height: int, fmt: int, usage: int, aspect: int, samples: int = 1
+    ) -> None:
         vk = device.vk
         self.device = device
         self.width, self.height, self.format = width, height, fmt
@@ -110,7 +112,7 @@ class Image:
                 extent=vk.VkExtent3D(width, height, 1),
                 mipLevels=1,
                 arrayLayers=1,
-                samples=vk.VK_SAMPLE_COUNT_1_BIT,
+                samples=samples,  # VkSampleCountFlagBits: the count itself
                 tiling=vk.VK_IMAGE_TILING_OPTIMAL,
                 usage=usage,
                 sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE,

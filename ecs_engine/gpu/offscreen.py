@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .memory import HOST, Buffer, Image
-from .render_pass import create_framebuffer, create_render_pass
+from .render_pass import SceneAttachments, create_framebuffer, create_render_pass
 
 if TYPE_CHECKING:
     from .device import Device
@@ -19,12 +19,15 @@ class OffscreenTarget:
     One colour image is shared by the frames in flight: the renderer waits for a frame's fence
     before reading its pixels, and frames in flight are ordered on the single queue."""
 
-    def __init__(self, device: Device, width: int, height: int) -> None:
+    def __init__(self, device: Device, width: int, height: int, samples: int = 1) -> None:
         vk = device.vk
         self.device = device
         self.width, self.height = width, height
+        self.samples = samples  # MSAA of the scene's attachments (the target itself has one sample)
         self.color_format = vk.VK_FORMAT_R8G8B8A8_SRGB
-        self.render_pass = create_render_pass(device, self.color_format, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL)
+        self.render_pass = create_render_pass(
+            device, self.color_format, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, samples
+        )
         self.color = Image(
             device,
             width,
@@ -33,16 +36,9 @@ class OffscreenTarget:
             vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
             vk.VK_IMAGE_ASPECT_COLOR_BIT,
         )
-        self.depth = Image(
-            device,
-            width,
-            height,
-            vk.VK_FORMAT_D32_SFLOAT,
-            vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
-            vk.VK_IMAGE_ASPECT_DEPTH_BIT,
-        )
+        self.attachments = SceneAttachments(device, width, height, samples)
         self.framebuffer = create_framebuffer(
-            device, self.render_pass, [self.color.view, self.depth.view], width, height
+            device, self.render_pass, self.attachments.views(self.color.view), width, height
         )
         self.readback = Buffer(device, width * height * 4, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
 
@@ -75,6 +71,11 @@ class OffscreenTarget:
             cb, vk.VK_PIPELINE_STAGE_TRANSFER_BIT, vk.VK_PIPELINE_STAGE_HOST_BIT, 0, 0, None, 1, [barrier], 0, None
         )
 
+    @property
+    def hdr_view(self) -> Any:
+        """The HDR colour the tone map reads (the resolved one with MSAA)."""
+        return self.attachments.input_view
+
     def pixels(self) -> np.ndarray:
         """(height, width, 4) uint8 RGBA (sRGB-encoded), a copy of the last readback."""
         return self.readback.bytes().reshape(self.height, self.width, 4).copy()
@@ -83,6 +84,6 @@ class OffscreenTarget:
         vk = self.device.vk
         self.readback.destroy()
         vk.vkDestroyFramebuffer(self.device.handle, self.framebuffer, None)
-        self.depth.destroy()
+        self.attachments.destroy()
         self.color.destroy()
         vk.vkDestroyRenderPass(self.device.handle, self.render_pass, None)

@@ -62,6 +62,7 @@ class GraphicsPipelineSpec:
     alpha_blend: bool = False
     fragment_constants: tuple[int, ...] = ()  # uint specialisation constants, constant_id 0, 1, ...
     polygon_mode: int = 0  # VK_POLYGON_MODE_FILL; LINE (1) and POINT (2) need fillModeNonSolid
+    samples: int = 1  # the subpass's MSAA count
 
 
 def specialization(vk: Any, values: tuple[int, ...]) -> tuple[Any, Any]:
@@ -124,7 +125,7 @@ def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
                 cullMode=vk.VK_CULL_MODE_BACK_BIT if spec.cull_back else vk.VK_CULL_MODE_NONE,
                 frontFace=vk.VK_FRONT_FACE_COUNTER_CLOCKWISE if spec.front_face_ccw else vk.VK_FRONT_FACE_CLOCKWISE,
             ),
-            pMultisampleState=vk.VkPipelineMultisampleStateCreateInfo(rasterizationSamples=vk.VK_SAMPLE_COUNT_1_BIT),
+            pMultisampleState=vk.VkPipelineMultisampleStateCreateInfo(rasterizationSamples=spec.samples),
             pDepthStencilState=vk.VkPipelineDepthStencilStateCreateInfo(
                 depthTestEnable=vk.VK_TRUE if spec.depth_test else vk.VK_FALSE,
                 depthWriteEnable=vk.VK_TRUE if spec.depth_write else vk.VK_FALSE,

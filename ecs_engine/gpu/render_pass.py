@@ -1,76 +1,145 @@
-"""The frame's render pass: colour + reverse-Z depth, two subpasses.
+"""The frame's render pass: the scene in 16-bit float (HDR) colour with reverse-Z depth, then
+tone mapped into the target (sRGB swapchain image or offscreen image), then the UI on top.
 
-Subpass 0 draws the scene (later: only secondary command buffers); subpass 1 draws overlays
-recorded inline (light billboards, UI) over the same attachments, depth-tested against the scene.
+Attachments: 0 the target (written only by the tone map), 1 depth, 2 the HDR colour (multisampled
+with --msaa), 3 its single-sample resolve (only with --msaa).
+
+- subpass 0 (SUBPASS_SCENE): the meshes, from the chunk jobs' secondary command buffers;
+- subpass 1 (SUBPASS_BILLBOARDS): light billboards inline, depth-tested against the scene; with
+  MSAA the HDR colour resolves at its end;
+- subpass 2 (SUBPASS_OUTPUT): the tone map reads the HDR colour as an input attachment (same
+  pixel, no sampling) and writes the target; the overlay (ImGui) draws after it, untouched by
+  exposure and tone curve.
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from .memory import Image
+
 if TYPE_CHECKING:
     from .device import Device
 
+SUBPASS_SCENE, SUBPASS_BILLBOARDS, SUBPASS_OUTPUT = 0, 1, 2
+HDR_FORMAT_NAME = "VK_FORMAT_R16G16B16A16_SFLOAT"
+DEPTH_FORMAT_NAME = "VK_FORMAT_D32_SFLOAT"
+MSAA_COUNTS = (1, 2, 4, 8)
 
-def create_render_pass(device: Device, color_format: int, final_layout: int) -> Any:
+
+def supported_samples(device: Device) -> tuple[int, ...]:
+    """The MSAA counts the device can render the HDR colour and depth with."""
+    limits = device.limits
+    mask = int(limits.framebufferColorSampleCounts) & int(limits.framebufferDepthSampleCounts)
+    return tuple(n for n in MSAA_COUNTS if mask & n)
+
+
+def check_samples(device: Device, samples: int) -> None:
+    """UsageError unless the device renders the scene with `samples` (--msaa)."""
+    from ..errors import UsageError
+
+    offered = supported_samples(device)
+    if samples not in offered:
+        counts = ", ".join(str(n) for n in offered)
+        raise UsageError(f"--msaa {samples}: {device.info.name} offers {counts}")
+
+
+def create_render_pass(device: Device, color_format: int, final_layout: int, samples: int = 1) -> Any:
     vk = device.vk
-    color = vk.VkAttachmentDescription(
-        format=color_format,
-        samples=vk.VK_SAMPLE_COUNT_1_BIT,
-        loadOp=vk.VK_ATTACHMENT_LOAD_OP_CLEAR,
-        storeOp=vk.VK_ATTACHMENT_STORE_OP_STORE,
-        stencilLoadOp=vk.VK_ATTACHMENT_LOAD_OP_DONT_CARE,
-        stencilStoreOp=vk.VK_ATTACHMENT_STORE_OP_DONT_CARE,
-        initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
-        finalLayout=final_layout,
-    )
-    depth = vk.VkAttachmentDescription(
-        format=vk.VK_FORMAT_D32_SFLOAT,
-        samples=vk.VK_SAMPLE_COUNT_1_BIT,
-        loadOp=vk.VK_ATTACHMENT_LOAD_OP_CLEAR,
-        storeOp=vk.VK_ATTACHMENT_STORE_OP_DONT_CARE,
-        stencilLoadOp=vk.VK_ATTACHMENT_LOAD_OP_DONT_CARE,
-        stencilStoreOp=vk.VK_ATTACHMENT_STORE_OP_DONT_CARE,
-        initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
-        finalLayout=vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
-    )
-    color_ref = vk.VkAttachmentReference(attachment=0, layout=vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL)
-    depth_ref = vk.VkAttachmentReference(attachment=1, layout=vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL)
+    msaa = samples > 1
+
+    def attachment(fmt: int, count: int, load: int, store: int, final: int) -> Any:
+        return vk.VkAttachmentDescription(
+            format=fmt,
+            samples=count,
+            loadOp=load,
+            storeOp=store,
+            stencilLoadOp=vk.VK_ATTACHMENT_LOAD_OP_DONT_CARE,
+            stencilStoreOp=vk.VK_ATTACHMENT_STORE_OP_DONT_CARE,
+            initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
+            finalLayout=final,
+        )
+
+    clear, dont_load = vk.VK_ATTACHMENT_LOAD_OP_CLEAR, vk.VK_ATTACHMENT_LOAD_OP_DONT_CARE
+    store, dont_store = vk.VK_ATTACHMENT_STORE_OP_STORE, vk.VK_ATTACHMENT_STORE_OP_DONT_CARE
+    color_layout = vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL
+    read_layout = vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
+    depth_layout = vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL
+    hdr_format = getattr(vk, HDR_FORMAT_NAME)
+    attachments = [
+        attachment(color_format, 1, dont_load, store, final_layout),  # every pixel written by the tone map
+        attachment(getattr(vk, DEPTH_FORMAT_NAME), samples, clear, dont_store, depth_layout),
+        attachment(hdr_format, samples, clear, dont_store, read_layout if not msaa else color_layout),
+    ]
+    if msaa:
+        attachments.append(attachment(hdr_format, 1, dont_load, dont_store, read_layout))
+    ref = vk.VkAttachmentReference
+    hdr = ref(attachment=2, layout=color_layout)
+    depth = ref(attachment=1, layout=depth_layout)
+    resolve = [ref(attachment=3, layout=color_layout)] if msaa else None
     subpasses = [
         vk.VkSubpassDescription(
+            pipelineBindPoint=vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pColorAttachments=[hdr], pDepthStencilAttachment=depth
+        ),
+        vk.VkSubpassDescription(
             pipelineBindPoint=vk.VK_PIPELINE_BIND_POINT_GRAPHICS,
-            pColorAttachments=[color_ref],
-            pDepthStencilAttachment=depth_ref,
-        )
-        for _ in range(2)
+            pColorAttachments=[hdr],
+            pResolveAttachments=resolve,
+            pDepthStencilAttachment=depth,
+        ),
+        vk.VkSubpassDescription(
+            pipelineBindPoint=vk.VK_PIPELINE_BIND_POINT_GRAPHICS,
+            pInputAttachments=[ref(attachment=3 if msaa else 2, layout=read_layout)],
+            pColorAttachments=[ref(attachment=0, layout=color_layout)],
+        ),
     ]
     color_stage = vk.VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT
+    fragment = vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT
     depth_stages = vk.VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT | vk.VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT
     color_rw = vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | vk.VK_ACCESS_COLOR_ATTACHMENT_READ_BIT
     depth_rw = vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT | vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT
     dependencies = [
-        # the previous frame's use of the attachments (or the presentation engine) before the clear
+        # the previous frame's use of the shared attachments (its tone map read the HDR colour),
+        # or the presentation engine, before this frame clears and writes them
         vk.VkSubpassDependency(
             srcSubpass=vk.VK_SUBPASS_EXTERNAL,
-            dstSubpass=0,
-            srcStageMask=color_stage | depth_stages,
+            dstSubpass=SUBPASS_SCENE,
+            srcStageMask=color_stage | depth_stages | fragment,
             dstStageMask=color_stage | depth_stages,
             srcAccessMask=0,
             dstAccessMask=color_rw | depth_rw,
         ),
-        # scene -> overlay: colour blended on top, depth tested against the scene
         vk.VkSubpassDependency(
-            srcSubpass=0,
-            dstSubpass=1,
+            srcSubpass=vk.VK_SUBPASS_EXTERNAL,
+            dstSubpass=SUBPASS_OUTPUT,
+            srcStageMask=color_stage,
+            dstStageMask=color_stage,
+            srcAccessMask=0,
+            dstAccessMask=color_rw,
+        ),
+        # scene -> billboards: colour blended on top, depth tested against the scene
+        vk.VkSubpassDependency(
+            srcSubpass=SUBPASS_SCENE,
+            dstSubpass=SUBPASS_BILLBOARDS,
             srcStageMask=color_stage | depth_stages,
             dstStageMask=color_stage | depth_stages,
             srcAccessMask=vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
             dstAccessMask=color_rw | depth_rw,
             dependencyFlags=vk.VK_DEPENDENCY_BY_REGION_BIT,
         ),
-        # overlay -> whatever reads the colour next (copy for readback, or present)
+        # the HDR colour (or its resolve) -> the tone map's input attachment read, pixel for pixel
         vk.VkSubpassDependency(
-            srcSubpass=1,
+            srcSubpass=SUBPASS_BILLBOARDS,
+            dstSubpass=SUBPASS_OUTPUT,
+            srcStageMask=color_stage,
+            dstStageMask=fragment,
+            srcAccessMask=vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
+            dstAccessMask=vk.VK_ACCESS_INPUT_ATTACHMENT_READ_BIT,
+            dependencyFlags=vk.VK_DEPENDENCY_BY_REGION_BIT,
+        ),
+        # the target -> whatever reads it next (copy for readback, or present)
+        vk.VkSubpassDependency(
+            srcSubpass=SUBPASS_OUTPUT,
             dstSubpass=vk.VK_SUBPASS_EXTERNAL,
             srcStageMask=color_stage,
             dstStageMask=vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
@@ -80,9 +149,61 @@ def create_render_pass(device: Device, color_format: int, final_layout: int) -> 
     ]
     return vk.vkCreateRenderPass(
         device.handle,
-        vk.VkRenderPassCreateInfo(pAttachments=[color, depth], pSubpasses=subpasses, pDependencies=dependencies),
+        vk.VkRenderPassCreateInfo(pAttachments=attachments, pSubpasses=subpasses, pDependencies=dependencies),
         None,
     )
+
+
+class SceneAttachments:
+    """The attachments a target shares between its framebuffers: depth, HDR colour and (with
+    MSAA) its resolve. `views(target_view)` lists a framebuffer's attachments in render-pass order;
+    `input_view` is what the tone map reads."""
+
+    def __init__(self, device: Device, width: int, height: int, samples: int = 1) -> None:
+        vk = device.vk
+        self.samples = samples
+        self.images: list[Image] = []
+        try:
+            self.images.append(
+                Image(
+                    device,
+                    width,
+                    height,
+                    getattr(vk, DEPTH_FORMAT_NAME),
+                    vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+                    vk.VK_IMAGE_ASPECT_DEPTH_BIT,
+                    samples,
+                )
+            )
+            color = vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT
+            hdr_usage = color | (vk.VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT if samples > 1 else 0)
+            if samples == 1:
+                hdr_usage |= vk.VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT
+            hdr_format = getattr(vk, HDR_FORMAT_NAME)
+            aspect = vk.VK_IMAGE_ASPECT_COLOR_BIT
+            self.images.append(Image(device, width, height, hdr_format, hdr_usage, aspect, samples))
+            if samples > 1:
+                resolve_usage = color | vk.VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT
+                self.images.append(Image(device, width, height, hdr_format, resolve_usage, aspect))
+        except BaseException:
+            self.destroy()
+            raise
+
+    @property
+    def depth_view(self) -> Any:
+        return self.images[0].view
+
+    @property
+    def input_view(self) -> Any:
+        return self.images[-1].view
+
+    def views(self, target_view: Any) -> list[Any]:
+        return [target_view] + [image.view for image in self.images]
+
+    def destroy(self) -> None:
+        for image in self.images:
+            image.destroy()
+        self.images = []
 
 
 def create_framebuffer(device: Device, render_pass: Any, views: list[Any], width: int, height: int) -> Any:

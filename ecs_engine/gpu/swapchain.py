@@ -10,8 +10,8 @@ import numpy as np
 
 from ..errors import UsageError
 from .functions import device_function, instance_function, raw_device_function
-from .memory import HOST, Buffer, Image
-from .render_pass import create_framebuffer, create_render_pass
+from .memory import HOST, Buffer
+from .render_pass import SceneAttachments, create_framebuffer, create_render_pass
 
 if TYPE_CHECKING:
     from .device import Device
@@ -29,10 +29,16 @@ class OutOfDate(Exception):
 
 class Swapchain:
     def __init__(
-        self, device: Device, surface: Any, framebuffer_size: Callable[[], tuple[int, int]], present: str = "fifo"
+        self,
+        device: Device,
+        surface: Any,
+        framebuffer_size: Callable[[], tuple[int, int]],
+        present: str = "fifo",
+        samples: int = 1,
     ) -> None:
         vk = self.vk = device.vk
         self.device = device
+        self.samples = samples  # MSAA of the scene's attachments
         self.surface = surface
         self.framebuffer_size = framebuffer_size
         inst = device.instance
@@ -50,7 +56,7 @@ class Swapchain:
         ]
         chosen = srgb[0] if srgb else formats[0]
         self.color_format, self.color_space = chosen.format, chosen.colorSpace
-        self.render_pass = create_render_pass(device, self.color_format, vk.VK_IMAGE_LAYOUT_PRESENT_SRC_KHR)
+        self.render_pass = create_render_pass(device, self.color_format, vk.VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, samples)
         self._create_fn = device_function(device, "vkCreateSwapchainKHR")
         self._destroy_fn = device_function(device, "vkDestroySwapchainKHR")
         self._images_fn = device_function(device, "vkGetSwapchainImagesKHR")
@@ -63,7 +69,7 @@ class Swapchain:
         self.views: list[Any] = []
         self.framebuffers: list[Any] = []
         self.render_finished: list[Any] = []
-        self.depth: Image | None = None
+        self.attachments: SceneAttachments | None = None
         self.width = self.height = 0
         self.recreations = 0
         # screenshots: an image can be copied out when the surface allows TRANSFER_SRC
@@ -110,14 +116,7 @@ class Swapchain:
             self._destroy_fn(self.device.handle, old, None)
         self.width, self.height = width, height
         self.images = self._images_fn(self.device.handle, self.handle)
-        self.depth = Image(
-            self.device,
-            width,
-            height,
-            vk.VK_FORMAT_D32_SFLOAT,
-            vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
-            vk.VK_IMAGE_ASPECT_DEPTH_BIT,
-        )
+        self.attachments = attachments = SceneAttachments(self.device, width, height, self.samples)
         for image in self.images:
             view = vk.vkCreateImageView(
                 self.device.handle,
@@ -137,7 +136,7 @@ class Swapchain:
             )
             self.views.append(view)
             self.framebuffers.append(
-                create_framebuffer(self.device, self.render_pass, [view, self.depth.view], width, height)
+                create_framebuffer(self.device, self.render_pass, attachments.views(view), width, height)
             )
             # one per image: a semaphore waited on by present is free again only once that image
             # is acquired again
@@ -152,9 +151,15 @@ class Swapchain:
         for sem in self.render_finished:
             vk.vkDestroySemaphore(self.device.handle, sem, None)
         self.framebuffers, self.views, self.render_finished = [], [], []
-        if self.depth is not None:
-            self.depth.destroy()
-            self.depth = None
+        if self.attachments is not None:
+            self.attachments.destroy()
+            self.attachments = None
+
+    @property
+    def hdr_view(self) -> Any:
+        """The HDR colour the tone map reads (the resolved one with MSAA)."""
+        assert self.attachments is not None
+        return self.attachments.input_view
 
     def present_mode_for(self, present: str) -> int:
         """The VkPresentModeKHR of a name; UsageError when the surface does not offer it."""

@@ -55,6 +55,7 @@ def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple[A
         vertex_attributes=vertex_attributes(ctx.device.vk, TEXTURED_VERTEX_INPUTS if textured else VERTEX_INPUTS),
         fragment_constants=(ctx.material_features,),  # mesh.frag's MATERIAL_FEATURES
         polygon_mode=FILL_MODES[ctx.fill],
+        samples=ctx.samples,
         # a double-sided material somewhere: back faces reach the fragment shader, which drops
         # those of single-sided materials (one pipeline for all; draws stay split by mesh only)
         cull_back=not ctx.material_features & FEATURE_DOUBLE_SIDED,

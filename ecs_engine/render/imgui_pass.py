@@ -2,8 +2,8 @@
 Vulkan renderer, so this is one.
 
 Per frame: the draw lists' vertices and indices are copied (memmove from the addresses the
-bindings expose) into this frame slot's mapped buffers; in the render pass's second subpass
-(after the light billboards) each command is one indexed draw with its scissor and texture.
+bindings expose) into this frame slot's mapped buffers; in the render pass's output subpass
+(after the tone map, so the UI keeps its colours) each command is one indexed draw with its scissor and texture.
 Textures follow ImGui 1.92's protocol: the backend creates, updates and destroys them as
 `ImDrawData.textures` asks, and hands ImGui an id to put in its commands.
 

@@ -125,6 +125,14 @@ COMPACT_PUSH = Struct(
 
 BILLBOARD_PUSH = Struct("BillboardPush", [("size", "float", "half the quad's side, in view units")])
 
+TONE_MAP_PUSH = Struct(
+    "ToneMapPush",
+    [
+        ("exposure", "float", "linear scale before the curve (2^EV)"),
+        ("operator", "uint", "TONE_MAP_* (render/tone_map.py)"),
+    ],
+)
+
 IMGUI_PUSH = Struct(
     "ImGuiPush",
     [
@@ -146,6 +154,7 @@ FEATURE_TEXTURES = 1 << 17  # some material has a texture: the textured shader v
 FEATURE_DOUBLE_SIDED = 1 << 18  # some material is double-sided: no back-face culling, see mesh_fragment.glsl
 ALPHA_OPAQUE, ALPHA_MASK, ALPHA_BLEND = range(3)
 LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL = range(3)
+TONE_MAP_CLAMP, TONE_MAP_ACES, TONE_MAP_REINHARD = range(3)
 NO_TEXTURE = 0xFFFFFFFF
 CULL_GROUP = 256  # cull.comp's local size
 COMPACT_GROUP = 64  # compact.comp's local size
@@ -161,6 +170,7 @@ STRUCTS = [
     CULL_PUSH,
     COMPACT_PUSH,
     BILLBOARD_PUSH,
+    TONE_MAP_PUSH,
     IMGUI_PUSH,
 ]
 DEFINES = {
@@ -191,6 +201,9 @@ DEFINES = {
     "LIGHT_POINT": LIGHT_POINT,
     "LIGHT_SPOT": LIGHT_SPOT,
     "LIGHT_DIRECTIONAL": LIGHT_DIRECTIONAL,
+    "TONE_MAP_CLAMP": TONE_MAP_CLAMP,
+    "TONE_MAP_ACES": TONE_MAP_ACES,
+    "TONE_MAP_REINHARD": TONE_MAP_REINHARD,
     "NO_TEXTURE": NO_TEXTURE,
     "CULL_GROUP": CULL_GROUP,
     "COMPACT_GROUP": COMPACT_GROUP,

@@ -1,4 +1,5 @@
-"""Point lights drawn as camera-facing billboards in the overlay subpass, blended back to front
+"""Point and spot lights drawn as camera-facing billboards in the billboard subpass (into the HDR
+colour, multisampled like the scene), blended back to front
 (light_rows.py sorts them far to near). The pipeline is made the first frame a scene has
 lights: a scene without lights never builds it."""
 
@@ -16,12 +17,19 @@ from .path import TargetState
 
 class LightPass:
     def __init__(
-        self, device: Device, frame_set_layout: Any, render_pass: Any, subpass: int, size: float = 0.08
+        self,
+        device: Device,
+        frame_set_layout: Any,
+        render_pass: Any,
+        subpass: int,
+        size: float = 0.08,
+        samples: int = 1,
     ) -> None:
         vk = self.vk = device.vk
         self.device = device
         self.render_pass = render_pass
         self.subpass = subpass
+        self.samples = samples
         self.size = size
         self.layout = pipeline_layout(
             device, [frame_set_layout], [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, BILLBOARD_PUSH.size)]
@@ -48,6 +56,7 @@ class LightPass:
                     cull_back=False,
                     depth_write=False,
                     alpha_blend=True,
+                    samples=self.samples,
                 ),
             )
         lib.vkCmdSetViewport(cb, 0, 1, target.viewport_ptr)

@@ -87,6 +87,7 @@ class PathContext:
     frames_in_flight: int
     material_features: int  # what the mesh pipelines are specialised for (Materials.features)
     fill: str  # FILL_MODES: how the mesh pipelines rasterise triangles
+    samples: int  # the target's MSAA count
     native_recorder: Callable[[], Any]  # gpu.native_recorder.NativeRecorder, compiled on first call, once a device
 
 

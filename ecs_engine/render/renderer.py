@@ -7,9 +7,10 @@ The mesh rows are drawn by a render path picked by name from PATHS (path.py says
 does); the chunks of rows are jobs on the worker pool, each recording a secondary command
 buffer (or, in `indirect`, only writing rows for the compute shaders). The primary command
 buffer begins the render pass with SECONDARY_COMMAND_BUFFERS contents, executes the path's
-secondaries in subpass 0, and draws the light billboards and the overlay (the editor's ImGui)
-inline in subpass 1. Switching mode or recorder swaps the path; the frame slots, buffers,
-light pass and overlay stay.
+secondaries in subpass 0, draws the light billboards inline in subpass 1 (both into the HDR
+colour), then in subpass 2 the tone map (tone_map.py) and the overlay (the editor's ImGui); see
+gpu/render_pass.py. Switching mode or recorder swaps the path; the frame slots, buffers, light
+pass, tone map and overlay stay.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from ..errors import UsageError
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_images
 from ..gpu.device import Device
 from ..gpu.frames import FrameRing
+from ..gpu.render_pass import SUBPASS_BILLBOARDS
 from ..gpu.secondary import SecondaryBuffers
 from ..jobs import JobPool
 from .camera import CameraMatrices
@@ -52,6 +54,7 @@ from .materials import Materials
 from .mesh_registry import MeshRegistry
 from .path import FILL_MODES, ChunkResult, FrameInputs, MeshBounds, PathContext, PathFactory, RenderPath, TargetState
 from .texture_pages import TexturePages
+from .tone_map import ToneMapPass, check_tone_map
 
 PATHS: dict[str, PathFactory] = {
     "instanced": InstancedPath,
@@ -100,12 +103,16 @@ class Renderer:
         ambient: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 0.06),
         light_size: float = 0.08,
         fill: str = "solid",
+        tone_map: str = "clamp",
+        exposure: float = 0.0,
     ) -> None:
         if mode not in PATHS:
             raise ValueError(f"unknown render mode {mode!r}; modes: {', '.join(MODES)}")
         vk = self.vk = device.vk
         self.device = device
         self.check_fill(fill)  # before anything is made: a refusal leaves nothing to destroy
+        check_tone_map(tone_map, exposure)
+        self.tone_map, self.exposure = tone_map, float(exposure)  # read each frame: change them any time
         self.target = target
         self.meshes = meshes
         self.clear_color = clear_color
@@ -139,7 +146,10 @@ class Renderer:
         self.material_features = self.default_materials.features
         self.fill = fill
         self.per_frame = [FrameResources.make(device, self.pool, self.set_layout, self.texture_pages) for _ in range(n)]
-        self.light_pass = LightPass(device, self.set_layout.handle, target.render_pass, 1, light_size)
+        self.light_pass = LightPass(
+            device, self.set_layout.handle, target.render_pass, SUBPASS_BILLBOARDS, light_size, target.samples
+        )
+        self.tone_map_pass = ToneMapPass(device, target.render_pass)
         self._targets: dict[tuple[int, int, int], TargetState] = {}
         self._bounds: tuple[int, MeshBounds] | None = None
         # drawn last in the overlay subpass: an object with prepare(slot, frames_in_flight) and
@@ -209,6 +219,7 @@ class Renderer:
             secondaries=self.secondaries,
             frames_in_flight=len(self.frames.frames),
             material_features=self.material_features,
+            samples=self.target.samples,
             fill=self.fill,
             native_recorder=self._native_recorder,
         )
@@ -263,10 +274,12 @@ class Renderer:
             if len(self._targets) > 16:  # swapchains come and go: drop the old framebuffers' entries
                 self._targets.clear()
             area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(width, height))
-            clears = [
-                vk.VkClearValue(color=vk.VkClearColorValue(float32=[*self.clear_color, 1.0])),
-                vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=0.0, stencil=0)),
-            ]  # reverse-Z
+            background = vk.VkClearValue(color=vk.VkClearColorValue(float32=[*self.clear_color, 1.0]))
+            clears = [  # in render-pass order (gpu/render_pass.py): the target is not cleared
+                background,
+                vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=0.0, stencil=0)),  # reverse-Z
+                background,  # the HDR colour
+            ]
             state = self._targets[key] = TargetState(
                 key=key,
                 area=area,
@@ -444,6 +457,10 @@ class Renderer:
             lib.vkCmdExecuteCommands(cb, len(secondaries), vk.ffi.new("VkCommandBuffer[]", secondaries))
         lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
         draws = self.light_pass.record(cb, target, pf.set_array, billboards)
+        lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
+        self.tone_map_pass.record(
+            cb, target.viewport_ptr, target.area_ptr, self.target.hdr_view, self.tone_map, self.exposure
+        )
         if self.overlay is not None:
             self.overlay.record(cb, slot, target.area.extent.width, target.area.extent.height)
         lib.vkCmdEndRenderPass(cb)
@@ -456,6 +473,7 @@ class Renderer:
 
     def _destroy_shared(self) -> None:
         self.light_pass.destroy()
+        self.tone_map_pass.destroy()
         self.texture_pages.destroy()
         self.secondaries.destroy()
         for pf in self.per_frame:

@@ -1,0 +1,120 @@
+"""The tone map: the scene is lit in 16-bit float colour (gpu/render_pass.py); this pass scales
+it by the exposure and maps it into what the display shows, in the render pass's output subpass.
+
+Operators (TONE_MAPS, picked by name; the shader reads the number):
+
+- `clamp`: min(c, 1), what the engine drew before HDR (the default: the seed scenes keep their
+  look and golden images);
+- `aces`: Narkowicz's fit of the ACES filmic curve, a toe and a soft shoulder, so highlights
+  keep their shape instead of burning out;
+- `reinhard`: c / (1 + c).
+
+`exposure` is in stops (EV): the colour is multiplied by 2^EV before the curve.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Final
+
+import numpy as np
+
+from ..errors import UsageError
+from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout
+from ..gpu.device import Device
+from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
+from ..gpu.render_pass import SUBPASS_OUTPUT
+from .layouts import TONE_MAP_ACES, TONE_MAP_CLAMP, TONE_MAP_PUSH, TONE_MAP_REINHARD
+
+TONE_MAPS: Final[dict[str, int]] = {"clamp": TONE_MAP_CLAMP, "aces": TONE_MAP_ACES, "reinhard": TONE_MAP_REINHARD}
+MAX_EXPOSURE: Final = 20.0  # stops either way
+_SETS = 8  # descriptor sets kept, one per HDR view seen (swapchains come and go)
+
+
+def check_tone_map(name: str, exposure: float) -> None:
+    if name not in TONE_MAPS:
+        raise UsageError(f"unknown tone map {name!r}; tone maps: {', '.join(TONE_MAPS)}")
+    if not isinstance(exposure, (int, float)) or not math.isfinite(exposure) or abs(exposure) > MAX_EXPOSURE:
+        raise UsageError(
+            f"exposure must be a number of stops in [-{MAX_EXPOSURE:g}, {MAX_EXPOSURE:g}], got {exposure!r}"
+        )
+
+
+class ToneMapPass:
+    def __init__(self, device: Device, render_pass: Any) -> None:
+        vk = self.vk = device.vk
+        self.device = device
+        self.render_pass = render_pass
+        stage = vk.VK_SHADER_STAGE_FRAGMENT_BIT
+        self.set_layout = DescriptorSetLayout(device, [(0, vk.VK_DESCRIPTOR_TYPE_INPUT_ATTACHMENT, stage)])
+        self.pool: DescriptorPool | None = None
+        self._sets: dict[int, Any] = {}  # HDR view address -> VkDescriptorSet[1]
+        self.layout = pipeline_layout(device, [self.set_layout.handle], [(stage, 0, TONE_MAP_PUSH.size)])
+        self.pipeline: Any = None
+        self._push = np.zeros(1, dtype=TONE_MAP_PUSH.dtype)
+        self._push_ptr = vk.ffi.from_buffer(self._push)
+
+    def _set_for(self, view: Any) -> Any:
+        vk = self.vk
+        key = int(vk.ffi.cast("uintptr_t", view))
+        found = self._sets.get(key)
+        if found is not None:
+            return found
+        if self.pool is None or len(self._sets) >= _SETS:
+            self.device.wait_idle()  # the old sets may be bound by frames in flight
+            if self.pool is not None:
+                self.pool.destroy()
+            self.pool = DescriptorPool(self.device, _SETS, {vk.VK_DESCRIPTOR_TYPE_INPUT_ATTACHMENT: _SETS})
+            self._sets.clear()
+        descriptor_set = self.pool.allocate(self.set_layout)
+        info = vk.VkDescriptorImageInfo(imageView=view, imageLayout=vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL)
+        write = vk.VkWriteDescriptorSet(
+            dstSet=descriptor_set,
+            dstBinding=0,
+            dstArrayElement=0,
+            descriptorCount=1,
+            descriptorType=vk.VK_DESCRIPTOR_TYPE_INPUT_ATTACHMENT,
+            pImageInfo=[info],
+        )
+        vk.vkUpdateDescriptorSets(self.device.handle, 1, [write], 0, None)
+        found = self._sets[key] = vk.ffi.new("VkDescriptorSet[1]", [descriptor_set])
+        return found
+
+    def record(self, cb: Any, viewport_ptr: Any, area_ptr: Any, hdr_view: Any, name: str, exposure: float) -> None:
+        """The full-screen triangle (raw calls; the set per HDR view made once)."""
+        vk = self.vk
+        lib = vk.lib
+        if self.pipeline is None:
+            self.pipeline = graphics_pipeline(
+                self.device,
+                GraphicsPipelineSpec(
+                    "tonemap.vert",
+                    "tonemap.frag",
+                    layout=self.layout,
+                    render_pass=self.render_pass,
+                    subpass=SUBPASS_OUTPUT,
+                    cull_back=False,
+                    depth_test=False,
+                    depth_write=False,
+                ),
+            )
+        descriptor_set = self._set_for(hdr_view)
+        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.pipeline)
+        lib.vkCmdSetViewport(cb, 0, 1, viewport_ptr)
+        lib.vkCmdSetScissor(cb, 0, 1, area_ptr)
+        lib.vkCmdBindDescriptorSets(
+            cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1, descriptor_set, 0, vk.ffi.NULL
+        )
+        self._push["exposure"] = 2.0**exposure
+        self._push["operator"] = TONE_MAPS[name]
+        lib.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_FRAGMENT_BIT, 0, TONE_MAP_PUSH.size, self._push_ptr)
+        lib.vkCmdDraw(cb, 3, 1, 0, 0)
+
+    def destroy(self) -> None:
+        vk = self.vk
+        if self.pipeline is not None:
+            vk.vkDestroyPipeline(self.device.handle, self.pipeline, None)
+        vk.vkDestroyPipelineLayout(self.device.handle, self.layout, None)
+        if self.pool is not None:
+            self.pool.destroy()
+        self.set_layout.destroy()

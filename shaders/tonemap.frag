@@ -1,0 +1,27 @@
+#version 450
+#extension GL_GOOGLE_include_directive : require
+#include "layouts.glsl"
+
+// The HDR colour of this pixel (an input attachment: the same pixel, no filtering), scaled by the
+// exposure and mapped into [0, 1] by the operator; the sRGB target encodes it on write.
+layout(input_attachment_index = 0, set = 0, binding = 0) uniform subpassInput hdr;
+layout(push_constant) uniform Push { ToneMapPush push; };
+
+layout(location = 0) out vec4 out_color;
+
+// Narkowicz's fit of the ACES filmic curve (2015), per channel
+vec3 aces(vec3 x) {
+    return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
+}
+
+void main() {
+    vec3 c = max(subpassLoad(hdr).rgb, vec3(0.0)) * push.exposure;
+    if (push.operator == TONE_MAP_ACES) {
+        c = aces(c);
+    } else if (push.operator == TONE_MAP_REINHARD) {
+        c = c / (1.0 + c);
+    } else {
+        c = min(c, vec3(1.0));
+    }
+    out_color = vec4(c, 1.0);
+}
