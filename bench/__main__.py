@@ -28,6 +28,7 @@ REGISTRY: dict[str, str] = {
     "scaling": "scaling",
     "numerics": "numerics",
     "soak": "soak",
+    "lights": "lights",
 }
 
 # One line each for the list in the usage text (the modules are not imported to print it).
@@ -37,6 +38,7 @@ SUMMARY: dict[str, str] = {
     "scaling": "render-job scaling by entities, threads, mode and recorder (Vulkan)",
     "numerics": "spring integrators' error against run time, render precision against distance",
     "soak": "the editor's scene for 100,000 frames with churn and settings switches: memory flat? (Vulkan)",
+    "lights": "GPU ms against light count (1 to 16,384), every light per fragment vs clustered (Vulkan)",
 }
 
 # The commands that work from any folder once ecs_engine is installed.

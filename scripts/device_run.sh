@@ -1,6 +1,6 @@
 #!/bin/bash
 # The GPU host run for issue 14 (device tool): A/B of e7d674c against the working tree, the
-# texture/material tests on NVIDIA, and the materials demo under validation. Prepare here, once:
+# texture/material/HDR/cluster tests on NVIDIA, the materials demo under validation, bench lights. Prepare here, once:
 #   .gl/  the Vulkan loader and validation layers as .deb files (the device README: apt-get download
 #         libvulkan1 ... vulkan-validationlayers), .whl/ wheels of vulkan cffi pycparser glfw trimesh
 #         imgui-bundle esper for Python 3.12, .ab/base = `git archive e7d674c` unpacked;
@@ -22,13 +22,16 @@ if [ "$MODE" = all ] || [ "$MODE" = tests ]; then
   # from a copy outside the checkout: in its root, `ecs_engine` would be the source folder, not the
   # installed package (whose components/ and systems/ live inside it)
   rm -rf /tmp/t && cp -r tests /tmp/t && cd /tmp
-  PYTHONPATH=/tmp/new:/tmp/site timeout 300 python3 -m pytest -q -p no:cacheprovider /tmp/t/test_textures.py /tmp/t/test_model_loading.py /tmp/t/test_shading_models.py /tmp/t/test_materials.py /tmp/t/test_render.py /tmp/t/test_light_rows.py /tmp/t/test_primitives.py /tmp/t/test_fill.py /tmp/t/test_double_sided.py > $OUT/gpu_tests.txt 2>&1
+  PYTHONPATH=/tmp/new:/tmp/site timeout 300 python3 -m pytest -q -p no:cacheprovider /tmp/t/test_textures.py /tmp/t/test_model_loading.py /tmp/t/test_shading_models.py /tmp/t/test_materials.py /tmp/t/test_render.py /tmp/t/test_light_rows.py /tmp/t/test_primitives.py /tmp/t/test_fill.py /tmp/t/test_double_sided.py /tmp/t/test_hdr.py /tmp/t/test_light_clusters.py > $OUT/gpu_tests.txt 2>&1
   tail -3 $OUT/gpu_tests.txt
   PYTHONPATH=/tmp/new:/tmp/site timeout 60 python3 -m ecs_engine demo materials --headless --frames 30 --width 1280 --height 720 --validate --screenshot $OUT/materials-h100.png 2>&1 | tail -3
   cd $REPO
 fi
+if [ "$MODE" = all ] || [ "$MODE" = lights ]; then
+  (cd /tmp && PYTHONPATH=/tmp/new:/tmp/site timeout 240 python3 -m ecs_engine.bench lights --out $OUT --machine h100-16c 2>&1 | grep -v "^\[lights" | tail -14)
+fi
 if [ "$MODE" = all ] || [ "$MODE" = ab ]; then
-  for rep in 1 2 3 4 5 6; do
+  for rep in 1 2 3 4; do
     if [ $((rep % 2)) = 1 ]; then order="new old"; else order="old new"; fi
     for v in $order; do
       (cd /tmp && PYTHONPATH=/tmp/$v:/tmp/site timeout 150 python3 $REPO/scripts/ab_frames.py $v $rep 1280x720 >> $OUT/ab.jsonl 2>> $OUT/ab.err)

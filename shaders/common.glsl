@@ -8,3 +8,6 @@ layout(std140, set = SET_FRAME, binding = BINDING_GLOBALS) uniform GlobalsBlock 
 layout(std430, set = SET_FRAME, binding = BINDING_LIGHTS) readonly buffer Lights { Light lights[]; };
 layout(std430, set = SET_FRAME, binding = BINDING_INSTANCES) readonly buffer Instances { Instance instances[]; };
 layout(std430, set = SET_FRAME, binding = BINDING_MATERIALS) readonly buffer Materials { Material materials[]; };
+#ifndef CLUSTER_WRITER
+layout(std430, set = SET_FRAME, binding = BINDING_CLUSTERS) readonly buffer Clusters { uint cluster_data[]; };
+#endif

@@ -24,6 +24,26 @@ vec4 sample_texture(uint ref, vec2 uv, vec2 dx, vec2 dy) {
 
 layout(location = 0) out vec4 out_color;
 
+vec3 light_term(uint i, Material m, uint model, vec3 p, vec3 n, vec3 to_eye) {
+    Light light = lights[i];
+    vec3 l;
+    float energy = light_at(light, p, n, l);
+    float nl = dot(n, l);
+    if (nl > 0.0 && energy > 0.0) {
+        return light.color_intensity.rgb * (energy * nl) * brdf_pi(m, model, n, l, to_eye, nl);
+    }
+    return vec3(0.0);
+}
+
+// The cluster of this fragment (cluster.comp made its light list): the screen tile, and the
+// exponential depth slice of its view depth.
+uint cluster_base(vec3 p) {
+    uvec2 tile = min(uvec2(gl_FragCoord.xy) / g.clusters.w, g.clusters.xy - 1u);
+    float depth = max(-(g.view * vec4(p, 1.0)).z, g.cluster_depth.x);
+    uint slice = min(uint(log(depth / g.cluster_depth.x) * g.cluster_depth.y), g.clusters.z - 1u);
+    return CLUSTER_HEADER + ((slice * g.clusters.y + tile.y) * g.clusters.x + tile.x) * CLUSTER_STRIDE;
+}
+
 // The material's shading model, per fragment, over every light. Every division is guarded, so a
 // fragment at a light's centre, a light of radius or intensity 0, or a degenerate normal stays finite.
 void main() {
@@ -85,13 +105,19 @@ void main() {
         float e2 = dot(eye, eye);
         vec3 to_eye = e2 > 1e-24 ? eye * inversesqrt(e2) : vec3(0.0, 0.0, 1.0);
         color = g.ambient.rgb * (g.ambient.a * occlusion) * m.base_color.rgb;
-        for (uint i = 0u; i < g.counts.x; ++i) {
-            Light light = lights[i];
-            vec3 l;
-            float energy = light_at(light, v_position, n, l);
-            float nl = dot(n, l);
-            if (nl > 0.0 && energy > 0.0) {
-                color += light.color_intensity.rgb * (energy * nl) * brdf_pi(m, model, n, l, to_eye, nl);
+        if ((MATERIAL_FEATURES & FEATURE_CLUSTERED) != 0u) {
+            uint globals = cluster_data[0];
+            for (uint k = 0u; k < globals; ++k) {
+                color += light_term(cluster_data[CLUSTER_GLOBALS + k], m, model, v_position, n, to_eye);
+            }
+            uint base = cluster_base(v_position);
+            uint count = min(cluster_data[base], uint(MAX_CLUSTER_LIGHTS));
+            for (uint k = 0u; k < count; ++k) {
+                color += light_term(cluster_data[base + 1u + k], m, model, v_position, n, to_eye);
+            }
+        } else {
+            for (uint i = 0u; i < g.counts.x; ++i) {
+                color += light_term(i, m, model, v_position, n, to_eye);
             }
         }
     }

@@ -285,3 +285,15 @@ def test_one_failing_output_does_not_lose_the_other(tmp_path, monkeypatch):
             )
         )
     assert len(json.loads(perf.read_text())["frames"]) == 2  # the log was written all the same
+
+
+def test_lights_demo_flags(tmp_path):
+    shot = tmp_path / "lights.png"
+    proc = cli(
+        "lights", "--lights", "100", "--light-culling", "clustered", "--headless", "--frames", "2",
+        "--width", "96", "--height", "64", "--validate", "--screenshot", str(shot),
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert "101 lights" in proc.stdout and shot.exists()
+    one_line_error(cli("cube", "--lights", "10", "--headless"), "--lights", "cube")
+    one_line_error(cli("lights", "--lights", "-1", "--headless"), "--lights -1")

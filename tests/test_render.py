@@ -55,11 +55,15 @@ def test_seed_scenes_match_golden_images(scene, tmp_path):
     assert stats.draws == 2  # one instanced draw of the shared mesh, one for the billboards
 
 
-@pytest.mark.parametrize("scene, lights, instances", [("materials", 3, 37)])
-def test_demo_scenes_match_golden_images(scene, lights, instances, tmp_path):
-    result = render(scene, screenshot=str(tmp_path / f"{scene}.png"))
+@pytest.mark.parametrize(
+    "scene, lights, instances, options",
+    [("materials", 3, 37, {}), ("lights", 257, None, {"lights": 256})],  # lights: clustered (256 + the sun)
+)
+def test_demo_scenes_match_golden_images(scene, lights, instances, options, tmp_path):
+    result = render(scene, screenshot=str(tmp_path / f"{scene}.png"), **options)
     assert_close_to_golden(result.pixels, scene)
-    assert (result.last_stats.lights, result.last_stats.instances) == (lights, instances)
+    assert result.last_stats.lights == lights
+    assert instances is None or result.last_stats.instances == instances
 
 
 def test_golden_comparison_detects_a_changed_scene():
@@ -94,7 +98,7 @@ def build_cubes(scales):
 def render_custom(build, monkeypatch, tmp_path, mode: str = "instanced") -> np.ndarray:
     import ecs_engine.app.session as session
 
-    monkeypatch.setattr(session, "scene_builder", lambda name, entities=None: build)
+    monkeypatch.setattr(session, "scene_builder", lambda name, entities=None, lights=None: build)
     result = run(
         RunOptions(
             scene="cube",

@@ -133,3 +133,15 @@ def test_entity_ids_are_integers_everywhere():
             with pytest.raises(TypeError, match="must be integers"):
                 call(bad)
     assert w.get(np.int64(e), A).v == 1 and w.is_alive(np.uint64(e))
+
+
+def test_spawn_batch_of_zero_rows_with_array_values():
+    """An empty batch with per-row arrays (shape (0, 3)) spawns nothing and does not fail."""
+    import numpy as np
+
+    from ecs_engine import World
+    from ecs_engine.components import PointLight, Transform
+
+    world = World()
+    ids = world.spawn_batch(0, Transform(position=np.zeros((0, 3))), PointLight(color=np.zeros((0, 3), np.float32)))
+    assert len(ids) == 0 and len(world) == 0

@@ -112,6 +112,13 @@ def render_flags() -> OneLineParser:
         "--msaa", type=int, choices=(1, 2, 4, 8), default=1, help="samples per pixel (default 1: no MSAA)"
     )
     common.add_argument(
+        "--light-culling",
+        choices=("auto", "loop", "clustered"),
+        default="auto",
+        help="auto (default): clusters from 64 bounded lights; loop: every fragment over every light",
+    )
+    common.add_argument("--lights", type=int, help="lights scene: how many point and spot lights (default 1,024)")
+    common.add_argument(
         "--entities", type=positive_int, help="scaling and motion scenes: entity count (default 10,000 and 100,000)"
     )
     common.add_argument(
@@ -135,7 +142,8 @@ def build_parser() -> argparse.ArgumentParser:
         default=DEFAULT_SCENE,
         choices=SCENES,
         help="cube, grid100, model: the seed's scenes; scaling: --entities moving entities; "
-        "materials: the shading models side by side; motion: text-mode ECS scene (no rendering)",
+        "materials: the shading models side by side; lights: --lights small lights (default 1,024); "
+        "motion: text-mode ECS scene (no rendering)",
     )
     demo.add_argument("path", nargs="?", help="model file for the model scene (OBJ, glTF/GLB, PLY, STL)")
     editor = sub.add_parser("editor", help="the ImGui editor and Perf window on demo scenes", parents=[common])
@@ -201,6 +209,8 @@ def check_flags_apply(args: argparse.Namespace, scenes: tuple[str, ...], editor:
     """Refuse a flag that would change nothing in this run, instead of ignoring it."""
     if args.entities is not None and "scaling" not in scenes:
         raise UsageError(f"--entities sizes the scaling and motion scenes; {', '.join(scenes)} has fixed content")
+    if args.lights is not None and "lights" not in scenes:
+        raise UsageError(f"--lights sizes the lights scene; {', '.join(scenes)} has fixed content")
     if args.headless and args.present != "fifo":
         raise UsageError("--present chooses a window's present mode; a --headless run has no window")
     if args.recorder is not None and not editor and not PATHS[args.mode].uses_recorder:
@@ -233,6 +243,8 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
         tone_map=args.tone_map,
         exposure=args.exposure,
         msaa=args.msaa,
+        light_culling=args.light_culling,
+        lights=args.lights,
         recorder=args.recorder,
         entities=args.entities or 10_000,
         perf_json=args.perf_json,

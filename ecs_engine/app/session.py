@@ -19,6 +19,7 @@ from ..ecs.world import World
 from ..gpu.device import Device
 from ..gpu.instance import Instance
 from ..jobs import JobPool
+from ..render.light_clusters import check_light_culling
 from ..render.mesh_registry import MeshRegistry
 from ..render.renderer import Renderer
 from ..render.tone_map import check_tone_map
@@ -122,6 +123,7 @@ class Session:
                 fill=start.fill,
                 tone_map=start.tone_map,
                 exposure=start.exposure,
+                light_culling=start.light_culling,
             )
             self.scene = start.scene
             self.world, self.schedule = self._build(start.scene, options.path)
@@ -147,13 +149,14 @@ class Session:
             fill=self.renderer.fill,
             tone_map=self.renderer.tone_map,
             exposure=self.renderer.exposure,
+            light_culling=self.renderer.light_culling,
         )
 
     def _build(self, scene: str, path: str | None) -> tuple[World, Schedule]:
         """A new world for `scene` (sharing the run's pool and meshes) and its schedule."""
         world = World()
         world.resources[JobPool] = self.pool
-        scene_builder(scene, self.options.entities)(world, self.gpu.meshes.add, path)
+        scene_builder(scene, self.options.entities, self.options.lights)(world, self.gpu.meshes.add, path)
         return world, default_schedule()
 
     def apply(self, wanted: Settings) -> None:
@@ -168,10 +171,12 @@ class Session:
             source.check_present(present)
         renderer.check_fill(wanted.fill)
         check_tone_map(wanted.tone_map, wanted.exposure)
+        check_light_culling(wanted.light_culling)
         scene = self._build(wanted.scene, None) if wanted.scene != self.scene else None
         renderer.set_path(wanted.mode, wanted.recorder)  # checks, then swaps
         renderer.set_fill(wanted.fill)
         renderer.tone_map, renderer.exposure = wanted.tone_map, float(wanted.exposure)
+        renderer.light_culling = wanted.light_culling
         renderer.culling = wanted.culling
         pool.resize(wanted.threads)
         if present is not None:

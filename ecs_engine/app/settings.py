@@ -14,6 +14,7 @@ import psutil
 
 from ..errors import UsageError
 from ..jobs import default_threads
+from ..render.light_clusters import check_light_culling
 from ..render.renderer import default_recorder
 from ..render.tone_map import check_tone_map
 from .scenes import SEED_SCENES
@@ -34,6 +35,7 @@ class Settings:
     fill: str = "solid"  # solid | wireframe | points
     tone_map: str = "clamp"  # clamp | aces | reinhard (render/tone_map.py)
     exposure: float = 0.0  # stops
+    light_culling: str = "auto"  # auto | loop | clustered (render/light_clusters.py)
 
 
 @dataclass(frozen=True)
@@ -58,6 +60,8 @@ class RunOptions:
     tone_map: str = "clamp"  # clamp | aces | reinhard
     exposure: float = 0.0  # stops: the HDR colour times 2^exposure before the tone map
     msaa: int = 1  # samples per pixel of the scene (1, 2, 4, 8), fixed for the run
+    light_culling: str = "auto"  # auto | loop | clustered
+    lights: int | None = None  # the lights scene's light count (None: its default, 1,024)
     chunk_rows: int | None = None  # rows per render job (None: about one per thread, frame_data.MIN_CHUNK_ROWS)
     recorder: str | None = None  # native | python (None: native when numba is there)
     entities: int = 10_000  # the scaling scene's entity count
@@ -69,6 +73,9 @@ class RunOptions:
         check_threads(self.threads)
         check_entities(self.entities)
         check_tone_map(self.tone_map, self.exposure)
+        check_light_culling(self.light_culling)
+        if self.lights is not None and not 0 <= self.lights <= MAX_LIGHTS:
+            raise UsageError(f"--lights {self.lights}: from 0 to {MAX_LIGHTS:,}")
 
     def settings(self) -> Settings:
         return Settings(
@@ -81,6 +88,7 @@ class RunOptions:
             fill=self.fill,
             tone_map=self.tone_map,
             exposure=self.exposure,
+            light_culling=self.light_culling,
         )
 
 
@@ -89,6 +97,7 @@ class RunOptions:
 # (28), the arrays its spawn call builds (~150), and two frame slots of 64-byte instance rows.
 BYTES_PER_ENTITY = 500
 MAX_ENTITIES = (1 << 32) - 1  # entity slots are 32-bit
+MAX_LIGHTS = 1 << 20  # the lights scene: a million lights is a scene no one draws interactively
 
 
 def max_threads() -> int:

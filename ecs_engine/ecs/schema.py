@@ -143,7 +143,8 @@ class Field:
         """Collapse a per-element mask to a per-row mask (shape () means one row)."""
         extra = len(self.shape)
         if mask.ndim > extra:
-            return np.asarray(mask.reshape(mask.shape[0], -1).any(axis=1))
+            # the width spelled out: reshape(0, -1) is ambiguous, and a batch of 0 rows is allowed
+            return np.asarray(mask.reshape(mask.shape[0], int(np.prod(mask.shape[1:]))).any(axis=1))
         return np.atleast_1d(mask.any()) if extra else np.atleast_1d(mask)
 
     def _fail(self, rows: np.ndarray, arr: np.ndarray, who: Callable[[int], str], what: str) -> None:

@@ -7,10 +7,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers, write_images
 from ..gpu.device import Device
-from ..gpu.memory import Buffer
+from ..gpu.memory import DEVICE, Buffer
 from .layouts import (
+    BINDING_CLUSTERS,
     BINDING_GLOBALS,
     BINDING_INSTANCES,
     BINDING_LIGHTS,
@@ -20,7 +23,9 @@ from .layouts import (
     INSTANCE,
     LIGHT,
     MATERIAL,
+    UINT_BYTES,
 )
+from .light_clusters import ClusterGrid
 from .materials import Materials
 from .texture_pages import TexturePages
 
@@ -34,12 +39,15 @@ class FrameResources:
     lights: Buffer
     instances: Buffer
     materials: Buffer
+    clusters: Buffer  # device-local: cluster.comp writes it, the fragment shader reads it
+    cluster_peak: Buffer  # host: the largest cluster's light count, copied there each clustered frame
     descriptor_set: Any
     set_array: Any  # VkDescriptorSet[1] for raw calls
     written: tuple[Any, ...] | None = None  # what the globals buffer holds
     # (the Materials, its version, the texture pages' generation) in `materials`: the object
     # itself, not its id, which a new registry could reuse once the old one is freed
     materials_written: tuple[Materials, int, int] | None = None
+    clustered: bool = False  # the last frame drawn in this slot clustered its lights (cluster_peak holds its peak)
 
     @classmethod
     def make(
@@ -53,6 +61,14 @@ class FrameResources:
             lights=Buffer(device, LIGHT.size * MIN_LIGHTS, ssbo),
             instances=Buffer(device, INSTANCE.size * 1024, ssbo),
             materials=Buffer(device, MATERIAL.size * MIN_MATERIALS, ssbo),
+            # bound always (the mesh shaders declare it), sized for a grid when lights are clustered
+            clusters=Buffer(
+                device,
+                ClusterGrid(1, 1, 1, 1.0, 1.0, 1, 1).buffer_bytes,
+                ssbo | vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT | vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                DEVICE,
+            ),
+            cluster_peak=Buffer(device, UINT_BYTES, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT),
             descriptor_set=descriptor_set,
             set_array=vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]),
         )
@@ -70,6 +86,7 @@ class FrameResources:
                 (BINDING_LIGHTS, ssbo, self.lights),
                 (BINDING_INSTANCES, ssbo, self.instances),
                 (BINDING_MATERIALS, ssbo, self.materials),
+                (BINDING_CLUSTERS, ssbo, self.clusters),
             ],
         )
         write_images(device, self.descriptor_set, BINDING_TEXTURES, pages.image_infos())
@@ -93,6 +110,18 @@ class FrameResources:
                     self.materials_written = None
                 self.write_set(device, pages)
 
+    def ensure_clusters(self, device: Device, pages: TexturePages, grid: ClusterGrid) -> None:
+        """Room for `grid`'s light lists (safe: this slot's fence was waited on)."""
+        if grid.buffer_bytes > self.clusters.size:
+            self.clusters = self.clusters.grown(grid.buffer_bytes)
+            self.write_set(device, pages)
+
+    def last_cluster_peak(self) -> int | None:
+        """The largest cluster's light count in the last frame this slot drew clustered."""
+        if not self.clustered:
+            return None
+        return int(self.cluster_peak.array(np.uint32, 1)[0])
+
     def write_materials(self, materials: Materials, pages: TexturePages) -> None:
         """The world's material table into this slot's copy, when it changed since last written
         here; texture handles become the pages' refs."""
@@ -106,5 +135,5 @@ class FrameResources:
             self.materials_written = key
 
     def destroy(self) -> None:
-        for buffer in (self.globals, self.lights, self.instances, self.materials):
+        for buffer in (self.globals, self.lights, self.instances, self.materials, self.clusters, self.cluster_peak):
             buffer.destroy()

@@ -32,6 +32,13 @@ GLOBALS = Struct(
         ("eye", "vec4", "xyz: the camera relative to the render origin (zero by default)"),
         ("ambient", "vec4", "rgb, intensity"),
         ("counts", "uvec4", "x: lights, y: point and spot lights (first in the buffer, drawn as billboards)"),
+        ("inverse_projection", "mat4", "clustered lights: cluster bounds from screen tiles"),
+        ("clusters", "uvec4", "x tiles across, y tiles down, z depth slices, w tile side in pixels"),
+        (
+            "cluster_depth",
+            "vec4",
+            "x near, y slices / ln(far / near): slice = floor(ln(depth / near) * y); zw viewport size in pixels",
+        ),
     ],
     std140=True,
     doc="The frame's uniforms. Positions are relative to the render origin (the camera, unless\n"
@@ -143,6 +150,7 @@ IMGUI_PUSH = Struct(
 
 SET_FRAME, SET_INDIRECT = 0, 1
 BINDING_GLOBALS, BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS, BINDING_TEXTURES = 0, 1, 2, 3, 4
+BINDING_CLUSTERS = 5  # clustered lights (light_clusters.py): light lists per view-space cluster
 TEXTURE_PAGES = 18  # texture_pages.py: two views (sRGB, UNORM) per size class, 16 to 4096 texels
 BINDING_IDS, BINDING_KEYS, BINDING_DRAW_STATE, BINDING_COMMANDS = 0, 1, 2, 3
 # shading models: the values of Material.kind.x and bits 0-5 of the mesh pipelines' MATERIAL_FEATURES
@@ -152,6 +160,16 @@ MODEL_UNLIT, MODEL_LAMBERT, MODEL_OREN_NAYAR, MODEL_PHONG, MODEL_BLINN_PHONG, MO
 FEATURE_ALPHA_MASK = 1 << 16  # some material is drawn with alpha_mode mask
 FEATURE_TEXTURES = 1 << 17  # some material has a texture: the textured shader variants (uv, tangents)
 FEATURE_DOUBLE_SIDED = 1 << 18  # some material is double-sided: no back-face culling, see mesh_fragment.glsl
+FEATURE_CLUSTERED = 1 << 19  # fragments loop over their cluster's lights, not all (light_clusters.py)
+CLUSTER_GROUP = 64  # cluster.comp's local size
+MAX_GLOBAL_LIGHTS = 256  # directional and unbounded lights every fragment loops over, when clustered
+MAX_CLUSTER_LIGHTS = 256  # bounded lights one cluster lists
+CLUSTER_STRIDE = 1 + MAX_CLUSTER_LIGHTS  # uints per cluster: its count, then its light indices
+# uints before the first cluster: the global count, the largest cluster's count (lights past
+# MAX_CLUSTER_LIGHTS are dropped: the renderer reads this back and falls back to the loop), the global list
+CLUSTER_PEAK = 1
+CLUSTER_GLOBALS = 2
+CLUSTER_HEADER = CLUSTER_GLOBALS + MAX_GLOBAL_LIGHTS
 ALPHA_OPAQUE, ALPHA_MASK, ALPHA_BLEND = range(3)
 LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL = range(3)
 TONE_MAP_CLAMP, TONE_MAP_ACES, TONE_MAP_REINHARD = range(3)
@@ -181,6 +199,15 @@ DEFINES = {
     "BINDING_INSTANCES": BINDING_INSTANCES,
     "BINDING_MATERIALS": BINDING_MATERIALS,
     "BINDING_TEXTURES": BINDING_TEXTURES,
+    "BINDING_CLUSTERS": BINDING_CLUSTERS,
+    "FEATURE_CLUSTERED": FEATURE_CLUSTERED,
+    "CLUSTER_GROUP": CLUSTER_GROUP,
+    "MAX_GLOBAL_LIGHTS": MAX_GLOBAL_LIGHTS,
+    "MAX_CLUSTER_LIGHTS": MAX_CLUSTER_LIGHTS,
+    "CLUSTER_STRIDE": CLUSTER_STRIDE,
+    "CLUSTER_HEADER": CLUSTER_HEADER,
+    "CLUSTER_PEAK": CLUSTER_PEAK,
+    "CLUSTER_GLOBALS": CLUSTER_GLOBALS,
     "TEXTURE_PAGES": TEXTURE_PAGES,
     "BINDING_IDS": BINDING_IDS,
     "BINDING_KEYS": BINDING_KEYS,

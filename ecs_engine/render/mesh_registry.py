@@ -43,6 +43,7 @@ class MeshRegistry:
         self._meshes: list[GpuMesh] = []
         self._by_data: dict[int, int] = {}  # id(MeshData) -> handle: the same object again
         self._by_content: dict[bytes, int] = {}  # digest of the arrays -> handle: an equal mesh again
+        self._bounds: tuple[int, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
         self._merged: MergedMeshes | None = None
 
     def add(self, mesh: MeshData) -> int:
@@ -68,6 +69,21 @@ class MeshRegistry:
 
     def __len__(self) -> int:
         return len(self._meshes)
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Per mesh: bounding sphere centre (n, 3) and radius, index count (kept until meshes are added)."""
+        n = len(self._meshes)
+        if self._bounds is None or self._bounds[0] != n:
+            meshes = self._meshes
+            self._bounds = (
+                n,
+                (
+                    np.array([m.data.center for m in meshes], dtype=np.float64).reshape(n, 3),
+                    np.array([m.data.radius for m in meshes], dtype=np.float64),
+                    np.array([m.index_count for m in meshes], dtype=np.int64),
+                ),
+            )
+        return self._bounds[1]
 
     def triangles(self, handle: int) -> int:
         return self._meshes[handle].index_count // 3

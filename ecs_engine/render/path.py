@@ -49,6 +49,39 @@ class TargetState:
     pass_begin_ptr: Any = None
     path_state: dict[Any, Any] = field(default_factory=dict)  # what paths keep per target and slot
 
+    @classmethod
+    def make(
+        cls,
+        vk: Any,
+        key: tuple[int, int, int],
+        framebuffer: Any,
+        render_pass: Any,
+        secondary_begin: Any,
+        clear_color: tuple[float, float, float],
+    ) -> TargetState:
+        width, height = key[1], key[2]
+        area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(width, height))
+        background = vk.VkClearValue(color=vk.VkClearColorValue(float32=[*clear_color, 1.0]))
+        clears = [  # in render-pass order (gpu/render_pass.py): the target is not cleared
+            background,
+            vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=0.0, stencil=0)),  # reverse-Z
+            background,  # the HDR colour
+        ]
+        state = cls(
+            key=key,
+            area=area,
+            viewport=vk.VkViewport(x=0.0, y=0.0, width=float(width), height=float(height), minDepth=0.0, maxDepth=1.0),
+            secondary_begin=secondary_begin,
+            pass_begin=vk.VkRenderPassBeginInfo(
+                renderPass=render_pass, framebuffer=framebuffer, renderArea=area, pClearValues=clears
+            ),
+            keep=(clears, framebuffer),
+        )
+        state.area_ptr = vk.ffi.addressof(state.area)
+        state.viewport_ptr = vk.ffi.addressof(state.viewport)
+        state.pass_begin_ptr = vk.ffi.addressof(state.pass_begin)
+        return state
+
 
 @dataclass
 class FrameInputs:

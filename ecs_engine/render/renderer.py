@@ -38,21 +38,24 @@ from .frame_data import Chunk, FrameData, FrameExtractor
 from .frame_resources import FrameResources
 from .indirect_path import IndirectPath
 from .layouts import (
+    BINDING_CLUSTERS,
     BINDING_GLOBALS,
     BINDING_INSTANCES,
     BINDING_LIGHTS,
     BINDING_MATERIALS,
     BINDING_TEXTURES,
+    FEATURE_CLUSTERED,
     GLOBALS,
     INSTANCE,
     LIGHT,
     TEXTURE_PAGES,
 )
+from .light_clusters import ClusterGrid, LightCulling, check_light_culling
 from .light_pass import LightPass
 from .light_rows import write_lights
 from .materials import Materials
 from .mesh_registry import MeshRegistry
-from .path import FILL_MODES, ChunkResult, FrameInputs, MeshBounds, PathContext, PathFactory, RenderPath, TargetState
+from .path import FILL_MODES, ChunkResult, FrameInputs, PathContext, PathFactory, RenderPath, TargetState
 from .texture_pages import TexturePages
 from .tone_map import ToneMapPass, check_tone_map
 
@@ -105,6 +108,7 @@ class Renderer:
         fill: str = "solid",
         tone_map: str = "clamp",
         exposure: float = 0.0,
+        light_culling: str = "auto",
     ) -> None:
         if mode not in PATHS:
             raise ValueError(f"unknown render mode {mode!r}; modes: {', '.join(MODES)}")
@@ -112,6 +116,7 @@ class Renderer:
         self.device = device
         self.check_fill(fill)  # before anything is made: a refusal leaves nothing to destroy
         check_tone_map(tone_map, exposure)
+        check_light_culling(light_culling)
         self.tone_map, self.exposure = tone_map, float(exposure)  # read each frame: change them any time
         self.target = target
         self.meshes = meshes
@@ -132,11 +137,11 @@ class Renderer:
         self.set_layout = DescriptorSetLayout(
             device,
             [(BINDING_GLOBALS, vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, stages)]
-            + [(b, ssbo, stages) for b in (BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS)]
+            + [(b, ssbo, stages) for b in (BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS, BINDING_CLUSTERS)]
             + [(BINDING_TEXTURES, sampler, vk.VK_SHADER_STAGE_FRAGMENT_BIT, TEXTURE_PAGES)],
         )
         self.pool = DescriptorPool(
-            device, n, {vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER: n, ssbo: 3 * n, sampler: TEXTURE_PAGES * n}
+            device, n, {vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER: n, ssbo: 4 * n, sampler: TEXTURE_PAGES * n}
         )
         self.texture_pages = TexturePages(device)
         # a world without a Materials resource draws with the default palette
@@ -150,8 +155,8 @@ class Renderer:
             device, self.set_layout.handle, target.render_pass, SUBPASS_BILLBOARDS, light_size, target.samples
         )
         self.tone_map_pass = ToneMapPass(device, target.render_pass)
+        self.lights = LightCulling(device, self.set_layout.handle, light_culling)
         self._targets: dict[tuple[int, int, int], TargetState] = {}
-        self._bounds: tuple[int, MeshBounds] | None = None
         # drawn last in the overlay subpass: an object with prepare(slot, frames_in_flight) and
         # record(cb, slot, width, height), e.g. imgui_pass.ImGuiRenderer
         self.overlay: Any = None
@@ -218,7 +223,7 @@ class Renderer:
             frame_set_layout=self.set_layout.handle,
             secondaries=self.secondaries,
             frames_in_flight=len(self.frames.frames),
-            material_features=self.material_features,
+            material_features=self.material_features | (FEATURE_CLUSTERED if self.lights.clustered else 0),
             samples=self.target.samples,
             fill=self.fill,
             native_recorder=self._native_recorder,
@@ -273,44 +278,15 @@ class Renderer:
         if state is None:
             if len(self._targets) > 16:  # swapchains come and go: drop the old framebuffers' entries
                 self._targets.clear()
-            area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(width, height))
-            background = vk.VkClearValue(color=vk.VkClearColorValue(float32=[*self.clear_color, 1.0]))
-            clears = [  # in render-pass order (gpu/render_pass.py): the target is not cleared
-                background,
-                vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=0.0, stencil=0)),  # reverse-Z
-                background,  # the HDR colour
-            ]
-            state = self._targets[key] = TargetState(
-                key=key,
-                area=area,
-                viewport=vk.VkViewport(
-                    x=0.0, y=0.0, width=float(width), height=float(height), minDepth=0.0, maxDepth=1.0
-                ),
-                secondary_begin=self.secondaries.begin_info(self.target.render_pass, 0, framebuffer),
-                pass_begin=vk.VkRenderPassBeginInfo(
-                    renderPass=self.target.render_pass, framebuffer=framebuffer, renderArea=area, pClearValues=clears
-                ),
-                keep=(clears, framebuffer),
+            state = self._targets[key] = TargetState.make(
+                vk,
+                key,
+                framebuffer,
+                self.target.render_pass,
+                self.secondaries.begin_info(self.target.render_pass, 0, framebuffer),
+                self.clear_color,
             )
-            state.area_ptr = vk.ffi.addressof(state.area)
-            state.viewport_ptr = vk.ffi.addressof(state.viewport)
-            state.pass_begin_ptr = vk.ffi.addressof(state.pass_begin)
         return state
-
-    def _mesh_bounds(self) -> MeshBounds:
-        """Per mesh: bounding sphere centre and radius, index count (kept until meshes are added)."""
-        n = len(self.meshes)
-        if self._bounds is None or self._bounds[0] != n:
-            meshes = [self.meshes[h] for h in range(n)]
-            self._bounds = (
-                n,
-                (
-                    np.array([m.data.center for m in meshes], dtype=np.float64).reshape(n, 3),
-                    np.array([m.data.radius for m in meshes], dtype=np.float64),
-                    np.array([m.index_count for m in meshes], dtype=np.int64),
-                ),
-            )
-        return self._bounds[1]
 
     def next_image_semaphore(self) -> Any:
         """The semaphore the next frame waits on for a swapchain image, once that frame slot's
@@ -352,6 +328,7 @@ class Renderer:
         material_count = len(materials)
         data = self.extract(world, width, height, material_count)  # before any GPU state: a bad world fails here
         self._check_material_features(materials)
+        grid = self._light_clusters(data, width, height)
         self._sync_textures(materials)
         if self.jobs is not None and self.jobs.generation != self._jobs_generation:
             self._forget_old_threads()
@@ -361,7 +338,11 @@ class Renderer:
         pf.ensure_capacity(
             self.device, self.texture_pages, self.path.rows_needed(data.candidates), data.light_count, material_count
         )
+        self.lights.check_peak(pf)
+        pf.clustered = grid is not None
         pf.write_materials(materials, self.texture_pages)
+        if grid is not None:
+            pf.ensure_clusters(self.device, self.texture_pages, grid)
         target = self.target_state(framebuffer or self.target.framebuffer, width, height)
         inputs = FrameInputs(
             slot=slot,
@@ -370,7 +351,7 @@ class Renderer:
             target=target,
             planes=data.planes,
             instances=pf.instances.array(INSTANCE.dtype),
-            bounds=self._mesh_bounds(),
+            bounds=self.meshes.bounds(),
             readback=readback,
             material_count=material_count,
         )
@@ -388,7 +369,9 @@ class Renderer:
                 data.camera.position - data.origin,
                 pf.lights.array(np.float32, (data.light_count, LIGHT.size // 4)),
             )
-        self._write_globals(pf, data.camera, data.view, data.origin, data.origin_key, data.light_count, positional)
+        self._write_globals(
+            pf, data.camera, data.view, data.origin, data.origin_key, data.light_count, positional, grid
+        )
         t0 = time.perf_counter()
 
         def job(chunk: Chunk) -> ChunkResult:
@@ -402,6 +385,8 @@ class Renderer:
         record_ms = (time.perf_counter() - t0) * 1e3
         cb = frame.command_buffer
         secondaries = path.finish(cb, inputs, results, data.candidates)
+        if grid is not None:
+            self.lights.record(cb, pf, grid)
         light_draws = self._record_primary(cb, secondaries, positional, target, pf, slot)
         if readback:
             self.target.record_readback(cb)
@@ -430,10 +415,11 @@ class Renderer:
         origin_key: bytes,
         light_count: int,
         positional: int,
+        grid: ClusterGrid | None,
     ) -> None:
         """The frame's uniforms, rewritten only when something in them changed (the slot's
         mapped buffer keeps what was last written there)."""
-        written = (cam, origin_key, light_count, positional, tuple(self.ambient))
+        written = (cam, origin_key, light_count, positional, tuple(self.ambient), grid)
         last = pf.written
         if last is not None and last[0] is cam and last[1:] == written[1:]:
             return
@@ -443,7 +429,36 @@ class Renderer:
         g["eye"][0, :3] = cam.position - origin  # float64 difference, then the cast
         g["ambient"] = self.ambient
         g["counts"] = (light_count, positional, 0, 0)
+        if grid is not None:
+            g["inverse_projection"] = np.linalg.inv(cam.projection).T
+            g["clusters"] = (grid.tiles_x, grid.tiles_y, grid.slices, grid.tile)
+            g["cluster_depth"] = (grid.near, grid.scale, grid.width, grid.height)
         pf.written = written
+
+    @property
+    def light_culling(self) -> str:
+        return self.lights.mode
+
+    @light_culling.setter
+    def light_culling(self, mode: str) -> None:
+        check_light_culling(mode)
+        self.lights.mode = mode
+
+    @property
+    def clustered(self) -> bool:
+        return self.lights.clustered
+
+    def _light_clusters(self, data: FrameData, width: int, height: int) -> ClusterGrid | None:
+        """This frame's cluster grid, or None for the all-lights loop; a change either way
+        rebuilds the mesh pipelines (FEATURE_CLUSTERED), undone if that fails."""
+        grid, flipped = self.lights.plan(data, width, height)
+        if flipped:
+            try:
+                self._swap_path(self._make_path(self.mode, self.cpu_recorder))
+            except BaseException:
+                self.lights.clustered = not self.lights.clustered
+                raise
+        return grid
 
     def _record_primary(
         self, cb: Any, secondaries: list[Any], billboards: int, target: TargetState, pf: FrameResources, slot: int
@@ -474,6 +489,7 @@ class Renderer:
     def _destroy_shared(self) -> None:
         self.light_pass.destroy()
         self.tone_map_pass.destroy()
+        self.lights.destroy()
         self.texture_pages.destroy()
         self.secondaries.destroy()
         for pf in self.per_frame:

@@ -1,0 +1,184 @@
+"""GPU time against light count: the lights demo's scene (a floor, 169 objects, N small point and
+spot lights moving) drawn with every fragment looping over every light and with clustered lights.
+
+Per light count (1 to 16,384) and light culling (`loop`, `clustered`, and `auto`, what the
+renderer picks), one renderer draws warm-up frames, then timed frames; GPU ms from the frame's
+timestamp queries (read a frame late), CPU ms from frame start to submit minus waits for the GPU.
+The configurations are run twice, in alternating order, and the median of both runs is kept (the
+host's drift hits every configuration alike). The target (issue 14): 4,096 lights with `auto`
+cost at most twice the GPU time of the 6-light frame of the same scene.
+
+JSON (schema_version 1): {"benchmark": "lights", "quick", "machine", "device", "config": {"width",
+"height", "warmup", "frames", "counts"}, "results": [{"lights", "culling", "clustered", "gpu_ms",
+"cpu_ms", "runs": [{"gpu_ms", "cpu_ms"}]}], "target": {"lights", "baseline_lights", "gpu_ms",
+"baseline_gpu_ms", "ratio", "limit", "met"}}
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from pathlib import Path
+from typing import Any
+
+COUNTS = (1, 6, 16, 64, 256, 1024, 4096, 16384)
+QUICK_COUNTS = (1, 6, 64, 256)
+CULLINGS = ("loop", "clustered", "auto")
+TARGET_LIGHTS, BASELINE_LIGHTS, TARGET_RATIO = 4096, 6, 2.0
+THREADS = 1
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--width", type=int, default=1280)
+    parser.add_argument("--height", type=int, default=720)
+
+
+def measure(gpu: Any, n: int, culling: str, warmup: int, frames: int) -> dict[str, Any]:
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.demos import lights
+    from ecs_engine.ecs.world import World
+    from ecs_engine.render.renderer import Renderer
+
+    device, target, meshes = gpu
+    world = World()
+    lights.build(world, meshes.add, lights=n)
+    schedule = default_schedule()
+    renderer = Renderer(device, target, meshes, light_culling=culling)
+    gpu_ms: list[float] = []
+    cpu_ms: list[float] = []
+    try:
+        for i in range(warmup + frames):
+            t0 = time.perf_counter()
+            schedule.run(world, 1.0 / 60.0)
+            stats = renderer.render(world)
+            if i >= warmup:
+                cpu_ms.append((time.perf_counter() - t0) * 1e3 - stats.wait_ms)
+                if stats.gpu_ms is not None:
+                    gpu_ms.append(stats.gpu_ms)
+        device.wait_idle()
+        clustered = renderer.clustered
+    finally:
+        renderer.destroy()
+    return {
+        "gpu_ms": statistics.median(gpu_ms) if gpu_ms else None,
+        "cpu_ms": statistics.median(cpu_ms),
+        "clustered": clustered,
+    }
+
+
+def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dict[str, Any]:
+    from ecs_engine.gpu.device import Device
+    from ecs_engine.gpu.instance import Instance
+    from ecs_engine.gpu.offscreen import OffscreenTarget
+    from ecs_engine.render.mesh_registry import MeshRegistry
+
+    counts = QUICK_COUNTS if args.quick else COUNTS
+    warmup, frames = (2, 4) if args.quick else (15, 60)
+    width, height = (320, 180) if args.quick else (args.width, args.height)
+    instance = Instance()
+    device = Device(instance)
+    target = OffscreenTarget(device, width, height)
+    meshes = MeshRegistry(device)
+    runs: dict[tuple[int, str], list[dict[str, Any]]] = {}
+    progress.total = 2 * len(counts) * len(CULLINGS)
+    try:
+        for round_ in range(2):
+            order = CULLINGS if round_ == 0 else CULLINGS[::-1]
+            for n in counts:
+                for culling in order:
+                    with progress.step(f"round {round_ + 1}: {n:,} lights, {culling}"):
+                        runs.setdefault((n, culling), []).append(
+                            measure((device, target, meshes), n, culling, warmup, frames)
+                        )
+        device_info = device.info.__dict__
+    finally:
+        meshes.destroy()
+        target.destroy()
+        device.destroy()
+        instance.destroy()
+    results = []
+    for (n, culling), measured in runs.items():
+        gpu = [m["gpu_ms"] for m in measured if m["gpu_ms"] is not None]
+        results.append(
+            {
+                "lights": n,
+                "culling": culling,
+                "clustered": measured[-1]["clustered"],
+                "gpu_ms": statistics.median(gpu) if gpu else None,
+                "cpu_ms": statistics.median(m["cpu_ms"] for m in measured),
+                "runs": [{"gpu_ms": m["gpu_ms"], "cpu_ms": m["cpu_ms"]} for m in measured],
+            }
+        )
+    doc = {
+        "benchmark": "lights",
+        "schema_version": 1,
+        "quick": bool(args.quick),
+        "machine": machine,
+        "device": device_info,
+        "config": {"width": width, "height": height, "warmup": warmup, "frames": frames, "counts": list(counts)},
+        "results": results,
+        "target": target_entry(results),
+    }
+    print(format_table(doc))
+    plot(doc, Path(args.out) / f"lights-{machine['slug']}.png")
+    return doc
+
+
+def target_entry(results: list[dict[str, Any]]) -> dict[str, Any]:
+    by = {(r["lights"], r["culling"]): r["gpu_ms"] for r in results}
+    target, base = by.get((TARGET_LIGHTS, "auto")), by.get((BASELINE_LIGHTS, "auto"))
+    ratio = target / base if target is not None and base else None
+    return {
+        "lights": TARGET_LIGHTS,
+        "baseline_lights": BASELINE_LIGHTS,
+        "gpu_ms": target,
+        "baseline_gpu_ms": base,
+        "ratio": ratio,
+        "limit": TARGET_RATIO,
+        "met": None if ratio is None else ratio <= TARGET_RATIO,
+    }
+
+
+def format_table(doc: dict[str, Any]) -> str:
+    rows = {}
+    for r in doc["results"]:
+        rows.setdefault(r["lights"], {})[r["culling"]] = r
+    lines = [
+        f"lights at {doc['config']['width']}x{doc['config']['height']}: GPU ms (CPU ms), median of 2 runs",
+        f"{'lights':>7} {'loop':>16} {'clustered':>16} {'auto':>16}",
+    ]
+    for n in sorted(rows):
+        cells = []
+        for culling in CULLINGS:
+            r = rows[n].get(culling)
+            cells.append("-" if r is None or r["gpu_ms"] is None else f"{r['gpu_ms']:.3f} ({r['cpu_ms']:.2f})")
+        lines.append(f"{n:>7,} " + " ".join(f"{c:>16}" for c in cells))
+    t = doc["target"]
+    if t["ratio"] is not None:
+        lines.append(
+            f"target: {t['lights']:,} lights {t['gpu_ms']:.3f} ms = {t['ratio']:.2f}x the {t['baseline_lights']}-light "
+            f"frame ({t['baseline_gpu_ms']:.3f} ms); limit {t['limit']:.0f}x: {'met' if t['met'] else 'NOT met'}"
+        )
+    return "\n".join(lines)
+
+
+def plot(doc: dict[str, Any], path: Path) -> None:
+    from . import pyplot, save_figure
+
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4.4))
+    for culling in CULLINGS:
+        pts = sorted((r["lights"], r["gpu_ms"]) for r in doc["results"] if r["culling"] == culling and r["gpu_ms"])
+        if pts:
+            ax.plot(*zip(*pts), marker="o", label=culling)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("lights")
+    ax.set_ylabel("GPU ms per frame")
+    cfg = doc["config"]
+    ax.set_title(f"lights scene at {cfg['width']}x{cfg['height']}: every light per fragment vs clustered")
+    ax.legend()
+    ax.grid(True, which="both", alpha=0.3)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    save_figure(fig, path)

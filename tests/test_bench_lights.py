@@ -1,0 +1,30 @@
+"""`bench lights --quick` on lavapipe: every light count and light culling measured, what each
+actually drew with (auto clusters from 64 lights), the JSON and the plot written."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_lights_quick_writes_its_json(tmp_path, monkeypatch):
+    monkeypatch.syspath_prepend(str(ROOT))
+    from bench.__main__ import main
+    from bench.lights import QUICK_COUNTS, target_entry
+
+    assert main(["lights", "--quick", "--out", str(tmp_path), "--machine", "ci"]) == 0
+    doc = json.loads((tmp_path / "lights-ci.json").read_text())
+    rows = {(r["lights"], r["culling"]): r for r in doc["results"]}
+    assert set(rows) == {(n, c) for n in QUICK_COUNTS for c in ("loop", "clustered", "auto")}
+    assert all(r["gpu_ms"] and r["gpu_ms"] > 0 and len(r["runs"]) == 2 for r in doc["results"])
+    assert not any(r["clustered"] for (n, c), r in rows.items() if c == "loop")
+    assert all(r["clustered"] for (n, c), r in rows.items() if c == "clustered")
+    assert [rows[n, "auto"]["clustered"] for n in QUICK_COUNTS] == [n >= 64 for n in QUICK_COUNTS]
+    assert doc["target"]["ratio"] is None  # 4,096 lights are not in the quick run
+    assert (tmp_path / "lights-ci.png").stat().st_size > 1000
+    made = target_entry(
+        [{"lights": 4096, "culling": "auto", "gpu_ms": 3.0}, {"lights": 6, "culling": "auto", "gpu_ms": 2.0}]
+    )
+    assert made["ratio"] == 1.5 and made["met"]

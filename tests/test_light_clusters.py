@@ -1,0 +1,168 @@
+"""Clustered lights: cluster.comp's light lists give the same image as the all-lights loop (within
+1/255 in 8-bit sRGB), for perspective and orthographic cameras and every render path; the switch
+between them follows the light count."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from gpu_context import headless_gpu
+
+from ecs_engine import World
+from ecs_engine.app.scenes import default_schedule
+from ecs_engine.components import Camera, DirectionalLight, Mesh, PointLight, SpotLight, Transform
+from ecs_engine.components.camera import ORTHOGRAPHIC
+from ecs_engine.errors import UsageError
+from ecs_engine.maths.camera import look_rotation
+from ecs_engine.render.light_clusters import (
+    CLUSTER_MIN_LIGHTS,
+    cluster_grid,
+    light_census,
+    wants_clusters,
+)
+from ecs_engine.render.light_rows import DirectionalLights, PositionalLights
+from ecs_engine.render.materials import Material, materials
+from ecs_engine.render.primitives import plane_mesh, sphere_mesh
+
+W, H = 160, 96  # 3 x 2 tiles: lights cross tile and slice borders
+
+
+def lit_field(gpu, lights: int, ortho: bool = False, seed: int = 3) -> World:
+    rng = np.random.default_rng(seed)
+    world = World()
+    library = materials(world)
+    floor = library.add(Material("floor", "lambert", (0.6, 0.6, 0.6, 1.0)))
+    shiny = library.add(Material("shiny", "cook_torrance", (0.9, 0.5, 0.3, 1.0), metallic=0.2, roughness=0.35))
+    world.spawn(Transform(), Mesh(handle=gpu.meshes.add(plane_mesh(30.0, 30)), material=floor))
+    ball = gpu.meshes.add(sphere_mesh(24, 12))
+    for x in np.linspace(-6, 6, 5):
+        for z in np.linspace(-10, 2, 4):
+            world.spawn(Transform(position=(x, 0.6, z), scale=(0.6, 0.6, 0.6)), Mesh(handle=ball, material=shiny))
+    n_spot = lights // 8
+    n_point = lights - n_spot
+    world.spawn_batch(
+        n_point,
+        Transform(
+            position=np.c_[rng.uniform(-12, 12, n_point), rng.uniform(0.2, 2.0, n_point), rng.uniform(-20, 4, n_point)]
+        ),
+        PointLight(
+            color=rng.uniform(0.2, 1.0, (n_point, 3)).astype(np.float32),
+            intensity=rng.uniform(0.5, 3.0, n_point),
+            radius=rng.uniform(0.8, 3.5, n_point),
+        ),
+    )
+    for _ in range(n_spot):
+        p = (rng.uniform(-10, 10), rng.uniform(2, 4), rng.uniform(-15, 2))
+        world.spawn(
+            Transform(position=p, rotation=look_rotation((rng.uniform(-0.3, 0.3), -1.0, rng.uniform(-0.3, 0.3)))),
+            SpotLight(color=(1.0, 0.9, 0.7), intensity=8.0, radius=6.0, inner_angle=0.3, outer_angle=0.6),
+        )
+    world.spawn(Transform(rotation=look_rotation((0.3, -1.0, -0.4))), DirectionalLight(illuminance=0.15))
+    world.spawn(Transform(position=(0.0, 6.0, -4.0)), PointLight(intensity=4.0, radius=0.0))  # unbounded
+    camera = Camera(fov_y=math.radians(60.0), near=0.1)
+    if ortho:
+        camera = Camera(projection=ORTHOGRAPHIC, near=0.1, far=100.0, height=14.0)
+    world.spawn(Transform(position=(0.0, 5.0, 7.0), rotation=look_rotation((0.0, -0.55, -1.0))), camera)
+    return world
+
+
+def render(gpu, world: World, culling: str, mode: str = "instanced") -> tuple[np.ndarray, bool]:
+    from ecs_engine.render.renderer import Renderer
+
+    renderer = Renderer(gpu.device, gpu.target, gpu.meshes, light_culling=culling, mode=mode)
+    try:
+        default_schedule().run(world, 0.0)
+        renderer.render(world, readback=True)
+        return gpu.target.pixels()[..., :3].astype(int), renderer.clustered
+    finally:
+        renderer.destroy()
+
+
+@pytest.mark.parametrize("ortho", [False, True])
+@pytest.mark.parametrize("mode", ["instanced", "indirect"])
+def test_clustered_lights_draw_what_the_loop_draws(ortho, mode):
+    with headless_gpu(W, H) as gpu:
+        world = lit_field(gpu, 300, ortho)
+        loop, loop_clustered = render(gpu, world, "loop", mode)
+        clustered, was_clustered = render(gpu, world, "clustered", mode)
+        dark, _ = render(gpu, lit_field(gpu, 0, ortho), "loop", mode)
+    assert not loop_clustered and was_clustered
+    assert np.abs(loop - dark).max() > 60  # the small lights make a visible difference
+    diff = np.abs(clustered - loop)
+    assert diff.max() <= 1, f"max difference {diff.max()} at {np.unravel_index(diff.argmax(), diff.shape)}"
+
+
+def crowd(gpu, n: int = 300) -> World:
+    """n lights on top of each other over the floor: one cluster reaches all of them."""
+    world = lit_field(gpu, 0)
+    world.spawn_batch(
+        n,
+        Transform(position=np.tile([0.0, 1.0, 0.0], (n, 1))),
+        PointLight(color=(0.02, 0.015, 0.01), intensity=1.0, radius=4.0),
+    )
+    return world
+
+
+def frames(gpu, world: World, culling: str, count: int) -> tuple[np.ndarray, object]:
+    from ecs_engine.render.renderer import Renderer
+
+    renderer = Renderer(gpu.device, gpu.target, gpu.meshes, light_culling=culling)
+    try:
+        default_schedule().run(world, 0.0)
+        for _ in range(count):
+            renderer.render(world, readback=True)
+        return gpu.target.pixels()[..., :3].astype(int), renderer.clustered
+    finally:
+        renderer.destroy()
+
+
+def test_an_overflowing_cluster_is_caught(caplog):
+    """More lights in one cluster than its list keeps: forced clustering leaves some out (the
+    comparison with the loop catches it, so it can fail) and warns once; `auto` warns once and
+    goes back to the loop, which draws them all."""
+    import logging
+
+    with headless_gpu(W, H) as gpu:
+        world = crowd(gpu)
+        loop, _ = frames(gpu, world, "loop", 1)
+        with caplog.at_level(logging.WARNING, logger="ecs_engine"):
+            forced, still = frames(gpu, world, "clustered", 6)
+            assert still and np.abs(forced - loop).max() > 10
+            auto, clustered = frames(gpu, world, "auto", 6)
+    assert not clustered and np.abs(auto - loop).max() <= 1
+    lines = [r.getMessage() for r in caplog.records]
+    assert len(lines) == 2 and "300 lights reach one light cluster" in lines[0] and "left out" in lines[0]
+    assert "all-lights loop" in lines[1]
+
+
+def test_auto_switches_with_the_light_count():
+    with headless_gpu(W, H) as gpu:
+        _, few_clustered = render(gpu, lit_field(gpu, 8), "auto")
+        _, many_clustered = render(gpu, lit_field(gpu, CLUSTER_MIN_LIGHTS + 10), "auto")
+    assert not few_clustered and many_clustered
+    assert not wants_clusters("auto", False, CLUSTER_MIN_LIGHTS - 1, 0)
+    assert wants_clusters("auto", True, CLUSTER_MIN_LIGHTS // 2, 0)  # hysteresis: stays on
+    assert not wants_clusters("auto", True, CLUSTER_MIN_LIGHTS // 2 - 1, 0)
+    assert not wants_clusters("clustered", False, 10, 10_000)  # the global list would overflow
+    assert not wants_clusters("loop", False, 10_000, 0)
+
+
+def test_census_grid_and_bad_mode():
+    parts = [
+        PositionalLights(
+            np.array([[0.0, 0.0, -10.0], [0.0, 0.0, -1.0]]), np.array([2.0, 0.0]), np.ones((2, 3)), np.ones(2)
+        )
+    ]
+    suns = [DirectionalLights(np.array([[0.0, -1.0, 0.0]]), np.ones((1, 3)), np.ones(1))]
+    assert light_census(parts, suns, np.zeros(3)) == (1, 2, pytest.approx(12.0))
+    grid = cluster_grid(160, 96, 0.1, 12.0)
+    assert (grid.tiles_x, grid.tiles_y) == (3, 2)
+    slices = grid.slice_of(np.array([0.05, 0.1, 0.11, 1.0, 11.99, 1e9]))
+    assert slices[0] == slices[1] == 0 and slices[-1] == grid.slices - 1
+    assert (np.diff(slices) >= 0).all()
+    from ecs_engine.render.renderer import Renderer
+
+    with headless_gpu(W, H) as gpu, pytest.raises(UsageError, match="light culling"):
+        Renderer(gpu.device, gpu.target, gpu.meshes, light_culling="tiles")
