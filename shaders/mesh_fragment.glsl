@@ -122,5 +122,6 @@ void main() {
         }
     }
     color += m.emissive.rgb;
-    out_color = vec4(min(color, vec3(65504.0)), 1.0);
+    // alpha matters only to the blended materials' pipelines (the others do not blend)
+    out_color = vec4(min(color, vec3(65504.0)), m.kind.y == ALPHA_BLEND ? m.base_color.a : 1.0);
 }

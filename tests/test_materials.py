@@ -25,8 +25,7 @@ W, H = 64, 48
     "changes, message",
     [
         (dict(model="toon"), "unknown shading model 'toon'; models: unlit, lambert"),
-        (dict(alpha_mode="blend"), "transparent pass"),
-        (dict(alpha_mode="see-through"), "alpha_mode must be one of opaque, mask"),
+        (dict(alpha_mode="see-through"), "alpha_mode must be one of opaque, mask, blend"),
         (dict(base_color=(1, 0, 0)), "base_color must be 4 finite numbers"),
         (dict(base_color=(1, float("nan"), 0, 1)), "base_color must be 4 finite numbers"),
         (dict(base_color=(1, 1, 1, 2)), "alpha must be at most 1"),

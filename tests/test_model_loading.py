@@ -117,6 +117,19 @@ def test_mtl_options_and_odd_lines(tmp_path, caplog):
     assert len(caplog.records) == 1 and "line 5" in caplog.records[0].getMessage()
 
 
+def test_translucent_materials_import_as_blended(tmp_path):
+    (tmp_path / "m.obj").write_text(QUAD_OBJ.format(mtl="m.mtl"))
+    (tmp_path / "m.mtl").write_text("newmtl shiny\nKd 1 0 0\nd 0.4\nnewmtl textured\nKd 0 1 0\n")
+    registry = Materials()
+    found = by_name(load_model(tmp_path / "m.obj", registry), registry)
+    glass = found["shiny"][1]
+    assert glass.alpha_mode == "blend" and glass.base_color[3] == pytest.approx(0.4)
+    assert found["textured"][1].alpha_mode == "opaque"
+    path = gltf_quad(tmp_path, baseColorFactor=[1.0, 1.0, 1.0, 0.5], alphaMode="BLEND")
+    (part,) = load_model(path, registry)
+    assert registry[part.material].alpha_mode == "blend"
+
+
 def test_the_torus_knot_keeps_one_part_without_a_material():
     parts = load_model(DEFAULT_MODEL, Materials())
     assert len(parts) == 1 and parts[0].material is None

@@ -13,7 +13,7 @@ from ..ecs.world import World
 from ..render.materials import ALPHA_MODES, SHADING_MODELS, TEXTURE_FIELDS, Material, Materials, materials
 from .editor_lights import Editor
 
-_ALPHA_EDITABLE = ("opaque", "mask")  # blend needs the transparent pass
+_ALPHA_EDITABLE = ("opaque", "mask", "blend")
 assert set(_ALPHA_EDITABLE) <= set(ALPHA_MODES)
 
 

@@ -40,7 +40,7 @@ def vertex_attributes(vk: Any, inputs: tuple[str, ...] = VERTEX_INPUTS) -> list[
     return [(location, formats[fields[name][0].shape[0]], fields[name][1]) for location, name in enumerate(inputs)]
 
 
-def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple[Any, Any]:
+def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str, blended: bool = False) -> tuple[Any, Any]:
     """The (plain, mirrored) mesh pipelines of a path: the same but for the front face. Textured
     materials take the `_textured` variants of both shaders (`mesh.vert` -> `mesh_textured.vert`)."""
     textured = bool(ctx.material_features & FEATURE_TEXTURES)
@@ -59,6 +59,9 @@ def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple[A
         # a double-sided material somewhere: back faces reach the fragment shader, which drops
         # those of single-sided materials (one pipeline for all; draws stay split by mesh only)
         cull_back=not ctx.material_features & FEATURE_DOUBLE_SIDED,
+        # blended materials (transparent_pass.py): over what is drawn, without hiding what follows
+        alpha_blend=blended,
+        depth_write=not blended,
     )
     vk = ctx.device.vk
     plain = graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, fragment_shader, **base))

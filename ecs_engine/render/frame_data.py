@@ -46,6 +46,19 @@ class Chunk:
 
 
 @dataclass
+class BlendedRows:
+    """This frame's rows with an alpha-blended material, gathered out of the chunks: drawn after
+    the opaque ones, back to front (transparent_pass.py)."""
+
+    model: np.ndarray
+    handle: np.ndarray
+    material: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.handle)
+
+
+@dataclass
 class FrameData:
     camera: CameraMatrices
     origin: np.ndarray  # float64: model matrices are relative to it
@@ -56,7 +69,8 @@ class FrameData:
     directional: list[DirectionalLights]
     light_count: int  # of every kind
     chunks: list[Chunk]
-    candidates: int  # rows with a mesh, before culling
+    candidates: int  # rows with a mesh in the chunks (opaque and masked materials), before culling
+    blended: BlendedRows | None = None  # rows with a blended material (None: the world has none)
 
 
 class FrameExtractor:
@@ -71,16 +85,28 @@ class FrameExtractor:
         self._view: tuple[CameraMatrices, bytes, np.ndarray] | None = None
         self._chunks_key: tuple[object, ...] = ()
         self._chunks: list[Chunk] = []
+        self._split_key: tuple[object, ...] = ()
+        self._split: list[tuple[np.ndarray, np.ndarray]] = []  # per table: opaque rows, blended rows
 
     def extract(
-        self, world: World, aspect: float, mesh_count: int, culling: bool, material_count: int = 1 << 32
+        self,
+        world: World,
+        aspect: float,
+        mesh_count: int,
+        culling: bool,
+        material_count: int = 1 << 32,
+        blend: np.ndarray | None = None,
     ) -> FrameData:
+        """`blend`: per material, whether it is alpha-blended (None: none is)."""
         cam = camera_matrices(world, aspect)
         origin = render_origin(world)
         origin_key = origin.tobytes()
         view = self.view(cam, origin, origin_key)
         positional, directional = self.lights(world)
         chunks = self.chunks(world, mesh_count, material_count)
+        blended = None
+        if blend is not None and chunks:
+            chunks, blended = self.split(world, chunks, blend)
         return FrameData(
             camera=cam,
             origin=origin,
@@ -92,7 +118,39 @@ class FrameExtractor:
             light_count=sum(len(p) for p in positional) + sum(len(d) for d in directional),
             chunks=chunks,
             candidates=sum(len(c.handle) for c in chunks),
+            blended=blended,
         )
+
+    def split(self, world: World, chunks: list[Chunk], blend: np.ndarray) -> tuple[list[Chunk], BlendedRows]:
+        """The chunks without their blended rows (gathered copies, made each frame: the model
+        matrices change), and those rows. Which rows are blended is kept while the tables, their
+        materials and the blend flags stay the same."""
+        query = world.query(ModelMatrix, Mesh, write=())
+        key = (
+            world,
+            blend.tobytes(),
+            *[(t.id, t.version, t.count, t.column_ticks[_MATERIAL]) for t in query.tables],
+        )
+        if key != self._split_key:
+            self._split = []
+            for batch in query:
+                flags = blend[batch[Mesh].material]
+                self._split.append((np.flatnonzero(~flags), np.flatnonzero(flags)))
+            self._split_key = key
+        opaque: list[Chunk] = []
+        models, handles, materials = [], [], []
+        offset = 0
+        for batch, (keep, blended) in zip(query, self._split):
+            m, mesh = batch[ModelMatrix], batch[Mesh]
+            model, handle, material = m.model[keep], mesh.handle[keep], mesh.material[keep]
+            for s in row_chunks(len(keep), self.rows_per_job(len(keep))):
+                opaque.append(Chunk(model[s], handle[s], material[s], offset))
+                offset += s.stop - s.start
+            models.append(m.model[blended])
+            handles.append(mesh.handle[blended])
+            materials.append(mesh.material[blended])
+        rows = BlendedRows(np.concatenate(models), np.concatenate(handles), np.concatenate(materials))
+        return opaque, rows
 
     def view(self, cam: CameraMatrices, origin: np.ndarray, origin_key: bytes) -> np.ndarray:
         """view_from_origin, kept while the camera matrices and the origin stay the same (a new

@@ -23,6 +23,7 @@ from .layouts import (
     INSTANCE,
     LIGHT,
     MATERIAL,
+    TEXTURE_PAGES,
     UINT_BYTES,
 )
 from .light_clusters import ClusterGrid
@@ -31,6 +32,30 @@ from .texture_pages import TexturePages
 
 MIN_LIGHTS = 256
 MIN_MATERIALS = 64
+
+
+def frame_sets(device: Device, frames: int) -> tuple[DescriptorSetLayout, DescriptorPool]:
+    """Set 0's layout (layouts.py's BINDING_*) and a pool with one set per frame slot."""
+    vk = device.vk
+    stages = vk.VK_SHADER_STAGE_VERTEX_BIT | vk.VK_SHADER_STAGE_FRAGMENT_BIT | vk.VK_SHADER_STAGE_COMPUTE_BIT
+    ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
+    sampler = vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
+    uniform = vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER
+    buffers = (BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS, BINDING_CLUSTERS)
+    layout = DescriptorSetLayout(
+        device,
+        [(BINDING_GLOBALS, uniform, stages)]
+        + [(b, ssbo, stages) for b in buffers]
+        + [(BINDING_TEXTURES, sampler, vk.VK_SHADER_STAGE_FRAGMENT_BIT, TEXTURE_PAGES)],
+    )
+    try:
+        pool = DescriptorPool(
+            device, frames, {uniform: frames, ssbo: len(buffers) * frames, sampler: TEXTURE_PAGES * frames}
+        )
+    except BaseException:
+        layout.destroy()
+        raise
+    return layout, pool
 
 
 @dataclass

@@ -64,9 +64,9 @@ SHADING_MODELS: Final[dict[str, int]] = {
     "blinn_phong": MODEL_BLINN_PHONG,
     "cook_torrance": MODEL_COOK_TORRANCE,
 }
-#: name -> the shader's ALPHA_* value. `blend` is refused until the transparent pass exists.
+#: name -> the shader's ALPHA_* value. `blend`: drawn after the opaque rows, back to front, with
+#: alpha blending and no depth writes (transparent_pass.py).
 ALPHA_MODES: Final[dict[str, int]] = {"opaque": ALPHA_OPAQUE, "mask": ALPHA_MASK, "blend": ALPHA_BLEND}
-_DRAWABLE_ALPHA = ("opaque", "mask")
 MAX_SHININESS: Final = 1e4
 #: the texture fields, in the order of the row's `textures` then `textures2.x`
 TEXTURE_FIELDS: Final = (
@@ -117,13 +117,9 @@ class Material:
             raise ValueError(
                 f"material {self.name!r}: unknown shading model {self.model!r}; models: {', '.join(SHADING_MODELS)}"
             )
-        if self.alpha_mode not in _DRAWABLE_ALPHA:
-            extra = (
-                " (blended materials need the transparent pass, not built yet)" if self.alpha_mode == "blend" else ""
-            )
+        if self.alpha_mode not in ALPHA_MODES:
             raise ValueError(
-                f"material {self.name!r}: alpha_mode must be one of {', '.join(_DRAWABLE_ALPHA)}, "
-                f"got {self.alpha_mode!r}{extra}"
+                f"material {self.name!r}: alpha_mode must be one of {', '.join(ALPHA_MODES)}, got {self.alpha_mode!r}"
             )
         if self.base_color[3] > 1:
             raise ValueError(f"material {self.name!r}: base_color's alpha must be at most 1, got {self.base_color[3]}")
@@ -197,6 +193,8 @@ class Materials:
         self._materials: list[Material] = []
         self.textures = Textures()  # what the materials' *_texture handles name
         self.table = np.zeros(max(len(palette), 1), MATERIAL.dtype)
+        self._blend = np.zeros(len(self.table), bool)  # per handle: alpha-blended
+        self.blended = 0  # how many materials are
         self.version = 0
         self.features = 0  # what the shader needs: bit per shading model some material uses, FEATURE_*
         for material in palette:
@@ -211,6 +209,7 @@ class Materials:
             grown = np.zeros(2 * len(self.table), MATERIAL.dtype)
             grown[:handle] = self.table[:handle]
             self.table = grown
+            self._blend = np.concatenate([self._blend, np.zeros(len(grown) - len(self._blend), bool)])
         self._materials.append(material)
         self._write(handle)
         return handle
@@ -240,6 +239,8 @@ class Materials:
     def _write(self, handle: int) -> None:
         self.table[handle] = self._materials[handle].row()
         material = self._materials[handle]
+        self._blend[handle] = material.alpha_mode == "blend"
+        self.blended = int(self._blend[: len(self._materials)].sum())
         self.features |= 1 << SHADING_MODELS[material.model]
         if material.alpha_mode == "mask":
             self.features |= FEATURE_ALPHA_MASK
@@ -259,6 +260,10 @@ class Materials:
 
     def __iter__(self) -> Iterator[Material]:
         return iter(self._materials)
+
+    def blend_flags(self) -> np.ndarray | None:
+        """Per material, whether it is alpha-blended; None when none is (the usual case)."""
+        return self._blend[: len(self._materials)] if self.blended else None
 
     def rows(self) -> np.ndarray:
         """The table's used rows (a view)."""

@@ -8,8 +8,8 @@ textures) added to a world's `Materials`.
 - PLY, STL, and parts without a material: `material` None (the caller picks one).
 
 A texture that is missing or broken leaves the model loading: one warning names the image and
-the fallback checkerboard shows where it was meant to be. Materials that ask for alpha blending
-are drawn opaque until the transparent pass exists, with one warning per material.
+the fallback checkerboard shows where it was meant to be. glTF `BLEND` and OBJ `d < 1` become
+blended materials (transparent_pass.py).
 """
 
 from __future__ import annotations
@@ -109,8 +109,7 @@ class _ObjMaterials:
     def _add(self, m: MtlMaterial) -> int:
         textures = self.registry.textures
         maps = m.maps
-        if m.opacity < 1.0:
-            log.warning("material %r: d = %g asks for blending, drawn opaque for now", m.name, m.opacity)
+        opacity = _unit(m.opacity)
         emissive = m.emissive
         if "emissive" in maps and not any(emissive):
             emissive = (1.0, 1.0, 1.0)  # map_Ke alone: the map is the emission
@@ -118,7 +117,8 @@ class _ObjMaterials:
             Material(
                 m.name,
                 "blinn_phong",
-                (*_rgb(m.diffuse, _unit), 1.0),
+                (*_rgb(m.diffuse, _unit), opacity),
+                alpha_mode="blend" if opacity < 1.0 else "opaque",
                 shininess=float(np.clip(m.shininess, 1.0, MAX_SHININESS)),
                 specular=float(np.clip(np.mean(m.specular), 0.0, 1.0)),
                 emissive=_rgb(emissive, _positive),
@@ -171,8 +171,6 @@ class _GltfMaterials:
         factor = getattr(pbr, "baseColorFactor", None)
         base = (1.0, 1.0, 1.0, 1.0) if factor is None else tuple(np.asarray(factor, np.float64) / 255.0)
         mode = str(getattr(pbr, "alphaMode", None) or "OPAQUE").upper()
-        if mode == "BLEND":
-            log.warning("%s: material %r asks for alpha blending, drawn opaque for now", self.file, name)
         emissive = getattr(pbr, "emissiveFactor", None)
         return self.registry.add(
             Material(
@@ -182,7 +180,7 @@ class _GltfMaterials:
                 metallic=_unit(_or(getattr(pbr, "metallicFactor", None), 1.0)),
                 roughness=_unit(_or(getattr(pbr, "roughnessFactor", None), 1.0)),
                 emissive=(0.0, 0.0, 0.0) if emissive is None else _rgb(emissive, _positive),
-                alpha_mode="mask" if mode == "MASK" else "opaque",
+                alpha_mode={"MASK": "mask", "BLEND": "blend"}.get(mode, "opaque"),
                 alpha_cutoff=_unit(_or(getattr(pbr, "alphaCutoff", None), 0.5)),
                 double_sided=bool(getattr(pbr, "doubleSided", False)),
                 normal_scale=self._normal_scale(name),

@@ -100,6 +100,23 @@ class FrameInputs:
 
 
 @dataclass
+class FrameStats:
+    """Indirect mode: draws, instances and triangles are counted on the GPU and read back
+    without waiting, so they belong to an earlier frame (like gpu_ms), or to this frame when it
+    was read back."""
+
+    draws: int
+    instances: int  # visible entities drawn
+    triangles: int
+    lights: int
+    gpu_ms: float | None  # of an earlier frame: timestamps are read without waiting
+    wait_ms: float = 0.0  # spent waiting for a frame slot (GPU-bound), not CPU work
+    record_ms: float = 0.0  # the chunk jobs: cull, write rows, record secondaries
+    chunks: int = 0
+    candidates: int = 0  # entities with a mesh, before culling
+
+
+@dataclass
 class ChunkResult:
     command_buffer: Any  # None when nothing in the chunk is visible (or the GPU records it)
     visible: int
@@ -125,6 +142,8 @@ class PathContext:
 
 
 class RenderPath(Protocol):
+    ctx: PathContext
+
     @property
     def name(self) -> str: ...
 

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import threading
 import time
-from dataclasses import dataclass
 from operator import attrgetter
 from typing import Any
 
@@ -26,7 +25,7 @@ import numpy as np
 from .. import native
 from ..ecs.world import World
 from ..errors import UsageError
-from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_images
+from ..gpu.descriptors import write_images
 from ..gpu.device import Device
 from ..gpu.frames import FrameRing
 from ..gpu.render_pass import SUBPASS_BILLBOARDS
@@ -35,29 +34,24 @@ from ..jobs import JobPool
 from .camera import CameraMatrices
 from .chunk_paths import RECORDERS, InstancedPath, PerEntityPath, check_recorder
 from .frame_data import Chunk, FrameData, FrameExtractor
-from .frame_resources import FrameResources
+from .frame_resources import FrameResources, frame_sets
 from .indirect_path import IndirectPath
 from .layouts import (
-    BINDING_CLUSTERS,
-    BINDING_GLOBALS,
-    BINDING_INSTANCES,
-    BINDING_LIGHTS,
-    BINDING_MATERIALS,
     BINDING_TEXTURES,
     FEATURE_CLUSTERED,
     GLOBALS,
     INSTANCE,
     LIGHT,
-    TEXTURE_PAGES,
 )
 from .light_clusters import ClusterGrid, LightCulling, check_light_culling
 from .light_pass import LightPass
 from .light_rows import write_lights
 from .materials import Materials
 from .mesh_registry import MeshRegistry
-from .path import FILL_MODES, ChunkResult, FrameInputs, PathContext, PathFactory, RenderPath, TargetState
+from .path import FILL_MODES, ChunkResult, FrameInputs, FrameStats, PathContext, PathFactory, RenderPath, TargetState
 from .texture_pages import TexturePages
 from .tone_map import ToneMapPass, check_tone_map
+from .transparent_pass import TransparentPass
 
 PATHS: dict[str, PathFactory] = {
     "instanced": InstancedPath,
@@ -66,23 +60,6 @@ PATHS: dict[str, PathFactory] = {
 }
 MODES = tuple(PATHS)
 RECORDER_NAMES = tuple(RECORDERS)
-
-
-@dataclass
-class FrameStats:
-    """Indirect mode: draws, instances and triangles are counted on the GPU and read back
-    without waiting, so they belong to an earlier frame (like gpu_ms), or to this frame when it
-    was read back."""
-
-    draws: int
-    instances: int  # visible entities drawn
-    triangles: int
-    lights: int
-    gpu_ms: float | None  # of an earlier frame: timestamps are read without waiting
-    wait_ms: float = 0.0  # spent waiting for a frame slot (GPU-bound), not CPU work
-    record_ms: float = 0.0  # the chunk jobs: cull, write rows, record secondaries
-    chunks: int = 0
-    candidates: int = 0  # entities with a mesh, before culling
 
 
 def default_recorder() -> str:
@@ -112,7 +89,7 @@ class Renderer:
     ) -> None:
         if mode not in PATHS:
             raise ValueError(f"unknown render mode {mode!r}; modes: {', '.join(MODES)}")
-        vk = self.vk = device.vk
+        self.vk = device.vk
         self.device = device
         self.check_fill(fill)  # before anything is made: a refusal leaves nothing to destroy
         check_tone_map(tone_map, exposure)
@@ -131,18 +108,7 @@ class Renderer:
         self.frames = FrameRing(device)
         n = len(self.frames.frames)
         self.secondaries = SecondaryBuffers(device, n)
-        stages = vk.VK_SHADER_STAGE_VERTEX_BIT | vk.VK_SHADER_STAGE_FRAGMENT_BIT | vk.VK_SHADER_STAGE_COMPUTE_BIT
-        ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
-        sampler = vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
-        self.set_layout = DescriptorSetLayout(
-            device,
-            [(BINDING_GLOBALS, vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, stages)]
-            + [(b, ssbo, stages) for b in (BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS, BINDING_CLUSTERS)]
-            + [(BINDING_TEXTURES, sampler, vk.VK_SHADER_STAGE_FRAGMENT_BIT, TEXTURE_PAGES)],
-        )
-        self.pool = DescriptorPool(
-            device, n, {vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER: n, ssbo: 4 * n, sampler: TEXTURE_PAGES * n}
-        )
+        self.set_layout, self.pool = frame_sets(device, n)
         self.texture_pages = TexturePages(device)
         # a world without a Materials resource draws with the default palette
         self.default_materials = Materials()
@@ -156,6 +122,7 @@ class Renderer:
         )
         self.tone_map_pass = ToneMapPass(device, target.render_pass)
         self.lights = LightCulling(device, self.set_layout.handle, light_culling)
+        self._transparent: TransparentPass | None = None  # blended materials, made on first use
         self._targets: dict[tuple[int, int, int], TargetState] = {}
         # drawn last in the overlay subpass: an object with prepare(slot, frames_in_flight) and
         # record(cb, slot, width, height), e.g. imgui_pass.ImGuiRenderer
@@ -197,6 +164,9 @@ class Renderer:
     def _swap_path(self, new: RenderPath) -> None:
         self.device.wait_idle()  # frames in flight may still use the old path's pipelines
         self.path.destroy()
+        if self._transparent is not None:  # its pipelines were made for the old path's context
+            self._transparent.destroy()
+            self._transparent = None
         for target in self._targets.values():
             target.path_state.clear()  # what the old path kept per target (its recorder's frame states)
         self.path = new
@@ -310,8 +280,10 @@ class Renderer:
         return found if found is not None else self.default_materials
 
     def extract(self, world: World, width: int, height: int, material_count: int | None = None) -> FrameData:
-        count = len(self.materials(world)) if material_count is None else material_count
-        return self.extractor.extract(world, width / height, len(self.meshes), self.culling, count)
+        materials = self.materials(world)
+        count = len(materials) if material_count is None else material_count
+        blend = materials.blend_flags()
+        return self.extractor.extract(world, width / height, len(self.meshes), self.culling, count, blend)
 
     def render(
         self,
@@ -336,7 +308,11 @@ class Renderer:
         slot = self.frames.frames.index(frame)
         pf = self.per_frame[slot]
         pf.ensure_capacity(
-            self.device, self.texture_pages, self.path.rows_needed(data.candidates), data.light_count, material_count
+            self.device,
+            self.texture_pages,
+            self.path.rows_needed(data.candidates) + len(data.blended or ()),
+            data.light_count,
+            material_count,
         )
         self.lights.check_peak(pf)
         pf.clustered = grid is not None
@@ -385,6 +361,9 @@ class Renderer:
         record_ms = (time.perf_counter() - t0) * 1e3
         cb = frame.command_buffer
         secondaries = path.finish(cb, inputs, results, data.candidates)
+        blended = self._record_blended(inputs, data)
+        if blended[0] is not None:
+            secondaries = [*secondaries, blended[0]]  # after every opaque row
         if grid is not None:
             self.lights.record(cb, pf, grid)
         light_draws = self._record_primary(cb, secondaries, positional, target, pf, slot)
@@ -394,6 +373,7 @@ class Renderer:
         if readback:
             self.frames.wait(frame)
         draws, visible, triangles = path.counts(inputs, results)
+        draws, visible, triangles = draws + blended[1], visible + blended[2], triangles + blended[3]
         return FrameStats(
             draws=draws + light_draws,
             instances=visible,
@@ -434,6 +414,15 @@ class Renderer:
             g["clusters"] = (grid.tiles_x, grid.tiles_y, grid.slices, grid.tile)
             g["cluster_depth"] = (grid.near, grid.scale, grid.width, grid.height)
         pf.written = written
+
+    def _record_blended(self, inputs: FrameInputs, data: FrameData) -> tuple[Any, int, int, int]:
+        """The blended rows' secondary (None when there is nothing to draw), draws, rows, triangles."""
+        if data.blended is None or not len(data.blended):
+            return None, 0, 0, 0
+        if self._transparent is None:
+            self._transparent = TransparentPass(self.path.ctx)
+        first = self.path.rows_needed(data.candidates)
+        return self._transparent.record(inputs, data.blended, first, data.camera.position - data.origin)
 
     @property
     def light_culling(self) -> str:
@@ -490,6 +479,8 @@ class Renderer:
         self.light_pass.destroy()
         self.tone_map_pass.destroy()
         self.lights.destroy()
+        if self._transparent is not None:
+            self._transparent.destroy()
         self.texture_pages.destroy()
         self.secondaries.destroy()
         for pf in self.per_frame:
