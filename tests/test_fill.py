@@ -78,3 +78,55 @@ def test_cli_fill_flag(tmp_path):
     assert shot.exists()
     bad = subprocess.run([*base, "--fill", "dots"], capture_output=True, text=True, timeout=300)
     assert bad.returncode == 2 and "--fill" in bad.stderr and "Traceback" not in bad.stderr
+
+
+def two_spheres(gpu, left_fill: str) -> np.ndarray:
+    """Two spheres of one mesh: the left with a material of fill `left_fill`, the right solid."""
+    from ecs_engine.render.materials import Material, materials
+    from ecs_engine.render.renderer import Renderer
+
+    world = World()
+    mesh = gpu.meshes.add(sphere_mesh(12, 6))
+    library = materials(world)
+    left = library.add(Material("left", "lambert", fill=left_fill))
+    right = library.add(Material("right", "lambert"))
+    world.spawn(Transform(position=(-1.1, 0.0, 0.0)), Mesh(handle=mesh, material=left))
+    world.spawn(Transform(position=(1.1, 0.0, 0.0)), Mesh(handle=mesh, material=right))
+    world.spawn(Transform(position=(0.0, 0.0, 3.2)), Camera(fov_y=math.radians(55.0)))
+    world.spawn(Transform(position=(2.0, 2.0, 4.0)), PointLight(intensity=30.0))
+    renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+    try:
+        default_schedule().run(world, 0.0)
+        renderer.render(world, readback=True)
+        img = gpu.target.pixels()[..., :3].astype(int)
+        return np.abs(img - img[0, 0]).sum(-1) > 12
+    finally:
+        renderer.destroy()
+
+
+def test_a_material_with_its_own_fill():
+    with headless_gpu(W, H) as gpu:
+        solid = two_spheres(gpu, "solid")
+        wire = two_spheres(gpu, "wireframe")
+        points = two_spheres(gpu, "points")
+    half = W // 2
+    assert abs(int(solid[:, :half].sum()) - int(solid[:, half:].sum())) < 30  # mirror images
+    assert 100 < wire[:, :half].sum() < 0.7 * solid[:, :half].sum()  # the left one only
+    assert (wire[:, half:] == solid[:, half:]).all()
+    assert points[:, :half].sum() < 0.2 * wire[:, :half].sum()
+    with pytest.raises(ValueError, match="fill must be one of"):
+        from ecs_engine.render.materials import Material
+
+        Material("m", fill="dots")
+
+
+def test_a_material_fill_without_the_device_feature_is_drawn_solid(monkeypatch, caplog):
+    import logging
+
+    with headless_gpu(W, H) as gpu:
+        solid = two_spheres(gpu, "solid")
+        monkeypatch.setitem(gpu.device.features, "fillModeNonSolid", False)
+        with caplog.at_level(logging.WARNING, logger="ecs_engine"):
+            fallback = two_spheres(gpu, "wireframe")
+    assert (fallback == solid).all()
+    assert len(caplog.records) == 1 and "fillModeNonSolid" in caplog.records[0].getMessage()

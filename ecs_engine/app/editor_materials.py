@@ -10,7 +10,7 @@ from typing import Any
 
 from ..components import Mesh
 from ..ecs.world import World
-from ..render.materials import ALPHA_MODES, SHADING_MODELS, TEXTURE_FIELDS, Material, Materials, materials
+from ..render.materials import ALPHA_MODES, FILLS, SHADING_MODELS, TEXTURE_FIELDS, Material, Materials, materials
 from .editor_lights import Editor
 
 _ALPHA_EDITABLE = ("opaque", "mask", "blend")
@@ -78,6 +78,9 @@ class MaterialsPanel:
             changed, value = imgui.slider_float("alpha cutoff", m.alpha_cutoff, 0.0, 1.0)
             if changed:
                 changes["alpha_cutoff"] = value
+        changed, index = imgui.combo("fill", FILLS.index(m.fill), list(FILLS))
+        if changed:
+            changes["fill"] = FILLS[index]
         changed, value = imgui.checkbox("double-sided", m.double_sided)
         if changed:
             changes["double_sided"] = value

@@ -59,7 +59,7 @@ def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str, blended: b
         # a double-sided material somewhere: back faces reach the fragment shader, which drops
         # those of single-sided materials (one pipeline for all; draws stay split by mesh only)
         cull_back=not ctx.material_features & FEATURE_DOUBLE_SIDED,
-        # blended materials (transparent_pass.py): over what is drawn, without hiding what follows
+        # blended materials (set_aside_pass.py): over what is drawn, without hiding what follows
         alpha_blend=blended,
         depth_write=not blended,
     )

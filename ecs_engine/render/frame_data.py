@@ -46,9 +46,9 @@ class Chunk:
 
 
 @dataclass
-class BlendedRows:
-    """This frame's rows with an alpha-blended material, gathered out of the chunks: drawn after
-    the opaque ones, back to front (transparent_pass.py)."""
+class SetAsideRows:
+    """This frame's rows drawn apart from the chunks (set_aside_pass.py): those whose material is
+    alpha-blended (after the opaque ones, back to front) or has its own fill (wireframe, points)."""
 
     model: np.ndarray
     handle: np.ndarray
@@ -70,7 +70,7 @@ class FrameData:
     light_count: int  # of every kind
     chunks: list[Chunk]
     candidates: int  # rows with a mesh in the chunks (opaque and masked materials), before culling
-    blended: BlendedRows | None = None  # rows with a blended material (None: the world has none)
+    set_aside: SetAsideRows | None = None  # None: no material is blended or has its own fill
 
 
 class FrameExtractor:
@@ -86,7 +86,7 @@ class FrameExtractor:
         self._chunks_key: tuple[object, ...] = ()
         self._chunks: list[Chunk] = []
         self._split_key: tuple[object, ...] = ()
-        self._split: list[tuple[np.ndarray, np.ndarray]] = []  # per table: opaque rows, blended rows
+        self._split: list[tuple[np.ndarray, np.ndarray]] = []  # per table: chunk rows, rows set aside
 
     def extract(
         self,
@@ -95,18 +95,18 @@ class FrameExtractor:
         mesh_count: int,
         culling: bool,
         material_count: int = 1 << 32,
-        blend: np.ndarray | None = None,
+        set_aside: np.ndarray | None = None,
     ) -> FrameData:
-        """`blend`: per material, whether it is alpha-blended (None: none is)."""
+        """`set_aside`: per material, whether its rows are drawn apart (Materials.set_aside)."""
         cam = camera_matrices(world, aspect)
         origin = render_origin(world)
         origin_key = origin.tobytes()
         view = self.view(cam, origin, origin_key)
         positional, directional = self.lights(world)
         chunks = self.chunks(world, mesh_count, material_count)
-        blended = None
-        if blend is not None and chunks:
-            chunks, blended = self.split(world, chunks, blend)
+        aside = None
+        if set_aside is not None and chunks:
+            chunks, aside = self.split(world, chunks, set_aside)
         return FrameData(
             camera=cam,
             origin=origin,
@@ -118,13 +118,13 @@ class FrameExtractor:
             light_count=sum(len(p) for p in positional) + sum(len(d) for d in directional),
             chunks=chunks,
             candidates=sum(len(c.handle) for c in chunks),
-            blended=blended,
+            set_aside=aside,
         )
 
-    def split(self, world: World, chunks: list[Chunk], blend: np.ndarray) -> tuple[list[Chunk], BlendedRows]:
-        """The chunks without their blended rows (gathered copies, made each frame: the model
-        matrices change), and those rows. Which rows are blended is kept while the tables, their
-        materials and the blend flags stay the same."""
+    def split(self, world: World, chunks: list[Chunk], blend: np.ndarray) -> tuple[list[Chunk], SetAsideRows]:
+        """The chunks without the rows set aside (gathered copies, made each frame: the model
+        matrices change), and those rows. Which rows those are is kept while the tables, their
+        materials and the flags stay the same."""
         query = world.query(ModelMatrix, Mesh, write=())
         key = (
             world,
@@ -149,7 +149,7 @@ class FrameExtractor:
             models.append(m.model[blended])
             handles.append(mesh.handle[blended])
             materials.append(mesh.material[blended])
-        rows = BlendedRows(np.concatenate(models), np.concatenate(handles), np.concatenate(materials))
+        rows = SetAsideRows(np.concatenate(models), np.concatenate(handles), np.concatenate(materials))
         return opaque, rows
 
     def view(self, cam: CameraMatrices, origin: np.ndarray, origin_key: bytes) -> np.ndarray:

@@ -65,9 +65,11 @@ SHADING_MODELS: Final[dict[str, int]] = {
     "cook_torrance": MODEL_COOK_TORRANCE,
 }
 #: name -> the shader's ALPHA_* value. `blend`: drawn after the opaque rows, back to front, with
-#: alpha blending and no depth writes (transparent_pass.py).
+#: alpha blending and no depth writes (set_aside_pass.py).
 ALPHA_MODES: Final[dict[str, int]] = {"opaque": ALPHA_OPAQUE, "mask": ALPHA_MASK, "blend": ALPHA_BLEND}
 MAX_SHININESS: Final = 1e4
+#: a material's fill: index 0 is the global --fill's look, the others are drawn apart
+FILLS: Final = ("solid", "wireframe", "points")
 #: the texture fields, in the order of the row's `textures` then `textures2.x`
 TEXTURE_FIELDS: Final = (
     "base_color_texture",
@@ -93,6 +95,7 @@ class Material:
     alpha_mode: str = "opaque"  # opaque or mask (alpha below alpha_cutoff is not drawn)
     alpha_cutoff: float = 0.5
     double_sided: bool = False  # back faces drawn too, lit with the normal reversed (glTF)
+    fill: str = "solid"  # solid, wireframe or points (where the device has fillModeNonSolid)
     base_color_texture: int | None = None  # sRGB
     metallic_roughness_texture: int | None = None  # linear: G roughness, B metallic
     normal_texture: int | None = None  # linear, tangent space
@@ -138,6 +141,8 @@ class Material:
                     f"material {self.name!r}: {name} must be a finite number in [{low}, {high}], got {value!r}"
                 )
             object.__setattr__(self, name, float(value))
+        if self.fill not in FILLS:
+            raise ValueError(f"material {self.name!r}: fill must be one of {', '.join(FILLS)}, got {self.fill!r}")
         if not isinstance(self.double_sided, (bool, np.bool_)):
             raise ValueError(f"material {self.name!r}: double_sided must be True or False, got {self.double_sided!r}")
         object.__setattr__(self, "double_sided", bool(self.double_sided))
@@ -193,8 +198,9 @@ class Materials:
         self._materials: list[Material] = []
         self.textures = Textures()  # what the materials' *_texture handles name
         self.table = np.zeros(max(len(palette), 1), MATERIAL.dtype)
-        self._blend = np.zeros(len(self.table), bool)  # per handle: alpha-blended
-        self.blended = 0  # how many materials are
+        self.blend = np.zeros(len(self.table), bool)  # per handle: alpha-blended
+        self.fills = np.zeros(len(self.table), np.uint8)  # per handle: index into FILLS
+        self._aside = 0  # materials whose rows are drawn apart (blended, or not solid)
         self.version = 0
         self.features = 0  # what the shader needs: bit per shading model some material uses, FEATURE_*
         for material in palette:
@@ -209,7 +215,8 @@ class Materials:
             grown = np.zeros(2 * len(self.table), MATERIAL.dtype)
             grown[:handle] = self.table[:handle]
             self.table = grown
-            self._blend = np.concatenate([self._blend, np.zeros(len(grown) - len(self._blend), bool)])
+            self.blend = np.concatenate([self.blend, np.zeros(len(grown) - len(self.blend), bool)])
+            self.fills = np.concatenate([self.fills, np.zeros(len(grown) - len(self.fills), np.uint8)])
         self._materials.append(material)
         self._write(handle)
         return handle
@@ -239,8 +246,10 @@ class Materials:
     def _write(self, handle: int) -> None:
         self.table[handle] = self._materials[handle].row()
         material = self._materials[handle]
-        self._blend[handle] = material.alpha_mode == "blend"
-        self.blended = int(self._blend[: len(self._materials)].sum())
+        self.blend[handle] = material.alpha_mode == "blend"
+        self.fills[handle] = FILLS.index(material.fill)
+        n = len(self._materials)
+        self._aside = int((self.blend[:n] | (self.fills[:n] != 0)).sum())
         self.features |= 1 << SHADING_MODELS[material.model]
         if material.alpha_mode == "mask":
             self.features |= FEATURE_ALPHA_MASK
@@ -261,9 +270,13 @@ class Materials:
     def __iter__(self) -> Iterator[Material]:
         return iter(self._materials)
 
-    def blend_flags(self) -> np.ndarray | None:
-        """Per material, whether it is alpha-blended; None when none is (the usual case)."""
-        return self._blend[: len(self._materials)] if self.blended else None
+    def set_aside(self) -> np.ndarray | None:
+        """Per material, whether its rows are drawn apart from the chunks (blended, or a fill of
+        its own; set_aside_pass.py); None when none is (the usual case)."""
+        if not self._aside:
+            return None
+        n = len(self._materials)
+        return self.blend[:n] | (self.fills[:n] != 0)
 
     def rows(self) -> np.ndarray:
         """The table's used rows (a view)."""

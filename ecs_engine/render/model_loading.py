@@ -9,7 +9,7 @@ textures) added to a world's `Materials`.
 
 A texture that is missing or broken leaves the model loading: one warning names the image and
 the fallback checkerboard shows where it was meant to be. glTF `BLEND` and OBJ `d < 1` become
-blended materials (transparent_pass.py).
+blended materials (set_aside_pass.py).
 """
 
 from __future__ import annotations

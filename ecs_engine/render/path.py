@@ -28,7 +28,7 @@ from .frame_data import Chunk
 from .mesh_registry import MeshRegistry
 
 #: --fill: name -> VkPolygonMode (wireframe and points need the device's fillModeNonSolid)
-FILL_MODES = {"solid": 0, "wireframe": 1, "points": 2}
+FILL_MODES = {"solid": 0, "wireframe": 1, "points": 2}  # the names are materials.FILLS
 
 MeshBounds = tuple[np.ndarray, np.ndarray, np.ndarray]  # per mesh: centre (n, 3), radius, index count
 

@@ -49,9 +49,9 @@ from .light_rows import write_lights
 from .materials import Materials
 from .mesh_registry import MeshRegistry
 from .path import FILL_MODES, ChunkResult, FrameInputs, FrameStats, PathContext, PathFactory, RenderPath, TargetState
+from .set_aside_pass import SetAsidePass
 from .texture_pages import TexturePages
 from .tone_map import ToneMapPass, check_tone_map
-from .transparent_pass import TransparentPass
 
 PATHS: dict[str, PathFactory] = {
     "instanced": InstancedPath,
@@ -122,7 +122,7 @@ class Renderer:
         )
         self.tone_map_pass = ToneMapPass(device, target.render_pass)
         self.lights = LightCulling(device, self.set_layout.handle, light_culling)
-        self._transparent: TransparentPass | None = None  # blended materials, made on first use
+        self._set_aside: SetAsidePass | None = None  # blended materials, made on first use
         self._targets: dict[tuple[int, int, int], TargetState] = {}
         # drawn last in the overlay subpass: an object with prepare(slot, frames_in_flight) and
         # record(cb, slot, width, height), e.g. imgui_pass.ImGuiRenderer
@@ -164,9 +164,9 @@ class Renderer:
     def _swap_path(self, new: RenderPath) -> None:
         self.device.wait_idle()  # frames in flight may still use the old path's pipelines
         self.path.destroy()
-        if self._transparent is not None:  # its pipelines were made for the old path's context
-            self._transparent.destroy()
-            self._transparent = None
+        if self._set_aside is not None:  # its pipelines were made for the old path's context
+            self._set_aside.destroy()
+            self._set_aside = None
         for target in self._targets.values():
             target.path_state.clear()  # what the old path kept per target (its recorder's frame states)
         self.path = new
@@ -282,8 +282,8 @@ class Renderer:
     def extract(self, world: World, width: int, height: int, material_count: int | None = None) -> FrameData:
         materials = self.materials(world)
         count = len(materials) if material_count is None else material_count
-        blend = materials.blend_flags()
-        return self.extractor.extract(world, width / height, len(self.meshes), self.culling, count, blend)
+        aside = materials.set_aside()
+        return self.extractor.extract(world, width / height, len(self.meshes), self.culling, count, aside)
 
     def render(
         self,
@@ -310,7 +310,7 @@ class Renderer:
         pf.ensure_capacity(
             self.device,
             self.texture_pages,
-            self.path.rows_needed(data.candidates) + len(data.blended or ()),
+            self.path.rows_needed(data.candidates) + len(data.set_aside or ()),
             data.light_count,
             material_count,
         )
@@ -361,9 +361,9 @@ class Renderer:
         record_ms = (time.perf_counter() - t0) * 1e3
         cb = frame.command_buffer
         secondaries = path.finish(cb, inputs, results, data.candidates)
-        blended = self._record_blended(inputs, data)
-        if blended[0] is not None:
-            secondaries = [*secondaries, blended[0]]  # after every opaque row
+        aside = self._record_set_aside(inputs, data, materials)
+        if aside[0] is not None:
+            secondaries = [*secondaries, aside[0]]  # after every chunk's rows
         if grid is not None:
             self.lights.record(cb, pf, grid)
         light_draws = self._record_primary(cb, secondaries, positional, target, pf, slot)
@@ -373,7 +373,7 @@ class Renderer:
         if readback:
             self.frames.wait(frame)
         draws, visible, triangles = path.counts(inputs, results)
-        draws, visible, triangles = draws + blended[1], visible + blended[2], triangles + blended[3]
+        draws, visible, triangles = draws + aside[1], visible + aside[2], triangles + aside[3]
         return FrameStats(
             draws=draws + light_draws,
             instances=visible,
@@ -415,14 +415,16 @@ class Renderer:
             g["cluster_depth"] = (grid.near, grid.scale, grid.width, grid.height)
         pf.written = written
 
-    def _record_blended(self, inputs: FrameInputs, data: FrameData) -> tuple[Any, int, int, int]:
-        """The blended rows' secondary (None when there is nothing to draw), draws, rows, triangles."""
-        if data.blended is None or not len(data.blended):
+    def _record_set_aside(
+        self, inputs: FrameInputs, data: FrameData, materials: Materials
+    ) -> tuple[Any, int, int, int]:
+        """The set-aside rows' secondary (None when there is nothing to draw), draws, rows, triangles."""
+        if data.set_aside is None or not len(data.set_aside):
             return None, 0, 0, 0
-        if self._transparent is None:
-            self._transparent = TransparentPass(self.path.ctx)
+        if self._set_aside is None:
+            self._set_aside = SetAsidePass(self.path.ctx)
         first = self.path.rows_needed(data.candidates)
-        return self._transparent.record(inputs, data.blended, first, data.camera.position - data.origin)
+        return self._set_aside.record(inputs, data.set_aside, first, data.camera.position - data.origin, materials)
 
     @property
     def light_culling(self) -> str:
@@ -479,8 +481,8 @@ class Renderer:
         self.light_pass.destroy()
         self.tone_map_pass.destroy()
         self.lights.destroy()
-        if self._transparent is not None:
-            self._transparent.destroy()
+        if self._set_aside is not None:
+            self._set_aside.destroy()
         self.texture_pages.destroy()
         self.secondaries.destroy()
         for pf in self.per_frame:

@@ -1,0 +1,122 @@
+"""Rows drawn apart from the chunks (frame_data.SetAsideRows), after every chunk's rows in the
+same subpass, with pipelines the render paths do not have:
+
+- materials with a fill of their own (`Material.fill`: wireframe or points), drawn first, with
+  depth writes, grouped by fill and (mesh, winding);
+- alpha-blended materials, drawn last, back to front by the distance of their bounding sphere's
+  centre from the eye, blending on and depth writes off (the opaque depth still hides them).
+  Sorting is per frame and vectorised. Objects that intersect or interleave can still blend in
+  the wrong order within a pixel: sorting is by object, as in glTF viewers and most engines.
+
+Consecutive rows of one (mesh, winding, fill) are one instanced draw. A device without
+fillModeNonSolid draws those materials solid, with one warning.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from ..gpu.pipeline import pipeline_layout
+from ..gpu.secondary import end_command_buffer
+from ..maths.culling import bounding_spheres, spheres_visible
+from .chunk_paths import mesh_pipelines
+from .frame_data import SetAsideRows
+from .materials import FILLS, Materials
+from .path import FrameInputs, PathContext
+
+log = logging.getLogger("ecs_engine")
+
+
+class SetAsidePass:
+    def __init__(self, ctx: PathContext) -> None:
+        self.ctx = ctx
+        self.layout = pipeline_layout(ctx.device, [ctx.frame_set_layout])
+        self.pipelines: dict[tuple[bool, str], tuple[Any, Any]] = {}  # (blended, fill) -> (plain, mirrored)
+        self.can_fill = bool(ctx.device.features.get("fillModeNonSolid"))
+        self._warned = False
+
+    def record(
+        self, frame: FrameInputs, rows: SetAsideRows, first_row: int, eye: np.ndarray, materials: Materials
+    ) -> tuple[Any, int, int, int]:
+        """Cull, order, write instance rows from `first_row`, record the draws: (secondary
+        command buffer or None, draws, rows drawn, triangles)."""
+        centers, radii, index_counts = frame.bounds
+        model, handle, material = rows.model, rows.handle, rows.material
+        c, r = bounding_spheres(model, centers[handle], radii[handle])
+        if frame.planes is not None:
+            keep = np.flatnonzero(spheres_visible(c, r, frame.planes))
+            model, handle, material, c = model[keep], handle[keep], material[keep], c[keep]
+        n = len(handle)
+        if n == 0:
+            return None, 0, 0, 0
+        blended = materials.blend[material]
+        fill = materials.fills[material].astype(np.int64)
+        if not self.can_fill and fill.any():
+            if not self._warned:
+                log.warning(
+                    "%s cannot draw wireframe or points (no fillModeNonSolid): drawn solid", self.ctx.device.info.name
+                )
+                self._warned = True
+            fill[:] = 0
+        mirrored = np.linalg.det(model[:, :3, :3].astype(np.float64)) < 0
+        keys = handle.astype(np.int64) * 2 + mirrored
+        d = c - eye
+        distance = np.einsum("ij,ij->i", d, d)
+        # unblended first, grouped by (fill, key); then blended, far to near (lexsort: last key first)
+        order = np.lexsort(
+            (np.where(blended, 0, keys), np.where(blended, 0, fill), np.where(blended, -distance, 0), blended)
+        )
+        keys, fill, blended = keys[order], fill[order], blended[order]
+        out = frame.instances[first_row : first_row + n]
+        out["model"] = model[order, :3, :]
+        out["misc"] = 0
+        out["misc"][:, 0] = material[order]
+        out["misc"][:, 1] = keys
+        group = (keys * len(FILLS) + fill) * 2 + blended
+        starts = np.flatnonzero(np.r_[True, group[1:] != group[:-1]])
+        counts = np.diff(np.r_[starts, n])
+        triangles = int((index_counts[keys[starts] // 2] // 3 * counts).sum())
+        runs = zip(
+            keys[starts].tolist(), fill[starts].tolist(), blended[starts].tolist(), starts.tolist(), counts.tolist()
+        )
+        return self._draw(frame, first_row, runs), len(starts), n, triangles
+
+    def _pipeline(self, blended: bool, fill: int, mirrored: int) -> Any:
+        key = (blended, FILLS[fill])
+        found = self.pipelines.get(key)
+        if found is None:
+            ctx = self.ctx if fill == 0 else replace(self.ctx, fill=FILLS[fill])
+            found = self.pipelines[key] = mesh_pipelines(ctx, self.layout, "mesh.vert", blended=blended)
+        return found[mirrored]
+
+    def _draw(self, frame: FrameInputs, first_row: int, runs: Any) -> Any:
+        ctx = self.ctx
+        vk = ctx.device.vk
+        cb = ctx.secondaries.begin(frame.slot, frame.target.secondary_begin)
+        vk.vkCmdSetViewport(cb, 0, 1, [frame.target.viewport])
+        vk.vkCmdSetScissor(cb, 0, 1, [frame.target.area])
+        vk.vkCmdBindDescriptorSets(
+            cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1, [frame.descriptor_set], 0, None
+        )
+        bound = None
+        for key, fill, blended, start, count in runs:
+            pipeline = self._pipeline(bool(blended), fill, key % 2)
+            if pipeline is not bound:
+                vk.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline)
+                bound = pipeline
+            mesh = ctx.meshes.bind(cb, key // 2)
+            vk.vkCmdDrawIndexed(cb, mesh.index_count, count, 0, 0, first_row + start)
+        end_command_buffer(vk, cb)
+        return cb
+
+    def destroy(self) -> None:
+        vk = self.ctx.device.vk
+        handle = self.ctx.device.handle
+        for pair in self.pipelines.values():
+            for pipeline in pair:
+                vk.vkDestroyPipeline(handle, pipeline, None)
+        vk.vkDestroyPipelineLayout(handle, self.layout, None)
