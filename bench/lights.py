@@ -1,5 +1,7 @@
 """GPU time against light count: the lights demo's scene (a floor, 169 objects, N small point and
-spot lights moving) drawn with every fragment looping over every light and with clustered lights.
+spot lights moving; their reach shrinks as their number grows, so each point of the floor is
+lit by about as many at every count: demos/lights.py) drawn with every fragment looping over
+every light and with clustered lights.
 
 Per light count (1 to 16,384) and light culling (`loop`, `clustered`, and `auto`, what the
 renderer picks), one renderer draws warm-up frames, then timed frames; GPU ms from the frame's

@@ -2,7 +2,14 @@
 over a floor and a field of spheres and cubes. With more than a few dozen bounded lights the
 renderer clusters them (render/light_clusters.py); `--light-culling loop` draws the same image
 with every fragment looping over every light, for comparison. A dim directional light keeps the
-scene readable where no small light reaches."""
+scene readable where no small light reaches.
+
+"Small" scales with the count: a light's reach is REACH_SPACINGS times the mean spacing of the
+lights over the floor, and its intensity follows the reach squared, so any count lights the floor
+about as brightly and each point of the floor is reached by about the same number of lights
+(~20). That is what makes light counts comparable in `bench lights`: with a fixed reach, 16 times
+the lights would also mean 16 times the lights per pixel, a different scene rather than more of
+the same one."""
 
 from __future__ import annotations
 
@@ -23,6 +30,7 @@ from .scene_kit import add_camera
 DEFAULT_LIGHTS = 1024
 FIELD = 40.0  # the floor's side
 SPOT_SHARE = 8  # one light in 8 is a spot light
+REACH_SPACINGS = 2.0  # a light's radius, in mean spacings between lights
 
 
 def build(
@@ -53,6 +61,8 @@ def build(
 
 
 def add_lights(world: World, rng: np.random.Generator, n: int) -> None:
+    reach = min(REACH_SPACINGS * FIELD / math.sqrt(max(n, 1)), FIELD)
+    power = (reach / 2.5) ** 2  # the lights of the default count have a reach of about 2.5
     spots = n // SPOT_SHARE
     points = n - spots
     hue = rng.uniform(0.0, 1.0, n)
@@ -66,26 +76,26 @@ def add_lights(world: World, rng: np.random.Generator, n: int) -> None:
             Transform(),
             Orbit(
                 center=centers,
-                radius=rng.uniform(0.5, 2.5, points),
+                radius=rng.uniform(0.2, 1.0, points) * reach,
                 angular_speed=rng.uniform(-1.2, 1.2, points),
                 phase=rng.uniform(0, 2 * math.pi, points),
                 height=rng.uniform(0.4, 1.6, points),
             ),
             PointLight(
                 color=colors[:points].astype(np.float32),
-                intensity=rng.uniform(0.6, 2.0, points),
-                radius=rng.uniform(1.5, 3.5, points),
+                intensity=rng.uniform(0.6, 2.0, points) * power,
+                radius=reach * rng.uniform(0.6, 1.4, points),
             ),
         )
     for k in range(spots):
         x, z = rng.uniform(-FIELD / 2, FIELD / 2, 2)
         aim = (rng.uniform(-0.4, 0.4), -1.0, rng.uniform(-0.4, 0.4))
         world.spawn(
-            Transform(position=(x, rng.uniform(2.5, 4.0), z), rotation=look_rotation(aim)),
+            Transform(position=(x, min(rng.uniform(2.5, 4.0), reach), z), rotation=look_rotation(aim)),
             SpotLight(
                 color=tuple(colors[points + k]),
-                intensity=rng.uniform(6.0, 12.0),
-                radius=6.0,
+                intensity=rng.uniform(6.0, 12.0) * power,
+                radius=2.4 * reach,
                 inner_angle=0.25,
                 outer_angle=0.5,
             ),

@@ -16,9 +16,10 @@ python3 -m pip install -q --no-deps --no-build-isolation --no-index --target /tm
 python3 -m pip install -q --no-deps --no-build-isolation --no-index --target /tmp/old .ab/base >/dev/null 2>&1 || { echo "install old failed"; exit 1; }
 { nvidia-smi --query-gpu=name,driver_version --format=csv,noheader; nproc; date -u +%FT%TZ; python3 --version; } > $OUT/machine.txt
 cat $OUT/machine.txt
-MODE=${1:-all}
+MODES=" ${*:-all} "  # any of: tests lights ab (or all)
+want() { [[ "$MODES" == *" $1 "* || "$MODES" == *" all "* ]]; }
 REPO=$PWD
-if [ "$MODE" = all ] || [ "$MODE" = tests ]; then
+if want tests; then
   # from a copy outside the checkout: in its root, `ecs_engine` would be the source folder, not the
   # installed package (whose components/ and systems/ live inside it)
   rm -rf /tmp/t && cp -r tests /tmp/t && cd /tmp
@@ -27,10 +28,10 @@ if [ "$MODE" = all ] || [ "$MODE" = tests ]; then
   PYTHONPATH=/tmp/new:/tmp/site timeout 60 python3 -m ecs_engine demo materials --headless --frames 30 --width 1280 --height 720 --validate --screenshot $OUT/materials-h100.png 2>&1 | tail -3
   cd $REPO
 fi
-if [ "$MODE" = all ] || [ "$MODE" = lights ]; then
-  (cd /tmp && PYTHONPATH=/tmp/new:/tmp/site timeout 240 python3 -m ecs_engine.bench lights --out $OUT --machine h100-16c 2>&1 | grep -v "^\[lights" | tail -14)
+if want lights; then
+  (cd /tmp && PYTHONPATH=/tmp/new:/tmp/site timeout 400 python3 -m ecs_engine.bench lights --out $OUT --machine h100-16c 2>&1 | grep -v "^\[lights" | tail -14)
 fi
-if [ "$MODE" = all ] || [ "$MODE" = ab ]; then
+if want ab; then
   for rep in 1 2 3 4; do
     if [ $((rep % 2)) = 1 ]; then order="new old"; else order="old new"; fi
     for v in $order; do

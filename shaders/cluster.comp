@@ -6,12 +6,15 @@
 // Clustered lights (render/light_clusters.py): one workgroup per view-space cluster (a screen
 // tile times an exponential depth slice) lists the bounded point and spot lights whose sphere
 // touches the cluster's box; one more workgroup lists the lights every fragment needs
-// (directional ones, and point or spot lights without a radius). Light indices per cluster are in
-// no particular order (atomics): the shading sum differs from the all-lights loop only by rounding.
+// (directional ones, and point or spot lights without a radius). A cluster's list is gathered in
+// shared memory, then copied to a range of the index pool that one atomic reserves. Light indices
+// are in no particular order (atomics): the shading sum differs from the loop only by rounding.
 layout(local_size_x = CLUSTER_GROUP) in;
 layout(std430, set = SET_FRAME, binding = BINDING_CLUSTERS) buffer Clusters { uint cluster_data[]; };
 
 shared uint found;
+shared uint start;
+shared uint listed[MAX_CLUSTER_LIGHTS];
 
 // The view-space point on the ray through NDC (x, y) at view depth `depth` (distance along -Z).
 vec3 at_depth(vec2 ndc, float depth) {
@@ -54,9 +57,9 @@ void main() {
     vec2 viewport = g.cluster_depth.zw;
     vec2 lo = vec2(tx, ty) * float(g.clusters.w) / viewport * 2.0 - 1.0;
     vec2 hi = min(vec2(tx + 1u, ty + 1u) * float(g.clusters.w) / viewport, vec2(1.0)) * 2.0 - 1.0;
-    float near = g.cluster_depth.x;
-    float d0 = near * exp(float(slice) / g.cluster_depth.y);
-    float d1 = slice + 1u == g.clusters.z ? 3.0e38 : near * exp(float(slice + 1u) / g.cluster_depth.y);
+    float s = g.cluster_depth.x;   // the first slice also takes every depth below s
+    float d0 = slice == 0u ? 1.0e-6 : s * exp(float(slice) / g.cluster_depth.y);
+    float d1 = slice + 1u == g.clusters.z ? 3.0e38 : s * exp(float(slice + 1u) / g.cluster_depth.y);
     vec3 bmin = vec3(3.0e38), bmax = vec3(-3.0e38);
     for (int k = 0; k < 8; ++k) {
         vec2 ndc = vec2((k & 1) == 0 ? lo.x : hi.x, (k & 2) == 0 ? lo.y : hi.y);
@@ -67,7 +70,6 @@ void main() {
     if (d1 > 1.0e37) {
         bmin.z = -3.0e38;   // the last slice runs to infinity
     }
-    uint base = CLUSTER_HEADER + c * CLUSTER_STRIDE;
     for (uint i = lid; i < g.counts.y; i += CLUSTER_GROUP) {
         vec4 pr = lights[i].position_radius;
         if (pr.w <= 0.0) {
@@ -78,13 +80,24 @@ void main() {
         if (dot(d, d) <= pr.w * pr.w) {
             uint k = atomicAdd(found, 1u);
             if (k < MAX_CLUSTER_LIGHTS) {
-                cluster_data[base + 1u + k] = i;
+                listed[k] = i;
             }
         }
     }
     barrier();
+    uint n = min(found, uint(MAX_CLUSTER_LIGHTS));
+    uint capacity = g.cluster_pool.y;
+    uint table = CLUSTER_HEADER + c * CLUSTER_STRIDE;
     if (lid == 0u) {
-        cluster_data[base] = found;   // may exceed MAX_CLUSTER_LIGHTS: readers take the minimum
-        atomicMax(cluster_data[CLUSTER_PEAK], found);   // zeroed before the dispatch
+        uint at = n == 0u ? 0u : atomicAdd(cluster_data[CLUSTER_POOL_USED], n);   // zeroed before the dispatch
+        start = at;
+        cluster_data[table] = g.cluster_pool.x + at;
+        cluster_data[table + 1u] = at >= capacity ? 0u : min(n, capacity - at);   // cut short when the pool is full
+        atomicMax(cluster_data[CLUSTER_PEAK], found);
+    }
+    barrier();
+    uint fit = start >= capacity ? 0u : min(n, capacity - start);
+    for (uint k = lid; k < fit; k += CLUSTER_GROUP) {
+        cluster_data[g.cluster_pool.x + start + k] = listed[k];
     }
 }

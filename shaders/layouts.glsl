@@ -13,11 +13,12 @@
 #define FEATURE_CLUSTERED 524288
 #define CLUSTER_GROUP 64
 #define MAX_GLOBAL_LIGHTS 256
-#define MAX_CLUSTER_LIGHTS 256
-#define CLUSTER_STRIDE 257
-#define CLUSTER_HEADER 258
+#define MAX_CLUSTER_LIGHTS 4096
+#define CLUSTER_STRIDE 2
+#define CLUSTER_HEADER 260
 #define CLUSTER_PEAK 1
-#define CLUSTER_GLOBALS 2
+#define CLUSTER_POOL_USED 2
+#define CLUSTER_GLOBALS 4
 #define TEXTURE_PAGES 18
 #define BINDING_IDS 0
 #define BINDING_KEYS 1
@@ -47,7 +48,7 @@
 
 // The frame's uniforms. Positions are relative to the render origin (the camera, unless
 // RenderOrigin is pinned).
-struct Globals {  // 272 bytes, std140
+struct Globals {  // 288 bytes, std140
     mat4 projection;            // offset 0: reverse-Z: near -> depth 1, far/infinity -> 0
     mat4 view;                  // offset 64: rotation, and the translation from the render origin to the camera
     vec4 eye;                   // offset 128: xyz: the camera relative to the render origin (zero by default)
@@ -55,7 +56,8 @@ struct Globals {  // 272 bytes, std140
     uvec4 counts;               // offset 160: x: lights, y: point and spot lights (first in the buffer, drawn as billboards)
     mat4 inverse_projection;    // offset 176: clustered lights: cluster bounds from screen tiles
     uvec4 clusters;             // offset 240: x tiles across, y tiles down, z depth slices, w tile side in pixels
-    vec4 cluster_depth;         // offset 256: x near, y slices / ln(far / near): slice = floor(ln(depth / near) * y); zw viewport size in pixels
+    uvec4 cluster_pool;         // offset 256: x first uint of the index pool, y its capacity in light indices, zw 0
+    vec4 cluster_depth;         // offset 272: x slice near s, y slices / ln(far / s): slice = floor(ln(max(depth, s) / s) * y); zw viewport size
 };
 
 // Point and spot lights first (sorted far to near from the camera), then directional ones.

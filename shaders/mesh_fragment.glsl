@@ -37,7 +37,7 @@ vec3 light_term(uint i, Material m, uint model, vec3 p, vec3 n, vec3 to_eye) {
 
 // The cluster of this fragment (cluster.comp made its light list): the screen tile, and the
 // exponential depth slice of its view depth.
-uint cluster_base(vec3 p) {
+uint cluster_entry(vec3 p) {
     uvec2 tile = min(uvec2(gl_FragCoord.xy) / g.clusters.w, g.clusters.xy - 1u);
     float depth = max(-(g.view * vec4(p, 1.0)).z, g.cluster_depth.x);
     uint slice = min(uint(log(depth / g.cluster_depth.x) * g.cluster_depth.y), g.clusters.z - 1u);
@@ -110,10 +110,11 @@ void main() {
             for (uint k = 0u; k < globals; ++k) {
                 color += light_term(cluster_data[CLUSTER_GLOBALS + k], m, model, v_position, n, to_eye);
             }
-            uint base = cluster_base(v_position);
-            uint count = min(cluster_data[base], uint(MAX_CLUSTER_LIGHTS));
+            uint entry = cluster_entry(v_position);
+            uint first = cluster_data[entry];
+            uint count = cluster_data[entry + 1u];
             for (uint k = 0u; k < count; ++k) {
-                color += light_term(cluster_data[base + 1u + k], m, model, v_position, n, to_eye);
+                color += light_term(cluster_data[first + k], m, model, v_position, n, to_eye);
             }
         } else {
             for (uint i = 0u; i < g.counts.x; ++i) {

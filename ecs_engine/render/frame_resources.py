@@ -93,7 +93,7 @@ class FrameResources:
                 ssbo | vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT | vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                 DEVICE,
             ),
-            cluster_peak=Buffer(device, UINT_BYTES, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT),
+            cluster_peak=Buffer(device, 2 * UINT_BYTES, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT),
             descriptor_set=descriptor_set,
             set_array=vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]),
         )
@@ -141,11 +141,13 @@ class FrameResources:
             self.clusters = self.clusters.grown(grid.buffer_bytes)
             self.write_set(device, pages)
 
-    def last_cluster_peak(self) -> int | None:
-        """The largest cluster's light count in the last frame this slot drew clustered."""
+    def last_cluster_peak(self) -> tuple[int, int] | None:
+        """(the largest cluster's light count, light indices the pool was asked for) in the last
+        frame this slot drew clustered."""
         if not self.clustered:
             return None
-        return int(self.cluster_peak.array(np.uint32, 1)[0])
+        peak, used = self.cluster_peak.array(np.uint32, 2)
+        return int(peak), int(used)
 
     def write_materials(self, materials: Materials, pages: TexturePages) -> None:
         """The world's material table into this slot's copy, when it changed since last written

@@ -34,10 +34,11 @@ GLOBALS = Struct(
         ("counts", "uvec4", "x: lights, y: point and spot lights (first in the buffer, drawn as billboards)"),
         ("inverse_projection", "mat4", "clustered lights: cluster bounds from screen tiles"),
         ("clusters", "uvec4", "x tiles across, y tiles down, z depth slices, w tile side in pixels"),
+        ("cluster_pool", "uvec4", "x first uint of the index pool, y its capacity in light indices, zw 0"),
         (
             "cluster_depth",
             "vec4",
-            "x near, y slices / ln(far / near): slice = floor(ln(depth / near) * y); zw viewport size in pixels",
+            "x slice near s, y slices / ln(far / s): slice = floor(ln(max(depth, s) / s) * y); zw viewport size",
         ),
     ],
     std140=True,
@@ -163,12 +164,15 @@ FEATURE_DOUBLE_SIDED = 1 << 18  # some material is double-sided: no back-face cu
 FEATURE_CLUSTERED = 1 << 19  # fragments loop over their cluster's lights, not all (light_clusters.py)
 CLUSTER_GROUP = 64  # cluster.comp's local size
 MAX_GLOBAL_LIGHTS = 256  # directional and unbounded lights every fragment loops over, when clustered
-MAX_CLUSTER_LIGHTS = 256  # bounded lights one cluster lists
-CLUSTER_STRIDE = 1 + MAX_CLUSTER_LIGHTS  # uints per cluster: its count, then its light indices
-# uints before the first cluster: the global count, the largest cluster's count (lights past
-# MAX_CLUSTER_LIGHTS are dropped: the renderer reads this back and falls back to the loop), the global list
+MAX_CLUSTER_LIGHTS = 4096  # bounded lights one cluster can list (its workgroup's shared memory)
+CLUSTER_STRIDE = 2  # uints per cluster in the table: first index in the pool, count
+# the header: the global list's count, the largest cluster's count (past MAX_CLUSTER_LIGHTS lights
+# are dropped), the pool's use (past its capacity lists are cut short: the renderer reads both
+# back and grows the pool or falls back to the loop), then the global list; the cluster table and
+# the pool of light indices follow
 CLUSTER_PEAK = 1
-CLUSTER_GLOBALS = 2
+CLUSTER_POOL_USED = 2
+CLUSTER_GLOBALS = 4
 CLUSTER_HEADER = CLUSTER_GLOBALS + MAX_GLOBAL_LIGHTS
 ALPHA_OPAQUE, ALPHA_MASK, ALPHA_BLEND = range(3)
 LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL = range(3)
@@ -207,6 +211,7 @@ DEFINES = {
     "CLUSTER_STRIDE": CLUSTER_STRIDE,
     "CLUSTER_HEADER": CLUSTER_HEADER,
     "CLUSTER_PEAK": CLUSTER_PEAK,
+    "CLUSTER_POOL_USED": CLUSTER_POOL_USED,
     "CLUSTER_GLOBALS": CLUSTER_GLOBALS,
     "TEXTURE_PAGES": TEXTURE_PAGES,
     "BINDING_IDS": BINDING_IDS,

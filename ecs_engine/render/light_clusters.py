@@ -38,8 +38,9 @@ from .light_rows import DirectionalLights, PositionalLights
 
 log = logging.getLogger("ecs_engine")
 
-TILE_PX: Final = 64
-SLICES: Final = 24
+TILE_PX: Final = 32
+SLICES: Final = 32
+POOL_PER_CLUSTER: Final = 32  # the index pool's first size, in light indices per cluster
 CLUSTER_MIN_LIGHTS: Final = 64
 LIGHT_MODES: Final = ("auto", "loop", "clustered")
 
@@ -49,19 +50,28 @@ class ClusterGrid:
     tiles_x: int
     tiles_y: int
     slices: int
-    near: float
-    scale: float  # slices / ln(far / near)
+    near: float  # the slice near plane s: the first slice takes every depth below s too
+    scale: float  # slices / ln(far / s)
     width: int
     height: int
     tile: int = TILE_PX
+    pool: int = 0  # the index pool's capacity (light indices); 0: POOL_PER_CLUSTER per cluster
 
     @property
     def count(self) -> int:
         return self.tiles_x * self.tiles_y * self.slices
 
     @property
+    def pool_start(self) -> int:
+        return CLUSTER_HEADER + self.count * CLUSTER_STRIDE
+
+    @property
+    def pool_capacity(self) -> int:
+        return self.pool or self.count * POOL_PER_CLUSTER
+
+    @property
     def buffer_bytes(self) -> int:
-        return (CLUSTER_HEADER + self.count * CLUSTER_STRIDE) * UINT_BYTES
+        return (self.pool_start + self.pool_capacity) * UINT_BYTES
 
     def slice_of(self, depth: np.ndarray) -> np.ndarray:
         """The slice each view depth falls in (as the fragment shader computes it)."""
@@ -69,9 +79,12 @@ class ClusterGrid:
         return np.minimum((np.log(d / self.near) * self.scale).astype(np.int64), self.slices - 1)
 
 
-def cluster_grid(width: int, height: int, near: float, reach: float) -> ClusterGrid:
+def cluster_grid(width: int, height: int, near: float, reach: float, pool: int = 0) -> ClusterGrid:
     """The grid for a viewport and a camera's near plane; `reach`: the farthest view distance a
-    bounded light touches (slices end there; beyond, the last one)."""
+    bounded light touches (slices end there; beyond, the last one). Slices start at
+    s = max(near, reach / 100): exponential slices from a tiny near plane would spend most of
+    themselves on the first metre."""
+    near = max(near, reach / 100.0)
     far = max(reach, near * 2.0)
     return ClusterGrid(
         tiles_x=-(-width // TILE_PX),
@@ -81,6 +94,7 @@ def cluster_grid(width: int, height: int, near: float, reach: float) -> ClusterG
         scale=SLICES / math.log(far / near),
         width=width,
         height=height,
+        pool=pool,
     )
 
 
@@ -137,8 +151,8 @@ class ClusterPass:
         lib = vk.lib
         if self.pipeline is None:
             self.pipeline = compute_pipeline(self.device, "cluster.comp", self.layout)
-        at = CLUSTER_PEAK * UINT_BYTES
-        vk.vkCmdFillBuffer(cb, clusters.handle, at, UINT_BYTES, 0)
+        at = CLUSTER_PEAK * UINT_BYTES  # the peak and the pool's use, zeroed, then read back
+        vk.vkCmdFillBuffer(cb, clusters.handle, at, 2 * UINT_BYTES, 0)
         self._barrier(
             cb,
             clusters,
@@ -158,7 +172,7 @@ class ClusterPass:
             vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
             vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
         )
-        region = vk.VkBufferCopy(srcOffset=at, dstOffset=0, size=UINT_BYTES)
+        region = vk.VkBufferCopy(srcOffset=at, dstOffset=0, size=2 * UINT_BYTES)
         vk.vkCmdCopyBuffer(cb, clusters.handle, peak.handle, 1, [region])
 
     def _barrier(self, cb: Any, buffer: Any, src: int, dst: int, src_stage: int, dst_stage: int) -> None:
@@ -191,6 +205,7 @@ class LightCulling:
         self.mode = mode  # auto | loop | clustered
         self.clustered = False  # the mesh pipelines loop over cluster lists
         self.overflow = 0  # lights in the fullest cluster, once one held more than its list keeps
+        self.pool = 0  # the index pool's capacity once grown (0: the grid's first size)
         self.pass_ = ClusterPass(device, frame_set_layout)
 
     def plan(self, data: Any, width: int, height: int) -> tuple[ClusterGrid | None, bool]:
@@ -205,13 +220,22 @@ class LightCulling:
             clustered &= not (self.overflow and self.mode == "auto")
         flipped = clustered != self.clustered
         self.clustered = clustered
-        return (cluster_grid(width, height, data.camera.near, reach) if clustered else None), flipped
+        grid = cluster_grid(width, height, data.camera.near, reach, self.pool) if clustered else None
+        if grid is not None and not self.pool:
+            self.pool = grid.pool_capacity
+        return grid, flipped
 
     def check_peak(self, frame: Any) -> None:
         """A cluster that held more lights than its list keeps dropped some (that frame was drawn
         without them): warn once; `auto` draws with the all-lights loop from then on."""
-        peak = frame.last_cluster_peak()
-        if peak is not None and peak > MAX_CLUSTER_LIGHTS and not self.overflow:
+        found = frame.last_cluster_peak()
+        if found is None:
+            return
+        peak, used = found
+        if used > self.pool:  # lists were cut short that frame: a bigger pool from now on
+            self.pool = 1 << int(used * 1.25).bit_length()
+            log.debug("light cluster pool grown to %d indices (%d were asked for)", self.pool, used)
+        if peak > MAX_CLUSTER_LIGHTS and not self.overflow:
             self.overflow = peak
             log.warning(
                 "%d lights reach one light cluster, more than the %d it lists; %s",

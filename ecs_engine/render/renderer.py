@@ -412,6 +412,7 @@ class Renderer:
         if grid is not None:
             g["inverse_projection"] = np.linalg.inv(cam.projection).T
             g["clusters"] = (grid.tiles_x, grid.tiles_y, grid.slices, grid.tile)
+            g["cluster_pool"] = (grid.pool_start, grid.pool_capacity, 0, 0)
             g["cluster_depth"] = (grid.near, grid.scale, grid.width, grid.height)
         pf.written = written
 
