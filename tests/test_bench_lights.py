@@ -1,5 +1,5 @@
 """`bench lights --quick` on lavapipe: every light count and light culling measured, what each
-actually drew with (auto clusters from 64 lights), the JSON and the plot written."""
+actually drew with (auto clusters from CLUSTER_MIN_LIGHTS), the JSON and the plot written."""
 
 from __future__ import annotations
 
@@ -21,7 +21,10 @@ def test_lights_quick_writes_its_json(tmp_path, monkeypatch):
     assert all(r["gpu_ms"] and r["gpu_ms"] > 0 and len(r["runs"]) == 2 for r in doc["results"])
     assert not any(r["clustered"] for (n, c), r in rows.items() if c == "loop")
     assert all(r["clustered"] for (n, c), r in rows.items() if c == "clustered")
-    assert [rows[n, "auto"]["clustered"] for n in QUICK_COUNTS] == [n >= 64 for n in QUICK_COUNTS]
+    from ecs_engine.render.light_clusters import CLUSTER_MIN_LIGHTS
+
+    wanted = [n >= CLUSTER_MIN_LIGHTS for n in QUICK_COUNTS]
+    assert [rows[n, "auto"]["clustered"] for n in QUICK_COUNTS] == wanted
     assert doc["target"]["ratio"] is None  # 4,096 lights are not in the quick run
     assert (tmp_path / "lights-ci.png").stat().st_size > 1000
     made = target_entry(

@@ -115,7 +115,7 @@ def render_flags() -> OneLineParser:
         "--light-culling",
         choices=("auto", "loop", "clustered"),
         default="auto",
-        help="auto (default): clusters from 64 bounded lights; loop: every fragment over every light",
+        help="auto (default): clusters from 16 bounded lights; loop: every fragment over every light",
     )
     common.add_argument("--lights", type=int, help="lights scene: how many point and spot lights (default 1,024)")
     common.add_argument(
