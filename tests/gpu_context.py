@@ -62,3 +62,22 @@ def headless_gpu(width: int = 64, height: int = 48) -> Iterator[Gpu]:
             (obj.destroy if hasattr(obj, "destroy") else obj.close)()
         gpu.meshes.destroy()
         gpu.target.destroy()
+
+
+def render_world(gpu: Gpu, world: Any, target: Any = None, frames: int = 1, **settings: Any) -> Any:
+    """`world` drawn by a new Renderer (settings: its keyword arguments) after one run of the
+    default schedule: the RGB pixels (height, width, 3) as int64 of the last of `frames` frames."""
+    import numpy as np
+
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.render.renderer import Renderer
+
+    target = target or gpu.target
+    renderer = Renderer(gpu.device, target, gpu.meshes, **settings)
+    try:
+        default_schedule().run(world, 0.0)
+        for _ in range(frames):
+            renderer.render(world, readback=True)
+        return target.pixels()[..., :3].astype(np.int64)
+    finally:
+        renderer.destroy()

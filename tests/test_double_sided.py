@@ -7,10 +7,9 @@ import math
 
 import numpy as np
 import pytest
-from gpu_context import headless_gpu
+from gpu_context import headless_gpu, render_world
 
 from ecs_engine import World
-from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Camera, DirectionalLight, Mesh, Transform
 from ecs_engine.maths.camera import look_rotation
 from ecs_engine.render.materials import Material, materials
@@ -24,8 +23,6 @@ FACING_MINUS_Z = (-math.sin(math.pi / 4), 0.0, 0.0, math.cos(math.pi / 4))  # +Y
 def render(gpu, sides: tuple[bool, bool]) -> np.ndarray:
     """Two planes facing away from the camera (it sees their backs), left and right, lit from the
     camera's side by a light shining along -Z."""
-    from ecs_engine.render.renderer import Renderer
-
     world = World()
     mesh = gpu.meshes.add(plane_mesh(1.0))
     for x, double in zip((-0.6, 0.6), sides):
@@ -33,13 +30,7 @@ def render(gpu, sides: tuple[bool, bool]) -> np.ndarray:
         world.spawn(Transform(position=(x, 0.0, 0.0), rotation=FACING_MINUS_Z), Mesh(handle=mesh, material=m))
     world.spawn(Transform(position=(0.0, 0.0, 1.3)), Camera(fov_y=math.radians(60.0), near=0.05))
     world.spawn(Transform(rotation=look_rotation((0.0, 0.0, -1.0))), DirectionalLight(illuminance=1.0))
-    renderer = Renderer(gpu.device, gpu.target, gpu.meshes, ambient=(1.0, 1.0, 1.0, 0.0))
-    try:
-        default_schedule().run(world, 0.0)
-        renderer.render(world, readback=True)
-        return gpu.target.pixels()[..., :3].astype(int)
-    finally:
-        renderer.destroy()
+    return render_world(gpu, world, ambient=(1.0, 1.0, 1.0, 0.0))
 
 
 @pytest.mark.parametrize("sides", [(False, False), (True, False), (True, True)])

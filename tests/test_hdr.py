@@ -11,10 +11,9 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from gpu_context import headless_gpu
+from gpu_context import headless_gpu, render_world
 
 from ecs_engine import World
-from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Camera, Mesh, Transform
 from ecs_engine.errors import UsageError
 from ecs_engine.render.materials import Material, materials
@@ -42,16 +41,7 @@ def glowing_plane(gpu, size: float = 4.0, rotation=FACING_Z) -> World:
 
 
 def draw(gpu, world: World, target=None, **settings) -> np.ndarray:
-    from ecs_engine.render.renderer import Renderer
-
-    target = target or gpu.target
-    renderer = Renderer(gpu.device, target, gpu.meshes, **settings)
-    try:
-        default_schedule().run(world, 0.0)
-        renderer.render(world, readback=True)
-        return target.pixels()[..., :3].astype(int)
-    finally:
-        renderer.destroy()
+    return render_world(gpu, world, target, **settings)
 
 
 @pytest.mark.parametrize("name", list(CURVES))

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from gpu_context import headless_gpu
+from gpu_context import headless_gpu, render_world
 
 from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
@@ -134,15 +134,7 @@ def test_materials_check_texture_handles():
 
 # ---------------------------------------------------------------------------------------- GPU
 def render(gpu, world: World, ambient=(1.0, 1.0, 1.0, 0.0)) -> np.ndarray:
-    from ecs_engine.render.renderer import Renderer
-
-    renderer = Renderer(gpu.device, gpu.target, gpu.meshes, ambient=ambient)
-    try:
-        default_schedule().run(world, 0.0)
-        renderer.render(world, readback=True)
-        return gpu.target.pixels()[..., :3].astype(np.int64)
-    finally:
-        renderer.destroy()
+    return render_world(gpu, world, ambient=ambient)
 
 
 def facing_plane(gpu, world: World, material: int, size: float = 2.0, position=(0.0, 0.0, 0.0)) -> None:
