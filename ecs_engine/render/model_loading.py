@@ -161,12 +161,13 @@ class _GltfMaterials:
     def _add(self, pbr: Any) -> int:
         name = _name(pbr) or "material"
         fields: dict[str, Any] = {}
+        declared = self._declared(name)  # what the file's JSON says the material's textures are
         for slot, (field, color) in _GLTF_TEXTURES.items():
             image = getattr(pbr, slot, None)
             if image is not None:
                 fields[field] = self._texture(image, color, name, slot)
-            elif slot in self._declared(name):
-                self._warn(self._declared(name)[slot], name)
+            elif slot in declared:
+                self._warn(declared[slot], name)
                 fields[field] = self.registry.textures.fallback
         factor = getattr(pbr, "baseColorFactor", None)
         base = (1.0, 1.0, 1.0, 1.0) if factor is None else tuple(np.asarray(factor, np.float64) / 255.0)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Callable
 from operator import attrgetter
 from typing import Any
 
@@ -226,19 +227,26 @@ class Renderer:
         if fill != self.fill:
             old = self.fill
             self.fill = fill
-            try:
-                self._swap_path(self._make_path(self.mode, self.cpu_recorder))
-            except BaseException:
-                self.fill = old
-                raise
+            self._respecialise(lambda: setattr(self, "fill", old))
 
     def _check_material_features(self, materials: Materials) -> None:
         """Rebuild the path's pipelines when the world's materials use a shading model (or alpha
         mask) they were specialised without."""
         wanted = self.material_features | materials.features
         if wanted != self.material_features:
+            old = self.material_features
             self.material_features = wanted
+            self._respecialise(lambda: setattr(self, "material_features", old))
+
+    def _respecialise(self, undo: Callable[[], None]) -> None:
+        """The current path again, its pipelines made for the settings just changed (fill,
+        material features, clustered lights); `undo` puts the old setting back if they cannot be
+        made, and the old path stays."""
+        try:
             self._swap_path(self._make_path(self.mode, self.cpu_recorder))
+        except BaseException:
+            undo()
+            raise
 
     def target_state(self, framebuffer: Any, width: int, height: int) -> TargetState:
         """What a framebuffer of this size needs per frame, made once (kept for 16 framebuffers)."""
@@ -279,10 +287,10 @@ class Renderer:
         found = world.resources.get(Materials)
         return found if found is not None else self.default_materials
 
-    def extract(self, world: World, width: int, height: int, material_count: int | None = None) -> FrameData:
-        materials = self.materials(world)
-        count = len(materials) if material_count is None else material_count
-        aside = materials.set_aside()
+    def extract(self, world: World, width: int, height: int, materials: Materials | None = None) -> FrameData:
+        if materials is None:
+            materials = self.materials(world)
+        count, aside = len(materials), materials.set_aside()
         return self.extractor.extract(world, width / height, len(self.meshes), self.culling, count, aside)
 
     def render(
@@ -298,7 +306,7 @@ class Renderer:
         width, height = extent or (self.target.width, self.target.height)
         materials = self.materials(world)
         material_count = len(materials)
-        data = self.extract(world, width, height, material_count)  # before any GPU state: a bad world fails here
+        data = self.extract(world, width, height, materials)  # before any GPU state: a bad world fails here
         self._check_material_features(materials)
         grid = self._light_clusters(data, width, height)
         self._sync_textures(materials)
@@ -445,11 +453,7 @@ class Renderer:
         rebuilds the mesh pipelines (FEATURE_CLUSTERED), undone if that fails."""
         grid, flipped = self.lights.plan(data, width, height)
         if flipped:
-            try:
-                self._swap_path(self._make_path(self.mode, self.cpu_recorder))
-            except BaseException:
-                self.lights.clustered = not self.lights.clustered
-                raise
+            self._respecialise(lambda: setattr(self.lights, "clustered", not self.lights.clustered))
         return grid
 
     def _record_primary(
