@@ -13,11 +13,8 @@
 #define FEATURE_CLUSTERED 524288
 #define CLUSTER_GROUP 64
 #define MAX_GLOBAL_LIGHTS 256
-#define MAX_CLUSTER_LIGHTS 4096
-#define CLUSTER_STRIDE 2
+#define LIGHT_BINS 1024
 #define CLUSTER_HEADER 260
-#define CLUSTER_PEAK 1
-#define CLUSTER_POOL_USED 2
 #define CLUSTER_GLOBALS 4
 #define TEXTURE_PAGES 18
 #define BINDING_IDS 0
@@ -54,10 +51,10 @@ struct Globals {  // 288 bytes, std140
     vec4 eye;                   // offset 128: xyz: the camera relative to the render origin (zero by default)
     vec4 ambient;               // offset 144: rgb, intensity
     uvec4 counts;               // offset 160: x: lights, y: point and spot lights (first in the buffer, drawn as billboards)
-    mat4 inverse_projection;    // offset 176: clustered lights: cluster bounds from screen tiles
-    uvec4 clusters;             // offset 240: x tiles across, y tiles down, z depth slices, w tile side in pixels
-    uvec4 cluster_pool;         // offset 256: x first uint of the index pool, y its capacity in light indices, zw 0
-    vec4 cluster_depth;         // offset 272: x slice near s, y slices / ln(far / s): slice = floor(ln(max(depth, s) / s) * y); zw viewport size
+    mat4 inverse_projection;    // offset 176: clustered lights: the screen tiles' planes
+    uvec4 light_tiles;          // offset 240: x tiles across, y tiles down, z mask words per tile, w tile side in pixels
+    uvec4 light_bins;           // offset 256: x first uint of the light bounds, y first uint of the tile masks, zw 0
+    vec4 bin_depth;             // offset 272: x bin near s, y LIGHT_BINS / ln(far / s): bin = floor(ln(max(distance, s) / s) * y); zw viewport size
 };
 
 // Point and spot lights first (sorted far to near from the camera), then directional ones.

@@ -1,5 +1,7 @@
 // The mesh fragment shader body: mesh.frag, and mesh_textured.frag (TEXTURED: the material's
 // textures, sampled from the texture pages; render/texture_pages.py says why pages).
+#include "light_grid.glsl"
+
 layout(location = 0) in vec3 v_position;
 layout(location = 1) in vec3 v_normal;
 layout(location = 2) flat in uint v_material;
@@ -35,13 +37,10 @@ vec3 light_term(uint i, Material m, uint model, vec3 p, vec3 n, vec3 to_eye) {
     return vec3(0.0);
 }
 
-// The cluster of this fragment (cluster.comp made its light list): the screen tile, and the
-// exponential depth slice of its view depth.
-uint cluster_entry(vec3 p) {
-    uvec2 tile = min(uvec2(gl_FragCoord.xy) / g.clusters.w, g.clusters.xy - 1u);
-    float depth = max(-(g.view * vec4(p, 1.0)).z, g.cluster_depth.x);
-    uint slice = min(uint(log(depth / g.cluster_depth.x) * g.cluster_depth.y), g.clusters.z - 1u);
-    return CLUSTER_HEADER + ((slice * g.clusters.y + tile.y) * g.clusters.x + tile.x) * CLUSTER_STRIDE;
+// Where the light mask of this fragment's screen tile starts (light_grid.glsl).
+uint tile_masks() {
+    uvec2 tile = min(uvec2(gl_FragCoord.xy) / g.light_tiles.w, g.light_tiles.xy - 1u);
+    return g.light_bins.y + (tile.y * g.light_tiles.x + tile.x) * g.light_tiles.z;
 }
 
 // The material's shading model, per fragment, over every light. Every division is guarded, so a
@@ -110,11 +109,34 @@ void main() {
             for (uint k = 0u; k < globals; ++k) {
                 color += light_term(cluster_data[CLUSTER_GLOBALS + k], m, model, v_position, n, to_eye);
             }
-            uint entry = cluster_entry(v_position);
-            uint first = cluster_data[entry];
-            uint count = cluster_data[entry + 1u];
-            for (uint k = 0u; k < count; ++k) {
-                color += light_term(cluster_data[first + k], m, model, v_position, n, to_eye);
+            // the lights of this fragment's distance bin (an index range) and screen tile (a mask),
+            // walked once for the whole subgroup (M. Drobot's scalarisation): the light index is
+            // then uniform, so its row is read once for all. Each invocation adds only the lights
+            // of its own cluster whose sphere holds the fragment (most candidates miss it).
+            uint bin = light_bin(sqrt(e2));
+            uint lo = cluster_data[CLUSTER_HEADER + bin];
+            uint hi = cluster_data[CLUSTER_HEADER + LIGHT_BINS + bin];
+            uint masks = tile_masks();
+            uint first = subgroupMin(lo), last = subgroupMax(hi);
+            for (uint w = first >> 5u; first <= last && w <= (last >> 5u); ++w) {
+                uint bits = lo <= hi && w >= (lo >> 5u) && w <= (hi >> 5u) ? cluster_data[masks + w] : 0u;
+                if (w == (lo >> 5u)) {
+                    bits &= ~0u << (lo & 31u);
+                }
+                if (w == (hi >> 5u)) {
+                    bits &= ~0u >> (31u - (hi & 31u));
+                }
+                uint any = subgroupOr(bits);
+                while (any != 0u) {
+                    uint j = uint(findLSB(any));
+                    any &= any - 1u;
+                    uint i = w * 32u + j;
+                    vec4 sphere = lights[i].position_radius;
+                    vec3 to_light = sphere.xyz - v_position;
+                    if ((bits & (1u << j)) != 0u && dot(to_light, to_light) < sphere.w * sphere.w) {
+                        color += light_term(i, m, model, v_position, n, to_eye);
+                    }
+                }
             }
         } else {
             for (uint i = 0u; i < g.counts.x; ++i) {

@@ -16,8 +16,10 @@ from ecs_engine.components import Camera, DirectionalLight, Mesh, PointLight, Sp
 from ecs_engine.components.camera import ORTHOGRAPHIC
 from ecs_engine.errors import UsageError
 from ecs_engine.maths.camera import look_rotation
+from ecs_engine.render.layouts import LIGHT_BINS
 from ecs_engine.render.light_clusters import (
     CLUSTER_MIN_LIGHTS,
+    TILE_PX,
     cluster_grid,
     light_census,
     wants_clusters,
@@ -26,7 +28,7 @@ from ecs_engine.render.light_rows import DirectionalLights, PositionalLights
 from ecs_engine.render.materials import Material, materials
 from ecs_engine.render.primitives import plane_mesh, sphere_mesh
 
-W, H = 160, 96  # 5 x 3 tiles: lights cross tile and slice borders
+W, H = 160, 96
 
 
 def lit_field(gpu, lights: int, ortho: bool = False, seed: int = 3) -> World:
@@ -82,7 +84,11 @@ def render(gpu, world: World, culling: str, mode: str = "instanced") -> tuple[np
 
 @pytest.mark.parametrize("ortho", [False, True])
 @pytest.mark.parametrize("mode", ["instanced", "indirect"])
-def test_clustered_lights_draw_what_the_loop_draws(ortho, mode):
+@pytest.mark.parametrize("tile", [16, TILE_PX])
+def test_clustered_lights_draw_what_the_loop_draws(ortho, mode, tile, monkeypatch):
+    from ecs_engine.render import light_clusters
+
+    monkeypatch.setattr(light_clusters, "TILE_PX", tile)  # 16: 10 x 6 tiles, lights cross their borders
     with headless_gpu(W, H) as gpu:
         world = lit_field(gpu, 300, ortho)
         loop, loop_clustered = render(gpu, world, "loop", mode)
@@ -118,63 +124,47 @@ def frames(gpu, world: World, culling: str, count: int) -> tuple[np.ndarray, obj
         renderer.destroy()
 
 
-def test_a_full_index_pool_grows(monkeypatch):
-    """The pool starts at one index per cluster here: the first frames' lists are cut short (the
-    image misses lights, so the comparison can fail), the read-back use grows the pool, and from
-    then on the image equals the loop's."""
+def test_a_crowd_of_lights_in_one_place_draws_as_the_loop():
+    """300 lights on one spot: every tile mask and distance bin there holds all of them (ten mask
+    words; no cap per cluster)."""
+    with headless_gpu(W, H) as gpu:
+        world = crowd(gpu, 300)
+        loop, _ = frames(gpu, world, "loop", 1)
+        clustered, was_clustered = frames(gpu, world, "clustered", 2)
+        dark, _ = frames(gpu, lit_field(gpu, 0), "loop", 1)
+    assert was_clustered
+    assert np.abs(loop - dark).max() > 30
+    assert np.abs(clustered - loop).max() <= 1
+
+
+@pytest.mark.parametrize("outer", [0.15, 0.6, 0.9, 1.2, math.pi / 2])
+def test_spot_cones_of_every_width_draw_as_the_loop(outer, monkeypatch):
+    """A spot light's cone is bounded by a tighter sphere than its radius (narrow cones, up to 45
+    degrees; wider ones, up to 90, by the sphere around the cap): too tight a sphere would cut the
+    light off at tile or bin borders."""
     from ecs_engine.render import light_clusters
 
-    monkeypatch.setattr(light_clusters, "POOL_PER_CLUSTER", 1)
+    monkeypatch.setattr(light_clusters, "TILE_PX", 8)  # many borders
     with headless_gpu(W, H) as gpu:
-        world = crowd(gpu, 40)
+        world = lit_field(gpu, 0)
+        rng = np.random.default_rng(11)
+        for _ in range(24):
+            p = (rng.uniform(-8, 8), rng.uniform(0.5, 3.0), rng.uniform(-12, 3))
+            aim = (rng.uniform(-1, 1), rng.uniform(-1.0, 0.2), rng.uniform(-1, 1))
+            world.spawn(
+                Transform(position=p, rotation=look_rotation(aim)),
+                SpotLight(
+                    color=(1.0, 0.8, 0.6),
+                    intensity=40.0,
+                    radius=rng.uniform(2.0, 7.0),
+                    outer_angle=outer,
+                    inner_angle=outer * 0.9,
+                ),  # bright, with a sharp edge: what a cut-off loses shows
+            )
         loop, _ = frames(gpu, world, "loop", 1)
-        first, _ = frames(gpu, world, "clustered", 1)
-        later, clustered = frames(gpu, world, "clustered", 6)
-    assert clustered
-    assert np.abs(first - loop).max() > 10
-    assert np.abs(later - loop).max() <= 1
-
-
-def test_a_cluster_past_its_limit_is_warned_about_once_and_auto_goes_back_to_the_loop(caplog):
-    """More lights in one cluster than its list keeps (MAX_CLUSTER_LIGHTS, the workgroup's shared
-    memory: too many to draw on lavapipe in a test) is read back like this."""
-    import logging
-
-    from ecs_engine.render.layouts import MAX_CLUSTER_LIGHTS
-    from ecs_engine.render.light_clusters import LightCulling
-
-    class Slot:
-        def __init__(self, found):
-            self.found = found
-
-        def last_cluster_peak(self):
-            return self.found
-
-    with headless_gpu(W, H) as gpu, caplog.at_level(logging.WARNING, logger="ecs_engine"):
-        from ecs_engine.render.frame_resources import frame_sets
-
-        layout, pool = frame_sets(gpu.device, 1)
-        culling = LightCulling(gpu.device, layout.handle, "auto")
-        try:
-            culling.check_peak(Slot(None))
-            culling.check_peak(Slot((MAX_CLUSTER_LIGHTS, 10)))
-            assert culling.overflow == 0
-            for _ in range(2):
-                culling.check_peak(Slot((MAX_CLUSTER_LIGHTS + 5, 10)))
-            assert culling.overflow == MAX_CLUSTER_LIGHTS + 5
-            world = lit_field(gpu, 300)
-            from ecs_engine.render.frame_data import FrameExtractor
-
-            default_schedule().run(world, 0.0)
-            data = FrameExtractor(lambda: 1).extract(world, W / H, len(gpu.meshes), True)
-            grid, _ = culling.plan(data, W, H)
-            assert grid is None and not culling.clustered  # auto: the loop from now on
-        finally:
-            culling.destroy()
-            pool.destroy()
-            layout.destroy()
-    lines = [r.getMessage() for r in caplog.records]
-    assert len(lines) == 1 and "all-lights loop" in lines[0]
+        clustered, was_clustered = frames(gpu, world, "clustered", 1)
+    assert was_clustered
+    assert np.abs(clustered - loop).max() <= 1
 
 
 def test_auto_switches_with_the_light_count():
@@ -197,12 +187,34 @@ def test_census_grid_and_bad_mode():
     ]
     suns = [DirectionalLights(np.array([[0.0, -1.0, 0.0]]), np.ones((1, 3)), np.ones(1))]
     assert light_census(parts, suns, np.zeros(3)) == (1, 2, pytest.approx(12.0))
-    grid = cluster_grid(160, 96, 0.1, 12.0)
-    assert (grid.tiles_x, grid.tiles_y) == (5, 3)  # 32-pixel tiles, the last ones partial
-    slices = grid.slice_of(np.array([0.05, 0.1, 0.11, 1.0, 11.99, 1e9]))
-    assert slices[0] == slices[1] == 0 and slices[-1] == grid.slices - 1
-    assert (np.diff(slices) >= 0).all()
+    grid = cluster_grid(168, 96, 0.1, 12.0, 33)
+    assert (grid.tiles_x, grid.tiles_y, grid.words) == (-(-168 // TILE_PX), -(-96 // TILE_PX), 2)  # last ones partial
+    assert grid.near == pytest.approx(0.12)  # s = reach / 100 when that is beyond the near plane
+    bins = grid.bin_of(np.array([0.05, 0.12, 0.13, 1.0, 11.99, 1e9]))
+    assert bins[0] == bins[1] == 0 and bins[-1] == LIGHT_BINS - 1 and bins[-2] == LIGHT_BINS - 1
+    assert (np.diff(bins) >= 0).all()
+    assert grid.buffer_bytes == 4 * (grid.masks_start + grid.tiles_x * grid.tiles_y * 2)
     from ecs_engine.render.renderer import Renderer
 
     with headless_gpu(W, H) as gpu, pytest.raises(UsageError, match="light culling"):
         Renderer(gpu.device, gpu.target, gpu.meshes, light_culling="tiles")
+
+
+def test_a_device_without_fragment_subgroups_loops_over_every_light(caplog):
+    """Clusters are walked once per subgroup (subgroupMin/Max/Or in the fragment shader): without
+    them the renderer keeps the all-lights loop, and says so once when clusters were asked for."""
+    import logging
+
+    with headless_gpu(W, H) as gpu, caplog.at_level(logging.WARNING, logger="ecs_engine"):
+        assert gpu.device.features["fragmentSubgroupArithmetic"]  # lavapipe and the H100 have them
+        gpu.device.features["fragmentSubgroupArithmetic"] = False
+        try:
+            world = lit_field(gpu, 40)
+            loop, _ = frames(gpu, world, "loop", 1)
+            image, clustered = frames(gpu, world, "clustered", 2)
+        finally:
+            gpu.device.features["fragmentSubgroupArithmetic"] = True
+    assert not clustered
+    assert np.array_equal(image, loop)
+    lines = [r.getMessage() for r in caplog.records]
+    assert len(lines) == 1 and "subgroup" in lines[0]

@@ -87,6 +87,13 @@ class Device:
         optional = ("multiDrawIndirect", "drawIndirectFirstInstance", "samplerAnisotropy", "fillModeNonSolid")
         features = vk.VkPhysicalDeviceFeatures(**{name: getattr(base, name) for name in optional})
         self.features.update({name: bool(getattr(base, name)) for name in optional})
+        # clustered lights walk their lists once per subgroup (subgroupMin/Max/Or in fragments)
+        sub = vk.VkPhysicalDeviceSubgroupProperties()
+        vk.vkGetPhysicalDeviceProperties2(self.physical, vk.VkPhysicalDeviceProperties2(pNext=sub))
+        self.features["fragmentSubgroupArithmetic"] = bool(
+            sub.supportedStages & vk.VK_SHADER_STAGE_FRAGMENT_BIT
+            and sub.supportedOperations & vk.VK_SUBGROUP_FEATURE_ARITHMETIC_BIT
+        )
         # Keep nested structs in locals until the call: the binding copies a list of structs into
         # an array, and what an element points to (here its priorities) lives only as long as
         # the Python object of that element.

@@ -7,8 +7,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers, write_images
 from ..gpu.device import Device
 from ..gpu.memory import DEVICE, Buffer
@@ -24,7 +22,6 @@ from .layouts import (
     LIGHT,
     MATERIAL,
     TEXTURE_PAGES,
-    UINT_BYTES,
 )
 from .light_clusters import ClusterGrid
 from .materials import Materials
@@ -65,14 +62,12 @@ class FrameResources:
     instances: Buffer
     materials: Buffer
     clusters: Buffer  # device-local: cluster.comp writes it, the fragment shader reads it
-    cluster_peak: Buffer  # host: the largest cluster's light count, copied there each clustered frame
     descriptor_set: Any
     set_array: Any  # VkDescriptorSet[1] for raw calls
     written: tuple[Any, ...] | None = None  # what the globals buffer holds
     # (the Materials, its version, the texture pages' generation) in `materials`: the object
     # itself, not its id, which a new registry could reuse once the old one is freed
     materials_written: tuple[Materials, int, int] | None = None
-    clustered: bool = False  # the last frame drawn in this slot clustered its lights (cluster_peak holds its peak)
 
     @classmethod
     def make(
@@ -89,11 +84,10 @@ class FrameResources:
             # bound always (the mesh shaders declare it), sized for a grid when lights are clustered
             clusters=Buffer(
                 device,
-                ClusterGrid(1, 1, 1, 1.0, 1.0, 1, 1).buffer_bytes,
-                ssbo | vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT | vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                ClusterGrid(1, 1, 1, 1.0, 1.0, 1, 1, tile=1).buffer_bytes,
+                ssbo | vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                 DEVICE,
             ),
-            cluster_peak=Buffer(device, 2 * UINT_BYTES, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT),
             descriptor_set=descriptor_set,
             set_array=vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]),
         )
@@ -141,14 +135,6 @@ class FrameResources:
             self.clusters = self.clusters.grown(grid.buffer_bytes)
             self.write_set(device, pages)
 
-    def last_cluster_peak(self) -> tuple[int, int] | None:
-        """(the largest cluster's light count, light indices the pool was asked for) in the last
-        frame this slot drew clustered."""
-        if not self.clustered:
-            return None
-        peak, used = self.cluster_peak.array(np.uint32, 2)
-        return int(peak), int(used)
-
     def write_materials(self, materials: Materials, pages: TexturePages) -> None:
         """The world's material table into this slot's copy, when it changed since last written
         here; texture handles become the pages' refs."""
@@ -162,5 +148,5 @@ class FrameResources:
             self.materials_written = key
 
     def destroy(self) -> None:
-        for buffer in (self.globals, self.lights, self.instances, self.materials, self.clusters, self.cluster_peak):
+        for buffer in (self.globals, self.lights, self.instances, self.materials, self.clusters):
             buffer.destroy()

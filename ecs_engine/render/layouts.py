@@ -32,13 +32,13 @@ GLOBALS = Struct(
         ("eye", "vec4", "xyz: the camera relative to the render origin (zero by default)"),
         ("ambient", "vec4", "rgb, intensity"),
         ("counts", "uvec4", "x: lights, y: point and spot lights (first in the buffer, drawn as billboards)"),
-        ("inverse_projection", "mat4", "clustered lights: cluster bounds from screen tiles"),
-        ("clusters", "uvec4", "x tiles across, y tiles down, z depth slices, w tile side in pixels"),
-        ("cluster_pool", "uvec4", "x first uint of the index pool, y its capacity in light indices, zw 0"),
+        ("inverse_projection", "mat4", "clustered lights: the screen tiles' planes"),
+        ("light_tiles", "uvec4", "x tiles across, y tiles down, z mask words per tile, w tile side in pixels"),
+        ("light_bins", "uvec4", "x first uint of the light bounds, y first uint of the tile masks, zw 0"),
         (
-            "cluster_depth",
+            "bin_depth",
             "vec4",
-            "x slice near s, y slices / ln(far / s): slice = floor(ln(max(depth, s) / s) * y); zw viewport size",
+            "x bin near s, y LIGHT_BINS / ln(far / s): bin = floor(ln(max(distance, s) / s) * y); zw viewport size",
         ),
     ],
     std140=True,
@@ -151,7 +151,7 @@ IMGUI_PUSH = Struct(
 
 SET_FRAME, SET_INDIRECT = 0, 1
 BINDING_GLOBALS, BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS, BINDING_TEXTURES = 0, 1, 2, 3, 4
-BINDING_CLUSTERS = 5  # clustered lights (light_clusters.py): light lists per view-space cluster
+BINDING_CLUSTERS = 5  # clustered lights (light_clusters.py): distance bins and tile masks
 TEXTURE_PAGES = 18  # texture_pages.py: two views (sRGB, UNORM) per size class, 16 to 4096 texels
 BINDING_IDS, BINDING_KEYS, BINDING_DRAW_STATE, BINDING_COMMANDS = 0, 1, 2, 3
 # shading models: the values of Material.kind.x and bits 0-5 of the mesh pipelines' MATERIAL_FEATURES
@@ -162,16 +162,12 @@ FEATURE_ALPHA_MASK = 1 << 16  # some material is drawn with alpha_mode mask
 FEATURE_TEXTURES = 1 << 17  # some material has a texture: the textured shader variants (uv, tangents)
 FEATURE_DOUBLE_SIDED = 1 << 18  # some material is double-sided: no back-face culling, see mesh_fragment.glsl
 FEATURE_CLUSTERED = 1 << 19  # fragments loop over their cluster's lights, not all (light_clusters.py)
-CLUSTER_GROUP = 64  # cluster.comp's local size
+CLUSTER_GROUP = 64  # light_bounds.comp's and light_tiles.comp's local size
 MAX_GLOBAL_LIGHTS = 256  # directional and unbounded lights every fragment loops over, when clustered
-MAX_CLUSTER_LIGHTS = 4096  # bounded lights one cluster can list (its workgroup's shared memory)
-CLUSTER_STRIDE = 2  # uints per cluster in the table: first index in the pool, count
-# the header: the global list's count, the largest cluster's count (past MAX_CLUSTER_LIGHTS lights
-# are dropped), the pool's use (past its capacity lists are cut short: the renderer reads both
-# back and grows the pool or falls back to the loop), then the global list; the cluster table and
-# the pool of light indices follow
-CLUSTER_PEAK = 1
-CLUSTER_POOL_USED = 2
+LIGHT_BINS = 1024  # distance bins: exponential shells around the eye, each with its light index range
+# the cluster buffer: a header (the global list's count, then the global list), per distance bin
+# the lowest then (LIGHT_BINS later) the highest index of a light reaching into it, then per light
+# its bounding sphere in view space (4 floats), then per screen tile a bit mask over the lights
 CLUSTER_GLOBALS = 4
 CLUSTER_HEADER = CLUSTER_GLOBALS + MAX_GLOBAL_LIGHTS
 ALPHA_OPAQUE, ALPHA_MASK, ALPHA_BLEND = range(3)
@@ -207,11 +203,8 @@ DEFINES = {
     "FEATURE_CLUSTERED": FEATURE_CLUSTERED,
     "CLUSTER_GROUP": CLUSTER_GROUP,
     "MAX_GLOBAL_LIGHTS": MAX_GLOBAL_LIGHTS,
-    "MAX_CLUSTER_LIGHTS": MAX_CLUSTER_LIGHTS,
-    "CLUSTER_STRIDE": CLUSTER_STRIDE,
+    "LIGHT_BINS": LIGHT_BINS,
     "CLUSTER_HEADER": CLUSTER_HEADER,
-    "CLUSTER_PEAK": CLUSTER_PEAK,
-    "CLUSTER_POOL_USED": CLUSTER_POOL_USED,
     "CLUSTER_GLOBALS": CLUSTER_GLOBALS,
     "TEXTURE_PAGES": TEXTURE_PAGES,
     "BINDING_IDS": BINDING_IDS,

@@ -1,15 +1,25 @@
 """Clustered forward lighting: for thousands of lights, each fragment loops over the lights of its
 cluster instead of every light.
 
-The view is cut into clusters: TILE_PX x TILE_PX screen tiles times SLICES depth slices,
-exponential in view depth from the near plane to the farthest reach of any bounded light (the
-last slice runs on to infinity). Each frame, before the render pass, cluster.comp lists per
-cluster the point and spot lights whose sphere (position, radius) touches the cluster's box, and
-once for all fragments the lights without a bound (directional ones, radius 0). The light's
-window function is exactly 0 beyond its radius, so leaving it out of a cluster it cannot reach
-changes nothing but the order of the sum (checked: images equal the loop within 1/255).
+A cluster is a screen tile (TILE_PX square) times a distance bin: one of LIGHT_BINS exponential
+shells around the eye, from s = max(near, reach / 100) to the farthest reach of any bounded light
+(the last bin runs on to infinity). The grid is decoupled, after M. Drobot's "Improved culling
+for tiled and clustered rendering" (SIGGRAPH 2017): each frame, before the render pass,
+light_bounds.comp gives every distance bin the lowest and highest index of a light whose bounding
+sphere reaches into it (the lights are sorted by distance from the eye: light_rows.py), and
+light_tiles.comp gives every screen tile a bit mask over the lights whose sphere touches its
+frustum. A fragment takes its bin's index range and walks its tile's mask words over that range.
+Lights without a bound (directional ones, radius 0) go to a global list every fragment loops
+over. Nothing is capped per cluster: the masks hold every light.
 
-Below CLUSTER_MIN_LIGHTS the simple loop stays: the compute pass and the lookups cost more than
+Measured on the GPU host (H100, 1280x720, the lights demo with 4,096 lights): the first version,
+one workgroup per 32 px x 32-slice cluster listing lights whose sphere touches the cluster's box,
+let each fragment evaluate ~77 lights where ~20 reach it; its dispatch alone took 2.25 ms of the
+10.8 ms frame. The light's window function is exactly 0 beyond its radius (and a spot light's
+beyond its cone), so leaving it out of a cluster it cannot reach changes nothing but the order of
+the sum (checked: images equal the loop within 1/255).
+
+Below CLUSTER_MIN_LIGHTS the simple loop stays: the compute passes and the lookups cost more than
 looping over a handful of lights (`python -m ecs_engine.bench lights` measures where they cross).
 The renderer switches with hysteresis (on at the threshold, off below half of it); a switch
 rebuilds the mesh pipelines (FEATURE_CLUSTERED is a specialisation constant).
@@ -26,21 +36,12 @@ import numpy as np
 
 from ..gpu.device import Device
 from ..gpu.pipeline import compute_pipeline, pipeline_layout
-from .layouts import (
-    CLUSTER_HEADER,
-    CLUSTER_PEAK,
-    CLUSTER_STRIDE,
-    MAX_CLUSTER_LIGHTS,
-    MAX_GLOBAL_LIGHTS,
-    UINT_BYTES,
-)
+from .layouts import CLUSTER_GROUP, CLUSTER_HEADER, LIGHT_BINS, MAX_GLOBAL_LIGHTS, UINT_BYTES
 from .light_rows import DirectionalLights, PositionalLights
 
 log = logging.getLogger("ecs_engine")
 
-TILE_PX: Final = 32
-SLICES: Final = 32
-POOL_PER_CLUSTER: Final = 32  # the index pool's first size, in light indices per cluster
+TILE_PX: Final = 16
 # measured on the GPU host (H100, 1280x720, the lights demo, bench/results/lights-h100-16c.json):
 # 6 lights 1.46 ms looping, 1.81 clustered; 16 lights 2.30 and 2.15; 64 lights 6.52 and 3.53
 CLUSTER_MIN_LIGHTS: Final = 16
@@ -51,52 +52,56 @@ LIGHT_MODES: Final = ("auto", "loop", "clustered")
 class ClusterGrid:
     tiles_x: int
     tiles_y: int
-    slices: int
-    near: float  # the slice near plane s: the first slice takes every depth below s too
-    scale: float  # slices / ln(far / s)
+    lights: int  # point and spot lights (the masks' bits)
+    near: float  # the bin near plane s: the first bin takes every distance below s too
+    scale: float  # LIGHT_BINS / ln(far / s)
     width: int
     height: int
-    tile: int = TILE_PX
-    pool: int = 0  # the index pool's capacity (light indices); 0: POOL_PER_CLUSTER per cluster
+    tile: int
 
     @property
-    def count(self) -> int:
-        return self.tiles_x * self.tiles_y * self.slices
+    def tiles(self) -> int:
+        return self.tiles_x * self.tiles_y
 
     @property
-    def pool_start(self) -> int:
-        return CLUSTER_HEADER + self.count * CLUSTER_STRIDE
+    def words(self) -> int:
+        """Mask words per tile."""
+        return max(1, -(-self.lights // 32))
 
     @property
-    def pool_capacity(self) -> int:
-        return self.pool or self.count * POOL_PER_CLUSTER
+    def bounds_start(self) -> int:
+        return CLUSTER_HEADER + 2 * LIGHT_BINS
+
+    @property
+    def masks_start(self) -> int:
+        return self.bounds_start + 4 * self.words * 32
 
     @property
     def buffer_bytes(self) -> int:
-        return (self.pool_start + self.pool_capacity) * UINT_BYTES
+        return (self.masks_start + self.tiles * self.words) * UINT_BYTES
 
-    def slice_of(self, depth: np.ndarray) -> np.ndarray:
-        """The slice each view depth falls in (as the fragment shader computes it)."""
-        d = np.maximum(np.asarray(depth, np.float64), self.near)
-        return np.minimum((np.log(d / self.near) * self.scale).astype(np.int64), self.slices - 1)
+    def bin_of(self, distance: np.ndarray) -> np.ndarray:
+        """The bin each distance from the eye falls in (as the shaders compute it)."""
+        d = np.maximum(np.asarray(distance, np.float64), self.near)
+        return np.minimum((np.log(d / self.near) * self.scale).astype(np.int64), LIGHT_BINS - 1)
 
 
-def cluster_grid(width: int, height: int, near: float, reach: float, pool: int = 0) -> ClusterGrid:
-    """The grid for a viewport and a camera's near plane; `reach`: the farthest view distance a
-    bounded light touches (slices end there; beyond, the last one). Slices start at
-    s = max(near, reach / 100): exponential slices from a tiny near plane would spend most of
-    themselves on the first metre."""
+def cluster_grid(width: int, height: int, near: float, reach: float, lights: int) -> ClusterGrid:
+    """The grid for a viewport, a camera's near plane and `lights` point and spot lights; `reach`:
+    the farthest distance from the eye a bounded light touches (bins end there; beyond, the last
+    one). Bins start at s = max(near, reach / 100): exponential bins from a tiny near plane would
+    spend most of themselves on the first metre."""
     near = max(near, reach / 100.0)
     far = max(reach, near * 2.0)
     return ClusterGrid(
         tiles_x=-(-width // TILE_PX),
         tiles_y=-(-height // TILE_PX),
-        slices=SLICES,
+        lights=lights,
         near=near,
-        scale=SLICES / math.log(far / near),
+        scale=LIGHT_BINS / math.log(far / near),
         width=width,
         height=height,
-        pool=pool,
+        tile=TILE_PX,
     )
 
 
@@ -139,43 +144,44 @@ def check_light_culling(mode: str) -> None:
 
 
 class ClusterPass:
-    """cluster.comp, recorded into the frame's primary command buffer before the render pass."""
+    """light_bounds.comp then light_tiles.comp, recorded into the frame's primary command buffer
+    before the render pass."""
 
     def __init__(self, device: Device, frame_set_layout: Any) -> None:
         self.device = device
         self.layout = pipeline_layout(device, [frame_set_layout])
-        self.pipeline: Any = None
+        self.pipelines: list[Any] = []
 
-    def record(self, cb: Any, set_array: Any, grid: ClusterGrid, clusters: Any, peak: Any) -> None:
-        """The dispatch, and the largest cluster's light count copied to `peak` (a host buffer the
-        renderer reads once the frame is done)."""
+    def record(self, cb: Any, set_array: Any, grid: ClusterGrid, clusters: Any, light_count: int) -> None:
         vk = self.device.vk
         lib = vk.lib
-        if self.pipeline is None:
-            self.pipeline = compute_pipeline(self.device, "cluster.comp", self.layout)
-        at = CLUSTER_PEAK * UINT_BYTES  # the peak and the pool's use, zeroed, then read back
-        vk.vkCmdFillBuffer(cb, clusters.handle, at, 2 * UINT_BYTES, 0)
+        if not self.pipelines:
+            self.pipelines = [
+                compute_pipeline(self.device, name, self.layout) for name in ("light_bounds.comp", "light_tiles.comp")
+            ]
+        bins = CLUSTER_HEADER * UINT_BYTES
+        vk.vkCmdFillBuffer(cb, clusters.handle, 0, UINT_BYTES, 0)  # the global list's count
+        vk.vkCmdFillBuffer(cb, clusters.handle, bins, LIGHT_BINS * UINT_BYTES, 0xFFFFFFFF)  # lowest index
+        vk.vkCmdFillBuffer(cb, clusters.handle, bins + LIGHT_BINS * UINT_BYTES, LIGHT_BINS * UINT_BYTES, 0)  # highest
+        shader_rw = vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_SHADER_WRITE_BIT
+        compute = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
         self._barrier(
-            cb,
-            clusters,
-            vk.VK_ACCESS_TRANSFER_WRITE_BIT,
-            vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_SHADER_WRITE_BIT,
-            vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
-            vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+            cb, clusters, vk.VK_ACCESS_TRANSFER_WRITE_BIT, shader_rw, vk.VK_PIPELINE_STAGE_TRANSFER_BIT, compute
         )
-        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.pipeline)
         lib.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.layout, 0, 1, set_array, 0, vk.ffi.NULL)
-        lib.vkCmdDispatch(cb, grid.count + 1, 1, 1)  # the last group lists the unbounded lights
+        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.pipelines[0])
+        lib.vkCmdDispatch(cb, -(-light_count // CLUSTER_GROUP), 1, 1)
+        self._barrier(cb, clusters, vk.VK_ACCESS_SHADER_WRITE_BIT, shader_rw, compute, compute)
+        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.pipelines[1])
+        lib.vkCmdDispatch(cb, grid.tiles, 1, 1)
         self._barrier(
             cb,
             clusters,
             vk.VK_ACCESS_SHADER_WRITE_BIT,
-            vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_TRANSFER_READ_BIT,
-            vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-            vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
+            vk.VK_ACCESS_SHADER_READ_BIT,
+            compute,
+            vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT,
         )
-        region = vk.VkBufferCopy(srcOffset=at, dstOffset=0, size=2 * UINT_BYTES)
-        vk.vkCmdCopyBuffer(cb, clusters.handle, peak.handle, 1, [region])
 
     def _barrier(self, cb: Any, buffer: Any, src: int, dst: int, src_stage: int, dst_stage: int) -> None:
         vk = self.device.vk
@@ -192,62 +198,45 @@ class ClusterPass:
 
     def destroy(self) -> None:
         vk = self.device.vk
-        if self.pipeline is not None:
-            vk.vkDestroyPipeline(self.device.handle, self.pipeline, None)
+        for pipeline in self.pipelines:
+            vk.vkDestroyPipeline(self.device.handle, pipeline, None)
         vk.vkDestroyPipelineLayout(self.device.handle, self.layout, None)
 
 
 class LightCulling:
     """The renderer's choice between the all-lights loop and clusters, frame by frame, and the
-    cluster pass. `plan` says whether the pipelines must change; `check_peak` reads back, once a
-    frame slot is free again, how full its fullest cluster was."""
+    cluster passes. `plan` says whether the pipelines must change."""
 
     def __init__(self, device: Device, frame_set_layout: Any, mode: str = "auto") -> None:
         check_light_culling(mode)
         self.mode = mode  # auto | loop | clustered
         self.clustered = False  # the mesh pipelines loop over cluster lists
-        self.overflow = 0  # lights in the fullest cluster, once one held more than its list keeps
-        self.pool = 0  # the index pool's capacity once grown (0: the grid's first size)
         self.pass_ = ClusterPass(device, frame_set_layout)
+        self.supported = bool(device.features.get("fragmentSubgroupArithmetic"))
+        self._warned = False
 
     def plan(self, data: Any, width: int, height: int) -> tuple[ClusterGrid | None, bool]:
         """(this frame's grid or None, whether `clustered` changed)."""
         clustered = False
         reach = 0.0
+        if not self.supported:
+            if self.mode == "clustered" and not self._warned:
+                self._warned = True
+                log.warning("this device has no subgroup arithmetic in fragment shaders: lights are not clustered")
+            return None, False
         if self.mode != "loop" and (
             self.clustered or self.mode == "clustered" or data.light_count >= CLUSTER_MIN_LIGHTS // 2
         ):
             bounded, unbounded, reach = light_census(data.lights, data.directional, data.camera.position)
             clustered = wants_clusters(self.mode, self.clustered, bounded, unbounded)
-            clustered &= not (self.overflow and self.mode == "auto")
         flipped = clustered != self.clustered
         self.clustered = clustered
-        grid = cluster_grid(width, height, data.camera.near, reach, self.pool) if clustered else None
-        if grid is not None and not self.pool:
-            self.pool = grid.pool_capacity
+        positional = sum(len(p) for p in data.lights)
+        grid = cluster_grid(width, height, data.camera.near, reach, positional) if clustered else None
         return grid, flipped
 
-    def check_peak(self, frame: Any) -> None:
-        """A cluster that held more lights than its list keeps dropped some (that frame was drawn
-        without them): warn once; `auto` draws with the all-lights loop from then on."""
-        found = frame.last_cluster_peak()
-        if found is None:
-            return
-        peak, used = found
-        if used > self.pool:  # lists were cut short that frame: a bigger pool from now on
-            self.pool = 1 << int(used * 1.25).bit_length()
-            log.debug("light cluster pool grown to %d indices (%d were asked for)", self.pool, used)
-        if peak > MAX_CLUSTER_LIGHTS and not self.overflow:
-            self.overflow = peak
-            log.warning(
-                "%d lights reach one light cluster, more than the %d it lists; %s",
-                peak,
-                MAX_CLUSTER_LIGHTS,
-                "drawing with the all-lights loop" if self.mode == "auto" else "some are left out",
-            )
-
-    def record(self, cb: Any, frame: Any, grid: ClusterGrid) -> None:
-        self.pass_.record(cb, frame.set_array, grid, frame.clusters, frame.cluster_peak)
+    def record(self, cb: Any, frame: Any, grid: ClusterGrid, light_count: int) -> None:
+        self.pass_.record(cb, frame.set_array, grid, frame.clusters, light_count)
 
     def destroy(self) -> None:
         self.pass_.destroy()

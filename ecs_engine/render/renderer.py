@@ -322,8 +322,6 @@ class Renderer:
             data.light_count,
             material_count,
         )
-        self.lights.check_peak(pf)
-        pf.clustered = grid is not None
         pf.write_materials(materials, self.texture_pages)
         if grid is not None:
             pf.ensure_clusters(self.device, self.texture_pages, grid)
@@ -373,7 +371,7 @@ class Renderer:
         if aside[0] is not None:
             secondaries = [*secondaries, aside[0]]  # after every chunk's rows
         if grid is not None:
-            self.lights.record(cb, pf, grid)
+            self.lights.record(cb, pf, grid, data.light_count)
         light_draws = self._record_primary(cb, secondaries, positional, target, pf, slot)
         if readback:
             self.target.record_readback(cb)
@@ -419,9 +417,9 @@ class Renderer:
         g["counts"] = (light_count, positional, 0, 0)
         if grid is not None:
             g["inverse_projection"] = np.linalg.inv(cam.projection).T
-            g["clusters"] = (grid.tiles_x, grid.tiles_y, grid.slices, grid.tile)
-            g["cluster_pool"] = (grid.pool_start, grid.pool_capacity, 0, 0)
-            g["cluster_depth"] = (grid.near, grid.scale, grid.width, grid.height)
+            g["light_tiles"] = (grid.tiles_x, grid.tiles_y, grid.words, grid.tile)
+            g["light_bins"] = (grid.bounds_start, grid.masks_start, 0, 0)
+            g["bin_depth"] = (grid.near, grid.scale, grid.width, grid.height)
         pf.written = written
 
     def _record_set_aside(
