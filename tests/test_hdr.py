@@ -149,3 +149,44 @@ def test_cli_hdr_flags(tmp_path):
     assert shot.exists() and "validation" not in proc.stderr.lower()
     bad = subprocess.run([*base, "--exposure", "nan"], capture_output=True, text=True, timeout=300)
     assert bad.returncode == 2 and "exposure" in bad.stderr and "Traceback" not in bad.stderr
+
+
+def test_the_target_takes_the_scene_straight_unless_the_tone_map_needs_hdr():
+    """clamp at exposure 0 without MSAA needs no HDR colour: the scene goes straight into the sRGB
+    target (no tone map pass). Another tone map or exposure switches the target to HDR between
+    frames, and back; the pipelines follow, and the clamp image is the same either way."""
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.render.renderer import Renderer
+
+    with headless_gpu(W, H) as gpu:
+        world = glowing_plane(gpu)
+        default_schedule().run(world, 0.0)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+        try:
+            shots = []
+            for tone_map, exposure in [("clamp", 0.0), ("aces", 0.0), ("clamp", 1e-6), ("clamp", 0.0)]:
+                renderer.tone_map, renderer.exposure = tone_map, exposure
+                renderer.render(world, readback=True)
+                shots.append((gpu.target.hdr, gpu.target.pixels()[..., :3].astype(int)))
+            generation = gpu.target.generation
+        finally:
+            renderer.destroy()
+    assert [hdr for hdr, _ in shots] == [False, True, True, False]
+    assert generation >= 2
+    direct, filmic, hdr_clamp, direct_again = (image for _, image in shots)
+    assert np.array_equal(direct, direct_again)
+    assert np.abs(direct - hdr_clamp).max() <= 1  # the same picture, through HDR or not
+    assert np.abs(direct - filmic).max() > 8  # aces(0.5) is 0.62, not 0.5
+
+
+def test_msaa_always_renders_through_hdr():
+    from ecs_engine.gpu.offscreen import OffscreenTarget
+
+    with headless_gpu(W, H) as gpu:
+        target = OffscreenTarget(gpu.device, W, H, samples=4)
+        try:
+            assert target.hdr and target.hdr_view is not None
+            target.set_hdr(False)  # the resolve needs the HDR colour: refused quietly
+            assert target.hdr and target.generation == 0
+        finally:
+            target.destroy()

@@ -179,6 +179,7 @@ class Session:
         renderer.light_culling = wanted.light_culling
         renderer.culling = wanted.culling
         pool.resize(wanted.threads)
+        renderer.ensure_output()  # HDR colour or not, as the tone map and exposure now need
         if present is not None:
             source.set_present(present)
         if scene is not None:

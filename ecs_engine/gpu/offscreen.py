@@ -19,15 +19,14 @@ class OffscreenTarget:
     One colour image is shared by the frames in flight: the renderer waits for a frame's fence
     before reading its pixels, and frames in flight are ordered on the single queue."""
 
-    def __init__(self, device: Device, width: int, height: int, samples: int = 1) -> None:
+    def __init__(self, device: Device, width: int, height: int, samples: int = 1, hdr: bool = False) -> None:
         vk = device.vk
         self.device = device
         self.width, self.height = width, height
         self.samples = samples  # MSAA of the scene's attachments (the target itself has one sample)
+        self.hdr = hdr or samples > 1  # the scene in HDR colour, tone mapped (gpu/render_pass.py)
+        self.generation = 0  # counts changes of render pass (set_hdr)
         self.color_format = vk.VK_FORMAT_R8G8B8A8_SRGB
-        self.render_pass = create_render_pass(
-            device, self.color_format, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, samples
-        )
         self.color = Image(
             device,
             width,
@@ -36,11 +35,34 @@ class OffscreenTarget:
             vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
             vk.VK_IMAGE_ASPECT_COLOR_BIT,
         )
-        self.attachments = SceneAttachments(device, width, height, samples)
-        self.framebuffer = create_framebuffer(
-            device, self.render_pass, self.attachments.views(self.color.view), width, height
-        )
+        self._build_pass()
         self.readback = Buffer(device, width * height * 4, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
+
+    def _build_pass(self) -> None:
+        device = self.device
+        self.render_pass = create_render_pass(
+            device, self.color_format, device.vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, self.samples, self.hdr
+        )
+        self.attachments = SceneAttachments(device, self.width, self.height, self.samples, self.hdr)
+        self.framebuffer = create_framebuffer(
+            device, self.render_pass, self.attachments.views(self.color.view), self.width, self.height
+        )
+
+    def _release_pass(self) -> None:
+        vk = self.device.vk
+        vk.vkDestroyFramebuffer(self.device.handle, self.framebuffer, None)
+        self.attachments.destroy()
+        vk.vkDestroyRenderPass(self.device.handle, self.render_pass, None)
+
+    def set_hdr(self, hdr: bool) -> None:
+        """Render the scene through HDR colour and the tone map, or straight into the target:
+        a new render pass (the caller waited until no frame uses the old one)."""
+        hdr = hdr or self.samples > 1
+        if hdr != self.hdr:
+            self._release_pass()
+            self.hdr = hdr
+            self._build_pass()
+            self.generation += 1
 
     def record_readback(self, cb: Any) -> None:
         """After the render pass (image in TRANSFER_SRC layout): copy it to the host buffer."""
@@ -73,7 +95,7 @@ class OffscreenTarget:
 
     @property
     def hdr_view(self) -> Any:
-        """The HDR colour the tone map reads (the resolved one with MSAA)."""
+        """The HDR colour the tone map reads (the resolved one with MSAA); None without HDR."""
         return self.attachments.input_view
 
     def pixels(self) -> np.ndarray:
@@ -81,9 +103,6 @@ class OffscreenTarget:
         return self.readback.bytes().reshape(self.height, self.width, 4).copy()
 
     def destroy(self) -> None:
-        vk = self.device.vk
         self.readback.destroy()
-        vk.vkDestroyFramebuffer(self.device.handle, self.framebuffer, None)
-        self.attachments.destroy()
+        self._release_pass()
         self.color.destroy()
-        vk.vkDestroyRenderPass(self.device.handle, self.render_pass, None)

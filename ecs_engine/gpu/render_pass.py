@@ -1,15 +1,23 @@
 """The frame's render pass: the scene in 16-bit float (HDR) colour with reverse-Z depth, then
-tone mapped into the target (sRGB swapchain image or offscreen image), then the UI on top.
+tone mapped into the target (sRGB swapchain image or offscreen image), then the UI on top; or,
+when the output needs no HDR colour (`hdr=False`: the clamp tone map at exposure 0 without MSAA,
+render/tone_map.py's wants_hdr), the scene straight into the target, as before HDR existed: the
+HDR colour and the tone map cost the seed scenes 0.12-0.17 ms of GPU time a frame on the H100.
 
-Attachments: 0 the target (written only by the tone map), 1 depth, 2 the HDR colour (multisampled
-with --msaa), 3 its single-sample resolve (only with --msaa).
+Attachments: 0 the target (written only by the tone map; with hdr=False cleared and drawn into by
+every subpass), 1 depth, 2 the HDR colour (multisampled with --msaa), 3 its single-sample resolve
+(only with --msaa).
 
 - subpass 0 (SUBPASS_SCENE): the meshes, from the chunk jobs' secondary command buffers;
 - subpass 1 (SUBPASS_BILLBOARDS): light billboards inline, depth-tested against the scene; with
   MSAA the HDR colour resolves at its end;
 - subpass 2 (SUBPASS_OUTPUT): the tone map reads the HDR colour as an input attachment (same
   pixel, no sampling) and writes the target; the overlay (ImGui) draws after it, untouched by
-  exposure and tone curve.
+  exposure and tone curve. With hdr=False only the overlay draws here.
+
+The subpasses are the same in both forms, but the two render passes are not compatible: a target
+that changes form (`set_hdr`) counts up its `generation`, and whoever made pipelines against its
+render pass makes them again.
 """
 
 from __future__ import annotations
@@ -44,7 +52,11 @@ def check_samples(device: Device, samples: int) -> None:
         raise UsageError(f"--msaa {samples}: {device.info.name} offers {counts}")
 
 
-def create_render_pass(device: Device, color_format: int, final_layout: int, samples: int = 1) -> Any:
+def create_render_pass(device: Device, color_format: int, final_layout: int, samples: int = 1, hdr: bool = True) -> Any:
+    if not hdr:
+        if samples > 1:
+            raise ValueError("MSAA resolves the HDR colour: a render pass with samples > 1 needs hdr=True")
+        return _create_direct_pass(device, color_format, final_layout)
     vk = device.vk
     msaa = samples > 1
 
@@ -154,12 +166,93 @@ def create_render_pass(device: Device, color_format: int, final_layout: int, sam
     )
 
 
+def _create_direct_pass(device: Device, color_format: int, final_layout: int) -> Any:
+    """The scene, the billboards and the overlay all drawn into the target (hdr=False)."""
+    vk = device.vk
+    color_layout = vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL
+    depth_layout = vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL
+    attachments = [
+        vk.VkAttachmentDescription(
+            format=fmt,
+            samples=1,
+            loadOp=vk.VK_ATTACHMENT_LOAD_OP_CLEAR,
+            storeOp=store,
+            stencilLoadOp=vk.VK_ATTACHMENT_LOAD_OP_DONT_CARE,
+            stencilStoreOp=vk.VK_ATTACHMENT_STORE_OP_DONT_CARE,
+            initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
+            finalLayout=final,
+        )
+        for fmt, store, final in (
+            (color_format, vk.VK_ATTACHMENT_STORE_OP_STORE, final_layout),
+            (getattr(vk, DEPTH_FORMAT_NAME), vk.VK_ATTACHMENT_STORE_OP_DONT_CARE, depth_layout),
+        )
+    ]
+    ref = vk.VkAttachmentReference
+    color, depth = ref(attachment=0, layout=color_layout), ref(attachment=1, layout=depth_layout)
+    graphics = vk.VK_PIPELINE_BIND_POINT_GRAPHICS
+    subpasses = [
+        vk.VkSubpassDescription(pipelineBindPoint=graphics, pColorAttachments=[color], pDepthStencilAttachment=depth),
+        vk.VkSubpassDescription(pipelineBindPoint=graphics, pColorAttachments=[color], pDepthStencilAttachment=depth),
+        vk.VkSubpassDescription(pipelineBindPoint=graphics, pColorAttachments=[color]),
+    ]
+    color_stage = vk.VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT
+    depth_stages = vk.VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT | vk.VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT
+    color_write = vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT
+    color_rw = color_write | vk.VK_ACCESS_COLOR_ATTACHMENT_READ_BIT
+    depth_write = vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT
+    depth_rw = depth_write | vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT
+    by_region = vk.VK_DEPENDENCY_BY_REGION_BIT
+    dependencies = [
+        # the previous frame's depth and the presentation engine's hold on the image, before the clears
+        vk.VkSubpassDependency(
+            srcSubpass=vk.VK_SUBPASS_EXTERNAL,
+            dstSubpass=SUBPASS_SCENE,
+            srcStageMask=color_stage | depth_stages,
+            dstStageMask=color_stage | depth_stages,
+            srcAccessMask=0,
+            dstAccessMask=color_rw | depth_rw,
+        ),
+        # scene -> billboards (blended on top, depth tested) -> overlay (blended on top)
+        vk.VkSubpassDependency(
+            srcSubpass=SUBPASS_SCENE,
+            dstSubpass=SUBPASS_BILLBOARDS,
+            srcStageMask=color_stage | depth_stages,
+            dstStageMask=color_stage | depth_stages,
+            srcAccessMask=color_write | depth_write,
+            dstAccessMask=color_rw | depth_rw,
+            dependencyFlags=by_region,
+        ),
+        vk.VkSubpassDependency(
+            srcSubpass=SUBPASS_BILLBOARDS,
+            dstSubpass=SUBPASS_OUTPUT,
+            srcStageMask=color_stage,
+            dstStageMask=color_stage,
+            srcAccessMask=color_write,
+            dstAccessMask=color_rw,
+            dependencyFlags=by_region,
+        ),
+        vk.VkSubpassDependency(
+            srcSubpass=SUBPASS_OUTPUT,
+            dstSubpass=vk.VK_SUBPASS_EXTERNAL,
+            srcStageMask=color_stage,
+            dstStageMask=vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
+            srcAccessMask=color_write,
+            dstAccessMask=vk.VK_ACCESS_TRANSFER_READ_BIT,
+        ),
+    ]
+    return vk.vkCreateRenderPass(
+        device.handle,
+        vk.VkRenderPassCreateInfo(pAttachments=attachments, pSubpasses=subpasses, pDependencies=dependencies),
+        None,
+    )
+
+
 class SceneAttachments:
     """The attachments a target shares between its framebuffers: depth, HDR colour and (with
-    MSAA) its resolve. `views(target_view)` lists a framebuffer's attachments in render-pass order;
-    `input_view` is what the tone map reads."""
+    MSAA) its resolve; with hdr=False depth alone. `views(target_view)` lists a framebuffer's
+    attachments in render-pass order; `input_view` is what the tone map reads."""
 
-    def __init__(self, device: Device, width: int, height: int, samples: int = 1) -> None:
+    def __init__(self, device: Device, width: int, height: int, samples: int = 1, hdr: bool = True) -> None:
         vk = device.vk
         self.samples = samples
         self.images: list[Image] = []
@@ -175,6 +268,8 @@ class SceneAttachments:
                     samples,
                 )
             )
+            if not hdr:
+                return
             color = vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT
             hdr_usage = color | (vk.VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT if samples > 1 else 0)
             if samples == 1:
@@ -195,7 +290,7 @@ class SceneAttachments:
 
     @property
     def input_view(self) -> Any:
-        return self.images[-1].view
+        return self.images[-1].view if len(self.images) > 1 else None
 
     def views(self, target_view: Any) -> list[Any]:
         return [target_view] + [image.view for image in self.images]

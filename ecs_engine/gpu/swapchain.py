@@ -35,10 +35,13 @@ class Swapchain:
         framebuffer_size: Callable[[], tuple[int, int]],
         present: str = "fifo",
         samples: int = 1,
+        hdr: bool = False,
     ) -> None:
         vk = self.vk = device.vk
         self.device = device
         self.samples = samples  # MSAA of the scene's attachments
+        self.hdr = hdr or samples > 1  # the scene in HDR colour, tone mapped (gpu/render_pass.py)
+        self.generation = 0  # counts changes of render pass (set_hdr)
         self.surface = surface
         self.framebuffer_size = framebuffer_size
         inst = device.instance
@@ -56,7 +59,7 @@ class Swapchain:
         ]
         chosen = srgb[0] if srgb else formats[0]
         self.color_format, self.color_space = chosen.format, chosen.colorSpace
-        self.render_pass = create_render_pass(device, self.color_format, vk.VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, samples)
+        self.render_pass = self._create_pass()
         self._create_fn = device_function(device, "vkCreateSwapchainKHR")
         self._destroy_fn = device_function(device, "vkDestroySwapchainKHR")
         self._images_fn = device_function(device, "vkGetSwapchainImagesKHR")
@@ -116,7 +119,7 @@ class Swapchain:
             self._destroy_fn(self.device.handle, old, None)
         self.width, self.height = width, height
         self.images = self._images_fn(self.device.handle, self.handle)
-        self.attachments = attachments = SceneAttachments(self.device, width, height, self.samples)
+        self.attachments = attachments = SceneAttachments(self.device, width, height, self.samples, self.hdr)
         for image in self.images:
             view = vk.vkCreateImageView(
                 self.device.handle,
@@ -157,7 +160,7 @@ class Swapchain:
 
     @property
     def hdr_view(self) -> Any:
-        """The HDR colour the tone map reads (the resolved one with MSAA)."""
+        """The HDR colour the tone map reads (the resolved one with MSAA); None without HDR."""
         assert self.attachments is not None
         return self.attachments.input_view
 
@@ -173,6 +176,24 @@ class Swapchain:
         self.present_mode = self.present_mode_for(present)
         self.present_name = present
         self.recreate()
+
+    def _create_pass(self) -> Any:
+        return create_render_pass(
+            self.device, self.color_format, self.vk.VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, self.samples, self.hdr
+        )
+
+    def set_hdr(self, hdr: bool) -> None:
+        """Render the scene through HDR colour and the tone map, or straight into the images: a
+        new render pass and framebuffers (waits until no frame uses the old ones)."""
+        hdr = hdr or self.samples > 1
+        if hdr != self.hdr:
+            self.device.wait_idle()
+            self._release()
+            self.vk.vkDestroyRenderPass(self.device.handle, self.render_pass, None)
+            self.hdr = hdr
+            self.render_pass = self._create_pass()
+            self._build()
+            self.generation += 1
 
     def recreate(self) -> None:
         self.device.wait_idle()

@@ -7,9 +7,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers, write_images
 from ..gpu.device import Device
 from ..gpu.memory import DEVICE, Buffer
+from .camera import CameraMatrices
 from .layouts import (
     BINDING_CLUSTERS,
     BINDING_GLOBALS,
@@ -134,6 +137,36 @@ class FrameResources:
         if grid.buffer_bytes > self.clusters.size:
             self.clusters = self.clusters.grown(grid.buffer_bytes)
             self.write_set(device, pages)
+
+    def write_globals(
+        self,
+        cam: CameraMatrices,
+        view: np.ndarray,
+        origin: np.ndarray,
+        origin_key: bytes,
+        light_count: int,
+        positional: int,
+        grid: ClusterGrid | None,
+        ambient: tuple[float, float, float, float],
+    ) -> None:
+        """The frame's uniforms, rewritten only when something in them changed (the slot's
+        mapped buffer keeps what was last written there)."""
+        written = (cam, origin_key, light_count, positional, tuple(ambient), grid)
+        last = self.written
+        if last is not None and last[0] is cam and last[1:] == written[1:]:
+            return
+        g = self.globals.array(GLOBALS.dtype, 1)
+        g["projection"] = cam.projection.T  # column-major for GLSL
+        g["view"] = view.T
+        g["eye"][0, :3] = cam.position - origin  # float64 difference, then the cast
+        g["ambient"] = ambient
+        g["counts"] = (light_count, positional, 0, 0)
+        if grid is not None:
+            g["inverse_projection"] = np.linalg.inv(cam.projection).T
+            g["light_tiles"] = (grid.tiles_x, grid.tiles_y, grid.words, grid.tile)
+            g["light_bins"] = (grid.bounds_start, grid.masks_start, 0, 0)
+            g["bin_depth"] = (grid.near, grid.scale, grid.width, grid.height)
+        self.written = written
 
     def write_materials(self, materials: Materials, pages: TexturePages) -> None:
         """The world's material table into this slot's copy, when it changed since last written

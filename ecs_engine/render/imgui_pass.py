@@ -95,26 +95,8 @@ class ImGuiRenderer:
         self._pools: list[Any] = []
         self._free_sets: list[Any] = []
         self.layout = pipeline_layout(device, [self.set_layout], [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, IMGUI_PUSH.size)])
-        self.pipeline = graphics_pipeline(
-            device,
-            GraphicsPipelineSpec(
-                "imgui.vert",
-                "imgui.frag",
-                layout=self.layout,
-                render_pass=render_pass,
-                subpass=subpass,
-                vertex_stride=VERTEX_BYTES,
-                vertex_attributes=[
-                    (0, vk.VK_FORMAT_R32G32_SFLOAT, 0),
-                    (1, vk.VK_FORMAT_R32G32_SFLOAT, 8),
-                    (2, vk.VK_FORMAT_R8G8B8A8_UNORM, 16),
-                ],
-                cull_back=False,
-                depth_test=False,
-                depth_write=False,
-                alpha_blend=True,
-            ),
-        )
+        self.subpass = subpass
+        self.pipeline = self._pipeline(render_pass)
         self._textures: dict[int, _Texture] = {}
         self._next_id = 1  # 0 means "no texture" to ImGui
         self._frames = [self._frame_buffers(1 << 14, 1 << 15) for _ in range(frames)]
@@ -419,6 +401,34 @@ class ImGuiRenderer:
             set_scissor(cb, 0, 1, scissor)
             draw(cb, count, 1, first_index, vertex_offset, 0)
         self.cpu_ms += (time.perf_counter() - t0) * 1e3
+
+    def _pipeline(self, render_pass: Any) -> Any:
+        vk = self.vk
+        return graphics_pipeline(
+            self.device,
+            GraphicsPipelineSpec(
+                "imgui.vert",
+                "imgui.frag",
+                layout=self.layout,
+                render_pass=render_pass,
+                subpass=self.subpass,
+                vertex_stride=VERTEX_BYTES,
+                vertex_attributes=[
+                    (0, vk.VK_FORMAT_R32G32_SFLOAT, 0),
+                    (1, vk.VK_FORMAT_R32G32_SFLOAT, 8),
+                    (2, vk.VK_FORMAT_R8G8B8A8_UNORM, 16),
+                ],
+                cull_back=False,
+                depth_test=False,
+                depth_write=False,
+                alpha_blend=True,
+            ),
+        )
+
+    def retarget(self, render_pass: Any) -> None:
+        """Draw into another render pass (the target changed form: gpu/render_pass.py)."""
+        old, self.pipeline = self.pipeline, self._pipeline(render_pass)
+        self.vk.vkDestroyPipeline(self.device.handle, old, None)
 
     def destroy(self) -> None:
         vk = self.vk

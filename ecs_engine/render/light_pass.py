@@ -70,6 +70,13 @@ class LightPass:
         lib.vkCmdDraw(cb, 6, count, 0, 0)
         return 1
 
+    def retarget(self, render_pass: Any) -> None:
+        """Draw into another render pass (the pipeline is made again on first use)."""
+        if self.pipeline is not None:
+            self.vk.vkDestroyPipeline(self.device.handle, self.pipeline, None)
+            self.pipeline = None
+        self.render_pass = render_pass
+
     def destroy(self) -> None:
         if self.pipeline is not None:
             self.vk.vkDestroyPipeline(self.device.handle, self.pipeline, None)

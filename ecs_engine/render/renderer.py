@@ -9,8 +9,10 @@ buffer (or, in `indirect`, only writing rows for the compute shaders). The prima
 buffer begins the render pass with SECONDARY_COMMAND_BUFFERS contents, executes the path's
 secondaries in subpass 0, draws the light billboards inline in subpass 1 (both into the HDR
 colour), then in subpass 2 the tone map (tone_map.py) and the overlay (the editor's ImGui); see
-gpu/render_pass.py. Switching mode or recorder swaps the path; the frame slots, buffers, light
-pass, tone map and overlay stay.
+gpu/render_pass.py. When the tone map is clamp at exposure 0 without MSAA, the target takes the
+scene straight, with no HDR colour and no tone map (ensure_output switches its form; what was
+made against its render pass is made again). Switching mode or recorder swaps the path; the frame
+slots, buffers, light pass, tone map and overlay stay.
 """
 
 from __future__ import annotations
@@ -32,7 +34,6 @@ from ..gpu.frames import FrameRing
 from ..gpu.render_pass import SUBPASS_BILLBOARDS
 from ..gpu.secondary import SecondaryBuffers
 from ..jobs import JobPool
-from .camera import CameraMatrices
 from .chunk_paths import RECORDERS, InstancedPath, PerEntityPath, check_recorder
 from .frame_data import Chunk, FrameData, FrameExtractor
 from .frame_resources import FrameResources, frame_sets
@@ -40,7 +41,6 @@ from .indirect_path import IndirectPath
 from .layouts import (
     BINDING_TEXTURES,
     FEATURE_CLUSTERED,
-    GLOBALS,
     INSTANCE,
     LIGHT,
 )
@@ -52,7 +52,7 @@ from .mesh_registry import MeshRegistry
 from .path import FILL_MODES, ChunkResult, FrameInputs, FrameStats, PathContext, PathFactory, RenderPath, TargetState
 from .set_aside_pass import SetAsidePass
 from .texture_pages import TexturePages
-from .tone_map import ToneMapPass, check_tone_map
+from .tone_map import ToneMapPass, check_tone_map, wants_hdr
 
 PATHS: dict[str, PathFactory] = {
     "instanced": InstancedPath,
@@ -97,6 +97,10 @@ class Renderer:
         check_light_culling(light_culling)
         self.tone_map, self.exposure = tone_map, float(exposure)  # read each frame: change them any time
         self.target = target
+        if wants_hdr(tone_map, exposure, target.samples) != target.hdr:
+            device.wait_idle()  # another renderer of this target may have frames in flight
+            target.set_hdr(not target.hdr)
+        self._target_generation = target.generation
         self.meshes = meshes
         self.clear_color = clear_color
         self.ambient = ambient
@@ -125,8 +129,8 @@ class Renderer:
         self.lights = LightCulling(device, self.set_layout.handle, light_culling)
         self._set_aside: SetAsidePass | None = None  # blended materials, made on first use
         self._targets: dict[tuple[int, int, int], TargetState] = {}
-        # drawn last in the overlay subpass: an object with prepare(slot, frames_in_flight) and
-        # record(cb, slot, width, height), e.g. imgui_pass.ImGuiRenderer
+        # drawn last in the overlay subpass: an object with prepare(slot, frames_in_flight),
+        # record(cb, slot, width, height) and retarget(render_pass), e.g. imgui_pass.ImGuiRenderer
         self.overlay: Any = None
         try:
             self.path: RenderPath = self._make_path(mode, recorder or default_recorder())
@@ -303,6 +307,10 @@ class Renderer:
         signal: Any = None,
     ) -> FrameStats:
         """Record and submit one frame. Headless targets read the image back when asked."""
+        if framebuffer is None:
+            self.ensure_output()  # the target's own framebuffer: its form can change here
+        elif self.target.generation != self._target_generation:
+            self._follow_target()
         width, height = extent or (self.target.width, self.target.height)
         materials = self.materials(world)
         material_count = len(materials)
@@ -351,8 +359,8 @@ class Renderer:
                 data.camera.position - data.origin,
                 pf.lights.array(np.float32, (data.light_count, LIGHT.size // 4)),
             )
-        self._write_globals(
-            pf, data.camera, data.view, data.origin, data.origin_key, data.light_count, positional, grid
+        pf.write_globals(
+            data.camera, data.view, data.origin, data.origin_key, data.light_count, positional, grid, self.ambient
         )
         t0 = time.perf_counter()
 
@@ -391,36 +399,6 @@ class Renderer:
             chunks=len(data.chunks),
             candidates=data.candidates,
         )
-
-    def _write_globals(
-        self,
-        pf: FrameResources,
-        cam: CameraMatrices,
-        view: np.ndarray,
-        origin: np.ndarray,
-        origin_key: bytes,
-        light_count: int,
-        positional: int,
-        grid: ClusterGrid | None,
-    ) -> None:
-        """The frame's uniforms, rewritten only when something in them changed (the slot's
-        mapped buffer keeps what was last written there)."""
-        written = (cam, origin_key, light_count, positional, tuple(self.ambient), grid)
-        last = pf.written
-        if last is not None and last[0] is cam and last[1:] == written[1:]:
-            return
-        g = pf.globals.array(GLOBALS.dtype, 1)
-        g["projection"] = cam.projection.T  # column-major for GLSL
-        g["view"] = view.T
-        g["eye"][0, :3] = cam.position - origin  # float64 difference, then the cast
-        g["ambient"] = self.ambient
-        g["counts"] = (light_count, positional, 0, 0)
-        if grid is not None:
-            g["inverse_projection"] = np.linalg.inv(cam.projection).T
-            g["light_tiles"] = (grid.tiles_x, grid.tiles_y, grid.words, grid.tile)
-            g["light_bins"] = (grid.bounds_start, grid.masks_start, 0, 0)
-            g["bin_depth"] = (grid.near, grid.scale, grid.width, grid.height)
-        pf.written = written
 
     def _record_set_aside(
         self, inputs: FrameInputs, data: FrameData, materials: Materials
@@ -467,13 +445,36 @@ class Renderer:
         lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
         draws = self.light_pass.record(cb, target, pf.set_array, billboards)
         lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
-        self.tone_map_pass.record(
-            cb, target.viewport_ptr, target.area_ptr, self.target.hdr_view, self.tone_map, self.exposure
-        )
+        if self.target.hdr:
+            self.tone_map_pass.record(
+                cb, target.viewport_ptr, target.area_ptr, self.target.hdr_view, self.tone_map, self.exposure
+            )
         if self.overlay is not None:
             self.overlay.record(cb, slot, target.area.extent.width, target.area.extent.height)
         lib.vkCmdEndRenderPass(cb)
         return draws
+
+    def ensure_output(self) -> None:
+        """Give the target the form the tone map and exposure need (HDR colour or straight into
+        the target), and follow it. Call between frames: a swapchain's framebuffers change."""
+        if wants_hdr(self.tone_map, self.exposure, self.target.samples) != self.target.hdr:
+            self.device.wait_idle()
+            self.target.set_hdr(not self.target.hdr)
+        if self.target.generation != self._target_generation:
+            self._follow_target()
+
+    def _follow_target(self) -> None:
+        """The target's render pass changed: make again what was made against the old one."""
+        self.device.wait_idle()
+        target = self.target
+        self._swap_path(self._make_path(self.mode, self.cpu_recorder))
+        self.light_pass.retarget(target.render_pass)
+        self.tone_map_pass.destroy()  # its descriptor sets name the old HDR views
+        self.tone_map_pass = ToneMapPass(self.device, target.render_pass)
+        self._targets.clear()  # their begin infos name the old render pass and framebuffers
+        if self.overlay is not None:
+            self.overlay.retarget(target.render_pass)
+        self._target_generation = target.generation
 
     def destroy(self) -> None:
         self.device.wait_idle()

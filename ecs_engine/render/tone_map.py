@@ -31,6 +31,12 @@ MAX_EXPOSURE: Final = 20.0  # stops either way
 _SETS = 8  # descriptor sets kept, one per HDR view seen (swapchains come and go)
 
 
+def wants_hdr(name: str, exposure: float, samples: int) -> bool:
+    """Whether the scene must be lit in HDR colour and tone mapped: not for the clamp operator at
+    exposure 0 without MSAA, which the target's own sRGB encoding does as well (gpu/render_pass.py)."""
+    return name != "clamp" or exposure != 0.0 or samples > 1
+
+
 def check_tone_map(name: str, exposure: float) -> None:
     if name not in TONE_MAPS:
         raise UsageError(f"unknown tone map {name!r}; tone maps: {', '.join(TONE_MAPS)}")
