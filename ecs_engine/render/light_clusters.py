@@ -15,7 +15,8 @@ over. Nothing is capped per cluster: the masks hold every light.
 Measured on the GPU host (H100, 1280x720, the lights demo with 4,096 lights): the first version,
 one workgroup per 32 px x 32-slice cluster listing lights whose sphere touches the cluster's box,
 let each fragment evaluate ~77 lights where ~20 reach it; its dispatch alone took 2.25 ms of the
-10.8 ms frame. The light's window function is exactly 0 beyond its radius (and a spot light's
+10.8 ms frame. This one: 0.26 ms for both passes, 5.3 ms the frame (docs/performance.md has the
+steps and what is left). The light's window function is exactly 0 beyond its radius (and a spot light's
 beyond its cone), so leaving it out of a cluster it cannot reach changes nothing but the order of
 the sum (checked: images equal the loop within 1/255).
 
@@ -43,7 +44,7 @@ log = logging.getLogger("ecs_engine")
 
 TILE_PX: Final = 16
 # measured on the GPU host (H100, 1280x720, the lights demo, bench/results/lights-h100-16c.json):
-# 6 lights 1.46 ms looping, 1.81 clustered; 16 lights 2.30 and 2.15; 64 lights 6.52 and 3.53
+# 6 lights 1.34 ms looping, 1.82 clustered; 16 lights 2.18 and 2.14; 64 lights 6.41 and 3.30
 CLUSTER_MIN_LIGHTS: Final = 16
 LIGHT_MODES: Final = ("auto", "loop", "clustered")
 
