@@ -151,7 +151,8 @@ def format_table(doc: dict[str, Any]) -> str:
     for r in doc["results"]:
         rows.setdefault(r["lights"], {})[r["culling"]] = r
     lines = [
-        f"lights at {doc['config']['width']}x{doc['config']['height']}: GPU ms (CPU ms), the smaller of 2 runs' medians",
+        f"lights at {doc['config']['width']}x{doc['config']['height']}: GPU ms (CPU ms), "
+        "the smaller of 2 runs' medians",
         f"{'lights':>7} {'loop':>16} {'clustered':>16} {'auto':>16}",
     ]
     for n in sorted(rows):
