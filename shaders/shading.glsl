@@ -71,9 +71,13 @@ vec3 brdf_pi(Material m, uint model, vec3 n, vec3 l, vec3 v, float nl) {
 }
 
 // The light's E at `p` and the unit direction towards it (`l`); E = 0 when out of reach.
+// Only the kinds the scene has are read (FEATURE_SPOT_LIGHTS, FEATURE_DIRECTIONAL_LIGHTS): with
+// point lights alone a light is its first 32 bytes, as before spot and directional lights.
 float light_at(Light light, vec3 p, vec3 fallback, out vec3 l) {
-    uint kind = uint(light.direction_kind.w);
-    if (kind == LIGHT_DIRECTIONAL) {
+    const bool spots = (MATERIAL_FEATURES & FEATURE_SPOT_LIGHTS) != 0u;
+    const bool suns = (MATERIAL_FEATURES & FEATURE_DIRECTIONAL_LIGHTS) != 0u;
+    uint kind = spots || suns ? uint(light.direction_kind.w) : LIGHT_POINT;
+    if (suns && kind == LIGHT_DIRECTIONAL) {
         l = -light.direction_kind.xyz;
         return light.color_intensity.w;
     }
@@ -88,7 +92,7 @@ float light_at(Light light, vec3 p, vec3 fallback, out vec3 l) {
     }
     l = d2 > 1e-24 ? to_light * inversesqrt(d2) : fallback;
     float energy = light.color_intensity.w * window / max(d2, 1e-4);
-    if (kind == LIGHT_SPOT) {
+    if (spots && kind == LIGHT_SPOT) {
         float t = clamp((dot(light.direction_kind.xyz, -l) - light.cone.x) * light.cone.y, 0.0, 1.0);
         energy *= t * t;
     }

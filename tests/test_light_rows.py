@@ -141,3 +141,53 @@ def test_spot_light_checks_its_cone_on_write():
     with pytest.raises(ValueError):
         world.spawn(Transform(), DirectionalLight(illuminance=float("nan")))
     assert len(world) == 0
+
+
+def test_the_mesh_shaders_read_only_the_light_kinds_a_scene_has():
+    """Point lights alone: the pipelines are specialised without the spot and directional code
+    (a light is read as its first 32 bytes). A spot light added later rebuilds them, and shows."""
+    import math
+
+    from gpu_context import headless_gpu, render_world
+
+    from ecs_engine import World
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.components import Camera, Mesh, PointLight, SpotLight, Transform
+    from ecs_engine.maths.camera import look_rotation
+    from ecs_engine.render.layouts import FEATURE_DIRECTIONAL_LIGHTS, FEATURE_SPOT_LIGHTS
+    from ecs_engine.render.light_rows import light_features
+    from ecs_engine.render.primitives import plane_mesh
+    from ecs_engine.render.renderer import Renderer
+
+    spot = PositionalLights(
+        np.zeros((1, 3)), np.ones(1), np.ones((1, 3)), np.ones(1), np.zeros((1, 3)), np.ones((1, 2))
+    )
+    point = PositionalLights(np.zeros((1, 3)), np.ones(1), np.ones((1, 3)), np.ones(1))
+    sun = DirectionalLights(np.zeros((1, 3)), np.ones((1, 3)), np.ones(1))
+    assert light_features([point], []) == 0
+    assert light_features([point, spot], [sun]) == FEATURE_SPOT_LIGHTS | FEATURE_DIRECTIONAL_LIGHTS
+    with headless_gpu(64, 48) as gpu:
+        world = World()
+        world.spawn(Transform(), Mesh(handle=gpu.meshes.add(plane_mesh(20.0))))
+        world.spawn(Transform(position=(-3.0, 1.0, 0.0)), PointLight(intensity=2.0, radius=4.0))
+        world.spawn(
+            Transform(position=(0.0, 6.0, 6.0), rotation=look_rotation((0.0, -1.0, -1.0))),
+            Camera(fov_y=math.radians(60.0)),
+        )
+        before = render_world(gpu, world)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+        try:
+            default_schedule().run(world, 0.0)
+            renderer.render(world)
+            assert not renderer.material_features & (FEATURE_SPOT_LIGHTS | FEATURE_DIRECTIONAL_LIGHTS)
+            world.spawn(
+                Transform(position=(3.0, 3.0, 0.0), rotation=look_rotation((0.0, -1.0, 0.0))),
+                SpotLight(intensity=20.0, radius=8.0, outer_angle=0.5),
+            )
+            default_schedule().run(world, 0.0)
+            renderer.render(world, readback=True)
+            assert renderer.material_features & FEATURE_SPOT_LIGHTS
+            after = gpu.target.pixels()[..., :3].astype(int)
+        finally:
+            renderer.destroy()
+    assert np.abs(after - before).max() > 40  # the spot's disc on the floor

@@ -162,6 +162,8 @@ FEATURE_ALPHA_MASK = 1 << 16  # some material is drawn with alpha_mode mask
 FEATURE_TEXTURES = 1 << 17  # some material has a texture: the textured shader variants (uv, tangents)
 FEATURE_DOUBLE_SIDED = 1 << 18  # some material is double-sided: no back-face culling, see mesh_fragment.glsl
 FEATURE_CLUSTERED = 1 << 19  # fragments loop over their cluster's lights, not all (light_clusters.py)
+FEATURE_SPOT_LIGHTS = 1 << 20  # the scene has spot lights (without: lights are read as points)
+FEATURE_DIRECTIONAL_LIGHTS = 1 << 21  # the scene has directional lights
 CLUSTER_GROUP = 64  # light_bounds.comp's and light_tiles.comp's local size
 MAX_GLOBAL_LIGHTS = 256  # directional and unbounded lights every fragment loops over, when clustered
 LIGHT_BINS = 1024  # distance bins: exponential shells around the eye, each with its light index range
@@ -201,6 +203,8 @@ DEFINES = {
     "BINDING_TEXTURES": BINDING_TEXTURES,
     "BINDING_CLUSTERS": BINDING_CLUSTERS,
     "FEATURE_CLUSTERED": FEATURE_CLUSTERED,
+    "FEATURE_SPOT_LIGHTS": FEATURE_SPOT_LIGHTS,
+    "FEATURE_DIRECTIONAL_LIGHTS": FEATURE_DIRECTIONAL_LIGHTS,
     "CLUSTER_GROUP": CLUSTER_GROUP,
     "MAX_GLOBAL_LIGHTS": MAX_GLOBAL_LIGHTS,
     "LIGHT_BINS": LIGHT_BINS,

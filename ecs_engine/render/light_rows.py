@@ -17,7 +17,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import native
-from .layouts import LIGHT, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT
+from .layouts import (
+    FEATURE_DIRECTIONAL_LIGHTS,
+    FEATURE_SPOT_LIGHTS,
+    LIGHT,
+    LIGHT_DIRECTIONAL,
+    LIGHT_POINT,
+    LIGHT_SPOT,
+)
 
 LIGHT_DTYPE = LIGHT.dtype
 FLOATS = 16  # a light's row seen as float32s
@@ -52,6 +59,16 @@ class DirectionalLights:
 
     def __len__(self) -> int:
         return len(self.illuminance)
+
+
+def light_features(positional: list[PositionalLights], directional: list[DirectionalLights]) -> int:
+    """The FEATURE_* bits of the light kinds present: the mesh shaders read only those."""
+    features = 0
+    if any(p.direction is not None and len(p) for p in positional):
+        features |= FEATURE_SPOT_LIGHTS
+    if any(len(d) for d in directional):
+        features |= FEATURE_DIRECTIONAL_LIGHTS
+    return features
 
 
 def local_minus_z(rotation: np.ndarray) -> np.ndarray:

@@ -46,7 +46,7 @@ from .layouts import (
 )
 from .light_clusters import ClusterGrid, LightCulling, check_light_culling
 from .light_pass import LightPass
-from .light_rows import write_lights
+from .light_rows import light_features, write_lights
 from .materials import Materials
 from .mesh_registry import MeshRegistry
 from .path import FILL_MODES, ChunkResult, FrameInputs, FrameStats, PathContext, PathFactory, RenderPath, TargetState
@@ -233,10 +233,10 @@ class Renderer:
             self.fill = fill
             self._respecialise(lambda: setattr(self, "fill", old))
 
-    def _check_material_features(self, materials: Materials) -> None:
-        """Rebuild the path's pipelines when the world's materials use a shading model (or alpha
-        mask) they were specialised without."""
-        wanted = self.material_features | materials.features
+    def _check_features(self, features: int) -> None:
+        """Rebuild the path's pipelines when the world's materials or lights need a shading model,
+        alpha mask or light kind they were specialised without (grown, never shrunk)."""
+        wanted = self.material_features | features
         if wanted != self.material_features:
             old = self.material_features
             self.material_features = wanted
@@ -315,7 +315,7 @@ class Renderer:
         materials = self.materials(world)
         material_count = len(materials)
         data = self.extract(world, width, height, materials)  # before any GPU state: a bad world fails here
-        self._check_material_features(materials)
+        self._check_features(materials.features | light_features(data.lights, data.directional))
         grid = self._light_clusters(data, width, height)
         self._sync_textures(materials)
         if self.jobs is not None and self.jobs.generation != self._jobs_generation:
