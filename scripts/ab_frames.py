@@ -13,6 +13,8 @@ new (issue 14 compared e7d674c, before materials, with the materials code).
     cd /tmp && for rep in 1 2 3; do for v in new old; do
         PYTHONPATH=/tmp/$v python3 /path/to/ab_frames.py $v $rep >> ab.jsonl; done; done
 
+(a fourth argument `small` leaves out the 1M-entity frames).
+
 (alternate which one goes first between repetitions). Results of one such run:
 bench/results/runs/ab-13/frames-h100-16c.json.
 """
@@ -69,7 +71,10 @@ def main() -> None:
     target = OffscreenTarget(device, width, height)
     meshes = MeshRegistry(device)
     worlds: dict[tuple[str, int], Any] = {}
+    small = len(sys.argv) > 4 and sys.argv[4] == "small"  # the seed scenes only (no 1M frames)
     for scene, n, mode, threads, frames, warmup in CONFIGS:
+        if small and n > 100:
+            continue
         pool = JobPool(threads)
         if (scene, n) not in worlds:
             worlds[scene, n] = World()
