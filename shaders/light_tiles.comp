@@ -29,9 +29,10 @@ vec4 side(vec2 a, vec2 b, vec3 inside) {
 }
 
 void main() {
-    uint tile = gl_WorkGroupID.x;
-    uint tx = tile % g.light_tiles.x;
-    uint ty = tile / g.light_tiles.x;
+    uint tx = gl_WorkGroupID.x;   // dispatched as tiles across x tiles down
+    uint ty = gl_WorkGroupID.y;
+    uint tile = ty * g.light_tiles.x + tx;
+    bool perspective = g.projection[3][3] != 1.0;
     vec2 viewport = g.bin_depth.zw;
     float px = float(g.light_tiles.w);
     vec2 lo = vec2(tx, ty) * px / viewport * 2.0 - 1.0;
@@ -52,7 +53,9 @@ void main() {
             uint at = g.light_bins.x + 4u * (first + j);
             vec4 s = vec4(uintBitsToFloat(cluster_data[at]), uintBitsToFloat(cluster_data[at + 1u]),
                           uintBitsToFloat(cluster_data[at + 2u]), uintBitsToFloat(cluster_data[at + 3u]));
-            bool touches = s.w > 0.0 && s.z < s.w;   // bounded, and not wholly behind the eye
+            // bounded, and (in perspective) not wholly behind the eye; an orthographic near plane
+            // may lie behind the camera
+            bool touches = s.w > 0.0 && (!perspective || s.z < s.w);
             for (int k = 0; k < 4 && touches; ++k) {
                 touches = dot(planes[k].xyz, s.xyz) + planes[k].w >= -s.w;
             }

@@ -104,8 +104,9 @@ void main() {
         float e2 = dot(eye, eye);
         vec3 to_eye = e2 > 1e-24 ? eye * inversesqrt(e2) : vec3(0.0, 0.0, 1.0);
         color = g.ambient.rgb * (g.ambient.a * occlusion) * m.base_color.rgb;
-        if ((MATERIAL_FEATURES & FEATURE_CLUSTERED) != 0u) {
-            uint globals = cluster_data[0];
+#ifdef CLUSTERED
+        {
+            uint globals = min(cluster_data[0], uint(MAX_GLOBAL_LIGHTS));
             for (uint k = 0u; k < globals; ++k) {
                 color += light_term(cluster_data[CLUSTER_GLOBALS + k], m, model, v_position, n, to_eye);
             }
@@ -117,7 +118,8 @@ void main() {
             uint lo = cluster_data[CLUSTER_HEADER + bin];
             uint hi = cluster_data[CLUSTER_HEADER + LIGHT_BINS + bin];
             uint masks = tile_masks();
-            uint first = subgroupMin(lo), last = subgroupMax(hi);
+            // (bounded: helper invocations may be left out of the subgroup's operations)
+            uint first = subgroupMin(lo), last = min(subgroupMax(hi), g.counts.y - 1u);
             for (uint w = first >> 5u; first <= last && w <= (last >> 5u); ++w) {
                 uint bits = lo <= hi && w >= (lo >> 5u) && w <= (hi >> 5u) ? cluster_data[masks + w] : 0u;
                 if (w == (lo >> 5u)) {
@@ -138,11 +140,12 @@ void main() {
                     }
                 }
             }
-        } else {
-            for (uint i = 0u; i < g.counts.x; ++i) {
-                color += light_term(i, m, model, v_position, n, to_eye);
-            }
         }
+#else
+        for (uint i = 0u; i < g.counts.x; ++i) {
+            color += light_term(i, m, model, v_position, n, to_eye);
+        }
+#endif
     }
     color += m.emissive.rgb;
     // alpha matters only to the blended materials' pipelines (the others do not blend)

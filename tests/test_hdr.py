@@ -190,3 +190,27 @@ def test_msaa_always_renders_through_hdr():
             assert target.hdr and target.generation == 0
         finally:
             target.destroy()
+
+
+def test_blended_materials_are_drawn_through_hdr_colour():
+    """An 8-bit target clamps a blended colour before blending: glass lit to 3.0 at alpha 0.5
+    over a dark background would come out at 0.5. With a blended material in the world the
+    target takes the HDR form even at clamp and exposure 0, and the glass is white."""
+    from ecs_engine.render.renderer import Renderer
+
+    with headless_gpu(W, H) as gpu:
+        world = World()
+        glass = materials(world).add(
+            Material("glass", "unlit", (0.0, 0.0, 0.0, 0.5), emissive=(3.0, 3.0, 3.0), alpha_mode="blend")
+        )
+        world.spawn(Transform(rotation=FACING_Z), Mesh(handle=gpu.meshes.add(plane_mesh(4.0)), material=glass))
+        world.spawn(Transform(position=(0.0, 0.0, 1.0)), Camera(fov_y=math.radians(60.0), near=0.05))
+        image = render_world(gpu, world)
+        assert gpu.target.hdr
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)  # a world without: straight again
+        try:
+            renderer.render(glowing_plane(gpu))
+            assert not gpu.target.hdr
+        finally:
+            renderer.destroy()
+    assert image[H // 2, W // 2].min() >= 254

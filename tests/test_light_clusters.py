@@ -218,3 +218,25 @@ def test_a_device_without_fragment_subgroups_loops_over_every_light(caplog):
     assert np.array_equal(image, loop)
     lines = [r.getMessage() for r in caplog.records]
     assert len(lines) == 1 and "subgroup" in lines[0]
+
+
+def test_a_light_grid_larger_than_the_device_binds_keeps_the_loop(caplog):
+    """The cluster buffer is one storage binding: past maxStorageBufferRange (a 4K view with tens
+    of thousands of lights on some devices) the renderer keeps the loop, and says so once."""
+    import logging
+
+    with headless_gpu(W, H) as gpu, caplog.at_level(logging.WARNING, logger="ecs_engine"):
+        world = lit_field(gpu, 40)
+        from ecs_engine.render.renderer import Renderer
+
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, light_culling="clustered")
+        try:
+            renderer.lights.max_bytes = 1024  # smaller than any grid
+            default_schedule().run(world, 0.0)
+            for _ in range(2):
+                renderer.render(world, readback=True)
+            assert not renderer.clustered
+        finally:
+            renderer.destroy()
+    lines = [r.getMessage() for r in caplog.records]
+    assert len(lines) == 1 and "not clustered" in lines[0]

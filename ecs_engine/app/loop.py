@@ -46,6 +46,7 @@ def run(
         start = time.perf_counter()
         frames = 0
         while source.running(frames):
+            session.renderer.ensure_output()  # HDR colour or not, as settings and materials need
             target = source.begin(session, frames)  # events, resize, acquire: not the frame's CPU work
             if target is None:
                 continue

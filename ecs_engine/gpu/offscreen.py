@@ -39,14 +39,26 @@ class OffscreenTarget:
         self.readback = Buffer(device, width * height * 4, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
 
     def _build_pass(self) -> None:
+        """The render pass, shared attachments and framebuffer of the current form; on failure
+        nothing is left made and the old ones (if any) stay."""
         device = self.device
-        self.render_pass = create_render_pass(
-            device, self.color_format, device.vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, self.samples, self.hdr
+        vk = device.vk
+        render_pass = create_render_pass(
+            device, self.color_format, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, self.samples, self.hdr
         )
-        self.attachments = SceneAttachments(device, self.width, self.height, self.samples, self.hdr)
-        self.framebuffer = create_framebuffer(
-            device, self.render_pass, self.attachments.views(self.color.view), self.width, self.height
-        )
+        try:
+            attachments = SceneAttachments(device, self.width, self.height, self.samples, self.hdr)
+            try:
+                framebuffer = create_framebuffer(
+                    device, render_pass, attachments.views(self.color.view), self.width, self.height
+                )
+            except BaseException:
+                attachments.destroy()
+                raise
+        except BaseException:
+            vk.vkDestroyRenderPass(device.handle, render_pass, None)
+            raise
+        self.render_pass, self.attachments, self.framebuffer = render_pass, attachments, framebuffer
 
     def _release_pass(self) -> None:
         vk = self.device.vk
@@ -59,9 +71,17 @@ class OffscreenTarget:
         a new render pass (the caller waited until no frame uses the old one)."""
         hdr = hdr or self.samples > 1
         if hdr != self.hdr:
-            self._release_pass()
+            old = (self.render_pass, self.attachments, self.framebuffer)
             self.hdr = hdr
-            self._build_pass()
+            try:
+                self._build_pass()  # the new form first: if it fails, the old one stays whole
+            except BaseException:
+                self.hdr = not hdr
+                raise
+            new = (self.render_pass, self.attachments, self.framebuffer)
+            self.render_pass, self.attachments, self.framebuffer = old
+            self._release_pass()
+            self.render_pass, self.attachments, self.framebuffer = new
             self.generation += 1
 
     def record_readback(self, cb: Any) -> None:

@@ -118,7 +118,7 @@ def create_render_pass(device: Device, color_format: int, final_layout: int, sam
             dstSubpass=SUBPASS_SCENE,
             srcStageMask=color_stage | depth_stages | fragment,
             dstStageMask=color_stage | depth_stages,
-            srcAccessMask=0,
+            srcAccessMask=vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
             dstAccessMask=color_rw | depth_rw,
         ),
         vk.VkSubpassDependency(
@@ -203,13 +203,14 @@ def _create_direct_pass(device: Device, color_format: int, final_layout: int) ->
     depth_rw = depth_write | vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT
     by_region = vk.VK_DEPENDENCY_BY_REGION_BIT
     dependencies = [
-        # the previous frame's depth and the presentation engine's hold on the image, before the clears
+        # the previous frame's depth (shared by the frames in flight) and the presentation
+        # engine's hold on the image, before the clears
         vk.VkSubpassDependency(
             srcSubpass=vk.VK_SUBPASS_EXTERNAL,
             dstSubpass=SUBPASS_SCENE,
             srcStageMask=color_stage | depth_stages,
             dstStageMask=color_stage | depth_stages,
-            srcAccessMask=0,
+            srcAccessMask=color_write | depth_write,
             dstAccessMask=color_rw | depth_rw,
         ),
         # scene -> billboards (blended on top, depth tested) -> overlay (blended on top)

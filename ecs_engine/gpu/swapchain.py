@@ -188,10 +188,15 @@ class Swapchain:
         hdr = hdr or self.samples > 1
         if hdr != self.hdr:
             self.device.wait_idle()
+            self.hdr = hdr
+            try:
+                render_pass = self._create_pass()  # first: if it fails, the old form stays whole
+            except BaseException:
+                self.hdr = not hdr
+                raise
             self._release()
             self.vk.vkDestroyRenderPass(self.device.handle, self.render_pass, None)
-            self.hdr = hdr
-            self.render_pass = self._create_pass()
+            self.render_pass = render_pass
             self._build()
             self.generation += 1
 

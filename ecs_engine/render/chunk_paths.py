@@ -23,7 +23,7 @@ from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_lay
 from ..gpu.secondary import end_command_buffer
 from .frame_data import Chunk
 from .instance_rows import write_rows
-from .layouts import FEATURE_DOUBLE_SIDED, FEATURE_TEXTURES, INSTANCE, MESH_VERTEX
+from .layouts import FEATURE_CLUSTERED, FEATURE_DOUBLE_SIDED, FEATURE_TEXTURES, INSTANCE, MESH_VERTEX
 from .path import FILL_MODES, ChunkResult, FrameInputs, PathContext, summed_counts
 
 # The MESH_VERTEX fields mesh_vertex.glsl reads, at locations 0, 1, ...: only those are bound (an
@@ -42,9 +42,11 @@ def vertex_attributes(vk: Any, inputs: tuple[str, ...] = VERTEX_INPUTS) -> list[
 
 def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str, blended: bool = False) -> tuple[Any, Any]:
     """The (plain, mirrored) mesh pipelines of a path: the same but for the front face. Textured
-    materials take the `_textured` variants of both shaders (`mesh.vert` -> `mesh_textured.vert`)."""
+    materials take the `_textured` variants of both shaders (`mesh.vert` -> `mesh_textured.vert`);
+    clustered lights the `_clustered` fragment shaders (they need subgroup arithmetic)."""
     textured = bool(ctx.material_features & FEATURE_TEXTURES)
-    fragment_shader = "mesh_textured.frag" if textured else "mesh.frag"
+    clustered = bool(ctx.material_features & FEATURE_CLUSTERED)
+    fragment_shader = f"mesh{'_textured' if textured else ''}{'_clustered' if clustered else ''}.frag"
     if textured:
         vertex_shader = vertex_shader.replace(".vert", "_textured.vert")
     base = dict(

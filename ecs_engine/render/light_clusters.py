@@ -174,7 +174,7 @@ class ClusterPass:
         lib.vkCmdDispatch(cb, -(-light_count // CLUSTER_GROUP), 1, 1)
         self._barrier(cb, clusters, vk.VK_ACCESS_SHADER_WRITE_BIT, shader_rw, compute, compute)
         lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.pipelines[1])
-        lib.vkCmdDispatch(cb, grid.tiles, 1, 1)
+        lib.vkCmdDispatch(cb, grid.tiles_x, grid.tiles_y, 1)
         self._barrier(
             cb,
             clusters,
@@ -214,6 +214,7 @@ class LightCulling:
         self.clustered = False  # the mesh pipelines loop over cluster lists
         self.pass_ = ClusterPass(device, frame_set_layout)
         self.supported = bool(device.features.get("fragmentSubgroupArithmetic"))
+        self.max_bytes = int(device.limits.maxStorageBufferRange)  # the cluster buffer is one binding
         self._warned = False
 
     def plan(self, data: Any, width: int, height: int) -> tuple[ClusterGrid | None, bool]:
@@ -230,10 +231,21 @@ class LightCulling:
         ):
             bounded, unbounded, reach = light_census(data.lights, data.directional, data.camera.position)
             clustered = wants_clusters(self.mode, self.clustered, bounded, unbounded)
-        flipped = clustered != self.clustered
-        self.clustered = clustered
         positional = sum(len(p) for p in data.lights)
         grid = cluster_grid(width, height, data.camera.near, reach, positional) if clustered else None
+        if grid is not None and grid.buffer_bytes > self.max_bytes:
+            if not self._warned:
+                self._warned = True
+                log.warning(
+                    "%d lights at %dx%d need a %d MiB light grid, more than the device binds: lights are not clustered",
+                    positional,
+                    width,
+                    height,
+                    grid.buffer_bytes >> 20,
+                )
+            grid, clustered = None, False
+        flipped = clustered != self.clustered
+        self.clustered = clustered
         return grid, flipped
 
     def record(self, cb: Any, frame: Any, grid: ClusterGrid, light_count: int) -> None:

@@ -201,6 +201,7 @@ class Materials:
         self.blend = np.zeros(len(self.table), bool)  # per handle: alpha-blended
         self.fills = np.zeros(len(self.table), np.uint8)  # per handle: index into FILLS
         self._aside = 0  # materials whose rows are drawn apart (blended, or not solid)
+        self.blends = False  # some material is alpha-blended
         self.version = 0
         self.features = 0  # what the shader needs: bit per shading model some material uses, FEATURE_*
         for material in palette:
@@ -250,6 +251,7 @@ class Materials:
         self.fills[handle] = FILLS.index(material.fill)
         n = len(self._materials)
         self._aside = int((self.blend[:n] | (self.fills[:n] != 0)).sum())
+        self.blends = bool(self.blend[:n].any())  # some material is alpha-blended
         self.features |= 1 << SHADING_MODELS[material.model]
         if material.alpha_mode == "mask":
             self.features |= FEATURE_ALPHA_MASK

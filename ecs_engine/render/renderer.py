@@ -95,8 +95,9 @@ class Renderer:
         self.check_fill(fill)  # before anything is made: a refusal leaves nothing to destroy
         check_tone_map(tone_map, exposure)
         check_light_culling(light_culling)
-        self.tone_map, self.exposure = tone_map, float(exposure)  # read each frame: change them any time
+        self.tone_map, self.exposure = tone_map, float(exposure)  # change them between frames (ensure_output)
         self.target = target
+        self._blends = False  # the last frame's world had blended materials (they need HDR colour)
         if wants_hdr(tone_map, exposure, target.samples) != target.hdr:
             device.wait_idle()  # another renderer of this target may have frames in flight
             target.set_hdr(not target.hdr)
@@ -307,12 +308,13 @@ class Renderer:
         signal: Any = None,
     ) -> FrameStats:
         """Record and submit one frame. Headless targets read the image back when asked."""
+        materials = self.materials(world)
+        self._blends = materials.blends
         if framebuffer is None:
             self.ensure_output()  # the target's own framebuffer: its form can change here
         elif self.target.generation != self._target_generation:
             self._follow_target()
         width, height = extent or (self.target.width, self.target.height)
-        materials = self.materials(world)
         material_count = len(materials)
         data = self.extract(world, width, height, materials)  # before any GPU state: a bad world fails here
         self._check_features(materials.features | light_features(data.lights, data.directional))
@@ -446,18 +448,17 @@ class Renderer:
         draws = self.light_pass.record(cb, target, pf.set_array, billboards)
         lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
         if self.target.hdr:
-            self.tone_map_pass.record(
-                cb, target.viewport_ptr, target.area_ptr, self.target.hdr_view, self.tone_map, self.exposure
-            )
+            self.tone_map_pass.record(cb, target, self.target, self.tone_map, self.exposure)
         if self.overlay is not None:
             self.overlay.record(cb, slot, target.area.extent.width, target.area.extent.height)
         lib.vkCmdEndRenderPass(cb)
         return draws
 
     def ensure_output(self) -> None:
-        """Give the target the form the tone map and exposure need (HDR colour or straight into
-        the target), and follow it. Call between frames: a swapchain's framebuffers change."""
-        if wants_hdr(self.tone_map, self.exposure, self.target.samples) != self.target.hdr:
+        """Give the target the form the tone map, exposure and blended materials need (HDR colour
+        or straight into the target), and follow it. Call between frames: a swapchain's
+        framebuffers change (the run loop calls it before each frame)."""
+        if wants_hdr(self.tone_map, self.exposure, self.target.samples, self._blends) != self.target.hdr:
             self.device.wait_idle()
             self.target.set_hdr(not self.target.hdr)
         if self.target.generation != self._target_generation:

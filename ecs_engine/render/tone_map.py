@@ -31,10 +31,12 @@ MAX_EXPOSURE: Final = 20.0  # stops either way
 _SETS = 8  # descriptor sets kept, one per HDR view seen (swapchains come and go)
 
 
-def wants_hdr(name: str, exposure: float, samples: int) -> bool:
+def wants_hdr(name: str, exposure: float, samples: int, blends: bool = False) -> bool:
     """Whether the scene must be lit in HDR colour and tone mapped: not for the clamp operator at
-    exposure 0 without MSAA, which the target's own sRGB encoding does as well (gpu/render_pass.py)."""
-    return name != "clamp" or exposure != 0.0 or samples > 1
+    exposure 0 without MSAA, which the target's own sRGB encoding does as well (gpu/render_pass.py),
+    unless some material blends: an 8-bit target clamps a blended colour before blending (glass lit
+    to 3.0 at alpha 0.5 over black: 0.5), the HDR colour after (1.0)."""
+    return name != "clamp" or exposure != 0.0 or samples > 1 or blends
 
 
 def check_tone_map(name: str, exposure: float) -> None:
@@ -55,6 +57,7 @@ class ToneMapPass:
         self.set_layout = DescriptorSetLayout(device, [(0, vk.VK_DESCRIPTOR_TYPE_INPUT_ATTACHMENT, stage)])
         self.pool: DescriptorPool | None = None
         self._sets: dict[int, Any] = {}  # HDR view address -> VkDescriptorSet[1]
+        self._views = 0  # the target's attachment remakes the sets were made for
         self.layout = pipeline_layout(device, [self.set_layout.handle], [(stage, 0, TONE_MAP_PUSH.size)])
         self.pipeline: Any = None
         self._push = np.zeros(1, dtype=TONE_MAP_PUSH.dtype)
@@ -86,10 +89,21 @@ class ToneMapPass:
         found = self._sets[key] = vk.ffi.new("VkDescriptorSet[1]", [descriptor_set])
         return found
 
-    def record(self, cb: Any, viewport_ptr: Any, area_ptr: Any, hdr_view: Any, name: str, exposure: float) -> None:
-        """The full-screen triangle (raw calls; the set per HDR view made once)."""
+    def record(self, cb: Any, state: Any, target: Any, name: str, exposure: float) -> None:
+        """The full-screen triangle over `state`'s area (raw calls), reading `target`'s HDR view;
+        the set per view made once. A swapchain counts its remakes (`recreations`): a new view may
+        reuse an old one's handle value, so the sets made for the old views go then."""
         vk = self.vk
         lib = vk.lib
+        viewport_ptr, area_ptr, hdr_view = state.viewport_ptr, state.area_ptr, target.hdr_view
+        views = getattr(target, "recreations", 0)
+        if views != self._views:
+            self.device.wait_idle()  # (the remake waited already; frames in flight may bind the sets)
+            if self.pool is not None:
+                self.pool.destroy()
+                self.pool = None
+            self._sets.clear()
+            self._views = views
         if self.pipeline is None:
             self.pipeline = graphics_pipeline(
                 self.device,
