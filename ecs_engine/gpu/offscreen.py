@@ -35,19 +35,19 @@ class OffscreenTarget:
             vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
             vk.VK_IMAGE_ASPECT_COLOR_BIT,
         )
-        self._build_pass()
+        self.render_pass, self.attachments, self.framebuffer = self._build_pass(self.hdr)
         self.readback = Buffer(device, width * height * 4, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
 
-    def _build_pass(self) -> None:
-        """The render pass, shared attachments and framebuffer of the current form; on failure
-        nothing is left made and the old ones (if any) stay."""
+    def _build_pass(self, hdr: bool) -> tuple[Any, SceneAttachments, Any]:
+        """The render pass, shared attachments and framebuffer of a form; on failure nothing is
+        left made."""
         device = self.device
         vk = device.vk
         render_pass = create_render_pass(
-            device, self.color_format, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, self.samples, self.hdr
+            device, self.color_format, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, self.samples, hdr
         )
         try:
-            attachments = SceneAttachments(device, self.width, self.height, self.samples, self.hdr)
+            attachments = SceneAttachments(device, self.width, self.height, self.samples, hdr)
             try:
                 framebuffer = create_framebuffer(
                     device, render_pass, attachments.views(self.color.view), self.width, self.height
@@ -58,7 +58,7 @@ class OffscreenTarget:
         except BaseException:
             vk.vkDestroyRenderPass(device.handle, render_pass, None)
             raise
-        self.render_pass, self.attachments, self.framebuffer = render_pass, attachments, framebuffer
+        return render_pass, attachments, framebuffer
 
     def _release_pass(self) -> None:
         vk = self.device.vk
@@ -71,17 +71,10 @@ class OffscreenTarget:
         a new render pass (the caller waited until no frame uses the old one)."""
         hdr = hdr or self.samples > 1
         if hdr != self.hdr:
-            old = (self.render_pass, self.attachments, self.framebuffer)
-            self.hdr = hdr
-            try:
-                self._build_pass()  # the new form first: if it fails, the old one stays whole
-            except BaseException:
-                self.hdr = not hdr
-                raise
-            new = (self.render_pass, self.attachments, self.framebuffer)
-            self.render_pass, self.attachments, self.framebuffer = old
+            new = self._build_pass(hdr)  # the new form first: if it fails, the old one stays whole
             self._release_pass()
             self.render_pass, self.attachments, self.framebuffer = new
+            self.hdr = hdr
             self.generation += 1
 
     def record_readback(self, cb: Any) -> None:

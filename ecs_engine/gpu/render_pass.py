@@ -52,6 +52,42 @@ def check_samples(device: Device, samples: int) -> None:
         raise UsageError(f"--msaa {samples}: {device.info.name} offers {counts}")
 
 
+def _attachment(vk: Any, fmt: int, samples: int, load: int, store: int, final: int) -> Any:
+    """An attachment without stencil, its contents undefined when the pass begins."""
+    return vk.VkAttachmentDescription(
+        format=fmt,
+        samples=samples,
+        loadOp=load,
+        storeOp=store,
+        stencilLoadOp=vk.VK_ATTACHMENT_LOAD_OP_DONT_CARE,
+        stencilStoreOp=vk.VK_ATTACHMENT_STORE_OP_DONT_CARE,
+        initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
+        finalLayout=final,
+    )
+
+
+def _to_readback(vk: Any) -> Any:
+    """The target, written in the output subpass, before whatever reads it next (a copy for
+    readback, or present)."""
+    return vk.VkSubpassDependency(
+        srcSubpass=SUBPASS_OUTPUT,
+        dstSubpass=vk.VK_SUBPASS_EXTERNAL,
+        srcStageMask=vk.VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
+        dstStageMask=vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
+        srcAccessMask=vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
+        dstAccessMask=vk.VK_ACCESS_TRANSFER_READ_BIT,
+    )
+
+
+def _render_pass(device: Device, attachments: list[Any], subpasses: list[Any], dependencies: list[Any]) -> Any:
+    vk = device.vk
+    return vk.vkCreateRenderPass(
+        device.handle,
+        vk.VkRenderPassCreateInfo(pAttachments=attachments, pSubpasses=subpasses, pDependencies=dependencies),
+        None,
+    )
+
+
 def create_render_pass(device: Device, color_format: int, final_layout: int, samples: int = 1, hdr: bool = True) -> Any:
     if not hdr:
         if samples > 1:
@@ -60,18 +96,6 @@ def create_render_pass(device: Device, color_format: int, final_layout: int, sam
     vk = device.vk
     msaa = samples > 1
 
-    def attachment(fmt: int, count: int, load: int, store: int, final: int) -> Any:
-        return vk.VkAttachmentDescription(
-            format=fmt,
-            samples=count,
-            loadOp=load,
-            storeOp=store,
-            stencilLoadOp=vk.VK_ATTACHMENT_LOAD_OP_DONT_CARE,
-            stencilStoreOp=vk.VK_ATTACHMENT_STORE_OP_DONT_CARE,
-            initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
-            finalLayout=final,
-        )
-
     clear, dont_load = vk.VK_ATTACHMENT_LOAD_OP_CLEAR, vk.VK_ATTACHMENT_LOAD_OP_DONT_CARE
     store, dont_store = vk.VK_ATTACHMENT_STORE_OP_STORE, vk.VK_ATTACHMENT_STORE_OP_DONT_CARE
     color_layout = vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL
@@ -79,12 +103,12 @@ def create_render_pass(device: Device, color_format: int, final_layout: int, sam
     depth_layout = vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL
     hdr_format = getattr(vk, HDR_FORMAT_NAME)
     attachments = [
-        attachment(color_format, 1, dont_load, store, final_layout),  # every pixel written by the tone map
-        attachment(getattr(vk, DEPTH_FORMAT_NAME), samples, clear, dont_store, depth_layout),
-        attachment(hdr_format, samples, clear, dont_store, read_layout if not msaa else color_layout),
+        _attachment(vk, color_format, 1, dont_load, store, final_layout),  # every pixel written by the tone map
+        _attachment(vk, getattr(vk, DEPTH_FORMAT_NAME), samples, clear, dont_store, depth_layout),
+        _attachment(vk, hdr_format, samples, clear, dont_store, read_layout if not msaa else color_layout),
     ]
     if msaa:
-        attachments.append(attachment(hdr_format, 1, dont_load, dont_store, read_layout))
+        attachments.append(_attachment(vk, hdr_format, 1, dont_load, dont_store, read_layout))
     ref = vk.VkAttachmentReference
     hdr = ref(attachment=2, layout=color_layout)
     depth = ref(attachment=1, layout=depth_layout)
@@ -149,21 +173,9 @@ def create_render_pass(device: Device, color_format: int, final_layout: int, sam
             dstAccessMask=vk.VK_ACCESS_INPUT_ATTACHMENT_READ_BIT,
             dependencyFlags=vk.VK_DEPENDENCY_BY_REGION_BIT,
         ),
-        # the target -> whatever reads it next (copy for readback, or present)
-        vk.VkSubpassDependency(
-            srcSubpass=SUBPASS_OUTPUT,
-            dstSubpass=vk.VK_SUBPASS_EXTERNAL,
-            srcStageMask=color_stage,
-            dstStageMask=vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
-            srcAccessMask=vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
-            dstAccessMask=vk.VK_ACCESS_TRANSFER_READ_BIT,
-        ),
+        _to_readback(vk),
     ]
-    return vk.vkCreateRenderPass(
-        device.handle,
-        vk.VkRenderPassCreateInfo(pAttachments=attachments, pSubpasses=subpasses, pDependencies=dependencies),
-        None,
-    )
+    return _render_pass(device, attachments, subpasses, dependencies)
 
 
 def _create_direct_pass(device: Device, color_format: int, final_layout: int) -> Any:
@@ -171,21 +183,10 @@ def _create_direct_pass(device: Device, color_format: int, final_layout: int) ->
     vk = device.vk
     color_layout = vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL
     depth_layout = vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL
+    clear, dont_store = vk.VK_ATTACHMENT_LOAD_OP_CLEAR, vk.VK_ATTACHMENT_STORE_OP_DONT_CARE
     attachments = [
-        vk.VkAttachmentDescription(
-            format=fmt,
-            samples=1,
-            loadOp=vk.VK_ATTACHMENT_LOAD_OP_CLEAR,
-            storeOp=store,
-            stencilLoadOp=vk.VK_ATTACHMENT_LOAD_OP_DONT_CARE,
-            stencilStoreOp=vk.VK_ATTACHMENT_STORE_OP_DONT_CARE,
-            initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
-            finalLayout=final,
-        )
-        for fmt, store, final in (
-            (color_format, vk.VK_ATTACHMENT_STORE_OP_STORE, final_layout),
-            (getattr(vk, DEPTH_FORMAT_NAME), vk.VK_ATTACHMENT_STORE_OP_DONT_CARE, depth_layout),
-        )
+        _attachment(vk, color_format, 1, clear, vk.VK_ATTACHMENT_STORE_OP_STORE, final_layout),
+        _attachment(vk, getattr(vk, DEPTH_FORMAT_NAME), 1, clear, dont_store, depth_layout),
     ]
     ref = vk.VkAttachmentReference
     color, depth = ref(attachment=0, layout=color_layout), ref(attachment=1, layout=depth_layout)
@@ -232,20 +233,9 @@ def _create_direct_pass(device: Device, color_format: int, final_layout: int) ->
             dstAccessMask=color_rw,
             dependencyFlags=by_region,
         ),
-        vk.VkSubpassDependency(
-            srcSubpass=SUBPASS_OUTPUT,
-            dstSubpass=vk.VK_SUBPASS_EXTERNAL,
-            srcStageMask=color_stage,
-            dstStageMask=vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
-            srcAccessMask=color_write,
-            dstAccessMask=vk.VK_ACCESS_TRANSFER_READ_BIT,
-        ),
+        _to_readback(vk),
     ]
-    return vk.vkCreateRenderPass(
-        device.handle,
-        vk.VkRenderPassCreateInfo(pAttachments=attachments, pSubpasses=subpasses, pDependencies=dependencies),
-        None,
-    )
+    return _render_pass(device, attachments, subpasses, dependencies)
 
 
 class SceneAttachments:

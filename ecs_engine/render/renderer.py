@@ -98,9 +98,7 @@ class Renderer:
         self.tone_map, self.exposure = tone_map, float(exposure)  # change them between frames (ensure_output)
         self.target = target
         self._blends = False  # the last frame's world had blended materials (they need HDR colour)
-        if wants_hdr(tone_map, exposure, target.samples) != target.hdr:
-            device.wait_idle()  # another renderer of this target may have frames in flight
-            target.set_hdr(not target.hdr)
+        self._fit_target()  # before anything is made against its render pass
         self._target_generation = target.generation
         self.meshes = meshes
         self.clear_color = clear_color
@@ -458,11 +456,14 @@ class Renderer:
         """Give the target the form the tone map, exposure and blended materials need (HDR colour
         or straight into the target), and follow it. Call between frames: a swapchain's
         framebuffers change (the run loop calls it before each frame)."""
-        if wants_hdr(self.tone_map, self.exposure, self.target.samples, self._blends) != self.target.hdr:
-            self.device.wait_idle()
-            self.target.set_hdr(not self.target.hdr)
+        self._fit_target()
         if self.target.generation != self._target_generation:
             self._follow_target()
+
+    def _fit_target(self) -> None:
+        if wants_hdr(self.tone_map, self.exposure, self.target.samples, self._blends) != self.target.hdr:
+            self.device.wait_idle()  # this or another renderer of the target may have frames in flight
+            self.target.set_hdr(not self.target.hdr)
 
     def _follow_target(self) -> None:
         """The target's render pass changed: make again what was made against the old one."""
