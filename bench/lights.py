@@ -1,10 +1,11 @@
 """GPU time against light count: the lights demo's scene (a floor, 169 objects, N small point and
 spot lights moving; their reach shrinks as their number grows, so each point of the floor is
 lit by about as many at every count: demos/lights.py) drawn with every fragment looping over
-every light and with clustered lights.
+every light, with clustered lights in the fragment shader, and with the opaque meshes lit in
+compute from the same clusters (deferred).
 
-Per light count (1 to 16,384) and light culling (`loop`, `clustered`, and `auto`, what the
-renderer picks), one renderer draws warm-up frames, then timed frames; GPU ms from the frame's
+Per light count (1 to 16,384) and light culling (`loop`, `clustered`, `deferred`, and `auto`,
+what the renderer picks), one renderer draws warm-up frames, then timed frames; GPU ms from the frame's
 timestamp queries (read a frame late), CPU ms from frame start to submit minus waits for the GPU.
 The configurations are run twice, in alternating order; each run gives the median of its frames
 and the smaller of the two is kept: a run can catch the GPU in a slow state for its whole length
@@ -14,7 +15,7 @@ carry that into the target's ratio. The target (issue 14): 4,096 lights with `au
 cost at most twice the GPU time of the 6-light frame of the same scene.
 
 JSON (schema_version 1): {"benchmark": "lights", "quick", "machine", "device", "config": {"width",
-"height", "warmup", "frames", "counts"}, "results": [{"lights", "culling", "clustered", "gpu_ms",
+"height", "warmup", "frames", "counts"}, "results": [{"lights", "culling", "clustered", "form", "gpu_ms",
 "cpu_ms", "runs": [{"gpu_ms", "cpu_ms"}]}], "target": {"lights", "baseline_lights", "gpu_ms",
 "baseline_gpu_ms", "ratio", "limit", "met"}}
 """
@@ -29,7 +30,7 @@ from typing import Any
 
 COUNTS = (1, 6, 16, 64, 256, 1024, 4096, 16384)
 QUICK_COUNTS = (1, 6, 64, 256)
-CULLINGS = ("loop", "clustered", "auto")
+CULLINGS = ("loop", "clustered", "deferred", "auto")
 TARGET_LIGHTS, BASELINE_LIGHTS, TARGET_RATIO = 4096, 6, 2.0
 THREADS = 1
 
@@ -62,13 +63,14 @@ def measure(gpu: Any, n: int, culling: str, warmup: int, frames: int) -> dict[st
                 if stats.gpu_ms is not None:
                     gpu_ms.append(stats.gpu_ms)
         device.wait_idle()
-        clustered = renderer.clustered
+        clustered, form = renderer.clustered, target.form
     finally:
         renderer.destroy()
     return {
         "gpu_ms": statistics.median(gpu_ms) if gpu_ms else None,
         "cpu_ms": statistics.median(cpu_ms),
         "clustered": clustered,
+        "form": form,  # the target's (gpu/render_pass.py): deferred when the opaque meshes were lit in compute
     }
 
 
@@ -125,6 +127,7 @@ def summarise(n: int, culling: str, measured: list[dict[str, Any]]) -> dict[str,
         "lights": n,
         "culling": culling,
         "clustered": measured[-1]["clustered"],
+        "form": measured[-1]["form"],
         "gpu_ms": min(gpu) if gpu else None,
         "cpu_ms": min(m["cpu_ms"] for m in measured),
         "runs": [{"gpu_ms": m["gpu_ms"], "cpu_ms": m["cpu_ms"]} for m in measured],
@@ -153,7 +156,7 @@ def format_table(doc: dict[str, Any]) -> str:
     lines = [
         f"lights at {doc['config']['width']}x{doc['config']['height']}: GPU ms (CPU ms), "
         "the smaller of 2 runs' medians",
-        f"{'lights':>7} {'loop':>16} {'clustered':>16} {'auto':>16}",
+        f"{'lights':>7} " + " ".join(f"{c:>16}" for c in CULLINGS),
     ]
     for n in sorted(rows):
         cells = []
@@ -184,7 +187,7 @@ def plot(doc: dict[str, Any], path: Path) -> None:
     ax.set_xlabel("lights")
     ax.set_ylabel("GPU ms per frame")
     cfg = doc["config"]
-    ax.set_title(f"lights scene at {cfg['width']}x{cfg['height']}: every light per fragment vs clustered")
+    ax.set_title(f"lights scene at {cfg['width']}x{cfg['height']}: every light, clustered, deferred")
     ax.legend()
     ax.grid(True, which="both", alpha=0.3)
     path.parent.mkdir(parents=True, exist_ok=True)

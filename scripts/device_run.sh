@@ -23,13 +23,13 @@ if want tests; then
   # from a copy outside the checkout: in its root, `ecs_engine` would be the source folder, not the
   # installed package (whose components/ and systems/ live inside it)
   rm -rf /tmp/t && cp -r tests /tmp/t && cd /tmp
-  PYTHONPATH=/tmp/new:/tmp/site timeout 300 python3 -m pytest -q -p no:cacheprovider /tmp/t/test_textures.py /tmp/t/test_model_loading.py /tmp/t/test_shading_models.py /tmp/t/test_materials.py /tmp/t/test_render.py /tmp/t/test_light_rows.py /tmp/t/test_primitives.py /tmp/t/test_fill.py /tmp/t/test_double_sided.py /tmp/t/test_hdr.py /tmp/t/test_light_clusters.py /tmp/t/test_editor.py > $OUT/gpu_tests.txt 2>&1
+  PYTHONPATH=/tmp/new:/tmp/site timeout 400 python3 -m pytest -q -p no:cacheprovider /tmp/t/test_textures.py /tmp/t/test_model_loading.py /tmp/t/test_shading_models.py /tmp/t/test_materials.py /tmp/t/test_render.py /tmp/t/test_light_rows.py /tmp/t/test_primitives.py /tmp/t/test_fill.py /tmp/t/test_double_sided.py /tmp/t/test_hdr.py /tmp/t/test_light_clusters.py /tmp/t/test_deferred.py /tmp/t/test_transparency.py /tmp/t/test_editor.py > $OUT/gpu_tests.txt 2>&1
   tail -3 $OUT/gpu_tests.txt
   PYTHONPATH=/tmp/new:/tmp/site timeout 60 python3 -m ecs_engine demo materials --headless --frames 30 --width 1280 --height 720 --validate --screenshot $OUT/materials-h100.png 2>&1 | tail -3
   cd $REPO
 fi
 if want lights; then
-  (cd /tmp && PYTHONPATH=/tmp/new:/tmp/site timeout 400 python3 -m ecs_engine.bench lights --out $OUT --machine h100-16c 2>&1 | grep -v "^\[lights" | tail -14)
+  (cd /tmp && PYTHONPATH=/tmp/new:/tmp/site timeout 560 python3 -m ecs_engine.bench lights --out $OUT --machine h100-16c 2>&1 | grep -v "^\[lights" | tail -14)
 fi
 if want ab; then
   for rep in 1 2 3 4; do

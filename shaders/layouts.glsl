@@ -42,6 +42,15 @@
 #define TONE_MAP_ACES 1
 #define TONE_MAP_REINHARD 2
 #define NO_TEXTURE 4294967295u
+#define NO_MATERIAL 4294967295u
+#define SET_DEFERRED 1
+#define BINDING_DEPTH 0
+#define BINDING_HDR 1
+#define BINDING_NORMAL_ROUGHNESS 2
+#define BINDING_BASE_METALLIC 3
+#define BINDING_MATERIAL_IDS 4
+#define DEFERRED_TILE 16
+#define DEFERRED_WORDS 512
 #define CULL_GROUP 256
 #define COMPACT_GROUP 64
 
@@ -53,8 +62,8 @@ struct Globals {  // 288 bytes, std140
     vec4 eye;                   // offset 128: xyz: the camera relative to the render origin (zero by default)
     vec4 ambient;               // offset 144: rgb, intensity
     uvec4 counts;               // offset 160: x: lights, y: point and spot lights (first in the buffer, drawn as billboards)
-    mat4 inverse_projection;    // offset 176: clustered lights: the screen tiles' planes
-    uvec4 light_tiles;          // offset 240: x tiles across, y tiles down, z mask words per tile, w tile side in pixels
+    mat4 inverse_projection;    // offset 176: the light grid's tile planes, the deferred lighting's positions
+    uvec4 light_tiles;          // offset 240: x tiles across (0: no light grid), y tiles down, z mask words per tile, w tile side in pixels
     uvec4 light_bins;           // offset 256: x first uint of the light bounds, y first uint of the tile masks, zw 0
     vec4 bin_depth;             // offset 272: x bin near s, y LIGHT_BINS / ln(far / s): bin = floor(ln(max(distance, s) / s) * y); zw viewport size
 };

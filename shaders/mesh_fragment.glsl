@@ -25,17 +25,12 @@ vec4 sample_texture(uint ref, vec2 uv, vec2 dx, vec2 dy) {
 #endif
 
 layout(location = 0) out vec4 out_color;
-
-vec3 light_term(uint i, Material m, uint model, vec3 p, vec3 n, vec3 to_eye) {
-    Light light = lights[i];
-    vec3 l;
-    float energy = light_at(light, p, n, l);
-    float nl = dot(n, l);
-    if (nl > 0.0 && energy > 0.0) {
-        return light.color_intensity.rgb * (energy * nl) * brdf_pi(m, model, n, l, to_eye, nl);
-    }
-    return vec3(0.0);
-}
+#ifdef GBUFFER
+// the deferred form's first pass (gpu/gbuffer.py): what render/deferred_pass.py lights the pixel with
+layout(location = 1) out vec4 out_normal_roughness;
+layout(location = 2) out vec4 out_base_metallic;
+layout(location = 3) out uint out_material;
+#endif
 
 // Where the light mask of this fragment's screen tile starts (light_grid.glsl).
 uint tile_masks() {
@@ -43,7 +38,8 @@ uint tile_masks() {
     return g.light_bins.y + (tile.y * g.light_tiles.x + tile.x) * g.light_tiles.z;
 }
 
-// The material's shading model, per fragment, over every light. Every division is guarded, so a
+// The material's shading model, per fragment, over every light (or, with GBUFFER, what the
+// lighting pass needs). Every division is guarded, so a
 // fragment at a light's centre, a light of radius or intensity 0, or a degenerate normal stays finite.
 void main() {
     Material m = materials[v_material];
@@ -77,6 +73,11 @@ void main() {
     }
     uint model = m.kind.x;
     vec3 color = m.base_color.rgb;
+#ifdef GBUFFER
+    out_normal_roughness = vec4(0.0);
+    out_base_metallic = vec4(0.0);
+    out_material = NO_MATERIAL;  // unlit: nothing for the lighting pass to add
+#endif
     if (!model_is(model, MODEL_UNLIT)) {
         float n2 = dot(n, n);
         if (n2 < 1e-24) {
@@ -104,7 +105,11 @@ void main() {
         float e2 = dot(eye, eye);
         vec3 to_eye = e2 > 1e-24 ? eye * inversesqrt(e2) : vec3(0.0, 0.0, 1.0);
         color = g.ambient.rgb * (g.ambient.a * occlusion) * m.base_color.rgb;
-#ifdef CLUSTERED
+#if defined(GBUFFER)
+        out_normal_roughness = vec4(n, m.surface.y);
+        out_base_metallic = vec4(m.base_color.rgb, m.surface.x);
+        out_material = v_material;
+#elif defined(CLUSTERED)
         {
             uint globals = min(cluster_data[0], uint(MAX_GLOBAL_LIGHTS));
             for (uint k = 0u; k < globals; ++k) {

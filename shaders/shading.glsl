@@ -99,3 +99,15 @@ float light_at(Light light, vec3 p, vec3 fallback, out vec3 l) {
     // capped: thousands of bright lights stay finite
     return min(energy, 65504.0);
 }
+
+// What light i adds at p (normal n, unit direction to the eye to_eye) under the material's model.
+vec3 light_term(uint i, Material m, uint model, vec3 p, vec3 n, vec3 to_eye) {
+    Light light = lights[i];
+    vec3 l;
+    float energy = light_at(light, p, n, l);
+    float nl = dot(n, l);
+    if (nl > 0.0 && energy > 0.0) {
+        return light.color_intensity.rgb * (energy * nl) * brdf_pi(m, model, n, l, to_eye, nl);
+    }
+    return vec3(0.0);
+}

@@ -1,5 +1,5 @@
 """`bench lights --quick` on lavapipe: every light count and light culling measured, what each
-actually drew with (auto clusters from CLUSTER_MIN_LIGHTS), the JSON and the plot written."""
+actually drew with (auto clusters and defers from CLUSTER_MIN_LIGHTS), the JSON and the plot written."""
 
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ def test_lights_quick_writes_its_json(tmp_path, monkeypatch):
     assert main(["lights", "--quick", "--out", str(tmp_path), "--machine", "ci"]) == 0
     doc = json.loads((tmp_path / "lights-ci.json").read_text())
     rows = {(r["lights"], r["culling"]): r for r in doc["results"]}
-    assert set(rows) == {(n, c) for n in QUICK_COUNTS for c in ("loop", "clustered", "auto")}
+    assert set(rows) == {(n, c) for n in QUICK_COUNTS for c in ("loop", "clustered", "deferred", "auto")}
     assert all(r["gpu_ms"] and r["gpu_ms"] > 0 and len(r["runs"]) == 2 for r in doc["results"])
     assert not any(r["clustered"] for (n, c), r in rows.items() if c == "loop")
     assert all(r["clustered"] for (n, c), r in rows.items() if c == "clustered")
@@ -25,6 +25,10 @@ def test_lights_quick_writes_its_json(tmp_path, monkeypatch):
 
     wanted = [n >= CLUSTER_MIN_LIGHTS for n in QUICK_COUNTS]
     assert [rows[n, "auto"]["clustered"] for n in QUICK_COUNTS] == wanted
+    # auto lights the opaque meshes in compute with the clusters; deferred always; the others never
+    assert [rows[n, "auto"]["form"] == "deferred" for n in QUICK_COUNTS] == wanted
+    assert all(r["form"] == "deferred" for (n, c), r in rows.items() if c == "deferred")
+    assert not any(r["form"] == "deferred" for (n, c), r in rows.items() if c in ("loop", "clustered"))
     assert doc["target"]["ratio"] is None  # 4,096 lights are not in the quick run
     assert (tmp_path / "lights-ci.png").stat().st_size > 1000
     made = target_entry(

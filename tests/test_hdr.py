@@ -186,7 +186,7 @@ def test_msaa_always_renders_through_hdr():
         target = OffscreenTarget(gpu.device, W, H, samples=4)
         try:
             assert target.hdr and target.hdr_view is not None
-            target.set_hdr(False)  # the resolve needs the HDR colour: refused quietly
+            target.set_form("direct")  # the resolve needs the HDR colour: refused quietly
             assert target.hdr and target.generation == 0
         finally:
             target.destroy()

@@ -148,10 +148,10 @@ def test_scene_without_lights_builds_no_light_pipeline():
         default_schedule().run(world, 0.0)
         stats = renderer.render(world, readback=True)
         assert stats.draws == 1 and stats.lights == 0
-        assert renderer.light_pass.pipeline is None  # made the first frame a scene has lights
+        assert renderer.output.light_pass.pipeline is None  # made the first frame a scene has lights
         world.spawn(Transform(position=(1.5, 2.5, 2.5)), PointLight())
         stats = renderer.render(world, readback=True)
-        assert stats.draws == 2 and stats.lights == 1 and renderer.light_pass.pipeline is not None
+        assert stats.draws == 2 and stats.lights == 1 and renderer.output.light_pass.pipeline is not None
         assert gpu.target.pixels()[..., :3].max() > 30
         handle = gpu.meshes.add(cube_mesh())
         assert gpu.meshes.add(gpu.meshes[handle].data) == handle  # a mesh is uploaded once

@@ -143,3 +143,21 @@ def test_a_window_with_msaa_and_a_filmic_tone_map_resizes_cleanly(msaa):
     result = run_windowed(options, glfw, on_frame=script)
     assert result.validation_messages == [] and result.frames == 8
     assert result.recreations >= 1
+
+
+def test_a_deferred_window_resizes_cleanly():
+    """The swapchain's G-buffer and the lighting's image set are made again on resize, with
+    validation on."""
+    glfw = open_glfw()
+    assert glfw is not None
+
+    def script(frame, glfw_, window):
+        if frame == 3:
+            glfw_.set_window_size(window, 300, 200)
+
+    options = RunOptions(
+        scene="lights", width=240, height=180, frames=8, validate=True, quiet=True, light_culling="deferred", lights=64
+    )
+    result = run_windowed(options, glfw, on_frame=script)
+    assert result.validation_messages == [] and result.frames == 8
+    assert result.recreations >= 1

@@ -13,6 +13,7 @@ from typing import NoReturn
 from ..ecs.errors import EcsError
 from ..errors import UsageError
 from ..gpu.swapchain import PRESENT_MODES
+from ..render.light_clusters import LIGHT_MODES
 from ..render.renderer import MODES, PATHS, RECORDER_NAMES
 from .scenes import SCENES as RENDERED_SCENES
 from .scenes import SEED_SCENES
@@ -113,9 +114,10 @@ def render_flags() -> OneLineParser:
     )
     common.add_argument(
         "--light-culling",
-        choices=("auto", "loop", "clustered"),
+        choices=LIGHT_MODES,
         default="auto",
-        help="auto (default): clusters from 16 bounded lights; loop: every fragment over every light",
+        help="auto (default): from 16 bounded lights, clusters and the opaque meshes lit in compute (deferred); "
+        "loop: every fragment over every light; clustered: clusters, lit in the fragment shader",
     )
     common.add_argument("--lights", type=int, help="lights scene: how many point and spot lights (default 1,024)")
     common.add_argument(

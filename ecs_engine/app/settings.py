@@ -35,7 +35,7 @@ class Settings:
     fill: str = "solid"  # solid | wireframe | points
     tone_map: str = "clamp"  # clamp | aces | reinhard (render/tone_map.py)
     exposure: float = 0.0  # stops
-    light_culling: str = "auto"  # auto | loop | clustered (render/light_clusters.py)
+    light_culling: str = "auto"  # render/light_clusters.py LIGHT_MODES (render/light_clusters.py)
 
 
 @dataclass(frozen=True)
@@ -60,7 +60,7 @@ class RunOptions:
     tone_map: str = "clamp"  # clamp | aces | reinhard
     exposure: float = 0.0  # stops: the HDR colour times 2^exposure before the tone map
     msaa: int = 1  # samples per pixel of the scene (1, 2, 4, 8), fixed for the run
-    light_culling: str = "auto"  # auto | loop | clustered
+    light_culling: str = "auto"  # render/light_clusters.py LIGHT_MODES
     lights: int | None = None  # the lights scene's light count (None: its default, 1,024)
     chunk_rows: int | None = None  # rows per render job (None: about one per thread, frame_data.MIN_CHUNK_ROWS)
     recorder: str | None = None  # native | python (None: native when numba is there)

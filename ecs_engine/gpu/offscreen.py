@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .memory import HOST, Buffer, Image
-from .render_pass import SceneAttachments, create_framebuffer, create_render_pass
+from .render_pass import FORMS, SceneAttachments, create_framebuffer, create_target_passes
 
 if TYPE_CHECKING:
     from .device import Device
@@ -24,8 +24,8 @@ class OffscreenTarget:
         self.device = device
         self.width, self.height = width, height
         self.samples = samples  # MSAA of the scene's attachments (the target itself has one sample)
-        self.hdr = hdr or samples > 1  # the scene in HDR colour, tone mapped (gpu/render_pass.py)
-        self.generation = 0  # counts changes of render pass (set_hdr)
+        self.form = "hdr" if hdr or samples > 1 else "direct"  # gpu/render_pass.py's FORMS
+        self.generation = 0  # counts changes of render pass (set_form)
         self.color_format = vk.VK_FORMAT_R8G8B8A8_SRGB
         self.color = Image(
             device,
@@ -35,19 +35,23 @@ class OffscreenTarget:
             vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
             vk.VK_IMAGE_ASPECT_COLOR_BIT,
         )
-        self.render_pass, self.attachments, self.framebuffer = self._build_pass(self.hdr)
+        self.render_pass, self.gbuffer_pass, self.attachments, self.framebuffer = self._build_pass(self.form)
         self.readback = Buffer(device, width * height * 4, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
 
-    def _build_pass(self, hdr: bool) -> tuple[Any, SceneAttachments, Any]:
-        """The render pass, shared attachments and framebuffer of a form; on failure nothing is
-        left made."""
+    @property
+    def hdr(self) -> bool:
+        return self.form != "direct"
+
+    def _build_pass(self, form: str) -> tuple[Any, Any, SceneAttachments, Any]:
+        """The render pass, G-buffer pass, shared attachments and framebuffer of a form; on
+        failure nothing is left made."""
         device = self.device
         vk = device.vk
-        render_pass = create_render_pass(
-            device, self.color_format, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, self.samples, hdr
+        render_pass, gbuffer_pass = create_target_passes(
+            device, self.color_format, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, self.samples, form
         )
         try:
-            attachments = SceneAttachments(device, self.width, self.height, self.samples, hdr)
+            attachments = SceneAttachments(device, self.width, self.height, self.samples, form, gbuffer_pass)
             try:
                 framebuffer = create_framebuffer(
                     device, render_pass, attachments.views(self.color.view), self.width, self.height
@@ -57,24 +61,32 @@ class OffscreenTarget:
                 raise
         except BaseException:
             vk.vkDestroyRenderPass(device.handle, render_pass, None)
+            if gbuffer_pass is not None:
+                vk.vkDestroyRenderPass(device.handle, gbuffer_pass, None)
             raise
-        return render_pass, attachments, framebuffer
+        return render_pass, gbuffer_pass, attachments, framebuffer
 
     def _release_pass(self) -> None:
         vk = self.device.vk
         vk.vkDestroyFramebuffer(self.device.handle, self.framebuffer, None)
         self.attachments.destroy()
         vk.vkDestroyRenderPass(self.device.handle, self.render_pass, None)
+        if self.gbuffer_pass is not None:
+            vk.vkDestroyRenderPass(self.device.handle, self.gbuffer_pass, None)
 
-    def set_hdr(self, hdr: bool) -> None:
-        """Render the scene through HDR colour and the tone map, or straight into the target:
-        a new render pass (the caller waited until no frame uses the old one)."""
-        hdr = hdr or self.samples > 1
-        if hdr != self.hdr:
-            new = self._build_pass(hdr)  # the new form first: if it fails, the old one stays whole
+    def set_form(self, form: str) -> None:
+        """Render the scene through HDR colour and the tone map (`hdr`), with the opaque meshes
+        lit in compute first (`deferred`), or straight into the target (`direct`): new render
+        passes (the caller waited until no frame uses the old ones). MSAA keeps `hdr`."""
+        if form not in FORMS:
+            raise ValueError(f"unknown target form {form!r}; forms: {', '.join(FORMS)}")
+        if self.samples > 1:
+            form = "hdr"
+        if form != self.form:
+            new = self._build_pass(form)  # the new form first: if it fails, the old one stays whole
             self._release_pass()
-            self.render_pass, self.attachments, self.framebuffer = new
-            self.hdr = hdr
+            self.render_pass, self.gbuffer_pass, self.attachments, self.framebuffer = new
+            self.form = form
             self.generation += 1
 
     def record_readback(self, cb: Any) -> None:

@@ -63,6 +63,7 @@ class GraphicsPipelineSpec:
     fragment_constants: tuple[int, ...] = ()  # uint specialisation constants, constant_id 0, 1, ...
     polygon_mode: int = 0  # VK_POLYGON_MODE_FILL; LINE (1) and POINT (2) need fillModeNonSolid
     samples: int = 1  # the subpass's MSAA count
+    color_attachments: int = 1  # the subpass's; all written alike (the G-buffer pass has four)
 
 
 def specialization(vk: Any, values: tuple[int, ...]) -> tuple[Any, Any]:
@@ -131,7 +132,7 @@ def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
                 depthWriteEnable=vk.VK_TRUE if spec.depth_write else vk.VK_FALSE,
                 depthCompareOp=vk.VK_COMPARE_OP_GREATER,
             ),
-            pColorBlendState=vk.VkPipelineColorBlendStateCreateInfo(pAttachments=[blend]),
+            pColorBlendState=vk.VkPipelineColorBlendStateCreateInfo(pAttachments=[blend] * spec.color_attachments),
             pDynamicState=vk.VkPipelineDynamicStateCreateInfo(
                 pDynamicStates=[vk.VK_DYNAMIC_STATE_VIEWPORT, vk.VK_DYNAMIC_STATE_SCISSOR]
             ),
@@ -145,11 +146,15 @@ def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
         vk.vkDestroyShaderModule(device.handle, frag, None)
 
 
-def compute_pipeline(device: Device, shader: str, layout: Any) -> Any:
+def compute_pipeline(device: Device, shader: str, layout: Any, constants: tuple[int, ...] = ()) -> Any:
+    """`constants`: uint specialisation constants, constant_id 0, 1, ..."""
     vk = device.vk
     module = shader_module(device, shader)
     try:
-        stage = vk.VkPipelineShaderStageCreateInfo(stage=vk.VK_SHADER_STAGE_COMPUTE_BIT, module=module, pName="main")
+        info_, _data = specialization(vk, constants)
+        stage = vk.VkPipelineShaderStageCreateInfo(
+            stage=vk.VK_SHADER_STAGE_COMPUTE_BIT, module=module, pName="main", pSpecializationInfo=info_
+        )
         info = vk.VkComputePipelineCreateInfo(stage=stage, layout=layout)
         return vk.vkCreateComputePipelines(device.handle, device.pipeline_cache.handle, 1, [info], None)[0]
     finally:

@@ -1,22 +1,27 @@
-"""The frame's render pass: the scene in 16-bit float (HDR) colour with reverse-Z depth, then
-tone mapped into the target (sRGB swapchain image or offscreen image), then the UI on top; or,
-when the output needs no HDR colour (`hdr=False`: the clamp tone map at exposure 0 without MSAA,
-render/tone_map.py's wants_hdr), the scene straight into the target, as before HDR existed: the
-HDR colour and the tone map cost the seed scenes 0.12-0.17 ms of GPU time a frame on the H100.
+"""The frame's render pass, in one of a target's three forms (FORMS):
 
-Attachments: 0 the target (written only by the tone map; with hdr=False cleared and drawn into by
-every subpass), 1 depth, 2 the HDR colour (multisampled with --msaa), 3 its single-sample resolve
-(only with --msaa).
+- `hdr`: the scene in 16-bit float (HDR) colour with reverse-Z depth, then tone mapped into the
+  target (sRGB swapchain image or offscreen image), then the UI on top;
+- `direct`: when the output needs no HDR colour (the clamp tone map at exposure 0 without MSAA,
+  render/tone_map.py's wants_hdr), the scene straight into the target, as before HDR existed: the
+  HDR colour and the tone map cost the seed scenes 0.12-0.17 ms of GPU time a frame on the H100;
+- `deferred`: as `hdr`, but the opaque meshes were drawn before, by the G-buffer pass
+  (gpu/gbuffer.py), and lit in compute: this pass loads depth and HDR colour.
 
-- subpass 0 (SUBPASS_SCENE): the meshes, from the chunk jobs' secondary command buffers;
+Attachments: 0 the target (written only by the tone map; in the direct form cleared and drawn
+into by every subpass), 1 depth, 2 the HDR colour (multisampled with --msaa), 3 its single-sample
+resolve (only with --msaa).
+
+- subpass 0 (SUBPASS_SCENE): the meshes, from the chunk jobs' secondary command buffers (in the
+  deferred form only the rows set aside: blended materials and fills of their own);
 - subpass 1 (SUBPASS_BILLBOARDS): light billboards inline, depth-tested against the scene; with
   MSAA the HDR colour resolves at its end;
 - subpass 2 (SUBPASS_OUTPUT): the tone map reads the HDR colour as an input attachment (same
   pixel, no sampling) and writes the target; the overlay (ImGui) draws after it, untouched by
-  exposure and tone curve. With hdr=False only the overlay draws here.
+  exposure and tone curve. In the direct form only the overlay draws here.
 
-The subpasses are the same in both forms, but the two render passes are not compatible: a target
-that changes form (`set_hdr`) counts up its `generation`, and whoever made pipelines against its
+The subpasses are the same in every form, but the render passes are not all compatible: a target
+that changes form (`set_form`) counts up its `generation`, and whoever made pipelines against its
 render pass makes them again.
 """
 
@@ -24,12 +29,16 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from .gbuffer import GBuffer, create_gbuffer_pass
 from .memory import Image
 
 if TYPE_CHECKING:
     from .device import Device
 
 SUBPASS_SCENE, SUBPASS_BILLBOARDS, SUBPASS_OUTPUT = 0, 1, 2
+#: a target's forms: straight into the target, HDR colour tone mapped, or HDR with the opaque
+#: meshes lit in compute first (gpu/gbuffer.py; this pass then loads depth and HDR colour)
+FORMS = ("direct", "hdr", "deferred")
 HDR_FORMAT_NAME = "VK_FORMAT_R16G16B16A16_SFLOAT"
 DEPTH_FORMAT_NAME = "VK_FORMAT_D32_SFLOAT"
 MSAA_COUNTS = (1, 2, 4, 8)
@@ -52,8 +61,9 @@ def check_samples(device: Device, samples: int) -> None:
         raise UsageError(f"--msaa {samples}: {device.info.name} offers {counts}")
 
 
-def _attachment(vk: Any, fmt: int, samples: int, load: int, store: int, final: int) -> Any:
-    """An attachment without stencil, its contents undefined when the pass begins."""
+def _attachment(vk: Any, fmt: int, samples: int, load: int, store: int, final: int, initial: int = 0) -> Any:
+    """An attachment without stencil, its contents undefined when the pass begins unless loaded
+    from `initial` (VK_IMAGE_LAYOUT_UNDEFINED is 0)."""
     return vk.VkAttachmentDescription(
         format=fmt,
         samples=samples,
@@ -61,7 +71,7 @@ def _attachment(vk: Any, fmt: int, samples: int, load: int, store: int, final: i
         storeOp=store,
         stencilLoadOp=vk.VK_ATTACHMENT_LOAD_OP_DONT_CARE,
         stencilStoreOp=vk.VK_ATTACHMENT_STORE_OP_DONT_CARE,
-        initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
+        initialLayout=initial,
         finalLayout=final,
     )
 
@@ -88,13 +98,16 @@ def _render_pass(device: Device, attachments: list[Any], subpasses: list[Any], d
     )
 
 
-def create_render_pass(device: Device, color_format: int, final_layout: int, samples: int = 1, hdr: bool = True) -> Any:
-    if not hdr:
-        if samples > 1:
-            raise ValueError("MSAA resolves the HDR colour: a render pass with samples > 1 needs hdr=True")
+def create_render_pass(
+    device: Device, color_format: int, final_layout: int, samples: int = 1, form: str = "hdr"
+) -> Any:
+    if form != "hdr" and samples > 1:
+        raise ValueError(f"MSAA resolves the HDR colour in the forward pass: the {form} form has one sample")
+    if form == "direct":
         return _create_direct_pass(device, color_format, final_layout)
     vk = device.vk
     msaa = samples > 1
+    deferred = form == "deferred"
 
     clear, dont_load = vk.VK_ATTACHMENT_LOAD_OP_CLEAR, vk.VK_ATTACHMENT_LOAD_OP_DONT_CARE
     store, dont_store = vk.VK_ATTACHMENT_STORE_OP_STORE, vk.VK_ATTACHMENT_STORE_OP_DONT_CARE
@@ -102,10 +115,27 @@ def create_render_pass(device: Device, color_format: int, final_layout: int, sam
     read_layout = vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
     depth_layout = vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL
     hdr_format = getattr(vk, HDR_FORMAT_NAME)
+    load = vk.VK_ATTACHMENT_LOAD_OP_LOAD if deferred else clear  # deferred: what the G-buffer pass and lighting left
     attachments = [
         _attachment(vk, color_format, 1, dont_load, store, final_layout),  # every pixel written by the tone map
-        _attachment(vk, getattr(vk, DEPTH_FORMAT_NAME), samples, clear, dont_store, depth_layout),
-        _attachment(vk, hdr_format, samples, clear, dont_store, read_layout if not msaa else color_layout),
+        _attachment(
+            vk,
+            getattr(vk, DEPTH_FORMAT_NAME),
+            samples,
+            load,
+            dont_store,
+            depth_layout,
+            vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL if deferred else 0,
+        ),
+        _attachment(
+            vk,
+            hdr_format,
+            samples,
+            load,
+            dont_store,
+            read_layout if not msaa else color_layout,
+            vk.VK_IMAGE_LAYOUT_GENERAL if deferred else 0,
+        ),
     ]
     if msaa:
         attachments.append(_attachment(vk, hdr_format, 1, dont_load, dont_store, read_layout))
@@ -134,15 +164,20 @@ def create_render_pass(device: Device, color_format: int, final_layout: int, sam
     depth_stages = vk.VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT | vk.VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT
     color_rw = vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | vk.VK_ACCESS_COLOR_ATTACHMENT_READ_BIT
     depth_rw = vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT | vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT
+    compute = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT if deferred else 0
+    shader_write = vk.VK_ACCESS_SHADER_WRITE_BIT if deferred else 0
     dependencies = [
         # the previous frame's use of the shared attachments (its tone map read the HDR colour),
-        # or the presentation engine, before this frame clears and writes them
+        # or the presentation engine, before this frame clears and writes them; deferred: this
+        # frame's lighting wrote the HDR colour (the G-buffer pass's own dependencies order the rest)
         vk.VkSubpassDependency(
             srcSubpass=vk.VK_SUBPASS_EXTERNAL,
             dstSubpass=SUBPASS_SCENE,
-            srcStageMask=color_stage | depth_stages | fragment,
+            srcStageMask=color_stage | depth_stages | fragment | compute,
             dstStageMask=color_stage | depth_stages,
-            srcAccessMask=vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
+            srcAccessMask=vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT
+            | vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT
+            | shader_write,
             dstAccessMask=color_rw | depth_rw,
         ),
         vk.VkSubpassDependency(
@@ -240,13 +275,25 @@ def _create_direct_pass(device: Device, color_format: int, final_layout: int) ->
 
 class SceneAttachments:
     """The attachments a target shares between its framebuffers: depth, HDR colour and (with
-    MSAA) its resolve; with hdr=False depth alone. `views(target_view)` lists a framebuffer's
+    MSAA) its resolve; in the direct form depth alone; in the deferred form also the G-buffer
+    (gpu/gbuffer.py: its images and the first pass's framebuffer), depth sampled and the HDR
+    colour a storage image for the lighting. `views(target_view)` lists a framebuffer's
     attachments in render-pass order; `input_view` is what the tone map reads."""
 
-    def __init__(self, device: Device, width: int, height: int, samples: int = 1, hdr: bool = True) -> None:
+    def __init__(
+        self,
+        device: Device,
+        width: int,
+        height: int,
+        samples: int = 1,
+        form: str = "hdr",
+        gbuffer_pass: Any = None,
+    ) -> None:
         vk = device.vk
         self.samples = samples
         self.images: list[Image] = []
+        self.gbuffer: GBuffer | None = None
+        deferred = form == "deferred"
         try:
             self.images.append(
                 Image(
@@ -254,23 +301,27 @@ class SceneAttachments:
                     width,
                     height,
                     getattr(vk, DEPTH_FORMAT_NAME),
-                    vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+                    vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | (vk.VK_IMAGE_USAGE_SAMPLED_BIT if deferred else 0),
                     vk.VK_IMAGE_ASPECT_DEPTH_BIT,
                     samples,
                 )
             )
-            if not hdr:
+            if form == "direct":
                 return
             color = vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT
             hdr_usage = color | (vk.VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT if samples > 1 else 0)
             if samples == 1:
                 hdr_usage |= vk.VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT
+            if deferred:
+                hdr_usage |= vk.VK_IMAGE_USAGE_STORAGE_BIT
             hdr_format = getattr(vk, HDR_FORMAT_NAME)
             aspect = vk.VK_IMAGE_ASPECT_COLOR_BIT
             self.images.append(Image(device, width, height, hdr_format, hdr_usage, aspect, samples))
             if samples > 1:
                 resolve_usage = color | vk.VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT
                 self.images.append(Image(device, width, height, hdr_format, resolve_usage, aspect))
+            if deferred:
+                self.gbuffer = GBuffer(device, gbuffer_pass, self.images[0].view, self.images[1].view, width, height)
         except BaseException:
             self.destroy()
             raise
@@ -287,9 +338,25 @@ class SceneAttachments:
         return [target_view] + [image.view for image in self.images]
 
     def destroy(self) -> None:
+        if self.gbuffer is not None:
+            self.gbuffer.destroy()
+            self.gbuffer = None
         for image in self.images:
             image.destroy()
         self.images = []
+
+
+def create_target_passes(device: Device, color_format: int, final_layout: int, samples: int, form: str) -> Any:
+    """(the render pass, the G-buffer pass or None) of a target's form; on failure nothing is left made."""
+    vk = device.vk
+    render_pass = create_render_pass(device, color_format, final_layout, samples, form)
+    if form != "deferred":
+        return render_pass, None
+    try:
+        return render_pass, create_gbuffer_pass(device, getattr(vk, DEPTH_FORMAT_NAME), getattr(vk, HDR_FORMAT_NAME))
+    except BaseException:
+        vk.vkDestroyRenderPass(device.handle, render_pass, None)
+        raise
 
 
 def create_framebuffer(device: Device, render_pass: Any, views: list[Any], width: int, height: int) -> Any:

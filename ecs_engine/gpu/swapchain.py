@@ -11,7 +11,7 @@ import numpy as np
 from ..errors import UsageError
 from .functions import device_function, instance_function, raw_device_function
 from .memory import HOST, Buffer
-from .render_pass import SceneAttachments, create_framebuffer, create_render_pass
+from .render_pass import FORMS, SceneAttachments, create_framebuffer, create_target_passes
 
 if TYPE_CHECKING:
     from .device import Device
@@ -40,8 +40,8 @@ class Swapchain:
         vk = self.vk = device.vk
         self.device = device
         self.samples = samples  # MSAA of the scene's attachments
-        self.hdr = hdr or samples > 1  # the scene in HDR colour, tone mapped (gpu/render_pass.py)
-        self.generation = 0  # counts changes of render pass (set_hdr)
+        self.form = "hdr" if hdr or samples > 1 else "direct"  # gpu/render_pass.py's FORMS
+        self.generation = 0  # counts changes of render pass (set_form)
         self.surface = surface
         self.framebuffer_size = framebuffer_size
         inst = device.instance
@@ -59,7 +59,7 @@ class Swapchain:
         ]
         chosen = srgb[0] if srgb else formats[0]
         self.color_format, self.color_space = chosen.format, chosen.colorSpace
-        self.render_pass = self._create_pass()
+        self.render_pass, self.gbuffer_pass = self._create_pass()
         self._create_fn = device_function(device, "vkCreateSwapchainKHR")
         self._destroy_fn = device_function(device, "vkDestroySwapchainKHR")
         self._images_fn = device_function(device, "vkGetSwapchainImagesKHR")
@@ -119,7 +119,9 @@ class Swapchain:
             self._destroy_fn(self.device.handle, old, None)
         self.width, self.height = width, height
         self.images = self._images_fn(self.device.handle, self.handle)
-        self.attachments = attachments = SceneAttachments(self.device, width, height, self.samples, self.hdr)
+        self.attachments = attachments = SceneAttachments(
+            self.device, width, height, self.samples, self.form, self.gbuffer_pass
+        )
         for image in self.images:
             view = vk.vkCreateImageView(
                 self.device.handle,
@@ -177,26 +179,35 @@ class Swapchain:
         self.present_name = present
         self.recreate()
 
-    def _create_pass(self) -> Any:
-        return create_render_pass(
-            self.device, self.color_format, self.vk.VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, self.samples, self.hdr
+    @property
+    def hdr(self) -> bool:
+        return self.form != "direct"
+
+    def _create_pass(self, form: str | None = None) -> Any:
+        return create_target_passes(
+            self.device, self.color_format, self.vk.VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, self.samples, form or self.form
         )
 
-    def set_hdr(self, hdr: bool) -> None:
-        """Render the scene through HDR colour and the tone map, or straight into the images: a
-        new render pass and framebuffers (waits until no frame uses the old ones)."""
-        hdr = hdr or self.samples > 1
-        if hdr != self.hdr:
+    def _destroy_passes(self) -> None:
+        for render_pass in (self.render_pass, self.gbuffer_pass):
+            if render_pass is not None:
+                self.vk.vkDestroyRenderPass(self.device.handle, render_pass, None)
+
+    def set_form(self, form: str) -> None:
+        """Render the scene through HDR colour and the tone map (`hdr`), with the opaque meshes
+        lit in compute first (`deferred`), or straight into the images (`direct`): new render
+        passes and framebuffers (waits until no frame uses the old ones). MSAA keeps `hdr`."""
+        if form not in FORMS:
+            raise ValueError(f"unknown target form {form!r}; forms: {', '.join(FORMS)}")
+        if self.samples > 1:
+            form = "hdr"
+        if form != self.form:
             self.device.wait_idle()
-            self.hdr = hdr
-            try:
-                render_pass = self._create_pass()  # first: if it fails, the old form stays whole
-            except BaseException:
-                self.hdr = not hdr
-                raise
+            passes = self._create_pass(form)  # first: if it fails, the old form stays whole
             self._release()
-            self.vk.vkDestroyRenderPass(self.device.handle, self.render_pass, None)
-            self.render_pass = render_pass
+            self._destroy_passes()
+            self.render_pass, self.gbuffer_pass = passes
+            self.form = form
             self._build()
             self.generation += 1
 
@@ -329,4 +340,4 @@ class Swapchain:
         if self.handle is not None:
             self._destroy_fn(self.device.handle, self.handle, None)
             self.handle = None
-        self.vk.vkDestroyRenderPass(self.device.handle, self.render_pass, None)
+        self._destroy_passes()

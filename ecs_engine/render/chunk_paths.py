@@ -19,6 +19,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from ..gpu.gbuffer import GBUFFER_COLORS
 from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
 from ..gpu.secondary import end_command_buffer
 from .frame_data import Chunk
@@ -43,10 +44,12 @@ def vertex_attributes(vk: Any, inputs: tuple[str, ...] = VERTEX_INPUTS) -> list[
 def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str, blended: bool = False) -> tuple[Any, Any]:
     """The (plain, mirrored) mesh pipelines of a path: the same but for the front face. Textured
     materials take the `_textured` variants of both shaders (`mesh.vert` -> `mesh_textured.vert`);
-    clustered lights the `_clustered` fragment shaders (they need subgroup arithmetic)."""
+    clustered lights the `_clustered` fragment shaders (they need subgroup arithmetic); the
+    G-buffer pass (ctx.gbuffer) the `_gbuffer` ones, which light nothing."""
     textured = bool(ctx.material_features & FEATURE_TEXTURES)
     clustered = bool(ctx.material_features & FEATURE_CLUSTERED)
-    fragment_shader = f"mesh{'_textured' if textured else ''}{'_clustered' if clustered else ''}.frag"
+    lighting = "_gbuffer" if ctx.gbuffer else "_clustered" if clustered else ""
+    fragment_shader = f"mesh{'_textured' if textured else ''}{lighting}.frag"
     if textured:
         vertex_shader = vertex_shader.replace(".vert", "_textured.vert")
     base = dict(
@@ -64,6 +67,7 @@ def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str, blended: b
         # blended materials (set_aside_pass.py): over what is drawn, without hiding what follows
         alpha_blend=blended,
         depth_write=not blended,
+        color_attachments=GBUFFER_COLORS if ctx.gbuffer else 1,
     )
     vk = ctx.device.vk
     plain = graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, fragment_shader, **base))

@@ -148,10 +148,11 @@ class FrameResources:
         positional: int,
         grid: ClusterGrid | None,
         ambient: tuple[float, float, float, float],
+        deferred: bool = False,
     ) -> None:
         """The frame's uniforms, rewritten only when something in them changed (the slot's
         mapped buffer keeps what was last written there)."""
-        written = (cam, origin_key, light_count, positional, tuple(ambient), grid)
+        written = (cam, origin_key, light_count, positional, tuple(ambient), grid, deferred)
         last = self.written
         if last is not None and last[0] is cam and last[1:] == written[1:]:
             return
@@ -161,8 +162,10 @@ class FrameResources:
         g["eye"][0, :3] = cam.position - origin  # float64 difference, then the cast
         g["ambient"] = ambient
         g["counts"] = (light_count, positional, 0, 0)
-        if grid is not None:
+        if grid is not None or deferred:  # the grid's tile planes; the deferred lighting's positions
             g["inverse_projection"] = np.linalg.inv(cam.projection).T
+        g["light_tiles"] = 0  # no grid (the deferred lighting then loops over every light)
+        if grid is not None:
             g["light_tiles"] = (grid.tiles_x, grid.tiles_y, grid.words, grid.tile)
             g["light_bins"] = (grid.bounds_start, grid.masks_start, 0, 0)
             g["bin_depth"] = (grid.near, grid.scale, grid.width, grid.height)

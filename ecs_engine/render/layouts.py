@@ -32,8 +32,12 @@ GLOBALS = Struct(
         ("eye", "vec4", "xyz: the camera relative to the render origin (zero by default)"),
         ("ambient", "vec4", "rgb, intensity"),
         ("counts", "uvec4", "x: lights, y: point and spot lights (first in the buffer, drawn as billboards)"),
-        ("inverse_projection", "mat4", "clustered lights: the screen tiles' planes"),
-        ("light_tiles", "uvec4", "x tiles across, y tiles down, z mask words per tile, w tile side in pixels"),
+        ("inverse_projection", "mat4", "the light grid's tile planes, the deferred lighting's positions"),
+        (
+            "light_tiles",
+            "uvec4",
+            "x tiles across (0: no light grid), y tiles down, z mask words per tile, w tile side in pixels",
+        ),
         ("light_bins", "uvec4", "x first uint of the light bounds, y first uint of the tile masks, zw 0"),
         (
             "bin_depth",
@@ -176,6 +180,12 @@ ALPHA_OPAQUE, ALPHA_MASK, ALPHA_BLEND = range(3)
 LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL = range(3)
 TONE_MAP_CLAMP, TONE_MAP_ACES, TONE_MAP_REINHARD = range(3)
 NO_TEXTURE = 0xFFFFFFFF
+NO_MATERIAL = 0xFFFFFFFF  # the G-buffer's material index where nothing is lit (gpu/gbuffer.py)
+# the deferred lighting pass (render/deferred_pass.py): set 1 names the G-buffer's images
+SET_DEFERRED = 1
+BINDING_DEPTH, BINDING_HDR, BINDING_NORMAL_ROUGHNESS, BINDING_BASE_METALLIC, BINDING_MATERIAL_IDS = range(5)
+DEFERRED_TILE = 16  # a workgroup lights DEFERRED_TILE x DEFERRED_TILE pixels
+DEFERRED_WORDS = 512  # light mask words a workgroup holds at once (16,384 lights; more take turns)
 CULL_GROUP = 256  # cull.comp's local size
 COMPACT_GROUP = 64  # compact.comp's local size
 
@@ -234,6 +244,15 @@ DEFINES = {
     "TONE_MAP_ACES": TONE_MAP_ACES,
     "TONE_MAP_REINHARD": TONE_MAP_REINHARD,
     "NO_TEXTURE": NO_TEXTURE,
+    "NO_MATERIAL": NO_MATERIAL,
+    "SET_DEFERRED": SET_DEFERRED,
+    "BINDING_DEPTH": BINDING_DEPTH,
+    "BINDING_HDR": BINDING_HDR,
+    "BINDING_NORMAL_ROUGHNESS": BINDING_NORMAL_ROUGHNESS,
+    "BINDING_BASE_METALLIC": BINDING_BASE_METALLIC,
+    "BINDING_MATERIAL_IDS": BINDING_MATERIAL_IDS,
+    "DEFERRED_TILE": DEFERRED_TILE,
+    "DEFERRED_WORDS": DEFERRED_WORDS,
     "CULL_GROUP": CULL_GROUP,
     "COMPACT_GROUP": COMPACT_GROUP,
 }

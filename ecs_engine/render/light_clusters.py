@@ -1,5 +1,5 @@
-"""Clustered forward lighting: for thousands of lights, each fragment loops over the lights of its
-cluster instead of every light.
+"""Clustered lighting: for thousands of lights, each fragment (forward) or each pixel of the
+deferred lighting pass loops over the lights of its cluster instead of every light.
 
 A cluster is a screen tile (TILE_PX square) times a distance bin: one of LIGHT_BINS exponential
 shells around the eye, from s = max(near, reach / 100) to the farthest reach of any bounded light
@@ -15,15 +15,17 @@ over. Nothing is capped per cluster: the masks hold every light.
 Measured on the GPU host (H100, 1280x720, the lights demo with 4,096 lights): the first version,
 one workgroup per 32 px x 32-slice cluster listing lights whose sphere touches the cluster's box,
 let each fragment evaluate ~77 lights where ~20 reach it; its dispatch alone took 2.25 ms of the
-10.8 ms frame. This one: 0.26 ms for both passes, 5.3 ms the frame (docs/performance.md has the
-steps and what is left). The light's window function is exactly 0 beyond its radius (and a spot light's
-beyond its cone), so leaving it out of a cluster it cannot reach changes nothing but the order of
-the sum (checked: images equal the loop within 1/255).
+10.8 ms frame. This one: 0.26 ms for both passes, 5.3 ms the frame lit in the fragment shader,
+1.8 ms lit in compute (deferred_pass.py; docs/performance.md has the steps). The light's window
+function is exactly 0 beyond its radius (and a spot light's beyond its cone), so leaving it out
+of a cluster it cannot reach changes nothing but the order of the sum (checked: images equal
+the loop within 1/255).
 
-Below CLUSTER_MIN_LIGHTS the simple loop stays: the compute passes and the lookups cost more than
-looping over a handful of lights (`python -m ecs_engine.bench lights` measures where they cross).
-The renderer switches with hysteresis (on at the threshold, off below half of it); a switch
-rebuilds the mesh pipelines (FEATURE_CLUSTERED is a specialisation constant).
+Below CLUSTER_MIN_LIGHTS the simple loop stays: the compute passes, the lookups and the G-buffer
+cost more than looping over a handful of lights (`python -m ecs_engine.bench lights` measures
+where they cross). The renderer switches with hysteresis (on at the threshold, off below half of
+it); a switch rebuilds the mesh pipelines (FEATURE_CLUSTERED is a specialisation constant) and,
+with `auto`, changes the target's form (deferred, or forward again).
 """
 
 from __future__ import annotations
@@ -44,9 +46,9 @@ log = logging.getLogger("ecs_engine")
 
 TILE_PX: Final = 16
 # measured on the GPU host (H100, 1280x720, the lights demo, bench/results/lights-h100-16c.json):
-# 6 lights 1.34 ms looping, 1.82 clustered; 16 lights 2.18 and 2.14; 64 lights 6.41 and 3.30
+# 6 lights 1.33 ms looping, 1.75 clustered, 1.58 deferred; 16 lights 2.18, 2.13 and 1.58
 CLUSTER_MIN_LIGHTS: Final = 16
-LIGHT_MODES: Final = ("auto", "loop", "clustered")
+LIGHT_MODES: Final = ("auto", "loop", "clustered", "deferred")
 
 
 @dataclass(frozen=True)
@@ -127,12 +129,12 @@ def light_census(
 
 
 def wants_clusters(mode: str, clustered_now: bool, bounded: int, unbounded: int) -> bool:
-    """Whether this frame's lights are clustered: `clustered` and `loop` force it (clustered only
-    while the unbounded ones fit the global list), `auto` switches at CLUSTER_MIN_LIGHTS bounded
-    lights, off again below half of that."""
+    """Whether this frame's lights are clustered: `clustered`, `deferred` and `loop` force it
+    (clustered only while the unbounded ones fit the global list), `auto` switches at
+    CLUSTER_MIN_LIGHTS bounded lights, off again below half of that."""
     if unbounded > MAX_GLOBAL_LIGHTS or bounded == 0 or mode == "loop":
         return False
-    if mode == "clustered":
+    if mode in ("clustered", "deferred"):
         return True
     return bounded >= (CLUSTER_MIN_LIGHTS // 2 if clustered_now else CLUSTER_MIN_LIGHTS)
 
@@ -181,7 +183,7 @@ class ClusterPass:
             vk.VK_ACCESS_SHADER_WRITE_BIT,
             vk.VK_ACCESS_SHADER_READ_BIT,
             compute,
-            vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT,
+            vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT | compute,  # forward fragments, or the deferred lighting
         )
 
     def _barrier(self, cb: Any, buffer: Any, src: int, dst: int, src_stage: int, dst_stage: int) -> None:
@@ -210,24 +212,25 @@ class LightCulling:
 
     def __init__(self, device: Device, frame_set_layout: Any, mode: str = "auto") -> None:
         check_light_culling(mode)
-        self.mode = mode  # auto | loop | clustered
+        self.mode = mode  # LIGHT_MODES
         self.clustered = False  # the mesh pipelines loop over cluster lists
         self.pass_ = ClusterPass(device, frame_set_layout)
         self.supported = bool(device.features.get("fragmentSubgroupArithmetic"))
         self.max_bytes = int(device.limits.maxStorageBufferRange)  # the cluster buffer is one binding
         self._warned = False
+        self._warned_msaa = False
 
     def plan(self, data: Any, width: int, height: int) -> tuple[ClusterGrid | None, bool]:
         """(this frame's grid or None, whether `clustered` changed)."""
         clustered = False
         reach = 0.0
         if not self.supported:
-            if self.mode == "clustered" and not self._warned:
+            if self.mode in ("clustered", "deferred") and not self._warned:
                 self._warned = True
                 log.warning("this device has no subgroup arithmetic in fragment shaders: lights are not clustered")
             return None, False
         if self.mode != "loop" and (
-            self.clustered or self.mode == "clustered" or data.light_count >= CLUSTER_MIN_LIGHTS // 2
+            self.clustered or self.mode in ("clustered", "deferred") or data.light_count >= CLUSTER_MIN_LIGHTS // 2
         ):
             bounded, unbounded, reach = light_census(data.lights, data.directional, data.camera.position)
             clustered = wants_clusters(self.mode, self.clustered, bounded, unbounded)
@@ -247,6 +250,18 @@ class LightCulling:
         flipped = clustered != self.clustered
         self.clustered = clustered
         return grid, flipped
+
+    def deferred(self, samples: int) -> bool:
+        """Whether the opaque meshes are lit in compute (the target's deferred form): asked for,
+        or `auto` with clustered lights; never with MSAA (the G-buffer has one sample: MSAA
+        keeps forward lighting, with one warning when deferred was asked for)."""
+        wanted = self.mode == "deferred" or (self.mode == "auto" and self.clustered)
+        if wanted and samples > 1:
+            if self.mode == "deferred" and not self._warned_msaa:
+                self._warned_msaa = True
+                log.warning("deferred lighting draws one sample per pixel: with --msaa %d lights stay forward", samples)
+            return False
+        return wanted
 
     def record(self, cb: Any, frame: Any, grid: ClusterGrid, light_count: int) -> None:
         self.pass_.record(cb, frame.set_array, grid, frame.clusters, light_count)

@@ -25,6 +25,7 @@ import numpy as np
 from ..gpu.device import Device
 from ..gpu.secondary import SecondaryBuffers
 from .frame_data import Chunk
+from .layouts import NO_MATERIAL
 from .mesh_registry import MeshRegistry
 
 #: --fill: name -> VkPolygonMode (wireframe and points need the device's fillModeNonSolid)
@@ -41,12 +42,14 @@ class TargetState:
     key: tuple[int, int, int]  # framebuffer address, width, height
     area: Any
     viewport: Any
-    secondary_begin: Any  # begin info with render-pass inheritance
+    secondary_begin: Any  # the chunks' begin info with render-pass inheritance
+    aside_begin: Any  # the set-aside rows' (the deferred form: the second pass; else the same)
     pass_begin: Any  # VkRenderPassBeginInfo with the clear values
     keep: Any  # what the structs point to
     area_ptr: Any = None  # pointers to the structs above, for raw calls
     viewport_ptr: Any = None
     pass_begin_ptr: Any = None
+    gbuffer_begin_ptr: Any = None  # the deferred form: the G-buffer pass's VkRenderPassBeginInfo
     path_state: dict[Any, Any] = field(default_factory=dict)  # what paths keep per target and slot
 
     @classmethod
@@ -58,28 +61,39 @@ class TargetState:
         render_pass: Any,
         secondary_begin: Any,
         clear_color: tuple[float, float, float],
+        gbuffer: tuple[Any, Any, Any] | None = None,
     ) -> TargetState:
+        """`gbuffer`, in the deferred form: the G-buffer pass, its framebuffer and the begin info
+        of secondaries inside it (the chunks'); `secondary_begin` is then the set-aside rows'."""
         width, height = key[1], key[2]
         area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(width, height))
         background = vk.VkClearValue(color=vk.VkClearColorValue(float32=[*clear_color, 1.0]))
-        clears = [  # in render-pass order (gpu/render_pass.py): the target is not cleared
-            background,
-            vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=0.0, stencil=0)),  # reverse-Z
-            background,  # the HDR colour
-        ]
+        depth = vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=0.0, stencil=0))  # reverse-Z
+        clears = [background, depth, background]  # in render-pass order (gpu/render_pass.py): the target is not cleared
         state = cls(
             key=key,
             area=area,
             viewport=vk.VkViewport(x=0.0, y=0.0, width=float(width), height=float(height), minDepth=0.0, maxDepth=1.0),
-            secondary_begin=secondary_begin,
+            secondary_begin=secondary_begin if gbuffer is None else gbuffer[2],
+            aside_begin=secondary_begin,
             pass_begin=vk.VkRenderPassBeginInfo(
                 renderPass=render_pass, framebuffer=framebuffer, renderArea=area, pClearValues=clears
             ),
-            keep=(clears, framebuffer),
+            keep=[clears, framebuffer],
         )
         state.area_ptr = vk.ffi.addressof(state.area)
         state.viewport_ptr = vk.ffi.addressof(state.viewport)
         state.pass_begin_ptr = vk.ffi.addressof(state.pass_begin)
+        if gbuffer is not None:
+            zero = vk.VkClearValue(color=vk.VkClearColorValue(float32=[0.0, 0.0, 0.0, 0.0]))
+            none = vk.VkClearValue(color=vk.VkClearColorValue(uint32=[NO_MATERIAL, 0, 0, 0]))
+            # depth, HDR colour, normal-roughness, base-metallic, material (gpu/gbuffer.py)
+            gbuffer_clears = [depth, background, zero, zero, none]
+            begin = vk.VkRenderPassBeginInfo(
+                renderPass=gbuffer[0], framebuffer=gbuffer[1], renderArea=area, pClearValues=gbuffer_clears
+            )
+            state.keep += [gbuffer_clears, begin, gbuffer]
+            state.gbuffer_begin_ptr = vk.ffi.addressof(begin)
         return state
 
 
@@ -139,6 +153,7 @@ class PathContext:
     fill: str  # FILL_MODES: how the mesh pipelines rasterise triangles
     samples: int  # the target's MSAA count
     native_recorder: Callable[[], Any]  # gpu.native_recorder.NativeRecorder, compiled on first call, once a device
+    gbuffer: bool = False  # the chunks draw into the G-buffer pass (the deferred form), lit later
 
 
 class RenderPath(Protocol):

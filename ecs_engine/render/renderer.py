@@ -6,13 +6,12 @@ frame's mapped buffers (globals, lights, instance rows) and records; it never wr
 The mesh rows are drawn by a render path picked by name from PATHS (path.py says what a path
 does); the chunks of rows are jobs on the worker pool, each recording a secondary command
 buffer (or, in `indirect`, only writing rows for the compute shaders). The primary command
-buffer begins the render pass with SECONDARY_COMMAND_BUFFERS contents, executes the path's
-secondaries in subpass 0, draws the light billboards inline in subpass 1 (both into the HDR
-colour), then in subpass 2 the tone map (tone_map.py) and the overlay (the editor's ImGui); see
-gpu/render_pass.py. When the tone map is clamp at exposure 0 without MSAA, the target takes the
-scene straight, with no HDR colour and no tone map (ensure_output switches its form; what was
-made against its render pass is made again). Switching mode or recorder swaps the path; the frame
-slots, buffers, light pass, tone map and overlay stay.
+buffer records the passes around them by the target's form (output_passes.py): the G-buffer pass
+and the lighting compute pass in the deferred form, then the target's render pass (the path's
+secondaries, the light billboards, the tone map and the overlay). The form follows the tone map,
+exposure, MSAA, blended materials and the light culling (ensure_output switches it between frames;
+what was made against the old render passes is made again). Switching mode or recorder swaps the
+path; the frame slots, buffers, output passes and overlay stay.
 """
 
 from __future__ import annotations
@@ -20,6 +19,7 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from operator import attrgetter
 from typing import Any
 
@@ -31,7 +31,6 @@ from ..errors import UsageError
 from ..gpu.descriptors import write_images
 from ..gpu.device import Device
 from ..gpu.frames import FrameRing
-from ..gpu.render_pass import SUBPASS_BILLBOARDS
 from ..gpu.secondary import SecondaryBuffers
 from ..jobs import JobPool
 from .chunk_paths import RECORDERS, InstancedPath, PerEntityPath, check_recorder
@@ -45,14 +44,14 @@ from .layouts import (
     LIGHT,
 )
 from .light_clusters import ClusterGrid, LightCulling, check_light_culling
-from .light_pass import LightPass
 from .light_rows import light_features, write_lights
 from .materials import Materials
 from .mesh_registry import MeshRegistry
+from .output_passes import OutputPasses
 from .path import FILL_MODES, ChunkResult, FrameInputs, FrameStats, PathContext, PathFactory, RenderPath, TargetState
 from .set_aside_pass import SetAsidePass
 from .texture_pages import TexturePages
-from .tone_map import ToneMapPass, check_tone_map, wants_hdr
+from .tone_map import check_tone_map, wants_hdr
 
 PATHS: dict[str, PathFactory] = {
     "instanced": InstancedPath,
@@ -98,8 +97,6 @@ class Renderer:
         self.tone_map, self.exposure = tone_map, float(exposure)  # change them between frames (ensure_output)
         self.target = target
         self._blends = False  # the last frame's world had blended materials (they need HDR colour)
-        self._fit_target()  # before anything is made against its render pass
-        self._target_generation = target.generation
         self.meshes = meshes
         self.clear_color = clear_color
         self.ambient = ambient
@@ -113,6 +110,9 @@ class Renderer:
         n = len(self.frames.frames)
         self.secondaries = SecondaryBuffers(device, n)
         self.set_layout, self.pool = frame_sets(device, n)
+        self.lights = LightCulling(device, self.set_layout.handle, light_culling)
+        self._fit_target()  # before anything is made against its render pass
+        self._target_generation = target.generation
         self.texture_pages = TexturePages(device)
         # a world without a Materials resource draws with the default palette
         self.default_materials = Materials()
@@ -121,13 +121,8 @@ class Renderer:
         self.material_features = self.default_materials.features
         self.fill = fill
         self.per_frame = [FrameResources.make(device, self.pool, self.set_layout, self.texture_pages) for _ in range(n)]
-        self.light_pass = LightPass(
-            device, self.set_layout.handle, target.render_pass, SUBPASS_BILLBOARDS, light_size, target.samples
-        )
-        self.tone_map_pass = ToneMapPass(device, target.render_pass)
-        self.lights = LightCulling(device, self.set_layout.handle, light_culling)
+        self.output = OutputPasses(device, target, self.set_layout.handle, self.secondaries, light_size, clear_color)
         self._set_aside: SetAsidePass | None = None  # blended materials, made on first use
-        self._targets: dict[tuple[int, int, int], TargetState] = {}
         # drawn last in the overlay subpass: an object with prepare(slot, frames_in_flight),
         # record(cb, slot, width, height) and retarget(render_pass), e.g. imgui_pass.ImGuiRenderer
         self.overlay: Any = None
@@ -171,8 +166,7 @@ class Renderer:
         if self._set_aside is not None:  # its pipelines were made for the old path's context
             self._set_aside.destroy()
             self._set_aside = None
-        for target in self._targets.values():
-            target.path_state.clear()  # what the old path kept per target (its recorder's frame states)
+        self.output.forget_path_state()
         self.path = new
 
     def _native_recorder(self) -> Any:
@@ -190,10 +184,11 @@ class Renderer:
 
     def _make_path(self, mode: str, recorder: str) -> RenderPath:
         check_recorder(recorder)
+        deferred = self.target.form == "deferred"
         ctx = PathContext(
             device=self.device,
             meshes=self.meshes,
-            render_pass=self.target.render_pass,
+            render_pass=self.target.gbuffer_pass if deferred else self.target.render_pass,
             frame_set_layout=self.set_layout.handle,
             secondaries=self.secondaries,
             frames_in_flight=len(self.frames.frames),
@@ -201,6 +196,7 @@ class Renderer:
             samples=self.target.samples,
             fill=self.fill,
             native_recorder=self._native_recorder,
+            gbuffer=deferred,
         )
         path = PATHS[mode](ctx, recorder)
         self.cpu_recorder = recorder
@@ -252,22 +248,8 @@ class Renderer:
             raise
 
     def target_state(self, framebuffer: Any, width: int, height: int) -> TargetState:
-        """What a framebuffer of this size needs per frame, made once (kept for 16 framebuffers)."""
-        vk = self.vk
-        key = (int(vk.ffi.cast("uintptr_t", framebuffer)), width, height)
-        state = self._targets.get(key)
-        if state is None:
-            if len(self._targets) > 16:  # swapchains come and go: drop the old framebuffers' entries
-                self._targets.clear()
-            state = self._targets[key] = TargetState.make(
-                vk,
-                key,
-                framebuffer,
-                self.target.render_pass,
-                self.secondaries.begin_info(self.target.render_pass, 0, framebuffer),
-                self.clear_color,
-            )
-        return state
+        """What a framebuffer of this size needs per frame, made once (output_passes.py)."""
+        return self.output.target_state(framebuffer, width, height)
 
     def next_image_semaphore(self) -> Any:
         """The semaphore the next frame waits on for a swapchain image, once that frame slot's
@@ -317,6 +299,8 @@ class Renderer:
         data = self.extract(world, width, height, materials)  # before any GPU state: a bad world fails here
         self._check_features(materials.features | light_features(data.lights, data.directional))
         grid = self._light_clusters(data, width, height)
+        if framebuffer is None:
+            self.ensure_output()  # clusters switched on or off: the deferred form follows them
         self._sync_textures(materials)
         if self.jobs is not None and self.jobs.generation != self._jobs_generation:
             self._forget_old_threads()
@@ -360,7 +344,15 @@ class Renderer:
                 pf.lights.array(np.float32, (data.light_count, LIGHT.size // 4)),
             )
         pf.write_globals(
-            data.camera, data.view, data.origin, data.origin_key, data.light_count, positional, grid, self.ambient
+            data.camera,
+            data.view,
+            data.origin,
+            data.origin_key,
+            data.light_count,
+            positional,
+            grid,
+            self.ambient,
+            self.target.form == "deferred",
         )
         t0 = time.perf_counter()
 
@@ -376,11 +368,20 @@ class Renderer:
         cb = frame.command_buffer
         secondaries = path.finish(cb, inputs, results, data.candidates)
         aside = self._record_set_aside(inputs, data, materials)
-        if aside[0] is not None:
-            secondaries = [*secondaries, aside[0]]  # after every chunk's rows
         if grid is not None:
             self.lights.record(cb, pf, grid, data.light_count)
-        light_draws = self._record_primary(cb, secondaries, positional, target, pf, slot)
+        light_draws = self.output.record(
+            cb,
+            secondaries,
+            aside[0],
+            positional,
+            target,
+            pf.set_array,
+            (self.tone_map, self.exposure),
+            self.material_features,
+            self.overlay,
+            slot,
+        )
         if readback:
             self.target.record_readback(cb)
         self.frames.end(frame, wait=wait, signal=signal)
@@ -407,7 +408,8 @@ class Renderer:
         if data.set_aside is None or not len(data.set_aside):
             return None, 0, 0, 0
         if self._set_aside is None:
-            self._set_aside = SetAsidePass(self.path.ctx)
+            # forward, in the target's render pass (in the deferred form, over the lit scene)
+            self._set_aside = SetAsidePass(replace(self.path.ctx, render_pass=self.target.render_pass, gbuffer=False))
         first = self.path.rows_needed(data.candidates)
         return self._set_aside.record(inputs, data.set_aside, first, data.camera.position - data.origin, materials)
 
@@ -432,26 +434,6 @@ class Renderer:
             self._respecialise(lambda: setattr(self.lights, "clustered", not self.lights.clustered))
         return grid
 
-    def _record_primary(
-        self, cb: Any, secondaries: list[Any], billboards: int, target: TargetState, pf: FrameResources, slot: int
-    ) -> int:
-        """Raw cffi calls with structs made once (see gpu/frames.py for why); `billboards` point
-        and spot lights get one. Returns the light pass's draws."""
-        vk = self.vk
-        lib = vk.lib
-        lib.vkCmdBeginRenderPass(cb, target.pass_begin_ptr, vk.VK_SUBPASS_CONTENTS_SECONDARY_COMMAND_BUFFERS)
-        if secondaries:
-            lib.vkCmdExecuteCommands(cb, len(secondaries), vk.ffi.new("VkCommandBuffer[]", secondaries))
-        lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
-        draws = self.light_pass.record(cb, target, pf.set_array, billboards)
-        lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
-        if self.target.hdr:
-            self.tone_map_pass.record(cb, target, self.target, self.tone_map, self.exposure)
-        if self.overlay is not None:
-            self.overlay.record(cb, slot, target.area.extent.width, target.area.extent.height)
-        lib.vkCmdEndRenderPass(cb)
-        return draws
-
     def ensure_output(self) -> None:
         """Give the target the form the tone map, exposure and blended materials need (HDR colour
         or straight into the target), and follow it. Call between frames: a swapchain's
@@ -461,19 +443,21 @@ class Renderer:
             self._follow_target()
 
     def _fit_target(self) -> None:
-        if wants_hdr(self.tone_map, self.exposure, self.target.samples, self._blends) != self.target.hdr:
+        samples = self.target.samples
+        if self.lights.deferred(samples):
+            form = "deferred"
+        else:
+            form = "hdr" if wants_hdr(self.tone_map, self.exposure, samples, self._blends) else "direct"
+        if form != self.target.form:
             self.device.wait_idle()  # this or another renderer of the target may have frames in flight
-            self.target.set_hdr(not self.target.hdr)
+            self.target.set_form(form)
 
     def _follow_target(self) -> None:
         """The target's render pass changed: make again what was made against the old one."""
         self.device.wait_idle()
         target = self.target
         self._swap_path(self._make_path(self.mode, self.cpu_recorder))
-        self.light_pass.retarget(target.render_pass)
-        self.tone_map_pass.destroy()  # its descriptor sets name the old HDR views
-        self.tone_map_pass = ToneMapPass(self.device, target.render_pass)
-        self._targets.clear()  # their begin infos name the old render pass and framebuffers
+        self.output.retarget()
         if self.overlay is not None:
             self.overlay.retarget(target.render_pass)
         self._target_generation = target.generation
@@ -484,8 +468,7 @@ class Renderer:
         self._destroy_shared()
 
     def _destroy_shared(self) -> None:
-        self.light_pass.destroy()
-        self.tone_map_pass.destroy()
+        self.output.destroy()
         self.lights.destroy()
         if self._set_aside is not None:
             self._set_aside.destroy()

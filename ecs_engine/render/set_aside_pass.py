@@ -96,7 +96,7 @@ class SetAsidePass:
     def _draw(self, frame: FrameInputs, first_row: int, runs: Any) -> Any:
         ctx = self.ctx
         vk = ctx.device.vk
-        cb = ctx.secondaries.begin(frame.slot, frame.target.secondary_begin)
+        cb = ctx.secondaries.begin(frame.slot, frame.target.aside_begin)
         vk.vkCmdSetViewport(cb, 0, 1, [frame.target.viewport])
         vk.vkCmdSetScissor(cb, 0, 1, [frame.target.area])
         vk.vkCmdBindDescriptorSets(

@@ -1,0 +1,135 @@
+"""Deferred lighting of the opaque meshes, in compute, between the target's two render passes
+(the deferred form, gpu/render_pass.py): the G-buffer pass (gpu/gbuffer.py) leaves depth, the HDR
+colour with ambient and emissive, and per pixel normal, roughness, base colour, metallic and the
+material index; deferred_light.comp adds every light's term, the same light_term the forward
+fragment shader uses, walking the light grid of render/light_clusters.py per 16 x 16-pixel
+workgroup when there is one. Blended materials and materials with a fill of their own stay
+forward (set_aside_pass.py), drawn in the second render pass over the lit scene.
+
+Why it exists: on the H100, fragment shaders run on the few graphics-capable units of the chip and
+compute shaders on all of it; the forward frame with 4,096 clustered lights took 3.97x the 6-light
+one (docs/performance.md has the figures before and after).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout
+from ..gpu.device import Device
+from ..gpu.pipeline import compute_pipeline, pipeline_layout
+from .layouts import (
+    BINDING_BASE_METALLIC,
+    BINDING_DEPTH,
+    BINDING_HDR,
+    BINDING_MATERIAL_IDS,
+    BINDING_NORMAL_ROUGHNESS,
+    DEFERRED_TILE,
+)
+
+
+class DeferredPass:
+    def __init__(self, device: Device, frame_set_layout: Any) -> None:
+        vk = self.vk = device.vk
+        self.device = device
+        stage = vk.VK_SHADER_STAGE_COMPUTE_BIT
+        storage = vk.VK_DESCRIPTOR_TYPE_STORAGE_IMAGE
+        sampled = vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
+        self.set_layout = DescriptorSetLayout(
+            device,
+            [(BINDING_DEPTH, sampled, stage)]
+            + [(b, storage, stage) for b in (BINDING_HDR, BINDING_NORMAL_ROUGHNESS, BINDING_BASE_METALLIC)]
+            + [(BINDING_MATERIAL_IDS, storage, stage)],
+        )
+        self.pool: DescriptorPool | None = None
+        self.layout = None
+        self.sampler = None
+        try:
+            self.pool = DescriptorPool(device, 1, {sampled: 1, storage: 4})
+            self.layout = pipeline_layout(device, [frame_set_layout, self.set_layout.handle])
+            self.sampler = vk.vkCreateSampler(
+                device.handle,
+                vk.VkSamplerCreateInfo(
+                    magFilter=vk.VK_FILTER_NEAREST,
+                    minFilter=vk.VK_FILTER_NEAREST,
+                    addressModeU=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+                    addressModeV=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+                    addressModeW=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+                ),
+                None,
+            )
+            self.image_set = self.pool.allocate(self.set_layout)
+        except BaseException:
+            self.destroy()
+            raise
+        self.pipelines: dict[int, Any] = {}  # MATERIAL_FEATURES -> pipeline
+        self._named: Any = None  # the target's SceneAttachments the set names
+
+    def _name(self, attachments: Any) -> None:
+        """Point set 1 at a target's depth, HDR colour and G-buffer (once per attachments: a
+        swapchain remakes them on resize, and frames in flight must be done with the old ones)."""
+        vk = self.vk
+        self.device.wait_idle()
+        general = vk.VK_IMAGE_LAYOUT_GENERAL
+        storage = vk.VK_DESCRIPTOR_TYPE_STORAGE_IMAGE
+        gbuffer = attachments.gbuffer
+        views = [(BINDING_HDR, attachments.images[1].view)] + list(
+            zip((BINDING_NORMAL_ROUGHNESS, BINDING_BASE_METALLIC, BINDING_MATERIAL_IDS), gbuffer.views, strict=True)
+        )
+        depth = vk.VkDescriptorImageInfo(
+            sampler=self.sampler,
+            imageView=attachments.depth_view,
+            imageLayout=vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL,
+        )
+        writes = [
+            vk.VkWriteDescriptorSet(
+                dstSet=self.image_set,
+                dstBinding=BINDING_DEPTH,
+                descriptorCount=1,
+                descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+                pImageInfo=[depth],
+            )
+        ] + [
+            vk.VkWriteDescriptorSet(
+                dstSet=self.image_set,
+                dstBinding=binding,
+                descriptorCount=1,
+                descriptorType=storage,
+                pImageInfo=[vk.VkDescriptorImageInfo(imageView=view, imageLayout=general)],
+            )
+            for binding, view in views
+        ]
+        vk.vkUpdateDescriptorSets(self.device.handle, len(writes), writes, 0, None)
+        self._named = attachments
+
+    def record(self, cb: Any, frame_set: Any, attachments: Any, features: int, width: int, height: int) -> None:
+        """Light the G-buffer of `attachments` (between the G-buffer pass and the target's pass,
+        whose dependencies order the images); `features`: the mesh pipelines' MATERIAL_FEATURES."""
+        vk = self.vk
+        if attachments is not self._named:
+            self._name(attachments)
+        pipeline = self.pipelines.get(features)
+        if pipeline is None:
+            pipeline = self.pipelines[features] = compute_pipeline(
+                self.device, "deferred_light.comp", self.layout, (features,)
+            )
+        point = vk.VK_PIPELINE_BIND_POINT_COMPUTE
+        vk.vkCmdBindPipeline(cb, point, pipeline)
+        vk.vkCmdBindDescriptorSets(cb, point, self.layout, 0, 2, [frame_set, self.image_set], 0, None)
+        vk.vkCmdDispatch(cb, -(-width // DEFERRED_TILE), -(-height // DEFERRED_TILE), 1)
+
+    def destroy(self) -> None:
+        vk, handle = self.vk, self.device.handle
+        for pipeline in getattr(self, "pipelines", {}).values():
+            vk.vkDestroyPipeline(handle, pipeline, None)
+        self.pipelines = {}
+        if self.sampler is not None:
+            vk.vkDestroySampler(handle, self.sampler, None)
+            self.sampler = None
+        if self.layout is not None:
+            vk.vkDestroyPipelineLayout(handle, self.layout, None)
+            self.layout = None
+        if self.pool is not None:
+            self.pool.destroy()
+            self.pool = None
+        self.set_layout.destroy()

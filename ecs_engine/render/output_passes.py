@@ -1,0 +1,145 @@
+"""What the frame's primary command buffer records around the render path's secondaries, by the
+target's form (gpu/render_pass.py's FORMS):
+
+- `direct` and `hdr`: the target's render pass: the chunks' and the set-aside rows' secondaries
+  in subpass 0, the light billboards (light_pass.py) in subpass 1, the tone map (tone_map.py,
+  HDR only) and the overlay (the editor's ImGui) in subpass 2;
+- `deferred`: the G-buffer pass with the chunks' secondaries (gpu/gbuffer.py), the lighting
+  compute pass (deferred_pass.py), then the target's render pass as above with the set-aside rows
+  alone in subpass 0.
+
+It also keeps, per framebuffer, the structs a frame needs (path.TargetState), and remakes what
+was made against the target's render pass when the target changes form.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..gpu.device import Device
+from ..gpu.render_pass import SUBPASS_BILLBOARDS
+from ..gpu.secondary import SecondaryBuffers
+from .deferred_pass import DeferredPass
+from .light_pass import LightPass
+from .path import TargetState
+from .tone_map import ToneMapPass
+
+
+class OutputPasses:
+    def __init__(
+        self,
+        device: Device,
+        target: Any,
+        frame_set_layout: Any,
+        secondaries: SecondaryBuffers,
+        light_size: float,
+        clear_color: tuple[float, float, float],
+    ) -> None:
+        self.device = device
+        self.vk = device.vk
+        self.target = target
+        self.secondaries = secondaries
+        self.clear_color = clear_color
+        self.light_pass = LightPass(
+            device, frame_set_layout, target.render_pass, SUBPASS_BILLBOARDS, light_size, target.samples
+        )
+        self.tone_map_pass: ToneMapPass | None = None
+        self.deferred: DeferredPass | None = None
+        try:
+            self.tone_map_pass = ToneMapPass(device, target.render_pass)
+            self.deferred = DeferredPass(device, frame_set_layout)
+        except BaseException:
+            self.destroy()
+            raise
+        self._targets: dict[tuple[int, int, int], TargetState] = {}
+
+    def target_state(self, framebuffer: Any, width: int, height: int) -> TargetState:
+        """What a framebuffer of this size needs per frame, made once (kept for 16 framebuffers)."""
+        vk = self.vk
+        key = (int(vk.ffi.cast("uintptr_t", framebuffer)), width, height)
+        state = self._targets.get(key)
+        if state is None:
+            if len(self._targets) > 16:  # swapchains come and go: drop the old framebuffers' entries
+                self._targets.clear()
+            target = self.target
+            gbuffer = None
+            if target.form == "deferred":
+                fb = target.attachments.gbuffer.framebuffer
+                gbuffer = (target.gbuffer_pass, fb, self.secondaries.begin_info(target.gbuffer_pass, 0, fb))
+            state = self._targets[key] = TargetState.make(
+                vk,
+                key,
+                framebuffer,
+                target.render_pass,
+                self.secondaries.begin_info(target.render_pass, 0, framebuffer),
+                self.clear_color,
+                gbuffer,
+            )
+        return state
+
+    def forget_path_state(self) -> None:
+        """Drop what the old render path kept per target (its recorder's frame states)."""
+        for state in self._targets.values():
+            state.path_state.clear()
+
+    def retarget(self) -> None:
+        """The target's render pass changed (the caller waited for the device): make again what
+        was made against the old one."""
+        assert self.tone_map_pass is not None
+        self.light_pass.retarget(self.target.render_pass)
+        self.tone_map_pass.destroy()  # its descriptor sets name the old HDR views
+        self.tone_map_pass = ToneMapPass(self.device, self.target.render_pass)
+        self._targets.clear()  # their begin infos name the old render passes and framebuffers
+
+    def record(
+        self,
+        cb: Any,
+        chunks: list[Any],
+        aside: Any,
+        billboards: int,
+        state: TargetState,
+        frame_set: Any,
+        tone_map: tuple[str, float],
+        features: int,
+        overlay: Any = None,
+        slot: int = 0,
+    ) -> int:
+        """Raw cffi calls with structs made once (see gpu/frames.py for why). `chunks`: the path's
+        secondaries; `aside`: the set-aside rows' or None; `billboards` point and spot lights get
+        one; `features`: the mesh pipelines' MATERIAL_FEATURES (the lighting's too). Returns the
+        light pass's draws."""
+        vk = self.vk
+        lib = vk.lib
+        target = self.target
+        secondaries = chunks
+        if state.gbuffer_begin_ptr is not None:
+            assert self.deferred is not None
+            lib.vkCmdBeginRenderPass(cb, state.gbuffer_begin_ptr, vk.VK_SUBPASS_CONTENTS_SECONDARY_COMMAND_BUFFERS)
+            if chunks:
+                lib.vkCmdExecuteCommands(cb, len(chunks), vk.ffi.new("VkCommandBuffer[]", chunks))
+            lib.vkCmdEndRenderPass(cb)
+            extent = state.area.extent
+            self.deferred.record(cb, frame_set[0], target.attachments, features, extent.width, extent.height)
+            secondaries = []
+        if aside is not None:
+            secondaries = [*secondaries, aside]  # after every chunk's rows
+        lib.vkCmdBeginRenderPass(cb, state.pass_begin_ptr, vk.VK_SUBPASS_CONTENTS_SECONDARY_COMMAND_BUFFERS)
+        if secondaries:
+            lib.vkCmdExecuteCommands(cb, len(secondaries), vk.ffi.new("VkCommandBuffer[]", secondaries))
+        lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
+        draws = self.light_pass.record(cb, state, frame_set, billboards)
+        lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
+        if target.hdr:
+            assert self.tone_map_pass is not None
+            self.tone_map_pass.record(cb, state, target, *tone_map)
+        if overlay is not None:
+            overlay.record(cb, slot, state.area.extent.width, state.area.extent.height)
+        lib.vkCmdEndRenderPass(cb)
+        return draws
+
+    def destroy(self) -> None:
+        self.light_pass.destroy()
+        if self.tone_map_pass is not None:
+            self.tone_map_pass.destroy()
+        if self.deferred is not None:
+            self.deferred.destroy()
