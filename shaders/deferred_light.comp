@@ -22,6 +22,8 @@ layout(set = SET_DEFERRED, binding = BINDING_NORMAL_ROUGHNESS, rgba32f) uniform 
 layout(set = SET_DEFERRED, binding = BINDING_BASE_METALLIC, rgba16f) uniform readonly image2D base_image;
 layout(set = SET_DEFERRED, binding = BINDING_MATERIAL_IDS, r32ui) uniform readonly uimage2D material_image;
 
+layout(push_constant) uniform Push { DeferredPush push; };
+
 const uint GROUP = DEFERRED_TILE * DEFERRED_TILE;
 shared uint s_near, s_far;   // the lit pixels' distances from the eye (float bits: positive floats order as uints)
 shared uint s_lo, s_hi;      // the light index range of the distance bins between them
@@ -50,7 +52,7 @@ uint tile_word(uint w, uvec2 first_tile, uvec2 last_tile) {
 }
 
 void main() {
-    ivec2 size = imageSize(hdr_image);
+    ivec2 size = min(ivec2(push.viewport), imageSize(hdr_image));   // what the rasteriser's viewport covered
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     uint local = gl_LocalInvocationIndex;
     uint index = all(lessThan(pixel, size)) ? imageLoad(material_image, pixel).x : NO_MATERIAL;

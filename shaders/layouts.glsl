@@ -13,6 +13,8 @@
 #define FEATURE_CLUSTERED 524288
 #define FEATURE_SPOT_LIGHTS 1048576
 #define FEATURE_DIRECTIONAL_LIGHTS 2097152
+#define FEATURE_EMISSIVE 4194304
+#define FEATURE_BLEND 8388608
 #define CLUSTER_GROUP 64
 #define MAX_GLOBAL_LIGHTS 256
 #define LIGHT_BINS 1024
@@ -136,6 +138,10 @@ struct BillboardPush {  // 4 bytes, std430
 struct ToneMapPush {  // 8 bytes, std430
     float exposure;             // offset 0: linear scale before the curve (2^EV)
     uint operator;              // offset 4: TONE_MAP_* (render/tone_map.py)
+};
+
+struct DeferredPush {  // 8 bytes, std430
+    uvec2 viewport;             // offset 0: the frame's viewport in pixels (the G-buffer may be larger)
 };
 
 struct ImGuiPush {  // 16 bytes, std430

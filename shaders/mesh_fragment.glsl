@@ -61,7 +61,7 @@ void main() {
         m.surface.y *= mr.g;
         m.surface.x *= mr.b;
     }
-    if (m.textures.w != NO_TEXTURE) {
+    if ((MATERIAL_FEATURES & FEATURE_EMISSIVE) != 0u && m.textures.w != NO_TEXTURE) {
         m.emissive.rgb *= sample_texture(m.textures.w, v_uv, dx, dy).rgb;
     }
     if (m.textures2.x != NO_TEXTURE) {
@@ -152,7 +152,10 @@ void main() {
         }
 #endif
     }
-    color += m.emissive.rgb;
+    if ((MATERIAL_FEATURES & FEATURE_EMISSIVE) != 0u) {
+        color += m.emissive.rgb;
+    }
     // alpha matters only to the blended materials' pipelines (the others do not blend)
-    out_color = vec4(min(color, vec3(65504.0)), m.kind.y == ALPHA_BLEND ? m.base_color.a : 1.0);
+    bool blended = (MATERIAL_FEATURES & FEATURE_BLEND) != 0u && m.kind.y == ALPHA_BLEND;
+    out_color = vec4(min(color, vec3(65504.0)), blended ? m.base_color.a : 1.0);
 }

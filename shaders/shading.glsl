@@ -17,8 +17,13 @@ vec3 schlick(vec3 f0, float cosine) {
     return f0 + (1.0 - f0) * (w * w * w * w * w);
 }
 
+// The shading models some material of the scene uses (the low bits of MATERIAL_FEATURES)
+const uint MODELS = MATERIAL_FEATURES & 0x3Fu;
+
+// Whether `model` is `which`: false when no material uses it, true without a look at `model`
+// when it is the only one used (the seed scenes' default palette: Blinn-Phong alone).
 bool model_is(uint model, uint which) {
-    return (MATERIAL_FEATURES & (1u << which)) != 0u && model == which;
+    return (MODELS & (1u << which)) != 0u && (MODELS == (1u << which) || model == which);
 }
 
 // pi * BRDF for unit normal n, direction to the light l, direction to the eye v; nl = n.l > 0.

@@ -158,23 +158,50 @@ def test_every_material_feature_lights_as_forward():
 
 
 def test_more_lights_than_a_workgroup_holds_at_once():
-    """17,000 lights in one spot: the tile over it takes two turns through the workgroup's shared
-    mask words (DEFERRED_WORDS, 16,384 lights a turn)."""
+    """A tile whose depth range reaches 17,000 lights takes two turns through the workgroup's
+    shared mask words (DEFERRED_WORDS: 16,384 lights a turn). Lights are sorted far to near, so
+    the second turn holds the nearest: a bright group in front of a dim crowd, both over the same
+    floor, which the image must show as the loop does."""
     from ecs_engine.render.layouts import DEFERRED_WORDS
 
-    n = DEFERRED_WORDS * 32 + 616
+    crowd, near = DEFERRED_WORDS * 32 + 16, 600
     with headless_gpu(48, 32) as gpu:
-        world = lit_field(gpu, 0)
-        world.spawn_batch(
-            n,
-            Transform(position=np.tile([0.0, 0.8, -2.0], (n, 1))),
-            PointLight(color=(0.004, 0.003, 0.002), intensity=1.0, radius=4.0),
-        )
+
+        def scene(bright: bool) -> World:
+            world = lit_field(gpu, 0)
+            world.spawn_batch(
+                crowd,
+                Transform(position=np.tile([0.0, 0.8, -2.5], (crowd, 1))),
+                PointLight(color=(0.002, 0.0015, 0.001), intensity=1.0, radius=4.0),
+            )
+            if bright:
+                world.spawn_batch(
+                    near,
+                    Transform(position=np.tile([0.3, 0.8, -1.5], (near, 1))),
+                    PointLight(color=(0.004, 0.01, 0.02), intensity=1.0, radius=4.0),
+                )
+            return world
+
+        world = scene(True)
         loop, _, _ = render(gpu, world, "loop")
         deferred, form, clustered = render(gpu, world, "deferred")
-        dark, _, _ = render(gpu, lit_field(gpu, 0), "loop")
+        crowd_only, _, _ = render(gpu, scene(False), "loop")
     assert form == "deferred" and clustered
-    assert np.abs(loop - dark).max() > 30
+    assert np.abs(loop - crowd_only).max() > 30  # what the second turn adds shows
+    assert_same(deferred, loop)
+
+
+@pytest.mark.parametrize(("width", "height", "tile"), [(157, 93, 16), (33, 17, 8), (200, 7, 64)])
+def test_images_of_any_size_light_their_edges(width, height, tile, monkeypatch):
+    """Sizes that are not multiples of the 16-pixel workgroup: the last ones are partial."""
+    from ecs_engine.render import light_clusters
+
+    monkeypatch.setattr(light_clusters, "TILE_PX", tile)
+    with headless_gpu(width, height) as gpu:
+        world = lit_field(gpu, 120)
+        loop, _, _ = render(gpu, world, "loop")
+        deferred, form, _ = render(gpu, world, "deferred")
+    assert form == "deferred"
     assert_same(deferred, loop)
 
 
@@ -195,22 +222,77 @@ def test_auto_defers_with_the_clusters_and_msaa_stays_forward(caplog):
     assert sum("deferred lighting draws one sample" in r.message for r in caplog.records) == 1
 
 
-def test_one_renderer_switches_form_as_the_light_count_changes():
-    """auto: many lights defer, few go straight into the target again; the image each time is
-    what a new renderer draws."""
+@pytest.mark.parametrize(("tone_map", "forward"), [("clamp", "direct"), ("aces", "hdr")])
+def test_one_renderer_switches_form_as_the_light_count_changes(tone_map, forward):
+    """auto: many lights defer, few go forward again (straight into the target with clamp); the
+    image each time is what a new renderer draws. Going deferred builds the G-buffer pipelines
+    once, not the forward clustered ones first."""
+    from ecs_engine.render import chunk_paths
     from ecs_engine.render.renderer import Renderer
+
+    made: list[str] = []
+    real = chunk_paths.graphics_pipeline
+
+    def counting(device, spec):
+        made.append(spec.fragment_shader)
+        return real(device, spec)
 
     with headless_gpu(W, H) as gpu:
         worlds = [lit_field(gpu, 4), lit_field(gpu, 200), lit_field(gpu, 4)]
-        fresh = [render(gpu, w, "auto")[0] for w in worlds]
-        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, tone_map="aces")
+        fresh = []
+        for world in worlds:
+            r = Renderer(gpu.device, gpu.target, gpu.meshes, tone_map=tone_map)
+            try:
+                default_schedule().run(world, 0.0)
+                r.render(world, readback=True)
+                fresh.append(gpu.target.pixels()[..., :3].astype(int))
+            finally:
+                r.destroy()
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, tone_map=tone_map)
         forms = []
         try:
             for world, want in zip(worlds, fresh, strict=True):
                 default_schedule().run(world, 0.0)
-                renderer.render(world, readback=True)
+                chunk_paths.graphics_pipeline = counting
+                try:
+                    renderer.render(world, readback=True)
+                finally:
+                    chunk_paths.graphics_pipeline = real
                 forms.append(gpu.target.form)
                 assert_same(gpu.target.pixels()[..., :3].astype(int), want)
         finally:
             renderer.destroy()
-    assert forms == ["hdr", "deferred", "hdr"]
+    assert forms == [forward, "deferred", forward]
+    assert not any("clustered" in name for name in made), made
+    assert sum("gbuffer" in name for name in made) == 2  # plain and mirrored, once
+
+
+def test_a_renderer_that_cannot_make_its_form_leaves_nothing(monkeypatch):
+    """The G-buffer pass fails to be made: the error comes out, the target keeps its old form,
+    and whatever the renderer had made is destroyed."""
+    from ecs_engine.gpu import render_pass
+    from ecs_engine.gpu.frames import FrameRing
+    from ecs_engine.gpu.secondary import SecondaryBuffers
+    from ecs_engine.render import renderer as renderer_module
+    from ecs_engine.render.light_clusters import LightCulling
+
+    def refuse(*args):
+        raise RuntimeError("no G-buffer today")
+
+    destroyed: list[str] = []
+    for cls in (FrameRing, SecondaryBuffers, LightCulling):
+        real = cls.destroy
+
+        def spy(self, real=real, name=cls.__name__):
+            destroyed.append(name)
+            real(self)
+
+        monkeypatch.setattr(cls, "destroy", spy)
+    monkeypatch.setattr(render_pass, "create_gbuffer_pass", refuse)
+    with headless_gpu(W, H) as gpu:
+        used = gpu.device.allocator.stats()["used_bytes"]
+        with pytest.raises(RuntimeError, match="no G-buffer"):
+            renderer_module.Renderer(gpu.device, gpu.target, gpu.meshes, light_culling="deferred")
+        assert gpu.target.form == "direct"  # the old form stays whole
+        assert gpu.device.allocator.stats()["used_bytes"] == used
+    assert sorted(destroyed) == ["FrameRing", "LightCulling", "SecondaryBuffers"]

@@ -14,7 +14,15 @@ from gpu_context import headless_gpu
 from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Camera, Mesh, PointLight, Transform
-from ecs_engine.render.layouts import FEATURE_ALPHA_MASK, MATERIAL, MODEL_BLINN_PHONG, MODEL_UNLIT, NO_TEXTURE
+from ecs_engine.render.layouts import (
+    FEATURE_ALPHA_MASK,
+    FEATURE_BLEND,
+    FEATURE_EMISSIVE,
+    MATERIAL,
+    MODEL_BLINN_PHONG,
+    MODEL_UNLIT,
+    NO_TEXTURE,
+)
 from ecs_engine.render.materials import DEFAULT_PALETTE, SHADING_MODELS, Material, Materials, materials
 from ecs_engine.render.primitives import plane_mesh
 
@@ -50,7 +58,7 @@ def test_registry_handles_rows_and_updates():
     version = mats.version
     handle = mats.add(Material("glow", "unlit", (0.1, 0.2, 0.3, 1.0), emissive=(1.0, 0.5, 0.0)))
     assert handle == 6 and mats.version > version
-    assert mats.features == (1 << MODEL_BLINN_PHONG) | (1 << MODEL_UNLIT)
+    assert mats.features == (1 << MODEL_BLINN_PHONG) | (1 << MODEL_UNLIT) | FEATURE_EMISSIVE  # it glows
     row = mats.rows()[handle]
     assert row.dtype == MATERIAL.dtype
     np.testing.assert_allclose(row["base_color"], (0.1, 0.2, 0.3, 1.0), rtol=1e-6)
@@ -64,9 +72,12 @@ def test_registry_handles_rows_and_updates():
     updated = mats.update(handle, base_color=(1, 1, 1, 1), alpha_mode="mask", alpha_cutoff=0.25)
     assert mats[handle] is updated and mats.version == version + 1
     assert mats.rows()[handle]["params"][0] == 0.25 and mats.features & FEATURE_ALPHA_MASK
+    assert not mats.features & FEATURE_BLEND
     with pytest.raises(ValueError, match="roughness"):
         mats.update(handle, roughness=2.0)
     assert mats[handle] is updated  # a refused update changes nothing
+    mats.update(handle, alpha_mode="blend")
+    assert mats.features & FEATURE_BLEND
     with pytest.raises(TypeError, match="no field"):
         mats.update(handle, colour=(1, 1, 1, 1))
     with pytest.raises(KeyError, match="no material 500"):

@@ -15,7 +15,6 @@ import time
 from typing import Any
 
 from ..ecs.world import World
-from ..gpu.render_pass import SUBPASS_OUTPUT
 from ..render.imgui_pass import ImGuiRenderer
 from .editor import Editor, SceneStats
 from .perf import PerfMonitor
@@ -52,7 +51,10 @@ class EditorSession:
             imgui.backends.glfw_init_for_vulkan(ctypes.cast(window, ctypes.c_void_p).value or 0, True)
         renderer = session.renderer
         self.renderer = ImGuiRenderer(
-            session.device, session.gpu.target.render_pass, SUBPASS_OUTPUT, len(renderer.frames.frames)
+            session.device,
+            session.gpu.target.render_pass,
+            session.gpu.target.output_subpass,
+            len(renderer.frames.frames),
         )
         self.editor = Editor(session.settings, scenes, max_threads)
         self.overlay = PerfOverlay()

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .memory import HOST, Buffer, Image
-from .render_pass import FORMS, SceneAttachments, create_framebuffer, create_target_passes
+from .render_pass import FORMS, SceneAttachments, create_framebuffer, create_target_passes, output_subpass
 
 if TYPE_CHECKING:
     from .device import Device
@@ -41,6 +41,11 @@ class OffscreenTarget:
     @property
     def hdr(self) -> bool:
         return self.form != "direct"
+
+    @property
+    def output_subpass(self) -> int:
+        """Where the overlay draws (gpu/render_pass.py)."""
+        return output_subpass(self.form)
 
     def _build_pass(self, form: str) -> tuple[Any, Any, SceneAttachments, Any]:
         """The render pass, G-buffer pass, shared attachments and framebuffer of a form; on

@@ -15,12 +15,13 @@ resolve (only with --msaa).
 - subpass 0 (SUBPASS_SCENE): the meshes, from the chunk jobs' secondary command buffers (in the
   deferred form only the rows set aside: blended materials and fills of their own);
 - subpass 1 (SUBPASS_BILLBOARDS): light billboards inline, depth-tested against the scene; with
-  MSAA the HDR colour resolves at its end;
+  MSAA the HDR colour resolves at its end; in the direct form the overlay follows them here
+  (that form has no third subpass: `output_subpass`);
 - subpass 2 (SUBPASS_OUTPUT): the tone map reads the HDR colour as an input attachment (same
   pixel, no sampling) and writes the target; the overlay (ImGui) draws after it, untouched by
-  exposure and tone curve. In the direct form only the overlay draws here.
+  exposure and tone curve.
 
-The subpasses are the same in every form, but the render passes are not all compatible: a target
+The render passes of the forms are not compatible: a target
 that changes form (`set_form`) counts up its `generation`, and whoever made pipelines against its
 render pass makes them again.
 """
@@ -76,11 +77,18 @@ def _attachment(vk: Any, fmt: int, samples: int, load: int, store: int, final: i
     )
 
 
-def _to_readback(vk: Any) -> Any:
-    """The target, written in the output subpass, before whatever reads it next (a copy for
+def output_subpass(form: str) -> int:
+    """The subpass the overlay (and, with HDR colour, the tone map) draws in: in the direct form
+    the billboards', as before HDR existed (a third subpass there would hold only the overlay,
+    and a subpass boundary is a barrier)."""
+    return SUBPASS_BILLBOARDS if form == "direct" else SUBPASS_OUTPUT
+
+
+def _to_readback(vk: Any, last: int = SUBPASS_OUTPUT) -> Any:
+    """The target, written in the last subpass, before whatever reads it next (a copy for
     readback, or present)."""
     return vk.VkSubpassDependency(
-        srcSubpass=SUBPASS_OUTPUT,
+        srcSubpass=last,
         dstSubpass=vk.VK_SUBPASS_EXTERNAL,
         srcStageMask=vk.VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
         dstStageMask=vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
@@ -226,10 +234,9 @@ def _create_direct_pass(device: Device, color_format: int, final_layout: int) ->
     ref = vk.VkAttachmentReference
     color, depth = ref(attachment=0, layout=color_layout), ref(attachment=1, layout=depth_layout)
     graphics = vk.VK_PIPELINE_BIND_POINT_GRAPHICS
-    subpasses = [
+    subpasses = [  # the scene; the billboards, then the overlay
         vk.VkSubpassDescription(pipelineBindPoint=graphics, pColorAttachments=[color], pDepthStencilAttachment=depth),
         vk.VkSubpassDescription(pipelineBindPoint=graphics, pColorAttachments=[color], pDepthStencilAttachment=depth),
-        vk.VkSubpassDescription(pipelineBindPoint=graphics, pColorAttachments=[color]),
     ]
     color_stage = vk.VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT
     depth_stages = vk.VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT | vk.VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT
@@ -249,7 +256,7 @@ def _create_direct_pass(device: Device, color_format: int, final_layout: int) ->
             srcAccessMask=color_write | depth_write,
             dstAccessMask=color_rw | depth_rw,
         ),
-        # scene -> billboards (blended on top, depth tested) -> overlay (blended on top)
+        # scene -> billboards (blended on top, depth tested) and overlay (blended on top)
         vk.VkSubpassDependency(
             srcSubpass=SUBPASS_SCENE,
             dstSubpass=SUBPASS_BILLBOARDS,
@@ -259,16 +266,7 @@ def _create_direct_pass(device: Device, color_format: int, final_layout: int) ->
             dstAccessMask=color_rw | depth_rw,
             dependencyFlags=by_region,
         ),
-        vk.VkSubpassDependency(
-            srcSubpass=SUBPASS_BILLBOARDS,
-            dstSubpass=SUBPASS_OUTPUT,
-            srcStageMask=color_stage,
-            dstStageMask=color_stage,
-            srcAccessMask=color_write,
-            dstAccessMask=color_rw,
-            dependencyFlags=by_region,
-        ),
-        _to_readback(vk),
+        _to_readback(vk, SUBPASS_BILLBOARDS),
     ]
     return _render_pass(device, attachments, subpasses, dependencies)
 

@@ -11,7 +11,7 @@ import numpy as np
 from ..errors import UsageError
 from .functions import device_function, instance_function, raw_device_function
 from .memory import HOST, Buffer
-from .render_pass import FORMS, SceneAttachments, create_framebuffer, create_target_passes
+from .render_pass import FORMS, SceneAttachments, create_framebuffer, create_target_passes, output_subpass
 
 if TYPE_CHECKING:
     from .device import Device
@@ -182,6 +182,11 @@ class Swapchain:
     @property
     def hdr(self) -> bool:
         return self.form != "direct"
+
+    @property
+    def output_subpass(self) -> int:
+        """Where the overlay draws (gpu/render_pass.py)."""
+        return output_subpass(self.form)
 
     def _create_pass(self, form: str | None = None) -> Any:
         return create_target_passes(

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout
 from ..gpu.device import Device
 from ..gpu.pipeline import compute_pipeline, pipeline_layout
@@ -24,6 +26,7 @@ from .layouts import (
     BINDING_HDR,
     BINDING_MATERIAL_IDS,
     BINDING_NORMAL_ROUGHNESS,
+    DEFERRED_PUSH,
     DEFERRED_TILE,
 )
 
@@ -46,7 +49,9 @@ class DeferredPass:
         self.sampler = None
         try:
             self.pool = DescriptorPool(device, 1, {sampled: 1, storage: 4})
-            self.layout = pipeline_layout(device, [frame_set_layout, self.set_layout.handle])
+            self.layout = pipeline_layout(
+                device, [frame_set_layout, self.set_layout.handle], [(stage, 0, DEFERRED_PUSH.size)]
+            )
             self.sampler = vk.vkCreateSampler(
                 device.handle,
                 vk.VkSamplerCreateInfo(
@@ -64,6 +69,8 @@ class DeferredPass:
             raise
         self.pipelines: dict[int, Any] = {}  # MATERIAL_FEATURES -> pipeline
         self._named: Any = None  # the target's SceneAttachments the set names
+        self._push = np.zeros(1, DEFERRED_PUSH.dtype)
+        self._push_ptr = vk.ffi.from_buffer(self._push)
 
     def _name(self, attachments: Any) -> None:
         """Point set 1 at a target's depth, HDR colour and G-buffer (once per attachments: a
@@ -116,6 +123,9 @@ class DeferredPass:
         point = vk.VK_PIPELINE_BIND_POINT_COMPUTE
         vk.vkCmdBindPipeline(cb, point, pipeline)
         vk.vkCmdBindDescriptorSets(cb, point, self.layout, 0, 2, [frame_set, self.image_set], 0, None)
+        self._push["viewport"] = (width, height)
+        stage = vk.VK_SHADER_STAGE_COMPUTE_BIT
+        vk.lib.vkCmdPushConstants(cb, self.layout, stage, 0, DEFERRED_PUSH.size, self._push_ptr)
         vk.vkCmdDispatch(cb, -(-width // DEFERRED_TILE), -(-height // DEFERRED_TILE), 1)
 
     def destroy(self) -> None:

@@ -425,9 +425,15 @@ class ImGuiRenderer:
             ),
         )
 
-    def retarget(self, render_pass: Any) -> None:
-        """Draw into another render pass (the target changed form: gpu/render_pass.py)."""
-        old, self.pipeline = self.pipeline, self._pipeline(render_pass)
+    def retarget(self, render_pass: Any, subpass: int) -> None:
+        """Draw into another render pass and subpass (the target changed form: gpu/render_pass.py)."""
+        self.subpass, old_subpass = subpass, self.subpass
+        try:
+            pipeline = self._pipeline(render_pass)
+        except BaseException:
+            self.subpass = old_subpass
+            raise
+        old, self.pipeline = self.pipeline, pipeline
         self.vk.vkDestroyPipeline(self.device.handle, old, None)
 
     def destroy(self) -> None:

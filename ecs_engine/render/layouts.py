@@ -145,6 +145,10 @@ TONE_MAP_PUSH = Struct(
     ],
 )
 
+DEFERRED_PUSH = Struct(
+    "DeferredPush", [("viewport", "uvec2", "the frame's viewport in pixels (the G-buffer may be larger)")]
+)
+
 IMGUI_PUSH = Struct(
     "ImGuiPush",
     [
@@ -168,6 +172,8 @@ FEATURE_DOUBLE_SIDED = 1 << 18  # some material is double-sided: no back-face cu
 FEATURE_CLUSTERED = 1 << 19  # fragments loop over their cluster's lights, not all (light_clusters.py)
 FEATURE_SPOT_LIGHTS = 1 << 20  # the scene has spot lights (without: lights are read as points)
 FEATURE_DIRECTIONAL_LIGHTS = 1 << 21  # the scene has directional lights
+FEATURE_EMISSIVE = 1 << 22  # some material glows (emissive colour or texture): without, none is read
+FEATURE_BLEND = 1 << 23  # some material is alpha-blended: without, every fragment's alpha is 1
 CLUSTER_GROUP = 64  # light_bounds.comp's and light_tiles.comp's local size
 MAX_GLOBAL_LIGHTS = 256  # directional and unbounded lights every fragment loops over, when clustered
 LIGHT_BINS = 1024  # distance bins: exponential shells around the eye, each with its light index range
@@ -201,6 +207,7 @@ STRUCTS = [
     COMPACT_PUSH,
     BILLBOARD_PUSH,
     TONE_MAP_PUSH,
+    DEFERRED_PUSH,
     IMGUI_PUSH,
 ]
 DEFINES = {
@@ -215,6 +222,8 @@ DEFINES = {
     "FEATURE_CLUSTERED": FEATURE_CLUSTERED,
     "FEATURE_SPOT_LIGHTS": FEATURE_SPOT_LIGHTS,
     "FEATURE_DIRECTIONAL_LIGHTS": FEATURE_DIRECTIONAL_LIGHTS,
+    "FEATURE_EMISSIVE": FEATURE_EMISSIVE,
+    "FEATURE_BLEND": FEATURE_BLEND,
     "CLUSTER_GROUP": CLUSTER_GROUP,
     "MAX_GLOBAL_LIGHTS": MAX_GLOBAL_LIGHTS,
     "LIGHT_BINS": LIGHT_BINS,

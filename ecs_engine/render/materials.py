@@ -40,7 +40,9 @@ from .layouts import (
     ALPHA_MASK,
     ALPHA_OPAQUE,
     FEATURE_ALPHA_MASK,
+    FEATURE_BLEND,
     FEATURE_DOUBLE_SIDED,
+    FEATURE_EMISSIVE,
     FEATURE_TEXTURES,
     MATERIAL,
     MODEL_BLINN_PHONG,
@@ -259,6 +261,10 @@ class Materials:
             self.features |= FEATURE_TEXTURES
         if material.double_sided:
             self.features |= FEATURE_DOUBLE_SIDED
+        if any(material.emissive) or material.emissive_texture is not None:
+            self.features |= FEATURE_EMISSIVE
+        if material.alpha_mode == "blend":
+            self.features |= FEATURE_BLEND
         self.version += 1
 
     def __getitem__(self, handle: int) -> Material:

@@ -3,7 +3,7 @@ target's form (gpu/render_pass.py's FORMS):
 
 - `direct` and `hdr`: the target's render pass: the chunks' and the set-aside rows' secondaries
   in subpass 0, the light billboards (light_pass.py) in subpass 1, the tone map (tone_map.py,
-  HDR only) and the overlay (the editor's ImGui) in subpass 2;
+  HDR only) and the overlay (the editor's ImGui) in subpass 2 (direct: the overlay in subpass 1);
 - `deferred`: the G-buffer pass with the chunks' secondaries (gpu/gbuffer.py), the lighting
   compute pass (deferred_pass.py), then the target's render pass as above with the set-aside rows
   alone in subpass 0.
@@ -51,22 +51,29 @@ class OutputPasses:
         except BaseException:
             self.destroy()
             raise
-        self._targets: dict[tuple[int, int, int], TargetState] = {}
+        self._targets: dict[tuple[tuple[int, int, int], int], TargetState] = {}
 
     def target_state(self, framebuffer: Any, width: int, height: int) -> TargetState:
         """What a framebuffer of this size needs per frame, made once (kept for 16 framebuffers)."""
         vk = self.vk
+        target = self.target
         key = (int(vk.ffi.cast("uintptr_t", framebuffer)), width, height)
-        state = self._targets.get(key)
+        # in the deferred form the G-buffer's framebuffer too: a swapchain remade at the same size
+        # may hand the new framebuffers the old handle values, but not necessarily both
+        gbuffer_fb = target.attachments.gbuffer.framebuffer if target.form == "deferred" else None
+        cache_key = (key, int(vk.ffi.cast("uintptr_t", gbuffer_fb)) if gbuffer_fb is not None else 0)
+        state = self._targets.get(cache_key)
         if state is None:
             if len(self._targets) > 16:  # swapchains come and go: drop the old framebuffers' entries
                 self._targets.clear()
-            target = self.target
             gbuffer = None
-            if target.form == "deferred":
-                fb = target.attachments.gbuffer.framebuffer
-                gbuffer = (target.gbuffer_pass, fb, self.secondaries.begin_info(target.gbuffer_pass, 0, fb))
-            state = self._targets[key] = TargetState.make(
+            if gbuffer_fb is not None:
+                gbuffer = (
+                    target.gbuffer_pass,
+                    gbuffer_fb,
+                    self.secondaries.begin_info(target.gbuffer_pass, 0, gbuffer_fb),
+                )
+            state = self._targets[cache_key] = TargetState.make(
                 vk,
                 key,
                 framebuffer,
@@ -128,9 +135,9 @@ class OutputPasses:
             lib.vkCmdExecuteCommands(cb, len(secondaries), vk.ffi.new("VkCommandBuffer[]", secondaries))
         lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
         draws = self.light_pass.record(cb, state, frame_set, billboards)
-        lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
-        if target.hdr:
+        if target.hdr:  # the direct form has no output subpass: the overlay follows the billboards
             assert self.tone_map_pass is not None
+            lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
             self.tone_map_pass.record(cb, state, target, *tone_map)
         if overlay is not None:
             overlay.record(cb, slot, state.area.extent.width, state.area.extent.height)

@@ -106,30 +106,34 @@ class Renderer:
         self.extractor = FrameExtractor(lambda: self.jobs.threads if self.jobs is not None else 1, chunk_rows)
         self._native = native_recorder  # compiling one costs about a second: callers may share one
         self.cpu_recorder = recorder or default_recorder()  # the CPU paths' recorder, kept while indirect draws
-        self.frames = FrameRing(device)
-        n = len(self.frames.frames)
-        self.secondaries = SecondaryBuffers(device, n)
-        self.set_layout, self.pool = frame_sets(device, n)
-        self.lights = LightCulling(device, self.set_layout.handle, light_culling)
-        self._fit_target()  # before anything is made against its render pass
-        self._target_generation = target.generation
-        self.texture_pages = TexturePages(device)
-        # a world without a Materials resource draws with the default palette
-        self.default_materials = Materials()
+        self._set_aside: SetAsidePass | None = None  # blended materials, made on first use
+        # drawn last, in the target's output_subpass: an object with prepare(slot, frames_in_flight),
+        # record(cb, slot, width, height) and retarget(render_pass, subpass), e.g. imgui_pass.ImGuiRenderer
+        self.overlay: Any = None
         # what the mesh pipelines were specialised for (Materials.features): grown, never shrunk,
         # when a world's materials use another shading model (a pipeline rebuild, as a mode switch)
+        self.default_materials = Materials()  # a world without a Materials resource: the default palette
         self.material_features = self.default_materials.features
         self.fill = fill
-        self.per_frame = [FrameResources.make(device, self.pool, self.set_layout, self.texture_pages) for _ in range(n)]
-        self.output = OutputPasses(device, target, self.set_layout.handle, self.secondaries, light_size, clear_color)
-        self._set_aside: SetAsidePass | None = None  # blended materials, made on first use
-        # drawn last in the overlay subpass: an object with prepare(slot, frames_in_flight),
-        # record(cb, slot, width, height) and retarget(render_pass), e.g. imgui_pass.ImGuiRenderer
-        self.overlay: Any = None
         try:
+            self.frames = FrameRing(device)
+            n = len(self.frames.frames)
+            self.secondaries = SecondaryBuffers(device, n)
+            self.set_layout, self.pool = frame_sets(device, n)
+            self.lights = LightCulling(device, self.set_layout.handle, light_culling)
+            self._fit_target()  # before anything is made against its render pass
+            self._target_generation = target.generation
+            self.texture_pages = TexturePages(device)
+            self.per_frame = [
+                FrameResources.make(device, self.pool, self.set_layout, self.texture_pages) for _ in range(n)
+            ]
+            self.output = OutputPasses(
+                device, target, self.set_layout.handle, self.secondaries, light_size, clear_color
+            )
             self.path: RenderPath = self._make_path(mode, recorder or default_recorder())
         except BaseException:
-            self._destroy_shared()  # a path the device cannot run (indirect), or no numba: nothing leaks
+            # a form or path the device cannot make (indirect), no numba, no memory: nothing leaks
+            self._destroy_shared()
             raise
 
     # ------------------------------------------------------------------ paths
@@ -298,9 +302,7 @@ class Renderer:
         material_count = len(materials)
         data = self.extract(world, width, height, materials)  # before any GPU state: a bad world fails here
         self._check_features(materials.features | light_features(data.lights, data.directional))
-        grid = self._light_clusters(data, width, height)
-        if framebuffer is None:
-            self.ensure_output()  # clusters switched on or off: the deferred form follows them
+        grid = self._light_clusters(data, width, height, own_target=framebuffer is None)
         self._sync_textures(materials)
         if self.jobs is not None and self.jobs.generation != self._jobs_generation:
             self._forget_old_threads()
@@ -426,12 +428,26 @@ class Renderer:
     def clustered(self) -> bool:
         return self.lights.clustered
 
-    def _light_clusters(self, data: FrameData, width: int, height: int) -> ClusterGrid | None:
+    def _light_clusters(self, data: FrameData, width: int, height: int, own_target: bool) -> ClusterGrid | None:
         """This frame's cluster grid, or None for the all-lights loop; a change either way
-        rebuilds the mesh pipelines (FEATURE_CLUSTERED), undone if that fails."""
+        rebuilds the mesh pipelines (FEATURE_CLUSTERED), undone if that fails. With `auto` it
+        also changes the form (deferred or not): on the target's own framebuffer at once, the
+        path made once for the new form; a swapchain's image was acquired in the old form, so
+        that frame stays in it and the next one switches (ensure_output, from the run loop)."""
         grid, flipped = self.lights.plan(data, width, height)
         if flipped:
-            self._respecialise(lambda: setattr(self.lights, "clustered", not self.lights.clustered))
+
+            def undo() -> None:
+                self.lights.clustered = not self.lights.clustered
+
+            if own_target and self._wanted_form() != self.target.form:
+                try:
+                    self.ensure_output()
+                except BaseException:
+                    undo()
+                    raise
+            else:
+                self._respecialise(undo)
         return grid
 
     def ensure_output(self) -> None:
@@ -442,12 +458,16 @@ class Renderer:
         if self.target.generation != self._target_generation:
             self._follow_target()
 
-    def _fit_target(self) -> None:
+    def _wanted_form(self) -> str:
+        """The target form (gpu/render_pass.py) the light culling, tone map, exposure, MSAA and
+        blended materials need."""
         samples = self.target.samples
         if self.lights.deferred(samples):
-            form = "deferred"
-        else:
-            form = "hdr" if wants_hdr(self.tone_map, self.exposure, samples, self._blends) else "direct"
+            return "deferred"
+        return "hdr" if wants_hdr(self.tone_map, self.exposure, samples, self._blends) else "direct"
+
+    def _fit_target(self) -> None:
+        form = self._wanted_form()
         if form != self.target.form:
             self.device.wait_idle()  # this or another renderer of the target may have frames in flight
             self.target.set_form(form)
@@ -459,7 +479,7 @@ class Renderer:
         self._swap_path(self._make_path(self.mode, self.cpu_recorder))
         self.output.retarget()
         if self.overlay is not None:
-            self.overlay.retarget(target.render_pass)
+            self.overlay.retarget(target.render_pass, target.output_subpass)
         self._target_generation = target.generation
 
     def destroy(self) -> None:
@@ -468,14 +488,10 @@ class Renderer:
         self._destroy_shared()
 
     def _destroy_shared(self) -> None:
-        self.output.destroy()
-        self.lights.destroy()
+        """What the renderer made, in reverse (what a failed __init__ had not made yet is skipped)."""
         if self._set_aside is not None:
             self._set_aside.destroy()
-        self.texture_pages.destroy()
-        self.secondaries.destroy()
-        for pf in self.per_frame:
-            pf.destroy()
-        self.pool.destroy()
-        self.set_layout.destroy()
-        self.frames.destroy()
+        for name in ("output", "per_frame", "texture_pages", "lights", "pool", "set_layout", "secondaries", "frames"):
+            made = getattr(self, name, None)
+            for part in made if isinstance(made, list) else [made] if made is not None else []:
+                part.destroy()
