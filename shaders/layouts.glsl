@@ -88,7 +88,7 @@ struct Instance {  // 64 bytes, std430
 struct Material {  // 112 bytes, std430
     vec4 base_color;            // offset 0: linear rgba
     vec4 emissive;              // offset 16: linear rgb, w: 0
-    vec4 surface;               // offset 32: x metallic, y roughness, z shininess, w specular strength
+    vec4 surface;               // offset 32: x metallic, y roughness, z shininess, w specular strength times Material.normalisation
     vec4 params;                // offset 48: x alpha cutoff, y normal scale, z occlusion strength, w 0
     uvec4 kind;                 // offset 64: x shading model (MODEL_*), y ALPHA_* mode, z double-sided, w 0
     uvec4 textures;             // offset 80: base colour, metallic-roughness, normal, emissive: page << 16 | layer, or NO_TEXTURE

@@ -42,14 +42,14 @@ vec3 brdf_pi(Material m, uint model, vec3 n, vec3 l, vec3 v, float nl) {
     if (model_is(model, MODEL_PHONG)) {
         float e = m.surface.z;
         float rv = max(dot(reflect(-l, n), v), 0.0);
-        return base + vec3(m.surface.w * (e + 2.0) / 2.0 * pow(rv, e));
+        return base + vec3(m.surface.w * pow(rv, e));   // w: strength * (e + 2) / 2 (materials.py)
     }
     if (model_is(model, MODEL_BLINN_PHONG)) {
         float e = m.surface.z;
         vec3 h = l + v;
         float h2 = dot(h, h);
         float nh = h2 > 1e-24 ? max(dot(n, h * inversesqrt(h2)), 0.0) : 0.0;
-        return base + vec3(m.surface.w * (e + 8.0) / 8.0 * pow(nh, e));
+        return base + vec3(m.surface.w * pow(nh, e));   // w: strength * (e + 8) / 8
     }
     if (model_is(model, MODEL_COOK_TORRANCE)) {
         float metallic = m.surface.x;

@@ -51,6 +51,16 @@ def test_bad_material_values_are_refused_naming_the_field(changes, message):
         Material("m", **changes)
 
 
+def test_specular_normalisation_is_folded_into_the_row():
+    """The shader reads strength * normalisation (not computed per light): (s + 2) / 2 for Phong,
+    (s + 8) / 8 for Blinn-Phong, none for the others."""
+    for model, factor in (("phong", (40 + 2) / 2), ("blinn_phong", (40 + 8) / 8), ("lambert", 1.0)):
+        row = Material("m", model, shininess=40.0, specular=0.3).row()
+        assert row["surface"][3] == pytest.approx(0.3 * factor, rel=1e-6)
+    # the palette keeps the seed scenes' strengths: pow(n.h, s) * strength, as before materials
+    assert DEFAULT_PALETTE[0].row()["surface"][3] == pytest.approx(0.5, rel=1e-6)
+
+
 def test_registry_handles_rows_and_updates():
     mats = Materials()
     assert len(mats) == 6 and [m.name for m in mats] == [m.name for m in DEFAULT_PALETTE]

@@ -75,7 +75,7 @@ MATERIAL = Struct(
     [
         ("base_color", "vec4", "linear rgba"),
         ("emissive", "vec4", "linear rgb, w: 0"),
-        ("surface", "vec4", "x metallic, y roughness, z shininess, w specular strength"),
+        ("surface", "vec4", "x metallic, y roughness, z shininess, w specular strength times Material.normalisation"),
         ("params", "vec4", "x alpha cutoff, y normal scale, z occlusion strength, w 0"),
         ("kind", "uvec4", "x shading model (MODEL_*), y ALPHA_* mode, z double-sided, w 0"),
         ("textures", "uvec4", "base colour, metallic-roughness, normal, emissive: page << 16 | layer, or NO_TEXTURE"),
