@@ -125,39 +125,30 @@ def test_two_hundred_resizes_and_minimises_while_rendering(monkeypatch):
     assert (1, 1) in seen and len(seen) > 150  # it really drew at 1x1 and at the other sizes
 
 
+def resized_run(**settings) -> None:
+    """8 frames in a 240x180 window that becomes 300x200 at frame 3, validation on: clean."""
+    glfw = open_glfw()
+    assert glfw is not None
+
+    def script(frame, glfw_, window):
+        if frame == 3:
+            glfw_.set_window_size(window, 300, 200)
+
+    options = RunOptions(width=240, height=180, frames=8, validate=True, quiet=True, **settings)
+    result = run_windowed(options, glfw, on_frame=script)
+    assert result.validation_messages == [] and result.frames == 8
+    assert result.recreations >= 1
+
+
 @pytest.mark.parametrize("msaa", [1, 4])
 def test_a_window_with_msaa_and_a_filmic_tone_map_resizes_cleanly(msaa):
     """The swapchain's shared attachments (multisampled depth and HDR colour, the resolve) are
     made again on resize, with validation on. Without MSAA the swapchain starts drawing straight
     into its images and the renderer switches it to HDR colour for the tone map."""
-    glfw = open_glfw()
-    assert glfw is not None
-
-    def script(frame, glfw_, window):
-        if frame == 3:
-            glfw_.set_window_size(window, 300, 200)
-
-    options = RunOptions(
-        scene="cube", width=240, height=180, frames=8, validate=True, quiet=True, msaa=msaa, tone_map="aces"
-    )
-    result = run_windowed(options, glfw, on_frame=script)
-    assert result.validation_messages == [] and result.frames == 8
-    assert result.recreations >= 1
+    resized_run(scene="cube", msaa=msaa, tone_map="aces")
 
 
 def test_a_deferred_window_resizes_cleanly():
     """The swapchain's G-buffer and the lighting's image set are made again on resize, with
     validation on."""
-    glfw = open_glfw()
-    assert glfw is not None
-
-    def script(frame, glfw_, window):
-        if frame == 3:
-            glfw_.set_window_size(window, 300, 200)
-
-    options = RunOptions(
-        scene="lights", width=240, height=180, frames=8, validate=True, quiet=True, light_culling="deferred", lights=64
-    )
-    result = run_windowed(options, glfw, on_frame=script)
-    assert result.validation_messages == [] and result.frames == 8
-    assert result.recreations >= 1
+    resized_run(scene="lights", light_culling="deferred", lights=64)

@@ -7,13 +7,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .memory import HOST, Buffer, Image
-from .render_pass import FORMS, SceneAttachments, create_framebuffer, create_target_passes, output_subpass
+from .render_pass import FORMS, SceneAttachments, TargetForm, create_framebuffer, create_target_passes
 
 if TYPE_CHECKING:
     from .device import Device
 
 
-class OffscreenTarget:
+class OffscreenTarget(TargetForm):
     """Renders into an sRGB RGBA8 image that can be copied to a host buffer each frame.
 
     One colour image is shared by the frames in flight: the renderer waits for a frame's fence
@@ -37,15 +37,6 @@ class OffscreenTarget:
         )
         self.render_pass, self.gbuffer_pass, self.attachments, self.framebuffer = self._build_pass(self.form)
         self.readback = Buffer(device, width * height * 4, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
-
-    @property
-    def hdr(self) -> bool:
-        return self.form != "direct"
-
-    @property
-    def output_subpass(self) -> int:
-        """Where the overlay draws (gpu/render_pass.py)."""
-        return output_subpass(self.form)
 
     def _build_pass(self, form: str) -> tuple[Any, Any, SceneAttachments, Any]:
         """The render pass, G-buffer pass, shared attachments and framebuffer of a form; on

@@ -84,6 +84,22 @@ def output_subpass(form: str) -> int:
     return SUBPASS_BILLBOARDS if form == "direct" else SUBPASS_OUTPUT
 
 
+class TargetForm:
+    """What a target (offscreen.py, swapchain.py) says of its `form`."""
+
+    form: str
+
+    @property
+    def hdr(self) -> bool:
+        """The scene is drawn in HDR colour and tone mapped (the hdr and deferred forms)."""
+        return self.form != "direct"
+
+    @property
+    def output_subpass(self) -> int:
+        """Where the overlay draws."""
+        return output_subpass(self.form)
+
+
 def _to_readback(vk: Any, last: int = SUBPASS_OUTPUT) -> Any:
     """The target, written in the last subpass, before whatever reads it next (a copy for
     readback, or present)."""

@@ -11,7 +11,7 @@ import numpy as np
 from ..errors import UsageError
 from .functions import device_function, instance_function, raw_device_function
 from .memory import HOST, Buffer
-from .render_pass import FORMS, SceneAttachments, create_framebuffer, create_target_passes, output_subpass
+from .render_pass import FORMS, SceneAttachments, TargetForm, create_framebuffer, create_target_passes
 
 if TYPE_CHECKING:
     from .device import Device
@@ -27,7 +27,7 @@ class OutOfDate(Exception):
     """The swapchain no longer matches the window: recreate it and skip this frame."""
 
 
-class Swapchain:
+class Swapchain(TargetForm):
     def __init__(
         self,
         device: Device,
@@ -178,15 +178,6 @@ class Swapchain:
         self.present_mode = self.present_mode_for(present)
         self.present_name = present
         self.recreate()
-
-    @property
-    def hdr(self) -> bool:
-        return self.form != "direct"
-
-    @property
-    def output_subpass(self) -> int:
-        """Where the overlay draws (gpu/render_pass.py)."""
-        return output_subpass(self.form)
 
     def _create_pass(self, form: str | None = None) -> Any:
         return create_target_passes(
