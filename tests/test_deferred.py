@@ -296,3 +296,33 @@ def test_a_renderer_that_cannot_make_its_form_leaves_nothing(monkeypatch):
         assert gpu.target.form == "direct"  # the old form stays whole
         assert gpu.device.allocator.stats()["used_bytes"] == used
     assert sorted(destroyed) == ["FrameRing", "LightCulling", "SecondaryBuffers"]
+
+
+@pytest.mark.parametrize("culling", ["auto", "deferred"])
+def test_a_device_without_fragment_subgroups_still_walks_the_grid_in_compute(culling, caplog):
+    """The forward `_clustered` shaders need subgroup arithmetic in fragment shaders; the lighting
+    pass does not: such a device still builds the grid and defers, and the rows drawn forward
+    (glass, wireframe) loop over every light. No warning: nothing asked for is missing."""
+    from ecs_engine.render import chunk_paths
+
+    made: list[str] = []
+    real = chunk_paths.graphics_pipeline
+
+    def counting(device, spec):
+        made.append(spec.fragment_shader)
+        return real(device, spec)
+
+    with headless_gpu(W, H) as gpu, caplog.at_level(logging.WARNING, logger="ecs_engine"):
+        world = textured_scene(gpu)
+        loop, _, _ = render(gpu, world, "loop")
+        gpu.device.features["fragmentSubgroupArithmetic"] = False
+        chunk_paths.graphics_pipeline = counting
+        try:
+            image, form, clustered = render(gpu, world, culling, frames=2)
+        finally:
+            chunk_paths.graphics_pipeline = real
+            gpu.device.features["fragmentSubgroupArithmetic"] = True
+    assert form == "deferred" and clustered
+    assert_same(image, loop)
+    assert made and not any("clustered" in name for name in made), made
+    assert not caplog.records

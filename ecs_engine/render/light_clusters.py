@@ -220,11 +220,20 @@ class LightCulling:
         self._warned = False
         self._warned_msaa = False
 
-    def plan(self, data: Any, width: int, height: int) -> tuple[ClusterGrid | None, bool]:
+    @property
+    def walked_by_fragments(self) -> bool:
+        """Whether forward fragments walk the grid (FEATURE_CLUSTERED: the `_clustered` shaders,
+        which need subgroup arithmetic); without it they loop over every light, while the
+        deferred lighting, in compute, still walks the grid."""
+        return self.clustered and self.supported
+
+    def plan(self, data: Any, width: int, height: int, samples: int = 1) -> tuple[ClusterGrid | None, bool]:
         """(this frame's grid or None, whether `clustered` changed)."""
         clustered = False
         reach = 0.0
-        if not self.supported:
+        # on a device without fragment subgroup arithmetic only the deferred lighting walks the
+        # grid: no grid where the lights are lit forward (`clustered`, or MSAA)
+        if not self.supported and (self.mode == "clustered" or samples > 1):
             if self.mode in ("clustered", "deferred") and not self._warned:
                 self._warned = True
                 log.warning("this device has no subgroup arithmetic in fragment shaders: lights are not clustered")

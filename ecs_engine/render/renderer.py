@@ -196,7 +196,7 @@ class Renderer:
             frame_set_layout=self.set_layout.handle,
             secondaries=self.secondaries,
             frames_in_flight=len(self.frames.frames),
-            material_features=self.material_features | (FEATURE_CLUSTERED if self.lights.clustered else 0),
+            material_features=self.material_features | (FEATURE_CLUSTERED if self.lights.walked_by_fragments else 0),
             samples=self.target.samples,
             fill=self.fill,
             native_recorder=self._native_recorder,
@@ -434,7 +434,7 @@ class Renderer:
         also changes the form (deferred or not): on the target's own framebuffer at once, the
         path made once for the new form; a swapchain's image was acquired in the old form, so
         that frame stays in it and the next one switches (ensure_output, from the run loop)."""
-        grid, flipped = self.lights.plan(data, width, height)
+        grid, flipped = self.lights.plan(data, width, height, self.target.samples)
         if flipped:
 
             def undo() -> None:
