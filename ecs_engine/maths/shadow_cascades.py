@@ -1,0 +1,139 @@
+"""Cascaded shadow maps for directional lights: where the view is split and how each cascade's
+light projection is fitted to its slice so that it does not shimmer (issue 15).
+
+The view from `near` to the shadow distance is cut into up to four slices (`cascade_splits`:
+the practical scheme of Zhang et al., "Parallel-split shadow maps", 2006, a blend of uniform and
+logarithmic splits). Each slice is enclosed in a sphere (`slice_sphere`), and the cascade's
+orthographic projection is the square around that sphere, seen along the light (`fit_cascade`):
+
+- a sphere's size depends only on the field of view, the aspect and the split distances, never
+  on where the camera looks, so turning the camera does not change the cascade's texel size;
+- the square's centre is snapped to whole shadow-map texels in the light's frame, measured from
+  the world origin (not from the camera-relative render origin, which moves with the camera),
+  so translating the camera moves the map's texel grid by whole texels: a static scene's shadow
+  edges stay where they are (after M. Valient, "Stable rendering of cascaded shadow maps",
+  ShaderX6, 2008).
+
+Conventions are those of maths/camera.py: right-handed, Y up, looking down -Z, matrices
+[row, column] on column vectors, reverse-Z depth in [0, 1] (near 1, far 0), Vulkan NDC (y down).
+Positions given to `fit_cascade` are relative to the render origin, which is `origin` in the
+world; the view matrix it returns takes render-relative positions, like the camera's.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .camera import check_positive
+
+MAX_CASCADES = 4
+
+
+def cascade_splits(near: float, far: float, count: int, blend: float = 0.75) -> np.ndarray:
+    """`count` + 1 view distances from `near` to `far`: split i is blend * log_i + (1 - blend) *
+    uniform_i (blend 1: logarithmic, the same ratio each cascade; 0: uniform)."""
+    check_positive("near", near)
+    if not (math.isfinite(far) and far > near):
+        raise ValueError(f"the shadow distance ({far!r}) must be finite and beyond near ({near!r})")
+    if not 1 <= count <= MAX_CASCADES:
+        raise ValueError(f"cascades must be 1 to {MAX_CASCADES}, got {count!r}")
+    if not 0.0 <= blend <= 1.0:
+        raise ValueError(f"the split blend must be in [0, 1], got {blend!r}")
+    i = np.arange(count + 1, dtype=np.float64) / count
+    splits = blend * near * (far / near) ** i + (1.0 - blend) * (near + (far - near) * i)
+    splits[0], splits[-1] = near, far  # exactly, whatever the rounding
+    return splits
+
+
+def slice_sphere(d0: float, d1: float, tan_half_fov_y: float, aspect: float) -> tuple[float, float]:
+    """(distance of the centre along the view axis, radius) of the smallest sphere around the
+    perspective frustum slice between view distances d0 < d1. A slice's corners lie at distance
+    d along the axis, k * d off it (k: the tangent of the half diagonal field of view); the
+    centre is where its distances to a near and a far corner are equal, unless that lies beyond
+    d1 (a wide slice), where the far cap's circle alone decides."""
+    k2 = tan_half_fov_y * tan_half_fov_y * (1.0 + aspect * aspect)
+    centre = 0.5 * (d0 + d1) * (1.0 + k2)
+    if centre >= d1:
+        return d1, math.sqrt(k2) * d1
+    return centre, math.sqrt((centre - d0) ** 2 + k2 * d0 * d0)
+
+
+def light_rotation(direction: np.ndarray) -> np.ndarray:
+    """(3, 3) rows: the light frame's right, up and back axes (back = -direction, the way the
+    light comes from), so that R @ p gives a point in the light's frame looking down -Z. Up is
+    world +Y projected, or +Z when the light shines (almost) straight up or down."""
+    d = np.asarray(direction, np.float64).reshape(3)
+    n = float(np.linalg.norm(d))
+    if not (math.isfinite(n) and n > 0.0):
+        raise ValueError(f"a light direction must be finite and non-zero, got {d.tolist()}")
+    back = -d / n
+    up_hint = np.array([0.0, 1.0, 0.0]) if abs(back[1]) < 0.999 else np.array([0.0, 0.0, 1.0])
+    right = np.cross(up_hint, back)
+    right /= np.linalg.norm(right)
+    up = np.cross(back, right)
+    return np.stack([right, up, back])
+
+
+@dataclass(frozen=True)
+class Cascade:
+    view: np.ndarray  # (4, 4) float32: render-relative positions -> the light's view
+    projection: np.ndarray  # (4, 4) float32: reverse-Z orthographic, the square around the sphere
+    radius: float  # of the slice's sphere: the map covers 2 * radius across
+    texel: float  # world units per shadow-map texel
+    near: float  # the slice's view distances
+    far: float
+
+    @property
+    def view_projection(self) -> np.ndarray:
+        return self.projection @ self.view
+
+
+def fit_cascade(
+    eye: np.ndarray,
+    forward: np.ndarray,
+    origin: np.ndarray,
+    d0: float,
+    d1: float,
+    tan_half_fov_y: float,
+    aspect: float,
+    direction: np.ndarray,
+    resolution: int,
+    caster_reach: float = 0.0,
+) -> Cascade:
+    """The cascade for the slice [d0, d1] of a perspective view at `eye` (render-relative)
+    looking along unit `forward`; `origin`: the render origin in the world (float64); the
+    light shines along `direction`; the map has `resolution` texels across. Casters up to
+    `caster_reach` beyond the sphere towards the light still cast into it (the depth range
+    grows that way; what lies behind the sphere casts nothing into it)."""
+    if resolution < 1:
+        raise ValueError(f"a shadow map needs at least one texel, got {resolution!r}")
+    along, radius = slice_sphere(d0, d1, tan_half_fov_y, aspect)
+    centre = np.asarray(eye, np.float64) + along * np.asarray(forward, np.float64)
+    rot = light_rotation(direction)
+    origin = np.asarray(origin, np.float64).reshape(3)
+    # the centre in the light's frame measured from the world origin, snapped to whole texels
+    texel = 2.0 * radius / resolution
+    c = rot @ (centre + origin)
+    c[:2] = np.round(c[:2] / texel) * texel
+    depth = 2.0 * radius + max(float(caster_reach), 0.0)
+    light_eye = c + np.array([0.0, 0.0, radius + max(float(caster_reach), 0.0)])  # on the back axis
+    view = np.eye(4)
+    view[:3, :3] = rot
+    view[:3, 3] = rot @ origin - light_eye  # float64, then the cast: render-relative input
+    projection = np.zeros((4, 4))
+    projection[0, 0] = 1.0 / radius
+    projection[1, 1] = -1.0 / radius  # Vulkan y flip, as maths.camera.orthographic
+    projection[2, 2] = 1.0 / depth  # reverse-Z: depth = (depth - d) / depth, d = -z from the light's eye
+    projection[2, 3] = 1.0
+    projection[3, 3] = 1.0
+    return Cascade(
+        view=view.astype(np.float32),
+        projection=projection.astype(np.float32),
+        radius=radius,
+        texel=texel,
+        near=d0,
+        far=d1,
+    )
