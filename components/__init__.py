@@ -14,6 +14,7 @@ from .light import DirectionalLight, PointLight, SpotLight
 from .mesh import Mesh
 from .motion import AngularVelocity, Spring, Velocity
 from .orbit import Orbit
+from .shadow import NotShadowCaster, NotShadowReceiver, Shadow
 from .transform import ModelMatrix, NormalMatrix, PreviousTransform, Transform
 
 __all__ = [
@@ -27,10 +28,13 @@ __all__ = [
     "Mesh",
     "ModelMatrix",
     "NormalMatrix",
+    "NotShadowCaster",
+    "NotShadowReceiver",
     "Orbit",
     "PointLight",
     "PreviousTransform",
     "RenderOrigin",
+    "Shadow",
     "SpotLight",
     "Spring",
     "Transform",

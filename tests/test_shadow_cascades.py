@@ -9,7 +9,14 @@ import math
 import numpy as np
 import pytest
 
-from ecs_engine.maths.shadow_cascades import cascade_splits, fit_cascade, light_rotation, slice_sphere
+from ecs_engine.maths.camera import orthographic, perspective
+from ecs_engine.maths.shadow_cascades import (
+    cascade_splits,
+    fit_cascade,
+    light_rotation,
+    slice_sphere,
+    view_slice_sphere,
+)
 
 FOV = math.radians(60.0)
 TAN = math.tan(FOV / 2)
@@ -29,6 +36,13 @@ def slice_corners(eye, forward, d0, d1):
             for sy in (-1, 1):
                 out.append(eye + forward * d + right * (sx * TAN * ASPECT * d) + up * (sy * TAN * d))
     return np.array(out)
+
+
+def fit(eye, forward, origin, d0, d1, light, res, reach=0.0):
+    along, r = slice_sphere(d0, d1, TAN, ASPECT)
+    return fit_cascade(
+        np.asarray(eye, float) + along * np.asarray(forward, float), r, origin, light, res, reach, d0, d1
+    )
 
 
 def to_map(cascade, points_rel):
@@ -52,6 +66,13 @@ def test_splits_run_from_near_to_far_between_uniform_and_logarithmic():
         cascade_splits(1.0, math.inf, 4)
 
 
+def test_the_sphere_of_a_cameras_slice_follows_its_projection():
+    along, r = view_slice_sphere(perspective(FOV, ASPECT, 0.1), 2.0, 9.0)
+    assert (along, r) == pytest.approx(slice_sphere(2.0, 9.0, TAN, ASPECT))
+    along, r = view_slice_sphere(orthographic(6.0, 2.0, 0.1, 100.0), 2.0, 10.0)
+    assert along == pytest.approx(6.0) and r == pytest.approx(math.sqrt(6.0**2 + 3.0**2 + 4.0**2))
+
+
 @pytest.mark.parametrize(("d0", "d1"), [(0.1, 5.0), (5.0, 20.0), (20.0, 21.0), (0.1, 200.0)])
 def test_the_slice_sphere_holds_the_slice_and_touches_it(d0, d1):
     along, r = slice_sphere(d0, d1, TAN, ASPECT)
@@ -69,7 +90,7 @@ def test_a_cascade_holds_its_slice_and_casters_towards_the_light():
         forward /= np.linalg.norm(forward)
         light = rng.normal(size=3)
         origin = rng.uniform(-1e5, 1e5, 3)
-        c = fit_cascade(eye, forward, origin, 2.0, 15.0, TAN, ASPECT, light, 1024, caster_reach=30.0)
+        c = fit(eye, forward, origin, 2.0, 15.0, light, 1024, reach=30.0)
         m = to_map(c, slice_corners(eye, forward, 2.0, 15.0))
         assert (np.abs(m[:, :2]) <= 1 + 1e-4).all() and (m[:, 2] >= -1e-4).all() and (m[:, 2] <= 1 + 1e-4).all()
         # a caster 25 units towards the light from the slice's middle still lands in the map
@@ -89,7 +110,7 @@ def test_translating_the_camera_moves_the_texel_grid_by_whole_texels():
     fractions = []
     for step in range(8):
         camera = np.array([0.0, 2.0, 0.0]) + step * np.array([0.0123, 0.0041, -0.0377])  # sub-texel steps
-        c = fit_cascade(np.zeros(3), forward, camera, 1.0, 20.0, TAN, ASPECT, light, res)
+        c = fit(np.zeros(3), forward, camera, 1.0, 20.0, light, res)
         uv = (to_map(c, points - camera)[:, :2] * 0.5 + 0.5) * res
         fractions.append(uv - np.floor(uv))
         assert c.texel == pytest.approx(2 * c.radius / res)
@@ -106,7 +127,7 @@ def test_turning_the_camera_keeps_the_texel_size():
     for yaw in np.linspace(0, 2 * math.pi, 9):
         forward = np.array([math.sin(yaw), -0.2, -math.cos(yaw)])
         forward /= np.linalg.norm(forward)
-        c = fit_cascade(np.zeros(3), forward, np.zeros(3), 3.0, 30.0, TAN, ASPECT, light, 1024)
+        c = fit(np.zeros(3), forward, np.zeros(3), 3.0, 30.0, light, 1024)
         sizes.add(round(c.texel, 12))
     assert len(sizes) == 1
 

@@ -29,7 +29,7 @@ import numpy as np
 
 from .camera import check_positive
 
-MAX_CASCADES = 4
+MAX_CASCADES = 4  # components/shadow.py: Shadow.cascades
 
 
 def cascade_splits(near: float, far: float, count: int, blend: float = 0.75) -> np.ndarray:
@@ -91,35 +91,45 @@ class Cascade:
         return self.projection @ self.view
 
 
+def view_slice_sphere(projection: np.ndarray, d0: float, d1: float) -> tuple[float, float]:
+    """(distance of the centre along the view axis, radius) of the sphere around the slice
+    [d0, d1] of a camera's view, perspective or orthographic, from its projection matrix
+    (maths/camera.py's: symmetric, reverse-Z)."""
+    p = np.asarray(projection, np.float64)
+    if p[3, 3] == 1.0:  # orthographic: a box of fixed cross-section
+        half_w, half_h = 1.0 / abs(p[0, 0]), 1.0 / abs(p[1, 1])
+        return 0.5 * (d0 + d1), math.sqrt(half_w * half_w + half_h * half_h + 0.25 * (d1 - d0) ** 2)
+    tan_half_fov_y = 1.0 / abs(p[1, 1])
+    return slice_sphere(d0, d1, tan_half_fov_y, abs(p[1, 1]) / abs(p[0, 0]))
+
+
 def fit_cascade(
-    eye: np.ndarray,
-    forward: np.ndarray,
+    centre: np.ndarray,
+    radius: float,
     origin: np.ndarray,
-    d0: float,
-    d1: float,
-    tan_half_fov_y: float,
-    aspect: float,
     direction: np.ndarray,
     resolution: int,
     caster_reach: float = 0.0,
+    near: float = 0.0,
+    far: float = 0.0,
 ) -> Cascade:
-    """The cascade for the slice [d0, d1] of a perspective view at `eye` (render-relative)
-    looking along unit `forward`; `origin`: the render origin in the world (float64); the
-    light shines along `direction`; the map has `resolution` texels across. Casters up to
-    `caster_reach` beyond the sphere towards the light still cast into it (the depth range
-    grows that way; what lies behind the sphere casts nothing into it)."""
+    """The cascade around the sphere (`centre` render-relative, `radius`) of a view slice from
+    `near` to `far`; `origin`: the render origin in the world (float64); the light shines along
+    `direction`; the map has `resolution` texels across. Casters up to `caster_reach` beyond
+    the sphere towards the light still cast into it (the depth range grows that way; what lies
+    behind the sphere casts nothing into it)."""
     if resolution < 1:
         raise ValueError(f"a shadow map needs at least one texel, got {resolution!r}")
-    along, radius = slice_sphere(d0, d1, tan_half_fov_y, aspect)
-    centre = np.asarray(eye, np.float64) + along * np.asarray(forward, np.float64)
+    check_positive("radius", radius)
     rot = light_rotation(direction)
     origin = np.asarray(origin, np.float64).reshape(3)
+    reach = max(float(caster_reach), 0.0)
     # the centre in the light's frame measured from the world origin, snapped to whole texels
     texel = 2.0 * radius / resolution
-    c = rot @ (centre + origin)
+    c = rot @ (np.asarray(centre, np.float64).reshape(3) + origin)
     c[:2] = np.round(c[:2] / texel) * texel
-    depth = 2.0 * radius + max(float(caster_reach), 0.0)
-    light_eye = c + np.array([0.0, 0.0, radius + max(float(caster_reach), 0.0)])  # on the back axis
+    depth = 2.0 * radius + reach
+    light_eye = c + np.array([0.0, 0.0, radius + reach])  # on the back axis
     view = np.eye(4)
     view[:3, :3] = rot
     view[:3, 3] = rot @ origin - light_eye  # float64, then the cast: render-relative input
@@ -134,6 +144,6 @@ def fit_cascade(
         projection=projection.astype(np.float32),
         radius=radius,
         texel=texel,
-        near=d0,
-        far=d1,
+        near=near,
+        far=far,
     )

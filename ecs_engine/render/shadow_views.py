@@ -1,0 +1,153 @@
+"""The frame's shadow views (issue 15): for every light with a `Shadow` (components/shadow.py),
+the views its shadow maps are drawn from, each with its layer of the shadow map array, the
+matrices that take render-relative positions there and the planes its casters are culled by.
+
+- directional light: one view per cascade (maths/shadow_cascades.py), fitted to a slice of the
+  camera's view from its near plane to `Shadow.distance`, stable under camera motion; casters
+  up to `distance` beyond a cascade's sphere towards the light still cast into it;
+- spot light: one perspective view from the light along its axis, as wide as its outer cone,
+  as deep as its range;
+- point light: six views, the faces of a cube map in Vulkan's order (+X, -X, +Y, -Y, +Z, -Z)
+  and orientation (the spec's cube map face selection: a direction's major axis picks the
+  face, the other two give s and t), so a samplerCube reads them back seamlessly.
+
+Views come in a fixed order (directional, spot, point lights, each in world order), the layers
+numbered in that order. Depth is reverse-Z as everywhere (near 1, far 0).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..components import DirectionalLight, PointLight, Shadow, SpotLight, Transform
+from ..ecs.world import World
+from ..maths.camera import perspective
+from ..maths.culling import frustum_planes
+from ..maths.shadow_cascades import cascade_splits, fit_cascade, light_rotation, view_slice_sphere
+from .camera import CameraMatrices
+from .light_rows import local_minus_z
+
+SPOT_NEAR = 0.01  # a spot or point light's near plane, times its range (0.05 for unbounded ones)
+MAX_SPOT_FOV = math.pi - 1e-3  # a 90-degree outer angle still makes a finite projection
+# (forward, s axis, t axis) per cube face: the Vulkan spec's table of sc, tc per major axis
+CUBE_FACES = (
+    ((1, 0, 0), (0, 0, -1), (0, -1, 0)),
+    ((-1, 0, 0), (0, 0, 1), (0, -1, 0)),
+    ((0, 1, 0), (1, 0, 0), (0, 0, 1)),
+    ((0, -1, 0), (1, 0, 0), (0, 0, -1)),
+    ((0, 0, 1), (1, 0, 0), (0, -1, 0)),
+    ((0, 0, -1), (-1, 0, 0), (0, -1, 0)),
+)
+
+
+@dataclass(frozen=True)
+class ShadowView:
+    entity: int  # the light's
+    kind: str  # "cascade", "spot" or "cube"
+    index: int  # the cascade, or the cube face; 0 for a spot light
+    layer: int  # in the shadow map array
+    view: np.ndarray  # (4, 4) float32: render-relative positions -> the view's frame
+    projection: np.ndarray  # (4, 4) float32, reverse-Z
+    planes: np.ndarray  # (k, 4) float64: where casters must be (maths/culling.py)
+    resolution: int
+    texel: float  # world units per texel: a cascade's everywhere; a spot or cube face's at distance 1
+    far: float  # a cascade: the far end of its slice of the camera's view; else the light's range (inf: none)
+
+    @property
+    def view_projection(self) -> np.ndarray:
+        return self.projection @ self.view
+
+
+def _translation_view(rotation: np.ndarray, position: np.ndarray) -> np.ndarray:
+    view = np.eye(4)
+    view[:3, :3] = rotation
+    view[:3, 3] = -rotation @ position
+    return view
+
+
+def _cube_face(face: int, near: float, far: float) -> np.ndarray:
+    """(4, 4) float64: a direction r from the light -> clip (sc, tc, depth, ma), ma = r on the
+    face's major axis; x/w and y/w are then the face's s and t in [-1, 1] (t down the image, as
+    Vulkan's NDC y), depth reverse-Z from `near` (1) to `far` (0, or infinite)."""
+    forward, s_axis, t_axis = (np.array(v, np.float64) for v in CUBE_FACES[face])
+    m = np.zeros((4, 4))
+    m[0, :3], m[1, :3], m[3, :3] = s_axis, t_axis, forward
+    if math.isinf(far):
+        m[2, 3] = near
+    else:
+        m[2, :3] = -near / (far - near) * forward
+        m[2, 3] = far * near / (far - near)
+    return m
+
+
+def shadow_views(world: World, cam: CameraMatrices, origin: np.ndarray) -> list[ShadowView]:
+    """The views of every shadow-casting light, in layer order (see the module)."""
+    origin = np.asarray(origin, np.float64)
+    eye = cam.position - origin
+    forward = cam.inverse_view[:3, :3].astype(np.float64) @ np.array([0.0, 0.0, -1.0])
+    views: list[ShadowView] = []
+
+    def add(
+        entity: int,
+        kind: str,
+        index: int,
+        view: np.ndarray,
+        projection: np.ndarray,
+        resolution: int,
+        texel: float,
+        far: float,
+    ) -> None:
+        view32, projection32 = view.astype(np.float32), projection.astype(np.float32)
+        planes = frustum_planes(projection32, view32)
+        views.append(ShadowView(entity, kind, index, len(views), view32, projection32, planes, resolution, texel, far))
+
+    for batch in world.query(DirectionalLight, Transform, Shadow, write=()):
+        shadow = batch[Shadow]
+        directions = local_minus_z(batch[Transform].rotation)
+        for row, entity in enumerate(batch.entities.tolist()):
+            distance = float(shadow.distance[row])
+            far = min(distance, cam.far)
+            if far <= cam.near:
+                continue  # the camera sees nothing within the shadow distance
+            splits = cascade_splits(cam.near, far, int(shadow.cascades[row]))
+            resolution = int(shadow.resolution[row])
+            for i in range(len(splits) - 1):
+                along, radius = view_slice_sphere(cam.projection, splits[i], splits[i + 1])
+                c = fit_cascade(
+                    eye + along * forward,
+                    radius,
+                    origin,
+                    directions[row],
+                    resolution,
+                    distance,
+                    splits[i],
+                    splits[i + 1],
+                )
+                add(entity, "cascade", i, c.view, c.projection, resolution, c.texel, float(splits[i + 1]))
+
+    for batch in world.query(SpotLight, Transform, Shadow, write=()):
+        spot, shadow, transform = batch[SpotLight], batch[Shadow], batch[Transform]
+        directions = local_minus_z(transform.rotation)
+        for row, entity in enumerate(batch.entities.tolist()):
+            reach = float(spot.radius[row])
+            far = reach if reach > 0 else math.inf
+            fov = min(2.0 * float(spot.outer_angle[row]), MAX_SPOT_FOV)
+            projection = perspective(fov, 1.0, SPOT_NEAR * reach if reach > 0 else 0.05, far).astype(np.float64)
+            view = _translation_view(light_rotation(directions[row]), transform.position[row] - origin)
+            resolution = int(shadow.resolution[row])
+            add(entity, "spot", 0, view, projection, resolution, 2.0 * math.tan(0.5 * fov) / resolution, far)
+
+    for batch in world.query(PointLight, Transform, Shadow, write=()):
+        light, shadow, transform = batch[PointLight], batch[Shadow], batch[Transform]
+        for row, entity in enumerate(batch.entities.tolist()):
+            reach = float(light.radius[row])
+            far = reach if reach > 0 else math.inf
+            near = SPOT_NEAR * reach if reach > 0 else 0.05
+            view = _translation_view(np.eye(3), transform.position[row] - origin)
+            resolution = int(shadow.resolution[row])
+            for face in range(6):
+                add(entity, "cube", face, view, _cube_face(face, near, far), resolution, 2.0 / resolution, far)
+    return views

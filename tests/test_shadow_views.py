@@ -1,0 +1,147 @@
+"""Shadow views (render/shadow_views.py): which lights get views (only those with a Shadow), in
+what order and layers; cascades holding their slices of the camera's view; spot views holding
+their cone; cube faces in Vulkan's cube-map orientation. And the Shadow component's checks."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from ecs_engine import World
+from ecs_engine.components import Camera, DirectionalLight, PointLight, Shadow, SpotLight, Transform
+from ecs_engine.maths.camera import look_rotation
+from ecs_engine.maths.shadow_cascades import cascade_splits
+from ecs_engine.render.camera import camera_matrices
+from ecs_engine.render.shadow_views import shadow_views
+
+ASPECT = 16 / 9
+
+
+def scene(origin=(0.0, 0.0, 0.0)) -> World:
+    world = World()
+    world.spawn(
+        Transform(position=origin, rotation=look_rotation((0.3, -0.4, -1.0))),
+        Camera(fov_y=math.radians(60.0), near=0.5, far=400.0),
+    )
+    world.spawn(
+        Transform(rotation=look_rotation((0.2, -1.0, 0.3))), DirectionalLight(), Shadow(cascades=3, distance=30.0)
+    )
+    world.spawn(Transform(rotation=look_rotation((0.0, -1.0, 0.0))), DirectionalLight())  # casts none
+    world.spawn(
+        Transform(position=(4.0, 3.0, -2.0), rotation=look_rotation((0.1, -1.0, 0.2))),
+        SpotLight(radius=12.0, outer_angle=0.7, inner_angle=0.5),
+        Shadow(resolution=1024),
+    )
+    world.spawn(Transform(position=(-3.0, 2.0, -5.0)), PointLight(radius=8.0), Shadow(resolution=512))
+    world.spawn(Transform(position=(1.0, 1.0, 1.0)), PointLight(radius=8.0))  # casts none
+    return world
+
+
+def clip(view, points):
+    p = np.c_[points, np.ones(len(points))] @ view.view_projection.astype(np.float64).T
+    return p
+
+
+def test_only_lights_with_a_shadow_get_views_in_layer_order():
+    world = scene()
+    cam = camera_matrices(world, ASPECT)
+    views = shadow_views(world, cam, cam.position)
+    assert [(v.kind, v.index) for v in views] == [
+        ("cascade", 0),
+        ("cascade", 1),
+        ("cascade", 2),
+        ("spot", 0),
+        *[("cube", f) for f in range(6)],
+    ]
+    assert [v.layer for v in views] == list(range(10))
+    assert [v.resolution for v in views] == [2048] * 3 + [1024] + [512] * 6
+    assert [v.far for v in views[:3]] == pytest.approx(cascade_splits(0.5, 30.0, 3)[1:].tolist())
+    assert shadow_views(World(), cam, cam.position) == []
+
+
+@pytest.mark.parametrize("origin", [(0.0, 0.0, 0.0), (1.0e5, 20.0, -3.0e5)])
+def test_each_cascade_holds_its_slice_of_the_view(origin):
+    world = scene(origin)
+    cam = camera_matrices(world, ASPECT)
+    views = shadow_views(world, cam, cam.position)
+    inv = np.linalg.inv(cam.projection.astype(np.float64))
+    rot = cam.inverse_view[:3, :3].astype(np.float64)
+    for v in views[:3]:
+        d0 = cam.near if v.index == 0 else views[v.index - 1].far
+        corners = []
+        for d in (d0, v.far):
+            for x in (-1, 1):
+                for y in (-1, 1):
+                    p = inv @ np.array([x, y, 0.5, 1.0])
+                    p = p[:3] / p[3]
+                    corners.append(rot @ (p * (d / -p[2])))  # render-relative: the camera is the origin
+        c = clip(v, np.array(corners))
+        ndc = c[:, :3] / c[:, 3:]
+        assert (np.abs(ndc[:, :2]) <= 1 + 1e-4).all() and (ndc[:, 2] >= -1e-4).all() and (ndc[:, 2] <= 1 + 1e-4).all()
+
+
+def test_a_spot_view_holds_its_cone_and_range():
+    world = scene()
+    cam = camera_matrices(world, ASPECT)
+    spot = shadow_views(world, cam, cam.position)[3]
+    rng = np.random.default_rng(2)
+    axis = np.array([0.1, -1.0, 0.2]) / np.linalg.norm([0.1, -1.0, 0.2])
+    apex = np.array([4.0, 3.0, -2.0]) - cam.position
+    inside = []
+    while len(inside) < 200:
+        d = rng.normal(size=3)
+        d /= np.linalg.norm(d)
+        if math.acos(np.clip(d @ axis, -1, 1)) < 0.7:
+            inside.append(apex + d * rng.uniform(0.2, 11.9))
+    dist = np.array(inside) @ spot.planes[:, :3].T + spot.planes[:, 3]
+    assert (dist >= -1e-5).all()
+    behind = apex - axis * 1.0
+    assert (behind @ spot.planes[:, :3].T + spot.planes[:, 3] < 0).any()
+
+
+def test_cube_faces_follow_vulkans_cube_map_face_selection():
+    """The face a direction's major axis picks draws it, at the spec's (s, t); the others leave it
+    out; depth runs from the near plane (1) to the light's range along the face's axis (0)."""
+    world = scene()
+    cam = camera_matrices(world, ASPECT)
+    faces = shadow_views(world, cam, cam.position)[4:]
+    light = np.array([-3.0, 2.0, -5.0]) - cam.position
+    rng = np.random.default_rng(5)
+    for _ in range(300):
+        r = rng.normal(size=3)
+        distance = rng.uniform(0.2, 7.9)
+        r *= distance / np.linalg.norm(r)
+        axis = int(np.argmax(np.abs(r)))
+        face = 2 * axis + (r[axis] < 0)
+        rx, ry, rz = r
+        ma = abs(r[axis])
+        sc, tc = {
+            0: (-rz, -ry),
+            1: (rz, -ry),
+            2: (rx, rz),
+            3: (rx, -rz),
+            4: (rx, -ry),
+            5: (-rx, -ry),
+        }[face]
+        for v in faces:
+            c = clip(v, (light + r)[None])[0]
+            holds = c[3] > 0 and abs(c[0]) <= c[3] and abs(c[1]) <= c[3]
+            assert holds == (v.index == face), (v.index, face)
+            if v.index == face:
+                assert (c[0] / c[3], c[1] / c[3]) == pytest.approx((sc / ma, tc / ma), abs=1e-5)
+                assert 0.0 <= c[2] / c[3] <= 1.0
+        beyond = clip(faces[face], (light + r * (8.5 / ma))[None])[0]
+        assert beyond[2] / beyond[3] < 0  # past the range along the face's axis: behind its far plane
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("resolution", 8), ("resolution", 9000), ("cascades", 0), ("cascades", 5), ("distance", 0.0), ("filter", 3),
+     ("bias", -1.0), ("softness", float("nan"))],
+)  # fmt: skip
+def test_bad_shadow_settings_are_refused_naming_the_field(field, value):
+    world = World()
+    with pytest.raises((ValueError, OverflowError), match=field):
+        world.spawn(Transform(), DirectionalLight(), Shadow(**{field: value}))
