@@ -11,3 +11,7 @@ layout(std430, set = SET_FRAME, binding = BINDING_MATERIALS) readonly buffer Mat
 #ifndef CLUSTER_WRITER
 layout(std430, set = SET_FRAME, binding = BINDING_CLUSTERS) readonly buffer Clusters { uint cluster_data[]; };
 #endif
+// shadows (render/shadow_pass.py): bound always, a 1-texel map when no light casts
+layout(std430, set = SET_FRAME, binding = BINDING_SHADOW_VIEWS) readonly buffer ShadowViews { ShadowView shadow_views[]; };
+layout(set = SET_FRAME, binding = BINDING_SHADOW_MAP) uniform sampler2DArrayShadow shadow_map;
+layout(set = SET_FRAME, binding = BINDING_SHADOW_MAP_HARD) uniform sampler2DArrayShadow shadow_map_hard;

@@ -61,6 +61,7 @@ void main() {
     uint model = 0u;
     vec3 p = vec3(0.0), n = vec3(0.0, 0.0, 1.0), to_eye = vec3(0.0, 0.0, 1.0);
     float distance = 0.0;
+    bool shadowed = true;
     if (lit) {
         float depth = texelFetch(depth_image, pixel, 0).x;
         vec2 ndc = (vec2(pixel) + 0.5) / vec2(size) * 2.0 - 1.0;
@@ -69,7 +70,8 @@ void main() {
         p = transpose(mat3(g.view)) * (v.xyz - g.view[3].xyz);   // the view is a rotation and a translation
         vec4 nr = imageLoad(normal_image, pixel);
         vec4 bm = imageLoad(base_image, pixel);
-        m = materials[index];
+        m = materials[index & 0x7FFFFFFFu];
+        shadowed = (index >> 31) == 0u;   // bit 31: NotShadowReceiver
         m.base_color.rgb = bm.rgb;   // after the base colour texture
         m.surface.x = bm.a;          // metallic and roughness after theirs
         m.surface.y = nr.a;
@@ -83,12 +85,12 @@ void main() {
     vec3 color = vec3(0.0);
     if (g.light_tiles.x == 0u) {
         for (uint i = 0u; lit && i < g.counts.x; ++i) {
-            color += light_term(i, m, model, p, n, to_eye);
+            color += light_term(i, m, model, p, n, to_eye, shadowed);
         }
     } else {
         uint globals = min(cluster_data[0], uint(MAX_GLOBAL_LIGHTS));
         for (uint k = 0u; lit && k < globals; ++k) {
-            color += light_term(cluster_data[CLUSTER_GLOBALS + k], m, model, p, n, to_eye);
+            color += light_term(cluster_data[CLUSTER_GLOBALS + k], m, model, p, n, to_eye, shadowed);
         }
         if (local == 0u) {
             s_near = floatBitsToUint(3.0e38);
@@ -145,7 +147,7 @@ void main() {
                     vec4 sphere = lights[i].position_radius;
                     vec3 to_light = sphere.xyz - p;
                     if (dot(to_light, to_light) < sphere.w * sphere.w) {
-                        color += light_term(i, m, model, p, n, to_eye);
+                        color += light_term(i, m, model, p, n, to_eye, shadowed);
                     }
                 }
             }

@@ -15,6 +15,13 @@
 #define FEATURE_DIRECTIONAL_LIGHTS 2097152
 #define FEATURE_EMISSIVE 4194304
 #define FEATURE_BLEND 8388608
+#define FEATURE_SHADOWS 16777216
+#define BINDING_SHADOW_VIEWS 6
+#define BINDING_SHADOW_MAP 7
+#define BINDING_SHADOW_MAP_HARD 8
+#define SHADOW_HARD 0
+#define SHADOW_PCF 1
+#define SHADOW_PCSS 2
 #define CLUSTER_GROUP 64
 #define MAX_GLOBAL_LIGHTS 256
 #define LIGHT_BINS 1024
@@ -75,13 +82,13 @@ struct Light {  // 64 bytes, std430
     vec4 position_radius;       // offset 0: relative to the render origin; radius (0: unbounded)
     vec4 color_intensity;       // offset 16: linear rgb, intensity (directional: illuminance)
     vec4 direction_kind;        // offset 32: xyz: where the light shines (spot, directional); w: LIGHT_POINT/SPOT/DIRECTIONAL
-    vec4 cone;                  // offset 48: spot: x cos(outer angle), y 1 / (cos(inner) - cos(outer)); zw: 0
+    vec4 cone;                  // offset 48: spot: x cos(outer angle), y 1 / (cos(inner) - cos(outer)); z first shadow view + 1 (0: none), w views
 };
 
 // One entity's row: 64 bytes (the normal matrix is derived in the vertex shader).
 struct Instance {  // 64 bytes, std430
     vec4 model[3];              // offset 0: rows of the camera-relative model matrix (the last row is 0 0 0 1)
-    uvec4 misc;                 // offset 48: x: material index, y: key = mesh * 2 + mirrored, zw: 0
+    uvec4 misc;                 // offset 48: x: material index, y: key = mesh * 2 + mirrored, z: 1 NotShadowReceiver, w: 0
 };
 
 // A material (render/materials.py): what the fragment shader's shading model reads.
@@ -138,6 +145,13 @@ struct BillboardPush {  // 4 bytes, std430
 struct ToneMapPush {  // 8 bytes, std430
     float exposure;             // offset 0: linear scale before the curve (2^EV)
     uint operator;              // offset 4: TONE_MAP_* (render/tone_map.py)
+};
+
+// One shadow view (render/shadow_views.py): a cascade, a spot light's map, a cube face.
+struct ShadowView {  // 96 bytes, std430
+    mat4 view_projection;       // offset 0: render-relative positions -> the shadow map's clip space (reverse-Z)
+    vec4 params;                // offset 64: x depth bias (NDC; perspective: times 1/w), y normal offset (world; perspective: times w), z far (a cascade: its slice's far view distance), w softness (PCF: texels; PCSS: light size)
+    uvec4 info;                 // offset 80: x layer, y SHADOW_* filter, z resolution, w 1 for a perspective view (spot, cube face)
 };
 
 struct DeferredPush {  // 8 bytes, std430

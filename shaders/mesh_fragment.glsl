@@ -42,7 +42,8 @@ uint tile_masks() {
 // lighting pass needs). Every division is guarded, so a
 // fragment at a light's centre, a light of radius or intensity 0, or a degenerate normal stays finite.
 void main() {
-    Material m = materials[v_material];
+    Material m = materials[v_material & 0x7FFFFFFFu];
+    bool shadowed = (v_material >> 31) == 0u;   // bit 31: NotShadowReceiver (mesh_vertex.glsl)
     float occlusion = 1.0;
     vec3 n = v_normal;
     if ((MATERIAL_FEATURES & FEATURE_DOUBLE_SIDED) != 0u && !gl_FrontFacing) {
@@ -108,12 +109,12 @@ void main() {
 #if defined(GBUFFER)
         out_normal_roughness = vec4(n, m.surface.y);
         out_base_metallic = vec4(m.base_color.rgb, m.surface.x);
-        out_material = v_material;
+        out_material = v_material;   // with its NotShadowReceiver bit
 #elif defined(CLUSTERED)
         {
             uint globals = min(cluster_data[0], uint(MAX_GLOBAL_LIGHTS));
             for (uint k = 0u; k < globals; ++k) {
-                color += light_term(cluster_data[CLUSTER_GLOBALS + k], m, model, v_position, n, to_eye);
+                color += light_term(cluster_data[CLUSTER_GLOBALS + k], m, model, v_position, n, to_eye, shadowed);
             }
             // the lights of this fragment's distance bin (an index range) and screen tile (a mask),
             // walked once for the whole subgroup (M. Drobot's scalarisation): the light index is
@@ -141,14 +142,14 @@ void main() {
                     vec4 sphere = lights[i].position_radius;
                     vec3 to_light = sphere.xyz - v_position;
                     if ((bits & (1u << j)) != 0u && dot(to_light, to_light) < sphere.w * sphere.w) {
-                        color += light_term(i, m, model, v_position, n, to_eye);
+                        color += light_term(i, m, model, v_position, n, to_eye, shadowed);
                     }
                 }
             }
         }
 #else
         for (uint i = 0u; i < g.counts.x; ++i) {
-            color += light_term(i, m, model, v_position, n, to_eye);
+            color += light_term(i, m, model, v_position, n, to_eye, shadowed);
         }
 #endif
     }

@@ -53,7 +53,7 @@ void main() {
     v_position = world;
     mat3 nm = normal_matrix(inst);
     v_normal = nm * in_normal;
-    v_material = inst.misc.x;
+    v_material = inst.misc.x | ((inst.misc.z & 1u) << 31);   // bit 31: NotShadowReceiver
 #ifdef TEXTURED
     // tangents move with the surface (the model matrix); the bitangent's sign flips with mirroring
     vec3 t = vec3(dot(inst.model[0].xyz, in_tangent.xyz), dot(inst.model[1].xyz, in_tangent.xyz),

@@ -105,13 +105,74 @@ float light_at(Light light, vec3 p, vec3 fallback, out vec3 l) {
     return min(energy, 65504.0);
 }
 
-// What light i adds at p (normal n, unit direction to the eye to_eye) under the material's model.
-vec3 light_term(uint i, Material m, uint model, vec3 p, vec3 n, vec3 to_eye) {
+// One comparison of the receiver's depth `ref` at `uv` of a shadow map layer: 1 lit, 0 shadowed.
+// Explicit (zero) gradients: legal in compute shaders and in non-uniform control flow.
+float shadow_tap(bool hard, vec2 uv, float layer, float ref) {
+    vec4 at = vec4(uv, layer, ref);
+    return hard ? textureGrad(shadow_map_hard, at, vec2(0.0), vec2(0.0))
+                : textureGrad(shadow_map, at, vec2(0.0), vec2(0.0));
+}
+
+// How much of light `light` reaches p (normal n) past its casters: 1 without shadows. A
+// directional light's cascade is picked by p's view depth; past the last one nothing is shadowed.
+// The receiver is moved along its normal and its depth towards the light (Shadow.normal_offset,
+// Shadow.bias); reverse-Z, so a receiver is lit where its depth is at least the map's.
+float light_shadow(Light light, vec3 p, vec3 n) {
+    uint first = uint(light.cone.z);
+    if (first == 0u) {
+        return 1.0;
+    }
+    first -= 1u;
+    uint count = max(uint(light.cone.w), 1u);
+    uint k = 0u;
+    if (count > 1u || shadow_views[first].info.w == 0u) {
+        float depth = -(g.view * vec4(p, 1.0)).z;
+        if (depth > shadow_views[first + count - 1u].params.z) {
+            return 1.0;
+        }
+        while (k + 1u < count && depth > shadow_views[first + k].params.z) {
+            ++k;
+        }
+    }
+    ShadowView v = shadow_views[first + k];
+    bool perspective = v.info.w == 1u;
+    float w0 = perspective ? max((v.view_projection * vec4(p, 1.0)).w, 0.0) : 1.0;
+    vec4 c = v.view_projection * vec4(p + n * (v.params.y * w0), 1.0);
+    if (c.w <= 0.0) {
+        return 1.0;
+    }
+    vec3 ndc = c.xyz / c.w;
+    vec2 uv = ndc.xy * 0.5 + 0.5;
+    if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0))) || ndc.z < 0.0 || ndc.z > 1.0) {
+        return 1.0;
+    }
+    float ref = ndc.z + (perspective ? v.params.x / c.w : v.params.x);
+    float layer = float(v.info.x);
+    if (v.info.y == SHADOW_HARD) {
+        return shadow_tap(true, uv, layer, ref);
+    }
+    // PCF: 3 x 3 taps `softness` texels apart, each a bilinear 2 x 2 comparison
+    vec2 step = vec2(v.params.w / float(v.info.z));
+    float lit = 0.0;
+    for (int y = -1; y <= 1; ++y) {
+        for (int x = -1; x <= 1; ++x) {
+            lit += shadow_tap(false, uv + vec2(x, y) * step, layer, ref);
+        }
+    }
+    return lit / 9.0;
+}
+
+// What light i adds at p (normal n, unit direction to the eye to_eye) under the material's
+// model; `shadowed`: p receives shadows (a mesh without NotShadowReceiver).
+vec3 light_term(uint i, Material m, uint model, vec3 p, vec3 n, vec3 to_eye, bool shadowed) {
     Light light = lights[i];
     vec3 l;
     float energy = light_at(light, p, n, l);
     float nl = dot(n, l);
     if (nl > 0.0 && energy > 0.0) {
+        if ((MATERIAL_FEATURES & FEATURE_SHADOWS) != 0u && shadowed) {
+            energy *= light_shadow(light, p, n);
+        }
         return light.color_intensity.rgb * (energy * nl) * brdf_pi(m, model, n, l, to_eye, nl);
     }
     return vec3(0.0);

@@ -98,7 +98,7 @@ def build_cubes(scales):
 def render_custom(build, monkeypatch, tmp_path, mode: str = "instanced") -> np.ndarray:
     import ecs_engine.app.session as session
 
-    monkeypatch.setattr(session, "scene_builder", lambda name, entities=None, lights=None: build)
+    monkeypatch.setattr(session, "scene_builder", lambda name, entities=None, lights=None, shadows=True: build)
     result = run(
         RunOptions(
             scene="cube",

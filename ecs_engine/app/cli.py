@@ -121,6 +121,9 @@ def render_flags() -> OneLineParser:
     )
     common.add_argument("--lights", type=int, help="lights scene: how many point and spot lights (default 1,024)")
     common.add_argument(
+        "--no-shadows", action="store_true", help="shadows scene: no light casts a shadow (for comparison)"
+    )
+    common.add_argument(
         "--entities", type=positive_int, help="scaling and motion scenes: entity count (default 10,000 and 100,000)"
     )
     common.add_argument(
@@ -145,6 +148,7 @@ def build_parser() -> argparse.ArgumentParser:
         choices=SCENES,
         help="cube, grid100, model: the seed's scenes; scaling: --entities moving entities; "
         "materials: the shading models side by side; lights: --lights small lights (default 1,024); "
+        "shadows: a cube, a pillar and boxes under casting lights (--no-shadows: none cast); "
         "motion: text-mode ECS scene (no rendering)",
     )
     demo.add_argument("path", nargs="?", help="model file for the model scene (OBJ, glTF/GLB, PLY, STL)")
@@ -213,6 +217,8 @@ def check_flags_apply(args: argparse.Namespace, scenes: tuple[str, ...], editor:
         raise UsageError(f"--entities sizes the scaling and motion scenes; {', '.join(scenes)} has fixed content")
     if args.lights is not None and "lights" not in scenes:
         raise UsageError(f"--lights sizes the lights scene; {', '.join(scenes)} has fixed content")
+    if args.no_shadows and "shadows" not in scenes:
+        raise UsageError(f"--no-shadows applies to the shadows scene, not {', '.join(scenes)}")
     if args.headless and args.present != "fifo":
         raise UsageError("--present chooses a window's present mode; a --headless run has no window")
     if args.recorder is not None and not editor and not PATHS[args.mode].uses_recorder:
@@ -247,6 +253,7 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
         msaa=args.msaa,
         light_culling=args.light_culling,
         lights=args.lights,
+        shadows=not args.no_shadows,
         recorder=args.recorder,
         entities=args.entities or 10_000,
         perf_json=args.perf_json,

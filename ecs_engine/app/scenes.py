@@ -8,13 +8,13 @@ from collections.abc import Callable
 from ..ecs.schedule import Schedule
 from ..errors import UsageError
 
-SCENES = ("cube", "grid100", "model", "scaling", "materials", "lights")
+SCENES = ("cube", "grid100", "model", "scaling", "materials", "lights", "shadows")
 SEED_SCENES = SCENES[:3]  # the seed thesis's three: 1 cube, 100 cubes, an OBJ model
 
 SceneBuilder = Callable[..., None]  # build(world, add_mesh, path=None)
 
 
-def scene_builder(name: str, entities: int = 10_000, lights: int | None = None) -> SceneBuilder:
+def scene_builder(name: str, entities: int = 10_000, lights: int | None = None, shadows: bool = True) -> SceneBuilder:
     if name not in SCENES:
         raise UsageError(f"unknown scene {name!r}; scenes: {', '.join(SCENES)}")
     build = importlib.import_module(f"ecs_engine.demos.{name}").build
@@ -22,6 +22,8 @@ def scene_builder(name: str, entities: int = 10_000, lights: int | None = None) 
         return lambda world, add_mesh, path=None: build(world, add_mesh, path, entities=entities)
     if name == "lights" and lights is not None:
         return lambda world, add_mesh, path=None: build(world, add_mesh, path, lights=lights)
+    if name == "shadows" and not shadows:
+        return lambda world, add_mesh, path=None: build(world, add_mesh, path, shadows=False)
     return build
 
 

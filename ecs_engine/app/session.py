@@ -156,7 +156,8 @@ class Session:
         """A new world for `scene` (sharing the run's pool and meshes) and its schedule."""
         world = World()
         world.resources[JobPool] = self.pool
-        scene_builder(scene, self.options.entities, self.options.lights)(world, self.gpu.meshes.add, path)
+        build = scene_builder(scene, self.options.entities, self.options.lights, self.options.shadows)
+        build(world, self.gpu.meshes.add, path)
         return world, default_schedule()
 
     def apply(self, wanted: Settings) -> None:

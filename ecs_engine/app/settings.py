@@ -62,6 +62,7 @@ class RunOptions:
     msaa: int = 1  # samples per pixel of the scene (1, 2, 4, 8), fixed for the run
     light_culling: str = "auto"  # render/light_clusters.py LIGHT_MODES
     lights: int | None = None  # the lights scene's light count (None: its default, 1,024)
+    shadows: bool = True  # the shadows scene's lights cast (--no-shadows: none do)
     chunk_rows: int | None = None  # rows per render job (None: about one per thread, frame_data.MIN_CHUNK_ROWS)
     recorder: str | None = None  # native | python (None: native when numba is there)
     entities: int = 10_000  # the scaling scene's entity count

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from .attachment import attachment
 from .memory import Image
 
 if TYPE_CHECKING:
@@ -35,22 +36,13 @@ def create_gbuffer_pass(device: Device, depth_format: int, hdr_format: int) -> A
     color_layout = vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL
     depth_layout = vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL
 
-    def attachment(fmt: int, final: int) -> Any:
-        return vk.VkAttachmentDescription(
-            format=fmt,
-            samples=1,
-            loadOp=vk.VK_ATTACHMENT_LOAD_OP_CLEAR,
-            storeOp=vk.VK_ATTACHMENT_STORE_OP_STORE,
-            stencilLoadOp=vk.VK_ATTACHMENT_LOAD_OP_DONT_CARE,
-            stencilStoreOp=vk.VK_ATTACHMENT_STORE_OP_DONT_CARE,
-            initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
-            finalLayout=final,
-        )
+    def cleared(fmt: int, final: int) -> Any:
+        return attachment(vk, fmt, 1, vk.VK_ATTACHMENT_LOAD_OP_CLEAR, vk.VK_ATTACHMENT_STORE_OP_STORE, final)
 
     attachments = [
-        attachment(depth_format, vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL),  # sampled by the lighting
-        attachment(hdr_format, general),  # read and written by the lighting as a storage image
-        *(attachment(getattr(vk, name), general) for name in GBUFFER_FORMAT_NAMES),
+        cleared(depth_format, vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL),  # sampled by the lighting
+        cleared(hdr_format, general),  # read and written by the lighting as a storage image
+        *(cleared(getattr(vk, name), general) for name in GBUFFER_FORMAT_NAMES),
     ]
     ref = vk.VkAttachmentReference
     subpass = vk.VkSubpassDescription(

@@ -49,7 +49,7 @@ def pipeline_layout(
 @dataclass
 class GraphicsPipelineSpec:
     vertex_shader: str
-    fragment_shader: str
+    fragment_shader: str | None  # None: depth only (shadow maps)
     layout: Any
     render_pass: Any
     subpass: int = 0
@@ -64,6 +64,7 @@ class GraphicsPipelineSpec:
     polygon_mode: int = 0  # VK_POLYGON_MODE_FILL; LINE (1) and POINT (2) need fillModeNonSolid
     samples: int = 1  # the subpass's MSAA count
     color_attachments: int = 1  # the subpass's; all written alike (the G-buffer pass has four)
+    depth_bias: tuple[float, float] | None = None  # (constant, slope) factors: shadow casters
 
 
 def specialization(vk: Any, values: tuple[int, ...]) -> tuple[Any, Any]:
@@ -80,15 +81,17 @@ def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
     """A pipeline with dynamic viewport and scissor and reverse-Z depth (compare GREATER)."""
     vk = device.vk
     vert = shader_module(device, spec.vertex_shader)
-    frag = shader_module(device, spec.fragment_shader)
+    frag = shader_module(device, spec.fragment_shader) if spec.fragment_shader else None
     try:
         constants, _constant_data = specialization(vk, spec.fragment_constants)
-        stages = [
-            vk.VkPipelineShaderStageCreateInfo(stage=vk.VK_SHADER_STAGE_VERTEX_BIT, module=vert, pName="main"),
-            vk.VkPipelineShaderStageCreateInfo(
-                stage=vk.VK_SHADER_STAGE_FRAGMENT_BIT, module=frag, pName="main", pSpecializationInfo=constants
-            ),
-        ]
+        stages = [vk.VkPipelineShaderStageCreateInfo(stage=vk.VK_SHADER_STAGE_VERTEX_BIT, module=vert, pName="main")]
+        if frag is not None:
+            stages.append(
+                vk.VkPipelineShaderStageCreateInfo(
+                    stage=vk.VK_SHADER_STAGE_FRAGMENT_BIT, module=frag, pName="main", pSpecializationInfo=constants
+                )
+            )
+        bias = spec.depth_bias or (0.0, 0.0)
         if spec.vertex_stride:
             vertex_input = vk.VkPipelineVertexInputStateCreateInfo(
                 pVertexBindingDescriptions=[
@@ -125,6 +128,9 @@ def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
                 lineWidth=1.0,
                 cullMode=vk.VK_CULL_MODE_BACK_BIT if spec.cull_back else vk.VK_CULL_MODE_NONE,
                 frontFace=vk.VK_FRONT_FACE_COUNTER_CLOCKWISE if spec.front_face_ccw else vk.VK_FRONT_FACE_CLOCKWISE,
+                depthBiasEnable=vk.VK_TRUE if spec.depth_bias else vk.VK_FALSE,
+                depthBiasConstantFactor=bias[0],
+                depthBiasSlopeFactor=bias[1],
             ),
             pMultisampleState=vk.VkPipelineMultisampleStateCreateInfo(rasterizationSamples=spec.samples),
             pDepthStencilState=vk.VkPipelineDepthStencilStateCreateInfo(
@@ -143,7 +149,8 @@ def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
         return vk.vkCreateGraphicsPipelines(device.handle, device.pipeline_cache.handle, 1, [info], None)[0]
     finally:
         vk.vkDestroyShaderModule(device.handle, vert, None)
-        vk.vkDestroyShaderModule(device.handle, frag, None)
+        if frag is not None:
+            vk.vkDestroyShaderModule(device.handle, frag, None)
 
 
 def compute_pipeline(device: Device, shader: str, layout: Any, constants: tuple[int, ...] = ()) -> Any:

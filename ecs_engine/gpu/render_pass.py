@@ -30,6 +30,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from .attachment import attachment as _attachment
 from .gbuffer import GBuffer, create_gbuffer_pass
 from .memory import Image
 
@@ -60,21 +61,6 @@ def check_samples(device: Device, samples: int) -> None:
     if samples not in offered:
         counts = ", ".join(str(n) for n in offered)
         raise UsageError(f"--msaa {samples}: {device.info.name} offers {counts}")
-
-
-def _attachment(vk: Any, fmt: int, samples: int, load: int, store: int, final: int, initial: int = 0) -> Any:
-    """An attachment without stencil, its contents undefined when the pass begins unless loaded
-    from `initial` (VK_IMAGE_LAYOUT_UNDEFINED is 0)."""
-    return vk.VkAttachmentDescription(
-        format=fmt,
-        samples=samples,
-        loadOp=load,
-        storeOp=store,
-        stencilLoadOp=vk.VK_ATTACHMENT_LOAD_OP_DONT_CARE,
-        stencilStoreOp=vk.VK_ATTACHMENT_STORE_OP_DONT_CARE,
-        initialLayout=initial,
-        finalLayout=final,
-    )
 
 
 def output_subpass(form: str) -> int:

@@ -22,7 +22,7 @@ import numpy as np
 from ..gpu.gbuffer import GBUFFER_COLORS
 from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
 from ..gpu.secondary import end_command_buffer
-from .frame_data import Chunk
+from .frame_data import NOT_RECEIVER, Chunk
 from .instance_rows import write_rows
 from .layouts import FEATURE_CLUSTERED, FEATURE_DOUBLE_SIDED, FEATURE_TEXTURES, INSTANCE, MESH_VERTEX
 from .path import FILL_MODES, ChunkResult, FrameInputs, PathContext, summed_counts
@@ -46,6 +46,8 @@ def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str, blended: b
     materials take the `_textured` variants of both shaders (`mesh.vert` -> `mesh_textured.vert`);
     clustered lights the `_clustered` fragment shaders (they need subgroup arithmetic); the
     G-buffer pass (ctx.gbuffer) the `_gbuffer` ones, which light nothing."""
+    if ctx.shadow:
+        return shadow_pipelines(ctx, layout, vertex_shader)
     textured = bool(ctx.material_features & FEATURE_TEXTURES)
     clustered = bool(ctx.material_features & FEATURE_CLUSTERED)
     lighting = "_gbuffer" if ctx.gbuffer else "_clustered" if clustered else ""
@@ -77,6 +79,33 @@ def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str, blended: b
         )
     except BaseException:
         vk.vkDestroyPipeline(ctx.device.handle, plain, None)
+        raise
+    return plain, mirrored
+
+
+# A caster's depth pushed away from the light (reverse-Z: towards 0) by the rasteriser, in
+# depth-format units and per unit of depth slope; the receivers add Shadow.bias and normal_offset.
+SHADOW_DEPTH_BIAS = (-1.0, -1.5)
+
+
+def shadow_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple[Any, Any]:
+    """The (plain, mirrored) depth-only pipelines of a path's shadow passes: the position alone
+    (shadow.vert, or shadow_push.vert for push-constant rows), no fragment shader."""
+    shader = {"mesh.vert": "shadow.vert", "mesh_push.vert": "shadow_push.vert"}[vertex_shader]
+    base = dict(
+        layout=layout,
+        render_pass=ctx.render_pass,
+        vertex_stride=MESH_VERTEX.itemsize,
+        vertex_attributes=vertex_attributes(ctx.device.vk, ("position",)),
+        cull_back=not ctx.material_features & FEATURE_DOUBLE_SIDED,
+        color_attachments=0,
+        depth_bias=SHADOW_DEPTH_BIAS,
+    )
+    plain = graphics_pipeline(ctx.device, GraphicsPipelineSpec(shader, None, **base))
+    try:
+        mirrored = graphics_pipeline(ctx.device, GraphicsPipelineSpec(shader, None, front_face_ccw=False, **base))
+    except BaseException:
+        ctx.device.vk.vkDestroyPipeline(ctx.device.handle, plain, None)
         raise
     return plain, mirrored
 
@@ -215,7 +244,8 @@ class ChunkPath:
         frame.path_state = self._recorder.frame_state(frame)
 
     def rows_for(self, chunk: Chunk, frame: FrameInputs) -> np.ndarray:
-        return frame.instances[chunk.offset : chunk.offset + len(chunk.handle)]
+        first = frame.row_base + chunk.offset
+        return frame.instances[first : first + len(chunk.handle)]
 
     def record_chunk(self, chunk: Chunk, frame: FrameInputs) -> ChunkResult:
         """One job: cull, write the visible rows sorted by key, record a secondary."""
@@ -235,7 +265,9 @@ class ChunkPath:
         )
         if n == 0:
             return ChunkResult(None, 0, 0, 0)
-        cb, draws, triangles = self._recorder.record(rows, key_counts, chunk.offset, frame)
+        if chunk.flags & NOT_RECEIVER:
+            rows["misc"][:n, 2] = 1  # no shadow falls on these (mesh_vertex.glsl)
+        cb, draws, triangles = self._recorder.record(rows, key_counts, frame.row_base + chunk.offset, frame)
         return ChunkResult(cb, n, draws, triangles)
 
     def finish(self, cb: Any, frame: FrameInputs, results: list[ChunkResult], candidates: int) -> list[Any]:

@@ -11,10 +11,21 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from ..components import DirectionalLight, Mesh, ModelMatrix, PointLight, SpotLight, Transform, render_origin
+from ..components import (
+    DirectionalLight,
+    Mesh,
+    ModelMatrix,
+    NotShadowCaster,
+    NotShadowReceiver,
+    PointLight,
+    SpotLight,
+    Transform,
+    render_origin,
+)
 from ..ecs.world import World
 from ..jobs import row_chunks
 from ..maths.culling import frustum_planes
@@ -31,6 +42,15 @@ _MATERIAL = (Mesh, "material")
 MIN_CHUNK_ROWS = 16_384
 
 
+NOT_CASTER, NOT_RECEIVER = 1, 2
+
+
+def shadow_flags(batch: Any) -> int:
+    """A table's shadow tags as Chunk.flags: a tag is in every row of a table or in none."""
+    types = batch.table.type_set
+    return (NOT_CASTER if NotShadowCaster in types else 0) | (NOT_RECEIVER if NotShadowReceiver in types else 0)
+
+
 @dataclass
 class Chunk:
     """A run of rows of one table: one job. Views into the world's columns."""
@@ -39,6 +59,7 @@ class Chunk:
     handle: np.ndarray
     material: np.ndarray
     offset: int  # first row of this chunk's slice of the instance buffer
+    flags: int = 0  # NOT_CASTER, NOT_RECEIVER: its table's shadow tags (components/shadow.py)
 
     @property
     def name(self) -> str:
@@ -144,7 +165,7 @@ class FrameExtractor:
             m, mesh = batch[ModelMatrix], batch[Mesh]
             model, handle, material = m.model[keep], mesh.handle[keep], mesh.material[keep]
             for s in row_chunks(len(keep), self.rows_per_job(len(keep))):
-                opaque.append(Chunk(model[s], handle[s], material[s], offset))
+                opaque.append(Chunk(model[s], handle[s], material[s], offset, shadow_flags(batch)))
                 offset += s.stop - s.start
             models.append(m.model[blended])
             handles.append(mesh.handle[blended])
@@ -172,7 +193,11 @@ class FrameExtractor:
         positional = []
         for batch in world.query(PointLight, Transform, write=()):
             light = batch[PointLight]
-            positional.append(PositionalLights(batch[Transform].position, light.radius, light.color, light.intensity))
+            positional.append(
+                PositionalLights(
+                    batch[Transform].position, light.radius, light.color, light.intensity, entity=batch.entities
+                )
+            )
         for batch in world.query(SpotLight, Transform, write=()):
             spot, transform = batch[SpotLight], batch[Transform]
             positional.append(
@@ -183,12 +208,15 @@ class FrameExtractor:
                     spot.intensity,
                     local_minus_z(transform.rotation),
                     spot_cones(spot.inner_angle, spot.outer_angle),
+                    batch.entities,
                 )
             )
         directional = []
         for batch in world.query(DirectionalLight, Transform, write=()):
             sun = batch[DirectionalLight]
-            directional.append(DirectionalLights(local_minus_z(batch[Transform].rotation), sun.color, sun.illuminance))
+            directional.append(
+                DirectionalLights(local_minus_z(batch[Transform].rotation), sun.color, sun.illuminance, batch.entities)
+            )
         return positional, directional
 
     def chunks(self, world: World, mesh_count: int, material_count: int = 1 << 32) -> list[Chunk]:
@@ -212,7 +240,7 @@ class FrameExtractor:
         for batch in query:
             m, mesh = batch[ModelMatrix], batch[Mesh]
             for s in row_chunks(len(batch), self.rows_per_job(len(batch))):
-                out.append(Chunk(m.model[s], mesh.handle[s], mesh.material[s], offset))
+                out.append(Chunk(m.model[s], mesh.handle[s], mesh.material[s], offset, shadow_flags(batch)))
                 offset += s.stop - s.start
         if out:
             top = max(int(c.handle.max()) for c in out)

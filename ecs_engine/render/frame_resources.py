@@ -4,6 +4,7 @@ fence was waited on, so the editor can edit materials while other frames are in 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -13,20 +14,26 @@ from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
 from ..gpu.device import Device
 from ..gpu.memory import DEVICE, Buffer
 from .camera import CameraMatrices
+from .frame_data import FrameData
 from .layouts import (
     BINDING_CLUSTERS,
     BINDING_GLOBALS,
     BINDING_INSTANCES,
     BINDING_LIGHTS,
     BINDING_MATERIALS,
+    BINDING_SHADOW_MAP,
+    BINDING_SHADOW_MAP_HARD,
+    BINDING_SHADOW_VIEWS,
     BINDING_TEXTURES,
     GLOBALS,
     INSTANCE,
     LIGHT,
     MATERIAL,
+    SHADOW_VIEW,
     TEXTURE_PAGES,
 )
 from .light_clusters import ClusterGrid
+from .light_rows import write_lights
 from .materials import Materials
 from .texture_pages import TexturePages
 
@@ -41,16 +48,17 @@ def frame_sets(device: Device, frames: int) -> tuple[DescriptorSetLayout, Descri
     ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
     sampler = vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
     uniform = vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER
-    buffers = (BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS, BINDING_CLUSTERS)
+    buffers = (BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS, BINDING_CLUSTERS, BINDING_SHADOW_VIEWS)
     layout = DescriptorSetLayout(
         device,
         [(BINDING_GLOBALS, uniform, stages)]
         + [(b, ssbo, stages) for b in buffers]
-        + [(BINDING_TEXTURES, sampler, vk.VK_SHADER_STAGE_FRAGMENT_BIT, TEXTURE_PAGES)],
+        + [(BINDING_TEXTURES, sampler, vk.VK_SHADER_STAGE_FRAGMENT_BIT, TEXTURE_PAGES)]
+        + [(b, sampler, stages) for b in (BINDING_SHADOW_MAP, BINDING_SHADOW_MAP_HARD)],
     )
     try:
         pool = DescriptorPool(
-            device, frames, {uniform: frames, ssbo: len(buffers) * frames, sampler: TEXTURE_PAGES * frames}
+            device, frames, {uniform: frames, ssbo: len(buffers) * frames, sampler: (TEXTURE_PAGES + 2) * frames}
         )
     except BaseException:
         layout.destroy()
@@ -65,16 +73,19 @@ class FrameResources:
     instances: Buffer
     materials: Buffer
     clusters: Buffer  # device-local: cluster.comp writes it, the fragment shader reads it
+    shadow_views: Buffer  # SHADOW_VIEW rows (render/shadow_pass.py)
     descriptor_set: Any
     set_array: Any  # VkDescriptorSet[1] for raw calls
     written: tuple[Any, ...] | None = None  # what the globals buffer holds
     # (the Materials, its version, the texture pages' generation) in `materials`: the object
     # itself, not its id, which a new registry could reuse once the old one is freed
     materials_written: tuple[Materials, int, int] | None = None
+    shadow_maps: Any = None  # the gpu.shadow_maps.ShadowMaps the set names
+    pages: Any = None  # the TexturePages the set names
 
     @classmethod
     def make(
-        cls, device: Device, pool: DescriptorPool, layout: DescriptorSetLayout, pages: TexturePages
+        cls, device: Device, pool: DescriptorPool, layout: DescriptorSetLayout, pages: TexturePages, shadow_maps: Any
     ) -> FrameResources:
         vk = device.vk
         ssbo = vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT
@@ -91,13 +102,17 @@ class FrameResources:
                 ssbo | vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                 DEVICE,
             ),
+            shadow_views=Buffer(device, SHADOW_VIEW.size * 4, ssbo),
             descriptor_set=descriptor_set,
             set_array=vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]),
+            shadow_maps=shadow_maps,
+            pages=pages,
         )
         frame.write_set(device, pages)
         return frame
 
     def write_set(self, device: Device, pages: TexturePages) -> None:
+        self.pages = pages
         vk = device.vk
         ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
         write_buffers(
@@ -109,12 +124,26 @@ class FrameResources:
                 (BINDING_INSTANCES, ssbo, self.instances),
                 (BINDING_MATERIALS, ssbo, self.materials),
                 (BINDING_CLUSTERS, ssbo, self.clusters),
+                (BINDING_SHADOW_VIEWS, ssbo, self.shadow_views),
             ],
         )
         write_images(device, self.descriptor_set, BINDING_TEXTURES, pages.image_infos())
+        self.name_shadow_maps(device, self.shadow_maps)
 
-    def ensure_capacity(self, device: Device, pages: TexturePages, instances: int, lights: int, materials: int) -> None:
-        """Grow the buffers (and name the new ones in the set)."""
+    def name_shadow_maps(self, device: Device, maps: Any) -> None:
+        """Point the set at `maps` (a gpu.shadow_maps.ShadowMaps), filtering and hard samplers."""
+        self.shadow_maps = maps
+        linear, hard = maps.image_infos()
+        write_images(device, self.descriptor_set, BINDING_SHADOW_MAP, [linear])
+        write_images(device, self.descriptor_set, BINDING_SHADOW_MAP_HARD, [hard])
+
+    def ensure_capacity(
+        self, device: Device, pages: TexturePages, instances: int, lights: int, materials: int, shadow_views: int = 0
+    ) -> None:
+        """Grow the buffers (and name the new ones in the set), before anything records with it."""
+        if shadow_views * SHADOW_VIEW.size > self.shadow_views.size:
+            self.shadow_views = self.shadow_views.grown(shadow_views * SHADOW_VIEW.size)
+            self.write_set(device, pages)
         if (
             instances * INSTANCE.size <= self.instances.size
             and lights * LIGHT.size <= self.lights.size
@@ -137,6 +166,33 @@ class FrameResources:
         if grid.buffer_bytes > self.clusters.size:
             self.clusters = self.clusters.grown(grid.buffer_bytes)
             self.write_set(device, pages)
+
+    def write_frame(
+        self,
+        device: Device,
+        data: FrameData,
+        materials: Materials,
+        grid: ClusterGrid | None,
+        ambient: tuple[float, float, float, float],
+        deferred: bool,
+        name_lights: Callable[[np.ndarray], None] | None,
+    ) -> int:
+        """The frame's materials, lights (then `name_lights(rows)`: their shadow views) and
+        globals into this slot's buffers; returns the point and spot lights (the billboards)."""
+        self.write_materials(materials, self.pages)
+        if grid is not None:
+            self.ensure_clusters(device, self.pages, grid)
+        positional = 0
+        if data.light_count:
+            rows = self.lights.array(np.float32, (data.light_count, LIGHT.size // 4))
+            eye = data.camera.position - data.origin
+            positional = write_lights(data.lights, data.directional, data.origin, eye, rows)
+            if name_lights is not None:
+                name_lights(rows)
+        self.write_globals(
+            data.camera, data.view, data.origin, data.origin_key, data.light_count, positional, grid, ambient, deferred
+        )
+        return positional
 
     def write_globals(
         self,
@@ -184,5 +240,5 @@ class FrameResources:
             self.materials_written = key
 
     def destroy(self) -> None:
-        for buffer in (self.globals, self.lights, self.instances, self.materials, self.clusters):
+        for buffer in (self.globals, self.lights, self.instances, self.materials, self.clusters, self.shadow_views):
             buffer.destroy()

@@ -30,7 +30,7 @@ from ..gpu.memory import DEVICE, HOST, Buffer
 from ..gpu.pipeline import compute_pipeline, pipeline_layout
 from ..gpu.secondary import end_command_buffer
 from .chunk_paths import mesh_pipelines
-from .frame_data import Chunk
+from .frame_data import NOT_RECEIVER, Chunk
 from .instance_rows import write_rows
 from .layouts import (
     BINDING_COMMANDS,
@@ -209,6 +209,8 @@ class IndirectPath:
         write_rows(
             chunk.model, chunk.handle, chunk.material, centers, radii, None, frame.material_count, rows, key_counts
         )
+        if chunk.flags & NOT_RECEIVER:
+            rows["misc"][:, 2] = 1  # no shadow falls on these (mesh_vertex.glsl)
         return ChunkResult(None, 0, 0, 0, key_counts)
 
     def finish(self, cb: Any, frame: FrameInputs, results: list[ChunkResult], candidates: int) -> list[Any]:

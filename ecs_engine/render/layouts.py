@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..components.shadow import SHADOW_HARD, SHADOW_PCF, SHADOW_PCSS
 from ..gpu.layout import Struct, glsl_header
 
 # A mesh vertex as the vertex buffers hold it (tightly packed: vertex input, not a buffer block);
@@ -56,7 +57,11 @@ LIGHT = Struct(
         ("position_radius", "vec4", "relative to the render origin; radius (0: unbounded)"),
         ("color_intensity", "vec4", "linear rgb, intensity (directional: illuminance)"),
         ("direction_kind", "vec4", "xyz: where the light shines (spot, directional); w: LIGHT_POINT/SPOT/DIRECTIONAL"),
-        ("cone", "vec4", "spot: x cos(outer angle), y 1 / (cos(inner) - cos(outer)); zw: 0"),
+        (
+            "cone",
+            "vec4",
+            "spot: x cos(outer angle), y 1 / (cos(inner) - cos(outer)); z first shadow view + 1 (0: none), w views",
+        ),
     ],
     doc="Point and spot lights first (sorted far to near from the camera), then directional ones.",
 )
@@ -65,7 +70,7 @@ INSTANCE = Struct(
     "Instance",
     [
         ("model", "vec4[3]", "rows of the camera-relative model matrix (the last row is 0 0 0 1)"),
-        ("misc", "uvec4", "x: material index, y: key = mesh * 2 + mirrored, zw: 0"),
+        ("misc", "uvec4", "x: material index, y: key = mesh * 2 + mirrored, z: 1 NotShadowReceiver, w: 0"),
     ],
     doc="One entity's row: 64 bytes (the normal matrix is derived in the vertex shader).",
 )
@@ -145,6 +150,21 @@ TONE_MAP_PUSH = Struct(
     ],
 )
 
+SHADOW_VIEW = Struct(
+    "ShadowView",
+    [
+        ("view_projection", "mat4", "render-relative positions -> the shadow map's clip space (reverse-Z)"),
+        (
+            "params",
+            "vec4",
+            "x depth bias (NDC; perspective: times 1/w), y normal offset (world; perspective: times w), "
+            "z far (a cascade: its slice's far view distance), w softness (PCF: texels; PCSS: light size)",
+        ),
+        ("info", "uvec4", "x layer, y SHADOW_* filter, z resolution, w 1 for a perspective view (spot, cube face)"),
+    ],
+    doc="One shadow view (render/shadow_views.py): a cascade, a spot light's map, a cube face.",
+)
+
 DEFERRED_PUSH = Struct(
     "DeferredPush", [("viewport", "uvec2", "the frame's viewport in pixels (the G-buffer may be larger)")]
 )
@@ -160,6 +180,9 @@ IMGUI_PUSH = Struct(
 SET_FRAME, SET_INDIRECT = 0, 1
 BINDING_GLOBALS, BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS, BINDING_TEXTURES = 0, 1, 2, 3, 4
 BINDING_CLUSTERS = 5  # clustered lights (light_clusters.py): distance bins and tile masks
+# shadows (render/shadow_pass.py): the views' rows, the map array with a filtering and a nearest
+# comparison sampler (PCF and PCSS; hard shadows)
+BINDING_SHADOW_VIEWS, BINDING_SHADOW_MAP, BINDING_SHADOW_MAP_HARD = 6, 7, 8
 TEXTURE_PAGES = 18  # texture_pages.py: two views (sRGB, UNORM) per size class, 16 to 4096 texels
 BINDING_IDS, BINDING_KEYS, BINDING_DRAW_STATE, BINDING_COMMANDS = 0, 1, 2, 3
 # shading models: the values of Material.kind.x and bits 0-5 of the mesh pipelines' MATERIAL_FEATURES
@@ -174,6 +197,7 @@ FEATURE_SPOT_LIGHTS = 1 << 20  # the scene has spot lights (without: lights are 
 FEATURE_DIRECTIONAL_LIGHTS = 1 << 21  # the scene has directional lights
 FEATURE_EMISSIVE = 1 << 22  # some material glows (emissive colour or texture): without, none is read
 FEATURE_BLEND = 1 << 23  # some material is alpha-blended: without, every fragment's alpha is 1
+FEATURE_SHADOWS = 1 << 24  # some light casts shadows: without, no shadow map is read
 CLUSTER_GROUP = 64  # light_bounds.comp's and light_tiles.comp's local size
 MAX_GLOBAL_LIGHTS = 256  # directional and unbounded lights every fragment loops over, when clustered
 LIGHT_BINS = 1024  # distance bins: exponential shells around the eye, each with its light index range
@@ -207,6 +231,7 @@ STRUCTS = [
     COMPACT_PUSH,
     BILLBOARD_PUSH,
     TONE_MAP_PUSH,
+    SHADOW_VIEW,
     DEFERRED_PUSH,
     IMGUI_PUSH,
 ]
@@ -224,6 +249,13 @@ DEFINES = {
     "FEATURE_DIRECTIONAL_LIGHTS": FEATURE_DIRECTIONAL_LIGHTS,
     "FEATURE_EMISSIVE": FEATURE_EMISSIVE,
     "FEATURE_BLEND": FEATURE_BLEND,
+    "FEATURE_SHADOWS": FEATURE_SHADOWS,
+    "BINDING_SHADOW_VIEWS": BINDING_SHADOW_VIEWS,
+    "BINDING_SHADOW_MAP": BINDING_SHADOW_MAP,
+    "BINDING_SHADOW_MAP_HARD": BINDING_SHADOW_MAP_HARD,
+    "SHADOW_HARD": SHADOW_HARD,
+    "SHADOW_PCF": SHADOW_PCF,
+    "SHADOW_PCSS": SHADOW_PCSS,
     "CLUSTER_GROUP": CLUSTER_GROUP,
     "MAX_GLOBAL_LIGHTS": MAX_GLOBAL_LIGHTS,
     "LIGHT_BINS": LIGHT_BINS,

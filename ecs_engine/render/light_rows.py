@@ -46,6 +46,7 @@ class PositionalLights:
     intensity: np.ndarray  # (n,)
     direction: np.ndarray | None = None  # (n, 3) where a spot light shines; None: point lights
     cone: np.ndarray | None = None  # (n, 2): cos(outer), 1 / (cos(inner) - cos(outer))
+    entity: np.ndarray | None = None  # (n,) the lights' entities (shadows name their views by them)
 
     def __len__(self) -> int:
         return len(self.radius)
@@ -56,6 +57,7 @@ class DirectionalLights:
     direction: np.ndarray  # (n, 3): where the light shines
     color: np.ndarray  # (n, 3)
     illuminance: np.ndarray  # (n,)
+    entity: np.ndarray | None = None  # (n,)
 
     def __len__(self) -> int:
         return len(self.illuminance)
@@ -223,3 +225,33 @@ def write_lights(
         rows[:, 11] = LIGHT_DIRECTIONAL
         row += len(d)
     return count
+
+
+def write_light_shadows(
+    positional: list[PositionalLights],
+    directional: list[DirectionalLights],
+    eye_from_origin: np.ndarray,
+    origin: np.ndarray,
+    views: dict[int, tuple[int, int]],
+    out: np.ndarray,
+) -> None:
+    """Name each shadow-casting light's views in its row (cone.z: first view + 1, cone.w: the
+    count), `views` mapping a light's entity to (first view, count). Positional rows are in
+    write_lights' order (far to near from the eye, ties in world order), found again here."""
+    count = sum(len(p) for p in positional)
+    if count:
+        entity = np.concatenate([p.entity for p in positional if p.entity is not None])
+        position = np.concatenate([p.position for p in positional])
+        to_eye = position - np.asarray(origin, np.float64) - np.asarray(eye_from_origin, np.float64)
+        order = np.argsort(-np.einsum("ij,ij->i", to_eye, to_eye), kind="stable")
+        for row, e in enumerate(entity[order].tolist()):
+            found = views.get(e)
+            if found is not None:
+                out[row, 14:16] = (found[0] + 1, found[1])
+    row = count
+    for d in directional:
+        for e in d.entity.tolist() if d.entity is not None else [None] * len(d):
+            found = views.get(e) if e is not None else None
+            if found is not None:
+                out[row, 14:16] = (found[0] + 1, found[1])
+            row += 1

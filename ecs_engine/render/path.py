@@ -62,6 +62,7 @@ class TargetState:
         secondary_begin: Any,
         clear_color: tuple[float, float, float],
         gbuffer: tuple[Any, Any, Any] | None = None,
+        depth_only: bool = False,
     ) -> TargetState:
         """`gbuffer`, in the deferred form: the G-buffer pass, its framebuffer and the begin info
         of secondaries inside it (the chunks'); `secondary_begin` is then the set-aside rows'."""
@@ -69,7 +70,9 @@ class TargetState:
         area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(width, height))
         background = vk.VkClearValue(color=vk.VkClearColorValue(float32=[*clear_color, 1.0]))
         depth = vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=0.0, stencil=0))  # reverse-Z
-        clears = [background, depth, background]  # in render-pass order (gpu/render_pass.py): the target is not cleared
+        # in render-pass order (gpu/render_pass.py): the target is not cleared; a shadow map's one
+        # attachment is depth (gpu/shadow_maps.py)
+        clears = [depth] if depth_only else [background, depth, background]
         state = cls(
             key=key,
             area=area,
@@ -111,6 +114,7 @@ class FrameInputs:
     readback: bool  # the frame is waited for: the path may read back what it counted on the GPU
     material_count: int = 1  # Mesh.material is below it (the extractor checked)
     path_state: Any = None  # what the path's begin_frame keeps for its jobs
+    row_base: int = 0  # where this view's rows start in `instances` (a shadow view's come after the camera's)
 
 
 @dataclass
@@ -154,6 +158,7 @@ class PathContext:
     samples: int  # the target's MSAA count
     native_recorder: Callable[[], Any]  # gpu.native_recorder.NativeRecorder, compiled on first call, once a device
     gbuffer: bool = False  # the chunks draw into the G-buffer pass (the deferred form), lit later
+    shadow: bool = False  # the chunks draw depth alone into a shadow map (render/shadow_pass.py)
 
 
 class RenderPath(Protocol):

@@ -20,10 +20,9 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import replace
+from functools import partial
 from operator import attrgetter
 from typing import Any
-
-import numpy as np
 
 from .. import native
 from ..ecs.world import World
@@ -40,16 +39,17 @@ from .indirect_path import IndirectPath
 from .layouts import (
     BINDING_TEXTURES,
     FEATURE_CLUSTERED,
+    FEATURE_SHADOWS,
     INSTANCE,
-    LIGHT,
 )
 from .light_clusters import ClusterGrid, LightCulling, check_light_culling
-from .light_rows import light_features, write_lights
+from .light_rows import light_features
 from .materials import Materials
 from .mesh_registry import MeshRegistry
 from .output_passes import OutputPasses
 from .path import FILL_MODES, ChunkResult, FrameInputs, FrameStats, PathContext, PathFactory, RenderPath, TargetState
 from .set_aside_pass import SetAsidePass
+from .shadow_pass import ShadowPass
 from .texture_pages import TexturePages
 from .tone_map import check_tone_map, wants_hdr
 
@@ -124,8 +124,10 @@ class Renderer:
             self._fit_target()  # before anything is made against its render pass
             self._target_generation = target.generation
             self.texture_pages = TexturePages(device)
+            self.shadows = ShadowPass(device, self.set_layout, self.secondaries, n)
             self.per_frame = [
-                FrameResources.make(device, self.pool, self.set_layout, self.texture_pages) for _ in range(n)
+                FrameResources.make(device, self.pool, self.set_layout, self.texture_pages, self.shadows.maps)
+                for _ in range(n)
             ]
             self.output = OutputPasses(
                 device, target, self.set_layout.handle, self.secondaries, light_size, clear_color
@@ -171,7 +173,13 @@ class Renderer:
             self._set_aside.destroy()
             self._set_aside = None
         self.output.forget_path_state()
+        self.shadows.forget_path()  # made again for the new path's context
         self.path = new
+
+    def _make_shadow_path(self, ctx: PathContext) -> RenderPath:
+        """The depth-only path of the shadow passes: the per-entity one for per_entity, else the
+        instanced one (indirect mode draws its shadows with the CPU's culling for now)."""
+        return (PerEntityPath if self.mode == "per_entity" else InstancedPath)(ctx, self.cpu_recorder)
 
     def _native_recorder(self) -> Any:
         """The native recorder compiled for this device, made on first use (about a second)."""
@@ -301,7 +309,9 @@ class Renderer:
         width, height = extent or (self.target.width, self.target.height)
         material_count = len(materials)
         data = self.extract(world, width, height, materials)  # before any GPU state: a bad world fails here
-        self._check_features(materials.features | light_features(data.lights, data.directional))
+        views = self.shadows.plan(world, data)  # lights with a Shadow: the views their maps are drawn from
+        features = light_features(data.lights, data.directional) | (FEATURE_SHADOWS if views else 0)
+        self._check_features(materials.features | features)
         grid = self._light_clusters(data, width, height, own_target=framebuffer is None)
         self._sync_textures(materials)
         if self.jobs is not None and self.jobs.generation != self._jobs_generation:
@@ -309,16 +319,14 @@ class Renderer:
         frame, gpu_ms = self.frames.begin()
         slot = self.frames.frames.index(frame)
         pf = self.per_frame[slot]
-        pf.ensure_capacity(
-            self.device,
-            self.texture_pages,
-            self.path.rows_needed(data.candidates) + len(data.set_aside or ()),
-            data.light_count,
-            material_count,
-        )
-        pf.write_materials(materials, self.texture_pages)
-        if grid is not None:
-            pf.ensure_clusters(self.device, self.texture_pages, grid)
+        if self.shadows.ensure(views):  # new maps (the device was waited for): every set names them
+            for each in self.per_frame:
+                each.name_shadow_maps(self.device, self.shadows.maps)
+        camera_rows = self.path.rows_needed(data.candidates) + len(data.set_aside or ())
+        rows = camera_rows + len(views) * data.candidates  # each shadow view's rows after the camera's
+        pf.ensure_capacity(self.device, self.texture_pages, rows, data.light_count, material_count, len(views))
+        deferred, name = self.target.form == "deferred", partial(self.shadows.name_lights, data, views)
+        positional = pf.write_frame(self.device, data, materials, grid, self.ambient, deferred, name if views else None)
         target = self.target_state(framebuffer or self.target.framebuffer, width, height)
         inputs = FrameInputs(
             slot=slot,
@@ -336,26 +344,6 @@ class Renderer:
         self.secondaries.reset(slot)
         if self.overlay is not None:
             self.overlay.prepare(slot, len(self.frames.frames))
-        positional = 0
-        if data.light_count:
-            positional = write_lights(
-                data.lights,
-                data.directional,
-                data.origin,
-                data.camera.position - data.origin,
-                pf.lights.array(np.float32, (data.light_count, LIGHT.size // 4)),
-            )
-        pf.write_globals(
-            data.camera,
-            data.view,
-            data.origin,
-            data.origin_key,
-            data.light_count,
-            positional,
-            grid,
-            self.ambient,
-            self.target.form == "deferred",
-        )
         t0 = time.perf_counter()
 
         def job(chunk: Chunk) -> ChunkResult:
@@ -366,12 +354,16 @@ class Renderer:
             if self.jobs is not None
             else [job(c) for c in data.chunks]
         )
+        shadow_buffers = self.shadows.draw_views(
+            views, inputs, pf, camera_rows, data, self.path.ctx, self._make_shadow_path, self.jobs
+        )
         record_ms = (time.perf_counter() - t0) * 1e3
         cb = frame.command_buffer
         secondaries = path.finish(cb, inputs, results, data.candidates)
         aside = self._record_set_aside(inputs, data, materials)
         if grid is not None:
             self.lights.record(cb, pf, grid, data.light_count)
+        self.shadows.record(cb, views, shadow_buffers)
         light_draws = self.output.record(
             cb,
             secondaries,
@@ -392,9 +384,9 @@ class Renderer:
         draws, visible, triangles = path.counts(inputs, results)
         draws, visible, triangles = draws + aside[1], visible + aside[2], triangles + aside[3]
         return FrameStats(
-            draws=draws + light_draws,
+            draws=draws + light_draws + (self.shadows.draws if views else 0),
             instances=visible,
-            triangles=triangles,
+            triangles=triangles + (self.shadows.triangles if views else 0),
             lights=data.light_count,
             gpu_ms=gpu_ms,
             wait_ms=self.frames.last_wait_ms,
@@ -491,7 +483,18 @@ class Renderer:
         """What the renderer made, in reverse (what a failed __init__ had not made yet is skipped)."""
         if self._set_aside is not None:
             self._set_aside.destroy()
-        for name in ("output", "per_frame", "texture_pages", "lights", "pool", "set_layout", "secondaries", "frames"):
+        names = (
+            "output",
+            "per_frame",
+            "shadows",
+            "texture_pages",
+            "lights",
+            "pool",
+            "set_layout",
+            "secondaries",
+            "frames",
+        )
+        for name in names:
             made = getattr(self, name, None)
             for part in made if isinstance(made, list) else [made] if made is not None else []:
                 part.destroy()

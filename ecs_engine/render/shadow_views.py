@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -55,6 +56,10 @@ class ShadowView:
     resolution: int
     texel: float  # world units per texel: a cascade's everywhere; a spot or cube face's at distance 1
     far: float  # a cascade: the far end of its slice of the camera's view; else the light's range (inf: none)
+    bias: float = 1.0  # the light's Shadow settings (components/shadow.py)
+    normal_offset: float = 1.0
+    filter: int = 1
+    softness: float = 1.5
 
     @property
     def view_projection(self) -> np.ndarray:
@@ -99,10 +104,20 @@ def shadow_views(world: World, cam: CameraMatrices, origin: np.ndarray) -> list[
         resolution: int,
         texel: float,
         far: float,
+        shadow: Any,
+        row: int,
     ) -> None:
         view32, projection32 = view.astype(np.float32), projection.astype(np.float32)
         planes = frustum_planes(projection32, view32)
-        views.append(ShadowView(entity, kind, index, len(views), view32, projection32, planes, resolution, texel, far))
+        settings = (
+            float(shadow.bias[row]),
+            float(shadow.normal_offset[row]),
+            int(shadow.filter[row]),
+            float(shadow.softness[row]),
+        )
+        views.append(
+            ShadowView(entity, kind, index, len(views), view32, projection32, planes, resolution, texel, far, *settings)
+        )
 
     for batch in world.query(DirectionalLight, Transform, Shadow, write=()):
         shadow = batch[Shadow]
@@ -126,7 +141,7 @@ def shadow_views(world: World, cam: CameraMatrices, origin: np.ndarray) -> list[
                     splits[i],
                     splits[i + 1],
                 )
-                add(entity, "cascade", i, c.view, c.projection, resolution, c.texel, float(splits[i + 1]))
+                add(entity, "cascade", i, c.view, c.projection, resolution, c.texel, float(splits[i + 1]), shadow, row)
 
     for batch in world.query(SpotLight, Transform, Shadow, write=()):
         spot, shadow, transform = batch[SpotLight], batch[Shadow], batch[Transform]
@@ -138,7 +153,18 @@ def shadow_views(world: World, cam: CameraMatrices, origin: np.ndarray) -> list[
             projection = perspective(fov, 1.0, SPOT_NEAR * reach if reach > 0 else 0.05, far).astype(np.float64)
             view = _translation_view(light_rotation(directions[row]), transform.position[row] - origin)
             resolution = int(shadow.resolution[row])
-            add(entity, "spot", 0, view, projection, resolution, 2.0 * math.tan(0.5 * fov) / resolution, far)
+            add(
+                entity,
+                "spot",
+                0,
+                view,
+                projection,
+                resolution,
+                2.0 * math.tan(0.5 * fov) / resolution,
+                far,
+                shadow,
+                row,
+            )
 
     for batch in world.query(PointLight, Transform, Shadow, write=()):
         light, shadow, transform = batch[PointLight], batch[Shadow], batch[Transform]
@@ -149,5 +175,16 @@ def shadow_views(world: World, cam: CameraMatrices, origin: np.ndarray) -> list[
             view = _translation_view(np.eye(3), transform.position[row] - origin)
             resolution = int(shadow.resolution[row])
             for face in range(6):
-                add(entity, "cube", face, view, _cube_face(face, near, far), resolution, 2.0 / resolution, far)
+                add(
+                    entity,
+                    "cube",
+                    face,
+                    view,
+                    _cube_face(face, near, far),
+                    resolution,
+                    2.0 / resolution,
+                    far,
+                    shadow,
+                    row,
+                )
     return views

@@ -1,0 +1,19 @@
+// The shadow passes' vertex shader body (render/shadow_pass.py): the position alone, through the
+// shadow view's globals (its own set 0: g.projection and g.view are the light's). shadow.vert
+// reads the row from the instance buffer, shadow_push.vert from push constants (per_entity).
+layout(location = 0) in vec3 in_position;
+
+#ifdef PUSH_INSTANCE
+layout(push_constant) uniform Push { Instance row; } push;
+#endif
+
+void main() {
+#ifdef PUSH_INSTANCE
+    Instance inst = push.row;
+#else
+    Instance inst = instances[gl_InstanceIndex];
+#endif
+    vec4 p = vec4(in_position, 1.0);
+    vec3 world = vec3(dot(inst.model[0], p), dot(inst.model[1], p), dot(inst.model[2], p));
+    gl_Position = g.projection * (g.view * vec4(world, 1.0));
+}

@@ -1,0 +1,198 @@
+"""Shadow maps drawn and read (render/shadow_pass.py): shadows fall where a NumPy ray cast of the
+scene says (a directional light's cascades, a spot light's map), open ground stays clean (no
+acne), the tags leave meshes out, every render path and the deferred lighting agree, and a scene
+without a Shadow pays for none of it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from gpu_context import headless_gpu
+
+from ecs_engine import World
+from ecs_engine.app.scenes import default_schedule
+from ecs_engine.components import (
+    DirectionalLight,
+    Mesh,
+    NotShadowCaster,
+    NotShadowReceiver,
+    Shadow,
+    SpotLight,
+    Transform,
+)
+from ecs_engine.demos.scene_kit import add_camera
+from ecs_engine.maths.camera import look_rotation
+from ecs_engine.render.camera import camera_matrices
+from ecs_engine.render.layouts import FEATURE_SHADOWS
+from ecs_engine.render.primitives import cube_mesh
+
+W, H = 160, 100
+CUBE = (np.array([-0.5, 0.5, -0.5]), np.array([0.5, 1.5, 0.5]))  # the unit cube centred at (0, 1, 0)
+
+
+def scene(gpu, light: str = "sun", shadow: bool = True, cube_tags=(), ground_tags=()) -> World:
+    """The issue's scene: a ground box whose top is y = 0, a unit cube centred at (0, 1, 0),
+    the camera at (0, 8, 8) looking at the origin; lit straight down by a directional light or
+    by a spot light above and to the side."""
+    world = World()
+    cube = gpu.meshes.add(cube_mesh())
+    world.spawn(Transform(position=(0.0, -0.5, 0.0), scale=(40.0, 1.0, 40.0)), Mesh(handle=cube), *ground_tags)
+    world.spawn(Transform(position=(0.0, 1.0, 0.0)), Mesh(handle=cube, material=1), *cube_tags)
+    cast = [Shadow(resolution=1024)] if shadow else []
+    if light == "sun":
+        world.spawn(Transform(rotation=look_rotation((0.0, -1.0, 0.0))), DirectionalLight(illuminance=0.8), *cast)
+    else:
+        world.spawn(
+            Transform(position=(-2.0, 4.0, 0.0), rotation=look_rotation((0.5, -1.0, 0.0))),
+            SpotLight(intensity=30.0, radius=20.0, inner_angle=0.9, outer_angle=1.0),
+            *cast,
+        )
+    add_camera(world, (0.0, 8.0, 8.0), (0.0, 0.0, 0.0))
+    return world
+
+
+def render(gpu, world: World, **settings) -> tuple[np.ndarray, object]:
+    from ecs_engine.render.renderer import Renderer
+
+    renderer = Renderer(gpu.device, gpu.target, gpu.meshes, **settings)
+    try:
+        default_schedule().run(world, 0.0)
+        renderer.render(world, readback=True)
+        return gpu.target.pixels()[..., :3].astype(int), renderer
+    finally:
+        renderer.destroy()
+
+
+def ground_hits(world: World) -> tuple[np.ndarray, np.ndarray]:
+    """Per pixel: where its ray meets the ground (y = 0), and whether the cube is in the way."""
+    cam = camera_matrices(world, W / H)
+    inv_p = np.linalg.inv(cam.projection.astype(np.float64))
+    rot = cam.inverse_view[:3, :3].astype(np.float64)
+    ys, xs = np.mgrid[0:H, 0:W]
+    ndc = np.stack([(xs + 0.5) / W * 2 - 1, (ys + 0.5) / H * 2 - 1, np.full(xs.shape, 0.5), np.ones(xs.shape)], -1)
+    p = ndc @ inv_p.T
+    d = (p[..., :3] / p[..., 3:]) @ rot.T
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    eye = cam.position
+    t = -eye[1] / d[..., 1]
+    hit = eye + d * t[..., None]
+    blocked = segment_hits_box(np.broadcast_to(eye, hit.shape), hit, *CUBE)
+    return hit, blocked
+
+
+def segment_hits_box(a: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Whether the segments a -> b cross the box [lo, hi] (slab test)."""
+    d = b - a
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t0, t1 = (lo - a) / d, (hi - a) / d
+    near = np.nanmax(np.minimum(t0, t1), axis=-1)
+    far = np.nanmin(np.maximum(t0, t1), axis=-1)
+    return (near <= far) & (far > 1e-6) & (near < 1 - 1e-6)
+
+
+def compare(image: np.ndarray, shadowed: np.ndarray, lit: np.ndarray) -> tuple[float, float]:
+    brightness = image.mean(axis=-1)
+    return float(brightness[shadowed].mean()), float(brightness[lit].mean())
+
+
+@pytest.mark.parametrize("light", ["sun", "spot"])
+def test_shadows_fall_where_a_ray_cast_says(light):
+    with headless_gpu(W, H) as gpu:
+        world = scene(gpu, light)
+        image, _ = render(gpu, world)
+        plain, _ = render(gpu, scene(gpu, light, shadow=False))
+    hit, blocked = ground_hits(world)
+    if light == "sun":  # straight down: the shadow is the cube's footprint, x and z in [-0.5, 0.5]
+        inside = (np.abs(hit[..., 0]) < 0.4) & (np.abs(hit[..., 2]) < 0.4)
+        outside = (np.abs(hit[..., 0]) > 0.6) | (np.abs(hit[..., 2]) > 0.6)
+    else:  # from the spot light's apex past the cube to the ground point, shrunk and grown a little
+        apex = np.array([-2.0, 4.0, 0.0])
+        inside = segment_hits_box(np.broadcast_to(apex, hit.shape), hit, CUBE[0] + 0.1, CUBE[1] - 0.1)
+        outside = ~segment_hits_box(np.broadcast_to(apex, hit.shape), hit, CUBE[0] - 0.1, CUBE[1] + 0.1)
+        outside &= np.linalg.norm(hit - np.array([0.0, 0.0, 0.0]), axis=-1) < 3.0  # within the spot's pool
+    shadowed, lit = inside & ~blocked, outside & ~blocked & (np.linalg.norm(hit, axis=-1) < 6.0)
+    assert shadowed.sum() > 20 and lit.sum() > 200  # the ray cast sees both
+    dark, bright = compare(image, shadowed, lit)
+    assert dark < 0.5 * bright, (dark, bright)
+    # the same scene without a Shadow: no darkening anywhere the ray cast says is shadowed
+    plain_dark, _ = compare(plain, shadowed, lit)
+    assert plain_dark > dark + 40
+    # and the rest of the image is the shadowless one's: lit ground is not darkened (no acne)
+    away = lit
+    assert np.abs(image[away] - plain[away]).max() <= 2
+
+
+def test_open_ground_facing_the_light_has_no_acne():
+    """A plane lit head-on by a casting light, nothing above it: the image is the shadowless one."""
+    with headless_gpu(W, H) as gpu:
+        world = scene(gpu, cube_tags=[NotShadowCaster()])
+        image, _ = render(gpu, world)
+        plain, _ = render(gpu, scene(gpu, shadow=False))
+    assert np.abs(image - plain).max() <= 1
+
+
+@pytest.mark.parametrize("lighting", ["loop", "deferred"])  # deferred: the flag rides in the G-buffer
+def test_tags_leave_meshes_out_of_shadows(lighting):
+    with headless_gpu(W, H) as gpu:
+        plain, _ = render(gpu, scene(gpu, shadow=False), light_culling=lighting)
+        no_caster, _ = render(gpu, scene(gpu, cube_tags=[NotShadowCaster()]), light_culling=lighting)
+        no_receiver, _ = render(gpu, scene(gpu, ground_tags=[NotShadowReceiver()]), light_culling=lighting)
+        both, _ = render(gpu, scene(gpu), light_culling=lighting)
+    assert np.abs(no_caster - plain).max() <= 1
+    assert np.abs(no_receiver - plain).max() <= 1
+    assert np.abs(both - plain).max() > 60
+
+
+@pytest.mark.parametrize(
+    "settings",
+    [dict(mode="per_entity"), dict(mode="indirect"), dict(light_culling="deferred"), dict(recorder="python")],
+)
+def test_every_path_and_the_deferred_lighting_draw_the_same_shadows(settings):
+    with headless_gpu(W, H) as gpu:
+        world = scene(gpu, "spot")
+        reference, _ = render(gpu, world, tone_map="aces")
+        image, _ = render(gpu, world, tone_map="aces", **settings)
+    assert np.abs(image - reference).max() <= 1
+
+
+def test_a_scene_without_shadows_pays_for_none():
+    from ecs_engine.render.renderer import Renderer
+
+    with headless_gpu(W, H) as gpu:
+        world = scene(gpu, shadow=False)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+        try:
+            default_schedule().run(world, 0.0)
+            stats = renderer.render(world, readback=True)
+            assert renderer.shadows.maps.resolution == 1 and renderer.shadows.path is None
+            assert not renderer.material_features & FEATURE_SHADOWS
+            assert stats.draws == 1  # the two cubes in one instanced draw, nothing for shadows
+            world.spawn(Transform(rotation=look_rotation((0.2, -1.0, 0.1))), DirectionalLight(), Shadow(cascades=2))
+            stats = renderer.render(world, readback=True)
+            assert renderer.material_features & FEATURE_SHADOWS
+            assert renderer.shadows.maps.resolution == 2048 and renderer.shadows.maps.layers == 2
+            assert stats.draws > 1  # the shadow views drew
+        finally:
+            renderer.destroy()
+
+
+def test_cascades_cover_the_shadow_distance_and_stop_there():
+    """A cube far beyond Shadow.distance casts nothing; one within it does."""
+    with headless_gpu(W, H) as gpu:
+        cube = gpu.meshes.add(cube_mesh())
+        images = []
+        for distance in (5.0, 60.0):
+            world = World()
+            world.spawn(Transform(position=(0.0, -0.5, -20.0), scale=(80.0, 1.0, 80.0)), Mesh(handle=cube))
+            world.spawn(Transform(position=(0.0, 2.0, -20.0), scale=(2.0, 2.0, 2.0)), Mesh(handle=cube, material=1))
+            world.spawn(
+                Transform(rotation=look_rotation((1.0, -1.0, 0.0))),  # slanted: the shadow falls to the side
+                DirectionalLight(),
+                Shadow(cascades=3, distance=distance),
+            )
+            add_camera(world, (0.0, 18.0, 0.0), (0.0, 0.0, -20.0))  # looking down steeply: the shadow shows
+            images.append(render(gpu, world)[0])
+        near_only, far_enough = images
+    # the cube stands ~27 units from the camera, in the last of three cascades of a 60-unit
+    # shadow distance, beyond a 5-unit one
+    assert (far_enough.mean(axis=-1) < near_only.mean(axis=-1) - 60).sum() > 20
