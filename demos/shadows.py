@@ -1,7 +1,7 @@
 """Shadows (issue 15): a ground box 40 x 1 x 40 whose top face is at y = 0, a unit cube centred at
 (0, 1, 0) under one directional light shining straight down, seen from (0, 8, 8); away from the
-centre a spot light throws a pillar's shadow across the ground, and a point light stands by two
-boxes (its cube-map shadows are planned but not drawn yet: render/shadow_pass.py).
+centre a spot light throws a pillar's shadow across the ground, and a point light's six cube
+faces throw two boxes' shadows away from it.
 `shadows=False` (`--no-shadows`) builds the same scene with no Shadow on any light."""
 
 from __future__ import annotations

@@ -151,7 +151,7 @@ struct ToneMapPush {  // 8 bytes, std430
 struct ShadowView {  // 96 bytes, std430
     mat4 view_projection;       // offset 0: render-relative positions -> the shadow map's clip space (reverse-Z)
     vec4 params;                // offset 64: x depth bias (NDC; perspective: times 1/w), y normal offset (world; perspective: times w), z far (a cascade: its slice's far view distance), w softness (PCF: texels; PCSS: light size)
-    uvec4 info;                 // offset 80: x layer, y SHADOW_* filter, z resolution, w 1 for a perspective view (spot, cube face)
+    uvec4 info;                 // offset 80: x layer, y SHADOW_* filter, z resolution, w 0 orthographic, 1 spot, 2 cube face
 };
 
 struct DeferredPush {  // 8 bytes, std430

@@ -114,7 +114,8 @@ float shadow_tap(bool hard, vec2 uv, float layer, float ref) {
 }
 
 // How much of light `light` reaches p (normal n) past its casters: 1 without shadows. A
-// directional light's cascade is picked by p's view depth; past the last one nothing is shadowed.
+// directional light's cascade is picked by p's view depth (past the last one nothing is
+// shadowed), a point light's cube face by the direction from the light.
 // The receiver is moved along its normal and its depth towards the light (Shadow.normal_offset,
 // Shadow.bias); reverse-Z, so a receiver is lit where its depth is at least the map's.
 float light_shadow(Light light, vec3 p, vec3 n) {
@@ -125,7 +126,14 @@ float light_shadow(Light light, vec3 p, vec3 n) {
     first -= 1u;
     uint count = max(uint(light.cone.w), 1u);
     uint k = 0u;
-    if (count > 1u || shadow_views[first].info.w == 0u) {
+    if (shadow_views[first].info.w == 2u) {
+        // a point light's cube: the face of the major axis of the direction from the light
+        // (the cube map face selection; render/shadow_views.py's CUBE_FACES order)
+        vec3 r = p - light.position_radius.xyz;
+        vec3 a = abs(r);
+        uint axis = a.x >= a.y && a.x >= a.z ? 0u : (a.y >= a.z ? 1u : 2u);
+        k = 2u * axis + (r[axis] < 0.0 ? 1u : 0u);
+    } else if (count > 1u || shadow_views[first].info.w == 0u) {
         float depth = -(g.view * vec4(p, 1.0)).z;
         if (depth > shadow_views[first + count - 1u].params.z) {
             return 1.0;
@@ -135,7 +143,7 @@ float light_shadow(Light light, vec3 p, vec3 n) {
         }
     }
     ShadowView v = shadow_views[first + k];
-    bool perspective = v.info.w == 1u;
+    bool perspective = v.info.w != 0u;
     float w0 = perspective ? max((v.view_projection * vec4(p, 1.0)).w, 0.0) : 1.0;
     vec4 c = v.view_projection * vec4(p + n * (v.params.y * w0), 1.0);
     if (c.w <= 0.0) {

@@ -160,7 +160,7 @@ SHADOW_VIEW = Struct(
             "x depth bias (NDC; perspective: times 1/w), y normal offset (world; perspective: times w), "
             "z far (a cascade: its slice's far view distance), w softness (PCF: texels; PCSS: light size)",
         ),
-        ("info", "uvec4", "x layer, y SHADOW_* filter, z resolution, w 1 for a perspective view (spot, cube face)"),
+        ("info", "uvec4", "x layer, y SHADOW_* filter, z resolution, w 0 orthographic, 1 spot, 2 cube face"),
     ],
     doc="One shadow view (render/shadow_views.py): a cascade, a spot light's map, a cube face.",
 )

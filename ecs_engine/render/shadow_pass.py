@@ -14,9 +14,11 @@ filter) and the map (shading.glsl's light_shadow); a light row names its first v
 A scene without a Shadow pays for none of it: no views, no jobs, a 1-texel map bound, and the
 shaders specialised without shadows (FEATURE_SHADOWS).
 
-Not yet: point lights' cube maps (their views are planned, not drawn), PCSS (drawn as PCF), alpha
-cutouts in the maps, and the indirect mode's GPU cull per view (it draws its shadows with the
-instanced path's CPU culling).
+A point light's six cube faces are layers of the same array, each widened by a few texels
+(shadow_views.py's CUBE_MARGIN); the lighting picks the face and filters within it.
+
+Not yet: PCSS (drawn as PCF), alpha cutouts in the maps, and the indirect mode's GPU cull per
+view (it draws its shadows with the instanced path's CPU culling).
 """
 
 from __future__ import annotations
@@ -39,7 +41,7 @@ from .light_rows import write_light_shadows
 from .path import FrameInputs, PathContext, RenderPath, TargetState
 from .shadow_views import ShadowView, shadow_views
 
-DRAWN_KINDS = ("cascade", "spot")  # cube faces: planned, not drawn yet
+PROJECTIONS = {"cascade": 0, "spot": 1, "cube": 2}  # SHADOW_VIEW.info.w: orthographic, perspective, a cube face
 
 
 class ShadowPass:
@@ -72,8 +74,7 @@ class ShadowPass:
         """This frame's drawn views (none without a Shadow: one query, no work)."""
         if not any(len(batch) for batch in world.query(Shadow, write=())):
             return []
-        views = [v for v in shadow_views(world, data.camera, data.origin) if v.kind in DRAWN_KINDS]
-        return [replace(v, layer=i) for i, v in enumerate(views)]
+        return shadow_views(world, data.camera, data.origin)
 
     def ensure(self, views: list[ShadowView]) -> bool:
         """Maps that hold `views` (made anew, larger, when they do not: the caller's frames in
@@ -256,7 +257,7 @@ class ShadowPass:
             else:  # depth = P22 * z + P23: linear
                 bias, offset = p[2, 2] * v.bias * v.texel, v.normal_offset * v.texel
             row["params"] = (bias, offset, v.far if np.isfinite(v.far) else 3.0e38, v.softness)
-            row["info"] = (v.layer, v.filter, v.resolution, int(perspective))
+            row["info"] = (v.layer, v.filter, v.resolution, PROJECTIONS[v.kind])
 
     def record(self, cb: Any, views: list[ShadowView], secondaries: list[list[Any]]) -> None:
         """Each view's layer drawn from its secondaries (raw calls); the first time the maps are

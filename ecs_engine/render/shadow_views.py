@@ -7,9 +7,10 @@ matrices that take render-relative positions there and the planes its casters ar
   up to `distance` beyond a cascade's sphere towards the light still cast into it;
 - spot light: one perspective view from the light along its axis, as wide as its outer cone,
   as deep as its range;
-- point light: six views, the faces of a cube map in Vulkan's order (+X, -X, +Y, -Y, +Z, -Z)
-  and orientation (the spec's cube map face selection: a direction's major axis picks the
-  face, the other two give s and t), so a samplerCube reads them back seamlessly.
+- point light: six views, the faces of a cube in Vulkan's order (+X, -X, +Y, -Y, +Z, -Z) and
+  orientation (the spec's cube map face selection: a direction's major axis picks the face, the
+  other two give s and t), each widened by CUBE_MARGIN texels: the lighting picks the face
+  itself and filters within one layer, so a face's edge needs texels beyond it (no seams).
 
 Views come in a fixed order (directional, spot, point lights, each in world order), the layers
 numbered in that order. Depth is reverse-Z as everywhere (near 1, far 0).
@@ -31,6 +32,7 @@ from ..maths.shadow_cascades import cascade_splits, fit_cascade, light_rotation,
 from .camera import CameraMatrices
 from .light_rows import local_minus_z
 
+CUBE_MARGIN = 4  # texels a cube face's map reaches past its edges (PCF's 3x3 bilinear taps need 3)
 SPOT_NEAR = 0.01  # a spot or point light's near plane, times its range (0.05 for unbounded ones)
 MAX_SPOT_FOV = math.pi - 1e-3  # a 90-degree outer angle still makes a finite projection
 # (forward, s axis, t axis) per cube face: the Vulkan spec's table of sc, tc per major axis
@@ -73,13 +75,20 @@ def _translation_view(rotation: np.ndarray, position: np.ndarray) -> np.ndarray:
     return view
 
 
-def _cube_face(face: int, near: float, far: float) -> np.ndarray:
-    """(4, 4) float64: a direction r from the light -> clip (sc, tc, depth, ma), ma = r on the
-    face's major axis; x/w and y/w are then the face's s and t in [-1, 1] (t down the image, as
-    Vulkan's NDC y), depth reverse-Z from `near` (1) to `far` (0, or infinite)."""
+def cube_face_scale(resolution: int) -> float:
+    """How much a cube face's s and t are shrunk so that CUBE_MARGIN texels beyond its edges
+    still land on the map: the lighting filters near a face's edge without reading past it."""
+    return resolution / (resolution + 2.0 * CUBE_MARGIN)
+
+
+def _cube_face(face: int, near: float, far: float, scale: float = 1.0) -> np.ndarray:
+    """(4, 4) float64: a direction r from the light -> clip (sc, tc, depth, ma) * (scale, scale,
+    1, 1), ma = r on the face's major axis; x/w and y/w are then the face's s and t in [-1, 1]
+    (t down the image, as Vulkan's NDC y), shrunk by `scale`, depth reverse-Z from `near` (1) to
+    `far` (0, or infinite)."""
     forward, s_axis, t_axis = (np.array(v, np.float64) for v in CUBE_FACES[face])
     m = np.zeros((4, 4))
-    m[0, :3], m[1, :3], m[3, :3] = s_axis, t_axis, forward
+    m[0, :3], m[1, :3], m[3, :3] = s_axis * scale, t_axis * scale, forward
     if math.isinf(far):
         m[2, 3] = near
     else:
@@ -180,9 +189,9 @@ def shadow_views(world: World, cam: CameraMatrices, origin: np.ndarray) -> list[
                     "cube",
                     face,
                     view,
-                    _cube_face(face, near, far),
+                    _cube_face(face, near, far, cube_face_scale(resolution)),
                     resolution,
-                    2.0 / resolution,
+                    2.0 / (resolution * cube_face_scale(resolution)),
                     far,
                     shadow,
                     row,
