@@ -357,3 +357,32 @@ def test_a_tone_map_change_rebuilds_the_overlay_for_the_new_render_pass(scene):
     scene.state.apply(replace(scene.state.settings, tone_map="clamp"))
     scene.frame()
     assert not target.hdr
+
+
+def test_light_sections_show_and_edit_shadows():
+    """The shadows scene's casting lights show their Shadow settings; an edit goes through the
+    world's checks (a refused one leaves the value and shows the message); a light that stops
+    casting loses its Shadow, and the image changes."""
+    from ecs_engine.components import DirectionalLight, PointLight, Shadow, SpotLight
+
+    scene = Scene("shadows")
+    try:
+        editor = scene.session.editor
+        world = scene.state.world
+        scene.frame()
+        sun = int(world.query(DirectionalLight, write=()).entities()[0])
+        for kind in (DirectionalLight, SpotLight, PointLight):  # each section, with its Shadow settings
+            editor.selected = int(world.query(kind, write=()).entities()[0])
+            scene.frame()
+            assert editor.status == ""
+        editor.set(world, sun, Shadow, cascades=2, bias=2.0)
+        assert world.get(sun, Shadow).cascades == 2
+        editor.set(world, sun, Shadow, resolution=8)  # refused: below 16 texels
+        assert "resolution" in editor.status and world.get(sun, Shadow).resolution == 2048
+        before = scene.gpu.target.pixels()[..., :3].copy()
+        world.remove(sun, Shadow)  # what the "casts shadows" checkbox does
+        scene.frame()
+        scene.frame()
+        assert (scene.gpu.target.pixels()[..., :3] != before).any()
+    finally:
+        scene.close()
