@@ -203,3 +203,49 @@ def test_cascades_cover_the_shadow_distance_and_stop_there():
     # the cube stands ~27 units from the camera, in the last of three cascades of a 60-unit
     # shadow distance, beyond a 5-unit one
     assert (far_enough.mean(axis=-1) < near_only.mean(axis=-1) - 60).sum() > 20
+
+
+def test_alpha_cutouts_cut_holes_in_the_shadow():
+    """A plane above the ground under the straight-down sun, alpha-masked by a 4 x 4 checkerboard:
+    its shadow on the ground is the checkerboard (a ray cast through the texture says where),
+    not a square."""
+    from ecs_engine.render.materials import Material, materials
+    from ecs_engine.render.primitives import plane_mesh
+    from ecs_engine.render.textures import Texture
+
+    cells = 4
+    with headless_gpu(W, H) as gpu:
+        world = scene(gpu, cube_tags=[NotShadowCaster()])
+        library = materials(world)
+        px = np.full((64, 64, 4), 200, np.uint8)
+        i, j = np.mgrid[0:64, 0:64] // (64 // cells)
+        px[..., 3] = np.where((i + j) % 2 == 0, 255, 0)
+        mask = library.add(
+            Material(
+                "holes",
+                "lambert",
+                alpha_mode="mask",
+                alpha_cutoff=0.5,
+                base_color_texture=library.textures.add(Texture("checker", px)),
+            )
+        )
+        world.spawn(Transform(position=(0.0, 2.5, 0.0)), Mesh(handle=gpu.meshes.add(plane_mesh(3.0, 1)), material=mask))
+        image, _ = render(gpu, world)
+    hit, blocked = ground_hits(world)
+    # where the ray meets the ground, and whether the plane above it is solid there; the plane
+    # and the cube hide parts of the ground from the camera: rays through them are left out
+    u, v = hit[..., 0] / 3.0 + 0.5, hit[..., 2] / 3.0 + 0.5
+    under = (u > 0.02) & (u < 0.98) & (v > 0.02) & (v < 0.98)
+    eye = camera_matrices(world, W / H).position
+    t = (2.5 - eye[1]) / (hit[..., 1] - eye[1])
+    through = eye + (hit - eye) * t[..., None]
+    seen = (np.abs(through[..., 0]) > 1.5) | (np.abs(through[..., 2]) > 1.5)
+    cu, cv = np.floor(u * cells), np.floor(v * cells)
+    fu, fv = u * cells - cu, v * cells - cv
+    inner = (fu > 0.2) & (fu < 0.8) & (fv > 0.2) & (fv < 0.8)  # away from the cells' edges
+    solid = (cu + cv) % 2 == 0  # texture rows follow v, columns u (a row-major image)
+    bright = image.mean(axis=-1)
+    seen &= ~blocked
+    shadowed, lit = under & seen & inner & solid, under & seen & inner & ~solid
+    assert shadowed.sum() > 10 and lit.sum() > 10
+    assert bright[shadowed].max() < bright[lit].min() - 40

@@ -152,3 +152,8 @@ def test_a_deferred_window_resizes_cleanly():
     """The swapchain's G-buffer and the lighting's image set are made again on resize, with
     validation on."""
     resized_run(scene="lights", light_culling="deferred", lights=64)
+
+
+def test_a_window_with_shadows_resizes_cleanly():
+    """Shadow maps do not belong to the swapchain: a resize leaves them, with validation on."""
+    resized_run(scene="shadows", light_culling="deferred")

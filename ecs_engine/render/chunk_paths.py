@@ -24,7 +24,14 @@ from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_lay
 from ..gpu.secondary import end_command_buffer
 from .frame_data import NOT_RECEIVER, Chunk
 from .instance_rows import write_rows
-from .layouts import FEATURE_CLUSTERED, FEATURE_DOUBLE_SIDED, FEATURE_TEXTURES, INSTANCE, MESH_VERTEX
+from .layouts import (
+    FEATURE_ALPHA_MASK,
+    FEATURE_CLUSTERED,
+    FEATURE_DOUBLE_SIDED,
+    FEATURE_TEXTURES,
+    INSTANCE,
+    MESH_VERTEX,
+)
 from .path import FILL_MODES, ChunkResult, FrameInputs, PathContext, summed_counts
 
 # The MESH_VERTEX fields mesh_vertex.glsl reads, at locations 0, 1, ...: only those are bound (an
@@ -90,20 +97,27 @@ SHADOW_DEPTH_BIAS = (-1.0, -1.5)
 
 def shadow_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple[Any, Any]:
     """The (plain, mirrored) depth-only pipelines of a path's shadow passes: the position alone
-    (shadow.vert, or shadow_push.vert for push-constant rows), no fragment shader."""
+    (shadow.vert, or shadow_push.vert for push-constant rows), no fragment shader; where some
+    material is alpha-masked, the _cutout variants and shadow_cutout.frag, which leave its holes
+    out of the map."""
+    cutout = bool(ctx.material_features & FEATURE_ALPHA_MASK)
     shader = {"mesh.vert": "shadow.vert", "mesh_push.vert": "shadow_push.vert"}[vertex_shader]
+    if cutout:
+        shader = shader.replace(".vert", "_cutout.vert")
+    fragment = "shadow_cutout.frag" if cutout else None
     base = dict(
         layout=layout,
         render_pass=ctx.render_pass,
         vertex_stride=MESH_VERTEX.itemsize,
-        vertex_attributes=vertex_attributes(ctx.device.vk, ("position",)),
+        vertex_attributes=vertex_attributes(ctx.device.vk, ("position", "uv") if cutout else ("position",)),
+        fragment_constants=(ctx.material_features,) if cutout else (),
         cull_back=not ctx.material_features & FEATURE_DOUBLE_SIDED,
         color_attachments=0,
         depth_bias=SHADOW_DEPTH_BIAS,
     )
-    plain = graphics_pipeline(ctx.device, GraphicsPipelineSpec(shader, None, **base))
+    plain = graphics_pipeline(ctx.device, GraphicsPipelineSpec(shader, fragment, **base))
     try:
-        mirrored = graphics_pipeline(ctx.device, GraphicsPipelineSpec(shader, None, front_face_ccw=False, **base))
+        mirrored = graphics_pipeline(ctx.device, GraphicsPipelineSpec(shader, fragment, front_face_ccw=False, **base))
     except BaseException:
         ctx.device.vk.vkDestroyPipeline(ctx.device.handle, plain, None)
         raise

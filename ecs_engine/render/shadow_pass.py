@@ -17,8 +17,10 @@ shaders specialised without shadows (FEATURE_SHADOWS).
 A point light's six cube faces are layers of the same array, each widened by a few texels
 (shadow_views.py's CUBE_MARGIN); the lighting picks the face and filters within it.
 
-Not yet: PCSS (drawn as PCF), alpha cutouts in the maps, and the indirect mode's GPU cull per
-view (it draws its shadows with the instanced path's CPU culling).
+Alpha-masked materials cut their holes in the maps (chunk_paths.py's shadow_pipelines).
+
+Not yet: PCSS (drawn as PCF) and the indirect mode's GPU cull per view (it draws its shadows
+with the instanced path's CPU culling).
 """
 
 from __future__ import annotations
