@@ -10,7 +10,8 @@ pays only for the shadows it asks for; meshes cast and receive them unless tagge
   position along its normal, in texels of the map, so that neither depends on the resolution;
 - `filter`: SHADOW_HARD, SHADOW_PCF (the default: percentage-closer filtering) or SHADOW_PCSS
   (contact-hardening: the penumbra widens with the receiver's distance from its caster);
-- `softness`: the PCF kernel's radius in texels, or for PCSS the light's size in world units.
+- `softness`: the PCF kernel's radius in texels; for PCSS the light's size in world units (a
+  directional light's: its width per unit of distance, e.g. 0.02 for a soft sun).
 """
 
 from __future__ import annotations

@@ -15,3 +15,4 @@ layout(std430, set = SET_FRAME, binding = BINDING_CLUSTERS) readonly buffer Clus
 layout(std430, set = SET_FRAME, binding = BINDING_SHADOW_VIEWS) readonly buffer ShadowViews { ShadowView shadow_views[]; };
 layout(set = SET_FRAME, binding = BINDING_SHADOW_MAP) uniform sampler2DArrayShadow shadow_map;
 layout(set = SET_FRAME, binding = BINDING_SHADOW_MAP_HARD) uniform sampler2DArrayShadow shadow_map_hard;
+layout(set = SET_FRAME, binding = BINDING_SHADOW_DEPTH) uniform sampler2DArray shadow_depth;

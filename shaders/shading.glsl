@@ -113,6 +113,51 @@ float shadow_tap(bool hard, vec2 uv, float layer, float ref) {
                 : textureGrad(shadow_map, at, vec2(0.0), vec2(0.0));
 }
 
+// A depth of view v back to a distance from the light (along its axis): depth = P22 * z + P23
+// orthographic (z = -distance), P22 + P23 / distance perspective (SHADOW_VIEW.depth_model).
+float light_distance(ShadowView v, float depth) {
+    return v.info.w == 0u ? (v.depth_model.y - depth) / v.depth_model.x
+                          : v.depth_model.y / max(depth - v.depth_model.x, 1e-9);
+}
+
+// Percentage-closer soft shadows (R. Fernando, 2005): the average depth of the casters around
+// the receiver (a 5 x 5 search over PCSS_SEARCH texels) gives the penumbra by similar triangles,
+// (receiver - blocker) * size / blocker for a spot or point light of size `softness`, (receiver
+// - blocker) * softness for a directional one (its width per unit of distance); then PCF over
+// that width: contact shadows stay sharp, far ones spread.
+const float PCSS_SEARCH = 12.0;
+const float PCSS_MAX = 24.0;  // the widest filter, in texels
+float pcss(ShadowView v, vec2 uv, float layer, float ref, float depth) {
+    vec2 texel = vec2(1.0 / float(v.info.z));
+    float sum = 0.0, found = 0.0;
+    for (int y = -2; y <= 2; ++y) {
+        for (int x = -2; x <= 2; ++x) {
+            vec2 at = uv + vec2(x, y) * texel * (PCSS_SEARCH / 2.0);
+            float z = textureGrad(shadow_depth, vec3(at, layer), vec2(0.0), vec2(0.0)).r;
+            if (z > ref) {   // reverse-Z: nearer the light than the receiver
+                sum += z;
+                found += 1.0;
+            }
+        }
+    }
+    if (found == 0.0) {
+        return 1.0;
+    }
+    float receiver = light_distance(v, depth), blocker = light_distance(v, sum / found);
+    float gap = max(receiver - blocker, 0.0);
+    bool perspective = v.info.w != 0u;
+    float penumbra = perspective ? gap * v.params.w / max(blocker, 1e-4) : gap * v.params.w;
+    float texel_world = v.depth_model.z * (perspective ? receiver : 1.0);
+    float radius = clamp(penumbra / max(texel_world, 1e-9), 1.0, PCSS_MAX);
+    float lit = 0.0;
+    for (int y = -2; y <= 2; ++y) {
+        for (int x = -2; x <= 2; ++x) {
+            lit += shadow_tap(false, uv + vec2(x, y) * texel * (radius / 2.0), layer, ref);
+        }
+    }
+    return lit / 25.0;
+}
+
 // How much of light `light` reaches p (normal n) past its casters: 1 without shadows. A
 // directional light's cascade is picked by p's view depth (past the last one nothing is
 // shadowed), a point light's cube face by the direction from the light.
@@ -158,6 +203,9 @@ float light_shadow(Light light, vec3 p, vec3 n) {
     float layer = float(v.info.x);
     if (v.info.y == SHADOW_HARD) {
         return shadow_tap(true, uv, layer, ref);
+    }
+    if (v.info.y == SHADOW_PCSS) {
+        return pcss(v, uv, layer, ref, ndc.z);
     }
     // PCF: 3 x 3 taps `softness` texels apart, each a bilinear 2 x 2 comparison
     vec2 step = vec2(v.params.w / float(v.info.z));

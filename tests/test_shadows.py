@@ -249,3 +249,54 @@ def test_alpha_cutouts_cut_holes_in_the_shadow():
     shadowed, lit = under & seen & inner & solid, under & seen & inner & ~solid
     assert shadowed.sum() > 10 and lit.sum() > 10
     assert bright[shadowed].max() < bright[lit].min() - 40
+
+
+def penumbra_widths(gpu, filter_: int) -> tuple[float, float]:
+    """A 4-unit wall (0.8 wide) under a sun 45 degrees from straight down, seen from straight
+    above (orthographic): the width (world units) of its shadow's side edge near its foot and
+    near the shadow's far end."""
+    from ecs_engine.components import ORTHOGRAPHIC, Camera
+
+    world = World()
+    cube = gpu.meshes.add(cube_mesh())
+    world.spawn(Transform(position=(0.0, -0.5, 0.0), scale=(40.0, 1.0, 40.0)), Mesh(handle=cube))
+    world.spawn(Transform(position=(0.0, 2.0, 0.0), scale=(0.3, 4.0, 0.8)), Mesh(handle=cube, material=1))
+    world.spawn(
+        Transform(rotation=look_rotation((1.0, -1.0, 0.0))),
+        DirectionalLight(illuminance=0.8),
+        Shadow(resolution=1024, cascades=1, distance=20.0, filter=filter_, softness=0.05 if filter_ == 2 else 1.5),
+    )
+    world.spawn(
+        Transform(position=(2.0, 10.0, 0.0), rotation=look_rotation((0.0, -1.0, -1e-3))),
+        Camera(projection=ORTHOGRAPHIC, height=3.0, near=0.1, far=30.0),
+    )
+    image, _ = render(gpu, world)
+    cam = camera_matrices(world, W / H)
+    vp = cam.projection.astype(np.float64) @ cam.view.astype(np.float64)
+    brightness = image.mean(axis=-1)
+
+    def profile(x: float) -> np.ndarray:
+        z = np.arange(0.0, 1.2, 0.005)
+        p = np.c_[np.full_like(z, x), np.zeros_like(z), z] - cam.position
+        c = np.c_[p, np.ones(len(z))] @ vp.T
+        px = np.clip(((c[:, 0] / c[:, 3]) * 0.5 + 0.5) * W, 0, W - 1).astype(int)
+        py = np.clip(((c[:, 1] / c[:, 3]) * 0.5 + 0.5) * H, 0, H - 1).astype(int)
+        return brightness[py, px]
+
+    widths = []
+    for x in (0.6, 3.4):
+        b = profile(x)
+        dark, lit = b[0], b[-20:].mean()
+        assert lit - dark > 60, (x, dark, lit)  # the shadow is there, its edge inside the profile
+        between = (b > dark + 0.1 * (lit - dark)) & (b < lit - 0.1 * (lit - dark))
+        widths.append(between.sum() * 0.005)
+    return widths[0], widths[1]
+
+
+def test_pcss_hardens_at_contact_and_softens_away_from_it():
+    with headless_gpu(W, H) as gpu:
+        pcf_near, pcf_far = penumbra_widths(gpu, 1)
+        pcss_near, pcss_far = penumbra_widths(gpu, 2)
+    assert pcss_far > 2.0 * max(pcss_near, 0.03), (pcss_near, pcss_far)
+    assert pcss_far > 3.0 * pcf_far, (pcf_far, pcss_far)
+    assert pcf_far < 2.0 * max(pcf_near, 0.03)  # PCF's edge is as wide everywhere

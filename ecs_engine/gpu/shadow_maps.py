@@ -2,9 +2,10 @@
 map; render/shadow_views.py), square, the depth-only render pass that draws a layer, a
 framebuffer per layer, and the view and samplers the lighting reads them through.
 
-Depth is reverse-Z, cleared to 0 (far); the samplers compare with GREATER_OR_EQUAL, so a
-receiver whose depth is at least the nearest caster's is lit. The filtering one is linear (each
-tap a bilinear 2 x 2 comparison: percentage-closer filtering in hardware), the hard one nearest.
+Depth is reverse-Z, cleared to 0 (far); the comparison samplers compare with GREATER_OR_EQUAL,
+so a receiver whose depth is at least the nearest caster's is lit. The filtering one is linear
+(each tap a bilinear 2 x 2 comparison: percentage-closer filtering in hardware), the hard one
+nearest; a third reads the depths themselves (PCSS looks for its blockers with it).
 Frames in flight share the image: the render pass's dependencies order this frame's writes
 after the previous frame's reads and before this frame's lighting.
 """
@@ -135,7 +136,8 @@ class ShadowMaps:
                         None,
                     )
                 )
-            for filtering in (vk.VK_FILTER_LINEAR, vk.VK_FILTER_NEAREST):
+            kinds = ((vk.VK_FILTER_LINEAR, True), (vk.VK_FILTER_NEAREST, True), (vk.VK_FILTER_NEAREST, False))
+            for filtering, compare in kinds:
                 self.samplers.append(
                     vk.vkCreateSampler(
                         device.handle,
@@ -145,7 +147,7 @@ class ShadowMaps:
                             addressModeU=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
                             addressModeV=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
                             addressModeW=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-                            compareEnable=vk.VK_TRUE,
+                            compareEnable=vk.VK_TRUE if compare else vk.VK_FALSE,
                             compareOp=vk.VK_COMPARE_OP_GREATER_OR_EQUAL,
                         ),
                         None,
@@ -156,7 +158,8 @@ class ShadowMaps:
             raise
 
     def image_infos(self) -> list[Any]:
-        """VkDescriptorImageInfo of the array with the filtering sampler, then the hard one."""
+        """VkDescriptorImageInfo of the array with the filtering comparison sampler, the hard
+        (nearest) one, and the plain nearest one that reads depths."""
         vk = self.vk
         layout = vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL
         return [

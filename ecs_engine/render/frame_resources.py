@@ -21,6 +21,7 @@ from .layouts import (
     BINDING_INSTANCES,
     BINDING_LIGHTS,
     BINDING_MATERIALS,
+    BINDING_SHADOW_DEPTH,
     BINDING_SHADOW_MAP,
     BINDING_SHADOW_MAP_HARD,
     BINDING_SHADOW_VIEWS,
@@ -54,11 +55,11 @@ def frame_sets(device: Device, frames: int) -> tuple[DescriptorSetLayout, Descri
         [(BINDING_GLOBALS, uniform, stages)]
         + [(b, ssbo, stages) for b in buffers]
         + [(BINDING_TEXTURES, sampler, vk.VK_SHADER_STAGE_FRAGMENT_BIT, TEXTURE_PAGES)]
-        + [(b, sampler, stages) for b in (BINDING_SHADOW_MAP, BINDING_SHADOW_MAP_HARD)],
+        + [(b, sampler, stages) for b in (BINDING_SHADOW_MAP, BINDING_SHADOW_MAP_HARD, BINDING_SHADOW_DEPTH)],
     )
     try:
         pool = DescriptorPool(
-            device, frames, {uniform: frames, ssbo: len(buffers) * frames, sampler: (TEXTURE_PAGES + 2) * frames}
+            device, frames, {uniform: frames, ssbo: len(buffers) * frames, sampler: (TEXTURE_PAGES + 3) * frames}
         )
     except BaseException:
         layout.destroy()
@@ -133,9 +134,10 @@ class FrameResources:
     def name_shadow_maps(self, device: Device, maps: Any) -> None:
         """Point the set at `maps` (a gpu.shadow_maps.ShadowMaps), filtering and hard samplers."""
         self.shadow_maps = maps
-        linear, hard = maps.image_infos()
-        write_images(device, self.descriptor_set, BINDING_SHADOW_MAP, [linear])
-        write_images(device, self.descriptor_set, BINDING_SHADOW_MAP_HARD, [hard])
+        for binding, info in zip(
+            (BINDING_SHADOW_MAP, BINDING_SHADOW_MAP_HARD, BINDING_SHADOW_DEPTH), maps.image_infos(), strict=True
+        ):
+            write_images(device, self.descriptor_set, binding, [info])
 
     def ensure_capacity(
         self, device: Device, pages: TexturePages, instances: int, lights: int, materials: int, shadow_views: int = 0

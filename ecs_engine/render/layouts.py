@@ -161,6 +161,12 @@ SHADOW_VIEW = Struct(
             "z far (a cascade: its slice's far view distance), w softness (PCF: texels; PCSS: light size)",
         ),
         ("info", "uvec4", "x layer, y SHADOW_* filter, z resolution, w 0 orthographic, 1 spot, 2 cube face"),
+        (
+            "depth_model",
+            "vec4",
+            "x P22, y P23 of the projection (a light distance from a depth), z a texel's world size "
+            "(perspective: at distance 1), w 0",
+        ),
     ],
     doc="One shadow view (render/shadow_views.py): a cascade, a spot light's map, a cube face.",
 )
@@ -181,8 +187,8 @@ SET_FRAME, SET_INDIRECT = 0, 1
 BINDING_GLOBALS, BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS, BINDING_TEXTURES = 0, 1, 2, 3, 4
 BINDING_CLUSTERS = 5  # clustered lights (light_clusters.py): distance bins and tile masks
 # shadows (render/shadow_pass.py): the views' rows, the map array with a filtering and a nearest
-# comparison sampler (PCF and PCSS; hard shadows)
-BINDING_SHADOW_VIEWS, BINDING_SHADOW_MAP, BINDING_SHADOW_MAP_HARD = 6, 7, 8
+# comparison sampler (PCF and PCSS; hard shadows), and read as depths (PCSS's blocker search)
+BINDING_SHADOW_VIEWS, BINDING_SHADOW_MAP, BINDING_SHADOW_MAP_HARD, BINDING_SHADOW_DEPTH = 6, 7, 8, 9
 TEXTURE_PAGES = 18  # texture_pages.py: two views (sRGB, UNORM) per size class, 16 to 4096 texels
 BINDING_IDS, BINDING_KEYS, BINDING_DRAW_STATE, BINDING_COMMANDS = 0, 1, 2, 3
 # shading models: the values of Material.kind.x and bits 0-5 of the mesh pipelines' MATERIAL_FEATURES
@@ -253,6 +259,7 @@ DEFINES = {
     "BINDING_SHADOW_VIEWS": BINDING_SHADOW_VIEWS,
     "BINDING_SHADOW_MAP": BINDING_SHADOW_MAP,
     "BINDING_SHADOW_MAP_HARD": BINDING_SHADOW_MAP_HARD,
+    "BINDING_SHADOW_DEPTH": BINDING_SHADOW_DEPTH,
     "SHADOW_HARD": SHADOW_HARD,
     "SHADOW_PCF": SHADOW_PCF,
     "SHADOW_PCSS": SHADOW_PCSS,

@@ -19,8 +19,8 @@ A point light's six cube faces are layers of the same array, each widened by a f
 
 Alpha-masked materials cut their holes in the maps (chunk_paths.py's shadow_pipelines).
 
-Not yet: PCSS (drawn as PCF) and the indirect mode's GPU cull per view (it draws its shadows
-with the instanced path's CPU culling).
+Not yet: the indirect mode's GPU cull per view (it draws its shadows with the instanced path's
+CPU culling).
 """
 
 from __future__ import annotations
@@ -260,6 +260,7 @@ class ShadowPass:
                 bias, offset = p[2, 2] * v.bias * v.texel, v.normal_offset * v.texel
             row["params"] = (bias, offset, v.far if np.isfinite(v.far) else 3.0e38, v.softness)
             row["info"] = (v.layer, v.filter, v.resolution, PROJECTIONS[v.kind])
+            row["depth_model"] = (p[2, 2], p[2, 3], v.texel, 0.0)
 
     def record(self, cb: Any, views: list[ShadowView], secondaries: list[list[Any]]) -> None:
         """Each view's layer drawn from its secondaries (raw calls); the first time the maps are
