@@ -64,7 +64,6 @@ class ShadowPass:
             self.destroy()
             raise
         self.cleared = False  # the layers' layout made by a first (clearing) pass
-        self.generation = 0  # counts new maps: the frame sets name them again
         self._view_sets: list[list[tuple[Buffer, Any, Any]]] = [[] for _ in range(frames)]  # (globals, set, array)
         self._targets: dict[int, TargetState] = {}
         self._pool_sets = 0  # view sets the pool holds per frame slot
@@ -92,7 +91,6 @@ class ShadowPass:
         self.maps.destroy()
         self.maps = new
         self.cleared = False
-        self.generation += 1
         self._targets.clear()
         return True
 
