@@ -300,3 +300,36 @@ def test_pcss_hardens_at_contact_and_softens_away_from_it():
     assert pcss_far > 2.0 * max(pcss_near, 0.03), (pcss_near, pcss_far)
     assert pcss_far > 3.0 * pcf_far, (pcf_far, pcss_far)
     assert pcf_far < 2.0 * max(pcf_near, 0.03)  # PCF's edge is as wide everywhere
+
+
+def test_cascades_do_not_shimmer_when_the_camera_moves():
+    """An orthographic camera looking straight down moves by whole pixels: the image moves with
+    it and nothing else changes, shadow edges included (the cascades' texel grid stays put in
+    the world). Without the snap the edges' pixels change as the map's texels slide."""
+    from ecs_engine.components import ORTHOGRAPHIC, Camera
+    from ecs_engine.render.materials import Material, materials
+
+    pixel = 3.0 / H  # world units per pixel of a 3-unit-high orthographic view
+    shots = []
+    with headless_gpu(W, H) as gpu:
+        cube = gpu.meshes.add(cube_mesh())
+        for step in (0, 7):
+            world = World()
+            world.spawn(Transform(position=(0.0, -0.5, 0.0), scale=(40.0, 1.0, 40.0)), Mesh(handle=cube))
+            matte = materials(world).add(Material("matte", "lambert", (0.8, 0.4, 0.3, 1.0)))  # no view-dependent light
+            world.spawn(Transform(position=(0.0, 0.75, 0.0), scale=(0.6, 1.5, 0.6)), Mesh(handle=cube, material=matte))
+            world.spawn(
+                Transform(rotation=look_rotation((0.7, -1.0, 0.35))),
+                DirectionalLight(illuminance=0.8),
+                Shadow(resolution=512, cascades=2, distance=15.0, filter=0),  # hard: every texel shows
+            )
+            world.spawn(
+                Transform(position=(0.6 + step * pixel, 10.0, 0.0), rotation=look_rotation((0.0, -1.0, -1e-6))),
+                Camera(projection=ORTHOGRAPHIC, height=3.0, near=0.1, far=30.0),
+            )
+            shots.append(render(gpu, world)[0])
+    # the camera moved 7 pixels towards +x: the world moved 7 pixels left in the image
+    before, after = shots[0][:, 7:], shots[1][:, :-7]
+    dark = before.mean(axis=-1) < 120
+    assert dark.sum() > 100  # the shadow is in the compared part
+    assert np.abs(before.astype(int) - after).max() <= 2
