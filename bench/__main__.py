@@ -29,6 +29,7 @@ REGISTRY: dict[str, str] = {
     "numerics": "numerics",
     "soak": "soak",
     "lights": "lights",
+    "shadows": "shadows",
 }
 
 # One line each for the list in the usage text (the modules are not imported to print it).
@@ -39,6 +40,7 @@ SUMMARY: dict[str, str] = {
     "numerics": "spring integrators' error against run time, render precision against distance",
     "soak": "the editor's scene for 100,000 frames with churn and settings switches: memory flat? (Vulkan)",
     "lights": "GPU ms against light count (1 to 16,384), every light per fragment vs clustered (Vulkan)",
+    "shadows": "CPU and GPU ms of each light type and filter casting, 10k to 1M entities, 1 and 16 threads (Vulkan)",
 }
 
 # The commands that work from any folder once ecs_engine is installed.
