@@ -13,7 +13,7 @@ from __future__ import annotations
 import sys
 import time
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from typing import Any, TextIO
 
 
@@ -69,3 +69,30 @@ def save_figure(fig: Any, path: Any) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+@contextmanager
+def headless_gpu(width: int, height: int) -> Iterator[tuple[Any, Any, Any]]:
+    """(device, offscreen target, mesh registry) for a Vulkan benchmark, destroyed in reverse
+    order however the benchmark ends, including when one of them fails to be made."""
+    from ecs_engine.gpu.device import Device
+    from ecs_engine.gpu.instance import Instance
+    from ecs_engine.gpu.offscreen import OffscreenTarget
+    from ecs_engine.render.mesh_registry import MeshRegistry
+
+    with ExitStack() as made:
+        instance = Instance()
+        made.callback(instance.destroy)
+        device = Device(instance)
+        made.callback(device.destroy)
+        target = OffscreenTarget(device, width, height)
+        made.callback(target.destroy)
+        meshes = MeshRegistry(device)
+        made.callback(meshes.destroy)
+        yield device, target, meshes
+
+
+def ratio_verdict(measured: float | None, baseline: float | None, limit: float) -> dict[str, Any]:
+    """A ratio target's entries: measured / baseline (None without both), the limit, whether met."""
+    ratio = measured / baseline if measured is not None and baseline else None
+    return {"ratio": ratio, "limit": limit, "met": None if ratio is None else ratio <= limit}

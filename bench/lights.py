@@ -28,6 +28,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from . import ratio_verdict
+
 COUNTS = (1, 6, 16, 64, 256, 1024, 4096, 16384)
 QUICK_COUNTS = (1, 6, 64, 256)
 CULLINGS = ("loop", "clustered", "deferred", "auto")
@@ -75,35 +77,21 @@ def measure(gpu: Any, n: int, culling: str, warmup: int, frames: int) -> dict[st
 
 
 def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dict[str, Any]:
-    from ecs_engine.gpu.device import Device
-    from ecs_engine.gpu.instance import Instance
-    from ecs_engine.gpu.offscreen import OffscreenTarget
-    from ecs_engine.render.mesh_registry import MeshRegistry
+    from . import headless_gpu
 
     counts = QUICK_COUNTS if args.quick else COUNTS
     warmup, frames = (2, 4) if args.quick else (15, 60)
     width, height = (320, 180) if args.quick else (args.width, args.height)
-    instance = Instance()
-    device = Device(instance)
-    target = OffscreenTarget(device, width, height)
-    meshes = MeshRegistry(device)
     runs: dict[tuple[int, str], list[dict[str, Any]]] = {}
     progress.total = 2 * len(counts) * len(CULLINGS)
-    try:
+    with headless_gpu(width, height) as gpu:
         for round_ in range(2):
             order = CULLINGS if round_ == 0 else CULLINGS[::-1]
             for n in counts:
                 for culling in order:
                     with progress.step(f"round {round_ + 1}: {n:,} lights, {culling}"):
-                        runs.setdefault((n, culling), []).append(
-                            measure((device, target, meshes), n, culling, warmup, frames)
-                        )
-        device_info = device.info.__dict__
-    finally:
-        meshes.destroy()
-        target.destroy()
-        device.destroy()
-        instance.destroy()
+                        runs.setdefault((n, culling), []).append(measure(gpu, n, culling, warmup, frames))
+        device_info = gpu[0].info.__dict__
     results = [summarise(n, culling, measured) for (n, culling), measured in runs.items()]
     doc = {
         "benchmark": "lights",
@@ -137,15 +125,12 @@ def summarise(n: int, culling: str, measured: list[dict[str, Any]]) -> dict[str,
 def target_entry(results: list[dict[str, Any]]) -> dict[str, Any]:
     by = {(r["lights"], r["culling"]): r["gpu_ms"] for r in results}
     target, base = by.get((TARGET_LIGHTS, "auto")), by.get((BASELINE_LIGHTS, "auto"))
-    ratio = target / base if target is not None and base else None
     return {
         "lights": TARGET_LIGHTS,
         "baseline_lights": BASELINE_LIGHTS,
         "gpu_ms": target,
         "baseline_gpu_ms": base,
-        "ratio": ratio,
-        "limit": TARGET_RATIO,
-        "met": None if ratio is None else ratio <= TARGET_RATIO,
+        **ratio_verdict(target, base, TARGET_RATIO),
     }
 
 

@@ -28,6 +28,8 @@ import numpy as np
 
 from ecs_engine.jobs import JobPool, default_threads
 
+from . import headless_gpu
+
 THREADS = default_threads()
 PYTHON_MAX = 10_000
 # Up to SMALL_MAX entities a configuration runs SMALL_FRAMES timed frames (a 100-entity frame
@@ -50,20 +52,12 @@ def sweep(
     from ecs_engine.app.report import describe_device
     from ecs_engine.app.scenes import default_schedule, scene_builder
     from ecs_engine.ecs.world import World
-    from ecs_engine.gpu.device import Device
-    from ecs_engine.gpu.instance import Instance
     from ecs_engine.gpu.native_recorder import NativeRecorder
-    from ecs_engine.gpu.offscreen import OffscreenTarget
-    from ecs_engine.render.mesh_registry import MeshRegistry
     from ecs_engine.render.renderer import Renderer
 
     rows = []
-    instance = Instance()
-    device = Device(instance)
-    target = OffscreenTarget(device, *size)
-    meshes = MeshRegistry(device)
-    native = NativeRecorder(device)
-    try:
+    with headless_gpu(*size) as (device, target, meshes):
+        native = NativeRecorder(device)
         world = World()
         scene_builder("scaling", entities)(world, meshes.add)
         schedule = default_schedule()
@@ -100,11 +94,6 @@ def sweep(
                         )
             finally:
                 renderer.destroy()
-    finally:
-        meshes.destroy()
-        target.destroy()
-        device.destroy()
-        instance.destroy()
     return rows
 
 
@@ -318,23 +307,10 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
 
 def measure_driver_floor(draws: int, size: tuple[int, int]) -> dict[str, Any]:
     """See bench/driver_floor.py: what the driver alone costs per per_entity draw."""
-    from ecs_engine.gpu.device import Device
-    from ecs_engine.gpu.instance import Instance
-    from ecs_engine.gpu.offscreen import OffscreenTarget
-    from ecs_engine.render.mesh_registry import MeshRegistry
     from ecs_engine.render.primitives import cube_mesh
 
     from .driver_floor import measure as floor
 
-    instance = Instance()
-    device = Device(instance)
-    target = OffscreenTarget(device, *size)
-    meshes = MeshRegistry(device)
-    try:
+    with headless_gpu(*size) as (device, target, meshes):
         meshes.add(cube_mesh())
         return floor(device, target, meshes, draws)
-    finally:
-        meshes.destroy()
-        target.destroy()
-        device.destroy()
-        instance.destroy()

@@ -25,6 +25,8 @@ from typing import Any
 
 from ecs_engine.jobs import default_threads
 
+from . import ratio_verdict
+
 COUNTS = (10_000, 100_000, 1_000_000)
 QUICK_COUNTS = (1_000,)
 # (light, filter): "none" is the same scene with the light casting nothing
@@ -40,13 +42,16 @@ TARGET_ENTITIES, TARGET_RATIO = 100_000, 2.0
 WIDTH, HEIGHT = 640, 360
 
 
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--counts", type=int, nargs="+", help="entity counts (default 10k, 100k, 1M)")
-
-
 def thread_counts() -> tuple[int, ...]:
     most = min(16, default_threads())
     return (1,) if most == 1 else (1, most)
+
+
+THREADS = max(thread_counts())  # the most a configuration uses (recorded with the machine)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--counts", type=int, nargs="+", help="entity counts (default 10k, 100k, 1M)")
 
 
 def add_light(world: Any, light: str, filter_: str) -> None:
@@ -100,35 +105,23 @@ def measure(gpu: Any, n: int, light: str, filter_: str, threads: int, warmup: in
 
 
 def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dict[str, Any]:
-    from ecs_engine.gpu.device import Device
-    from ecs_engine.gpu.instance import Instance
-    from ecs_engine.gpu.offscreen import OffscreenTarget
-    from ecs_engine.render.mesh_registry import MeshRegistry
+    from . import headless_gpu
 
     counts = tuple(args.counts) if getattr(args, "counts", None) else (QUICK_COUNTS if args.quick else COUNTS)
     warmup, frames = (2, 4) if args.quick else (8, 30)
     threads = thread_counts()
-    instance = Instance()
-    device = Device(instance)
-    target = OffscreenTarget(device, WIDTH, HEIGHT)
-    meshes = MeshRegistry(device)
     runs: dict[tuple[int, int, str, str], list[dict[str, Any]]] = {}
     progress.total = 2 * len(counts) * len(threads) * len(CONFIGS)
-    try:
+    with headless_gpu(WIDTH, HEIGHT) as gpu:
         for round_ in range(2):
             for n in counts:
                 for t in threads:
                     for light, filter_ in CONFIGS if round_ == 0 else CONFIGS[::-1]:
                         with progress.step(f"round {round_ + 1}: {n:,} entities, {t} threads, {light} {filter_}"):
                             runs.setdefault((n, t, light, filter_), []).append(
-                                measure((device, target, meshes), n, light, filter_, t, warmup, frames)
+                                measure(gpu, n, light, filter_, t, warmup, frames)
                             )
-        device_info = device.info.__dict__
-    finally:
-        meshes.destroy()
-        target.destroy()
-        device.destroy()
-        instance.destroy()
+        device_info = gpu[0].info.__dict__
     results = [summarise(key, measured) for key, measured in runs.items()]
     doc = {
         "benchmark": "shadows",
@@ -170,15 +163,12 @@ def target_entry(results: list[dict[str, Any]], threads: int) -> dict[str, Any]:
     by = {(r["entities"], r["threads"], r["light"], r["filter"]): r["cpu_ms"] for r in results}
     shadowed = by.get((TARGET_ENTITIES, threads, "directional", "pcf"))
     base = by.get((TARGET_ENTITIES, threads, "none", "-"))
-    ratio = shadowed / base if shadowed is not None and base else None
     return {
         "entities": TARGET_ENTITIES,
         "threads": threads,
         "cpu_ms": shadowed,
         "baseline_cpu_ms": base,
-        "ratio": ratio,
-        "limit": TARGET_RATIO,
-        "met": None if ratio is None else ratio <= TARGET_RATIO,
+        **ratio_verdict(shadowed, base, TARGET_RATIO),
     }
 
 
