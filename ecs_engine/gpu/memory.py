@@ -96,14 +96,23 @@ def upload(device: Device, data: np.ndarray, usage: int) -> Buffer:
 
 
 class Image:
-    """A 2D device-local image with one view (colour or depth attachments, readback source)."""
+    """A 2D device-local image with one view (colour or depth attachments, readback source); with
+    `layers`, an array of that many layers whose view is a 2D array (layer_view gives one layer)."""
 
     def __init__(
-        self, device: Device, width: int, height: int, fmt: int, usage: int, aspect: int, samples: int = 1
+        self,
+        device: Device,
+        width: int,
+        height: int,
+        fmt: int,
+        usage: int,
+        aspect: int,
+        samples: int = 1,
+        layers: int | None = None,
     ) -> None:
         vk = device.vk
         self.device = device
-        self.width, self.height, self.format = width, height, fmt
+        self.width, self.height, self.format, self.aspect = width, height, fmt, aspect
         self.handle = vk.vkCreateImage(
             device.handle,
             vk.VkImageCreateInfo(
@@ -111,7 +120,7 @@ class Image:
                 format=fmt,
                 extent=vk.VkExtent3D(width, height, 1),
                 mipLevels=1,
-                arrayLayers=1,
+                arrayLayers=layers or 1,
                 samples=samples,  # VkSampleCountFlagBits: the count itself
                 tiling=vk.VK_IMAGE_TILING_OPTIMAL,
                 usage=usage,
@@ -123,18 +132,27 @@ class Image:
         req = vk.vkGetImageMemoryRequirements(device.handle, self.handle)
         self.allocation = device.allocator.allocate(req, DEVICE, "image")
         vk.vkBindImageMemory(device.handle, self.handle, self.allocation.memory, self.allocation.offset)
-        self.view = vk.vkCreateImageView(
-            device.handle,
+        kind = vk.VK_IMAGE_VIEW_TYPE_2D if layers is None else vk.VK_IMAGE_VIEW_TYPE_2D_ARRAY
+        self.view = self._view(kind, 0, layers or 1)
+
+    def _view(self, kind: int, first: int, count: int) -> Any:
+        vk = self.device.vk
+        return vk.vkCreateImageView(
+            self.device.handle,
             vk.VkImageViewCreateInfo(
                 image=self.handle,
-                viewType=vk.VK_IMAGE_VIEW_TYPE_2D,
-                format=fmt,
+                viewType=kind,
+                format=self.format,
                 subresourceRange=vk.VkImageSubresourceRange(
-                    aspectMask=aspect, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=1
+                    aspectMask=self.aspect, baseMipLevel=0, levelCount=1, baseArrayLayer=first, layerCount=count
                 ),
             ),
             None,
         )
+
+    def layer_view(self, layer: int) -> Any:
+        """A 2D view of one layer (an attachment), for the caller to destroy before the image."""
+        return self._view(self.device.vk.VK_IMAGE_VIEW_TYPE_2D, layer, 1)
 
     def destroy(self) -> None:
         if self.handle is None:

@@ -15,7 +15,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from .attachment import attachment
-from .memory import DEVICE
+from .memory import Image
 
 if TYPE_CHECKING:
     from .device import Device
@@ -77,52 +77,22 @@ class ShadowMaps:
         vk = self.vk = device.vk
         self.device = device
         self.resolution, self.layers = int(resolution), int(layers)
-        self.image: Any = None
-        self.allocation: Any = None
-        self.array_view: Any = None
+        self.image: Image | None = None
         self.layer_views: list[Any] = []
         self.framebuffers: list[Any] = []
         self.samplers: list[Any] = []
-        fmt = getattr(vk, SHADOW_FORMAT_NAME)
-        aspect = vk.VK_IMAGE_ASPECT_DEPTH_BIT
         try:
-            self.image = vk.vkCreateImage(
-                device.handle,
-                vk.VkImageCreateInfo(
-                    imageType=vk.VK_IMAGE_TYPE_2D,
-                    format=fmt,
-                    extent=vk.VkExtent3D(self.resolution, self.resolution, 1),
-                    mipLevels=1,
-                    arrayLayers=self.layers,
-                    samples=1,
-                    tiling=vk.VK_IMAGE_TILING_OPTIMAL,
-                    usage=vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT,
-                    sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE,
-                    initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
-                ),
-                None,
+            self.image = Image(
+                device,
+                self.resolution,
+                self.resolution,
+                getattr(vk, SHADOW_FORMAT_NAME),
+                vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT,
+                vk.VK_IMAGE_ASPECT_DEPTH_BIT,
+                layers=self.layers,
             )
-            req = vk.vkGetImageMemoryRequirements(device.handle, self.image)
-            self.allocation = device.allocator.allocate(req, DEVICE, "image")
-            vk.vkBindImageMemory(device.handle, self.image, self.allocation.memory, self.allocation.offset)
-
-            def view(kind: int, first: int, count: int) -> Any:
-                return vk.vkCreateImageView(
-                    device.handle,
-                    vk.VkImageViewCreateInfo(
-                        image=self.image,
-                        viewType=kind,
-                        format=fmt,
-                        subresourceRange=vk.VkImageSubresourceRange(
-                            aspectMask=aspect, baseMipLevel=0, levelCount=1, baseArrayLayer=first, layerCount=count
-                        ),
-                    ),
-                    None,
-                )
-
-            self.array_view = view(vk.VK_IMAGE_VIEW_TYPE_2D_ARRAY, 0, self.layers)
             for layer in range(self.layers):
-                self.layer_views.append(view(vk.VK_IMAGE_VIEW_TYPE_2D, layer, 1))
+                self.layer_views.append(self.image.layer_view(layer))
                 self.framebuffers.append(
                     vk.vkCreateFramebuffer(
                         device.handle,
@@ -162,9 +132,9 @@ class ShadowMaps:
         (nearest) one, and the plain nearest one that reads depths."""
         vk = self.vk
         layout = vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL
-        return [
-            vk.VkDescriptorImageInfo(sampler=s, imageView=self.array_view, imageLayout=layout) for s in self.samplers
-        ]
+        assert self.image is not None
+        view = self.image.view  # the 2D array of every layer
+        return [vk.VkDescriptorImageInfo(sampler=s, imageView=view, imageLayout=layout) for s in self.samplers]
 
     def destroy(self) -> None:
         vk, handle = self.vk, self.device.handle
@@ -174,11 +144,7 @@ class ShadowMaps:
             vk.vkDestroyFramebuffer(handle, fb, None)
         for v in self.layer_views:
             vk.vkDestroyImageView(handle, v, None)
-        if self.array_view is not None:
-            vk.vkDestroyImageView(handle, self.array_view, None)
         if self.image is not None:
-            vk.vkDestroyImage(handle, self.image, None)
-        if self.allocation is not None:
-            self.device.allocator.free(self.allocation)
+            self.image.destroy()
         self.samplers, self.framebuffers, self.layer_views = [], [], []
-        self.array_view = self.image = self.allocation = None
+        self.image = None

@@ -87,6 +87,13 @@ def spot_cones(inner: np.ndarray, outer: np.ndarray) -> np.ndarray:
     return np.stack([cos_outer, 1.0 / np.maximum(cos_inner - cos_outer, 1e-4)], axis=1)
 
 
+def far_to_near(position: np.ndarray, origin: np.ndarray, eye: np.ndarray) -> np.ndarray:
+    """The order of the positional rows: far to near from `eye` (relative to `origin`), ties in
+    world order (the kernel below sorts the same way, stably)."""
+    to_eye = position - np.asarray(origin, np.float64) - np.asarray(eye, np.float64)
+    return np.argsort(-np.einsum("ij,ij->i", to_eye, to_eye), kind="stable")
+
+
 def write_positional_numpy(
     position: np.ndarray,
     radius: np.ndarray,
@@ -101,8 +108,7 @@ def write_positional_numpy(
 ) -> None:
     """Reference version of the positional kernel: `out` is (n, 16) float32."""
     rel = position - origin
-    to_eye = rel - eye
-    order = np.argsort(-np.einsum("ij,ij->i", to_eye, to_eye), kind="stable")
+    order = far_to_near(position, origin, eye)
     out[:, :3] = rel[order]
     out[:, 3] = radius[order]
     out[:, 4:7] = color[order]
@@ -241,9 +247,7 @@ def write_light_shadows(
     count = sum(len(p) for p in positional)
     if count:
         entity = np.concatenate([p.entity for p in positional if p.entity is not None])
-        position = np.concatenate([p.position for p in positional])
-        to_eye = position - np.asarray(origin, np.float64) - np.asarray(eye_from_origin, np.float64)
-        order = np.argsort(-np.einsum("ij,ij->i", to_eye, to_eye), kind="stable")
+        order = far_to_near(np.concatenate([p.position for p in positional]), origin, eye_from_origin)
         for row, e in enumerate(entity[order].tolist()):
             found = views.get(e)
             if found is not None:

@@ -384,9 +384,9 @@ class Renderer:
         draws, visible, triangles = path.counts(inputs, results)
         draws, visible, triangles = draws + aside[1], visible + aside[2], triangles + aside[3]
         return FrameStats(
-            draws=draws + light_draws + (self.shadows.draws if views else 0),
+            draws=draws + light_draws + self.shadows.draws,
             instances=visible,
-            triangles=triangles + (self.shadows.triangles if views else 0),
+            triangles=triangles + self.shadows.triangles,
             lights=data.light_count,
             gpu_ms=gpu_ms,
             wait_ms=self.frames.last_wait_ms,

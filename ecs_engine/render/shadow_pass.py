@@ -232,6 +232,7 @@ class ShadowPass:
         """The frame's shadow work on the CPU: the views' rows for the lighting, their sets and
         inputs, and the chunk jobs; per view the secondaries record() executes."""
         if not views:
+            self.draws = self.triangles = 0
             return []
         self.write_views(pf.shadow_views.array(SHADOW_VIEW.dtype, len(views)), views)
         inputs = self.view_inputs(views, frame, row_base, data.candidates)
