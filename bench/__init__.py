@@ -96,3 +96,23 @@ def ratio_verdict(measured: float | None, baseline: float | None, limit: float) 
     """A ratio target's entries: measured / baseline (None without both), the limit, whether met."""
     ratio = measured / baseline if measured is not None and baseline else None
     return {"ratio": ratio, "limit": limit, "met": None if ratio is None else ratio <= limit}
+
+
+def timed_frames(world: Any, schedule: Any, renderer: Any, warmup: int, frames: int) -> dict[str, float | None]:
+    """`warmup` then `frames` frames of 1/60 s: the medians of the CPU frame (the schedule and
+    the render, minus waits for the GPU) and of the GPU frame (timestamps, a frame late; None
+    when the device gave none), after the device has finished."""
+    import statistics
+
+    cpu: list[float] = []
+    gpu: list[float] = []
+    for i in range(warmup + frames):
+        t0 = time.perf_counter()
+        schedule.run(world, 1.0 / 60.0)
+        stats = renderer.render(world)
+        if i >= warmup:
+            cpu.append((time.perf_counter() - t0) * 1e3 - stats.wait_ms)
+            if stats.gpu_ms is not None:
+                gpu.append(stats.gpu_ms)
+    renderer.device.wait_idle()
+    return {"cpu_ms": statistics.median(cpu), "gpu_ms": statistics.median(gpu) if gpu else None}

@@ -23,12 +23,10 @@ JSON (schema_version 1): {"benchmark": "lights", "quick", "machine", "device", "
 from __future__ import annotations
 
 import argparse
-import statistics
-import time
 from pathlib import Path
 from typing import Any
 
-from . import ratio_verdict
+from . import ratio_verdict, timed_frames
 
 COUNTS = (1, 6, 16, 64, 256, 1024, 4096, 16384)
 QUICK_COUNTS = (1, 6, 64, 256)
@@ -53,24 +51,13 @@ def measure(gpu: Any, n: int, culling: str, warmup: int, frames: int) -> dict[st
     lights.build(world, meshes.add, lights=n)
     schedule = default_schedule()
     renderer = Renderer(device, target, meshes, light_culling=culling)
-    gpu_ms: list[float] = []
-    cpu_ms: list[float] = []
     try:
-        for i in range(warmup + frames):
-            t0 = time.perf_counter()
-            schedule.run(world, 1.0 / 60.0)
-            stats = renderer.render(world)
-            if i >= warmup:
-                cpu_ms.append((time.perf_counter() - t0) * 1e3 - stats.wait_ms)
-                if stats.gpu_ms is not None:
-                    gpu_ms.append(stats.gpu_ms)
-        device.wait_idle()
+        timed = timed_frames(world, schedule, renderer, warmup, frames)
         clustered, form = renderer.clustered, target.form
     finally:
         renderer.destroy()
     return {
-        "gpu_ms": statistics.median(gpu_ms) if gpu_ms else None,
-        "cpu_ms": statistics.median(cpu_ms),
+        **timed,
         "clustered": clustered,
         "form": form,  # the target's (gpu/render_pass.py): deferred when the opaque meshes were lit in compute
     }

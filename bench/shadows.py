@@ -18,14 +18,12 @@ JSON (schema_version 1): {"benchmark": "shadows", "quick", "machine", "device", 
 from __future__ import annotations
 
 import argparse
-import statistics
-import time
 from pathlib import Path
 from typing import Any
 
 from ecs_engine.jobs import default_threads
 
-from . import ratio_verdict
+from . import ratio_verdict, timed_frames
 
 COUNTS = (10_000, 100_000, 1_000_000)
 QUICK_COUNTS = (1_000,)
@@ -84,24 +82,13 @@ def measure(gpu: Any, n: int, light: str, filter_: str, threads: int, warmup: in
     scene_builder("scaling", n)(world, meshes.add)
     add_light(world, light, filter_)
     schedule = default_schedule()
-    cpu: list[float] = []
-    gpu_ms: list[float] = []
     with JobPool(threads) as pool:
         world.resources[JobPool] = pool
         renderer = Renderer(device, target, meshes, jobs=pool)
         try:
-            for i in range(warmup + frames):
-                t0 = time.perf_counter()
-                schedule.run(world, 1.0 / 60.0)
-                stats = renderer.render(world)
-                if i >= warmup:
-                    cpu.append((time.perf_counter() - t0) * 1e3 - stats.wait_ms)
-                    if stats.gpu_ms is not None:
-                        gpu_ms.append(stats.gpu_ms)
-            device.wait_idle()
+            return timed_frames(world, schedule, renderer, warmup, frames)
         finally:
             renderer.destroy()
-    return {"cpu_ms": statistics.median(cpu), "gpu_ms": statistics.median(gpu_ms) if gpu_ms else None}
 
 
 def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dict[str, Any]:
