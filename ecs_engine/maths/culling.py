@@ -22,6 +22,20 @@ def frustum_planes(projection: np.ndarray, view: np.ndarray) -> np.ndarray:
     return rows[keep] / norms[keep, None]
 
 
+def frustum_planes_many(clip: np.ndarray) -> np.ndarray:
+    """(C, 6, 4) planes of C clip matrices (projection @ view, (C, 4, 4)) at once, all six kept:
+    for views with a finite far plane (shadow cascades), where a frame has several."""
+    m = np.asarray(clip, np.float64)
+    rows = np.stack(
+        [m[:, 3] + m[:, 0], m[:, 3] - m[:, 0], m[:, 3] + m[:, 1], m[:, 3] - m[:, 1], m[:, 3] - m[:, 2], m[:, 2]],
+        axis=1,
+    )
+    norms = np.sqrt((rows[..., :3] ** 2).sum(axis=-1))
+    if not (norms > 1e-12).all():
+        raise ValueError("frustum_planes_many needs finite far planes (use frustum_planes)")
+    return rows / norms[..., None]
+
+
 def spheres_visible(centers: np.ndarray, radii: np.ndarray, planes: np.ndarray) -> np.ndarray:
     """Boolean mask of spheres at least partly inside every plane."""
     dist = centers @ planes[:, :3].T + planes[:, 3]  # (n, k) signed distances

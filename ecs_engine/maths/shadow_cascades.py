@@ -23,6 +23,7 @@ world; the view matrix it returns takes render-relative positions, like the came
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,16 +66,20 @@ def light_rotation(direction: np.ndarray) -> np.ndarray:
     """(3, 3) rows: the light frame's right, up and back axes (back = -direction, the way the
     light comes from), so that R @ p gives a point in the light's frame looking down -Z. Up is
     world +Y projected, or +Z when the light shines (almost) straight up or down."""
-    d = np.asarray(direction, np.float64).reshape(3)
-    n = float(np.linalg.norm(d))
+    x, y, z = (float(v) for v in np.asarray(direction, np.float64).reshape(3))
+    # scalar maths: numpy's cross on 3-vectors costs 20x more, per frame and cascade
+    n = math.sqrt(x * x + y * y + z * z)
     if not (math.isfinite(n) and n > 0.0):
-        raise ValueError(f"a light direction must be finite and non-zero, got {d.tolist()}")
-    back = -d / n
-    up_hint = np.array([0.0, 1.0, 0.0]) if abs(back[1]) < 0.999 else np.array([0.0, 0.0, 1.0])
-    right = np.cross(up_hint, back)
-    right /= np.linalg.norm(right)
-    up = np.cross(back, right)
-    return np.stack([right, up, back])
+        raise ValueError(f"a light direction must be finite and non-zero, got {[x, y, z]}")
+    bx, by, bz = -x / n, -y / n, -z / n
+    if abs(by) < 0.999:  # right = up_hint x back, up_hint +Y
+        rx, ry, rz = bz, 0.0, -bx
+    else:  # up_hint +Z
+        rx, ry, rz = -by, bx, 0.0
+    r = math.sqrt(rx * rx + ry * ry + rz * rz)
+    rx, ry, rz = rx / r, ry / r, rz / r
+    ux, uy, uz = by * rz - bz * ry, bz * rx - bx * rz, bx * ry - by * rx  # back x right
+    return np.array([[rx, ry, rz], [ux, uy, uz], [bx, by, bz]])
 
 
 @dataclass(frozen=True)
@@ -118,32 +123,58 @@ def fit_cascade(
     `direction`; the map has `resolution` texels across. Casters up to `caster_reach` beyond
     the sphere towards the light still cast into it (the depth range grows that way; what lies
     behind the sphere casts nothing into it)."""
+    return fit_cascades(
+        np.reshape(centre, (1, 3)), [radius], origin, direction, resolution, caster_reach, [near], [far]
+    )[0]
+
+
+def fit_cascades(
+    centres: np.ndarray,
+    radii: Sequence[float],
+    origin: np.ndarray,
+    direction: np.ndarray,
+    resolution: int,
+    caster_reach: float = 0.0,
+    nears: Sequence[float] = (),
+    fars: Sequence[float] = (),
+) -> list[Cascade]:
+    """`fit_cascade` for a light's C cascades at once ((C, 3) centres, C radii, nears, fars):
+    one set of array operations, not one per cascade (this runs every frame)."""
     if resolution < 1:
         raise ValueError(f"a shadow map needs at least one texel, got {resolution!r}")
-    check_positive("radius", radius)
+    for radius in radii:
+        check_positive("radius", radius)
     rot = light_rotation(direction)
     origin = np.asarray(origin, np.float64).reshape(3)
     reach = max(float(caster_reach), 0.0)
-    # the centre in the light's frame measured from the world origin, snapped to whole texels
-    texel = 2.0 * radius / resolution
-    c = rot @ (np.asarray(centre, np.float64).reshape(3) + origin)
-    c[:2] = np.round(c[:2] / texel) * texel
-    depth = 2.0 * radius + reach
-    light_eye = c + np.array([0.0, 0.0, radius + reach])  # on the back axis
-    view = np.eye(4)
-    view[:3, :3] = rot
-    view[:3, 3] = rot @ origin - light_eye  # float64, then the cast: render-relative input
-    projection = np.zeros((4, 4))
-    projection[0, 0] = 1.0 / radius
-    projection[1, 1] = -1.0 / radius  # Vulkan y flip, as maths.camera.orthographic
-    projection[2, 2] = 1.0 / depth  # reverse-Z: depth = (depth - d) / depth, d = -z from the light's eye
-    projection[2, 3] = 1.0
-    projection[3, 3] = 1.0
-    return Cascade(
-        view=view.astype(np.float32),
-        projection=projection.astype(np.float32),
-        radius=radius,
-        texel=texel,
-        near=near,
-        far=far,
-    )
+    r = np.asarray(radii, np.float64)
+    count = len(r)
+    # each centre in the light's frame measured from the world origin, snapped to whole texels
+    texel = 2.0 * r / resolution
+    c = (np.asarray(centres, np.float64).reshape(count, 3) + origin) @ rot.T
+    c[:, :2] = np.round(c[:, :2] / texel[:, None]) * texel[:, None]
+    c[:, 2] += r + reach  # the light's eye, on the back axis
+    view = np.zeros((count, 4, 4))
+    view[:, :3, :3] = rot
+    view[:, :3, 3] = rot @ origin - c  # float64, then the cast: render-relative input
+    view[:, 3, 3] = 1.0
+    projection = np.zeros((count, 4, 4))
+    projection[:, 0, 0] = 1.0 / r
+    projection[:, 1, 1] = -1.0 / r  # Vulkan y flip, as maths.camera.orthographic
+    projection[:, 2, 2] = 1.0 / (2.0 * r + reach)  # reverse-Z: depth = (depth - d) / depth, d = -z from the eye
+    projection[:, 2, 3] = 1.0
+    projection[:, 3, 3] = 1.0
+    view32, projection32 = view.astype(np.float32), projection.astype(np.float32)
+    nears = list(nears) or [0.0] * count
+    fars = list(fars) or [0.0] * count
+    return [
+        Cascade(
+            view=view32[k],
+            projection=projection32[k],
+            radius=float(r[k]),
+            texel=float(texel[k]),
+            near=float(nears[k]),
+            far=float(fars[k]),
+        )
+        for k in range(count)
+    ]

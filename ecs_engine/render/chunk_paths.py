@@ -23,7 +23,7 @@ from ..gpu.gbuffer import GBUFFER_COLORS
 from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
 from ..gpu.secondary import end_command_buffer
 from .frame_data import NOT_RECEIVER, Chunk
-from .instance_rows import write_rows
+from .instance_rows import write_keyed, write_rows
 from .layouts import (
     FEATURE_ALPHA_MASK,
     FEATURE_CLUSTERED,
@@ -277,6 +277,17 @@ class ChunkPath:
             rows,
             key_counts,
         )
+        return self._recorded(chunk, frame, rows, n, key_counts)
+
+    def record_keyed(self, chunk: Chunk, frame: FrameInputs, keys: np.ndarray, key_counts: np.ndarray) -> ChunkResult:
+        """record_chunk for a chunk already culled (instance_rows.cull_views: one view's keys)."""
+        rows = self.rows_for(chunk, frame)
+        n = write_keyed(chunk.model, chunk.material, keys, key_counts, frame.material_count, rows)
+        return self._recorded(chunk, frame, rows, n, key_counts)
+
+    def _recorded(
+        self, chunk: Chunk, frame: FrameInputs, rows: np.ndarray, n: int, key_counts: np.ndarray
+    ) -> ChunkResult:
         if n == 0:
             return ChunkResult(None, 0, 0, 0)
         if chunk.flags & NOT_RECEIVER:

@@ -83,6 +83,7 @@ class FrameResources:
     materials_written: tuple[Materials, int, int] | None = None
     shadow_maps: Any = None  # the gpu.shadow_maps.ShadowMaps the set names
     pages: Any = None  # the TexturePages the set names
+    set_version: int = 0  # bumped whenever the set is written: copies of it (shadow views') are then stale
 
     @classmethod
     def make(
@@ -114,6 +115,7 @@ class FrameResources:
 
     def write_set(self, device: Device, pages: TexturePages) -> None:
         self.pages = pages
+        self.set_version += 1
         vk = device.vk
         ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
         write_buffers(
@@ -134,6 +136,7 @@ class FrameResources:
     def name_shadow_maps(self, device: Device, maps: Any) -> None:
         """Point the set at `maps` (a gpu.shadow_maps.ShadowMaps), filtering and hard samplers."""
         self.shadow_maps = maps
+        self.set_version += 1
         for binding, info in zip(
             (BINDING_SHADOW_MAP, BINDING_SHADOW_MAP_HARD, BINDING_SHADOW_DEPTH), maps.image_infos(), strict=True
         ):

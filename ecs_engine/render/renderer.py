@@ -21,7 +21,6 @@ import time
 from collections.abc import Callable
 from dataclasses import replace
 from functools import partial
-from operator import attrgetter
 from typing import Any
 
 from .. import native
@@ -33,7 +32,8 @@ from ..gpu.frames import FrameRing
 from ..gpu.secondary import SecondaryBuffers
 from ..jobs import JobPool
 from .chunk_paths import RECORDERS, InstancedPath, PerEntityPath, check_recorder
-from .frame_data import Chunk, FrameData, FrameExtractor
+from .frame_data import FrameData, FrameExtractor
+from .frame_jobs import FrameJobs, job_name
 from .frame_resources import FrameResources, frame_sets
 from .indirect_path import IndirectPath
 from .layouts import (
@@ -47,7 +47,7 @@ from .light_rows import light_features
 from .materials import Materials
 from .mesh_registry import MeshRegistry
 from .output_passes import OutputPasses
-from .path import FILL_MODES, ChunkResult, FrameInputs, FrameStats, PathContext, PathFactory, RenderPath, TargetState
+from .path import FILL_MODES, FrameInputs, FrameStats, PathContext, PathFactory, RenderPath, TargetState
 from .set_aside_pass import SetAsidePass
 from .shadow_pass import ShadowPass
 from .texture_pages import TexturePages
@@ -346,17 +346,10 @@ class Renderer:
             self.overlay.prepare(slot, len(self.frames.frames))
         t0 = time.perf_counter()
 
-        def job(chunk: Chunk) -> ChunkResult:
-            return path.record_chunk(chunk, inputs)
-
-        results = (
-            self.jobs.map(job, data.chunks, attrgetter("name"))
-            if self.jobs is not None
-            else [job(c) for c in data.chunks]
-        )
-        shadow_buffers = self.shadows.draw_views(
-            views, inputs, pf, camera_rows, data, self.path.ctx, self._make_shadow_path, self.jobs
-        )
+        self.shadows.prepare(views, inputs, pf, camera_rows, data, path, self._make_shadow_path)
+        work = FrameJobs(path, inputs, self.shadows, data.chunks)  # one batch: camera and shadow views
+        done = self.jobs.map(work.run, work.work, job_name) if self.jobs is not None else list(map(work.run, work.work))
+        results, shadow_buffers = work.results(done)
         record_ms = (time.perf_counter() - t0) * 1e3
         cb = frame.command_buffer
         secondaries = path.finish(cb, inputs, results, data.candidates)

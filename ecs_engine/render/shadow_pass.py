@@ -3,11 +3,11 @@
 Each frame: the views of the lights with a `Shadow` (shadow_views.py); the map array grown to
 hold them (gpu/shadow_maps.py); per view a set 0 of its own whose globals are the light's
 matrices (so the render path's shaders draw from the light unchanged) and a slice of the
-frame's instance buffer after the camera's rows; then every (view, chunk) pair is a job on the
-worker pool: it culls the chunk against the view's planes, writes the rows and records a
-secondary command buffer with a depth-only pipeline, as the camera's chunks are recorded
-(chunk_paths.py: the same paths, made for the shadow render pass). The primary then draws each
-view's layer: begin, execute its secondaries, end.
+frame's instance buffer after the camera's rows. The chunk jobs (frame_jobs.py) then cull each
+chunk against the camera and every view in one pass, write each view's visible rows and record
+a secondary per view with a depth-only pipeline (chunk_paths.py: the same paths, made for the
+shadow render pass; view_recording.py: all of it in one native call). The primary then draws
+each view's layer: begin, execute its secondaries, end.
 
 The lighting reads SHADOW_VIEW rows (per view its matrix, bias, normal offset, cascade split,
 filter) and the map (shading.glsl's light_shadow); a light row names its first view and count.
@@ -25,7 +25,7 @@ CPU culling).
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -37,11 +37,24 @@ from ..gpu.device import Device
 from ..gpu.memory import Buffer
 from ..gpu.secondary import SecondaryBuffers
 from ..gpu.shadow_maps import ShadowMaps, create_shadow_pass
-from .frame_data import NOT_CASTER, Chunk, FrameData
+from .frame_data import Chunk, FrameData
+from .instance_rows import cull_views, padded_planes
 from .layouts import BINDING_GLOBALS, GLOBALS, SHADOW_VIEW
 from .light_rows import write_light_shadows
-from .path import FrameInputs, PathContext, RenderPath, TargetState
+from .path import ChunkResult, FrameInputs, PathContext, RenderPath, TargetState
 from .shadow_views import ShadowView, shadow_views
+from .view_recording import ViewRecording, can_fuse
+
+
+@dataclass
+class ViewSet:
+    """A shadow view's set 0 in one frame slot: the frame's set copied, its own globals."""
+
+    globals: Buffer
+    descriptor_set: Any
+    set_array: Any  # VkDescriptorSet[1], for raw calls
+    copied: tuple[Any, int] | None = None  # (frame set, its version) last copied from
+
 
 PROJECTIONS = {"cascade": 0, "spot": 1, "cube": 2}  # SHADOW_VIEW.info.w: orthographic, perspective, a cube face
 
@@ -64,11 +77,15 @@ class ShadowPass:
             self.destroy()
             raise
         self.cleared = False  # the layers' layout made by a first (clearing) pass
-        self._view_sets: list[list[tuple[Buffer, Any, Any]]] = [[] for _ in range(frames)]  # (globals, set, array)
+        self._view_sets: list[list[ViewSet]] = [[] for _ in range(frames)]
         self._targets: dict[int, TargetState] = {}
         self._pool_sets = 0  # view sets the pool holds per frame slot
         self.path: RenderPath | None = None
         self.draws = self.triangles = 0  # the last frame's shadow draws
+        self._inputs: list[FrameInputs] = []  # this frame's views' (prepare)
+        self._recording: Any = None  # the path this frame's jobs record with
+        self._planes = padded_planes([])  # this frame's views' (V, 24) culling planes
+        self._fused: ViewRecording | None = None  # the views as one native call a job
 
     # -------------------------------------------------------------- planning
     def plan(self, world: World, data: FrameData) -> list[ShadowView]:
@@ -127,9 +144,12 @@ class ShadowPass:
             )
         return state
 
-    def view_inputs(self, views: list[ShadowView], frame: FrameInputs, row_base: int, rows: int) -> list[FrameInputs]:
-        """Per view: its set 0 (globals: the light's matrices; the rest the frame's) and
-        the FrameInputs its chunk jobs read; view k's rows start at row_base + k * rows."""
+    def view_inputs(
+        self, views: list[ShadowView], frame: FrameInputs, set_version: int, row_base: int, rows: int
+    ) -> list[FrameInputs]:
+        """Per view: its set 0 (globals: the light's matrices; the rest the frame's, copied
+        again only when the frame's set was written since: `set_version`) and the FrameInputs
+        its chunk jobs read; view k's rows start at row_base + k * rows."""
         sets = self._view_sets[frame.slot]
         vk = self.vk
         while len(sets) < len(views):
@@ -139,37 +159,39 @@ class ShadowPass:
                 continue
             assert self.pool is not None
             descriptor_set = self.pool.allocate(self.set_layout)
-            sets.append(
-                (
-                    Buffer(self.device, GLOBALS.size, vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT),
-                    descriptor_set,
-                    vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]),
-                )
+            globals_buffer = Buffer(self.device, GLOBALS.size, vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT)
+            write_buffers(
+                self.device, descriptor_set, [(BINDING_GLOBALS, vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, globals_buffer)]
             )
-        out = []
-        uniform = vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER
-        for k, view in enumerate(views):
-            globals_buffer, descriptor_set, array = sets[k]
-            g = globals_buffer.array(GLOBALS.dtype, 1)
-            g[...] = 0
-            g["projection"] = view.projection.T
-            g["view"] = view.view.T
-            # the frame's set copied whole (a driver may read every binding a shader declares,
-            # used or not: lavapipe crashed on the unwritten ones), then the view's globals
+            sets.append(ViewSet(globals_buffer, descriptor_set, vk.ffi.new("VkDescriptorSet[1]", [descriptor_set])))
+        stale = [s.descriptor_set for s in sets[: len(views)] if s.copied != (frame.descriptor_set, set_version)]
+        if stale:
+            # the frame's set copied whole but for the globals (a driver may read every binding a
+            # shader declares, used or not: lavapipe crashed on unwritten ones); at 4 views this
+            # cost ~0.2 ms a frame when done every frame, so only after the frame's set changed
             copies = [
                 vk.VkCopyDescriptorSet(
-                    srcSet=frame.descriptor_set, srcBinding=b, dstSet=descriptor_set, dstBinding=b, descriptorCount=n
+                    srcSet=frame.descriptor_set, srcBinding=b, dstSet=dst, dstBinding=b, descriptorCount=n
                 )
+                for dst in stale
                 for b, _, _, n in self.set_layout.bindings
                 if b != BINDING_GLOBALS
             ]
             vk.vkUpdateDescriptorSets(self.device.handle, 0, None, len(copies), copies)
-            write_buffers(self.device, descriptor_set, [(BINDING_GLOBALS, uniform, globals_buffer)])
+            for s in sets[: len(views)]:
+                s.copied = (frame.descriptor_set, set_version)
+        out = []
+        for k, view in enumerate(views):
+            view_set = sets[k]
+            g = view_set.globals.array(GLOBALS.dtype, 1)
+            g[...] = 0
+            g["projection"] = view.projection.T
+            g["view"] = view.view.T
             out.append(
                 replace(
                     frame,
-                    descriptor_set=descriptor_set,
-                    set_array=array,
+                    descriptor_set=view_set.descriptor_set,
+                    set_array=view_set.set_array,
                     target=self.target_state(view.layer),
                     planes=view.planes,
                     readback=False,
@@ -191,52 +213,75 @@ class ShadowPass:
         self.pool = DescriptorPool(self.device, count, sizes)
         self._pool_sets = per_slot
 
-    def record_jobs(
-        self, path: RenderPath, inputs: list[FrameInputs], chunks: list[Chunk], jobs: Any
-    ) -> list[list[Any]]:
-        """Every (view, chunk) pair a job (chunks tagged NotShadowCaster left out); per view the
-        secondaries to execute, and (draws, triangles) summed."""
-        casters = [c for c in chunks if not c.flags & NOT_CASTER]
-        pairs = [(k, c) for k in range(len(inputs)) for c in casters]
-        for view in inputs:
-            path.begin_frame(view)
-
-        def job(pair: tuple[int, Chunk]) -> Any:
-            return path.record_chunk(pair[1], inputs[pair[0]])
-
-        results = (
-            jobs.map(job, pairs, lambda p: f"shadow view {p[0]}: {p[1].name}")
-            if jobs is not None
-            else [job(p) for p in pairs]
-        )
-        per_view: list[list[Any]] = [[] for _ in inputs]
-        self.draws = self.triangles = 0
-        for (k, _), r in zip(pairs, results, strict=True):
-            if r.command_buffer is not None:
-                per_view[k].append(r.command_buffer)
-            self.draws += r.draws
-            self.triangles += r.triangles
-        return per_view
-
-    def draw_views(
+    def prepare(
         self,
         views: list[ShadowView],
         frame: FrameInputs,
         pf: Any,
         row_base: int,
         data: FrameData,
-        ctx: PathContext,
+        camera: RenderPath,
         make: Any,
-        jobs: Any,
-    ) -> list[list[Any]]:
-        """The frame's shadow work on the CPU: the views' rows for the lighting, their sets and
-        inputs, and the chunk jobs; per view the secondaries record() executes."""
+    ) -> None:
+        """The frame's shadow work before its jobs (frame_jobs.py hands them out): the views'
+        rows for the lighting, their sets, inputs and culling planes; `camera` is the camera's
+        path (its begin_frame done), whose jobs may cull the camera's view with the shadows'."""
+        self.draws = self.triangles = 0
+        self._fused = None
         if not views:
-            self.draws = self.triangles = 0
-            return []
+            self._inputs = []
+            return
         self.write_views(pf.shadow_views.array(SHADOW_VIEW.dtype, len(views)), views)
-        inputs = self.view_inputs(views, frame, row_base, data.candidates)
-        return self.record_jobs(self.path_for(ctx, make), inputs, data.chunks, jobs)
+        self._inputs = self.view_inputs(views, frame, pf.set_version, row_base, data.candidates)
+        path = self._recording = self.path_for(camera.ctx, make)
+        for view in self._inputs:
+            path.begin_frame(view)
+        self._planes = padded_planes([frame.planes] + [view.planes for view in self._inputs])  # the camera's first
+        if can_fuse([path]):  # one native call a job (view_recording.py)
+            if can_fuse([camera]):
+                paths, inputs = [camera] + [path] * len(views), [frame] + self._inputs
+                self._fused = ViewRecording(paths, inputs, self._planes, with_camera=True)
+            else:
+                self._fused = ViewRecording([path] * len(views), self._inputs, self._planes[1:], with_camera=False)
+
+    @property
+    def active(self) -> bool:
+        """Whether this frame draws shadow views (after prepare)."""
+        return bool(self._inputs)
+
+    def record_chunk(self, chunk: Chunk, camera: Any = None) -> tuple[ChunkResult | None, list[ChunkResult]]:
+        """One job: the chunk culled against every view at once (a row's sphere is worked out
+        once, not once a view: instance_rows.cull_views), then per view its visible rows written
+        and recorded. With `camera` (its path and FrameInputs; the path can record culled rows)
+        the camera's view is culled in the same pass: (the camera's result or None, per view)."""
+        fused = self._fused
+        if fused is not None and (camera is None or fused.with_camera):
+            results = fused.record(chunk, camera is not None)
+            return (results[0], results[1:]) if camera is not None else (None, results)
+        centers, radii, index_counts = self._inputs[0].bounds
+        planes = self._planes if camera is not None else self._planes[1:]
+        keys = np.empty((len(planes), len(chunk.handle)), np.int32)
+        key_counts = np.empty((len(planes), 2 * len(index_counts)), np.int64)
+        cull_views(chunk.model, chunk.handle, centers, radii, planes, keys, key_counts)
+        path, empty, first = self._recording, ChunkResult(None, 0, 0, 0), int(camera is not None)
+        results = [
+            path.record_keyed(chunk, view, keys[v], key_counts[v]) if key_counts[v].any() else empty
+            for v, view in enumerate(self._inputs, first)
+        ]
+        if camera is None:
+            return None, results
+        return camera[0].record_keyed(chunk, camera[1], keys[0], key_counts[0]), results
+
+    def collect(self, results: list[list[ChunkResult]]) -> list[list[Any]]:
+        """Per view the secondaries record() executes; the draws and triangles summed."""
+        per_view: list[list[Any]] = [[] for _ in self._inputs]
+        for per_chunk in results:
+            for k, r in enumerate(per_chunk):
+                if r.command_buffer is not None:
+                    per_view[k].append(r.command_buffer)
+                self.draws += r.draws
+                self.triangles += r.triangles
+        return per_view
 
     def name_lights(self, data: FrameData, views: list[ShadowView], rows: np.ndarray) -> None:
         """Each shadow-casting light's row names its first view and count (light_rows.py)."""
@@ -280,8 +325,8 @@ class ShadowPass:
 
     def _release_sets(self) -> None:
         for sets in self._view_sets:
-            for buffer, _, _ in sets:
-                buffer.destroy()
+            for view_set in sets:
+                view_set.globals.destroy()
         self._view_sets = [[] for _ in range(self.frames)]
         if self.pool is not None:
             self.pool.destroy()

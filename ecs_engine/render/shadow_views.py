@@ -27,8 +27,8 @@ import numpy as np
 from ..components import DirectionalLight, PointLight, Shadow, SpotLight, Transform
 from ..ecs.world import World
 from ..maths.camera import perspective
-from ..maths.culling import frustum_planes
-from ..maths.shadow_cascades import cascade_splits, fit_cascade, light_rotation, view_slice_sphere
+from ..maths.culling import frustum_planes, frustum_planes_many
+from ..maths.shadow_cascades import cascade_splits, fit_cascades, light_rotation, view_slice_sphere
 from .camera import CameraMatrices
 from .light_rows import local_minus_z
 
@@ -115,9 +115,11 @@ def shadow_views(world: World, cam: CameraMatrices, origin: np.ndarray) -> list[
         far: float,
         shadow: Any,
         row: int,
+        planes: np.ndarray | None = None,
     ) -> None:
-        view32, projection32 = view.astype(np.float32), projection.astype(np.float32)
-        planes = frustum_planes(projection32, view32)
+        view32, projection32 = view.astype(np.float32, copy=False), projection.astype(np.float32, copy=False)
+        if planes is None:
+            planes = frustum_planes(projection32, view32)
         settings = (
             float(shadow.bias[row]),
             float(shadow.normal_offset[row]),
@@ -136,21 +138,19 @@ def shadow_views(world: World, cam: CameraMatrices, origin: np.ndarray) -> list[
             far = min(distance, cam.far)
             if far <= cam.near:
                 continue  # the camera sees nothing within the shadow distance
-            splits = cascade_splits(cam.near, far, int(shadow.cascades[row]))
+            splits = cascade_splits(cam.near, far, int(shadow.cascades[row])).tolist()
             resolution = int(shadow.resolution[row])
-            for i in range(len(splits) - 1):
-                along, radius = view_slice_sphere(cam.projection, splits[i], splits[i + 1])
-                c = fit_cascade(
-                    eye + along * forward,
-                    radius,
-                    origin,
-                    directions[row],
-                    resolution,
-                    distance,
-                    splits[i],
-                    splits[i + 1],
-                )
-                add(entity, "cascade", i, c.view, c.projection, resolution, c.texel, float(splits[i + 1]), shadow, row)
+            spheres = [view_slice_sphere(cam.projection, splits[i], splits[i + 1]) for i in range(len(splits) - 1)]
+            centres = eye + np.array([along for along, _ in spheres])[:, None] * forward
+            cascades = fit_cascades(
+                centres, [radius for _, radius in spheres], origin, directions[row], resolution, distance,
+                splits[:-1], splits[1:],
+            )  # fmt: skip
+            clip = np.array([c.projection for c in cascades], np.float64) @ np.array([c.view for c in cascades])
+            planes = frustum_planes_many(clip)
+            for i, c in enumerate(cascades):
+                far_i = splits[i + 1]
+                add(entity, "cascade", i, c.view, c.projection, resolution, c.texel, far_i, shadow, row, planes[i])
 
     for batch in world.query(SpotLight, Transform, Shadow, write=()):
         spot, shadow, transform = batch[SpotLight], batch[Shadow], batch[Transform]
