@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -25,9 +25,13 @@ from ..render.light_clusters import LIGHT_MODES
 from ..render.path import FILL_MODES
 from ..render.renderer import MODES, PATHS, RECORDER_NAMES
 from ..render.tone_map import TONE_MAPS
-from .editor_lights import LIGHT_SECTIONS
+from .editor_lights import LIGHT_SECTIONS, ShadowMapImages
 from .editor_materials import MaterialsPanel, mesh_section
 from .settings import Settings
+
+if TYPE_CHECKING:
+    from ..render.imgui_pass import ImGuiRenderer
+    from ..render.renderer import Renderer
 
 PRESENT_MODES = tuple(SWAPCHAIN_PRESENT_MODES)
 
@@ -67,6 +71,12 @@ class Editor:
         # screen rectangles (x0, y0, x1, y1) of a few widgets as last drawn: where synthetic
         # input (tests, scripted demos) should click
         self.rects: dict[str, tuple[float, float, float, float]] = {}
+        self.shadow_maps: ShadowMapImages | None = None  # show_shadow_maps
+
+    def show_shadow_maps(self, renderer: Renderer, overlay: ImGuiRenderer) -> None:
+        """Show the shadow maps of `renderer` (render/renderer.py's Renderer) in the light sections,
+        drawn by `overlay` (the ImGuiRenderer that draws this editor)."""
+        self.shadow_maps = ShadowMapImages(renderer.shadows, overlay)
 
     # ---------------------------------------------------------------- requests
     def take_requests(self) -> Settings | None:
@@ -95,6 +105,8 @@ class Editor:
     def draw(self, world: World, stats: SceneStats) -> None:
         """Build this frame's editor windows (between imgui.new_frame() and imgui.render())."""
         imgui = self.imgui
+        if self.shadow_maps is not None:
+            self.shadow_maps.begin_frame()
         self._settings_window(stats)
         imgui.set_next_window_pos((10, 330), imgui.Cond_.first_use_ever.value)
         imgui.set_next_window_size((300, 300), imgui.Cond_.first_use_ever.value)

@@ -1,18 +1,31 @@
 """The inspector's light sections: point, spot and directional lights, picked from a table by
 component type. Each edit goes through `Editor.set` (the world's checks; a refused value leaves
-the light as it was and shows the message)."""
+the light as it was and shows the message).
+
+A light that casts shadows shows its shadow maps (ShadowMapImages): a thumbnail per layer (a
+directional light's cascades, a spot light's map, a point light's six cube faces), grey, near
+white and far black (reverse-Z depth), as the last frame drew them."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from ..components import DirectionalLight, PointLight, Shadow, SpotLight
 from ..components.shadow import SHADOW_FILTERS
 from ..ecs.world import World
+
+if TYPE_CHECKING:
+    from ..gpu.shadow_maps import ShadowMaps
+    from ..render.imgui_pass import ImGuiRenderer
+    from ..render.shadow_pass import ShadowPass
+    from ..render.shadow_views import ShadowView
+
+CUBE_FACE_NAMES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")  # shadow_views.py's face order
+THUMBNAIL = 128  # a shadow map thumbnail's largest side in pixels (64 at least: smaller fit a row)
 
 
 class Editor(Protocol):
@@ -28,6 +41,85 @@ class Editor(Protocol):
     def show_material(self, handle: int) -> None:
         """Select a material and bring the Materials tab forward."""
         ...
+
+    @property
+    def shadow_maps(self) -> ShadowMapImages | None:
+        """The shadow map thumbnails (None: the editor has no renderer to show them from)."""
+        ...
+
+
+class ShadowMapImages:
+    """The renderer's shadow map layers as ImGui images: per layer a grey view of it
+    (ShadowMaps.preview_view) registered with the overlay (imgui_pass.ImGuiRenderer's
+    register_image) the first time it is shown. When the maps are made anew (larger: render/
+    shadow_pass.py's ensure), the old ids are dropped (the overlay drops them itself when it draws
+    after the maps went, before the next UI is built) and the new layers registered as shown.
+    Which layers are a light's comes from the renderer's last planned views (ShadowPass.last_views)."""
+
+    def __init__(self, shadows: ShadowPass, overlay: ImGuiRenderer) -> None:
+        self.shadows, self.overlay = shadows, overlay
+        self._maps: ShadowMaps | None = None  # the maps the ids below show
+        self._ids: dict[int, int] = {}  # layer -> ImGui texture id
+        self.drawn: dict[int, int] = {}  # the last UI's thumbnails: layer -> texture id
+        self.rects: dict[int, tuple[float, float, float, float]] = {}  # layer -> its thumbnail on screen
+
+    def begin_frame(self) -> None:
+        self.drawn, self.rects = {}, {}
+
+    def views(self, eid: int) -> list[ShadowView]:
+        """The light's views (ShadowView) as last planned, in layer order (none before it was drawn)."""
+        maps = self.shadows.maps
+        if maps is None:
+            return []
+        return [v for v in self.shadows.last_views if v.entity == eid and v.layer < maps.layers]
+
+    def texture(self, layer: int) -> int:
+        """The ImGui texture id of the current maps' `layer`."""
+        maps = self.shadows.maps
+        assert maps is not None
+        if maps is not self._maps:
+            for tex_id in self._ids.values():
+                self.overlay.unregister_image(tex_id)
+            self._maps, self._ids = maps, {}
+        known = self._ids.get(layer)
+        if known is not None:
+            return known
+        view = maps.preview_view(layer)
+        alive = lambda: not maps.destroyed  # the maps may go before the overlay draws
+        tex_id = self._ids[layer] = self.overlay.register_image(view, maps.plain_sampler, maps.read_layout, alive)
+        return tex_id
+
+    def draw(self, imgui: Any, eid: int) -> None:
+        """The light's thumbnails, as many to a row as fit; hovering one shows it larger."""
+        views = self.views(eid)
+        if not views:
+            return
+        imgui.text("shadow maps (near white, far black)")
+        spacing = float(imgui.get_style().item_spacing.x)
+        avail = float(imgui.get_content_region_avail().x)
+        columns = 3 if views[0].kind == "cube" else len(views)
+        side = max(64.0, min(float(THUMBNAIL), (avail - (columns - 1) * spacing) / columns))
+        per_row = max(1, int((avail + spacing) // (side + spacing)))
+        for k, v in enumerate(views):
+            if k % per_row:
+                imgui.same_line()
+            tex_id = self.texture(v.layer)
+            imgui.image(imgui.ImTextureRef(tex_id), (side, side))
+            lo, hi = imgui.get_item_rect_min(), imgui.get_item_rect_max()
+            self.drawn[v.layer], self.rects[v.layer] = tex_id, (lo.x, lo.y, hi.x, hi.y)
+            if imgui.is_item_hovered():
+                imgui.begin_tooltip()
+                imgui.text(f"{_view_name(v)}: layer {v.layer}, {v.resolution} texels")
+                imgui.image(imgui.ImTextureRef(tex_id), (2 * THUMBNAIL, 2 * THUMBNAIL))
+                imgui.end_tooltip()
+
+
+def _view_name(view: ShadowView) -> str:
+    if view.kind == "cascade":
+        return f"cascade {view.index} (to {view.far:.3g})"
+    if view.kind == "cube":
+        return f"cube face {CUBE_FACE_NAMES[view.index]}"
+    return "spot light"
 
 
 def _color(editor: Editor, world: World, eid: int, component: type, value: Any) -> None:
@@ -105,6 +197,8 @@ def shadow(editor: Editor, world: World, eid: int, directional: bool) -> None:
     if changed:
         editor.set(world, eid, Shadow, filter=pick)
     _amount(editor, world, eid, Shadow, "softness", "softness (PCF texels)", s.softness)
+    if editor.shadow_maps is not None:
+        editor.shadow_maps.draw(imgui, eid)
 
 
 #: component type -> its inspector section, in the order they are drawn

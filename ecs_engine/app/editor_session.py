@@ -57,6 +57,7 @@ class EditorSession:
             len(renderer.frames.frames),
         )
         self.editor = Editor(session.settings, scenes, max_threads)
+        self.editor.show_shadow_maps(renderer, self.renderer)
         self.overlay = PerfOverlay()
         self.build_ms = 0.0
         self.min_interval_s = 0.0 if not max_ui_hz else 1.0 / max_ui_hz

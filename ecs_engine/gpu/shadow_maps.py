@@ -8,6 +8,9 @@ so a receiver whose depth is at least the nearest caster's is lit. The filtering
 nearest; a third reads the depths themselves (PCSS looks for its blockers with it).
 Frames in flight share the image: the render pass's dependencies order this frame's writes
 after the previous frame's reads and before this frame's lighting.
+
+The editor shows each layer (preview_view: the depth in R, G and B, read through the plain
+sampler) in the overlay, drawn after the lighting, where every layer is in READ_LAYOUT.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ if TYPE_CHECKING:
     from .device import Device
 
 SHADOW_FORMAT_NAME = "VK_FORMAT_D32_SFLOAT"
+READ_LAYOUT_NAME = "VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL"  # after the shadow pass: sampled
 
 
 def create_shadow_pass(device: Device) -> Any:
@@ -31,7 +35,7 @@ def create_shadow_pass(device: Device) -> Any:
         1,
         vk.VK_ATTACHMENT_LOAD_OP_CLEAR,
         vk.VK_ATTACHMENT_STORE_OP_STORE,
-        vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL,
+        getattr(vk, READ_LAYOUT_NAME),
     )
     subpass = vk.VkSubpassDescription(
         pipelineBindPoint=vk.VK_PIPELINE_BIND_POINT_GRAPHICS,
@@ -81,6 +85,8 @@ class ShadowMaps:
         self.layer_views: list[Any] = []
         self.framebuffers: list[Any] = []
         self.samplers: list[Any] = []
+        self._previews: dict[int, Any] = {}  # layer -> its grey view (preview_view)
+        self.read_layout = getattr(vk, READ_LAYOUT_NAME)
         try:
             self.image = Image(
                 device,
@@ -131,13 +137,55 @@ class ShadowMaps:
         """VkDescriptorImageInfo of the array with the filtering comparison sampler, the hard
         (nearest) one, and the plain nearest one that reads depths."""
         vk = self.vk
-        layout = vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL
+        layout = self.read_layout
         assert self.image is not None
         view = self.image.view  # the 2D array of every layer
         return [vk.VkDescriptorImageInfo(sampler=s, imageView=view, imageLayout=layout) for s in self.samplers]
 
+    @property
+    def plain_sampler(self) -> Any:
+        """The nearest sampler that reads depths (no comparison)."""
+        return self.samplers[2]
+
+    @property
+    def destroyed(self) -> bool:
+        return self.image is None
+
+    def preview_view(self, layer: int) -> Any:
+        """A 2D view of `layer` whose R, G and B are its depth (A one): a grey image, near
+        (reverse-Z: 1) white, far black; read it with plain_sampler in read_layout. Made on first
+        use, destroyed with the maps."""
+        assert self.image is not None
+        if not 0 <= layer < self.layers:
+            raise IndexError(f"layer {layer} of {self.layers}")
+        view = self._previews.get(layer)
+        if view is None:
+            vk = self.vk
+            r, one = vk.VK_COMPONENT_SWIZZLE_R, vk.VK_COMPONENT_SWIZZLE_ONE
+            view = self._previews[layer] = vk.vkCreateImageView(
+                self.device.handle,
+                vk.VkImageViewCreateInfo(
+                    image=self.image.handle,
+                    viewType=vk.VK_IMAGE_VIEW_TYPE_2D,
+                    format=self.image.format,
+                    components=vk.VkComponentMapping(r=r, g=r, b=r, a=one),
+                    subresourceRange=vk.VkImageSubresourceRange(
+                        aspectMask=vk.VK_IMAGE_ASPECT_DEPTH_BIT,
+                        baseMipLevel=0,
+                        levelCount=1,
+                        baseArrayLayer=layer,
+                        layerCount=1,
+                    ),
+                ),
+                None,
+            )
+        return view
+
     def destroy(self) -> None:
         vk, handle = self.vk, self.device.handle
+        for v in self._previews.values():
+            vk.vkDestroyImageView(handle, v, None)
+        self._previews = {}
         for sampler in self.samplers:
             vk.vkDestroySampler(handle, sampler, None)
         for fb in self.framebuffers:

@@ -5,7 +5,9 @@ Per frame: the draw lists' vertices and indices are copied (memmove from the add
 bindings expose) into this frame slot's mapped buffers; in the render pass's output subpass
 (after the tone map, so the UI keeps its colours) each command is one indexed draw with its scissor and texture.
 Textures follow ImGui 1.92's protocol: the backend creates, updates and destroys them as
-`ImDrawData.textures` asks, and hands ImGui an id to put in its commands.
+`ImDrawData.textures` asks, and hands ImGui an id to put in its commands. Images the engine owns
+(the editor's shadow map thumbnails) are registered by view (`register_image`: imgui_images.py)
+and drawn with `imgui.image(imgui.ImTextureRef(tex_id), size)`.
 
 Vertex colours are sRGB and the render targets are sRGB formats, so the vertex shader decodes
 them; textures are sRGB images, decoded by the sampler.
@@ -15,6 +17,7 @@ from __future__ import annotations
 
 import ctypes
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -22,6 +25,7 @@ import numpy as np
 
 from ..gpu.memory import HOST, Buffer, Image
 from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
+from .imgui_images import UserImages
 from .layouts import IMGUI_PUSH
 
 if TYPE_CHECKING:
@@ -52,6 +56,7 @@ class OverlayCounts:
     commands: int = 0
     vertices: int = 0
     indices: int = 0
+    images: int = 0  # commands drawing a registered image (register_image)
 
 
 class ImGuiRenderer:
@@ -98,7 +103,8 @@ class ImGuiRenderer:
         self.subpass = subpass
         self.pipeline = self._pipeline(render_pass)
         self._textures: dict[int, _Texture] = {}
-        self._next_id = 1  # 0 means "no texture" to ImGui
+        self._next_id = 1  # 0 means "no texture" to ImGui; user images' ids come from the same count
+        self.images = UserImages(vk, device, self._allocate_set, lambda s: self._free_sets.append(s))
         self._frames = [self._frame_buffers(1 << 14, 1 << 15) for _ in range(frames)]
         self._prepared: dict[int, tuple[list[Any], tuple[float, float, float, float]]] = {}
         # the last UI's (ImGui frame, draws, push constants, draw lists, vertex and index counts)
@@ -192,6 +198,19 @@ class ImGuiRenderer:
         self._upload(texture, tex, [(0, 0, tex.width, tex.height)], fresh=True)
         tex.set_tex_id(tex_id)
         tex.set_status(self.imgui.ImTextureStatus.ok)
+
+    def register_image(self, view: Any, sampler: Any, layout: int, alive: Callable[[], bool] | None = None) -> int:
+        """An ImGui texture id that draws `view` (the caller's, in `layout` whenever the overlay
+        draws) through `sampler`; `alive()`, when given, is asked every overlay frame: once it
+        says False the id is dropped (imgui_images.py)."""
+        tex_id = self._next_id
+        self._next_id += 1
+        self.images.register(tex_id, view, sampler, layout, alive)
+        return tex_id
+
+    def unregister_image(self, tex_id: int) -> None:
+        """Stop drawing a registered image (its set is reused once no frame in flight reads it)."""
+        self.images.unregister(tex_id)
 
     def _upload(self, texture: _Texture, tex: Any, rects: list[tuple[int, int, int, int]], fresh: bool) -> None:
         """Copy rectangles of the texture's pixels to the image, through a staging buffer."""
@@ -311,6 +330,7 @@ class ImGuiRenderer:
         the draws are the last ones, and a slot that already holds that geometry copies nothing."""
         t0 = time.perf_counter()
         self.cpu_ms = 0.0
+        images_gone = self.images.begin_frame(frames_in_flight)  # the last draws may name them
         draw_data = self.imgui.get_draw_data()
         if draw_data is None or not draw_data.valid:
             self._prepared.pop(slot, None)
@@ -319,6 +339,8 @@ class ImGuiRenderer:
         if self._last is None or self._last[0] != frame:
             if draw_data.textures is not None:
                 self.update_textures(draw_data.textures, frames_in_flight)
+            self._last = (frame, *self._draw_list(draw_data))
+        elif images_gone:
             self._last = (frame, *self._draw_list(draw_data))
         _, draws, push, lists, vertices, indices = self._last
         if self._copied.get(slot) != frame:
@@ -334,12 +356,14 @@ class ImGuiRenderer:
                 ibase += ni
             self._copied[slot] = frame
         self._prepared[slot] = (draws, push)
-        self.counts = OverlayCounts(len(lists), len(draws), vertices, indices)
+        images = sum(1 for d in draws if d[5]) if len(self.images) else 0
+        self.counts = OverlayCounts(len(lists), len(draws), vertices, indices, images)
         self.cpu_ms = (time.perf_counter() - t0) * 1e3
 
     def _draw_list(self, draw_data: Any) -> tuple[list[Any], tuple[float, ...], list[Any], int, int]:
         """Per command: (VkRect2D* scissor, VkDescriptorSet[1], index count, first index,
-        vertex offset), scissors clamped to the display and empty ones dropped; made once per UI."""
+        vertex offset, whether it draws a user image), scissors clamped to the display and empty
+        ones dropped; made once per UI (and again when a user image goes away)."""
         vk = self.vk
         sx, sy = draw_data.framebuffer_scale.x, draw_data.framebuffer_scale.y
         px, py = draw_data.display_pos.x, draw_data.display_pos.y
@@ -351,9 +375,10 @@ class ImGuiRenderer:
             for cmd in dl.cmd_buffer:
                 if cmd.elem_count == 0:
                     continue
-                texture = self._textures.get(int(cmd.get_tex_id()))
+                tex_id = int(cmd.get_tex_id())
+                texture = self._textures.get(tex_id) or self.images.get(tex_id)
                 if texture is None:
-                    continue  # a user texture id this backend does not know
+                    continue  # an id this backend does not know (or no longer: a dropped image)
                 c = cmd.clip_rect
                 x0, y0 = max((c.x - px) * sx, 0.0), max((c.y - py) * sy, 0.0)
                 x1, y1 = min((c.z - px) * sx, w), min((c.w - py) * sy, h)
@@ -364,7 +389,14 @@ class ImGuiRenderer:
                     {"offset": {"x": int(x0), "y": int(y0)}, "extent": {"width": int(x1 - x0), "height": int(y1 - y0)}},
                 )
                 draws.append(
-                    (scissor, texture.set_array, cmd.elem_count, cmd.idx_offset + ibase, cmd.vtx_offset + vbase)
+                    (
+                        scissor,
+                        texture.set_array,
+                        cmd.elem_count,
+                        cmd.idx_offset + ibase,
+                        cmd.vtx_offset + vbase,
+                        tex_id not in self._textures,
+                    )
                 )
             vbase += dl.vtx_buffer.size()
             ibase += dl.idx_buffer.size()
@@ -394,7 +426,7 @@ class ImGuiRenderer:
         bound = None
         layout, null = self.layout, vk.ffi.NULL
         set_scissor, draw = lib.vkCmdSetScissor, lib.vkCmdDrawIndexed
-        for scissor, sets, count, first_index, vertex_offset in draws:
+        for scissor, sets, count, first_index, vertex_offset, _ in draws:
             if sets is not bound:
                 lib.vkCmdBindDescriptorSets(cb, graphics, layout, 0, 1, sets, 0, null)
                 bound = sets
@@ -441,6 +473,7 @@ class ImGuiRenderer:
         self.device.wait_idle()
         for tex_id in list(self._textures):
             self._destroy_texture(tex_id)
+        self.images.clear()  # their sets go with the pools
         for fb in self._frames:
             fb.vertices.destroy()
             fb.indices.destroy()

@@ -82,6 +82,7 @@ class ShadowPass:
         self._pool_sets = 0  # view sets the pool holds per frame slot
         self.path: RenderPath | None = None
         self.draws = self.triangles = 0  # the last frame's shadow draws
+        self.last_views: list[ShadowView] = []  # the last plan's (the editor's map thumbnails)
         self._inputs: list[FrameInputs] = []  # this frame's views' (prepare)
         self._recording: Any = None  # the path this frame's jobs record with
         self._planes = padded_planes([])  # this frame's views' (V, 24) culling planes
@@ -90,9 +91,9 @@ class ShadowPass:
     # -------------------------------------------------------------- planning
     def plan(self, world: World, data: FrameData) -> list[ShadowView]:
         """This frame's drawn views (none without a Shadow: one query, no work)."""
-        if not any(len(batch) for batch in world.query(Shadow, write=())):
-            return []
-        return shadow_views(world, data.camera, data.origin)
+        casts = any(len(batch) for batch in world.query(Shadow, write=()))
+        self.last_views = shadow_views(world, data.camera, data.origin) if casts else []
+        return self.last_views
 
     def ensure(self, views: list[ShadowView]) -> bool:
         """Maps that hold `views` (made anew, larger, when they do not: the caller's frames in
