@@ -10,6 +10,7 @@ from .camera import (
     render_origin,
 )
 from .camera_control import FlyCamera
+from .environment import Environment
 from .light import DirectionalLight, PointLight, SpotLight
 from .mesh import Mesh
 from .motion import AngularVelocity, Spring, Velocity
@@ -24,6 +25,7 @@ __all__ = [
     "AngularVelocity",
     "Camera",
     "DirectionalLight",
+    "Environment",
     "FlyCamera",
     "Mesh",
     "ModelMatrix",

@@ -16,3 +16,5 @@ layout(std430, set = SET_FRAME, binding = BINDING_SHADOW_VIEWS) readonly buffer 
 layout(set = SET_FRAME, binding = BINDING_SHADOW_MAP) uniform sampler2DArrayShadow shadow_map;
 layout(set = SET_FRAME, binding = BINDING_SHADOW_MAP_HARD) uniform sampler2DArrayShadow shadow_map_hard;
 layout(set = SET_FRAME, binding = BINDING_SHADOW_DEPTH) uniform sampler2DArray shadow_depth;
+// the Environment's cube map (render/environment.py): bound always, a black 1-texel cube without one
+layout(set = SET_FRAME, binding = BINDING_ENVIRONMENT) uniform samplerCube environment_map;

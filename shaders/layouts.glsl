@@ -20,6 +20,8 @@
 #define BINDING_SHADOW_MAP 7
 #define BINDING_SHADOW_MAP_HARD 8
 #define BINDING_SHADOW_DEPTH 9
+#define BINDING_ENVIRONMENT 10
+#define FEATURE_ENVIRONMENT 33554432
 #define SHADOW_HARD 0
 #define SHADOW_PCF 1
 #define SHADOW_PCSS 2
@@ -66,7 +68,7 @@
 
 // The frame's uniforms. Positions are relative to the render origin (the camera, unless
 // RenderOrigin is pinned).
-struct Globals {  // 288 bytes, std140
+struct Globals {  // 448 bytes, std140
     mat4 projection;            // offset 0: reverse-Z: near -> depth 1, far/infinity -> 0
     mat4 view;                  // offset 64: rotation, and the translation from the render origin to the camera
     vec4 eye;                   // offset 128: xyz: the camera relative to the render origin (zero by default)
@@ -76,6 +78,8 @@ struct Globals {  // 288 bytes, std140
     uvec4 light_tiles;          // offset 240: x tiles across (0: no light grid), y tiles down, z mask words per tile, w tile side in pixels
     uvec4 light_bins;           // offset 256: x first uint of the light bounds, y first uint of the tile masks, zw 0
     vec4 bin_depth;             // offset 272: x bin near s, y LIGHT_BINS / ln(far / s): bin = floor(ln(max(distance, s) / s) * y); zw viewport size
+    vec4 environment;           // offset 288: the Environment (environment.glsl): x intensity, y its cube map's last mip level, z 1: image-based ambient, w 0
+    vec4 irradiance[9];         // offset 304: the environment's diffuse light as 9 spherical harmonics (rgb), environment_maps.py
 };
 
 // Point and spot lights first (sorted far to near from the camera), then directional ones.
@@ -93,7 +97,7 @@ struct Instance {  // 64 bytes, std430
 };
 
 // A material (render/materials.py): what the fragment shader's shading model reads.
-struct Material {  // 112 bytes, std430
+struct Material {  // 128 bytes, std430
     vec4 base_color;            // offset 0: linear rgba
     vec4 emissive;              // offset 16: linear rgb, w: 0
     vec4 surface;               // offset 32: x metallic, y roughness, z shininess, w specular strength times Material.normalisation
@@ -101,6 +105,7 @@ struct Material {  // 112 bytes, std430
     uvec4 kind;                 // offset 64: x shading model (MODEL_*), y ALPHA_* mode, z double-sided, w 0
     uvec4 textures;             // offset 80: base colour, metallic-roughness, normal, emissive: page << 16 | layer, or NO_TEXTURE
     uvec4 textures2;            // offset 96: x occlusion texture (as above); yzw: NO_TEXTURE
+    vec4 environment;           // offset 112: x reflectivity, y refraction, z index of refraction, w 0 (environment.glsl)
 };
 
 // The indirect path's key table: one row per key = mesh * 2 + mirrored.

@@ -1,6 +1,7 @@
 // The mesh fragment shader body: mesh.frag, and mesh_textured.frag (TEXTURED: the material's
 // textures, sampled from the texture pages; render/texture_pages.py says why pages).
 #include "light_grid.glsl"
+#include "environment.glsl"
 
 layout(location = 0) in vec3 v_position;
 layout(location = 1) in vec3 v_normal;
@@ -93,7 +94,12 @@ void main() {
         vec3 eye = g.eye.xyz - v_position;
         float e2 = dot(eye, eye);
         vec3 to_eye = e2 > 1e-24 ? eye * inversesqrt(e2) : vec3(0.0, 0.0, 1.0);
-        color = g.ambient.rgb * (g.ambient.a * occlusion) * m.base_color.rgb;
+        bool environment = (MATERIAL_FEATURES & FEATURE_ENVIRONMENT) != 0u;
+        if (environment && g.environment.z > 0.0) {
+            color = environment_ambient(m, model, n, to_eye, occlusion);   // image-based ambient
+        } else {
+            color = g.ambient.rgb * (g.ambient.a * occlusion) * m.base_color.rgb;
+        }
 #if defined(GBUFFER)
         out_normal_roughness = vec4(n, m.surface.y);
         out_base_metallic = vec4(m.base_color.rgb, m.surface.x);
@@ -138,6 +144,11 @@ void main() {
 #else
         for (uint i = 0u; i < g.counts.x; ++i) {
             color += light_term(i, m, model, v_position, n, to_eye, shadowed);
+        }
+#endif
+#ifndef GBUFFER
+        if (environment) {   // mirroring materials are drawn forward (Materials.set_aside), never here with GBUFFER
+            color = environment_surface(color, m, n, to_eye);
         }
 #endif
     }

@@ -96,7 +96,7 @@ def test_missing_model_file_and_debug_traceback(tmp_path):
     [
         (["cube", "--width", "0", "--headless"], "above 0"),
         (["cube", "--frames", "-2", "--headless"], "above 0"),
-        (["cube", "extra.obj", "--headless"], "only goes with the model scene"),
+        (["cube", "extra.obj", "--headless"], "a path goes with the model scene"),
         (["cube", "--present", "sometimes"], "invalid choice"),
     ],
 )

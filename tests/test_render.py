@@ -57,7 +57,12 @@ def test_seed_scenes_match_golden_images(scene, tmp_path):
 
 @pytest.mark.parametrize(
     "scene, lights, instances, options",
-    [("materials", 3, 37, {}), ("lights", 257, None, {"lights": 256}), ("shadows", 3, 5, {})],  # lights: clustered
+    [
+        ("materials", 3, 37, {}),
+        ("lights", 257, None, {"lights": 256}),  # clustered
+        ("shadows", 3, 5, {}),
+        ("environment", 1, 6, {}),  # its generated sky, mirrored, refracted and lighting the ambient
+    ],
 )
 def test_demo_scenes_match_golden_images(scene, lights, instances, options, tmp_path):
     result = render(scene, screenshot=str(tmp_path / f"{scene}.png"), **options)

@@ -149,9 +149,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="cube, grid100, model: the seed's scenes; scaling: --entities moving entities; "
         "materials: the shading models side by side; lights: --lights small lights (default 1,024); "
         "shadows: a cube, a pillar and boxes under casting lights (--no-shadows: none cast); "
+        "environment: spheres mirroring, refracting and lit by a sky (PATH: an equirectangular .hdr or image); "
         "motion: text-mode ECS scene (no rendering)",
     )
-    demo.add_argument("path", nargs="?", help="model file for the model scene (OBJ, glTF/GLB, PLY, STL)")
+    demo.add_argument(
+        "path",
+        nargs="?",
+        help="model file for the model scene (OBJ, glTF/GLB, PLY, STL); sky image for the environment scene",
+    )
     editor = sub.add_parser("editor", help="the ImGui editor and Perf window on demo scenes", parents=[common])
     editor.add_argument(
         "scenes",
@@ -230,8 +235,8 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
     from .report import report_validation
     from .settings import RunOptions
 
-    if args.path is not None and args.scene != "model":
-        raise UsageError(f"a model path only goes with the model scene, not {args.scene!r}")
+    if args.path is not None and args.scene not in ("model", "environment"):
+        raise UsageError(f"a path goes with the model scene (a model) or environment (a sky), not {args.scene!r}")
     editor = editor_scenes is not None
     check_flags_apply(args, editor_scenes or (args.scene,), editor)
     options = RunOptions(

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..components import Camera, Mesh, PointLight, Transform, active_camera
+from ..components import Camera, Environment, Mesh, PointLight, Transform, active_camera
 from ..ecs.world import World
 from ..gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
 from ..maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
@@ -107,7 +107,7 @@ class Editor:
         imgui = self.imgui
         if self.shadow_maps is not None:
             self.shadow_maps.begin_frame()
-        self._settings_window(stats)
+        self._settings_window(world, stats)
         imgui.set_next_window_pos((10, 330), imgui.Cond_.first_use_ever.value)
         imgui.set_next_window_size((300, 300), imgui.Cond_.first_use_ever.value)
         if imgui.begin("Entities")[0]:
@@ -125,7 +125,7 @@ class Editor:
             imgui.end_tab_bar()
         imgui.end()
 
-    def _settings_window(self, stats: SceneStats) -> None:
+    def _settings_window(self, world: World, stats: SceneStats) -> None:
         imgui = self.imgui
         req = self.requested
         imgui.set_next_window_pos((10, 10), imgui.Cond_.first_use_ever.value)
@@ -143,6 +143,7 @@ class Editor:
             req.light_culling = _combo(imgui, "light culling", req.light_culling, LIGHT_MODES)
             if req.present is not None:
                 req.present = _combo(imgui, "present", req.present, PRESENT_MODES)
+            self._environment(world)
             imgui.separator()
             imgui.text(f"entities   {stats.entities:,}")
             imgui.text(f"visible    {stats.visible:,}")
@@ -151,6 +152,20 @@ class Editor:
             if self.settings_status:
                 imgui.text_colored((1.0, 0.4, 0.3, 1.0), self.settings_status)
         imgui.end()
+
+    def _environment(self, world: World) -> None:
+        """The world's Environment, when it has one: its intensity, sky and image-based ambient
+        (a new Environment object; the renderer keeps the image, whose source is the same)."""
+        env = world.resources.get(Environment)
+        if env is None:
+            return
+        imgui = self.imgui
+        imgui.separator()
+        changed, intensity = imgui.slider_float("environment", env.intensity, 0.0, 8.0)
+        sky_changed, sky = imgui.checkbox("sky", env.sky)
+        ambient_changed, ambient = imgui.checkbox("image-based ambient", env.ambient)
+        if changed or sky_changed or ambient_changed:
+            world.resources[Environment] = replace(env, intensity=max(intensity, 0.0), sky=sky, ambient=ambient)
 
     # ----------------------------------------------------------------- browser
     def component_names(self, world: World) -> list[str]:

@@ -1,6 +1,7 @@
 """A sampled 2D array image with a full mip chain and two views of the same texels: sRGB (the
-sampler decodes to linear before filtering) and UNORM (data read as stored). Layers are uploaded
-from NumPy mip chains through a bounded staging buffer."""
+sampler decodes to linear before filtering) and UNORM (data read as stored); or, with `cube`, six
+half-float RGBA layers seen as one cube map (render/environment.py). Layers are uploaded from
+NumPy mip chains through a bounded staging buffer."""
 
 from __future__ import annotations
 
@@ -17,22 +18,30 @@ _STAGING_BYTES = 64 * 2**20  # one submit copies at most this much (a 4096^2 lay
 
 
 class ArrayImage:
-    """side x side texels, `levels` mips, `layers` layers; `srgb_view` and `unorm_view`."""
+    """side x side texels, `levels` mips, `layers` layers; `srgb_view` and `unorm_view` (with
+    `cube`: 6 RGBA16F layers and `cube_view`)."""
 
-    def __init__(self, device: Device, side: int, layers: int) -> None:
+    def __init__(self, device: Device, side: int, layers: int, cube: bool = False) -> None:
         vk = device.vk
         self.device = device
-        self.side, self.layers = side, layers
+        self.side, self.layers = side, 6 if cube else layers
         self.levels = side.bit_length()  # side is a power of two: log2(side) + 1
+        if cube:
+            flags, storage = vk.VK_IMAGE_CREATE_CUBE_COMPATIBLE_BIT, vk.VK_FORMAT_R16G16B16A16_SFLOAT
+            views = [(vk.VK_FORMAT_R16G16B16A16_SFLOAT, vk.VK_IMAGE_VIEW_TYPE_CUBE)]
+        else:
+            flags, storage = vk.VK_IMAGE_CREATE_MUTABLE_FORMAT_BIT, vk.VK_FORMAT_R8G8B8A8_UNORM
+            kind = vk.VK_IMAGE_VIEW_TYPE_2D_ARRAY
+            views = [(vk.VK_FORMAT_R8G8B8A8_SRGB, kind), (vk.VK_FORMAT_R8G8B8A8_UNORM, kind)]
         self.handle = vk.vkCreateImage(
             device.handle,
             vk.VkImageCreateInfo(
-                flags=vk.VK_IMAGE_CREATE_MUTABLE_FORMAT_BIT,
+                flags=flags,
                 imageType=vk.VK_IMAGE_TYPE_2D,
-                format=vk.VK_FORMAT_R8G8B8A8_UNORM,
+                format=storage,
                 extent=vk.VkExtent3D(side, side, 1),
                 mipLevels=self.levels,
-                arrayLayers=layers,
+                arrayLayers=self.layers,
                 samples=vk.VK_SAMPLE_COUNT_1_BIT,
                 tiling=vk.VK_IMAGE_TILING_OPTIMAL,
                 usage=vk.VK_IMAGE_USAGE_SAMPLED_BIT | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT,
@@ -47,13 +56,13 @@ class ArrayImage:
             req = vk.vkGetImageMemoryRequirements(device.handle, self.handle)
             self.allocation = device.allocator.allocate(req, DEVICE, "image")
             vk.vkBindImageMemory(device.handle, self.handle, self.allocation.memory, self.allocation.offset)
-            for fmt in (vk.VK_FORMAT_R8G8B8A8_SRGB, vk.VK_FORMAT_R8G8B8A8_UNORM):
+            for fmt, view_type in views:
                 self.views.append(
                     vk.vkCreateImageView(
                         device.handle,
                         vk.VkImageViewCreateInfo(
                             image=self.handle,
-                            viewType=vk.VK_IMAGE_VIEW_TYPE_2D_ARRAY,
+                            viewType=view_type,
                             format=fmt,
                             subresourceRange=self._range(),
                         ),
@@ -72,6 +81,10 @@ class ArrayImage:
     def unorm_view(self) -> Any:
         return self.views[1]
 
+    @property
+    def cube_view(self) -> Any:
+        return self.views[0]
+
     def _range(self) -> Any:
         vk = self.device.vk
         return vk.VkImageSubresourceRange(
@@ -83,8 +96,9 @@ class ArrayImage:
         )
 
     def upload(self, chains: Sequence[Sequence[np.ndarray]]) -> None:
-        """Fill layers 0.. with `chains` (per layer: its levels, RGBA8, largest first); the rest
-        of the layers stay undefined. Ends with every layer ready for sampling."""
+        """Fill layers 0.. with `chains` (per layer: its levels, RGBA8, or RGBA16F for a cube,
+        largest first); the rest of the layers stay undefined. Ends with every layer ready for
+        sampling."""
         vk = self.device.vk
         if len(chains) > self.layers:
             raise ValueError(f"{len(chains)} layers for an image of {self.layers}")
@@ -93,7 +107,7 @@ class ArrayImage:
         size = 0
         for layer, chain in enumerate(chains):
             if len(chain) != self.levels or chain[0].shape != (self.side, self.side, 4):
-                raise ValueError(f"layer {layer}: needs {self.levels} levels from {self.side} x {self.side} RGBA8")
+                raise ValueError(f"layer {layer}: needs {self.levels} levels from {self.side} x {self.side} RGBA")
             nbytes = sum(level.nbytes for level in chain)
             if batch and size + nbytes > _STAGING_BYTES:
                 self._copy(batch, size)
@@ -112,7 +126,7 @@ class ArrayImage:
             regions = []
             offset = 0
             for layer, level, pixels in batch:
-                raw[offset : offset + pixels.nbytes] = np.ascontiguousarray(pixels).reshape(-1)
+                raw[offset : offset + pixels.nbytes] = np.ascontiguousarray(pixels).view(np.uint8).reshape(-1)
                 side = pixels.shape[0]
                 regions.append(
                     vk.VkBufferImageCopy(

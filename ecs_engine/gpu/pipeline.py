@@ -65,6 +65,7 @@ class GraphicsPipelineSpec:
     samples: int = 1  # the subpass's MSAA count
     color_attachments: int = 1  # the subpass's; all written alike (the G-buffer pass has four)
     depth_bias: tuple[float, float] | None = None  # (constant, slope) factors: shadow casters
+    depth_or_equal: bool = False  # compare GREATER_OR_EQUAL: the sky, drawn at depth 0 where nothing is
 
 
 def specialization(vk: Any, values: tuple[int, ...]) -> tuple[Any, Any]:
@@ -136,7 +137,7 @@ def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
             pDepthStencilState=vk.VkPipelineDepthStencilStateCreateInfo(
                 depthTestEnable=vk.VK_TRUE if spec.depth_test else vk.VK_FALSE,
                 depthWriteEnable=vk.VK_TRUE if spec.depth_write else vk.VK_FALSE,
-                depthCompareOp=vk.VK_COMPARE_OP_GREATER,
+                depthCompareOp=vk.VK_COMPARE_OP_GREATER_OR_EQUAL if spec.depth_or_equal else vk.VK_COMPARE_OP_GREATER,
             ),
             pColorBlendState=vk.VkPipelineColorBlendStateCreateInfo(pAttachments=[blend] * spec.color_attachments),
             pDynamicState=vk.VkPipelineDynamicStateCreateInfo(

@@ -10,7 +10,7 @@ rebuilding matrices, planes and chunk lists would spend a good part of it.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -74,6 +74,8 @@ class SetAsideRows:
     model: np.ndarray
     handle: np.ndarray
     material: np.ndarray
+    # the same rows as shadow casters, per table (its shadow tags), offsets after the chunks' rows
+    casters: list[Chunk] = field(default_factory=list)
 
     def __len__(self) -> int:
         return len(self.handle)
@@ -92,6 +94,11 @@ class FrameData:
     chunks: list[Chunk]
     candidates: int  # rows with a mesh in the chunks (opaque and masked materials), before culling
     set_aside: SetAsideRows | None = None  # None: no material is blended or has its own fill
+
+    @property
+    def all_rows(self) -> int:
+        """Rows with a mesh: the chunks', then the set-aside ones (a shadow view's rows: both cast)."""
+        return self.candidates + (len(self.set_aside) if self.set_aside is not None else 0)
 
 
 class FrameExtractor:
@@ -159,7 +166,7 @@ class FrameExtractor:
                 self._split.append((np.flatnonzero(~flags), np.flatnonzero(flags)))
             self._split_key = key
         opaque: list[Chunk] = []
-        models, handles, materials = [], [], []
+        models, handles, materials, flags = [], [], [], []
         offset = 0
         for batch, (keep, blended) in zip(query, self._split):
             m, mesh = batch[ModelMatrix], batch[Mesh]
@@ -170,7 +177,12 @@ class FrameExtractor:
             models.append(m.model[blended])
             handles.append(mesh.handle[blended])
             materials.append(mesh.material[blended])
+            flags.append(shadow_flags(batch))
         rows = SetAsideRows(np.concatenate(models), np.concatenate(handles), np.concatenate(materials))
+        for model, handle, material, tags in zip(models, handles, materials, flags, strict=True):
+            if len(handle):  # a shadow view's rows: the chunks', then these
+                rows.casters.append(Chunk(model, handle, material, offset, tags))
+                offset += len(handle)
         return opaque, rows
 
     def view(self, cam: CameraMatrices, origin: np.ndarray, origin_key: bytes) -> np.ndarray:

@@ -6,7 +6,8 @@ chunk_paths.py's record_keyed), a chunk is one job for every view: its rows are 
 the camera and each shadow view in one pass over their model matrices (shadow_pass.py's
 record_chunk, instance_rows.cull_views), then each view's visible rows are written and
 recorded. Chunks tagged NotShadowCaster, and every chunk of a path that culls on the GPU
-(indirect), are camera jobs of their own; the latter's casters are then shadow-only jobs.
+(indirect), are camera jobs of their own; the latter's casters are then shadow-only jobs, as are
+the set-aside rows that cast (SetAsideRows.casters).
 """
 
 from __future__ import annotations
@@ -21,7 +22,10 @@ CAMERA, SHADOWS, BOTH = "camera", "shadows", "camera and shadows"
 
 
 class FrameJobs:
-    def __init__(self, path: RenderPath, inputs: FrameInputs, shadows: ShadowPass, chunks: list[Chunk]) -> None:
+    def __init__(
+        self, path: RenderPath, inputs: FrameInputs, shadows: ShadowPass, chunks: list[Chunk], aside: list[Chunk]
+    ) -> None:
+        """`aside`: the set-aside rows as shadow casters (SetAsideRows.casters), shadow-only jobs."""
         self.path, self.inputs, self.shadows = path, inputs, shadows
         self.work: list[tuple[str, Chunk]] = [(CAMERA, c) for c in chunks]
         if shadows.active:
@@ -30,6 +34,7 @@ class FrameJobs:
                 self.work = [(BOTH if caster else CAMERA, c) for caster, c in zip(casters, chunks, strict=True)]
             else:
                 self.work += [(SHADOWS, c) for caster, c in zip(casters, chunks, strict=True) if caster]
+            self.work += [(SHADOWS, c) for c in aside if not c.flags & NOT_CASTER]
 
     def run(self, item: tuple[str, Chunk]) -> tuple[ChunkResult | None, list[ChunkResult]]:
         """One job: (the camera's result or None, the shadow views' results)."""

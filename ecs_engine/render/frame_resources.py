@@ -17,6 +17,7 @@ from .camera import CameraMatrices
 from .frame_data import FrameData
 from .layouts import (
     BINDING_CLUSTERS,
+    BINDING_ENVIRONMENT,
     BINDING_GLOBALS,
     BINDING_INSTANCES,
     BINDING_LIGHTS,
@@ -55,11 +56,12 @@ def frame_sets(device: Device, frames: int) -> tuple[DescriptorSetLayout, Descri
         [(BINDING_GLOBALS, uniform, stages)]
         + [(b, ssbo, stages) for b in buffers]
         + [(BINDING_TEXTURES, sampler, vk.VK_SHADER_STAGE_FRAGMENT_BIT, TEXTURE_PAGES)]
-        + [(b, sampler, stages) for b in (BINDING_SHADOW_MAP, BINDING_SHADOW_MAP_HARD, BINDING_SHADOW_DEPTH)],
+        + [(b, sampler, stages) for b in (BINDING_SHADOW_MAP, BINDING_SHADOW_MAP_HARD, BINDING_SHADOW_DEPTH)]
+        + [(BINDING_ENVIRONMENT, sampler, vk.VK_SHADER_STAGE_FRAGMENT_BIT)],
     )
     try:
         pool = DescriptorPool(
-            device, frames, {uniform: frames, ssbo: len(buffers) * frames, sampler: (TEXTURE_PAGES + 3) * frames}
+            device, frames, {uniform: frames, ssbo: len(buffers) * frames, sampler: (TEXTURE_PAGES + 4) * frames}
         )
     except BaseException:
         layout.destroy()
@@ -83,11 +85,18 @@ class FrameResources:
     materials_written: tuple[Materials, int, int] | None = None
     shadow_maps: Any = None  # the gpu.shadow_maps.ShadowMaps the set names
     pages: Any = None  # the TexturePages the set names
+    environment: Any = None  # the render.environment.EnvironmentMap the set names
     set_version: int = 0  # bumped whenever the set is written: copies of it (shadow views') are then stale
 
     @classmethod
     def make(
-        cls, device: Device, pool: DescriptorPool, layout: DescriptorSetLayout, pages: TexturePages, shadow_maps: Any
+        cls,
+        device: Device,
+        pool: DescriptorPool,
+        layout: DescriptorSetLayout,
+        pages: TexturePages,
+        shadow_maps: Any,
+        environment: Any,
     ) -> FrameResources:
         vk = device.vk
         ssbo = vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT
@@ -109,6 +118,7 @@ class FrameResources:
             set_array=vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]),
             shadow_maps=shadow_maps,
             pages=pages,
+            environment=environment,
         )
         frame.write_set(device, pages)
         return frame
@@ -132,6 +142,12 @@ class FrameResources:
         )
         write_images(device, self.descriptor_set, BINDING_TEXTURES, pages.image_infos())
         self.name_shadow_maps(device, self.shadow_maps)
+        self.name_environment(device)
+
+    def name_environment(self, device: Device) -> None:
+        """Point the set at the environment's cube map (after it was loaded anew)."""
+        self.set_version += 1
+        write_images(device, self.descriptor_set, BINDING_ENVIRONMENT, [self.environment.image_info()])
 
     def name_shadow_maps(self, device: Device, maps: Any) -> None:
         """Point the set at `maps` (a gpu.shadow_maps.ShadowMaps), filtering and hard samplers."""
@@ -213,7 +229,8 @@ class FrameResources:
     ) -> None:
         """The frame's uniforms, rewritten only when something in them changed (the slot's
         mapped buffer keeps what was last written there)."""
-        written = (cam, origin_key, light_count, positional, tuple(ambient), grid, deferred)
+        environment = self.environment
+        written = (cam, origin_key, light_count, positional, tuple(ambient), grid, deferred, environment.source)
         last = self.written
         if last is not None and last[0] is cam and last[1:] == written[1:]:
             return
@@ -223,6 +240,7 @@ class FrameResources:
         g["eye"][0, :3] = cam.position - origin  # float64 difference, then the cast
         g["ambient"] = ambient
         g["counts"] = (light_count, positional, 0, 0)
+        g["environment"], g["irradiance"] = environment.globals()
         if grid is not None or deferred:  # the grid's tile planes; the deferred lighting's positions
             g["inverse_projection"] = np.linalg.inv(cam.projection).T
         g["light_tiles"] = 0  # no grid (the deferred lighting then loops over every light)

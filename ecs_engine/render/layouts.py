@@ -45,6 +45,17 @@ GLOBALS = Struct(
             "vec4",
             "x bin near s, y LIGHT_BINS / ln(far / s): bin = floor(ln(max(distance, s) / s) * y); zw viewport size",
         ),
+        (
+            "environment",
+            "vec4",
+            "the Environment (environment.glsl): x intensity, y its cube map's last mip level, "
+            "z 1: image-based ambient, w 0",
+        ),
+        (
+            "irradiance",
+            "vec4[9]",
+            "the environment's diffuse light as 9 spherical harmonics (rgb), environment_maps.py",
+        ),
     ],
     std140=True,
     doc="The frame's uniforms. Positions are relative to the render origin (the camera, unless\n"
@@ -85,6 +96,7 @@ MATERIAL = Struct(
         ("kind", "uvec4", "x shading model (MODEL_*), y ALPHA_* mode, z double-sided, w 0"),
         ("textures", "uvec4", "base colour, metallic-roughness, normal, emissive: page << 16 | layer, or NO_TEXTURE"),
         ("textures2", "uvec4", "x occlusion texture (as above); yzw: NO_TEXTURE"),
+        ("environment", "vec4", "x reflectivity, y refraction, z index of refraction, w 0 (environment.glsl)"),
     ],
     doc="A material (render/materials.py): what the fragment shader's shading model reads.",
 )
@@ -189,6 +201,7 @@ BINDING_CLUSTERS = 5  # clustered lights (light_clusters.py): distance bins and 
 # shadows (render/shadow_pass.py): the views' rows, the map array with a filtering and a nearest
 # comparison sampler (PCF and PCSS; hard shadows), and read as depths (PCSS's blocker search)
 BINDING_SHADOW_VIEWS, BINDING_SHADOW_MAP, BINDING_SHADOW_MAP_HARD, BINDING_SHADOW_DEPTH = 6, 7, 8, 9
+BINDING_ENVIRONMENT = 10  # the Environment's cube map (a black 1-texel cube without one)
 TEXTURE_PAGES = 18  # texture_pages.py: two views (sRGB, UNORM) per size class, 16 to 4096 texels
 BINDING_IDS, BINDING_KEYS, BINDING_DRAW_STATE, BINDING_COMMANDS = 0, 1, 2, 3
 # shading models: the values of Material.kind.x and bits 0-5 of the mesh pipelines' MATERIAL_FEATURES
@@ -204,6 +217,7 @@ FEATURE_DIRECTIONAL_LIGHTS = 1 << 21  # the scene has directional lights
 FEATURE_EMISSIVE = 1 << 22  # some material glows (emissive colour or texture): without, none is read
 FEATURE_BLEND = 1 << 23  # some material is alpha-blended: without, every fragment's alpha is 1
 FEATURE_SHADOWS = 1 << 24  # some light casts shadows: without, no shadow map is read
+FEATURE_ENVIRONMENT = 1 << 25  # the world has an Environment: its sky, reflections and ambient are read
 CLUSTER_GROUP = 64  # light_bounds.comp's and light_tiles.comp's local size
 MAX_GLOBAL_LIGHTS = 256  # directional and unbounded lights every fragment loops over, when clustered
 LIGHT_BINS = 1024  # distance bins: exponential shells around the eye, each with its light index range
@@ -260,6 +274,8 @@ DEFINES = {
     "BINDING_SHADOW_MAP": BINDING_SHADOW_MAP,
     "BINDING_SHADOW_MAP_HARD": BINDING_SHADOW_MAP_HARD,
     "BINDING_SHADOW_DEPTH": BINDING_SHADOW_DEPTH,
+    "BINDING_ENVIRONMENT": BINDING_ENVIRONMENT,
+    "FEATURE_ENVIRONMENT": FEATURE_ENVIRONMENT,
     "SHADOW_HARD": SHADOW_HARD,
     "SHADOW_PCF": SHADOW_PCF,
     "SHADOW_PCSS": SHADOW_PCSS,

@@ -105,6 +105,13 @@ class Material:
     occlusion_texture: int | None = None  # linear: R
     normal_scale: float = 1.0
     occlusion_strength: float = 1.0
+    # the world's Environment seen in the surface (environment.glsl), any shading model: a mirror
+    # image weighted by Schlick's Fresnel with `reflectivity` at normal incidence, and a refracted
+    # image (glass) by `refraction`, bent by `ior` and mixed with its reflection by Fresnel. Blurred
+    # by roughness. Such materials are drawn forward, after the chunks (set_aside_pass.py).
+    reflectivity: float = 0.0
+    refraction: float = 0.0
+    ior: float = 1.5
 
     def __post_init__(self) -> None:
         for name, size in (("base_color", 4), ("emissive", 3)):
@@ -136,6 +143,9 @@ class Material:
             ("alpha_cutoff", 0.0, 1.0),
             ("normal_scale", -1e3, 1e3),
             ("occlusion_strength", 0.0, 1.0),
+            ("reflectivity", 0.0, 1.0),
+            ("refraction", 0.0, 1.0),
+            ("ior", 1.0, 3.0),
         ):
             value = getattr(self, name)
             if not isinstance(value, (int, float, np.number)) or not (math.isfinite(value) and low <= value <= high):
@@ -179,7 +189,13 @@ class Material:
         handles = [NO_TEXTURE if (h := getattr(self, name)) is None else h for name in TEXTURE_FIELDS]
         out["textures"] = handles[:4]
         out["textures2"] = (handles[4], NO_TEXTURE, NO_TEXTURE, NO_TEXTURE)
+        out["environment"] = (self.reflectivity, self.refraction, self.ior, 0.0)
         return out
+
+    @property
+    def mirrors(self) -> bool:
+        """Whether the environment shows in it (reflection or refraction)."""
+        return self.reflectivity > 0 or self.refraction > 0
 
 
 def _palette_entry(name: str, color: tuple[float, float, float], strength: float, shininess: float) -> Material:
@@ -211,7 +227,8 @@ class Materials:
         self.table = np.zeros(max(len(palette), 1), MATERIAL.dtype)
         self.blend = np.zeros(len(self.table), bool)  # per handle: alpha-blended
         self.fills = np.zeros(len(self.table), np.uint8)  # per handle: index into FILLS
-        self._aside = 0  # materials whose rows are drawn apart (blended, or not solid)
+        self.mirrors = np.zeros(len(self.table), bool)  # per handle: reflects or refracts the environment
+        self._aside = 0  # materials whose rows are drawn apart (blended, not solid, or mirroring)
         self.blends = False  # some material is alpha-blended
         self.version = 0
         self.features = 0  # what the shader needs: bit per shading model some material uses, FEATURE_*
@@ -229,6 +246,7 @@ class Materials:
             self.table = grown
             self.blend = np.concatenate([self.blend, np.zeros(len(grown) - len(self.blend), bool)])
             self.fills = np.concatenate([self.fills, np.zeros(len(grown) - len(self.fills), np.uint8)])
+            self.mirrors = np.concatenate([self.mirrors, np.zeros(len(grown) - len(self.mirrors), bool)])
         self._materials.append(material)
         self._write(handle)
         return handle
@@ -260,8 +278,9 @@ class Materials:
         material = self._materials[handle]
         self.blend[handle] = material.alpha_mode == "blend"
         self.fills[handle] = FILLS.index(material.fill)
+        self.mirrors[handle] = material.mirrors
         n = len(self._materials)
-        self._aside = int((self.blend[:n] | (self.fills[:n] != 0)).sum())
+        self._aside = int(self._aside_mask(n).sum())
         self.blends = bool(self.blend[:n].any())  # some material is alpha-blended
         self.features |= 1 << SHADING_MODELS[material.model]
         if material.alpha_mode == "mask":
@@ -288,12 +307,16 @@ class Materials:
         return iter(self._materials)
 
     def set_aside(self) -> np.ndarray | None:
-        """Per material, whether its rows are drawn apart from the chunks (blended, or a fill of
-        its own; set_aside_pass.py); None when none is (the usual case)."""
+        """Per material, whether its rows are drawn apart from the chunks (blended, a fill of its
+        own, or mirroring the environment; set_aside_pass.py); None when none is (the usual case)."""
         if not self._aside:
             return None
-        n = len(self._materials)
-        return self.blend[:n] | (self.fills[:n] != 0)
+        return self._aside_mask(len(self._materials))
+
+    def _aside_mask(self, n: int) -> np.ndarray:
+        # mirroring materials are drawn forward even in the deferred form: their surface mixes
+        # the lit colour with the environment, after every light (set_aside_pass.py)
+        return self.blend[:n] | (self.fills[:n] != 0) | self.mirrors[:n]
 
     def rows(self) -> np.ndarray:
         """The table's used rows (a view)."""

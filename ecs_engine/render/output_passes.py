@@ -1,12 +1,13 @@
 """What the frame's primary command buffer records around the render path's secondaries, by the
 target's form (gpu/render_pass.py's FORMS):
 
-- `direct` and `hdr`: the target's render pass: the chunks' and the set-aside rows' secondaries
-  in subpass 0, the light billboards (light_pass.py) in subpass 1, the tone map (tone_map.py,
-  HDR only) and the overlay (the editor's ImGui) in subpass 2 (direct: the overlay in subpass 1);
+- `direct` and `hdr`: the target's render pass: the chunks', the sky's (sky_pass.py) and the
+  set-aside rows' secondaries in subpass 0, the light billboards (light_pass.py) in subpass 1,
+  the tone map (tone_map.py, HDR only) and the overlay (the editor's ImGui) in subpass 2 (direct:
+  the overlay in subpass 1);
 - `deferred`: the G-buffer pass with the chunks' secondaries (gpu/gbuffer.py), the lighting
-  compute pass (deferred_pass.py), then the target's render pass as above with the set-aside rows
-  alone in subpass 0.
+  compute pass (deferred_pass.py), then the target's render pass as above with the sky and the
+  set-aside rows alone in subpass 0.
 
 It also keeps, per framebuffer, the structs a frame needs (path.TargetState), and remakes what
 was made against the target's render pass when the target changes form.
@@ -22,6 +23,7 @@ from ..gpu.secondary import SecondaryBuffers
 from .deferred_pass import DeferredPass
 from .light_pass import LightPass
 from .path import TargetState
+from .sky_pass import SkyPass
 from .tone_map import ToneMapPass
 
 
@@ -45,9 +47,11 @@ class OutputPasses:
         )
         self.tone_map_pass: ToneMapPass | None = None
         self.deferred: DeferredPass | None = None
+        self.sky: SkyPass | None = None
         try:
             self.tone_map_pass = ToneMapPass(device, target.render_pass)
             self.deferred = DeferredPass(device, frame_set_layout)
+            self.sky = SkyPass(device, frame_set_layout, secondaries, target)
         except BaseException:
             self.destroy()
             raise
@@ -94,6 +98,8 @@ class OutputPasses:
         was made against the old one."""
         assert self.tone_map_pass is not None
         self.light_pass.retarget(self.target.render_pass)
+        assert self.sky is not None
+        self.sky.retarget()
         self.tone_map_pass.destroy()  # its descriptor sets name the old HDR views
         self.tone_map_pass = ToneMapPass(self.device, self.target.render_pass)
         self._targets.clear()  # their begin infos name the old render passes and framebuffers
@@ -110,11 +116,12 @@ class OutputPasses:
         features: int,
         overlay: Any = None,
         slot: int = 0,
+        sky: bool = False,
     ) -> int:
         """Raw cffi calls with structs made once (see gpu/frames.py for why). `chunks`: the path's
         secondaries; `aside`: the set-aside rows' or None; `billboards` point and spot lights get
-        one; `features`: the mesh pipelines' MATERIAL_FEATURES (the lighting's too). Returns the
-        light pass's draws."""
+        one; `features`: the mesh pipelines' MATERIAL_FEATURES (the lighting's too); `sky`: the
+        Environment is drawn behind. Returns the light pass's draws."""
         vk = self.vk
         lib = vk.lib
         target = self.target
@@ -128,6 +135,9 @@ class OutputPasses:
             extent = state.area.extent
             self.deferred.record(cb, frame_set[0], target.attachments, features, extent.width, extent.height)
             secondaries = []
+        if sky:  # after the opaque chunks, before the blended rows
+            assert self.sky is not None
+            secondaries = [*secondaries, self.sky.record(state, frame_set, slot)]
         if aside is not None:
             secondaries = [*secondaries, aside]  # after every chunk's rows
         lib.vkCmdBeginRenderPass(cb, state.pass_begin_ptr, vk.VK_SUBPASS_CONTENTS_SECONDARY_COMMAND_BUFFERS)
@@ -146,6 +156,8 @@ class OutputPasses:
 
     def destroy(self) -> None:
         self.light_pass.destroy()
+        if self.sky is not None:
+            self.sky.destroy()
         if self.tone_map_pass is not None:
             self.tone_map_pass.destroy()
         if self.deferred is not None:

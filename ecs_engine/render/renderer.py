@@ -32,6 +32,7 @@ from ..gpu.frames import FrameRing
 from ..gpu.secondary import SecondaryBuffers
 from ..jobs import JobPool
 from .chunk_paths import RECORDERS, InstancedPath, PerEntityPath, check_recorder
+from .environment import EnvironmentMap
 from .frame_data import FrameData, FrameExtractor
 from .frame_jobs import FrameJobs, job_name
 from .frame_resources import FrameResources, frame_sets
@@ -39,6 +40,7 @@ from .indirect_path import IndirectPath
 from .layouts import (
     BINDING_TEXTURES,
     FEATURE_CLUSTERED,
+    FEATURE_ENVIRONMENT,
     FEATURE_SHADOWS,
     INSTANCE,
 )
@@ -125,8 +127,11 @@ class Renderer:
             self._target_generation = target.generation
             self.texture_pages = TexturePages(device)
             self.shadows = ShadowPass(device, self.set_layout, self.secondaries, n)
+            self.environment = EnvironmentMap(device)
             self.per_frame = [
-                FrameResources.make(device, self.pool, self.set_layout, self.texture_pages, self.shadows.maps)
+                FrameResources.make(
+                    device, self.pool, self.set_layout, self.texture_pages, self.shadows.maps, self.environment
+                )
                 for _ in range(n)
             ]
             self.output = OutputPasses(
@@ -310,7 +315,11 @@ class Renderer:
         material_count = len(materials)
         data = self.extract(world, width, height, materials)  # before any GPU state: a bad world fails here
         views = self.shadows.plan(world, data)  # lights with a Shadow: the views their maps are drawn from
+        if self.environment.sync(world):  # a new Environment (the device was waited for)
+            for each in self.per_frame:
+                each.name_environment(self.device)
         features = light_features(data.lights, data.directional) | (FEATURE_SHADOWS if views else 0)
+        features |= FEATURE_ENVIRONMENT if self.environment.active else 0
         self._check_features(materials.features | features)
         grid = self._light_clusters(data, width, height, own_target=framebuffer is None)
         self._sync_textures(materials)
@@ -323,7 +332,7 @@ class Renderer:
             for each in self.per_frame:
                 each.name_shadow_maps(self.device, self.shadows.maps)
         camera_rows = self.path.rows_needed(data.candidates) + len(data.set_aside or ())
-        rows = camera_rows + len(views) * data.candidates  # each shadow view's rows after the camera's
+        rows = camera_rows + len(views) * data.all_rows  # each shadow view's rows after the camera's
         pf.ensure_capacity(self.device, self.texture_pages, rows, data.light_count, material_count, len(views))
         deferred, name = self.target.form == "deferred", partial(self.shadows.name_lights, data, views)
         positional = pf.write_frame(self.device, data, materials, grid, self.ambient, deferred, name if views else None)
@@ -347,7 +356,8 @@ class Renderer:
         t0 = time.perf_counter()
 
         self.shadows.prepare(views, inputs, pf, camera_rows, data, path, self._make_shadow_path)
-        work = FrameJobs(path, inputs, self.shadows, data.chunks)  # one batch: camera and shadow views
+        aside_casters = data.set_aside.casters if data.set_aside is not None else []
+        work = FrameJobs(path, inputs, self.shadows, data.chunks, aside_casters)  # one batch: camera and shadows
         done = self.jobs.map(work.run, work.work, job_name) if self.jobs is not None else list(map(work.run, work.work))
         results, shadow_buffers = work.results(done)
         record_ms = (time.perf_counter() - t0) * 1e3
@@ -368,6 +378,7 @@ class Renderer:
             self.material_features,
             self.overlay,
             slot,
+            sky=self.environment.sky,
         )
         if readback:
             self.target.record_readback(cb)
@@ -385,7 +396,7 @@ class Renderer:
             wait_ms=self.frames.last_wait_ms,
             record_ms=record_ms,
             chunks=len(data.chunks),
-            candidates=data.candidates,
+            candidates=data.all_rows,
         )
 
     def _record_set_aside(
@@ -476,18 +487,8 @@ class Renderer:
         """What the renderer made, in reverse (what a failed __init__ had not made yet is skipped)."""
         if self._set_aside is not None:
             self._set_aside.destroy()
-        names = (
-            "output",
-            "per_frame",
-            "shadows",
-            "texture_pages",
-            "lights",
-            "pool",
-            "set_layout",
-            "secondaries",
-            "frames",
-        )
-        for name in names:
+        names = "output per_frame shadows environment texture_pages lights pool set_layout secondaries frames"
+        for name in names.split():
             made = getattr(self, name, None)
             for part in made if isinstance(made, list) else [made] if made is not None else []:
                 part.destroy()

@@ -233,7 +233,7 @@ class ShadowPass:
             self._inputs = []
             return
         self.write_views(pf.shadow_views.array(SHADOW_VIEW.dtype, len(views)), views)
-        self._inputs = self.view_inputs(views, frame, pf.set_version, row_base, data.candidates)
+        self._inputs = self.view_inputs(views, frame, pf.set_version, row_base, data.all_rows)
         path = self._recording = self.path_for(camera.ctx, make)
         for view in self._inputs:
             path.begin_frame(view)
@@ -293,7 +293,10 @@ class ShadowPass:
         write_light_shadows(data.lights, data.directional, data.camera.position - data.origin, data.origin, first, rows)
 
     def write_views(self, out: np.ndarray, views: list[ShadowView]) -> None:
-        """SHADOW_VIEW rows of the views (shading.glsl's light_shadow reads them)."""
+        """SHADOW_VIEW rows of the views (shading.glsl's light_shadow reads them). Every layer
+        has the maps' resolution, the largest any light asks for; a view's filter steps and
+        texel size stay those of its own light's resolution (its bias, PCF width and PCSS search
+        in the texels it asked for), sampling the finer map."""
         for k, v in enumerate(views):
             perspective = v.kind != "cascade"
             p = v.projection.astype(np.float64)

@@ -1,0 +1,61 @@
+"""The Environment's sky (components/environment.py) behind the scene: one full-screen triangle
+at depth 0, the far plane of reverse-Z, whose depth test passes on equal, so it shades only
+pixels no mesh covered. Recorded into a secondary of the target's first subpass after the
+chunks' and before the set-aside rows' (blended ones must blend over it); in the deferred form,
+first in the target's pass, over the lit G-buffer image. The pipeline is made the first frame a
+world has a sky."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..gpu.device import Device
+from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
+from ..gpu.secondary import SecondaryBuffers, end_command_buffer
+from .path import TargetState
+
+
+class SkyPass:
+    def __init__(self, device: Device, frame_set_layout: Any, secondaries: SecondaryBuffers, target: Any) -> None:
+        self.device, self.vk, self.secondaries, self.target = device, device.vk, secondaries, target
+        self.layout = pipeline_layout(device, [frame_set_layout])
+        self.pipeline: Any = None
+
+    def record(self, state: TargetState, set_array: Any, slot: int) -> Any:
+        """The sky's secondary for this frame (raw calls, structs made once)."""
+        vk = self.vk
+        lib = vk.lib
+        if self.pipeline is None:
+            self.pipeline = graphics_pipeline(
+                self.device,
+                GraphicsPipelineSpec(
+                    "sky.vert",
+                    "sky.frag",
+                    layout=self.layout,
+                    render_pass=self.target.render_pass,
+                    cull_back=False,
+                    depth_write=False,
+                    depth_or_equal=True,
+                    samples=self.target.samples,
+                ),
+            )
+        cb = self.secondaries.begin(slot, state.aside_begin)
+        lib.vkCmdSetViewport(cb, 0, 1, state.viewport_ptr)
+        lib.vkCmdSetScissor(cb, 0, 1, state.area_ptr)
+        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.pipeline)
+        lib.vkCmdBindDescriptorSets(
+            cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1, set_array, 0, vk.ffi.NULL
+        )
+        lib.vkCmdDraw(cb, 3, 1, 0, 0)
+        end_command_buffer(vk, cb)
+        return cb
+
+    def retarget(self) -> None:
+        """The target's render pass changed: the pipeline is made again on first use."""
+        if self.pipeline is not None:
+            self.vk.vkDestroyPipeline(self.device.handle, self.pipeline, None)
+            self.pipeline = None
+
+    def destroy(self) -> None:
+        self.retarget()
+        self.vk.vkDestroyPipelineLayout(self.device.handle, self.layout, None)
