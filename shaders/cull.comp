@@ -2,6 +2,8 @@
 #extension GL_GOOGLE_include_directive : require
 // Indirect mode, pass 1: cull every instance row's bounding sphere against the frustum planes
 // (camera-relative, pointing inwards) and append the visible row's index to its key's region.
+// The camera's view and each shadow view (render/shadow_indirect.py) run it over the same rows,
+// each with its own set 1; a shadow view leaves out the rows tagged NotShadowCaster (pc.skip).
 #include "common.glsl"
 #define IDS_WRITABLE 1
 #include "indirect.glsl"
@@ -13,6 +15,7 @@ void main() {
     uint i = pc.first_row + gl_GlobalInvocationID.x;
     if (i >= pc.row_end) return;
     Instance inst = instances[i];
+    if ((inst.misc.w & pc.skip) != 0u) return;
     uint key = inst.misc.y;
     vec4 s = keys[key].sphere;
     vec4 c = vec4(s.xyz, 1.0);

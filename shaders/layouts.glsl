@@ -64,6 +64,7 @@
 #define DEFERRED_TILE 16
 #define DEFERRED_WORDS 512
 #define CULL_GROUP 256
+#define ROW_NOT_CASTER 1
 #define COMPACT_GROUP 64
 
 // The frame's uniforms. Positions are relative to the render origin (the camera, unless
@@ -93,7 +94,7 @@ struct Light {  // 64 bytes, std430
 // One entity's row: 64 bytes (the normal matrix is derived in the vertex shader).
 struct Instance {  // 64 bytes, std430
     vec4 model[3];              // offset 0: rows of the camera-relative model matrix (the last row is 0 0 0 1)
-    uvec4 misc;                 // offset 48: x: material index, y: key = mesh * 2 + mirrored, z: 1 NotShadowReceiver, w: 0
+    uvec4 misc;                 // offset 48: x: material index, y: key = mesh * 2 + mirrored, z: 1 NotShadowReceiver, w: ROW_* bits (indirect mode: ROW_NOT_CASTER), else 0
 };
 
 // A material (render/materials.py): what the fragment shader's shading model reads.
@@ -137,6 +138,7 @@ struct CullPush {  // 112 bytes, std430
     uint plane_count;           // offset 96: 0: culling off
     uint row_end;               // offset 100: rows [first_row, row_end) in this dispatch (large counts take several)
     uint first_row;             // offset 104
+    uint skip;                  // offset 108: rows whose misc.w has one of these bits are left out (a shadow view: ROW_NOT_CASTER)
 };
 
 struct CompactPush {  // 8 bytes, std430

@@ -1,7 +1,9 @@
 // The shadow passes' vertex shader body (render/shadow_pass.py): the position alone, through the
 // shadow view's globals (its own set 0: g.projection and g.view are the light's). shadow.vert
-// reads the row from the instance buffer, shadow_push.vert from push constants (per_entity);
-// the _cutout variants also pass texture coordinates and the material on.
+// reads the row from the instance buffer, shadow_push.vert from push constants (per_entity),
+// shadow_indirect.vert through the view's ids, culled on the GPU (render/shadow_indirect.py:
+// instances[ids[gl_InstanceIndex]], as mesh_indirect.vert); the _cutout variants also pass
+// texture coordinates and the material on.
 layout(location = 0) in vec3 in_position;
 #ifdef CUTOUT
 // alpha-masked materials cut holes in the map (shadow_cutout.frag): the texture coordinates and
@@ -16,8 +18,10 @@ layout(push_constant) uniform Push { Instance row; } push;
 #endif
 
 void main() {
-#ifdef PUSH_INSTANCE
+#if defined(PUSH_INSTANCE)
     Instance inst = push.row;
+#elif defined(INDIRECT_INSTANCE)
+    Instance inst = instances[ids[gl_InstanceIndex]];
 #else
     Instance inst = instances[gl_InstanceIndex];
 #endif

@@ -97,11 +97,16 @@ SHADOW_DEPTH_BIAS = (-1.0, -1.5)
 
 def shadow_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple[Any, Any]:
     """The (plain, mirrored) depth-only pipelines of a path's shadow passes: the position alone
-    (shadow.vert, or shadow_push.vert for push-constant rows), no fragment shader; where some
+    (shadow.vert, shadow_push.vert for push-constant rows, shadow_indirect.vert for rows culled
+    on the GPU), no fragment shader; where some
     material is alpha-masked, the _cutout variants and shadow_cutout.frag, which leave its holes
     out of the map."""
     cutout = bool(ctx.material_features & FEATURE_ALPHA_MASK)
-    shader = {"mesh.vert": "shadow.vert", "mesh_push.vert": "shadow_push.vert"}[vertex_shader]
+    shader = {
+        "mesh.vert": "shadow.vert",
+        "mesh_push.vert": "shadow_push.vert",
+        "mesh_indirect.vert": "shadow_indirect.vert",  # the GPU-culled views (shadow_indirect.py)
+    }[vertex_shader]
     if cutout:
         shader = shader.replace(".vert", "_cutout.vert")
     fragment = "shadow_cutout.frag" if cutout else None

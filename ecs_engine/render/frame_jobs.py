@@ -5,9 +5,10 @@ With shadow views and a camera path that records culled rows (the CPU-recorded p
 chunk_paths.py's record_keyed), a chunk is one job for every view: its rows are culled against
 the camera and each shadow view in one pass over their model matrices (shadow_pass.py's
 record_chunk, instance_rows.cull_views), then each view's visible rows are written and
-recorded. Chunks tagged NotShadowCaster, and every chunk of a path that culls on the GPU
-(indirect), are camera jobs of their own; the latter's casters are then shadow-only jobs, as are
-the set-aside rows that cast (SetAsideRows.casters).
+recorded. Chunks tagged NotShadowCaster are camera jobs of their own. A path that culls on the
+GPU (indirect) has its chunks' rows culled on the GPU per shadow view too (shadow_indirect.py):
+its chunks are camera jobs alone. The set-aside rows that cast (SetAsideRows.casters) are
+shadow-only jobs in every mode.
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ class FrameJobs:
             casters = [not c.flags & NOT_CASTER for c in chunks]
             if hasattr(path, "record_keyed"):
                 self.work = [(BOTH if caster else CAMERA, c) for caster, c in zip(casters, chunks, strict=True)]
-            else:
+            elif not shadows.culls_on_gpu:  # (the indirect mode's views cull the chunks' rows on the GPU)
                 self.work += [(SHADOWS, c) for caster, c in zip(casters, chunks, strict=True) if caster]
             self.work += [(SHADOWS, c) for c in aside if not c.flags & NOT_CASTER]
 

@@ -14,6 +14,10 @@ and count rows per key; from those counts each key gets a region of the `ids` bu
 The path's buffers are descriptor set 1 (layouts.py). Visible counts exist only on the GPU: they
 are copied to a mapped buffer and read once the frame's fence has signalled (an earlier frame's,
 or this one's after a readback wait).
+
+Shadow views (shadow_indirect.py) are culled by the same shaders over the same rows, each view
+with its own set 1 naming this frame's key table; rows of NotShadowCaster chunks carry
+ROW_NOT_CASTER in misc.w, which their cull leaves out.
 """
 
 from __future__ import annotations
@@ -30,7 +34,7 @@ from ..gpu.memory import DEVICE, HOST, Buffer
 from ..gpu.pipeline import compute_pipeline, pipeline_layout
 from ..gpu.secondary import end_command_buffer
 from .chunk_paths import mesh_pipelines
-from .frame_data import NOT_RECEIVER, Chunk
+from .frame_data import NOT_CASTER, NOT_RECEIVER, Chunk
 from .instance_rows import write_rows
 from .layouts import (
     BINDING_COMMANDS,
@@ -44,6 +48,7 @@ from .layouts import (
     DRAW_COMMAND,
     DRAW_STATE,
     KEY_INFO,
+    ROW_NOT_CASTER,
     UINT_BYTES,
 )
 from .mesh_registry import MergedMeshes
@@ -68,6 +73,9 @@ class _IndirectFrame:
     copy_region: Any = None  # VkBufferCopy* of the whole state buffer
     written: tuple[bytes, int] | None = None  # (key counts, merged meshes) the key table holds
     previous: tuple[int, int, int] | None = None  # the counts of the slot's last frame, read at begin_frame
+    # this frame's candidate rows per key and count (finish): what the shadow views cull
+    key_counts: np.ndarray | None = None
+    candidates: int = 0
 
 
 def check_support(device: Device) -> None:
@@ -118,31 +126,7 @@ class IndirectPath:
         self._compact_ptr = vk.ffi.from_buffer(self._compact_push)
         self._sets = vk.ffi.new("VkDescriptorSet[2]")
         self._offsets = vk.ffi.new("VkDeviceSize[1]", [0])
-        compute = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
-        shader_rw = vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_SHADER_WRITE_BIT
-        self._barriers = [
-            _Barrier(vk, *b)
-            for b in (
-                (vk.VK_PIPELINE_STAGE_TRANSFER_BIT, compute, vk.VK_ACCESS_TRANSFER_WRITE_BIT, shader_rw),
-                (compute, compute, vk.VK_ACCESS_SHADER_WRITE_BIT, shader_rw),
-                (
-                    compute,
-                    vk.VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT
-                    | vk.VK_PIPELINE_STAGE_VERTEX_SHADER_BIT
-                    | vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
-                    vk.VK_ACCESS_SHADER_WRITE_BIT,
-                    vk.VK_ACCESS_INDIRECT_COMMAND_READ_BIT
-                    | vk.VK_ACCESS_SHADER_READ_BIT
-                    | vk.VK_ACCESS_TRANSFER_READ_BIT,
-                ),
-                (
-                    vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
-                    vk.VK_PIPELINE_STAGE_HOST_BIT,
-                    vk.VK_ACCESS_TRANSFER_WRITE_BIT,
-                    vk.VK_ACCESS_HOST_READ_BIT,
-                ),
-            )
-        ]
+        self._barriers = compute_barriers(vk)
 
     # ---------------------------------------------------------------- buffers
     def _make_frame(self, descriptor_set: Any, keys: int, rows: int) -> _IndirectFrame:
@@ -211,6 +195,8 @@ class IndirectPath:
         )
         if chunk.flags & NOT_RECEIVER:
             rows["misc"][:, 2] = 1  # no shadow falls on these (mesh_vertex.glsl)
+        if chunk.flags & NOT_CASTER:
+            rows["misc"][:, 3] = ROW_NOT_CASTER  # the shadow views' cull leaves these out (cull.comp)
         return ChunkResult(None, 0, 0, 0, key_counts)
 
     def finish(self, cb: Any, frame: FrameInputs, results: list[ChunkResult], candidates: int) -> list[Any]:
@@ -224,10 +210,12 @@ class IndirectPath:
         self._ensure_capacity(frame.slot, keys, candidates)
         merged = self.ctx.meshes.merged()
         self._write_key_table(frame.slot, key_counts, merged, frame.bounds)
-        self._sets[0], self._sets[1] = frame.descriptor_set, self.frames[frame.slot].descriptor_set
+        f = self.frames[frame.slot]
+        f.key_counts, f.candidates = key_counts, candidates  # what the shadow views cull (shadow_indirect.py)
+        self._sets[0], self._sets[1] = frame.descriptor_set, f.descriptor_set
         planes = None if frame.planes is None else frame.planes.astype(np.float32)
         self._record_compute(cb, frame.slot, planes, candidates, keys)
-        self.frames[frame.slot].recorded = frame.bounds[2] // 3  # the triangles the counts will weigh
+        f.recorded = frame.bounds[2] // 3  # the triangles the counts will weigh
         vk = self.vk
         lib = vk.lib
         secondary = self.ctx.secondaries.begin(frame.slot, frame.target.secondary_begin)
@@ -360,7 +348,35 @@ class IndirectPath:
                 owned.destroy()
 
 
-class _Barrier:
+def compute_barriers(vk: Any) -> list[Barrier]:
+    """The compute passes' barriers, in order: the counters zeroed -> cull, cull -> compact, the
+    commands written -> the draws (and the counters' copy), the copy -> the host's read."""
+    compute = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
+    shader_rw = vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_SHADER_WRITE_BIT
+    return [
+        Barrier(vk, *b)
+        for b in (
+            (vk.VK_PIPELINE_STAGE_TRANSFER_BIT, compute, vk.VK_ACCESS_TRANSFER_WRITE_BIT, shader_rw),
+            (compute, compute, vk.VK_ACCESS_SHADER_WRITE_BIT, shader_rw),
+            (
+                compute,
+                vk.VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT
+                | vk.VK_PIPELINE_STAGE_VERTEX_SHADER_BIT
+                | vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
+                vk.VK_ACCESS_SHADER_WRITE_BIT,
+                vk.VK_ACCESS_INDIRECT_COMMAND_READ_BIT | vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_TRANSFER_READ_BIT,
+            ),
+            (
+                vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
+                vk.VK_PIPELINE_STAGE_HOST_BIT,
+                vk.VK_ACCESS_TRANSFER_WRITE_BIT,
+                vk.VK_ACCESS_HOST_READ_BIT,
+            ),
+        )
+    ]
+
+
+class Barrier:
     """A global memory barrier, made once and recorded with a raw call."""
 
     def __init__(self, vk: Any, src_stage: int, dst_stage: int, src_access: int, dst_access: int) -> None:

@@ -81,7 +81,12 @@ INSTANCE = Struct(
     "Instance",
     [
         ("model", "vec4[3]", "rows of the camera-relative model matrix (the last row is 0 0 0 1)"),
-        ("misc", "uvec4", "x: material index, y: key = mesh * 2 + mirrored, z: 1 NotShadowReceiver, w: 0"),
+        (
+            "misc",
+            "uvec4",
+            "x: material index, y: key = mesh * 2 + mirrored, z: 1 NotShadowReceiver, "
+            "w: ROW_* bits (indirect mode: ROW_NOT_CASTER), else 0",
+        ),
     ],
     doc="One entity's row: 64 bytes (the normal matrix is derived in the vertex shader).",
 )
@@ -141,6 +146,7 @@ CULL_PUSH = Struct(
         ("plane_count", "uint", "0: culling off"),
         ("row_end", "uint", "rows [first_row, row_end) in this dispatch (large counts take several)"),
         ("first_row", "uint"),
+        ("skip", "uint", "rows whose misc.w has one of these bits are left out (a shadow view: ROW_NOT_CASTER)"),
     ],
 )
 
@@ -237,6 +243,7 @@ BINDING_DEPTH, BINDING_HDR, BINDING_NORMAL_ROUGHNESS, BINDING_BASE_METALLIC, BIN
 DEFERRED_TILE = 16  # a workgroup lights DEFERRED_TILE x DEFERRED_TILE pixels
 DEFERRED_WORDS = 512  # light mask words a workgroup holds at once (16,384 lights; more take turns)
 CULL_GROUP = 256  # cull.comp's local size
+ROW_NOT_CASTER = 1  # Instance.misc.w bit (indirect mode): the row casts no shadow (cull.comp skips it in shadow views)
 COMPACT_GROUP = 64  # compact.comp's local size
 
 STRUCTS = [
@@ -318,6 +325,7 @@ DEFINES = {
     "DEFERRED_TILE": DEFERRED_TILE,
     "DEFERRED_WORDS": DEFERRED_WORDS,
     "CULL_GROUP": CULL_GROUP,
+    "ROW_NOT_CASTER": ROW_NOT_CASTER,
     "COMPACT_GROUP": COMPACT_GROUP,
 }
 

@@ -182,8 +182,8 @@ class Renderer:
         self.path = new
 
     def _make_shadow_path(self, ctx: PathContext) -> RenderPath:
-        """The depth-only path of the shadow passes: the per-entity one for per_entity, else the
-        instanced one (indirect mode draws its shadows with the CPU's culling for now)."""
+        """The depth-only path of the shadow passes' CPU jobs: the per-entity one for per_entity,
+        else the instanced one (indirect: the set-aside casters alone; shadow_indirect.py culls)."""
         return (PerEntityPath if self.mode == "per_entity" else InstancedPath)(ctx, self.cpu_recorder)
 
     def _native_recorder(self) -> Any:

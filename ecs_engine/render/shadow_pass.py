@@ -19,8 +19,10 @@ A point light's six cube faces are layers of the same array, each widened by a f
 
 Alpha-masked materials cut their holes in the maps (chunk_paths.py's shadow_pipelines).
 
-Not yet: the indirect mode's GPU cull per view (it draws its shadows with the instanced path's
-CPU culling).
+In the indirect mode the chunks' rows are culled on the GPU per view (shadow_indirect.py): the
+compute passes and a secondary per view are recorded here, before the views' render passes; the
+chunk jobs only write the camera's rows, and the CPU path culls and draws the set-aside casters
+(blended materials and the like) alone.
 """
 
 from __future__ import annotations
@@ -38,10 +40,12 @@ from ..gpu.memory import Buffer
 from ..gpu.secondary import SecondaryBuffers
 from ..gpu.shadow_maps import ShadowMaps, create_shadow_pass
 from .frame_data import Chunk, FrameData
+from .indirect_path import IndirectPath
 from .instance_rows import cull_views, padded_planes
 from .layouts import BINDING_GLOBALS, GLOBALS, SHADOW_VIEW
 from .light_rows import write_light_shadows
 from .path import ChunkResult, FrameInputs, PathContext, RenderPath, TargetState
+from .shadow_indirect import IndirectShadows
 from .shadow_views import ShadowView, shadow_views
 from .view_recording import ViewRecording, can_fuse
 
@@ -81,7 +85,9 @@ class ShadowPass:
         self._targets: dict[int, TargetState] = {}
         self._pool_sets = 0  # view sets the pool holds per frame slot
         self.path: RenderPath | None = None
-        self.draws = self.triangles = 0  # the last frame's shadow draws
+        self._counts = [0, 0]  # the last frame's shadow draws and triangles recorded on the CPU
+        self.gpu: IndirectShadows | None = None  # the indirect mode's GPU-culled views
+        self._gpu_frame = False  # this frame's views are culled on the GPU
         self.last_views: list[ShadowView] = []  # the last plan's (the editor's map thumbnails)
         self._inputs: list[FrameInputs] = []  # this frame's views' (prepare)
         self._recording: Any = None  # the path this frame's jobs record with
@@ -125,6 +131,9 @@ class ShadowPass:
         if self.path is not None:
             self.path.destroy()
             self.path = None
+        if self.gpu is not None:
+            self.gpu.destroy()
+            self.gpu = None
         for state in self._targets.values():
             state.path_state.clear()
 
@@ -227,8 +236,9 @@ class ShadowPass:
         """The frame's shadow work before its jobs (frame_jobs.py hands them out): the views'
         rows for the lighting, their sets, inputs and culling planes; `camera` is the camera's
         path (its begin_frame done), whose jobs may cull the camera's view with the shadows'."""
-        self.draws = self.triangles = 0
+        self._counts = [0, 0]
         self._fused = None
+        self._gpu_frame = False
         if not views:
             self._inputs = []
             return
@@ -237,6 +247,15 @@ class ShadowPass:
         path = self._recording = self.path_for(camera.ctx, make)
         for view in self._inputs:
             path.begin_frame(view)
+        if isinstance(camera, IndirectPath):  # the chunks' rows culled on the GPU per view
+            if self.gpu is not None and self.gpu.camera is not camera:
+                self.device.wait_idle()  # made for a path that is gone (forget_path was not called)
+                self.gpu.destroy()
+                self.gpu = None
+            if self.gpu is None:
+                self.gpu = IndirectShadows(camera, self.render_pass)
+            self.gpu.begin_frame(frame.slot, frame.readback)
+            self._gpu_frame = True
         self._planes = padded_planes([frame.planes] + [view.planes for view in self._inputs])  # the camera's first
         if can_fuse([path]):  # one native call a job (view_recording.py)
             if can_fuse([camera]):
@@ -249,6 +268,23 @@ class ShadowPass:
     def active(self) -> bool:
         """Whether this frame draws shadow views (after prepare)."""
         return bool(self._inputs)
+
+    @property
+    def culls_on_gpu(self) -> bool:
+        """Whether this frame's views cull the chunks' rows on the GPU (the indirect mode): the
+        chunk jobs then record nothing for them (frame_jobs.py)."""
+        return self._gpu_frame and bool(self._inputs)
+
+    @property
+    def draws(self) -> int:
+        """The last frame's shadow draws: those recorded on the CPU, and those the GPU counted
+        in the indirect mode (an earlier frame's unless the frame was read back, as the camera's)."""
+        return self._counts[0] + (self.gpu.counts()[0] if self.gpu is not None and self.culls_on_gpu else 0)
+
+    @property
+    def triangles(self) -> int:
+        """The last frame's shadow triangles, counted as `draws`."""
+        return self._counts[1] + (self.gpu.counts()[1] if self.gpu is not None and self.culls_on_gpu else 0)
 
     def record_chunk(self, chunk: Chunk, camera: Any = None) -> tuple[ChunkResult | None, list[ChunkResult]]:
         """One job: the chunk culled against every view at once (a row's sphere is worked out
@@ -280,8 +316,8 @@ class ShadowPass:
             for k, r in enumerate(per_chunk):
                 if r.command_buffer is not None:
                     per_view[k].append(r.command_buffer)
-                self.draws += r.draws
-                self.triangles += r.triangles
+                self._counts[0] += r.draws
+                self._counts[1] += r.triangles
         return per_view
 
     def name_lights(self, data: FrameData, views: list[ShadowView], rows: np.ndarray) -> None:
@@ -316,6 +352,9 @@ class ShadowPass:
         assert self.maps is not None
         vk = self.vk
         lib = vk.lib
+        if self.gpu is not None and self.culls_on_gpu:  # the compute passes first, then each view's draws
+            culled = self.gpu.record(cb, self._inputs, self._planes[1:])
+            secondaries = [([g] if g is not None else []) + s for g, s in zip(culled, secondaries, strict=True)]
         drawn = {v.layer: s for v, s in zip(views, secondaries, strict=True)}
         layers = range(self.maps.layers) if not self.cleared else drawn.keys()
         for layer in layers:
@@ -340,6 +379,10 @@ class ShadowPass:
         if self.path is not None:
             self.path.destroy()
             self.path = None
+        gpu = getattr(self, "gpu", None)  # (a failed __init__ has none)
+        if gpu is not None:
+            gpu.destroy()
+            self.gpu = None
         self._release_sets()
         if self.maps is not None:
             self.maps.destroy()
