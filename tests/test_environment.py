@@ -11,13 +11,13 @@ import math
 import numpy as np
 import pytest
 from gpu_context import headless_gpu
+from pixel_rays import pixel_rays
 
 from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Environment, Mesh, Transform
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.errors import UsageError
-from ecs_engine.render.camera import camera_matrices
 from ecs_engine.render.materials import Material, materials
 from ecs_engine.render.primitives import cube_mesh, sphere_mesh
 from ecs_engine.render.textures import linear_to_srgb
@@ -42,18 +42,6 @@ def render(gpu, world: World, **settings) -> np.ndarray:
         renderer.destroy()
 
 
-def view_rays(world: World) -> tuple[np.ndarray, np.ndarray]:
-    """Per pixel the unit direction of its ray in the world, and the eye."""
-    cam = camera_matrices(world, W / H)
-    inv_p = np.linalg.inv(cam.projection.astype(np.float64))
-    rot = cam.inverse_view[:3, :3].astype(np.float64)
-    ys, xs = np.mgrid[0:H, 0:W]
-    ndc = np.stack([(xs + 0.5) / W * 2 - 1, (ys + 0.5) / H * 2 - 1, np.full(xs.shape, 0.5), np.ones(xs.shape)], -1)
-    p = ndc @ inv_p.T
-    d = (p[..., :3] / p[..., 3:]) @ rot.T
-    return d / np.linalg.norm(d, axis=-1, keepdims=True), cam.position
-
-
 def encoded(linear: np.ndarray) -> np.ndarray:
     """What the target stores for a linear colour (the clamp tone map into an sRGB image)."""
     return np.round(linear_to_srgb(np.asarray(linear, np.float64)) * 255.0)
@@ -67,7 +55,7 @@ def test_the_sky_shows_the_face_each_pixel_looks_at():
         world.resources[Environment] = Environment(flat_faces())
         add_camera(world, (0.0, 0.0, 0.0), (1.0, 0.9, -1.1))  # towards a corner: +X, +Y and -Z
         image = render(gpu, world)
-        rays, _ = view_rays(world)
+        rays, _ = pixel_rays(world, W, H)
     major = np.abs(rays).argmax(axis=-1)
     face = 2 * major + (np.take_along_axis(rays, major[..., None], -1)[..., 0] < 0)
     # pixels within a texel of a face's edge mix two faces (bilinear): left out
@@ -98,7 +86,7 @@ def test_a_mirror_reflects_by_schlicks_fresnel(reflectivity):
     with headless_gpu(W, H) as gpu:
         world = mirror_world(gpu, reflectivity)
         image = render(gpu, world, ambient=(0.0, 0.0, 0.0, 0.0))
-        rays, _ = view_rays(world)
+        rays, _ = pixel_rays(world, W, H)
     hits = rays[..., 1] < -0.05  # the plane, not too near the horizon (it reaches 200 units)
     cos = -rays[..., 1]
     fresnel = reflectivity + (1.0 - reflectivity) * (1.0 - cos) ** 5

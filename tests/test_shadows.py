@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from gpu_context import headless_gpu
+from pixel_rays import pixel_rays
 
 from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
@@ -69,15 +70,7 @@ def render(gpu, world: World, **settings) -> tuple[np.ndarray, object]:
 
 def ground_hits(world: World) -> tuple[np.ndarray, np.ndarray]:
     """Per pixel: where its ray meets the ground (y = 0), and whether the cube is in the way."""
-    cam = camera_matrices(world, W / H)
-    inv_p = np.linalg.inv(cam.projection.astype(np.float64))
-    rot = cam.inverse_view[:3, :3].astype(np.float64)
-    ys, xs = np.mgrid[0:H, 0:W]
-    ndc = np.stack([(xs + 0.5) / W * 2 - 1, (ys + 0.5) / H * 2 - 1, np.full(xs.shape, 0.5), np.ones(xs.shape)], -1)
-    p = ndc @ inv_p.T
-    d = (p[..., :3] / p[..., 3:]) @ rot.T
-    d /= np.linalg.norm(d, axis=-1, keepdims=True)
-    eye = cam.position
+    d, eye = pixel_rays(world, W, H)
     t = -eye[1] / d[..., 1]
     hit = eye + d * t[..., None]
     blocked = segment_hits_box(np.broadcast_to(eye, hit.shape), hit, *CUBE)

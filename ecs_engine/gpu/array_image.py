@@ -180,21 +180,30 @@ class ArrayImage:
 
 def texture_sampler(device: Device) -> Any:
     """Trilinear, repeating, with the device's anisotropy (up to 16x) where it has the feature."""
-    vk = device.vk
     anisotropy = min(16.0, float(device.limits.maxSamplerAnisotropy)) if device.features.get("samplerAnisotropy") else 0
+    return _trilinear(device, device.vk.VK_SAMPLER_ADDRESS_MODE_REPEAT, anisotropy, None)
+
+
+def clamped_sampler(device: Device, max_lod: float | None = None) -> Any:
+    """Trilinear, clamped to the edges (ImGui's textures: max_lod 1; a cube map: every mip)."""
+    return _trilinear(device, device.vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, 0.0, max_lod)
+
+
+def _trilinear(device: Device, address_uv: int, anisotropy: float, max_lod: float | None) -> Any:
+    vk = device.vk
     return vk.vkCreateSampler(
         device.handle,
         vk.VkSamplerCreateInfo(
             magFilter=vk.VK_FILTER_LINEAR,
             minFilter=vk.VK_FILTER_LINEAR,
             mipmapMode=vk.VK_SAMPLER_MIPMAP_MODE_LINEAR,
-            addressModeU=vk.VK_SAMPLER_ADDRESS_MODE_REPEAT,
-            addressModeV=vk.VK_SAMPLER_ADDRESS_MODE_REPEAT,
+            addressModeU=address_uv,
+            addressModeV=address_uv,
             addressModeW=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
             anisotropyEnable=vk.VK_TRUE if anisotropy > 1 else vk.VK_FALSE,
             maxAnisotropy=max(anisotropy, 1.0),
             minLod=0.0,
-            maxLod=vk.VK_LOD_CLAMP_NONE,
+            maxLod=vk.VK_LOD_CLAMP_NONE if max_lod is None else max_lod,
         ),
         None,
     )

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..components.environment import Environment
 from ..ecs.world import World
-from ..gpu.array_image import ArrayImage
+from ..gpu.array_image import ArrayImage, clamped_sampler
 from ..gpu.device import Device
 from .environment_maps import cube_mips, irradiance_sh9, load_cube
 
@@ -36,21 +36,7 @@ def _chains(mips: list[np.ndarray]) -> list[list[np.ndarray]]:
 class EnvironmentMap:
     def __init__(self, device: Device) -> None:
         self.device = device
-        vk = device.vk
-        self.sampler = vk.vkCreateSampler(
-            device.handle,
-            vk.VkSamplerCreateInfo(
-                magFilter=vk.VK_FILTER_LINEAR,
-                minFilter=vk.VK_FILTER_LINEAR,
-                mipmapMode=vk.VK_SAMPLER_MIPMAP_MODE_LINEAR,
-                addressModeU=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-                addressModeV=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-                addressModeW=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-                minLod=0.0,
-                maxLod=vk.VK_LOD_CLAMP_NONE,
-            ),
-            None,
-        )
+        self.sampler = clamped_sampler(device)
         self.source: Environment | None = None  # what the image holds
         self.image: ArrayImage | None = None
         self.irradiance = np.zeros((9, 3), np.float32)

@@ -17,6 +17,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from ..gpu.descriptors import write_images
+
 
 @dataclass
 class UserImage:
@@ -48,16 +50,12 @@ class UserImages:
     ) -> None:
         vk = self.vk
         descriptor_set = self._allocate()
-        info = vk.VkDescriptorImageInfo(sampler=sampler, imageView=view, imageLayout=layout)
-        write = vk.VkWriteDescriptorSet(
-            dstSet=descriptor_set,
-            dstBinding=0,
-            dstArrayElement=0,
-            descriptorCount=1,
-            descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
-            pImageInfo=[info],
+        write_images(
+            self.device,
+            descriptor_set,
+            0,
+            [vk.VkDescriptorImageInfo(sampler=sampler, imageView=view, imageLayout=layout)],
         )
-        vk.vkUpdateDescriptorSets(self.device.handle, 1, [write], 0, None)
         self._images[tex_id] = UserImage(descriptor_set, vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]), alive)
 
     def unregister(self, tex_id: int) -> None:

@@ -23,6 +23,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..gpu.array_image import clamped_sampler
+from ..gpu.descriptors import write_images
 from ..gpu.memory import HOST, Buffer, Image
 from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
 from .imgui_images import UserImages
@@ -70,19 +72,7 @@ class ImGuiRenderer:
         io.backend_flags |= (
             imgui.BackendFlags_.renderer_has_textures.value | imgui.BackendFlags_.renderer_has_vtx_offset.value
         )
-        self.sampler = vk.vkCreateSampler(
-            device.handle,
-            vk.VkSamplerCreateInfo(
-                magFilter=vk.VK_FILTER_LINEAR,
-                minFilter=vk.VK_FILTER_LINEAR,
-                mipmapMode=vk.VK_SAMPLER_MIPMAP_MODE_LINEAR,
-                addressModeU=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-                addressModeV=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-                addressModeW=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-                maxLod=1.0,
-            ),
-            None,
-        )
+        self.sampler = clamped_sampler(device, max_lod=1.0)
         self.set_layout = vk.vkCreateDescriptorSetLayout(
             device.handle,
             vk.VkDescriptorSetLayoutCreateInfo(
@@ -175,22 +165,7 @@ class ImGuiRenderer:
         info = vk.VkDescriptorImageInfo(
             sampler=self.sampler, imageView=image.view, imageLayout=vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
         )
-        vk.vkUpdateDescriptorSets(
-            self.device.handle,
-            1,
-            [
-                vk.VkWriteDescriptorSet(
-                    dstSet=descriptor_set,
-                    dstBinding=0,
-                    dstArrayElement=0,
-                    descriptorCount=1,
-                    descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
-                    pImageInfo=[info],
-                )
-            ],
-            0,
-            None,
-        )
+        write_images(self.device, descriptor_set, 0, [info])
         texture = _Texture(image, descriptor_set, vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]))
         tex_id = self._next_id
         self._next_id += 1

@@ -78,6 +78,40 @@ class _IndirectFrame:
     candidates: int = 0
 
 
+def record_indirect_draws(
+    vk: Any,
+    cb: Any,
+    pipelines: tuple[Any, Any],
+    merged: MergedMeshes,
+    key_counts: np.ndarray,
+    commands: Buffer,
+    state: Buffer,
+    offsets: Any,
+) -> None:
+    """One vkCmdDrawIndexedIndirectCount per winding that has candidates, over the merged mesh
+    buffers, reading compact.comp's `commands` and the counts in `state` (the camera's draws, and
+    each GPU-culled shadow view's: shadow_indirect.py)."""
+    lib = vk.lib
+    meshes = len(key_counts) // 2
+    if merged.vertex_array is None:
+        merged.vertex_array = vk.ffi.new("VkBuffer[1]", [merged.vertices.handle])
+    lib.vkCmdBindVertexBuffers(cb, 0, 1, merged.vertex_array, offsets)
+    lib.vkCmdBindIndexBuffer(cb, merged.indices.handle, 0, vk.VK_INDEX_TYPE_UINT32)
+    for winding, pipeline in enumerate(pipelines):
+        if not key_counts[winding::2].any():
+            continue
+        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline)
+        lib.vkCmdDrawIndexedIndirectCount(
+            cb,
+            commands.handle,
+            winding * meshes * DRAW_COMMAND.size,
+            state.handle,
+            DRAW_STATE.offset("draw_counts") + UINT_BYTES * winding,
+            meshes,
+            DRAW_COMMAND.size,
+        )
+
+
 def check_support(device: Device) -> None:
     missing = [f for f in FEATURES if not device.features.get(f)]
     if missing:
@@ -302,29 +336,9 @@ class IndirectPath:
         to_host.record(lib, cb)
 
     def _record_draws(self, cb: Any, slot: int, merged: MergedMeshes, key_counts: np.ndarray) -> None:
-        """Into the frame's secondary (viewport, scissor and sets already bound): one indirect
-        count draw per winding that has candidates."""
-        vk = self.vk
-        lib = vk.lib
+        """Into the frame's secondary (viewport, scissor and sets already bound)."""
         f = self.frames[slot]
-        meshes = len(key_counts) // 2
-        if merged.vertex_array is None:
-            merged.vertex_array = vk.ffi.new("VkBuffer[1]", [merged.vertices.handle])
-        lib.vkCmdBindVertexBuffers(cb, 0, 1, merged.vertex_array, self._offsets)
-        lib.vkCmdBindIndexBuffer(cb, merged.indices.handle, 0, vk.VK_INDEX_TYPE_UINT32)
-        for winding, pipeline in enumerate(self.pipelines):
-            if not key_counts[winding::2].any():
-                continue
-            lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline)
-            lib.vkCmdDrawIndexedIndirectCount(
-                cb,
-                f.commands.handle,
-                winding * meshes * DRAW_COMMAND.size,
-                f.state.handle,
-                DRAW_STATE.offset("draw_counts") + UINT_BYTES * winding,
-                meshes,
-                DRAW_COMMAND.size,
-            )
+        record_indirect_draws(self.vk, cb, self.pipelines, merged, key_counts, f.commands, f.state, self._offsets)
 
     def destroy(self) -> None:
         """Also for a path half built (its constructor failed): what exists goes."""

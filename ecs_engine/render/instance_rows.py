@@ -48,20 +48,26 @@ def write_rows_numpy(
     key_counts: np.ndarray,
 ) -> int:
     """Reference version of `write_rows`."""
+    keys = handle.astype(np.int64) * 2 + (_determinant3(model[:, :3, :3]) < 0)
     if len(planes):
         c, r = bounding_spheres(model, centers[handle], radii[handle])
-        visible = np.flatnonzero(spheres_visible(c, r, planes))
-        model, handle, material = model[visible], handle[visible], material[visible]
-    n = len(handle)
-    mirrored = _determinant3(model[:, :3, :3]) < 0
-    key = handle.astype(np.int64) * 2 + mirrored
-    order = np.argsort(key, kind="stable")
+        keys = np.where(spheres_visible(c, r, planes), keys, -1)
+    key_counts[:] = np.bincount(keys[keys >= 0], minlength=len(key_counts))[: len(key_counts)]
+    return _write_keyed_numpy(model, material, keys, n_materials, rows)
+
+
+def _write_keyed_numpy(
+    model: np.ndarray, material: np.ndarray, keys: np.ndarray, n_materials: int, rows: np.ndarray
+) -> int:
+    """The rows whose key is not -1 into `rows`, sorted by key (stable): write_rows' order."""
+    visible = np.flatnonzero(keys >= 0)
+    order = visible[np.argsort(keys[visible], kind="stable")]
+    n = len(order)
     out = rows[:n]
     out["model"] = model[order, :3, :]
     out["misc"][:, 0] = material[order] % n_materials
-    out["misc"][:, 1] = key[order]
+    out["misc"][:, 1] = keys[order]
     out["misc"][:, 2:] = 0
-    key_counts[:] = np.bincount(key, minlength=len(key_counts))[: len(key_counts)]
     return n
 
 
@@ -348,12 +354,4 @@ def write_keyed(
     if _write_keyed_native is not None and rows.flags.c_contiguous and model.flags.c_contiguous:
         rows64 = rows.view(np.uint64)
         return int(_write_keyed_native(model, material, keys, key_counts, np.uint32(n_materials), np.uint64(0), rows64))
-    visible = np.flatnonzero(keys >= 0)
-    order = visible[np.argsort(keys[visible], kind="stable")]
-    n = len(order)
-    out = rows[:n]
-    out["model"] = model[order, :3, :]
-    out["misc"][:, 0] = material[order] % n_materials
-    out["misc"][:, 1] = keys[order]
-    out["misc"][:, 2:] = 0
-    return n
+    return _write_keyed_numpy(model, material, keys, n_materials, rows)

@@ -46,7 +46,7 @@ from ..gpu.descriptors import DescriptorPool, write_buffers
 from ..gpu.memory import DEVICE, HOST, Buffer
 from ..gpu.secondary import end_command_buffer
 from .chunk_paths import shadow_pipelines
-from .indirect_path import STATE_HEADER, IndirectPath, compute_barriers
+from .indirect_path import STATE_HEADER, IndirectPath, compute_barriers, record_indirect_draws
 from .layouts import (
     BINDING_COMMANDS,
     BINDING_DRAW_STATE,
@@ -185,30 +185,13 @@ class IndirectShadows:
         """The view's secondary: per winding with candidates, one indirect count draw."""
         vk, camera = self.vk, self.camera
         lib = vk.lib
-        meshes = len(key_counts) // 2
         merged = camera.ctx.meshes.merged()  # the camera's finish made it for this frame
-        if merged.vertex_array is None:
-            merged.vertex_array = vk.ffi.new("VkBuffer[1]", [merged.vertices.handle])
         target = view.target
         cb = self.secondaries.begin(slot, target.secondary_begin)
         lib.vkCmdSetViewport(cb, 0, 1, target.viewport_ptr)
         lib.vkCmdSetScissor(cb, 0, 1, target.area_ptr)
         lib.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, camera.layout, 0, 2, sets, 0, vk.ffi.NULL)
-        lib.vkCmdBindVertexBuffers(cb, 0, 1, merged.vertex_array, self._offsets)
-        lib.vkCmdBindIndexBuffer(cb, merged.indices.handle, 0, vk.VK_INDEX_TYPE_UINT32)
-        for winding, pipeline in enumerate(self.pipelines):
-            if not key_counts[winding::2].any():
-                continue
-            lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline)
-            lib.vkCmdDrawIndexedIndirectCount(
-                cb,
-                b.commands.handle,
-                winding * meshes * DRAW_COMMAND.size,
-                b.state.handle,
-                DRAW_STATE.offset("draw_counts") + UINT_BYTES * winding,
-                meshes,
-                DRAW_COMMAND.size,
-            )
+        record_indirect_draws(vk, cb, self.pipelines, merged, key_counts, b.commands, b.state, self._offsets)
         end_command_buffer(vk, cb)
         return cb
 
