@@ -190,3 +190,31 @@ def test_the_views_buffers_follow_new_meshes_rows_and_views():
         assert counts[0] == views
         assert max_difference(image, fresh) <= 1
         assert counts == instanced, (counts, instanced)
+
+
+def test_the_indirect_mode_gives_the_views_no_copy_of_the_rows():
+    """Culled in place on the GPU, the chunks' rows are not written again per view: with a sun's
+    4 cascades the instance buffer holds the camera's rows (and the set-aside casters' per view),
+    where the instanced mode writes every row again for each view."""
+    from ecs_engine.render.layouts import INSTANCE
+    from ecs_engine.render.renderer import Renderer
+
+    sizes = {}
+    with headless_gpu(W, H) as gpu:
+        world = scene(gpu, "sun")
+        cube = gpu.meshes.add(cube_mesh())
+        for i in range(2000):
+            world.spawn(
+                Transform(position=(i % 40 - 20.0, 3.0, i // 40 - 25.0), scale=(0.1, 0.1, 0.1)), Mesh(handle=cube)
+            )
+        rows = 2002
+        for mode in ("instanced", "indirect"):
+            renderer = Renderer(gpu.device, gpu.target, gpu.meshes, mode=mode)
+            try:
+                default_schedule().run(world, 0.0)
+                renderer.render(world, readback=True)
+                sizes[mode] = max(pf.instances.size for pf in renderer.per_frame) // INSTANCE.size
+            finally:
+                renderer.destroy()
+    assert sizes["instanced"] >= 5 * rows  # the camera's and 4 views'
+    assert sizes["indirect"] < 2 * rows

@@ -332,7 +332,7 @@ class Renderer:
             for each in self.per_frame:
                 each.name_shadow_maps(self.device, self.shadows.maps)
         camera_rows = self.path.rows_needed(data.candidates) + len(data.set_aside or ())
-        rows = camera_rows + len(views) * data.all_rows  # each shadow view's rows after the camera's
+        rows = camera_rows + len(views) * ShadowPass.view_rows(data, self.path)  # each view's after the camera's
         pf.ensure_capacity(self.device, self.texture_pages, rows, data.light_count, material_count, len(views))
         deferred, name = self.target.form == "deferred", partial(self.shadows.name_lights, data, views)
         positional = pf.write_frame(self.device, data, materials, grid, self.ambient, deferred, name if views else None)
