@@ -386,3 +386,30 @@ def test_light_sections_show_and_edit_shadows():
         assert (scene.gpu.target.pixels()[..., :3] != before).any()
     finally:
         scene.close()
+
+
+def test_the_environment_settings_edit_the_worlds_environment():
+    """The environment scene's sky, image-based ambient and intensity are in the "Scene and
+    render" window: clicking "sky" replaces the Environment without it (the image stays loaded)
+    and the background changes."""
+    from ecs_engine.components import Environment
+
+    scene = Scene("environment")
+    try:
+        editor = scene.session.editor
+        world = scene.state.world
+        for _ in range(3):
+            scene.frame()
+        before = world.resources[Environment]
+        image = scene.state.renderer.environment.image
+        shot = scene.gpu.target.pixels()[..., :3].copy()
+        scene.frame(mouse=centre(editor.rects["sky"]))
+        scene.frame(down=True)
+        scene.frame(down=False)
+        scene.frame()
+        after = world.resources[Environment]
+        assert after is not before and not after.sky and after.source is before.source
+        assert scene.state.renderer.environment.image is image  # not loaded again
+        assert (scene.gpu.target.pixels()[..., :3] != shot).any()
+    finally:
+        scene.close()

@@ -163,6 +163,7 @@ class Editor:
         imgui.separator()
         changed, intensity = imgui.slider_float("environment", env.intensity, 0.0, 8.0)
         sky_changed, sky = imgui.checkbox("sky", env.sky)
+        self._remember("sky")
         ambient_changed, ambient = imgui.checkbox("image-based ambient", env.ambient)
         if changed or sky_changed or ambient_changed:
             world.resources[Environment] = replace(env, intensity=max(intensity, 0.0), sky=sky, ambient=ambient)
