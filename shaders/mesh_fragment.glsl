@@ -14,6 +14,10 @@ layout(location = 4) in vec4 v_tangent;
 #endif
 
 layout(location = 0) out vec4 out_color;
+#ifdef OIT
+// weighted blended transparency (render/oit_pass.py): the revealage target
+layout(location = 1) out float out_reveal;
+#endif
 #ifdef GBUFFER
 // the deferred form's first pass (gpu/gbuffer.py): what render/deferred_pass.py lights the pixel with
 layout(location = 1) out vec4 out_normal_roughness;
@@ -155,7 +159,18 @@ void main() {
     if ((MATERIAL_FEATURES & FEATURE_EMISSIVE) != 0u) {
         color += m.emissive.rgb;
     }
+#ifdef OIT
+    // McGuire and Bavoil, "Weighted blended order-independent transparency" (2013), eq. 10 on
+    // the distance d from the eye: nearer surfaces weigh more; the sums are order-independent
+    float a = clamp(m.base_color.a, 0.0, 1.0);
+    float d = length(g.eye.xyz - v_position);
+    float d5 = d / 5.0, d200 = d / 200.0;
+    float w = a * clamp(10.0 / (1e-5 + d5 * d5 + d200 * d200 * d200 * d200 * d200 * d200), 1e-2, 3e3);
+    out_color = vec4(min(color, vec3(65504.0)) * a, a) * w;
+    out_reveal = a;
+#else
     // alpha matters only to the blended materials' pipelines (the others do not blend)
     bool blended = (MATERIAL_FEATURES & FEATURE_BLEND) != 0u && m.kind.y == ALPHA_BLEND;
     out_color = vec4(min(color, vec3(65504.0)), blended ? m.base_color.a : 1.0);
+#endif
 }

@@ -119,6 +119,13 @@ def render_flags() -> OneLineParser:
         help="auto (default): from 16 bounded lights, clusters and the opaque meshes lit in compute (deferred); "
         "loop: every fragment over every light; clustered: clusters, lit in the fragment shader",
     )
+    common.add_argument(
+        "--transparency",
+        choices=("sorted", "weighted"),
+        default="sorted",
+        help="blended materials: sorted back to front per object (default), or weighted blended "
+        "order-independent transparency (drawn in the deferred form)",
+    )
     common.add_argument("--lights", type=int, help="lights scene: how many point and spot lights (default 1,024)")
     common.add_argument(
         "--no-shadows", action="store_true", help="shadows scene: no light casts a shadow (for comparison)"
@@ -257,6 +264,7 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
         exposure=args.exposure,
         msaa=args.msaa,
         light_culling=args.light_culling,
+        transparency=args.transparency,
         lights=args.lights,
         shadows=not args.no_shadows,
         recorder=args.recorder,

@@ -22,6 +22,7 @@ from ..ecs.world import World
 from ..gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
 from ..maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
 from ..render.light_clusters import LIGHT_MODES
+from ..render.oit_pass import TRANSPARENCY_MODES
 from ..render.path import FILL_MODES
 from ..render.renderer import MODES, PATHS, RECORDER_NAMES
 from ..render.tone_map import TONE_MAPS
@@ -141,6 +142,7 @@ class Editor:
             req.tone_map = _combo(imgui, "tone map", req.tone_map, tuple(TONE_MAPS))
             _, req.exposure = imgui.slider_float("exposure (EV)", req.exposure, -8.0, 8.0)
             req.light_culling = _combo(imgui, "light culling", req.light_culling, LIGHT_MODES)
+            req.transparency = _combo(imgui, "transparency", req.transparency, TRANSPARENCY_MODES)
             if req.present is not None:
                 req.present = _combo(imgui, "present", req.present, PRESENT_MODES)
             self._environment(world)

@@ -21,6 +21,7 @@ from ..gpu.instance import Instance
 from ..jobs import JobPool
 from ..render.light_clusters import check_light_culling
 from ..render.mesh_registry import MeshRegistry
+from ..render.oit_pass import check_transparency
 from ..render.renderer import Renderer
 from ..render.tone_map import check_tone_map
 from .scenes import default_schedule, scene_builder
@@ -124,6 +125,7 @@ class Session:
                 tone_map=start.tone_map,
                 exposure=start.exposure,
                 light_culling=start.light_culling,
+                transparency=start.transparency,
             )
             self.scene = start.scene
             self.world, self.schedule = self._build(start.scene, options.path)
@@ -150,6 +152,7 @@ class Session:
             tone_map=self.renderer.tone_map,
             exposure=self.renderer.exposure,
             light_culling=self.renderer.light_culling,
+            transparency=self.renderer.transparency,
         )
 
     def _build(self, scene: str, path: str | None) -> tuple[World, Schedule]:
@@ -173,11 +176,13 @@ class Session:
         renderer.check_fill(wanted.fill)
         check_tone_map(wanted.tone_map, wanted.exposure)
         check_light_culling(wanted.light_culling)
+        check_transparency(wanted.transparency)
         scene = self._build(wanted.scene, None) if wanted.scene != self.scene else None
         renderer.set_path(wanted.mode, wanted.recorder)  # checks, then swaps
         renderer.set_fill(wanted.fill)
         renderer.tone_map, renderer.exposure = wanted.tone_map, float(wanted.exposure)
         renderer.light_culling = wanted.light_culling
+        renderer.transparency = wanted.transparency
         renderer.culling = wanted.culling
         pool.resize(wanted.threads)
         renderer.ensure_output()  # HDR colour or not, as the tone map and exposure now need

@@ -15,6 +15,7 @@ import psutil
 from ..errors import UsageError
 from ..jobs import default_threads
 from ..render.light_clusters import check_light_culling
+from ..render.oit_pass import check_transparency
 from ..render.renderer import default_recorder
 from ..render.tone_map import check_tone_map
 from .scenes import SEED_SCENES
@@ -36,6 +37,7 @@ class Settings:
     tone_map: str = "clamp"  # clamp | aces | reinhard (render/tone_map.py)
     exposure: float = 0.0  # stops
     light_culling: str = "auto"  # render/light_clusters.py LIGHT_MODES (render/light_clusters.py)
+    transparency: str = "sorted"  # sorted | weighted (render/oit_pass.py)
 
 
 @dataclass(frozen=True)
@@ -61,6 +63,7 @@ class RunOptions:
     exposure: float = 0.0  # stops: the HDR colour times 2^exposure before the tone map
     msaa: int = 1  # samples per pixel of the scene (1, 2, 4, 8), fixed for the run
     light_culling: str = "auto"  # render/light_clusters.py LIGHT_MODES
+    transparency: str = "sorted"  # blended materials: sorted, or weighted (order-independent)
     lights: int | None = None  # the lights scene's light count (None: its default, 1,024)
     shadows: bool = True  # the shadows scene's lights cast (--no-shadows: none do)
     chunk_rows: int | None = None  # rows per render job (None: about one per thread, frame_data.MIN_CHUNK_ROWS)
@@ -75,6 +78,7 @@ class RunOptions:
         check_entities(self.entities)
         check_tone_map(self.tone_map, self.exposure)
         check_light_culling(self.light_culling)
+        check_transparency(self.transparency)
         if self.lights is not None and not 0 <= self.lights <= MAX_LIGHTS:
             raise UsageError(f"--lights {self.lights}: from 0 to {MAX_LIGHTS:,}")
 
@@ -90,6 +94,7 @@ class RunOptions:
             tone_map=self.tone_map,
             exposure=self.exposure,
             light_culling=self.light_culling,
+            transparency=self.transparency,
         )
 
 

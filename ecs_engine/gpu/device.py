@@ -83,8 +83,15 @@ class Device:
         self.features = {"drawIndirectCount": bool(f12.drawIndirectCount), "hostQueryReset": bool(f12.hostQueryReset)}
         base = vk.vkGetPhysicalDeviceFeatures(self.physical)
         # the indirect render mode needs all three (checked there, with one message if one lacks)
-        # anisotropic texture filtering and wireframe/point fill where the device has them
-        optional = ("multiDrawIndirect", "drawIndirectFirstInstance", "samplerAnisotropy", "fillModeNonSolid")
+        # anisotropic texture filtering and wireframe/point fill where the device has them;
+        # independent blending for weighted transparency's two targets (render/oit_pass.py)
+        optional = (
+            "multiDrawIndirect",
+            "drawIndirectFirstInstance",
+            "samplerAnisotropy",
+            "fillModeNonSolid",
+            "independentBlend",
+        )
         features = vk.VkPhysicalDeviceFeatures(**{name: getattr(base, name) for name in optional})
         self.features.update({name: bool(getattr(base, name)) for name in optional})
         # clustered lights walk their lists once per subgroup (subgroupMin/Max/Or in fragments)

@@ -66,6 +66,20 @@ class GraphicsPipelineSpec:
     color_attachments: int = 1  # the subpass's; all written alike (the G-buffer pass has four)
     depth_bias: tuple[float, float] | None = None  # (constant, slope) factors: shadow casters
     depth_or_equal: bool = False  # compare GREATER_OR_EQUAL: the sky, drawn at depth 0 where nothing is
+    blend: str = ""  # a BLEND_MODES name ("" with alpha_blend: "alpha")
+
+
+# Blend factors per colour attachment (src colour, dst colour, src alpha, dst alpha), the last one
+# repeated for further attachments; "" blends nothing. From a table, as pygfx picks its blend modes.
+BLEND_MODES: dict[str, tuple[tuple[str, str, str, str], ...]] = {
+    "": (),
+    "alpha": (("SRC_ALPHA", "ONE_MINUS_SRC_ALPHA", "ONE", "ONE_MINUS_SRC_ALPHA"),),
+    # weighted blended order-independent transparency (render/oit_pass.py): premultiplied colour
+    # and alpha summed into the accumulation target, the revealage multiplied by (1 - alpha)
+    "weighted": (("ONE", "ONE", "ONE", "ONE"), ("ZERO", "ONE_MINUS_SRC_COLOR", "ZERO", "ONE_MINUS_SRC_ALPHA")),
+    # its composite: the average colour over the scene, by 1 - revealage (the fragment's alpha)
+    "composite": (("ONE_MINUS_SRC_ALPHA", "SRC_ALPHA", "ZERO", "ONE"),),
+}
 
 
 def specialization(vk: Any, values: tuple[int, ...]) -> tuple[Any, Any]:
@@ -107,16 +121,23 @@ def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
             )
         else:
             vertex_input = vk.VkPipelineVertexInputStateCreateInfo()
-        blend = vk.VkPipelineColorBlendAttachmentState(
-            blendEnable=vk.VK_TRUE if spec.alpha_blend else vk.VK_FALSE,
-            srcColorBlendFactor=vk.VK_BLEND_FACTOR_SRC_ALPHA,
-            dstColorBlendFactor=vk.VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
-            colorBlendOp=vk.VK_BLEND_OP_ADD,
-            srcAlphaBlendFactor=vk.VK_BLEND_FACTOR_ONE,
-            dstAlphaBlendFactor=vk.VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
-            alphaBlendOp=vk.VK_BLEND_OP_ADD,
-            colorWriteMask=0xF,
-        )
+        modes = BLEND_MODES["alpha" if spec.alpha_blend else spec.blend]
+        blends = [
+            vk.VkPipelineColorBlendAttachmentState(
+                blendEnable=vk.VK_TRUE if modes else vk.VK_FALSE,
+                srcColorBlendFactor=getattr(vk, f"VK_BLEND_FACTOR_{factors[0]}"),
+                dstColorBlendFactor=getattr(vk, f"VK_BLEND_FACTOR_{factors[1]}"),
+                colorBlendOp=vk.VK_BLEND_OP_ADD,
+                srcAlphaBlendFactor=getattr(vk, f"VK_BLEND_FACTOR_{factors[2]}"),
+                dstAlphaBlendFactor=getattr(vk, f"VK_BLEND_FACTOR_{factors[3]}"),
+                alphaBlendOp=vk.VK_BLEND_OP_ADD,
+                colorWriteMask=0xF,
+            )
+            for factors in (
+                modes[min(k, len(modes) - 1)] if modes else ("ONE", "ZERO", "ONE", "ZERO")
+                for k in range(spec.color_attachments)
+            )
+        ]
         info = vk.VkGraphicsPipelineCreateInfo(
             pStages=stages,
             pVertexInputState=vertex_input,
@@ -139,7 +160,7 @@ def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
                 depthWriteEnable=vk.VK_TRUE if spec.depth_write else vk.VK_FALSE,
                 depthCompareOp=vk.VK_COMPARE_OP_GREATER_OR_EQUAL if spec.depth_or_equal else vk.VK_COMPARE_OP_GREATER,
             ),
-            pColorBlendState=vk.VkPipelineColorBlendStateCreateInfo(pAttachments=[blend] * spec.color_attachments),
+            pColorBlendState=vk.VkPipelineColorBlendStateCreateInfo(pAttachments=blends),
             pDynamicState=vk.VkPipelineDynamicStateCreateInfo(
                 pDynamicStates=[vk.VK_DYNAMIC_STATE_VIEWPORT, vk.VK_DYNAMIC_STATE_SCISSOR]
             ),

@@ -58,7 +58,7 @@ def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str, blended: b
     textured = bool(ctx.material_features & FEATURE_TEXTURES)
     clustered = bool(ctx.material_features & FEATURE_CLUSTERED)
     lighting = "_gbuffer" if ctx.gbuffer else "_clustered" if clustered else ""
-    fragment_shader = f"mesh{'_textured' if textured else ''}{lighting}.frag"
+    fragment_shader = f"mesh{'_textured' if textured else ''}{lighting}{'_oit' if ctx.oit else ''}.frag"
     if textured:
         vertex_shader = vertex_shader.replace(".vert", "_textured.vert")
     base = dict(
@@ -74,9 +74,10 @@ def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str, blended: b
         # those of single-sided materials (one pipeline for all; draws stay split by mesh only)
         cull_back=not ctx.material_features & FEATURE_DOUBLE_SIDED,
         # blended materials (set_aside_pass.py): over what is drawn, without hiding what follows
-        alpha_blend=blended,
+        alpha_blend=blended and not ctx.oit,
+        blend="weighted" if ctx.oit else "",
         depth_write=not blended,
-        color_attachments=GBUFFER_COLORS if ctx.gbuffer else 1,
+        color_attachments=GBUFFER_COLORS if ctx.gbuffer else 2 if ctx.oit else 1,
     )
     vk = ctx.device.vk
     plain = graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, fragment_shader, **base))

@@ -15,6 +15,7 @@ was made against the target's render pass when the target changes form.
 
 from __future__ import annotations
 
+import logging
 from typing import Any
 
 from ..gpu.device import Device
@@ -22,9 +23,12 @@ from ..gpu.render_pass import SUBPASS_BILLBOARDS
 from ..gpu.secondary import SecondaryBuffers
 from .deferred_pass import DeferredPass
 from .light_pass import LightPass
+from .oit_pass import WeightedTransparency
 from .path import TargetState
 from .sky_pass import SkyPass
 from .tone_map import ToneMapPass
+
+log = logging.getLogger("ecs_engine")
 
 
 class OutputPasses:
@@ -48,6 +52,8 @@ class OutputPasses:
         self.tone_map_pass: ToneMapPass | None = None
         self.deferred: DeferredPass | None = None
         self.sky: SkyPass | None = None
+        self.oit: WeightedTransparency | None = None  # made the first frame it is asked for
+        self._warned_blend = False
         try:
             self.tone_map_pass = ToneMapPass(device, target.render_pass)
             self.deferred = DeferredPass(device, frame_set_layout)
@@ -88,6 +94,22 @@ class OutputPasses:
             )
         return state
 
+    def weighted(self, mode: str) -> WeightedTransparency | None:
+        """The weighted transparency pass ready for the target, when `mode` asks for it and the
+        target is in the deferred form (it needs the opaque depth before the target's pass)."""
+        target = self.target
+        if mode != "weighted" or target.form != "deferred":
+            return None
+        if not self.device.features.get("independentBlend"):
+            if not self._warned_blend:
+                log.warning("%s lacks independentBlend: blended rows are sorted instead", self.device.info.name)
+                self._warned_blend = True
+            return None
+        if self.oit is None:
+            self.oit = WeightedTransparency(self.device, self.secondaries)
+        self.oit.ensure(target.attachments.depth_view, target.width, target.height)
+        return self.oit
+
     def forget_path_state(self) -> None:
         """Drop what the old render path kept per target (its recorder's frame states)."""
         for state in self._targets.values():
@@ -117,11 +139,13 @@ class OutputPasses:
         overlay: Any = None,
         slot: int = 0,
         sky: bool = False,
+        transparent: Any = None,
     ) -> int:
         """Raw cffi calls with structs made once (see gpu/frames.py for why). `chunks`: the path's
         secondaries; `aside`: the set-aside rows' or None; `billboards` point and spot lights get
         one; `features`: the mesh pipelines' MATERIAL_FEATURES (the lighting's too); `sky`: the
-        Environment is drawn behind. Returns the light pass's draws."""
+        Environment is drawn behind; `transparent`: the blended rows' secondary for the weighted
+        transparency pass (the deferred form). Returns the light pass's draws."""
         vk = self.vk
         lib = vk.lib
         target = self.target
@@ -134,12 +158,18 @@ class OutputPasses:
             lib.vkCmdEndRenderPass(cb)
             extent = state.area.extent
             self.deferred.record(cb, frame_set[0], target.attachments, features, extent.width, extent.height)
+            if transparent is not None:
+                assert self.oit is not None
+                self.oit.accumulate(cb, transparent)
             secondaries = []
         if sky:  # after the opaque chunks, before the blended rows
             assert self.sky is not None
             secondaries = [*secondaries, self.sky.record(state, frame_set, slot)]
         if aside is not None:
             secondaries = [*secondaries, aside]  # after every chunk's rows
+        if transparent is not None:  # the weighted transparency over all of it
+            assert self.oit is not None
+            secondaries = [*secondaries, self.oit.record_composite(target.render_pass, state, slot)]
         lib.vkCmdBeginRenderPass(cb, state.pass_begin_ptr, vk.VK_SUBPASS_CONTENTS_SECONDARY_COMMAND_BUFFERS)
         if secondaries:
             lib.vkCmdExecuteCommands(cb, len(secondaries), vk.ffi.new("VkCommandBuffer[]", secondaries))
@@ -158,6 +188,8 @@ class OutputPasses:
         self.light_pass.destroy()
         if self.sky is not None:
             self.sky.destroy()
+        if self.oit is not None:
+            self.oit.destroy()
         if self.tone_map_pass is not None:
             self.tone_map_pass.destroy()
         if self.deferred is not None:

@@ -159,6 +159,7 @@ class PathContext:
     native_recorder: Callable[[], Any]  # gpu.native_recorder.NativeRecorder, compiled on first call, once a device
     gbuffer: bool = False  # the chunks draw into the G-buffer pass (the deferred form), lit later
     shadow: bool = False  # the chunks draw depth alone into a shadow map (render/shadow_pass.py)
+    oit: bool = False  # blended rows accumulate weighted transparency (render/oit_pass.py)
 
 
 class RenderPath(Protocol):

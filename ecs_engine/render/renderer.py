@@ -48,6 +48,7 @@ from .light_clusters import ClusterGrid, LightCulling, check_light_culling
 from .light_rows import light_features
 from .materials import Materials
 from .mesh_registry import MeshRegistry
+from .oit_pass import check_transparency
 from .output_passes import OutputPasses
 from .path import FILL_MODES, FrameInputs, FrameStats, PathContext, PathFactory, RenderPath, TargetState
 from .set_aside_pass import SetAsidePass
@@ -88,6 +89,7 @@ class Renderer:
         tone_map: str = "clamp",
         exposure: float = 0.0,
         light_culling: str = "auto",
+        transparency: str = "sorted",
     ) -> None:
         if mode not in PATHS:
             raise ValueError(f"unknown render mode {mode!r}; modes: {', '.join(MODES)}")
@@ -96,6 +98,8 @@ class Renderer:
         self.check_fill(fill)  # before anything is made: a refusal leaves nothing to destroy
         check_tone_map(tone_map, exposure)
         check_light_culling(light_culling)
+        check_transparency(transparency)
+        self.transparency = transparency  # blended rows: sorted, or weighted (oit_pass.py: deferred form)
         self.tone_map, self.exposure = tone_map, float(exposure)  # change them between frames (ensure_output)
         self.target = target
         self._blends = False  # the last frame's world had blended materials (they need HDR colour)
@@ -379,6 +383,7 @@ class Renderer:
             self.overlay,
             slot,
             sky=self.environment.sky,
+            transparent=aside[4],
         )
         if readback:
             self.target.record_readback(cb)
@@ -401,15 +406,15 @@ class Renderer:
 
     def _record_set_aside(
         self, inputs: FrameInputs, data: FrameData, materials: Materials
-    ) -> tuple[Any, int, int, int]:
-        """The set-aside rows' secondary (None when there is nothing to draw), draws, rows, triangles."""
+    ) -> tuple[Any, int, int, int, Any]:
+        """The set-aside rows' secondary, draws, rows, triangles, weighted transparency's secondary."""
         if data.set_aside is None or not len(data.set_aside):
-            return None, 0, 0, 0
-        if self._set_aside is None:
-            # forward, in the target's render pass (in the deferred form, over the lit scene)
+            return None, 0, 0, 0, None
+        if self._set_aside is None:  # forward, in the target's pass (deferred: over the lit scene)
             self._set_aside = SetAsidePass(replace(self.path.ctx, render_pass=self.target.render_pass, gbuffer=False))
         first = self.path.rows_needed(data.candidates)
-        return self._set_aside.record(inputs, data.set_aside, first, data.camera.position - data.origin, materials)
+        eye, oit = data.camera.position - data.origin, self.output.weighted(self.transparency)
+        return self._set_aside.record(inputs, data.set_aside, first, eye, materials, oit)
 
     @property
     def light_culling(self) -> str:
@@ -458,7 +463,7 @@ class Renderer:
         """The target form (gpu/render_pass.py) the light culling, tone map, exposure, MSAA and
         blended materials need."""
         samples = self.target.samples
-        if self.lights.deferred(samples):
+        if self.lights.deferred(samples) or (self.transparency == "weighted" and self._blends and samples == 1):
             return "deferred"
         return "hdr" if wants_hdr(self.tone_map, self.exposure, samples, self._blends) else "direct"
 

@@ -9,7 +9,8 @@ same subpass, with pipelines the render paths do not have:
   the wrong order within a pixel: sorting is by object, as in glTF viewers and most engines.
 
 Consecutive rows of one (mesh, winding, fill) are one instanced draw. A device without
-fillModeNonSolid draws those materials solid, with one warning.
+fillModeNonSolid draws those materials solid, with one warning. With weighted blended
+transparency (oit_pass.py) the blended rows go to a secondary of that pass instead, in any order.
 """
 
 from __future__ import annotations
@@ -35,15 +36,22 @@ class SetAsidePass:
     def __init__(self, ctx: PathContext) -> None:
         self.ctx = ctx
         self.layout = pipeline_layout(ctx.device, [ctx.frame_set_layout])
-        self.pipelines: dict[tuple[bool, str], tuple[Any, Any]] = {}  # (blended, fill) -> (plain, mirrored)
+        self.pipelines: dict[tuple[bool, str, bool], tuple[Any, Any]] = {}  # (blended, fill, oit) -> (plain, mirrored)
         self.can_fill = bool(ctx.device.features.get("fillModeNonSolid"))
         self._warned = False
 
     def record(
-        self, frame: FrameInputs, rows: SetAsideRows, first_row: int, eye: np.ndarray, materials: Materials
-    ) -> tuple[Any, int, int, int]:
+        self,
+        frame: FrameInputs,
+        rows: SetAsideRows,
+        first_row: int,
+        eye: np.ndarray,
+        materials: Materials,
+        oit: Any = None,
+    ) -> tuple[Any, int, int, int, Any]:
         """Cull, order, write instance rows from `first_row`, record the draws: (secondary
-        command buffer or None, draws, rows drawn, triangles)."""
+        command buffer or None, draws, rows drawn, triangles, the weighted transparency pass's
+        secondary or None). `oit`: a WeightedTransparency the blended rows accumulate in."""
         centers, radii, index_counts = frame.bounds
         model, handle, material = rows.model, rows.handle, rows.material
         c, r = bounding_spheres(model, centers[handle], radii[handle])
@@ -52,7 +60,7 @@ class SetAsidePass:
             model, handle, material, c = model[keep], handle[keep], material[keep], c[keep]
         n = len(handle)
         if n == 0:
-            return None, 0, 0, 0
+            return None, 0, 0, 0, None
         blended = materials.blend[material]
         fill = materials.fills[material].astype(np.int64)
         if not self.can_fill and fill.any():
@@ -80,23 +88,34 @@ class SetAsidePass:
         starts = np.flatnonzero(np.r_[True, group[1:] != group[:-1]])
         counts = np.diff(np.r_[starts, n])
         triangles = int((index_counts[keys[starts] // 2] // 3 * counts).sum())
-        runs = zip(
-            keys[starts].tolist(), fill[starts].tolist(), blended[starts].tolist(), starts.tolist(), counts.tolist()
+        runs = list(
+            zip(
+                keys[starts].tolist(), fill[starts].tolist(), blended[starts].tolist(), starts.tolist(), counts.tolist()
+            )
         )
-        return self._draw(frame, first_row, runs), len(starts), n, triangles
+        if oit is None:
+            return self._draw(frame, first_row, runs, frame.target.aside_begin), len(starts), n, triangles, None
+        solid = [r for r in runs if not r[2]]
+        cb = self._draw(frame, first_row, solid, frame.target.aside_begin) if solid else None
+        state = oit.state
+        oit_frame = replace(frame, target=state)
+        accumulated = self._draw(oit_frame, first_row, [r for r in runs if r[2]], state.secondary_begin, oit)
+        return cb, len(starts), n, triangles, accumulated
 
-    def _pipeline(self, blended: bool, fill: int, mirrored: int) -> Any:
-        key = (blended, FILLS[fill])
+    def _pipeline(self, blended: bool, fill: int, mirrored: int, oit: Any = None) -> Any:
+        key = (blended, FILLS[fill], oit is not None)
         found = self.pipelines.get(key)
         if found is None:
             ctx = self.ctx if fill == 0 else replace(self.ctx, fill=FILLS[fill])
+            if oit is not None:  # the weighted transparency pass: one sample, two targets
+                ctx = replace(ctx, render_pass=oit.render_pass, oit=True, samples=1)
             found = self.pipelines[key] = mesh_pipelines(ctx, self.layout, "mesh.vert", blended=blended)
         return found[mirrored]
 
-    def _draw(self, frame: FrameInputs, first_row: int, runs: Any) -> Any:
+    def _draw(self, frame: FrameInputs, first_row: int, runs: Any, begin: Any, oit: Any = None) -> Any:
         ctx = self.ctx
         vk = ctx.device.vk
-        cb = ctx.secondaries.begin(frame.slot, frame.target.aside_begin)
+        cb = ctx.secondaries.begin(frame.slot, begin)
         vk.vkCmdSetViewport(cb, 0, 1, [frame.target.viewport])
         vk.vkCmdSetScissor(cb, 0, 1, [frame.target.area])
         vk.vkCmdBindDescriptorSets(
@@ -104,7 +123,7 @@ class SetAsidePass:
         )
         bound = None
         for key, fill, blended, start, count in runs:
-            pipeline = self._pipeline(bool(blended), fill, key % 2)
+            pipeline = self._pipeline(bool(blended), fill, key % 2, oit)
             if pipeline is not bound:
                 vk.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline)
                 bound = pipeline
