@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from .attachment import attachment
+from .attachment import attachment, create_framebuffer, make_render_pass
 from .memory import Image
 
 if TYPE_CHECKING:
@@ -78,11 +78,7 @@ def create_gbuffer_pass(device: Device, depth_format: int, hdr_format: int) -> A
             dstAccessMask=vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_SHADER_WRITE_BIT,
         ),
     ]
-    return vk.vkCreateRenderPass(
-        device.handle,
-        vk.VkRenderPassCreateInfo(pAttachments=attachments, pSubpasses=[subpass], pDependencies=dependencies),
-        None,
-    )
+    return make_render_pass(device, attachments, [subpass], dependencies)
 
 
 class GBuffer:
@@ -99,13 +95,7 @@ class GBuffer:
             for name in GBUFFER_FORMAT_NAMES:
                 self.images.append(Image(device, width, height, getattr(vk, name), usage, vk.VK_IMAGE_ASPECT_COLOR_BIT))
             views = [depth_view, hdr_view, *(image.view for image in self.images)]
-            self.framebuffer = vk.vkCreateFramebuffer(
-                device.handle,
-                vk.VkFramebufferCreateInfo(
-                    renderPass=render_pass, pAttachments=views, width=width, height=height, layers=1
-                ),
-                None,
-            )
+            self.framebuffer = create_framebuffer(device, render_pass, views, width, height)
         except BaseException:
             self.destroy()
             raise

@@ -6,8 +6,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .attachment import create_framebuffer
 from .memory import HOST, Buffer, Image
-from .render_pass import FORMS, SceneAttachments, TargetForm, create_framebuffer, create_target_passes
+from .render_pass import FORMS, SceneAttachments, TargetForm, create_target_passes
 
 if TYPE_CHECKING:
     from .device import Device

@@ -31,6 +31,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from .attachment import attachment as _attachment
+from .attachment import make_render_pass
 from .gbuffer import GBuffer, create_gbuffer_pass
 from .memory import Image
 
@@ -96,15 +97,6 @@ def _to_readback(vk: Any, last: int = SUBPASS_OUTPUT) -> Any:
         dstStageMask=vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
         srcAccessMask=vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
         dstAccessMask=vk.VK_ACCESS_TRANSFER_READ_BIT,
-    )
-
-
-def _render_pass(device: Device, attachments: list[Any], subpasses: list[Any], dependencies: list[Any]) -> Any:
-    vk = device.vk
-    return vk.vkCreateRenderPass(
-        device.handle,
-        vk.VkRenderPassCreateInfo(pAttachments=attachments, pSubpasses=subpasses, pDependencies=dependencies),
-        None,
     )
 
 
@@ -220,7 +212,7 @@ def create_render_pass(
         ),
         _to_readback(vk),
     ]
-    return _render_pass(device, attachments, subpasses, dependencies)
+    return make_render_pass(device, attachments, subpasses, dependencies)
 
 
 def _create_direct_pass(device: Device, color_format: int, final_layout: int) -> Any:
@@ -270,7 +262,7 @@ def _create_direct_pass(device: Device, color_format: int, final_layout: int) ->
         ),
         _to_readback(vk, SUBPASS_BILLBOARDS),
     ]
-    return _render_pass(device, attachments, subpasses, dependencies)
+    return make_render_pass(device, attachments, subpasses, dependencies)
 
 
 class SceneAttachments:
@@ -357,12 +349,3 @@ def create_target_passes(device: Device, color_format: int, final_layout: int, s
     except BaseException:
         vk.vkDestroyRenderPass(device.handle, render_pass, None)
         raise
-
-
-def create_framebuffer(device: Device, render_pass: Any, views: list[Any], width: int, height: int) -> Any:
-    vk = device.vk
-    return vk.vkCreateFramebuffer(
-        device.handle,
-        vk.VkFramebufferCreateInfo(renderPass=render_pass, pAttachments=views, width=width, height=height, layers=1),
-        None,
-    )

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from .attachment import attachment
+from .attachment import attachment, create_framebuffer, make_render_pass
 from .memory import Image
 
 if TYPE_CHECKING:
@@ -66,11 +66,7 @@ def create_shadow_pass(device: Device) -> Any:
             dstAccessMask=vk.VK_ACCESS_SHADER_READ_BIT,
         ),
     ]
-    return vk.vkCreateRenderPass(
-        device.handle,
-        vk.VkRenderPassCreateInfo(pAttachments=[depth], pSubpasses=[subpass], pDependencies=dependencies),
-        None,
-    )
+    return make_render_pass(device, [depth], [subpass], dependencies)
 
 
 class ShadowMaps:
@@ -100,17 +96,7 @@ class ShadowMaps:
             for layer in range(self.layers):
                 self.layer_views.append(self.image.layer_view(layer))
                 self.framebuffers.append(
-                    vk.vkCreateFramebuffer(
-                        device.handle,
-                        vk.VkFramebufferCreateInfo(
-                            renderPass=render_pass,
-                            pAttachments=[self.layer_views[-1]],
-                            width=self.resolution,
-                            height=self.resolution,
-                            layers=1,
-                        ),
-                        None,
-                    )
+                    create_framebuffer(device, render_pass, [self.layer_views[-1]], self.resolution, self.resolution)
                 )
             kinds = ((vk.VK_FILTER_LINEAR, True), (vk.VK_FILTER_NEAREST, True), (vk.VK_FILTER_NEAREST, False))
             for filtering, compare in kinds:

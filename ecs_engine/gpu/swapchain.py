@@ -9,9 +9,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import UsageError
+from .attachment import create_framebuffer
 from .functions import device_function, instance_function, raw_device_function
 from .memory import HOST, Buffer
-from .render_pass import FORMS, SceneAttachments, TargetForm, create_framebuffer, create_target_passes
+from .render_pass import FORMS, SceneAttachments, TargetForm, create_target_passes
 
 if TYPE_CHECKING:
     from .device import Device

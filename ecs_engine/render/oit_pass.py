@@ -25,7 +25,7 @@ from __future__ import annotations
 from typing import Any
 
 from ..gpu.array_image import clamped_sampler
-from ..gpu.attachment import attachment
+from ..gpu.attachment import attachment, create_framebuffer, make_render_pass
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_images
 from ..gpu.device import Device
 from ..gpu.memory import Image
@@ -88,11 +88,7 @@ def create_oit_pass(device: Device) -> Any:
             dstAccessMask=vk.VK_ACCESS_SHADER_READ_BIT,
         ),
     ]
-    return vk.vkCreateRenderPass(
-        device.handle,
-        vk.VkRenderPassCreateInfo(pAttachments=attachments, pSubpasses=[subpass], pDependencies=dependencies),
-        None,
-    )
+    return make_render_pass(device, attachments, [subpass], dependencies)
 
 
 class WeightedTransparency:
@@ -130,13 +126,7 @@ class WeightedTransparency:
         for fmt in (ACCUMULATION_FORMAT, REVEALAGE_FORMAT):
             self.images.append(Image(self.device, width, height, getattr(vk, fmt), color, aspect))
         views = [image.view for image in self.images] + [depth_view]
-        self.framebuffer = vk.vkCreateFramebuffer(
-            self.device.handle,
-            vk.VkFramebufferCreateInfo(
-                renderPass=self.render_pass, pAttachments=views, width=width, height=height, layers=1
-            ),
-            None,
-        )
+        self.framebuffer = create_framebuffer(self.device, self.render_pass, views, width, height)
         read = vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
         for binding, image in enumerate(self.images):
             info = vk.VkDescriptorImageInfo(sampler=self.sampler, imageView=image.view, imageLayout=read)
