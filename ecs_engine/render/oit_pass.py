@@ -31,8 +31,9 @@ from ..gpu.device import Device
 from ..gpu.memory import Image
 from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
 from ..gpu.render_pass import DEPTH_FORMAT_NAME
-from ..gpu.secondary import SecondaryBuffers, end_command_buffer
+from ..gpu.secondary import SecondaryBuffers
 from .path import TargetState
+from .sky_pass import full_screen_secondary
 
 ACCUMULATION_FORMAT = "VK_FORMAT_R16G16B16A16_SFLOAT"
 REVEALAGE_FORMAT = "VK_FORMAT_R16_SFLOAT"
@@ -161,8 +162,6 @@ class WeightedTransparency:
 
     def record_composite(self, target_pass: Any, state: TargetState, slot: int) -> Any:
         """The composite's secondary in the target pass's first subpass (after the set-aside rows)."""
-        vk = self.vk
-        lib = vk.lib
         if self.composite is None or self._composite_pass != target_pass:
             self._destroy_composite()
             spec = GraphicsPipelineSpec(
@@ -176,16 +175,7 @@ class WeightedTransparency:
                 blend="composite",
             )
             self.composite, self._composite_pass = graphics_pipeline(self.device, spec), target_pass
-        cb = self.secondaries.begin(slot, state.aside_begin)
-        lib.vkCmdSetViewport(cb, 0, 1, state.viewport_ptr)
-        lib.vkCmdSetScissor(cb, 0, 1, state.area_ptr)
-        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.composite)
-        lib.vkCmdBindDescriptorSets(
-            cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1, self.set_array, 0, vk.ffi.NULL
-        )
-        lib.vkCmdDraw(cb, 3, 1, 0, 0)
-        end_command_buffer(vk, cb)
-        return cb
+        return full_screen_secondary(self.secondaries, slot, state, self.composite, self.layout, self.set_array)
 
     def _destroy_composite(self) -> None:
         if self.composite is not None:

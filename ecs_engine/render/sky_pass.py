@@ -15,6 +15,24 @@ from ..gpu.secondary import SecondaryBuffers, end_command_buffer
 from .path import TargetState
 
 
+def full_screen_secondary(
+    secondaries: SecondaryBuffers, slot: int, state: TargetState, pipeline: Any, layout: Any, set_array: Any
+) -> Any:
+    """A secondary of the target pass's first subpass (its set-aside begin info) drawing one
+    triangle over the screen with `pipeline` and set 0 `set_array`: the sky, and weighted
+    transparency's composite (oit_pass.py). Raw calls, structs made once."""
+    vk = secondaries.device.vk
+    lib = vk.lib
+    cb = secondaries.begin(slot, state.aside_begin)
+    lib.vkCmdSetViewport(cb, 0, 1, state.viewport_ptr)
+    lib.vkCmdSetScissor(cb, 0, 1, state.area_ptr)
+    lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline)
+    lib.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1, set_array, 0, vk.ffi.NULL)
+    lib.vkCmdDraw(cb, 3, 1, 0, 0)
+    end_command_buffer(vk, cb)
+    return cb
+
+
 class SkyPass:
     def __init__(self, device: Device, frame_set_layout: Any, secondaries: SecondaryBuffers, target: Any) -> None:
         self.device, self.vk, self.secondaries, self.target = device, device.vk, secondaries, target
@@ -22,9 +40,7 @@ class SkyPass:
         self.pipeline: Any = None
 
     def record(self, state: TargetState, set_array: Any, slot: int) -> Any:
-        """The sky's secondary for this frame (raw calls, structs made once)."""
-        vk = self.vk
-        lib = vk.lib
+        """The sky's secondary for this frame."""
         if self.pipeline is None:
             self.pipeline = graphics_pipeline(
                 self.device,
@@ -39,16 +55,7 @@ class SkyPass:
                     samples=self.target.samples,
                 ),
             )
-        cb = self.secondaries.begin(slot, state.aside_begin)
-        lib.vkCmdSetViewport(cb, 0, 1, state.viewport_ptr)
-        lib.vkCmdSetScissor(cb, 0, 1, state.area_ptr)
-        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.pipeline)
-        lib.vkCmdBindDescriptorSets(
-            cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1, set_array, 0, vk.ffi.NULL
-        )
-        lib.vkCmdDraw(cb, 3, 1, 0, 0)
-        end_command_buffer(vk, cb)
-        return cb
+        return full_screen_secondary(self.secondaries, slot, state, self.pipeline, self.layout, set_array)
 
     def retarget(self) -> None:
         """The target's render pass changed: the pipeline is made again on first use."""
