@@ -16,9 +16,7 @@ layout(location = 3) out vec2 v_uv;
 layout(location = 4) out vec4 v_tangent;
 #endif
 
-#ifdef PUSH_INSTANCE
-layout(push_constant) uniform Push { Instance row; } push;
-#endif
+#include "instance_row.glsl"
 
 // The normal matrix: the cofactor of the model's 3x3 part (det * inverse transpose), made from
 // columns scaled by the largest one (so huge scales do not overflow and tiny ones do not all
@@ -41,15 +39,8 @@ mat3 normal_matrix(Instance inst) {
 }
 
 void main() {
-#if defined(PUSH_INSTANCE)
-    Instance inst = push.row;
-#elif defined(INDIRECT_INSTANCE)
-    Instance inst = instances[ids[gl_InstanceIndex]];
-#else
-    Instance inst = instances[gl_InstanceIndex];
-#endif
-    vec4 p = vec4(in_position, 1.0);
-    vec3 world = vec3(dot(inst.model[0], p), dot(inst.model[1], p), dot(inst.model[2], p));
+    Instance inst = instance_row();
+    vec3 world = instance_world(inst, in_position);
     v_position = world;
     mat3 nm = normal_matrix(inst);
     v_normal = nm * in_normal;

@@ -13,20 +13,11 @@ layout(location = 0) out vec2 v_uv;
 layout(location = 1) flat out uint v_material;
 #endif
 
-#ifdef PUSH_INSTANCE
-layout(push_constant) uniform Push { Instance row; } push;
-#endif
+#include "instance_row.glsl"
 
 void main() {
-#if defined(PUSH_INSTANCE)
-    Instance inst = push.row;
-#elif defined(INDIRECT_INSTANCE)
-    Instance inst = instances[ids[gl_InstanceIndex]];
-#else
-    Instance inst = instances[gl_InstanceIndex];
-#endif
-    vec4 p = vec4(in_position, 1.0);
-    vec3 world = vec3(dot(inst.model[0], p), dot(inst.model[1], p), dot(inst.model[2], p));
+    Instance inst = instance_row();
+    vec3 world = instance_world(inst, in_position);
     gl_Position = g.projection * (g.view * vec4(world, 1.0));
 #ifdef CUTOUT
     v_uv = in_uv;
