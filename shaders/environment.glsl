@@ -2,7 +2,8 @@
 // in only with FEATURE_ENVIRONMENT (a world without one reads none of it). Directions are in the
 // world's axes (positions are render-relative, not rotated), as the cube map's faces are.
 
-// Radiance from direction d, blurred to mip level `lod` (0: sharp), times the intensity.
+// Radiance from direction d, blurred to mip level `lod` (0: sharp; level roughness * g.environment.y
+// holds the GGX lobe of that roughness, environment_prefilter.py), times the intensity.
 vec3 environment_radiance(vec3 d, float lod) {
     return textureLod(environment_map, d, lod).rgb * g.environment.x;
 }
@@ -33,8 +34,8 @@ vec2 environment_brdf(float nv, float roughness) {
 }
 
 // The ambient light from the environment (replaces the flat ambient when g.environment.z is 1):
-// diffuse from the harmonics; for Cook-Torrance also the specular, the mip chain read at a level
-// that grows with roughness (box-filtered mips, not a GGX prefilter: an approximation).
+// diffuse from the harmonics; for Cook-Torrance also the specular (Karis' split sum): the
+// GGX-prefiltered mip chain read at the surface's roughness, times the environment BRDF.
 vec3 environment_ambient(Material m, uint model, vec3 n, vec3 v, float occlusion) {
     vec3 base = m.base_color.rgb;
     if (model_is(model, MODEL_COOK_TORRANCE)) {

@@ -79,7 +79,7 @@ struct Globals {  // 448 bytes, std140
     uvec4 light_tiles;          // offset 240: x tiles across (0: no light grid), y tiles down, z mask words per tile, w tile side in pixels
     uvec4 light_bins;           // offset 256: x first uint of the light bounds, y first uint of the tile masks, zw 0
     vec4 bin_depth;             // offset 272: x bin near s, y LIGHT_BINS / ln(far / s): bin = floor(ln(max(distance, s) / s) * y); zw viewport size
-    vec4 environment;           // offset 288: the Environment (environment.glsl): x intensity, y its cube map's last mip level, z 1: image-based ambient, w 0
+    vec4 environment;           // offset 288: the Environment (environment.glsl): x intensity, y the mip level that holds roughness 1, z 1: image-based ambient, w 0
     vec4 irradiance[9];         // offset 304: the environment's diffuse light as 9 spherical harmonics (rgb), environment_maps.py
 };
 

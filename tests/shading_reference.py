@@ -9,6 +9,7 @@ or E = illuminance (directional); radiance = ambient * base + sum E (n.wi) pi f(
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -145,3 +146,21 @@ def hit_sphere(origin, rays, center, radius):
     disc = b * b - (oc @ oc - radius * radius)
     t = -b - np.sqrt(np.maximum(disc, 0))
     return np.where(disc > 0, t, np.nan), origin + rays * t[..., None]
+
+
+def lobe_integral(faces: np.ndarray, normals: np.ndarray, roughness: float) -> np.ndarray:
+    """sum over texels l of L(l) D(h) (n.l) dw / the same without L, h = (n + l) / |n + l|: the
+    prefilter's definition with n = v (the importance sampler's pdf of l is D(h) / 4)."""
+    side = faces.shape[1]
+    from ecs_engine.render.environment_maps import _texel_solid_angles, cube_directions
+
+    light = cube_directions(side).reshape(-1, 3)
+    solid_angle = np.tile(_texel_solid_angles(side).ravel(), 6)
+    a2 = roughness**4
+    h = normals[:, None, :] + light[None]
+    h /= np.linalg.norm(h, axis=-1, keepdims=True)
+    nh = np.einsum("ijk,ik->ij", h, normals)
+    nl = normals @ light.T
+    d = a2 / (math.pi * (nh * nh * (a2 - 1.0) + 1.0) ** 2)
+    weight = np.where(nl > 0.0, d * nl * solid_angle[None], 0.0)
+    return (weight @ faces.reshape(-1, 3)) / weight.sum(axis=1, keepdims=True)

@@ -12,12 +12,14 @@ import numpy as np
 import pytest
 from gpu_context import headless_gpu
 from pixel_rays import pixel_rays
+from shading_reference import lobe_integral
 
 from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Environment, Mesh, Transform
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.errors import UsageError
+from ecs_engine.render.environment_maps import cube_directions
 from ecs_engine.render.materials import Material, materials
 from ecs_engine.render.primitives import cube_mesh, sphere_mesh
 from ecs_engine.render.textures import linear_to_srgb
@@ -95,6 +97,32 @@ def test_a_mirror_reflects_by_schlicks_fresnel(reflectivity):
     assert np.abs(image[..., 0] - expected)[hits].max() <= 2
     grazing, steep = image[hits][:, 0].max(), image[hits][:, 0].min()
     assert grazing - steep > 10  # the Fresnel term shows across the image
+
+
+def test_a_rough_mirror_shows_the_ggx_blurred_sky():
+    """A plane of reflectivity 1 and roughness 1 under a sky bright overhead and dark below: each
+    pixel is the GGX lobe's average of the sky around its reflected ray (the split sum's
+    prefilter, integrated here over every sky texel), read from the prefiltered chain's level for
+    roughness 1 (4 x 4 faces, so within a few levels of 255 of the exact integral)."""
+    side = 16
+    d = cube_directions(side)
+    sky = (0.05 + 0.7 * np.clip(d[..., 1:2], 0.0, 1.0) ** 2 + 0.2 * np.clip(d[..., :1], 0.0, 1.0)).repeat(3, -1)
+    with headless_gpu(W, H) as gpu:
+        world = World()
+        cube = gpu.meshes.add(cube_mesh())
+        look = materials(world).add(Material("rough", "lambert", (0.0, 0.0, 0.0, 1.0), reflectivity=1.0, roughness=1.0))
+        world.spawn(Transform(position=(0.0, -0.5, 0.0), scale=(400.0, 1.0, 400.0)), Mesh(handle=cube, material=look))
+        world.resources[Environment] = Environment(sky.astype(np.float32), sky=False, ambient=False)
+        add_camera(world, (0.0, 2.0, 6.0), (1.0, 0.0, -2.0))
+        image = render(gpu, world, ambient=(0.0, 0.0, 0.0, 0.0))
+        rays, _ = pixel_rays(world, W, H)
+    hits = rays[..., 1] < -0.05
+    reflected = rays[hits] * np.array([1.0, -1.0, 1.0])
+    expected = encoded(lobe_integral(sky, reflected / np.linalg.norm(reflected, axis=-1, keepdims=True), 1.0))
+    error = np.abs(image[hits] - expected)
+    assert hits.mean() > 0.5
+    assert error.mean() <= 2.0 and error.max() <= 6, (error.mean(), error.max())
+    assert np.ptp(expected[:, 0]) > 40  # the blurred sky varies across the plane
 
 
 def test_glass_shows_the_sky_behind_it_bent():

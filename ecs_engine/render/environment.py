@@ -1,7 +1,8 @@
 """The GPU side of the world's Environment (components/environment.py): its cube map with a
-box-filtered mip chain (half floats, sampled trilinearly), and what the frame's globals carry:
-the intensity, the last mip level (roughness picks a level), whether it lights the ambient, and
-its diffuse light as 9 spherical harmonics (environment_maps.py does the CPU work).
+GGX-prefiltered mip chain (half floats, sampled trilinearly; environment_prefilter.py), and what
+the frame's globals carry: the intensity, the mip level that holds roughness 1 (roughness picks a
+level), whether it lights the ambient, and its diffuse light as 9 spherical harmonics
+(environment_maps.py does the CPU work). Prefiltering runs on the job pool when given one.
 
 Without an Environment a black 1-texel cube stays bound (the shaders are compiled without
 FEATURE_ENVIRONMENT then and never read it). A new Environment object is loaded when the frame
@@ -19,7 +20,9 @@ from ..components.environment import Environment
 from ..ecs.world import World
 from ..gpu.array_image import ArrayImage, clamped_sampler
 from ..gpu.device import Device
+from ..jobs import JobPool
 from .environment_maps import cube_mips, irradiance_sh9, load_cube
+from .environment_prefilter import ggx_prefiltered_mips, roughness_levels
 
 
 def _chains(mips: list[np.ndarray]) -> list[list[np.ndarray]]:
@@ -56,7 +59,7 @@ class EnvironmentMap:
         """Whether the sky is drawn behind the scene."""
         return self.source is not None and self.source.sky
 
-    def sync(self, world: World) -> bool:
+    def sync(self, world: World, jobs: JobPool | None = None) -> bool:
         """Load the world's Environment when it is new; True when the bound image changed (the
         frame sets must name it again). A source that cannot be loaded raises UsageError and
         leaves the previous one bound."""
@@ -71,7 +74,8 @@ class EnvironmentMap:
             mips, irradiance = cube_mips(np.zeros((6, 1, 1, 3), np.float32)), np.zeros((9, 3), np.float32)
         else:
             faces = load_cube(env.source, env.size)
-            mips, irradiance = cube_mips(faces), irradiance_sh9(faces)
+            mips = ggx_prefiltered_mips(faces, map_blocks=jobs.map if jobs is not None else None)
+            irradiance = irradiance_sh9(faces)
         self.device.wait_idle()  # frames in flight sample the old image
         self._upload(mips)
         self.source, self.irradiance = env, np.asarray(irradiance, np.float32)
@@ -105,7 +109,7 @@ class EnvironmentMap:
         rows[:, :3] = self.irradiance
         if env is None:
             return (0.0, 0.0, 0.0, 0.0), rows
-        return (env.intensity, float(self.image.levels - 1), 1.0 if env.ambient else 0.0, 0.0), rows
+        return (env.intensity, float(roughness_levels(self.image.levels)), 1.0 if env.ambient else 0.0, 0.0), rows
 
     def destroy(self) -> None:
         if self.image is not None:

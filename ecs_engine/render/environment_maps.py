@@ -1,6 +1,7 @@
 """Environment maps on the CPU: an image of the sky all around becomes the six faces of a cube
-map (linear RGB, float32), its box-filtered mip chain, and the nine spherical-harmonic
-coefficients of its diffuse light, which the GPU side uploads and samples.
+map (linear RGB, float32), its box-filtered mip chain (environment_prefilter.py blurs the
+specular levels from it), and the nine spherical-harmonic coefficients of its diffuse light,
+which the GPU side uploads and samples.
 
 - Cube faces come in Vulkan's layer order (+X, -X, +Y, -Y, +Z, -Z: CUBE_FACE_NAMES) and
   orientation (the spec's cube map face selection, CUBE_FACES in shadow_views.py): on a face with

@@ -48,7 +48,7 @@ GLOBALS = Struct(
         (
             "environment",
             "vec4",
-            "the Environment (environment.glsl): x intensity, y its cube map's last mip level, "
+            "the Environment (environment.glsl): x intensity, y the mip level that holds roughness 1, "
             "z 1: image-based ambient, w 0",
         ),
         (

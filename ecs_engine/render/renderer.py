@@ -319,7 +319,7 @@ class Renderer:
         material_count = len(materials)
         data = self.extract(world, width, height, materials)  # before any GPU state: a bad world fails here
         views = self.shadows.plan(world, data)  # lights with a Shadow: the views their maps are drawn from
-        if self.environment.sync(world):  # a new Environment (the device was waited for)
+        if self.environment.sync(world, self.jobs):  # a new Environment (the device was waited for)
             for each in self.per_frame:
                 each.name_environment(self.device)
         features = light_features(data.lights, data.directional) | (FEATURE_SHADOWS if views else 0)
