@@ -120,24 +120,40 @@ float light_distance(ShadowView v, float depth) {
                           : v.depth_model.y / max(depth - v.depth_model.x, 1e-9);
 }
 
+// A disc of PCSS_TAPS points (Vogel's golden-angle spiral: even cover at any count), turned by
+// `angle`: PCSS's search and filter turn it by a noise of the shadow map's texel position
+// (Jimenez' interleaved gradient noise, at a quarter texel), so its few taps give a smooth penumbra
+// with fine noise instead of the bands a fixed grid draws. The noise is fixed to the map, so it
+// does not crawl when the camera moves (cascades move in whole texels).
+const int PCSS_TAPS = 16;
+vec2 disc_tap(int i, float angle) {
+    float r = sqrt((float(i) + 0.5) / float(PCSS_TAPS));
+    float theta = float(i) * 2.39996323 + angle;
+    return r * vec2(cos(theta), sin(theta));
+}
+
+float shadow_noise_angle(vec2 uv, float size) {
+    vec2 at = floor(uv * size * 4.0);
+    return 6.28318531 * fract(52.9829189 * fract(dot(at, vec2(0.06711056, 0.00583715))));
+}
+
 // Percentage-closer soft shadows (R. Fernando, 2005): the average depth of the casters around
-// the receiver (a 5 x 5 search over PCSS_SEARCH texels) gives the penumbra by similar triangles,
+// the receiver (a disc of PCSS_SEARCH texels across) gives the penumbra by similar triangles,
 // (receiver - blocker) * size / blocker for a spot or point light of size `softness`, (receiver
-// - blocker) * softness for a directional one (its width per unit of distance); then PCF over
-// that width: contact shadows stay sharp, far ones spread.
+// - blocker) * softness for a directional one (its width per unit of distance); then PCF over a
+// disc that wide: contact shadows stay sharp, far ones spread.
 const float PCSS_SEARCH = 12.0;
 const float PCSS_MAX = 24.0;  // the widest filter, in texels
 float pcss(ShadowView v, vec2 uv, float layer, float ref, float depth) {
     vec2 texel = vec2(1.0 / float(v.info.z));
+    float angle = shadow_noise_angle(uv, float(v.info.z));
     float sum = 0.0, found = 0.0;
-    for (int y = -2; y <= 2; ++y) {
-        for (int x = -2; x <= 2; ++x) {
-            vec2 at = uv + vec2(x, y) * texel * (PCSS_SEARCH / 2.0);
-            float z = textureGrad(shadow_depth, vec3(at, layer), vec2(0.0), vec2(0.0)).r;
-            if (z > ref) {   // reverse-Z: nearer the light than the receiver
-                sum += z;
-                found += 1.0;
-            }
+    for (int i = 0; i < PCSS_TAPS; ++i) {
+        vec2 at = uv + disc_tap(i, angle) * texel * PCSS_SEARCH;
+        float z = textureGrad(shadow_depth, vec3(at, layer), vec2(0.0), vec2(0.0)).r;
+        if (z > ref) {   // reverse-Z: nearer the light than the receiver
+            sum += z;
+            found += 1.0;
         }
     }
     if (found == 0.0) {
@@ -150,12 +166,10 @@ float pcss(ShadowView v, vec2 uv, float layer, float ref, float depth) {
     float texel_world = v.depth_model.z * (perspective ? receiver : 1.0);
     float radius = clamp(penumbra / max(texel_world, 1e-9), 1.0, PCSS_MAX);
     float lit = 0.0;
-    for (int y = -2; y <= 2; ++y) {
-        for (int x = -2; x <= 2; ++x) {
-            lit += shadow_tap(false, uv + vec2(x, y) * texel * (radius / 2.0), layer, ref);
-        }
+    for (int i = 0; i < PCSS_TAPS; ++i) {
+        lit += shadow_tap(false, uv + disc_tap(i, angle) * texel * radius, layer, ref);
     }
-    return lit / 25.0;
+    return lit / float(PCSS_TAPS);
 }
 
 // How much of light `light` reaches p (normal n) past its casters: 1 without shadows. A
