@@ -120,21 +120,24 @@ float light_distance(ShadowView v, float depth) {
                           : v.depth_model.y / max(depth - v.depth_model.x, 1e-9);
 }
 
-// A disc of PCSS_TAPS points (Vogel's golden-angle spiral: even cover at any count), turned by
-// `angle`: PCSS's search and filter turn it by a noise of the shadow map's texel position
+// A disc of PCSS_TAPS points (Vogel's golden-angle spiral: even cover at any count). PCSS's
+// search and filter turn it by a noise of the shadow map's texel position
 // (Jimenez' interleaved gradient noise, at a quarter texel), so its few taps give a smooth penumbra
 // with fine noise instead of the bands a fixed grid draws. The noise is fixed to the map, so it
 // does not crawl when the camera moves (cascades move in whole texels).
 const int PCSS_TAPS = 16;
-vec2 disc_tap(int i, float angle) {
-    float r = sqrt((float(i) + 0.5) / float(PCSS_TAPS));
-    float theta = float(i) * 2.39996323 + angle;
-    return r * vec2(cos(theta), sin(theta));
-}
+const vec2 PCSS_DISC[PCSS_TAPS] = vec2[](  // r = sqrt((i + 0.5) / 16), angle = i * 2.39996323
+    vec2(0.176777, 0.000000), vec2(-0.225772, 0.206826), vec2(0.034558, -0.393771), vec2(0.284571, 0.371173),
+    vec2(-0.522223, -0.092374), vec2(0.494695, -0.314685), vec2(-0.165466, 0.615525), vec2(-0.315561, -0.607594),
+    vec2(0.684642, 0.250030), vec2(-0.712256, 0.294009), vec2(0.343355, -0.733729), vec2(0.253730, 0.808932),
+    vec2(-0.764746, -0.443186), vec2(0.897134, -0.197232), vec2(-0.547507, 0.778772), vec2(-0.126487, -0.976090));
 
-float shadow_noise_angle(vec2 uv, float size) {
+// The disc turned by the noise at uv, scaled to `texel` units: tap i is uv + turn * PCSS_DISC[i] * r.
+mat2 shadow_noise_turn(vec2 uv, float size, float texel) {
     vec2 at = floor(uv * size * 4.0);
-    return 6.28318531 * fract(52.9829189 * fract(dot(at, vec2(0.06711056, 0.00583715))));
+    float angle = 6.28318531 * fract(52.9829189 * fract(dot(at, vec2(0.06711056, 0.00583715))));
+    float c = cos(angle) * texel, s = sin(angle) * texel;
+    return mat2(c, s, -s, c);
 }
 
 // Percentage-closer soft shadows (R. Fernando, 2005): the average depth of the casters around
@@ -145,11 +148,10 @@ float shadow_noise_angle(vec2 uv, float size) {
 const float PCSS_SEARCH = 12.0;
 const float PCSS_MAX = 24.0;  // the widest filter, in texels
 float pcss(ShadowView v, vec2 uv, float layer, float ref, float depth) {
-    vec2 texel = vec2(1.0 / float(v.info.z));
-    float angle = shadow_noise_angle(uv, float(v.info.z));
+    mat2 turn = shadow_noise_turn(uv, float(v.info.z), 1.0 / float(v.info.z));
     float sum = 0.0, found = 0.0;
     for (int i = 0; i < PCSS_TAPS; ++i) {
-        vec2 at = uv + disc_tap(i, angle) * texel * PCSS_SEARCH;
+        vec2 at = uv + turn * PCSS_DISC[i] * PCSS_SEARCH;
         float z = textureGrad(shadow_depth, vec3(at, layer), vec2(0.0), vec2(0.0)).r;
         if (z > ref) {   // reverse-Z: nearer the light than the receiver
             sum += z;
@@ -167,7 +169,7 @@ float pcss(ShadowView v, vec2 uv, float layer, float ref, float depth) {
     float radius = clamp(penumbra / max(texel_world, 1e-9), 1.0, PCSS_MAX);
     float lit = 0.0;
     for (int i = 0; i < PCSS_TAPS; ++i) {
-        lit += shadow_tap(false, uv + disc_tap(i, angle) * texel * radius, layer, ref);
+        lit += shadow_tap(false, uv + turn * PCSS_DISC[i] * radius, layer, ref);
     }
     return lit / float(PCSS_TAPS);
 }
