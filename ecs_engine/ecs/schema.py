@@ -43,9 +43,15 @@ class Field:
         min_exclusive: bool = False,
         maximum: float | None = None,
         unit: bool = False,
+        entity: bool = False,
         doc: str = "",
     ) -> None:
         self.dtype = np.dtype(dtype)
+        # `entity`: the field holds entity ids (int64; -1 or any dead id: none), so saved scenes
+        # remap it on load and the hierarchy follows it
+        if entity and (self.dtype != np.int64):
+            raise TypeError(f"an entity field holds int64 ids, not {self.dtype}")
+        self.entity = entity
         self.shape = (shape,) if isinstance(shape, int) else tuple(shape)
         self.finite = finite
         self.allow_posinf = allow_posinf
