@@ -30,6 +30,7 @@ REGISTRY: dict[str, str] = {
     "soak": "soak",
     "lights": "lights",
     "shadows": "shadows",
+    "schedule": "schedule",
 }
 
 # One line each for the list in the usage text (the modules are not imported to print it).
@@ -41,6 +42,7 @@ SUMMARY: dict[str, str] = {
     "soak": "the editor's scene for 100,000 frames with churn and settings switches: memory flat? (Vulkan)",
     "lights": "GPU ms against light count (1 to 16,384), every light per fragment vs clustered (Vulkan)",
     "shadows": "CPU and GPU ms of each light type and filter casting, 10k to 1M entities, 1 and 16 threads (Vulkan)",
+    "schedule": "the parallel schedule: 8 independent systems over 1M entities, 1 to 16 threads (CPU only)",
 }
 
 # The commands that work from any folder once ecs_engine is installed.

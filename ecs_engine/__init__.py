@@ -8,6 +8,8 @@ Rules of use, in short:
 - `world.query(A, B, with_=..., without=..., write=...)` yields per-table batches of column views.
 - Values are checked where they enter the world (NaN/Inf, ranges, shapes, dtypes); systems that
   write through views are trusted.
+- `world.events(Kind)` is a typed event channel, double-buffered per frame; `Schedule(parallel=
+  True)` runs a stage's systems whose declared reads and writes do not conflict at the same time.
 """
 
 from .ecs import (
@@ -17,6 +19,7 @@ from .ecs import (
     ComponentView,
     DeadEntityError,
     EcsError,
+    Events,
     Field,
     FixedTimestep,
     FunctionSystem,
@@ -37,6 +40,7 @@ __all__ = [
     "ComponentView",
     "DeadEntityError",
     "EcsError",
+    "Events",
     "Field",
     "FixedTimestep",
     "FunctionSystem",

@@ -3,6 +3,7 @@ the schedule and the fixed step. It imports nothing from rendering, the app, or 
 components and systems (they build on it)."""
 
 from .errors import AccessError, DeadEntityError, EcsError, MissingComponentError
+from .events import Columns, Events, Reader
 from .query import Batch, ComponentView, Query
 from .schedule import FunctionSystem, Schedule, System, system
 from .schema import Component, Field, schema_of
@@ -12,16 +13,19 @@ from .world import World
 __all__ = [
     "AccessError",
     "Batch",
+    "Columns",
     "Component",
     "ComponentView",
     "DeadEntityError",
     "EcsError",
+    "Events",
     "Field",
     "FixedTimestep",
     "FunctionSystem",
     "Interpolation",
     "MissingComponentError",
     "Query",
+    "Reader",
     "Schedule",
     "System",
     "World",

@@ -97,6 +97,14 @@ class CommandQueue:
         self._touched.update(command.ids.tolist())
         self._commands.append(command)
 
+    def extend(self, other: CommandQueue) -> None:
+        """Append `other`'s commands (a parallel system's queue) in their order; empties it."""
+        for command in other._commands:
+            self.push(command)  # type: ignore[arg-type]
+        other._commands = []
+        other.pending_destroy.clear()
+        other._touched.clear()
+
     def touches(self, ids: np.ndarray) -> bool:
         """Whether a queued command names one of `ids` (so a later write must queue behind it)."""
         return bool(self._touched) and not self._touched.isdisjoint(ids.tolist())

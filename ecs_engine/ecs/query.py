@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Iterator
 from typing import Any, Protocol
 
@@ -10,6 +11,8 @@ import numpy as np
 from .errors import AccessError
 from .schema import Component, Field, ObjectStore, schema_of
 from .table import ArchetypeTable, ColumnKey
+
+_SCAN_LOCK = threading.Lock()
 
 
 class QueryHost(Protocol):
@@ -136,10 +139,12 @@ class Query:
     def _refresh(self) -> list[ArchetypeTable]:
         tables = self._all_tables
         if self._scanned < len(tables):
-            for table in tables[self._scanned :]:
-                if self._all <= table.type_set and not (self.without & table.type_set):
-                    self._tables.append(table)
-            self._scanned = len(tables)
+            with _SCAN_LOCK:  # systems of a parallel stage may share this query
+                n = len(tables)
+                fresh = tables[self._scanned : n]
+                found = [t for t in fresh if self._all <= t.type_set and not (self.without & t.type_set)]
+                self._tables = self._tables + found  # a new list: a loop over the old one goes on undisturbed
+                self._scanned = n
         return self._tables
 
     @property

@@ -1,10 +1,23 @@
-"""Systems and the schedule that runs them each frame, in stated order, with sync points."""
+"""Systems and the schedule that runs them each frame, in stated order, with sync points.
+
+A parallel schedule (`Schedule(parallel=True)`, with a JobPool resource in the world) runs the
+systems of one stage whose declared access does not conflict at the same time on the pool's
+threads: two systems conflict when one writes a type the other reads or writes, or when either
+is undeclared (reads or writes None) or `exclusive`. A system runs after every earlier system it
+conflicts with (its "level" is one more than theirs), so conflicting systems keep their declared
+order; structural changes are applied at the stage's sync point in declared order too. Declare
+resources and event types the same way as components (`reads=[RenderOrigin]`): access the
+schedule cannot see is a data race in a parallel stage. Only numba kernels and large NumPy calls
+release the GIL, so only such systems gain.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any, Protocol
 
+from ..jobs import JobPool
+from .commands import CommandQueue
 from .errors import EcsError
 from .schema import schema_of
 from .timestep import Interpolation
@@ -41,6 +54,7 @@ class System:
     reads: frozenset[type] | None = frozenset()
     writes: frozenset[type] | None = frozenset()
     last_run_tick: int = 0
+    exclusive: bool = False  # never run alongside another system (a parallel schedule)
 
     def __init__(
         self, reads: Iterable[type] | None = (), writes: Iterable[type] | None = (), name: str | None = None
@@ -94,14 +108,36 @@ def as_system(obj: System | Callable[[World, float], Any]) -> System:
     raise TypeError(f"not a system: {obj!r}")
 
 
+def conflict(a: System, b: System) -> bool:
+    """Whether two systems may not run at the same time (see the module docstring)."""
+    if a.exclusive or b.exclusive or a.reads is None or a.writes is None or b.reads is None or b.writes is None:
+        return True
+    return bool(a.writes & (b.reads | b.writes)) or bool(b.writes & a.reads)
+
+
+def levels(systems: Sequence[System]) -> list[list[int]]:
+    """The indices of `systems` grouped by level: each system one level after the last earlier
+    system it conflicts with; a level's systems may run at the same time."""
+    level: list[int] = []
+    for i, s in enumerate(systems):
+        level.append(1 + max((level[j] for j in range(i) if conflict(systems[j], s)), default=-1))
+    groups: list[list[int]] = [[] for _ in range(max(level, default=-1) + 1)]
+    for i, n in enumerate(level):
+        groups[n].append(i)
+    return groups
+
+
 class Schedule:
     """Stages run in order; systems in a stage run in the order added; after every stage comes a
-    sync point where deferred structural changes (spawn, destroy, add, remove) are applied."""
+    sync point where deferred structural changes (spawn, destroy, add, remove) are applied, and
+    after every frame the event channels turn over. `parallel=True`: see the module docstring."""
 
-    def __init__(self, stages: Iterable[str] = ("update", "post_update")) -> None:
+    def __init__(self, stages: Iterable[str] = ("update", "post_update"), parallel: bool = False) -> None:
         self.stages: dict[str, list[System]] = {name: [] for name in stages}
         if not self.stages:
             raise ValueError("a schedule needs at least one stage")
+        self.parallel = parallel
+        self._levels: dict[str, tuple[tuple[int, ...], list[list[int]]]] = {}  # per stage, by its systems
 
     def add(self, obj: System | Callable[[World, float], Any], stage: str | None = None) -> System:
         stage = stage or next(iter(self.stages))
@@ -115,6 +151,31 @@ class Schedule:
 
     def order(self) -> list[tuple[str, list[str]]]:
         return [(stage, [s.name for s in systems]) for stage, systems in self.stages.items()]
+
+    def groups(self, stage: str) -> list[list[str]]:
+        """The names of a stage's systems by level: those of one level may run together."""
+        systems = self.stages[stage]
+        return [[systems[i].name for i in group] for group in levels(systems)]
+
+    def _run_stage(self, world: World, name: str, dt: float) -> None:
+        systems = self.stages[name]
+        pool = world.resources.get(JobPool)
+        if not self.parallel or pool is None or pool.threads < 2 or len(systems) < 2:
+            _run_stage(world, systems, dt)
+            return
+        key = tuple(id(s) for s in systems)
+        cached = self._levels.get(name)
+        if cached is None or cached[0] != key:
+            cached = self._levels[name] = (key, levels(systems))
+        queues = [CommandQueue() for _ in systems]
+        try:
+            for group in cached[1]:
+                chosen = [systems[i] for i in group]
+                spread = pool.map if len(chosen) > 1 else _inline  # alone: its own jobs may spread
+                world.run_systems_together(chosen, dt, spread, [queues[i] for i in group])
+        finally:
+            world.join_commands(queues)
+        world.flush()
 
     def run_frame(
         self, world: World, frame_dt: float, clock: FixedClock, fixed_stage: str = "fixed", max_frame_dt: float = 0.1
@@ -132,20 +193,26 @@ class Schedule:
         world.flush()
         steps = clock.advance(frame_dt)
         for _ in range(steps):
-            _run_stage(world, self.stages[fixed_stage], clock.step)
+            self._run_stage(world, fixed_stage, clock.step)
         world.resources[Interpolation] = Interpolation(clock.alpha)
         variable_dt = min(float(frame_dt), max_frame_dt)
-        for name, systems in self.stages.items():
+        for name in self.stages:
             if name != fixed_stage:
-                _run_stage(world, systems, variable_dt)
+                self._run_stage(world, name, variable_dt)
+        world.update_events()
         return steps
 
     def run(self, world: World, dt: float) -> None:
         if world.deferring:
             raise EcsError("Schedule.run() cannot be called from inside a system or a query loop")
         world.flush()
-        for systems in self.stages.values():
-            _run_stage(world, systems, dt)
+        for name in self.stages:
+            self._run_stage(world, name, dt)
+        world.update_events()
+
+
+def _inline(fn: Callable[[Any], Any], chunks: Iterable[Any]) -> list[Any]:
+    return [fn(chunk) for chunk in chunks]
 
 
 def _run_stage(world: World, systems: list[System], dt: float) -> None:

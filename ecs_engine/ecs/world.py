@@ -4,7 +4,8 @@ cached queries and keeps the change ticks of the running system."""
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator
+import threading
+from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any, Protocol
 
@@ -13,6 +14,7 @@ import numpy as np
 from .commands import Add, CommandQueue, Destroy, Remove, Set, Spawn
 from .entities import INDEX_MASK
 from .errors import AccessError, DeadEntityError, EcsError, MissingComponentError, describe_entity
+from .events import Events
 from .query import Query, check_access
 from .schema import Component, ObjectStore, closure, object_component, schema_of
 from .storage import Checked, Storage
@@ -37,6 +39,17 @@ def entity_id(eid: Any) -> int:
     raise TypeError(f"entity ids must be integers, got {type(eid).__name__} {eid!r}")
 
 
+class _Running(threading.local):
+    """Per thread: the system it runs (the parallel schedule runs several at once), its change
+    tick, the query loops open, and the command queue of a system run in parallel (merged into
+    the world's in the schedule's declared order after the group)."""
+
+    system: RunningSystem | None = None
+    tick: int = 0
+    iter_depth: int = 0
+    commands: CommandQueue | None = None
+
+
 def _new_entity(row: int) -> str:
     return "new entity" if row == 0 else f"new entity (row {row} of the batch)"
 
@@ -51,11 +64,11 @@ class World:
         self._stamp_keys: dict[tuple[type, ...], list[tuple[Any, str]]] = {}  # see change_stamp
         self._closures: dict[frozenset[type[Component]], frozenset[type[Component]]] = {}
         self.tick = 0
-        self._commands = CommandQueue()
-        self._iter_depth = 0
+        self._queue = CommandQueue()
+        self._local = _Running()
         self._defer_depth = 0
-        self._system: RunningSystem | None = None
-        self._system_tick = 0
+        self._ids_lock = threading.Lock()  # id allocation by systems running in parallel
+        self._events: dict[type, Events[Any]] = {}
         # Singletons shared by systems (render origin, input state, ...), keyed by type.
         self.resources: dict[Any, Any] = {}
 
@@ -75,7 +88,22 @@ class World:
 
     @property
     def deferring(self) -> bool:
-        return self._iter_depth > 0 or self._defer_depth > 0 or self._system is not None
+        local = self._local
+        return local.iter_depth > 0 or self._defer_depth > 0 or local.system is not None
+
+    @property
+    def _commands(self) -> CommandQueue:
+        """Where structural changes queue: this thread's parallel system's own queue, else the
+        world's."""
+        return self._local.commands or self._queue
+
+    @property
+    def _system(self) -> RunningSystem | None:
+        return self._local.system
+
+    def running_system(self) -> RunningSystem | None:
+        """The system running on this thread, if any."""
+        return self._local.system
 
     def entities(self) -> np.ndarray:
         parts = [t.entities[: t.count] for t in self.storage.tables if t.count]
@@ -127,8 +155,8 @@ class World:
     # ----------------------------------------------------------------- ticks
     def write_tick(self) -> int:
         """The change tick for a write now: the running system's, else a new one."""
-        if self._system is not None:
-            return self._system_tick
+        if self._local.system is not None:
+            return self._local.tick
         self.tick += 1
         return self.tick
 
@@ -191,11 +219,13 @@ class World:
         """Create one entity from component values; returns its id."""
         checked = self._bundles(values, 1, _new_entity)
         types = self._closure(checked)
-        eid = self.storage.index.allocate_one()
         if self.deferring:
-            self.storage.index.reserve(np.array([eid], dtype=np.int64))
+            with self._ids_lock:
+                eid = self.storage.index.allocate_one()
+                self.storage.index.reserve(np.array([eid], dtype=np.int64))
             self._commands.push(Spawn(np.array([eid], dtype=np.int64), types, checked))
         else:
+            eid = self.storage.index.allocate_one()
             self.storage.place_one(eid, types, checked, self.write_tick())
         return eid
 
@@ -213,11 +243,13 @@ class World:
             raise ValueError(f"cannot spawn a negative number of entities ({n})")
         checked = self._bundles(values, n, _new_entity)
         types = self._closure(checked)
-        ids = self.storage.index.allocate(n)
         if self.deferring:
-            self.storage.index.reserve(ids)
+            with self._ids_lock:
+                ids = self.storage.index.allocate(n)
+                self.storage.index.reserve(ids)
             self._commands.push(Spawn(ids, types, checked))
         else:
+            ids = self.storage.index.allocate(n)
             self.storage.place(ids, types, checked, self.write_tick())
         return ids
 
@@ -365,10 +397,10 @@ class World:
 
     def begin_iteration(self) -> None:
         """A query loop starts: structural changes wait until the last loop ends."""
-        self._iter_depth += 1
+        self._local.iter_depth += 1
 
     def end_iteration(self) -> None:
-        self._iter_depth -= 1
+        self._local.iter_depth -= 1
         if not self.deferring and self._commands:
             self.flush()
 
@@ -390,21 +422,66 @@ class World:
         A queued `remove` of a component the entity no longer has is skipped; any other
         failing command is reported after all the others were applied.
         """
-        if self._iter_depth or self._system is not None:
+        if self._local.iter_depth or self._local.system is not None:
             raise EcsError("flush() cannot run while a system or a query loop is active")
-        self._commands.apply(self.storage, self.write_tick)
+        self._queue.apply(self.storage, self.write_tick)
 
     # ---------------------------------------------------------------- systems
     def run_system(self, system: RunningSystem, dt: float) -> None:
         """Run one system with its own change tick; structural changes wait for a flush."""
-        if self._system is not None:
-            raise EcsError(f"system {system.name} started inside system {self._system.name}")
+        if self._local.system is not None:
+            raise EcsError(f"system {system.name} started inside system {self._local.system.name}")
         self.tick += 1
-        tick = self.tick
-        self._system = system
-        self._system_tick = tick
+        self._run_as(system, dt, self.tick, None)
+
+    def run_systems_together(
+        self, systems: Sequence[RunningSystem], dt: float, spread: Any, queues: Sequence[CommandQueue]
+    ) -> None:
+        """Run systems whose declared access does not conflict at the same time:
+        `spread(job, range(len(systems)))` runs the jobs (JobPool.map). Each gets its change tick
+        (in the order given) and queues its structural changes in its own `queues[i]`, which the
+        caller joins in its declared order (`join_commands`), so the result does not depend on
+        which thread finishes first. A system's error is raised as it was, after all finished."""
+        if self._local.system is not None:
+            raise EcsError(f"systems started inside system {self._local.system.name}")
+        ticks = [self.tick + 1 + i for i in range(len(systems))]
+        self.tick += len(systems)
+        errors: list[BaseException | None] = [None] * len(systems)
+
+        def job(i: int) -> None:
+            try:
+                self._run_as(systems[i], dt, ticks[i], queues[i])
+            except BaseException as exc:  # re-raised below, as the system raised it
+                errors[i] = exc
+
+        spread(job, range(len(systems)))
+        for exc in errors:
+            if exc is not None:
+                raise exc
+
+    def join_commands(self, queues: Iterable[CommandQueue]) -> None:
+        """Append queued structural changes (run_systems_together's) to the world's, in order."""
+        for queue in queues:
+            self._queue.extend(queue)
+
+    def _run_as(self, system: RunningSystem, dt: float, tick: int, queue: CommandQueue | None) -> None:
+        local = self._local
+        local.system, local.tick, local.commands = system, tick, queue
         try:
             system.run(self, dt)
         finally:
-            self._system = None
+            local.system, local.commands = None, None
             system.last_run_tick = tick
+
+    # ----------------------------------------------------------------- events
+    def events(self, kind: type) -> Events[Any]:
+        """The event channel of `kind` (made on first use); see events.py."""
+        channel = self._events.get(kind)
+        if channel is None:
+            channel = self._events.setdefault(kind, Events(kind, self))
+        return channel
+
+    def update_events(self) -> None:
+        """The frame boundary for every channel (Schedule calls it after each frame)."""
+        for channel in self._events.values():
+            channel.update()
