@@ -133,6 +133,11 @@ class Field:
             return arr.astype(target)
         if arr.dtype == object or not np.can_cast(arr.dtype, target, casting="same_kind"):
             raise ValueError(f"{self.qualname} holds {target} values; got {arr.dtype} ({_preview(value)})")
+        if target.kind == "U" and arr.dtype.kind == "U" and arr.dtype.itemsize > target.itemsize and arr.size:
+            longest = target.itemsize // 4  # a cast would cut longer strings short without a word
+            rows = self._rows(np.char.str_len(arr) > longest)
+            if rows.any():
+                self._fail(rows, arr, who, f"is at most {longest} characters long")
         return arr.astype(target)
 
     def _coerce_object(self, value: Any, n: int) -> np.ndarray:
