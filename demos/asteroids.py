@@ -1,0 +1,100 @@
+"""Asteroids: a ship on a wrapping field of thousands of spinning rocks (up to 100,000 as the
+levels rise), flown with the keyboard and mouse or by a bot. The game itself is components and
+systems (asteroids_game.py, asteroids_bot.py); this module makes its meshes, materials, light,
+camera and schedule."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from ecs_engine import World
+from ecs_engine.components import Camera, DirectionalLight, Transform
+from ecs_engine.ecs import Schedule
+from ecs_engine.maths.camera import look_rotation
+from ecs_engine.render.materials import Material, materials
+from ecs_engine.render.mesh_data import MeshData
+from ecs_engine.render.primitives import cone_mesh, sphere_mesh
+
+from .asteroids_bot import BotSystem
+from .asteroids_game import (
+    CollisionSystem,
+    DamageSystem,
+    FollowCameraSystem,
+    Game,
+    LevelSystem,
+    LifetimeSystem,
+    RestartSystem,
+    ShipControls,
+    ShipSystem,
+    WrapSystem,
+    start,
+)
+
+
+def rock_mesh(seed: int = 5) -> MeshData:
+    """A lumpy unit-diameter rock: a coarse sphere pushed in and out along its normals."""
+    base = sphere_mesh(segments=12, rings=8, radius=0.5)
+    rng = np.random.default_rng(seed)
+    positions = base.positions.astype(np.float64)
+    # the same bump for vertices at one place (the seam's copies), so the rock stays closed
+    keys = np.round(positions, 4)
+    _, where, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    bumps = rng.uniform(0.8, 1.15, len(where))[inverse.reshape(-1)]
+    positions *= bumps[:, None]
+    return MeshData.from_arrays(positions.astype(np.float32), base.normals, base.indices, "rock")
+
+
+def ship_mesh() -> MeshData:
+    """A dart pointing down -Z (the ship's forward)."""
+    cone = cone_mesh(segments=3, radius=0.7, height=1.8)
+    turn = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])  # +Y (the tip) to -Z
+    return MeshData.from_arrays(
+        (cone.positions @ turn.T).astype(np.float32), (cone.normals @ turn.T).astype(np.float32), cone.indices, "ship"
+    )
+
+
+def build(
+    world: World, add_mesh: Callable[[MeshData], int], path: str | None = None, seed: int = 1, autoplay: bool = False
+) -> None:
+    looks = materials(world)
+    game = Game(
+        seed=int(seed),
+        meshes={"rock": add_mesh(rock_mesh()), "ship": add_mesh(ship_mesh()), "shot": add_mesh(sphere_mesh(8, 6))},
+        materials={
+            "rock": looks.add(Material("rock", "cook_torrance", (0.45, 0.4, 0.36, 1.0), roughness=0.9)),
+            "ship": looks.add(Material("ship", "cook_torrance", (0.3, 0.6, 1.0, 1.0), metallic=0.8, roughness=0.3)),
+            "shot": looks.add(Material("shot", "unlit", (1.0, 0.9, 0.3, 1.0), emissive=(4.0, 3.0, 0.8))),
+        },
+    )
+    world.resources[Game] = game
+    world.resources[ShipControls] = ShipControls()
+    world.spawn(Transform(rotation=look_rotation((0.3, -1.0, -0.4))), DirectionalLight(illuminance=2.5))
+    world.spawn(
+        Transform(position=FollowCameraSystem.OFFSET, rotation=look_rotation(-FollowCameraSystem.OFFSET)),
+        Camera(fov_y=math.radians(50.0), near=0.5, far=2000.0),
+    )
+    start(world, game)
+
+
+def schedule(autoplay: bool = False, controls: object | None = None) -> Schedule:
+    """The game's systems: controls (the bot, or `controls`, a system filling ShipControls from
+    the input), the ship, motion, wrap, lifetimes, collisions, damage, levels, restart in the
+    fixed step; the camera per frame; then the stock render origin and matrices."""
+    from ecs_engine.systems import MotionSystem, RenderOriginSystem, TransformSystem
+
+    steps = Schedule(("fixed", "update", "post_update"))
+    if autoplay:
+        steps.add(BotSystem(), "fixed")
+    elif controls is not None:
+        steps.add(controls, "fixed")  # type: ignore[arg-type]
+    for system in (ShipSystem(), MotionSystem(), WrapSystem(), LifetimeSystem(), CollisionSystem()):
+        steps.add(system, "fixed")
+    for system in (DamageSystem(), LevelSystem(), RestartSystem()):
+        steps.add(system, "fixed")
+    steps.add(FollowCameraSystem(), "update")
+    steps.add(RenderOriginSystem(), "post_update")
+    steps.add(TransformSystem(), "post_update")
+    return steps
