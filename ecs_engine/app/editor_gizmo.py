@@ -1,0 +1,139 @@
+"""The editor's transform gizmo (ImGuizmo, shipped with imgui-bundle) over the selected entity:
+translate, rotate or scale it with the mouse in the scene, each drag one undoable step.
+
+ImGuizmo works in OpenGL conventions: column-major float[16], a clip space with y up and depth
+-1..1. The engine's camera is reverse-Z Vulkan; the gizmo gets an OpenGL projection of the same
+field of view (or orthographic height), which puts every point on the same pixel. Positions are
+taken relative to the camera, in float64 before the cast, so the gizmo stays exact far from the
+origin. A result is split back into position, rotation (a unit quaternion from the normalised
+columns; a mirrored matrix keeps its sign in the x scale) and scale.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ..components import ORTHOGRAPHIC, Camera, Transform, active_camera
+from ..ecs.world import World
+from ..maths.camera import rotation_matrix
+from ..maths.transform import compose_numpy
+from .editor_history import History
+
+OPERATIONS = ("translate", "rotate", "scale")
+
+
+def gl_projection(camera: Any, aspect: float) -> np.ndarray:
+    """An OpenGL projection (y up, depth -1..1) matching the camera's view of the scene; an
+    infinite far plane becomes 10^5 near planes (the gizmo only needs directions there)."""
+    near = float(camera.near)
+    far = float(camera.far) if math.isfinite(float(camera.far)) else near * 1e5
+    aspect = float(camera.aspect) or aspect
+    p = np.zeros((4, 4))
+    if int(camera.projection) == ORTHOGRAPHIC:
+        half_h = float(camera.height) / 2.0
+        p[0, 0], p[1, 1] = 1.0 / (half_h * aspect), 1.0 / half_h
+        p[2, 2], p[2, 3], p[3, 3] = -2.0 / (far - near), -(far + near) / (far - near), 1.0
+        return p
+    f = 1.0 / math.tan(float(camera.fov_y) / 2.0)
+    p[0, 0], p[1, 1] = f / aspect, f
+    p[2, 2], p[2, 3], p[3, 2] = -(far + near) / (far - near), -2.0 * far * near / (far - near), -1.0
+    return p
+
+
+def column_major(m: np.ndarray) -> list[float]:
+    return [float(v) for v in np.asarray(m, np.float64).T.ravel()]
+
+
+def from_column_major(values: Any) -> np.ndarray:
+    return np.array([float(values[i]) for i in range(16)]).reshape(4, 4).T
+
+
+def decompose(m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Position, unit quaternion (x, y, z, w) and scale of an affine matrix without shear."""
+    linear = m[:3, :3]
+    scale = np.linalg.norm(linear, axis=0)
+    if np.linalg.det(linear) < 0:
+        scale[0] = -scale[0]
+    r = linear / np.where(scale == 0.0, 1.0, scale)
+    trace = r[0, 0] + r[1, 1] + r[2, 2]
+    if trace > 0:
+        s = math.sqrt(trace + 1.0) * 2
+        q = [(r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s, 0.25 * s]
+    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
+        s = math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2]) * 2
+        q = [0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s, (r[2, 1] - r[1, 2]) / s]
+    elif r[1, 1] > r[2, 2]:
+        s = math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2]) * 2
+        q = [(r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s, (r[0, 2] - r[2, 0]) / s]
+    else:
+        s = math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1]) * 2
+        q = [(r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s, (r[1, 0] - r[0, 1]) / s]
+    quat = np.array(q)
+    return m[:3, 3].copy(), quat / np.linalg.norm(quat), scale
+
+
+class Gizmo:
+    """Draws and applies the gizmo for one selected entity each frame."""
+
+    def __init__(self) -> None:
+        from imgui_bundle import imguizmo
+
+        self.g = imguizmo.im_guizmo
+        self.module = imguizmo
+        self.operation = "translate"
+        self.local = False  # rotate and translate along the entity's own axes
+        self.used = False  # the gizmo took the mouse this frame (the scene click must not pick)
+
+    def draw(self, world: World, entity: int, history: History, width: float, height: float) -> None:
+        g = self.g
+        g.begin_frame()
+        self.used = False
+        try:
+            cam_id = active_camera(world)
+        except Exception:  # no camera: nothing to place the gizmo with
+            return
+        camera = world.get(cam_id, Camera)
+        eye = world.get(cam_id, Transform)
+        g.set_orthographic(int(camera.projection) == ORTHOGRAPHIC)
+        g.set_rect(0.0, 0.0, float(width), float(height))
+        g.set_drawlist()  # the foreground of the main viewport
+        view = np.eye(4)
+        view[:3, :3] = rotation_matrix(eye.rotation)[:3, :3].T  # the camera at the origin
+        t = world.get(entity, Transform)
+        model = np.zeros((1, 4, 4))  # float64, relative to the camera
+        compose_numpy(
+            np.asarray([t.position], np.float64),
+            np.asarray([t.rotation], np.float64),
+            np.asarray([t.scale], np.float64),
+            np.asarray(eye.position, np.float64),
+            model,
+        )
+        model = model[0]
+        matrix = self.module.im_guizmo.Matrix16(column_major(model))
+        op = getattr(g.OPERATION, self.operation)
+        mode = g.MODE.local if self.local or self.operation == "scale" else g.MODE.world
+        changed = g.manipulate(
+            self.module.im_guizmo.Matrix16(column_major(view)),
+            self.module.im_guizmo.Matrix16(column_major(gl_projection(camera, width / max(height, 1.0)))),
+            op,
+            mode,
+            matrix,
+        )
+        self.used = bool(g.is_using() or g.is_over())
+        if g.is_using():
+            history.begin(("gizmo", entity), world, entity, Transform)
+        else:
+            history.end()
+        if changed:
+            position, rotation, scale = decompose(from_column_major(matrix.values))
+            history.set(
+                world,
+                entity,
+                Transform,
+                position=np.asarray(eye.position, np.float64) + position,
+                rotation=rotation,
+                scale=scale,
+            )
