@@ -10,6 +10,22 @@ from ecs_engine.app.offscreen import sharing
 
 
 @pytest.fixture(scope="session", autouse=True)
+def config_home(tmp_path_factory):
+    """The user's config folder (the editor's layout, settings) in a temporary folder: tests
+    never read or write the real one. Subprocesses inherit it."""
+    import os
+
+    path = tmp_path_factory.mktemp("config")
+    old = os.environ.get("XDG_CONFIG_HOME")
+    os.environ["XDG_CONFIG_HOME"] = str(path)
+    yield path
+    if old is None:
+        os.environ.pop("XDG_CONFIG_HOME", None)
+    else:
+        os.environ["XDG_CONFIG_HOME"] = old
+
+
+@pytest.fixture(scope="session", autouse=True)
 def one_vulkan_device():
     with sharing(shared_device):
         yield

@@ -18,7 +18,7 @@ from ecs_engine.components import Camera, Mesh, PointLight, Transform
 from ecs_engine.jobs import JobPool
 from ecs_engine.maths.camera import yaw_pitch_quat, yaw_pitch_roll, yaw_pitch_roll_quat
 
-W, H = 640, 480
+W, H = 1024, 720
 
 
 def headless(tmp_path, editor: bool, size=(W, H), **kw):
@@ -44,12 +44,14 @@ def test_the_overlay_is_drawn_over_the_scene(tmp_path):
     plain = headless(tmp_path, editor=False, size=size)
     ui = headless(tmp_path, editor=True, size=size, perf_json=str(tmp_path / "perf.json"))
     diff = np.abs(ui.pixels[..., :3].astype(int) - plain.pixels[..., :3]).max(axis=2) > 24
-    # the settings window (top left) and the Perf window (top right) cover the scene there...
-    # (text, frames and widgets: the windows' dark background is close to the clear colour)
-    assert diff[20:300, 20:300].mean() > 0.05 and diff[20:300, 920:1260].mean() > 0.05
-    assert ui.editor.renderer.counts.commands > 5
-    # ...and the scene is untouched where no window is
-    assert diff[400:700, 700:880].mean() < 0.01
+    # docked panels: settings down the left, the inspector down the right, the entity list and
+    # Perf under the scene cover it there (text, frames and widgets: the windows' dark
+    # background is close to the clear colour)...
+    assert diff[20:300, 20:280].mean() > 0.05 and diff[20:100, 990:1260].mean() > 0.02
+    assert diff[520:700, 310:600].mean() > 0.02 and diff[520:700, 620:950].mean() > 0.02
+    assert ui.editor.renderer.counts.commands > 3
+    # ...and the scene is untouched in the central node, where no panel is
+    assert diff[100:480, 400:900].mean() < 0.01
     doc = json.loads((tmp_path / "perf.json").read_text())
     assert len(doc["frames"]) == 6 and doc["meta"]["editor"] is True
 

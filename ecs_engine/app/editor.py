@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..components import Camera, Environment, Mesh, PointLight, Transform, active_camera
+from ..components.name import Name
 from ..ecs.world import World
 from ..gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
 from ..maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
@@ -26,6 +27,9 @@ from ..render.oit_pass import TRANSPARENCY_MODES
 from ..render.path import FILL_MODES
 from ..render.renderer import MODES, PATHS, RECORDER_NAMES
 from ..render.tone_map import TONE_MAPS
+from .editor_dock import DockLayout
+from .editor_gizmo import OPERATIONS, Gizmo
+from .editor_history import History
 from .editor_lights import LIGHT_SECTIONS, ShadowMapImages
 from .editor_materials import MaterialsPanel, mesh_section
 from .settings import Settings
@@ -73,11 +77,17 @@ class Editor:
         # input (tests, scripted demos) should click
         self.rects: dict[str, tuple[float, float, float, float]] = {}
         self.shadow_maps: ShadowMapImages | None = None  # show_shadow_maps
+        self.meshes: Any = None  # the renderer's MeshRegistry (show_shadow_maps): clicks pick with it
+        self.dock = DockLayout(imgui)
+        self.history = History()
+        self.gizmo = Gizmo()
+        self.picked: int | None = None  # what the last click in the scene picked (None: nothing)
 
     def show_shadow_maps(self, renderer: Renderer, overlay: ImGuiRenderer) -> None:
         """Show the shadow maps of `renderer` (render/renderer.py's Renderer) in the light sections,
         drawn by `overlay` (the ImGuiRenderer that draws this editor)."""
         self.shadow_maps = ShadowMapImages(renderer.shadows, overlay)
+        self.meshes = renderer.meshes
 
     # ---------------------------------------------------------------- requests
     def take_requests(self) -> Settings | None:
@@ -101,11 +111,13 @@ class Editor:
         self.status, self.status_entity = "", None
         self.browser.key = None
         self.materials = MaterialsPanel()
+        self.history.forget()
 
     # -------------------------------------------------------------------- draw
     def draw(self, world: World, stats: SceneStats) -> None:
         """Build this frame's editor windows (between imgui.new_frame() and imgui.render())."""
         imgui = self.imgui
+        self.dock.begin()
         if self.shadow_maps is not None:
             self.shadow_maps.begin_frame()
         self._settings_window(world, stats)
@@ -125,6 +137,37 @@ class Editor:
             self.open_tab = None
             imgui.end_tab_bar()
         imgui.end()
+        self._scene_input(world)
+
+    def _scene_input(self, world: World) -> None:
+        """The gizmo over the selection, a click in the scene picks, Ctrl+Z / Ctrl+Y undo and redo,
+        W / E / R pick the gizmo's operation (while no text field has the keyboard)."""
+        imgui = self.imgui
+        io = imgui.get_io()
+        width, height = io.display_size.x, io.display_size.y
+        eid = self.selected
+        self.gizmo.used = False
+        if eid is not None and world.is_alive(eid) and world.has(eid, Transform):
+            self.gizmo.draw(world, eid, self.history, width, height)
+        if not io.want_text_input:
+            ctrl = imgui.Key.mod_ctrl
+            if imgui.is_key_chord_pressed(ctrl | imgui.Key.z):
+                self.history.undo(world)
+            elif imgui.is_key_chord_pressed(ctrl | imgui.Key.y) or imgui.is_key_chord_pressed(
+                ctrl | imgui.Key.mod_shift | imgui.Key.z
+            ):
+                self.history.redo(world)
+            for key, operation in zip((imgui.Key.w, imgui.Key.e, imgui.Key.r), OPERATIONS):
+                if not io.key_ctrl and imgui.is_key_pressed(key, False) and not io.want_capture_keyboard:
+                    self.gizmo.operation = operation
+        if imgui.is_mouse_clicked(0) and not io.want_capture_mouse and not self.gizmo.used and self.meshes is not None:
+            from ..render.picking import pick
+
+            mouse = io.mouse_pos
+            hit = pick(world, self.meshes, mouse.x, mouse.y, max(width, 1.0), max(height, 1.0))
+            self.picked = None if hit is None else hit.entity
+            if hit is not None:
+                self.selected = hit.entity
 
     def _settings_window(self, world: World, stats: SceneStats) -> None:
         imgui = self.imgui
@@ -176,13 +219,18 @@ class Editor:
         return ["(any component)"] + names
 
     def filtered_ids(self, world: World) -> np.ndarray:
-        """Entity ids matching the search text (a number: that id or its index) and the
-        component filter; cached until rows come or go or the filter changes."""
+        """Entity ids matching the search text (a number: that id or its index; other text: the
+        names that contain it, any case) and the component filter; cached until rows come or go,
+        a Name is written or the filter changes."""
         b = self.browser
         names = self.component_names(world)
         b.component = min(b.component, len(names) - 1)
         # a table's version changes whenever rows come or go
-        key = (tuple((t.id, t.version) for t in world.tables), b.search, names[b.component])
+        key = (
+            tuple((t.id, t.version, t.column_ticks.get((Name, "value"), 0)) for t in world.tables),
+            b.search,
+            names[b.component],
+        )
         if b.key == key:
             return b.ids
         if b.component == 0:
@@ -200,7 +248,11 @@ class Editor:
             try:
                 number = int(text, 0)
             except ValueError:
-                ids = ids[:0]
+                named = [
+                    batch.entities[np.char.find(np.char.lower(batch[Name].value), text.lower()) >= 0]
+                    for batch in world.query(Name, write=())
+                ]
+                ids = ids[np.isin(ids, np.concatenate(named))] if named else ids[:0]
             else:
                 ids = ids[(ids == number) | ((ids & 0xFFFFFFFF) == number)]
         b.ids, b.key = np.asarray(ids, dtype=np.int64), key
@@ -209,7 +261,7 @@ class Editor:
     def _browser(self, world: World) -> None:
         imgui = self.imgui
         b = self.browser
-        _, b.search = imgui.input_text("id", b.search)
+        _, b.search = imgui.input_text("id or name", b.search)
         names = self.component_names(world)
         _, b.component = imgui.combo("with", min(b.component, len(names) - 1), names)
         ids = self.filtered_ids(world)
@@ -221,7 +273,8 @@ class Editor:
             while clipper.step():  # the first step measures one row, later ones the visible rows
                 for row in range(clipper.display_start, clipper.display_end):
                     eid = int(ids[row])
-                    label = f"{eid & 0xFFFFFFFF} (gen {eid >> 32})##{eid}"
+                    name = str(world.get(eid, Name).value) if world.has(eid, Name) else ""
+                    label = f"{name or eid & 0xFFFFFFFF} ({eid & 0xFFFFFFFF}, gen {eid >> 32})##{eid}"
                     if imgui.selectable(label, eid == self.selected)[0]:
                         self.selected = eid
                     if first:
@@ -238,6 +291,18 @@ class Editor:
         imgui.same_line()
         if imgui.button("add light"):
             self.selected = self.add_light(world)
+        if imgui.button("undo"):
+            self.history.undo(world)
+        self._remember("undo")
+        imgui.same_line()
+        if imgui.button("redo"):
+            self.history.redo(world)
+        for operation in OPERATIONS:  # the gizmo's (W, E, R in the scene)
+            imgui.same_line()
+            if imgui.radio_button(operation, self.gizmo.operation == operation):
+                self.gizmo.operation = operation
+        if self.history.status:
+            imgui.text_colored((1.0, 0.7, 0.3, 1.0), self.history.status)
         eid = self.selected
         if eid is None or not world.is_alive(eid):
             imgui.text("select an entity")
@@ -250,6 +315,10 @@ class Editor:
         if self.status_entity != eid:
             self.status = ""  # an error about another entity
         imgui.text(f"entity {eid & 0xFFFFFFFF} (gen {eid >> 32})")
+        if Name in world.components(eid):
+            changed, name = imgui.input_text("name", str(world.get(eid, Name).value))
+            if changed:
+                self.set(world, eid, Name, value=name)
         types = world.components(eid)
         imgui.text_wrapped(", ".join(t.__name__ for t in types))
         try:
@@ -316,9 +385,15 @@ class Editor:
         self.rects[name] = (lo.x, lo.y, hi.x, hi.y)
 
     def set(self, world: World, eid: int, component: type, **fields: Any) -> None:
-        """One edit through the World API; a rejected value leaves the component as it was."""
+        """One undoable edit through the World API (a drag of one widget is one step); a rejected
+        value leaves the component as it was."""
+        imgui = self.imgui
+        if imgui.is_item_active():  # a drag or slider held: its edits join one step
+            self.history.begin(("widget", imgui.get_item_id(), eid, component), world, eid, component)
+        else:
+            self.history.end()
         try:
-            world.set(eid, component, **fields)
+            self.history.set(world, eid, component, **fields)
             self.status = ""
         except ValueError as exc:
             self.status, self.status_entity = str(exc), eid

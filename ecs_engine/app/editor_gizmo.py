@@ -123,10 +123,10 @@ class Gizmo:
             matrix,
         )
         self.used = bool(g.is_using() or g.is_over())
-        if g.is_using():
+        if g.is_using() or changed:  # the release frame may still move it: the same step
             history.begin(("gizmo", entity), world, entity, Transform)
         else:
-            history.end()
+            history.end(("gizmo", entity))
         if changed:
             position, rotation, scale = decompose(from_column_major(matrix.values))
             history.set(

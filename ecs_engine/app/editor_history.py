@@ -62,8 +62,9 @@ class History:
         self.end()
         self._open = (key, Step(entity, component, {}))
 
-    def end(self) -> None:
-        if self._open is None:
+    def end(self, key: Any = None) -> None:
+        """Close the open step (with `key`: only if it is that widget's)."""
+        if self._open is None or (key is not None and self._open[0] != key):
             return
         step = self._open[1]
         self._open = None

@@ -1,0 +1,83 @@
+"""The editor's docked layout: a dock space over the whole window whose central node lets the
+scene show through (the renderer draws it behind the UI), with the panels docked around it:
+scene settings down the left, the inspector down the right, and under the scene the entity
+browser and the hierarchy (tabs) beside the Perf window. The user may rearrange them; ImGui keeps the layout in
+`editor.ini` in the user's config folder (XDG_CONFIG_HOME, else ~/.config, then `ecs_engine/`),
+so it is the same next run. The default layout is built only when that file has none.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+LEFT = ("Scene and render",)
+RIGHT = ("Inspector",)
+BOTTOM_LEFT = ("Hierarchy", "Entities")  # tabs; the entity browser in front
+BOTTOM_RIGHT = ("Perf",)
+PANEL_WIDTH = 300.0  # pixels the side columns get at least (up to 40% of the window each)
+DOCKSPACE = "editor dock space"
+
+
+def config_dir() -> Path:
+    """The user's config folder for the engine (created when first written)."""
+    base = os.environ.get("XDG_CONFIG_HOME", "")
+    if not os.path.isabs(base):  # unset, empty or relative: the XDG spec says to ignore it
+        base = str(Path.home() / ".config")
+    return Path(base) / "ecs_engine"
+
+
+def layout_file() -> Path:
+    return config_dir() / "editor.ini"
+
+
+class DockLayout:
+    """Call `begin()` first in every UI frame (after imgui.new_frame)."""
+
+    def __init__(self, imgui: Any, persist: bool = True) -> None:
+        self.imgui = imgui
+        io = imgui.get_io()
+        io.config_flags |= imgui.ConfigFlags_.docking_enable.value
+        self.path: Path | None = None
+        if persist:
+            self.path = layout_file()
+            try:
+                self.path.parent.mkdir(parents=True, exist_ok=True)
+                io.set_ini_filename(str(self.path))
+            except OSError:  # a read-only home: the layout is not kept, nothing else changes
+                self.path = None
+        self.id = 0
+        self.central: tuple[float, float, float, float] | None = None  # the scene's rectangle
+        self._checked = False
+
+    def begin(self) -> None:
+        imgui = self.imgui
+        flags = imgui.DockNodeFlags_.passthru_central_node.value
+        self.id = imgui.dock_space_over_viewport(imgui.get_id(DOCKSPACE), imgui.get_main_viewport(), flags)
+        internal = imgui.internal
+        if not self._checked:
+            self._checked = True
+            node = internal.dock_builder_get_node(self.id)
+            if node is None or not node.is_split_node():
+                self.build_default()
+        central = internal.dock_builder_get_central_node(self.id)
+        if central is not None:
+            x, y = central.pos.x, central.pos.y
+            self.central = (x, y, x + central.size.x, y + central.size.y)
+
+    def build_default(self) -> None:
+        imgui, internal = self.imgui, self.imgui.internal
+        viewport = imgui.get_main_viewport()
+        internal.dock_builder_remove_node(self.id)
+        internal.dock_builder_add_node(self.id, imgui.internal.DockNodeFlagsPrivate_.dock_space.value)
+        internal.dock_builder_set_node_size(self.id, viewport.size)
+        side = min(max(PANEL_WIDTH / max(viewport.size.x, 1.0), 0.2), 0.4)
+        left, rest = internal.dock_builder_split_node_py(self.id, imgui.Dir.left, side)[1:]
+        right, rest = internal.dock_builder_split_node_py(rest, imgui.Dir.right, min(side / (1.0 - side), 0.5))[1:]
+        bottom, _ = internal.dock_builder_split_node_py(rest, imgui.Dir.down, 0.3)[1:]
+        browser, perf = internal.dock_builder_split_node_py(bottom, imgui.Dir.left, 0.45)[1:]
+        for names, node in ((LEFT, left), (RIGHT, right), (BOTTOM_LEFT, browser), (BOTTOM_RIGHT, perf)):
+            for name in names:
+                internal.dock_builder_dock_window(name, node)
+        internal.dock_builder_finish(self.id)

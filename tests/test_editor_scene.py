@@ -1,0 +1,147 @@
+"""The editor's scene interaction (issue 16): a click in the scene selects what is drawn under
+it, the gizmo drags the selection and each drag undoes and redoes as one step, the browser finds
+entities by name, and the docked layout is kept between runs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_editor import H, Scene, W
+
+from ecs_engine.components import Transform
+from ecs_engine.components.name import Name
+from ecs_engine.render.picking import pick
+
+
+@pytest.fixture
+def scene():
+    s = Scene()
+    try:
+        yield s
+    finally:
+        s.close()
+
+
+def central_hit(scene):
+    """A pixel in the scene's central node with an entity drawn under it, and that entity."""
+    editor, world = scene.session.editor, scene.state.world
+    x0, y0, x1, y1 = editor.dock.central
+    for fy in np.linspace(0.3, 0.7, 9):
+        for fx in np.linspace(0.3, 0.7, 9):
+            x, y = x0 + fx * (x1 - x0), y0 + fy * (y1 - y0)
+            hit = pick(world, scene.gpu.meshes, x, y, W, H)
+            if hit is not None:
+                return (x, y), hit.entity
+    raise AssertionError("nothing drawn in the central node")
+
+
+def click(scene, at) -> None:
+    scene.frame(mouse=at)
+    scene.frame(down=True)
+    scene.frame(down=False)
+
+
+def test_a_click_in_the_scene_selects_what_is_drawn_there_not_through_a_panel(scene):
+    editor = scene.session.editor
+    for _ in range(3):
+        scene.frame()
+    at, entity = central_hit(scene)
+    click(scene, at)
+    assert editor.selected == entity and editor.picked == entity
+    editor.selected = None
+    # the settings panel covers the scene's left: a click on it picks nothing behind it
+    world = scene.state.world
+    behind = [
+        (x, y)
+        for y in range(40, H - 40, 20)
+        for x in range(10, int(editor.dock.central[0]) - 10, 20)
+        if pick(world, scene.gpu.meshes, x, y, W, H) is not None
+    ]
+    assert behind, "nothing drawn behind the left panel to test with"
+    click(scene, behind[len(behind) // 2])
+    assert editor.selected is None
+
+
+def key_chord(scene, *keys) -> None:
+    for key in keys:
+        scene.io.add_key_event(key, True)
+    scene.frame()
+    for key in reversed(keys):
+        scene.io.add_key_event(key, False)
+    scene.frame()
+
+
+def test_the_gizmo_drags_the_selection_and_undo_redo_restore_it(scene):
+    from imgui_bundle import imgui
+
+    editor, world = scene.session.editor, scene.state.world
+    for _ in range(3):
+        scene.frame()
+    at, entity = central_hit(scene)
+    click(scene, at)
+    assert editor.selected == entity
+    before = world.get(entity, Transform).position.copy()
+    # the translate gizmo's centre handle moves the selection in the screen's plane
+    from ecs_engine.render.camera import camera_matrices
+
+    cam = camera_matrices(world, W / H)
+    view = np.asarray(cam.view, np.float64)[:3, :3] @ (before - cam.position)
+    clip = np.asarray(cam.projection, np.float64) @ np.r_[view, 1.0]
+    handle = ((clip[0] / clip[3] + 1) * 0.5 * W, (clip[1] / clip[3] + 1) * 0.5 * H)
+    scene.frame(mouse=handle)
+    scene.frame(down=True)
+    for dx in (10, 20, 30, 40):
+        scene.frame(mouse=(handle[0] + dx, handle[1]))
+    scene.frame(down=False)
+    scene.frame()  # the step closes the frame after the release
+    after = world.get(entity, Transform).position.copy()
+    right = np.asarray(cam.inverse_view, np.float64)[:3, 0]
+    assert (after - before) @ right > 0.05  # moved to the screen's right
+    assert len(editor.history.undo_steps) == 1  # the whole drag: one step
+    key_chord(scene, imgui.Key.mod_ctrl, imgui.Key.z)
+    np.testing.assert_allclose(world.get(entity, Transform).position, before)
+    key_chord(scene, imgui.Key.mod_ctrl, imgui.Key.y)
+    np.testing.assert_allclose(world.get(entity, Transform).position, after)
+
+
+def test_the_browser_finds_entities_by_name(scene):
+    editor, world = scene.session.editor, scene.state.world
+    ids = world.query(Transform).entities()
+    world.add(ids[3], Name(value="Red Ship"))
+    world.add(ids[5], Name(value="blue ship"))
+    editor.browser.search = "SHIP"
+    found = editor.filtered_ids(world)
+    assert sorted(found.tolist()) == sorted([int(ids[3]), int(ids[5])])
+    world.set(ids[5], Name(value="rock"))
+    assert editor.filtered_ids(world).tolist() == [int(ids[3])]  # a renamed entity drops out
+
+
+def test_the_docked_layout_is_kept_between_runs(config_home):
+    from imgui_bundle import imgui
+
+    first = Scene()
+    try:
+        for _ in range(2):
+            first.frame()
+        layout = first.session.editor.dock
+        assert layout.path is not None and layout.path.parent.parent == config_home
+        node = imgui.internal.dock_builder_get_node(layout.id)
+        assert node is not None and node.is_split_node()
+        # move the Inspector into the settings' node, as a user would by dragging its tab
+        settings = imgui.internal.find_window_by_name("Scene and render")
+        imgui.internal.dock_builder_dock_window("Inspector", settings.dock_id)
+        first.frame()
+        first.frame()
+    finally:
+        first.close()  # destroying the context writes the layout
+    assert "[Docking]" in layout.path.read_text()
+    second = Scene()
+    try:
+        for _ in range(2):
+            second.frame()
+        inspector = imgui.internal.find_window_by_name("Inspector")
+        settings = imgui.internal.find_window_by_name("Scene and render")
+        assert inspector.dock_id == settings.dock_id != 0
+    finally:
+        second.close()
+    layout.path.unlink()  # the next tests get the default layout again
