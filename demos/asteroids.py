@@ -57,11 +57,17 @@ def ship_mesh() -> MeshData:
 
 
 def build(
-    world: World, add_mesh: Callable[[MeshData], int], path: str | None = None, seed: int = 1, autoplay: bool = False
+    world: World,
+    add_mesh: Callable[[MeshData], int],
+    path: str | None = None,
+    seed: int = 1,
+    autoplay: bool = False,
+    level: int = 1,
 ) -> None:
     looks = materials(world)
     game = Game(
         seed=int(seed),
+        first_level=int(level),
         meshes={"rock": add_mesh(rock_mesh()), "ship": add_mesh(ship_mesh()), "shot": add_mesh(sphere_mesh(8, 6))},
         materials={
             "rock": looks.add(Material("rock", "cook_torrance", (0.45, 0.4, 0.36, 1.0), roughness=0.9)),

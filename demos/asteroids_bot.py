@@ -15,15 +15,30 @@ from ecs_engine.ecs import System, World
 from .asteroids_game import Asteroid, Collider, Game, Ship, ShipControls, ShipSystem
 
 
-def _wrapped(delta: np.ndarray, half: float) -> np.ndarray:
-    """The shortest offsets in a wrapping arena (x and z)."""
-    out = delta.copy()
-    out[:, [0, 2]] = np.mod(out[:, [0, 2]] + half, 2.0 * half) - half
-    return out
+def _near(world: World, at: np.ndarray, half: float, reach: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The asteroids within `reach` of `at` in x and z (the shortest way round the wrapping
+    arena): their offsets (n, 3), velocities and radii. One pass of cheap NumPy over the
+    columns, then work only on the few near ones."""
+    offsets, speeds, radii = [], [], []
+    for batch in world.query(Transform, Velocity, Collider, with_=(Asteroid,), write=()):
+        p = batch[Transform].position
+        dx = np.abs(p[:, 0] - at[0])
+        dz = np.abs(p[:, 2] - at[2])
+        span = 2.0 * half
+        near = np.flatnonzero((np.minimum(dx, span - dx) < reach) & (np.minimum(dz, span - dz) < reach))
+        if len(near):
+            d = p[near] - at
+            d[:, [0, 2]] = np.mod(d[:, [0, 2]] + half, span) - half
+            offsets.append(d)
+            speeds.append(batch[Velocity].linear[near])
+            radii.append(batch[Collider].radius[near])
+    if not offsets:
+        return np.empty((0, 3)), np.empty((0, 3)), np.empty(0)
+    return np.concatenate(offsets), np.concatenate(speeds), np.concatenate(radii)
 
 
 class BotSystem(System):
-    RANGE, DANGER = 35.0, 4.0
+    RANGE, DANGER, SEARCH = 35.0, 4.0, 60.0
 
     def __init__(self) -> None:
         super().__init__(reads=[Ship, Transform, Velocity, Asteroid, Collider, Game], writes=[ShipControls], name="bot")
@@ -37,14 +52,11 @@ class BotSystem(System):
             return
         ship = ships[0]
         at, heading, velocity = ship[Transform].position[0], float(ship[Ship].heading[0]), ship[Velocity].linear[0]
-        offsets, speeds, radii = [], [], []
-        for batch in world.query(Transform, Velocity, Collider, with_=(Asteroid,)):
-            offsets.append(_wrapped(batch[Transform].position - at, game.half))
-            speeds.append(batch[Velocity].linear - velocity)
-            radii.append(batch[Collider].radius)
-        if not offsets:
+        d, v, r = _near(world, at, game.half, self.SEARCH)
+        if not len(d):
+            controls.thrust = 0.6  # nothing near: cruise until something is
             return
-        d, v, r = np.concatenate(offsets), np.concatenate(speeds), np.concatenate(radii)
+        v = v - velocity
         distance = np.linalg.norm(d[:, [0, 2]], axis=1) - r
         nearest = int(np.argmin(distance))
         ahead = np.array([-math.sin(heading), 0.0, -math.cos(heading)])

@@ -61,3 +61,26 @@ def test_bad_input_is_refused():
         overlapping_pairs(np.array([[1e9, 0, 0]]), 1.0, np.zeros((1, 3)), 1.0)
     with pytest.raises(ValueError, match=r"\(N, 3\)"):
         overlapping_pairs(np.zeros((2, 2)), 1.0, np.zeros((1, 3)), 1.0)
+
+
+@pytest.mark.parametrize("path", ["dense", "sorted spread", "numpy"])
+def test_a_few_spheres_against_many_take_the_spread_paths(monkeypatch, path):
+    """A few projectiles against thousands of asteroids: the small set is spread over its 27
+    cells (a dense table in the compiled kernel, or sorted keys), the large set never sorted."""
+    from ecs_engine import native
+    from ecs_engine.maths import broad_phase
+
+    if path == "sorted spread":
+        monkeypatch.setattr(broad_phase, "DENSE_CELLS", 1)
+    elif path == "numpy":
+        monkeypatch.setattr(native, "AVAILABLE", False)
+    rng = np.random.default_rng(11)
+    many = rng.uniform(-30, 30, (5000, 3))
+    few = rng.uniform(-30, 30, (40, 3))
+    r_many, r_few = rng.uniform(0.2, 1.5, 5000), rng.uniform(0.1, 0.5, 40)
+    for a, ra, b, rb in ((few, r_few, many, r_many), (many, r_many, few, r_few)):
+        got = overlapping_pairs(a, ra, b, rb)
+        want = brute(a, ra, b, rb)
+        assert len(want[0]) > 10
+        np.testing.assert_array_equal(got[0], want[0])
+        np.testing.assert_array_equal(got[1], want[1])
