@@ -149,7 +149,7 @@ def _dense_pairs(
 
 
 @native.njit
-def _dense_kernel(b, rb, a, ra, inverse_cell, low, shape, starts, members, ia, ib):  # type: ignore[no-untyped-def]  # pragma: no cover - compiled
+def _dense_kernel(b, rb, a, ra, inverse_cell, low, shape, starts, members, ia, ib):  # pragma: no cover - compiled
     """Pairs into ia/ib; returns how many there are (more than their length: call again)."""
     found = 0
     for j in range(b.shape[0]):
