@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from gpu_context import headless_gpu
 
 from ecs_engine import World
@@ -148,3 +149,25 @@ def test_picking_agrees_with_the_rendered_image():
                     assert hit is not None and hit.entity == ids[int(np.argmax(c))], (x, y, c)
                     checked += 1
     assert checked > 50
+
+
+def test_the_compiled_sphere_pass_equals_the_numpy_one():
+    from ecs_engine import native
+    from ecs_engine.render import picking
+
+    if not native.AVAILABLE:
+        pytest.skip("ECS_ENGINE_NO_NUMBA set")
+    rng = np.random.default_rng(4)
+    n = 500
+    models = np.zeros((n, 4, 4), np.float32)
+    models[:, :3, :3] = rng.normal(size=(n, 3, 3))
+    models[:, :3, 3] = rng.uniform(-20, 20, (n, 3))
+    models[:, 3, 3] = 1.0
+    centers, radii = rng.normal(size=(3, 3)), rng.uniform(0.5, 2.0, 3)
+    handles = rng.integers(0, 3, n)
+    origin, direction = np.array([0.0, 0.0, 30.0]), np.array([0.1, 0.05, -1.0]) / np.linalg.norm([0.1, 0.05, -1.0])
+    want = picking._sphere_entries(origin, direction, models, centers[handles], radii[handles])
+    got = np.empty(n)
+    picking._entries_native(origin, direction, models, centers, radii, handles, got)
+    assert np.isfinite(want).sum() > 10 and np.isinf(want).sum() > 10
+    np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import native
 from ..components import Mesh, ModelMatrix, render_origin
 from ..ecs.world import World
 from .camera import camera_matrices
@@ -59,11 +60,38 @@ def _rows(world: World) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.concatenate(ids), np.concatenate(models), np.concatenate(handles)
 
 
+@native.njit
+def _entries_native(origin, direction, models, centers, radii, handles, out):  # pragma: no cover - compiled
+    for n in range(models.shape[0]):
+        h = handles[n]
+        c = centers[h]
+        m = models[n]
+        scale2 = 0.0
+        for col in range(3):
+            s = m[0, col] * m[0, col] + m[1, col] * m[1, col] + m[2, col] * m[2, col]
+            scale2 = max(scale2, s)
+        radius = radii[h] * np.sqrt(scale2)
+        along = 0.0
+        dist2 = 0.0
+        for row in range(3):
+            center = m[row, 0] * c[0] + m[row, 1] * c[1] + m[row, 2] * c[2] + m[row, 3]
+            d = center - origin[row]
+            along += d * direction[row]
+            dist2 += d * d
+        inside2 = radius * radius - (dist2 - along * along)
+        if inside2 < 0.0:
+            out[n] = np.inf
+            continue
+        root = np.sqrt(inside2)
+        out[n] = np.inf if along + root < 0.0 else max(along - root, 0.0)
+
+
 def _sphere_entries(
     origin: np.ndarray, direction: np.ndarray, models: np.ndarray, centers: np.ndarray, radii: np.ndarray
 ) -> np.ndarray:
     """Per row, the ray's distance to where it enters the row's bounding sphere (inf: missed;
-    0 when the origin is inside). Model matrices are [row, column]: p' = M[:3, :3] p + M[:3, 3]."""
+    0 when the origin is inside). Model matrices are [row, column]: p' = M[:3, :3] p + M[:3, 3].
+    (The NumPy form; `_rows_entries` runs the compiled one over the columns without copies.)"""
     m = models.astype(np.float64)
     linear = m[:, :3, :3]
     center = np.einsum("nij,nj->ni", linear, centers) + m[:, :3, 3]
@@ -95,18 +123,43 @@ def ray_triangles(origin: np.ndarray, direction: np.ndarray, triangles: np.ndarr
     return float(t[hit].min()) if hit.any() else float("inf")
 
 
+def _rows_entries(
+    world: World, origin: np.ndarray, direction: np.ndarray, centers: np.ndarray, radii: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Ids, models, handles and sphere entries of the rows whose spheres the ray enters."""
+    if not native.AVAILABLE:
+        ids, models, handles = _rows(world)
+        known = handles < len(radii)
+        ids, models, handles = ids[known], models[known], handles[known].astype(np.int64)
+        entries = _sphere_entries(origin, direction, models, centers[handles], radii[handles])
+        hit = np.isfinite(entries)
+        return ids[hit], models[hit], handles[hit], entries[hit]
+    parts: list[tuple[np.ndarray, ...]] = []
+    for batch in world.query(Mesh, ModelMatrix, write=()):
+        handles = batch[Mesh].handle.astype(np.int64)
+        known = handles < len(radii)
+        models = batch[ModelMatrix].model
+        ids = batch.entities
+        if not known.all():
+            handles, models, ids = handles[known], models[known], ids[known]
+        entries = np.empty(len(ids))
+        _entries_native(origin, direction, models, centers, radii, handles, entries)  # type: ignore[misc]
+        hit = np.flatnonzero(np.isfinite(entries))
+        parts.append((ids[hit], models[hit], handles[hit], entries[hit]))
+    if not parts:
+        return np.empty(0, np.int64), np.empty((0, 4, 4), np.float32), np.empty(0, np.int64), np.empty(0)
+    return tuple(np.concatenate(p) for p in zip(*parts))  # type: ignore[return-value]
+
+
 def pick(world: World, meshes: Any, x: float, y: float, width: int, height: int) -> Pick | None:
     """The entity drawn nearest under pixel (x, y) of a width x height view, or None. `meshes` is
     the renderer's MeshRegistry (bounds() and [handle].data)."""
     origin, direction = pixel_ray(world, x, y, width, height)
-    ids, models, handles = _rows(world)
+    centers, radii, _ = meshes.bounds()
+    local_origin = origin - render_origin(world)  # ModelMatrix is relative to the render origin
+    ids, models, handles, entries = _rows_entries(world, local_origin, direction, centers, radii)
     if not len(ids):
         return None
-    centers, radii, _ = meshes.bounds()
-    known = handles < len(radii)
-    ids, models, handles = ids[known], models[known], handles[known].astype(np.int64)
-    local_origin = origin - render_origin(world)  # ModelMatrix is relative to the render origin
-    entries = _sphere_entries(local_origin, direction, models, centers[handles], radii[handles])
     best_t, best = float("inf"), -1
     for row in np.argsort(entries, kind="stable"):
         if entries[row] >= best_t:  # every later sphere starts beyond the nearest hit so far
