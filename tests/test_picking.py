@@ -161,7 +161,7 @@ def test_the_compiled_sphere_pass_equals_the_numpy_one():
     n = 500
     models = np.zeros((n, 4, 4), np.float32)
     models[:, :3, :3] = rng.normal(size=(n, 3, 3))
-    models[:, :3, 3] = rng.uniform(-20, 20, (n, 3))
+    models[:, :3, 3] = rng.uniform(-4, 4, (n, 3))
     models[:, 3, 3] = 1.0
     centers, radii = rng.normal(size=(3, 3)), rng.uniform(0.5, 2.0, 3)
     handles = rng.integers(0, 3, n)
