@@ -30,3 +30,19 @@ def test_readme_materials_example_runs():
     assert materials(world)[scope["gold"]].roughness == 0.6
     assert materials(world)[scope["floor"]].base_color_texture == scope["tiles"]
     assert world.query(DirectionalLight).count() == 1 and world.query(SpotLight).count() == 1
+
+
+def test_readme_games_example_runs():
+    text = (Path(__file__).resolve().parent.parent / "README.md").read_text()
+    blocks = [b for b in re.findall(r"```python\n(.*?)```", text, re.S) if "world.events(Hit)" in b]
+    assert len(blocks) == 1, "README has no games-as-systems example"
+    scope: dict = {}
+    exec(compile(blocks[0], "README.md", "exec"), scope)
+    from ecs_engine.jobs import JobPool
+
+    world, health = scope["world"], scope["Health"]
+    try:
+        hp = world.query(health).column(health.hp)
+        assert (hp == 6.0).sum() > 0 and (hp == 10.0).sum() > 0  # the ones near the bomb took 4
+    finally:
+        world.resources[JobPool].close()
