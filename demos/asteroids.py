@@ -32,6 +32,9 @@ from .asteroids_game import (
     WrapSystem,
     start,
 )
+from .asteroids_hud import draw_hud, summary
+
+__all__ = ["ShipControls", "build", "draw_hud", "schedule", "summary"]
 
 
 def rock_mesh(seed: int = 5) -> MeshData:
@@ -71,13 +74,22 @@ def build(
         meshes={"rock": add_mesh(rock_mesh()), "ship": add_mesh(ship_mesh()), "shot": add_mesh(sphere_mesh(8, 6))},
         materials={
             "rock": looks.add(Material("rock", "cook_torrance", (0.45, 0.4, 0.36, 1.0), roughness=0.9)),
-            "ship": looks.add(Material("ship", "cook_torrance", (0.3, 0.6, 1.0, 1.0), metallic=0.8, roughness=0.3)),
+            "ship": looks.add(
+                Material(
+                    "ship",
+                    "cook_torrance",
+                    (0.3, 0.6, 1.0, 1.0),
+                    metallic=0.1,
+                    roughness=0.4,
+                    emissive=(0.05, 0.12, 0.3),
+                )
+            ),
             "shot": looks.add(Material("shot", "unlit", (1.0, 0.9, 0.3, 1.0), emissive=(4.0, 3.0, 0.8))),
         },
     )
     world.resources[Game] = game
     world.resources[ShipControls] = ShipControls()
-    world.spawn(Transform(rotation=look_rotation((0.3, -1.0, -0.4))), DirectionalLight(illuminance=2.5))
+    world.spawn(Transform(rotation=look_rotation((0.3, -1.0, -0.4))), DirectionalLight(illuminance=0.9))
     world.spawn(
         Transform(position=FollowCameraSystem.OFFSET, rotation=look_rotation(-FollowCameraSystem.OFFSET)),
         Camera(fov_y=math.radians(50.0), near=0.5, far=2000.0),

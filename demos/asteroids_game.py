@@ -65,7 +65,7 @@ class ShipHit:
 @dataclass
 class ShipControls:
     """What the ship does this step: turn (-1 right .. 1 left), thrust (-1 .. 1), fire, and
-    restart (after game over)."""
+    restart (after game over; a latch the restart system clears)."""
 
     turn: float = 0.0
     thrust: float = 0.0
@@ -144,7 +144,7 @@ def start(world: World, game: Game) -> None:
     game.rng = np.random.default_rng(game.seed)
     game.half = arena_half(game.level_count())
     world.spawn(
-        Transform(),
+        Transform(scale=(1.6, 1.6, 1.6)),
         Velocity(),
         Ship(invulnerable=2.0),
         Collider(radius=SHIP_RADIUS),
@@ -317,12 +317,13 @@ class RestartSystem(System):
     """After game over, the restart control clears the field and starts level 1 again."""
 
     def __init__(self) -> None:
-        super().__init__(reads=[ShipControls], writes=[Game, Asteroid, Projectile, Ship], name="restart")
+        super().__init__(writes=[ShipControls, Game, Asteroid, Projectile, Ship], name="restart")
         self.exclusive = True  # it destroys and spawns everything
 
     def run(self, world: World, dt: float) -> None:
-        game = world.resources[Game]
-        if not (game.over and world.resources[ShipControls].restart):
+        game, controls = world.resources[Game], world.resources[ShipControls]
+        wanted, controls.restart = controls.restart, False  # consumed (a press while playing is dropped)
+        if not (game.over and wanted):
             return
         for kind in (Asteroid, Projectile, Ship):
             ids = world.query(kind).entities()

@@ -9,20 +9,13 @@ from gpu_context import close_shared, shared_device, shared_instance
 from ecs_engine.app.offscreen import sharing
 
 
-@pytest.fixture(scope="session", autouse=True)
-def config_home(tmp_path_factory):
-    """The user's config folder (the editor's layout, settings) in a temporary folder: tests
-    never read or write the real one. Subprocesses inherit it."""
-    import os
-
+@pytest.fixture(autouse=True)
+def config_home(tmp_path_factory, monkeypatch):
+    """The user's config folder (the editor's layout, settings), empty for each test: tests
+    never read or write the real one, nor see what another test left. Subprocesses inherit it."""
     path = tmp_path_factory.mktemp("config")
-    old = os.environ.get("XDG_CONFIG_HOME")
-    os.environ["XDG_CONFIG_HOME"] = str(path)
-    yield path
-    if old is None:
-        os.environ.pop("XDG_CONFIG_HOME", None)
-    else:
-        os.environ["XDG_CONFIG_HOME"] = old
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(path))
+    return path
 
 
 @pytest.fixture(scope="session", autouse=True)

@@ -14,7 +14,7 @@ def test_glfw_keys_drive_the_fly_camera_with_the_seed_key_map():
     from ecs_engine.systems import FlyCameraSystem, InputState
 
     names = key_names(glfw)
-    assert sorted(names.values()) == sorted(["left", "right", "up", "down", "w", "s", "a", "d", "e", "q"])
+    assert sorted(names.values()) == sorted(["left", "right", "up", "down", "w", "s", "a", "d", "e", "q", "space", "r"])
     world = World()
     cam = world.spawn(Transform(), Camera(), FlyCamera(move_speed=2.0))
     keys = world.resources[InputState] = InputState()

@@ -173,6 +173,9 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"scenes to switch between, the first one opened (default {DEFAULT_SCENE}; "
         f"choices: {', '.join(EDITOR_SCENES)})",
     )
+    from .play import add_parser as add_play_parser
+
+    add_play_parser(sub, common, positive_int)
     # Every argument goes to the benchmark runner, --help first included: REMAINDER skips a leading
     # option, so this parser has a prefix no argument can start with ("\0") and sees none.
     bench = sub.add_parser(
@@ -195,6 +198,11 @@ def run(args: argparse.Namespace) -> int:
             check_threads(args.threads)
             return motion.main(args.entities or 100_000, args.frames or 300, args.threads)
         return run_scene(args)
+    if args.command == "play":
+        from .play import run_play
+
+        check_flags_apply(args, (args.game,), False)
+        return run_play(args, HEADLESS_FALLBACK_FRAMES)
     if args.command == "bench":
         from ..bench.__main__ import main as bench_main
 

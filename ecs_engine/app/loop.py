@@ -10,11 +10,13 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from typing import Any
 
 from ..ecs.errors import EcsError
 from ..errors import UsageError
 from ..jobs import default_threads
 from .editor_session import EditorSession
+from .imgui_session import ImGuiSession
 from .offscreen import OffscreenSource
 from .perf import PerfMonitor, check_writable
 from .report import RunResult, describe_device, save_png, summary_line
@@ -27,20 +29,27 @@ def run(
     source: FrameSource | None = None,
     log: Callable[[str], None] | None = None,
     max_ui_hz: float | None = 120.0,
+    make_session: Callable[[RunOptions, FrameSource], Session] = Session,
+    ui: Callable[[Session, Any], ImGuiSession] | None = None,
 ) -> RunResult:
     """Open the source, run `options.frames` frames (a window: until it closes), close it.
-    Headless by default; pass a window.WindowSource to draw in a window."""
+    Headless by default; pass a window.WindowSource to draw in a window. `make_session` makes
+    the session (a game's, play.py); `ui(session, window)` its ImGui (the editor's by default
+    when options.editor is set)."""
     say = log or (lambda text: None if options.quiet else print(text))
     source = source or OffscreenSource()
     if options.screenshot is not None:
         check_writable(options.screenshot, "the screenshot")  # now, not after the whole run
     result = RunResult()
     perf = result.perf = PerfMonitor(log=options.perf_json or False)  # checks its path too
-    session = editor = None
+    session: Session | None = None
+    editor: ImGuiSession | None = None
     try:
-        session = Session(options, source)
+        session = make_session(options, source)
         result.device = describe_device(session.device)
-        if options.editor:  # after the source's key callbacks: ImGui's GLFW backend chains to them
+        if ui is not None:  # after the source's key callbacks: ImGui's GLFW backend chains to them
+            editor = result.editor = ui(session, source.window)
+        elif options.editor:
             editor = result.editor = EditorSession(session, options.scenes, default_threads(), source.window, max_ui_hz)
         say(f"{source.describe(session)} on {result.device}")
         start = time.perf_counter()
@@ -100,7 +109,7 @@ def run(
     return result
 
 
-def apply_requests(session: Session, editor: EditorSession) -> None:
+def apply_requests(session: Session, editor: ImGuiSession) -> None:
     """The editor's requests, between frames. One the session refuses (a mode this device lacks,
     a scene that fails to load) changes nothing and is shown in the editor, not raised."""
     wanted = editor.take_requests()

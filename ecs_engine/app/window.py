@@ -27,7 +27,8 @@ from .report import save_png
 from .session import FrameTarget, Gpu, Session
 from .settings import MAX_DT, SIM_STEP, RunOptions
 
-# GLFW key -> the names FlyCameraSystem reads (the seed's Table 7.1).
+# GLFW key -> the names FlyCameraSystem reads (the seed's Table 7.1), and the games' fire and
+# restart (play.py).
 KEY_NAMES = {
     "KEY_LEFT": "left",
     "KEY_RIGHT": "right",
@@ -39,6 +40,8 @@ KEY_NAMES = {
     "KEY_D": "d",
     "KEY_E": "e",
     "KEY_Q": "q",
+    "KEY_SPACE": "space",
+    "KEY_R": "r",
 }
 
 

@@ -1,0 +1,146 @@
+"""`ecs-engine play GAME`: a game from demos/ in a window (or headless), with its HUD.
+
+A game module provides `build(world, add_mesh, path, seed=, autoplay=, level=)`,
+`schedule(autoplay, controls)` (its systems), `draw_hud(imgui, world)` and `summary(world)` (the
+line printed at the end). The run is the engine's one loop (loop.py) with a `GameSession` (the
+game's world and schedule instead of a demo scene's) and a `GameUI` (the HUD on the ImGui
+session). Keys reach the game through the InputState resource, which `KeyboardControls` turns
+into the game's controls.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+from dataclasses import replace
+from typing import Any
+
+from ..ecs.schedule import Schedule, System
+from ..ecs.world import World
+from ..errors import UsageError
+from ..jobs import JobPool
+from .imgui_session import ImGuiSession
+from .perf import PerfMonitor
+from .session import FrameSource, Session
+from .settings import RunOptions
+
+GAMES = {"asteroids": "ecs_engine.demos.asteroids"}
+HEADLESS_FRAMES = 600
+
+
+def game_module(name: str) -> Any:
+    if name not in GAMES:
+        raise UsageError(f"unknown game {name!r}; games: {', '.join(GAMES)}")
+    return importlib.import_module(GAMES[name])
+
+
+class KeyboardControls(System):
+    """Arrows or WASD turn and thrust, space fires, R restarts (from the InputState resource)."""
+
+    def __init__(self, controls_type: type) -> None:
+        from ..systems import InputState
+
+        super().__init__(reads=[InputState], writes=[controls_type], name="keyboard_controls")
+        self.controls_type, self.input_type = controls_type, InputState
+
+    def run(self, world: World, dt: float) -> None:
+        controls = world.resources[self.controls_type]
+        state = world.resources.get(self.input_type)
+        keys = set() if state is None or state.keyboard_captured_by_ui else state.pressed
+        controls.turn = float(("left" in keys or "a" in keys) - ("right" in keys or "d" in keys))
+        controls.thrust = float(("up" in keys or "w" in keys) - ("down" in keys or "s" in keys))
+        controls.fire = "space" in keys
+        controls.restart = controls.restart or "r" in keys  # a latch: the HUD's button sets it too
+
+
+class GameSession(Session):
+    """A session whose world and schedule are the game's."""
+
+    def __init__(self, options: RunOptions, source: FrameSource, game: str, seed: int, autoplay: bool, level: int):
+        self.game, self.module = game, game_module(game)
+        self.seed, self.autoplay, self.level = seed, autoplay, level
+        super().__init__(options, source)
+        self.scene = game  # what the run's first line names
+
+    def _build(self, scene: str, path: str | None) -> tuple[World, Schedule]:
+        world = World()
+        world.resources[JobPool] = self.pool
+        self.module.build(world, self.gpu.meshes.add, seed=self.seed, autoplay=self.autoplay, level=self.level)
+        controls = None if self.autoplay else KeyboardControls(self.module.ShipControls)
+        return world, self.module.schedule(autoplay=self.autoplay, controls=controls)
+
+
+class GameUI(ImGuiSession):
+    """The game's HUD on the run's ImGui session."""
+
+    def __init__(self, session: GameSession, window: Any = None) -> None:
+        super().__init__(session, window, max_ui_hz=None)
+        self.module = session.module
+        self.rects: dict[str, tuple[float, float, float, float]] = {}
+
+    def draw(self, world: World, stats: Any, perf: PerfMonitor) -> None:
+        self.rects = self.module.draw_hud(self.imgui, world)
+
+
+def add_parser(sub: Any, common: argparse.ArgumentParser, positive_int: Any) -> None:
+    play = sub.add_parser("play", help="play a game written as systems (asteroids)", parents=[common])
+    play.add_argument("game", choices=tuple(GAMES), help="the game")
+    play.add_argument("--autoplay", action="store_true", help="a bot plays (reproducible with --seed)")
+    play.add_argument("--seed", type=int, default=1, help="the game's random seed (default 1)")
+    play.add_argument("--level", type=positive_int, default=1, help="the level to start at (6: 100,000 asteroids)")
+
+
+def run_play(args: argparse.Namespace, fallback_frames: int) -> int:
+    from .loop import run
+    from .report import report_validation
+
+    module = game_module(args.game)
+    holder: list[GameSession] = []
+
+    def make(options: RunOptions, source: FrameSource) -> Session:
+        holder.append(GameSession(options, source, args.game, args.seed, args.autoplay, args.level))
+        return holder[-1]
+
+    def ui(session: Session, window: Any) -> ImGuiSession:
+        assert isinstance(session, GameSession)
+        return GameUI(session, window)
+
+    options = RunOptions(
+        scene="cube",  # unused: the game builds the world
+        headless=args.headless,
+        frames=args.frames,
+        screenshot=args.screenshot,
+        width=args.width,
+        height=args.height,
+        validate=args.validate,
+        present=args.present,
+        mode=args.mode,
+        threads=args.threads,
+        culling=args.culling,
+        fill=args.fill,
+        tone_map=args.tone_map,
+        exposure=args.exposure,
+        msaa=args.msaa,
+        light_culling=args.light_culling,
+        transparency=args.transparency,
+        recorder=args.recorder,
+        perf_json=args.perf_json,
+    )
+    source = None
+    if not args.headless:
+        from .window import WindowSource, open_glfw
+
+        glfw = open_glfw()
+        if glfw is not None:
+            source = WindowSource(glfw)
+        else:
+            options = replace(options, headless=True, frames=args.frames or fallback_frames)
+            print(f"no display found: playing {options.frames} frames headless instead")
+    elif options.frames is None:
+        options = replace(options, frames=HEADLESS_FRAMES)
+    result = run(options, source, make_session=make, ui=ui)
+    if holder:
+        print(module.summary(holder[-1].world))
+    if options.screenshot:
+        print(f"wrote {options.screenshot}")
+    return report_validation(result)

@@ -1,0 +1,169 @@
+"""`ecs-engine play asteroids`: headless with the bot it exits 0 and prints the score, the same
+on every run; keys drive the ship through the window's input; the HUD's Restart button restarts
+after game over; bad arguments are one clear error."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from ecs_engine import World
+from ecs_engine.app.play import KeyboardControls
+from ecs_engine.demos.asteroids_game import ShipControls
+from ecs_engine.systems import InputState
+
+
+def play(*args: str) -> subprocess.CompletedProcess:
+    env = dict(os.environ)
+    env.pop("DISPLAY", None)
+    return subprocess.run(
+        [sys.executable, "-m", "ecs_engine", "play", *args],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
+    )
+
+
+def test_headless_autoplay_exits_0_and_prints_the_same_score_every_run():
+    runs = [
+        play(
+            "asteroids", "--headless", "--autoplay", "--frames", "600", "--seed", "1", "--width", "96", "--height", "64"
+        )
+        for _ in range(2)
+    ]
+    for run in runs:
+        assert run.returncode == 0, run.stderr
+    lines = [next(line for line in r.stdout.splitlines() if line.startswith("asteroids: score")) for r in runs]
+    assert lines[0] == lines[1]
+    assert int(lines[0].split()[2]) > 0  # the bot scored
+
+
+def test_bad_arguments_are_one_clear_error():
+    for args, message in (
+        (("chess", "--headless"), "invalid choice: 'chess'"),
+        (("asteroids", "--headless", "--level", "0"), "expected a number above 0"),
+        (("asteroids", "--headless", "--entities", "5"), "--entities sizes the scaling"),
+    ):
+        run = play(*args)
+        assert run.returncode == 2 and message in run.stderr and "Traceback" not in run.stderr, run.stderr
+
+
+def test_keys_become_ship_controls_unless_the_ui_has_the_keyboard():
+    world = World()
+    controls = world.resources[ShipControls] = ShipControls()
+    keys = world.resources[InputState] = InputState(pressed={"left", "w", "space"})
+    system = KeyboardControls(ShipControls)
+    world.run_system(system, 0.0)
+    assert (controls.turn, controls.thrust, controls.fire, controls.restart) == (1.0, 1.0, True, False)
+    keys.pressed = {"d", "down", "r"}
+    world.run_system(system, 0.0)
+    assert (controls.turn, controls.thrust, controls.fire, controls.restart) == (-1.0, -1.0, False, True)
+    keys.pressed = set()
+    world.run_system(system, 0.0)
+    assert controls.restart  # a latch until the restart system takes it
+    keys.keyboard_captured_by_ui = True
+    world.run_system(system, 0.0)
+    assert (controls.turn, controls.thrust, controls.fire) == (0.0, 0.0, False)
+
+
+def test_the_hud_restarts_the_game_after_game_over():
+    """Headless: the HUD shows game over with a Restart button; a click on it starts a new game."""
+    from imgui_bundle import imgui
+
+    from ecs_engine.app.offscreen import OffscreenSource
+    from ecs_engine.app.perf import PerfMonitor
+    from ecs_engine.app.play import GameSession, GameUI
+    from ecs_engine.app.settings import RunOptions
+    from ecs_engine.demos.asteroids_game import Game
+
+    source = OffscreenSource()
+    options = RunOptions(scene="cube", width=320, height=240, threads=2, validate=True)
+    session = GameSession(options, source, "asteroids", 1, False, 1)
+    ui = GameUI(session, None)
+    perf = PerfMonitor()
+    try:
+        game = session.world.resources[Game]
+        game.over, game.health = True, 0.0
+        io = imgui.get_io()
+
+        def frame(mouse=None, down=None):
+            if mouse is not None:
+                io.add_mouse_pos_event(*mouse)
+            if down is not None:
+                io.add_mouse_button_event(0, down)
+            session.schedule.run(session.world, 1 / 60)
+            ui.build(session.world, None, perf, 1 / 60, 320, 240)
+            session.renderer.render(session.world, readback=True)
+
+        frame()
+        frame()
+        x0, y0, x1, y1 = ui.rects["restart"]
+        frame(mouse=((x0 + x1) / 2, (y0 + y1) / 2))
+        frame(down=True)
+        frame(down=False)
+        frame()
+        game = session.world.resources[Game]
+        assert not game.over and game.health == 100.0 and game.score == 0
+    finally:
+        ui.destroy()
+        session.close()
+    assert source.validation_messages() == []
+
+
+@pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs a display (make test runs under Xvfb)")
+def test_the_windowed_game_takes_keys_and_restarts_from_the_hud():
+    """In a window under Xvfb: space and W go through the window's key path (apply_key) and the
+    ship fires; after game over R starts a new game."""
+    import glfw as glfw_module
+
+    from ecs_engine.app.loop import run
+    from ecs_engine.app.play import GameSession, GameUI
+    from ecs_engine.app.settings import RunOptions
+    from ecs_engine.app.window import WindowSource, apply_key, key_names, open_glfw
+    from ecs_engine.components import Transform
+    from ecs_engine.demos.asteroids_game import Game, Ship
+
+    glfw = open_glfw()
+    assert glfw is not None
+    holder: dict = {}
+    names = key_names(glfw_module)
+
+    def script(frame, glfw_, window):
+        source, session = holder["source"], holder.get("session")
+        if frame == 2:
+            apply_key(glfw_, names, source.input, glfw_.KEY_SPACE, glfw_.PRESS)
+            apply_key(glfw_, names, source.input, glfw_.KEY_W, glfw_.PRESS)
+        if frame == 20:
+            apply_key(glfw_, names, source.input, glfw_.KEY_SPACE, glfw_.RELEASE)
+            apply_key(glfw_, names, source.input, glfw_.KEY_W, glfw_.RELEASE)
+            game = session.world.resources[Game]
+            holder["shots"], game.health = game.shots, 0.0
+            game.over = True
+        if frame == 24:
+            apply_key(glfw_, names, source.input, glfw_.KEY_R, glfw_.PRESS)
+        if frame == 26:
+            apply_key(glfw_, names, source.input, glfw_.KEY_R, glfw_.RELEASE)
+
+    def make(options, source):
+        holder["session"] = GameSession(options, source, "asteroids", 1, False, 1)
+        return holder["session"]
+
+    def ui(session, window):
+        holder["ui"] = GameUI(session, window)
+        return holder["ui"]
+
+    source = holder["source"] = WindowSource(glfw, on_frame=script)
+    options = RunOptions(scene="cube", width=320, height=240, frames=36, validate=True, quiet=True, headless=False)
+    result = run(options, source, make_session=make, ui=ui)
+    assert result.validation_messages == [] and result.frames == 36
+    world = holder["session"].world
+    game = world.resources[Game]
+    assert holder["shots"] > 0  # space fired
+    assert not game.over and game.health == 100.0  # restarted by R
+    ship = world.query(Ship).entities()
+    assert len(ship) == 1 and np.allclose(world.get(int(ship[0]), Transform).position, 0.0, atol=0.5)
