@@ -10,12 +10,21 @@ from ecs_engine.app.offscreen import sharing
 
 
 @pytest.fixture(autouse=True)
-def config_home(tmp_path_factory, monkeypatch):
+def config_home(tmp_path_factory):
     """The user's config folder (the editor's layout, settings), empty for each test: tests
-    never read or write the real one, nor see what another test left. Subprocesses inherit it."""
+    never read or write the real one, nor see what another test left. Subprocesses inherit it.
+    (Not through `monkeypatch`: that would keep the test's own monkeypatch alive past the GPU
+    checks below, which must see the device's features restored.)"""
+    import os
+
     path = tmp_path_factory.mktemp("config")
-    monkeypatch.setenv("XDG_CONFIG_HOME", str(path))
-    return path
+    old = os.environ.get("XDG_CONFIG_HOME")
+    os.environ["XDG_CONFIG_HOME"] = str(path)
+    yield path
+    if old is None:
+        os.environ.pop("XDG_CONFIG_HOME", None)
+    else:
+        os.environ["XDG_CONFIG_HOME"] = old
 
 
 @pytest.fixture(scope="session", autouse=True)
