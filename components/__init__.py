@@ -11,9 +11,11 @@ from .camera import (
 )
 from .camera_control import FlyCamera
 from .environment import Environment
+from .hierarchy import Parent, WorldMatrix
 from .light import DirectionalLight, PointLight, SpotLight
 from .mesh import Mesh
 from .motion import AngularVelocity, Spring, Velocity
+from .name import Name
 from .orbit import Orbit
 from .shadow import NotShadowCaster, NotShadowReceiver, Shadow
 from .transform import ModelMatrix, NormalMatrix, PreviousTransform, Transform
@@ -29,10 +31,12 @@ __all__ = [
     "FlyCamera",
     "Mesh",
     "ModelMatrix",
+    "Name",
     "NormalMatrix",
     "NotShadowCaster",
     "NotShadowReceiver",
     "Orbit",
+    "Parent",
     "PointLight",
     "PreviousTransform",
     "RenderOrigin",
@@ -41,6 +45,7 @@ __all__ = [
     "Spring",
     "Transform",
     "Velocity",
+    "WorldMatrix",
     "active_camera",
     "render_origin",
 ]

@@ -1,7 +1,8 @@
 """Stock systems: the fixed step's snapshot for interpolation, motion, springs, orbits, the fly
-camera, the render origin and the transform (matrices)."""
+camera, the render origin, the transform (matrices) and the hierarchy (parents' transforms)."""
 
 from .camera_control import FlyCameraSystem, InputState
+from .hierarchy import HierarchySystem
 from .interpolation import SnapshotSystem
 from .motion import MotionSystem
 from .orbit import OrbitSystem
@@ -10,6 +11,7 @@ from .transform import RenderOriginSystem, TransformSystem
 
 __all__ = [
     "FlyCameraSystem",
+    "HierarchySystem",
     "InputState",
     "MotionSystem",
     "OrbitSystem",

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from ecs_engine import World
-from ecs_engine.app.editor_gizmo import column_major, decompose, from_column_major, gl_projection
+from ecs_engine.app.editor_gizmo import column_major, from_column_major, gl_projection
 from ecs_engine.components import ORTHOGRAPHIC, Camera, Transform
+from ecs_engine.maths.decompose import decompose
 from ecs_engine.maths.transform import compose_numpy
 from ecs_engine.render.camera import camera_matrices
 

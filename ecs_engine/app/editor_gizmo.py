@@ -19,6 +19,7 @@ import numpy as np
 from ..components import ORTHOGRAPHIC, Camera, Transform, active_camera
 from ..ecs.world import World
 from ..maths.camera import rotation_matrix
+from ..maths.decompose import decompose
 from ..maths.transform import compose_numpy
 from .editor_history import History
 
@@ -49,30 +50,6 @@ def column_major(m: np.ndarray) -> list[float]:
 
 def from_column_major(values: Any) -> np.ndarray:
     return np.array([float(values[i]) for i in range(16)]).reshape(4, 4).T
-
-
-def decompose(m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Position, unit quaternion (x, y, z, w) and scale of an affine matrix without shear."""
-    linear = m[:3, :3]
-    scale = np.linalg.norm(linear, axis=0)
-    if np.linalg.det(linear) < 0:
-        scale[0] = -scale[0]
-    r = linear / np.where(scale == 0.0, 1.0, scale)
-    trace = r[0, 0] + r[1, 1] + r[2, 2]
-    if trace > 0:
-        s = math.sqrt(trace + 1.0) * 2
-        q = [(r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s, 0.25 * s]
-    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
-        s = math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2]) * 2
-        q = [0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s, (r[2, 1] - r[1, 2]) / s]
-    elif r[1, 1] > r[2, 2]:
-        s = math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2]) * 2
-        q = [(r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s, (r[0, 2] - r[2, 0]) / s]
-    else:
-        s = math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1]) * 2
-        q = [(r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s, (r[1, 0] - r[0, 1]) / s]
-    quat = np.array(q)
-    return m[:3, 3].copy(), quat / np.linalg.norm(quat), scale
 
 
 class Gizmo:

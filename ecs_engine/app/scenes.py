@@ -29,10 +29,11 @@ def scene_builder(name: str, entities: int = 10_000, lights: int | None = None, 
 
 def default_schedule() -> Schedule:
     """Simulation (snapshot for interpolation, orbits, motion, springs) in the fixed-step stage,
-    the camera per frame, then render origin and matrices. `Schedule.run` runs every stage
+    the camera per frame, then render origin, matrices and the hierarchy's. `Schedule.run` runs every stage
     once; the run loop uses `Schedule.run_frame` with a FixedTimestep."""
     from ..systems import (
         FlyCameraSystem,
+        HierarchySystem,
         MotionSystem,
         OrbitSystem,
         RenderOriginSystem,
@@ -49,4 +50,5 @@ def default_schedule() -> Schedule:
     schedule.add(FlyCameraSystem(), "update")
     schedule.add(RenderOriginSystem(), "post_update")
     schedule.add(TransformSystem(), "post_update")
+    schedule.add(HierarchySystem(), "post_update")  # after: children's matrices from their parents'
     return schedule

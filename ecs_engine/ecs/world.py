@@ -122,6 +122,13 @@ class World:
         index = self.storage.index
         return index.valid_one(eid) and int(index.table[eid & INDEX_MASK]) >= 0
 
+    def alive(self, ids: Any) -> np.ndarray:
+        """Per id (an int array), whether it names a live entity (vectorised is_alive)."""
+        ids = np.asarray(ids, np.int64).reshape(-1)
+        index = self.storage.index
+        ok = index.valid(ids)
+        return ok & (index.table[np.where(ok, ids & INDEX_MASK, 0)] >= 0)
+
     def locate(self, eid: int) -> tuple[ArchetypeTable, int]:
         """The table and row holding a live entity (valid until the next structural change)."""
         return self.storage.locate(entity_id(eid))

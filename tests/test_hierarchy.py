@@ -1,0 +1,181 @@
+"""The transform hierarchy (components/hierarchy.py, systems/hierarchy.py): world transforms are
+the product of the chain's matrices (scaled, mirrored, far out), follow a parent's move the same
+frame, reparenting keeps the world place when asked, subtrees are destroyed whole, loops are
+refused, a dead parent leaves a root, and picking sees children where they are drawn."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ecs_engine import EcsError, World, system
+from ecs_engine.app.scenes import default_schedule
+from ecs_engine.components import Mesh, ModelMatrix, Parent, Transform, WorldMatrix
+from ecs_engine.components.hierarchy import children, descendants, destroy_subtree, set_parent
+from ecs_engine.maths.decompose import trs_matrices
+
+
+def q(axis, angle):
+    axis = np.asarray(axis, np.float64) / np.linalg.norm(axis)
+    return np.r_[axis * np.sin(angle / 2), np.cos(angle / 2)]
+
+
+def reference(*transforms) -> np.ndarray:
+    """The chain's world matrix built independently: T R S products, root first."""
+    out = np.eye(4)
+    for position, rotation, scale in transforms:
+        x, y, z, w = rotation
+        r = np.array(
+            [
+                [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+            ]
+        )
+        m = np.eye(4)
+        m[:3, :3] = r * np.asarray(scale)
+        m[:3, 3] = position
+        out = out @ m
+    return out
+
+
+CHAIN = [
+    ((1.0, 2.0, 3.0), q((0, 1, 0), 0.7), (2.0, 1.0, 0.5)),
+    ((0.5, -1.0, 0.0), q((1, 0, 0), -0.4), (1.0, -1.0, 1.0)),  # mirrored
+    ((0.0, 0.0, 2.0), q((1, 1, 0), 1.1), (0.3, 0.3, 0.3)),
+]
+
+
+def chain(world: World, offset=(0.0, 0.0, 0.0)) -> list[int]:
+    ids: list[int] = []
+    for k, (p, r, s) in enumerate(CHAIN):
+        position = np.add(p, offset) if k == 0 else p
+        parts = [Transform(position=position, rotation=r, scale=s)]
+        if ids:
+            parts.append(Parent(entity=ids[-1]))
+        ids.append(world.spawn(*parts, Mesh()))
+    return ids
+
+
+def test_world_matrices_are_the_chains_product_and_follow_the_root_the_same_frame():
+    world = World()
+    ids = chain(world)
+    schedule = default_schedule()
+    schedule.run(world, 0.0)
+    want = reference(*CHAIN)
+    np.testing.assert_allclose(world.get(ids[2], WorldMatrix).matrix, want, atol=1e-12)
+    assert np.linalg.det(want[:3, :3]) < 0  # the mirrored middle link flips the grandchild
+    np.testing.assert_allclose(world.get(ids[2], ModelMatrix).model, want, atol=1e-5)
+    world.set(ids[0], Transform, position=np.array([10.0, 0.0, 0.0]))
+    schedule.run(world, 0.0)
+    moved = [((10.0, 0.0, 0.0), CHAIN[0][1], CHAIN[0][2]), *CHAIN[1:]]
+    np.testing.assert_allclose(world.get(ids[2], WorldMatrix).matrix, reference(*moved), atol=1e-12)
+
+
+def test_far_from_the_origin_the_model_matrix_keeps_its_precision():
+    from ecs_engine.components import RenderOrigin
+
+    offset = (1e7, -2e7, 3e7)
+    world = World()
+    ids = chain(world, offset)
+    world.resources[RenderOrigin] = RenderOrigin(position=np.array(offset) + (1.0, 2.0, 3.0), follow_camera=False)
+    default_schedule().run(world, 0.0)
+    want = reference(*CHAIN)  # relative to the origin at the root: the same matrix minus (1, 2, 3)
+    want[:3, 3] -= (1.0, 2.0, 3.0)
+    np.testing.assert_allclose(world.get(ids[2], ModelMatrix).model, want, atol=1e-5)  # float32, not 1e7 off
+
+
+def test_reparenting_keeps_the_world_place_when_asked_and_helpers_walk_the_tree():
+    """Uniform scales: a world matrix without shear, which a Transform can hold exactly."""
+    world = World()
+    a = world.spawn(Transform(position=(1.0, 2.0, 3.0), rotation=q((0, 1, 0), 0.7), scale=(2.0, 2.0, 2.0)))
+    b = world.spawn(Transform(position=(0.5, -1.0, 0.0), rotation=q((1, 0, 0), -0.4)), Parent(entity=a))
+    c = world.spawn(Transform(position=(0.0, 0.0, 2.0), scale=(0.3, 0.3, 0.3)), Parent(entity=b))
+    other = world.spawn(Transform(position=(5.0, 5.0, 5.0), rotation=q((0, 0, 1), 0.5), scale=(2.0, 2.0, 2.0)))
+    schedule = default_schedule()
+    schedule.run(world, 0.0)
+    before = world.get(c, WorldMatrix).matrix.copy()
+    assert children(world, a).tolist() == [b] and descendants(world, a).tolist() == [b, c]
+    set_parent(world, c, other, keep_world=True)
+    schedule.run(world, 0.0)
+    np.testing.assert_allclose(world.get(c, WorldMatrix).matrix, before, atol=1e-9)
+    assert children(world, other).tolist() == [c] and descendants(world, a).tolist() == [b]
+    set_parent(world, c, None)  # a root now: its local transform is its world transform
+    schedule.run(world, 0.0)
+    t = world.get(c, Transform)
+    np.testing.assert_allclose(
+        world.get(c, WorldMatrix).matrix, trs_matrices(t.position[None], t.rotation[None], t.scale[None])[0]
+    )
+
+
+def test_loops_are_refused_and_a_dead_parent_leaves_a_root():
+    world = World()
+    a, b, c = chain(world)
+    with pytest.raises(EcsError, match="loop"):
+        set_parent(world, a, c)
+    world.set(a, Parent(entity=c)) if world.has(a, Parent) else world.add(a, Parent(entity=c))  # made anyway
+    with pytest.raises(EcsError, match="loops through"):
+        default_schedule().run(world, 0.0)
+    world.remove(a, Parent)
+    world.destroy(b)
+    default_schedule().run(world, 0.0)
+    local = reference(CHAIN[2])
+    np.testing.assert_allclose(world.get(c, WorldMatrix).matrix, local, atol=1e-12)
+
+
+def test_destroy_subtree_inside_and_outside_a_system():
+    world = World()
+    a, b, c = chain(world)
+    keep = world.spawn(Transform())
+    destroy_subtree(world, b)
+    assert world.is_alive(a) and not world.is_alive(b) and not world.is_alive(c) and world.is_alive(keep)
+    a, b, c = chain(world)
+
+    @system(reads=[Parent])
+    def remove(world, dt):
+        destroy_subtree(world, a)
+        assert world.is_alive(c)  # deferred to the sync point
+
+    from ecs_engine import Schedule
+
+    schedule = Schedule(("update",))
+    schedule.add(remove)
+    schedule.run(world, 0.0)
+    assert not any(world.is_alive(e) for e in (a, b, c)) and world.is_alive(keep)
+
+
+def test_a_wide_hierarchy_matches_each_entitys_own_product():
+    rng = np.random.default_rng(2)
+    world = World()
+    roots = world.spawn_batch(50, Transform(position=rng.uniform(-10, 10, (50, 3)), scale=rng.uniform(0.5, 2, (50, 3))))
+    n = 2000
+    parent_of = roots[rng.integers(0, 50, n)]
+    rotation = rng.normal(size=(n, 4))
+    kids = world.spawn_batch(
+        n, Transform(position=rng.uniform(-3, 3, (n, 3)), rotation=rotation), Parent(entity=parent_of)
+    )
+    grand = world.spawn_batch(n, Transform(position=(0.0, 1.0, 0.0)), Parent(entity=kids))
+    default_schedule().run(world, 0.0)
+    for k in rng.integers(0, n, 20):
+        g, kid, root = grand[k], kids[k], parent_of[k]
+        parts = [world.get(e, Transform) for e in (root, kid, g)]
+        want = reference(*[(t.position, t.rotation, t.scale) for t in parts])
+        np.testing.assert_allclose(world.get(g, WorldMatrix).matrix, want, atol=1e-9)
+
+
+def test_picking_finds_a_child_where_its_parent_puts_it():
+    from test_picking import Registry, pixel_of
+
+    from ecs_engine.demos.scene_kit import add_camera
+    from ecs_engine.render.picking import pick
+    from ecs_engine.render.primitives import cube_mesh
+
+    world = World()
+    add_camera(world, (0.0, 0.0, 10.0), (0.0, 0.0, 0.0))
+    parent = world.spawn(Transform(position=(2.0, 0.0, 0.0), rotation=q((0, 0, 1), np.pi / 2)))
+    child = world.spawn(Transform(position=(1.0, 0.0, 0.0)), Parent(entity=parent), Mesh())
+    default_schedule().run(world, 0.0)
+    # rotated 90 degrees about z, the child's local +x offset lands at world (2, 1, 0)
+    hit = pick(world, Registry(cube_mesh()), *pixel_of(world, np.array([2.0, 1.0, 0.0])), 96, 64)
+    assert hit is not None and hit.entity == child
+    assert pick(world, Registry(cube_mesh()), *pixel_of(world, np.array([3.0, 0.0, 0.0])), 96, 64) is None
