@@ -254,30 +254,13 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
         raise UsageError(f"a path goes with the model scene (a model) or environment (a sky), not {args.scene!r}")
     editor = editor_scenes is not None
     check_flags_apply(args, editor_scenes or (args.scene,), editor)
-    options = RunOptions(
+    options = RunOptions.from_flags(
+        args,
         scene=args.scene,
         path=args.path,
-        headless=args.headless,
-        frames=args.frames,
-        screenshot=args.screenshot,
-        width=args.width,
-        height=args.height,
-        validate=args.validate,
-        present=args.present,
-        mode=args.mode,
-        threads=args.threads,
-        culling=args.culling,
-        fill=args.fill,
-        tone_map=args.tone_map,
-        exposure=args.exposure,
-        msaa=args.msaa,
-        light_culling=args.light_culling,
-        transparency=args.transparency,
         lights=args.lights,
         shadows=not args.no_shadows,
-        recorder=args.recorder,
         entities=args.entities or 10_000,
-        perf_json=args.perf_json,
         editor=editor,
         scenes=editor_scenes or (),
     )

@@ -105,27 +105,7 @@ def run_play(args: argparse.Namespace, fallback_frames: int) -> int:
         assert isinstance(session, GameSession)
         return GameUI(session, window)
 
-    options = RunOptions(
-        scene="cube",  # unused: the game builds the world
-        headless=args.headless,
-        frames=args.frames,
-        screenshot=args.screenshot,
-        width=args.width,
-        height=args.height,
-        validate=args.validate,
-        present=args.present,
-        mode=args.mode,
-        threads=args.threads,
-        culling=args.culling,
-        fill=args.fill,
-        tone_map=args.tone_map,
-        exposure=args.exposure,
-        msaa=args.msaa,
-        light_culling=args.light_culling,
-        transparency=args.transparency,
-        recorder=args.recorder,
-        perf_json=args.perf_json,
-    )
+    options = RunOptions.from_flags(args, scene="cube")  # the scene is unused: the game builds the world
     source = None
     if not args.headless:
         from .window import WindowSource, open_glfw

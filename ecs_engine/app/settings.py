@@ -9,6 +9,7 @@ worker pool, the mode and recorder in the renderer's path, the present mode in t
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import psutil
 
@@ -72,6 +73,33 @@ class RunOptions:
     perf_json: str | None = None  # write every frame's perf samples here at the end
     editor: bool = False  # the ImGui editor and Perf window (headless: drawn into the image)
     scenes: tuple[str, ...] = SEED_SCENES  # the editor's scene switcher
+
+    # the command-line flags every rendering command shares (cli.render_flags), by field name
+    FLAGS: ClassVar[tuple[str, ...]] = (
+        "headless",
+        "frames",
+        "screenshot",
+        "width",
+        "height",
+        "validate",
+        "present",
+        "mode",
+        "threads",
+        "culling",
+        "fill",
+        "tone_map",
+        "exposure",
+        "msaa",
+        "light_culling",
+        "transparency",
+        "recorder",
+        "perf_json",
+    )
+
+    @classmethod
+    def from_flags(cls, args: Any, **fields: Any) -> RunOptions:
+        """The options a command's parsed render flags give, plus its own `fields`."""
+        return cls(**{name: getattr(args, name) for name in cls.FLAGS}, **fields)
 
     def __post_init__(self) -> None:
         check_threads(self.threads)
