@@ -16,6 +16,7 @@ from .entities import INDEX_MASK
 from .errors import AccessError, DeadEntityError, EcsError, MissingComponentError, describe_entity
 from .events import Events
 from .query import Query, check_access
+from .running import Running
 from .schema import Component, ObjectStore, closure, object_component, schema_of
 from .storage import Checked, Storage
 from .table import ArchetypeTable
@@ -39,17 +40,6 @@ def entity_id(eid: Any) -> int:
     raise TypeError(f"entity ids must be integers, got {type(eid).__name__} {eid!r}")
 
 
-class _Running(threading.local):
-    """Per thread: the system it runs (the parallel schedule runs several at once), its change
-    tick, the query loops open, and the command queue of a system run in parallel (merged into
-    the world's in the schedule's declared order after the group)."""
-
-    system: RunningSystem | None = None
-    tick: int = 0
-    iter_depth: int = 0
-    commands: CommandQueue | None = None
-
-
 def _new_entity(row: int) -> str:
     return "new entity" if row == 0 else f"new entity (row {row} of the batch)"
 
@@ -65,7 +55,7 @@ class World:
         self._closures: dict[frozenset[type[Component]], frozenset[type[Component]]] = {}
         self.tick = 0
         self._queue = CommandQueue()
-        self._local = _Running()
+        self._local = Running()
         self._defer_depth = 0
         self._ids_lock = threading.Lock()  # id allocation by systems running in parallel
         self._events: dict[type, Events[Any]] = {}
@@ -479,6 +469,20 @@ class World:
         finally:
             local.system, local.commands = None, None
             system.last_run_tick = tick
+
+    # ------------------------------------------------------------ scene files
+    def save(self, path: Any) -> None:
+        """Write the entities to a scene file (scene_file.py: the format; no pickle)."""
+        from .scene_file import save
+
+        save(self, path)
+
+    @classmethod
+    def load(cls, path: Any, into: World | None = None) -> World:
+        """The entities of a scene file, in a new world or `into` (SceneFileError: nothing changed)."""
+        from .scene_file import load
+
+        return load(path, cls() if into is None else into)[0]
 
     # ----------------------------------------------------------------- events
     def events(self, kind: type) -> Events[Any]:
