@@ -31,6 +31,7 @@ REGISTRY: dict[str, str] = {
     "lights": "lights",
     "shadows": "shadows",
     "schedule": "schedule",
+    "scene-io": "scene_io",
 }
 
 # One line each for the list in the usage text (the modules are not imported to print it).
@@ -43,6 +44,7 @@ SUMMARY: dict[str, str] = {
     "lights": "GPU ms against light count (1 to 16,384), every light per fragment vs clustered (Vulkan)",
     "shadows": "CPU and GPU ms of each light type and filter casting, 10k to 1M entities, 1 and 16 threads (Vulkan)",
     "schedule": "the parallel schedule: 8 independent systems over 1M entities, 1 to 16 threads (CPU only)",
+    "scene-io": "World.save and World.load of the scaling scene, 10k to 1M entities (CPU only)",
 }
 
 # The commands that work from any folder once ecs_engine is installed.
