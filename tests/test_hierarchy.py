@@ -179,3 +179,27 @@ def test_picking_finds_a_child_where_its_parent_puts_it():
     hit = pick(world, Registry(cube_mesh()), *pixel_of(world, np.array([2.0, 1.0, 0.0])), 96, 64)
     assert hit is not None and hit.entity == child
     assert pick(world, Registry(cube_mesh()), *pixel_of(world, np.array([3.0, 0.0, 0.0])), 96, 64) is None
+
+
+def test_the_compiled_and_numpy_paths_agree(monkeypatch):
+    from ecs_engine import native
+    from ecs_engine.systems import HierarchySystem
+
+    if not native.AVAILABLE:
+        pytest.skip("ECS_ENGINE_NO_NUMBA set")
+    rng = np.random.default_rng(5)
+    world = World()
+    roots = world.spawn_batch(20, Transform(position=rng.normal(size=(20, 3)), scale=rng.uniform(0.5, 2, (20, 3))))
+    kids = world.spawn_batch(
+        500,
+        Transform(position=rng.normal(size=(500, 3)), rotation=rng.normal(size=(500, 4))),
+        Parent(entity=roots[rng.integers(0, 20, 500)]),
+    )
+    world.spawn_batch(500, Transform(scale=(-1.0, 2.0, 1.0)), Parent(entity=kids))
+    world.spawn_batch(10, Parent(entity=kids[:10]))  # no Transform: identity under its parent
+    system = HierarchySystem()
+    world.run_system(system, 0.0)
+    compiled = world.query(WorldMatrix).column(WorldMatrix.matrix)
+    monkeypatch.setattr(native, "AVAILABLE", False)
+    world.run_system(system, 0.0)
+    np.testing.assert_allclose(world.query(WorldMatrix).column(WorldMatrix.matrix), compiled, atol=1e-12)
