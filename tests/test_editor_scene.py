@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 from test_editor import H, Scene, W
 
-from ecs_engine.components import Transform
-from ecs_engine.components.name import Name
+from ecs_engine.components import Name, Transform
 from ecs_engine.render.picking import pick
 
 
@@ -145,3 +144,38 @@ def test_the_docked_layout_is_kept_between_runs(config_home):
     finally:
         second.close()
     layout.path.unlink()  # the next tests get the default layout again
+
+
+def test_the_hierarchy_window_shows_the_tree_and_a_drag_reparents(scene):
+    """Two parents with a child each: the tree lists them; dragging one parent onto the other's
+    child makes it that child's child, and it stays where it was in the world."""
+    from ecs_engine.components import Parent, WorldMatrix
+
+    editor, world = scene.session.editor, scene.state.world
+    ids = world.query(Transform).entities()
+    a, b, c, d = (int(e) for e in ids[:4])
+    world.add(b, Parent(entity=a))
+    world.add(d, Parent(entity=c))
+    world.add(a, Name(value="first"))
+    # the Hierarchy tab is behind the Entities one: bring it forward
+    from imgui_bundle import imgui
+
+    for _ in range(2):
+        scene.frame()
+    imgui.set_window_focus("Hierarchy")
+    for _ in range(2):
+        scene.frame()
+    tree = editor.tree
+    assert set(tree.roots) == {a, c} and tree.below[a] == [b] and tree.below[c] == [d]
+    world_before = np.array(world.get(c, Transform).position)  # a root: its Transform is its world
+    source, target = tree.rects[str(c)], tree.rects[str(b)]
+    start = ((source[0] + source[2]) / 2, (source[1] + source[3]) / 2)
+    end = ((target[0] + target[2]) / 2, (target[1] + target[3]) / 2)
+    scene.frame(mouse=start)
+    scene.frame(down=True)
+    for f in np.linspace(0.2, 1.0, 5):
+        scene.frame(mouse=(start[0] + f * (end[0] - start[0]), start[1] + f * (end[1] - start[1])))
+    scene.frame(down=False)
+    scene.frame()
+    assert world.get(c, Parent).entity == b
+    np.testing.assert_allclose(world.get(c, WorldMatrix).matrix[:3, 3], world_before, atol=1e-6)

@@ -32,6 +32,7 @@ from .editor_gizmo import OPERATIONS, Gizmo
 from .editor_history import History
 from .editor_lights import LIGHT_SECTIONS, ShadowMapImages
 from .editor_materials import MaterialsPanel, mesh_section
+from .editor_tree import HierarchyPanel, drag_source
 from .settings import Settings
 
 if TYPE_CHECKING:
@@ -82,6 +83,7 @@ class Editor:
         self.history = History()
         self.gizmo = Gizmo()
         self.picked: int | None = None  # what the last click in the scene picked (None: nothing)
+        self.tree = HierarchyPanel()
 
     def show_shadow_maps(self, renderer: Renderer, overlay: ImGuiRenderer) -> None:
         """Show the shadow maps of `renderer` (render/renderer.py's Renderer) in the light sections,
@@ -112,6 +114,7 @@ class Editor:
         self.browser.key = None
         self.materials = MaterialsPanel()
         self.history.forget()
+        self.tree = HierarchyPanel()
 
     # -------------------------------------------------------------------- draw
     def draw(self, world: World, stats: SceneStats) -> None:
@@ -125,6 +128,9 @@ class Editor:
         imgui.set_next_window_size((300, 300), imgui.Cond_.first_use_ever.value)
         if imgui.begin("Entities")[0]:
             self._browser(world)
+        imgui.end()
+        if imgui.begin("Hierarchy")[0]:
+            self.tree.draw(imgui, world, self)
         imgui.end()
         imgui.set_next_window_pos((320, 330), imgui.Cond_.first_use_ever.value)
         imgui.set_next_window_size((340, 300), imgui.Cond_.first_use_ever.value)
@@ -277,6 +283,7 @@ class Editor:
                     label = f"{name or eid & 0xFFFFFFFF} ({eid & 0xFFFFFFFF}, gen {eid >> 32})##{eid}"
                     if imgui.selectable(label, eid == self.selected)[0]:
                         self.selected = eid
+                    drag_source(imgui, eid, label)  # onto a node of the Hierarchy window: parent it
                     if first:
                         self._remember("first row")
                         first = False
