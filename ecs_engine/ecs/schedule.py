@@ -159,8 +159,8 @@ class Schedule:
 
     def _run_stage(self, world: World, name: str, dt: float) -> None:
         systems = self.stages[name]
-        pool = world.resources.get(JobPool)
-        if not self.parallel or pool is None or pool.threads < 2 or len(systems) < 2:
+        pool = world.resources.get(JobPool) if self.parallel else None
+        if pool is None or pool.threads < 2 or len(systems) < 2:
             _run_stage(world, systems, dt)
             return
         key = tuple(id(s) for s in systems)

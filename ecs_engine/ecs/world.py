@@ -16,7 +16,7 @@ from .entities import INDEX_MASK
 from .errors import AccessError, DeadEntityError, EcsError, MissingComponentError, describe_entity
 from .events import Events
 from .query import Query, check_access
-from .running import Running
+from .running import Running, ThreadRunning
 from .schema import Component, ObjectStore, closure, object_component, schema_of
 from .storage import Checked, Storage
 from .table import ArchetypeTable
@@ -87,10 +87,6 @@ class World:
         world's."""
         return self._local.commands or self._queue
 
-    @property
-    def _system(self) -> RunningSystem | None:
-        return self._local.system
-
     def running_system(self) -> RunningSystem | None:
         """The system running on this thread, if any."""
         return self._local.system
@@ -158,9 +154,9 @@ class World:
         return self.tick
 
     def system_last_run_tick(self) -> int:
-        if self._system is None:
+        if self._local.system is None:
             raise EcsError("a `changed` filter outside a system needs an explicit since=tick")
-        return self._system.last_run_tick
+        return self._local.system.last_run_tick
 
     # ------------------------------------------------------------ checking
     def _bundles(self, values: Iterable[Any], n: int, who: Any) -> Checked:
@@ -207,7 +203,7 @@ class World:
         return ids
 
     def _check_write_access(self, ct: type[Component]) -> None:
-        system = self._system
+        system = self._local.system
         if system is not None and system.writes is not None and ct not in system.writes:
             raise AccessError(f"system {system.name} writes {ct.__name__} but does not declare it")
 
@@ -361,7 +357,7 @@ class World:
     ) -> Query:
         """A cached query. `write` defaults to every required type outside a system and to the
         system's declared writes inside one; other columns come back read-only."""
-        system = self._system
+        system = self._local.system
         fast = None
         if type(with_) is tuple and type(without) is tuple and (write is None or type(write) is tuple):
             # the same call from the same place every frame: skip resolving and checking again
@@ -451,7 +447,11 @@ class World:
             except BaseException as exc:  # re-raised below, as the system raised it
                 errors[i] = exc
 
-        spread(job, range(len(systems)))
+        single, self._local = self._local, ThreadRunning()  # each thread its own, for the group
+        try:
+            spread(job, range(len(systems)))
+        finally:
+            self._local = single
         for exc in errors:
             if exc is not None:
                 raise exc
