@@ -53,3 +53,15 @@ def gpu_left_as_found():
 def _state() -> tuple[int, int, dict[str, bool]]:
     device = shared_device()
     return len(device.instance.messages), device.allocator.stats()["used_bytes"], dict(device.features)
+
+
+@pytest.fixture
+def scene():
+    """The editor on a headless grid100 session, driven frame by frame (test_editor.Scene)."""
+    from test_editor import Scene
+
+    s = Scene()
+    try:
+        yield s
+    finally:
+        s.close()

@@ -105,15 +105,6 @@ class Scene:
         assert self.source.validation_messages() == []
 
 
-@pytest.fixture
-def scene():
-    s = Scene()
-    try:
-        yield s
-    finally:
-        s.close()
-
-
 def centre(rect):
     return ((rect[0] + rect[2]) / 2, (rect[1] + rect[3]) / 2)
 

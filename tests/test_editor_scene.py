@@ -5,20 +5,10 @@ entities by name, and the docked layout is kept between runs."""
 from __future__ import annotations
 
 import numpy as np
-import pytest
 from test_editor import H, Scene, W
 
 from ecs_engine.components import Name, Transform
 from ecs_engine.render.picking import pick
-
-
-@pytest.fixture
-def scene():
-    s = Scene()
-    try:
-        yield s
-    finally:
-        s.close()
 
 
 def central_hit(scene):
