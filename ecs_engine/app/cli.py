@@ -138,6 +138,10 @@ def render_flags() -> OneLineParser:
         metavar="PATH",
         help="write every frame's perf samples (CPU, GPU, record ms, psutil) to this JSON file at the end",
     )
+    common.add_argument(
+        "--input-script", metavar="PATH", help="replay key presses by frame from this file (see app/input_script.py)"
+    )
+    common.add_argument("--record-input", metavar="PATH", help="write the run's key presses by frame to this file")
     common.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show tracebacks")
     return common
 

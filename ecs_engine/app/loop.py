@@ -17,6 +17,7 @@ from ..errors import UsageError
 from ..jobs import default_threads
 from .editor_session import EditorSession
 from .imgui_session import ImGuiSession
+from .input_script import InputRecorder, read_script
 from .offscreen import OffscreenSource
 from .perf import PerfMonitor, check_writable
 from .report import RunResult, describe_device, save_png, summary_line
@@ -40,6 +41,10 @@ def run(
     source = source or OffscreenSource()
     if options.screenshot is not None:
         check_writable(options.screenshot, "the screenshot")  # now, not after the whole run
+    script = read_script(options.input_script) if options.input_script else None  # before a window opens
+    if options.record_input is not None:
+        check_writable(options.record_input, "the input recording")
+    recorder = InputRecorder(options.record_input) if options.record_input else None
     result = RunResult()
     perf = result.perf = PerfMonitor(log=options.perf_json or False)  # checks its path too
     session: Session | None = None
@@ -62,6 +67,12 @@ def run(
             t0 = time.perf_counter()
             if editor is not None and source.input is not None:
                 source.input.keyboard_captured_by_ui = editor.wants_keyboard  # keys typed into the UI
+            if script is not None or recorder is not None:
+                keys = held_keys(session)
+                if script is not None:
+                    script.apply(frames, keys.pressed)
+                if recorder is not None:
+                    recorder.frame(frames, keys.pressed)
             session.schedule.run_frame(session.world, target.dt, source.clock, max_frame_dt=source.max_frame_dt)
             if editor is not None:
                 width, height = target.extent or (options.width, options.height)
@@ -100,6 +111,8 @@ def run(
         if frames:
             say(summary_line(result, frames, result.wall_s, final=True))
         write_outputs(options, result, say)
+        if recorder is not None:
+            recorder.write()
     finally:
         if editor is not None:
             editor.destroy()
@@ -107,6 +120,16 @@ def run(
             session.close()  # a Session that failed half-built has closed its source already
         result.validation_messages = source.validation_messages()
     return result
+
+
+def held_keys(session: Session) -> Any:
+    """The world's InputState resource (a headless run gets one on first use)."""
+    from ..systems import InputState
+
+    state = session.world.resources.get(InputState)
+    if state is None:
+        state = session.world.resources[InputState] = InputState()
+    return state
 
 
 def apply_requests(session: Session, editor: ImGuiSession) -> None:
