@@ -3,7 +3,10 @@ and on game over a Restart button (R does the same). Drawn each UI frame by the 
 
 from __future__ import annotations
 
+import hashlib
 from typing import Any
+
+import numpy as np
 
 from ecs_engine.ecs import World
 
@@ -38,10 +41,20 @@ def draw_hud(imgui: Any, world: World) -> dict[str, tuple[float, float, float, f
     return rects
 
 
+def world_hash(world: World) -> str:
+    """A digest of every column of every table (in a fixed order): equal worlds, equal hashes."""
+    digest = hashlib.sha256()
+    for table in sorted(world.tables, key=lambda t: sorted(c.__name__ for c in t.types)):
+        for key in sorted(table.columns, key=lambda k: (k[0].__name__, k[1])):
+            digest.update(np.ascontiguousarray(table.columns[key][: table.count]).tobytes())
+    return digest.hexdigest()[:16]
+
+
 def summary(world: World) -> str:
-    """The line a run prints at its end."""
+    """The line a run prints at its end (with the world's hash: replays must match it)."""
     game = world.resources[Game]
     state = "game over" if game.over else "playing"
     return (
-        f"asteroids: score {game.score} at level {game.level}, health {game.health:.0f} ({state}), {game.shots} shots"
+        f"asteroids: score {game.score} at level {game.level}, health {game.health:.0f} ({state}), "
+        f"{game.shots} shots, world {world_hash(world)}"
     )
