@@ -9,28 +9,24 @@ import sys
 
 import pytest
 
-from ecs_engine.app.input_script import KEYS, InputRecorder, read_script
+from ecs_engine.app.input_script import InputRecorder, read_script
 from ecs_engine.errors import UsageError
-
-
-def test_the_key_names_are_the_windows():
-    import glfw
-
-    from ecs_engine.app.window import key_names
-
-    assert KEYS == set(key_names(glfw).values())
+from ecs_engine.systems import InputState
 
 
 def test_a_script_parses_and_applies_by_frame(tmp_path):
     path = tmp_path / "keys.txt"
-    path.write_text("# a comment\n2 down w\n2 down space  # two at once\n\n5 up w\n")
+    path.write_text("# a comment\n2 down w\n2 down left_shift  # two at once\n\n5 up w\n6 down mouse_left\n")
     script = read_script(path)
-    held: set[str] = set()
+    state = InputState()
     seen = []
     for frame in range(7):
-        script.apply(frame, held)
-        seen.append(sorted(held))
-    assert seen[1] == [] and seen[2] == ["space", "w"] and seen[5] == ["space"]
+        script.apply(frame, state)
+        seen.append((sorted(state.pressed), sorted(state.just_pressed), sorted(state.just_released)))
+        state.end_frame()
+    assert seen[1] == ([], [], []) and seen[2] == (["left_shift", "w"], ["left_shift", "w"], [])
+    assert seen[3] == (["left_shift", "w"], [], [])  # held, no new edge
+    assert seen[5] == (["left_shift"], [], ["w"]) and seen[6][1] == ["mouse_left"]
 
 
 @pytest.mark.parametrize(
@@ -40,7 +36,8 @@ def test_a_script_parses_and_applies_by_frame(tmp_path):
         ("x down w\n", "line 1: the frame 'x' is not a whole number"),
         ("5 down w\n3 up w\n", "line 2: frame 3 comes before frame 5"),
         ("1 press w\n", "unknown action 'press'"),
-        ("1 down f13\n", "unknown key 'f13'"),
+        ("1 down f99\n", "unknown key or button 'f99'"),
+        ("1 down lefft\n", "did you mean left"),
     ],
 )
 def test_a_bad_script_is_one_error_naming_the_line(tmp_path, text, message):
@@ -52,17 +49,24 @@ def test_a_bad_script_is_one_error_naming_the_line(tmp_path, text, message):
         read_script(tmp_path / "missing.txt")
 
 
-def test_a_recording_replays_the_same_key_states(tmp_path):
+def test_a_recording_replays_the_same_presses_and_releases(tmp_path):
+    """Including a key pressed and released between two frames, and one released and pressed."""
     recorder = InputRecorder(tmp_path / "rec.txt")
-    states = [set(), {"w"}, {"w", "space"}, {"space"}, set(), {"r"}]
-    for frame, held in enumerate(states):
-        recorder.frame(frame, held)
+    live = InputState()
+    events = {1: [("press", "w")], 2: [("press", "space"), ("release", "space")], 3: [("release", "w"), ("press", "w")]}
+    seen = []
+    for frame in range(5):
+        for action, key in events.get(frame, []):
+            getattr(live, action)(key)
+        recorder.frame(frame, live)
+        seen.append((set(live.pressed), set(live.just_pressed), set(live.just_released)))
+        live.end_frame()
     recorder.write()
-    script = read_script(tmp_path / "rec.txt")
-    held: set[str] = set()
-    for frame, want in enumerate(states):
-        script.apply(frame, held)
-        assert held == want
+    script, replay = read_script(tmp_path / "rec.txt"), InputState()
+    for frame, want in enumerate(seen):
+        script.apply(frame, replay)
+        assert (replay.pressed, replay.just_pressed, replay.just_released) == want, frame
+        replay.end_frame()
 
 
 def play(*args: str) -> subprocess.CompletedProcess:
@@ -107,4 +111,22 @@ def test_a_replayed_game_ends_the_same_and_a_bad_script_stops_before_the_run(tmp
     bad = tmp_path / "bad.txt"
     bad.write_text("1 down nope\n")
     run = play("--frames", "5", "--input-script", str(bad))
-    assert run.returncode == 2 and "line 1: unknown key 'nope'" in run.stderr and "Traceback" not in run.stderr
+    assert (
+        run.returncode == 2 and "line 1: unknown key or button 'nope'" in run.stderr and "Traceback" not in run.stderr
+    )
+
+
+def test_the_input_state_checks_names_and_keeps_edges_for_one_frame():
+    state = InputState()
+    with pytest.raises(ValueError, match="did you mean space"):
+        state.down("spcae")
+    state.press("a")
+    state.release("a")  # pressed and released between two frames
+    state.move_mouse(10.0, 20.0)
+    state.move_mouse(15.0, 18.0)
+    state.scroll = (0.0, -1.0)
+    assert not state.down("a") and state.pressed_now("a") and state.released_now("a")
+    assert state.mouse == (15.0, 18.0) and state.mouse_delta == (15.0, 18.0)
+    state.end_frame()
+    assert not state.pressed_now("a") and not state.released_now("a")
+    assert state.mouse == (15.0, 18.0) and state.mouse_delta == (0.0, 0.0) and state.scroll == (0.0, 0.0)

@@ -10,10 +10,11 @@ The format is text, one event a line: the frame (0-based, ascending), the action
     70 up space
     130 up w
 
-Keys are the names the InputState resource uses (systems.camera_control.KEYS plus the games'
-`space` and `r`). Events of frame N are applied before frame N's systems run. A recording
-writes, for each frame, the keys that went down or up since the frame before, in this format,
-so replaying a recording gives the same key states frame by frame. A bad script (an unknown key
+Keys are the names the InputState resource uses: GLFW's key names in lower case without KEY_
+(`left_shift`, `f12`, `space`) and `mouse_left`, `mouse_right`, `mouse_middle`. Events of frame
+N are applied before frame N's systems run. A recording writes, for each frame, the keys that
+went down or up since the frame before, in this format, so replaying a recording gives the same
+held keys and the same presses and releases frame by frame. A bad script (an unknown key
 or action, a frame out of order, a line that is not three words) is one UsageError naming the
 file and the line, before the run starts.
 """
@@ -25,9 +26,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import UsageError
-from ..systems.camera_control import KEYS as FLY_KEYS
+from ..systems.camera_control import InputState
 
-KEYS = FLY_KEYS | {"space", "r"}  # what window.KEY_NAMES gives (a test keeps the two equal)
 ACTIONS = ("down", "up")
 
 
@@ -35,13 +35,13 @@ ACTIONS = ("down", "up")
 class InputScript:
     events: dict[int, list[tuple[str, str]]] = field(default_factory=dict)  # frame -> (action, key)
 
-    def apply(self, frame: int, pressed: set[str]) -> None:
-        """This frame's events into the held keys."""
+    def apply(self, frame: int, state: InputState) -> None:
+        """This frame's events into the input state (held keys and this frame's edges)."""
         for action, key in self.events.get(frame, ()):
             if action == "down":
-                pressed.add(key)
+                state.press(key)
             else:
-                pressed.discard(key)
+                state.release(key)
 
 
 def read_script(path: str | os.PathLike[str]) -> InputScript:
@@ -67,27 +67,30 @@ def read_script(path: str | os.PathLike[str]) -> InputScript:
             raise UsageError(f"{where}: frame {frame} comes before frame {last} (frames must not go back)")
         if action not in ACTIONS:
             raise UsageError(f"{where}: unknown action {action!r}; actions: {', '.join(ACTIONS)}")
-        if key not in KEYS:
-            raise UsageError(f"{where}: unknown key {key!r}; keys: {', '.join(sorted(KEYS))}")
+        try:
+            InputState.check(key)
+        except ValueError as exc:
+            raise UsageError(f"{where}: {exc}") from None
         script.events.setdefault(frame, []).append((action, key))
         last = frame
     return script
 
 
 class InputRecorder:
-    """Writes what changed in the held keys each frame, in the script format."""
+    """Writes each frame's presses and releases, in the script format."""
 
     def __init__(self, path: str | os.PathLike[str]) -> None:
         self.path = Path(path)
         self.lines = ["# recorded by ecs-engine --record-input: frame action key"]
-        self.previous: set[str] = set()
 
-    def frame(self, frame: int, pressed: set[str]) -> None:
-        for key in sorted(pressed - self.previous):
-            self.lines.append(f"{frame} down {key}")
-        for key in sorted(self.previous - pressed):
-            self.lines.append(f"{frame} up {key}")
-        self.previous = set(pressed)
+    def frame(self, frame: int, state: InputState) -> None:
+        for key in sorted(state.just_pressed | state.just_released):
+            down, up = key in state.just_pressed, key in state.just_released
+            # both: released then pressed again if it is held now, else pressed then released
+            order = ("up", "down") if key in state.pressed else ("down", "up")
+            for action in order:
+                if (action == "down" and down) or (action == "up" and up):
+                    self.lines.append(f"{frame} {action} {key}")
 
     def write(self) -> None:
         try:

@@ -15,6 +15,7 @@ from typing import Any
 from ..ecs.errors import EcsError
 from ..errors import UsageError
 from ..jobs import default_threads
+from ..systems import InputState
 from .editor_session import EditorSession
 from .imgui_session import ImGuiSession
 from .input_script import InputRecorder, read_script
@@ -70,10 +71,13 @@ def run(
             if script is not None or recorder is not None:
                 keys = held_keys(session)
                 if script is not None:
-                    script.apply(frames, keys.pressed)
+                    script.apply(frames, keys)
                 if recorder is not None:
-                    recorder.frame(frames, keys.pressed)
+                    recorder.frame(frames, keys)
             session.schedule.run_frame(session.world, target.dt, source.clock, max_frame_dt=source.max_frame_dt)
+            held = session.world.resources.get(InputState)
+            if held is not None:
+                held.end_frame()  # the systems saw this frame's presses and releases
             if editor is not None:
                 width, height = target.extent or (options.width, options.height)
                 editor.build(session.world, result.last_stats, perf, target.dt, width, height)
@@ -124,8 +128,6 @@ def run(
 
 def held_keys(session: Session) -> Any:
     """The world's InputState resource (a headless run gets one on first use)."""
-    from ..systems import InputState
-
     state = session.world.resources.get(InputState)
     if state is None:
         state = session.world.resources[InputState] = InputState()

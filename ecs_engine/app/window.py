@@ -23,41 +23,36 @@ from ..gpu.render_pass import check_samples
 from ..gpu.swapchain import OutOfDate, Swapchain
 from ..render.mesh_registry import MeshRegistry
 from ..systems import InputState
+from ..systems.camera_control import input_names
 from .report import save_png
 from .session import FrameTarget, Gpu, Session
 from .settings import MAX_DT, SIM_STEP, RunOptions
 
-# GLFW key -> the names FlyCameraSystem reads (the seed's Table 7.1), and the games' fire and
-# restart (play.py).
-KEY_NAMES = {
-    "KEY_LEFT": "left",
-    "KEY_RIGHT": "right",
-    "KEY_UP": "up",
-    "KEY_DOWN": "down",
-    "KEY_W": "w",
-    "KEY_S": "s",
-    "KEY_A": "a",
-    "KEY_D": "d",
-    "KEY_E": "e",
-    "KEY_Q": "q",
-    "KEY_SPACE": "space",
-    "KEY_R": "r",
-}
-
 
 def key_names(glfw: Any) -> dict[int, str]:
-    return {getattr(glfw, k): v for k, v in KEY_NAMES.items()}
+    """GLFW key code -> its name in InputState: every KEY_* constant, lower-case, without the
+    prefix (the fly camera's "left", "w", ... and the games' "space", "r" among them)."""
+    names = input_names()
+    return {getattr(glfw, k): k[4:].lower() for k in dir(glfw) if k.startswith("KEY_") and k[4:].lower() in names}
+
+
+def button_names(glfw: Any) -> dict[int, str]:
+    return {
+        glfw.MOUSE_BUTTON_LEFT: "mouse_left",
+        glfw.MOUSE_BUTTON_RIGHT: "mouse_right",
+        glfw.MOUSE_BUTTON_MIDDLE: "mouse_middle",
+    }
 
 
 def apply_key(glfw: Any, names: dict[int, str], keys: Any, key: int, action: int) -> None:
-    """A GLFW key event into the InputState resource (key repeat changes nothing)."""
+    """A GLFW key or mouse button event into the InputState resource (repeats change nothing)."""
     name = names.get(key)
     if name is None:
         return
     if action == glfw.PRESS:
-        keys.pressed.add(name)
+        keys.press(name)
     elif action == glfw.RELEASE:
-        keys.pressed.discard(name)
+        keys.release(name)
 
 
 def open_glfw() -> Any | None:
@@ -153,7 +148,19 @@ class WindowSource:
         def give_input(world: World) -> None:
             world.resources[InputState] = self.input
 
+        buttons = button_names(glfw)
+
+        def on_button(_win: Any, button: int, action: int, _mods: int) -> None:
+            apply_key(glfw, buttons, self.input, button, action)
+
         glfw.set_key_callback(self.window, on_key)
+        glfw.set_mouse_button_callback(self.window, on_button)
+        glfw.set_cursor_pos_callback(self.window, lambda _w, x, y: self.input.move_mouse(float(x), float(y)))
+        glfw.set_scroll_callback(
+            self.window,
+            lambda _w, x, y: setattr(self.input, "scroll", (self.input.scroll[0] + x, self.input.scroll[1] + y)),
+        )
+        glfw.set_char_callback(self.window, lambda _w, code: setattr(self.input, "text", self.input.text + chr(code)))
         glfw.set_framebuffer_size_callback(self.window, lambda *_: setattr(self, "_resized", True))
         give_input(session.world)
         session.on_world.append(give_input)
