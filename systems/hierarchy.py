@@ -120,14 +120,14 @@ class HierarchySystem(System):
                 t = batch[Transform]
                 root_world[at[rows]] = trs_matrices(t.position[rows], t.rotation[rows], t.scale[rows])
         root_at = np.where(parent_row < 0, _lookup(roots, parent_ids), -1)
-        rows_by_level = np.concatenate(levels(parent_row, kids))
+        by_level = levels(parent_row, kids)
         p, r, s = np.concatenate(position), np.concatenate(rotation), np.concatenate(scale)
         worlds = np.empty((len(kids), 4, 4))
         if native.AVAILABLE:
-            _compose(rows_by_level, parent_row, root_at, p, r, s, root_world, worlds)  # type: ignore[misc]
+            _compose(np.concatenate(by_level), parent_row, root_at, p, r, s, root_world, worlds)  # type: ignore[misc]
         else:
             local = trs_matrices(p, r, s)
-            for rows in levels(parent_row, kids):
+            for rows in by_level:
                 above = np.broadcast_to(np.eye(4), (len(rows), 4, 4)).copy()
                 inner = parent_row[rows] >= 0
                 above[inner] = worlds[parent_row[rows][inner]]

@@ -4,8 +4,6 @@ arena wraps, and a seeded autoplayed run is the same world every time."""
 
 from __future__ import annotations
 
-import hashlib
-
 import numpy as np
 
 from ecs_engine import World
@@ -22,6 +20,7 @@ from ecs_engine.demos.asteroids_game import (
     ShipControls,
     spawn_asteroids,
 )
+from ecs_engine.demos.asteroids_hud import world_hash
 from ecs_engine.ecs.timestep import FixedTimestep
 
 
@@ -43,15 +42,6 @@ def game_world(seed: int = 1, autoplay: bool = False):
 def frames(world, schedule, clock, n: int) -> None:
     for _ in range(n):
         schedule.run_frame(world, 1 / 60, clock)
-
-
-def world_hash(world: World) -> str:
-    digest = hashlib.sha256()
-    for table in sorted(world.tables, key=lambda t: sorted(c.__name__ for c in t.types)):
-        n = table.count
-        for key in sorted(table.columns, key=lambda k: (k[0].__name__, k[1])):
-            digest.update(np.ascontiguousarray(table.columns[key][:n]).tobytes())
-    return digest.hexdigest()
 
 
 def only_rock(world: World, at, size: int) -> int:

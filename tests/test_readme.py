@@ -17,12 +17,18 @@ def test_readme_example_runs():
     assert len(world) == 5_000
 
 
-def test_readme_materials_example_runs():
+def run_block(marker: str, what: str) -> dict:
+    """Run the one README python block containing `marker`; its variables."""
     text = (Path(__file__).resolve().parent.parent / "README.md").read_text()
-    blocks = [b for b in re.findall(r"```python\n(.*?)```", text, re.S) if "Material(" in b]
-    assert len(blocks) == 1, "README has no materials example"
+    blocks = [b for b in re.findall(r"```python\n(.*?)```", text, re.S) if marker in b]
+    assert len(blocks) == 1, f"README has no {what} example"
     scope: dict = {}
     exec(compile(blocks[0], "README.md", "exec"), scope)
+    return scope
+
+
+def test_readme_materials_example_runs():
+    scope = run_block("Material(", "materials")
     from ecs_engine.components import DirectionalLight, SpotLight
     from ecs_engine.render.materials import materials
 
@@ -33,11 +39,7 @@ def test_readme_materials_example_runs():
 
 
 def test_readme_games_example_runs():
-    text = (Path(__file__).resolve().parent.parent / "README.md").read_text()
-    blocks = [b for b in re.findall(r"```python\n(.*?)```", text, re.S) if "world.events(Hit)" in b]
-    assert len(blocks) == 1, "README has no games-as-systems example"
-    scope: dict = {}
-    exec(compile(blocks[0], "README.md", "exec"), scope)
+    scope = run_block("world.events(Hit)", "games-as-systems")
     from ecs_engine.jobs import JobPool
 
     world, health = scope["world"], scope["Health"]

@@ -187,10 +187,7 @@ class World:
         if ids.dtype.kind not in "iu":
             raise TypeError(f"entity ids must be integers, got {ids.dtype}")
         ids = ids.astype(np.int64, copy=False).reshape(-1)
-        index = self.storage.index
-        ok = index.valid(ids)
-        if not allow_reserved:
-            ok &= index.table[np.where(ok, ids & INDEX_MASK, 0)] >= 0
+        ok = self.storage.index.valid(ids) if allow_reserved else self.alive(ids)
         if not ok.all():
             bad = int(ids[~ok][0])
             raise DeadEntityError(self.storage.dead_message(bad))

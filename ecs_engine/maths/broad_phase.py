@@ -33,6 +33,12 @@ DENSE_CELLS = 1 << 22  # the most cells a dense table over the small set's reach
 _NEIGHBOURS = np.array([(x, y, z) for x in (-1, 0, 1) for y in (-1, 0, 1) for z in (-1, 0, 1)], np.int64)
 
 
+def _runs(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """The positions start, start + 1, ... of every run (starts[k], counts[k]), concatenated."""
+    run_first = np.repeat(np.cumsum(counts) - counts, counts)
+    return np.repeat(starts, counts) + (np.arange(int(counts.sum())) - run_first)
+
+
 def _keys(cells: np.ndarray) -> np.ndarray:
     c = cells + _BIAS
     return (c[..., 0] << (2 * _BITS)) | (c[..., 1] << _BITS) | c[..., 2]
@@ -109,10 +115,8 @@ def _spread_pairs(
     if not len(hit):
         return empty, empty
     counts, starts = counts[hit], starts[hit]
-    total = int(counts.sum())
     ib = np.repeat(hit, counts)
-    run_first = np.repeat(np.cumsum(counts) - counts, counts)
-    ia = order[np.repeat(starts, counts) + (np.arange(total) - run_first)] // 27
+    ia = order[_runs(starts, counts)] // 27
     d = a[ia] - b[ib]
     reach = ra[ia] + rb[ib]
     keep = np.einsum("ij,ij->i", d, d) < reach * reach
@@ -185,9 +189,7 @@ def _pairs(a: np.ndarray, ra: np.ndarray, b: np.ndarray, rb: np.ndarray, cell: f
         return empty, empty
     ia = np.repeat(np.repeat(np.arange(len(a)), 27), counts.ravel())
     # position k of the expansion within its run: k - the run's first position
-    run_first = np.repeat(np.cumsum(counts.ravel()) - counts.ravel(), counts.ravel())
-    slot = np.repeat(starts.ravel(), counts.ravel()) + (np.arange(total) - run_first)
-    ib = order[slot]
+    ib = order[_runs(starts.ravel(), counts.ravel())]
     d = a[ia] - b[ib]
     reach = ra[ia] + rb[ib]
     keep = np.einsum("ij,ij->i", d, d) < reach * reach
