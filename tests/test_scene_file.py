@@ -1,19 +1,37 @@
-"""Saved scenes (ecs/scene_file.py): a round trip keeps every column and archetype and remaps
-entity references, into a fresh world or one with entities; a truncated, corrupt, wrong-version
-or hostile file is one SceneFileError and changes nothing; a failed save keeps the old file."""
+"""Saved scenes (ecs/scene_file.py, render/scene_assets.py): a round trip keeps every column and
+archetype and remaps entity references, into a fresh world or one with entities; materials, the
+environment and meshes come back by reference or by value with their handles remapped; each kind
+of truncated, corrupt or hostile file is one SceneFileError and changes nothing; a failed save
+keeps the old file."""
 
 from __future__ import annotations
 
+import io
 import json
+import struct
+import warnings
 import zipfile
 
 import numpy as np
 import pytest
 
-from ecs_engine import World
+from ecs_engine import Component, Field, World
 from ecs_engine.components import AngularVelocity, Mesh, Name, Parent, Transform, Velocity
-from ecs_engine.ecs import scene_file
-from ecs_engine.ecs.scene_file import SceneFileError
+from ecs_engine.components.environment import Environment
+from ecs_engine.ecs.scene_file import IdMap, SceneFileError, load_world, save_world
+from ecs_engine.render.materials import Material, Materials, materials
+from ecs_engine.render.mesh_data import MeshData, normalized
+from ecs_engine.render.primitives import cube_mesh, sphere_mesh, torus_mesh
+from ecs_engine.render.scene_assets import MeshReferences, scene_codecs
+from ecs_engine.render.textures import Texture
+
+
+class Registry(list):
+    """A session's mesh registry as MeshReferences sees it (MeshRegistry without the GPU)."""
+
+    def add(self, mesh: MeshData) -> int:
+        self.append(mesh)
+        return len(self) - 1
 
 
 def sample() -> tuple[World, dict[str, int]]:
@@ -25,122 +43,66 @@ def sample() -> tuple[World, dict[str, int]]:
     root = world.spawn(Transform(position=(1.0, 2.0, 3.0)), Name(value="root"), AngularVelocity(angular=(0, 1, 0)))
     child = world.spawn(Transform(), Parent(entity=root), Name(value="child"))
     orphan = world.spawn(Transform(), Parent(entity=123456789))  # names no saved entity
+    world.destroy(world.spawn(Transform()))  # a dead id in between
     return world, {"root": root, "child": child, "orphan": orphan}
 
 
 def columns(world: World) -> dict:
+    """Every column but the entity ones, by archetype; rows in entity order."""
     out = {}
-    for table in world.tables:
+    for table in (t for t in world.tables if t.count):
         key = tuple(sorted(t.__name__ for t in table.types))
         for (ct, name), column in table.columns.items():
             if not ct.__fields__[name].entity:
-                out[(key, ct.__name__, name)] = column[: table.count].copy()
-    return out
+                out.setdefault((key, ct.__name__, name), []).append(column[: table.count])
+    return {k: np.concatenate(v) for k, v in out.items()}
 
 
-def test_a_round_trip_keeps_columns_and_remaps_references(tmp_path):
+def state(world: World) -> tuple:
+    """What a failed load must leave as it was."""
+    counts = tuple((t.types, t.count) for t in world.tables if t.count)
+    found = world.resources.get(Materials)
+    return len(world), world.entities().tolist(), counts, dict(world.resources), len(found) if found else 0
+
+
+def test_a_round_trip_keeps_columns_archetypes_and_remaps_references(tmp_path):
     world, named = sample()
     path = tmp_path / "level.scene"
-    scene_file.save(world, path)
-    loaded, mapping = scene_file.load(path, World())
-    assert len(loaded) == len(world)
+    save_world(world, path, resources=())
+    loaded, ids = load_world(path, World(), resources=())
+    assert len(loaded) == len(world) == 303
     before, after = columns(world), columns(loaded)
-    assert before.keys() == after.keys()
+    assert before.keys() == after.keys()  # the same archetypes, each column equal
     for key in before:
-        np.testing.assert_array_equal(before[key], after[key])
-    root, child, orphan = (mapping[named[k]] for k in ("root", "child", "orphan"))
+        np.testing.assert_array_equal(before[key], after[key], err_msg=str(key))
+    root, child, orphan = (ids[named[k]] for k in ("root", "child", "orphan"))
     assert loaded.get(child, Parent).entity == root
     assert loaded.get(orphan, Parent).entity == -1
     assert loaded.get(root, Name).value == "root"
+    assert set(ids) == set(world.entities().tolist()) and sorted(ids.values()) == sorted(loaded.entities().tolist())
 
 
-def test_loading_into_a_world_with_entities_keeps_them(tmp_path):
+def test_loading_into_a_world_with_entities_allocates_new_ids(tmp_path):
     world, named = sample()
     path = tmp_path / "level.scene"
-    scene_file.save(world, path)
+    save_world(world, path)
     target = World()
-    mine = target.spawn(Transform(position=(9.0, 9.0, 9.0)))
-    _, mapping = scene_file.load(path, target)
-    assert target.is_alive(mine) and len(target) == len(world) + 1
-    assert mine not in mapping.values()
-    assert target.get(mapping[named["child"]], Parent).entity == mapping[named["root"]]
+    mine = target.spawn_batch(5, Transform(position=(9.0, 9.0, 9.0)))
+    _, first = load_world(path, target)
+    _, second = load_world(path, target)  # twice: two copies, nothing collides
+    assert len(target) == 5 + 2 * len(world) and target.alive(mine).all()
+    assert not set(first.values()) & set(second.values()) and not set(first.values()) & set(mine.tolist())
+    for ids in (first, second):
+        assert target.get(ids[named["child"]], Parent).entity == ids[named["root"]]
+    np.testing.assert_array_equal(target.get(mine[0], Transform).position, (9.0, 9.0, 9.0))
 
 
-def rewrite(path, tmp_path, change) -> object:
-    """A copy of the scene at `path` with its header and members passed through `change`."""
-    with zipfile.ZipFile(path) as archive:
-        members = {name: archive.read(name) for name in archive.namelist()}
-    header = json.loads(members["header.json"])
-    change(header, members)
-    members["header.json"] = json.dumps(header).encode()
-    bad = tmp_path / "bad.scene"
-    with zipfile.ZipFile(bad, "w") as archive:
-        for name, data in members.items():
-            archive.writestr(name, data)
-    return bad
-
-
-def nan_positions(header, members):
-    for table in header["tables"]:
-        for column in table["columns"]:
-            if column["field"] == "position" and "Transform" in column["component"]:
-                data = bytearray(members[column["member"]])
-                data[-8:] = np.array([np.nan]).tobytes()
-                members[column["member"]] = bytes(data)
-                return
-
-
-def huge(header, members):
-    member = header["tables"][0]["columns"][0]["member"]
-    data = members[member]
-    members[member] = data.replace(b"(300,", b"(300000000000,", 1)
-
-
-BAD = {
-    "wrong version": (lambda h, m: h.update(version=99), "format version 99"),
-    "not a scene": (lambda h, m: h.update(format="zip"), "not a scene file"),
-    "unknown component": (lambda h, m: h["tables"][0]["components"].append("nowhere.Thing"), "unknown component"),
-    "missing member": (lambda h, m: m.pop(h["tables"][0]["ids"]), "is missing"),
-    "shape lie": (lambda h, m: h["tables"][0].update(rows=301), "expected"),
-    "absurd size": (huge, "more than it holds"),
-    "NaN in a transform": (nan_positions, "Transform.position"),
-    "escaping name": (lambda h, m: m.update({"../evil.npy": b"x"}), "leaves the archive"),
-}
-
-
-@pytest.mark.parametrize("case", sorted(BAD))
-def test_a_bad_file_is_one_clear_error_and_changes_nothing(tmp_path, case):
-    world, _ = sample()
-    path = tmp_path / "level.scene"
-    scene_file.save(world, path)
-    change, message = BAD[case]
-    bad = rewrite(path, tmp_path, change)
-    target = World()
-    keep = target.spawn(Transform())
-    with pytest.raises(SceneFileError, match=message):
-        scene_file.load(bad, target)
-    assert len(target) == 1 and target.is_alive(keep)
-
-
-def test_truncated_or_garbage_files_and_a_failed_save(tmp_path):
-    world, _ = sample()
-    path = tmp_path / "level.scene"
-    scene_file.save(world, path)
-    data = path.read_bytes()
-    for name, content in (("truncated", data[: len(data) // 2]), ("garbage", b"not a zip at all"), ("empty", b"")):
-        bad = tmp_path / f"{name}.scene"
-        bad.write_bytes(content)
-        with pytest.raises(SceneFileError, match="scene file"):
-            scene_file.load(bad, World())
-
-    class Thing:
-        pass
-
-    world.spawn(Thing())  # an object column: no pickle-free form
-    with pytest.raises(SceneFileError, match="Python objects"):
-        scene_file.save(world, path)
-    assert path.read_bytes() == data  # the old file is untouched
-    assert not list(tmp_path.glob(".*.tmp"))
+def test_id_map_is_a_vectorised_mapping():
+    ids = IdMap(np.array([30, 10, 20], np.int64), np.array([3, 1, 2], np.int64))
+    assert dict(ids) == {10: 1, 20: 2, 30: 3} and len(ids) == 3
+    np.testing.assert_array_equal(ids.remap(np.array([20, -1, 5, 30])), [2, -1, -1, 3])
+    with pytest.raises(KeyError):
+        ids[5]
 
 
 def test_world_save_and_load(tmp_path):
@@ -151,3 +113,326 @@ def test_world_save_and_load(tmp_path):
     roots = [e for e in loaded.query(Name).entities() if loaded.get(e, Name).value == "root"]
     children = [e for e in loaded.query(Parent).entities() if loaded.get(e, Parent).entity != -1]
     assert len(roots) == 1 and loaded.get(children[0], Parent).entity == roots[0]
+
+
+# ----------------------------------------------------------------- resources and references
+def dressed(tmp_path) -> tuple[World, Registry, dict[str, int]]:
+    """A world with a textured material, an environment and four meshes: two primitives (by
+    reference), one normalized primitive, one made from arrays (by value)."""
+    world = World()
+    registry = Registry([torus_mesh(), sphere_mesh(12, 6), normalized(cube_mesh(), 3.0)])
+    registry.add(MeshData.from_arrays(np.eye(3), np.eye(3), [0, 1, 2], "triangle"))
+    mats = materials(world)
+    pixels = np.random.default_rng(1).integers(0, 256, (16, 16, 4), dtype=np.uint8)
+    shiny = mats.add(Material("shiny", metallic=1.0, base_color_texture=mats.textures.add(Texture("noise", pixels))))
+    world.resources[Environment] = Environment("sky.hdr", intensity=2.0, sky=False)
+    world.resources[object] = "not a scene's"  # a resource no codec saves
+    named = {
+        "ball": world.spawn(Transform(), Mesh(handle=1, material=shiny)),
+        "tri": world.spawn(Transform(), Mesh(handle=3, material=4)),
+        "box": world.spawn(Transform(), Mesh(handle=2)),
+    }
+    return world, registry, named
+
+
+def test_materials_environment_and_meshes_round_trip(tmp_path):
+    world, registry, named = dressed(tmp_path)
+    path = tmp_path / "dressed.scene"
+    save_world(world, path, resources=scene_codecs(registry))
+    with zipfile.ZipFile(path) as archive:
+        header = json.loads(archive.read("header.json"))
+    assert header["not_saved"] == ["builtins.object"]
+    meshes = {m["handle"]: m for m in next(r for r in header["resources"] if r["name"] == "meshes")["doc"]["meshes"]}
+    assert sorted(meshes) == [1, 2, 3]  # the torus is in the registry but no entity uses it
+    assert meshes[1]["source"] == {"primitive": "sphere", "args": {"segments": 12, "rings": 6, "radius": 0.5}}
+    assert meshes[2]["source"] == {"normalized": 3.0, "of": {"primitive": "cube", "args": {}}}
+    assert meshes[3]["source"] is None  # made from arrays: saved by value
+
+    target = World()
+    other = materials(target).add(Material("theirs", model="lambert"))
+    materials(target).add(Material("theirs", model="lambert"))  # equal materials: handles still count
+    their_meshes = Registry([cube_mesh(), torus_mesh()])  # handles 0 and 1 taken: 1, 2, 3 move up
+    _, ids = load_world(path, target, resources=scene_codecs(their_meshes))
+    ball, tri, box = (target.get(ids[named[k]], Mesh) for k in ("ball", "tri", "box"))
+    assert materials(target)[other].name == "theirs" and len(materials(target)) == 9  # palette, theirs x2, shiny
+    got = materials(target)[ball.material]
+    assert got.name == "shiny" and got.metallic == 1.0 and tri.material == 4  # the palette is shared
+    texture = materials(target).textures[got.base_color_texture]
+    np.testing.assert_array_equal(texture.pixels, materials(world).textures[0].pixels)
+    for mesh, handle in ((ball, 1), (tri, 3), (box, 2)):
+        mine, theirs = registry[handle], their_meshes[mesh.handle]
+        assert mesh.handle == handle + 1 and mine.name == theirs.name
+        np.testing.assert_array_equal(mine.positions, theirs.positions)
+        np.testing.assert_array_equal(mine.indices, theirs.indices)
+    assert target.resources[Environment].source == "sky.hdr" and target.resources[Environment].intensity == 2.0
+    assert object not in target.resources
+
+
+def test_an_environment_of_pixels_and_meshes_by_value(tmp_path):
+    world = World()
+    sky = np.random.default_rng(2).random((8, 16, 3)).astype(np.float32)
+    world.resources[Environment] = Environment(sky, ambient=False, size=16)
+    registry = Registry([sphere_mesh()])
+    world.spawn(Transform(), Mesh(handle=0))
+    path = tmp_path / "sky.scene"
+    save_world(world, path, resources=[*scene_codecs(), MeshReferences(registry, by_value=True)])
+    target, theirs = World(), Registry()
+    load_world(path, target, resources=scene_codecs(theirs))
+    env = target.resources[Environment]
+    np.testing.assert_array_equal(env.source, sky)
+    assert (env.ambient, env.size) == (False, 16)
+    np.testing.assert_array_equal(theirs[0].normals, registry[0].normals)
+
+
+def test_a_resource_without_its_codec_is_refused(tmp_path):
+    world, registry, _ = dressed(tmp_path)
+    save_world(world, tmp_path / "d.scene", resources=scene_codecs(registry))
+    target = World()
+    with pytest.raises(SceneFileError, match="no codec was given for its resource 'meshes'"):
+        load_world(tmp_path / "d.scene", target)  # the registered codecs: materials, environment
+    assert len(target) == 0 and not target.resources
+
+
+def test_the_scaling_scene_round_trips(tmp_path):
+    from ecs_engine.demos.scaling import build
+
+    world, registry = World(), Registry()
+    build(world, registry.add, entities=2_000)
+    save_world(world, tmp_path / "s.scene", resources=scene_codecs(registry))
+    loaded, theirs = World(), Registry()
+    _, ids = load_world(tmp_path / "s.scene", loaded, resources=scene_codecs(theirs))
+    before, after = columns(world), columns(loaded)
+    assert before.keys() == after.keys() and len(loaded) == len(world) > 2_000  # camera, lights
+    for key in before:
+        if key[1] != "Mesh":
+            np.testing.assert_array_equal(before[key], after[key], err_msg=str(key))
+    handles = [(world.get(e, Mesh).handle, loaded.get(ids[e], Mesh).handle) for e in world.query(Mesh).entities()]
+    for mine, new in set(handles):
+        np.testing.assert_array_equal(registry[mine].positions, theirs[new].positions)
+    assert {registry[h].name for h, _ in handles} == {"cube", "torus_knot"}
+
+
+class Health(Component):
+    scene_name = "game.Health"
+    hp = Field(np.float32, default=100.0, minimum=0.0)
+
+
+def test_a_component_is_found_by_its_scene_name(tmp_path):
+    world = World()
+    world.spawn(Health(hp=7.0))
+    save_world(world, tmp_path / "h.scene")
+    with zipfile.ZipFile(tmp_path / "h.scene") as archive:
+        assert json.loads(archive.read("header.json"))["tables"][0]["components"] == ["game.Health"]
+    loaded, _ = load_world(tmp_path / "h.scene", World(), components=[Health])
+    assert loaded.get(loaded.entities()[0], Health).hp == 7.0
+    with pytest.raises(SceneFileError, match=r"unknown component 'game\.Health'"):
+        load_world(tmp_path / "h.scene", World(), components={})
+
+
+# ------------------------------------------------------------------------------ bad files
+def members_of(path) -> tuple[dict, dict]:
+    with zipfile.ZipFile(path) as archive:
+        members = {name: archive.read(name) for name in archive.namelist()}
+    return json.loads(members.pop("header.json")), members
+
+
+def write_zip(path, header, members, extra=(), compression=zipfile.ZIP_STORED) -> None:
+    with zipfile.ZipFile(path, "w", compression) as archive:
+        archive.writestr("header.json", json.dumps(header))
+        for name, data in [*members.items(), *extra]:
+            archive.writestr(name, data)
+
+
+def column(header, component, field) -> str:
+    for table in header["tables"]:
+        for c in table["columns"]:
+            if c["field"] == field and c["component"].endswith(component):
+                return c["member"]
+    raise KeyError(field)
+
+
+def npy(descr: str, shape: tuple, data: bytes) -> bytes:
+    out = io.BytesIO()
+    np.lib.format.write_array_header_1_0(out, {"descr": descr, "fortran_order": False, "shape": shape})
+    return out.getvalue() + data
+
+
+def nan_last(h, m):  # the last table's last position: the tables before it spawn, then roll back
+    member = column({"tables": h["tables"][-1:]}, "Transform", "position")
+    m[member] = m[member][:-8] + np.array([np.nan]).tobytes()
+
+
+def rows(n):
+    def change(h, m):
+        h["tables"][0]["rows"] = n
+        ids = io.BytesIO(m[h["tables"][0]["ids"]])
+        np.lib.format.read_magic(ids)
+        np.lib.format.read_array_header_1_0(ids)  # what is left: the data
+        m[h["tables"][0]["ids"]] = npy("<i8", (n,), ids.read())
+
+    return change
+
+
+BAD = {
+    "newer version": (lambda h, m: h.update(version=3), "format version 3"),
+    "wrong magic": (lambda h, m: h.update(format="zip"), "not a scene file"),
+    "unknown component": (lambda h, m: h["tables"][0]["components"].append("nowhere.Thing"), "unknown component"),
+    "missing member": (lambda h, m: m.pop(h["tables"][0]["ids"]), "is missing"),
+    "extra member": (lambda h, m: m.update({"stray.npy": b"x"}), "stray.npy is not in the header"),
+    "rows disagree": (lambda h, m: h["tables"][0].update(rows=301), r"expected int64 \(301,\)"),
+    "dtype disagrees": (lambda h, m: h["tables"][0]["columns"][0].update(dtype="<f2"), "the field is not"),
+    "count disagrees": (lambda h, m: h.update(entities=7), "counts 7 entities"),
+    "10^12 rows in the header": (lambda h, m: h["tables"][0].update(rows=10**12), "expected int64"),
+    "10^12 rows in both": (rows(10**12), "does not hold"),
+    "object dtype": (lambda h, m: m.update({h["tables"][0]["ids"]: npy("|O", (300,), b"")}), "Python objects"),
+    "NaN in a transform": (nan_last, "Transform.position must be finite"),
+    "one member twice": (lambda h, m: h["tables"][1].update(ids=h["tables"][0]["ids"]), "named twice"),
+    "same ids": (lambda h, m: m.update({h["tables"][1]["ids"]: m[h["tables"][2]["ids"]]}), "not unique"),
+    "empty header": (lambda h, m: h.clear(), "not a scene file"),
+    "mistyped header": (lambda h, m: h["tables"][0].update(columns={}), "lacks rows, components or columns"),
+    "unknown resource": (lambda h, m: h["resources"].append({"name": "x", "arrays": {}}), "resource 'x'"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_a_bad_file_is_one_clear_error_and_changes_nothing(tmp_path, case):
+    world, _ = sample()
+    path = tmp_path / "level.scene"
+    save_world(world, path)
+    header, members = members_of(path)
+    change, message = BAD[case]
+    change(header, members)
+    write_zip(tmp_path / "bad.scene", header, members)
+    target = World()
+    target.spawn_batch(3, Transform(), Parent())
+    before = state(target)
+    with pytest.raises(SceneFileError, match=message):
+        load_world(tmp_path / "bad.scene", target)
+    assert state(target) == before
+
+
+def test_hostile_archives(tmp_path):
+    world, _ = sample()
+    path = tmp_path / "level.scene"
+    save_world(world, path)
+    header, members = members_of(path)
+    cases = {
+        "escaping name": ([("../evil.npy", b"x")], "leaves the archive"),
+        "absolute name": ([("/etc/evil", b"x")], "leaves the archive"),
+        "duplicate member": ([(next(iter(members)), b"x")], "names a member twice"),
+    }
+    for name, (extra, message) in cases.items():
+        bad = tmp_path / f"{name}.scene"
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # zipfile warns of the duplicate name
+            write_zip(bad, header, members, extra)
+        with pytest.raises(SceneFileError, match=message):
+            load_world(bad, World())
+    with zipfile.ZipFile(tmp_path / "text.scene", "w") as archive:
+        archive.writestr("header.json", "{not json")
+    with pytest.raises(SceneFileError, match=r"header\.json is not JSON"):
+        load_world(tmp_path / "text.scene", World())
+    data = path.read_bytes()
+    at = data.index(b"tables/0/0.npy", data.index(b"PK\x01\x02")) - 46  # its central directory entry
+    (tmp_path / "bomb.scene").write_bytes(data[: at + 24] + struct.pack("<I", 0xFFFFFFF0) + data[at + 28 :])
+    with pytest.raises(SceneFileError, match="claims more than it holds"):  # 4 GB from a few bytes
+        load_world(tmp_path / "bomb.scene", World())
+    at = data.index(np.array([1.0, 2.0, 3.0]).tobytes())  # the root's position, one bit flipped
+    (tmp_path / "flipped.scene").write_bytes(data[:at] + bytes([data[at] ^ 1]) + data[at + 1 :])
+    with pytest.raises(SceneFileError, match="Bad CRC-32"):
+        load_world(tmp_path / "flipped.scene", World())
+    for name, content in (("truncated", data[: len(data) // 2]), ("garbage", b"not a zip at all"), ("empty", b"")):
+        (tmp_path / name).write_bytes(content)
+        with pytest.raises(SceneFileError, match="unreadable"):
+            load_world(tmp_path / name, World())
+
+
+def test_bad_resources_change_nothing(tmp_path):
+    world, registry, _ = dressed(tmp_path)
+    path = tmp_path / "d.scene"
+    save_world(world, path, resources=scene_codecs(registry))
+    header, members = members_of(path)
+    mats = next(r for r in header["resources"] if r["name"] == "materials")
+    mats["doc"]["materials"][-1]["model"] = "toon"
+    write_zip(tmp_path / "bad.scene", header, members)
+    target = World()
+    materials(target).add(Material("mine"))
+    before = state(target)
+    with pytest.raises(SceneFileError, match="unknown shading model 'toon'"):
+        load_world(tmp_path / "bad.scene", target, resources=scene_codecs(Registry()))
+    assert state(target) == before
+    header, members = members_of(path)
+    meshes = next(r for r in header["resources"] if r["name"] == "meshes")
+    meshes["doc"]["meshes"] = meshes["doc"]["meshes"][:1]  # a Mesh.handle with no saved mesh
+    meshes["arrays"] = {}
+    write_zip(tmp_path / "bad.scene", header, {k: v for k, v in members.items() if "mesh3_" not in k})
+    with pytest.raises(SceneFileError, match=r"Mesh\.handle [23] names nothing the scene saved"):
+        load_world(tmp_path / "bad.scene", target, resources=scene_codecs(Registry()))
+    assert state(target) == before
+    header, members = members_of(path)
+    meshes = next(r for r in header["resources"] if r["name"] == "meshes")
+    meshes["doc"]["meshes"][0]["source"]["args"]["segments"] = 10**6  # a billion vertices, were it made
+    write_zip(tmp_path / "bad.scene", header, members)
+    with pytest.raises(SceneFileError, match="segments = 1000000 is out of range"):
+        load_world(tmp_path / "bad.scene", target, resources=scene_codecs(Registry()))
+    assert state(target) == before
+
+
+def test_unit_fields_come_back_exact_and_a_non_unit_one_is_normalised(tmp_path):
+    world = World()
+    rotations = np.random.default_rng(3).normal(size=(1000, 4))
+    world.spawn_batch(1000, Transform(rotation=rotations))
+    save_world(world, tmp_path / "r.scene")
+    loaded, _ = load_world(tmp_path / "r.scene", World())
+    np.testing.assert_array_equal(rotations_of(loaded), rotations_of(world))
+    header, members = members_of(tmp_path / "r.scene")
+    member = column(header, "Transform", "rotation")
+    members[member] = members[member][: -4 * 8] + np.array([0.0, 0.0, 0.0, 2.0]).tobytes()
+    write_zip(tmp_path / "bad.scene", header, members)
+    loaded, _ = load_world(tmp_path / "bad.scene", World())
+    np.testing.assert_array_equal(rotations_of(loaded)[-1], (0.0, 0.0, 0.0, 1.0))
+
+
+def rotations_of(world: World) -> np.ndarray:
+    return columns(world)[(("Transform",), "Transform", "rotation")]
+
+
+def test_a_failed_save_keeps_the_old_file(tmp_path):
+    world, _ = sample()
+    path = tmp_path / "level.scene"
+    save_world(world, path)
+    data = path.read_bytes()
+
+    class Thing:
+        pass
+
+    world.spawn(Thing())  # an object column: no pickle-free form
+    with pytest.raises(SceneFileError, match=r"cannot save ThingStore\.value: it holds Python objects"):
+        save_world(world, path)
+
+    class Failing:
+        name, resource_types = "failing", ()
+
+        def save(self, world):
+            raise ValueError("no")
+
+    with pytest.raises(SceneFileError, match="resource 'failing': no"):
+        save_world(sample()[0], path, resources=[Failing()])
+    assert path.read_bytes() == data and [p.name for p in tmp_path.iterdir()] == ["level.scene"]
+    with pytest.raises(SceneFileError, match="cannot write"):
+        save_world(sample()[0], tmp_path / "missing" / "level.scene")
+    with world.deferred(), pytest.raises(SceneFileError, match="inside a system"):
+        save_world(world, path)
+
+
+def test_version_1_and_deflated_files_load(tmp_path):
+    world, named = sample()
+    save_world(world, tmp_path / "v2.scene")
+    header, members = members_of(tmp_path / "v2.scene")
+    write_zip(tmp_path / "deflated.scene", header, members, compression=zipfile.ZIP_DEFLATED)
+    header["version"] = 1
+    del header["resources"], header["not_saved"], header["engine"]
+    write_zip(tmp_path / "v1.scene", header, members)
+    for name in ("v1.scene", "deflated.scene"):
+        loaded, ids = load_world(tmp_path / name, World())
+        assert len(loaded) == len(world) and loaded.get(ids[named["child"]], Parent).entity == ids[named["root"]]

@@ -1,236 +1,499 @@
-"""Saved scenes: a world's entities as NumPy columns in one zip file with a JSON header. No
-pickle anywhere (arrays are read with allow_pickle=False), so a scene file cannot run code.
+"""Saved scenes: a world's entities as NumPy columns in one zip file with a JSON header. No pickle
+anywhere (arrays are read with allow_pickle=False, object dtypes are refused both ways), so
+opening a scene file cannot run code. docs/scene-format.md is the full specification.
 
-Format (version 1; docs/scene-format.md says the same):
-- `header.json`: {"format": "ecs_engine.scene", "version": 1, "entities": N, "tables": [...]},
-  each table {"components": [name, ...], "rows": n, "ids": member, "columns": [{"component":
-  name, "field": name, "dtype": str, "shape": [..], "member": name}, ...]}. A component's name is
-  its module and qualified class name.
-- one `.npy` member per column (shape (rows, *field shape)) and per table's saved ids.
+Format version 2 (version 1 files, without resources, load too): a zip archive, its members
+stored (floats barely compress; stored members go at disk speed; deflated ones are read too):
+- `header.json`: {"format": "ecs_engine.scene", "version": 2, "engine": "0.1.0", "entities": N,
+  "tables": [...], "resources": [...], "not_saved": [...]}. Per archetype table: "components"
+  (stable names, below), "rows", "ids" (member of its saved entity ids), "columns": per field
+  {"component", "field", "dtype" (numpy's dtype.str), "shape" (per entity), "member"}. Per
+  resource: {"name", "module", "doc" (JSON), "arrays": {key: {"member", "dtype", "shape"}}}.
+  "not_saved": the world's resources that no codec saved (JobPool, input state...).
+- one `.npy` member per column, shape (rows, *field shape), and per table's ids (int64).
 
-On load every table gets new ids (a world that already has entities keeps them), and every
-field declared `Field(..., entity=True)` is remapped from saved ids to the new ones (an id that
-named no saved entity becomes -1). Everything is checked before anything is spawned; values go
-through the component's own checks (spawn_batch); if any of that fails, what was spawned is
-destroyed and one SceneFileError says why: a failed load changes nothing. A save writes a
-temporary file beside the target and renames it, so a failed save leaves the old file.
+A component's stable name is its class's own `scene_name` attribute if any, else module and
+qualified name: the loader finds it among the Component subclasses imported (or `components=`).
 
-Not saved: resources (materials, the environment, ...) and object fields (a Python object has
-no pickle-free form): saving a world with an object field is refused, naming it.
+Loading gives every entity a new id (a world's own entities stay: nothing collides) and returns
+an IdMap, saved id -> new id; `Field(..., entity=True)` fields are rewritten to the new ids (-1
+for an id that named no saved entity). The whole file is checked before anything spawns; values
+then pass the components' own checks (spawn_batch). On any failure what was spawned is destroyed
+and one SceneFileError says why.
+
+Resources (materials, environment) and session assets (meshes) are saved by codecs plugged in
+here (ResourceCodec; render/scene_assets.py has the stock ones), so the core needs no renderer:
+a codec saves JSON plus arrays and, on load, may rewrite handle columns through lookup tables.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import os
+import re
+import secrets
 import zipfile
+from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass, field
+from importlib import metadata
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol, TypeVar
 
 import numpy as np
 
 from .errors import EcsError
-from .schema import Component, ObjectStore
+from .schema import Component
 
 FORMAT = "ecs_engine.scene"
-VERSION = 1
+VERSION = 2
+READS = (1, 2)  # format versions this engine loads
 HEADER_LIMIT = 16 << 20  # bytes of JSON header a scene may have
+DEFLATE_RATIO = 1100  # deflate never expands more than ~1032:1; a member claiming more is a bomb
+_MEMBER = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*(/[A-Za-z0-9_][A-Za-z0-9_.-]*)*\Z")  # no "..", "/x", "C:"
+_KEY = re.compile(r"[A-Za-z0-9_]{1,64}\Z")
+
+Remaps = dict[tuple[type[Component], str], np.ndarray]
+_T = TypeVar("_T")
+try:
+    _ENGINE = metadata.version("ecs_engine")
+except metadata.PackageNotFoundError:  # run from a checkout that is not installed
+    _ENGINE = "unknown"
 
 
 class SceneFileError(EcsError, ValueError):
-    """A scene file that cannot be saved or loaded; nothing was changed."""
+    """A scene file that cannot be saved or loaded; the world (and any old file) is unchanged."""
+
+
+@dataclass(frozen=True)
+class SavedResource:
+    """What a codec saves: a JSON-able document and named arrays (keys [A-Za-z0-9_], no objects)."""
+
+    doc: Any
+    arrays: Mapping[str, np.ndarray] = field(default_factory=dict)
+
+
+class PreparedResource(Protocol):
+    """A resource read and checked, not yet in the world."""
+
+    def remaps(self) -> Remaps: ...  # per (component, field): saved value -> target's (-1: none)
+
+    def commit(self, world: Any) -> None: ...  # into the world once every entity is placed; never fails
+
+
+class ResourceCodec(Protocol):
+    """How one resource (or session asset table) goes into a scene file and comes back."""
+
+    name: str  # its key in the header
+    resource_types: tuple[Any, ...]  # the world.resources keys it saves (for "not_saved")
+
+    def save(self, world: Any) -> SavedResource | None: ...  # None: nothing to save
+
+    # check `saved` and plan it against `world`, changing nothing there; ValueError if bad
+    def read(self, saved: SavedResource, world: Any) -> PreparedResource: ...
+
+
+_codecs: dict[str, ResourceCodec] = {}
+
+
+def register_codec(codec: ResourceCodec) -> None:
+    """Make `codec` one of the defaults of save_world and load_world (a later one of the same name
+    replaces it). render/scene_assets.py registers the materials and environment codecs."""
+    if not _KEY.match(codec.name):
+        raise ValueError(f"a codec's name is 1-64 of [A-Za-z0-9_], got {codec.name!r}")
+    _codecs[codec.name] = codec
+
+
+def registered_codecs() -> list[ResourceCodec]:
+    return list(_codecs.values())
 
 
 def component_name(ct: type[Component]) -> str:
-    return f"{ct.__module__}.{ct.__qualname__}"
+    """The name a scene file gives a component type (see the module docstring)."""
+    own = ct.__dict__.get("scene_name")
+    return own if isinstance(own, str) else f"{ct.__module__}.{ct.__qualname__}"
 
 
-def _known_components() -> dict[str, type[Component]]:
-    found: dict[str, type[Component]] = {}
+def known_components() -> dict[str, type[Component] | None]:
+    """Every Component subclass imported, by component_name (None where two share a name)."""
+    found: dict[str, type[Component] | None] = {}
     todo = list(Component.__subclasses__())
     while todo:
         ct = todo.pop()
-        found[component_name(ct)] = ct
         todo.extend(ct.__subclasses__())
+        if not any(f.is_object for f in ct.__fields__.values()):
+            name = component_name(ct)
+            found[name] = None if found.get(name, ct) is not ct else ct
     return found
 
 
-def save(world: Any, path: str | os.PathLike[str]) -> None:
-    """Write the world's entities to `path` (see the module docstring)."""
+class IdMap(Mapping[int, int]):
+    """Saved entity id -> new id, kept as sorted arrays (a dict of a million ints costs a second)."""
+
+    def __init__(self, saved: np.ndarray, new: np.ndarray, order: np.ndarray | None = None) -> None:
+        order = np.argsort(saved) if order is None else order
+        self.saved, self.new = saved[order], new[order]
+
+    def remap(self, ids: np.ndarray) -> np.ndarray:
+        """New ids for saved ones, vectorised; -1 where an id named no saved entity."""
+        ids = np.asarray(ids, np.int64)
+        if not len(self.saved):
+            return np.full(ids.shape, -1, np.int64)
+        at = np.minimum(np.searchsorted(self.saved, ids), len(self.saved) - 1)
+        return np.where(self.saved[at] == ids, self.new[at], -1)
+
+    def __getitem__(self, eid: int) -> int:
+        if (found := int(self.remap(np.array([eid], np.int64))[0])) < 0:
+            raise KeyError(eid)
+        return found
+
+    def __iter__(self) -> Iterator[int]:
+        return iter(self.saved.tolist())
+
+    def __len__(self) -> int:
+        return len(self.saved)
+
+
+# ------------------------------------------------------------------------------------- saving
+def save_world(world: Any, path: str | os.PathLike[str], *, resources: Iterable[ResourceCodec] | None = None) -> None:
+    """Write the world's entities, and what `resources` (default: the registered codecs) save, to
+    `path`. Written to a temporary file beside it and renamed, so a failed save keeps the old file."""
     target = Path(path)
-    tables, members = [], []
-    for k, table in enumerate(world.tables):
-        n = table.count
-        if not n:
-            continue
-        columns = []
+    if world.deferring:
+        raise SceneFileError("a scene cannot be saved from inside a system or a query loop")
+    members: list[tuple[str, np.ndarray]] = []
+    tables = []
+    for k, table in enumerate(t for t in world.tables if t.count):
+        n, columns = table.count, list[dict[str, Any]]()
         for ct in sorted(table.types, key=component_name):
-            if issubclass(ct, ObjectStore) or any(f.is_object for f in ct.__fields__.values()):
-                raise SceneFileError(f"{ct.__name__} holds Python objects: a scene file stores only NumPy columns")
-            for j, (name, f) in enumerate(ct.__fields__.items()):
-                member = f"t{k}/{component_name(ct)}/{j}.npy"
-                column = table.columns[(ct, name)][:n]
-                columns.append(
-                    {
-                        "component": component_name(ct),
-                        "field": name,
-                        "dtype": f.dtype.str,
-                        "shape": list(f.shape),
-                        "member": member,
-                    }
-                )
-                members.append((member, column))
-        ids_member = f"t{k}/ids.npy"
-        members.append((ids_member, table.entities[:n]))
-        tables.append(
-            {"components": sorted(map(component_name, table.types)), "rows": n, "ids": ids_member, "columns": columns}
-        )
-    header = {"format": FORMAT, "version": VERSION, "entities": sum(t["rows"] for t in tables), "tables": tables}
-    temporary = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+            for name, f in ct.__fields__.items():
+                why = "it holds Python objects, which only pickle could store (a scene file holds NumPy columns)"
+                _check(not f.is_object, target, f"cannot save {ct.__name__}.{name}: {why}")
+                member = f"tables/{k}/{len(columns)}.npy"
+                columns.append({"component": component_name(ct), "field": name} | _described(member, f.dtype, f.shape))
+                members.append((member, table.columns[(ct, name)][:n]))
+        members.append((f"tables/{k}/ids.npy", table.entities[:n]))
+        names = sorted(map(component_name, table.types))
+        tables.append({"components": names, "rows": n, "ids": f"tables/{k}/ids.npy", "columns": columns})
+    saved_resources, covered = [], set[Any]()
+    for codec in _chosen(resources):
+        covered.update(codec.resource_types)
+        try:
+            saved = codec.save(world)
+        except (ValueError, TypeError, KeyError) as exc:
+            raise SceneFileError(f"cannot save resource {codec.name!r}: {exc}") from None
+        if saved is None:
+            continue
+        arrays = {}
+        for key, array in saved.arrays.items():
+            array = np.asarray(array)
+            _check(bool(_KEY.match(key)) and not array.dtype.hasobject, target, f"{codec.name}: array {key!r}")
+            arrays[key] = _described(f"resources/{codec.name}/{key}.npy", array.dtype, array.shape)
+            members.append((arrays[key]["member"], array))
+        module = type(codec).__module__
+        saved_resources.append({"name": codec.name, "module": module, "doc": saved.doc, "arrays": arrays})
+    not_saved = sorted(_resource_name(key) for key in world.resources if key not in covered)
+    header = {"format": FORMAT, "version": VERSION, "engine": _ENGINE, "entities": sum(t["rows"] for t in tables)}
+    header |= {"tables": tables, "resources": saved_resources, "not_saved": not_saved}
     try:
-        with zipfile.ZipFile(temporary, "w", zipfile.ZIP_STORED) as archive:
-            archive.writestr("header.json", json.dumps(header))
-            for member, array in members:
-                with archive.open(member, "w", force_zip64=True) as out:
-                    np.lib.format.write_array(out, np.ascontiguousarray(array), allow_pickle=False)
+        text = json.dumps(header, allow_nan=False)
+    except (TypeError, ValueError) as exc:
+        raise SceneFileError(f"a resource's document is not plain JSON: {exc}") from None
+    _write(target, text, members)
+
+
+def _described(member: str, dtype: np.dtype, shape: tuple[int, ...]) -> dict[str, Any]:
+    return {"dtype": dtype.str, "shape": list(shape), "member": member}
+
+
+def _resource_name(key: Any) -> str:
+    return f"{key.__module__}.{key.__qualname__}" if isinstance(key, type) else repr(key)[:100]
+
+
+def _write(target: Path, header: str, members: list[tuple[str, np.ndarray]]) -> None:
+    temporary = target.with_name(f".{target.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
+    try:
+        with open(os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666), "wb") as raw:
+            with zipfile.ZipFile(raw, "w", zipfile.ZIP_STORED) as archive:
+                archive.writestr("header.json", header)
+                for member, array in members:
+                    with archive.open(member, "w", force_zip64=True) as out:
+                        np.lib.format.write_array(out, np.ascontiguousarray(array), allow_pickle=False)
         os.replace(temporary, target)
-    except BaseException:
+    except BaseException as exc:
         temporary.unlink(missing_ok=True)
+        if isinstance(exc, OSError):
+            raise SceneFileError(f"cannot write scene file {target}: {exc.strerror or exc}") from None
         raise
+
+
+def _chosen(resources: Iterable[ResourceCodec] | None) -> list[ResourceCodec]:
+    codecs = registered_codecs() if resources is None else list(resources)
+    names = [c.name for c in codecs]
+    if len(set(names)) != len(names):
+        raise SceneFileError(f"two resource codecs share a name: {sorted(names)}")
+    return codecs
+
+
+# ------------------------------------------------------------------------------------ loading
+@dataclass
+class _Table:
+    types: list[type[Component]]
+    ids: np.ndarray
+    values: dict[type[Component], dict[str, np.ndarray]]
+
+
+def load_world(
+    path: str | os.PathLike[str],
+    world: Any,
+    *,
+    resources: Iterable[ResourceCodec] | None = None,
+    components: Mapping[str, type[Component]] | Iterable[type[Component]] | None = None,
+) -> tuple[Any, IdMap]:
+    """Add the scene at `path` to `world` (World.load passes a new one). `resources`: the codecs
+    (default: the registered ones); `components`: name -> class, or classes (default: every
+    Component subclass imported). Returns the world and the IdMap. Raises SceneFileError and
+    changes nothing on a bad file."""
+    file = Path(path)
+    if world.deferring:
+        raise SceneFileError("a scene cannot be loaded from inside a system or a query loop")
+    known: Any = known_components() if components is None else components
+    if not isinstance(known, Mapping):
+        known = {component_name(ct): ct for ct in known}
+    codecs = {c.name: c for c in _chosen(resources)}
+    try:
+        with zipfile.ZipFile(file) as archive:
+            reader = _Reader(archive, file)
+            header = reader.header()
+            tables = [reader.table(k, spec, known) for k, spec in enumerate(header["tables"])]
+            saved = [reader.resource(spec) for spec in header["resources"]]
+            reader.all_used()
+    except SceneFileError:
+        raise
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, OSError, RuntimeError, NotImplementedError) as exc:
+        raise _fail(file, f"unreadable ({exc})") from None
+    except (ValueError, TypeError, KeyError) as exc:  # a value in the file that no check above caught
+        raise _fail(file, f"malformed ({exc})") from None
+    if header["entities"] != sum(len(t.ids) for t in tables):
+        raise _fail(file, f"the header counts {header['entities']} entities, its tables hold another number")
+    saved_ids = np.concatenate([t.ids for t in tables]) if tables else np.empty(0, np.int64)
+    order = np.argsort(saved_ids)
+    ordered = saved_ids[order]
+    if len(ordered) and (ordered[0] <= 0 or (ordered[1:] == ordered[:-1]).any()):
+        raise _fail(file, "its saved entity ids are not unique positive ids")
+    prepared = [_prepare(file, codecs, spec, world) for spec in saved]
+    remaps: Remaps = {}
+    for ready in prepared:
+        for key, table in ready.remaps().items():
+            if key in remaps:
+                raise _fail(file, f"two resources remap {key[0].__name__}.{key[1]}")
+            remaps[key] = np.asarray(table, np.int64)
+    for k, t in enumerate(tables):
+        _apply(file, k, t, remaps)
+    return world, _spawn(file, world, tables, (saved_ids, order), prepared)
+
+
+def _prepare(file: Path, codecs: dict[str, ResourceCodec], spec: tuple[str, str, SavedResource], world: Any) -> Any:
+    name, module, saved = spec
+    codec = codecs.get(name)
+    if codec is None:
+        why = f"no codec was given for its resource {name!r} (import {module[:100]} or pass resources=)"
+        raise _fail(file, why)
+    try:
+        return codec.read(saved, world)
+    except (ValueError, TypeError, KeyError, LookupError) as exc:
+        raise _fail(file, f"resource {name!r}: {exc}") from None
+
+
+def _apply(file: Path, k: int, table: _Table, remaps: Remaps) -> None:
+    """Rewrite handle columns through the codecs' lookup tables (saved value -> target's)."""
+    for (ct, name), lookup in remaps.items():
+        column = table.values.get(ct, {}).get(name)
+        if column is None or not len(column):
+            continue
+        ok = (column >= 0) & (column < len(lookup))
+        new = lookup[np.where(ok, column, 0)] if len(lookup) else np.full(len(column), -1, np.int64)
+        bad = ~ok | (new < 0)
+        if bad.any():
+            value = column[np.argmax(bad)]
+            raise _fail(file, f"table {k}: {ct.__name__}.{name} {value} names nothing the scene saved")
+        table.values[ct][name] = new.astype(column.dtype)
+
+
+def _spawn(file: Path, world: Any, tables: list[_Table], saved: tuple[np.ndarray, ...], prepared: list[Any]) -> IdMap:
+    """Spawn every table (entity fields as -1 first), then point the entity fields at the new
+    ids and commit the resources; on any failure destroy what was spawned."""
+    spawned: list[np.ndarray] = []
+    try:
+        for k, t in enumerate(tables):
+            bundle = []
+            for ct, fields in t.values.items():
+                safe = {n: (np.full(len(v), -1, np.int64) if ct.__fields__[n].entity else v) for n, v in fields.items()}
+                bundle.append(ct(**safe))
+            try:
+                spawned.append(world.spawn_batch(len(t.ids), *bundle))
+            except (EcsError, ValueError, TypeError) as exc:  # a value the component's checks refuse
+                names = ", ".join(ct.__name__ for ct in t.types) or "no components"
+                raise _fail(file, f"table {k} ({names}): {exc}") from None
+            _exact_units(world, t, spawned[-1])
+        ids = IdMap(saved[0], np.concatenate(spawned) if spawned else np.empty(0, np.int64), saved[1])
+        for t, new in zip(tables, spawned):
+            for ct, fields in t.values.items():
+                if any(ct.__fields__[n].entity for n in fields):
+                    full = {n: ids.remap(v) if ct.__fields__[n].entity else v for n, v in fields.items()}
+                    world.set(new, ct, **full)  # every field given: no per-entity partial check
+        for ready in prepared:
+            ready.commit(world)
+    except BaseException as exc:
+        for new in spawned:
+            world.destroy(new)
+        if isinstance(exc, (EcsError, ValueError, TypeError)) and not isinstance(exc, SceneFileError):
+            raise _fail(file, str(exc)) from exc
+        raise
+    return ids
+
+
+def _exact_units(world: Any, t: _Table, new: np.ndarray) -> None:
+    """Spawning normalised the unit fields (quaternions), which can move a row that was unit
+    already by an ulp: put back the saved rows that were unit to rounding, so a round trip is exact."""
+    table, row = world.locate(int(new[0])) if len(new) else (None, 0)
+    rows = slice(row, row + len(new))
+    if table is None or not np.array_equal(table.entities[rows], new):
+        return  # not placed as one run of rows: keep the normalised values
+    for ct, fields in t.values.items():
+        for name, saved in fields.items():
+            if ct.__fields__[name].unit:  # |q|^2 - 1 is about 2 (|q| - 1): within a few ulps of unit
+                unit = np.abs(np.einsum("...i,...i->...", saved, saved) - 1) <= 16 * np.finfo(saved.dtype).eps
+                np.copyto(table.columns[(ct, name)][rows], saved, where=unit[..., None])
 
 
 def _fail(path: Path, why: str) -> SceneFileError:
     return SceneFileError(f"scene file {path}: {why}")
 
 
-def _read_array(archive: zipfile.ZipFile, member: str, path: Path) -> np.ndarray:
-    """A member's array, its header checked against the member's size before any allocation."""
-    try:
-        info = archive.getinfo(member)
-    except KeyError:
-        raise _fail(path, f"member {member} is missing") from None
-    with archive.open(info) as data:
+def _check(ok: bool, path: Path, why: str) -> None:
+    if not ok:
+        raise _fail(path, why)
+
+
+def _need(value: _T | None, path: Path, why: str) -> _T:
+    if value is None:
+        raise _fail(path, why)
+    return value
+
+
+def _int(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and value >= 0
+
+
+class _Reader:
+    """Reads members of one archive, each checked before anything the size of its data is
+    allocated: names safe and used once, sizes within the archive, .npy headers as expected."""
+
+    def __init__(self, archive: zipfile.ZipFile, path: Path) -> None:
+        self.archive, self.path = archive, path
+        infos = archive.infolist()
+        names = [i.filename for i in infos]
+        _check(len(names) == len(set(names)), path, "it names a member twice")
+        for info in infos:
+            _check(bool(_MEMBER.match(info.filename)), path, f"member name {info.filename[:80]!r} leaves the archive")
+            _check(not info.flag_bits & 1, path, f"member {info.filename} is encrypted")
+            _check(info.compress_type in (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED), path, "an unknown compression")
+        size = path.stat().st_size
+        _check(sum(i.compress_size for i in infos) <= size, path, "its members overlap or claim more than it holds")
+        for info in infos:
+            stored = info.compress_type == zipfile.ZIP_STORED
+            limit = info.compress_size if stored else DEFLATE_RATIO * info.compress_size + 1024
+            _check(info.file_size <= limit, path, f"member {info.filename} claims more than it holds")
+        self.infos = {i.filename: i for i in infos}
+        self.used: set[str] = set()
+
+    def info(self, member: Any) -> zipfile.ZipInfo:
+        _check(isinstance(member, str) and member in self.infos, self.path, f"member {str(member)[:80]} is missing")
+        _check(member not in self.used, self.path, f"member {member} is named twice in the header")
+        self.used.add(member)
+        return self.infos[member]
+
+    def header(self) -> dict[str, Any]:
+        info = self.info("header.json")
+        _check(info.file_size <= HEADER_LIMIT, self.path, f"header.json is over {HEADER_LIMIT} bytes")
         try:
-            version = np.lib.format.read_magic(data)
-            read_header = (
-                np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
-            )
-            shape, fortran, dtype = read_header(data)
-        except (ValueError, OSError, EOFError) as exc:
-            raise _fail(path, f"member {member} is not a NumPy array ({exc})") from None
-        if dtype.hasobject:
-            raise _fail(path, f"member {member} holds Python objects")
-        if int(np.prod(shape, dtype=np.int64)) * dtype.itemsize > info.file_size:
-            raise _fail(path, f"member {member} claims {shape} of {dtype}, more than it holds")
-        raw = data.read()
-    count = int(np.prod(shape, dtype=np.int64))
-    if len(raw) < count * dtype.itemsize:
-        raise _fail(path, f"member {member} is truncated")
-    array = np.frombuffer(raw, dtype=dtype, count=count)
-    return array.reshape(shape, order="F" if fortran else "C").copy()
+            header = json.loads(self.archive.read(info))
+        except (ValueError, UnicodeDecodeError, RecursionError) as exc:
+            raise _fail(self.path, f"header.json is not JSON ({exc})") from None
+        _check(isinstance(header, dict) and header.get("format") == FORMAT, self.path, "not a scene file")
+        version = header.get("version")
+        _check(version in READS, self.path, f"format version {version!r}; this engine reads versions {READS}")
+        header.setdefault("resources", [])
+        ok = isinstance(header.get("tables"), list) and isinstance(header["resources"], list)
+        _check(ok and _int(header.get("entities")), self.path, "header.json lacks its entities, tables or resources")
+        return header
+
+    def array(self, member: Any, dtype: np.dtype | None, shape: tuple[int, ...] | None) -> np.ndarray:
+        """The member's array; its dtype and shape must be these (None: any, no objects)."""
+        info, path = self.info(member), self.path
+        with self.archive.open(info) as data:
+            try:
+                version = np.lib.format.read_magic(data)
+                _check(version in ((1, 0), (2, 0)), path, f"member {member} is .npy version {version}")
+                read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+                got_shape, fortran, got = read(data)
+            except (ValueError, OSError, EOFError, SyntaxError) as exc:
+                raise _fail(path, f"member {member} is not a NumPy array ({exc})") from None
+            _check(not got.hasobject, path, f"member {member} holds Python objects")
+            _check(got.itemsize > 0 and min(got_shape, default=0) >= 0, path, f"member {member} has no sizes")
+            expect = f"{dtype} {shape}" if dtype is not None else "no objects"
+            ok = (dtype is None or got == dtype) and (shape is None or tuple(got_shape) == shape)
+            _check(ok, path, f"member {member} is {got} {tuple(got_shape)}, expected {expect}")
+            nbytes = math.prod(got_shape) * got.itemsize
+            _check(nbytes == info.file_size - data.tell(), path, f"member {member} does not hold {got_shape} of {got}")
+            raw = data.read(nbytes)
+            _check(len(raw) == nbytes and not data.read(1), path, f"member {member} is truncated")
+        return np.frombuffer(raw, got).reshape(got_shape, order="F" if fortran else "C")
+
+    def table(self, k: int, spec: Any, known: Mapping[str, type[Component] | None]) -> _Table:
+        path = self.path
+        ok = isinstance(spec, dict) and _int(spec.get("rows")) and isinstance(spec.get("components"), list)
+        _check(ok and isinstance(spec.get("columns"), list), path, f"table {k} lacks rows, components or columns")
+        rows, types = spec["rows"], []
+        for name in spec["components"]:
+            ct = known.get(name) if isinstance(name, str) else None
+            if ct is None:
+                why = "two classes have that name" if name in known else "import the module that defines it first"
+                raise _fail(path, f"unknown component {str(name)[:200]!r} ({why})")
+            _check(ct not in types, path, f"table {k} names {name} twice")
+            types.append(ct)
+        ids = self.array(spec.get("ids"), np.dtype(np.int64), (rows,))
+        values: dict[type[Component], dict[str, np.ndarray]] = {ct: {} for ct in types}
+        for column in spec["columns"]:
+            ok = isinstance(column, dict) and isinstance(column.get("component"), str)
+            ct = known.get(column["component"]) if ok else None
+            ct = _need(ct if ct in values else None, path, f"table {k}: a column of no component of it: {column}"[:300])
+            field = column.get("field")
+            f = _need(ct.__fields__.get(field) if isinstance(field, str) else None, path, f"no field {field}"[:200])
+            _check(f.name not in values[ct], path, f"table {k}: {f.qualname} is given twice")
+            said = (column.get("dtype"), column.get("shape"))
+            _check(said == (f.dtype.str, list(f.shape)), path, f"table {k}: {f.qualname} is {said}, the field is not")
+            values[ct][f.name] = self.array(column.get("member"), f.dtype, (rows, *f.shape))
+        return _Table(types, ids, values)  # fields not saved get their defaults (a field added since)
+
+    def resource(self, spec: Any) -> tuple[str, str, SavedResource]:
+        ok = isinstance(spec, dict) and isinstance(spec.get("name"), str) and isinstance(spec.get("arrays"), dict)
+        _check(ok, self.path, f"a resource lacks its name or arrays: {str(spec)[:200]}")
+        arrays = {}
+        for key, said in spec["arrays"].items():
+            _check(isinstance(said, dict) and bool(_KEY.match(key)), self.path, f"resource array {key[:80]!r}")
+            array = self.array(said.get("member"), None, None)
+            same = [array.dtype.str, list(array.shape)] == [said.get("dtype"), said.get("shape")]
+            _check(same, self.path, f"resource array {key} is not the dtype and shape its header says")
+            arrays[key] = array
+        return spec["name"], str(spec.get("module", "?")), SavedResource(spec.get("doc"), arrays)
+
+    def all_used(self) -> None:
+        extra = sorted(set(self.infos) - self.used)
+        _check(not extra, self.path, f"member {extra[0] if extra else ''} is not in the header")
 
 
-def _header(archive: zipfile.ZipFile, path: Path) -> dict[str, Any]:
-    names = archive.namelist()
-    if len(names) != len(set(names)):
-        raise _fail(path, "it names a member twice")
-    if any(name.startswith(("/", "\\")) or ".." in name.split("/") for name in names):
-        raise _fail(path, "a member's name leaves the archive")
-    try:
-        info = archive.getinfo("header.json")
-    except KeyError:
-        raise _fail(path, "no header.json: not a scene file") from None
-    if info.file_size > HEADER_LIMIT:
-        raise _fail(path, f"header.json is {info.file_size} bytes, more than {HEADER_LIMIT}")
-    try:
-        header = json.loads(archive.read(info))
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise _fail(path, f"header.json is not JSON ({exc})") from None
-    if not isinstance(header, dict) or header.get("format") != FORMAT:
-        raise _fail(path, f"not a scene file (format is not {FORMAT!r})")
-    version = header.get("version")
-    if not isinstance(version, int) or version > VERSION or version < 1:
-        raise _fail(path, f"format version {version!r}; this engine reads versions 1 to {VERSION}")
-    if not isinstance(header.get("tables"), list):
-        raise _fail(path, "header.json has no list of tables")
-    return header
-
-
-def _table(archive: zipfile.ZipFile, spec: Any, known: dict[str, type[Component]], path: Path) -> tuple:
-    """One table's ids, component types and {component: {field: column}}, checked."""
-    try:
-        rows, names, columns, ids_member = int(spec["rows"]), list(spec["components"]), spec["columns"], spec["ids"]
-    except (KeyError, TypeError, ValueError):
-        raise _fail(path, "a table in header.json lacks rows, components, columns or ids") from None
-    types = []
-    for name in names:
-        if name not in known:
-            raise _fail(path, f"unknown component {name} (import the module that defines it first)")
-        types.append(known[name])
-    ids = _read_array(archive, str(ids_member), path)
-    if ids.dtype != np.int64 or ids.shape != (rows,):
-        raise _fail(path, f"table ids are {ids.dtype} {ids.shape}, expected int64 ({rows},)")
-    values: dict[type[Component], dict[str, np.ndarray]] = {ct: {} for ct in types}
-    for column in columns:
-        ct = known.get(str(column.get("component"))) if isinstance(column, dict) else None
-        if ct is None or ct not in values:
-            raise _fail(path, f"a column names a component outside its table: {column!r}"[:300])
-        field = ct.__fields__.get(str(column.get("field")))
-        if field is None:
-            raise _fail(path, f"{ct.__name__} has no field {column.get('field')!r}")
-        array = _read_array(archive, str(column.get("member")), path)
-        if array.dtype != field.dtype or array.shape != (rows, *field.shape):
-            raise _fail(
-                path, f"{field.qualname} is {array.dtype} {array.shape}, expected {field.dtype} {(rows, *field.shape)}"
-            )
-        values[ct][field.name] = array
-    for ct, got in values.items():
-        missing = set(ct.__fields__) - set(got)
-        if missing:
-            raise _fail(path, f"{ct.__name__} lacks its fields {sorted(missing)}")
-    return ids, values
-
-
-def load(path: str | os.PathLike[str], world: Any) -> tuple[Any, dict[int, int]]:
-    """Load the scene at `path` into `world` (World.load makes a new one). Returns the world and
-    the map from saved ids to new ids. Raises SceneFileError (and changes nothing) on a bad file."""
-    file = Path(path)
-    if world.deferring:
-        raise SceneFileError("a scene cannot be loaded from inside a system or a query loop")
-    try:
-        with zipfile.ZipFile(file) as archive:
-            header = _header(archive, file)
-            known = _known_components()
-            tables = [_table(archive, spec, known, file) for spec in header["tables"]]
-    except (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, OSError) as exc:
-        raise _fail(file, f"unreadable ({exc})") from None
-    spawned: list[np.ndarray] = []
-    mapping: dict[int, int] = {}
-    try:
-        for ids, values in tables:
-            bundle = []
-            for ct, fields in values.items():
-                safe = {n: (np.full_like(v, -1) if ct.__fields__[n].entity else v) for n, v in fields.items()}
-                bundle.append(ct(**safe))
-            new = world.spawn_batch(len(ids), *bundle)
-            spawned.append(new)
-            mapping.update(zip(ids.tolist(), new.tolist()))
-        old_ids = np.fromiter(mapping.keys(), np.int64, len(mapping))
-        new_ids = np.fromiter(mapping.values(), np.int64, len(mapping))
-        order = np.argsort(old_ids)
-        old_sorted, new_sorted = old_ids[order], new_ids[order]
-        for (_, values), new in zip(tables, spawned):
-            for ct, fields in values.items():
-                remapped = {}
-                for name, column in fields.items():
-                    if ct.__fields__[name].entity:
-                        at = np.minimum(np.searchsorted(old_sorted, column), max(len(old_sorted) - 1, 0))
-                        hit = (len(old_sorted) > 0) & (old_sorted[at] == column)
-                        remapped[name] = np.where(hit, new_sorted[at], -1)
-                if remapped and len(new):
-                    world.set(new, ct, **remapped)
-    except (EcsError, ValueError, TypeError) as exc:
-        for ids in spawned:
-            world.destroy(ids)
-        raise _fail(file, str(exc)) from None
-    return world, mapping
+# the names World.save and World.load call
+save = save_world
+load = load_world

@@ -11,6 +11,7 @@ where a normal map's green channel points (MikkTSpace in OpenGL's v-up coordinat
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -51,6 +52,10 @@ class MeshData:
     radius: float
     uvs: np.ndarray = None  # type: ignore[assignment]  # (V, 2) float32; None: zeros
     tangents: np.ndarray = None  # type: ignore[assignment]  # (V, 4) float32; None: made by tangent_frames
+    # How to make this mesh again, as JSON (saved scenes refer to the mesh by it instead of copying
+    # its arrays; render/scene_assets.py): {"primitive": name, "args": {...}}, {"file": path} or
+    # {"normalized": size, "of": source}; None: unknown. Treat it as read-only.
+    source: dict[str, Any] | None = None
 
     def __post_init__(self) -> None:
         for field, dtype in (
@@ -106,12 +111,14 @@ class MeshData:
         name: str,
         uvs: np.ndarray | None = None,
         tangents: np.ndarray | None = None,
+        source: dict[str, Any] | None = None,
     ) -> MeshData:
         """Validate and freeze the arrays and compute the bounding sphere (and, when not given,
         the tangents from the texture coordinates)."""
         positions = _frozen(positions, np.float32, "positions")
         center, radius = bounding_sphere(positions)
-        return cls(positions, normals, np.asarray(indices).reshape(-1), name, center, radius, uvs, tangents)  # type: ignore[arg-type]
+        indices = np.asarray(indices).reshape(-1)
+        return cls(positions, normals, indices, name, center, radius, uvs, tangents, source)  # type: ignore[arg-type]
 
     @property
     def vertex_count(self) -> int:
@@ -163,9 +170,17 @@ def normalized_together(meshes: list[MeshData], size: float = 1.0) -> list[MeshD
     hi = np.max([m.positions.astype(np.float64).max(0) for m in meshes], axis=0)
     extent = float((hi - lo).max())
     scale = size / extent if extent > 0 else 1.0
+    # one mesh alone: its source and the size make it again (parts moved together do not)
+    source = {"normalized": float(size), "of": meshes[0].source} if len(meshes) == 1 and meshes[0].source else None
     return [
         MeshData.from_arrays(
-            (m.positions.astype(np.float64) - (lo + hi) / 2) * scale, m.normals, m.indices, m.name, m.uvs, m.tangents
+            (m.positions.astype(np.float64) - (lo + hi) / 2) * scale,
+            m.normals,
+            m.indices,
+            m.name,
+            m.uvs,
+            m.tangents,
+            source,
         )
         for m in meshes
     ]

@@ -9,6 +9,8 @@ cube's, a cylinder's rims) have their own vertices so normals stay flat there.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from .mesh_data import MeshData
@@ -25,6 +27,11 @@ def _grid_indices(rows: int, cols: int, first: int = 0) -> np.ndarray:
     d = a + cols + 1  # (row + 1, col)
     e = d + 1
     return np.stack([a, d, b, b, d, e], axis=-1).reshape(-1)
+
+
+def _source(name: str, **args: Any) -> dict[str, Any]:
+    """The recipe a saved scene keeps instead of the arrays (MeshData.source): maker and arguments."""
+    return {"primitive": name, "args": {k: v.item() if isinstance(v, np.generic) else v for k, v in args.items()}}
 
 
 def _checked(count: int, name: str, least: int) -> int:
@@ -53,7 +60,9 @@ def cube_mesh() -> MeshData:
                 normals.append(n)
                 uvs.append(((du + 1) / 2, (1 - dv) / 2))  # +v in space is up the image
             indices += [base, base + 1, base + 2, base, base + 2, base + 3]
-    return MeshData.from_arrays(np.array(positions), np.array(normals), np.array(indices), "cube", np.array(uvs))
+    return MeshData.from_arrays(
+        np.array(positions), np.array(normals), np.array(indices), "cube", np.array(uvs), source=_source("cube")
+    )
 
 
 def sphere_mesh(segments: int = 32, rings: int = 16, radius: float = 0.5) -> MeshData:
@@ -71,7 +80,12 @@ def sphere_mesh(segments: int = 32, rings: int = 16, radius: float = 0.5) -> Mes
     p = normals[tris]
     area = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
     return MeshData.from_arrays(
-        normals * radius, normals, tris[area > 1e-12], "sphere", np.stack([u.ravel(), v.ravel()], -1)
+        normals * radius,
+        normals,
+        tris[area > 1e-12],
+        "sphere",
+        np.stack([u.ravel(), v.ravel()], -1),
+        source=_source("sphere", segments=segments, rings=rings, radius=radius),
     )
 
 
@@ -86,7 +100,10 @@ def plane_mesh(size: float = 1.0, subdivisions: int = 1) -> MeshData:
     positions = np.stack([(u - 0.5) * size, np.zeros_like(u), (v - 0.5) * size], -1).reshape(-1, 3)
     normals = np.tile([0.0, 1.0, 0.0], (len(positions), 1))
     tris = _grid_indices(n, n).reshape(-1, 3)  # seen from +Y: +X right, +Z down the image
-    return MeshData.from_arrays(positions, normals, tris, "plane", np.stack([u.ravel(), v.ravel()], -1))
+    uvs = np.stack([u.ravel(), v.ravel()], -1)
+    return MeshData.from_arrays(
+        positions, normals, tris, "plane", uvs, source=_source("plane", size=size, subdivisions=subdivisions)
+    )
 
 
 def _cap(y: float, radius: float, segments: int, first: int) -> tuple[np.ndarray, ...]:
@@ -104,7 +121,12 @@ def _cap(y: float, radius: float, segments: int, first: int) -> tuple[np.ndarray
 
 
 def _solid_of_revolution(
-    name: str, radius_at: np.ndarray, heights: np.ndarray, slope: float, segments: int, caps: list[tuple[float, float]]
+    source: dict[str, Any],
+    radius_at: np.ndarray,
+    heights: np.ndarray,
+    slope: float,
+    segments: int,
+    caps: list[tuple[float, float]],
 ) -> MeshData:
     """A side surface through rings of radius `radius_at[i]` at `heights[i]` (top first), its normals
     tilted by `slope` (d radius / d height), plus flat caps (height, radius)."""
@@ -128,7 +150,12 @@ def _solid_of_revolution(
         parts_t.append(ct)
         first += len(cp)
     return MeshData.from_arrays(
-        np.concatenate(parts_p), np.concatenate(parts_n), np.concatenate(parts_t), name, np.concatenate(parts_uv)
+        np.concatenate(parts_p),
+        np.concatenate(parts_n),
+        np.concatenate(parts_t),
+        source["primitive"],
+        np.concatenate(parts_uv),
+        source=source,
     )
 
 
@@ -138,7 +165,7 @@ def cylinder_mesh(segments: int = 32, radius: float = 0.5, height: float = 1.0, 
     segments = _checked(segments, "segments", 3)
     h = height / 2
     return _solid_of_revolution(
-        "cylinder",
+        _source("cylinder", segments=segments, radius=radius, height=height, caps=caps),
         np.array([radius, radius]),
         np.array([h, -h]),
         0.0,
@@ -153,7 +180,8 @@ def cone_mesh(segments: int = 32, radius: float = 0.5, height: float = 1.0, ring
     segments, rings = _checked(segments, "segments", 3), _checked(rings, "rings", 1)
     t = np.linspace(0.0, 1.0, rings + 1)
     h = height / 2
-    return _solid_of_revolution("cone", radius * t, h - height * t, -radius / height, segments, [(-h, radius)])
+    source = _source("cone", segments=segments, radius=radius, height=height, rings=rings)
+    return _solid_of_revolution(source, radius * t, h - height * t, -radius / height, segments, [(-h, radius)])
 
 
 def torus_mesh(segments: int = 48, sides: int = 24, major: float = 0.35, minor: float = 0.15) -> MeshData:
@@ -169,7 +197,9 @@ def torus_mesh(segments: int = 48, sides: int = 24, major: float = 0.35, minor: 
     positions = (ring * major).reshape(-1, 3) + normals * minor
     u, v = np.meshgrid(np.linspace(0, 1, segments + 1), np.linspace(1, 0, sides + 1))  # rows run over the top
     tris = _grid_indices(sides, segments).reshape(-1, 3)[:, ::-1]
-    return MeshData.from_arrays(positions, normals, tris, "torus", np.stack([u.ravel(), v.ravel()], -1))
+    uvs = np.stack([u.ravel(), v.ravel()], -1)
+    source = _source("torus", segments=segments, sides=sides, major=major, minor=minor)
+    return MeshData.from_arrays(positions, normals, tris, "torus", uvs, source=source)
 
 
 #: name -> maker with its defaults, for scenes and the editor

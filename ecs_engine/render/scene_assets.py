@@ -1,0 +1,302 @@
+"""Saved scenes' render assets: the codecs (ecs/scene_file.py's ResourceCodec) that save a world's
+materials and environment and a session's meshes, kept out of the ECS core, which knows no
+renderer. Importing this module registers the two world codecs as defaults of World.save and
+World.load; meshes need the session's registry: `scene_codecs(session.meshes)`.
+
+- materials (`Materials` resource): every material as JSON (the dataclass's fields), texture
+  fields as indices into the saved textures, whose pixels are arrays (by value: a `Texture` does
+  not keep the file it came from). On load they join the target's materials (an equal material,
+  such as the default palette, is reused) and `Mesh.material` is rewritten to the new handles.
+- environment (`Environment` resource): its settings as JSON; a source that is a path (or six)
+  by reference, pixels as an array. Loading replaces the target's environment.
+- meshes (`Mesh.handle`, the session's MeshRegistry): per handle the entities use, its name,
+  counts and `MeshData.source` (a primitive and its arguments, a model file, normalized...) when
+  known, else its arrays. On load each is made again (or read), added to the registry (which
+  reuses an equal mesh) and `Mesh.handle` rewritten. The registry may gain meshes even when the
+  load then fails; the world does not change.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+
+from ..components.environment import Environment
+from ..components.mesh import Mesh
+from ..ecs.scene_file import Remaps, ResourceCodec, SavedResource, register_codec
+from .materials import DEFAULT_PALETTE, TEXTURE_FIELDS, Material, Materials, materials
+from .mesh_data import MeshData
+from .textures import Texture
+
+__all__ = ["EnvironmentCodec", "MaterialsCodec", "MeshReferences", "mesh_from_source", "scene_codecs"]
+
+MATERIAL_FIELDS = tuple(f.name for f in dataclasses.fields(Material))
+MAX_PRIMITIVE_COUNT = 1024  # segments, rings...: a hostile file cannot ask for a billion vertices
+
+
+def _doc(value: Any, kind: type, what: str) -> Any:
+    """`value` if it is a `kind` (a float may be written as an int; a bool is no number)."""
+    kinds = (int, float) if kind is float else kind
+    if not isinstance(value, kinds) or (isinstance(value, bool) and kind is not bool):
+        raise ValueError(f"{what} must be a {kind.__name__}, got {str(value)[:80]}")
+    return float(value) if isinstance(value, (int, float)) and kind is float else value
+
+
+@dataclass
+class _Prepared:
+    """A resource planned against the target world: lookup tables now, changes at commit."""
+
+    tables: Remaps
+    apply: Any  # (world) -> None
+
+    def remaps(self) -> Remaps:
+        return self.tables
+
+    def commit(self, world: Any) -> None:
+        self.apply(world)
+
+
+# ------------------------------------------------------------------------------- materials
+class MaterialsCodec:
+    name = "materials"
+    resource_types: tuple[Any, ...] = (Materials,)
+
+    def save(self, world: Any) -> SavedResource | None:
+        found: Materials | None = world.resources.get(Materials)
+        if found is None:
+            return None
+        textures: dict[int, int] = {}  # handle -> index among the saved ones
+        docs = []
+        for material in found:
+            doc = dataclasses.asdict(material)
+            for name in TEXTURE_FIELDS:
+                if doc[name] is not None:
+                    doc[name] = textures.setdefault(doc[name], len(textures))
+            docs.append(doc)
+        saved = [found.textures[h] for h in textures]
+        texture_docs = [{"name": t.name, "color": t.color} for t in saved]
+        arrays = {f"texture{i}": t.pixels for i, t in enumerate(saved)}
+        return SavedResource({"materials": docs, "textures": texture_docs}, arrays)
+
+    def read(self, saved: SavedResource, world: Any) -> _Prepared:
+        doc = _doc(saved.doc, dict, "the materials document")
+        texture_docs = _doc(doc.get("textures"), list, "textures")
+        textures = []
+        for i, t in enumerate(texture_docs):
+            t = _doc(t, dict, f"texture {i}")
+            pixels = saved.arrays.get(f"texture{i}")
+            if pixels is None or pixels.dtype != np.uint8 or pixels.ndim != 3 or pixels.shape[2] != 4:
+                raise ValueError(f"texture {i} has no RGBA8 pixels")
+            textures.append(Texture(str(t.get("name", "")), pixels, bool(_doc(t.get("color"), bool, "color"))))
+        target: Materials | None = world.resources.get(Materials)
+        have_textures = [] if target is None else [target.textures[h] for h in range(len(target.textures))]
+        new_textures, texture_handles = [], []
+        for t in textures:  # an equal texture already there is reused
+            same = [h for h, o in enumerate(have_textures) if _same_texture(o, t)]
+            if not same:
+                have_textures.append(t)
+                new_textures.append(t)
+            texture_handles.append(same[0] if same else len(have_textures) - 1)
+        existing = list(DEFAULT_PALETTE if target is None else target)  # what materials(world) will hold
+        have = {m: h for h, m in reversed(list(enumerate(existing)))}
+        new_materials: list[Material] = []
+        handles: list[int] = []
+        for i, m in enumerate(_doc(doc.get("materials"), list, "materials")):
+            fields = dict(_doc(m, dict, f"material {i}"))
+            unknown = set(fields) - set(MATERIAL_FIELDS)
+            if unknown:
+                raise ValueError(f"material {i} has unknown fields {sorted(unknown)[:5]}")
+            _doc(fields.get("name", ""), str, f"material {i}'s name")
+            for name in TEXTURE_FIELDS:
+                if fields.get(name) is not None:
+                    index = _doc(fields[name], int, f"material {i}'s {name}")
+                    if not 0 <= index < len(textures):
+                        raise ValueError(f"material {i}'s {name} names no saved texture ({index})")
+                    fields[name] = texture_handles[index]
+            material = Material(**fields)
+            if material not in have:  # an equal one (the default palette) is reused
+                have[material] = len(existing) + len(new_materials)
+                new_materials.append(material)
+            handles.append(have[material])
+
+        def apply(world: Any) -> None:
+            registry = materials(world)
+            for t in new_textures:
+                registry.textures.add(t)
+            for m in new_materials:
+                registry.add(m)
+
+        return _Prepared({(Mesh, "material"): np.array(handles, np.int64)}, apply)
+
+
+def _same_texture(a: Texture, b: Texture) -> bool:
+    return a.name == b.name and a.color == b.color and np.array_equal(a.pixels, b.pixels)
+
+
+# ----------------------------------------------------------------------------- environment
+class EnvironmentCodec:
+    name = "environment"
+    resource_types: tuple[Any, ...] = (Environment,)
+
+    def save(self, world: Any) -> SavedResource | None:
+        env: Environment | None = world.resources.get(Environment)
+        if env is None:
+            return None
+        size = None if env.size is None else int(env.size)
+        settings = {"intensity": env.intensity, "sky": bool(env.sky), "ambient": bool(env.ambient), "size": size}
+        if isinstance(env.source, np.ndarray):
+            return SavedResource(settings | {"source": {"pixels": "pixels"}}, {"pixels": env.source})
+        if isinstance(env.source, (str, Path)):
+            return SavedResource(settings | {"source": {"path": str(env.source)}})
+        return SavedResource(settings | {"source": {"paths": [str(p) for p in env.source]}})
+
+    def read(self, saved: SavedResource, world: Any) -> _Prepared:
+        doc = _doc(saved.doc, dict, "the environment document")
+        source = _doc(doc.get("source"), dict, "the environment's source")
+        if "pixels" in source:
+            value: Any = saved.arrays.get("pixels")
+            if value is None or value.dtype.kind not in "uf":
+                raise ValueError("the environment's pixels are missing or not numbers")
+        elif "path" in source:
+            value = _doc(source["path"], str, "the environment's path")
+        else:
+            value = [_doc(p, str, "an environment path") for p in _doc(source.get("paths"), list, "paths")]
+        size = doc.get("size")
+        env = Environment(
+            value,
+            _doc(doc.get("intensity"), float, "intensity"),
+            _doc(doc.get("sky"), bool, "sky"),
+            _doc(doc.get("ambient"), bool, "ambient"),
+            None if size is None else _doc(size, int, "size"),
+        )
+        return _Prepared({}, lambda world: world.resources.__setitem__(Environment, env))
+
+
+# ---------------------------------------------------------------------------------- meshes
+class MeshSource(Protocol):
+    """What MeshReferences needs of a mesh registry (MeshRegistry is one): the mesh (or an entry
+    with `.data`) at a handle, and `add`, which returns the handle of a mesh."""
+
+    def __getitem__(self, handle: int) -> Any: ...
+
+    def __len__(self) -> int: ...
+
+    def add(self, mesh: MeshData) -> int: ...
+
+
+class MeshReferences:
+    """Codec of the meshes that `Mesh.handle` names in `registry`. `by_value`: save every mesh's
+    arrays, even those whose source could make them again."""
+
+    name = "meshes"
+    resource_types: tuple[Any, ...] = ()
+
+    def __init__(self, registry: MeshSource, *, by_value: bool = False) -> None:
+        self.registry, self.by_value = registry, by_value
+
+    def save(self, world: Any) -> SavedResource | None:
+        used: set[int] = set()
+        for table in world.tables:
+            if table.count and table.has(Mesh):
+                column = table.columns[(Mesh, "handle")][: table.count]
+                top = int(column.max())
+                hits = np.flatnonzero(np.bincount(column, minlength=top + 1)) if top < 1 << 20 else np.unique(column)
+                used.update(hits.tolist())
+        entries, arrays = [], {}
+        for handle in sorted(used):
+            if handle >= len(self.registry):
+                raise ValueError(f"Mesh.handle {handle} is not a mesh of the registry ({len(self.registry)} meshes)")
+            mesh: MeshData = getattr(self.registry[handle], "data", self.registry[handle])
+            entry = {"handle": handle, "name": mesh.name, "vertices": mesh.vertex_count, "source": mesh.source}
+            if mesh.source is None or self.by_value:
+                entry["source"] = None
+                for part in ("positions", "normals", "indices", "uvs", "tangents"):
+                    arrays[f"mesh{handle}_{part}"] = getattr(mesh, part)
+            entries.append(entry)
+        return SavedResource({"meshes": entries}, arrays) if entries else None
+
+    def read(self, saved: SavedResource, world: Any) -> _Prepared:
+        doc = _doc(saved.doc, dict, "the meshes document")
+        made: dict[int, MeshData] = {}
+        for i, entry in enumerate(_doc(doc.get("meshes"), list, "meshes")):
+            entry = _doc(entry, dict, f"mesh {i}")
+            handle = _doc(entry.get("handle"), int, f"mesh {i}'s handle")
+            if not 0 <= handle < 1 << 20 or handle in made:
+                raise ValueError(f"mesh handle {handle} is out of range or saved twice")
+            if entry.get("source") is None:
+                made[handle] = _mesh_arrays(saved.arrays, handle, str(entry.get("name", "mesh")))
+            else:
+                made[handle] = mesh_from_source(entry["source"])
+                count = entry.get("vertices")
+                if _made_in_code(entry["source"]) and count != made[handle].vertex_count:
+                    raise ValueError(
+                        f"mesh {handle}: its source makes {made[handle].vertex_count} vertices, not {count}"
+                    )
+        lookup = np.full(max(made, default=-1) + 1, -1, np.int64)
+        for handle, mesh in made.items():
+            lookup[handle] = self.registry.add(mesh)  # the session's registry, not the world
+        return _Prepared({(Mesh, "handle"): lookup}, lambda world: None)
+
+
+def _mesh_arrays(arrays: Mapping[str, np.ndarray], handle: int, name: str) -> MeshData:
+    """A mesh saved by value."""
+    get = {p: arrays.get(f"mesh{handle}_{p}") for p in ("positions", "normals", "indices", "uvs", "tangents")}
+    positions, normals, indices = get["positions"], get["normals"], get["indices"]
+    if positions is None or normals is None or indices is None:
+        raise ValueError(f"mesh {handle} has neither a source nor its arrays")
+    return MeshData.from_arrays(positions, normals, indices, name, get["uvs"], get["tangents"])
+
+
+def _made_in_code(source: dict[str, Any]) -> bool:
+    """Whether the recipe makes the same mesh every time (no file that may have changed since)."""
+    return "primitive" in source or ("normalized" in source and _made_in_code(source.get("of") or {"file": 0}))
+
+
+def mesh_from_source(source: Any, depth: int = 0) -> MeshData:
+    """The mesh a MeshData.source recipe makes (ValueError for one that is not a recipe)."""
+    from .primitives import PRIMITIVES
+
+    source = _doc(source, dict, "a mesh source")
+    if depth > 8:
+        raise ValueError("a mesh source nested more than 8 deep")
+    if "primitive" in source:
+        maker = PRIMITIVES.get(source["primitive"])
+        args = _doc(source.get("args", {}), dict, "a primitive's args")
+        if maker is None:
+            raise ValueError(f"unknown primitive {str(source['primitive'])[:40]!r}; known: {', '.join(PRIMITIVES)}")
+        for key, value in args.items():
+            if not isinstance(value, (int, float)) or abs(value) > MAX_PRIMITIVE_COUNT:
+                raise ValueError(f"primitive argument {str(key)[:40]} = {str(value)[:40]} is out of range")
+        return maker(**args)
+    if "file" in source:
+        from ..errors import UsageError
+        from .mesh_loading import load_mesh
+
+        try:
+            mesh = load_mesh(_doc(source["file"], str, "a mesh file"))
+        except UsageError as exc:
+            raise ValueError(str(exc)) from None
+        return dataclasses.replace(mesh, source={"file": source["file"]})
+    if "normalized" in source:
+        from .mesh_data import normalized
+
+        size = _doc(source["normalized"], float, "a normalized size")
+        return normalized(mesh_from_source(source.get("of"), depth + 1), size)
+    raise ValueError(f"not a mesh source: {str(source)[:80]}")
+
+
+def scene_codecs(meshes: MeshSource | None = None) -> list[ResourceCodec]:
+    """Every stock codec, with the meshes of `meshes` (a session's MeshRegistry) when given."""
+    codecs: list[ResourceCodec] = [MaterialsCodec(), EnvironmentCodec()]
+    if meshes is not None:
+        codecs.append(MeshReferences(meshes))
+    return codecs
+
+
+register_codec(MaterialsCodec())
+register_codec(EnvironmentCodec())
