@@ -212,6 +212,54 @@ def test_the_scaling_scene_round_trips(tmp_path):
     assert {registry[h].name for h, _ in handles} == {"cube", "torus_knot"}
 
 
+def test_a_models_parts_and_its_textures_are_saved_by_reference(tmp_path):
+    """The model scene of a two-material OBJ: both parts (normalized together) and the texture its
+    .mtl names are recorded by file, not copied; they load equal; a file gone since is one error."""
+    from test_model_loading import png, write_obj
+
+    from ecs_engine.demos.model import build
+
+    obj = write_obj(tmp_path)
+    wood = png(tmp_path / "wood.png", (200, 120, 40, 255))
+    png(tmp_path / "normal.png", (128, 128, 255, 255))
+    world, registry = World(), Registry()
+    build(world, registry.add, str(obj))
+    path = tmp_path / "model.scene"
+    save_world(world, path, resources=scene_codecs(registry))
+    with zipfile.ZipFile(path) as archive:
+        header = json.loads(archive.read("header.json"))
+        members = archive.namelist()
+    docs = {r["name"]: r for r in header["resources"]}
+    sources = [m["source"] for m in docs["meshes"]["doc"]["meshes"]]
+    assert [s["part"] for s in sources] == [0, 1] and all(s["normalized_together"] == 2.0 for s in sources)
+    assert sources[0]["of"] == [{"file": str(obj.resolve()), "part": 0}, {"file": str(obj.resolve()), "part": 1}]
+    files = {t["file"] for t in docs["materials"]["doc"]["textures"]}
+    assert files == {str((tmp_path / "wood.png").resolve()), str((tmp_path / "normal.png").resolve())}
+    assert not docs["meshes"]["arrays"] and not docs["materials"]["arrays"]  # nothing by value
+    assert not any(m.startswith("resources/") for m in members)
+
+    loaded, theirs = World(), Registry()
+    _, ids = load_world(path, loaded, resources=scene_codecs(theirs))
+    for eid in world.query(Mesh).entities():
+        mine, new = world.get(eid, Mesh), loaded.get(ids[eid], Mesh)
+        np.testing.assert_array_equal(registry[mine.handle].positions, theirs[new.handle].positions)
+        np.testing.assert_array_equal(registry[mine.handle].uvs, theirs[new.handle].uvs)
+    textured = [materials(loaded)[loaded.get(ids[e], Mesh).material] for e in world.query(Mesh).entities()]
+    base = [m.base_color_texture for m in textured if m.base_color_texture is not None]
+    np.testing.assert_array_equal(materials(loaded).textures[base[0]].pixels, wood)
+
+    (tmp_path / "wood.png").unlink()
+    target = World()
+    with pytest.raises(SceneFileError, match="wood.png"):
+        load_world(path, target, resources=scene_codecs(Registry()))
+    assert len(target) == 0 and Materials not in target.resources
+    png(tmp_path / "wood.png", (200, 120, 40, 255))
+    obj.unlink()
+    with pytest.raises(SceneFileError, match="m.obj"):
+        load_world(path, target, resources=scene_codecs(Registry()))
+    assert len(target) == 0
+
+
 class Health(Component):
     scene_name = "game.Health"
     hp = Field(np.float32, default=100.0, minimum=0.0)

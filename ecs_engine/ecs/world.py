@@ -468,18 +468,20 @@ class World:
             system.last_run_tick = tick
 
     # ------------------------------------------------------------ scene files
-    def save(self, path: Any) -> None:
-        """Write the entities to a scene file (scene_file.py: the format; no pickle)."""
+    def save(self, path: Any, resources: Any = None) -> None:
+        """Write the entities, and what the `resources` codecs save (default: the registered ones),
+        to a scene file (scene_file.py: the format; no pickle)."""
         from .scene_file import save
 
-        save(self, path)
+        save(self, path, resources=resources)
 
     @classmethod
-    def load(cls, path: Any, into: World | None = None) -> World:
-        """The entities of a scene file, in a new world or `into` (SceneFileError: nothing changed)."""
+    def load(cls, path: Any, into: World | None = None, resources: Any = None) -> World:
+        """The entities of a scene file, in a new world or `into`, its resources read by the
+        `resources` codecs (default: the registered ones). SceneFileError: nothing changed."""
         from .scene_file import load
 
-        return load(path, cls() if into is None else into)[0]
+        return load(path, cls() if into is None else into, resources=resources)[0]
 
     # ----------------------------------------------------------------- events
     def events(self, kind: type) -> Events[Any]:

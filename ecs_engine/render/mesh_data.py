@@ -54,7 +54,8 @@ class MeshData:
     tangents: np.ndarray = None  # type: ignore[assignment]  # (V, 4) float32; None: made by tangent_frames
     # How to make this mesh again, as JSON (saved scenes refer to the mesh by it instead of copying
     # its arrays; render/scene_assets.py): {"primitive": name, "args": {...}}, {"file": path} or
-    # {"normalized": size, "of": source}; None: unknown. Treat it as read-only.
+    # {"file": path, "part": k} (a model's part), {"normalized": size, "of": source} or
+    # {"normalized_together": size, "of": [sources], "part": k}; None: unknown. Read-only.
     source: dict[str, Any] | None = None
 
     def __post_init__(self) -> None:
@@ -170,8 +171,13 @@ def normalized_together(meshes: list[MeshData], size: float = 1.0) -> list[MeshD
     hi = np.max([m.positions.astype(np.float64).max(0) for m in meshes], axis=0)
     extent = float((hi - lo).max())
     scale = size / extent if extent > 0 else 1.0
-    # one mesh alone: its source and the size make it again (parts moved together do not)
-    source = {"normalized": float(size), "of": meshes[0].source} if len(meshes) == 1 and meshes[0].source else None
+    # the sources and the size make them again (saved scenes): of one mesh, or of every part
+    sources: list[dict[str, Any] | None] = [None] * len(meshes)
+    if len(meshes) == 1 and meshes[0].source:
+        sources = [{"normalized": float(size), "of": meshes[0].source}]
+    elif all(m.source for m in meshes):
+        together = [m.source for m in meshes]
+        sources = [{"normalized_together": float(size), "of": together, "part": i} for i in range(len(meshes))]
     return [
         MeshData.from_arrays(
             (m.positions.astype(np.float64) - (lo + hi) / 2) * scale,
@@ -182,7 +188,7 @@ def normalized_together(meshes: list[MeshData], size: float = 1.0) -> list[MeshD
             m.tangents,
             source,
         )
-        for m in meshes
+        for m, source in zip(meshes, sources)
     ]
 
 

@@ -8,7 +8,7 @@ import io
 import json
 import os
 from pathlib import Path
-from typing import Final
+from typing import Any, Final
 
 import numpy as np
 
@@ -37,7 +37,7 @@ def load_mesh(path: str | os.PathLike[str], *, max_triangles: int | None = None)
     Any problem with the file (or more than `max_triangles` triangles) raises `UsageError` with one
     line naming the file, so the CLI can show it without a traceback."""
     file, parts, _ = read_parts(path, max_triangles)
-    return assemble(file, parts)
+    return assemble(file, parts, source={"file": str(file.resolve())})  # saved scenes name the file
 
 
 def read_parts(
@@ -213,9 +213,9 @@ def _transformed(
     return positions, faces, normals
 
 
-def assemble(file: Path, parts: list[Part], name: str | None = None) -> MeshData:
+def assemble(file: Path, parts: list[Part], name: str | None = None, source: dict[str, Any] | None = None) -> MeshData:
     """Drop zero-area triangles and unused vertices, fill in normals, build one MeshData of `parts`
-    (checked by read_parts)."""
+    (checked by read_parts); `source`: its MeshData.source."""
     everything = np.concatenate([p for p, _, _, _ in parts])
     size = float((everything.max(0) - everything.min(0)).max())
     has_uvs = any(uv is not None for _, _, _, uv in parts)
@@ -252,6 +252,7 @@ def assemble(file: Path, parts: list[Part], name: str | None = None) -> MeshData
         np.concatenate(out_i),
         name or file.stem,
         uvs=np.concatenate(out_uv) if has_uvs else None,
+        source=source,
     )
 
 

@@ -31,7 +31,7 @@ from .mesh_loading import assemble, read_parts
 from .mtl import MtlMaterial, mtl_libraries, read_mtl
 from .textures import ImageError, Texture, pixels_of
 
-__all__ = ["ModelPart", "load_model"]
+__all__ = ["ModelPart", "load_model", "model_part"]
 
 log = logging.getLogger("ecs_engine")
 
@@ -55,21 +55,40 @@ def load_model(
     path: str | os.PathLike[str], registry: Materials, *, max_triangles: int | None = None
 ) -> list[ModelPart]:
     """The file's parts, one per material, in file order. Geometry problems raise UsageError as
-    `load_mesh` does; material and texture problems only warn."""
+    `load_mesh` does; material and texture problems only warn. Each part's mesh records its
+    source ({"file", "part"}: saved scenes refer to it instead of copying it)."""
     file, parts, trimesh_materials = read_parts(path, max_triangles)
     converter = _converter(file, registry)
+    meshes = _part_meshes(file, parts, trimesh_materials)
+    return [ModelPart(mesh, None if material is None else converter(material)) for material, mesh in meshes]
+
+
+def model_part(path: str | os.PathLike[str], part: int) -> MeshData:
+    """Part `part` of the model at `path`, as load_model makes it (no materials read): what a
+    saved scene's {"file": path, "part": k} source names. UsageError for a part the file lacks."""
+    file, parts, trimesh_materials = read_parts(path)
+    meshes = _part_meshes(file, parts, trimesh_materials)
+    if not 0 <= part < len(meshes):
+        raise UsageError(f"{file}: has {len(meshes)} parts, not a part {part}")
+    return meshes[part][1]
+
+
+def _part_meshes(file: Path, parts: list[Any], trimesh_materials: list[object | None]) -> list[tuple[Any, MeshData]]:
+    """(trimesh material, mesh) per material, in file order; a material whose triangles are all
+    degenerate is left out (UsageError when all are)."""
     groups: dict[int, tuple[object | None, list[int]]] = {}
     for i, material in enumerate(trimesh_materials):
         groups.setdefault(id(material), (material, []))[1].append(i)
-    out = []
+    out: list[tuple[Any, MeshData]] = []
     error: UsageError | None = None
     for material, indices in groups.values():
         try:
-            mesh = assemble(file, [parts[i] for i in indices], f"{file.stem}:{_name(material) or 'default'}")
+            source = {"file": str(file.resolve()), "part": len(out)}
+            mesh = assemble(file, [parts[i] for i in indices], f"{file.stem}:{_name(material) or 'default'}", source)
         except UsageError as exc:  # this material's triangles are all degenerate: the others may not be
             error = exc
             continue
-        out.append(ModelPart(mesh, None if material is None else converter(material)))
+        out.append((material, mesh))
     if not out:
         assert error is not None
         raise error

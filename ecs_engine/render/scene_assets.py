@@ -19,6 +19,7 @@ World.load; meshes need the session's registry: `scene_codecs(session.meshes)`.
 from __future__ import annotations
 
 import dataclasses
+import json
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,7 +32,7 @@ from ..components.mesh import Mesh
 from ..ecs.scene_file import Remaps, ResourceCodec, SavedResource, register_codec
 from .materials import DEFAULT_PALETTE, TEXTURE_FIELDS, Material, Materials, materials
 from .mesh_data import MeshData
-from .textures import Texture
+from .textures import ImageError, Texture, read_image
 
 __all__ = ["EnvironmentCodec", "MaterialsCodec", "MeshReferences", "mesh_from_source", "scene_codecs"]
 
@@ -79,8 +80,8 @@ class MaterialsCodec:
                     doc[name] = textures.setdefault(doc[name], len(textures))
             docs.append(doc)
         saved = [found.textures[h] for h in textures]
-        texture_docs = [{"name": t.name, "color": t.color} for t in saved]
-        arrays = {f"texture{i}": t.pixels for i, t in enumerate(saved)}
+        texture_docs = [{"name": t.name, "color": t.color, "file": t.source} for t in saved]
+        arrays = {f"texture{i}": t.pixels for i, t in enumerate(saved) if t.source is None}  # by value
         return SavedResource({"materials": docs, "textures": texture_docs}, arrays)
 
     def read(self, saved: SavedResource, world: Any) -> _Prepared:
@@ -89,10 +90,8 @@ class MaterialsCodec:
         textures = []
         for i, t in enumerate(texture_docs):
             t = _doc(t, dict, f"texture {i}")
-            pixels = saved.arrays.get(f"texture{i}")
-            if pixels is None or pixels.dtype != np.uint8 or pixels.ndim != 3 or pixels.shape[2] != 4:
-                raise ValueError(f"texture {i} has no RGBA8 pixels")
-            textures.append(Texture(str(t.get("name", "")), pixels, bool(_doc(t.get("color"), bool, "color"))))
+            name, color = str(t.get("name", "")), _doc(t.get("color"), bool, "color")
+            textures.append(_texture(i, name, color, t.get("file"), saved.arrays.get(f"texture{i}")))
         target: Materials | None = world.resources.get(Materials)
         have_textures = [] if target is None else [target.textures[h] for h in range(len(target.textures))]
         new_textures, texture_handles = [], []
@@ -134,8 +133,22 @@ class MaterialsCodec:
         return _Prepared({(Mesh, "material"): np.array(handles, np.int64)}, apply)
 
 
+def _texture(i: int, name: str, color: bool, file: Any, pixels: np.ndarray | None) -> Texture:
+    """Saved texture `i`: read again from its file (by reference) or from its pixels (by value)."""
+    if file is not None:
+        path = Path(_doc(file, str, f"texture {i}'s file"))
+        try:
+            return Texture(name, read_image(path), color, str(path))
+        except ImageError as exc:
+            raise ValueError(f"texture {i} ({path}): {exc}") from None
+    if pixels is None or pixels.dtype != np.uint8 or pixels.ndim != 3 or pixels.shape[2] != 4:
+        raise ValueError(f"texture {i} has neither a file nor RGBA8 pixels")
+    return Texture(name, pixels, color)
+
+
 def _same_texture(a: Texture, b: Texture) -> bool:
-    return a.name == b.name and a.color == b.color and np.array_equal(a.pixels, b.pixels)
+    same_file = a.source is not None and a.source == b.source
+    return a.name == b.name and a.color == b.color and (same_file or np.array_equal(a.pixels, b.pixels))
 
 
 # ----------------------------------------------------------------------------- environment
@@ -223,6 +236,7 @@ class MeshReferences:
     def read(self, saved: SavedResource, world: Any) -> _Prepared:
         doc = _doc(saved.doc, dict, "the meshes document")
         made: dict[int, MeshData] = {}
+        cache: dict[str, Any] = {}  # a model file read once for all its parts
         for i, entry in enumerate(_doc(doc.get("meshes"), list, "meshes")):
             entry = _doc(entry, dict, f"mesh {i}")
             handle = _doc(entry.get("handle"), int, f"mesh {i}'s handle")
@@ -231,7 +245,7 @@ class MeshReferences:
             if entry.get("source") is None:
                 made[handle] = _mesh_arrays(saved.arrays, handle, str(entry.get("name", "mesh")))
             else:
-                made[handle] = mesh_from_source(entry["source"])
+                made[handle] = mesh_from_source(entry["source"], cache)
                 count = entry.get("vertices")
                 if _made_in_code(entry["source"]) and count != made[handle].vertex_count:
                     raise ValueError(
@@ -254,16 +268,35 @@ def _mesh_arrays(arrays: Mapping[str, np.ndarray], handle: int, name: str) -> Me
 
 def _made_in_code(source: dict[str, Any]) -> bool:
     """Whether the recipe makes the same mesh every time (no file that may have changed since)."""
-    return "primitive" in source or ("normalized" in source and _made_in_code(source.get("of") or {"file": 0}))
+    if "primitive" in source:
+        return True
+    of = source.get("of")
+    if "normalized" in source:
+        return isinstance(of, dict) and _made_in_code(of)
+    if "normalized_together" in source:
+        return isinstance(of, list) and all(isinstance(o, dict) and _made_in_code(o) for o in of)
+    return False
 
 
-def mesh_from_source(source: Any, depth: int = 0) -> MeshData:
-    """The mesh a MeshData.source recipe makes (ValueError for one that is not a recipe)."""
-    from .primitives import PRIMITIVES
-
+def mesh_from_source(source: Any, cache: dict[str, Any] | None = None, depth: int = 0) -> MeshData:
+    """The mesh a MeshData.source recipe makes (ValueError for one that is not a recipe).
+    `cache`: meshes made so far in this load, so a model's parts read its file once."""
+    cache = {} if cache is None else cache
     source = _doc(source, dict, "a mesh source")
     if depth > 8:
         raise ValueError("a mesh source nested more than 8 deep")
+    key = json.dumps(source, sort_keys=True)
+    if key not in cache:
+        cache[key] = _made(source, cache, depth)
+    made: MeshData = cache[key]
+    return made
+
+
+def _made(source: dict[str, Any], cache: dict[str, Any], depth: int) -> MeshData:
+    from ..errors import UsageError
+    from .mesh_data import normalized, normalized_together
+    from .primitives import PRIMITIVES
+
     if "primitive" in source:
         maker = PRIMITIVES.get(source["primitive"])
         args = _doc(source.get("args", {}), dict, "a primitive's args")
@@ -274,19 +307,30 @@ def mesh_from_source(source: Any, depth: int = 0) -> MeshData:
                 raise ValueError(f"primitive argument {str(key)[:40]} = {str(value)[:40]} is out of range")
         return maker(**args)
     if "file" in source:
-        from ..errors import UsageError
         from .mesh_loading import load_mesh
+        from .model_loading import model_part
 
+        file = _doc(source["file"], str, "a mesh file")
         try:
-            mesh = load_mesh(_doc(source["file"], str, "a mesh file"))
+            if "part" in source:
+                return model_part(file, _doc(source["part"], int, "a model part"))
+            return load_mesh(file)
         except UsageError as exc:
             raise ValueError(str(exc)) from None
-        return dataclasses.replace(mesh, source={"file": source["file"]})
     if "normalized" in source:
-        from .mesh_data import normalized
-
         size = _doc(source["normalized"], float, "a normalized size")
-        return normalized(mesh_from_source(source.get("of"), depth + 1), size)
+        return normalized(mesh_from_source(source.get("of"), cache, depth + 1), size)
+    if "normalized_together" in source:
+        size = _doc(source["normalized_together"], float, "a normalized size")
+        of = _doc(source.get("of"), list, "the parts normalized together")
+        part = _doc(source.get("part"), int, "a part")
+        if not 0 <= part < len(of):
+            raise ValueError(f"part {part} of {len(of)} parts normalized together")
+        key = json.dumps({"normalized_together": size, "of": of}, sort_keys=True)
+        if key not in cache:
+            cache[key] = normalized_together([mesh_from_source(o, cache, depth + 1) for o in of], size)
+        together: list[MeshData] = cache[key]
+        return together[part]
     raise ValueError(f"not a mesh source: {str(source)[:80]}")
 
 

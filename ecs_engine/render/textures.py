@@ -45,6 +45,7 @@ class Texture:
     name: str
     pixels: np.ndarray
     color: bool = True  # sRGB-encoded colour; False: linear data
+    source: str | None = None  # the image file it was read from (saved scenes name it); None: pixels only
 
     def __post_init__(self) -> None:
         pixels = np.asarray(self.pixels)
@@ -117,7 +118,7 @@ class Textures:
             log.warning("%s: %s; drawn with the fallback texture", file, exc)
             handle = self.fallback
         else:
-            handle = self.add(Texture(file.name, pixels, color))
+            handle = self.add(Texture(file.name, pixels, color, str(file.resolve())))
         self._by_file[key] = handle
         return handle
 
