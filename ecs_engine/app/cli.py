@@ -15,8 +15,8 @@ from ..errors import UsageError
 from ..gpu.swapchain import PRESENT_MODES
 from ..render.light_clusters import LIGHT_MODES
 from ..render.renderer import MODES, PATHS, RECORDER_NAMES
+from .scenes import SCENE_FILE_SUFFIX, SEED_SCENES, is_scene_file
 from .scenes import SCENES as RENDERED_SCENES
-from .scenes import SEED_SCENES
 from .settings import check_entities, check_threads
 
 
@@ -46,9 +46,15 @@ def dimension(text: str) -> int:
 
 
 def editor_scene(text: str) -> str:
+    """A demo scene's name or a saved scene file's path (ending in .scene)."""
     # a type, not choices=: argparse checks an empty nargs="*" list against choices and fails
+    if is_scene_file(text):
+        if not Path(text).is_file():
+            raise argparse.ArgumentTypeError(f"no scene file {text!r}")
+        return text
     if text not in EDITOR_SCENES:
-        raise argparse.ArgumentTypeError(f"invalid choice: {text!r} (choose from {', '.join(EDITOR_SCENES)})")
+        choices = f"{', '.join(EDITOR_SCENES)}, or a {SCENE_FILE_SUFFIX} file"
+        raise argparse.ArgumentTypeError(f"invalid choice: {text!r} (choose from {choices})")
     return text
 
 
@@ -175,7 +181,7 @@ def build_parser() -> argparse.ArgumentParser:
         type=editor_scene,
         metavar="SCENE",
         help=f"scenes to switch between, the first one opened (default {DEFAULT_SCENE}; "
-        f"choices: {', '.join(EDITOR_SCENES)})",
+        f"choices: {', '.join(EDITOR_SCENES)}, or a saved {SCENE_FILE_SUFFIX} file)",
     )
     from .play import add_parser as add_play_parser
 

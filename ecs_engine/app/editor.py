@@ -28,6 +28,7 @@ from ..render.path import FILL_MODES
 from ..render.renderer import MODES, PATHS, RECORDER_NAMES
 from ..render.tone_map import TONE_MAPS
 from .editor_dock import DockLayout
+from .editor_files import FileMenu
 from .editor_gizmo import OPERATIONS, Gizmo
 from .editor_history import History
 from .editor_lights import LIGHT_SECTIONS, ShadowMapImages
@@ -84,6 +85,7 @@ class Editor:
         self.gizmo = Gizmo()
         self.picked: int | None = None  # what the last click in the scene picked (None: nothing)
         self.tree = HierarchyPanel()
+        self.files = FileMenu()
 
     def show_shadow_maps(self, renderer: Renderer, overlay: ImGuiRenderer) -> None:
         """Show the shadow maps of `renderer` (render/renderer.py's Renderer) in the light sections,
@@ -120,6 +122,7 @@ class Editor:
     def draw(self, world: World, stats: SceneStats) -> None:
         """Build this frame's editor windows (between imgui.new_frame() and imgui.render())."""
         imgui = self.imgui
+        self.files.draw(imgui, world, self)  # the menu bar first: the dock space fits under it
         self.dock.begin()
         if self.shadow_maps is not None:
             self.shadow_maps.begin_frame()

@@ -12,6 +12,12 @@ SCENES = ("cube", "grid100", "model", "scaling", "materials", "lights", "shadows
 SEED_SCENES = SCENES[:3]  # the seed thesis's three: 1 cube, 100 cubes, an OBJ model
 
 SceneBuilder = Callable[..., None]  # build(world, add_mesh, path=None)
+SCENE_FILE_SUFFIX = ".scene"  # a saved scene (ecs/scene_file.py) opens where a scene name goes
+
+
+def is_scene_file(name: str) -> bool:
+    """Whether `name` is a scene file's path rather than a demo scene's name."""
+    return name not in SCENES and name.lower().endswith(SCENE_FILE_SUFFIX)
 
 
 def scene_builder(name: str, entities: int = 10_000, lights: int | None = None, shadows: bool = True) -> SceneBuilder:

@@ -13,6 +13,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
+from ..components.camera import active_camera
+from ..ecs.scene_file import load_world, save_world
 from ..ecs.schedule import Schedule
 from ..ecs.timestep import FixedTimestep
 from ..ecs.world import World
@@ -23,8 +25,9 @@ from ..render.light_clusters import check_light_culling
 from ..render.mesh_registry import MeshRegistry
 from ..render.oit_pass import check_transparency
 from ..render.renderer import Renderer
+from ..render.scene_assets import scene_codecs
 from ..render.tone_map import check_tone_map
-from .scenes import default_schedule, scene_builder
+from .scenes import default_schedule, is_scene_file, scene_builder
 from .settings import RunOptions, Settings
 
 
@@ -156,12 +159,22 @@ class Session:
         )
 
     def _build(self, scene: str, path: str | None) -> tuple[World, Schedule]:
-        """A new world for `scene` (sharing the run's pool and meshes) and its schedule."""
+        """A new world for `scene` (a demo scene's name or a scene file's path; sharing the run's
+        pool and meshes) and its schedule."""
         world = World()
         world.resources[JobPool] = self.pool
-        build = scene_builder(scene, self.options.entities, self.options.lights, self.options.shadows)
-        build(world, self.gpu.meshes.add, path)
+        if is_scene_file(scene):
+            load_world(scene, world, resources=scene_codecs(self.gpu.meshes))
+            active_camera(world)  # a scene without one is refused here, not at the first frame
+        else:
+            build = scene_builder(scene, self.options.entities, self.options.lights, self.options.shadows)
+            build(world, self.gpu.meshes.add, path)
         return world, default_schedule()
+
+    def save(self, path: str) -> None:
+        """Write the world to a scene file, its meshes, materials and environment by reference
+        where they can be made again (render/scene_assets.py). SceneFileError: the file is as it was."""
+        save_world(self.world, path, resources=scene_codecs(self.gpu.meshes))
 
     def apply(self, wanted: Settings) -> None:
         """Make `wanted` the settings in force, changing only what differs. All or nothing: what
