@@ -288,3 +288,22 @@ def test_camera_matrices_are_kept_while_the_camera_is_still_and_remade_when_it_c
     assert camera_matrices(w, 1.5).entity == other
     w.destroy(other)
     assert camera_matrices(w, 1.5).entity == e
+
+
+@pytest.mark.parametrize("lens", [perspective(1.0, 1.6, 0.1), orthographic(4.0, 1.6, 0.1, 50.0)])
+def test_a_region_projection_shows_the_lens_view_inside_the_region(lens):
+    """Every point lands in the region where the lens puts it in a whole target; depth is kept."""
+    from ecs_engine.maths.camera import region_projection
+
+    region = (0.25, 0.1, 0.75, 0.6)
+    full = region_projection(lens, region).astype(np.float64)
+    points = np.c_[np.random.default_rng(3).uniform(-2, 2, (50, 2)), -np.linspace(1, 20, 50), np.ones(50)]
+    a, b = points @ lens.astype(np.float64).T, points @ full.T
+    a, b = a[:, :3] / a[:, 3:], b[:, :3] / b[:, 3:]
+    fx, fy = (a[:, 0] + 1) / 2, (a[:, 1] + 1) / 2  # fractions of the region
+    np.testing.assert_allclose((b[:, 0] + 1) / 2, region[0] + fx * (region[2] - region[0]), atol=1e-5)
+    np.testing.assert_allclose((b[:, 1] + 1) / 2, region[1] + fy * (region[3] - region[1]), atol=1e-5)
+    np.testing.assert_allclose(b[:, 2], a[:, 2], rtol=1e-5)
+    for bad in [(0.5, 0.1, 0.5, 0.6), (-0.1, 0, 1, 1), (0, 0, 1, 1.5), (0.6, 0, 0.4, 1)]:
+        with pytest.raises(ValueError, match="a region is"):
+            region_projection(lens, bad)

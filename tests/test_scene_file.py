@@ -250,12 +250,12 @@ def test_a_models_parts_and_its_textures_are_saved_by_reference(tmp_path):
 
     (tmp_path / "wood.png").unlink()
     target = World()
-    with pytest.raises(SceneFileError, match="wood.png"):
+    with pytest.raises(SceneFileError, match=r"wood\.png"):
         load_world(path, target, resources=scene_codecs(Registry()))
     assert len(target) == 0 and Materials not in target.resources
     png(tmp_path / "wood.png", (200, 120, 40, 255))
     obj.unlink()
-    with pytest.raises(SceneFileError, match="m.obj"):
+    with pytest.raises(SceneFileError, match=r"m\.obj"):
         load_world(path, target, resources=scene_codecs(Registry()))
     assert len(target) == 0
 

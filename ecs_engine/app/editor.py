@@ -157,7 +157,7 @@ class Editor:
         eid = self.selected
         self.gizmo.used = False
         if eid is not None and world.is_alive(eid) and world.has(eid, Transform):
-            self.gizmo.draw(world, eid, self.history, width, height)
+            self.gizmo.draw(world, eid, self.history, self.dock.central or (0.0, 0.0, width, height))
         if not io.want_text_input:
             ctrl = imgui.Key.mod_ctrl
             if imgui.is_key_chord_pressed(ctrl | imgui.Key.z):
@@ -173,7 +173,8 @@ class Editor:
             from ..render.picking import pick
 
             mouse = io.mouse_pos
-            hit = pick(world, self.meshes, mouse.x, mouse.y, max(width, 1.0), max(height, 1.0))
+            size = (max(width, 1.0), max(height, 1.0))
+            hit = pick(world, self.meshes, mouse.x, mouse.y, *size, self.dock.region(*size))
             self.picked = None if hit is None else hit.entity
             if hit is not None:
                 self.selected = hit.entity

@@ -1,5 +1,5 @@
-"""The editor's docked layout: a dock space over the whole window whose central node lets the
-scene show through (the renderer draws it behind the UI), with the panels docked around it:
+"""The editor's docked layout: a dock space over the whole window whose central node shows the
+scene (the renderer draws the view for that rectangle: `region`), with the panels docked around it:
 scene settings down the left, the inspector down the right, and under the scene the entity
 browser and the hierarchy (tabs) beside the Perf window. The user may rearrange them; ImGui keeps the layout in
 `editor.ini` in the user's config folder (XDG_CONFIG_HOME, else ~/.config, then `ecs_engine/`),
@@ -65,6 +65,16 @@ class DockLayout:
         if central is not None:
             x, y = central.pos.x, central.pos.y
             self.central = (x, y, x + central.size.x, y + central.size.y)
+
+    def region(self, width: float, height: float) -> tuple[float, float, float, float] | None:
+        """The central node as fractions of a width x height window (the renderer's region: the
+        scene shows there, centred and undistorted), or None before the first layout."""
+        if self.central is None or width <= 0 or height <= 0:
+            return None
+        x0, y0, x1, y1 = (round(v) for v in self.central)  # whole pixels: the view's pixels are the window's
+        x0, x1 = min(max(x0 / width, 0.0), 1.0), min(max(x1 / width, 0.0), 1.0)
+        y0, y1 = min(max(y0 / height, 0.0), 1.0), min(max(y1 / height, 0.0), 1.0)
+        return (x0, y0, x1, y1) if x1 - x0 > 1e-3 and y1 - y0 > 1e-3 else None  # a collapsed node: whole window
 
     def build_default(self) -> None:
         imgui, internal = self.imgui, self.imgui.internal

@@ -64,7 +64,8 @@ class Gizmo:
         self.local = False  # rotate and translate along the entity's own axes
         self.used = False  # the gizmo took the mouse this frame (the scene click must not pick)
 
-    def draw(self, world: World, entity: int, history: History, width: float, height: float) -> None:
+    def draw(self, world: World, entity: int, history: History, rect: tuple[float, float, float, float]) -> None:
+        """The gizmo over `entity`, the scene shown in `rect` (x0, y0, x1, y1 pixels)."""
         g = self.g
         g.begin_frame()
         self.used = False
@@ -75,7 +76,8 @@ class Gizmo:
         camera = world.get(cam_id, Camera)
         eye = world.get(cam_id, Transform)
         g.set_orthographic(int(camera.projection) == ORTHOGRAPHIC)
-        g.set_rect(0.0, 0.0, float(width), float(height))
+        x0, y0, x1, y1 = (float(v) for v in rect)
+        g.set_rect(x0, y0, x1 - x0, y1 - y0)
         g.set_drawlist()  # the foreground of the main viewport
         view = np.eye(4)
         view[:3, :3] = rotation_matrix(eye.rotation)[:3, :3].T  # the camera at the origin
@@ -94,7 +96,7 @@ class Gizmo:
         mode = g.MODE.local if self.local or self.operation == "scale" else g.MODE.world
         changed = g.manipulate(
             self.module.im_guizmo.Matrix16(column_major(view)),
-            self.module.im_guizmo.Matrix16(column_major(gl_projection(camera, width / max(height, 1.0)))),
+            self.module.im_guizmo.Matrix16(column_major(gl_projection(camera, (x1 - x0) / max(y1 - y0, 1.0)))),
             op,
             mode,
             matrix,

@@ -33,11 +33,14 @@ class EditorSession(ImGuiSession):
         super().__init__(session, window, max_ui_hz)
         self.editor = Editor(session.settings, scenes, max_threads)
         self.editor.show_shadow_maps(session.renderer, self.renderer)
+        self.scene_renderer = session.renderer  # draws the scene for the dock's central node
         self.overlay = PerfOverlay()
         session.on_world.append(lambda world: self.editor.forget_world())
 
     def draw(self, world: World, stats: Any, perf: PerfMonitor) -> None:
         self.editor.draw(world, scene_stats(world, stats))
+        size = self.imgui.get_io().display_size
+        self.scene_renderer.region = self.editor.dock.region(size.x, size.y)
         self.overlay.draw(perf, self.cost_ms)
 
     def take_requests(self) -> Settings | None:

@@ -71,6 +71,29 @@ def orthographic(height: float, aspect: float, near: float, far: float) -> np.nd
     return m.astype(np.float32)
 
 
+def check_region(region: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+    """(x0, y0, x1, y1): a part of a render target, fractions of its size from the top left."""
+    x0, y0, x1, y1 = (float(v) for v in region)
+    if not (0.0 <= x0 < x1 <= 1.0 and 0.0 <= y0 < y1 <= 1.0):
+        raise ValueError(f"a region is (x0, y0, x1, y1) with 0 <= x0 < x1 <= 1 and 0 <= y0 < y1 <= 1, got {region!r}")
+    return x0, y0, x1, y1
+
+
+def region_projection(lens: np.ndarray, region: tuple[float, float, float, float]) -> np.ndarray:
+    """The projection for the whole target that shows, inside `region` (check_region), exactly what
+    `lens` (made with the region's aspect) shows over a whole target: an off-axis frustum, so a
+    view drawn full-window appears centred and undistorted in the region (the editor's central
+    node). Clip x' = sx x + cx w, where sx is the region's width fraction and cx its centre in NDC;
+    y likewise (Vulkan's NDC y points down, as fractions from the top do). float32."""
+    x0, y0, x1, y1 = check_region(region)
+    t = np.eye(4)
+    t[0, 0], t[0, 3] = x1 - x0, x0 + x1 - 1.0
+    t[1, 1], t[1, 3] = y1 - y0, y0 + y1 - 1.0
+    # the w row of an orthographic lens is (0, 0, 0, 1), of a perspective one (0, 0, -1, 0): both
+    # carry the shift into x and y as w does
+    return (t @ np.asarray(lens, np.float64)).astype(np.float32)
+
+
 def rotation_matrix(rotation_quat: np.ndarray) -> np.ndarray:
     """(4, 4) float64 rotation of a quaternion (x, y, z, w); non-unit input is normalised.
 

@@ -124,9 +124,11 @@ class FrameExtractor:
         culling: bool,
         material_count: int = 1 << 32,
         set_aside: np.ndarray | None = None,
+        region: tuple[float, float, float, float] | None = None,
     ) -> FrameData:
-        """`set_aside`: per material, whether its rows are drawn apart (Materials.set_aside)."""
-        cam = camera_matrices(world, aspect)
+        """`set_aside`: per material, whether its rows are drawn apart (Materials.set_aside);
+        `region`: the part of the target the view shows in (camera_matrices); culled to it."""
+        cam = camera_matrices(world, aspect, region)
         origin = render_origin(world)
         origin_key = origin.tobytes()
         view = self.view(cam, origin, origin_key)
@@ -140,7 +142,7 @@ class FrameExtractor:
             origin=origin,
             origin_key=origin_key,
             view=view,
-            planes=self.planes(cam.projection, view) if culling else None,
+            planes=self.planes(cam.lens, view) if culling else None,
             lights=positional,
             directional=directional,
             light_count=sum(len(p) for p in positional) + sum(len(d) for d in directional),

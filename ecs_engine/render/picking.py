@@ -34,10 +34,16 @@ class Pick:
     distance: float
 
 
-def pixel_ray(world: World, x: float, y: float, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+Region = tuple[float, float, float, float]  # x0, y0, x1, y1: fractions of the target (camera.py)
+
+
+def pixel_ray(
+    world: World, x: float, y: float, width: float, height: float, region: Region | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """The ray through pixel (x, y) (from the top left; pixel centres at .5) of a width x height
-    view of the active camera: origin (world, float64) and unit direction."""
-    cam = camera_matrices(world, width / height)
+    target showing the active camera (in `region` of it, as the renderer's region): origin
+    (world, float64) and unit direction."""
+    cam = camera_matrices(world, width / height, region)
     inverse = np.linalg.inv(cam.projection.astype(np.float64))
     ndc_x, ndc_y = x / width * 2.0 - 1.0, y / height * 2.0 - 1.0
     # reverse-Z: depth 1 is the near plane; 0.5 is finite for every projection the engine makes
@@ -151,10 +157,19 @@ def _rows_entries(
     return tuple(np.concatenate(p) for p in zip(*parts))  # type: ignore[return-value]
 
 
-def pick(world: World, meshes: Any, x: float, y: float, width: int, height: int) -> Pick | None:
-    """The entity drawn nearest under pixel (x, y) of a width x height view, or None. `meshes` is
-    the renderer's MeshRegistry (bounds() and [handle].data)."""
-    origin, direction = pixel_ray(world, x, y, width, height)
+def pick(
+    world: World,
+    meshes: Any,
+    x: float,
+    y: float,
+    width: float,
+    height: float,
+    region: Region | None = None,
+) -> Pick | None:
+    """The entity drawn nearest under pixel (x, y) of a width x height target (showing the view in
+    `region` of it, as the renderer's region), or None. `meshes` is the renderer's MeshRegistry
+    (bounds() and [handle].data)."""
+    origin, direction = pixel_ray(world, x, y, width, height, region)
     centers, radii, _ = meshes.bounds()
     local_origin = origin - render_origin(world)  # ModelMatrix is relative to the render origin
     ids, models, handles, entries = _rows_entries(world, local_origin, direction, centers, radii)

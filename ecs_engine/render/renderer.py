@@ -109,6 +109,7 @@ class Renderer:
         self.jobs = jobs
         self._jobs_generation = jobs.generation if jobs is not None else 0
         self.culling = culling
+        self.region: tuple[float, float, float, float] | None = None  # the view's part of the target (camera.py)
         self.extractor = FrameExtractor(lambda: self.jobs.threads if self.jobs is not None else 1, chunk_rows)
         self._native = native_recorder  # compiling one costs about a second: callers may share one
         self.cpu_recorder = recorder or default_recorder()  # the CPU paths' recorder, kept while indirect draws
@@ -297,7 +298,8 @@ class Renderer:
         if materials is None:
             materials = self.materials(world)
         count, aside = len(materials), materials.set_aside()
-        return self.extractor.extract(world, width / height, len(self.meshes), self.culling, count, aside)
+        aspect = width / height
+        return self.extractor.extract(world, aspect, len(self.meshes), self.culling, count, aside, self.region)
 
     def render(
         self,

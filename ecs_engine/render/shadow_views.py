@@ -140,7 +140,7 @@ def shadow_views(world: World, cam: CameraMatrices, origin: np.ndarray) -> list[
                 continue  # the camera sees nothing within the shadow distance
             splits = cascade_splits(cam.near, far, int(shadow.cascades[row])).tolist()
             resolution = int(shadow.resolution[row])
-            spheres = [view_slice_sphere(cam.projection, splits[i], splits[i + 1]) for i in range(len(splits) - 1)]
+            spheres = [view_slice_sphere(cam.lens, splits[i], splits[i + 1]) for i in range(len(splits) - 1)]
             centres = eye + np.array([along for along, _ in spheres])[:, None] * forward
             cascades = fit_cascades(
                 centres, [radius for _, radius in spheres], origin, directions[row], resolution, distance,
