@@ -32,6 +32,7 @@ REGISTRY: dict[str, str] = {
     "shadows": "shadows",
     "schedule": "schedule",
     "scene-io": "scene_io",
+    "hierarchy": "hierarchy",
 }
 
 # One line each for the list in the usage text (the modules are not imported to print it).
@@ -45,6 +46,7 @@ SUMMARY: dict[str, str] = {
     "shadows": "CPU and GPU ms of each light type and filter casting, 10k to 1M entities, 1 and 16 threads (Vulkan)",
     "schedule": "the parallel schedule: 8 independent systems over 1M entities, 1 to 16 threads (CPU only)",
     "scene-io": "World.save and World.load of the scaling scene, 10k to 1M entities (CPU only)",
+    "hierarchy": "HierarchySystem over 11k to 1.1M entities with Parent, plan kept and made again (CPU only)",
 }
 
 # The commands that work from any folder once ecs_engine is installed.

@@ -1,33 +1,53 @@
 """World transforms through the Parent hierarchy, level by level, vectorised.
 
 Each frame (after TransformSystem, which wrote every ModelMatrix as if each entity were a root):
-the entities with Parent are sorted into levels by how many parents lie above them, then level by
-level world = parent's world @ own local matrix (one batched matmul per level, float64), written
-to WorldMatrix, and the ModelMatrix of every such entity is rewritten from it relative to the
-render origin, in float64 before the cast (so a hierarchy 10^7 units out keeps its precision).
-A child whose parent is -1 or dead is a root. A loop is an EcsError naming its entities. Ids are
-matched with sorted arrays and searchsorted, never a Python loop over entities.
+every entity with Parent gets world = parent's world @ own local matrix, parents before children
+(one compiled pass in level order; a batched float64 matmul per level without numba), written
+to WorldMatrix, and its ModelMatrix rewritten from it relative to the render origin, in float64
+before the cast (so a hierarchy 10^7 units out keeps its precision). A child whose parent is -1
+or dead is a root; one whose parent has no Parent uses that parent's Transform as its world. A
+loop is an EcsError naming its entities.
+
+The plan (which row is whose parent, the level order, where each outside parent's Transform
+lives) is kept while the tables holding Parent, their Parent columns and the tables of those
+outside parents are unchanged: a still hierarchy whose transforms move costs only the gathers,
+the pass and the writes. Ids are matched through the world's entity index (a scatter and a
+gather), never sorted and never looped over in Python.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ecs_engine import native
 from ecs_engine.components import ModelMatrix, RenderOrigin, Transform, render_origin
 from ecs_engine.components.hierarchy import Parent, WorldMatrix
+from ecs_engine.ecs.entities import INDEX_MASK
 from ecs_engine.ecs.errors import EcsError
 from ecs_engine.ecs.schedule import System
 from ecs_engine.ecs.world import World
 from ecs_engine.maths.decompose import trs_matrices
 
+_PARENT = (Parent, "entity")
 
-def _lookup(sorted_ids: np.ndarray, ids: np.ndarray) -> np.ndarray:
-    """Positions of `ids` in `sorted_ids`, -1 where absent."""
-    if not len(sorted_ids):
-        return np.full(len(ids), -1, np.int64)
-    at = np.minimum(np.searchsorted(sorted_ids, ids), len(sorted_ids) - 1)
-    return np.where(sorted_ids[at] == ids, at, -1)
+
+@dataclass
+class _Plan:
+    key: tuple[Any, ...]
+    tables: list[Any]  # the tables with Parent, in row order (those with Transform first)
+    offsets: dict[int, int]  # table id -> its first row
+    count: int
+    order: np.ndarray  # rows, parents before children
+    levels: list[np.ndarray]  # the same rows by depth (the NumPy form)
+    parent_row: np.ndarray  # per row: its parent's row, -1 where the parent is outside or none
+    # per table holding parents outside the hierarchy: (table, its rows, our rows); the rows of a
+    # table without Transform are empty (those parents are the identity)
+    outside: list[tuple[Any, np.ndarray, np.ndarray]]
+    outside_versions: tuple[int, ...]  # those tables' versions when planned
+    above_row: np.ndarray  # per row: where its parent outside the hierarchy is in run's `above` (-1: none)
 
 
 def levels(parent_row: np.ndarray, kids: np.ndarray) -> list[np.ndarray]:
@@ -47,22 +67,36 @@ def levels(parent_row: np.ndarray, kids: np.ndarray) -> list[np.ndarray]:
     return [np.flatnonzero(depth == d) for d in range(int(depth.max()) + 1)] if len(depth) else []
 
 
+@native.inner
+def _trs(position, rotation, scale, row, m):  # pragma: no cover - compiled
+    """m (3, 4) = T R S of `row` (the quaternion normalised)."""
+    x, y, z, w = rotation[row, 0], rotation[row, 1], rotation[row, 2], rotation[row, 3]
+    inv = 1.0 / np.sqrt(x * x + y * y + z * z + w * w)
+    x, y, z, w = x * inv, y * inv, z * inv, w * inv
+    sx, sy, sz = scale[row, 0], scale[row, 1], scale[row, 2]
+    m[0, 0], m[0, 1], m[0, 2] = (1 - 2 * (y * y + z * z)) * sx, 2 * (x * y - z * w) * sy, 2 * (x * z + y * w) * sz
+    m[1, 0], m[1, 1], m[1, 2] = 2 * (x * y + z * w) * sx, (1 - 2 * (x * x + z * z)) * sy, 2 * (y * z - x * w) * sz
+    m[2, 0], m[2, 1], m[2, 2] = 2 * (x * z - y * w) * sx, 2 * (y * z + x * w) * sy, (1 - 2 * (x * x + y * y)) * sz
+    m[0, 3], m[1, 3], m[2, 3] = position[row, 0], position[row, 1], position[row, 2]
+
+
 @native.njit
-def _compose(order, parent_row, root_at, position, rotation, scale, root_world, out):  # pragma: no cover - compiled
-    """out[row] = (parent's world) @ T R S(row), rows taken in `order` (parents before children)."""
+def _compose(order, parent_row, above_row, trs, above, out, model, origin):  # pragma: no cover - compiled
+    """out[row] = (parent's world) @ T R S(row), rows taken in `order` (parents before children),
+    and model[row] = out[row] with `origin` taken from its translation (float32); `trs`: the
+    rows' (position, rotation, scale); `above`: those of parents outside the hierarchy, the
+    parent of `row` at above_row[row] (-1: none)."""
+    position, rotation, scale = trs
+    above_p, above_r, above_s = above
     m = np.empty((3, 4))
+    a = np.empty((3, 4))
     for k in range(order.shape[0]):
         row = order[k]
-        x, y, z, w = rotation[row, 0], rotation[row, 1], rotation[row, 2], rotation[row, 3]
-        inv = 1.0 / np.sqrt(x * x + y * y + z * z + w * w)
-        x, y, z, w = x * inv, y * inv, z * inv, w * inv
-        sx, sy, sz = scale[row, 0], scale[row, 1], scale[row, 2]
-        m[0, 0], m[0, 1], m[0, 2] = (1 - 2 * (y * y + z * z)) * sx, 2 * (x * y - z * w) * sy, 2 * (x * z + y * w) * sz
-        m[1, 0], m[1, 1], m[1, 2] = 2 * (x * y + z * w) * sx, (1 - 2 * (x * x + z * z)) * sy, 2 * (y * z - x * w) * sz
-        m[2, 0], m[2, 1], m[2, 2] = 2 * (x * z - y * w) * sx, 2 * (y * z + x * w) * sy, (1 - 2 * (x * x + y * y)) * sz
-        m[0, 3], m[1, 3], m[2, 3] = position[row, 0], position[row, 1], position[row, 2]
+        _trs(position, rotation, scale, row, m)
         p = parent_row[row]
-        r = root_at[row]
+        r = above_row[row]
+        if p < 0 and r >= 0:
+            _trs(above_p, above_r, above_s, r, a)
         for i in range(3):
             for j in range(4):
                 if p >= 0:
@@ -70,76 +104,144 @@ def _compose(order, parent_row, root_at, position, rotation, scale, root_world, 
                     if j == 3:
                         v += out[p, i, 3]
                 elif r >= 0:
-                    v = root_world[r, i, 0] * m[0, j] + root_world[r, i, 1] * m[1, j] + root_world[r, i, 2] * m[2, j]
+                    v = a[i, 0] * m[0, j] + a[i, 1] * m[1, j] + a[i, 2] * m[2, j]
                     if j == 3:
-                        v += root_world[r, i, 3]
+                        v += a[i, 3]
                 else:
                     v = m[i, j]
                 out[row, i, j] = v
+                model[row, i, j] = v - origin[i] if j == 3 else v
         out[row, 3, 0], out[row, 3, 1], out[row, 3, 2], out[row, 3, 3] = 0.0, 0.0, 0.0, 1.0
+        model[row, 3, 0], model[row, 3, 1], model[row, 3, 2], model[row, 3, 3] = 0.0, 0.0, 0.0, 1.0
 
 
 class HierarchySystem(System):
     def __init__(self) -> None:
         super().__init__(reads=[Transform, Parent, RenderOrigin], writes=[WorldMatrix, ModelMatrix], name="hierarchy")
+        self._plan: _Plan | None = None
+        self._world: Any = None
+
+    def plan(self, world: World) -> _Plan | None:
+        """The plan for the world as it is (kept while what it depends on is unchanged)."""
+        with_t = world.query(Parent, Transform, write=()).tables
+        without_t = world.query(Parent, without=(Transform,), write=()).tables
+        tables = [t for t in (*with_t, *without_t) if t.count]
+        key = tuple((t.id, t.version, t.column_ticks[_PARENT]) for t in tables)
+        old = self._plan
+        if old is not None and self._world is world and old.key == key:
+            if tuple(t.version for t, _, _ in old.outside) == old.outside_versions:
+                return old
+        if not tables:
+            return None
+        offsets, start = {}, 0
+        for t in tables:
+            offsets[t.id] = start
+            start += t.count
+        kids = np.concatenate([t.entities[: t.count] for t in tables])
+        parent_ids = np.concatenate([t.columns[_PARENT][: t.count] for t in tables])
+        live = (parent_ids != -1) & world.alive(parent_ids)
+        index = world.storage.index
+        slot = np.full(len(index.table), -1, np.int64)  # entity index -> our row
+        slot[kids & INDEX_MASK] = np.arange(len(kids))
+        at = np.where(live, parent_ids & INDEX_MASK, 0)
+        parent_row = np.where(live, slot[at], -1)
+        outside_rows = np.flatnonzero(live & (parent_row < 0))
+        outside = []
+        where = index.table[at[outside_rows]]
+        for tid in np.unique(where).tolist():
+            table = world.storage.tables[tid]
+            mine = outside_rows[where == tid]
+            if not table.has(Transform):  # parents without Transform: the identity
+                mine = mine[:0]
+            outside.append((table, index.row[at[mine]], mine))
+        by_level = levels(parent_row, kids)
+        versions = tuple(t.version for t, _, _ in outside)
+        order = np.concatenate(by_level)
+        above_row = np.full(len(kids), -1, np.int64)
+        with_rows = [(rows, mine) for _, rows, mine in outside if len(mine)]
+        if len(with_rows) == 1:  # run reads that table's columns at the parents' rows
+            above_row[with_rows[0][1]] = with_rows[0][0]
+        elif with_rows:  # run gathers them in this order
+            mine = np.concatenate([m for _, m in with_rows])
+            above_row[mine] = np.arange(len(mine))
+        plan = _Plan(key, tables, offsets, len(kids), order, by_level, parent_row, outside, versions, above_row)
+        self._plan, self._world = plan, world
+        return plan
 
     def run(self, world: World, dt: float) -> None:
-        ids, of, position, rotation, scale, offsets = [], [], [], [], [], {}
-        start = 0
-        for batch in world.query(Parent, Transform, write=()):
-            t = batch[Transform]
-            offsets[batch.table.id] = start
-            start += len(batch)
-            ids.append(batch.entities)
-            of.append(batch[Parent].entity)
-            position.append(t.position)
-            rotation.append(t.rotation)
-            scale.append(t.scale)
-        for batch in world.query(Parent, without=(Transform,), write=()):  # no Transform: identity
-            offsets[batch.table.id] = start
-            start += len(batch)
-            ids.append(batch.entities)
-            of.append(batch[Parent].entity)
-            position.append(np.zeros((len(batch), 3)))
-            rotation.append(np.broadcast_to([0.0, 0.0, 0.0, 1.0], (len(batch), 4)))
-            scale.append(np.ones((len(batch), 3)))
-        if not ids:
+        plan = self.plan(world)
+        if plan is None:
             return
-        kids, parent_ids = np.concatenate(ids), np.concatenate(of)
-        parent_ids = np.where((parent_ids != -1) & world.alive(parent_ids), parent_ids, -1)
-        order = np.argsort(kids)
-        found = _lookup(kids[order], parent_ids)
-        parent_row = np.where(found >= 0, order[np.maximum(found, 0)], -1)
-        # roots: live parents outside the hierarchy, their own Transform their world
-        roots = np.unique(parent_ids[(parent_ids != -1) & (parent_row < 0)])
-        root_world = np.broadcast_to(np.eye(4), (len(roots), 4, 4)).copy()
-        for batch in world.query(Transform, without=(Parent,), write=()):
-            at = _lookup(roots, batch.entities)
-            rows = np.flatnonzero(at >= 0)
-            if len(rows):
-                t = batch[Transform]
-                root_world[at[rows]] = trs_matrices(t.position[rows], t.rotation[rows], t.scale[rows])
-        root_at = np.where(parent_row < 0, _lookup(roots, parent_ids), -1)
-        by_level = levels(parent_row, kids)
-        p, r, s = np.concatenate(position), np.concatenate(rotation), np.concatenate(scale)
-        worlds = np.empty((len(kids), 4, 4))
+        n, tables = plan.count, plan.tables
+        trs = self._local(plan)
+        above = self._above(plan)
+        origin = np.asarray(render_origin(world), np.float64)
+        # one table (the usual case): the pass writes its columns in place; else into scratch
+        # arrays copied out per table
+        worlds: list[np.ndarray] = [b[WorldMatrix].matrix for b in world.query(WorldMatrix, with_=(Parent,))]
+        models: list[np.ndarray] = [b[ModelMatrix].model for b in world.query(ModelMatrix, with_=(Parent,))]
+        direct = len(tables) == 1 and len(worlds) == 1 and len(models) == 1
+        out = worlds[0] if direct else np.empty((n, 4, 4))
+        model = models[0] if direct else np.empty((n, 4, 4), np.float32)
         if native.AVAILABLE:
-            _compose(np.concatenate(by_level), parent_row, root_at, p, r, s, root_world, worlds)  # type: ignore[misc]
+            _compose(plan.order, plan.parent_row, plan.above_row, trs, above, out, model, origin)  # type: ignore[misc]
         else:
-            local = trs_matrices(p, r, s)
-            for rows in by_level:
-                above = np.broadcast_to(np.eye(4), (len(rows), 4, 4)).copy()
-                inner = parent_row[rows] >= 0
-                above[inner] = worlds[parent_row[rows][inner]]
-                outer = ~inner & (root_at[rows] >= 0)
-                above[outer] = root_world[root_at[rows][outer]]
-                worlds[rows] = above @ local[rows]
-        origin = render_origin(world)
-        for batch in world.query(WorldMatrix, with_=(Parent,)):
-            first = offsets[batch.table.id]
-            batch[WorldMatrix].matrix = worlds[first : first + len(batch)]
-        for batch in world.query(ModelMatrix, with_=(Parent,)):  # what is drawn
-            first = offsets[batch.table.id]
-            relative = worlds[first : first + len(batch)].copy()
-            relative[:, :3, 3] -= origin  # in float64, before the cast
-            batch[ModelMatrix].model = relative
+            self._compose_numpy(plan, trs, above, out)
+            model[:] = out
+            model[:, :3, 3] = out[:, :3, 3] - origin  # in float64, before the cast
+        if not direct:
+            for batch in world.query(WorldMatrix, with_=(Parent,)):
+                first = plan.offsets[batch.table.id]
+                batch[WorldMatrix].matrix = out[first : first + len(batch)]
+            for batch in world.query(ModelMatrix, with_=(Parent,)):  # what is drawn
+                first = plan.offsets[batch.table.id]
+                batch[ModelMatrix].model = model[first : first + len(batch)]
+
+    @staticmethod
+    def _local(plan: _Plan) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The rows' position, rotation and scale: the table's columns themselves when there is
+        one table with Transform, else gathered (identity where a table has no Transform)."""
+        tables, n = plan.tables, plan.count
+        if len(tables) == 1 and tables[0].has(Transform):
+            c = tables[0].columns
+            return c[(Transform, "position")][:n], c[(Transform, "rotation")][:n], c[(Transform, "scale")][:n]
+        position, rotation, scale = np.zeros((n, 3)), np.zeros((n, 4)), np.ones((n, 3))
+        rotation[:, 3] = 1.0
+        for t in tables:
+            if t.has(Transform):
+                rows = slice(plan.offsets[t.id], plan.offsets[t.id] + t.count)
+                for field, into in (("position", position), ("rotation", rotation), ("scale", scale)):
+                    into[rows] = t.columns[(Transform, field)][: t.count]
+        return position, rotation, scale
+
+    @staticmethod
+    def _above(plan: _Plan) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Position, rotation and scale of the parents outside the hierarchy, as plan.above_row
+        indexes them: the columns of their table when there is one, else gathered."""
+        with_rows = [(table, rows) for table, rows, _ in plan.outside if len(rows)]
+        if len(with_rows) == 1:
+            table = with_rows[0][0]
+            n = table.count
+            c = table.columns
+            return c[(Transform, "position")][:n], c[(Transform, "rotation")][:n], c[(Transform, "scale")][:n]
+        if not with_rows:
+            return np.zeros((1, 3)), np.array([[0.0, 0.0, 0.0, 1.0]]), np.ones((1, 3))
+
+        def gathered(field: str) -> np.ndarray:
+            return np.concatenate([t.columns[(Transform, field)][rows] for t, rows in with_rows])
+
+        return gathered("position"), gathered("rotation"), gathered("scale")
+
+    @staticmethod
+    def _compose_numpy(
+        plan: _Plan, trs: tuple[np.ndarray, ...], above: tuple[np.ndarray, ...], out: np.ndarray
+    ) -> None:
+        """The pass without numba: a batched matmul per level."""
+        local = trs_matrices(*trs)
+        above_world = np.broadcast_to(np.eye(4), (plan.count, 4, 4)).copy()
+        mask = plan.above_row >= 0
+        above_world[mask] = trs_matrices(*(a[plan.above_row[mask]] for a in above))
+        for rows in plan.levels:
+            parent = plan.parent_row[rows]
+            inner = (parent >= 0)[:, None, None]
+            out[rows] = np.where(inner, out[np.maximum(parent, 0)], above_world[rows]) @ local[rows]

@@ -1,4 +1,4 @@
-"""The parallel-schedule and scene-file benchmarks run (quick mode), check their own results, and
+"""The parallel-schedule, scene-file and hierarchy benchmarks run (quick mode), check their own results, and
 write JSON of the documented shape."""
 
 from __future__ import annotations
@@ -29,3 +29,13 @@ def test_scene_io_quick_writes_json(tmp_path, monkeypatch):
     doc = json.loads((tmp_path / "scene-io-ci.json").read_text())
     assert doc["benchmark"] == "scene-io" and [r["entities"] for r in doc["rows"]] == [1_000, 5_000]
     assert all(r["save_s"] > 0 and r["load_s"] > 0 and r["file_mb"] > 0 for r in doc["rows"])
+
+
+def test_hierarchy_quick_writes_json(tmp_path, monkeypatch):
+    monkeypatch.syspath_prepend(str(ROOT))
+    from bench.__main__ import main
+
+    assert main(["hierarchy", "--quick", "--out", str(tmp_path), "--machine", "ci"]) == 0
+    doc = json.loads((tmp_path / "hierarchy-ci.json").read_text())
+    assert doc["benchmark"] == "hierarchy" and [r["with_parent"] for r in doc["rows"]] == [1_000, 10_000]
+    assert all(r["still_ms"] > 0 and r["replanned_ms"] > 0 for r in doc["rows"])

@@ -203,3 +203,42 @@ def test_the_compiled_and_numpy_paths_agree(monkeypatch):
     monkeypatch.setattr(native, "AVAILABLE", False)
     world.run_system(system, 0.0)
     np.testing.assert_allclose(world.query(WorldMatrix).column(WorldMatrix.matrix), compiled, atol=1e-12)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_the_kept_plan_follows_every_change_it_depends_on(compiled, monkeypatch):
+    """The system keeps its plan while the hierarchy is still: moved parents are followed without
+    planning again, an unrelated spawn keeps the plan, and a reparent, a parent destroyed, a
+    parent gaining a Transform or parents in another table each make a new one that is right."""
+    from ecs_engine import native
+    from ecs_engine.components import Velocity
+    from ecs_engine.systems import HierarchySystem
+
+    if compiled and not native.AVAILABLE:
+        pytest.skip("ECS_ENGINE_NO_NUMBA set")
+    monkeypatch.setattr(native, "AVAILABLE", compiled)
+
+    world, system = World(), HierarchySystem()
+    a = world.spawn(Transform(position=(1.0, 0.0, 0.0)))
+    b = world.spawn(Transform(position=(0.0, 5.0, 0.0)), Velocity())  # another table
+    bare = world.spawn(Velocity())  # no Transform: the identity, until it gains one
+    kids = world.spawn_batch(3, Transform(position=(0.0, 0.0, 1.0)), Parent(entity=np.array([a, a, bare])))
+
+    def where() -> np.ndarray:
+        world.run_system(system, 0.0)
+        return np.array([world.get(k, WorldMatrix).matrix[:3, 3] for k in kids])
+
+    np.testing.assert_allclose(where(), [[1, 0, 1], [1, 0, 1], [0, 0, 1]])
+    plan = system.plan(world)
+    world.set(a, Transform, position=np.array([2.0, 0.0, 0.0]))
+    world.spawn_batch(10, Transform(), Velocity())  # b's table changes; no kid's parent is there yet
+    np.testing.assert_allclose(where(), [[2, 0, 1], [2, 0, 1], [0, 0, 1]])
+    assert system.plan(world) is plan
+    world.set(kids[1], Parent, entity=b)  # a Parent column written
+    np.testing.assert_allclose(where(), [[2, 0, 1], [0, 5, 1], [0, 0, 1]])
+    world.add(bare, Transform(position=(0.0, 0.0, -3.0)))
+    np.testing.assert_allclose(where(), [[2, 0, 1], [0, 5, 1], [0, 0, -2]])
+    world.set(b, Transform, position=np.array([0.0, 7.0, 0.0]))  # a second outside table, followed
+    np.testing.assert_allclose(where()[1], [0, 7, 1])
+    world.destroy(a)
+    np.testing.assert_allclose(where(), [[0, 0, 1], [0, 7, 1], [0, 0, -2]])
