@@ -2,7 +2,8 @@
 
 Each frame (after TransformSystem, which wrote every ModelMatrix as if each entity were a root):
 every entity with Parent gets world = parent's world @ own local matrix, parents before children
-(one compiled pass in level order; a batched float64 matmul per level without numba), written
+(a compiled pass per level, its rows cut into chunks on the JobPool; a batched float64 matmul
+per level without numba), written
 to WorldMatrix, and its ModelMatrix rewritten from it relative to the render origin, in float64
 before the cast (so a hierarchy 10^7 units out keeps its precision). A child whose parent is -1
 or dead is a root; one whose parent has no Parent uses that parent's Transform as its world. A
@@ -29,6 +30,7 @@ from ecs_engine.ecs.entities import INDEX_MASK
 from ecs_engine.ecs.errors import EcsError
 from ecs_engine.ecs.schedule import System
 from ecs_engine.ecs.world import World
+from ecs_engine.jobs import JobPool, over_rows
 from ecs_engine.maths.decompose import trs_matrices
 
 _PARENT = (Parent, "entity")
@@ -40,7 +42,6 @@ class _Plan:
     tables: list[Any]  # the tables with Parent, in row order (those with Transform first)
     offsets: dict[int, int]  # table id -> its first row
     count: int
-    order: np.ndarray  # rows, parents before children
     levels: list[np.ndarray]  # the same rows by depth (the NumPy form)
     parent_row: np.ndarray  # per row: its parent's row, -1 where the parent is outside or none
     # per table holding parents outside the hierarchy: (table, its rows, our rows); the rows of a
@@ -156,7 +157,6 @@ class HierarchySystem(System):
             outside.append((table, index.row[at[mine]], mine))
         by_level = levels(parent_row, kids)
         versions = tuple(t.version for t, _, _ in outside)
-        order = np.concatenate(by_level)
         above_row = np.full(len(kids), -1, np.int64)
         with_rows = [(rows, mine) for _, rows, mine in outside if len(mine)]
         if len(with_rows) == 1:  # run reads that table's columns at the parents' rows
@@ -164,7 +164,7 @@ class HierarchySystem(System):
         elif with_rows:  # run gathers them in this order
             mine = np.concatenate([m for _, m in with_rows])
             above_row[mine] = np.arange(len(mine))
-        plan = _Plan(key, tables, offsets, len(kids), order, by_level, parent_row, outside, versions, above_row)
+        plan = _Plan(key, tables, offsets, len(kids), by_level, parent_row, outside, versions, above_row)
         self._plan, self._world = plan, world
         return plan
 
@@ -183,8 +183,14 @@ class HierarchySystem(System):
         direct = len(tables) == 1 and len(worlds) == 1 and len(models) == 1
         out = worlds[0] if direct else np.empty((n, 4, 4))
         model = models[0] if direct else np.empty((n, 4, 4), np.float32)
-        if native.AVAILABLE:
-            _compose(plan.order, plan.parent_row, plan.above_row, trs, above, out, model, origin)  # type: ignore[misc]
+        if native.AVAILABLE:  # a level's rows are independent: cut into chunks on the pool
+            pool = world.resources.get(JobPool)
+            for rows in plan.levels:
+
+                def chunk(s: slice, rows: np.ndarray = rows) -> None:
+                    _compose(rows[s], plan.parent_row, plan.above_row, trs, above, out, model, origin)  # type: ignore[misc]
+
+                over_rows(pool, len(rows), chunk)
         else:
             self._compose_numpy(plan, trs, above, out)
             model[:] = out

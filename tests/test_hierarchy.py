@@ -242,3 +242,32 @@ def test_the_kept_plan_follows_every_change_it_depends_on(compiled, monkeypatch)
     np.testing.assert_allclose(where()[1], [0, 7, 1])
     world.destroy(a)
     np.testing.assert_allclose(where(), [[0, 0, 1], [0, 7, 1], [0, 0, -2]])
+
+
+def test_levels_cut_into_chunks_on_the_pool_give_the_same_matrices():
+    from ecs_engine import native
+    from ecs_engine.jobs import CHUNK_ROWS, JobPool
+    from ecs_engine.systems import HierarchySystem
+
+    if not native.AVAILABLE:
+        pytest.skip("ECS_ENGINE_NO_NUMBA set")
+    rng = np.random.default_rng(8)
+    n = 3 * CHUNK_ROWS
+
+    def worlds(pool):
+        world = World()
+        if pool is not None:
+            world.resources[JobPool] = pool
+        roots = world.spawn_batch(100, Transform(position=rng.normal(size=(100, 3))))
+        kids = world.spawn_batch(
+            n, Transform(position=rng.normal(size=(n, 3))), Parent(entity=roots[np.arange(n) % 100])
+        )
+        world.spawn_batch(n, Transform(position=(0.0, 1.0, 0.0)), Parent(entity=kids))
+        world.run_system(HierarchySystem(), 0.0)
+        return world.query(WorldMatrix).column(WorldMatrix.matrix)
+
+    rng = np.random.default_rng(8)
+    alone = worlds(None)
+    rng = np.random.default_rng(8)
+    with JobPool(4) as pool:
+        np.testing.assert_array_equal(worlds(pool), alone)
