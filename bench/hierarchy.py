@@ -1,7 +1,8 @@
 """The hierarchy: HierarchySystem over R roots with 10 children each (half of them under another
 child, so two levels below the roots), 1k to 100k roots (11k to 1.1M entities with Parent).
 
-Measured per size, median of the frames: `still`, a hierarchy whose parents move every frame
+Measured per size and thread count (the world's JobPool: each level's rows are cut into chunks
+on it), median of the frames: `still`, a hierarchy whose parents move every frame
 (the roots' Transforms written) but whose structure stays, so the system keeps its plan; and
 `replanned`, the same frame with the plan made again (what a frame that spawns or reparents in
 those tables costs). The world matrices are checked against a NumPy reference on a sample.
@@ -18,10 +19,12 @@ import numpy as np
 
 from ecs_engine import World, native
 from ecs_engine.components import Mesh, Parent, Transform, WorldMatrix
+from ecs_engine.jobs import JobPool, default_threads
 from ecs_engine.maths.decompose import trs_matrices
 from ecs_engine.systems import HierarchySystem
 
 CHILDREN = 10
+THREADS = default_threads()
 
 
 def make_world(roots: int) -> tuple[World, np.ndarray, np.ndarray, np.ndarray]:
@@ -51,8 +54,14 @@ def check(world: World, top: np.ndarray, first: np.ndarray, second: np.ndarray) 
             raise AssertionError(f"world matrix of entity {second[k]} is wrong")
 
 
-def frame_ms(roots: int, frames: int, replan: bool) -> float:
+def frame_ms(roots: int, frames: int, replan: bool, threads: int) -> float:
     world, top, first, second = make_world(roots)
+    with JobPool(threads) as pool:
+        world.resources[JobPool] = pool
+        return _timed(world, top, first, second, frames, replan)
+
+
+def _timed(world: World, top: np.ndarray, first: np.ndarray, second: np.ndarray, frames: int, replan: bool) -> float:
     system = HierarchySystem()
     rng = np.random.default_rng(4)
     world.run_system(system, 0.0)  # compile and plan
@@ -77,26 +86,16 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
     frames = 3 if args.quick else args.frames
     rows = []
     for roots in sizes:
-        with progress.step(f"{roots:,} roots, {roots * CHILDREN:,} with Parent"):
-            still = frame_ms(roots, frames, replan=False)
-            replanned = frame_ms(roots, frames, replan=True)
-        rows.append(
-            {
-                "roots": roots,
-                "with_parent": roots * CHILDREN,
-                "still_ms": round(still, 3),
-                "replanned_ms": round(replanned, 3),
-            }
-        )
+        for threads in sorted({1, THREADS}):
+            with progress.step(f"{roots:,} roots, {roots * CHILDREN:,} with Parent, {threads} threads"):
+                still = frame_ms(roots, frames, False, threads)
+                replanned = frame_ms(roots, frames, True, threads)
+            row = {"roots": roots, "with_parent": roots * CHILDREN, "threads": threads}
+            rows.append(row | {"still_ms": round(still, 3), "replanned_ms": round(replanned, 3)})
     print(f"HierarchySystem, {CHILDREN} children a root over two levels (median of {frames} frames):")
-    print("    roots  with Parent   still ms  replanned ms")
+    print("    roots  with Parent  threads   still ms  replanned ms")
     for r in rows:
-        print(f"{r['roots']:>9,}  {r['with_parent']:>11,}  {r['still_ms']:9.2f}  {r['replanned_ms']:12.2f}")
-    return {
-        "benchmark": "hierarchy",
-        "machine": machine,
-        "quick": bool(args.quick),
-        "numba": native.AVAILABLE,
-        "frames": frames,
-        "rows": rows,
-    }
+        sizes_text = f"{r['roots']:>9,}  {r['with_parent']:>11,}  {r['threads']:7}"
+        print(f"{sizes_text}  {r['still_ms']:9.2f}  {r['replanned_ms']:12.2f}")
+    doc = {"benchmark": "hierarchy", "machine": machine, "quick": bool(args.quick), "numba": native.AVAILABLE}
+    return doc | {"frames": frames, "rows": rows}

@@ -37,5 +37,5 @@ def test_hierarchy_quick_writes_json(tmp_path, monkeypatch):
 
     assert main(["hierarchy", "--quick", "--out", str(tmp_path), "--machine", "ci"]) == 0
     doc = json.loads((tmp_path / "hierarchy-ci.json").read_text())
-    assert doc["benchmark"] == "hierarchy" and [r["with_parent"] for r in doc["rows"]] == [1_000, 10_000]
+    assert doc["benchmark"] == "hierarchy" and sorted({r["with_parent"] for r in doc["rows"]}) == [1_000, 10_000]
     assert all(r["still_ms"] > 0 and r["replanned_ms"] > 0 for r in doc["rows"])
