@@ -143,11 +143,11 @@ def test_settings_requests_rebuild_what_they_need(scene):
     scene.frame()
     editor = scene.session.editor
     renderer, path = scene.state.renderer, scene.state.renderer.path
-    editor.requested.mode, editor.requested.threads, editor.requested.culling = "indirect", 3, False
+    editor.requested.mode, editor.requested.threads, editor.requested.culling = "indirect", 3, "none"
     scene.frame()  # the request is applied after this frame
     # the path is swapped; the renderer, its frame slots and buffers stay
     assert scene.state.renderer is renderer and renderer.path is not path and renderer.mode == "indirect"
-    assert scene.state.pool.threads == 3 and scene.state.renderer.culling is False
+    assert scene.state.pool.threads == 3 and scene.state.renderer.culling == "none"
     assert scene.state.world.resources[JobPool] is scene.state.pool  # one pool, resized in place
     scene.frame()
     assert scene.stats.instances == 100 and scene.gpu.target.pixels()[..., :3].max() > 30

@@ -25,7 +25,7 @@ def scene(n: int = 50) -> World:
 
 def test_extraction_reads_chunks_lights_and_camera_from_the_world():
     world = scene()
-    data = FrameExtractor(lambda: 1, chunk_rows=16).extract(world, 4 / 3, mesh_count=2, culling=True)
+    data = FrameExtractor(lambda: 1, chunk_rows=16).extract(world, 4 / 3, mesh_count=2, culling="frustum")
     # one table (Transform, Mesh, ModelMatrix): jobs of 16 rows, the last one shorter
     assert data.candidates == 53 and [len(c.handle) for c in data.chunks] == [16, 16, 16, 5]
     assert [c.offset for c in data.chunks] == [0, 16, 32, 48]  # each chunk's slice of the buffer
@@ -34,7 +34,7 @@ def test_extraction_reads_chunks_lights_and_camera_from_the_world():
     assert data.camera.position.tolist() == [0.0, 1.0, 10.0]
     assert np.allclose(data.origin, data.camera.position)  # camera-relative by default
     assert data.planes.shape == (5, 4)  # infinite far plane: five planes
-    assert FrameExtractor(lambda: 1).extract(world, 4 / 3, 2, culling=False).planes is None
+    assert FrameExtractor(lambda: 1).extract(world, 4 / 3, 2, culling="none").planes is None
 
 
 def test_what_is_kept_is_the_same_object_until_the_world_changes_it():
@@ -52,7 +52,7 @@ def test_what_is_kept_is_the_same_object_until_the_world_changes_it():
 def test_a_mesh_handle_beyond_the_uploaded_meshes_is_named():
     world = scene()
     with pytest.raises(ValueError, match=r"Mesh\.handle 1 does not name an uploaded mesh"):
-        FrameExtractor(lambda: 1).extract(world, 1.0, mesh_count=1, culling=True)
+        FrameExtractor(lambda: 1).extract(world, 1.0, mesh_count=1, culling="frustum")
 
 
 def test_jobs_follow_the_thread_count_but_never_get_tiny():

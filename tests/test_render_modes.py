@@ -39,16 +39,18 @@ def reference(tmp_path_factory):
 @pytest.mark.parametrize(
     "mode, threads, culling",
     [
-        ("instanced", 1, True),
-        ("instanced", 2, True),
-        ("instanced", 4, True),
-        ("per_entity", 1, True),
-        ("per_entity", 2, True),
-        ("per_entity", 4, False),
-        ("instanced", 1, False),
-        ("indirect", 1, True),
-        ("indirect", 2, True),
-        ("indirect", 4, False),
+        ("instanced", 1, "frustum"),
+        ("instanced", 2, "frustum"),
+        ("instanced", 4, "frustum"),
+        ("instanced", 2, "temporal"),
+        ("per_entity", 1, "frustum"),
+        ("per_entity", 2, "frustum"),
+        ("per_entity", 2, "temporal"),
+        ("per_entity", 4, "none"),
+        ("instanced", 1, "none"),
+        ("indirect", 1, "frustum"),
+        ("indirect", 2, "frustum"),
+        ("indirect", 4, "none"),
     ],
 )
 def test_same_image_in_every_mode_recorder_and_thread_count(reference, tmp_path, mode, threads, culling, recorder):
@@ -67,8 +69,10 @@ def test_same_image_in_every_mode_recorder_and_thread_count(reference, tmp_path,
     assert stats.instances == 100
 
 
-@pytest.mark.parametrize("mode", ["instanced", "indirect"])
-def test_culling_drops_what_is_off_screen(tmp_path, monkeypatch, mode):
+@pytest.mark.parametrize(
+    "mode, culling", [("instanced", "frustum"), ("instanced", "temporal"), ("indirect", "frustum")]
+)
+def test_culling_drops_what_is_off_screen(tmp_path, monkeypatch, mode, culling):
     import ecs_engine.demos.grid100 as grid100
 
     original = grid100.build
@@ -83,10 +87,10 @@ def test_culling_drops_what_is_off_screen(tmp_path, monkeypatch, mode):
         )
 
     monkeypatch.setattr(grid100, "build", build)
-    culled = grid(tmp_path, threads=2, mode=mode)
+    culled = grid(tmp_path, threads=2, mode=mode, culling=culling)
     assert culled.last_stats.candidates == 150 and culled.last_stats.instances == 100
     assert_close_to_golden(culled.pixels, "grid100")
-    everything = grid(tmp_path, threads=2, culling=False, mode=mode)
+    everything = grid(tmp_path, threads=2, culling="none", mode=mode)
     assert everything.last_stats.instances == 150
 
 

@@ -58,8 +58,8 @@ def test_settings_are_read_from_their_owners():
         assert session.world.resources[JobPool] is session.pool
         session.pool.resize(3)  # changed at the owner: the settings say so
         assert session.settings.threads == 3
-        session.renderer.culling = False
-        assert session.settings.culling is False
+        session.renderer.culling = "none"
+        assert session.settings.culling == "none"
         assert session.settings.present is None  # headless: no swapchain
         wanted = session.settings
         wanted.scene, wanted.threads = "cube", 1

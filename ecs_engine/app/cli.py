@@ -13,6 +13,7 @@ from typing import NoReturn
 from ..ecs.errors import EcsError
 from ..errors import UsageError
 from ..gpu.swapchain import PRESENT_MODES
+from ..render.frame_data import CULLING
 from ..render.light_clusters import LIGHT_MODES
 from ..render.renderer import MODES, PATHS, RECORDER_NAMES
 from .scenes import SCENE_FILE_SUFFIX, SEED_SCENES, is_scene_file
@@ -98,7 +99,14 @@ def render_flags() -> OneLineParser:
         help="native: numba loop without the GIL (default when numba is installed); python: the binding",
     )
     common.add_argument(
-        "--no-culling", dest="culling", action="store_false", help="draw everything, skip frustum culling"
+        "--culling",
+        choices=CULLING,
+        default="frustum",
+        help="frustum: every row tested each frame (default); temporal: a row tested again only when the camera's "
+        "and its own speed limits say it could have changed side (not with --mode indirect); none: draw everything",
+    )
+    common.add_argument(
+        "--no-culling", dest="culling", action="store_const", const="none", help="draw everything (--culling none)"
     )
     common.add_argument(
         "--fill",

@@ -22,6 +22,7 @@ from ..components.name import Name
 from ..ecs.world import World
 from ..gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
 from ..maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
+from ..render.frame_data import CULLING
 from ..render.light_clusters import LIGHT_MODES
 from ..render.oit_pass import TRANSPARENCY_MODES
 from ..render.path import FILL_MODES
@@ -190,7 +191,7 @@ class Editor:
             if PATHS[req.mode].uses_recorder:
                 req.recorder = _combo(imgui, "recorder", req.recorder, RECORDER_NAMES)
             _, req.threads = imgui.slider_int("threads", req.threads, 1, max(1, self.max_threads))
-            _, req.culling = imgui.checkbox("frustum culling", req.culling)
+            req.culling = _combo(imgui, "culling", req.culling, CULLING)
             req.fill = _combo(imgui, "fill", req.fill, tuple(FILL_MODES))
             req.tone_map = _combo(imgui, "tone map", req.tone_map, tuple(TONE_MAPS))
             _, req.exposure = imgui.slider_float("exposure (EV)", req.exposure, -8.0, 8.0)

@@ -88,6 +88,7 @@ def run(
                 extent=target.extent,
                 wait=target.wait,
                 signal=target.signal,
+                dt=target.dt,
             )
             end = time.perf_counter()
             # CPU work: not the waits for the GPU (renderer); the wait for an image came before t0

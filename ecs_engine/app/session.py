@@ -21,6 +21,7 @@ from ..ecs.world import World
 from ..gpu.device import Device
 from ..gpu.instance import Instance
 from ..jobs import JobPool
+from ..render.frame_data import check_culling
 from ..render.light_clusters import check_light_culling
 from ..render.mesh_registry import MeshRegistry
 from ..render.oit_pass import check_transparency
@@ -190,13 +191,14 @@ class Session:
         check_tone_map(wanted.tone_map, wanted.exposure)
         check_light_culling(wanted.light_culling)
         check_transparency(wanted.transparency)
+        culling = check_culling(wanted.culling, wanted.mode)
         scene = self._build(wanted.scene, None) if wanted.scene != self.scene else None
         renderer.set_path(wanted.mode, wanted.recorder)  # checks, then swaps
         renderer.set_fill(wanted.fill)
         renderer.tone_map, renderer.exposure = wanted.tone_map, float(wanted.exposure)
         renderer.light_culling = wanted.light_culling
         renderer.transparency = wanted.transparency
-        renderer.culling = wanted.culling
+        renderer.culling = culling
         pool.resize(wanted.threads)
         renderer.ensure_output()  # HDR colour or not, as the tone map and exposure now need
         if present is not None:

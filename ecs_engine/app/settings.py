@@ -32,7 +32,7 @@ class Settings:
     mode: str
     recorder: str  # native | python (the indirect mode records on the GPU: kept for switching back)
     threads: int  # worker pool size, counting the main thread
-    culling: bool
+    culling: str  # frustum | temporal | none (render/frame_data.py CULLING)
     present: str | None  # fifo | mailbox | immediate; None: headless, no swapchain
     fill: str = "solid"  # solid | wireframe | points
     tone_map: str = "clamp"  # clamp | aces | reinhard (render/tone_map.py)
@@ -58,7 +58,7 @@ class RunOptions:
     quiet: bool = False
     mode: str = "instanced"  # instanced | per_entity | indirect
     threads: int | None = None  # None: all cores
-    culling: bool = True
+    culling: str = "frustum"  # frustum | temporal | none
     fill: str = "solid"  # solid | wireframe | points (render/path.py's FILL_MODES)
     tone_map: str = "clamp"  # clamp | aces | reinhard
     exposure: float = 0.0  # stops: the HDR colour times 2^exposure before the tone map

@@ -19,11 +19,12 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from .. import native
 from ..gpu.gbuffer import GBUFFER_COLORS
 from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
 from ..gpu.secondary import end_command_buffer
 from .frame_data import NOT_RECEIVER, Chunk
-from .instance_rows import write_keyed, write_rows
+from .instance_rows import masked_keys, write_keyed, write_rows
 from .layouts import (
     FEATURE_ALPHA_MASK,
     FEATURE_CLUSTERED,
@@ -229,6 +230,10 @@ RECORDERS: dict[str, Callable[[ChunkPath], PythonRecorder | NativeRecorder]] = {
 }
 
 
+def default_recorder() -> str:
+    return "native" if native.AVAILABLE else "python"
+
+
 def check_recorder(name: str) -> None:
     if name not in RECORDERS:
         raise ValueError(f"unknown recorder {name!r}; recorders: {', '.join(RECORDERS)}")
@@ -272,6 +277,10 @@ class ChunkPath:
         centers, radii, index_counts = frame.bounds
         rows = self.rows_for(chunk, frame)
         key_counts = np.zeros(2 * len(index_counts), dtype=np.int64)
+        visible = None if frame.ahead is None else frame.ahead.visible(chunk)
+        if visible is not None:  # culled ahead (temporal): write what it kept
+            keys = masked_keys(chunk.model, chunk.handle, visible, key_counts)
+            return self.record_keyed(chunk, frame, keys, key_counts)
         n = write_rows(
             chunk.model,
             chunk.handle,

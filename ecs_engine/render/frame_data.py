@@ -31,6 +31,7 @@ from ..jobs import row_chunks
 from ..maths.culling import frustum_planes
 from .camera import CameraMatrices, camera_matrices, view_from_origin
 from .light_rows import DirectionalLights, PositionalLights, local_minus_z, spot_cones
+from .temporal_culling import TemporalCulling
 
 _HANDLE = (Mesh, "handle")  # the columns whose writes make the extractor check handles again
 _MATERIAL = (Mesh, "material")
@@ -43,6 +44,20 @@ MIN_CHUNK_ROWS = 16_384
 
 
 NOT_CASTER, NOT_RECEIVER = 1, 2
+CULLING = ("frustum", "temporal", "none")  # per frame; only when due (temporal_culling.py); off
+
+
+def check_culling(culling: str | bool, mode: str = "instanced") -> str:
+    """The culling method named (True: frustum, False: none); UsageError for an unknown one, or
+    temporal in the indirect mode, whose compute shader culls every row on the GPU."""
+    from ..errors import UsageError
+
+    name = {True: "frustum", False: "none"}.get(culling, culling) if isinstance(culling, bool) else culling
+    if name not in CULLING:
+        raise UsageError(f"unknown culling {culling!r}; culling: {', '.join(CULLING)}")
+    if name == "temporal" and mode == "indirect":
+        raise UsageError("--culling temporal is for the CPU-culled modes; the indirect mode culls on the GPU")
+    return str(name)
 
 
 def shadow_flags(batch: Any) -> int:
@@ -60,6 +75,8 @@ class Chunk:
     material: np.ndarray
     offset: int  # first row of this chunk's slice of the instance buffer
     flags: int = 0  # NOT_CASTER, NOT_RECEIVER: its table's shadow tags (components/shadow.py)
+    table: int = -1  # the table's id and the chunk's first row in it (FrameData.masks)
+    start: int = 0
 
     @property
     def name(self) -> str:
@@ -94,6 +111,13 @@ class FrameData:
     chunks: list[Chunk]
     candidates: int  # rows with a mesh in the chunks (opaque and masked materials), before culling
     set_aside: SetAsideRows | None = None  # None: no material is blended or has its own fill
+    masks: dict[int, np.ndarray] | None = None  # temporal culling: per table id, the rows to draw
+
+    def visible(self, chunk: Chunk) -> np.ndarray | None:
+        """The rows of `chunk` to draw, where the culling decided ahead (temporal); else None."""
+        if self.masks is None or chunk.table not in self.masks:
+            return None
+        return self.masks[chunk.table][chunk.start : chunk.start + len(chunk.handle)]
 
     @property
     def all_rows(self) -> int:
@@ -115,19 +139,25 @@ class FrameExtractor:
         self._chunks: list[Chunk] = []
         self._split_key: tuple[object, ...] = ()
         self._split: list[tuple[np.ndarray, np.ndarray]] = []  # per table: chunk rows, rows set aside
+        self.temporal = TemporalCulling()
 
     def extract(
         self,
         world: World,
         aspect: float,
         mesh_count: int,
-        culling: bool,
+        culling: str | bool,
         material_count: int = 1 << 32,
         set_aside: np.ndarray | None = None,
         region: tuple[float, float, float, float] | None = None,
+        dt: float | None = None,
+        bounds: Any = None,
     ) -> FrameData:
-        """`set_aside`: per material, whether its rows are drawn apart (Materials.set_aside);
-        `region`: the part of the target the view shows in (camera_matrices); culled to it."""
+        """`culling`: CULLING (a bool: frustum or none); `set_aside`: per material, whether its
+        rows are drawn apart (Materials.set_aside); `region`: the part of the target the view
+        shows in (camera_matrices), culled to it; temporal culling needs `dt` (the seconds since
+        the last frame) and `bounds` (the mesh registry's)."""
+        culling = check_culling(culling)
         cam = camera_matrices(world, aspect, region)
         origin = render_origin(world)
         origin_key = origin.tobytes()
@@ -137,18 +167,23 @@ class FrameExtractor:
         aside = None
         if set_aside is not None and chunks:
             chunks, aside = self.split(world, chunks, set_aside)
+        planes = self.planes(cam.lens, view) if culling != "none" else None
+        masks = None
+        if culling == "temporal" and planes is not None:
+            masks = self.temporal.masks(world, cam, origin, planes, dt, bounds)
         return FrameData(
             camera=cam,
             origin=origin,
             origin_key=origin_key,
             view=view,
-            planes=self.planes(cam.lens, view) if culling else None,
+            planes=planes,
             lights=positional,
             directional=directional,
             light_count=sum(len(p) for p in positional) + sum(len(d) for d in directional),
             chunks=chunks,
             candidates=sum(len(c.handle) for c in chunks),
             set_aside=aside,
+            masks=masks,
         )
 
     def split(self, world: World, chunks: list[Chunk], blend: np.ndarray) -> tuple[list[Chunk], SetAsideRows]:
@@ -254,7 +289,8 @@ class FrameExtractor:
         for batch in query:
             m, mesh = batch[ModelMatrix], batch[Mesh]
             for s in row_chunks(len(batch), self.rows_per_job(len(batch))):
-                out.append(Chunk(m.model[s], mesh.handle[s], mesh.material[s], offset, shadow_flags(batch)))
+                flags, table = shadow_flags(batch), batch.table.id
+                out.append(Chunk(m.model[s], mesh.handle[s], mesh.material[s], offset, flags, table, s.start))
                 offset += s.stop - s.start
         if out:
             top = max(int(c.handle.max()) for c in out)

@@ -269,6 +269,41 @@ def _cull_views_kernel(model_4x4, handle, centers, radii, planes, keys, key_coun
         i = j
 
 
+def _masked_keys_kernel(model_4x4, handle, visible, keys, key_counts):  # pragma: no cover - compiled
+    # Keys from a visibility decided elsewhere (temporal culling): mesh * 2 + mirrored, or -1.
+    for k in range(key_counts.shape[0]):
+        key_counts[k] = 0
+    for i in range(handle.shape[0]):
+        if not visible[i]:
+            keys[i] = -1
+            continue
+        m = model_4x4[i]
+        det = (
+            m[0, 0] * (m[1, 1] * m[2, 2] - m[1, 2] * m[2, 1])
+            - m[0, 1] * (m[1, 0] * m[2, 2] - m[1, 2] * m[2, 0])
+            + m[0, 2] * (m[1, 0] * m[2, 1] - m[1, 1] * m[2, 0])
+        )
+        k = 2 * handle[i] + (1 if det < 0.0 else 0)
+        keys[i] = k
+        key_counts[k] += 1
+
+
+_masked_keys_native = native.njit(_masked_keys_kernel)
+
+
+def masked_keys(model: np.ndarray, handle: np.ndarray, visible: np.ndarray, key_counts: np.ndarray) -> np.ndarray:
+    """Per row: its key (mesh * 2 + mirrored) where `visible`, else -1; counts per key into
+    `key_counts`. For rows culled elsewhere (render/temporal_culling.py); then `write_keyed`."""
+    keys = np.empty(len(handle), np.int32)
+    if _masked_keys_native is not None:
+        _masked_keys_native(model, handle, visible, keys, key_counts)
+        return keys
+    all_keys = handle.astype(np.int64) * 2 + (_determinant3(model[:, :3, :3]) < 0)
+    keys[:] = np.where(visible, all_keys, -1)
+    key_counts[:] = np.bincount(keys[keys >= 0], minlength=len(key_counts))[: len(key_counts)]
+    return keys
+
+
 _cull_run = native.inner(_cull_run_kernel)
 _spheres = native.inner(_spheres_kernel)
 _test_spheres = native.inner(_test_spheres_kernel)

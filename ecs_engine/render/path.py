@@ -115,6 +115,7 @@ class FrameInputs:
     material_count: int = 1  # Mesh.material is below it (the extractor checked)
     path_state: Any = None  # what the path's begin_frame keeps for its jobs
     row_base: int = 0  # where this view's rows start in `instances` (a shadow view's come after the camera's)
+    ahead: Any = None  # the FrameData, where the culling decided the camera's rows ahead (temporal)
 
 
 @dataclass

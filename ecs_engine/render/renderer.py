@@ -31,9 +31,9 @@ from ..gpu.device import Device
 from ..gpu.frames import FrameRing
 from ..gpu.secondary import SecondaryBuffers
 from ..jobs import JobPool
-from .chunk_paths import RECORDERS, InstancedPath, PerEntityPath, check_recorder
+from .chunk_paths import RECORDERS, InstancedPath, PerEntityPath, check_recorder, default_recorder
 from .environment import EnvironmentMap
-from .frame_data import FrameData, FrameExtractor
+from .frame_data import FrameData, FrameExtractor, check_culling
 from .frame_jobs import FrameJobs, job_name
 from .frame_resources import FrameResources, frame_sets
 from .indirect_path import IndirectPath
@@ -65,10 +65,6 @@ MODES = tuple(PATHS)
 RECORDER_NAMES = tuple(RECORDERS)
 
 
-def default_recorder() -> str:
-    return "native" if native.AVAILABLE else "python"
-
-
 class Renderer:
     def __init__(
         self,
@@ -79,7 +75,7 @@ class Renderer:
         mode: str = "instanced",
         recorder: str | None = None,
         jobs: JobPool | None = None,
-        culling: bool = True,
+        culling: str | bool = "frustum",
         chunk_rows: int | None = None,
         native_recorder: Any = None,
         clear_color: tuple[float, float, float] = (0.02, 0.02, 0.03),
@@ -108,7 +104,7 @@ class Renderer:
         self.ambient = ambient
         self.jobs = jobs
         self._jobs_generation = jobs.generation if jobs is not None else 0
-        self.culling = culling
+        self.culling = check_culling(culling, mode)  # CULLING: frustum, temporal or none
         self.region: tuple[float, float, float, float] | None = None  # the view's part of the target (camera.py)
         self.extractor = FrameExtractor(lambda: self.jobs.threads if self.jobs is not None else 1, chunk_rows)
         self._native = native_recorder  # compiling one costs about a second: callers may share one
@@ -294,12 +290,12 @@ class Renderer:
         found = world.resources.get(Materials)
         return found if found is not None else self.default_materials
 
-    def extract(self, world: World, width: int, height: int, materials: Materials | None = None) -> FrameData:
-        if materials is None:
-            materials = self.materials(world)
-        count, aside = len(materials), materials.set_aside()
-        aspect = width / height
-        return self.extractor.extract(world, aspect, len(self.meshes), self.culling, count, aside, self.region)
+    def extract(
+        self, world: World, width: int, height: int, materials: Materials | None = None, dt: float | None = None
+    ) -> FrameData:
+        materials = self.materials(world) if materials is None else materials
+        args = (self.culling, len(materials), materials.set_aside(), self.region, dt, self.meshes.bounds())
+        return self.extractor.extract(world, width / height, len(self.meshes), *args)
 
     def render(
         self,
@@ -309,8 +305,10 @@ class Renderer:
         extent: tuple[int, int] | None = None,
         wait: Any = None,
         signal: Any = None,
+        dt: float | None = None,
     ) -> FrameStats:
-        """Record and submit one frame. Headless targets read the image back when asked."""
+        """Record and submit one frame (`dt`: seconds since the last, for temporal culling).
+        Headless targets read the image back when asked."""
         materials = self.materials(world)
         self._blends = materials.blends
         if framebuffer is None:
@@ -319,7 +317,7 @@ class Renderer:
             self._follow_target()
         width, height = extent or (self.target.width, self.target.height)
         material_count = len(materials)
-        data = self.extract(world, width, height, materials)  # before any GPU state: a bad world fails here
+        data = self.extract(world, width, height, materials, dt)  # before any GPU state: a bad world fails here
         views = self.shadows.plan(world, data)  # lights with a Shadow: the views their maps are drawn from
         if self.environment.sync(world, self.jobs):  # a new Environment (the device was waited for)
             for each in self.per_frame:
@@ -353,6 +351,7 @@ class Renderer:
             bounds=self.meshes.bounds(),
             readback=readback,
             material_count=material_count,
+            ahead=data if data.masks is not None else None,
         )
         path = self.path
         path.begin_frame(inputs)

@@ -1,0 +1,312 @@
+"""`--culling temporal`: frustum culling that re-tests a row only when its state could have
+changed (seed 004's temporal coherence, conservative by construction; maths/coherence.py has
+the bound and why).
+
+Per table with a mesh the culler keeps, per row: visible or not, the time until which that
+holds, and the sphere it was tested with. Each frame it re-tests
+- every row of every table, when the frustum's shape (fov, aspect, near, far) or the speed
+  limits changed, or the camera moved or turned faster than the limits allow (a teleport; the
+  limits come from the camera's FlyCamera, or the `SpeedLimits` resource);
+- every row of a table whose rows came or went (spawns, destroys, moves between tables);
+- the rows whose time ran out: rows sit in buckets by expiry slot (1/120 s), so only the due
+  buckets are read (the seed decremented only its queue's head);
+- in a table whose ModelMatrix column was written since the last frame, the rows whose sphere
+  moved further than their own speed bound allows since their test (from Velocity and
+  AngularVelocity; none: any move), or changed size: a `world.set`, a teleport, a wrap-around.
+The result per row equals exact per-frame culling, by the bound (tests and `bench culling` check
+it against the exact test: no row missing); rows are never drawn that exact culling would cull,
+except where `min_interval` holds a row visible for longer to save re-tests.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .. import native
+from ..components import AngularVelocity, Mesh, ModelMatrix, Velocity
+from ..ecs.world import World
+from ..maths.coherence import coherence
+from ..maths.culling import bounding_spheres
+
+SLOT_S = 1.0 / 120.0  # expiry buckets' width
+HORIZON_S = 4.0  # a row is re-tested at least this often
+SLACK = 1e-6  # relative: float32 model matrices and the kernel's own rounding
+_MODEL = (ModelMatrix, "model")
+
+
+@dataclass(frozen=True)
+class SpeedLimits:
+    """World resource: how fast the camera may move (units/s) and turn (rad/s). Without it the
+    active camera's FlyCamera gives them (move_speed, and turn_speed on both axes at once)."""
+
+    move: float
+    turn: float
+
+    def __post_init__(self) -> None:
+        for name in ("move", "turn"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ValueError(f"SpeedLimits.{name} must be finite and >= 0, got {value!r}")
+
+
+DEFAULT_LIMITS = SpeedLimits(move=10.0, turn=math.pi)  # no controller: a camera moved by code
+
+
+def speed_limits(world: World, camera: int) -> SpeedLimits:
+    found = world.resources.get(SpeedLimits)
+    if found is not None:
+        return found
+    from ..components.camera_control import FlyCamera
+
+    if world.has(camera, FlyCamera):
+        fly = world.get(camera, FlyCamera)
+        return SpeedLimits(float(fly.move_speed), math.sqrt(2.0) * float(fly.turn_speed))
+    return DEFAULT_LIMITS
+
+
+@dataclass
+class _Rows:
+    """One table's rows as last tested."""
+
+    version: int
+    tick: int
+    visible: np.ndarray  # bool (n,)
+    slot: np.ndarray  # int64 (n,): the expiry bucket each row sits in
+    center: np.ndarray  # (n, 3) the spheres tested, in the world (the render origin moves)
+    radius: np.ndarray
+    speed: np.ndarray  # (n,) the centres' own speed bound
+    tested: np.ndarray  # (n,) when
+    buckets: dict[int, list[np.ndarray]] = field(default_factory=dict)
+
+
+@dataclass
+class _Camera:
+    eye: np.ndarray  # world, float64
+    rotation: np.ndarray  # (3, 3)
+    lens: np.ndarray
+    origin: np.ndarray
+    limits: SpeedLimits
+
+
+@dataclass
+class CullStats:
+    tested: int = 0  # rows tested this frame
+    everything: bool = False  # every row was (a frame that invalidated all)
+
+
+class TemporalCulling:
+    def __init__(self, min_interval: float = 0.0) -> None:
+        self.min_interval = float(min_interval)  # seconds a visible row is held at least
+        self.now = 0.0
+        self._rows: dict[int, _Rows] = {}
+        self._camera: _Camera | None = None
+        self._world: Any = None
+        self.stats = CullStats()
+
+    def reset(self) -> None:
+        self._rows.clear()
+        self._camera = None
+
+    def masks(
+        self, world: World, cam: Any, origin: np.ndarray, planes: np.ndarray, dt: float | None, bounds: Any
+    ) -> dict[int, np.ndarray]:
+        """Per table id with a Mesh and a ModelMatrix: the rows to draw (bool). `cam`: this
+        frame's CameraMatrices; `planes`: its frustum (render-relative); `dt`: seconds since
+        the last frame (None: unknown, so any camera move re-tests all); `bounds`: the mesh
+        registry's (centres, radii, index counts)."""
+        if world is not self._world:
+            self.reset()
+            self._world = world
+        step = 0.0 if dt is None else max(float(dt), 0.0)
+        self.now += step
+        camera = _Camera(
+            np.asarray(cam.position, np.float64),
+            np.asarray(cam.inverse_view, np.float64)[:3, :3],
+            np.asarray(cam.lens, np.float64),
+            np.asarray(origin, np.float64),
+            speed_limits(world, cam.entity),
+        )
+        if not self._within_limits(camera, dt):
+            self._rows.clear()
+        self._camera = camera
+        self.stats = CullStats(everything=not self._rows)
+        eye = camera.eye - camera.origin  # render-relative, as the planes and model matrices are
+        offsets = np.abs(planes[:, :3] @ eye + planes[:, 3])
+        out = {}
+        seen = set()
+        for batch in world.query(ModelMatrix, Mesh, write=()):
+            table = batch.table
+            seen.add(table.id)
+            state = self._rows.get(table.id)
+            tick = table.column_ticks[_MODEL]
+            if state is None or state.version != table.version:
+                state = self._rows[table.id] = self._test_all(batch, planes, eye, offsets, camera.limits, bounds, tick)
+            else:
+                due = self._due(state)
+                if tick != state.tick:
+                    due = np.union1d(due, self._moved(batch, state, bounds))
+                    state.tick = tick
+                if len(due):
+                    self._test(batch, state, due, planes, eye, offsets, camera.limits, bounds)
+            out[table.id] = state.visible
+        for gone in set(self._rows) - seen:
+            del self._rows[gone]
+        return out
+
+    # ------------------------------------------------------------------ invalidation
+    def _within_limits(self, camera: _Camera, dt: float | None) -> bool:
+        """Whether the rows' times still hold: the same frustum shape and limits, and
+        the camera moved and turned no faster than the limits since the last frame."""
+        last = self._camera
+        if last is None or last.limits != camera.limits:
+            return False
+        if not np.array_equal(last.lens, camera.lens):
+            return False
+        moved = float(np.linalg.norm(camera.eye - last.eye))
+        turned = _angle(last.rotation, camera.rotation)
+        if dt is None:
+            return moved == 0.0 and turned == 0.0
+        slack = SLACK * (1.0 + float(np.abs(camera.eye).max()))
+        return moved <= camera.limits.move * dt + slack and turned <= camera.limits.turn * dt + 1e-9
+
+    # ------------------------------------------------------------------------ tests
+    def _test_all(
+        self,
+        batch: Any,
+        planes: np.ndarray,
+        eye: np.ndarray,
+        offsets: np.ndarray,
+        limits: SpeedLimits,
+        bounds: Any,
+        tick: int,
+    ) -> _Rows:
+        n = len(batch)
+        self.stats.tested += n
+        state = _Rows(
+            batch.table.version,
+            tick,
+            np.zeros(n, np.bool_),
+            np.zeros(n, np.int64),
+            np.zeros((n, 3)),
+            np.zeros(n),
+            np.zeros(n),
+            np.zeros(n),
+        )
+        self._test(batch, state, np.arange(n), planes, eye, offsets, limits, bounds, count=False)
+        return state
+
+    def _test(
+        self,
+        batch: Any,
+        state: _Rows,
+        rows: np.ndarray,
+        planes: np.ndarray,
+        eye: np.ndarray,
+        offsets: np.ndarray,
+        limits: SpeedLimits,
+        bounds: Any,
+        count: bool = True,
+    ) -> None:
+        if count:
+            self.stats.tested += len(rows)
+        centers, radii, _ = bounds
+        model = batch[ModelMatrix].model[rows]
+        handle = batch[Mesh].handle[rows]
+        c, r = bounding_spheres(model, centers[handle], radii[handle])
+        r_test = r * (1.0 + SLACK) + SLACK * (1.0 + np.abs(c).max(axis=1, initial=0.0))  # never cull what exact keeps
+        speed = _own_speed(batch, rows, c - model[:, :3, 3])
+        distances = c @ planes[:, :3].T + planes[:, 3]
+        visible, keep = coherence(
+            distances, r_test, np.linalg.norm(c - eye, axis=1), offsets, limits.move, limits.turn, speed
+        )
+        if self.min_interval > 0.0:  # held visible: an extra draw instead of a re-test soon
+            held = keep < self.min_interval
+            visible = visible | held
+            keep = np.where(held, self.min_interval, keep)
+        state.visible[rows] = visible
+        origin = self._camera.origin if self._camera is not None else np.zeros(3)
+        state.center[rows], state.radius[rows], state.speed[rows] = c + origin, r, speed
+        state.tested[rows] = self.now
+        expiry = self.now + np.minimum(keep, HORIZON_S)
+        # the bucket that ends before the expiry; rows due now go to the next frame's
+        slot = np.maximum(np.floor(expiry / SLOT_S).astype(np.int64), int(self.now // SLOT_S) + 1)
+        state.slot[rows] = slot
+        order = np.argsort(slot, kind="stable")
+        cuts = np.flatnonzero(np.diff(slot[order])) + 1
+        for part in np.split(rows[order], cuts):
+            state.buckets.setdefault(int(state.slot[part[0]]), []).append(part)
+
+    def _due(self, state: _Rows) -> np.ndarray:
+        """Rows whose bucket's time has come (a row re-bucketed since sits later: skipped)."""
+        now_slot = int(self.now // SLOT_S)
+        parts = []
+        for slot in sorted(k for k in state.buckets if k <= now_slot):
+            for rows in state.buckets.pop(slot):
+                parts.append(rows[state.slot[rows] == slot])
+        return np.unique(np.concatenate(parts)) if parts else np.empty(0, np.int64)
+
+    def _moved(self, batch: Any, state: _Rows, bounds: Any) -> np.ndarray:
+        """Rows whose sphere moved beyond its own speed bound since its test, or changed size."""
+        centers, radii, _ = bounds
+        model = batch[ModelMatrix].model[: len(state.visible)]
+        handle = batch[Mesh].handle[: len(state.visible)]
+        origin = self._camera.origin if self._camera is not None else np.zeros(3)
+        if _moved_native is not None:
+            out = np.zeros(len(handle), np.bool_)
+            last = (state.center, state.radius, state.speed, state.tested)
+            _moved_native(model, handle, centers, radii, origin, *last, self.now, SLACK, out)
+            return np.flatnonzero(out)
+        c, r = bounding_spheres(model, centers[handle], radii[handle])
+        allowed = state.speed * (self.now - state.tested) + SLACK * (1.0 + np.abs(c).max(axis=1))
+        moved = np.linalg.norm(c + origin - state.center, axis=1) > allowed
+        resized = np.abs(r - state.radius) > SLACK * (1.0 + r)
+        return np.flatnonzero(moved | resized)
+
+
+def _own_speed(batch: Any, rows: np.ndarray, offset: np.ndarray) -> np.ndarray:
+    """Each sphere centre's speed bound: |Velocity| plus |AngularVelocity| times the centre's
+    distance from the pivot; 0 without them (the verification catches any other move)."""
+    speed = np.zeros(len(rows))
+    table = batch.table
+    if table.has(Velocity):
+        speed += np.linalg.norm(table.columns[(Velocity, "linear")][rows], axis=1)
+    if table.has(AngularVelocity):
+        speed += np.linalg.norm(table.columns[(AngularVelocity, "angular")][rows], axis=1) * np.linalg.norm(
+            offset, axis=1
+        )
+    return speed
+
+
+def _angle(a: np.ndarray, b: np.ndarray) -> float:
+    """The angle of the rotation taking orientation a to b (3x3 each)."""
+    cos = (np.trace(a.T @ b) - 1.0) / 2.0
+    return float(np.arccos(np.clip(cos, -1.0, 1.0)))
+
+
+def _moved_kernel(
+    model, handle, centers, radii, origin, center0, radius0, speed, tested, now, slack, out
+):  # pragma: no cover
+    for i in range(handle.shape[0]):
+        h = handle[i]
+        m = model[i]
+        ex, ey, ez = centers[h, 0], centers[h, 1], centers[h, 2]
+        cx = m[0, 0] * ex + m[0, 1] * ey + m[0, 2] * ez + m[0, 3]
+        cy = m[1, 0] * ex + m[1, 1] * ey + m[1, 2] * ez + m[1, 3]
+        cz = m[2, 0] * ex + m[2, 1] * ey + m[2, 2] * ez + m[2, 3]
+        sx = m[0, 0] * m[0, 0] + m[1, 0] * m[1, 0] + m[2, 0] * m[2, 0]
+        sy = m[0, 1] * m[0, 1] + m[1, 1] * m[1, 1] + m[2, 1] * m[2, 1]
+        sz = m[0, 2] * m[0, 2] + m[1, 2] * m[1, 2] + m[2, 2] * m[2, 2]
+        r = radii[h] * np.sqrt(max(sx, max(sy, sz)))
+        dx = cx + origin[0] - center0[i, 0]
+        dy = cy + origin[1] - center0[i, 1]
+        dz = cz + origin[2] - center0[i, 2]
+        big = max(abs(cx), max(abs(cy), abs(cz)))
+        allowed = speed[i] * (now - tested[i]) + slack * (1.0 + big)
+        out[i] = dx * dx + dy * dy + dz * dz > allowed * allowed or abs(r - radius0[i]) > slack * (1.0 + r)
+
+
+_moved_native = native.njit(_moved_kernel)
