@@ -195,3 +195,22 @@ def test_the_culling_flag_is_checked():
         check_culling("temporal", "indirect")
     with pytest.raises(ValueError, match=r"SpeedLimits\.move"):
         SpeedLimits(float("nan"), 1.0)
+
+
+def test_a_child_moved_by_its_parent_is_followed():
+    """A child's own Transform never changes; its parent's does: its world place (WorldMatrix)
+    is what the culler watches, not the ModelMatrix, which moves with the render origin."""
+    from ecs_engine.components import Parent
+
+    world = World()
+    add_camera(world, eye=(0.0, 0.0, 10.0), target=(0.0, 0.0, 0.0))
+    parent = world.spawn(Transform(position=(500.0, 0.0, 0.0)))
+    child = world.spawn(Transform(position=(0.0, 1.0, 0.0)), Parent(entity=parent), Mesh(handle=0))
+    world.spawn_batch(20, Transform(position=np.c_[np.arange(20.0), np.zeros((20, 2))]), Mesh(handle=0))
+    schedule, extractor = default_schedule(), FrameExtractor(lambda: 1)
+    for position in ((500.0, 0.0, 0.0), (500.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (-500.0, 0.0, 0.0)):
+        world.set(parent, Transform, position=np.array(position))
+        schedule.run(world, 1 / 60)
+        exact, drawn = exact_and_temporal(extractor, world, 1 / 60)
+        assert (drawn == exact).all()
+    assert world.get(child, Mesh).handle == 0

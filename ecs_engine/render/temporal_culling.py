@@ -10,7 +10,9 @@ holds, and the sphere it was tested with. Each frame it re-tests
 - every row of a table whose rows came or went (spawns, destroys, moves between tables);
 - the rows whose time ran out: rows sit in buckets by expiry slot (1/120 s), so only the due
   buckets are read (the seed decremented only its queue's head);
-- in a table whose ModelMatrix column was written since the last frame, the rows whose sphere
+- in a table whose rows' place in the world may have changed since the last frame (its
+  Transform, PreviousTransform or WorldMatrix columns written; its ModelMatrix, without a
+  Transform: not the ModelMatrix alone, which follows the render origin), the rows whose sphere
   moved further than their own speed bound allows since their test (from Velocity and
   AngularVelocity; none: any move), or changed size: a `world.set`, a teleport, a wrap-around.
 The result per row equals exact per-frame culling, by the bound (tests and `bench culling` check
@@ -27,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from .. import native
-from ..components import AngularVelocity, Mesh, ModelMatrix, Velocity
+from ..components import AngularVelocity, Mesh, ModelMatrix, PreviousTransform, Transform, Velocity, WorldMatrix
 from ..ecs.world import World
 from ..maths.coherence import coherence
 from ..maths.culling import bounding_spheres
@@ -73,7 +75,7 @@ class _Rows:
     """One table's rows as last tested."""
 
     version: int
-    tick: int
+    tick: tuple[int, ...]  # geometry_tick when last checked
     visible: np.ndarray  # bool (n,)
     slot: np.ndarray  # int64 (n,): the expiry bucket each row sits in
     center: np.ndarray  # (n, 3) the spheres tested, in the world (the render origin moves)
@@ -142,7 +144,7 @@ class TemporalCulling:
             table = batch.table
             seen.add(table.id)
             state = self._rows.get(table.id)
-            tick = table.column_ticks[_MODEL]
+            tick = geometry_tick(table)
             if state is None or state.version != table.version:
                 state = self._rows[table.id] = self._test_all(batch, planes, eye, offsets, camera.limits, bounds, tick)
             else:
@@ -182,7 +184,7 @@ class TemporalCulling:
         offsets: np.ndarray,
         limits: SpeedLimits,
         bounds: Any,
-        tick: int,
+        tick: tuple[int, ...],
     ) -> _Rows:
         n = len(batch)
         self.stats.tested += n
@@ -265,6 +267,19 @@ class TemporalCulling:
         moved = np.linalg.norm(c + origin - state.center, axis=1) > allowed
         resized = np.abs(r - state.radius) > SLACK * (1.0 + r)
         return np.flatnonzero(moved | resized)
+
+
+_GEOMETRY = (Transform, PreviousTransform, WorldMatrix)
+
+
+def geometry_tick(table: Any) -> tuple[int, ...]:
+    """The write ticks of what places a table's rows in the world. With a Transform, the
+    ModelMatrix is TransformSystem's (or HierarchySystem's, from WorldMatrix) function of them and
+    of the render origin, which moves with the camera every frame: a still table whose matrices
+    were only made relative to a new origin keeps its tick."""
+    if not table.has(Transform):
+        return (table.column_ticks[_MODEL],)
+    return tuple(tick for (ct, _), tick in table.column_ticks.items() if ct in _GEOMETRY)
 
 
 def _own_speed(batch: Any, rows: np.ndarray, offset: np.ndarray) -> np.ndarray:
