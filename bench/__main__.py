@@ -33,6 +33,7 @@ REGISTRY: dict[str, str] = {
     "schedule": "schedule",
     "scene-io": "scene_io",
     "hierarchy": "hierarchy",
+    "culling": "culling",
 }
 
 # One line each for the list in the usage text (the modules are not imported to print it).
@@ -47,6 +48,7 @@ SUMMARY: dict[str, str] = {
     "schedule": "the parallel schedule: 8 independent systems over 1M entities, 1 to 16 threads (CPU only)",
     "scene-io": "World.save and World.load of the scaling scene, 10k to 1M entities (CPU only)",
     "hierarchy": "HierarchySystem over 11k to 1.1M entities with Parent, plan kept and made again (CPU only)",
+    "culling": "temporal-coherence culling against per-frame frustum culling over camera paths, 10k to 1M (CPU only)",
 }
 
 # The commands that work from any folder once ecs_engine is installed.

@@ -13,7 +13,7 @@ import pytest
 
 from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
-from ecs_engine.components import Camera, Mesh, Transform, Velocity
+from ecs_engine.components import Camera, Mesh, ModelMatrix, Transform, Velocity
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.maths.camera import perspective, rotation_matrix, view_rotation, yaw_pitch_quat
 from ecs_engine.maths.coherence import NEVER, coherence, crossing_times
@@ -113,12 +113,13 @@ def exact_and_temporal(extractor: FrameExtractor, world: World, dt: float | None
 
 @pytest.mark.parametrize("compiled", [True, False])
 def test_temporal_culling_draws_what_exact_culling_draws_over_a_camera_path(compiled, monkeypatch):
-    from ecs_engine.render import temporal_culling
+    from ecs_engine.render import temporal_kernels
 
-    if compiled and temporal_culling._moved_native is None:
+    if compiled and temporal_kernels.moved_native is None:
         pytest.skip("ECS_ENGINE_NO_NUMBA set")
     if not compiled:
-        monkeypatch.setattr(temporal_culling, "_moved_native", None)
+        monkeypatch.setattr(temporal_kernels, "moved_native", None)
+        monkeypatch.setattr(temporal_kernels, "retest_native", None)
     rng = np.random.default_rng(3)
     world, camera, still = world_with_rows(rng)
     schedule = default_schedule()
@@ -214,3 +215,52 @@ def test_a_child_moved_by_its_parent_is_followed():
         exact, drawn = exact_and_temporal(extractor, world, 1 / 60)
         assert (drawn == exact).all()
     assert world.get(child, Mesh).handle == 0
+
+
+def test_the_compiled_test_equals_the_numpy_one():
+    from ecs_engine.render import temporal_culling, temporal_kernels
+
+    if temporal_kernels.retest_native is None:
+        pytest.skip("ECS_ENGINE_NO_NUMBA set")
+    rng = np.random.default_rng(9)
+    world = World()
+    world.spawn_batch(
+        2_000,
+        Transform(position=rng.uniform(-50, 50, (2_000, 3)), scale=rng.uniform(0.2, 3, (2_000, 3))),
+        Velocity(linear=rng.normal(size=(2_000, 3))),
+        Mesh(handle=0),
+    )
+    add_camera(world, eye=(0.0, 0.0, 30.0), target=(0.0, 0.0, 0.0))
+    default_schedule().run(world, 0.0)
+    data = FrameExtractor(lambda: 1).extract(world, 1.5, 1, "frustum")
+    batch = next(iter(world.query(ModelMatrix, Mesh, write=())))
+    rows = rng.choice(2_000, 500, replace=False)
+    eye = data.camera.position - data.origin
+    offsets = np.abs(data.planes[:, :3] @ eye + data.planes[:, 3])
+    args = (batch, rows, data.planes, eye, offsets, SpeedLimits(5.0, 1.0), Bounds().value)
+    compiled = temporal_culling.TemporalCulling._retest_native(*args)
+    reference = temporal_culling._retest_numpy(*args)
+    for got, want in zip(compiled, reference):
+        np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)
+
+
+def test_a_still_camera_lowers_the_assumed_speeds_and_a_start_raises_them():
+    from ecs_engine.render.temporal_culling import CALM_FRAMES, RUNGS
+
+    rng = np.random.default_rng(6)
+    world, camera, _ = world_with_rows(rng)
+    schedule, extractor = default_schedule(), FrameExtractor(lambda: 1)
+    dt, tested = 1 / 60, []
+    for _ in range(CALM_FRAMES * (len(RUNGS) + 1)):
+        schedule.run(world, dt)
+        exact, drawn = exact_and_temporal(extractor, world, dt)
+        assert (drawn == exact).all()
+        tested.append(extractor.temporal.stats.tested)
+    assert extractor.temporal.assumed.rung == [0, 0]  # still: the lowest rung on both axes
+    assert np.mean(tested[-CALM_FRAMES:]) < np.mean(tested[CALM_FRAMES : 2 * CALM_FRAMES])
+    cam = world.get(camera, Transform)
+    world.set(camera, Transform, position=cam.position + np.array([0.0, 0.0, -5.9 * dt]))  # at the limit
+    schedule.run(world, dt)
+    exact, drawn = exact_and_temporal(extractor, world, dt)
+    assert (drawn == exact).all() and extractor.temporal.stats.everything
+    assert extractor.temporal.assumed.rung[0] == len(RUNGS) - 1

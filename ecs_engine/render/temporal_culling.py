@@ -5,8 +5,9 @@ the bound and why).
 Per table with a mesh the culler keeps, per row: visible or not, the time until which that
 holds, and the sphere it was tested with. Each frame it re-tests
 - every row of every table, when the frustum's shape (fov, aspect, near, far) or the speed
-  limits changed, or the camera moved or turned faster than the limits allow (a teleport; the
-  limits come from the camera's FlyCamera, or the `SpeedLimits` resource);
+  limits changed, or the camera moved or turned faster than the times assumed: they assume a
+  rung of the limits (_Assumed: a still camera's times are long) and never more than the limits
+  (the camera's FlyCamera's, or the `SpeedLimits` resource), so a teleport re-tests all;
 - every row of a table whose rows came or went (spawns, destroys, moves between tables);
 - the rows whose time ran out: rows sit in buckets by expiry slot (1/120 s), so only the due
   buckets are read (the seed decremented only its queue's head);
@@ -23,16 +24,17 @@ except where `min_interval` holds a row visible for longer to save re-tests.
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from .. import native
 from ..components import AngularVelocity, Mesh, ModelMatrix, PreviousTransform, Transform, Velocity, WorldMatrix
 from ..ecs.world import World
 from ..maths.coherence import coherence
 from ..maths.culling import bounding_spheres
+from . import temporal_kernels as kernels
 
 SLOT_S = 1.0 / 120.0  # expiry buckets' width
 HORIZON_S = 4.0  # a row is re-tested at least this often
@@ -100,6 +102,42 @@ class CullStats:
     everything: bool = False  # every row was (a frame that invalidated all)
 
 
+RUNGS = (1 / 64, 1 / 16, 1 / 4, 1.0)  # fractions of the limits the rows' times may assume
+CALM_FRAMES = 30  # frames the camera stays well under a lower rung before the times assume it
+
+
+class _Assumed:
+    """The speeds the rows' times assume, per axis (move, turn) a rung of RUNGS times the limit.
+    A camera that goes faster than its rung raises it and every row is tested again (its time
+    assumed less); one that stayed at most half the next rung down for CALM_FRAMES frames lowers
+    it, with no test: the old times, made for faster, hold all the more. So a still or slow
+    camera gets long times, and the limits are only what a time may ever assume: beyond them
+    (a teleport) every row is tested again."""
+
+    def __init__(self) -> None:
+        self.rung = [len(RUNGS) - 1, len(RUNGS) - 1]
+        self.recent: deque[tuple[float, float]] = deque(maxlen=CALM_FRAMES)
+
+    def speeds(self, limits: SpeedLimits) -> SpeedLimits:
+        return SpeedLimits(limits.move * RUNGS[self.rung[0]], limits.turn * RUNGS[self.rung[1]])
+
+    def update(self, limits: SpeedLimits, move: float, turn: float) -> bool:
+        """Take this frame's speeds; False when they exceeded what the times assumed."""
+        self.recent.append((move, turn))
+        valid = True
+        for axis, (actual, limit) in enumerate(((move, limits.move), (turn, limits.turn))):
+            need = next((k for k, f in enumerate(RUNGS) if actual <= f * limit), None)
+            if need is None or need > self.rung[axis]:
+                valid = False
+                self.rung[axis] = len(RUNGS) - 1 if need is None else need
+                self.recent.clear()
+            elif self.rung[axis] > 0 and len(self.recent) == CALM_FRAMES:
+                lower = RUNGS[self.rung[axis] - 1] * limit
+                if max(r[axis] for r in self.recent) <= 0.5 * lower:
+                    self.rung[axis] -= 1
+        return valid
+
+
 class TemporalCulling:
     def __init__(self, min_interval: float = 0.0) -> None:
         self.min_interval = float(min_interval)  # seconds a visible row is held at least
@@ -108,6 +146,7 @@ class TemporalCulling:
         self._camera: _Camera | None = None
         self._world: Any = None
         self.stats = CullStats()
+        self.assumed = _Assumed()
 
     def reset(self) -> None:
         self._rows.clear()
@@ -132,10 +171,11 @@ class TemporalCulling:
             np.asarray(origin, np.float64),
             speed_limits(world, cam.entity),
         )
-        if not self._within_limits(camera, dt):
+        if not self._still_valid(camera, dt):
             self._rows.clear()
         self._camera = camera
         self.stats = CullStats(everything=not self._rows)
+        assumed = self.assumed.speeds(camera.limits)
         eye = camera.eye - camera.origin  # render-relative, as the planes and model matrices are
         offsets = np.abs(planes[:, :3] @ eye + planes[:, 3])
         out = {}
@@ -146,34 +186,34 @@ class TemporalCulling:
             state = self._rows.get(table.id)
             tick = geometry_tick(table)
             if state is None or state.version != table.version:
-                state = self._rows[table.id] = self._test_all(batch, planes, eye, offsets, camera.limits, bounds, tick)
+                state = self._rows[table.id] = self._test_all(batch, planes, eye, offsets, assumed, bounds, tick)
             else:
                 due = self._due(state)
                 if tick != state.tick:
                     due = np.union1d(due, self._moved(batch, state, bounds))
                     state.tick = tick
                 if len(due):
-                    self._test(batch, state, due, planes, eye, offsets, camera.limits, bounds)
+                    self._test(batch, state, due, planes, eye, offsets, assumed, bounds)
             out[table.id] = state.visible
         for gone in set(self._rows) - seen:
             del self._rows[gone]
         return out
 
     # ------------------------------------------------------------------ invalidation
-    def _within_limits(self, camera: _Camera, dt: float | None) -> bool:
-        """Whether the rows' times still hold: the same frustum shape and limits, and
-        the camera moved and turned no faster than the limits since the last frame."""
+    def _still_valid(self, camera: _Camera, dt: float | None) -> bool:
+        """Whether the rows' times still hold: the same frustum shape and limits, and the camera
+        moved and turned no faster than the speeds the times assumed (which this updates)."""
         last = self._camera
-        if last is None or last.limits != camera.limits:
-            return False
-        if not np.array_equal(last.lens, camera.lens):
+        if last is None or last.limits != camera.limits or not np.array_equal(last.lens, camera.lens):
+            self.assumed = _Assumed()
             return False
         moved = float(np.linalg.norm(camera.eye - last.eye))
         turned = _angle(last.rotation, camera.rotation)
-        if dt is None:
+        if dt is None or dt <= 0.0:
             return moved == 0.0 and turned == 0.0
-        slack = SLACK * (1.0 + float(np.abs(camera.eye).max()))
-        return moved <= camera.limits.move * dt + slack and turned <= camera.limits.turn * dt + 1e-9
+        moved = max(moved - SLACK * (1.0 + float(np.abs(camera.eye).max())), 0.0)
+        turned = max(turned - 1e-9, 0.0)
+        return self.assumed.update(camera.limits, moved / dt, turned / dt)
 
     # ------------------------------------------------------------------------ tests
     def _test_all(
@@ -215,16 +255,10 @@ class TemporalCulling:
     ) -> None:
         if count:
             self.stats.tested += len(rows)
-        centers, radii, _ = bounds
-        model = batch[ModelMatrix].model[rows]
-        handle = batch[Mesh].handle[rows]
-        c, r = bounding_spheres(model, centers[handle], radii[handle])
-        r_test = r * (1.0 + SLACK) + SLACK * (1.0 + np.abs(c).max(axis=1, initial=0.0))  # never cull what exact keeps
-        speed = _own_speed(batch, rows, c - model[:, :3, 3])
-        distances = c @ planes[:, :3].T + planes[:, 3]
-        visible, keep = coherence(
-            distances, r_test, np.linalg.norm(c - eye, axis=1), offsets, limits.move, limits.turn, speed
-        )
+        if kernels.retest_native is not None:
+            c, r, speed, visible, keep = self._retest_native(batch, rows, planes, eye, offsets, limits, bounds)
+        else:
+            c, r, speed, visible, keep = _retest_numpy(batch, rows, planes, eye, offsets, limits, bounds)
         if self.min_interval > 0.0:  # held visible: an extra draw instead of a re-test soon
             held = keep < self.min_interval
             visible = visible | held
@@ -242,6 +276,25 @@ class TemporalCulling:
         for part in np.split(rows[order], cuts):
             state.buckets.setdefault(int(state.slot[part[0]]), []).append(part)
 
+    @staticmethod
+    def _retest_native(
+        batch: Any,
+        rows: np.ndarray,
+        planes: np.ndarray,
+        eye: np.ndarray,
+        offsets: np.ndarray,
+        limits: SpeedLimits,
+        bounds: Any,
+    ) -> tuple[np.ndarray, ...]:
+        table, none = batch.table, np.zeros((0, 3))
+        linear = table.columns[(Velocity, "linear")] if table.has(Velocity) else none
+        angular = table.columns[(AngularVelocity, "angular")] if table.has(AngularVelocity) else none
+        out = np.empty((len(rows), 7))
+        model, handle = batch[ModelMatrix].model, batch[Mesh].handle
+        args = (planes, offsets, eye, limits.move, limits.turn, linear, angular, SLACK, out)
+        kernels.retest_native(rows, model, handle, bounds[0], bounds[1], *args)  # type: ignore[misc]
+        return out[:, :3], out[:, 3], out[:, 4], out[:, 5] > 0.5, out[:, 6]
+
     def _due(self, state: _Rows) -> np.ndarray:
         """Rows whose bucket's time has come (a row re-bucketed since sits later: skipped)."""
         now_slot = int(self.now // SLOT_S)
@@ -257,10 +310,10 @@ class TemporalCulling:
         model = batch[ModelMatrix].model[: len(state.visible)]
         handle = batch[Mesh].handle[: len(state.visible)]
         origin = self._camera.origin if self._camera is not None else np.zeros(3)
-        if _moved_native is not None:
+        if kernels.moved_native is not None:
             out = np.zeros(len(handle), np.bool_)
             last = (state.center, state.radius, state.speed, state.tested)
-            _moved_native(model, handle, centers, radii, origin, *last, self.now, SLACK, out)
+            kernels.moved_native(model, handle, centers, radii, origin, *last, self.now, SLACK, out)
             return np.flatnonzero(out)
         c, r = bounding_spheres(model, centers[handle], radii[handle])
         allowed = state.speed * (self.now - state.tested) + SLACK * (1.0 + np.abs(c).max(axis=1))
@@ -282,6 +335,28 @@ def geometry_tick(table: Any) -> tuple[int, ...]:
     return tuple(tick for (ct, _), tick in table.column_ticks.items() if ct in _GEOMETRY)
 
 
+def _retest_numpy(
+    batch: Any,
+    rows: np.ndarray,
+    planes: np.ndarray,
+    eye: np.ndarray,
+    offsets: np.ndarray,
+    limits: SpeedLimits,
+    bounds: Any,
+) -> tuple[np.ndarray, ...]:
+    """The rows' spheres, own speed bounds, state and seconds kept (temporal_kernels.py's test)."""
+    centers, radii, _ = bounds
+    model = batch[ModelMatrix].model[rows]
+    handle = batch[Mesh].handle[rows]
+    c, r = bounding_spheres(model, centers[handle], radii[handle])
+    r_test = r * (1.0 + SLACK) + SLACK * (1.0 + np.abs(c).max(axis=1, initial=0.0))  # never cull what exact keeps
+    speed = _own_speed(batch, rows, c - model[:, :3, 3])
+    distances = c @ planes[:, :3].T + planes[:, 3]
+    far = np.linalg.norm(c - eye, axis=1)
+    visible, keep = coherence(distances, r_test, far, offsets, limits.move, limits.turn, speed)
+    return c, r, speed, visible, keep
+
+
 def _own_speed(batch: Any, rows: np.ndarray, offset: np.ndarray) -> np.ndarray:
     """Each sphere centre's speed bound: |Velocity| plus |AngularVelocity| times the centre's
     distance from the pivot; 0 without them (the verification catches any other move)."""
@@ -300,28 +375,3 @@ def _angle(a: np.ndarray, b: np.ndarray) -> float:
     """The angle of the rotation taking orientation a to b (3x3 each)."""
     cos = (np.trace(a.T @ b) - 1.0) / 2.0
     return float(np.arccos(np.clip(cos, -1.0, 1.0)))
-
-
-def _moved_kernel(
-    model, handle, centers, radii, origin, center0, radius0, speed, tested, now, slack, out
-):  # pragma: no cover
-    for i in range(handle.shape[0]):
-        h = handle[i]
-        m = model[i]
-        ex, ey, ez = centers[h, 0], centers[h, 1], centers[h, 2]
-        cx = m[0, 0] * ex + m[0, 1] * ey + m[0, 2] * ez + m[0, 3]
-        cy = m[1, 0] * ex + m[1, 1] * ey + m[1, 2] * ez + m[1, 3]
-        cz = m[2, 0] * ex + m[2, 1] * ey + m[2, 2] * ez + m[2, 3]
-        sx = m[0, 0] * m[0, 0] + m[1, 0] * m[1, 0] + m[2, 0] * m[2, 0]
-        sy = m[0, 1] * m[0, 1] + m[1, 1] * m[1, 1] + m[2, 1] * m[2, 1]
-        sz = m[0, 2] * m[0, 2] + m[1, 2] * m[1, 2] + m[2, 2] * m[2, 2]
-        r = radii[h] * np.sqrt(max(sx, max(sy, sz)))
-        dx = cx + origin[0] - center0[i, 0]
-        dy = cy + origin[1] - center0[i, 1]
-        dz = cz + origin[2] - center0[i, 2]
-        big = max(abs(cx), max(abs(cy), abs(cz)))
-        allowed = speed[i] * (now - tested[i]) + slack * (1.0 + big)
-        out[i] = dx * dx + dy * dy + dz * dz > allowed * allowed or abs(r - radius0[i]) > slack * (1.0 + r)
-
-
-_moved_native = native.njit(_moved_kernel)
