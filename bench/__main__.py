@@ -138,6 +138,8 @@ def main(argv: list[str] | None = None, prog: str = COMMANDS[1]) -> int:
     )
     progress.note(f"results go to {Path(args.out).resolve()}")
     doc = module.run(args, machine, progress)
+    if doc is None:  # the benchmark only redrew an earlier result (culling --plot)
+        return 0
     path = Path(args.out) / f"{name}-{machine['slug']}.json"
     write_json(doc, path)
     progress.note(f"wrote {path.resolve()}")
