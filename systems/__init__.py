@@ -1,8 +1,10 @@
 """Stock systems: the fixed step's snapshot for interpolation, motion, springs, orbits, the fly
-camera, the render origin, the transform (matrices) and the hierarchy (parents' transforms)."""
+camera, the render origin, the transform (matrices) and the hierarchy (parents' transforms); the
+input resource they and games read (InputState)."""
 
-from .camera_control import FlyCameraSystem, InputState
+from .camera_control import FlyCameraSystem
 from .hierarchy import HierarchySystem
+from .input_state import InputState
 from .interpolation import SnapshotSystem
 from .motion import MotionSystem
 from .orbit import OrbitSystem
