@@ -5,6 +5,9 @@ saved and loaded, and a bad one is a warning and the defaults, the file left as 
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
 
 import pytest
 
@@ -172,3 +175,21 @@ def test_a_bad_user_file_is_a_warning_and_the_defaults_and_stays_as_it_was(confi
     path.write_text('{"version": 1, "actions": {"fire": ["f"]}}')
     assert load_bindings(DEFAULTS, "asteroids", warn=said.append).bound("fire") == ["f"] and len(said) == 1
 
+
+def test_play_with_a_bad_bindings_file_warns_once_and_plays(config_home):
+    path = bindings_file("asteroids")
+    path.parent.mkdir(parents=True)
+    path.write_text("{not json")
+    env = dict(os.environ)
+    env.pop("DISPLAY", None)
+    run = subprocess.run(
+        [sys.executable, "-m", "ecs_engine", "play", "asteroids", "--headless", "--frames", "3"]
+        + ["--width", "96", "--height", "64"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
+    )
+    assert run.returncode == 0, run.stderr
+    assert run.stderr.count("warning: input bindings") == 1 and "not JSON" in run.stderr
+    assert "Traceback" not in run.stderr and path.read_text() == "{not json"
