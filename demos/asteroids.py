@@ -1,7 +1,8 @@
 """Asteroids: a ship on a wrapping field of thousands of spinning rocks (up to 100,000 as the
-levels rise), flown with the keyboard and mouse or by a bot. The game itself is components and
-systems (asteroids_game.py, asteroids_bot.py); this module makes its meshes, materials, light,
-camera and schedule."""
+levels rise), flown with the keyboard, mouse or a gamepad (through actions,
+asteroids_controls.py) or by a bot. The game itself is components and systems
+(asteroids_game.py, asteroids_bot.py); this module makes its meshes, materials, light, camera and
+schedule."""
 
 from __future__ import annotations
 
@@ -17,8 +18,10 @@ from ecs_engine.maths.camera import look_rotation
 from ecs_engine.render.materials import Material, materials
 from ecs_engine.render.mesh_data import MeshData
 from ecs_engine.render.primitives import cone_mesh, sphere_mesh
+from ecs_engine.systems import ActionMap
 
 from .asteroids_bot import BotSystem
+from .asteroids_controls import ACTIONS, ShipControlSystem
 from .asteroids_game import (
     CollisionSystem,
     DamageSystem,
@@ -34,7 +37,7 @@ from .asteroids_game import (
 )
 from .asteroids_hud import draw_hud, summary
 
-__all__ = ["ShipControls", "build", "draw_hud", "schedule", "summary"]
+__all__ = ["ACTIONS", "ShipControls", "build", "controls", "draw_hud", "schedule", "summary"]
 
 
 def rock_mesh(seed: int = 5) -> MeshData:
@@ -89,12 +92,19 @@ def build(
     )
     world.resources[Game] = game
     world.resources[ShipControls] = ShipControls()
+    if ActionMap not in world.resources:  # `play` puts the user's bindings there first
+        world.resources[ActionMap] = ActionMap(ACTIONS)
     world.spawn(Transform(rotation=look_rotation((0.3, -1.0, -0.4))), DirectionalLight(illuminance=0.9))
     world.spawn(
         Transform(position=FollowCameraSystem.OFFSET, rotation=look_rotation(-FollowCameraSystem.OFFSET)),
         Camera(fov_y=math.radians(50.0), near=0.5, far=2000.0),
     )
     start(world, game)
+
+
+def controls() -> ShipControlSystem:
+    """The player's controls: the ActionMap's actions (bindings: ACTIONS) into ShipControls."""
+    return ShipControlSystem()
 
 
 def schedule(autoplay: bool = False, controls: object | None = None) -> Schedule:

@@ -65,12 +65,14 @@ class ShipHit:
 @dataclass
 class ShipControls:
     """What the ship does this step: turn (-1 right .. 1 left), thrust (-1 .. 1), fire, and
-    restart (after game over; a latch the restart system clears)."""
+    restart (after game over; a latch the restart system clears). `aim`, when set, is a direction
+    (x, z) on the plane the ship turns to face (at its turn rate) instead of `turn`."""
 
     turn: float = 0.0
     thrust: float = 0.0
     fire: bool = False
     restart: bool = False
+    aim: tuple[float, float] | None = None
 
 
 @dataclass
@@ -167,7 +169,7 @@ class ShipSystem(System):
             return
         for batch in world.query(Ship, Transform, Velocity):
             ship, t, v = batch[Ship], batch[Transform], batch[Velocity]
-            ship.heading += np.clip(controls.turn, -1.0, 1.0) * self.TURN * dt
+            ship.heading += self.turn_step(controls, ship.heading, dt)
             t.rotation = heading_rotation(ship.heading)
             ahead = forward(ship.heading)
             v.linear += ahead * (np.clip(controls.thrust, -1.0, 1.0) * self.ACCEL * dt)
@@ -187,6 +189,16 @@ class ShipSystem(System):
                     Collider(radius=0.25),
                     Mesh(handle=game.meshes.get("shot", 0), material=game.materials.get("shot", 0)),
                 )
+
+    @classmethod
+    def turn_step(cls, controls: ShipControls, heading: np.ndarray, dt: float) -> np.ndarray | float:
+        """This step's turn: toward `aim` (stopping on it), else as `turn` says."""
+        if controls.aim is None:
+            return np.clip(controls.turn, -1.0, 1.0) * cls.TURN * dt  # (this order: replays' hashes)
+        most = cls.TURN * dt
+        wanted = math.atan2(-controls.aim[0], -controls.aim[1])  # heading 0 looks down -Z
+        error = np.mod(wanted - heading + math.pi, 2.0 * math.pi) - math.pi
+        return np.clip(error, -most, most)
 
 
 class WrapSystem(System):

@@ -1,4 +1,5 @@
-"""Keyboard fly camera (the seed thesis's key map, Table 7.1) and the input resource it reads.
+"""Keyboard fly camera (the seed thesis's key map, Table 7.1), from the InputState resource
+(input_state.py).
 
 Left / Right arrows   yaw left / right (about world +Y)
 Up / Down arrows      pitch up / down (about the camera's +X)
@@ -9,10 +10,7 @@ E / Q                 up / down along world +Y
 
 from __future__ import annotations
 
-import difflib
-import functools
 import math
-from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
@@ -23,84 +21,14 @@ from ecs_engine.ecs.schedule import System
 from ecs_engine.ecs.world import World
 from ecs_engine.maths.camera import yaw_pitch_quat
 
+from .input_state import InputState
+
 # Pitch stops this short of straight up/down: at the pole yaw and roll coincide and the view
 # would flip when it is crossed.
 PITCH_LIMIT = 0.5 * math.pi - 0.01
 TAU = 2.0 * math.pi
 
 KEYS = frozenset({"left", "right", "up", "down", "w", "s", "a", "d", "e", "q"})
-
-
-MOUSE_BUTTONS = ("mouse_left", "mouse_right", "mouse_middle")
-
-
-@functools.cache
-def input_names() -> frozenset[str]:
-    """Every key GLFW names (KEY_LEFT_SHIFT is "left_shift", KEY_F12 "f12", KEY_0 "0") and the
-    mouse buttons: the names InputState takes."""
-    import glfw
-
-    keys = {k[4:].lower() for k in dir(glfw) if k.startswith("KEY_") and k not in ("KEY_UNKNOWN", "KEY_LAST")}
-    return frozenset(keys | set(MOUSE_BUTTONS))
-
-
-@dataclass
-class InputState:
-    """World resource filled by the window layer (or an input script): the keys and mouse
-    buttons held (`pressed`), those that went down or up since the last frame's systems ran
-    (`just_pressed`, `just_released`: a key pressed and released between two frames is in both),
-    the mouse position (pixels from the top left), its move, the scroll and the text typed since
-    then, and whether the UI owns the mouse or keyboard. The run loop calls `end_frame()` after
-    the systems ran."""
-
-    pressed: set[str] = field(default_factory=set)
-    just_pressed: set[str] = field(default_factory=set)
-    just_released: set[str] = field(default_factory=set)
-    mouse: tuple[float, float] = (0.0, 0.0)
-    mouse_delta: tuple[float, float] = (0.0, 0.0)
-    scroll: tuple[float, float] = (0.0, 0.0)
-    text: str = ""
-    mouse_captured_by_ui: bool = False
-    keyboard_captured_by_ui: bool = False
-
-    @staticmethod
-    def check(name: str) -> str:
-        if name not in input_names():
-            near = difflib.get_close_matches(name, sorted(input_names()), n=3)
-            hint = f"; did you mean {', '.join(near)}?" if near else ""
-            raise ValueError(f"unknown key or button {name!r}{hint}")
-        return name
-
-    def down(self, name: str) -> bool:
-        """Held now."""
-        return self.check(name) in self.pressed
-
-    def pressed_now(self, name: str) -> bool:
-        """Went down since the last frame."""
-        return self.check(name) in self.just_pressed
-
-    def released_now(self, name: str) -> bool:
-        """Went up since the last frame."""
-        return self.check(name) in self.just_released
-
-    def press(self, name: str) -> None:
-        self.pressed.add(name)
-        self.just_pressed.add(name)
-
-    def release(self, name: str) -> None:
-        if name in self.pressed:
-            self.pressed.discard(name)
-            self.just_released.add(name)
-
-    def move_mouse(self, x: float, y: float) -> None:
-        self.mouse_delta = (self.mouse_delta[0] + x - self.mouse[0], self.mouse_delta[1] + y - self.mouse[1])
-        self.mouse = (x, y)
-
-    def end_frame(self) -> None:
-        """The frame's systems saw the edges: clear them (the held keys stay)."""
-        self.just_pressed.clear()
-        self.just_released.clear()
-        self.mouse_delta, self.scroll, self.text = (0.0, 0.0), (0.0, 0.0), ""
 
 
 class FlyInput(NamedTuple):

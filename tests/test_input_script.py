@@ -38,6 +38,15 @@ def test_a_script_parses_and_applies_by_frame(tmp_path):
         ("1 press w\n", "unknown action 'press'"),
         ("1 down f99\n", "unknown key or button 'f99'"),
         ("1 down lefft\n", "did you mean left"),
+        ("1 axis gamepad_left_x\n", "line 1: expected 'FRAME axis AXIS VALUE'"),
+        ("1 axis gamepad_lefty 0.5\n", "unknown gamepad axis 'gamepad_lefty'; did you mean gamepad_left_y"),
+        ("1 axis gamepad_left_x 1.5\n", "an axis value is from -1 to 1, not 1.5"),
+        ("1 axis gamepad_left_x nan\n", "VALUE 'nan' is not a finite number"),
+        ("1 move 10\n", "expected 'FRAME move X Y'"),
+        ("1 move 10 up\n", "Y 'up' is not a finite number"),
+        ("1 scroll inf 0\n", "DX 'inf' is not a finite number"),
+        ("1\n", "line 1: expected one of FRAME down|up KEY, FRAME axis AXIS VALUE"),
+        ("1 down gamepad_aa\n", "did you mean gamepad_a"),
     ],
 )
 def test_a_bad_script_is_one_error_naming_the_line(tmp_path, text, message):
@@ -49,23 +58,54 @@ def test_a_bad_script_is_one_error_naming_the_line(tmp_path, text, message):
         read_script(tmp_path / "missing.txt")
 
 
+def test_gamepads_and_the_mouse_by_frame(tmp_path):
+    path = tmp_path / "pad.txt"
+    path.write_text(
+        "1 down gamepad_a\n1 axis gamepad_left_x -0.5\n2 move 100 50.5\n2 move 110 60\n"
+        "3 scroll 0 -1\n3 up gamepad_a\n3 axis gamepad_left_x 0\n"
+    )
+    script, state = read_script(path), InputState()
+    seen = []
+    for frame in range(4):
+        script.apply(frame, state)
+        seen.append((sorted(state.just_pressed), sorted(state.just_released), dict(state.axes), state.mouse))
+        seen[-1] += (state.mouse_delta, state.scroll)
+        state.end_frame()
+    assert seen[1][:3] == (["gamepad_a"], [], {"gamepad_left_x": -0.5}) and state.axis("gamepad_left_x") == 0.0
+    assert seen[2][3:] == ((110.0, 60.0), (110.0, 60.0), (0.0, 0.0))
+    assert seen[3][1] == ["gamepad_a"] and seen[3][2] == {"gamepad_left_x": 0.0} and seen[3][5] == (0.0, -1.0)
+
+
 def test_a_recording_replays_the_same_presses_and_releases(tmp_path):
     """Including a key pressed and released between two frames, and one released and pressed."""
     recorder = InputRecorder(tmp_path / "rec.txt")
     live = InputState()
-    events = {1: [("press", "w")], 2: [("press", "space"), ("release", "space")], 3: [("release", "w"), ("press", "w")]}
+    events = {
+        1: [("press", "w"), ("set_axis", "gamepad_right_trigger", 0.1 + 0.2)],
+        2: [("press", "space"), ("release", "space"), ("move_mouse", 3.25, 4.0), ("move_mouse", 7.0, 1 / 3)],
+        3: [("release", "w"), ("press", "w"), ("press", "gamepad_dpad_up"), ("set_axis", "gamepad_right_trigger", 0.0)],
+        4: [("move_mouse", 7.0, 1 / 3)],  # not a move
+    }
     seen = []
-    for frame in range(5):
-        for action, key in events.get(frame, []):
-            getattr(live, action)(key)
+
+    def snapshot(state):
+        return (set(state.pressed), set(state.just_pressed), set(state.just_released), dict(state.axes), state.mouse)
+
+    for frame in range(6):
+        for action, *args in events.get(frame, []):
+            getattr(live, action)(*args)
+        if frame == 5:
+            live.scroll = (0.0, 2.5)
         recorder.frame(frame, live)
-        seen.append((set(live.pressed), set(live.just_pressed), set(live.just_released)))
+        seen.append(snapshot(live) + (live.scroll,))
         live.end_frame()
     recorder.write()
+    text = (tmp_path / "rec.txt").read_text()
+    assert "1 axis gamepad_right_trigger 0.30000000000000004" in text and "4 move" not in text
     script, replay = read_script(tmp_path / "rec.txt"), InputState()
     for frame, want in enumerate(seen):
         script.apply(frame, replay)
-        assert (replay.pressed, replay.just_pressed, replay.just_released) == want, frame
+        assert snapshot(replay) + (replay.scroll,) == want, frame
         replay.end_frame()
 
 
@@ -94,10 +134,13 @@ def play(*args: str) -> subprocess.CompletedProcess:
 
 
 def test_a_replayed_game_ends_the_same_and_a_bad_script_stops_before_the_run(tmp_path):
-    """The player's keys from a script: the same final line twice; recording that run and
-    replaying the recording gives it again."""
+    """The player's keys, gamepad and mouse from a script: the same final line twice; recording
+    that run and replaying the recording gives it again."""
     script = tmp_path / "fly.txt"
-    script.write_text("5 down space\n5 down left\n40 up left\n60 down w\n120 up w\n150 up space\n")
+    script.write_text(
+        "5 down space\n5 down left\n40 up left\n60 down w\n80 axis gamepad_left_x 0.8\n"
+        "100 axis gamepad_left_x 0\n110 move 20 10\n115 down gamepad_a\n120 up w\n140 up gamepad_a\n150 up space\n"
+    )
     record = tmp_path / "rec.txt"
     runs = [play("--frames", "200", "--input-script", str(script), "--record-input", str(record))]
     runs.append(play("--frames", "200", "--input-script", str(record)))

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from ecs_engine import World
-from ecs_engine.app.play import KeyboardControls
+from ecs_engine.demos.asteroids_controls import ACTIONS, ShipControlSystem
 from ecs_engine.demos.asteroids_game import ShipControls
-from ecs_engine.systems import InputState
+from ecs_engine.systems import ActionMap, InputState
 
 
 def play(*args: str) -> subprocess.CompletedProcess:
@@ -53,11 +53,14 @@ def test_bad_arguments_are_one_clear_error():
         assert run.returncode == 2 and message in run.stderr and "Traceback" not in run.stderr, run.stderr
 
 
-def test_keys_become_ship_controls_unless_the_ui_has_the_keyboard():
+def test_keys_and_buttons_become_ship_controls_unless_the_ui_has_them():
+    """Through the game's actions: keys while the UI does not have the keyboard, mouse buttons
+    while it does not have the mouse, gamepads always."""
     world = World()
     controls = world.resources[ShipControls] = ShipControls()
+    world.resources[ActionMap] = ActionMap(ACTIONS)
     keys = world.resources[InputState] = InputState(pressed={"left", "w", "space"})
-    system = KeyboardControls(ShipControls)
+    system = ShipControlSystem()
     world.run_system(system, 0.0)
     assert (controls.turn, controls.thrust, controls.fire, controls.restart) == (1.0, 1.0, True, False)
     keys.pressed = {"d", "down", "r"}
@@ -66,9 +69,21 @@ def test_keys_become_ship_controls_unless_the_ui_has_the_keyboard():
     keys.pressed = set()
     world.run_system(system, 0.0)
     assert controls.restart  # a latch until the restart system takes it
-    keys.keyboard_captured_by_ui = True
+    keys.pressed, keys.keyboard_captured_by_ui = {"left", "w", "space"}, True
     world.run_system(system, 0.0)
     assert (controls.turn, controls.thrust, controls.fire) == (0.0, 0.0, False)
+    keys.pressed, keys.keyboard_captured_by_ui, keys.mouse_captured_by_ui = {"mouse_left"}, False, True
+    world.run_system(system, 0.0)
+    assert not controls.fire  # the click went to the UI
+    keys.mouse_captured_by_ui = False
+    world.run_system(system, 0.0)
+    assert controls.fire
+    keys.pressed, keys.keyboard_captured_by_ui, keys.mouse_captured_by_ui = {"gamepad_a"}, True, True
+    world.run_system(system, 0.0)
+    assert controls.fire  # the UI takes neither the pad's buttons ...
+    keys.set_axis("gamepad_left_x", 1.0)
+    world.run_system(system, 0.0)
+    assert controls.turn == -1.0  # ... nor its sticks
 
 
 def test_the_hud_restarts_the_game_after_game_over():
@@ -167,3 +182,48 @@ def test_the_windowed_game_takes_keys_and_restarts_from_the_hud():
     assert not game.over and game.health == 100.0  # restarted by R
     ship = world.query(Ship).entities()
     assert len(ship) == 1 and np.allclose(world.get(int(ship[0]), Transform).position, 0.0, atol=0.5)
+
+
+def test_the_hud_keeps_the_mouse_while_imgui_wants_it():
+    """A run's loop sets the input's mouse_captured_by_ui from ImGui's want_capture_mouse: over
+    the HUD a held left button fires nothing; off it, it fires. (Headless: a source whose input
+    is the world's, as the window's is, with the pointer fed to ImGui by hand.)"""
+    from imgui_bundle import imgui
+
+    from ecs_engine.app.loop import run
+    from ecs_engine.app.offscreen import OffscreenSource
+    from ecs_engine.app.play import GameSession, GameUI
+    from ecs_engine.app.settings import RunOptions
+    from ecs_engine.demos.asteroids_game import Game
+
+    seen: list[tuple[bool, bool, int]] = []
+    holder: dict = {}
+
+    class Probe(OffscreenSource):
+        def attach(self, session):
+            super().attach(session)
+            self.input = session.world.resources[InputState] = InputState(pressed={"mouse_left"})
+
+        def begin(self, session, frames_done):
+            io = imgui.get_io()
+            if frames_done == 3:
+                io.add_mouse_pos_event(20.0, 20.0)  # over the HUD window (at 12, 12)
+            if frames_done == 10:
+                io.add_mouse_pos_event(300.0, 200.0)  # over the game
+            if frames_done:
+                game = session.world.resources[Game]
+                seen.append((self.input.mouse_captured_by_ui, session.world.resources[ShipControls].fire, game.shots))
+            return super().begin(session, frames_done)
+
+    def make(options, source):
+        holder["session"] = GameSession(options, source, "asteroids", 1, False, 1)
+        return holder["session"]
+
+    options = RunOptions(scene="cube", width=320, height=240, frames=16, validate=True, quiet=True, headless=True)
+    result = run(options, Probe(), make_session=make, ui=lambda session, window: GameUI(session, window))
+    assert result.validation_messages == []
+    captured = [c for c, _, _ in seen]
+    assert captured[:3] == [False, False, False] and captured[4:9] == [True] * 5 and captured[-3:] == [False] * 3
+    assert all(fire == (not c) for c, fire, _ in seen)  # each frame's controls saw that frame's flag
+    shots = [n for _, _, n in seen]
+    assert shots[4] > 0 and shots[4] == shots[8] and shots[-1] > shots[8]  # no shots while over the HUD

@@ -48,3 +48,12 @@ def test_readme_games_example_runs():
         assert (hp == 6.0).sum() > 0 and (hp == 10.0).sum() > 0  # the ones near the bomb took 4
     finally:
         world.resources[JobPool].close()
+
+
+def test_readme_input_example_runs(config_home):
+    """The action map example: it saves into the config folder (the test's own, conftest)."""
+    scope = run_block("ActionMap(", "input")
+    from ecs_engine.app.bindings import bindings_file
+
+    assert scope["path"] == bindings_file("mygame") and scope["path"].is_relative_to(config_home)
+    assert scope["actions"].bound("turn") == ["a/d", "gamepad_left_x"]

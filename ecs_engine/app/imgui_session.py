@@ -56,6 +56,11 @@ class ImGuiSession:
     def wants_keyboard(self) -> bool:
         return bool(self.imgui.get_io().want_capture_keyboard)
 
+    @property
+    def wants_mouse(self) -> bool:
+        """The pointer is over a window of the UI, or a drag began on one."""
+        return bool(self.imgui.get_io().want_capture_mouse)
+
     def build(self, world: World, stats: Any, perf: PerfMonitor, dt: float, width: int, height: int) -> None:
         """This frame's UI, up to imgui.render(); the renderer draws it in the overlay subpass."""
         imgui = self.imgui

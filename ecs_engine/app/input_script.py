@@ -1,47 +1,87 @@
-"""Input scripts: key presses by frame, replayed into a run (`--input-script PATH`) or recorded
-from one (`--record-input PATH`), so a game can be tested and replayed headless.
+"""Input scripts: keys, buttons, gamepad axes and the mouse by frame, replayed into a run
+(`--input-script PATH`) or recorded from one (`--record-input PATH`), so a game can be tested and
+replayed headless.
 
-The format is text, one event a line: the frame (0-based, ascending), the action and the key,
-`#` starting a comment:
+The format is text, one event a line: the frame (0-based, ascending), the action and its
+arguments, `#` starting a comment:
 
-    # frame action key
-    10 down w
-    10 down space
-    70 up space
+    # frame action arguments
+    10 down w                    # a key, mouse button or gamepad button goes down ...
+    10 down gamepad_a
+    70 up gamepad_a              # ... or up
+    80 axis gamepad_left_x -0.5  # a gamepad axis' raw value, -1..1 (triggers 0..1)
+    90 move 412.5 120            # the mouse pointer, pixels from the top left of the view
+    95 scroll 0 -1               # the wheel
     130 up w
 
-Keys are the names the InputState resource uses: GLFW's key names in lower case without KEY_
-(`left_shift`, `f12`, `space`) and `mouse_left`, `mouse_right`, `mouse_middle`. Events of frame
-N are applied before frame N's systems run. A recording writes, for each frame, the keys that
-went down or up since the frame before, in this format, so replaying a recording gives the same
-held keys and the same presses and releases frame by frame. A bad script (an unknown key
-or action, a frame out of order, a line that is not three words) is one UsageError naming the
-file and the line, before the run starts.
+Names are the InputState resource's (ecs_engine.systems.input_state): GLFW's key names in lower
+case without KEY_ (`left_shift`, `f12`, `space`), `mouse_left`, `mouse_right`, `mouse_middle`,
+the gamepad buttons `gamepad_a` ... `gamepad_dpad_left` and the axes `gamepad_left_x` ...
+`gamepad_right_trigger` (a script's gamepad is every gamepad at once, as the names are).
+Events of frame N are applied before frame N's systems run; in a headless run the mouse is in
+the offscreen image's pixels (--width x --height). A recording writes, for each frame, the keys
+and buttons that went down or up since the frame before, the axes that changed, where the mouse
+ended up if it moved, and the scroll, in this format, so replaying a recording gives the same
+input frame by frame. Scripts of only `down` and `up` lines (the first version of the format)
+read as before. A bad script (an unknown name or action, a frame out of order, a value that is
+not a finite number, a line with the wrong number of words) is one UsageError naming the file
+and the line, before the run starts.
 """
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import UsageError
-from ..systems.camera_control import InputState
+from ..systems.input_state import InputState
 
-ACTIONS = ("down", "up")
+# action -> the words after it
+ACTIONS = {"down": ("KEY",), "up": ("KEY",), "axis": ("AXIS", "VALUE"), "move": ("X", "Y"), "scroll": ("DX", "DY")}
 
 
 @dataclass
 class InputScript:
-    events: dict[int, list[tuple[str, str]]] = field(default_factory=dict)  # frame -> (action, key)
+    events: dict[int, list[tuple[str, ...]]] = field(default_factory=dict)  # frame -> (action, *arguments)
 
     def apply(self, frame: int, state: InputState) -> None:
-        """This frame's events into the input state (held keys and this frame's edges)."""
-        for action, key in self.events.get(frame, ()):
+        """This frame's events into the input state (held keys, axes, mouse and this frame's edges)."""
+        for action, *args in self.events.get(frame, ()):
             if action == "down":
-                state.press(key)
+                state.press(args[0])
+            elif action == "up":
+                state.release(args[0])
+            elif action == "axis":
+                state.set_axis(args[0], float(args[1]))
+            elif action == "move":
+                state.move_mouse(float(args[0]), float(args[1]))
             else:
-                state.release(key)
+                state.scroll = (state.scroll[0] + float(args[0]), state.scroll[1] + float(args[1]))
+
+
+def _usage(action: str) -> str:
+    return f"FRAME {'down|up' if action in ('down', 'up') else action} {' '.join(ACTIONS[action])}"
+
+
+def _check_event(action: str, args: list[str]) -> None:
+    """A ValueError for an unknown name or a value that is not a finite number."""
+    names = ACTIONS[action]
+    for word, value in zip(names, args):
+        if word == "KEY":
+            InputState.check(value)
+        elif word == "AXIS":
+            InputState.check_axis(value)
+        else:
+            try:
+                number = float(value)
+            except ValueError:
+                number = math.nan
+            if not math.isfinite(number):
+                raise ValueError(f"{word} {value!r} is not a finite number")
+            if word == "VALUE" and abs(number) > 1.0:
+                raise ValueError(f"an axis value is from -1 to 1, not {value}")
 
 
 def read_script(path: str | os.PathLike[str]) -> InputScript:
@@ -56,9 +96,10 @@ def read_script(path: str | os.PathLike[str]) -> InputScript:
         if not words:
             continue
         where = f"input script {file}, line {number}"
-        if len(words) != 3:
-            raise UsageError(f"{where}: expected 'FRAME down|up KEY', got {line.strip()!r}")
-        frame_text, action, key = words
+        if len(words) < 2:
+            usage = ", ".join(_usage(a) for a in ("down", "axis", "move", "scroll"))
+            raise UsageError(f"{where}: expected one of {usage}; got {line.strip()!r}")
+        frame_text, action, *args = words
         try:
             frame = int(frame_text)
         except ValueError:
@@ -67,11 +108,13 @@ def read_script(path: str | os.PathLike[str]) -> InputScript:
             raise UsageError(f"{where}: frame {frame} comes before frame {last} (frames must not go back)")
         if action not in ACTIONS:
             raise UsageError(f"{where}: unknown action {action!r}; actions: {', '.join(ACTIONS)}")
+        if len(args) != len(ACTIONS[action]):
+            raise UsageError(f"{where}: expected '{_usage(action)}', got {line.strip()!r}")
         try:
-            InputState.check(key)
+            _check_event(action, args)
         except ValueError as exc:
             raise UsageError(f"{where}: {exc}") from None
-        script.events.setdefault(frame, []).append((action, key))
+        script.events.setdefault(frame, []).append((action, *args))
         last = frame
     return script
 
@@ -81,9 +124,20 @@ class InputRecorder:
 
     def __init__(self, path: str | os.PathLike[str]) -> None:
         self.path = Path(path)
-        self.lines = ["# recorded by ecs-engine --record-input: frame action key"]
+        self.lines = ["# recorded by ecs-engine --record-input: frame action arguments"]
+        self.mouse = (0.0, 0.0)  # a new InputState's
+        self.axes: dict[str, float] = {}
 
     def frame(self, frame: int, state: InputState) -> None:
+        if state.mouse != self.mouse:
+            self.mouse = state.mouse
+            self.lines.append(f"{frame} move {state.mouse[0]!r} {state.mouse[1]!r}")
+        for name, value in sorted(state.axes.items()):
+            if value != self.axes.get(name, 0.0):
+                self.lines.append(f"{frame} axis {name} {value!r}")
+        self.axes = dict(state.axes)
+        if state.scroll != (0.0, 0.0):
+            self.lines.append(f"{frame} scroll {state.scroll[0]!r} {state.scroll[1]!r}")
         for key in sorted(state.just_pressed | state.just_released):
             down, up = key in state.just_pressed, key in state.just_released
             # both: released then pressed again if it is held now, else pressed then released

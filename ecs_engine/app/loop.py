@@ -68,8 +68,11 @@ def run(
             t0 = time.perf_counter()
             if editor is not None and source.input is not None:
                 source.input.keyboard_captured_by_ui = editor.wants_keyboard  # keys typed into the UI
+                source.input.mouse_captured_by_ui = editor.wants_mouse  # over a UI window, or dragging one
             if script is not None or recorder is not None:
                 keys = held_keys(session)
+                if source.window is None:  # headless: a script's mouse is in the offscreen image's pixels
+                    keys.viewport = (float(options.width), float(options.height))
                 if script is not None:
                     script.apply(frames, keys)
                 if recorder is not None:

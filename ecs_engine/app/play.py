@@ -1,11 +1,13 @@
 """`ecs-engine play GAME`: a game from demos/ in a window (or headless), with its HUD.
 
 A game module provides `build(world, add_mesh, path, seed=, autoplay=, level=)`,
-`schedule(autoplay, controls)` (its systems), `draw_hud(imgui, world)` and `summary(world)` (the
-line printed at the end). The run is the engine's one loop (loop.py) with a `GameSession` (the
-game's world and schedule instead of a demo scene's) and a `GameUI` (the HUD on the ImGui
-session). Keys reach the game through the InputState resource, which `KeyboardControls` turns
-into the game's controls.
+`ACTIONS` (its actions' default bindings), `controls()` (the system turning actions into the
+game's controls), `schedule(autoplay, controls)` (its systems), `draw_hud(imgui, world)` and
+`summary(world)` (the line printed at the end). The run is the engine's one loop (loop.py) with a
+`GameSession` (the game's world and schedule instead of a demo scene's) and a `GameUI` (the HUD
+on the ImGui session). Keys, mouse and gamepads reach the game through the InputState resource
+and the ActionMap resource (the game's ACTIONS with the user's `input-<game>.json` over them,
+bindings.py), which ignores the mouse while the HUD has it and keys while it has the keyboard.
 """
 
 from __future__ import annotations
@@ -15,10 +17,12 @@ import importlib
 from dataclasses import replace
 from typing import Any
 
-from ..ecs.schedule import Schedule, System
+from ..ecs.schedule import Schedule
 from ..ecs.world import World
 from ..errors import UsageError
 from ..jobs import JobPool
+from ..systems.action_map import ActionMap
+from .bindings import load_bindings
 from .imgui_session import ImGuiSession
 from .perf import PerfMonitor
 from .session import FrameSource, Session
@@ -34,25 +38,6 @@ def game_module(name: str) -> Any:
     return importlib.import_module(GAMES[name])
 
 
-class KeyboardControls(System):
-    """Arrows or WASD turn and thrust, space fires, R restarts (from the InputState resource)."""
-
-    def __init__(self, controls_type: type) -> None:
-        from ..systems import InputState
-
-        super().__init__(reads=[InputState], writes=[controls_type], name="keyboard_controls")
-        self.controls_type, self.input_type = controls_type, InputState
-
-    def run(self, world: World, dt: float) -> None:
-        controls = world.resources[self.controls_type]
-        state = world.resources.get(self.input_type)
-        keys = set() if state is None or state.keyboard_captured_by_ui else state.pressed
-        controls.turn = float(("left" in keys or "a" in keys) - ("right" in keys or "d" in keys))
-        controls.thrust = float(("up" in keys or "w" in keys) - ("down" in keys or "s" in keys))
-        controls.fire = "space" in keys
-        controls.restart = controls.restart or "r" in keys  # a latch: the HUD's button sets it too
-
-
 class GameSession(Session):
     """A session whose world and schedule are the game's."""
 
@@ -65,8 +50,10 @@ class GameSession(Session):
     def _build(self, scene: str, path: str | None) -> tuple[World, Schedule]:
         world = World()
         world.resources[JobPool] = self.pool
+        if not self.autoplay:  # the bot needs no bindings (build puts the defaults there)
+            world.resources[ActionMap] = load_bindings(self.module.ACTIONS, self.game)
         self.module.build(world, self.gpu.meshes.add, seed=self.seed, autoplay=self.autoplay, level=self.level)
-        controls = None if self.autoplay else KeyboardControls(self.module.ShipControls)
+        controls = None if self.autoplay else self.module.controls()
         return world, self.module.schedule(autoplay=self.autoplay, controls=controls)
 
 

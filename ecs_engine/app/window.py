@@ -1,5 +1,6 @@
-"""The window frame source: a GLFW window with a Vulkan surface and swapchain, keyboard to the
-fly camera (an InputState resource in the session's world), wall-clock time.
+"""The window frame source: a GLFW window with a Vulkan surface and swapchain, keyboard, mouse
+and gamepads (polled once a frame, gamepads.py) into the InputState resource of the session's
+world, wall-clock time.
 
 The swapchain is recreated when the window is resized; while it is minimised (a framebuffer of
 size 0) no frame is drawn and the loop waits for events.
@@ -23,7 +24,8 @@ from ..gpu.render_pass import check_samples
 from ..gpu.swapchain import OutOfDate, Swapchain
 from ..render.mesh_registry import MeshRegistry
 from ..systems import InputState
-from ..systems.camera_control import input_names
+from ..systems.input_state import input_names
+from .gamepads import GamepadPoller
 from .report import save_png
 from .session import FrameTarget, Gpu, Session
 from .settings import MAX_DT, SIM_STEP, RunOptions
@@ -90,6 +92,7 @@ class WindowSource:
         self.max_frame_dt = MAX_DT
         self.window: Any = None
         self.input = InputState()
+        self.gamepads = GamepadPoller()
         self.frames: int | None = None
         self.minimised_waits = 0
         self.instance: Instance | None = None  # its validation messages outlive the run
@@ -187,6 +190,9 @@ class WindowSource:
         if self.on_frame is not None:
             self.on_frame(frames_done, glfw, self.window)
         glfw.poll_events()
+        self.gamepads.poll(glfw, self.input)
+        width, height = glfw.get_window_size(self.window)  # the units of the mouse position
+        self.input.viewport = (float(width), float(height))
         w, h = glfw.get_framebuffer_size(self.window)
         if w == 0 or h == 0:  # minimised: nothing to draw into
             glfw.wait_events_timeout(0.05)
