@@ -71,9 +71,9 @@ class DockLayout:
         scene shows there, centred and undistorted), or None before the first layout."""
         if self.central is None or width <= 0 or height <= 0:
             return None
-        x0, y0, x1, y1 = (round(v) for v in self.central)  # whole pixels: the view's pixels are the window's
-        x0, x1 = min(max(x0 / width, 0.0), 1.0), min(max(x1 / width, 0.0), 1.0)
-        y0, y1 = min(max(y0 / height, 0.0), 1.0), min(max(y1 / height, 0.0), 1.0)
+        px0, py0, px1, py1 = (round(v) for v in self.central)  # whole pixels: the view's pixels are the window's
+        x0, x1 = min(max(px0 / width, 0.0), 1.0), min(max(px1 / width, 0.0), 1.0)
+        y0, y1 = min(max(py0 / height, 0.0), 1.0), min(max(py1 / height, 0.0), 1.0)
         return (x0, y0, x1, y1) if x1 - x0 > 1e-3 and y1 - y0 > 1e-3 else None  # a collapsed node: whole window
 
     def build_default(self) -> None:
