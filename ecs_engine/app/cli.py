@@ -153,9 +153,11 @@ def render_flags() -> OneLineParser:
         help="write every frame's perf samples (CPU, GPU, record ms, psutil) to this JSON file at the end",
     )
     common.add_argument(
-        "--input-script", metavar="PATH", help="replay key presses by frame from this file (see app/input_script.py)"
+        "--input-script",
+        metavar="PATH",
+        help="replay input by frame (keys, buttons, pad axes, mouse, scroll) from this file (app/input_script.py)",
     )
-    common.add_argument("--record-input", metavar="PATH", help="write the run's key presses by frame to this file")
+    common.add_argument("--record-input", metavar="PATH", help="write the run's input by frame to this file")
     common.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show tracebacks")
     return common
 

@@ -71,8 +71,8 @@ class RunOptions:
     recorder: str | None = None  # native | python (None: native when numba is there)
     entities: int = 10_000  # the scaling scene's entity count
     perf_json: str | None = None  # write every frame's perf samples here at the end
-    input_script: str | None = None  # key presses by frame to replay (app/input_script.py)
-    record_input: str | None = None  # write the run's key presses by frame here at the end
+    input_script: str | None = None  # input by frame to replay (app/input_script.py)
+    record_input: str | None = None  # write the run's input by frame here at the end
     editor: bool = False  # the ImGui editor and Perf window (headless: drawn into the image)
     scenes: tuple[str, ...] = SEED_SCENES  # the editor's scene switcher
 
