@@ -238,7 +238,7 @@ def test_the_compiled_test_equals_the_numpy_one():
     eye = data.camera.position - data.origin
     offsets = np.abs(data.planes[:, :3] @ eye + data.planes[:, 3])
     args = (batch, rows, data.planes, eye, offsets, SpeedLimits(5.0, 1.0), Bounds().value)
-    compiled = temporal_culling.TemporalCulling._retest_native(*args)
+    compiled = temporal_culling._retest_compiled(*args)
     reference = temporal_culling._retest_numpy(*args)
     for got, want in zip(compiled, reference):
         np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)

@@ -91,8 +91,8 @@ class FileMenu:
             save_world(world, file, resources=scene_codecs(editor.meshes))
         except (EcsError, ValueError, OSError) as exc:
             return self._done(str(exc), failed=True)
-        if not is_scene_file(editor.settings.scene):  # the scene is now that file: Save writes there
-            editor.scenes = (*editor.scenes, str(file)) if str(file) not in editor.scenes else editor.scenes
+        if not is_scene_file(editor.settings.scene):  # offer the new file in the scene switcher
+            _listed(editor, str(file))
         return self._done(f"saved {len(world):,} entities to {file}")
 
     def open(self, editor: Any, path: str) -> bool:
@@ -102,9 +102,7 @@ class FileMenu:
             return self._done(f"not a {SCENE_FILE_SUFFIX} file: {file.name}", failed=True)
         if not file.is_file():
             return self._done(f"no scene file {file}", failed=True)
-        name = str(file)
-        if name not in editor.scenes:
-            editor.scenes = (*editor.scenes, name)
+        name = _listed(editor, str(file))
         editor.requested.scene = self.pending = name
         return self._done(f"opening {file}")
 
@@ -143,6 +141,13 @@ class FileMenu:
             self.dialog = None
             imgui.close_current_popup()
         imgui.end_popup()
+
+
+def _listed(editor: Any, name: str) -> str:
+    """`name` in the editor's scene switcher (added once)."""
+    if name not in editor.scenes:
+        editor.scenes = (*editor.scenes, name)
+    return name
 
 
 def _scene_files(path: str) -> list[Path]:

@@ -227,7 +227,6 @@ class TemporalCulling:
         tick: tuple[int, ...],
     ) -> _Rows:
         n = len(batch)
-        self.stats.tested += n
         state = _Rows(
             batch.table.version,
             tick,
@@ -238,7 +237,7 @@ class TemporalCulling:
             np.zeros(n),
             np.zeros(n),
         )
-        self._test(batch, state, np.arange(n), planes, eye, offsets, limits, bounds, count=False)
+        self._test(batch, state, np.arange(n), planes, eye, offsets, limits, bounds)
         return state
 
     def _test(
@@ -251,14 +250,10 @@ class TemporalCulling:
         offsets: np.ndarray,
         limits: SpeedLimits,
         bounds: Any,
-        count: bool = True,
     ) -> None:
-        if count:
-            self.stats.tested += len(rows)
-        if kernels.retest_native is not None:
-            c, r, speed, visible, keep = self._retest_native(batch, rows, planes, eye, offsets, limits, bounds)
-        else:
-            c, r, speed, visible, keep = _retest_numpy(batch, rows, planes, eye, offsets, limits, bounds)
+        self.stats.tested += len(rows)
+        retest = _retest_compiled if kernels.retest_native is not None else _retest_numpy
+        c, r, speed, visible, keep = retest(batch, rows, planes, eye, offsets, limits, bounds)
         if self.min_interval > 0.0:  # held visible: an extra draw instead of a re-test soon
             held = keep < self.min_interval
             visible = visible | held
@@ -275,25 +270,6 @@ class TemporalCulling:
         cuts = np.flatnonzero(np.diff(slot[order])) + 1
         for part in np.split(rows[order], cuts):
             state.buckets.setdefault(int(state.slot[part[0]]), []).append(part)
-
-    @staticmethod
-    def _retest_native(
-        batch: Any,
-        rows: np.ndarray,
-        planes: np.ndarray,
-        eye: np.ndarray,
-        offsets: np.ndarray,
-        limits: SpeedLimits,
-        bounds: Any,
-    ) -> tuple[np.ndarray, ...]:
-        table, none = batch.table, np.zeros((0, 3))
-        linear = table.columns[(Velocity, "linear")] if table.has(Velocity) else none
-        angular = table.columns[(AngularVelocity, "angular")] if table.has(AngularVelocity) else none
-        out = np.empty((len(rows), 7))
-        model, handle = batch[ModelMatrix].model, batch[Mesh].handle
-        args = (planes, offsets, eye, limits.move, limits.turn, linear, angular, SLACK, out)
-        kernels.retest_native(rows, model, handle, bounds[0], bounds[1], *args)  # type: ignore[misc]
-        return out[:, :3], out[:, 3], out[:, 4], out[:, 5] > 0.5, out[:, 6]
 
     def _due(self, state: _Rows) -> np.ndarray:
         """Rows whose bucket's time has come (a row re-bucketed since sits later: skipped)."""
@@ -333,6 +309,26 @@ def geometry_tick(table: Any) -> tuple[int, ...]:
     if not table.has(Transform):
         return (table.column_ticks[_MODEL],)
     return tuple(tick for (ct, _), tick in table.column_ticks.items() if ct in _GEOMETRY)
+
+
+def _retest_compiled(
+    batch: Any,
+    rows: np.ndarray,
+    planes: np.ndarray,
+    eye: np.ndarray,
+    offsets: np.ndarray,
+    limits: SpeedLimits,
+    bounds: Any,
+) -> tuple[np.ndarray, ...]:
+    """_retest_numpy's results from temporal_kernels.py's loop."""
+    table, none = batch.table, np.zeros((0, 3))
+    linear = table.columns[(Velocity, "linear")] if table.has(Velocity) else none
+    angular = table.columns[(AngularVelocity, "angular")] if table.has(AngularVelocity) else none
+    out = np.empty((len(rows), 7))
+    model, handle = batch[ModelMatrix].model, batch[Mesh].handle
+    args = (planes, offsets, eye, limits.move, limits.turn, linear, angular, SLACK, out)
+    kernels.retest_native(rows, model, handle, bounds[0], bounds[1], *args)  # type: ignore[misc]
+    return out[:, :3], out[:, 3], out[:, 4], out[:, 5] > 0.5, out[:, 6]
 
 
 def _retest_numpy(
