@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 from ..components.camera import active_camera
-from ..ecs.scene_file import load_world, save_world
+from ..ecs.scene_file import load_world
 from ..ecs.schedule import Schedule
 from ..ecs.timestep import FixedTimestep
 from ..ecs.world import World
@@ -171,11 +171,6 @@ class Session:
             build = scene_builder(scene, self.options.entities, self.options.lights, self.options.shadows)
             build(world, self.gpu.meshes.add, path)
         return world, default_schedule()
-
-    def save(self, path: str) -> None:
-        """Write the world to a scene file, its meshes, materials and environment by reference
-        where they can be made again (render/scene_assets.py). SceneFileError: the file is as it was."""
-        save_world(self.world, path, resources=scene_codecs(self.gpu.meshes))
 
     def apply(self, wanted: Settings) -> None:
         """Make `wanted` the settings in force, changing only what differs. All or nothing: what

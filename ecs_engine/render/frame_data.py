@@ -52,7 +52,7 @@ def check_culling(culling: str | bool, mode: str = "instanced") -> str:
     temporal in the indirect mode, whose compute shader culls every row on the GPU."""
     from ..errors import UsageError
 
-    name = {True: "frustum", False: "none"}.get(culling, culling) if isinstance(culling, bool) else culling
+    name = ("frustum" if culling else "none") if isinstance(culling, bool) else culling
     if name not in CULLING:
         raise UsageError(f"unknown culling {culling!r}; culling: {', '.join(CULLING)}")
     if name == "temporal" and mode == "indirect":
