@@ -66,6 +66,11 @@
 #define CULL_GROUP 256
 #define ROW_NOT_CASTER 1
 #define COMPACT_GROUP 64
+#define SET_OCCLUSION 2
+#define BINDING_VISIBILITY 0
+#define BINDING_PYRAMID 1
+#define BINDING_EARLY_DEPTH 2
+#define REDUCE_GROUP 8
 
 // The frame's uniforms. Positions are relative to the render origin (the camera, unless
 // RenderOrigin is pinned).
@@ -133,17 +138,23 @@ struct DrawCommand {  // 20 bytes, std430
     uint first_instance;        // offset 16
 };
 
-struct CullPush {  // 112 bytes, std430
+struct CullPush {  // 128 bytes, std430
     vec4 planes[6];             // offset 0: frustum planes (camera-relative, pointing inwards)
     uint plane_count;           // offset 96: 0: culling off
     uint row_end;               // offset 100: rows [first_row, row_end) in this dispatch (large counts take several)
     uint first_row;             // offset 104
     uint skip;                  // offset 108: rows whose misc.w has one of these bits are left out (a shadow view: ROW_NOT_CASTER)
+    uvec4 occlusion;            // offset 112: cull_late.comp: xy the depth pyramid's base (the target's size), z its levels, w 1: cull rows that cover no pixel centre
 };
 
 struct CompactPush {  // 8 bytes, std430
     uint key_count;             // offset 0
     uint mesh_count;            // offset 4: commands per winding list
+};
+
+struct ReducePush {  // 32 bytes, std430
+    uvec4 source;               // offset 0: xy the level read (the depth image's size for level 0), z its first float, w 1: read the depth image
+    uvec4 target;               // offset 16: xy the level written, z its first float, w 0
 };
 
 struct BillboardPush {  // 4 bytes, std430

@@ -103,7 +103,9 @@ def render_flags() -> OneLineParser:
         choices=CULLING,
         default="frustum",
         help="frustum: every row tested each frame (default); temporal: a row tested again only when the camera's "
-        "and its own speed limits say it could have changed side (not with --mode indirect); none: draw everything",
+        "and its own speed limits say it could have changed side (not with --mode indirect); occlusion: --mode "
+        "indirect only, the frustum and then what last frame's visible rows hide and what covers no pixel, on the "
+        "GPU (two-phase, a depth pyramid; the image is frustum culling's); none: draw everything",
     )
     common.add_argument(
         "--no-culling", dest="culling", action="store_const", const="none", help="draw everything (--culling none)"

@@ -44,12 +44,15 @@ MIN_CHUNK_ROWS = 16_384
 
 
 NOT_CASTER, NOT_RECEIVER = 1, 2
-CULLING = ("frustum", "temporal", "none")  # per frame; only when due (temporal_culling.py); off
+# per frame; only when due (temporal_culling.py); the frustum, then what is hidden (the indirect
+# mode: render/occlusion.py); off
+CULLING = ("frustum", "temporal", "occlusion", "none")
 
 
-def check_culling(culling: str | bool, mode: str = "instanced") -> str:
+def check_culling(culling: str | bool, mode: str | None = "instanced") -> str:
     """The culling method named (True: frustum, False: none); UsageError for an unknown one, or
-    temporal in the indirect mode, whose compute shader culls every row on the GPU."""
+    (unless `mode` is None) temporal in the indirect mode, whose compute shader culls every row on
+    the GPU, or occlusion in another (a CPU-culled mode given occlusion culls the frustum alone)."""
     from ..errors import UsageError
 
     name = ("frustum" if culling else "none") if isinstance(culling, bool) else culling
@@ -57,6 +60,8 @@ def check_culling(culling: str | bool, mode: str = "instanced") -> str:
         raise UsageError(f"unknown culling {culling!r}; culling: {', '.join(CULLING)}")
     if name == "temporal" and mode == "indirect":
         raise UsageError("--culling temporal is for the CPU-culled modes; the indirect mode culls on the GPU")
+    if name == "occlusion" and mode not in ("indirect", None):
+        raise UsageError("--culling occlusion needs --mode indirect: the depth pyramid is tested on the GPU")
     return str(name)
 
 
@@ -157,7 +162,7 @@ class FrameExtractor:
         rows are drawn apart (Materials.set_aside); `region`: the part of the target the view
         shows in (camera_matrices), culled to it; temporal culling needs `dt` (the seconds since
         the last frame) and `bounds` (the mesh registry's)."""
-        culling = check_culling(culling)
+        culling = check_culling(culling, None)
         cam = camera_matrices(world, aspect, region)
         origin = render_origin(world)
         origin_key = origin.tobytes()

@@ -23,6 +23,7 @@ ROW_NOT_CASTER in misc.w, which their cull leaves out.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -52,6 +53,7 @@ from .layouts import (
     UINT_BYTES,
 )
 from .mesh_registry import MergedMeshes
+from .occlusion import OcclusionCulling, can_cull
 from .path import ChunkResult, FrameInputs, MeshBounds, PathContext
 
 STATE_HEADER = DRAW_STATE.size // UINT_BYTES  # uints before the per-key counters
@@ -130,6 +132,7 @@ class IndirectPath:
         self.ctx = ctx
         self.vk = ctx.device.vk
         self.frames: list[_IndirectFrame] = []
+        self.occlusion: OcclusionCulling | None = None  # --culling occlusion, made on first use
         try:
             self._build(ctx)
         except BaseException:
@@ -248,7 +251,7 @@ class IndirectPath:
         f.key_counts, f.candidates = key_counts, candidates  # what the shadow views cull (shadow_indirect.py)
         self._sets[0], self._sets[1] = frame.descriptor_set, f.descriptor_set
         planes = None if frame.planes is None else frame.planes.astype(np.float32)
-        self._record_compute(cb, frame.slot, planes, candidates, keys)
+        self._record_compute(cb, frame, planes, candidates, keys)
         f.recorded = frame.bounds[2] // 3  # the triangles the counts will weigh
         vk = self.vk
         lib = vk.lib
@@ -299,41 +302,96 @@ class IndirectPath:
         table["sphere"][:, :3] = centers[mesh]
         table["sphere"][:, 3] = radii[mesh]
 
-    def _record_compute(self, cb: Any, slot: int, planes: np.ndarray | None, rows: int, keys: int) -> None:
-        """Into the primary, before the render pass: zero the counters, cull, write commands,
-        and copy the counters where the CPU can read them."""
+    def _record_compute(self, cb: Any, frame: FrameInputs, planes: np.ndarray | None, rows: int, keys: int) -> None:
+        """Into the primary, before the render pass: zero the counters, cull (with occlusion
+        culling: its early pass, depth and pyramid first, occlusion.py), write commands, and copy
+        the counters where the CPU can read them."""
         vk = self.vk
         lib = vk.lib
-        f = self.frames[slot]
-        to_compute, compute_to_compute, to_draw, to_host = self._barriers
-        stage = vk.VK_SHADER_STAGE_COMPUTE_BIT
+        f = self.frames[frame.slot]
+        to_compute, compute_to_compute, to_draw, to_host, drawn_to_compute = self._barriers
+        occlusion = self._occlusion_for(frame, planes, rows)
         # the previous frame in this slot read the commands and ids: its fence covered that
         lib.vkCmdFillBuffer(cb, f.state.handle, 0, f.state.size, 0)
+        if occlusion is not None:
+            occlusion.zero_visibility(cb)
         to_compute.record(lib, cb)
-        lib.vkCmdBindDescriptorSets(
-            cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.compute_layout, 0, 2, self._sets, 0, vk.ffi.NULL
-        )
-        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.cull)
+        layout = self.compute_layout if occlusion is None else occlusion.layout
+        lib.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 2, self._sets, 0, vk.ffi.NULL)
         push = self._push
         push["plane_count"] = 0
         if planes is not None:
             push["planes"][0, : len(planes)] = planes
             push["plane_count"] = len(planes)
+        cull = self.cull
+        if occlusion is not None:
+            occlusion.bind(cb)
+            push["occlusion"] = occlusion.push_value
+            self._cull_rows(cb, occlusion.early, rows)
+            self._compact(cb, keys, compute_to_compute, to_draw)
+            merged, key_counts = self.ctx.meshes.merged(), f.key_counts
+            assert key_counts is not None  # finish() set it
+            draw = partial(record_indirect_draws, vk, merged=merged, key_counts=key_counts, commands=f.commands)
+            occlusion.record_depth(cb, partial(self._early_draws, draw=draw, state=f.state))
+            drawn_to_compute.record(lib, cb)  # the early draws read ids and commands: both are rewritten
+            occlusion.record_pyramid(cb, compute_to_compute)
+            lib.vkCmdFillBuffer(cb, f.state.handle, 0, f.state.size, 0)
+            drawn_to_compute.record(lib, cb)  # the zeroed counters and the pyramid -> the late cull
+            cull = occlusion.late
+        self._cull_rows(cb, cull, rows)
+        self._compact(cb, keys, compute_to_compute, to_draw)
+        lib.vkCmdCopyBuffer(cb, f.state.handle, f.readback.handle, 1, f.copy_region)
+        to_host.record(lib, cb)
+
+    def _early_draws(self, cb: Any, pipelines: tuple[Any, Any], draw: Any, state: Buffer) -> None:
+        """The early rows' depth: the camera's set 0 and this frame's set 1 (graphics)."""
+        vk = self.vk
+        vk.lib.vkCmdBindDescriptorSets(
+            cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 2, self._sets, 0, vk.ffi.NULL
+        )
+        draw(cb, pipelines, state=state, offsets=self._offsets)
+
+    def _occlusion_for(self, frame: FrameInputs, planes: np.ndarray | None, rows: int) -> OcclusionCulling | None:
+        """The frame's occlusion culling, made on first use; None where the frame culls the
+        frustum alone (asked so, culling off, or a target that is not sampled once per pixel)."""
+        if not frame.occlusion or planes is None or not can_cull(self.ctx) or rows == 0:
+            return None
+        if self.occlusion is None:
+            self.occlusion = OcclusionCulling(
+                self.ctx, [self.ctx.frame_set_layout, self.set_layout.handle], self.layout
+            )
+        _, width, height = frame.target.key
+        self.occlusion.ensure(width, height, rows)
+        return self.occlusion
+
+    def _cull_rows(self, cb: Any, pipeline: Any, rows: int) -> None:
+        """One cull pass over rows [0, rows), in dispatches of at most maxComputeWorkGroupCount groups."""
+        vk = self.vk
+        lib = vk.lib
+        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, pipeline)
+        push = self._push
         step = self.max_groups * CULL_GROUP
         for first in range(0, rows, step):
             count = min(step, rows - first)
             push["row_end"] = first + count  # rows below this index exist
             push["first_row"] = first
-            lib.vkCmdPushConstants(cb, self.compute_layout, stage, 0, CULL_PUSH.size, self._push_ptr)
+            lib.vkCmdPushConstants(
+                cb, self.compute_layout, vk.VK_SHADER_STAGE_COMPUTE_BIT, 0, CULL_PUSH.size, self._push_ptr
+            )
             lib.vkCmdDispatch(cb, -(-count // CULL_GROUP), 1, 1)
+
+    def _compact(self, cb: Any, keys: int, compute_to_compute: Barrier, to_draw: Barrier) -> None:
+        """The non-empty keys' draw commands, then the barrier to the draws that read them."""
+        vk = self.vk
+        lib = vk.lib
         compute_to_compute.record(lib, cb)
         lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.compact)
         self._compact_push["key_count"], self._compact_push["mesh_count"] = keys, keys // 2
-        lib.vkCmdPushConstants(cb, self.compute_layout, stage, 0, COMPACT_PUSH.size, self._compact_ptr)
+        lib.vkCmdPushConstants(
+            cb, self.compute_layout, vk.VK_SHADER_STAGE_COMPUTE_BIT, 0, COMPACT_PUSH.size, self._compact_ptr
+        )
         lib.vkCmdDispatch(cb, -(-keys // COMPACT_GROUP), 1, 1)
         to_draw.record(lib, cb)
-        lib.vkCmdCopyBuffer(cb, f.state.handle, f.readback.handle, 1, f.copy_region)
-        to_host.record(lib, cb)
 
     def _record_draws(self, cb: Any, slot: int, merged: MergedMeshes, key_counts: np.ndarray) -> None:
         """Into the frame's secondary (viewport, scissor and sets already bound)."""
@@ -348,6 +406,9 @@ class IndirectPath:
             for b in (f.keys, f.ids, f.state, f.commands, f.readback):
                 b.destroy()
         self.frames = []
+        if self.__dict__.get("occlusion") is not None:
+            self.occlusion.destroy()  # type: ignore[union-attr]
+            self.occlusion = None
         for name in ("pipelines", "cull", "compact"):
             made = self.__dict__.pop(name, None)
             for pipeline in made if isinstance(made, tuple) else (made,) if made is not None else ():
@@ -364,7 +425,8 @@ class IndirectPath:
 
 def compute_barriers(vk: Any) -> list[Barrier]:
     """The compute passes' barriers, in order: the counters zeroed -> cull, cull -> compact, the
-    commands written -> the draws (and the counters' copy), the copy -> the host's read."""
+    commands written -> the draws (and the counters' copy), the copy -> the host's read; for
+    occlusion culling, the early draws and the pyramid -> the cleared counters and the late cull."""
     compute = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
     shader_rw = vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_SHADER_WRITE_BIT
     return [
@@ -385,6 +447,15 @@ def compute_barriers(vk: Any) -> list[Barrier]:
                 vk.VK_PIPELINE_STAGE_HOST_BIT,
                 vk.VK_ACCESS_TRANSFER_WRITE_BIT,
                 vk.VK_ACCESS_HOST_READ_BIT,
+            ),
+            (
+                vk.VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT
+                | vk.VK_PIPELINE_STAGE_VERTEX_SHADER_BIT
+                | vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
+                | vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
+                compute | vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
+                vk.VK_ACCESS_SHADER_WRITE_BIT | vk.VK_ACCESS_TRANSFER_WRITE_BIT,
+                shader_rw | vk.VK_ACCESS_TRANSFER_WRITE_BIT,
             ),
         )
     ]

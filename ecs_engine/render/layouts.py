@@ -2,7 +2,8 @@
 below are what the engine writes, and shaders/layouts.glsl is generated from them.
 
 Set 0 is the frame's (globals, lights, instance rows, materials, texture pages), shared by every pass and path;
-set 1 belongs to the indirect path (ids, key table, draw state, commands).
+set 1 belongs to the indirect path (ids, key table, draw state, commands); set 2 to its
+occlusion culling (last frame's visibility per row, the depth pyramid, the early depth image).
 """
 
 from __future__ import annotations
@@ -147,6 +148,25 @@ CULL_PUSH = Struct(
         ("row_end", "uint", "rows [first_row, row_end) in this dispatch (large counts take several)"),
         ("first_row", "uint"),
         ("skip", "uint", "rows whose misc.w has one of these bits are left out (a shadow view: ROW_NOT_CASTER)"),
+        (
+            "occlusion",
+            "uvec4",
+            "cull_late.comp: xy the depth pyramid's base (the target's size), z its levels, w 1: cull "
+            "rows that cover no pixel centre",
+        ),
+    ],
+)
+
+# depth_reduce.comp (render/occlusion.py): one level of the depth pyramid from the one below it
+REDUCE_PUSH = Struct(
+    "ReducePush",
+    [
+        (
+            "source",
+            "uvec4",
+            "xy the level read (the depth image's size for level 0), z its first float, w 1: read the depth image",
+        ),
+        ("target", "uvec4", "xy the level written, z its first float, w 0"),
     ],
 )
 
@@ -245,6 +265,10 @@ DEFERRED_WORDS = 512  # light mask words a workgroup holds at once (16,384 light
 CULL_GROUP = 256  # cull.comp's local size
 ROW_NOT_CASTER = 1  # Instance.misc.w bit (indirect mode): the row casts no shadow (cull.comp skips it in shadow views)
 COMPACT_GROUP = 64  # compact.comp's local size
+# two-phase occlusion culling (render/occlusion.py): set 2 of the cull passes, set 0 of the reduction
+SET_OCCLUSION = 2
+BINDING_VISIBILITY, BINDING_PYRAMID, BINDING_EARLY_DEPTH = range(3)
+REDUCE_GROUP = 8  # depth_reduce.comp's local size, each way
 
 STRUCTS = [
     GLOBALS,
@@ -256,6 +280,7 @@ STRUCTS = [
     DRAW_COMMAND,
     CULL_PUSH,
     COMPACT_PUSH,
+    REDUCE_PUSH,
     BILLBOARD_PUSH,
     TONE_MAP_PUSH,
     SHADOW_VIEW,
@@ -327,6 +352,11 @@ DEFINES = {
     "CULL_GROUP": CULL_GROUP,
     "ROW_NOT_CASTER": ROW_NOT_CASTER,
     "COMPACT_GROUP": COMPACT_GROUP,
+    "SET_OCCLUSION": SET_OCCLUSION,
+    "BINDING_VISIBILITY": BINDING_VISIBILITY,
+    "BINDING_PYRAMID": BINDING_PYRAMID,
+    "BINDING_EARLY_DEPTH": BINDING_EARLY_DEPTH,
+    "REDUCE_GROUP": REDUCE_GROUP,
 }
 
 

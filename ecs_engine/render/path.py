@@ -116,6 +116,7 @@ class FrameInputs:
     path_state: Any = None  # what the path's begin_frame keeps for its jobs
     row_base: int = 0  # where this view's rows start in `instances` (a shadow view's come after the camera's)
     ahead: Any = None  # the FrameData, where the culling decided the camera's rows ahead (temporal)
+    occlusion: bool = False  # --culling occlusion: the indirect path culls what is hidden too (occlusion.py)
 
 
 @dataclass

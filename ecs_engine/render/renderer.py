@@ -89,8 +89,7 @@ class Renderer:
     ) -> None:
         if mode not in PATHS:
             raise ValueError(f"unknown render mode {mode!r}; modes: {', '.join(MODES)}")
-        self.vk = device.vk
-        self.device = device
+        self.vk, self.device = device.vk, device
         self.check_fill(fill)  # before anything is made: a refusal leaves nothing to destroy
         check_tone_map(tone_map, exposure)
         check_light_culling(light_culling)
@@ -104,7 +103,7 @@ class Renderer:
         self.ambient = ambient
         self.jobs = jobs
         self._jobs_generation = jobs.generation if jobs is not None else 0
-        self.culling = check_culling(culling, mode)  # CULLING: frustum, temporal or none
+        self.culling = check_culling(culling, mode)  # CULLING: frustum, temporal, occlusion or none
         self.region: tuple[float, float, float, float] | None = None  # the view's part of the target (camera.py)
         self.extractor = FrameExtractor(lambda: self.jobs.threads if self.jobs is not None else 1, chunk_rows)
         self._native = native_recorder  # compiling one costs about a second: callers may share one
@@ -352,6 +351,7 @@ class Renderer:
             readback=readback,
             material_count=material_count,
             ahead=data if data.masks is not None else None,
+            occlusion=self.culling == "occlusion",
         )
         path = self.path
         path.begin_frame(inputs)

@@ -149,7 +149,7 @@ class IndirectShadows:
         lib = vk.lib
         compute, stage = vk.VK_PIPELINE_BIND_POINT_COMPUTE, vk.VK_SHADER_STAGE_COMPUTE_BIT
         layout = camera.compute_layout
-        to_compute, compute_to_compute, to_draw, to_host = self._barriers
+        to_compute, compute_to_compute, to_draw, to_host = self._barriers[:4]
         for b in buffers:  # the previous frame in this slot read them: its fence covered that
             lib.vkCmdFillBuffer(cb, b.state.handle, 0, b.state.size, 0)
         to_compute.record(lib, cb)

@@ -1,0 +1,285 @@
+"""Two-phase occlusion culling for the indirect mode (`--culling occlusion`), after zeux/niagara.
+
+Per frame, in the primary before the scene's render pass (IndirectPath._record_compute):
+1. early cull (cull_early.comp): the rows the last frame found visible, still in the frustum,
+   with an opaque one-sided material; compact.comp makes their draws;
+2. their depth alone, into this module's single-sample depth image (the shadow maps' depth-only
+   render pass, no bias; shadow_indirect.vert through the camera's set 0: the same position
+   arithmetic as mesh_indirect.vert);
+3. the depth pyramid (depth_reduce.comp): level k holds, per texel, the farthest depth of the
+   2^(k+1)-pixel square it covers, in a storage buffer;
+4. late cull (cull_late.comp): every row against the frustum and then its sphere's screen rect
+   against the pyramid; the survivors are the frame's draws, and their verdict is the next
+   frame's early set.
+
+Unlike niagara, the early rows are drawn again in the scene pass instead of into it: the scene's
+render pass (forward, deferred, HDR and MSAA forms, render/renderer.py) stays one pass, and the
+early pass costs their vertices alone. What is visible in the final image lies in front of the
+early depth on a pixel it covers (every early row passes the late test and is drawn), so the
+late test keeps it: the image is frustum culling's. A row that covers no pixel centre is culled
+too (sub-pixel culling): it could not have produced a fragment. Both need one sample per pixel
+and filled triangles, so with MSAA or wireframe the frame culls the frustum alone (`active`).
+
+The images, buffers and pipelines are shared by the frames in flight: the GPU runs frames in
+submission order and each frame's barriers order its writes after the last frame's reads.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..gpu.attachment import create_framebuffer
+from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
+from ..gpu.memory import DEVICE, Buffer, Image
+from ..gpu.pipeline import GraphicsPipelineSpec, compute_pipeline, graphics_pipeline, pipeline_layout
+from ..gpu.shadow_maps import SHADOW_FORMAT_NAME, create_shadow_pass
+from .chunk_paths import vertex_attributes
+from .layouts import (
+    BINDING_EARLY_DEPTH,
+    BINDING_PYRAMID,
+    BINDING_VISIBILITY,
+    CULL_PUSH,
+    MESH_VERTEX,
+    REDUCE_GROUP,
+    REDUCE_PUSH,
+    UINT_BYTES,
+)
+from .path import PathContext
+
+
+def pyramid_levels(width: int, height: int) -> list[tuple[int, int, int]]:
+    """(first float, width, height) of each level: halved, rounded up, down to one texel."""
+    levels, first = [], 0
+    w, h = width, height
+    while True:
+        w, h = (w + 1) // 2, (h + 1) // 2
+        levels.append((first, w, h))
+        first += w * h
+        if w == 1 and h == 1:
+            return levels
+
+
+def can_cull(ctx: PathContext) -> bool:
+    """Whether the target's pixels are sampled once, at their centres, from filled triangles."""
+    return ctx.samples == 1 and ctx.fill == "solid"
+
+
+class OcclusionCulling:
+    """The early depth, the pyramid, last frame's visibility per row, and their passes."""
+
+    def __init__(self, ctx: PathContext, sets: list[Any], graphics_layout: Any) -> None:
+        """`sets`: the cull passes' sets 0 and 1 (their layouts); `graphics_layout`: the
+        indirect draws' pipeline layout (sets 0 and 1), which the early depth draws share."""
+        self.ctx = ctx
+        vk = ctx.device.vk
+        self.vk = vk
+        self.size = (0, 0)
+        self.levels: list[tuple[int, int, int]] = []
+        self.depth: Image | None = None
+        self.framebuffer: Any = None
+        self.pyramid: Buffer | None = None
+        self.visibility: Buffer | None = None
+        self.fresh = False  # the visibility buffer is new: zero it before the first early pass
+        try:
+            self._build(ctx, sets, graphics_layout)
+        except BaseException:
+            self.destroy()  # what was made so far
+            raise
+
+    def _build(self, ctx: PathContext, sets: list[Any], graphics_layout: Any) -> None:
+        device, vk = ctx.device, self.vk
+        ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
+        sampled = vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
+        compute = vk.VK_SHADER_STAGE_COMPUTE_BIT
+        self.set_layout = DescriptorSetLayout(
+            device,
+            [
+                (BINDING_VISIBILITY, ssbo, compute),
+                (BINDING_PYRAMID, ssbo, compute),
+                (BINDING_EARLY_DEPTH, sampled, compute),
+            ],
+        )
+        self.pool = DescriptorPool(device, 1, {ssbo: 2, sampled: 1})
+        self.set = self.pool.allocate(self.set_layout)
+        self.layout = pipeline_layout(device, [*sets, self.set_layout.handle], [(compute, 0, CULL_PUSH.size)])
+        self.early = compute_pipeline(device, "cull_early.comp", self.layout)
+        self.late = compute_pipeline(device, "cull_late.comp", self.layout)
+        self.reduce = compute_pipeline(device, "depth_reduce.comp", self.layout)
+        self.render_pass = create_shadow_pass(device)  # depth alone: cleared, stored, then sampled
+        base = dict(
+            layout=graphics_layout,
+            render_pass=self.render_pass,
+            vertex_stride=MESH_VERTEX.itemsize,
+            vertex_attributes=vertex_attributes(vk, ("position",)),
+            color_attachments=0,
+        )
+        self.pipelines: tuple[Any, ...] = (
+            graphics_pipeline(device, GraphicsPipelineSpec("shadow_indirect.vert", None, **base)),
+        )
+        mirrored = GraphicsPipelineSpec("shadow_indirect.vert", None, front_face_ccw=False, **base)
+        self.pipelines = (self.pipelines[0], graphics_pipeline(device, mirrored))
+        self.sampler = vk.vkCreateSampler(
+            device.handle,
+            vk.VkSamplerCreateInfo(
+                magFilter=vk.VK_FILTER_NEAREST,
+                minFilter=vk.VK_FILTER_NEAREST,
+                addressModeU=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+                addressModeV=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+                addressModeW=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+            ),
+            None,
+        )
+        self._reduce_push = vk.ffi.new("uint32_t[8]")
+        self._set_array = vk.ffi.new("VkDescriptorSet[1]", [self.set])
+        self._clear = vk.ffi.new("VkClearValue[1]")  # depth 0: reverse-Z's far
+        self._begin: Any = None
+
+    # ------------------------------------------------------------ resources
+    def ensure(self, width: int, height: int, rows: int) -> None:
+        """The depth image and pyramid at the target's size, the visibility for `rows` rows.
+        Growing waits for the device: the frames in flight share them (sizes change rarely)."""
+        vk, device = self.vk, self.ctx.device
+        grow_rows = self.visibility is None or self.visibility.size < UINT_BYTES * max(rows, 1)
+        if (width, height) == self.size and not grow_rows:
+            return
+        device.wait_idle()
+        if grow_rows:
+            if self.visibility is not None:
+                self.visibility.destroy()
+            usage = vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
+            self.visibility = Buffer(device, UINT_BYTES * max(rows + rows // 2, 1024), usage, DEVICE)
+            self.fresh = True
+        if (width, height) != self.size:
+            self._release_images()
+            self.depth = Image(
+                device,
+                width,
+                height,
+                getattr(vk, SHADOW_FORMAT_NAME),
+                vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT,
+                vk.VK_IMAGE_ASPECT_DEPTH_BIT,
+            )
+            self.framebuffer = create_framebuffer(device, self.render_pass, [self.depth.view], width, height)
+            self.levels = pyramid_levels(width, height)
+            first, w, h = self.levels[-1]
+            self.pyramid = Buffer(device, 4 * (first + w * h), vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, DEVICE)
+            self.size = (width, height)
+            self._viewport = vk.ffi.new("VkViewport*", {"width": width, "height": height, "maxDepth": 1.0})
+            self._area = vk.ffi.new("VkRect2D*", {"extent": {"width": width, "height": height}})
+            self._begin = vk.ffi.new(
+                "VkRenderPassBeginInfo*",
+                {
+                    "sType": vk.VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO,
+                    "renderPass": self.render_pass,
+                    "framebuffer": self.framebuffer,
+                    "renderArea": {"extent": {"width": width, "height": height}},
+                    "clearValueCount": 1,
+                    "pClearValues": self._clear,
+                },
+            )
+        assert self.visibility is not None and self.pyramid is not None and self.depth is not None
+        write_buffers(
+            device,
+            self.set,
+            [(BINDING_VISIBILITY, vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, self.visibility)]
+            + [(BINDING_PYRAMID, vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, self.pyramid)],
+        )
+        info = vk.VkDescriptorImageInfo(
+            sampler=self.sampler,
+            imageView=self.depth.view,
+            imageLayout=vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL,
+        )
+        vk.vkUpdateDescriptorSets(
+            device.handle,
+            1,
+            [
+                vk.VkWriteDescriptorSet(
+                    dstSet=self.set,
+                    dstBinding=BINDING_EARLY_DEPTH,
+                    descriptorCount=1,
+                    descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+                    pImageInfo=[info],
+                )
+            ],
+            0,
+            None,
+        )
+
+    @property
+    def push_value(self) -> tuple[int, int, int, int]:
+        """CullPush.occlusion: the pyramid's base size and levels; sub-pixel culling on."""
+        return self.size[0], self.size[1], len(self.levels), 1
+
+    # ---------------------------------------------------------------- record
+    def bind(self, cb: Any) -> None:
+        """Set 2, after the cull passes' sets 0 and 1."""
+        vk = self.vk
+        vk.lib.vkCmdBindDescriptorSets(
+            cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.layout, 2, 1, self._set_array, 0, vk.ffi.NULL
+        )
+
+    def zero_visibility(self, cb: Any) -> None:
+        """A new visibility buffer says "not visible" everywhere (the frame's first barrier,
+        transfer -> compute, follows)."""
+        if self.fresh and self.visibility is not None:
+            self.vk.lib.vkCmdFillBuffer(cb, self.visibility.handle, 0, self.visibility.size, 0)
+            self.fresh = False
+
+    def record_depth(self, cb: Any, draw: Any) -> None:
+        """The early pass: `draw(cb, pipelines)` records the early rows' indirect draws."""
+        lib = self.vk.lib
+        lib.vkCmdBeginRenderPass(cb, self._begin, self.vk.VK_SUBPASS_CONTENTS_INLINE)
+        lib.vkCmdSetViewport(cb, 0, 1, self._viewport)
+        lib.vkCmdSetScissor(cb, 0, 1, self._area)
+        draw(cb, self.pipelines)
+        lib.vkCmdEndRenderPass(cb)
+
+    def record_pyramid(self, cb: Any, barrier: Any) -> None:
+        """Every level, each after the one below it (`barrier`: compute writes -> compute reads)."""
+        vk = self.vk
+        lib = vk.lib
+        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.reduce)
+        push = self._reduce_push
+        source = (self.size[0], self.size[1], 0, 1)  # level 0 reads the depth image
+        for k, (first, w, h) in enumerate(self.levels):
+            if k:
+                barrier.record(lib, cb)
+            push[0:8] = [*source, w, h, first, 0]
+            lib.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_COMPUTE_BIT, 0, REDUCE_PUSH.size, push)
+            lib.vkCmdDispatch(cb, -(-w // REDUCE_GROUP), -(-h // REDUCE_GROUP), 1)
+            source = (w, h, first, 0)
+
+    def destroy(self) -> None:
+        """Also when half built (the constructor failed): what exists goes."""
+        vk, handle = self.vk, self.ctx.device.handle
+        self._release_images()
+        if self.visibility is not None:
+            self.visibility.destroy()
+            self.visibility = None
+        owned = self.__dict__
+        for pipeline in (*owned.pop("pipelines", ()), *(owned.pop(n, None) for n in ("early", "late", "reduce"))):
+            if pipeline is not None:
+                vk.vkDestroyPipeline(handle, pipeline, None)
+        for name, destroy in (
+            ("layout", vk.vkDestroyPipelineLayout),
+            ("render_pass", vk.vkDestroyRenderPass),
+            ("sampler", vk.vkDestroySampler),
+        ):
+            made = owned.pop(name, None)
+            if made is not None:
+                destroy(handle, made, None)
+        for name in ("pool", "set_layout"):
+            made = owned.pop(name, None)
+            if made is not None:
+                made.destroy()
+
+    def _release_images(self) -> None:
+        vk, handle = self.vk, self.ctx.device.handle
+        if self.framebuffer is not None:
+            vk.vkDestroyFramebuffer(handle, self.framebuffer, None)
+            self.framebuffer = None
+        for owned in (self.depth, self.pyramid):
+            if owned is not None:
+                owned.destroy()
+        self.depth = self.pyramid = None
+        self.size = (0, 0)

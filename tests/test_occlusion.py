@@ -1,0 +1,107 @@
+"""Two-phase occlusion culling (render/occlusion.py): the image equals frustum culling's, frame
+after frame while things move, with far fewer rows drawn in a dense scene; the pyramid's levels;
+sub-pixel rows culled; refusals and fallbacks."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from gpu_context import headless_gpu
+
+from ecs_engine import World
+from ecs_engine.app.scenes import default_schedule
+from ecs_engine.components import Mesh, Transform
+from ecs_engine.demos import scaling
+from ecs_engine.demos.scene_kit import add_camera
+from ecs_engine.errors import UsageError
+from ecs_engine.render.occlusion import pyramid_levels
+from ecs_engine.render.primitives import cube_mesh
+from ecs_engine.render.renderer import Renderer
+
+W, H = 96, 64
+
+
+def scaling_world(gpu, entities: int) -> World:
+    world = World()
+    scaling.build(world, gpu.meshes.add, entities=entities)
+    return world
+
+
+def frames(gpu, world: World, culling: str, count: int, **kw):
+    """Per frame after a schedule step: (pixels, rows drawn)."""
+    renderer = Renderer(gpu.device, gpu.target, gpu.meshes, mode="indirect", culling=culling, **kw)
+    schedule = default_schedule()
+    out = []
+    try:
+        for _ in range(count):
+            schedule.run(world, 1 / 30)
+            stats = renderer.render(world, readback=True)
+            out.append((gpu.target.pixels()[..., :3].copy(), stats.instances))
+    finally:
+        renderer.destroy()
+    return out
+
+
+def test_images_equal_frustum_culling_while_everything_moves_and_fewer_rows_are_drawn():
+    with headless_gpu(W, H) as gpu:
+        saved = scaling_world(gpu, 4000)
+        world = scaling_world(gpu, 4000)
+        frustum = frames(gpu, saved, "frustum", 4)
+        occluded = frames(gpu, world, "occlusion", 4)
+    for (a, drawn_all), (b, drawn) in zip(frustum, occluded, strict=True):
+        assert a[..., :3].max() > 30
+        assert np.array_equal(a, b)
+        assert drawn <= drawn_all
+    # from the second frame on the early pass has last frame's set: what it hides is not drawn
+    assert all(drawn < 0.8 * drawn_all for (_, drawn_all), (_, drawn) in zip(frustum[1:], occluded[1:], strict=True))
+
+
+def tiny_and_one_big_cube(gpu) -> World:
+    """One cube filling the middle, and 200 cubes far smaller than a pixel beside it."""
+    world = World()
+    cube = gpu.meshes.add(cube_mesh())
+    rng = np.random.default_rng(3)
+    far = np.column_stack([rng.uniform(-9, 9, 200), rng.uniform(-6, 6, 200), np.full(200, -10.0)])
+    world.spawn_batch(200, Transform(position=far, scale=(0.001, 0.001, 0.001)), Mesh(handle=cube))
+    world.spawn(Transform(position=(0.0, 0.0, 0.0)), Mesh(handle=cube))
+    add_camera(world, eye=(0.0, 0.0, 6.0), target=(0.0, 0.0, 0.0))
+    return world
+
+
+def test_rows_that_cover_no_pixel_centre_are_not_drawn_and_the_image_is_unchanged():
+    with headless_gpu(W, H) as gpu:
+        frustum = frames(gpu, tiny_and_one_big_cube(gpu), "frustum", 2)
+        occluded = frames(gpu, tiny_and_one_big_cube(gpu), "occlusion", 2)
+    assert [n for _, n in frustum] == [201, 201]
+    assert [n for _, n in occluded] == [1, 1]
+    assert all(np.array_equal(a, b) for (a, _), (b, _) in zip(frustum, occluded, strict=True))
+
+
+def test_with_msaa_the_frame_culls_the_frustum_alone():
+    from ecs_engine.gpu.offscreen import OffscreenTarget
+
+    with headless_gpu(W, H) as gpu:
+        target = OffscreenTarget(gpu.device, W, H, samples=4)
+        gpu.owned.append(target)
+        world = tiny_and_one_big_cube(gpu)
+        renderer = Renderer(gpu.device, target, gpu.meshes, mode="indirect", culling="occlusion")
+        gpu.owned.append(renderer)
+        default_schedule().run(world, 0.0)
+        counts = [renderer.render(world, readback=True).instances for _ in range(2)]
+        assert counts == [201, 201]
+        assert renderer.path.occlusion is None  # never made
+
+
+def test_pyramid_levels_halve_rounding_up_to_one_texel():
+    levels = pyramid_levels(1280, 720)
+    assert [(w, h) for _, w, h in levels[:3]] == [(640, 360), (320, 180), (160, 90)]
+    assert levels[-1][1:] == (1, 1) and len(levels) == 11
+    firsts = [f for f, _, _ in levels]
+    assert firsts == [0] + list(np.cumsum([w * h for _, w, h in levels[:-1]]))
+    assert [(w, h) for _, w, h in pyramid_levels(5, 3)] == [(3, 2), (2, 1), (1, 1)]
+    assert [(w, h) for _, w, h in pyramid_levels(1, 1)] == [(1, 1)]
+
+
+def test_occlusion_culling_outside_the_indirect_mode_is_one_clear_refusal():
+    with headless_gpu(W, H) as gpu, pytest.raises(UsageError, match="--culling occlusion needs --mode indirect"):
+        Renderer(gpu.device, gpu.target, gpu.meshes, mode="instanced", culling="occlusion")
