@@ -121,13 +121,16 @@ def restore(world: Any, saved: list[np.ndarray]) -> None:
         batch[Orbit].phase[...] = next(values)
 
 
-def measure(world: Any, schedule: Any, renderer: Any, frames: int, warmup: int) -> dict[str, Any]:
+def measure(
+    world: Any, schedule: Any, renderer: Any, frames: int, warmup: int, dt: float | None = None
+) -> dict[str, Any]:
+    """Medians over `frames` after `warmup`; `dt` goes to the renderer (temporal culling needs it)."""
     record, systems, cpu, gpu, ends = [], [], [], [], []
     for i in range(warmup + frames):
         t0 = time.perf_counter()
         schedule.run(world, 1 / 60)
         t1 = time.perf_counter()
-        stats = renderer.render(world)
+        stats = renderer.render(world, dt=dt)
         now = time.perf_counter()
         if i >= warmup:
             record.append(stats.record_ms)

@@ -164,6 +164,41 @@ def test_scene_without_lights_builds_no_light_pipeline():
         assert gpu.meshes.add(cube_mesh()) == handle and len(gpu.meshes) == count  # an equal one too
 
 
+def test_upload_buffers_are_mapped_device_memory_or_host_memory_when_that_runs_out(monkeypatch):
+    from ecs_engine.errors import UsageError
+    from ecs_engine.gpu.allocator import BlockAllocator
+    from ecs_engine.gpu.memory import HOST, UPLOAD, Buffer
+
+    with headless_gpu() as gpu:
+        device, vk = gpu.device, gpu.device.vk
+        props = device.allocator.memory_properties
+        buffer = Buffer(device, 4096, vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, UPLOAD)
+        try:
+            flags = props.memoryTypes[device.allocator._memory_type(0xFFFFFFFF, UPLOAD)].propertyFlags
+            assert flags & vk.VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT
+            buffer.array(np.uint32)[:] = 7  # mapped
+            assert buffer.array(np.uint32)[-1] == 7
+        finally:
+            buffer.destroy()
+        real = BlockAllocator._allocate
+        asked = []
+
+        def bar_full(self, requirements, where, kind):
+            asked.append(where)
+            if where == UPLOAD:
+                raise UsageError("out of GPU memory allocating 64 MiB")
+            return real(self, requirements, where, kind)
+
+        monkeypatch.setattr(BlockAllocator, "_allocate", bar_full)
+        fallback = Buffer(device, 4096, vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, UPLOAD)
+        try:
+            assert asked == [UPLOAD, HOST]
+            fallback.array(np.uint32)[:] = 3
+            assert fallback.array(np.uint32)[0] == 3
+        finally:
+            fallback.destroy()
+
+
 def test_suballocator_serves_many_buffers_from_few_allocations():
     from ecs_engine.gpu.device import Device
     from ecs_engine.gpu.instance import Instance

@@ -20,6 +20,9 @@ from ..errors import UsageError
 BLOCK_SIZE = 64 * 2**20
 HOST = "host"  # HOST_VISIBLE | HOST_COHERENT, persistently mapped
 DEVICE = "device"  # DEVICE_LOCAL
+# DEVICE_LOCAL | HOST_VISIBLE | HOST_COHERENT where the device has it (resizable BAR: the GPU
+# reads at its own memory's speed, the CPU writes across the bus), else HOST; mapped
+UPLOAD = "upload"
 
 
 def _align(x: int, a: int) -> int:
@@ -85,8 +88,11 @@ class BlockAllocator:
     def _memory_type(self, type_bits: int, where: str) -> int:
         vk = self.vk
         props = self.memory_properties
+        host = vk.VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | vk.VK_MEMORY_PROPERTY_HOST_COHERENT_BIT
         if where == HOST:
-            wanted = [vk.VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | vk.VK_MEMORY_PROPERTY_HOST_COHERENT_BIT]
+            wanted = [host]
+        elif where == UPLOAD:
+            wanted = [host | vk.VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, host]
         else:
             wanted = [vk.VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0]
         for flags in wanted:
@@ -96,6 +102,16 @@ class BlockAllocator:
         raise UsageError(f"{self.device_name} has no {where} memory type for this resource")
 
     def allocate(self, requirements: Any, where: str, kind: str) -> Allocation:
+        """A suballocation; UPLOAD falls back to HOST when the bus-visible device memory is full
+        (a GPU without resizable BAR has 256 MiB of it)."""
+        if where == UPLOAD:
+            try:
+                return self._allocate(requirements, UPLOAD, kind)
+            except UsageError:
+                where = HOST
+        return self._allocate(requirements, where, kind)
+
+    def _allocate(self, requirements: Any, where: str, kind: str) -> Allocation:
         vk = self.vk
         type_index = self._memory_type(requirements.memoryTypeBits, where)
         blocks = self._blocks.setdefault((type_index, kind, where), [])
@@ -112,7 +128,7 @@ class BlockAllocator:
         except (vk.VkErrorOutOfDeviceMemory, vk.VkErrorOutOfHostMemory) as exc:
             raise UsageError(f"out of GPU memory allocating {block_size / 2**20:.0f} MiB") from exc
         self.allocate_calls += 1
-        mapped = vk.vkMapMemory(self.device_handle, memory, 0, block_size, 0) if where == HOST else None
+        mapped = vk.vkMapMemory(self.device_handle, memory, 0, block_size, 0) if where != DEVICE else None
         block = _Block(memory, block_size, mapped, [(0, block_size)])
         blocks.append(block)
         offset = block.take(size, alignment)

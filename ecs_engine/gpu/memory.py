@@ -12,10 +12,10 @@ from typing import Any
 
 import numpy as np
 
-from .allocator import DEVICE, HOST
+from .allocator import DEVICE, HOST, UPLOAD
 from .device import Device
 
-__all__ = ["DEVICE", "HOST", "Buffer", "Image", "upload"]
+__all__ = ["DEVICE", "HOST", "UPLOAD", "Buffer", "Image", "upload"]
 
 
 class Buffer:
@@ -39,8 +39,8 @@ class Buffer:
         vk.vkBindBufferMemory(device.handle, self.handle, self.allocation.memory, self.allocation.offset)
 
     def bytes(self) -> np.ndarray:
-        if self.where != HOST:
-            raise ValueError("only host buffers are mapped")
+        if self.where == DEVICE:
+            raise ValueError("only host and upload buffers are mapped")
         start = self.allocation.offset
         block = self.allocation.block
         if block.view is None:
