@@ -22,5 +22,5 @@ void main() {
     vec3 center;
     float radius;
     row_sphere(inst, center, radius);
-    if (in_frustum(center, radius)) append_row(i, inst.misc.y);
+    if (in_frustum(center, radius)) append_row(i, inst.misc.y, center, radius);
 }

@@ -25,5 +25,5 @@ void main() {
     row_sphere(inst, center, radius);
     bool visible = in_frustum(center, radius) && occlusion_visible(center, radius);
     row_visible[i] = visible ? 1u : 0u;
-    if (visible) append_row(i, inst.misc.y);
+    if (visible) append_row(i, inst.misc.y, center, radius);
 }

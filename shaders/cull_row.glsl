@@ -23,8 +23,30 @@ bool in_frustum(vec3 center, float radius) {
     return true;
 }
 
-// The row drawn: a slot in its key's region of ids.
-void append_row(uint i, uint key) {
-    uint slot = atomicAdd(visible[key], 1u);
-    ids_out[keys[key].base + slot] = i;
+// A level of detail's error may cover this many pixels (mesh_lod.py lod_for_screen_size's
+// threshold_px).
+const float LOD_PIXELS = 1.0;
+
+// The key the row is drawn with: with CULL_LOD, that of the coarsest level of its mesh whose
+// error, projected at the sphere's nearest point (the camera's globals g), covers at most
+// LOD_PIXELS; else its own. The same rule as mesh_lod.py lod_for_screen_size.
+uint draw_key(uint key, vec3 center, float radius) {
+    KeyInfo k = keys[key];
+    if ((pc.occlusion.w & CULL_LOD) == 0u || k.lod.y == 0u) return key;
+    mat4 P = g.projection;
+    float focal = 0.5 * float(pc.occlusion.y) * abs(P[1][1]);  // pixels a unit covers at distance 1
+    float nearest = P[2][3] != 0.0 ? length(center - g.eye.xyz) - radius : 1.0;
+    float scale = radius / k.sphere.w;
+    uint level = 0u;
+    for (uint l = 0u; l < min(k.lod.y, uint(MAX_LODS)); ++l) {
+        if (k.lod_error[l] * scale * focal <= LOD_PIXELS * nearest) level = l + 1u;
+    }
+    return level == 0u ? key : (k.lod.x + level - 1u) * 2u + (key & 1u);
+}
+
+// The row drawn: a slot in the region of the key it is drawn with.
+void append_row(uint i, uint key, vec3 center, float radius) {
+    uint drawn = draw_key(key, center, radius);
+    uint slot = atomicAdd(visible[drawn], 1u);
+    ids_out[keys[drawn].base + slot] = i;
 }

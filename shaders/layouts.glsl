@@ -71,6 +71,9 @@
 #define BINDING_PYRAMID 1
 #define BINDING_EARLY_DEPTH 2
 #define REDUCE_GROUP 8
+#define CULL_SUBPIXEL 1
+#define CULL_LOD 2
+#define MAX_LODS 4
 
 // The frame's uniforms. Positions are relative to the render origin (the camera, unless
 // RenderOrigin is pinned).
@@ -114,13 +117,15 @@ struct Material {  // 128 bytes, std430
     vec4 environment;           // offset 112: x reflectivity, y refraction, z index of refraction, w 0 (environment.glsl)
 };
 
-// The indirect path's key table: one row per key = mesh * 2 + mirrored.
-struct KeyInfo {  // 32 bytes, std430
+// The indirect path's key table: one row per key = draw mesh * 2 + mirrored (the meshes, then their levels of detail: mesh_registry.py merged).
+struct KeyInfo {  // 64 bytes, std430
     uint index_count;           // offset 0
     uint first_index;           // offset 4: of the mesh in the merged index buffer
     int vertex_offset;          // offset 8: of the mesh in the merged vertex buffer
     uint base;                  // offset 12: first slot of this key's region of ids
-    vec4 sphere;                // offset 16: the mesh's bounding sphere: centre xyz, radius
+    vec4 sphere;                // offset 16: the mesh's bounding sphere (holding its levels of detail too): centre xyz, radius
+    uvec4 lod;                  // offset 32: x: the draw mesh of its first coarser level (that level's key: x * 2 + mirrored), y: levels
+    vec4 lod_error;             // offset 48: per coarser level, its error in the mesh's units (render/mesh_lod.py)
 };
 
 // Head of the indirect path's draw state buffer; visible rows per key follow it.
@@ -144,7 +149,7 @@ struct CullPush {  // 128 bytes, std430
     uint row_end;               // offset 100: rows [first_row, row_end) in this dispatch (large counts take several)
     uint first_row;             // offset 104
     uint skip;                  // offset 108: rows whose misc.w has one of these bits are left out (a shadow view: ROW_NOT_CASTER)
-    uvec4 occlusion;            // offset 112: cull_late.comp: xy the depth pyramid's base (the target's size), z its levels, w 1: cull rows that cover no pixel centre
+    uvec4 occlusion;            // offset 112: the camera's cull passes: xy the target's size (the depth pyramid's base), z the pyramid's levels, w CULL_* bits
 };
 
 struct CompactPush {  // 8 bytes, std430

@@ -55,7 +55,7 @@ bool project_sphere(vec3 c, float r, out vec4 rect, out float nearest) {
     return true;
 }
 
-// Whether the sphere may show: false when it covers no pixel centre (pc.occlusion.w) or lies
+// Whether the sphere may show: false when it covers no pixel centre (CULL_SUBPIXEL) or lies
 // behind the farthest early depth over every pixel it covers.
 bool occlusion_visible(vec3 center, float radius) {
     vec3 c = (g.view * vec4(center, 1.0)).xyz;
@@ -66,7 +66,7 @@ bool occlusion_visible(vec3 center, float radius) {
     vec2 size = vec2(pc.occlusion.xy);
     vec4 px = clamp((rect * 0.5 + 0.5) * size.xyxy, vec4(-2.0), size.xyxy + 2.0);
     ivec4 p;
-    if (pc.occlusion.w != 0u) {  // the pixel centres inside, with a margin for snapping
+    if ((pc.occlusion.w & CULL_SUBPIXEL) != 0u) {  // the pixel centres inside, with a margin for snapping
         p = ivec4(ceil(px.xy - 0.51), floor(px.zw - 0.49));
         if (p.x > p.z || p.y > p.w) return false;
     } else {

@@ -29,7 +29,7 @@ def scaling_world(gpu, entities: int) -> World:
 
 def frames(gpu, world: World, culling: str, count: int, **kw):
     """Per frame after a schedule step: (pixels, rows drawn)."""
-    renderer = Renderer(gpu.device, gpu.target, gpu.meshes, mode="indirect", culling=culling, **kw)
+    renderer = Renderer(gpu.device, gpu.target, gpu.meshes, mode="indirect", culling=culling, lod=False, **kw)
     schedule = default_schedule()
     out = []
     try:

@@ -111,6 +111,12 @@ def render_flags() -> OneLineParser:
         "--no-culling", dest="culling", action="store_const", const="none", help="draw everything (--culling none)"
     )
     common.add_argument(
+        "--no-lod",
+        dest="lod",
+        action="store_false",
+        help="--mode indirect draws every mesh in full, not at the coarsest level of detail its size on screen allows",
+    )
+    common.add_argument(
         "--fill",
         choices=("solid", "wireframe", "points"),
         default="solid",

@@ -192,6 +192,8 @@ class Editor:
                 req.recorder = _combo(imgui, "recorder", req.recorder, RECORDER_NAMES)
             _, req.threads = imgui.slider_int("threads", req.threads, 1, max(1, self.max_threads))
             req.culling = _combo(imgui, "culling", req.culling, CULLING)
+            if req.mode == "indirect":
+                _, req.lod = imgui.checkbox("levels of detail", req.lod)
             req.fill = _combo(imgui, "fill", req.fill, tuple(FILL_MODES))
             req.tone_map = _combo(imgui, "tone map", req.tone_map, tuple(TONE_MAPS))
             _, req.exposure = imgui.slider_float("exposure (EV)", req.exposure, -8.0, 8.0)

@@ -130,6 +130,7 @@ class Session:
                 exposure=start.exposure,
                 light_culling=start.light_culling,
                 transparency=start.transparency,
+                lod=start.lod,
             )
             self.scene = start.scene
             self.world, self.schedule = self._build(start.scene, options.path)
@@ -157,6 +158,7 @@ class Session:
             exposure=self.renderer.exposure,
             light_culling=self.renderer.light_culling,
             transparency=self.renderer.transparency,
+            lod=self.renderer.lod,
         )
 
     def _build(self, scene: str, path: str | None) -> tuple[World, Schedule]:
@@ -193,7 +195,7 @@ class Session:
         renderer.tone_map, renderer.exposure = wanted.tone_map, float(wanted.exposure)
         renderer.light_culling = wanted.light_culling
         renderer.transparency = wanted.transparency
-        renderer.culling = culling
+        renderer.culling, renderer.lod = culling, wanted.lod
         pool.resize(wanted.threads)
         renderer.ensure_output()  # HDR colour or not, as the tone map and exposure now need
         if present is not None:

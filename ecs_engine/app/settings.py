@@ -32,13 +32,14 @@ class Settings:
     mode: str
     recorder: str  # native | python (the indirect mode records on the GPU: kept for switching back)
     threads: int  # worker pool size, counting the main thread
-    culling: str  # frustum | temporal | none (render/frame_data.py CULLING)
+    culling: str  # frustum | temporal | occlusion | none (render/frame_data.py CULLING)
     present: str | None  # fifo | mailbox | immediate; None: headless, no swapchain
     fill: str = "solid"  # solid | wireframe | points
     tone_map: str = "clamp"  # clamp | aces | reinhard (render/tone_map.py)
     exposure: float = 0.0  # stops
     light_culling: str = "auto"  # render/light_clusters.py LIGHT_MODES (render/light_clusters.py)
     transparency: str = "sorted"  # sorted | weighted (render/oit_pass.py)
+    lod: bool = True  # levels of detail by projected size (the indirect mode: render/mesh_lod.py)
 
 
 @dataclass(frozen=True)
@@ -58,7 +59,8 @@ class RunOptions:
     quiet: bool = False
     mode: str = "instanced"  # instanced | per_entity | indirect
     threads: int | None = None  # None: all cores
-    culling: str = "frustum"  # frustum | temporal | none
+    culling: str = "frustum"  # frustum | temporal | occlusion | none
+    lod: bool = True  # --no-lod: the indirect mode draws every mesh in full
     fill: str = "solid"  # solid | wireframe | points (render/path.py's FILL_MODES)
     tone_map: str = "clamp"  # clamp | aces | reinhard
     exposure: float = 0.0  # stops: the HDR colour times 2^exposure before the tone map
@@ -88,6 +90,7 @@ class RunOptions:
         "mode",
         "threads",
         "culling",
+        "lod",
         "fill",
         "tone_map",
         "exposure",
@@ -127,6 +130,7 @@ class RunOptions:
             exposure=self.exposure,
             light_culling=self.light_culling,
             transparency=self.transparency,
+            lod=self.lod,
         )
 
 

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import UsageError
+from ..gpu.barrier import Barrier
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
 from ..gpu.device import Device
 from ..gpu.memory import DEVICE, HOST, Buffer
@@ -45,7 +46,9 @@ from .layouts import (
     COMPACT_GROUP,
     COMPACT_PUSH,
     CULL_GROUP,
+    CULL_LOD,
     CULL_PUSH,
+    CULL_SUBPIXEL,
     DRAW_COMMAND,
     DRAW_STATE,
     KEY_INFO,
@@ -112,6 +115,19 @@ def record_indirect_draws(
             meshes,
             DRAW_COMMAND.size,
         )
+
+
+def key_capacities(key_counts: np.ndarray, merged: MergedMeshes) -> np.ndarray:
+    """Per key of every draw mesh, the rows its region of `ids` must hold: a mesh's keys their
+    rows, each of its levels' keys the same (every row may be drawn at any level). The meshes'
+    keys come first, so their regions start where they did without levels (the shadow views'
+    ids hold those alone)."""
+    owners = merged.owners[merged.count :]
+    capacity = np.zeros(2 * merged.draw_meshes, dtype=np.int64)
+    capacity[: len(key_counts)] = key_counts
+    capacity[len(key_counts) :: 2] = key_counts[2 * owners]
+    capacity[len(key_counts) + 1 :: 2] = key_counts[2 * owners + 1]
+    return capacity
 
 
 def check_support(device: Device) -> None:
@@ -239,20 +255,21 @@ class IndirectPath:
     def finish(self, cb: Any, frame: FrameInputs, results: list[ChunkResult], candidates: int) -> list[Any]:
         """The compute passes into the primary (before the render pass) and the one secondary
         that draws what they wrote."""
-        keys = 2 * len(self.ctx.meshes)
-        key_counts = np.zeros(keys, dtype=np.int64)
+        merged = self.ctx.meshes.merged()
+        key_counts = np.zeros(2 * merged.count, dtype=np.int64)  # the meshes' keys: rows as written
         for r in results:
             if r.key_counts is not None:
                 key_counts += r.key_counts
-        self._ensure_capacity(frame.slot, keys, candidates)
-        merged = self.ctx.meshes.merged()
-        self._write_key_table(frame.slot, key_counts, merged, frame.bounds)
+        capacity = key_capacities(key_counts, merged)  # every draw mesh's keys: rows they may get
+        keys = len(capacity)
+        self._ensure_capacity(frame.slot, keys, int(capacity.sum()))
+        self._write_key_table(frame.slot, capacity, merged, frame.bounds)
         f = self.frames[frame.slot]
         f.key_counts, f.candidates = key_counts, candidates  # what the shadow views cull (shadow_indirect.py)
         self._sets[0], self._sets[1] = frame.descriptor_set, f.descriptor_set
         planes = None if frame.planes is None else frame.planes.astype(np.float32)
         self._record_compute(cb, frame, planes, candidates, keys)
-        f.recorded = frame.bounds[2] // 3  # the triangles the counts will weigh
+        f.recorded = merged.index_count // 3  # the triangles the counts will weigh, per draw mesh
         vk = self.vk
         lib = vk.lib
         secondary = self.ctx.secondaries.begin(frame.slot, frame.target.secondary_begin)
@@ -261,7 +278,7 @@ class IndirectPath:
         lib.vkCmdBindDescriptorSets(
             secondary, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 2, self._sets, 0, vk.ffi.NULL
         )
-        self._record_draws(secondary, frame.slot, merged, key_counts)
+        self._record_draws(secondary, frame.slot, merged, capacity)
         end_command_buffer(vk, secondary)
         return [secondary]
 
@@ -283,24 +300,31 @@ class IndirectPath:
         visible = raw[STATE_HEADER:].astype(np.int64)
         return int(raw[0]) + int(raw[1]), int(visible.sum()), int((visible * per_key).sum())
 
-    def _write_key_table(self, slot: int, key_counts: np.ndarray, merged: MergedMeshes, bounds: MeshBounds) -> None:
-        """Each key's mesh and the start of its region of `ids` (skipped when the counts and
-        meshes are those the table already holds)."""
+    def _write_key_table(self, slot: int, capacity: np.ndarray, merged: MergedMeshes, bounds: MeshBounds) -> None:
+        """Each key's draw mesh, the start of its region of `ids` and, for a mesh's keys, its
+        sphere and levels of detail (skipped when the table already holds these)."""
         f = self.frames[slot]
-        written = (key_counts.tobytes(), id(merged))
+        written = (capacity.tobytes(), id(merged))
         if f.written == written:
             return
         f.written = written
-        centers, radii, index_counts = bounds
-        n = len(key_counts)
+        centers, radii, _ = bounds
+        n = len(capacity)
         table = f.keys.array(KEY_INFO.dtype, n)
-        mesh = np.arange(n) // 2
-        table["index_count"] = index_counts[mesh]
-        table["first_index"] = merged.first_index[mesh]
-        table["vertex_offset"] = merged.vertex_offset[mesh]
-        table["base"] = np.concatenate([[0], np.cumsum(key_counts)[:-1]])
-        table["sphere"][:, :3] = centers[mesh]
-        table["sphere"][:, 3] = radii[mesh]
+        draw = np.arange(n) // 2
+        owner = merged.owners[draw]  # the mesh whose rows the key draws
+        table["index_count"] = merged.index_count[draw]
+        table["first_index"] = merged.first_index[draw]
+        table["vertex_offset"] = merged.vertex_offset[draw]
+        table["base"] = np.concatenate([[0], np.cumsum(capacity)[:-1]])
+        table["sphere"][:, :3] = centers[owner]
+        table["sphere"][:, 3] = radii[owner]
+        own = draw < merged.count  # the rows' own keys carry the levels; a level's keys none
+        table["lod"] = 0
+        table["lod"][own, 0] = merged.lod_first[owner[own]]
+        table["lod"][own, 1] = merged.lod_levels[owner[own]]
+        table["lod_error"] = 0.0
+        table["lod_error"][own] = merged.lod_error[owner[own]]
 
     def _record_compute(self, cb: Any, frame: FrameInputs, planes: np.ndarray | None, rows: int, keys: int) -> None:
         """Into the primary, before the render pass: zero the counters, cull (with occlusion
@@ -324,9 +348,12 @@ class IndirectPath:
             push["planes"][0, : len(planes)] = planes
             push["plane_count"] = len(planes)
         cull = self.cull
+        _, width, height = frame.target.key
+        lod = CULL_LOD if frame.lod and self.ctx.meshes.merged().lod_levels.any() else 0
+        push["occlusion"] = (width, height, 0, lod)  # cull.comp: the levels of detail's projection
         if occlusion is not None:
             occlusion.bind(cb)
-            push["occlusion"] = occlusion.push_value
+            push["occlusion"] = (width, height, len(occlusion.levels), CULL_SUBPIXEL | lod)
             self._cull_rows(cb, occlusion.early, rows)
             self._compact(cb, keys, compute_to_compute, to_draw)
             merged, key_counts = self.ctx.meshes.merged(), f.key_counts
@@ -459,18 +486,3 @@ def compute_barriers(vk: Any) -> list[Barrier]:
             ),
         )
     ]
-
-
-class Barrier:
-    """A global memory barrier, made once and recorded with a raw call."""
-
-    def __init__(self, vk: Any, src_stage: int, dst_stage: int, src_access: int, dst_access: int) -> None:
-        self.stages = (src_stage, dst_stage)
-        self.barrier = vk.ffi.new(
-            "VkMemoryBarrier*",
-            {"sType": vk.VK_STRUCTURE_TYPE_MEMORY_BARRIER, "srcAccessMask": src_access, "dstAccessMask": dst_access},
-        )
-        self.null = vk.ffi.NULL
-
-    def record(self, lib: Any, cb: Any) -> None:
-        lib.vkCmdPipelineBarrier(cb, self.stages[0], self.stages[1], 0, 1, self.barrier, 0, self.null, 0, self.null)

@@ -114,9 +114,12 @@ KEY_INFO = Struct(
         ("first_index", "uint", "of the mesh in the merged index buffer"),
         ("vertex_offset", "int", "of the mesh in the merged vertex buffer"),
         ("base", "uint", "first slot of this key's region of ids"),
-        ("sphere", "vec4", "the mesh's bounding sphere: centre xyz, radius"),
+        ("sphere", "vec4", "the mesh's bounding sphere (holding its levels of detail too): centre xyz, radius"),
+        ("lod", "uvec4", "x: the draw mesh of its first coarser level (that level's key: x * 2 + mirrored), y: levels"),
+        ("lod_error", "vec4", "per coarser level, its error in the mesh's units (render/mesh_lod.py)"),
     ],
-    doc="The indirect path's key table: one row per key = mesh * 2 + mirrored.",
+    doc="The indirect path's key table: one row per key = draw mesh * 2 + mirrored (the meshes, then their "
+    "levels of detail: mesh_registry.py merged).",
 )
 
 DRAW_STATE = Struct(
@@ -151,8 +154,8 @@ CULL_PUSH = Struct(
         (
             "occlusion",
             "uvec4",
-            "cull_late.comp: xy the depth pyramid's base (the target's size), z its levels, w 1: cull "
-            "rows that cover no pixel centre",
+            "the camera's cull passes: xy the target's size (the depth pyramid's base), z the pyramid's "
+            "levels, w CULL_* bits",
         ),
     ],
 )
@@ -269,6 +272,9 @@ COMPACT_GROUP = 64  # compact.comp's local size
 SET_OCCLUSION = 2
 BINDING_VISIBILITY, BINDING_PYRAMID, BINDING_EARLY_DEPTH = range(3)
 REDUCE_GROUP = 8  # depth_reduce.comp's local size, each way
+CULL_SUBPIXEL = 1  # CullPush.occlusion.w: rows covering no pixel centre are culled (occlusion culling)
+CULL_LOD = 2  # CullPush.occlusion.w: rows draw the coarsest level of detail their size allows
+MAX_LODS = 4  # coarser levels a key table row holds (KeyInfo.lod_error)
 
 STRUCTS = [
     GLOBALS,
@@ -357,6 +363,9 @@ DEFINES = {
     "BINDING_PYRAMID": BINDING_PYRAMID,
     "BINDING_EARLY_DEPTH": BINDING_EARLY_DEPTH,
     "REDUCE_GROUP": REDUCE_GROUP,
+    "CULL_SUBPIXEL": CULL_SUBPIXEL,
+    "CULL_LOD": CULL_LOD,
+    "MAX_LODS": MAX_LODS,
 }
 
 

@@ -1,19 +1,24 @@
 """Meshes uploaded once to device-local memory and shared: entities hold only a handle.
 
 The indirect render mode draws every mesh from one vertex and one index buffer (a draw command
-names its mesh by first index and vertex offset): `merged()` builds those on first use."""
+names its mesh by first index and vertex offset): `merged()` builds those on first use. A mesh
+with enough triangles gets coarser levels of detail when it is added (mesh_lod.py); they live
+only in the merged buffers, as draw meshes after the meshes themselves, so handles, scene files
+and the CPU-culled modes never see them."""
 
 from __future__ import annotations
 
 import hashlib
+from collections import OrderedDict
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..gpu.memory import Buffer, upload
-from .layouts import MESH_VERTEX
+from .layouts import MAX_LODS, MESH_VERTEX
 from .mesh_data import MeshData
+from .mesh_lod import Lod, build_lods
 
 if TYPE_CHECKING:
     from ..gpu.device import Device
@@ -21,12 +26,28 @@ if TYPE_CHECKING:
 
 @dataclass
 class MergedMeshes:
+    """Draw meshes: the meshes (handles 0..count-1), then every mesh's coarser levels."""
+
     vertices: Buffer
     indices: Buffer
-    first_index: np.ndarray  # per mesh handle
+    first_index: np.ndarray  # per draw mesh
     vertex_offset: np.ndarray
+    index_count: np.ndarray
     count: int  # meshes included (handles 0..count-1)
+    lod_first: np.ndarray  # per mesh: the draw mesh of its first coarser level (0: none)
+    lod_levels: np.ndarray  # per mesh: its coarser levels
+    lod_error: np.ndarray  # (count, MAX_LODS) float32: their errors
     vertex_array: Any = None  # VkBuffer[1] for raw calls, made on first use
+
+    @property
+    def draw_meshes(self) -> int:
+        return len(self.index_count)
+
+    @property
+    def owners(self) -> np.ndarray:
+        """Per draw mesh, the mesh it draws: itself, or the mesh a level of detail belongs to."""
+        n = self.count
+        return np.concatenate([np.arange(n), np.repeat(np.arange(n), self.lod_levels.astype(np.int64))])
 
 
 @dataclass
@@ -41,6 +62,7 @@ class MeshRegistry:
     def __init__(self, device: Device) -> None:
         self.device = device
         self._meshes: list[GpuMesh] = []
+        self._lods: list[list[Lod]] = []  # per handle, its coarser levels (mesh_lod.py), at most MAX_LODS
         self._by_data: dict[int, int] = {}  # id(MeshData) -> handle: the same object again
         self._by_content: dict[bytes, int] = {}  # digest of the arrays -> handle: an equal mesh again
         self._bounds: tuple[int, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
@@ -61,6 +83,7 @@ class MeshRegistry:
         indices = upload(self.device, mesh.indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT)
         handle = len(self._meshes)
         self._meshes.append(GpuMesh(mesh, vertices, indices, len(mesh.indices)))
+        self._lods.append(_levels(mesh, digest))
         self._by_data[key] = self._by_content[digest] = handle
         return handle
 
@@ -70,19 +93,24 @@ class MeshRegistry:
     def __len__(self) -> int:
         return len(self._meshes)
 
+    def lods(self, handle: int) -> list[Lod]:
+        """The mesh's coarser levels of detail, finest first (none for a small mesh)."""
+        return self._lods[handle]
+
     def bounds(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Per mesh: bounding sphere centre (n, 3) and radius, index count (kept until meshes are added)."""
+        """Per mesh: bounding sphere centre (n, 3) and radius, index count (kept until meshes are
+        added). The sphere holds the mesh's levels of detail too: whichever is drawn, culling it
+        by the sphere is safe."""
         n = len(self._meshes)
         if self._bounds is None or self._bounds[0] != n:
             meshes = self._meshes
-            self._bounds = (
-                n,
-                (
-                    np.array([m.data.center for m in meshes], dtype=np.float64).reshape(n, 3),
-                    np.array([m.data.radius for m in meshes], dtype=np.float64),
-                    np.array([m.index_count for m in meshes], dtype=np.int64),
-                ),
-            )
+            centers = np.array([m.data.center for m in meshes], dtype=np.float64).reshape(n, 3)
+            radii = np.array([m.data.radius for m in meshes], dtype=np.float64)
+            for handle, lods in enumerate(self._lods):
+                for lod in lods:
+                    reach = np.linalg.norm(lod.mesh.positions - centers[handle], axis=1).max(initial=0.0)
+                    radii[handle] = max(radii[handle], float(reach))
+            self._bounds = (n, (centers, radii, np.array([m.index_count for m in meshes], dtype=np.int64)))
         return self._bounds[1]
 
     def triangles(self, handle: int) -> int:
@@ -103,7 +131,13 @@ class MeshRegistry:
         if self._merged is not None:
             self.device.wait_idle()  # a frame in flight may still draw from the old buffers
             self._destroy_merged()
-        datas = [m.data for m in self._meshes]
+        n = len(self._meshes)
+        levels = np.array([len(lods) for lods in self._lods], dtype=np.int64)
+        lod_first = np.where(levels > 0, n + np.concatenate([[0], np.cumsum(levels)[:-1]]), 0) if n else levels
+        lod_error = np.zeros((n, MAX_LODS), dtype=np.float32)
+        for handle, lods in enumerate(self._lods):
+            lod_error[handle, : len(lods)] = [lod.error for lod in lods]
+        datas = [m.data for m in self._meshes] + [lod.mesh for lods in self._lods for lod in lods]
         index_counts = np.array([len(d.indices) for d in datas], dtype=np.int64)
         vertex_counts = np.array([len(d.positions) for d in datas], dtype=np.int64)
         first_index = np.concatenate([[0], np.cumsum(index_counts)[:-1]]).astype(np.uint32)
@@ -115,7 +149,11 @@ class MeshRegistry:
             upload(self.device, indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT),
             first_index,
             vertex_offset,
-            len(datas),
+            index_counts,
+            n,
+            lod_first.astype(np.uint32),
+            levels.astype(np.uint32),
+            lod_error,
         )
         return self._merged
 
@@ -131,8 +169,25 @@ class MeshRegistry:
             mesh.vertices.destroy()
             mesh.indices.destroy()
         self._meshes.clear()
+        self._lods.clear()
         self._by_data.clear()
         self._by_content.clear()
+
+
+# Levels of detail by mesh content, for registries made again (tests, benchmarks, a new device):
+# simplifying a 12k-triangle mesh and measuring its error takes a good part of a second.
+_LEVELS: OrderedDict[bytes, list[Lod]] = OrderedDict()
+_LEVELS_KEPT = 32
+
+
+def _levels(mesh: MeshData, digest: bytes) -> list[Lod]:
+    levels = _LEVELS.get(digest)
+    if levels is None:
+        levels = _LEVELS[digest] = build_lods(mesh)[:MAX_LODS]
+        while len(_LEVELS) > _LEVELS_KEPT:
+            _LEVELS.popitem(last=False)
+    _LEVELS.move_to_end(digest)
+    return levels
 
 
 def _interleaved(mesh: MeshData) -> np.ndarray:

@@ -205,11 +205,6 @@ class OcclusionCulling:
             None,
         )
 
-    @property
-    def push_value(self) -> tuple[int, int, int, int]:
-        """CullPush.occlusion: the pyramid's base size and levels; sub-pixel culling on."""
-        return self.size[0], self.size[1], len(self.levels), 1
-
     # ---------------------------------------------------------------- record
     def bind(self, cb: Any) -> None:
         """Set 2, after the cull passes' sets 0 and 1."""

@@ -117,6 +117,7 @@ class FrameInputs:
     row_base: int = 0  # where this view's rows start in `instances` (a shadow view's come after the camera's)
     ahead: Any = None  # the FrameData, where the culling decided the camera's rows ahead (temporal)
     occlusion: bool = False  # --culling occlusion: the indirect path culls what is hidden too (occlusion.py)
+    lod: bool = False  # the indirect path draws each row at the coarsest level of detail its size allows
 
 
 @dataclass

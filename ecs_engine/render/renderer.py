@@ -1,18 +1,16 @@
 """The renderer: one frame from `FrameData` to a submitted command buffer.
 
-Data goes one way: the extractor reads the world (frame_data.py), the renderer writes the
-frame's mapped buffers (globals, lights, instance rows) and records; it never writes the world.
-
-The mesh rows are drawn by a render path picked by name from PATHS (path.py says what a path
-does); the chunks of rows are jobs on the worker pool, each recording a secondary command
-buffer (or, in `indirect`, only writing rows for the compute shaders). The primary command
-buffer records the passes around them by the target's form (output_passes.py): the G-buffer pass
-and the lighting compute pass in the deferred form, then the target's render pass (the path's
-secondaries, the light billboards, the tone map and the overlay). The form follows the tone map,
-exposure, MSAA, blended materials and the light culling (ensure_output switches it between frames;
-what was made against the old render passes is made again). Switching mode or recorder swaps the
-path; the frame slots, buffers, output passes and overlay stay.
-"""
+Data goes one way: the extractor reads the world (frame_data.py), the renderer writes the frame's
+mapped buffers (globals, lights, instance rows) and records; it never writes the world. The mesh
+rows are drawn by a render path picked by name from PATHS (path.py says what a path does); the
+chunks of rows are jobs on the worker pool, each recording a secondary command buffer (in
+`indirect` only writing rows for the compute shaders, which also pick levels of detail: `lod`).
+The primary records the passes around them by the target's form (output_passes.py): the G-buffer
+pass and the lighting compute pass in the deferred form, then the target's render pass (the
+path's secondaries, the light billboards, the tone map and the overlay). The form follows the
+tone map, exposure, MSAA, blended materials and the light culling (ensure_output switches it
+between frames; what was made against the old render passes is made again). Switching mode or
+recorder swaps the path; the frame slots, buffers, output passes and overlay stay."""
 
 from __future__ import annotations
 
@@ -86,6 +84,7 @@ class Renderer:
         exposure: float = 0.0,
         light_culling: str = "auto",
         transparency: str = "sorted",
+        lod: bool = True,
     ) -> None:
         if mode not in PATHS:
             raise ValueError(f"unknown render mode {mode!r}; modes: {', '.join(MODES)}")
@@ -94,13 +93,12 @@ class Renderer:
         check_tone_map(tone_map, exposure)
         check_light_culling(light_culling)
         check_transparency(transparency)
-        self.transparency = transparency  # blended rows: sorted, or weighted (oit_pass.py: deferred form)
+        # blended rows: sorted, or weighted (oit_pass.py: deferred form); levels of detail (indirect mode)
+        self.transparency, self.lod = transparency, lod
         self.tone_map, self.exposure = tone_map, float(exposure)  # change them between frames (ensure_output)
         self.target = target
         self._blends = False  # the last frame's world had blended materials (they need HDR colour)
-        self.meshes = meshes
-        self.clear_color = clear_color
-        self.ambient = ambient
+        self.meshes, self.clear_color, self.ambient = meshes, clear_color, ambient
         self.jobs = jobs
         self._jobs_generation = jobs.generation if jobs is not None else 0
         self.culling = check_culling(culling, mode)  # CULLING: frustum, temporal, occlusion or none
@@ -352,6 +350,7 @@ class Renderer:
             material_count=material_count,
             ahead=data if data.masks is not None else None,
             occlusion=self.culling == "occlusion",
+            lod=self.lod,
         )
         path = self.path
         path.begin_frame(inputs)

@@ -1,0 +1,84 @@
+"""Levels of detail in the indirect mode (mesh_registry.py, cull_row.glsl draw_key): made when a
+mesh is added, held by its culling sphere, picked on the GPU by the rule mesh_lod.py states, full
+detail with --no-lod, and plumbed through the flags and the editor's settings."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from gpu_context import headless_gpu
+
+from ecs_engine import World
+from ecs_engine.app.cli import build_parser
+from ecs_engine.app.scenes import default_schedule
+from ecs_engine.app.settings import RunOptions
+from ecs_engine.components import Mesh, Transform
+from ecs_engine.demos.scene_kit import add_camera
+from ecs_engine.render.mesh_data import normalized
+from ecs_engine.render.mesh_loading import DEFAULT_MODEL, load_mesh
+from ecs_engine.render.mesh_lod import focal_pixels, lod_errors, lod_for_screen_size
+from ecs_engine.render.primitives import cube_mesh
+from ecs_engine.render.renderer import Renderer
+
+W, H = 96, 64
+FOV = math.radians(50.0)  # scene_kit.add_camera's
+
+
+def knot(gpu) -> int:
+    return gpu.meshes.add(normalized(load_mesh(DEFAULT_MODEL)))
+
+
+def test_levels_are_made_when_a_mesh_is_added_and_its_sphere_holds_them():
+    with headless_gpu(W, H) as gpu:
+        k, cube = knot(gpu), gpu.meshes.add(cube_mesh())
+        levels = gpu.meshes.lods(k)
+        assert gpu.meshes.lods(cube) == []  # 12 triangles: nothing to gain
+        triangles = [gpu.meshes.triangles(k)] + [lod.mesh.triangle_count for lod in levels]
+        assert len(levels) >= 2 and triangles == sorted(triangles, reverse=True)
+        centers, radii, _ = gpu.meshes.bounds()
+        for lod in levels:
+            assert np.linalg.norm(lod.mesh.positions - centers[k], axis=1).max() <= radii[k] + 1e-9
+        merged = gpu.meshes.merged()
+        assert merged.count == 2 and merged.draw_meshes == 2 + len(levels)
+        assert merged.lod_levels.tolist() == [len(levels), 0] and merged.lod_first[0] == 2
+        assert (merged.index_count[2:] // 3).tolist() == triangles[1:]
+
+
+def test_the_gpu_picks_each_rows_level_by_the_rule_of_mesh_lod():
+    rng = np.random.default_rng(11)
+    with headless_gpu(W, H) as gpu:
+        k = knot(gpu)
+        levels = gpu.meshes.lods(k)
+        n = 60
+        # straight ahead; the first ten close enough that their error shows (or the camera is inside)
+        distance = np.concatenate([rng.uniform(0.05, 0.5, 10), rng.uniform(0.5, 40.0, n - 10)])
+        scale = rng.uniform(0.3, 2.0, n)
+        side = rng.uniform(-0.3, 0.3, (n, 2)) * distance[:, None] * 0.5
+        positions = np.column_stack([side, -distance])
+        world = World()
+        world.spawn_batch(n, Transform(position=positions, scale=np.repeat(scale[:, None], 3, 1)), Mesh(handle=k))
+        add_camera(world, eye=(0.0, 0.0, 0.0), target=(0.0, 0.0, -1.0))
+        default_schedule().run(world, 0.0)
+        counts = {}
+        for lod in (True, False):
+            renderer = Renderer(gpu.device, gpu.target, gpu.meshes, mode="indirect", culling="none", lod=lod)
+            gpu.owned.append(renderer)
+            counts[lod] = renderer.render(world, readback=True)
+        centers, radii, _ = gpu.meshes.bounds()
+        row_radius = radii[k] * scale
+        dist = np.linalg.norm(positions + centers[k] * scale[:, None], axis=1)
+        level = lod_for_screen_size(lod_errors(levels), dist, row_radius, focal_pixels(FOV, H), scale)
+        assert 0 < (level == 0).sum() < n and (level == len(levels)).sum() > 0  # a real mix
+        per_level = np.array([gpu.meshes.triangles(k)] + [lod.mesh.triangle_count for lod in levels])
+        assert counts[False].triangles == n * per_level[0]
+        # float32 on the GPU against float64 here: a row on a threshold may go either way
+        assert abs(counts[True].triangles - per_level[level].sum()) <= 2 * per_level[0]
+        assert counts[True].triangles < 0.6 * counts[False].triangles
+
+
+def test_lod_flag_and_settings():
+    args = build_parser().parse_args(["demo", "scaling", "--mode", "indirect", "--no-lod"])
+    options = RunOptions.from_flags(args, scene="scaling")
+    assert options.lod is False and options.settings().lod is False
+    assert RunOptions().settings().lod is True
