@@ -34,6 +34,7 @@ REGISTRY: dict[str, str] = {
     "scene-io": "scene_io",
     "hierarchy": "hierarchy",
     "culling": "culling",
+    "frame": "frame",
 }
 
 # One line each for the list in the usage text (the modules are not imported to print it).
@@ -49,6 +50,7 @@ SUMMARY: dict[str, str] = {
     "scene-io": "World.save and World.load of the scaling scene, 10k to 1M entities (CPU only)",
     "hierarchy": "HierarchySystem over 11k to 1.1M entities with Parent, plan kept and made again (CPU only)",
     "culling": "temporal-coherence culling against per-frame frustum culling over camera paths, 10k to 1M (CPU only)",
+    "frame": "one scene's CPU frame through the run loop, median and p99 (default: 1 cube, 2,400 frames) (Vulkan)",
 }
 
 # The commands that work from any folder once ecs_engine is installed.
