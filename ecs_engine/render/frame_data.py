@@ -50,6 +50,8 @@ CULLING = ("frustum", "temporal", "none")  # per frame; only when due (temporal_
 def check_culling(culling: str | bool, mode: str = "instanced") -> str:
     """The culling method named (True: frustum, False: none); UsageError for an unknown one, or
     temporal in the indirect mode, whose compute shader culls every row on the GPU."""
+    if type(culling) is str and culling in CULLING and (culling != "temporal" or mode != "indirect"):
+        return culling  # the per-frame call (extract): no import, no conversion
     from ..errors import UsageError
 
     name = ("frustum" if culling else "none") if isinstance(culling, bool) else culling
