@@ -10,11 +10,17 @@ JSON (schema_version 1): {"benchmark": "frame", "quick", "machine", "device", "c
 "mode", "threads", "width", "height", "frames", "warmup", "repeat"}, "results": [{"run",
 "cpu_ms_median", "cpu_ms_p99", "cpu_ms_mean", "record_ms_median", "gpu_ms_median", "fps",
 "draws"}], "targets": [{"name", "target", "measured", "unit", "op", "met"}]}.
+
+Standalone, `python3 bench/frame.py [options]` measures with whichever ecs_engine is importable
+(an older install too, for old/new runs alternated) and prints the table only.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -123,3 +129,25 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
         "results": results,
         "targets": targets,
     }
+
+
+class _Silent:
+    """Progress for the standalone run: nothing printed."""
+
+    total = 0
+
+    @contextmanager
+    def step(self, what: str) -> Iterator[None]:
+        yield
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="tiny sizes: a smoke run in seconds")
+    add_arguments(parser)
+    run(parser.parse_args(argv), {}, _Silent())
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
