@@ -127,6 +127,7 @@ class Query:
         self._tables: list[ArchetypeTable] = []
         self._scanned = 0
         self._batches: dict[int, tuple[int, Batch]] = {}  # table id -> (table version, batch)
+        self._changed_keys: dict[tuple[type, ...], list[ColumnKey]] = {}  # iter(changed=...)'s columns
 
     def describe(self) -> str:
         parts = [", ".join(t.__name__ for t in self.required)]
@@ -158,16 +159,22 @@ class Query:
         """Yield batches; with `changed`, only tables where one of those columns was written
         after tick `since` (inside a system, `since` defaults to its last run)."""
         world = self._world
-        tables = self._refresh()
+        tables = self._tables if self._scanned == len(self._all_tables) else self._refresh()
         if not tables:
             return  # no table matches: nothing to yield, no iteration to open (a per-frame saving)
         changed_keys: list[ColumnKey] = []
         if changed:
             if since is None:
                 since = world.system_last_run_tick()
-            for t in changed:
-                ct = schema_of(t)
-                changed_keys.extend((ct, name) for name in ct.__fields__)
+            kept = self._changed_keys.get(changed) if type(changed) is tuple else None
+            if kept is None:
+                for t in changed:
+                    ct = schema_of(t)
+                    changed_keys.extend((ct, name) for name in ct.__fields__)
+                if type(changed) is tuple:  # the same filter every frame: its columns found once
+                    self._changed_keys[changed] = changed_keys
+            else:
+                changed_keys = kept
         tick = world.write_tick() if self._write_keys else 0
         world.begin_iteration()
         try:

@@ -27,6 +27,8 @@ class Frame:
     queries: Any
     fence_array: Any = None  # VkFence[1] for the raw calls
     submitted: bool = False  # the query pool holds results of a submitted frame
+    slot: int = 0  # its index in FrameRing.frames
+    plain_submit: Any = None  # (VkSubmitInfo, its address) without semaphores (offscreen), made once
 
 
 class FrameRing:
@@ -59,7 +61,8 @@ class FrameRing:
             queries = vk.vkCreateQueryPool(
                 device.handle, vk.VkQueryPoolCreateInfo(queryType=vk.VK_QUERY_TYPE_TIMESTAMP, queryCount=2), None
             )
-            self.frames.append(Frame(pool, cb, fence, sem[0], sem[1], queries, vk.ffi.new("VkFence[1]", [fence])))
+            fences = vk.ffi.new("VkFence[1]", [fence])
+            self.frames.append(Frame(pool, cb, fence, sem[0], sem[1], queries, fences, slot=len(self.frames)))
         self._submits: dict[tuple[int, int, int], Any] = {}
 
     def begin(self) -> tuple[Frame, float | None]:
@@ -93,20 +96,28 @@ class FrameRing:
 
     def _submit_info(self, frame: Frame, wait: Any, signal: Any) -> Any:
         """VkSubmitInfo* for this frame and semaphores, made once per combination."""
+        if wait is None and signal is None:  # offscreen: no semaphores, no key to make
+            if frame.plain_submit is None:
+                frame.plain_submit = self._made_submit(frame, None, None)
+            return frame.plain_submit[1]
         vk = self.device.vk
-        key = (self.frames.index(frame), _address(vk, wait), _address(vk, signal))
+        key = (frame.slot, _address(vk, wait), _address(vk, signal))
         info = self._submits.get(key)
         if info is None:
             if len(self._submits) > 64:  # semaphores of old swapchains
                 self._submits.clear()
-            made = vk.VkSubmitInfo(
-                pCommandBuffers=[frame.command_buffer],
-                pWaitSemaphores=[wait] if wait is not None else None,
-                pWaitDstStageMask=[vk.VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT] if wait is not None else None,
-                pSignalSemaphores=[signal] if signal is not None else None,
-            )
-            info = self._submits[key] = (made, vk.ffi.addressof(made))
+            info = self._submits[key] = self._made_submit(frame, wait, signal)
         return info[1]
+
+    def _made_submit(self, frame: Frame, wait: Any, signal: Any) -> tuple[Any, Any]:
+        vk = self.device.vk
+        made = vk.VkSubmitInfo(
+            pCommandBuffers=[frame.command_buffer],
+            pWaitSemaphores=[wait] if wait is not None else None,
+            pWaitDstStageMask=[vk.VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT] if wait is not None else None,
+            pSignalSemaphores=[signal] if signal is not None else None,
+        )
+        return made, vk.ffi.addressof(made)
 
     def wait(self, frame: Frame) -> None:
         vk = self.device.vk

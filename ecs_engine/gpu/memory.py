@@ -27,6 +27,7 @@ class Buffer:
         self.size = int(size)
         self.usage = usage
         self.where = where
+        self._views: dict[tuple[Any, Any, int], np.ndarray] = {}  # array()'s, made once each
         if where == DEVICE:
             usage |= vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
         self.handle = vk.vkCreateBuffer(
@@ -48,7 +49,20 @@ class Buffer:
         return block.view[start : start + self.size]
 
     def array(self, dtype: Any, shape: tuple[int, ...] | int | None = None, offset: int = 0) -> np.ndarray:
-        """A NumPy view of the mapped bytes (writes go straight to memory the GPU reads)."""
+        """A NumPy view of the mapped bytes (writes go straight to memory the GPU reads). The
+        views are kept per (dtype, shape, offset): the mapping of a buffer never moves, and a
+        frame asks for the same ones each time (making one is ~3 us of NumPy calls)."""
+        key = (dtype, tuple(shape) if isinstance(shape, list) else shape, offset)
+        views = self._views
+        found = views.get(key)
+        if found is not None:
+            return found
+        if len(views) >= 16:  # shapes that follow a count (lights, materials) come and go
+            views.clear()
+        made = views[key] = self._array(dtype, shape, offset)
+        return made
+
+    def _array(self, dtype: Any, shape: tuple[int, ...] | int | None, offset: int) -> np.ndarray:
         raw = self.bytes()[offset:]
         dt = np.dtype(dtype)
         if shape is None:
@@ -77,6 +91,7 @@ class Buffer:
             return
         self.device.vk.vkDestroyBuffer(self.device.handle, self.handle, None)
         self.device.allocator.free(self.allocation)
+        self._views.clear()  # they would see whatever is allocated there next
         self.handle = None
 
 

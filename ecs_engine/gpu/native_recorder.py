@@ -108,6 +108,9 @@ class NativeRecorder:
 
         self._record = numba.njit(nogil=True)(record)
         self._zero = np.zeros(1, dtype=np.int64)
+        self._zero_addr = self._zero.ctypes.data  # addresses kept as ints: .ctypes costs ~1 us a call
+        self._vertex_addr = 0
+        self._cb_ints: dict[Any, int] = {}  # secondary -> handle_int (the pools reuse them every frame)
         self._meshes_seen = -1
 
     def set_meshes(self, vertex_handles: list[Any], index_handles: list[Any], index_counts: list[int]) -> None:
@@ -115,6 +118,7 @@ class NativeRecorder:
         self._vertex = np.array([handle_int(vk, h) for h in vertex_handles], dtype=np.int64)
         self._index = np.array([handle_int(vk, h) for h in index_handles], dtype=np.int64)
         self._counts = np.array(index_counts, dtype=np.int64)
+        self._vertex_addr = self._vertex.ctypes.data
         self._meshes_seen = len(vertex_handles)
 
     @property
@@ -165,10 +169,14 @@ class NativeRecorder:
         """Begin `cb` (an allocated secondary), record one chunk's binds and draws, end it.
         `rows` are sorted by key (mesh * 2 + mirrored), `key_counts[key]` of each. Returns
         (draws, triangles). Threads may share one frame state."""
-        vk = self.vk
         out = np.empty(2, dtype=np.int64)
+        cb_int = self._cb_ints.get(cb)
+        if cb_int is None:
+            if len(self._cb_ints) > 4096:  # pools of threads long gone
+                self._cb_ints.clear()
+            cb_int = self._cb_ints[cb] = handle_int(self.vk, cb)  # the address itself: never stale
         result = self._record(
-            handle_int(vk, cb),
+            cb_int,
             frame["layout"],
             frame["push_stage"],
             rows.dtype.itemsize,
@@ -177,8 +185,8 @@ class NativeRecorder:
             first_instance,
             key_counts,
             frame["pipelines"],
-            self._vertex.ctypes.data,
-            self._zero.ctypes.data,
+            self._vertex_addr,
+            self._zero_addr,
             self._index,
             self._counts,
             frame["begin_addr"],

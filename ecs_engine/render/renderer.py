@@ -327,7 +327,7 @@ class Renderer:
         if self.jobs is not None and self.jobs.generation != self._jobs_generation:
             self._forget_old_threads()
         frame, gpu_ms = self.frames.begin()
-        slot = self.frames.frames.index(frame)
+        slot = frame.slot
         pf = self.per_frame[slot]
         if self.shadows.ensure(views):  # new maps (the device was waited for): every set names them
             for each in self.per_frame:

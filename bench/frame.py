@@ -1,0 +1,153 @@
+"""One scene's CPU frame through the run loop, headless: the median and p99 over many frames.
+
+Issue 17's bar: the 1-cube scene (`cube`, the seed's first) at 0.15 ms of CPU a frame, instanced,
+one thread, 640x360. The frame is what `ecs-engine run` counts (app/loop.py): the schedule and
+the render (extract, write, record, submit), minus the time spent waiting for the GPU's fence.
+Small frames need many samples: 2,400 timed frames after 300 of warm-up by default, and
+`--repeat` runs the whole configuration again in the same process (the host drifts).
+
+JSON (schema_version 1): {"benchmark": "frame", "quick", "machine", "device", "config": {"scene",
+"mode", "threads", "width", "height", "frames", "warmup", "repeat"}, "results": [{"run",
+"cpu_ms_median", "cpu_ms_p99", "cpu_ms_mean", "record_ms_median", "gpu_ms_median", "fps",
+"draws"}], "targets": [{"name", "target", "measured", "unit", "op", "met"}]}.
+
+Standalone, `python3 bench/frame.py [options]` measures with whichever ecs_engine is importable
+(an older install too, for old/new runs alternated) and prints the table only.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
+
+import numpy as np
+
+from ecs_engine.app.loop import run as run_scene
+from ecs_engine.app.scenes import SCENES
+from ecs_engine.app.settings import RunOptions
+from ecs_engine.render.renderer import MODES
+
+THREADS = 1
+TARGET_MS = 0.15  # issue 17: the 1-cube scene, instanced, one thread
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--scene", default="cube", choices=SCENES, help="demo scene (default: cube, one cube)")
+    parser.add_argument("--mode", default="instanced", choices=MODES)
+    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--size", default="640x360", help="WIDTHxHEIGHT of the offscreen target")
+    parser.add_argument("--frames", type=int, default=2400, help="timed frames (default 2,400)")
+    parser.add_argument("--warmup", type=int, default=300)
+    parser.add_argument("--repeat", type=int, default=1, help="runs of the configuration, one after another")
+
+
+def measure(options: RunOptions, warmup: int) -> dict[str, Any]:
+    result = run_scene(options)
+    cpu = np.array(result.cpu_ms[warmup:])
+    gpu = np.array(result.gpu_ms[warmup:])
+    record = np.array(result.record_ms[warmup:])
+    return {
+        "cpu_ms_median": float(np.median(cpu)),
+        "cpu_ms_p99": float(np.percentile(cpu, 99)),
+        "cpu_ms_mean": float(cpu.mean()),
+        "record_ms_median": float(np.median(record)),
+        "gpu_ms_median": float(np.median(gpu)) if len(gpu) else None,
+        "fps": float(result.fps_after(warmup)),
+        "draws": result.last_stats.draws,
+        "device": result.device,
+    }
+
+
+def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dict[str, Any]:
+    width, height = (int(v) for v in args.size.lower().split("x"))
+    frames, warmup, repeat = (60, 10, 1) if args.quick else (args.frames, args.warmup, args.repeat)
+    if args.quick:
+        width, height = 160, 90
+    options = RunOptions(
+        scene=args.scene,
+        width=width,
+        height=height,
+        frames=warmup + frames,
+        quiet=True,
+        mode=args.mode,
+        threads=args.threads,
+    )
+    results = []
+    progress.total = repeat
+    for i in range(repeat):
+        with progress.step(f"{args.scene}, {args.mode}, {args.threads} thread(s), {width}x{height}: run {i + 1}"):
+            results.append(measure(options, warmup) | {"run": i + 1})
+    device = results[0].pop("device")
+    for r in results[1:]:
+        r.pop("device")
+    medians = [r["cpu_ms_median"] for r in results]
+    targets = []
+    if args.scene == "cube" and args.mode == "instanced" and args.threads == 1:
+        measured = float(np.median(medians))
+        targets.append(
+            {
+                "name": "1-cube scene: CPU frame ms (median), instanced, 1 thread",
+                "target": TARGET_MS,
+                "measured": measured,
+                "unit": "ms",
+                "op": "<=",
+                "met": bool(measured <= TARGET_MS),
+            }
+        )
+    print(f"{'run':>3} {'cpu median ms':>13} {'cpu p99 ms':>10} {'cpu mean ms':>11} {'record ms':>9} {'gpu ms':>7}")
+    for r in results:
+        gpu = "n/a" if r["gpu_ms_median"] is None else f"{r['gpu_ms_median']:.3f}"
+        print(
+            f"{r['run']:3} {r['cpu_ms_median']:13.4f} {r['cpu_ms_p99']:10.4f} {r['cpu_ms_mean']:11.4f} "
+            f"{r['record_ms_median']:9.4f} {gpu:>7}"
+        )
+    print(
+        f"{args.scene}, {args.mode}, {args.threads} thread(s), {width}x{height}, {frames:,} frames: "
+        f"CPU frame median {np.median(medians):.4f} ms"
+    )
+    for t in targets:
+        print(f"target {'MET ' if t['met'] else 'MISS'} {t['name']}: {t['measured']:.4f} ms (target <= {t['target']})")
+    return {
+        "benchmark": "frame",
+        "schema_version": 1,
+        "quick": bool(args.quick),
+        "machine": machine,
+        "device": device,
+        "config": {
+            "scene": args.scene,
+            "mode": args.mode,
+            "threads": args.threads,
+            "width": width,
+            "height": height,
+            "frames": frames,
+            "warmup": warmup,
+            "repeat": repeat,
+        },
+        "results": results,
+        "targets": targets,
+    }
+
+
+class _Silent:
+    """Progress for the standalone run: nothing printed."""
+
+    total = 0
+
+    @contextmanager
+    def step(self, what: str) -> Iterator[None]:
+        yield
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="tiny sizes: a smoke run in seconds")
+    add_arguments(parser)
+    run(parser.parse_args(argv), {}, _Silent())
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,21 @@
+"""The frame benchmark runs (tiny sizes, lavapipe) and writes its JSON with the issue-17 target."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_frame_quick_writes_json_with_the_target(tmp_path, monkeypatch):
+    monkeypatch.syspath_prepend(str(ROOT))
+    from bench.__main__ import main
+
+    assert main(["frame", "--quick", "--out", str(tmp_path), "--machine", "ci"]) == 0
+    doc = json.loads((tmp_path / "frame-ci.json").read_text())
+    assert doc["config"]["scene"] == "cube" and doc["config"]["mode"] == "instanced"
+    (row,) = doc["results"]
+    assert 0 < row["cpu_ms_median"] <= row["cpu_ms_p99"] and row["draws"] >= 1
+    (target,) = doc["targets"]
+    assert target["target"] == 0.15 and type(target["met"]) is bool
