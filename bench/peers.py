@@ -22,13 +22,15 @@ JSON (schema_version 1): {"benchmark": "peers", "quick", "machine", "device" (th
 Vulkan device), "peer": {"versions", "adapter", "renderer", "notes"} (null without a pygfx
 variant), "config": {"entities", "variants", "frames", "warmup", "size", "threads", "objects_max",
 "budget_s"}, "results": [{"entities", "variant", "wall_ms", "frames", ... | "skipped": why}],
-"ratios": [{"entities", "engine_instanced_ms", "<variant>_x", ...}]}.
+"ratios": [{"entities", "engine_instanced_ms", "<variant>_x", ...}], "plot": "peers-<slug>.png" or null
+(without matplotlib)}; the plot is wall ms against entities, one line per variant.
 """
 
 from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -66,7 +68,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def check(args: argparse.Namespace) -> None:
-    """Before anything runs: pygfx installed and a GPU adapter for it, when a pygfx variant is asked for."""
+    """Before anything runs: sizes that make sense; pygfx installed and a GPU adapter for it, when a
+    pygfx variant is asked for."""
+    if args.entities is not None and min(args.entities) < 1:
+        raise UsageError("--entities: every count must be at least 1")
+    if (args.frames is not None and args.frames < 1) or (args.warmup is not None and args.warmup < 0):
+        raise UsageError("--frames must be at least 1 and --warmup at least 0")
+    if args.objects_max < 0 or args.budget < 0:
+        raise UsageError("--objects-max and --budget must not be negative")
     if not any(v in PYGFX_VARIANTS for v in args.variants):
         return
     missing = peer.check_available()
@@ -170,7 +179,7 @@ def ratios(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
 def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dict[str, Any]:
     check(args)  # bench.__main__ calls it first; a direct caller gets the same refusal
     counts = args.entities or (QUICK_COUNTS if args.quick else COUNTS)
-    frames = args.frames or (5 if args.quick else 60)
+    frames = args.frames if args.frames is not None else (5 if args.quick else 60)
     warmup = args.warmup if args.warmup is not None else (2 if args.quick else 10)
     engine = [v for v in VARIANTS if v in args.variants and v in ENGINE_VARIANTS]
     pygfx = [v for v in VARIANTS if v in args.variants and v in PYGFX_VARIANTS]
@@ -211,6 +220,13 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
         "ratios": ratios(results),
     }
     print(format_table(doc))
+    out = Path(args.out) / f"peers-{machine['slug']}.png"
+    try:
+        plot(doc, out)
+        doc["plot"] = out.name
+    except ImportError:  # matplotlib comes with the bench and dev extras
+        progress.note("matplotlib is missing: no plot")
+        doc["plot"] = None
     return doc
 
 
@@ -254,3 +270,25 @@ def format_table(doc: dict[str, Any]) -> str:
     if any(r.get("stopped_early") for r in doc["results"]):
         lines.append(f"*: stopped after --budget {doc['config']['budget_s']:g} s, fewer frames timed")
     return "\n".join(lines)
+
+
+def plot(doc: dict[str, Any], path: Path) -> None:
+    from . import pyplot, save_figure
+
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4.4))
+    for variant in doc["config"]["variants"]:
+        points = [(r["entities"], r["wall_ms"]) for r in doc["results"] if r["variant"] == variant and "wall_ms" in r]
+        if points:
+            ax.plot(
+                *zip(*sorted(points)), marker="o", linestyle="--" if variant.startswith("pygfx") else "-", label=variant
+            )
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("entities")
+    ax.set_ylabel("wall ms per frame (median), GPU synced")
+    ax.set_title(f"scaling workload at {doc['config']['size'][0]}x{doc['config']['size'][1]}: this engine and pygfx")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    save_figure(fig, path)

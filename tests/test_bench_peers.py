@@ -55,6 +55,7 @@ def test_engine_side_writes_its_rows_and_ratios(tmp_path, monkeypatch, capsys):
         rows["engine-indirect"]["wall_ms"] / ratio["engine_instanced_ms"]
     )
     assert ratio["pygfx_instanced_x"] is None and ratio["pygfx_objects_x"] is None
+    assert doc["plot"] == "peers-ci.png" and (tmp_path / "peers-ci.png").stat().st_size > 1000
     table = capsys.readouterr().out
     assert "engine-instanced" in table and "wall ms per frame" in table
 
@@ -126,3 +127,11 @@ def test_no_adapter_is_one_line_and_exit_2(tmp_path, monkeypatch, capsys):
     assert main(["peers", *TINY, "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert err.strip().splitlines() == ["bench: pygfx cannot draw here: wgpu found no GPU adapter"]
+
+
+def test_bad_sizes_are_refused_in_one_line(tmp_path, monkeypatch, capsys):
+    main = bench(monkeypatch)
+    for bad in (["--entities", "0"], ["--frames", "0"], ["--budget", "-1"]):
+        assert main(["peers", *TINY, *bad, "--variants", "engine-instanced", "--out", str(tmp_path)]) == 2
+        err = capsys.readouterr().err
+        assert len(err.strip().splitlines()) == 1 and err.startswith("bench: --"), err
