@@ -11,11 +11,11 @@ Variants (`--variants`, default all four):
 - pygfx-instanced, pygfx-objects: the same scene's numbers in pygfx (bench/peers_pygfx.py says
   how: one InstancedMesh per mesh, or one Mesh per entity, moved in NumPy, read back each frame).
   One object per entity is slow: it runs only up to `--objects-max` entities (more are recorded
-  as skipped), and any pygfx configuration stops timing after `--budget` seconds (at least 3
-  frames; the row says so).
+  as skipped), and a pygfx configuration whose frames (warm-up included) pass `--budget`
+  seconds stops timing early (after 3 timed frames at least; its row says so).
 
 Wall ms is the median over the timed frames after the warm-up, from the start of the frame's
-motion to the frame read back. The ratios divide each pygfx variant by engine-instanced at
+motion to the frame read back. The ratios divide each other variant's by engine-instanced's at
 the same N. pygfx needs the optional extra: `pip install -e .[peers]`.
 
 JSON (schema_version 1): {"benchmark": "peers", "quick", "machine", "device" (the engine's
@@ -63,7 +63,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"pygfx-objects runs up to this many entities (default {OBJECTS_MAX:,})",
     )
     parser.add_argument(
-        "--budget", type=float, default=30.0, help="seconds of timed frames per pygfx configuration (default 30)"
+        "--budget",
+        type=float,
+        default=30.0,
+        help="seconds of frames, warm-up included, per pygfx configuration (default 30)",
     )
 
 

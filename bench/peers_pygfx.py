@@ -285,15 +285,17 @@ BUILDERS = {"instanced": build_instanced, "objects": build_objects}
 def measure(
     canvas: Canvas, numbers: SceneNumbers, variant: str, frames: int, warmup: int, budget_s: float
 ) -> dict[str, Any]:
-    """Wall ms a frame (the median, and its two parts) over `frames` frames after `warmup`; a
-    run past `budget_s` seconds stops early (at least 3 timed frames) and says how many it
-    timed. A scene pygfx cannot make (pygfx 0.17 gives every instance an object id and refuses
-    more than 1,000,000 ids: the 1M scene) gives {"skipped": why}."""
+    """Wall ms a frame (the median, and its two parts) over `frames` frames after `warmup`;
+    frames past `budget_s` seconds (warm-up included) stop the timing early, after 3 timed
+    frames at least, and the row says how many it timed. A scene pygfx cannot make gives
+    {"skipped": why}: pygfx 0.17 gives every instance an object id and refuses more than
+    1,000,000 ids, so the 1M scene."""
     t0 = time.perf_counter()
     try:
         scene, camera, update = BUILDERS[variant](numbers)
     except RuntimeError as exc:  # pygfx: "Max number of objects reached."
-        return {"skipped": f"pygfx could not build it: {exc} (it gives every instance an object id, 1,000,000 at most)"}
+        why = f"{exc} (pygfx gives every instance an object id, 1,000,000 at most)"
+        return {"skipped": f"pygfx could not build it: {why}"}
     build_s = time.perf_counter() - t0
     wall, update_ms, render_ms = [], [], []
     start = time.perf_counter()
