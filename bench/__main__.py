@@ -5,7 +5,7 @@ Runs one registered benchmark, prints its table on stdout (progress goes to stde
 `<out>/<NAME>-<slug>.json` with its plot beside it. The default out is a folder in the user's cache
 (`default_out()`), so a run never changes a checkout; `--out bench/results` updates the committed
 results. Exit codes: 0 done (or --help), 2 usage error: a bad argument, or a benchmark that cannot
-run here (its `check(args)`, called before anything is printed, or its run raised UsageError: a
+run here (its `preflight(args)`, called before anything is printed, or its run raised UsageError: a
 missing optional extra, no GPU), reported as one line.
 """
 
@@ -131,8 +131,8 @@ def main(argv: list[str] | None = None, prog: str = COMMANDS[1]) -> int:
     try:
         if args.machine is not None:
             check_slug(args.machine)
-        if hasattr(module, "check"):
-            module.check(args)
+        if hasattr(module, "preflight"):
+            module.preflight(args)
     except (ValueError, UsageError) as exc:
         print(f"bench: {exc}", file=sys.stderr)
         return 2

@@ -70,7 +70,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def check(args: argparse.Namespace) -> None:
+def preflight(args: argparse.Namespace) -> None:
     """Before anything runs: sizes that make sense; pygfx installed and a GPU adapter for it, when a
     pygfx variant is asked for."""
     if args.entities is not None and min(args.entities) < 1:
@@ -180,7 +180,7 @@ def ratios(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dict[str, Any]:
-    check(args)  # bench.__main__ calls it first; a direct caller gets the same refusal
+    preflight(args)  # bench.__main__ calls it first; a direct caller gets the same refusal
     counts = args.entities or (QUICK_COUNTS if args.quick else COUNTS)
     frames = args.frames if args.frames is not None else (5 if args.quick else 60)
     warmup = args.warmup if args.warmup is not None else (2 if args.quick else 10)
