@@ -2,7 +2,9 @@
 `python -m ecs_engine.bench ...`; `ecs-engine bench --help` lists them).
 
 Each benchmark is a module registered in `bench.__main__.REGISTRY`. It provides
-`add_arguments(parser)` (optional, for its own options), `THREADS` (the thread count it uses,
+`add_arguments(parser)` (optional, for its own options), `preflight(args)` (optional: raises
+ecs_engine.errors.UsageError, reported as one line and exit 2 before anything is printed, when
+the benchmark cannot run here, e.g. an optional extra is missing), `THREADS` (the thread count it uses,
 recorded in the machine description) and `run(args, machine, progress) -> dict` returning the JSON
 document that `bench.__main__` writes to `<out>/<name>-<slug>.json`. Anything else it writes (a
 plot) goes under `args.out` too, never beside the code.

@@ -4,7 +4,9 @@
 Runs one registered benchmark, prints its table on stdout (progress goes to stderr) and writes
 `<out>/<NAME>-<slug>.json` with its plot beside it. The default out is a folder in the user's cache
 (`default_out()`), so a run never changes a checkout; `--out bench/results` updates the committed
-results. Exit codes: 0 done (or --help), 2 usage error.
+results. Exit codes: 0 done (or --help), 2 usage error: a bad argument, or a benchmark that cannot
+run here (its `preflight(args)`, called before anything is printed, or its run raised UsageError: a
+missing optional extra, no GPU), reported as one line.
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ REGISTRY: dict[str, str] = {
     "culling": "culling",
     "culling-methods": "culling_methods",
     "frame": "frame",
+    "peers": "peers",
 }
 
 # One line each for the list in the usage text (the modules are not imported to print it).
@@ -53,6 +56,7 @@ SUMMARY: dict[str, str] = {
     "culling": "temporal-coherence culling against per-frame frustum culling over camera paths, 10k to 1M (CPU only)",
     "culling-methods": "CPU, GPU and wall ms of every culling method, moving scene at 1280x720, 10k to 1M (Vulkan)",
     "frame": "one scene's CPU frame through the run loop, median and p99 (default: 1 cube, 2,400 frames) (Vulkan)",
+    "peers": "the scaling workload here and in pygfx, wall ms a frame side by side, 1k to 1M (Vulkan, wgpu)",
 }
 
 # The commands that work from any folder once ecs_engine is installed.
@@ -110,6 +114,7 @@ def main(argv: list[str] | None = None, prog: str = COMMANDS[1]) -> int:
         print(f"bench: unknown benchmark {name!r}; known benchmarks: {known}", file=sys.stderr)
         return 2
     module = importlib.import_module(f"{__package__ or 'bench'}.{REGISTRY[name]}")
+    from ecs_engine.errors import UsageError  # here: the usage text above needs no ecs_engine
 
     out = default_out()
     parser = argparse.ArgumentParser(prog=f"{prog} {name}", description=(module.__doc__ or "").strip().splitlines()[0])
@@ -127,12 +132,14 @@ def main(argv: list[str] | None = None, prog: str = COMMANDS[1]) -> int:
     if hasattr(module, "add_arguments"):
         module.add_arguments(parser)
     args = parser.parse_args(argv[1:])
-    if args.machine is not None:
-        try:
+    try:
+        if args.machine is not None:
             check_slug(args.machine)
-        except ValueError as exc:
-            print(f"bench: {exc}", file=sys.stderr)
-            return 2
+        if hasattr(module, "preflight"):
+            module.preflight(args)
+    except (ValueError, UsageError) as exc:
+        print(f"bench: {exc}", file=sys.stderr)
+        return 2
 
     machine = describe(threads=getattr(module, "THREADS", 1), slug=args.machine)
     progress = Progress(name)
@@ -141,7 +148,11 @@ def main(argv: list[str] | None = None, prog: str = COMMANDS[1]) -> int:
         + (f", {machine['gpu']['name']}" if machine["gpu"] else "")
     )
     progress.note(f"results go to {Path(args.out).resolve()}")
-    doc = module.run(args, machine, progress)
+    try:
+        doc = module.run(args, machine, progress)
+    except UsageError as exc:  # e.g. no Vulkan device
+        print(f"bench: {exc}", file=sys.stderr)
+        return 2
     if doc is None:  # the benchmark only redrew an earlier result (culling --plot)
         return 0
     path = Path(args.out) / f"{name}-{machine['slug']}.json"
