@@ -1,0 +1,335 @@
+"""Levels of detail made at load: coarser copies of a mesh by quadric-error edge collapse (the
+fast-simplification library), each with its geometric error, and the rule that picks a level from
+that error projected to the screen, in NumPy, as the culling shader does it per row.
+
+Level 0 is the mesh itself (error 0); `build_lods` makes the coarser ones. A level's error is a
+distance in the mesh's own units (before an entity's scale): how far its surface strays from the
+original's, measured both ways at vertices (see `_deviation`). A level is good enough while that
+error covers under about a pixel on screen, so `lod_for_screen_size` takes the coarsest level whose
+error, projected at the nearest point of the bounding sphere, is at most `threshold_px`.
+
+Why the attributes are chosen, not interpolated: the library moves kept vertices to their quadric's
+optimum and returns only positions and triangles. Split vertices (UV seams, hard edges) would tear
+the surface if simplified apart, so positions are welded first; every output vertex is a welded
+original vertex that survived its collapses, and each corner takes the normal and UV of that
+survivor's own split copy closest (in UV and normal) to the corner's original copy. Seams and hard
+edges that survive stay sharp, the shading keeps the detailed mesh's normals, and no vertex gets
+an average of two sides of a seam. A carried normal facing away from the new surface (more than
+90° from its faces' normal) is replaced by that face normal. Tangents are made again from the UVs.
+
+LOD meshes have `source` None: they are remade from their base mesh at load, never saved."""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Sequence
+from dataclasses import dataclass
+from itertools import pairwise
+from typing import Final
+
+import fast_simplification
+import numpy as np
+
+from .mesh_data import MeshData
+
+__all__ = ["DEFAULT_RATIOS", "MIN_TRIANGLES", "Lod", "build_lods", "focal_pixels", "lod_errors", "lod_for_screen_size"]
+
+#: Fractions of the original triangles the levels aim for: each halves the last.
+DEFAULT_RATIOS: Final = (0.5, 0.25, 0.125)
+#: No level under this many triangles: a smaller mesh costs the GPU about its draw, not its triangles
+#: (a cube, 12 triangles, gets no levels).
+MIN_TRIANGLES: Final = 64
+#: A level must have at least this fraction fewer triangles than the one before, or the levels stop
+#: (the library could not collapse further without flipping faces or tearing borders).
+MIN_DROP: Final = 0.1
+# Twice a triangle's area below this fraction of the mesh's squared size: no normal, so no quadric
+# (the library would divide by zero); as mesh_loading.py drops such triangles from files.
+_DEGENERATE_AREA: Final = 1e-12
+# The library keeps the mesh it works on in module state: one simplification at a time.
+_LIBRARY_LOCK = threading.Lock()
+
+
+@dataclass(frozen=True)
+class Lod:
+    """One coarser level: its mesh, its error (object-space units, before the entity's scale; 0 is
+    exact) and the fraction of the original triangles it was asked for."""
+
+    mesh: MeshData
+    error: float
+    ratio: float
+
+
+@dataclass(frozen=True)
+class _Welded:
+    """The mesh with split vertices merged by position, and its usable triangles."""
+
+    positions: np.ndarray  # (W, 3) float64
+    weld: np.ndarray  # (V,) render vertex -> welded vertex
+    triangles: np.ndarray  # (T, 3) welded indices, degenerate triangles dropped
+    corners: np.ndarray  # (T, 3) the same triangles' render vertices
+
+
+def build_lods(
+    mesh: MeshData, ratios: Sequence[float] = DEFAULT_RATIOS, min_triangles: int = MIN_TRIANGLES
+) -> list[Lod]:
+    """Coarser levels of `mesh`, finest first, each aiming for `ratio` times its triangles (each
+    simplified from the original, not from the level before, so errors do not compound).
+
+    The levels stop at the first that would have fewer than `min_triangles` triangles, or fewer
+    than MIN_DROP (10%) fewer than the level before. Errors never decrease from one level to the
+    next (a level's is at least the one before's), so a selection rule can rely on their order.
+
+    Degenerate triangles (repeated vertices, no area) are left out of the simplification; a mesh
+    with none left, like an empty one, gets no levels ([]). A MeshData cannot hold NaN or infinite
+    positions (its constructor refuses them); should the library return any, that level and the
+    coarser ones are not made. Bad `ratios` (not strictly decreasing within (0, 1)) or
+    `min_triangles` (under 1) raise ValueError, anything but a MeshData TypeError."""
+    if not isinstance(mesh, MeshData):
+        raise TypeError(f"build_lods needs a MeshData, got {type(mesh).__name__}")
+    ratios = [float(r) for r in ratios]
+    if any(not 0.0 < r < 1.0 for r in ratios) or any(a <= b for a, b in pairwise(ratios)):
+        raise ValueError(f"LOD ratios must be strictly decreasing fractions in (0, 1), got {ratios}")
+    if isinstance(min_triangles, bool) or not isinstance(min_triangles, (int, np.integer)) or min_triangles < 1:
+        raise ValueError(f"min_triangles must be an integer of at least 1, got {min_triangles!r}")
+    welded = _welded(mesh)
+    total = len(welded.triangles)
+    levels: list[Lod] = []
+    previous, error = total, 0.0
+    for i, ratio in enumerate(ratios, start=1):
+        target = int(ratio * total)
+        if target < min_triangles:
+            break
+        level = _simplified(mesh, welded, target, f"{mesh.name} lod{i}")
+        if level is None:
+            break
+        lod_mesh, level_error = level
+        count = lod_mesh.triangle_count
+        if count < min_triangles or count > (1.0 - MIN_DROP) * previous:
+            break
+        error = max(error, level_error)
+        levels.append(Lod(lod_mesh, error, ratio))
+        previous = count
+    return levels
+
+
+def lod_errors(lods: Sequence[Lod]) -> np.ndarray:
+    """The errors of level 0 (the mesh itself: 0) and of `lods`, as `lod_for_screen_size` takes them."""
+    return np.array([0.0, *(lod.error for lod in lods)], dtype=np.float32)
+
+
+def focal_pixels(fov_y: float, viewport_height: float) -> float:
+    """Pixels a length of 1 spans at distance 1 straight ahead: a perspective camera with vertical
+    field of view `fov_y` (radians) over `viewport_height` pixels. A length s at distance d spans
+    about s * focal / d pixels."""
+    if not 0.0 < fov_y < np.pi or not viewport_height > 0:
+        raise ValueError(f"need 0 < fov_y < pi and viewport_height > 0, got {fov_y}, {viewport_height}")
+    return float(viewport_height / (2.0 * np.tan(fov_y / 2.0)))
+
+
+def lod_for_screen_size(
+    errors: np.ndarray,
+    distance: np.ndarray,
+    radius: np.ndarray | float,
+    focal_px: float,
+    scale: np.ndarray | float = 1.0,
+    threshold_px: float = 1.0,
+) -> np.ndarray:
+    """Per row, the coarsest level whose error would span at most `threshold_px` pixels.
+
+    `errors`: (L,) for every row, or (N, L) per row, as `lod_errors` gives them (level 0 first,
+    never decreasing; pad a mesh with fewer levels with inf). `distance`: (N,) from the camera to
+    each bounding sphere's centre, `radius` its radius and `scale` the entity's largest scale
+    (world units), `focal_px` from `focal_pixels`. The error is projected at the sphere's nearest
+    point, so no part of the mesh is drawn coarser than the rule allows; a camera inside the sphere
+    gets level 0. The shader's loop: level = number of levels with error * scale * focal_px <=
+    threshold_px * nearest, minus one. Returns (N,) int32."""
+    d = np.asarray(distance, dtype=np.float64).reshape(-1)
+    e = np.asarray(errors, dtype=np.float64)
+    if e.ndim == 1:
+        e = e[None, :]
+    if e.ndim != 2 or e.shape[1] == 0 or e.shape[0] not in (1, d.size):
+        raise ValueError(f"errors must be (L,) or (N, L) with N = {d.size} rows, got shape {np.shape(errors)}")
+    nearest = np.maximum(d - np.asarray(radius, dtype=np.float64).reshape(-1), 0.0)
+    projected = e * (np.asarray(scale, dtype=np.float64).reshape(-1, 1) * focal_px)
+    fits = projected <= threshold_px * nearest[:, None]
+    return np.maximum(fits.sum(axis=1) - 1, 0).astype(np.int32)
+
+
+def _welded(mesh: MeshData) -> _Welded:
+    """Merge vertices at the same position (split by UV seams or hard edges) so the simplifier
+    sees one connected surface, and drop triangles with no area."""
+    positions = mesh.positions + np.float32(0.0)  # -0.0 becomes 0.0, so equal positions have equal bytes
+    keys = np.ascontiguousarray(positions).view(np.dtype((np.void, 12))).reshape(-1)
+    _, first, weld = np.unique(keys, return_index=True, return_inverse=True)
+    weld = weld.reshape(-1)
+    points = positions[first].astype(np.float64)
+    corners = mesh.indices.reshape(-1, 3).astype(np.int64)
+    triangles = weld[corners]
+    a, b, c = (points[triangles[:, k]] for k in range(3))
+    double_area = np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    size = float(np.ptp(points, axis=0).max()) if len(points) else 0.0
+    keep = (
+        (triangles[:, 0] != triangles[:, 1])
+        & (triangles[:, 1] != triangles[:, 2])
+        & (triangles[:, 2] != triangles[:, 0])
+        & (double_area > _DEGENERATE_AREA * size * size)
+    )
+    return _Welded(points, weld, triangles[keep], corners[keep])
+
+
+def _simplified(mesh: MeshData, welded: _Welded, target: int, name: str) -> tuple[MeshData, float] | None:
+    """One level of about `target` triangles and its error; None if the library's output has
+    non-finite positions."""
+    with _LIBRARY_LOCK:
+        points, faces, collapses = fast_simplification.simplify(
+            welded.positions, welded.triangles.astype(np.int32), target_count=target, return_collapses=True
+        )
+    points = np.asarray(points, dtype=np.float64)
+    if not np.isfinite(points).all():
+        return None
+    # Each collapse (i0, i1) merges welded vertex i1 into i0; follow the chains to the survivors.
+    root = np.arange(len(welded.positions))
+    collapses = np.asarray(collapses, dtype=np.int64).reshape(-1, 2)
+    root[collapses[:, 1]] = collapses[:, 0]
+    while True:
+        jumped = root[root]
+        if np.array_equal(jumped, root):
+            break
+        root = jumped
+    # The library keeps the triangles not collapsed away in order and numbers the survivors in
+    # order, so its output is this mapping; checked, since the corners' attributes rely on it.
+    mapped = root[welded.triangles]
+    kept = (mapped[:, 0] != mapped[:, 1]) & (mapped[:, 1] != mapped[:, 2]) & (mapped[:, 2] != mapped[:, 0])
+    used = np.zeros(len(root), dtype=bool)
+    used[mapped[kept]] = True
+    rank = np.cumsum(used) - 1
+    if used.sum() != len(points) or not np.array_equal(rank[mapped[kept]], np.asarray(faces).reshape(-1, 3)):
+        raise RuntimeError("fast-simplification's output does not follow its collapse record (a changed version?)")
+    # Each corner takes the survivor's split copy closest in UV and normal to its own original copy.
+    corners = welded.corners[kept]
+    chosen = _closest_copies(mesh, welded.weld, corners, mapped[kept])
+    vertices, indices = np.unique(chosen.reshape(-1), return_inverse=True)
+    positions = points[rank[welded.weld[vertices]]]
+    normals = _facing_normals(positions, indices.reshape(-1, 3), mesh.normals[vertices].astype(np.float64))
+    lod = MeshData.from_arrays(positions, normals, indices.astype(np.uint32), name, mesh.uvs[vertices])
+    error = _deviation(welded, root, rank, used, points, rank[mapped[kept]])
+    return lod, error
+
+
+def _closest_copies(mesh: MeshData, weld: np.ndarray, corners: np.ndarray, survivors: np.ndarray) -> np.ndarray:
+    """For each corner (render vertex `corners`, now at welded vertex `survivors`), the render
+    vertex of that welded vertex whose UV and normal are nearest the corner's own."""
+    order = np.argsort(weld, kind="stable")
+    counts = np.bincount(weld)
+    starts = np.cumsum(counts) - counts
+    flat, home = corners.reshape(-1), survivors.reshape(-1)
+    uv, normal = mesh.uvs.astype(np.float64), mesh.normals.astype(np.float64)
+    best = order[starts[home]]
+    # corners by their survivor's copies, most first: the m-th copy exists for a prefix of them
+    # (a sphere's pole has hundreds of copies but few corners)
+    many = counts[home]
+    by_count = np.argsort(-many, kind="stable")
+    descending = many[by_count]
+    best_cost = np.full(flat.shape, np.inf)
+    for m in range(int(descending[0]) if descending.size else 0):
+        rows = by_count[: int(np.searchsorted(-descending, -m, side="left"))]
+        cand = order[starts[home[rows]] + m]
+        here = flat[rows]
+        cost = ((uv[cand] - uv[here]) ** 2).sum(1) + ((normal[cand] - normal[here]) ** 2).sum(1)
+        better = cost < best_cost[rows]
+        best[rows[better]] = cand[better]
+        best_cost[rows[better]] = cost[better]
+    return best.reshape(corners.shape)
+
+
+def _facing_normals(positions: np.ndarray, triangles: np.ndarray, carried: np.ndarray) -> np.ndarray:
+    """The carried normals, except where one points more than 90° from its vertex's area-weighted
+    face normal (a fold the coarse surface no longer has): there that face normal."""
+    face = np.cross(
+        positions[triangles[:, 1]] - positions[triangles[:, 0]], positions[triangles[:, 2]] - positions[triangles[:, 0]]
+    )
+    summed = np.zeros_like(carried)
+    for k in range(3):
+        np.add.at(summed, triangles[:, k], face)
+    length = np.linalg.norm(summed, axis=1)
+    flip = ((summed * carried).sum(1) < 0.0) & (length > 0.0)
+    out = carried.copy()
+    out[flip] = summed[flip] / length[flip, None]
+    return out / np.linalg.norm(out, axis=1, keepdims=True)
+
+
+def _deviation(
+    welded: _Welded, root: np.ndarray, rank: np.ndarray, used: np.ndarray, points: np.ndarray, faces: np.ndarray
+) -> float:
+    """How far the simplified surface strays from the original, an upper bound sampled at vertices:
+    the largest of each simplified vertex's distance to the original triangles around the vertices
+    collapsed into it, and each original vertex's distance to the simplified triangles around its
+    and its neighbours' survivors. Each is a distance to some of the surface's triangles, so at
+    least the distance to the whole surface: the bound errs on the coarse level's side (it is
+    switched to later), never on the screen's. A Hausdorff distance measured at the vertices, in
+    the mesh's units; a vertex the optimum moved beyond its own collapsed region makes it loose
+    (up to about 3x seen on a subdivided knot, 1.3x on the torus knot).
+
+    Why not the library's quadric error: it is a sum of squared plane distances, not a length, and
+    grows with the number of collapses merged, so it cannot be projected to pixels."""
+    original, triangles = welded.positions, welded.triangles
+    # simplified vertex -> original triangles of its collapsed vertices (every corner names one)
+    near = rank[root[triangles.reshape(-1)]]
+    tri = np.repeat(np.arange(len(triangles)), 3)
+    d = _point_triangle_distance(points[near], *(original[triangles[tri, k]] for k in range(3)))
+    outward = np.full(len(points), np.inf)
+    np.minimum.at(outward, near, d)
+    # original vertex -> simplified triangles around its neighbours' survivors (CSR of the simplified
+    # corners); its own survivor's alone leave it often nearer a triangle one step further on
+    corner_vertex = faces.reshape(-1)
+    order = np.argsort(corner_vertex, kind="stable")
+    counts = np.bincount(corner_vertex, minlength=len(points))
+    starts = np.cumsum(counts) - counts
+    survivor = root[triangles]
+    alive = used[survivor]
+    query = np.repeat(triangles, 3, axis=1).reshape(-1)  # each corner with each corner's survivor
+    home = np.tile(np.where(alive, rank[survivor], -1), 3).reshape(-1)
+    keys = np.unique((query * len(points) + home)[home >= 0])  # each pair once
+    query, home = np.divmod(keys, len(points))
+    n = counts[home]
+    pair_query = np.repeat(query, n)
+    offsets = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)
+    pair_face = order[np.repeat(starts[home], n) + offsets] // 3
+    d = _point_triangle_distance(original[pair_query], *(points[faces[pair_face, k]] for k in range(3)))
+    inward = np.full(len(original), np.inf)
+    np.minimum.at(inward, pair_query, d)
+    # an original vertex with no neighbour's survivor left (a part collapsed away): every triangle
+    lost = np.flatnonzero(np.isinf(inward) & np.isin(np.arange(len(original)), triangles))
+    for v in lost:
+        many = np.broadcast_to(original[v], (len(faces), 3))
+        inward[v] = _point_triangle_distance(many, *(points[faces[:, k]] for k in range(3))).min()
+    inward = inward[np.isfinite(inward)]
+    both = np.concatenate([outward, inward])
+    return float(both.max()) if both.size else 0.0
+
+
+def _point_triangle_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Distance from each point to its triangle (all (N, 3)): the closest point by the triangle's
+    Voronoi regions (Ericson, Real-Time Collision Detection, 5.1.5), vectorised. Worked as (3, N)
+    rows: sums over 3 contiguous rows are several times faster than over (N, 3)'s short rows."""
+    p, a, b, c = (np.ascontiguousarray(x.T, dtype=np.float64) for x in (p, a, b, c))
+    ab, ac, ap, bp, cp = b - a, c - a, p - a, p - b, p - c
+    d1, d2, d3, d4, d5, d6 = ((x * y).sum(0) for x, y in ((ab, ap), (ac, ap), (ab, bp), (ac, bp), (ab, cp), (ac, cp)))
+    va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        denom = va + vb + vc
+        closest = a + ab * (vb / denom) + ac * (vc / denom)  # inside the face
+        # edges, then vertices, each overriding where its region holds (the regions do not overlap)
+        t_ab, t_ac, t_bc = d1 / (d1 - d3), d2 / (d2 - d6), (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        regions = (
+            ((vc <= 0) & (d1 >= 0) & (d3 <= 0), lambda: a + ab * t_ab),
+            ((vb <= 0) & (d2 >= 0) & (d6 <= 0), lambda: a + ac * t_ac),
+            ((va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0), lambda: b + (c - b) * t_bc),
+            ((d1 <= 0) & (d2 <= 0), lambda: a),
+            ((d3 >= 0) & (d4 <= d3), lambda: b),
+            ((d6 >= 0) & (d5 <= d6), lambda: c),
+        )
+        for region, point in regions:
+            if region.any():
+                closest = np.where(region, point(), closest)
+    return np.sqrt(((p - np.nan_to_num(closest)) ** 2).sum(0))
