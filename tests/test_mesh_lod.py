@@ -1,0 +1,180 @@
+"""Levels of detail (render/mesh_lod.py): the levels the torus knot gets, their errors checked
+against a brute-force distance to the surface, attributes carried across seams, the meshes that get
+none, bad input, and the selection rule the culling shader mirrors."""
+
+from itertools import pairwise
+
+import numpy as np
+import pytest
+import trimesh
+
+from ecs_engine.render.mesh_data import MeshData
+from ecs_engine.render.mesh_loading import DEFAULT_MODEL, load_mesh
+from ecs_engine.render.mesh_lod import (
+    DEFAULT_RATIOS,
+    build_lods,
+    focal_pixels,
+    lod_errors,
+    lod_for_screen_size,
+)
+from ecs_engine.render.primitives import cube_mesh, sphere_mesh
+
+
+@pytest.fixture(scope="module")
+def knot():
+    return load_mesh(DEFAULT_MODEL)
+
+
+@pytest.fixture(scope="module")
+def knot_lods(knot):
+    return build_lods(knot)
+
+
+def surface_distance(points, mesh, cap):
+    """Each point's exact distance to the mesh's surface where it is at most `cap` (inf where it is
+    more), by trimesh, trying every triangle whose bounding box lies within `cap` of the point."""
+    triangles = mesh.positions.astype(np.float64)[mesh.indices.reshape(-1, 3)]
+    lo, hi = triangles.min(axis=1), triangles.max(axis=1)
+    out = np.full(len(points), np.inf)
+    for start in range(0, len(points), 256):
+        p = points[start : start + 256].astype(np.float64)
+        gap = np.maximum(np.maximum(lo[None] - p[:, None], p[:, None] - hi[None]), 0.0)
+        which, tri = np.nonzero((gap**2).sum(axis=2) <= cap * cap)
+        closest = trimesh.triangles.closest_point(triangles[tri], p[which])
+        d = np.linalg.norm(closest - p[which], axis=1)
+        near = np.full(len(p), np.inf)
+        np.minimum.at(near, which, d)
+        out[start : start + 256] = np.where(near <= cap, near, np.inf)
+    return out
+
+
+def test_knot_levels_have_fewer_triangles_and_growing_errors(knot, knot_lods):
+    assert len(knot_lods) == len(DEFAULT_RATIOS)
+    counts = [knot.triangle_count] + [lod.mesh.triangle_count for lod in knot_lods]
+    assert all(a > b for a, b in pairwise(counts)), counts
+    for lod in knot_lods:  # the library reaches its target on a closed, smooth mesh
+        assert lod.mesh.triangle_count == pytest.approx(lod.ratio * knot.triangle_count, rel=0.05)
+    errors = lod_errors(knot_lods)
+    assert errors[0] == 0.0 and np.all(np.diff(errors) > 0), errors
+    assert errors[-1] < 0.05 * knot.radius  # an eighth of the triangles still looks like the knot
+
+
+def test_knot_levels_are_valid_meshes(knot_lods):
+    for i, lod in enumerate(knot_lods, start=1):
+        m = lod.mesh
+        assert m.indices.dtype == np.uint32 and int(m.indices.max()) < m.vertex_count
+        assert np.unique(m.indices).size == m.vertex_count  # no unused vertices
+        np.testing.assert_allclose(np.linalg.norm(m.normals, axis=1), 1.0, atol=1e-5)
+        assert np.isfinite(m.positions).all() and np.isfinite(m.uvs).all()
+        assert m.name.endswith(f"lod{i}") and m.source is None
+        # the normals face the way the coarse triangles do (no folds, winding kept)
+        tri = m.positions.astype(np.float64)[m.indices.reshape(-1, 3)]
+        face = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        face /= np.linalg.norm(face, axis=1, keepdims=True)
+        agree = np.einsum("tj,tkj->tk", face, m.normals[m.indices.reshape(-1, 3)])
+        assert (agree > 0).mean() > 0.999 and np.median(agree) > 0.95
+
+
+def test_reported_error_bounds_the_distance_to_the_original_surface(knot, knot_lods):
+    """Every vertex of the coarsest level (a sample of the others) lies within the level's error of the
+    original surface, and sampled original vertices within it of the level's; nor is the bound loose."""
+    for lod in knot_lods:
+        every = 1 if lod is knot_lods[-1] else 8  # all of the coarsest level's vertices, a sample of the rest
+        cap = lod.error * (1 + 1e-4) + 1e-6
+        outward = surface_distance(lod.mesh.positions[::every], knot, cap)
+        inward = surface_distance(knot.positions[::4], lod.mesh, cap)
+        assert np.isfinite(outward).all() and np.isfinite(inward).all(), lod.ratio
+        assert lod.error < 3.0 * max(outward.max(), inward.max()), lod.ratio
+
+
+def test_uv_seams_stay_split():
+    """The sphere's UV seam (u = 0 and u = 1 at the same positions) survives: a corner takes the copy
+    on its own side, so no triangle stretches across the whole texture."""
+    sphere = sphere_mesh(48, 24)
+    lods = build_lods(sphere, ratios=(0.5, 0.25))
+    assert lods
+
+    def widest_u(m):
+        u = m.uvs[m.indices.reshape(-1, 3), 0]
+        return float((u.max(1) - u.min(1)).max())
+
+    assert widest_u(sphere) < 0.5
+    for lod in lods:
+        assert widest_u(lod.mesh) < 0.5
+        assert lod.mesh.uvs[:, 0].min() < 0.05 and lod.mesh.uvs[:, 0].max() > 0.95
+
+
+def test_small_and_empty_meshes_get_no_levels():
+    assert build_lods(cube_mesh()) == []
+    empty = MeshData.from_arrays(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, np.uint32), "empty")
+    assert build_lods(empty) == []
+    flat = MeshData.from_arrays(  # only degenerate triangles: a repeated vertex, three in a line
+        [[0, 0, 0], [1, 0, 0], [2, 0, 0]], [[0, 0, 1]] * 3, [0, 0, 1, 0, 1, 2], "degenerate"
+    )
+    assert build_lods(flat, min_triangles=1) == []
+
+
+def test_degenerate_triangles_are_left_out(knot, knot_lods):
+    bad = np.concatenate([knot.indices, [0, 0, 1, 5, 5, 5]])
+    mesh = MeshData.from_arrays(knot.positions, knot.normals, bad, "knot with slivers", knot.uvs)
+    lods = build_lods(mesh)
+    assert [lod.mesh.triangle_count for lod in lods] == [lod.mesh.triangle_count for lod in knot_lods]
+
+
+def test_levels_stop_at_min_triangles(knot):
+    lods = build_lods(knot, min_triangles=2000)
+    assert [lod.ratio for lod in lods] == [0.5, 0.25]
+    assert build_lods(knot, min_triangles=knot.triangle_count) == []
+
+
+def test_bad_input_is_refused():
+    with pytest.raises(ValueError, match="finite"):  # NaN never reaches build_lods: MeshData refuses it
+        MeshData.from_arrays([[0, 0, 0], [1, 0, np.nan], [0, 1, 0]], [[0, 0, 1]] * 3, [0, 1, 2], "nan")
+    with pytest.raises(TypeError, match="MeshData"):
+        build_lods(trimesh.creation.box())
+    cube = cube_mesh()
+    for ratios in ((0.5, 0.5), (0.25, 0.5), (1.0,), (0.0,), (-0.5,)):
+        with pytest.raises(ValueError, match="ratios"):
+            build_lods(cube, ratios=ratios)
+    for bad in (0, -3, 2.5, True):
+        with pytest.raises(ValueError, match="min_triangles"):
+            build_lods(cube, min_triangles=bad)
+
+
+def test_focal_pixels():
+    assert focal_pixels(np.pi / 2, 1000) == pytest.approx(500.0)
+    with pytest.raises(ValueError):
+        focal_pixels(0.0, 1000)
+
+
+def test_selection_is_level_zero_near_and_coarser_far(knot, knot_lods):
+    errors = lod_errors(knot_lods)
+    focal = focal_pixels(np.radians(60), 1080)
+    distance = np.geomspace(0.01, 1000.0, 400)
+    levels = lod_for_screen_size(errors, distance, knot.radius, focal)
+    assert levels.dtype == np.int32 and levels.shape == distance.shape
+    assert levels[0] == 0 and levels[-1] == len(errors) - 1
+    assert np.all(np.diff(levels) >= 0)  # never finer further away
+    assert set(levels.tolist()) == set(range(len(errors)))
+
+
+def test_selection_switches_where_the_error_spans_the_threshold():
+    errors = np.array([0.0, 0.01, 0.04])
+    focal, radius = 1000.0, 2.0
+    switch = errors[1] * focal / 1.0 + radius  # level 1's error spans exactly a pixel here
+    d = np.array([0.0, 1.0, switch * 0.999, switch * 1.001, errors[2] * focal + radius + 1e-6])
+    assert lod_for_screen_size(errors, d, radius, focal).tolist() == [0, 0, 0, 1, 2]
+    # twice the scale (or half the threshold) doubles the distance needed
+    assert lod_for_screen_size(errors, [switch * 1.001], radius, focal, scale=2.0).tolist() == [0]
+    assert lod_for_screen_size(errors, [switch * 1.001], radius, focal, threshold_px=0.5).tolist() == [0]
+    assert lod_for_screen_size(errors, [2 * switch], radius, focal, threshold_px=2.0).tolist() == [2]
+
+
+def test_selection_per_row_with_padding():
+    """Rows of different meshes: errors per row, a mesh with fewer levels padded with inf."""
+    errors = np.array([[0.0, 0.01, 0.02], [0.0, 0.01, np.inf], [0.0, np.inf, np.inf]])
+    far = np.full(3, 1e6)
+    assert lod_for_screen_size(errors, far, np.ones(3), 1000.0).tolist() == [2, 1, 0]
+    assert lod_for_screen_size(errors, np.zeros(3), np.ones(3), 1000.0).tolist() == [0, 0, 0]
+    with pytest.raises(ValueError, match="rows"):
+        lod_for_screen_size(errors, np.ones(2), 1.0, 1000.0)
