@@ -189,6 +189,23 @@ def clamped_sampler(device: Device, max_lod: float | None = None) -> Any:
     return _trilinear(device, device.vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, 0.0, max_lod)
 
 
+def nearest_sampler(device: Device) -> Any:
+    """Nearest, clamped to the edges: for images read texel by texel (depth, the G-buffer)."""
+    vk = device.vk
+    clamp = vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE
+    return vk.vkCreateSampler(
+        device.handle,
+        vk.VkSamplerCreateInfo(
+            magFilter=vk.VK_FILTER_NEAREST,
+            minFilter=vk.VK_FILTER_NEAREST,
+            addressModeU=clamp,
+            addressModeV=clamp,
+            addressModeW=clamp,
+        ),
+        None,
+    )
+
+
 def _trilinear(device: Device, address_uv: int, anisotropy: float, max_lod: float | None) -> Any:
     vk = device.vk
     return vk.vkCreateSampler(

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from ..gpu.array_image import nearest_sampler
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout
 from ..gpu.device import Device
 from ..gpu.pipeline import compute_pipeline, pipeline_layout
@@ -52,17 +53,7 @@ class DeferredPass:
             self.layout = pipeline_layout(
                 device, [frame_set_layout, self.set_layout.handle], [(stage, 0, DEFERRED_PUSH.size)]
             )
-            self.sampler = vk.vkCreateSampler(
-                device.handle,
-                vk.VkSamplerCreateInfo(
-                    magFilter=vk.VK_FILTER_NEAREST,
-                    minFilter=vk.VK_FILTER_NEAREST,
-                    addressModeU=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-                    addressModeV=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-                    addressModeW=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-                ),
-                None,
-            )
+            self.sampler = nearest_sampler(device)
             self.image_set = self.pool.allocate(self.set_layout)
         except BaseException:
             self.destroy()

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from ..gpu.array_image import nearest_sampler
 from ..gpu.attachment import create_framebuffer
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
 from ..gpu.memory import DEVICE, Buffer, Image
@@ -118,17 +119,7 @@ class OcclusionCulling:
         )
         mirrored = GraphicsPipelineSpec("shadow_indirect.vert", None, front_face_ccw=False, **base)
         self.pipelines = (self.pipelines[0], graphics_pipeline(device, mirrored))
-        self.sampler = vk.vkCreateSampler(
-            device.handle,
-            vk.VkSamplerCreateInfo(
-                magFilter=vk.VK_FILTER_NEAREST,
-                minFilter=vk.VK_FILTER_NEAREST,
-                addressModeU=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-                addressModeV=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-                addressModeW=vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-            ),
-            None,
-        )
+        self.sampler = nearest_sampler(device)
         self._reduce_push = vk.ffi.new("uint32_t[8]")
         self._set_array = vk.ffi.new("VkDescriptorSet[1]", [self.set])
         self._clear = vk.ffi.new("VkClearValue[1]")  # depth 0: reverse-Z's far
