@@ -158,7 +158,7 @@ struct CompactPush {  // 8 bytes, std430
 };
 
 struct ReducePush {  // 32 bytes, std430
-    uvec4 source;               // offset 0: xy the level read (the depth image's size for level 0), z its first float, w 1: read the depth image
+    uvec4 source;               // offset 0: xy the level read (level 0: the depth image's size), z its first float, w the samples (0: a level)
     uvec4 target;               // offset 16: xy the level written, z its first float, w 0
 };
 

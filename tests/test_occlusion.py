@@ -77,18 +77,39 @@ def test_rows_that_cover_no_pixel_centre_are_not_drawn_and_the_image_is_unchange
     assert all(np.array_equal(a, b) for (a, _), (b, _) in zip(frustum, occluded, strict=True))
 
 
-def test_with_msaa_the_frame_culls_the_frustum_alone():
+def test_with_msaa_the_image_still_equals_frustum_cullings():
+    """The early depth takes the target's samples, the pyramid the farthest of them."""
     from ecs_engine.gpu.offscreen import OffscreenTarget
 
+    out = {}
     with headless_gpu(W, H) as gpu:
         target = OffscreenTarget(gpu.device, W, H, samples=4)
         gpu.owned.append(target)
+        for culling in ("frustum", "occlusion"):
+            world = scaling_world(gpu, 4000)
+            renderer = Renderer(gpu.device, target, gpu.meshes, mode="indirect", culling=culling, lod=False)
+            gpu.owned.append(renderer)
+            schedule = default_schedule()
+            out[culling] = []
+            for _ in range(3):
+                schedule.run(world, 1 / 30)
+                drawn = renderer.render(world, readback=True).instances
+                out[culling].append((target.pixels()[..., :3].copy(), drawn))
+        assert renderer.path.occlusion is not None and renderer.path.occlusion.samples == 4
+    for (a, drawn_all), (b, drawn) in zip(out["frustum"], out["occlusion"], strict=True):
+        assert np.array_equal(a, b)
+        assert drawn <= drawn_all
+    assert out["occlusion"][-1][1] < 0.95 * out["frustum"][-1][1]  # hidden rows culled (no sub-pixel culling)
+
+
+def test_wireframe_frames_cull_the_frustum_alone():
+    with headless_gpu(W, H) as gpu:
         world = tiny_and_one_big_cube(gpu)
-        renderer = Renderer(gpu.device, target, gpu.meshes, mode="indirect", culling="occlusion")
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, mode="indirect", culling="occlusion", fill="wireframe")
         gpu.owned.append(renderer)
         default_schedule().run(world, 0.0)
         counts = [renderer.render(world, readback=True).instances for _ in range(2)]
-        assert counts == [201, 201]
+        assert counts == [201, 201]  # the tiny cubes too: no sub-pixel culling either
         assert renderer.path.occlusion is None  # never made
 
 

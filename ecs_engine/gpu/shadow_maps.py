@@ -27,12 +27,14 @@ SHADOW_FORMAT_NAME = "VK_FORMAT_D32_SFLOAT"
 READ_LAYOUT_NAME = "VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL"  # after the shadow pass: sampled
 
 
-def create_shadow_pass(device: Device) -> Any:
+def create_shadow_pass(device: Device, samples: int = 1) -> Any:
+    """A depth-only pass: cleared, stored, then sampled (READ_LAYOUT); `samples` per pixel (the
+    occlusion culling's early depth matches the target's MSAA, render/occlusion.py)."""
     vk = device.vk
     depth = attachment(
         vk,
         getattr(vk, SHADOW_FORMAT_NAME),
-        1,
+        samples,
         vk.VK_ATTACHMENT_LOAD_OP_CLEAR,
         vk.VK_ATTACHMENT_STORE_OP_STORE,
         getattr(vk, READ_LAYOUT_NAME),

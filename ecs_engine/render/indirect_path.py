@@ -353,7 +353,8 @@ class IndirectPath:
         push["occlusion"] = (width, height, 0, lod)  # cull.comp: the levels of detail's projection
         if occlusion is not None:
             occlusion.bind(cb)
-            push["occlusion"] = (width, height, len(occlusion.levels), CULL_SUBPIXEL | lod)
+            subpixel = CULL_SUBPIXEL if occlusion.samples == 1 else 0  # MSAA samples lie off the centres
+            push["occlusion"] = (width, height, len(occlusion.levels), subpixel | lod)
             self._cull_rows(cb, occlusion.early, rows)
             self._compact(cb, keys, compute_to_compute, to_draw)
             merged, key_counts = self.ctx.meshes.merged(), f.key_counts

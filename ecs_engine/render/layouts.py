@@ -167,7 +167,7 @@ REDUCE_PUSH = Struct(
         (
             "source",
             "uvec4",
-            "xy the level read (the depth image's size for level 0), z its first float, w 1: read the depth image",
+            "xy the level read (level 0: the depth image's size), z its first float, w the samples (0: a level)",
         ),
         ("target", "uvec4", "xy the level written, z its first float, w 0"),
     ],

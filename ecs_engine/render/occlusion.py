@@ -3,7 +3,7 @@
 Per frame, in the primary before the scene's render pass (IndirectPath._record_compute):
 1. early cull (cull_early.comp): the rows the last frame found visible, still in the frustum,
    with an opaque one-sided material; compact.comp makes their draws;
-2. their depth alone, into this module's single-sample depth image (the shadow maps' depth-only
+2. their depth alone, into this module's depth image (the target's samples; the shadow maps' depth-only
    render pass, no bias; shadow_indirect.vert through the camera's set 0: the same position
    arithmetic as mesh_indirect.vert);
 3. the depth pyramid (depth_reduce.comp): level k holds, per texel, the farthest depth of the
@@ -16,9 +16,12 @@ Unlike niagara, the early rows are drawn again in the scene pass instead of into
 render pass (forward, deferred, HDR and MSAA forms, render/renderer.py) stays one pass, and the
 early pass costs their vertices alone. What is visible in the final image lies in front of the
 early depth on a pixel it covers (every early row passes the late test and is drawn), so the
-late test keeps it: the image is frustum culling's. A row that covers no pixel centre is culled
-too (sub-pixel culling): it could not have produced a fragment. Both need one sample per pixel
-and filled triangles, so with MSAA or wireframe the frame culls the frustum alone (`active`).
+late test keeps it: the image is frustum culling's. With one sample per pixel a row that covers
+no pixel centre is culled too (sub-pixel culling): it could not have produced a fragment. With
+MSAA the early depth has the target's samples and the pyramid's first level takes the farthest
+of them; rows are tested over every pixel they touch, and sub-pixel culling is off (samples lie
+off the centres). Wireframe and points show what is behind them: those frames cull the frustum
+alone (`can_cull`).
 
 The images, buffers and pipelines are shared by the frames in flight: the GPU runs frames in
 submission order and each frame's barriers order its writes after the last frame's reads.
@@ -61,8 +64,8 @@ def pyramid_levels(width: int, height: int) -> list[tuple[int, int, int]]:
 
 
 def can_cull(ctx: PathContext) -> bool:
-    """Whether the target's pixels are sampled once, at their centres, from filled triangles."""
-    return ctx.samples == 1 and ctx.fill == "solid"
+    """Whether the triangles are filled (wireframe shows what is behind them)."""
+    return ctx.fill == "solid"
 
 
 class OcclusionCulling:
@@ -81,6 +84,7 @@ class OcclusionCulling:
         self.pyramid: Buffer | None = None
         self.visibility: Buffer | None = None
         self.fresh = False  # the visibility buffer is new: zero it before the first early pass
+        self.samples = ctx.samples  # the target's MSAA count: the early depth's too
         try:
             self._build(ctx, sets, graphics_layout)
         except BaseException:
@@ -105,14 +109,17 @@ class OcclusionCulling:
         self.layout = pipeline_layout(device, [*sets, self.set_layout.handle], [(compute, 0, CULL_PUSH.size)])
         self.early = compute_pipeline(device, "cull_early.comp", self.layout)
         self.late = compute_pipeline(device, "cull_late.comp", self.layout)
-        self.reduce = compute_pipeline(device, "depth_reduce.comp", self.layout)
-        self.render_pass = create_shadow_pass(device)  # depth alone: cleared, stored, then sampled
+        self.reduce = compute_pipeline(
+            device, "depth_reduce_ms.comp" if self.samples > 1 else "depth_reduce.comp", self.layout
+        )
+        self.render_pass = create_shadow_pass(device, self.samples)  # depth alone: cleared, stored, then sampled
         base = dict(
             layout=graphics_layout,
             render_pass=self.render_pass,
             vertex_stride=MESH_VERTEX.itemsize,
             vertex_attributes=vertex_attributes(vk, ("position",)),
             color_attachments=0,
+            samples=self.samples,
         )
         self.pipelines: tuple[Any, ...] = (
             graphics_pipeline(device, GraphicsPipelineSpec("shadow_indirect.vert", None, **base)),
@@ -149,6 +156,7 @@ class OcclusionCulling:
                 getattr(vk, SHADOW_FORMAT_NAME),
                 vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT,
                 vk.VK_IMAGE_ASPECT_DEPTH_BIT,
+                samples=self.samples,
             )
             self.framebuffer = create_framebuffer(device, self.render_pass, [self.depth.view], width, height)
             self.levels = pyramid_levels(width, height)
@@ -226,7 +234,7 @@ class OcclusionCulling:
         lib = vk.lib
         lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.reduce)
         push = self._reduce_push
-        source = (self.size[0], self.size[1], 0, 1)  # level 0 reads the depth image
+        source = (self.size[0], self.size[1], 0, self.samples)  # level 0 reads the depth image
         for k, (first, w, h) in enumerate(self.levels):
             if k:
                 barrier.record(lib, cb)
