@@ -66,8 +66,10 @@ bool occlusion_visible(vec3 center, float radius) {
     vec2 size = vec2(pc.occlusion.xy);
     vec4 px = clamp((rect * 0.5 + 0.5) * size.xyxy, vec4(-2.0), size.xyxy + 2.0);
     ivec4 p;
-    if ((pc.occlusion.w & CULL_SUBPIXEL) != 0u) {  // the pixel centres inside, with a margin for snapping
-        p = ivec4(ceil(px.xy - 0.51), floor(px.zw - 0.49));
+    if ((pc.occlusion.w & CULL_SUBPIXEL) != 0u) {
+        // the pixel centres inside, with a margin of 1/16 pixel: Vulkan snaps vertices to at
+        // least 4 sub-pixel bits (1/32 pixel of error at most)
+        p = ivec4(ceil(px.xy - 0.5625), floor(px.zw - 0.4375));
         if (p.x > p.z || p.y > p.w) return false;
     } else {
         p = ivec4(floor(px));

@@ -73,7 +73,9 @@ def test_rows_that_cover_no_pixel_centre_are_not_drawn_and_the_image_is_unchange
         frustum = frames(gpu, tiny_and_one_big_cube(gpu), "frustum", 2)
         occluded = frames(gpu, tiny_and_one_big_cube(gpu), "occlusion", 2)
     assert [n for _, n in frustum] == [201, 201]
-    assert [n for _, n in occluded] == [1, 1]
+    # a tiny cube within 1/16 pixel of a pixel centre is kept (the rasteriser's snapping margin):
+    # about 3 of the 200 by chance
+    assert all(1 <= n <= 15 for _, n in occluded), [n for _, n in occluded]
     assert all(np.array_equal(a, b) for (a, _), (b, _) in zip(frustum, occluded, strict=True))
 
 
@@ -126,3 +128,37 @@ def test_pyramid_levels_halve_rounding_up_to_one_texel():
 def test_occlusion_culling_outside_the_indirect_mode_is_one_clear_refusal():
     with headless_gpu(W, H) as gpu, pytest.raises(UsageError, match="--culling occlusion needs --mode indirect"):
         Renderer(gpu.device, gpu.target, gpu.meshes, mode="instanced", culling="occlusion")
+
+
+def test_with_levels_of_detail_and_mirrored_rows_the_early_pass_reads_the_scenes_command_lists(monkeypatch):
+    """The early depth pass draws from the same per-winding lists as the scene (compact writes
+    them a draw-mesh count apart), and the image still equals frustum culling's."""
+    import ecs_engine.render.indirect_path as indirect
+
+    lists = []
+    real = indirect.record_indirect_draws
+
+    def spy(vk, cb, pipelines, merged, key_counts, commands, state, offsets):
+        lists.append(len(key_counts))
+        return real(vk, cb, pipelines, merged, key_counts, commands, state, offsets)
+
+    monkeypatch.setattr(indirect, "record_indirect_draws", spy)
+    images = {}
+    with headless_gpu(W, H) as gpu:
+        for culling in ("frustum", "occlusion"):
+            world = scaling_world(gpu, 3000)
+            for batch in world.query(Transform):
+                scale = batch[Transform].scale
+                scale[::3, 0] *= -1.0  # a third of the rows mirrored
+            renderer = Renderer(gpu.device, gpu.target, gpu.meshes, mode="indirect", culling=culling)
+            gpu.owned.append(renderer)
+            schedule = default_schedule()
+            images[culling] = []
+            for _ in range(3):
+                schedule.run(world, 1 / 30)
+                renderer.render(world, readback=True)
+                images[culling].append(gpu.target.pixels()[..., :3].copy())
+        merged = gpu.meshes.merged()
+        assert merged.draw_meshes > merged.count  # the knot has levels of detail
+    assert set(lists) == {2 * merged.draw_meshes}  # early and scene draws alike
+    assert all(np.array_equal(a, b) for a, b in zip(images["frustum"], images["occlusion"], strict=True))

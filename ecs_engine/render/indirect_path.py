@@ -268,7 +268,7 @@ class IndirectPath:
         f.key_counts, f.candidates = key_counts, candidates  # what the shadow views cull (shadow_indirect.py)
         self._sets[0], self._sets[1] = frame.descriptor_set, f.descriptor_set
         planes = None if frame.planes is None else frame.planes.astype(np.float32)
-        self._record_compute(cb, frame, planes, candidates, keys)
+        self._record_compute(cb, frame, planes, candidates, capacity)
         f.recorded = merged.index_count // 3  # the triangles the counts will weigh, per draw mesh
         vk = self.vk
         lib = vk.lib
@@ -326,10 +326,14 @@ class IndirectPath:
         table["lod_error"] = 0.0
         table["lod_error"][own] = merged.lod_error[owner[own]]
 
-    def _record_compute(self, cb: Any, frame: FrameInputs, planes: np.ndarray | None, rows: int, keys: int) -> None:
+    def _record_compute(
+        self, cb: Any, frame: FrameInputs, planes: np.ndarray | None, rows: int, capacity: np.ndarray
+    ) -> None:
         """Into the primary, before the render pass: zero the counters, cull (with occlusion
         culling: its early pass, depth and pyramid first, occlusion.py), write commands, and copy
-        the counters where the CPU can read them."""
+        the counters where the CPU can read them. `capacity`: per key of every draw mesh (levels
+        of detail too), as key_capacities gives it."""
+        keys = len(capacity)
         vk = self.vk
         lib = vk.lib
         f = self.frames[frame.slot]
@@ -357,9 +361,9 @@ class IndirectPath:
             push["occlusion"] = (width, height, len(occlusion.levels), subpixel | lod)
             self._cull_rows(cb, occlusion.early, rows)
             self._compact(cb, keys, compute_to_compute, to_draw)
-            merged, key_counts = self.ctx.meshes.merged(), f.key_counts
-            assert key_counts is not None  # finish() set it
-            draw = partial(record_indirect_draws, vk, merged=merged, key_counts=key_counts, commands=f.commands)
+            # every draw mesh's keys, as the scene's draws: compact wrote the lists `keys // 2` apart
+            merged = self.ctx.meshes.merged()
+            draw = partial(record_indirect_draws, vk, merged=merged, key_counts=capacity, commands=f.commands)
             occlusion.record_depth(cb, partial(self._early_draws, draw=draw, state=f.state))
             drawn_to_compute.record(lib, cb)  # the early draws read ids and commands: both are rewritten
             occlusion.record_pyramid(cb, compute_to_compute)

@@ -142,11 +142,11 @@ class OcclusionCulling:
             return
         device.wait_idle()
         if grow_rows:
+            usage = vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
+            bigger = Buffer(device, UINT_BYTES * max(rows + rows // 2, 1024), usage, DEVICE)  # may fail: keep the old
             if self.visibility is not None:
                 self.visibility.destroy()
-            usage = vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
-            self.visibility = Buffer(device, UINT_BYTES * max(rows + rows // 2, 1024), usage, DEVICE)
-            self.fresh = True
+            self.visibility, self.fresh = bigger, True
         if (width, height) != self.size:
             self._release_images()
             self.depth = Image(
