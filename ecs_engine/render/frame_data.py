@@ -27,6 +27,7 @@ from ..components import (
     render_origin,
 )
 from ..ecs.world import World
+from ..errors import UsageError
 from ..jobs import row_chunks
 from ..maths.culling import frustum_planes
 from .camera import CameraMatrices, camera_matrices, view_from_origin
@@ -53,13 +54,6 @@ def check_culling(culling: str | bool, mode: str | None = "instanced") -> str:
     """The culling method named (True: frustum, False: none); UsageError for an unknown one, or
     (unless `mode` is None) temporal in the indirect mode, whose compute shader culls every row on
     the GPU, or occlusion in another (a CPU-culled mode given occlusion culls the frustum alone)."""
-    refused = (culling == "temporal" and mode == "indirect") or (
-        culling == "occlusion" and mode not in ("indirect", None)
-    )
-    if type(culling) is str and culling in CULLING and not refused:
-        return culling  # the per-frame call (extract): no import, no conversion
-    from ..errors import UsageError
-
     name = ("frustum" if culling else "none") if isinstance(culling, bool) else culling
     if name not in CULLING:
         raise UsageError(f"unknown culling {culling!r}; culling: {', '.join(CULLING)}")
