@@ -23,7 +23,6 @@ ROW_NOT_CASTER in misc.w, which their cull leaves out.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import partial
 from typing import Any
 
 import numpy as np
@@ -268,7 +267,7 @@ class IndirectPath:
         f.key_counts, f.candidates = key_counts, candidates  # what the shadow views cull (shadow_indirect.py)
         self._sets[0], self._sets[1] = frame.descriptor_set, f.descriptor_set
         planes = None if frame.planes is None else frame.planes.astype(np.float32)
-        self._record_compute(cb, frame, planes, candidates, capacity)
+        self._record_compute(cb, frame, planes, candidates, merged, capacity)
         f.recorded = merged.index_count // 3  # the triangles the counts will weigh, per draw mesh
         vk = self.vk
         lib = vk.lib
@@ -327,7 +326,13 @@ class IndirectPath:
         table["lod_error"][own] = merged.lod_error[owner[own]]
 
     def _record_compute(
-        self, cb: Any, frame: FrameInputs, planes: np.ndarray | None, rows: int, capacity: np.ndarray
+        self,
+        cb: Any,
+        frame: FrameInputs,
+        planes: np.ndarray | None,
+        rows: int,
+        merged: MergedMeshes,
+        capacity: np.ndarray,
     ) -> None:
         """Into the primary, before the render pass: zero the counters, cull (with occlusion
         culling: its early pass, depth and pyramid first, occlusion.py), write commands, and copy
@@ -353,7 +358,7 @@ class IndirectPath:
             push["plane_count"] = len(planes)
         cull = self.cull
         _, width, height = frame.target.key
-        lod = CULL_LOD if frame.lod and self.ctx.meshes.merged().lod_levels.any() else 0
+        lod = CULL_LOD if frame.lod and merged.lod_levels.any() else 0
         push["occlusion"] = (width, height, 0, lod)  # cull.comp: the levels of detail's projection
         if occlusion is not None:
             occlusion.bind(cb)
@@ -361,10 +366,13 @@ class IndirectPath:
             push["occlusion"] = (width, height, len(occlusion.levels), subpixel | lod)
             self._cull_rows(cb, occlusion.early, rows)
             self._compact(cb, keys, compute_to_compute, to_draw)
+            occlusion.begin_depth(cb)  # the early rows' depth: the camera's set 0, this frame's set 1
+            lib.vkCmdBindDescriptorSets(
+                cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 2, self._sets, 0, vk.ffi.NULL
+            )
             # every draw mesh's keys, as the scene's draws: compact wrote the lists `keys // 2` apart
-            merged = self.ctx.meshes.merged()
-            draw = partial(record_indirect_draws, vk, merged=merged, key_counts=capacity, commands=f.commands)
-            occlusion.record_depth(cb, partial(self._early_draws, draw=draw, state=f.state))
+            record_indirect_draws(vk, cb, occlusion.pipelines, merged, capacity, f.commands, f.state, self._offsets)
+            occlusion.end_depth(cb)
             drawn_to_compute.record(lib, cb)  # the early draws read ids and commands: both are rewritten
             occlusion.record_pyramid(cb, compute_to_compute)
             lib.vkCmdFillBuffer(cb, f.state.handle, 0, f.state.size, 0)
@@ -375,17 +383,9 @@ class IndirectPath:
         lib.vkCmdCopyBuffer(cb, f.state.handle, f.readback.handle, 1, f.copy_region)
         to_host.record(lib, cb)
 
-    def _early_draws(self, cb: Any, pipelines: tuple[Any, Any], draw: Any, state: Buffer) -> None:
-        """The early rows' depth: the camera's set 0 and this frame's set 1 (graphics)."""
-        vk = self.vk
-        vk.lib.vkCmdBindDescriptorSets(
-            cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 2, self._sets, 0, vk.ffi.NULL
-        )
-        draw(cb, pipelines, state=state, offsets=self._offsets)
-
     def _occlusion_for(self, frame: FrameInputs, planes: np.ndarray | None, rows: int) -> OcclusionCulling | None:
         """The frame's occlusion culling, made on first use; None where the frame culls the
-        frustum alone (asked so, culling off, or a target that is not sampled once per pixel)."""
+        frustum alone (asked so, culling off, wireframe or points: occlusion.can_cull)."""
         if not frame.occlusion or planes is None or not can_cull(self.ctx) or rows == 0:
             return None
         if self.occlusion is None:

@@ -33,7 +33,7 @@ from typing import Any
 
 from ..gpu.array_image import nearest_sampler
 from ..gpu.attachment import create_framebuffer
-from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
+from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers, write_images
 from ..gpu.memory import DEVICE, Buffer, Image
 from ..gpu.pipeline import GraphicsPipelineSpec, compute_pipeline, graphics_pipeline, pipeline_layout
 from ..gpu.shadow_maps import SHADOW_FORMAT_NAME, create_shadow_pass
@@ -177,32 +177,13 @@ class OcclusionCulling:
                 },
             )
         assert self.visibility is not None and self.pyramid is not None and self.depth is not None
+        ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
         write_buffers(
-            device,
-            self.set,
-            [(BINDING_VISIBILITY, vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, self.visibility)]
-            + [(BINDING_PYRAMID, vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, self.pyramid)],
+            device, self.set, [(BINDING_VISIBILITY, ssbo, self.visibility), (BINDING_PYRAMID, ssbo, self.pyramid)]
         )
-        info = vk.VkDescriptorImageInfo(
-            sampler=self.sampler,
-            imageView=self.depth.view,
-            imageLayout=vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL,
-        )
-        vk.vkUpdateDescriptorSets(
-            device.handle,
-            1,
-            [
-                vk.VkWriteDescriptorSet(
-                    dstSet=self.set,
-                    dstBinding=BINDING_EARLY_DEPTH,
-                    descriptorCount=1,
-                    descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
-                    pImageInfo=[info],
-                )
-            ],
-            0,
-            None,
-        )
+        layout = vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL  # the depth-only pass's final layout
+        depth = vk.VkDescriptorImageInfo(sampler=self.sampler, imageView=self.depth.view, imageLayout=layout)
+        write_images(device, self.set, BINDING_EARLY_DEPTH, [depth])
 
     # ---------------------------------------------------------------- record
     def bind(self, cb: Any) -> None:
@@ -219,14 +200,16 @@ class OcclusionCulling:
             self.vk.lib.vkCmdFillBuffer(cb, self.visibility.handle, 0, self.visibility.size, 0)
             self.fresh = False
 
-    def record_depth(self, cb: Any, draw: Any) -> None:
-        """The early pass: `draw(cb, pipelines)` records the early rows' indirect draws."""
+    def begin_depth(self, cb: Any) -> None:
+        """The early pass's render pass, viewport and scissor: the early rows' draws follow (with
+        `pipelines`), then end_depth."""
         lib = self.vk.lib
         lib.vkCmdBeginRenderPass(cb, self._begin, self.vk.VK_SUBPASS_CONTENTS_INLINE)
         lib.vkCmdSetViewport(cb, 0, 1, self._viewport)
         lib.vkCmdSetScissor(cb, 0, 1, self._area)
-        draw(cb, self.pipelines)
-        lib.vkCmdEndRenderPass(cb)
+
+    def end_depth(self, cb: Any) -> None:
+        self.vk.lib.vkCmdEndRenderPass(cb)
 
     def record_pyramid(self, cb: Any, barrier: Any) -> None:
         """Every level, each after the one below it (`barrier`: compute writes -> compute reads)."""
