@@ -39,6 +39,7 @@ REGISTRY: dict[str, str] = {
     "culling-methods": "culling_methods",
     "frame": "frame",
     "peers": "peers",
+    "raytracing": "raytracing",
 }
 
 # One line each for the list in the usage text (the modules are not imported to print it).
@@ -57,6 +58,7 @@ SUMMARY: dict[str, str] = {
     "culling-methods": "CPU, GPU and wall ms of every culling method, moving scene at 1280x720, 10k to 1M (Vulkan)",
     "frame": "one scene's CPU frame through the run loop, median and p99 (default: 1 cube, 2,400 frames) (Vulkan)",
     "peers": "the scaling workload here and in pygfx, wall ms a frame side by side, 1k to 1M (Vulkan, wgpu)",
+    "raytracing": "bottom levels per mesh, top-level build and update at 10k to 1M instances (Vulkan ray tracing)",
 }
 
 # The commands that work from any folder once ecs_engine is installed.

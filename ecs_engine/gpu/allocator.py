@@ -23,6 +23,7 @@ DEVICE = "device"  # DEVICE_LOCAL
 # DEVICE_LOCAL | HOST_VISIBLE | HOST_COHERENT where the device has it (resizable BAR: the GPU
 # reads at its own memory's speed, the CPU writes across the bus), else HOST; mapped
 UPLOAD = "upload"
+ADDRESSED = "addressed"  # the resource kind of buffers with SHADER_DEVICE_ADDRESS usage
 
 
 def _align(x: int, a: int) -> int:
@@ -121,9 +122,17 @@ class BlockAllocator:
             if offset is not None:
                 return Allocation(block, offset, size)
         block_size = max(BLOCK_SIZE, _align(size, 2**20))
+        # buffers read by their device address (ray tracing's inputs) live in blocks allocated so
+        flags = (
+            vk.VkMemoryAllocateFlagsInfo(flags=vk.lib.VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT)
+            if kind == ADDRESSED
+            else None
+        )
         try:
             memory = vk.vkAllocateMemory(
-                self.device_handle, vk.VkMemoryAllocateInfo(allocationSize=block_size, memoryTypeIndex=type_index), None
+                self.device_handle,
+                vk.VkMemoryAllocateInfo(pNext=flags, allocationSize=block_size, memoryTypeIndex=type_index),
+                None,
             )
         except (vk.VkErrorOutOfDeviceMemory, vk.VkErrorOutOfHostMemory) as exc:
             raise UsageError(f"out of GPU memory allocating {block_size / 2**20:.0f} MiB") from exc

@@ -104,3 +104,30 @@ def write_images(device: Device, descriptor_set: Any, binding: int, infos: Seque
         0,
         None,
     )
+
+
+def write_acceleration_structure(device: Device, descriptor_set: Any, binding: int, handle: Any) -> None:
+    """Point an acceleration-structure binding at a top level (raw call: the binding's
+    constructor leaves descriptorCount at 0 for this type, whose data travels in pNext)."""
+    vk, lib, ffi = device.vk, device.vk.lib, device.vk.ffi
+    structures = ffi.new("VkAccelerationStructureKHR[1]", [handle])
+    data = ffi.new(
+        "VkWriteDescriptorSetAccelerationStructureKHR*",
+        {
+            "sType": lib.VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET_ACCELERATION_STRUCTURE_KHR,
+            "accelerationStructureCount": 1,
+            "pAccelerationStructures": structures,
+        },
+    )
+    write = ffi.new(
+        "VkWriteDescriptorSet*",
+        {
+            "sType": vk.VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
+            "pNext": data,
+            "dstSet": descriptor_set,
+            "dstBinding": binding,
+            "descriptorCount": 1,
+            "descriptorType": lib.VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR,
+        },
+    )
+    lib.vkUpdateDescriptorSets(device.handle, 1, write, 0, ffi.NULL)

@@ -12,6 +12,7 @@ from .allocator import BlockAllocator
 from .functions import instance_function
 from .instance import Instance
 from .pipeline_cache import PipelineCache
+from .ray_tracing_support import RAY_TRACING_EXTENSIONS, ray_tracing_chain, ray_tracing_properties
 
 # Preference order by VkPhysicalDeviceType: discrete, integrated, virtual, CPU, other.
 _TYPE_RANK = {2: 0, 1: 1, 3: 2, 4: 3, 0: 4}
@@ -76,11 +77,19 @@ class Device:
 
         f12 = vk.VkPhysicalDeviceVulkan12Features()
         vk.vkGetPhysicalDeviceFeatures2(self.physical, vk.VkPhysicalDeviceFeatures2(pNext=f12))
+        # ray tracing (gpu/acceleration.py): enabled where the device has all of it
+        ray_chain = ray_tracing_chain(vk, self.physical, supported, f12)  # kept until the device is made
+        if ray_chain is not None:
+            exts += [e for e in RAY_TRACING_EXTENSIONS if e not in exts]
         want12 = vk.VkPhysicalDeviceVulkan12Features(
+            pNext=ray_chain[0] if ray_chain is not None else None,
             drawIndirectCount=f12.drawIndirectCount,
             hostQueryReset=f12.hostQueryReset,
+            bufferDeviceAddress=1 if ray_chain is not None else 0,
         )
         self.features = {"drawIndirectCount": bool(f12.drawIndirectCount), "hostQueryReset": bool(f12.hostQueryReset)}
+        self.features["rayTracing"] = ray_chain is not None
+        self.ray_tracing = ray_tracing_properties(vk, self.physical) if ray_chain is not None else None
         base = vk.vkGetPhysicalDeviceFeatures(self.physical)
         # the indirect render mode needs all three (checked there, with one message if one lacks)
         # anisotropic texture filtering and wireframe/point fill where the device has them;

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .allocator import DEVICE, HOST, UPLOAD
+from .allocator import ADDRESSED, DEVICE, HOST, UPLOAD
 from .device import Device
 
 __all__ = ["DEVICE", "HOST", "UPLOAD", "Buffer", "Image", "upload"]
@@ -36,7 +36,8 @@ class Buffer:
             None,
         )
         req = vk.vkGetBufferMemoryRequirements(device.handle, self.handle)
-        self.allocation = device.allocator.allocate(req, where, "buffer")
+        addressed = bool(usage & vk.lib.VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT)
+        self.allocation = device.allocator.allocate(req, where, ADDRESSED if addressed else "buffer")
         vk.vkBindBufferMemory(device.handle, self.handle, self.allocation.memory, self.allocation.offset)
 
     def bytes(self) -> np.ndarray:
@@ -70,6 +71,14 @@ class Buffer:
         shape = (shape,) if isinstance(shape, int) else shape
         count = math.prod(shape) * dt.itemsize
         return raw[:count].view(dt).reshape(shape)
+
+    @property
+    def address(self) -> int:
+        """The buffer's device address (usage SHADER_DEVICE_ADDRESS; the raw call: the binding's
+        wrapper returns its argument instead)."""
+        vk = self.device.vk
+        info = vk.VkBufferDeviceAddressInfo(buffer=self.handle)
+        return int(vk.lib.vkGetBufferDeviceAddress(self.device.handle, vk.ffi.addressof(info)))
 
     def descriptor(self, offset: int = 0, size: int | None = None) -> Any:
         vk = self.device.vk

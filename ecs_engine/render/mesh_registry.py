@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..gpu.acceleration import MeshInput, Structure, build_bottom_levels, ray_input_usage
 from ..gpu.memory import Buffer, upload
 from .layouts import MAX_LODS, MESH_VERTEX
 from .mesh_data import MeshData
@@ -22,6 +23,8 @@ from .mesh_lod import Lod, build_lods
 
 if TYPE_CHECKING:
     from ..gpu.device import Device
+
+_POSITION = int(MESH_VERTEX.fields["position"][1]) if MESH_VERTEX.fields else 0  # the position's byte offset
 
 
 @dataclass
@@ -67,6 +70,8 @@ class MeshRegistry:
         self._by_content: dict[bytes, int] = {}  # digest of the arrays -> handle: an equal mesh again
         self._bounds: tuple[int, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
         self._merged: MergedMeshes | None = None
+        self._bottom: list[Structure] = []  # per handle, its bottom-level acceleration structure
+        self._bottom_addresses = np.zeros(0, dtype=np.uint64)
 
     def add(self, mesh: MeshData) -> int:
         """Upload `mesh` once: the same MeshData, or an equal one (the same vertices and indices,
@@ -79,8 +84,9 @@ class MeshRegistry:
         if digest in self._by_content:
             return self._by_content[digest]
         vk = self.device.vk
-        vertices = upload(self.device, _interleaved(mesh), vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT)
-        indices = upload(self.device, mesh.indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT)
+        ray = ray_input_usage(self.device)  # a bottom level may be built from them
+        vertices = upload(self.device, _interleaved(mesh), vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | ray)
+        indices = upload(self.device, mesh.indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT | ray)
         handle = len(self._meshes)
         self._meshes.append(GpuMesh(mesh, vertices, indices, len(mesh.indices)))
         self._lods.append(_levels(mesh, digest))
@@ -122,6 +128,20 @@ class MeshRegistry:
         vk.vkCmdBindVertexBuffers(cb, 0, 1, [mesh.vertices.handle], [0])
         vk.vkCmdBindIndexBuffer(cb, mesh.indices.handle, 0, vk.VK_INDEX_TYPE_UINT32)
         return mesh
+
+    def bottom_levels(self) -> np.ndarray:
+        """Per mesh handle, the device address of its bottom-level acceleration structure (ray
+        tracing): built and compacted once per mesh, on the first call after it was added (a
+        device that never traces rays builds none)."""
+        done = len(self._bottom)
+        if done < len(self._meshes):
+            inputs = [
+                MeshInput(m.vertices, len(m.data.positions), MESH_VERTEX.itemsize, m.indices, m.index_count, _POSITION)
+                for m in self._meshes[done:]
+            ]
+            self._bottom += build_bottom_levels(self.device, inputs)
+            self._bottom_addresses = np.array([s.address for s in self._bottom], dtype=np.uint64)
+        return self._bottom_addresses
 
     def merged(self) -> MergedMeshes:
         """Every mesh in one vertex and one index buffer, rebuilt when meshes were added."""
@@ -165,6 +185,9 @@ class MeshRegistry:
 
     def destroy(self) -> None:
         self._destroy_merged()
+        for structure in self._bottom:
+            structure.destroy()
+        self._bottom.clear()
         for mesh in self._meshes:
             mesh.vertices.destroy()
             mesh.indices.destroy()
