@@ -6,12 +6,15 @@ each built alone and compacted: the build's GPU ms (timestamps around it), the w
 whole call (build, compacted-size query, copy), bytes before and after compaction. Top level,
 per instance count: the CPU ms of writing the instance rows (render/ray_instances.py, the chunk
 jobs' kernel: one thread, and split over the job pool), the GPU ms of a full build and of an
-update (refit) after every instance moved; medians of `--repeat` runs each.
+update (refit) after every instance moved; medians of `--repeat` runs each. Frames: the scaling
+scene with one casting light (directional, spot, point) at 1280x720 on THREADS threads, drawn with
+shadow maps (forward, and in the deferred form the rays use) and with ray-traced shadows.
 
 JSON (schema_version 1): {"benchmark": "raytracing", "quick", "machine", "device", "config":
 {"counts", "repeat", "threads"}, "bottom": [{"mesh", "triangles", "build_gpu_ms", "wall_ms",
 "bytes", "compacted_bytes"}], "top": [{"instances", "write_ms_1_thread", "write_ms_threads",
-"build_gpu_ms", "update_gpu_ms", "bytes"}]}.
+"build_gpu_ms", "update_gpu_ms", "bytes"}], "frames": [{"entities", "light", "shadows",
+"light_culling", "cpu_ms", "gpu_ms"}]}.
 """
 
 from __future__ import annotations
@@ -273,6 +276,7 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
             device.destroy()
     finally:
         instance.destroy()
+    framed = frames(counts, args.quick, progress)  # a device of their own (bench.headless_gpu)
     print(f"{'mesh':16} {'triangles':>9} {'build GPU ms':>12} {'wall ms':>8} {'MB':>7} {'compacted MB':>12}")
     for b in bottom:
         print(
@@ -288,6 +292,16 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
             f"{t['instances']:9,} {t['write_ms_1_thread']:11.2f} {t['write_ms_threads']:12.2f} "
             f"{t['build_gpu_ms']:12.3f} {t['update_gpu_ms']:13.3f} {t['bytes'] / 2**20:7.1f}"
         )
+    print(
+        f"frames at {FRAME_SIZE[0]}x{FRAME_SIZE[1]}, {THREADS} threads: CPU ms / GPU ms "
+        "(the smaller of 2 runs' medians)"
+    )
+    for f in framed:
+        gpu_ms = "-" if f["gpu_ms"] is None else f"{f['gpu_ms']:.2f}"
+        print(
+            f"{f['entities']:>9,} {f['light']:>12} {f['shadows']:>9} ({f['light_culling']:>8}) "
+            f"{f['cpu_ms']:8.2f} / {gpu_ms}"
+        )
     return {
         "benchmark": "raytracing",
         "schema_version": 1,
@@ -297,4 +311,65 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
         "config": {"counts": list(counts), "repeat": repeat, "threads": THREADS},
         "bottom": bottom,
         "top": top,
+        "frames": framed,
     }
+
+
+FRAME_LIGHTS = ("directional", "spot", "point")
+FRAME_METHODS = (("maps", "auto"), ("maps", "deferred"), ("raytraced", "auto"))  # (shadows, light culling)
+FRAME_SIZE = (1280, 720)
+
+
+def frames(counts: tuple[int, ...], quick: bool, progress: Any) -> list[dict[str, Any]]:
+    """The scaling scene (moving, spinning cubes) with one casting light, drawn with shadow maps
+    (the forward form, and the deferred one the rays need) and ray-traced: CPU and GPU ms, the
+    smaller of two runs' medians, the configurations of a count alternated."""
+    from . import headless_gpu
+
+    warmup, timed = (2, 4) if quick else (8, 30)
+    runs: dict[tuple[int, str, str, str], list[dict[str, Any]]] = {}
+    with headless_gpu(*FRAME_SIZE) as gpu:
+        for n in counts:
+            for round_ in range(2):
+                configs = [(light, *m) for light in FRAME_LIGHTS for m in FRAME_METHODS]
+                for light, method, culling in configs if round_ == 0 else configs[::-1]:
+                    with progress.step(f"frames: {n:,} entities, {light}, {method} ({culling}), run {round_ + 1}"):
+                        runs.setdefault((n, light, method, culling), []).append(
+                            _frame(gpu, n, light, method, culling, warmup, timed)
+                        )
+    out = []
+    for (n, light, method, culling), measured in runs.items():
+        gpu_ms = [m["gpu_ms"] for m in measured if m["gpu_ms"] is not None]
+        out.append(
+            {
+                "entities": n,
+                "light": light,
+                "shadows": method,
+                "light_culling": culling,
+                "cpu_ms": min(m["cpu_ms"] for m in measured),
+                "gpu_ms": min(gpu_ms) if gpu_ms else None,
+            }
+        )
+    return out
+
+
+def _frame(gpu: Any, n: int, light: str, method: str, culling: str, warmup: int, timed: int) -> dict[str, Any]:
+    from ecs_engine.app.scenes import default_schedule, scene_builder
+    from ecs_engine.ecs.world import World
+    from ecs_engine.jobs import JobPool
+    from ecs_engine.render.renderer import Renderer
+
+    from . import timed_frames
+    from .shadows import add_light
+
+    device, target, meshes = gpu
+    world = World()
+    scene_builder("scaling", n)(world, meshes.add)
+    add_light(world, light, "pcf")
+    with JobPool(THREADS) as pool:
+        world.resources[JobPool] = pool
+        renderer = Renderer(device, target, meshes, jobs=pool, shadows=method, light_culling=culling)
+        try:
+            return timed_frames(world, default_schedule(), renderer, warmup, timed)
+        finally:
+            renderer.destroy()

@@ -1,6 +1,14 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
+
+// ray-traced shadows' mask (render/ray_shadows.py), read by light_shadow at this pixel
+layout(set = SET_DEFERRED, binding = BINDING_SHADOW_MASK, rgba8) uniform readonly image2DArray shadow_mask;
+ivec2 g_pixel;
+float ray_shadow_mask(uint light) {
+    return imageLoad(shadow_mask, ivec3(g_pixel, int(light / 4u)))[light % 4u];
+}
+#define RAY_SHADOW_MASK
 #include "shading.glsl"
 #include "light_grid.glsl"
 
@@ -54,6 +62,7 @@ uint tile_word(uint w, uvec2 first_tile, uvec2 last_tile) {
 void main() {
     ivec2 size = min(ivec2(push.viewport), imageSize(hdr_image));   // what the rasteriser's viewport covered
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    g_pixel = pixel;
     uint local = gl_LocalInvocationIndex;
     uint index = all(lessThan(pixel, size)) ? imageLoad(material_image, pixel).x : NO_MATERIAL;
     bool lit = index != NO_MATERIAL;

@@ -74,6 +74,14 @@
 #define CULL_SUBPIXEL 1
 #define CULL_LOD 2
 #define MAX_LODS 4
+#define MAX_RAY_LIGHTS 8
+#define FEATURE_RAY_SHADOWS 67108864
+#define BINDING_SHADOW_MASK 5
+#define BINDING_RAY_SCENE 0
+#define BINDING_RAY_FRAME 1
+#define BINDING_RAY_DEPTH 2
+#define BINDING_RAY_NORMAL 3
+#define BINDING_RAY_MASK 4
 
 // The frame's uniforms. Positions are relative to the render origin (the camera, unless
 // RenderOrigin is pinned).
@@ -181,6 +189,15 @@ struct ShadowView {  // 112 bytes, std430
 
 struct DeferredPush {  // 8 bytes, std430
     uvec2 viewport;             // offset 0: the frame's viewport in pixels (the G-buffer may be larger)
+};
+
+// The ray-traced shadows' frame (render/ray_shadows.py, shaders/shadow_rays.rgen).
+struct RayFrame {  // 400 bytes, std430
+    mat4 inverse_projection;    // offset 0: clip -> view space (the frame's projection, reverse-Z)
+    mat4 view;                  // offset 64: render-relative positions -> view space (a rotation and a translation)
+    uvec4 size;                 // offset 128: x, y the viewport in pixels, z the lights, w the frame (the samples' noise)
+    vec4 light_position[8];     // offset 144: xyz a point or spot light's render-relative position, a directional light's unit direction towards it; w its LIGHT_* kind
+    vec4 light_params[8];       // offset 272: x the light's size (point, spot: radius; directional: tangent of its angular radius), y rays per pixel, z its reach (0: none), w 0
 };
 
 struct ImGuiPush {  // 16 bytes, std430

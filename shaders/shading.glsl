@@ -187,6 +187,15 @@ float light_shadow(Light light, vec3 p, vec3 n) {
         return 1.0;
     }
     first -= 1u;
+    if ((MATERIAL_FEATURES & FEATURE_RAY_SHADOWS) != 0u) {
+        // ray-traced: cone.z names the light's place in the mask (render/ray_shadows.py), which
+        // only the deferred lighting has; forward surfaces (blended ones) get no shadow then
+#ifdef RAY_SHADOW_MASK
+        return ray_shadow_mask(first);
+#else
+        return 1.0;
+#endif
+    }
     uint count = max(uint(light.cone.w), 1u);
     uint k = 0u;
     if (shadow_views[first].info.w == 2u) {

@@ -29,6 +29,12 @@ def test_raytracing_quick(tmp_path, monkeypatch, capsys):
         assert 0 < b["compacted_bytes"] <= b["bytes"] and b["build_gpu_ms"] > 0
     (top,) = doc["top"]
     assert top["instances"] == 1000 and top["build_gpu_ms"] > 0 and top["update_gpu_ms"] > 0
+    assert {(f["shadows"], f["light_culling"]) for f in doc["frames"]} == {
+        ("maps", "auto"),
+        ("maps", "deferred"),
+        ("raytraced", "auto"),
+    }
+    assert all(f["gpu_ms"] > 0 and f["cpu_ms"] > 0 for f in doc["frames"])
 
 
 def test_raytracing_refuses_bad_options(capsys, monkeypatch):

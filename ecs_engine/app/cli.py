@@ -148,6 +148,14 @@ def render_flags() -> OneLineParser:
         help="blended materials: sorted back to front per object (default), or weighted blended "
         "order-independent transparency (drawn in the deferred form)",
     )
+    common.add_argument(
+        "--shadows",
+        dest="shadow_method",
+        choices=("maps", "raytraced"),
+        default="maps",
+        help="how lights with a Shadow cast: shadow maps (default), or ray-traced (needs a GPU with "
+        "ray-tracing pipelines; drawn in the deferred form)",
+    )
     common.add_argument("--lights", type=int, help="lights scene: how many point and spot lights (default 1,024)")
     common.add_argument(
         "--no-shadows", action="store_true", help="shadows scene: no light casts a shadow (for comparison)"

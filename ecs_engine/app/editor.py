@@ -26,6 +26,7 @@ from ..render.frame_data import CULLING
 from ..render.light_clusters import LIGHT_MODES
 from ..render.oit_pass import TRANSPARENCY_MODES
 from ..render.path import FILL_MODES
+from ..render.ray_shadows import SHADOW_METHODS
 from ..render.renderer import MODES, PATHS, RECORDER_NAMES
 from ..render.tone_map import TONE_MAPS
 from .editor_dock import DockLayout
@@ -61,7 +62,9 @@ class _Browser:
 
 
 class Editor:
-    def __init__(self, settings: Settings, scenes: tuple[str, ...], max_threads: int) -> None:
+    def __init__(
+        self, settings: Settings, scenes: tuple[str, ...], max_threads: int, ray_tracing: bool = False
+    ) -> None:
         from imgui_bundle import imgui
 
         self.imgui = imgui
@@ -69,6 +72,7 @@ class Editor:
         self.requested = replace(settings)
         self.scenes = scenes
         self.max_threads = max_threads
+        self.ray_tracing = ray_tracing  # the device traces rays: ray-traced shadows can be picked
         self.selected: int | None = None
         self.browser = _Browser()
         self.materials = MaterialsPanel()
@@ -199,6 +203,11 @@ class Editor:
             _, req.exposure = imgui.slider_float("exposure (EV)", req.exposure, -8.0, 8.0)
             req.light_culling = _combo(imgui, "light culling", req.light_culling, LIGHT_MODES)
             req.transparency = _combo(imgui, "transparency", req.transparency, TRANSPARENCY_MODES)
+            imgui.begin_disabled(not self.ray_tracing)  # greyed out where the device cannot trace rays
+            req.shadow_method = _combo(imgui, "shadows", req.shadow_method, SHADOW_METHODS)
+            imgui.end_disabled()
+            if not self.ray_tracing and imgui.is_item_hovered(imgui.HoveredFlags_.allow_when_disabled.value):
+                imgui.set_tooltip("ray-traced shadows need a GPU with ray-tracing pipelines")
             if req.present is not None:
                 req.present = _combo(imgui, "present", req.present, PRESENT_MODES)
             self._environment(world)

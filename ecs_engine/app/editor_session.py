@@ -31,7 +31,7 @@ class EditorSession(ImGuiSession):
         max_ui_hz: float | None = 120.0,
     ) -> None:
         super().__init__(session, window, max_ui_hz)
-        self.editor = Editor(session.settings, scenes, max_threads)
+        self.editor = Editor(session.settings, scenes, max_threads, session.device.ray_tracing is not None)
         self.editor.show_shadow_maps(session.renderer, self.renderer)
         self.scene_renderer = session.renderer  # draws the scene for the dock's central node
         self.overlay = PerfOverlay()

@@ -25,6 +25,7 @@ from ..render.frame_data import check_culling
 from ..render.light_clusters import check_light_culling
 from ..render.mesh_registry import MeshRegistry
 from ..render.oit_pass import check_transparency
+from ..render.ray_shadows import check_shadow_method
 from ..render.renderer import Renderer
 from ..render.scene_assets import scene_codecs
 from ..render.tone_map import check_tone_map
@@ -131,6 +132,7 @@ class Session:
                 light_culling=start.light_culling,
                 transparency=start.transparency,
                 lod=start.lod,
+                shadows=start.shadow_method,
             )
             self.scene = start.scene
             self.world, self.schedule = self._build(start.scene, options.path)
@@ -159,6 +161,7 @@ class Session:
             light_culling=self.renderer.light_culling,
             transparency=self.renderer.transparency,
             lod=self.renderer.lod,
+            shadow_method=self.renderer.shadow_method,
         )
 
     def _build(self, scene: str, path: str | None) -> tuple[World, Schedule]:
@@ -188,6 +191,7 @@ class Session:
         check_tone_map(wanted.tone_map, wanted.exposure)
         check_light_culling(wanted.light_culling)
         check_transparency(wanted.transparency)
+        check_shadow_method(wanted.shadow_method, self.device, renderer.target.samples)
         culling = check_culling(wanted.culling, wanted.mode)
         scene = self._build(wanted.scene, None) if wanted.scene != self.scene else None
         renderer.set_path(wanted.mode, wanted.recorder)  # checks, then swaps
@@ -195,6 +199,7 @@ class Session:
         renderer.tone_map, renderer.exposure = wanted.tone_map, float(wanted.exposure)
         renderer.light_culling = wanted.light_culling
         renderer.transparency = wanted.transparency
+        renderer.set_shadow_method(wanted.shadow_method)
         renderer.culling, renderer.lod = culling, wanted.lod
         pool.resize(wanted.threads)
         renderer.ensure_output()  # HDR colour or not, as the tone map and exposure now need

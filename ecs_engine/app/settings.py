@@ -17,6 +17,7 @@ from ..errors import UsageError
 from ..jobs import default_threads
 from ..render.light_clusters import check_light_culling
 from ..render.oit_pass import check_transparency
+from ..render.ray_shadows import check_shadow_method
 from ..render.renderer import default_recorder
 from ..render.tone_map import check_tone_map
 from .scenes import SEED_SCENES
@@ -40,6 +41,7 @@ class Settings:
     light_culling: str = "auto"  # render/light_clusters.py LIGHT_MODES (render/light_clusters.py)
     transparency: str = "sorted"  # sorted | weighted (render/oit_pass.py)
     lod: bool = True  # levels of detail by projected size (the indirect mode: render/mesh_lod.py)
+    shadow_method: str = "maps"  # maps | raytraced (render/ray_shadows.py)
 
 
 @dataclass(frozen=True)
@@ -69,6 +71,7 @@ class RunOptions:
     transparency: str = "sorted"  # blended materials: sorted, or weighted (order-independent)
     lights: int | None = None  # the lights scene's light count (None: its default, 1,024)
     shadows: bool = True  # the shadows scene's lights cast (--no-shadows: none do)
+    shadow_method: str = "maps"  # maps | raytraced: how shadows are drawn (render/ray_shadows.py)
     chunk_rows: int | None = None  # rows per render job (None: about one per thread, frame_data.MIN_CHUNK_ROWS)
     recorder: str | None = None  # native | python (None: native when numba is there)
     entities: int = 10_000  # the scaling scene's entity count
@@ -97,6 +100,7 @@ class RunOptions:
         "msaa",
         "light_culling",
         "transparency",
+        "shadow_method",
         "recorder",
         "perf_json",
         "input_script",
@@ -114,6 +118,7 @@ class RunOptions:
         check_tone_map(self.tone_map, self.exposure)
         check_light_culling(self.light_culling)
         check_transparency(self.transparency)
+        check_shadow_method(self.shadow_method)  # the device's part once it is open
         if self.lights is not None and not 0 <= self.lights <= MAX_LIGHTS:
             raise UsageError(f"--lights {self.lights}: from 0 to {MAX_LIGHTS:,}")
 
@@ -131,6 +136,7 @@ class RunOptions:
             light_culling=self.light_culling,
             transparency=self.transparency,
             lod=self.lod,
+            shadow_method=self.shadow_method,
         )
 
 

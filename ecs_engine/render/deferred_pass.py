@@ -27,9 +27,11 @@ from .layouts import (
     BINDING_HDR,
     BINDING_MATERIAL_IDS,
     BINDING_NORMAL_ROUGHNESS,
+    BINDING_SHADOW_MASK,
     DEFERRED_PUSH,
     DEFERRED_TILE,
 )
+from .shadow_mask import ShadowMask
 
 
 class DeferredPass:
@@ -43,13 +45,13 @@ class DeferredPass:
             device,
             [(BINDING_DEPTH, sampled, stage)]
             + [(b, storage, stage) for b in (BINDING_HDR, BINDING_NORMAL_ROUGHNESS, BINDING_BASE_METALLIC)]
-            + [(BINDING_MATERIAL_IDS, storage, stage)],
+            + [(BINDING_MATERIAL_IDS, storage, stage), (BINDING_SHADOW_MASK, storage, stage)],
         )
         self.pool: DescriptorPool | None = None
         self.layout = None
         self.sampler = None
         try:
-            self.pool = DescriptorPool(device, 1, {sampled: 1, storage: 4})
+            self.pool = DescriptorPool(device, 1, {sampled: 1, storage: 5})
             self.layout = pipeline_layout(
                 device, [frame_set_layout, self.set_layout.handle], [(stage, 0, DEFERRED_PUSH.size)]
             )
@@ -60,6 +62,7 @@ class DeferredPass:
             raise
         self.pipelines: dict[int, Any] = {}  # MATERIAL_FEATURES -> pipeline
         self._named: Any = None  # the target's SceneAttachments the set names
+        self.mask: ShadowMask | None = None  # ray-traced shadows' mask, made with the attachments named
         self._push = np.zeros(1, DEFERRED_PUSH.dtype)
         self._push_ptr = vk.ffi.from_buffer(self._push)
 
@@ -71,9 +74,15 @@ class DeferredPass:
         general = vk.VK_IMAGE_LAYOUT_GENERAL
         storage = vk.VK_DESCRIPTOR_TYPE_STORAGE_IMAGE
         gbuffer = attachments.gbuffer
-        views = [(BINDING_HDR, attachments.images[1].view)] + list(
+        hdr = attachments.images[1]
+        if self.mask is not None:
+            self.mask.destroy()
+            self.mask = None
+        self.mask = ShadowMask(self.device, hdr.width, hdr.height)
+        views = [(BINDING_HDR, hdr.view)] + list(
             zip((BINDING_NORMAL_ROUGHNESS, BINDING_BASE_METALLIC, BINDING_MATERIAL_IDS), gbuffer.views, strict=True)
         )
+        views.append((BINDING_SHADOW_MASK, self.mask.view))
         depth = vk.VkDescriptorImageInfo(
             sampler=self.sampler,
             imageView=attachments.depth_view,
@@ -100,6 +109,13 @@ class DeferredPass:
         vk.vkUpdateDescriptorSets(self.device.handle, len(writes), writes, 0, None)
         self._named = attachments
 
+    def named(self, attachments: Any) -> ShadowMask:
+        """The shadow mask of the set, once the set names `attachments`."""
+        if attachments is not self._named:
+            self._name(attachments)
+        assert self.mask is not None
+        return self.mask
+
     def record(self, cb: Any, frame_set: Any, attachments: Any, features: int, width: int, height: int) -> None:
         """Light the G-buffer of `attachments` (between the G-buffer pass and the target's pass,
         whose dependencies order the images); `features`: the mesh pipelines' MATERIAL_FEATURES."""
@@ -121,6 +137,10 @@ class DeferredPass:
 
     def destroy(self) -> None:
         vk, handle = self.vk, self.device.handle
+        mask = getattr(self, "mask", None)
+        if mask is not None:
+            mask.destroy()
+            self.mask = None
         for pipeline in getattr(self, "pipelines", {}).values():
             vk.vkDestroyPipeline(handle, pipeline, None)
         self.pipelines = {}

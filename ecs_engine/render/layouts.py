@@ -216,6 +216,29 @@ DEFERRED_PUSH = Struct(
     "DeferredPush", [("viewport", "uvec2", "the frame's viewport in pixels (the G-buffer may be larger)")]
 )
 
+MAX_RAY_LIGHTS = 8  # shadow-casting lights the ray-traced shadows trace (render/ray_shadows.py)
+RAY_FRAME = Struct(
+    "RayFrame",
+    [
+        ("inverse_projection", "mat4", "clip -> view space (the frame's projection, reverse-Z)"),
+        ("view", "mat4", "render-relative positions -> view space (a rotation and a translation)"),
+        ("size", "uvec4", "x, y the viewport in pixels, z the lights, w the frame (the samples' noise)"),
+        (
+            "light_position",
+            f"vec4[{MAX_RAY_LIGHTS}]",
+            "xyz a point or spot light's render-relative position, a directional light's unit direction "
+            "towards it; w its LIGHT_* kind",
+        ),
+        (
+            "light_params",
+            f"vec4[{MAX_RAY_LIGHTS}]",
+            "x the light's size (point, spot: radius; directional: tangent of its angular radius), "
+            "y rays per pixel, z its reach (0: none), w 0",
+        ),
+    ],
+    doc="The ray-traced shadows' frame (render/ray_shadows.py, shaders/shadow_rays.rgen).",
+)
+
 IMGUI_PUSH = Struct(
     "ImGuiPush",
     [
@@ -247,6 +270,7 @@ FEATURE_EMISSIVE = 1 << 22  # some material glows (emissive colour or texture): 
 FEATURE_BLEND = 1 << 23  # some material is alpha-blended: without, every fragment's alpha is 1
 FEATURE_SHADOWS = 1 << 24  # some light casts shadows: without, no shadow map is read
 FEATURE_ENVIRONMENT = 1 << 25  # the world has an Environment: its sky, reflections and ambient are read
+FEATURE_RAY_SHADOWS = 1 << 26  # shadows are ray-traced: the deferred lighting reads their mask, no map
 CLUSTER_GROUP = 64  # light_bounds.comp's and light_tiles.comp's local size
 MAX_GLOBAL_LIGHTS = 256  # directional and unbounded lights every fragment loops over, when clustered
 LIGHT_BINS = 1024  # distance bins: exponential shells around the eye, each with its light index range
@@ -263,6 +287,9 @@ NO_MATERIAL = 0xFFFFFFFF  # the G-buffer's material index where nothing is lit (
 # the deferred lighting pass (render/deferred_pass.py): set 1 names the G-buffer's images
 SET_DEFERRED = 1
 BINDING_DEPTH, BINDING_HDR, BINDING_NORMAL_ROUGHNESS, BINDING_BASE_METALLIC, BINDING_MATERIAL_IDS = range(5)
+BINDING_SHADOW_MASK = 5  # ray-traced shadows' mask: 4 lights a layer, one per channel (render/ray_shadows.py)
+# the ray-traced shadows' own set (shaders/shadow_rays.rgen)
+BINDING_RAY_SCENE, BINDING_RAY_FRAME, BINDING_RAY_DEPTH, BINDING_RAY_NORMAL, BINDING_RAY_MASK = range(5)
 DEFERRED_TILE = 16  # a workgroup lights DEFERRED_TILE x DEFERRED_TILE pixels
 DEFERRED_WORDS = 512  # light mask words a workgroup holds at once (16,384 lights; more take turns)
 CULL_GROUP = 256  # cull.comp's local size
@@ -291,6 +318,7 @@ STRUCTS = [
     TONE_MAP_PUSH,
     SHADOW_VIEW,
     DEFERRED_PUSH,
+    RAY_FRAME,
     IMGUI_PUSH,
 ]
 DEFINES = {
@@ -366,6 +394,14 @@ DEFINES = {
     "CULL_SUBPIXEL": CULL_SUBPIXEL,
     "CULL_LOD": CULL_LOD,
     "MAX_LODS": MAX_LODS,
+    "MAX_RAY_LIGHTS": MAX_RAY_LIGHTS,
+    "FEATURE_RAY_SHADOWS": FEATURE_RAY_SHADOWS,
+    "BINDING_SHADOW_MASK": BINDING_SHADOW_MASK,
+    "BINDING_RAY_SCENE": BINDING_RAY_SCENE,
+    "BINDING_RAY_FRAME": BINDING_RAY_FRAME,
+    "BINDING_RAY_DEPTH": BINDING_RAY_DEPTH,
+    "BINDING_RAY_NORMAL": BINDING_RAY_NORMAL,
+    "BINDING_RAY_MASK": BINDING_RAY_MASK,
 }
 
 

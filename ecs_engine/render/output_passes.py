@@ -54,6 +54,7 @@ class OutputPasses:
         self.sky: SkyPass | None = None
         self.oit: WeightedTransparency | None = None  # made the first frame it is asked for
         self._warned_blend = False
+        self.ray_shadows: Any = None  # render/ray_shadows.py's RayShadows where shadows are traced
         try:
             self.tone_map_pass = ToneMapPass(device, target.render_pass)
             self.deferred = DeferredPass(device, frame_set_layout)
@@ -157,6 +158,10 @@ class OutputPasses:
                 lib.vkCmdExecuteCommands(cb, len(chunks), vk.ffi.new("VkCommandBuffer[]", chunks))
             lib.vkCmdEndRenderPass(cb)
             extent = state.area.extent
+            ray = self.ray_shadows
+            if ray is not None and ray.lights:  # the shadow mask the lighting reads (ray_shadows.py)
+                mask = self.deferred.named(target.attachments)
+                ray.record(cb, slot, target.attachments, mask, extent.width, extent.height)
             self.deferred.record(cb, frame_set[0], target.attachments, features, extent.width, extent.height)
             if transparent is not None:
                 assert self.oit is not None

@@ -39,20 +39,23 @@ from .layouts import (
     BINDING_TEXTURES,
     FEATURE_CLUSTERED,
     FEATURE_ENVIRONMENT,
+    FEATURE_RAY_SHADOWS,
     FEATURE_SHADOWS,
     INSTANCE,
 )
-from .light_clusters import ClusterGrid, LightCulling, check_light_culling
+from .light_clusters import LightCulling, check_light_culling
 from .light_rows import light_features
 from .materials import Materials
 from .mesh_registry import MeshRegistry
 from .oit_pass import check_transparency
 from .output_passes import OutputPasses
 from .path import FILL_MODES, FrameInputs, FrameStats, PathContext, PathFactory, RenderPath, TargetState
+from .ray_shadows import RayShadows, check_shadow_method
 from .set_aside_pass import SetAsidePass
 from .shadow_pass import ShadowPass
+from .target_forms import TargetForms
 from .texture_pages import TexturePages
-from .tone_map import check_tone_map, wants_hdr
+from .tone_map import check_tone_map
 
 PATHS: dict[str, PathFactory] = {
     "instanced": InstancedPath,
@@ -63,7 +66,7 @@ MODES = tuple(PATHS)
 RECORDER_NAMES = tuple(RECORDERS)
 
 
-class Renderer:
+class Renderer(TargetForms):
     def __init__(
         self,
         device: Device,
@@ -85,6 +88,7 @@ class Renderer:
         light_culling: str = "auto",
         transparency: str = "sorted",
         lod: bool = True,
+        shadows: str = "maps",
     ) -> None:
         if mode not in PATHS:
             raise ValueError(f"unknown render mode {mode!r}; modes: {', '.join(MODES)}")
@@ -93,6 +97,7 @@ class Renderer:
         check_tone_map(tone_map, exposure)
         check_light_culling(light_culling)
         check_transparency(transparency)
+        check_shadow_method(shadows, device, target.samples)  # raytraced: a device that traces rays
         # blended rows: sorted, or weighted (oit_pass.py: deferred form); levels of detail (indirect mode)
         self.transparency, self.lod = transparency, lod
         self.tone_map, self.exposure = tone_map, float(exposure)  # change them between frames (ensure_output)
@@ -115,9 +120,11 @@ class Renderer:
         self.default_materials = Materials()  # a world without a Materials resource: the default palette
         self.material_features = self.default_materials.features
         self.fill = fill
+        self.ray_shadows: RayShadows | None = None  # shadows="raytraced" (ray_shadows.py): the deferred form
         try:
             self.frames = FrameRing(device)
             n = len(self.frames.frames)
+            self.ray_shadows = RayShadows(device, meshes, n) if shadows == "raytraced" else None
             self.secondaries = SecondaryBuffers(device, n)
             self.set_layout, self.pool = frame_sets(device, n)
             self.lights = LightCulling(device, self.set_layout.handle, light_culling)
@@ -135,6 +142,7 @@ class Renderer:
             self.output = OutputPasses(
                 device, target, self.set_layout.handle, self.secondaries, light_size, clear_color
             )
+            self.output.ray_shadows = self.ray_shadows
             self.path: RenderPath = self._make_path(mode, recorder or default_recorder())
         except BaseException:
             # a form or path the device cannot make (indirect), no numba, no memory: nothing leaks
@@ -243,6 +251,27 @@ class Renderer:
             self.fill = fill
             self._respecialise(lambda: setattr(self, "fill", old))
 
+    @property
+    def shadow_method(self) -> str:
+        """maps, or raytraced (ray_shadows.py)."""
+        return "raytraced" if self.ray_shadows is not None else "maps"
+
+    def set_shadow_method(self, method: str) -> None:
+        """Shadow maps or ray-traced shadows from the next frame (a device without ray tracing
+        refuses raytraced: UsageError, nothing changed)."""
+        check_shadow_method(method, self.device, self.target.samples)
+        if method == self.shadow_method:
+            return
+        self.device.wait_idle()
+        made = RayShadows(self.device, self.meshes, len(self.frames.frames)) if method == "raytraced" else None
+        if self.ray_shadows is not None:
+            self.ray_shadows.destroy()
+        self.ray_shadows = self.output.ray_shadows = made
+        if made is None and self.material_features & FEATURE_RAY_SHADOWS:  # the maps' lookups again
+            self.material_features &= ~FEATURE_RAY_SHADOWS
+            self._swap_path(self._make_path(self.mode, self.cpu_recorder))
+        self.ensure_output()  # the deferred form for the rays, or the form the rest needs
+
     def _check_features(self, features: int) -> None:
         """Rebuild the path's pipelines when the world's materials or lights need a shading model,
         alpha mask or light kind they were specialised without (grown, never shrunk)."""
@@ -315,11 +344,14 @@ class Renderer:
         width, height = extent or (self.target.width, self.target.height)
         material_count = len(materials)
         data = self.extract(world, width, height, materials, dt)  # before any GPU state: a bad world fails here
-        views = self.shadows.plan(world, data)  # lights with a Shadow: the views their maps are drawn from
+        ray = self.ray_shadows  # lights with a Shadow: the views their maps are drawn from, or their rays
+        views = self.shadows.plan(world, data) if ray is None else []
+        traced = ray.plan(world, data) if ray is not None else []
         if self.environment.sync(world, self.jobs):  # a new Environment (the device was waited for)
             for each in self.per_frame:
                 each.name_environment(self.device)
         features = light_features(data.lights, data.directional) | (FEATURE_SHADOWS if views else 0)
+        features |= FEATURE_SHADOWS | FEATURE_RAY_SHADOWS if traced else 0
         features |= FEATURE_ENVIRONMENT if self.environment.active else 0
         self._check_features(materials.features | features)
         grid = self._light_clusters(data, width, height, own_target=framebuffer is None)
@@ -335,8 +367,12 @@ class Renderer:
         camera_rows = self.path.rows_needed(data.candidates) + len(data.set_aside or ())
         rows = camera_rows + len(views) * ShadowPass.view_rows(data, self.path)  # each view's after the camera's
         pf.ensure_capacity(self.device, self.texture_pages, rows, data.light_count, material_count, len(views))
-        deferred, name = self.target.form == "deferred", partial(self.shadows.name_lights, data, views)
-        positional = pf.write_frame(self.device, data, materials, grid, self.ambient, deferred, name if views else None)
+        deferred = self.target.form == "deferred"
+        name = partial(self.shadows.name_lights, data, views) if views else None
+        name = partial(ray.name_lights, data, traced) if ray is not None and traced else name
+        positional = pf.write_frame(self.device, data, materials, grid, self.ambient, deferred, name)
+        if ray is not None and traced:
+            ray.prepare(slot, data, self.jobs, width, height)
         target = self.target_state(framebuffer or self.target.framebuffer, width, height)
         inputs = FrameInputs(
             slot=slot,
@@ -416,73 +452,6 @@ class Renderer:
         eye, oit = data.camera.position - data.origin, self.output.weighted(self.transparency)
         return self._set_aside.record(inputs, data.set_aside, first, eye, materials, oit)
 
-    @property
-    def light_culling(self) -> str:
-        return self.lights.mode
-
-    @light_culling.setter
-    def light_culling(self, mode: str) -> None:
-        check_light_culling(mode)
-        self.lights.mode = mode
-
-    @property
-    def clustered(self) -> bool:
-        return self.lights.clustered
-
-    def _light_clusters(self, data: FrameData, width: int, height: int, own_target: bool) -> ClusterGrid | None:
-        """This frame's cluster grid, or None for the all-lights loop; a change either way
-        rebuilds the mesh pipelines (FEATURE_CLUSTERED), undone if that fails. With `auto` it
-        also changes the form (deferred or not): on the target's own framebuffer at once, the
-        path made once for the new form; a swapchain's image was acquired in the old form, so
-        that frame stays in it and the next one switches (ensure_output, from the run loop)."""
-        grid, flipped = self.lights.plan(data, width, height, self.target.samples)
-        if flipped:
-
-            def undo() -> None:
-                self.lights.clustered = not self.lights.clustered
-
-            if own_target and self._wanted_form() != self.target.form:
-                try:
-                    self.ensure_output()
-                except BaseException:
-                    undo()
-                    raise
-            else:
-                self._respecialise(undo)
-        return grid
-
-    def ensure_output(self) -> None:
-        """Give the target the form the tone map, exposure and blended materials need (HDR colour
-        or straight into the target), and follow it. Call between frames: a swapchain's
-        framebuffers change (the run loop calls it before each frame)."""
-        self._fit_target()
-        if self.target.generation != self._target_generation:
-            self._follow_target()
-
-    def _wanted_form(self) -> str:
-        """The target form (gpu/render_pass.py) the light culling, tone map, exposure, MSAA and
-        blended materials need."""
-        samples = self.target.samples
-        if self.lights.deferred(samples) or (self.transparency == "weighted" and self._blends and samples == 1):
-            return "deferred"
-        return "hdr" if wants_hdr(self.tone_map, self.exposure, samples, self._blends) else "direct"
-
-    def _fit_target(self) -> None:
-        form = self._wanted_form()
-        if form != self.target.form:
-            self.device.wait_idle()  # this or another renderer of the target may have frames in flight
-            self.target.set_form(form)
-
-    def _follow_target(self) -> None:
-        """The target's render pass changed: make again what was made against the old one."""
-        self.device.wait_idle()
-        target = self.target
-        self._swap_path(self._make_path(self.mode, self.cpu_recorder))
-        self.output.retarget()
-        if self.overlay is not None:
-            self.overlay.retarget(target.render_pass, target.output_subpass)
-        self._target_generation = target.generation
-
     def destroy(self) -> None:
         self.device.wait_idle()
         self.path.destroy()
@@ -492,7 +461,9 @@ class Renderer:
         """What the renderer made, in reverse (what a failed __init__ had not made yet is skipped)."""
         if self._set_aside is not None:
             self._set_aside.destroy()
-        names = "output per_frame shadows environment texture_pages lights pool set_layout secondaries frames"
+        names = (
+            "output per_frame shadows environment texture_pages lights pool set_layout secondaries ray_shadows frames"
+        )
         for name in names.split():
             made = getattr(self, name, None)
             for part in made if isinstance(made, list) else [made] if made is not None else []:

@@ -1,0 +1,315 @@
+"""Ray-traced shadows (issue 18; the renderer's `shadows="raytraced"`), on devices with
+ray-tracing pipelines: the same lights with a `Shadow` as the shadow maps, traced instead.
+
+A frame: the chunk jobs' rows become top-level instances (render/ray_instances.py, written in
+parallel by the job pool, one job a chunk, the kernel without the GIL) in the slot's buffer;
+after the G-buffer pass (the deferred form: its depth is the pre-pass, its normals give the rays'
+start off the surface) the top level is refitted, or built where the instance count changed or
+REBUILD_EVERY frames passed (a refit's quality drifts as things move), then shaders/
+shadow_rays.rgen traces, per pixel and light, one ray towards it (a hard shadow) or, for a light
+whose Shadow asks for PCSS, SOFT_RAYS rays to a disc of the Shadow's softness (an area light);
+the fraction that reached it goes to the shadow mask the deferred lighting reads.
+
+At most MAX_RAY_LIGHTS lights cast (directional, then spot, then point lights, in world order,
+as the shadow maps' views are ordered); those past it cast nothing, said once in the log.
+Forward-lit surfaces (alpha-blended materials, drawn after the deferred lighting) receive no
+ray-traced shadow: the mask is per pixel of the opaque surface behind them.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..components import DirectionalLight, PointLight, Shadow, SpotLight, Transform
+from ..components.shadow import SHADOW_PCSS
+from ..ecs.world import World
+from ..errors import UsageError
+from ..gpu.acceleration import AS_INSTANCE, TopLevel, ray_input_usage
+from ..gpu.array_image import nearest_sampler
+from ..gpu.barrier import Barrier
+from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_acceleration_structure
+from ..gpu.memory import UPLOAD, Buffer
+from ..gpu.pipeline import pipeline_layout
+from ..gpu.ray_pipeline import RayPipeline
+from .frame_data import NOT_CASTER, Chunk, FrameData
+from .layouts import (
+    BINDING_RAY_DEPTH,
+    BINDING_RAY_FRAME,
+    BINDING_RAY_MASK,
+    BINDING_RAY_NORMAL,
+    BINDING_RAY_SCENE,
+    LIGHT_DIRECTIONAL,
+    LIGHT_POINT,
+    LIGHT_SPOT,
+    MAX_RAY_LIGHTS,
+    RAY_FRAME,
+)
+from .light_rows import local_minus_z, write_light_shadows
+from .ray_instances import write_instances
+
+log = logging.getLogger(__name__)
+
+SHADOW_METHODS = ("maps", "raytraced")
+SOFT_RAYS = 4  # rays per pixel of a light whose Shadow asks for PCSS (an area light)
+REBUILD_EVERY = 30  # frames between full builds of the top level (refits in between)
+
+
+def check_shadow_method(method: str, device: Any = None, samples: int = 1) -> None:
+    """UsageError for an unknown method, or `raytraced` on a device that cannot trace rays or
+    with MSAA (the rays start from the G-buffer, which has one sample)."""
+    if method not in SHADOW_METHODS:
+        raise UsageError(f"unknown shadow method {method!r}; methods: {', '.join(SHADOW_METHODS)}")
+    if method != "raytraced":
+        return
+    if device is not None and device.ray_tracing is None:
+        raise UsageError(
+            f"--shadows raytraced needs ray-tracing pipelines (VK_KHR_ray_tracing_pipeline and "
+            f"VK_KHR_acceleration_structure), which {device.info.name} lacks: use --shadows maps"
+        )
+    if samples > 1:
+        raise UsageError(
+            f"--shadows raytraced traces from the one-sample G-buffer: it cannot draw with --msaa {samples}"
+        )
+
+
+@dataclass(frozen=True)
+class RayLight:
+    entity: int
+    kind: int  # LIGHT_*
+    position: np.ndarray  # render-relative position, or a directional light's unit direction towards it
+    size: float  # 0: a hard shadow; else the area light's radius (directional: the tangent of its angle)
+    reach: float  # a point or spot light's radius (0: unbounded)
+
+
+def ray_lights(world: World, origin: np.ndarray) -> list[RayLight]:
+    """The shadow-casting lights, in the shadow maps' order, at most MAX_RAY_LIGHTS."""
+    found: list[RayLight] = []
+
+    def size(shadow: Any, row: int) -> float:
+        return float(shadow.softness[row]) if int(shadow.filter[row]) == SHADOW_PCSS else 0.0
+
+    for batch in world.query(DirectionalLight, Transform, Shadow, write=()):
+        towards = -local_minus_z(batch[Transform].rotation)
+        for row, entity in enumerate(batch.entities.tolist()):
+            found.append(RayLight(entity, LIGHT_DIRECTIONAL, towards[row], size(batch[Shadow], row), 0.0))
+    for kind, component in ((LIGHT_SPOT, SpotLight), (LIGHT_POINT, PointLight)):
+        for batch in world.query(component, Transform, Shadow, write=()):
+            position = batch[Transform].position - origin
+            reach = batch[component].radius
+            for row, entity in enumerate(batch.entities.tolist()):
+                found.append(RayLight(entity, kind, position[row], size(batch[Shadow], row), float(reach[row])))
+    if len(found) > MAX_RAY_LIGHTS:
+        log.warning("%d lights cast ray-traced shadows; the first %d do", len(found), MAX_RAY_LIGHTS)
+        found = found[:MAX_RAY_LIGHTS]
+    return found
+
+
+class _Slot:
+    """A frame slot's: the instance rows, the RayFrame, the descriptor set and what it names."""
+
+    def __init__(self, device: Any, pool: DescriptorPool, layout: DescriptorSetLayout) -> None:
+        vk = device.vk
+        self.frame = Buffer(device, RAY_FRAME.size, vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, UPLOAD)
+        self.rows: Buffer | None = None
+        self.set = pool.allocate(layout)
+        self.named: tuple[Any, ...] = ()
+
+    def rows_for(self, device: Any, count: int) -> np.ndarray:
+        """The slot's instance rows, room for `count` (its fence was waited for: safe to grow)."""
+        need = max(count, 1) * AS_INSTANCE.itemsize
+        if self.rows is None:
+            self.rows = Buffer(device, need, ray_input_usage(device), UPLOAD)
+        self.rows = self.rows.grown(need)
+        return self.rows.array(AS_INSTANCE, max(count, 1))
+
+    def destroy(self) -> None:
+        self.frame.destroy()
+        if self.rows is not None:
+            self.rows.destroy()
+
+
+class RayShadows:
+    def __init__(self, device: Any, meshes: Any, frames: int) -> None:
+        check_shadow_method("raytraced", device)  # (the caller checks its target's samples)
+        vk, lib = device.vk, device.vk.lib
+        self.device, self.meshes = device, meshes
+        stage = lib.VK_SHADER_STAGE_RAYGEN_BIT_KHR
+        storage_image = vk.VK_DESCRIPTOR_TYPE_STORAGE_IMAGE
+        self.set_layout = DescriptorSetLayout(
+            device,
+            [
+                (BINDING_RAY_SCENE, lib.VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR, stage),
+                (BINDING_RAY_FRAME, vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, stage),
+                (BINDING_RAY_DEPTH, vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, stage),
+                (BINDING_RAY_NORMAL, storage_image, stage),
+                (BINDING_RAY_MASK, storage_image, stage),
+            ],
+        )
+        self._made: list[Any] = [self.set_layout]
+        try:
+            sizes = {
+                lib.VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR: frames,
+                vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER: frames,
+                vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER: frames,
+                storage_image: 2 * frames,
+            }
+            self.pool = DescriptorPool(device, frames, sizes)
+            self._made.append(self.pool)
+            self.layout = pipeline_layout(device, [self.set_layout.handle])
+            self.pipeline = RayPipeline(device, self.layout, "shadow_rays.rgen", ["shadow_rays.rmiss"], [None])
+            self._made.append(self.pipeline)
+            self.sampler = nearest_sampler(device)
+            self.top = TopLevel(device, 1024)
+            self._made.append(self.top)
+            self.slots = [_Slot(device, self.pool, self.set_layout) for _ in range(frames)]
+        except BaseException:
+            self.destroy()
+            raise
+        rt, compute = lib.VK_PIPELINE_STAGE_RAY_TRACING_SHADER_BIT_KHR, vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
+        written = (
+            vk.VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT
+            | vk.VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT
+            | vk.VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT
+            | compute
+        )
+        access = vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT
+        # the G-buffer's depth and normals to the rays; the last frame's lighting has read the mask
+        self._before = Barrier(
+            vk,
+            written,
+            rt,
+            access | vk.VK_ACCESS_SHADER_READ_BIT,
+            vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_SHADER_WRITE_BIT,
+        )
+        self._after = Barrier(
+            vk, rt, compute, vk.VK_ACCESS_SHADER_WRITE_BIT, vk.VK_ACCESS_SHADER_READ_BIT
+        )  # the mask, to the lighting
+        self.frame_number = 0
+        self._since_build = REBUILD_EVERY
+        self._count = 0
+        self.lights: list[RayLight] = []
+
+    # ------------------------------------------------------------ per frame
+    def plan(self, world: World, data: FrameData) -> list[RayLight]:
+        self.lights = ray_lights(world, data.origin) if any(len(b) for b in world.query(Shadow, write=())) else []
+        return self.lights
+
+    def name_lights(self, data: FrameData, lights: list[RayLight], rows: np.ndarray) -> None:
+        """Each traced light's row names its place in the mask (cone.z: place + 1; light_rows.py)."""
+        places = {light.entity: (i, 0) for i, light in enumerate(lights)}
+        write_light_shadows(
+            data.lights, data.directional, data.camera.position - data.origin, data.origin, places, rows
+        )
+
+    def prepare(self, slot: int, data: FrameData, jobs: Any, width: int, height: int) -> None:
+        """Before the frame's recording: every row with a mesh as an instance (the jobs), the
+        top level's room for them, the slot's RayFrame."""
+        blas = self.meshes.bottom_levels()
+        chunks: list[Chunk] = list(data.chunks) + (list(data.set_aside.casters) if data.set_aside is not None else [])
+        count = max((c.offset + len(c.handle) for c in chunks), default=0)
+        s = self.slots[slot]
+        rows = s.rows_for(self.device, count)
+        if count > self.top.capacity:
+            self.device.wait_idle()  # the other slots' frames trace the structure being replaced
+            self.top.reserve(count)
+        rows[:count]["blas"] = 0  # rows no chunk writes (set-aside rows that cast nothing) stay inactive
+
+        def job(chunk: Chunk) -> None:
+            end = chunk.offset + len(chunk.handle)
+            write_instances(
+                chunk.model, chunk.handle, blas, chunk.offset, not chunk.flags & NOT_CASTER, rows[chunk.offset : end]
+            )
+
+        if jobs is not None and len(chunks) > 1:
+            jobs.map(job, chunks)
+        else:
+            for chunk in chunks:
+                job(chunk)
+        self._count = count
+        f = s.frame.array(RAY_FRAME.dtype, 1)
+        f["inverse_projection"] = np.linalg.inv(data.camera.projection).T
+        f["view"] = data.view.T
+        f["size"] = (width, height, len(self.lights), self.frame_number)
+        f["light_position"] = 0
+        f["light_params"] = 0
+        for i, light in enumerate(self.lights):
+            f["light_position"][0, i] = (*light.position, light.kind)
+            f["light_params"][0, i] = (light.size, SOFT_RAYS if light.size > 0 else 1, light.reach, 0.0)
+        self.frame_number += 1
+
+    def record(self, cb: Any, slot: int, attachments: Any, mask: Any, width: int, height: int) -> None:
+        """After the G-buffer pass, before the deferred lighting: the top level, then the rays."""
+        lib = self.device.vk.lib
+        s = self.slots[slot]
+        assert s.rows is not None
+        update = self._since_build < REBUILD_EVERY
+        refit = self.top.record(cb, s.rows.address, self._count, update)
+        self._since_build = self._since_build + 1 if refit else 1
+        named = (attachments, mask, self.top.handle)
+        if s.named != named:
+            self._name(s, attachments, mask)
+            s.named = named
+        self._before.record(lib, cb)
+        self.pipeline.bind(cb, [s.set])
+        self.pipeline.trace(cb, width, height)
+        self._after.record(lib, cb)
+
+    def _name(self, s: _Slot, attachments: Any, mask: Any) -> None:
+        vk = self.device.vk
+        general = vk.VK_IMAGE_LAYOUT_GENERAL
+        storage = vk.VK_DESCRIPTOR_TYPE_STORAGE_IMAGE
+        write_acceleration_structure(self.device, s.set, BINDING_RAY_SCENE, self.top.handle)
+        depth = vk.VkDescriptorImageInfo(
+            sampler=self.sampler,
+            imageView=attachments.depth_view,
+            imageLayout=vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL,
+        )
+        writes = [
+            vk.VkWriteDescriptorSet(
+                dstSet=s.set,
+                dstBinding=BINDING_RAY_FRAME,
+                descriptorCount=1,
+                descriptorType=vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                pBufferInfo=[s.frame.descriptor()],
+            ),
+            vk.VkWriteDescriptorSet(
+                dstSet=s.set,
+                dstBinding=BINDING_RAY_DEPTH,
+                descriptorCount=1,
+                descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+                pImageInfo=[depth],
+            ),
+            vk.VkWriteDescriptorSet(
+                dstSet=s.set,
+                dstBinding=BINDING_RAY_NORMAL,
+                descriptorCount=1,
+                descriptorType=storage,
+                pImageInfo=[vk.VkDescriptorImageInfo(imageView=attachments.gbuffer.views[0], imageLayout=general)],
+            ),
+            vk.VkWriteDescriptorSet(
+                dstSet=s.set,
+                dstBinding=BINDING_RAY_MASK,
+                descriptorCount=1,
+                descriptorType=storage,
+                pImageInfo=[vk.VkDescriptorImageInfo(imageView=mask.view, imageLayout=general)],
+            ),
+        ]
+        vk.vkUpdateDescriptorSets(self.device.handle, len(writes), writes, 0, None)
+
+    def destroy(self) -> None:
+        for s in getattr(self, "slots", []):
+            s.destroy()
+        self.slots = []
+        if getattr(self, "sampler", None) is not None:
+            self.device.vk.vkDestroySampler(self.device.handle, self.sampler, None)
+            self.sampler = None
+        if getattr(self, "layout", None) is not None:
+            self.device.vk.vkDestroyPipelineLayout(self.device.handle, self.layout, None)
+            self.layout = None
+        for made in reversed(self._made):
+            made.destroy()
+        self._made = []

@@ -1,0 +1,107 @@
+"""How the renderer's target is drawn (gpu/render_pass.py's forms): forward into the target
+("direct"), through HDR colour ("hdr") or through a G-buffer lit in compute ("deferred"), as the
+light culling, tone map, exposure, MSAA, blended materials and ray-traced shadows need; switched
+between frames, and what was made against the old render passes made again. A part of Renderer
+(its base class), apart for its size."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from .frame_data import FrameData
+from .light_clusters import ClusterGrid, check_light_culling
+from .tone_map import wants_hdr
+
+
+class TargetForms:
+    """Renderer's target-form methods; the attributes they use are the renderer's."""
+
+    device: Any
+    target: Any
+    lights: Any
+    transparency: str
+    tone_map: str
+    exposure: float
+    output: Any
+    overlay: Any
+    ray_shadows: Any
+    cpu_recorder: str
+    _blends: bool
+    _target_generation: int
+    _swap_path: Callable[[Any], None]
+    _make_path: Callable[[str, str], Any]
+    _respecialise: Callable[[Callable[[], None]], None]
+
+    @property
+    def mode(self) -> str:  # the renderer's path's
+        raise NotImplementedError
+
+    @property
+    def light_culling(self) -> str:
+        return self.lights.mode
+
+    @light_culling.setter
+    def light_culling(self, mode: str) -> None:
+        check_light_culling(mode)
+        self.lights.mode = mode
+
+    @property
+    def clustered(self) -> bool:
+        return self.lights.clustered
+
+    def _light_clusters(self, data: FrameData, width: int, height: int, own_target: bool) -> ClusterGrid | None:
+        """This frame's cluster grid, or None for the all-lights loop; a change either way
+        rebuilds the mesh pipelines (FEATURE_CLUSTERED), undone if that fails. With `auto` it
+        also changes the form (deferred or not): on the target's own framebuffer at once, the
+        path made once for the new form; a swapchain's image was acquired in the old form, so
+        that frame stays in it and the next one switches (ensure_output, from the run loop)."""
+        grid, flipped = self.lights.plan(data, width, height, self.target.samples)
+        if flipped:
+
+            def undo() -> None:
+                self.lights.clustered = not self.lights.clustered
+
+            if own_target and self._wanted_form() != self.target.form:
+                try:
+                    self.ensure_output()
+                except BaseException:
+                    undo()
+                    raise
+            else:
+                self._respecialise(undo)
+        return grid
+
+    def ensure_output(self) -> None:
+        """Give the target the form the tone map, exposure and blended materials need (HDR colour
+        or straight into the target), and follow it. Call between frames: a swapchain's
+        framebuffers change (the run loop calls it before each frame)."""
+        self._fit_target()
+        if self.target.generation != self._target_generation:
+            self._follow_target()
+
+    def _wanted_form(self) -> str:
+        """The target form (gpu/render_pass.py) the light culling, tone map, exposure, MSAA and
+        blended materials need."""
+        samples = self.target.samples
+        if self.ray_shadows is not None:
+            return "deferred"  # the G-buffer pass is the rays' depth pre-pass (render/ray_shadows.py)
+        if self.lights.deferred(samples) or (self.transparency == "weighted" and self._blends and samples == 1):
+            return "deferred"
+        return "hdr" if wants_hdr(self.tone_map, self.exposure, samples, self._blends) else "direct"
+
+    def _fit_target(self) -> None:
+        form = self._wanted_form()
+        if form != self.target.form:
+            self.device.wait_idle()  # this or another renderer of the target may have frames in flight
+            self.target.set_form(form)
+
+    def _follow_target(self) -> None:
+        """The target's render pass changed: make again what was made against the old one."""
+        self.device.wait_idle()
+        target = self.target
+        self._swap_path(self._make_path(self.mode, self.cpu_recorder))
+        self.output.retarget()
+        if self.overlay is not None:
+            self.overlay.retarget(target.render_pass, target.output_subpass)
+        self._target_generation = target.generation

@@ -1,0 +1,169 @@
+"""Ray-traced shadows (render/ray_shadows.py, `--shadows raytraced`). Everywhere: a device that
+cannot trace rays (lavapipe), or MSAA, refuses in one message and changes nothing. On the GPU
+host (ray-tracing pipelines; the tests skip elsewhere, saying why), with the validation layers
+on: shadows fall where a NumPy ray cast says, agree with the shadow maps' but near edges, the
+tags leave meshes out, area lights soften them, and switching method live draws what a fresh
+renderer draws."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from gpu_context import headless_gpu, shared_device
+from test_shadows import CUBE, POINT, H, W, compare, ground_hits, render, scene, segment_hits_box
+
+from ecs_engine.app.settings import RunOptions
+from ecs_engine.components import NotShadowCaster, NotShadowReceiver, Shadow
+from ecs_engine.components.shadow import SHADOW_PCSS
+from ecs_engine.errors import UsageError
+
+
+def _needs_ray_tracing():
+    device = shared_device()
+    if device.ray_tracing is None:
+        pytest.skip(f"{device.info.name} has no ray-tracing pipelines (VK_KHR_ray_tracing_pipeline)")
+
+
+def test_a_device_without_ray_tracing_refuses_raytraced_shadows():
+    from ecs_engine.render.renderer import Renderer
+
+    with headless_gpu(W, H) as gpu:
+        if gpu.device.ray_tracing is not None:
+            pytest.skip("this device traces rays")
+        with pytest.raises(UsageError, match=r"needs ray-tracing pipelines.*lacks: use --shadows maps"):
+            Renderer(gpu.device, gpu.target, gpu.meshes, shadows="raytraced")
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+        try:
+            with pytest.raises(UsageError, match="needs ray-tracing pipelines"):
+                renderer.set_shadow_method("raytraced")
+            assert renderer.shadow_method == "maps" and renderer.ray_shadows is None
+        finally:
+            renderer.destroy()
+
+
+def test_the_command_line_refuses_in_one_line(capsys):
+    from ecs_engine.app.cli import main
+
+    if shared_device().ray_tracing is not None:
+        pytest.skip("this device traces rays")
+    assert main(["demo", "cube", "--headless", "--frames", "1", "--shadows", "raytraced"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--shadows raytraced needs ray-tracing pipelines" in err[0]
+
+
+def test_unknown_methods_and_msaa_are_refused():
+    from ecs_engine.render.ray_shadows import check_shadow_method
+
+    with pytest.raises(UsageError, match="unknown shadow method 'soft'"):
+        RunOptions(shadow_method="soft")
+    device = shared_device()
+
+    class Traces:  # a device that traces rays, for the MSAA check alone
+        ray_tracing = object()
+        info = device.info
+
+    with pytest.raises(UsageError, match="cannot draw with --msaa 4"):
+        check_shadow_method("raytraced", Traces(), 4)
+    check_shadow_method("raytraced", Traces(), 1)
+    check_shadow_method("maps", device, 8)
+
+
+@pytest.mark.parametrize("light", ["sun", "spot", "point"])
+def test_ray_traced_shadows_fall_where_a_ray_cast_says(light):
+    _needs_ray_tracing()
+    with headless_gpu(W, H) as gpu:
+        world = scene(gpu, light)
+        image, _ = render(gpu, world, shadows="raytraced")
+        plain, _ = render(gpu, scene(gpu, light, shadow=False), light_culling="deferred")
+    hit, blocked = ground_hits(world)
+    if light == "sun":
+        inside = (np.abs(hit[..., 0]) < 0.4) & (np.abs(hit[..., 2]) < 0.4)
+        outside = (np.abs(hit[..., 0]) > 0.6) | (np.abs(hit[..., 2]) > 0.6)
+    else:
+        apex = np.array([-2.0, 4.0, 0.0]) if light == "spot" else np.array(POINT)
+        inside = segment_hits_box(np.broadcast_to(apex, hit.shape), hit, CUBE[0] + 0.1, CUBE[1] - 0.1)
+        outside = ~segment_hits_box(np.broadcast_to(apex, hit.shape), hit, CUBE[0] - 0.1, CUBE[1] + 0.1)
+        outside &= np.linalg.norm(hit, axis=-1) < 3.0
+    shadowed, lit = inside & ~blocked, outside & ~blocked & (np.linalg.norm(hit, axis=-1) < 6.0)
+    dark, bright = compare(image, shadowed, lit)
+    assert dark < 0.5 * bright, (dark, bright)
+    plain_dark, _ = compare(plain, shadowed, lit)
+    assert plain_dark > dark + 40
+    assert np.abs(image[lit] - plain[lit]).max() <= 2  # no self-shadowing on open ground
+
+
+@pytest.mark.parametrize("light", ["sun", "spot", "point"])
+def test_ray_traced_and_map_shadows_agree_but_near_edges(light):
+    """The difference of the two (both lit in the deferred form) is confined to a band around
+    the shadows' edges, where the maps' texels and PCF filtering blur what the rays see sharp."""
+    _needs_ray_tracing()
+    with headless_gpu(W, H) as gpu:
+        traced, _ = render(gpu, scene(gpu, light), shadows="raytraced")
+        mapped, _ = render(gpu, scene(gpu, light), light_culling="deferred")
+        plain, _ = render(gpu, scene(gpu, light, shadow=False), light_culling="deferred")
+    differ = np.abs(traced - mapped).max(axis=-1) > 8
+    shade = [(plain - image).mean(axis=-1) > 10 for image in (traced, mapped)]
+    assert all(s.sum() > 50 for s in shade)  # both cast a shadow
+    edge = np.zeros_like(differ)
+    for s in shade:
+        edge |= (s ^ np.roll(s, 1, 0)) | (s ^ np.roll(s, 1, 1))
+    near = edge.copy()
+    for _ in range(2):  # within 2 pixels of either shadow's edge
+        near = near | np.roll(near, 1, 0) | np.roll(near, -1, 0) | np.roll(near, 1, 1) | np.roll(near, -1, 1)
+    assert differ.mean() < 0.02, differ.mean()
+    assert (differ & ~near).sum() == 0, np.argwhere(differ & ~near)[:10]
+
+
+@pytest.mark.parametrize("tags", ["caster", "receiver"])
+def test_tags_leave_meshes_out_of_ray_traced_shadows(tags):
+    _needs_ray_tracing()
+    with headless_gpu(W, H) as gpu:
+        cube_tags = [NotShadowCaster()] if tags == "caster" else []
+        ground_tags = [NotShadowReceiver()] if tags == "receiver" else []
+        image, _ = render(gpu, scene(gpu, cube_tags=cube_tags, ground_tags=ground_tags), shadows="raytraced")
+        plain, _ = render(gpu, scene(gpu, shadow=False), light_culling="deferred")
+    assert np.abs(image - plain).max() <= 2
+
+
+def test_area_lights_soften_ray_traced_shadows():
+    """A light whose Shadow asks for PCSS is an area light of the Shadow's softness: the shadow's
+    edge spreads over more pixels than the hard one's, and grows with the softness."""
+    _needs_ray_tracing()
+
+    def penumbra(softness: float | None) -> int:
+        with headless_gpu(W, H) as gpu:
+            world = scene(gpu, "spot")
+            for batch in world.query(Shadow):
+                if softness is not None:
+                    batch[Shadow].filter[:] = SHADOW_PCSS
+                    batch[Shadow].softness[:] = softness
+            image, _ = render(gpu, world, shadows="raytraced")
+        b = image.mean(axis=-1)
+        return int(((b > 0.2 * b.max()) & (b < 0.8 * np.percentile(b, 90))).sum())
+
+    hard, soft, softer = penumbra(None), penumbra(0.2), penumbra(0.6)
+    assert hard < soft < softer, (hard, soft, softer)
+
+
+def test_switching_method_live_draws_what_a_fresh_renderer_draws():
+    _needs_ray_tracing()
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.render.renderer import Renderer
+
+    with headless_gpu(W, H) as gpu:
+        world = scene(gpu, "spot")
+        traced, _ = render(gpu, world, shadows="raytraced")
+        mapped, _ = render(gpu, world)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+        try:
+            default_schedule().run(world, 0.0)
+            shots = []
+            for method in ("raytraced", "maps", "raytraced"):
+                renderer.set_shadow_method(method)
+                renderer.ensure_output()
+                renderer.render(world, readback=True)
+                shots.append(gpu.target.pixels()[..., :3].astype(int))
+        finally:
+            renderer.destroy()
+    assert np.abs(shots[0] - traced).max() <= 1 and np.abs(shots[2] - traced).max() <= 1
+    assert np.abs(shots[1] - mapped).max() <= 1
