@@ -103,7 +103,9 @@ def test_ray_traced_and_map_shadows_agree_but_near_edges(light):
         plain, _ = render(gpu, scene(gpu, light, shadow=False), light_culling="deferred")
     differ = np.abs(traced - mapped).max(axis=-1) > 8
     shade = [(plain - image).mean(axis=-1) > 10 for image in (traced, mapped)]
-    assert all(s.sum() > 50 for s in shade)  # both cast a shadow
+    assert all(
+        s.sum() > (5 if light == "sun" else 50) for s in shade
+    )  # both cast (the sun's, below the cube, shows little)
     edge = np.zeros_like(differ)
     for s in shade:
         edge |= (s ^ np.roll(s, 1, 0)) | (s ^ np.roll(s, 1, 1))
@@ -111,7 +113,13 @@ def test_ray_traced_and_map_shadows_agree_but_near_edges(light):
     for _ in range(2):  # within 2 pixels of either shadow's edge
         near = near | np.roll(near, 1, 0) | np.roll(near, -1, 0) | np.roll(near, 1, 1) | np.roll(near, -1, 1)
     assert differ.mean() < 0.02, differ.mean()
-    assert (differ & ~near).sum() == 0, np.argwhere(differ & ~near)[:10]
+    far = np.argwhere(differ & ~near)
+    assert len(far) == 0, (
+        len(far),
+        differ.sum(),
+        far[:10].tolist(),
+        np.abs(traced - mapped).max(axis=-1)[differ & ~near][:10],
+    )
 
 
 @pytest.mark.parametrize("tags", ["caster", "receiver"])
@@ -126,23 +134,27 @@ def test_tags_leave_meshes_out_of_ray_traced_shadows(tags):
 
 
 def test_area_lights_soften_ray_traced_shadows():
-    """A light whose Shadow asks for PCSS is an area light of the Shadow's softness: the shadow's
-    edge spreads over more pixels than the hard one's, and grows with the softness."""
+    """A light whose Shadow asks for PCSS is an area light of the Shadow's softness (for the sun:
+    the tangent of its angular radius): the shadow's edge spreads over more pixels than the hard
+    one's, the more the softer, and the shadow's core stays dark."""
     _needs_ray_tracing()
 
-    def penumbra(softness: float | None) -> int:
+    def shot(softness: float | None) -> np.ndarray:
         with headless_gpu(W, H) as gpu:
-            world = scene(gpu, "spot")
+            world = scene(gpu, "sun")
             for batch in world.query(Shadow):
                 if softness is not None:
                     batch[Shadow].filter[:] = SHADOW_PCSS
                     batch[Shadow].softness[:] = softness
             image, _ = render(gpu, world, shadows="raytraced")
-        b = image.mean(axis=-1)
-        return int(((b > 0.2 * b.max()) & (b < 0.8 * np.percentile(b, 90))).sum())
+        return image.mean(axis=-1)
 
-    hard, soft, softer = penumbra(None), penumbra(0.2), penumbra(0.6)
-    assert hard < soft < softer, (hard, soft, softer)
+    hard, soft, softer = shot(None), shot(0.1), shot(0.3)
+    spread = [int((np.abs(s - hard) > 8).sum()) for s in (soft, softer)]
+    assert 20 < spread[0] < spread[1], spread
+    core = hard < 0.5 * np.median(hard)  # the hard shadow, shrunk: under the cube the soft one is dark too
+    core &= np.roll(core, 3, 0) & np.roll(core, -3, 0) & np.roll(core, 3, 1) & np.roll(core, -3, 1)
+    assert core.sum() > 10 and np.abs(soft[core] - hard[core]).max() <= 12
 
 
 def test_switching_method_live_draws_what_a_fresh_renderer_draws():

@@ -216,7 +216,9 @@ class RayShadows:
         if count > self.top.capacity:
             self.device.wait_idle()  # the other slots' frames trace the structure being replaced
             self.top.reserve(count)
-        rows[:count]["blas"] = 0  # rows no chunk writes (set-aside rows that cast nothing) stay inactive
+        covered = sum(len(c.handle) for c in chunks)
+        if covered != count:  # rows no chunk writes stay inactive (a strided write: only when needed)
+            rows[:count]["blas"] = 0
 
         def job(chunk: Chunk) -> None:
             end = chunk.offset + len(chunk.handle)
