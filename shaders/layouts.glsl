@@ -82,6 +82,7 @@
 #define BINDING_RAY_DEPTH 2
 #define BINDING_RAY_NORMAL 3
 #define BINDING_RAY_MASK 4
+#define BINDING_RAY_DENOISED 5
 
 // The frame's uniforms. Positions are relative to the render origin (the camera, unless
 // RenderOrigin is pinned).

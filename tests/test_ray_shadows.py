@@ -157,6 +157,34 @@ def test_area_lights_soften_ray_traced_shadows():
     assert core.sum() > 10 and np.abs(soft[core] - hard[core]).max() <= 12
 
 
+def test_the_denoise_smooths_soft_shadows_and_leaves_hard_ones():
+    """The option's filter (shadow_denoise.py): in an area light's penumbra the pixel-to-pixel
+    noise of 4 rays a pixel drops; a hard shadow's image is the same with it or without."""
+    _needs_ray_tracing()
+
+    def shot(softness: float | None, denoise: bool) -> np.ndarray:
+        with headless_gpu(W, H) as gpu:
+            world = scene(gpu, "spot")
+            for batch in world.query(Shadow):
+                if softness is not None:
+                    batch[Shadow].filter[:] = SHADOW_PCSS
+                    batch[Shadow].softness[:] = softness
+            image, _ = render(gpu, world, shadows="raytraced", shadow_denoise=denoise)
+        return image.mean(axis=-1)
+
+    hard = shot(None, True)
+    assert np.abs(hard - shot(None, False)).max() == 0
+    raw, smooth = shot(0.5, False), shot(0.5, True)
+    penumbra = np.abs(raw - hard) > 8
+    assert penumbra.sum() > 50
+
+    def roughness(b: np.ndarray) -> float:  # the mean step to the right and down neighbours
+        steps = np.abs(np.diff(b, axis=1))[:-1, :] + np.abs(np.diff(b, axis=0))[:, :-1]
+        return float(steps[penumbra[:-1, :-1]].mean())
+
+    assert roughness(smooth) < 0.6 * roughness(raw), (roughness(smooth), roughness(raw))
+
+
 def test_switching_method_live_draws_what_a_fresh_renderer_draws():
     _needs_ray_tracing()
     from ecs_engine.app.scenes import default_schedule

@@ -156,6 +156,12 @@ def render_flags() -> OneLineParser:
         help="how lights with a Shadow cast: shadow maps (default), or ray-traced (needs a GPU with "
         "ray-tracing pipelines; drawn in the deferred form)",
     )
+    common.add_argument(
+        "--no-shadow-denoise",
+        dest="shadow_denoise",
+        action="store_false",
+        help="--shadows raytraced: leave area lights' soft shadows unfiltered (4 rays a pixel: noisy)",
+    )
     common.add_argument("--lights", type=int, help="lights scene: how many point and spot lights (default 1,024)")
     common.add_argument(
         "--no-shadows", action="store_true", help="shadows scene: no light casts a shadow (for comparison)"

@@ -208,6 +208,8 @@ class Editor:
             imgui.end_disabled()
             if not self.ray_tracing and imgui.is_item_hovered(imgui.HoveredFlags_.allow_when_disabled.value):
                 imgui.set_tooltip("ray-traced shadows need a GPU with ray-tracing pipelines")
+            if req.shadow_method == "raytraced":
+                _, req.shadow_denoise = imgui.checkbox("denoise soft shadows", req.shadow_denoise)
             if req.present is not None:
                 req.present = _combo(imgui, "present", req.present, PRESENT_MODES)
             self._environment(world)

@@ -133,6 +133,7 @@ class Session:
                 transparency=start.transparency,
                 lod=start.lod,
                 shadows=start.shadow_method,
+                shadow_denoise=start.shadow_denoise,
             )
             self.scene = start.scene
             self.world, self.schedule = self._build(start.scene, options.path)
@@ -162,6 +163,7 @@ class Session:
             transparency=self.renderer.transparency,
             lod=self.renderer.lod,
             shadow_method=self.renderer.shadow_method,
+            shadow_denoise=self.renderer.shadow_denoise,
         )
 
     def _build(self, scene: str, path: str | None) -> tuple[World, Schedule]:
@@ -200,6 +202,7 @@ class Session:
         renderer.light_culling = wanted.light_culling
         renderer.transparency = wanted.transparency
         renderer.set_shadow_method(wanted.shadow_method)
+        renderer.shadow_denoise = wanted.shadow_denoise
         renderer.culling, renderer.lod = culling, wanted.lod
         pool.resize(wanted.threads)
         renderer.ensure_output()  # HDR colour or not, as the tone map and exposure now need

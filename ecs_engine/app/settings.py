@@ -42,6 +42,7 @@ class Settings:
     transparency: str = "sorted"  # sorted | weighted (render/oit_pass.py)
     lod: bool = True  # levels of detail by projected size (the indirect mode: render/mesh_lod.py)
     shadow_method: str = "maps"  # maps | raytraced (render/ray_shadows.py)
+    shadow_denoise: bool = True  # ray-traced soft shadows filtered (render/shadow_denoise.py)
 
 
 @dataclass(frozen=True)
@@ -72,6 +73,7 @@ class RunOptions:
     lights: int | None = None  # the lights scene's light count (None: its default, 1,024)
     shadows: bool = True  # the shadows scene's lights cast (--no-shadows: none do)
     shadow_method: str = "maps"  # maps | raytraced: how shadows are drawn (render/ray_shadows.py)
+    shadow_denoise: bool = True  # --no-shadow-denoise: ray-traced soft shadows unfiltered
     chunk_rows: int | None = None  # rows per render job (None: about one per thread, frame_data.MIN_CHUNK_ROWS)
     recorder: str | None = None  # native | python (None: native when numba is there)
     entities: int = 10_000  # the scaling scene's entity count
@@ -101,6 +103,7 @@ class RunOptions:
         "light_culling",
         "transparency",
         "shadow_method",
+        "shadow_denoise",
         "recorder",
         "perf_json",
         "input_script",
@@ -137,6 +140,7 @@ class RunOptions:
             transparency=self.transparency,
             lod=self.lod,
             shadow_method=self.shadow_method,
+            shadow_denoise=self.shadow_denoise,
         )
 
 

@@ -290,6 +290,7 @@ BINDING_DEPTH, BINDING_HDR, BINDING_NORMAL_ROUGHNESS, BINDING_BASE_METALLIC, BIN
 BINDING_SHADOW_MASK = 5  # ray-traced shadows' mask: 4 lights a layer, one per channel (render/ray_shadows.py)
 # the ray-traced shadows' own set (shaders/shadow_rays.rgen)
 BINDING_RAY_SCENE, BINDING_RAY_FRAME, BINDING_RAY_DEPTH, BINDING_RAY_NORMAL, BINDING_RAY_MASK = range(5)
+BINDING_RAY_DENOISED = 5  # shadow_denoise.comp's output (the mask the lighting reads)
 DEFERRED_TILE = 16  # a workgroup lights DEFERRED_TILE x DEFERRED_TILE pixels
 DEFERRED_WORDS = 512  # light mask words a workgroup holds at once (16,384 lights; more take turns)
 CULL_GROUP = 256  # cull.comp's local size
@@ -402,6 +403,7 @@ DEFINES = {
     "BINDING_RAY_DEPTH": BINDING_RAY_DEPTH,
     "BINDING_RAY_NORMAL": BINDING_RAY_NORMAL,
     "BINDING_RAY_MASK": BINDING_RAY_MASK,
+    "BINDING_RAY_DENOISED": BINDING_RAY_DENOISED,
 }
 
 

@@ -50,6 +50,8 @@ from .layouts import (
 )
 from .light_rows import local_minus_z, write_light_shadows
 from .ray_instances import write_instances
+from .shadow_denoise import ShadowDenoise
+from .shadow_mask import ShadowMask
 
 log = logging.getLogger(__name__)
 
@@ -192,6 +194,9 @@ class RayShadows:
         self._since_build = REBUILD_EVERY
         self._count = 0
         self.lights: list[RayLight] = []
+        self.denoise = True  # soft shadows filtered (shadow_denoise.py), made on first use
+        self._denoiser: ShadowDenoise | None = None
+        self._traced: ShadowMask | None = None  # the rays' mask when they are filtered
 
     # ------------------------------------------------------------ per frame
     def plan(self, world: World, data: FrameData) -> list[RayLight]:
@@ -244,21 +249,40 @@ class RayShadows:
         self.frame_number += 1
 
     def record(self, cb: Any, slot: int, attachments: Any, mask: Any, width: int, height: int) -> None:
-        """After the G-buffer pass, before the deferred lighting: the top level, then the rays."""
+        """After the G-buffer pass, before the deferred lighting: the top level, the rays into
+        `mask` (the lighting's ShadowMask), or into a mask of their own that the denoise filters
+        into it where some light is soft and `denoise` is on."""
         lib = self.device.vk.lib
         s = self.slots[slot]
         assert s.rows is not None
         update = self._since_build < REBUILD_EVERY
         refit = self.top.record(cb, s.rows.address, self._count, update)
         self._since_build = self._since_build + 1 if refit else 1
-        named = (attachments, mask, self.top.handle)
+        filtered = self.denoise and any(light.size > 0 for light in self.lights)
+        traced = self._traced_mask(mask) if filtered else mask
+        named = (attachments, traced, self.top.handle)
         if s.named != named:
-            self._name(s, attachments, mask)
+            self._name(s, attachments, traced)
             s.named = named
         self._before.record(lib, cb)
         self.pipeline.bind(cb, [s.set])
         self.pipeline.trace(cb, width, height)
         self._after.record(lib, cb)
+        if filtered:
+            if self._denoiser is None:
+                self._denoiser = ShadowDenoise(self.device, len(self.slots))
+            self._denoiser.record(cb, slot, s.frame, attachments, traced, mask, width, height)
+
+    def _traced_mask(self, mask: Any) -> ShadowMask:
+        """The rays' own mask, the size of the lighting's (made again when that one is)."""
+        own = self._traced
+        if own is None or (own.width, own.height) != (mask.width, mask.height):
+            if own is not None:
+                self.device.wait_idle()  # the other slots' frames may read it
+                own.destroy()
+                self._traced = None
+            own = self._traced = ShadowMask(self.device, mask.width, mask.height)
+        return own
 
     def _name(self, s: _Slot, attachments: Any, mask: Any) -> None:
         vk = self.device.vk
@@ -303,6 +327,10 @@ class RayShadows:
         vk.vkUpdateDescriptorSets(self.device.handle, len(writes), writes, 0, None)
 
     def destroy(self) -> None:
+        for part in (getattr(self, "_denoiser", None), getattr(self, "_traced", None)):
+            if part is not None:
+                part.destroy()
+        self._denoiser = self._traced = None
         for s in getattr(self, "slots", []):
             s.destroy()
         self.slots = []

@@ -89,6 +89,7 @@ class Renderer(TargetForms):
         transparency: str = "sorted",
         lod: bool = True,
         shadows: str = "maps",
+        shadow_denoise: bool = True,
     ) -> None:
         if mode not in PATHS:
             raise ValueError(f"unknown render mode {mode!r}; modes: {', '.join(MODES)}")
@@ -121,10 +122,12 @@ class Renderer(TargetForms):
         self.material_features = self.default_materials.features
         self.fill = fill
         self.ray_shadows: RayShadows | None = None  # shadows="raytraced" (ray_shadows.py): the deferred form
+        self._shadow_denoise = bool(shadow_denoise)  # its soft shadows filtered (shadow_denoise.py)
         try:
             self.frames = FrameRing(device)
             n = len(self.frames.frames)
             self.ray_shadows = RayShadows(device, meshes, n) if shadows == "raytraced" else None
+            self.shadow_denoise = shadow_denoise
             self.secondaries = SecondaryBuffers(device, n)
             self.set_layout, self.pool = frame_sets(device, n)
             self.lights = LightCulling(device, self.set_layout.handle, light_culling)
@@ -256,6 +259,17 @@ class Renderer(TargetForms):
         """maps, or raytraced (ray_shadows.py)."""
         return "raytraced" if self.ray_shadows is not None else "maps"
 
+    @property
+    def shadow_denoise(self) -> bool:
+        """Ray-traced soft shadows are filtered (shadow_denoise.py); kept while maps are drawn."""
+        return self._shadow_denoise
+
+    @shadow_denoise.setter
+    def shadow_denoise(self, on: bool) -> None:
+        self._shadow_denoise = bool(on)
+        if self.ray_shadows is not None:
+            self.ray_shadows.denoise = self._shadow_denoise
+
     def set_shadow_method(self, method: str) -> None:
         """Shadow maps or ray-traced shadows from the next frame (a device without ray tracing
         refuses raytraced: UsageError, nothing changed)."""
@@ -267,6 +281,7 @@ class Renderer(TargetForms):
         if self.ray_shadows is not None:
             self.ray_shadows.destroy()
         self.ray_shadows = self.output.ray_shadows = made
+        self.shadow_denoise = self._shadow_denoise
         if made is None and self.material_features & FEATURE_RAY_SHADOWS:  # the maps' lookups again
             self.material_features &= ~FEATURE_RAY_SHADOWS
             self._swap_path(self._make_path(self.mode, self.cpu_recorder))
