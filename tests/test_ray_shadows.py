@@ -133,23 +133,26 @@ def test_tags_leave_meshes_out_of_ray_traced_shadows(tags):
     assert np.abs(image - plain).max() <= 2
 
 
+def traced_brightness(light: str, softness: float | None, **settings) -> np.ndarray:
+    """The scene's brightness with ray-traced shadows; with `softness`, its light's Shadow asks
+    for PCSS of that softness (an area light)."""
+    with headless_gpu(W, H) as gpu:
+        world = scene(gpu, light)
+        for batch in world.query(Shadow):
+            if softness is not None:
+                batch[Shadow].filter[:] = SHADOW_PCSS
+                batch[Shadow].softness[:] = softness
+        image, _ = render(gpu, world, shadows="raytraced", **settings)
+    return image.mean(axis=-1)
+
+
 def test_area_lights_soften_ray_traced_shadows():
     """A light whose Shadow asks for PCSS is an area light of the Shadow's softness (for the sun:
     the tangent of its angular radius): the shadow's edge spreads over more pixels than the hard
     one's, the more the softer, and the shadow's core stays dark."""
     _needs_ray_tracing()
 
-    def shot(softness: float | None) -> np.ndarray:
-        with headless_gpu(W, H) as gpu:
-            world = scene(gpu, "sun")
-            for batch in world.query(Shadow):
-                if softness is not None:
-                    batch[Shadow].filter[:] = SHADOW_PCSS
-                    batch[Shadow].softness[:] = softness
-            image, _ = render(gpu, world, shadows="raytraced")
-        return image.mean(axis=-1)
-
-    hard, soft, softer = shot(None), shot(0.1), shot(0.3)
+    hard, soft, softer = (traced_brightness("sun", s) for s in (None, 0.1, 0.3))
     spread = [int((np.abs(s - hard) > 8).sum()) for s in (soft, softer)]
     assert 20 < spread[0] < spread[1], spread
     core = hard < 0.5 * np.median(hard)  # the hard shadow, shrunk: under the cube the soft one is dark too
@@ -162,19 +165,9 @@ def test_the_denoise_smooths_soft_shadows_and_leaves_hard_ones():
     noise of 4 rays a pixel drops; a hard shadow's image is the same with it or without."""
     _needs_ray_tracing()
 
-    def shot(softness: float | None, denoise: bool) -> np.ndarray:
-        with headless_gpu(W, H) as gpu:
-            world = scene(gpu, "spot")
-            for batch in world.query(Shadow):
-                if softness is not None:
-                    batch[Shadow].filter[:] = SHADOW_PCSS
-                    batch[Shadow].softness[:] = softness
-            image, _ = render(gpu, world, shadows="raytraced", shadow_denoise=denoise)
-        return image.mean(axis=-1)
-
-    hard = shot(None, True)
-    assert np.abs(hard - shot(None, False)).max() == 0
-    raw, smooth = shot(0.5, False), shot(0.5, True)
+    hard = traced_brightness("spot", None)
+    assert np.abs(hard - traced_brightness("spot", None, shadow_denoise=False)).max() == 0
+    raw, smooth = traced_brightness("spot", 0.5, shadow_denoise=False), traced_brightness("spot", 0.5)
     penumbra = np.abs(raw - hard) > 8
     assert penumbra.sum() > 50
 

@@ -131,3 +131,48 @@ def write_acceleration_structure(device: Device, descriptor_set: Any, binding: i
         },
     )
     lib.vkUpdateDescriptorSets(device.handle, 1, write, 0, ffi.NULL)
+
+
+def write_set(
+    device: Device,
+    descriptor_set: Any,
+    *,
+    storage_buffers: Sequence[tuple[int, Buffer]] = (),
+    samplers: Sequence[tuple[int, Any, Any, int]] = (),
+    storage_images: Sequence[tuple[int, Any]] = (),
+) -> None:
+    """Point bindings of a set, one descriptor each, in one update: storage buffers (binding,
+    buffer), combined image samplers (binding, sampler, view, layout) and storage images in the
+    GENERAL layout (binding, view)."""
+    vk = device.vk
+    writes = [
+        vk.VkWriteDescriptorSet(
+            dstSet=descriptor_set,
+            dstBinding=binding,
+            descriptorCount=1,
+            descriptorType=vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+            pBufferInfo=[buffer.descriptor()],
+        )
+        for binding, buffer in storage_buffers
+    ]
+    writes += [
+        vk.VkWriteDescriptorSet(
+            dstSet=descriptor_set,
+            dstBinding=binding,
+            descriptorCount=1,
+            descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+            pImageInfo=[vk.VkDescriptorImageInfo(sampler=sampler, imageView=view, imageLayout=layout)],
+        )
+        for binding, sampler, view, layout in samplers
+    ]
+    writes += [
+        vk.VkWriteDescriptorSet(
+            dstSet=descriptor_set,
+            dstBinding=binding,
+            descriptorCount=1,
+            descriptorType=vk.VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
+            pImageInfo=[vk.VkDescriptorImageInfo(imageView=view, imageLayout=vk.VK_IMAGE_LAYOUT_GENERAL)],
+        )
+        for binding, view in storage_images
+    ]
+    vk.vkUpdateDescriptorSets(device.handle, len(writes), writes, 0, None)

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..gpu.array_image import nearest_sampler
-from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout
+from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_set
 from ..gpu.device import Device
 from ..gpu.pipeline import compute_pipeline, pipeline_layout
 from .layouts import (
@@ -69,10 +69,7 @@ class DeferredPass:
     def _name(self, attachments: Any) -> None:
         """Point set 1 at a target's depth, HDR colour and G-buffer (once per attachments: a
         swapchain remakes them on resize, and frames in flight must be done with the old ones)."""
-        vk = self.vk
         self.device.wait_idle()
-        general = vk.VK_IMAGE_LAYOUT_GENERAL
-        storage = vk.VK_DESCRIPTOR_TYPE_STORAGE_IMAGE
         gbuffer = attachments.gbuffer
         hdr = attachments.images[1]
         if self.mask is not None:
@@ -83,30 +80,9 @@ class DeferredPass:
             zip((BINDING_NORMAL_ROUGHNESS, BINDING_BASE_METALLIC, BINDING_MATERIAL_IDS), gbuffer.views, strict=True)
         )
         views.append((BINDING_SHADOW_MASK, self.mask.view))
-        depth = vk.VkDescriptorImageInfo(
-            sampler=self.sampler,
-            imageView=attachments.depth_view,
-            imageLayout=vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL,
-        )
-        writes = [
-            vk.VkWriteDescriptorSet(
-                dstSet=self.image_set,
-                dstBinding=BINDING_DEPTH,
-                descriptorCount=1,
-                descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
-                pImageInfo=[depth],
-            )
-        ] + [
-            vk.VkWriteDescriptorSet(
-                dstSet=self.image_set,
-                dstBinding=binding,
-                descriptorCount=1,
-                descriptorType=storage,
-                pImageInfo=[vk.VkDescriptorImageInfo(imageView=view, imageLayout=general)],
-            )
-            for binding, view in views
-        ]
-        vk.vkUpdateDescriptorSets(self.device.handle, len(writes), writes, 0, None)
+        depth_layout = self.vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL
+        samplers = [(BINDING_DEPTH, self.sampler, attachments.depth_view, depth_layout)]
+        write_set(self.device, self.image_set, samplers=samplers, storage_images=views)
         self._named = attachments
 
     def named(self, attachments: Any) -> ShadowMask:

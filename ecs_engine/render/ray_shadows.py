@@ -31,7 +31,7 @@ from ..errors import UsageError
 from ..gpu.acceleration import AS_INSTANCE, TopLevel, ray_input_usage
 from ..gpu.array_image import nearest_sampler
 from ..gpu.barrier import Barrier
-from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_acceleration_structure
+from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_acceleration_structure, write_set
 from ..gpu.memory import UPLOAD, Buffer
 from ..gpu.pipeline import pipeline_layout
 from ..gpu.ray_pipeline import RayPipeline
@@ -285,46 +285,15 @@ class RayShadows:
         return own
 
     def _name(self, s: _Slot, attachments: Any, mask: Any) -> None:
-        vk = self.device.vk
-        general = vk.VK_IMAGE_LAYOUT_GENERAL
-        storage = vk.VK_DESCRIPTOR_TYPE_STORAGE_IMAGE
         write_acceleration_structure(self.device, s.set, BINDING_RAY_SCENE, self.top.handle)
-        depth = vk.VkDescriptorImageInfo(
-            sampler=self.sampler,
-            imageView=attachments.depth_view,
-            imageLayout=vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL,
+        depth_layout = self.device.vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL
+        write_set(
+            self.device,
+            s.set,
+            storage_buffers=[(BINDING_RAY_FRAME, s.frame)],
+            samplers=[(BINDING_RAY_DEPTH, self.sampler, attachments.depth_view, depth_layout)],
+            storage_images=[(BINDING_RAY_NORMAL, attachments.gbuffer.views[0]), (BINDING_RAY_MASK, mask.view)],
         )
-        writes = [
-            vk.VkWriteDescriptorSet(
-                dstSet=s.set,
-                dstBinding=BINDING_RAY_FRAME,
-                descriptorCount=1,
-                descriptorType=vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                pBufferInfo=[s.frame.descriptor()],
-            ),
-            vk.VkWriteDescriptorSet(
-                dstSet=s.set,
-                dstBinding=BINDING_RAY_DEPTH,
-                descriptorCount=1,
-                descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
-                pImageInfo=[depth],
-            ),
-            vk.VkWriteDescriptorSet(
-                dstSet=s.set,
-                dstBinding=BINDING_RAY_NORMAL,
-                descriptorCount=1,
-                descriptorType=storage,
-                pImageInfo=[vk.VkDescriptorImageInfo(imageView=attachments.gbuffer.views[0], imageLayout=general)],
-            ),
-            vk.VkWriteDescriptorSet(
-                dstSet=s.set,
-                dstBinding=BINDING_RAY_MASK,
-                descriptorCount=1,
-                descriptorType=storage,
-                pImageInfo=[vk.VkDescriptorImageInfo(imageView=mask.view, imageLayout=general)],
-            ),
-        ]
-        vk.vkUpdateDescriptorSets(self.device.handle, len(writes), writes, 0, None)
 
     def destroy(self) -> None:
         for part in (getattr(self, "_denoiser", None), getattr(self, "_traced", None)):

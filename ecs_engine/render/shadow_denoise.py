@@ -9,7 +9,7 @@ from typing import Any
 
 from ..gpu.array_image import nearest_sampler
 from ..gpu.barrier import Barrier
-from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout
+from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_set
 from ..gpu.pipeline import compute_pipeline, pipeline_layout
 from .layouts import BINDING_RAY_DENOISED, BINDING_RAY_DEPTH, BINDING_RAY_FRAME, BINDING_RAY_MASK, BINDING_RAY_NORMAL
 
@@ -69,43 +69,18 @@ class ShadowDenoise:
         self._after.record(vk.lib, cb)
 
     def _name(self, descriptor_set: Any, frame: Any, attachments: Any, traced: Any, out: Any) -> None:
-        vk = self.device.vk
-        general = vk.VK_IMAGE_LAYOUT_GENERAL
-        depth = vk.VkDescriptorImageInfo(
-            sampler=self.sampler,
-            imageView=attachments.depth_view,
-            imageLayout=vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL,
+        depth_layout = self.device.vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL
+        write_set(
+            self.device,
+            descriptor_set,
+            storage_buffers=[(BINDING_RAY_FRAME, frame)],
+            samplers=[(BINDING_RAY_DEPTH, self.sampler, attachments.depth_view, depth_layout)],
+            storage_images=[
+                (BINDING_RAY_NORMAL, attachments.gbuffer.views[0]),
+                (BINDING_RAY_MASK, traced.view),
+                (BINDING_RAY_DENOISED, out.view),
+            ],
         )
-
-        def image(binding: int, view: Any) -> Any:
-            return vk.VkWriteDescriptorSet(
-                dstSet=descriptor_set,
-                dstBinding=binding,
-                descriptorCount=1,
-                descriptorType=vk.VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
-                pImageInfo=[vk.VkDescriptorImageInfo(imageView=view, imageLayout=general)],
-            )
-
-        writes = [
-            vk.VkWriteDescriptorSet(
-                dstSet=descriptor_set,
-                dstBinding=BINDING_RAY_FRAME,
-                descriptorCount=1,
-                descriptorType=vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                pBufferInfo=[frame.descriptor()],
-            ),
-            vk.VkWriteDescriptorSet(
-                dstSet=descriptor_set,
-                dstBinding=BINDING_RAY_DEPTH,
-                descriptorCount=1,
-                descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
-                pImageInfo=[depth],
-            ),
-            image(BINDING_RAY_NORMAL, attachments.gbuffer.views[0]),
-            image(BINDING_RAY_MASK, traced.view),
-            image(BINDING_RAY_DENOISED, out.view),
-        ]
-        vk.vkUpdateDescriptorSets(self.device.handle, len(writes), writes, 0, None)
 
     def destroy(self) -> None:
         vk, handle = self.device.vk, self.device.handle
