@@ -200,3 +200,30 @@ def test_switching_method_live_draws_what_a_fresh_renderer_draws():
             renderer.destroy()
     assert np.abs(shots[0] - traced).max() <= 1 and np.abs(shots[2] - traced).max() <= 1
     assert np.abs(shots[1] - mapped).max() <= 1
+
+
+def test_the_session_switches_method_all_or_nothing():
+    """Session.apply: raytraced where the device traces rays (the deferred form follows, the denoise
+    option rides along); refused, with nothing changed, where it cannot."""
+    from dataclasses import replace
+
+    from ecs_engine.app.offscreen import OffscreenSource
+    from ecs_engine.app.session import Session
+
+    source = OffscreenSource()
+    options = RunOptions(scene="shadows", width=W, height=H, validate=True, threads=2)
+    with Session(options, source) as session:
+        wanted = replace(session.settings, shadow_method="raytraced", shadow_denoise=False, threads=1)
+        if session.device.ray_tracing is None:
+            with pytest.raises(UsageError, match="needs ray-tracing pipelines"):
+                session.apply(wanted)
+            assert session.settings.shadow_method == "maps" and session.pool.threads == 2
+        else:
+            session.apply(wanted)
+            assert session.settings.shadow_method == "raytraced" and not session.settings.shadow_denoise
+            assert session.renderer.target.form == "deferred"
+            session.schedule.run(session.world, 0.0)
+            session.renderer.render(session.world, readback=True)
+            session.apply(replace(session.settings, shadow_method="maps"))
+            assert session.renderer.ray_shadows is None and session.settings.shadow_method == "maps"
+    assert source.validation_messages() == []
