@@ -101,25 +101,52 @@ def test_ray_traced_and_map_shadows_agree_but_near_edges(light):
         traced, _ = render(gpu, scene(gpu, light), shadows="raytraced")
         mapped, _ = render(gpu, scene(gpu, light), light_culling="deferred")
         plain, _ = render(gpu, scene(gpu, light, shadow=False), light_culling="deferred")
+    assert_agree_but_near_edges(traced, mapped, plain, least=5 if light == "sun" else 50)  # the sun's shows little
+
+
+def assert_agree_but_near_edges(
+    traced: np.ndarray, mapped: np.ndarray, plain: np.ndarray, least: int, stray: int = 0
+) -> None:
+    """Both images shadow more than `least` pixels against `plain` (no shadows), under 2% of the
+    pixels differ by more than 8/255, and all of those but `stray` lie within 2 pixels of an edge
+    of either image's shadows."""
     differ = np.abs(traced - mapped).max(axis=-1) > 8
     shade = [(plain - image).mean(axis=-1) > 10 for image in (traced, mapped)]
-    assert all(
-        s.sum() > (5 if light == "sun" else 50) for s in shade
-    )  # both cast (the sun's, below the cube, shows little)
+    assert all(s.sum() > least for s in shade), [int(s.sum()) for s in shade]
     edge = np.zeros_like(differ)
     for s in shade:
         edge |= (s ^ np.roll(s, 1, 0)) | (s ^ np.roll(s, 1, 1))
     near = edge.copy()
-    for _ in range(2):  # within 2 pixels of either shadow's edge
+    for _ in range(2):
         near = near | np.roll(near, 1, 0) | np.roll(near, -1, 0) | np.roll(near, 1, 1) | np.roll(near, -1, 1)
     assert differ.mean() < 0.02, differ.mean()
     far = np.argwhere(differ & ~near)
-    assert len(far) == 0, (
-        len(far),
-        differ.sum(),
-        far[:10].tolist(),
-        np.abs(traced - mapped).max(axis=-1)[differ & ~near][:10],
-    )
+    assert len(far) <= stray, (len(far), int(differ.sum()), far[:10].tolist())
+
+
+def test_the_shadows_demo_agrees_with_its_maps_but_near_edges():
+    """The `shadows` demo scene (a sun, a spot and a point light casting, PCF maps), drawn through
+    a session as `demo shadows` draws it: maps (in the deferred form) against rays."""
+    _needs_ray_tracing()
+    from ecs_engine.app.offscreen import OffscreenSource
+    from ecs_engine.app.session import Session
+
+    def shot(**kw) -> np.ndarray:
+        options = RunOptions(scene="shadows", width=320, height=180, validate=True, threads=2, **kw)
+        source = OffscreenSource()
+        with Session(options, source) as session:
+            session.schedule.run(session.world, 0.0)
+            session.renderer.render(session.world, readback=True)
+            image = session.gpu.target.pixels()[..., :3].astype(int)
+        assert source.validation_messages() == []
+        return image
+
+    traced = shot(shadow_method="raytraced")
+    mapped = shot(light_culling="deferred")
+    plain = shot(light_culling="deferred", shadows=False)
+    # one pixel of the tilted pillar's lit face, at a grazing angle to the spot light, differed in
+    # the H100 run: there the maps' depth bias and the rays' start off the surface part ways
+    assert_agree_but_near_edges(traced, mapped, plain, least=200, stray=3)
 
 
 @pytest.mark.parametrize("tags", ["caster", "receiver"])
