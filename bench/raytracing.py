@@ -101,16 +101,20 @@ def bottom_levels(device: Any, timer: GpuTimer, quick: bool, repeat: int, progre
                 given = acc.MeshInput(
                     mesh.vertices, len(data.positions), MESH_VERTEX.itemsize, mesh.indices, mesh.index_count
                 )
-                walls, gpus, sizes = [], [], (0, 0)
+                walls: list[float] = []
+                gpus: list[float] = []
+                sizes = (0, 0)
                 for _ in range(repeat):
                     t0 = time.perf_counter()
                     small = acc.build_bottom_levels(device, [given])
                     walls.append((time.perf_counter() - t0) * 1e3)
-                    full = acc.build_bottom_levels(device, [given], compact=False)
-                    sizes = (full[0].size, small[0].size)
-                    for s in small + full:
+                    # the build alone, without compaction, between timestamps: GPU ms and full size
+                    timed = acc.build_bottom_levels(
+                        device, [given], compact=False, submit=lambda record, gpus=gpus: gpus.append(timer.time(record))
+                    )
+                    sizes = (timed[0].size, small[0].size)
+                    for s in small + timed:
                         s.destroy()
-                    gpus.append(_timed_build(device, timer, given))
                 out.append(
                     {
                         "mesh": name,
@@ -124,35 +128,6 @@ def bottom_levels(device: Any, timer: GpuTimer, quick: bool, repeat: int, progre
     finally:
         meshes.destroy()
     return out
-
-
-def _timed_build(device: Any, timer: GpuTimer, given: Any) -> float:
-    """GPU ms of one bottom-level build alone (no compaction)."""
-    from ecs_engine.gpu import acceleration as acc
-
-    lib, ffi = device.vk.lib, device.vk.ffi
-    geometry = acc.triangle_geometry(device, ffi, given)
-    info = acc.build_info(
-        device,
-        ffi,
-        lib.VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR,
-        lib.VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR,
-        geometry,
-    )
-    size, scratch_size, _ = acc.build_sizes(device, info, given.index_count // 3)
-    structure, scratch = (
-        acc.Structure(device, lib.VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, size),
-        acc.Scratch(device, scratch_size),
-    )
-    try:
-        info.dstAccelerationStructure = structure.handle
-        info.scratchData.deviceAddress = scratch.address
-        ranges = ffi.new("VkAccelerationStructureBuildRangeInfoKHR[1]", [{"primitiveCount": given.index_count // 3}])
-        pointers = ffi.new("VkAccelerationStructureBuildRangeInfoKHR*[1]", [ranges])
-        return timer.time(lambda cb: acc.functions(device).build(cb, 1, info, pointers))
-    finally:
-        structure.destroy()
-        scratch.destroy()
 
 
 def _field(n: int, seed: int) -> np.ndarray:

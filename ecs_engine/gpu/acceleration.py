@@ -14,12 +14,13 @@ a 24-bit shader-binding-table offset with 8 bits of flags, the bottom level's de
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from .barrier import Barrier
 from .frames import check
 from .functions import raw_device_function
 from .memory import DEVICE, Buffer
@@ -199,18 +200,13 @@ def build_sizes(device: Any, info: Any, primitives: int) -> tuple[int, int, int]
     return int(sizes.accelerationStructureSize), int(sizes.buildScratchSize), int(sizes.updateScratchSize)
 
 
-def _as_barrier(device: Any, cb: Any, src_stage: int, src_access: int, dst_stage: int, dst_access: int) -> None:
-    vk, ffi = device.vk, device.vk.ffi
-    barrier = ffi.new(
-        "VkMemoryBarrier*",
-        {"sType": vk.VK_STRUCTURE_TYPE_MEMORY_BARRIER, "srcAccessMask": src_access, "dstAccessMask": dst_access},
-    )
-    vk.lib.vkCmdPipelineBarrier(cb, src_stage, dst_stage, 0, 1, barrier, 0, ffi.NULL, 0, ffi.NULL)
-
-
-def build_bottom_levels(device: Any, meshes: Sequence[MeshInput], compact: bool = True) -> list[Structure]:
+def build_bottom_levels(
+    device: Any, meshes: Sequence[MeshInput], compact: bool = True, submit: Callable[[Any], Any] | None = None
+) -> list[Structure]:
     """Bottom levels for `meshes`, built in one submit, then (with `compact`) copied into
-    structures of their compacted size in a second one; the full-size ones are freed."""
+    structures of their compacted size in a second one; the full-size ones are freed. `submit`
+    records and submits the build, waiting for it (device.submit_once; bench/raytracing.py
+    passes one that times it)."""
     if not meshes:
         return []
     vk, lib, ffi = device.vk, device.vk.lib, device.vk.ffi
@@ -254,16 +250,22 @@ def build_bottom_levels(device: Any, meshes: Sequence[MeshInput], compact: bool 
             def record(cb: Any) -> None:
                 fns.build(cb, len(meshes), infos, pointers)
                 if query is not None:
-                    access = lib.VK_ACCESS_ACCELERATION_STRUCTURE_WRITE_BIT_KHR
                     stage = lib.VK_PIPELINE_STAGE_ACCELERATION_STRUCTURE_BUILD_BIT_KHR
-                    _as_barrier(device, cb, stage, access, stage, lib.VK_ACCESS_ACCELERATION_STRUCTURE_READ_BIT_KHR)
+                    built = Barrier(
+                        vk,
+                        stage,
+                        stage,
+                        lib.VK_ACCESS_ACCELERATION_STRUCTURE_WRITE_BIT_KHR,
+                        lib.VK_ACCESS_ACCELERATION_STRUCTURE_READ_BIT_KHR,
+                    )
+                    built.record(lib, cb)
                     lib.vkCmdResetQueryPool(cb, query, 0, len(meshes))
                     handles = ffi.new("VkAccelerationStructureKHR[]", [s.handle for s in made])
                     fns.write_properties(
                         cb, len(meshes), handles, lib.VK_QUERY_TYPE_ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR, query, 0
                     )
 
-            device.submit_once(record)
+            (submit or device.submit_once)(record)
             if query is not None:
                 sizes = ffi.new("uint64_t[]", len(meshes))
                 check(
@@ -353,8 +355,8 @@ class TopLevel:
             lib.VK_ACCESS_ACCELERATION_STRUCTURE_WRITE_BIT_KHR,
         )
         # before: the last frame's rays read it (the same queue, earlier submits); after: this frame's
-        self._before = (stages[1], read, stages[0], read | write)
-        self._after = (stages[0], write, stages[1], read)
+        self._before = Barrier(device.vk, stages[1], stages[0], read, read | write)
+        self._after = Barrier(device.vk, stages[0], stages[1], write, read)
         self.built_count = -1  # instances of the last build (an update must keep the count)
         self.capacity = 0
         self.structure: Structure | None = None
@@ -403,9 +405,9 @@ class TopLevel:
         info.dstAccelerationStructure = self.handle
         self._geometry.geometry.instances.data.deviceAddress = instances_address
         self._range[0].primitiveCount = count
-        _as_barrier(self.device, cb, *self._before)
+        self._before.record(lib, cb)
         self.fns.build(cb, 1, info, self._ranges)
-        _as_barrier(self.device, cb, *self._after)
+        self._after.record(lib, cb)
         self.built_count = count
         return refit
 
