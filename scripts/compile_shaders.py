@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 
 SHADERS = Path(__file__).resolve().parent.parent / "shaders"
-STAGES = (".vert", ".frag", ".comp", ".rgen", ".rmiss", ".rchit")
+STAGES = (".vert", ".frag", ".comp", ".rgen", ".rmiss", ".rchit", ".rahit")
 LAYOUTS = SHADERS / "layouts.glsl"
 
 

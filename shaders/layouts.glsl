@@ -83,6 +83,11 @@
 #define BINDING_RAY_NORMAL 3
 #define BINDING_RAY_MASK 4
 #define BINDING_RAY_DENOISED 5
+#define SET_RAY 1
+#define BINDING_RAY_MESHES 6
+#define BINDING_RAY_ROWS 7
+#define MESH_VERTEX_FLOATS 12
+#define MESH_VERTEX_UV 6
 
 // The frame's uniforms. Positions are relative to the render origin (the camera, unless
 // RenderOrigin is pinned).

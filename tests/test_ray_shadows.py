@@ -10,7 +10,19 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from gpu_context import headless_gpu, shared_device
-from test_shadows import CUBE, POINT, H, W, compare, ground_hits, render, scene, segment_hits_box
+from test_shadows import (
+    CUBE,
+    POINT,
+    H,
+    W,
+    assert_checkerboard_shadow,
+    compare,
+    cutout_scene,
+    ground_hits,
+    render,
+    scene,
+    segment_hits_box,
+)
 
 from ecs_engine.app.settings import RunOptions
 from ecs_engine.components import NotShadowCaster, NotShadowReceiver, Shadow
@@ -122,6 +134,28 @@ def assert_agree_but_near_edges(
     assert differ.mean() < 0.02, differ.mean()
     far = np.argwhere(differ & ~near)
     assert len(far) <= stray, (len(far), int(differ.sum()), far[:10].tolist())
+
+
+def test_alpha_cutouts_let_rays_through_where_the_maps_let_light_through():
+    """The checkerboard-masked plane (test_shadows.py): the rays' any-hit shader reads the
+    texture at each hit, so the ray-traced shadow is the checkerboard too, and agrees with the
+    maps' but near edges; the same plane made opaque casts a square (the holes are the any-hit's)."""
+    from ecs_engine.render.materials import materials
+
+    _needs_ray_tracing()
+    with headless_gpu(W, H) as gpu:
+        world = cutout_scene(gpu)
+        traced, _ = render(gpu, world, shadows="raytraced")
+        mapped, _ = render(gpu, cutout_scene(gpu), light_culling="deferred")
+        plain, _ = render(gpu, scene(gpu, shadow=False), light_culling="deferred")
+        solid = cutout_scene(gpu)
+        library = materials(solid)
+        library.update(len(library) - 1, alpha_mode="opaque")
+        square, _ = render(gpu, solid, shadows="raytraced")
+    assert_checkerboard_shadow(world, traced)
+    assert_agree_but_near_edges(traced, mapped, plain, least=50)
+    with pytest.raises(AssertionError):  # the opaque plane's shadow is a square: no lit cells in it
+        assert_checkerboard_shadow(solid, square)
 
 
 def test_the_shadows_demo_agrees_with_its_maps_but_near_edges():

@@ -15,7 +15,13 @@ from ecs_engine.gpu.memory import UPLOAD, Buffer
 from ecs_engine.render.layouts import MESH_VERTEX
 from ecs_engine.render.mesh_registry import MeshRegistry
 from ecs_engine.render.primitives import cube_mesh, sphere_mesh
-from ecs_engine.render.ray_instances import INDEX_LIMIT, write_instances, write_instances_numpy
+from ecs_engine.render.ray_instances import (
+    FACING_CULL_DISABLE,
+    FORCE_NO_OPAQUE,
+    INDEX_LIMIT,
+    write_instances,
+    write_instances_numpy,
+)
 
 
 def test_instance_dtype_is_the_vulkan_struct():
@@ -52,6 +58,30 @@ def test_instance_kernel_matches_the_reference(caster):
     assert (want["blas"] == blas[handle]).all()
     assert (want["index_mask"] >> 24 == (0xFF if caster else 0)).all()
     assert want["index_mask"][100] & 0xFFFFFF == 0  # row INDEX_LIMIT: wrapped
+    assert (want["sbt_flags"] >> 24 == FACING_CULL_DISABLE).all()  # no cutouts: every instance opaque
+
+
+def test_instance_kernel_marks_alpha_masked_rows_non_opaque():
+    """With cutouts (per material), the rows of alpha-masked materials lose the opaque flag (the
+    any-hit shader runs for them) and every instance's mesh and material are written beside."""
+    rng = np.random.default_rng(8)
+    n = 300
+    model = rng.normal(size=(n, 4, 4)).astype(np.float32)
+    handle = rng.integers(0, 3, n).astype(np.int32)
+    material = rng.integers(0, 5, n).astype(np.uint32)
+    cutout = np.array([False, True, False, True, False])
+    blas = np.array([1 << 40, 2 << 40, 3 << 40], dtype=np.uint64)
+    got, want = np.zeros(n, AS_INSTANCE), np.zeros(n, AS_INSTANCE)
+    got_rows, want_rows = np.zeros((n, 2), np.uint32), np.zeros((n, 2), np.uint32)
+    write_instances(model, handle, blas, 10, True, got, material, cutout, got_rows)
+    write_instances_numpy(model, handle, blas, 10, True, want, material, cutout, want_rows)
+    assert got.tobytes() == want.tobytes() and (got_rows == want_rows).all()
+    flags = want["sbt_flags"] >> 24
+    assert (flags == np.where(cutout[material], FACING_CULL_DISABLE | FORCE_NO_OPAQUE, FACING_CULL_DISABLE)).all()
+    assert 50 < cutout[material].sum() < 250
+    assert (want_rows[:, 0] == handle).all() and (want_rows[:, 1] == material).all()
+    with pytest.raises(ValueError, match="cutout needs the rows' materials"):
+        write_instances(model, handle, blas, 10, True, got, None, cutout, got_rows)
 
 
 def test_a_device_without_ray_tracing_refuses_in_one_message():

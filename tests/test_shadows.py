@@ -201,32 +201,37 @@ def test_cascades_cover_the_shadow_distance_and_stop_there():
     assert (far_enough.mean(axis=-1) < near_only.mean(axis=-1) - 60).sum() > 20
 
 
-def test_alpha_cutouts_cut_holes_in_the_shadow():
-    """A plane above the ground under the straight-down sun, alpha-masked by a 4 x 4 checkerboard:
-    its shadow on the ground is the checkerboard (a ray cast through the texture says where),
-    not a square."""
+CELLS = 4  # the cutout plane's checkerboard: CELLS x CELLS cells, every other one cut away
+
+
+def cutout_scene(gpu) -> World:
+    """The issue's scene with a 3-unit plane at y = 2.5 under the straight-down sun, alpha-masked
+    by a checkerboard texture; the cube casts nothing."""
     from ecs_engine.render.materials import Material, materials
     from ecs_engine.render.primitives import plane_mesh
     from ecs_engine.render.textures import Texture
 
-    cells = 4
-    with headless_gpu(W, H) as gpu:
-        world = scene(gpu, cube_tags=[NotShadowCaster()])
-        library = materials(world)
-        px = np.full((64, 64, 4), 200, np.uint8)
-        i, j = np.mgrid[0:64, 0:64] // (64 // cells)
-        px[..., 3] = np.where((i + j) % 2 == 0, 255, 0)
-        mask = library.add(
-            Material(
-                "holes",
-                "lambert",
-                alpha_mode="mask",
-                alpha_cutoff=0.5,
-                base_color_texture=library.textures.add(Texture("checker", px)),
-            )
+    world = scene(gpu, cube_tags=[NotShadowCaster()])
+    library = materials(world)
+    px = np.full((64, 64, 4), 200, np.uint8)
+    i, j = np.mgrid[0:64, 0:64] // (64 // CELLS)
+    px[..., 3] = np.where((i + j) % 2 == 0, 255, 0)
+    mask = library.add(
+        Material(
+            "holes",
+            "lambert",
+            alpha_mode="mask",
+            alpha_cutoff=0.5,
+            base_color_texture=library.textures.add(Texture("checker", px)),
         )
-        world.spawn(Transform(position=(0.0, 2.5, 0.0)), Mesh(handle=gpu.meshes.add(plane_mesh(3.0, 1)), material=mask))
-        image, _ = render(gpu, world)
+    )
+    world.spawn(Transform(position=(0.0, 2.5, 0.0)), Mesh(handle=gpu.meshes.add(plane_mesh(3.0, 1)), material=mask))
+    return world
+
+
+def assert_checkerboard_shadow(world: World, image: np.ndarray) -> None:
+    """The cutout plane's shadow on the ground is its checkerboard (a ray cast through the
+    texture says where), not a square."""
     hit, blocked = ground_hits(world)
     # where the ray meets the ground, and whether the plane above it is solid there; the plane
     # and the cube hide parts of the ground from the camera: rays through them are left out
@@ -236,8 +241,8 @@ def test_alpha_cutouts_cut_holes_in_the_shadow():
     t = (2.5 - eye[1]) / (hit[..., 1] - eye[1])
     through = eye + (hit - eye) * t[..., None]
     seen = (np.abs(through[..., 0]) > 1.5) | (np.abs(through[..., 2]) > 1.5)
-    cu, cv = np.floor(u * cells), np.floor(v * cells)
-    fu, fv = u * cells - cu, v * cells - cv
+    cu, cv = np.floor(u * CELLS), np.floor(v * CELLS)
+    fu, fv = u * CELLS - cu, v * CELLS - cv
     inner = (fu > 0.2) & (fu < 0.8) & (fv > 0.2) & (fv < 0.8)  # away from the cells' edges
     solid = (cu + cv) % 2 == 0  # texture rows follow v, columns u (a row-major image)
     bright = image.mean(axis=-1)
@@ -245,6 +250,15 @@ def test_alpha_cutouts_cut_holes_in_the_shadow():
     shadowed, lit = under & seen & inner & solid, under & seen & inner & ~solid
     assert shadowed.sum() > 10 and lit.sum() > 10
     assert bright[shadowed].max() < bright[lit].min() - 40
+
+
+def test_alpha_cutouts_cut_holes_in_the_shadow():
+    """A plane above the ground under the straight-down sun, alpha-masked by a 4 x 4 checkerboard:
+    its shadow on the ground is the checkerboard, not a square."""
+    with headless_gpu(W, H) as gpu:
+        world = cutout_scene(gpu)
+        image, _ = render(gpu, world)
+    assert_checkerboard_shadow(world, image)
 
 
 FINE = np.arange(0.0, 1.2, 0.005)  # the penumbra profiles' samples (world units across the edge)

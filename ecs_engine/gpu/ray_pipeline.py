@@ -1,5 +1,6 @@
 """A ray-tracing pipeline (VK_KHR_ray_tracing_pipeline) and its shader binding table: one
-ray-generation shader, miss shaders and triangle hit groups (closest hit only), and the raw
+ray-generation shader, miss shaders and triangle hit groups (a closest-hit and an any-hit
+shader, either absent), and the raw
 vkCmdTraceRaysKHR call with the table's regions made once.
 
 The binding's constructors of the pipeline and group create infos default to wrong sTypes, and
@@ -27,8 +28,9 @@ def _align(x: int, a: int) -> int:
 
 class RayPipeline:
     """Shaders by compiled name: `raygen`, `misses` (miss index i is the i-th), `hits` (hit group
-    i: that closest-hit shader; None for a group with no shader). `constants`: uint
-    specialisation constants of every stage, constant_id 0, 1, ..."""
+    i: a closest-hit shader's name, None for a group with no shader, or a pair (closest hit,
+    any hit), either None). `constants`: uint specialisation constants of every stage,
+    constant_id 0, 1, ..."""
 
     def __init__(
         self,
@@ -36,7 +38,7 @@ class RayPipeline:
         layout: Any,
         raygen: str,
         misses: Sequence[str],
-        hits: Sequence[str | None] = (),
+        hits: Sequence[str | None | tuple[str | None, str | None]] = (),
         constants: tuple[int, ...] = (),
         recursion: int = 1,
     ) -> None:
@@ -46,9 +48,15 @@ class RayPipeline:
             raise RuntimeError(f"{device.info.name} has no ray-tracing pipelines")
         self.device = device
         self.layout = layout
-        names = [raygen, *misses, *(h for h in hits if h is not None)]
+        pairs = [h if isinstance(h, tuple) else (h, None) for h in hits]
+        names = [raygen, *misses]
         kinds = [lib.VK_SHADER_STAGE_RAYGEN_BIT_KHR] + [lib.VK_SHADER_STAGE_MISS_BIT_KHR] * len(misses)
-        kinds += [lib.VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR] * sum(h is not None for h in hits)
+        hit_kinds = (lib.VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR, lib.VK_SHADER_STAGE_ANY_HIT_BIT_KHR)
+        for pair in pairs:
+            for name, kind in zip(pair, hit_kinds):
+                if name is not None:
+                    names.append(name)
+                    kinds.append(kind)
         modules: list[Any] = []
         try:
             for name in names:
@@ -74,8 +82,12 @@ class RayPipeline:
                     stage += 1
                 else:
                     g.type = lib.VK_RAY_TRACING_SHADER_GROUP_TYPE_TRIANGLES_HIT_GROUP_KHR
-                    if hits[i - 1 - len(misses)] is not None:
+                    closest, any_hit = pairs[i - 1 - len(misses)]
+                    if closest is not None:
                         g.closestHitShader = stage
+                        stage += 1
+                    if any_hit is not None:
+                        g.anyHitShader = stage
                         stage += 1
             info = ffi.new("VkRayTracingPipelineCreateInfoKHR*")
             info.sType = lib.VK_STRUCTURE_TYPE_RAY_TRACING_PIPELINE_CREATE_INFO_KHR

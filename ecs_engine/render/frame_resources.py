@@ -51,11 +51,13 @@ def frame_sets(device: Device, frames: int) -> tuple[DescriptorSetLayout, Descri
     sampler = vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
     uniform = vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER
     buffers = (BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS, BINDING_CLUSTERS, BINDING_SHADOW_VIEWS)
+    # the shadow rays' any-hit shader reads the materials and textures (shaders/shadow_rays.rahit)
+    any_hit = vk.lib.VK_SHADER_STAGE_ANY_HIT_BIT_KHR if device.ray_tracing is not None else 0
     layout = DescriptorSetLayout(
         device,
         [(BINDING_GLOBALS, uniform, stages)]
-        + [(b, ssbo, stages) for b in buffers]
-        + [(BINDING_TEXTURES, sampler, vk.VK_SHADER_STAGE_FRAGMENT_BIT, TEXTURE_PAGES)]
+        + [(b, ssbo, stages | (any_hit if b == BINDING_MATERIALS else 0)) for b in buffers]
+        + [(BINDING_TEXTURES, sampler, vk.VK_SHADER_STAGE_FRAGMENT_BIT | any_hit, TEXTURE_PAGES)]
         + [(b, sampler, stages) for b in (BINDING_SHADOW_MAP, BINDING_SHADOW_MAP_HARD, BINDING_SHADOW_DEPTH)]
         + [(BINDING_ENVIRONMENT, sampler, vk.VK_SHADER_STAGE_FRAGMENT_BIT)],
     )

@@ -291,6 +291,13 @@ BINDING_SHADOW_MASK = 5  # ray-traced shadows' mask: 4 lights a layer, one per c
 # the ray-traced shadows' own set (shaders/shadow_rays.rgen)
 BINDING_RAY_SCENE, BINDING_RAY_FRAME, BINDING_RAY_DEPTH, BINDING_RAY_NORMAL, BINDING_RAY_MASK = range(5)
 BINDING_RAY_DENOISED = 5  # shadow_denoise.comp's output (the mask the lighting reads)
+# the shadow rays' pipeline: the frame set is set 0 (the any-hit shader reads its materials and
+# textures, as shadow_cutout.frag does), the rays' own set is set 1
+SET_RAY = 1
+BINDING_RAY_MESHES = 6  # per mesh handle: its vertex and index buffers' device addresses (uvec4)
+BINDING_RAY_ROWS = 7  # per top-level instance: its mesh handle and material (uvec2)
+MESH_VERTEX_FLOATS = MESH_VERTEX.itemsize // 4  # a mesh vertex in floats, and its uv's first float
+MESH_VERTEX_UV = int(MESH_VERTEX.fields["uv"][1]) // 4 if MESH_VERTEX.fields else 0
 DEFERRED_TILE = 16  # a workgroup lights DEFERRED_TILE x DEFERRED_TILE pixels
 DEFERRED_WORDS = 512  # light mask words a workgroup holds at once (16,384 lights; more take turns)
 CULL_GROUP = 256  # cull.comp's local size
@@ -404,6 +411,11 @@ DEFINES = {
     "BINDING_RAY_NORMAL": BINDING_RAY_NORMAL,
     "BINDING_RAY_MASK": BINDING_RAY_MASK,
     "BINDING_RAY_DENOISED": BINDING_RAY_DENOISED,
+    "SET_RAY": SET_RAY,
+    "BINDING_RAY_MESHES": BINDING_RAY_MESHES,
+    "BINDING_RAY_ROWS": BINDING_RAY_ROWS,
+    "MESH_VERTEX_FLOATS": MESH_VERTEX_FLOATS,
+    "MESH_VERTEX_UV": MESH_VERTEX_UV,
 }
 
 

@@ -161,7 +161,7 @@ class OutputPasses:
             ray = self.ray_shadows
             if ray is not None and ray.lights:  # the shadow mask the lighting reads (ray_shadows.py)
                 mask = self.deferred.named(target.attachments)
-                ray.record(cb, slot, target.attachments, mask, extent.width, extent.height)
+                ray.record(cb, slot, frame_set[0], target.attachments, mask, extent.width, extent.height)
             self.deferred.record(cb, frame_set[0], target.attachments, features, extent.width, extent.height)
             if transparent is not None:
                 assert self.oit is not None

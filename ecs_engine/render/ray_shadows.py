@@ -8,7 +8,11 @@ start off the surface) the top level is refitted, or built where the instance co
 REBUILD_EVERY frames passed (a refit's quality drifts as things move), then shaders/
 shadow_rays.rgen traces, per pixel and light, one ray towards it (a hard shadow) or, for a light
 whose Shadow asks for PCSS, SOFT_RAYS rays to a disc of the Shadow's softness (an area light);
-the fraction that reached it goes to the shadow mask the deferred lighting reads.
+the fraction that reached it goes to the shadow mask the deferred lighting reads. Instances of
+alpha-masked materials are not opaque to the rays: shaders/shadow_rays.rahit fetches the hit's
+uv from the mesh's buffers (by device address) and lets the ray through where the material's
+alpha is under its cutoff, as the shadow maps' cutout pass does (the frame set, set 0 of this
+pipeline, gives it the materials and textures).
 
 At most MAX_RAY_LIGHTS lights cast (directional, then spot, then point lights, in world order,
 as the shadow maps' views are ordered); those past it cast nothing, said once in the log.
@@ -37,16 +41,20 @@ from ..gpu.pipeline import pipeline_layout
 from ..gpu.ray_pipeline import RayPipeline
 from .frame_data import NOT_CASTER, Chunk, FrameData
 from .layouts import (
+    ALPHA_MASK,
     BINDING_RAY_DEPTH,
     BINDING_RAY_FRAME,
     BINDING_RAY_MASK,
+    BINDING_RAY_MESHES,
     BINDING_RAY_NORMAL,
+    BINDING_RAY_ROWS,
     BINDING_RAY_SCENE,
     LIGHT_DIRECTIONAL,
     LIGHT_POINT,
     LIGHT_SPOT,
     MAX_RAY_LIGHTS,
     RAY_FRAME,
+    SET_RAY,
 )
 from .light_rows import local_minus_z, write_light_shadows
 from .ray_instances import write_instances
@@ -110,15 +118,41 @@ def ray_lights(world: World, origin: np.ndarray) -> list[RayLight]:
     return found
 
 
+def cutouts(materials: Any) -> np.ndarray | None:
+    """Per material, whether it is alpha-masked (its instances are not opaque to the rays); None
+    when none is."""
+    masked = materials.rows()["kind"][:, 1] == ALPHA_MASK
+    return masked if masked.any() else None
+
+
 class _Slot:
-    """A frame slot's: the instance rows, the RayFrame, the descriptor set and what it names."""
+    """A frame slot's: the instance rows, the RayFrame, the instances' (mesh, material) pairs and
+    the meshes' buffer addresses (for the any-hit shader), the descriptor set and what it names."""
 
     def __init__(self, device: Any, pool: DescriptorPool, layout: DescriptorSetLayout) -> None:
         vk = device.vk
-        self.frame = Buffer(device, RAY_FRAME.size, vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, UPLOAD)
+        storage = vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT
+        self.frame = Buffer(device, RAY_FRAME.size, storage, UPLOAD)
         self.rows: Buffer | None = None
+        self.pairs = Buffer(device, 8, storage, UPLOAD)  # uvec2 per instance (written with cutouts)
+        self.meshes = Buffer(device, 16, storage, UPLOAD)  # uvec4 per mesh handle
+        self.mesh_count = -1  # the meshes the addresses were written for
         self.set = pool.allocate(layout)
         self.named: tuple[Any, ...] = ()
+
+    def pairs_for(self, device: Any, count: int) -> np.ndarray:
+        self.pairs = self.pairs.grown(max(count, 1) * 8)
+        return self.pairs.array(np.uint32, (max(count, 1), 2))
+
+    def mesh_buffers(self, device: Any, meshes: Any) -> None:
+        """Every mesh's vertex and index buffer addresses (again when meshes were added)."""
+        if self.mesh_count == len(meshes):
+            return
+        self.meshes = self.meshes.grown(max(len(meshes), 1) * 16)
+        table = self.meshes.array(np.uint64, (max(len(meshes), 1), 2))
+        for handle in range(len(meshes)):
+            table[handle] = (meshes[handle].vertices.address, meshes[handle].indices.address)
+        self.mesh_count = len(meshes)
 
     def rows_for(self, device: Any, count: int) -> np.ndarray:
         """The slot's instance rows, room for `count` (its fence was waited for: safe to grow)."""
@@ -129,40 +163,46 @@ class _Slot:
         return self.rows.array(AS_INSTANCE, max(count, 1))
 
     def destroy(self) -> None:
-        self.frame.destroy()
-        if self.rows is not None:
-            self.rows.destroy()
+        for made in (self.frame, self.rows, self.pairs, self.meshes):
+            if made is not None:
+                made.destroy()
 
 
 class RayShadows:
-    def __init__(self, device: Any, meshes: Any, frames: int) -> None:
+    """`frame_set_layout`: the renderer's frame set's (set 0 of the rays' pipeline)."""
+
+    def __init__(self, device: Any, meshes: Any, frames: int, frame_set_layout: Any) -> None:
         check_shadow_method("raytraced", device)  # (the caller checks its target's samples)
         vk, lib = device.vk, device.vk.lib
         self.device, self.meshes = device, meshes
-        stage = lib.VK_SHADER_STAGE_RAYGEN_BIT_KHR
-        storage_image = vk.VK_DESCRIPTOR_TYPE_STORAGE_IMAGE
+        stage, any_hit = lib.VK_SHADER_STAGE_RAYGEN_BIT_KHR, lib.VK_SHADER_STAGE_ANY_HIT_BIT_KHR
+        storage_image, ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
         self.set_layout = DescriptorSetLayout(
             device,
             [
                 (BINDING_RAY_SCENE, lib.VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR, stage),
-                (BINDING_RAY_FRAME, vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, stage),
+                (BINDING_RAY_FRAME, ssbo, stage),
                 (BINDING_RAY_DEPTH, vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, stage),
                 (BINDING_RAY_NORMAL, storage_image, stage),
                 (BINDING_RAY_MASK, storage_image, stage),
+                (BINDING_RAY_MESHES, ssbo, any_hit),
+                (BINDING_RAY_ROWS, ssbo, any_hit),
             ],
         )
         self._made: list[Any] = [self.set_layout]
         try:
             sizes = {
                 lib.VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR: frames,
-                vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER: frames,
+                ssbo: 3 * frames,
                 vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER: frames,
                 storage_image: 2 * frames,
             }
             self.pool = DescriptorPool(device, frames, sizes)
             self._made.append(self.pool)
-            self.layout = pipeline_layout(device, [self.set_layout.handle])
-            self.pipeline = RayPipeline(device, self.layout, "shadow_rays.rgen", ["shadow_rays.rmiss"], [None])
+            assert SET_RAY == 1  # set 0 is the frame set
+            self.layout = pipeline_layout(device, [frame_set_layout, self.set_layout.handle])
+            hits = [(None, "shadow_rays.rahit")]  # alpha cutouts: the rest is opaque
+            self.pipeline = RayPipeline(device, self.layout, "shadow_rays.rgen", ["shadow_rays.rmiss"], hits)
             self._made.append(self.pipeline)
             self.sampler = nearest_sampler(device)
             self.top = TopLevel(device, 1024)
@@ -197,6 +237,7 @@ class RayShadows:
         self.denoise = True  # soft shadows filtered (shadow_denoise.py), made on first use
         self._denoiser: ShadowDenoise | None = None
         self._traced: ShadowMask | None = None  # the rays' mask when they are filtered
+        self._cutouts: tuple[Any, int, np.ndarray | None] = (None, -1, None)  # materials, version, cutouts()
 
     # ------------------------------------------------------------ per frame
     def plan(self, world: World, data: FrameData) -> list[RayLight]:
@@ -210,9 +251,10 @@ class RayShadows:
             data.lights, data.directional, data.camera.position - data.origin, data.origin, places, rows
         )
 
-    def prepare(self, slot: int, data: FrameData, jobs: Any, width: int, height: int) -> None:
+    def prepare(self, slot: int, data: FrameData, jobs: Any, width: int, height: int, materials: Any) -> None:
         """Before the frame's recording: every row with a mesh as an instance (the jobs), the
-        top level's room for them, the slot's RayFrame."""
+        top level's room for them, the slot's RayFrame; with alpha-masked `materials`, the
+        instances' meshes and materials and the meshes' buffers for the any-hit shader."""
         blas = self.meshes.bottom_levels()
         chunks: list[Chunk] = list(data.chunks) + (list(data.set_aside.casters) if data.set_aside is not None else [])
         count = max((c.offset + len(c.handle) for c in chunks), default=0)
@@ -224,12 +266,17 @@ class RayShadows:
         covered = sum(len(c.handle) for c in chunks)
         if covered != count:  # rows no chunk writes stay inactive (a strided write: only when needed)
             rows[:count]["blas"] = 0
+        cutout = self.cutouts(materials)
+        pairs = s.pairs_for(self.device, count) if cutout is not None else None
+        if cutout is not None:
+            s.mesh_buffers(self.device, self.meshes)
 
         def job(chunk: Chunk) -> None:
             end = chunk.offset + len(chunk.handle)
-            write_instances(
-                chunk.model, chunk.handle, blas, chunk.offset, not chunk.flags & NOT_CASTER, rows[chunk.offset : end]
-            )
+            caster = not chunk.flags & NOT_CASTER
+            at = slice(chunk.offset, end)
+            own = pairs[at] if pairs is not None else None
+            write_instances(chunk.model, chunk.handle, blas, chunk.offset, caster, rows[at], chunk.material, cutout, own)
 
         if jobs is not None and len(chunks) > 1:
             jobs.map(job, chunks)
@@ -248,10 +295,19 @@ class RayShadows:
             f["light_params"][0, i] = (light.size, SOFT_RAYS if light.size > 0 else 1, light.reach, 0.0)
         self.frame_number += 1
 
-    def record(self, cb: Any, slot: int, attachments: Any, mask: Any, width: int, height: int) -> None:
+    def cutouts(self, materials: Any) -> np.ndarray | None:
+        """cutouts(materials), kept while the materials stay the same."""
+        kept, version, found = self._cutouts
+        if kept is not materials or version != materials.version:
+            found = cutouts(materials)
+            self._cutouts = (materials, materials.version, found)
+        return found
+
+    def record(self, cb: Any, slot: int, frame_set: Any, attachments: Any, mask: Any, width: int, height: int) -> None:
         """After the G-buffer pass, before the deferred lighting: the top level, the rays into
         `mask` (the lighting's ShadowMask), or into a mask of their own that the denoise filters
-        into it where some light is soft and `denoise` is on."""
+        into it where some light is soft and `denoise` is on. `frame_set`: the slot's frame
+        descriptor set (the materials and textures of the any-hit shader)."""
         lib = self.device.vk.lib
         s = self.slots[slot]
         assert s.rows is not None
@@ -260,12 +316,12 @@ class RayShadows:
         self._since_build = self._since_build + 1 if refit else 1
         filtered = self.denoise and any(light.size > 0 for light in self.lights)
         traced = self._traced_mask(mask) if filtered else mask
-        named = (attachments, traced, self.top.handle)
+        named = (attachments, traced, self.top.handle, s.pairs.handle, s.meshes.handle)
         if s.named != named:
             self._name(s, attachments, traced)
             s.named = named
         self._before.record(lib, cb)
-        self.pipeline.bind(cb, [s.set])
+        self.pipeline.bind(cb, [frame_set, s.set])
         self.pipeline.trace(cb, width, height)
         self._after.record(lib, cb)
         if filtered:
@@ -290,7 +346,7 @@ class RayShadows:
         write_set(
             self.device,
             s.set,
-            storage_buffers=[(BINDING_RAY_FRAME, s.frame)],
+            storage_buffers=[(BINDING_RAY_FRAME, s.frame), (BINDING_RAY_MESHES, s.meshes), (BINDING_RAY_ROWS, s.pairs)],
             samplers=[(BINDING_RAY_DEPTH, self.sampler, attachments.depth_view, depth_layout)],
             storage_images=[(BINDING_RAY_NORMAL, attachments.gbuffer.views[0]), (BINDING_RAY_MASK, mask.view)],
         )

@@ -126,10 +126,11 @@ class Renderer(TargetForms):
         try:
             self.frames = FrameRing(device)
             n = len(self.frames.frames)
-            self.ray_shadows = RayShadows(device, meshes, n) if shadows == "raytraced" else None
-            self.shadow_denoise = shadow_denoise
             self.secondaries = SecondaryBuffers(device, n)
             self.set_layout, self.pool = frame_sets(device, n)
+            traced = shadows == "raytraced"
+            self.ray_shadows = RayShadows(device, meshes, n, self.set_layout.handle) if traced else None
+            self.shadow_denoise = shadow_denoise
             self.lights = LightCulling(device, self.set_layout.handle, light_culling)
             self._fit_target()  # before anything is made against its render pass
             self._target_generation = target.generation
@@ -277,7 +278,8 @@ class Renderer(TargetForms):
         if method == self.shadow_method:
             return
         self.device.wait_idle()
-        made = RayShadows(self.device, self.meshes, len(self.frames.frames)) if method == "raytraced" else None
+        frames, layout = len(self.frames.frames), self.set_layout.handle
+        made = RayShadows(self.device, self.meshes, frames, layout) if method == "raytraced" else None
         if self.ray_shadows is not None:
             self.ray_shadows.destroy()
         self.ray_shadows = self.output.ray_shadows = made
@@ -387,7 +389,7 @@ class Renderer(TargetForms):
         name = partial(ray.name_lights, data, traced) if ray is not None and traced else name
         positional = pf.write_frame(self.device, data, materials, grid, self.ambient, deferred, name)
         if ray is not None and traced:
-            ray.prepare(slot, data, self.jobs, width, height)
+            ray.prepare(slot, data, self.jobs, width, height, materials)
         target = self.target_state(framebuffer or self.target.framebuffer, width, height)
         inputs = FrameInputs(
             slot=slot,
@@ -477,7 +479,7 @@ class Renderer(TargetForms):
         if self._set_aside is not None:
             self._set_aside.destroy()
         names = (
-            "output per_frame shadows environment texture_pages lights pool set_layout secondaries ray_shadows frames"
+            "output per_frame shadows environment texture_pages lights ray_shadows pool set_layout secondaries frames"
         )
         for name in names.split():
             made = getattr(self, name, None)
