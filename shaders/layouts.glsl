@@ -75,6 +75,7 @@
 #define CULL_LOD 2
 #define MAX_LODS 4
 #define MAX_RAY_LIGHTS 8
+#define RAY_PLACE 16
 #define FEATURE_RAY_SHADOWS 67108864
 #define BINDING_SHADOW_MASK 5
 #define BINDING_RAY_SCENE 0
@@ -110,7 +111,7 @@ struct Light {  // 64 bytes, std430
     vec4 position_radius;       // offset 0: relative to the render origin; radius (0: unbounded)
     vec4 color_intensity;       // offset 16: linear rgb, intensity (directional: illuminance)
     vec4 direction_kind;        // offset 32: xyz: where the light shines (spot, directional); w: LIGHT_POINT/SPOT/DIRECTIONAL
-    vec4 cone;                  // offset 48: spot: x cos(outer angle), y 1 / (cos(inner) - cos(outer)); z first shadow view + 1 (0: none), w views
+    vec4 cone;                  // offset 48: spot: x cos(outer angle), y 1 / (cos(inner) - cos(outer)); z first shadow view + 1 (0: none), w views + RAY_PLACE * (place in the ray-traced shadows' mask + 1; 0: none)
 };
 
 // One entity's row: 64 bytes (the normal matrix is derived in the vertex shader).

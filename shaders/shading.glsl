@@ -182,21 +182,22 @@ float pcss(ShadowView v, vec2 uv, float layer, float ref, float depth) {
 // The receiver is moved along its normal and its depth towards the light (Shadow.normal_offset,
 // Shadow.bias); reverse-Z, so a receiver is lit where its depth is at least the map's.
 float light_shadow(Light light, vec3 p, vec3 n) {
+    uint named = uint(light.cone.w);
+#ifdef RAY_SHADOW_MASK
+    if ((MATERIAL_FEATURES & FEATURE_RAY_SHADOWS) != 0u) {
+        // ray-traced: cone.w names the light's place in the mask (render/ray_shadows.py), which
+        // only the deferred lighting has; forward surfaces (blended ones) read the shadow maps
+        // drawn for them (cone.z), or get no shadow where none were drawn
+        uint place = named / RAY_PLACE;
+        return place == 0u ? 1.0 : ray_shadow_mask(place - 1u);
+    }
+#endif
     uint first = uint(light.cone.z);
     if (first == 0u) {
         return 1.0;
     }
     first -= 1u;
-    if ((MATERIAL_FEATURES & FEATURE_RAY_SHADOWS) != 0u) {
-        // ray-traced: cone.z names the light's place in the mask (render/ray_shadows.py), which
-        // only the deferred lighting has; forward surfaces (blended ones) get no shadow then
-#ifdef RAY_SHADOW_MASK
-        return ray_shadow_mask(first);
-#else
-        return 1.0;
-#endif
-    }
-    uint count = max(uint(light.cone.w), 1u);
+    uint count = max(named % RAY_PLACE, 1u);
     uint k = 0u;
     if (shadow_views[first].info.w == 2u) {
         // a point light's cube: the face of the major axis of the direction from the light

@@ -158,6 +158,51 @@ def test_alpha_cutouts_let_rays_through_where_the_maps_let_light_through():
         assert_checkerboard_shadow(solid, square)
 
 
+def glass_scene(gpu, glass: bool = True, shadow: bool = True):
+    """The spot light's scene with a blended pane of glass lying on the ground under the cube and
+    its shadow (a forward-lit row: the rays' mask holds the ground beneath it), casting nothing
+    itself."""
+    from ecs_engine.components import Mesh, Transform
+    from ecs_engine.render.materials import Material, materials
+    from ecs_engine.render.primitives import plane_mesh
+
+    world = scene(gpu, "spot", shadow=shadow)
+    if glass:
+        pane = materials(world).add(Material("glass", "lambert", base_color=(0.9, 0.9, 1.0, 0.5), alpha_mode="blend"))
+        pane_mesh = Mesh(handle=gpu.meshes.add(plane_mesh(4.0, 1)), material=pane)
+        world.spawn(Transform(position=(0.0, 0.05, 0.0)), pane_mesh, NotShadowCaster())  # it receives
+    return world
+
+
+def draw(gpu, world, **settings) -> tuple[np.ndarray, int]:
+    """The frame's pixels, and the shadow maps' draws."""
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.render.renderer import Renderer
+
+    renderer = Renderer(gpu.device, gpu.target, gpu.meshes, **settings)
+    try:
+        default_schedule().run(world, 0.0)
+        renderer.render(world, readback=True)
+        return gpu.target.pixels()[..., :3].astype(int), renderer.shadows.draws
+    finally:
+        renderer.destroy()
+
+
+def test_blended_rows_read_shadow_maps_drawn_beside_the_rays():
+    """A blended pane under the cube: the rays' mask is per pixel of the ground beneath it, so
+    the frame draws the maps too and the pane reads them; the image agrees with the maps' but
+    near edges (lit by rays alone, the pane would be bright over the whole shadow). Without
+    forward-lit rows no map is drawn."""
+    _needs_ray_tracing()
+    with headless_gpu(W, H) as gpu:
+        traced, maps_drawn = draw(gpu, glass_scene(gpu), shadows="raytraced")
+        mapped, _ = draw(gpu, glass_scene(gpu), light_culling="deferred")
+        plain, _ = draw(gpu, glass_scene(gpu, shadow=False), light_culling="deferred")
+        _, bare_maps_drawn = draw(gpu, glass_scene(gpu, glass=False), shadows="raytraced")
+    assert maps_drawn > 0 and bare_maps_drawn == 0  # maps for the pane's sake only
+    assert_agree_but_near_edges(traced, mapped, plain, least=50)
+
+
 def test_the_shadows_demo_agrees_with_its_maps_but_near_edges():
     """The `shadows` demo scene (a sun, a spot and a point light casting, PCF maps), drawn through
     a session as `demo shadows` draws it: maps (in the deferred form) against rays."""

@@ -72,7 +72,8 @@ LIGHT = Struct(
         (
             "cone",
             "vec4",
-            "spot: x cos(outer angle), y 1 / (cos(inner) - cos(outer)); z first shadow view + 1 (0: none), w views",
+            "spot: x cos(outer angle), y 1 / (cos(inner) - cos(outer)); z first shadow view + 1 (0: none), "
+            "w views + RAY_PLACE * (place in the ray-traced shadows' mask + 1; 0: none)",
         ),
     ],
     doc="Point and spot lights first (sorted far to near from the camera), then directional ones.",
@@ -217,6 +218,7 @@ DEFERRED_PUSH = Struct(
 )
 
 MAX_RAY_LIGHTS = 8  # shadow-casting lights the ray-traced shadows trace (render/ray_shadows.py)
+RAY_PLACE = 16  # Light.cone.w: views (at most 6) + RAY_PLACE * (the light's place in the rays' mask + 1)
 RAY_FRAME = Struct(
     "RayFrame",
     [
@@ -403,6 +405,7 @@ DEFINES = {
     "CULL_LOD": CULL_LOD,
     "MAX_LODS": MAX_LODS,
     "MAX_RAY_LIGHTS": MAX_RAY_LIGHTS,
+    "RAY_PLACE": RAY_PLACE,
     "FEATURE_RAY_SHADOWS": FEATURE_RAY_SHADOWS,
     "BINDING_SHADOW_MASK": BINDING_SHADOW_MASK,
     "BINDING_RAY_SCENE": BINDING_RAY_SCENE,

@@ -24,6 +24,7 @@ from .layouts import (
     LIGHT_DIRECTIONAL,
     LIGHT_POINT,
     LIGHT_SPOT,
+    RAY_PLACE,
 )
 
 LIGHT_DTYPE = LIGHT.dtype
@@ -240,22 +241,29 @@ def write_light_shadows(
     origin: np.ndarray,
     views: dict[int, tuple[int, int]],
     out: np.ndarray,
+    places: dict[int, int] | None = None,
 ) -> None:
     """Name each shadow-casting light's views in its row (cone.z: first view + 1, cone.w: the
-    count), `views` mapping a light's entity to (first view, count). Positional rows are in
-    write_lights' order (far to near from the eye, ties in world order), found again here."""
+    count), `views` mapping a light's entity to (first view, count), and its place in the
+    ray-traced shadows' mask (`places`: entity to place; cone.w += RAY_PLACE * (place + 1)).
+    Positional rows are in write_lights' order (far to near from the eye, ties in world order),
+    found again here."""
+    places = places or {}
     count = sum(len(p) for p in positional)
     if count:
         entity = np.concatenate([p.entity for p in positional if p.entity is not None])
         order = far_to_near(np.concatenate([p.position for p in positional]), origin, eye_from_origin)
         for row, e in enumerate(entity[order].tolist()):
-            found = views.get(e)
-            if found is not None:
-                out[row, 14:16] = (found[0] + 1, found[1])
+            _name(out, row, views.get(e), places.get(e))
     row = count
     for d in directional:
         for e in d.entity.tolist() if d.entity is not None else [None] * len(d):
-            found = views.get(e) if e is not None else None
-            if found is not None:
-                out[row, 14:16] = (found[0] + 1, found[1])
+            if e is not None:
+                _name(out, row, views.get(e), places.get(e))
             row += 1
+
+
+def _name(out: np.ndarray, row: int, views: tuple[int, int] | None, place: int | None) -> None:
+    first, count = views if views is not None else (-1, 0)
+    if views is not None or place is not None:
+        out[row, 14:16] = (first + 1, count + (0 if place is None else RAY_PLACE * (place + 1)))

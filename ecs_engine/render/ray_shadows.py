@@ -16,8 +16,11 @@ pipeline, gives it the materials and textures).
 
 At most MAX_RAY_LIGHTS lights cast (directional, then spot, then point lights, in world order,
 as the shadow maps' views are ordered); those past it cast nothing, said once in the log.
-Forward-lit surfaces (alpha-blended materials, drawn after the deferred lighting) receive no
-ray-traced shadow: the mask is per pixel of the opaque surface behind them.
+Forward-lit surfaces (the rows set aside: blended, wireframe, mirroring; drawn after the deferred
+lighting) are not in the mask, which holds the opaque surface behind them: where a frame has such
+rows, the renderer draws the casting lights' shadow maps as well and those rows read the maps
+(each light's row names both; light_rows.write_light_shadows), as engines that trace the opaque
+surfaces' shadows do for translucent ones.
 """
 
 from __future__ import annotations
@@ -56,7 +59,7 @@ from .layouts import (
     RAY_FRAME,
     SET_RAY,
 )
-from .light_rows import local_minus_z, write_light_shadows
+from .light_rows import local_minus_z
 from .ray_instances import write_instances
 from .shadow_denoise import ShadowDenoise
 from .shadow_mask import ShadowMask
@@ -244,12 +247,11 @@ class RayShadows:
         self.lights = ray_lights(world, data.origin) if any(len(b) for b in world.query(Shadow, write=())) else []
         return self.lights
 
-    def name_lights(self, data: FrameData, lights: list[RayLight], rows: np.ndarray) -> None:
-        """Each traced light's row names its place in the mask (cone.z: place + 1; light_rows.py)."""
-        places = {light.entity: (i, 0) for i, light in enumerate(lights)}
-        write_light_shadows(
-            data.lights, data.directional, data.camera.position - data.origin, data.origin, places, rows
-        )
+    @staticmethod
+    def places(lights: list[RayLight]) -> dict[int, int]:
+        """Per traced light's entity: its place in the mask, which its light row names
+        (light_rows.write_light_shadows)."""
+        return {light.entity: i for i, light in enumerate(lights)}
 
     def prepare(self, slot: int, data: FrameData, jobs: Any, width: int, height: int, materials: Any) -> None:
         """Before the frame's recording: every row with a mesh as an instance (the jobs), the

@@ -44,7 +44,7 @@ from .layouts import (
     INSTANCE,
 )
 from .light_clusters import LightCulling, check_light_culling
-from .light_rows import light_features
+from .light_rows import light_features, write_light_shadows
 from .materials import Materials
 from .mesh_registry import MeshRegistry
 from .oit_pass import check_transparency
@@ -361,8 +361,11 @@ class Renderer(TargetForms):
         width, height = extent or (self.target.width, self.target.height)
         material_count = len(materials)
         data = self.extract(world, width, height, materials, dt)  # before any GPU state: a bad world fails here
-        ray = self.ray_shadows  # lights with a Shadow: the views their maps are drawn from, or their rays
-        views = self.shadows.plan(world, data) if ray is None else []
+        # lights with a Shadow: the views their maps are drawn from, or their rays (and maps
+        # too for the rows lit forward, which the rays' per-pixel mask does not cover)
+        ray = self.ray_shadows
+        forward = data.set_aside is not None and len(data.set_aside) > 0
+        views = self.shadows.plan(world, data) if ray is None or forward else []
         traced = ray.plan(world, data) if ray is not None else []
         if self.environment.sync(world, self.jobs):  # a new Environment (the device was waited for)
             for each in self.per_frame:
@@ -385,8 +388,11 @@ class Renderer(TargetForms):
         rows = camera_rows + len(views) * ShadowPass.view_rows(data, self.path)  # each view's after the camera's
         pf.ensure_capacity(self.device, self.texture_pages, rows, data.light_count, material_count, len(views))
         deferred = self.target.form == "deferred"
-        name = partial(self.shadows.name_lights, data, views) if views else None
-        name = partial(ray.name_lights, data, traced) if ray is not None and traced else name
+        named = self.shadows.light_views(views) if views else {}
+        places = ray.places(traced) if ray is not None and traced else {}
+        eye = data.camera.position - data.origin
+        light_shadows = (data.lights, data.directional, eye, data.origin, named)
+        name = partial(write_light_shadows, *light_shadows, places=places) if named or places else None
         positional = pf.write_frame(self.device, data, materials, grid, self.ambient, deferred, name)
         if ray is not None and traced:
             ray.prepare(slot, data, self.jobs, width, height, materials)

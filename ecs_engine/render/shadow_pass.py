@@ -43,7 +43,6 @@ from .frame_data import Chunk, FrameData
 from .indirect_path import IndirectPath
 from .instance_rows import cull_views, padded_planes
 from .layouts import BINDING_GLOBALS, GLOBALS, SHADOW_VIEW
-from .light_rows import write_light_shadows
 from .path import ChunkResult, FrameInputs, PathContext, RenderPath, TargetState
 from .shadow_indirect import IndirectShadows
 from .shadow_views import ShadowView, shadow_views
@@ -333,13 +332,15 @@ class ShadowPass:
                 self._counts[1] += r.triangles
         return per_view
 
-    def name_lights(self, data: FrameData, views: list[ShadowView], rows: np.ndarray) -> None:
-        """Each shadow-casting light's row names its first view and count (light_rows.py)."""
+    @staticmethod
+    def light_views(views: list[ShadowView]) -> dict[int, tuple[int, int]]:
+        """Per shadow-casting light's entity: its first view and count, which its light row
+        names (light_rows.write_light_shadows)."""
         first: dict[int, tuple[int, int]] = {}
         for v in views:
             start, count = first.get(v.entity, (v.layer, 0))
             first[v.entity] = (start, count + 1)
-        write_light_shadows(data.lights, data.directional, data.camera.position - data.origin, data.origin, first, rows)
+        return first
 
     def write_views(self, out: np.ndarray, views: list[ShadowView]) -> None:
         """SHADOW_VIEW rows of the views (shading.glsl's light_shadow reads them). Every layer
