@@ -186,10 +186,12 @@ float light_shadow(Light light, vec3 p, vec3 n) {
 #ifdef RAY_SHADOW_MASK
     if ((MATERIAL_FEATURES & FEATURE_RAY_SHADOWS) != 0u) {
         // ray-traced: cone.w names the light's place in the mask (render/ray_shadows.py), which
-        // only the deferred lighting has; forward surfaces (blended ones) read the shadow maps
-        // drawn for them (cone.z), or get no shadow where none were drawn
+        // only the deferred lighting has; forward surfaces (blended ones), and lights past the
+        // traced ones, read the shadow maps drawn for them (cone.z)
         uint place = named / RAY_PLACE;
-        return place == 0u ? 1.0 : ray_shadow_mask(place - 1u);
+        if (place != 0u) {
+            return ray_shadow_mask(place - 1u);
+        }
     }
 #endif
     uint first = uint(light.cone.z);

@@ -174,33 +174,71 @@ def glass_scene(gpu, glass: bool = True, shadow: bool = True):
     return world
 
 
-def draw(gpu, world, **settings) -> tuple[np.ndarray, int]:
-    """The frame's pixels, and the shadow maps' draws."""
+def draw(gpu, world, traced_lights: int | None = None, **settings) -> tuple[np.ndarray, int, set[int]]:
+    """The frame's pixels, the shadow maps' draws and the entities of the lights they were drawn
+    for; `traced_lights`: the rays' max_lights."""
     from ecs_engine.app.scenes import default_schedule
     from ecs_engine.render.renderer import Renderer
 
     renderer = Renderer(gpu.device, gpu.target, gpu.meshes, **settings)
     try:
+        if traced_lights is not None:
+            renderer.ray_shadows.max_lights = traced_lights
         default_schedule().run(world, 0.0)
         renderer.render(world, readback=True)
-        return gpu.target.pixels()[..., :3].astype(int), renderer.shadows.draws
+        mapped = {v.entity for v in renderer.shadows.last_views}
+        return gpu.target.pixels()[..., :3].astype(int), renderer.shadows.draws, mapped
     finally:
         renderer.destroy()
 
 
-def test_blended_rows_read_shadow_maps_drawn_beside_the_rays():
+@pytest.mark.parametrize("mode", ["instanced", "indirect"])
+def test_blended_rows_read_shadow_maps_drawn_beside_the_rays(mode):
     """A blended pane under the cube: the rays' mask is per pixel of the ground beneath it, so
     the frame draws the maps too and the pane reads them; the image agrees with the maps' but
     near edges (lit by rays alone, the pane would be bright over the whole shadow). Without
     forward-lit rows no map is drawn."""
     _needs_ray_tracing()
     with headless_gpu(W, H) as gpu:
-        traced, maps_drawn = draw(gpu, glass_scene(gpu), shadows="raytraced")
-        mapped, _ = draw(gpu, glass_scene(gpu), light_culling="deferred")
-        plain, _ = draw(gpu, glass_scene(gpu, shadow=False), light_culling="deferred")
-        _, bare_maps_drawn = draw(gpu, glass_scene(gpu, glass=False), shadows="raytraced")
+        traced, maps_drawn, _ = draw(gpu, glass_scene(gpu), shadows="raytraced", mode=mode)
+        mapped, _, _ = draw(gpu, glass_scene(gpu), light_culling="deferred", mode=mode)
+        plain, _, _ = draw(gpu, glass_scene(gpu, shadow=False), light_culling="deferred", mode=mode)
+        _, bare_maps_drawn, _ = draw(gpu, glass_scene(gpu, glass=False), shadows="raytraced", mode=mode)
     assert maps_drawn > 0 and bare_maps_drawn == 0  # maps for the pane's sake only
     assert_agree_but_near_edges(traced, mapped, plain, least=50)
+
+
+def two_lights(gpu, shadow: bool = True):
+    """The spot light's scene and a sun, both casting: the sun is the first traced (directional
+    lights come first)."""
+    from ecs_engine.components import DirectionalLight, Transform
+    from ecs_engine.maths.camera import look_rotation
+
+    world = scene(gpu, "spot", shadow=shadow)
+    cast = [Shadow(resolution=1024)] if shadow else []
+    sun = world.spawn(Transform(rotation=look_rotation((0.4, -1.0, 0.3))), DirectionalLight(illuminance=0.8), *cast)
+    return world, sun
+
+
+def test_lights_past_the_traced_ones_read_shadow_maps():
+    """With room for one traced light, the sun is traced and the spot light gets a shadow map
+    (drawn for it alone), which the deferred lighting reads: the image agrees with maps-only
+    but near edges. With room for none, every light reads maps, as the maps-only image does.
+    H100: 22 pixels differ; 7 lie on the sun's shadow edge inside the spot's shadow (traced 212,
+    PCF 171-192), an edge the finder misses, as both sides are shaded against the no-shadow image."""
+    _needs_ray_tracing()
+    with headless_gpu(W, H) as gpu:
+        world, sun = two_lights(gpu)
+        one, one_draws, one_mapped = draw(gpu, world, traced_lights=1, shadows="raytraced")
+        none, _, none_mapped = draw(gpu, two_lights(gpu)[0], traced_lights=0, shadows="raytraced")
+        traced, _, traced_mapped = draw(gpu, two_lights(gpu)[0], shadows="raytraced")
+        mapped, _, _ = draw(gpu, two_lights(gpu)[0], light_culling="deferred")
+        plain, _, _ = draw(gpu, two_lights(gpu, shadow=False)[0], light_culling="deferred")
+    spot = {e for e in none_mapped if e != sun}
+    assert one_draws > 0 and one_mapped == spot and len(spot) == 1 and sun in none_mapped
+    assert traced_mapped == set()  # both traced: no map
+    assert_agree_but_near_edges(one, mapped, plain, least=50, stray=8)
+    assert np.abs(none - mapped).max() <= 2  # the same maps, read by the same lighting
 
 
 def test_the_shadows_demo_agrees_with_its_maps_but_near_edges():

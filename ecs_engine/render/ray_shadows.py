@@ -14,8 +14,9 @@ uv from the mesh's buffers (by device address) and lets the ray through where th
 alpha is under its cutoff, as the shadow maps' cutout pass does (the frame set, set 0 of this
 pipeline, gives it the materials and textures).
 
-At most MAX_RAY_LIGHTS lights cast (directional, then spot, then point lights, in world order,
-as the shadow maps' views are ordered); those past it cast nothing, said once in the log.
+At most `max_lights` (MAX_RAY_LIGHTS) lights are traced (directional, then spot, then point
+lights, in world order, as the shadow maps' views are ordered); the renderer draws shadow maps
+for those past it (`overflow`), which the deferred lighting reads for them.
 Forward-lit surfaces (the rows set aside: blended, wireframe, mirroring; drawn after the deferred
 lighting) are not in the mask, which holds the opaque surface behind them: where a frame has such
 rows, the renderer draws the casting lights' shadow maps as well and those rows read the maps
@@ -25,7 +26,6 @@ surfaces' shadows do for translucent ones.
 
 from __future__ import annotations
 
-import logging
 from dataclasses import dataclass
 from typing import Any
 
@@ -64,7 +64,6 @@ from .ray_instances import write_instances
 from .shadow_denoise import ShadowDenoise
 from .shadow_mask import ShadowMask
 
-log = logging.getLogger(__name__)
 
 SHADOW_METHODS = ("maps", "raytraced")
 SOFT_RAYS = 4  # rays per pixel of a light whose Shadow asks for PCSS (an area light)
@@ -99,7 +98,7 @@ class RayLight:
 
 
 def ray_lights(world: World, origin: np.ndarray) -> list[RayLight]:
-    """The shadow-casting lights, in the shadow maps' order, at most MAX_RAY_LIGHTS."""
+    """The shadow-casting lights, in the shadow maps' order."""
     found: list[RayLight] = []
 
     def size(shadow: Any, row: int) -> float:
@@ -115,9 +114,6 @@ def ray_lights(world: World, origin: np.ndarray) -> list[RayLight]:
             reach = batch[component].radius
             for row, entity in enumerate(batch.entities.tolist()):
                 found.append(RayLight(entity, kind, position[row], size(batch[Shadow], row), float(reach[row])))
-    if len(found) > MAX_RAY_LIGHTS:
-        log.warning("%d lights cast ray-traced shadows; the first %d do", len(found), MAX_RAY_LIGHTS)
-        found = found[:MAX_RAY_LIGHTS]
     return found
 
 
@@ -237,6 +233,8 @@ class RayShadows:
         self._since_build = REBUILD_EVERY
         self._count = 0
         self.lights: list[RayLight] = []
+        self.max_lights = MAX_RAY_LIGHTS  # traced; the shadow maps take the rest
+        self.overflow: set[int] = set()  # the entities of the casting lights past max_lights
         self.denoise = True  # soft shadows filtered (shadow_denoise.py), made on first use
         self._denoiser: ShadowDenoise | None = None
         self._traced: ShadowMask | None = None  # the rays' mask when they are filtered
@@ -244,7 +242,10 @@ class RayShadows:
 
     # ------------------------------------------------------------ per frame
     def plan(self, world: World, data: FrameData) -> list[RayLight]:
-        self.lights = ray_lights(world, data.origin) if any(len(b) for b in world.query(Shadow, write=())) else []
+        """The lights traced this frame (`overflow`: those left to the shadow maps)."""
+        found = ray_lights(world, data.origin) if any(len(b) for b in world.query(Shadow, write=())) else []
+        limit = max(0, min(self.max_lights, MAX_RAY_LIGHTS))
+        self.lights, self.overflow = found[:limit], {light.entity for light in found[limit:]}
         return self.lights
 
     @staticmethod

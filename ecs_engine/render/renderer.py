@@ -362,11 +362,13 @@ class Renderer(TargetForms):
         material_count = len(materials)
         data = self.extract(world, width, height, materials, dt)  # before any GPU state: a bad world fails here
         # lights with a Shadow: the views their maps are drawn from, or their rays (and maps
-        # too for the rows lit forward, which the rays' per-pixel mask does not cover)
+        # too for the rows lit forward, which the rays' per-pixel mask does not cover, and for
+        # the lights past the traced ones)
         ray = self.ray_shadows
-        forward = data.set_aside is not None and len(data.set_aside) > 0
-        views = self.shadows.plan(world, data) if ray is None or forward else []
         traced = ray.plan(world, data) if ray is not None else []
+        forward = data.set_aside is not None and len(data.set_aside) > 0
+        only = None if ray is None or forward else ray.overflow
+        views = self.shadows.plan(world, data, only) if only is None or only else []
         if self.environment.sync(world, self.jobs):  # a new Environment (the device was waited for)
             for each in self.per_frame:
                 each.name_environment(self.device)

@@ -94,10 +94,11 @@ class ShadowPass:
         self._fused: ViewRecording | None = None  # the views as one native call a job
 
     # -------------------------------------------------------------- planning
-    def plan(self, world: World, data: FrameData) -> list[ShadowView]:
-        """This frame's drawn views (none without a Shadow: one query, no work)."""
+    def plan(self, world: World, data: FrameData, only: set[int] | None = None) -> list[ShadowView]:
+        """This frame's drawn views (none without a Shadow: one query, no work), of every casting
+        light or of those whose entities are in `only`."""
         casts = any(len(batch) for batch in world.query(Shadow, write=()))
-        self.last_views = shadow_views(world, data.camera, data.origin) if casts else []
+        self.last_views = shadow_views(world, data.camera, data.origin, only) if casts else []
         return self.last_views
 
     def ensure(self, views: list[ShadowView]) -> bool:

@@ -97,8 +97,11 @@ def _cube_face(face: int, near: float, far: float, scale: float = 1.0) -> np.nda
     return m
 
 
-def shadow_views(world: World, cam: CameraMatrices, origin: np.ndarray) -> list[ShadowView]:
-    """The views of every shadow-casting light, in layer order (see the module)."""
+def shadow_views(
+    world: World, cam: CameraMatrices, origin: np.ndarray, only: set[int] | None = None
+) -> list[ShadowView]:
+    """The views of every shadow-casting light (or of the lights whose entities are in `only`),
+    in layer order (see the module)."""
     origin = np.asarray(origin, np.float64)
     eye = cam.position - origin
     forward = cam.inverse_view[:3, :3].astype(np.float64) @ np.array([0.0, 0.0, -1.0])
@@ -134,6 +137,8 @@ def shadow_views(world: World, cam: CameraMatrices, origin: np.ndarray) -> list[
         shadow = batch[Shadow]
         directions = local_minus_z(batch[Transform].rotation)
         for row, entity in enumerate(batch.entities.tolist()):
+            if only is not None and entity not in only:
+                continue
             distance = float(shadow.distance[row])
             far = min(distance, cam.far)
             if far <= cam.near:
@@ -156,6 +161,8 @@ def shadow_views(world: World, cam: CameraMatrices, origin: np.ndarray) -> list[
         spot, shadow, transform = batch[SpotLight], batch[Shadow], batch[Transform]
         directions = local_minus_z(transform.rotation)
         for row, entity in enumerate(batch.entities.tolist()):
+            if only is not None and entity not in only:
+                continue
             reach = float(spot.radius[row])
             far = reach if reach > 0 else math.inf
             fov = min(2.0 * float(spot.outer_angle[row]), MAX_SPOT_FOV)
@@ -178,6 +185,8 @@ def shadow_views(world: World, cam: CameraMatrices, origin: np.ndarray) -> list[
     for batch in world.query(PointLight, Transform, Shadow, write=()):
         light, shadow, transform = batch[PointLight], batch[Shadow], batch[Transform]
         for row, entity in enumerate(batch.entities.tolist()):
+            if only is not None and entity not in only:
+                continue
             reach = float(light.radius[row])
             far = reach if reach > 0 else math.inf
             near = SPOT_NEAR * reach if reach > 0 else 0.05
