@@ -9,7 +9,8 @@ Rules of use, in short:
 - Values are checked where they enter the world (NaN/Inf, ranges, shapes, dtypes); systems that
   write through views are trusted.
 - `world.events(Kind)` is a typed event channel, double-buffered per frame; `Schedule(parallel=
-  True)` runs a stage's systems whose declared reads and writes do not conflict at the same time.
+  True)` runs a stage's systems whose declared reads and writes do not conflict at the same time;
+  `run_if=any_with(A, B)` skips a system while no entity has A and B.
 """
 
 from .ecs import (
@@ -28,6 +29,7 @@ from .ecs import (
     Schedule,
     System,
     World,
+    any_with,
     system,
 )
 
@@ -49,5 +51,6 @@ __all__ = [
     "Schedule",
     "System",
     "World",
+    "any_with",
     "system",
 ]

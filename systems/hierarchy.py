@@ -28,7 +28,7 @@ from ecs_engine.components import ModelMatrix, RenderOrigin, Transform, render_o
 from ecs_engine.components.hierarchy import Parent, WorldMatrix
 from ecs_engine.ecs.entities import INDEX_MASK
 from ecs_engine.ecs.errors import EcsError
-from ecs_engine.ecs.schedule import System
+from ecs_engine.ecs.schedule import System, any_with
 from ecs_engine.ecs.world import World
 from ecs_engine.jobs import JobPool, over_rows
 from ecs_engine.maths.decompose import trs_matrices
@@ -118,7 +118,8 @@ def _compose(order, parent_row, above_row, trs, above, out, model, origin):  # p
 
 class HierarchySystem(System):
     def __init__(self) -> None:
-        super().__init__(reads=[Transform, Parent, RenderOrigin], writes=[WorldMatrix, ModelMatrix], name="hierarchy")
+        reads, writes = [Transform, Parent, RenderOrigin], [WorldMatrix, ModelMatrix]
+        super().__init__(reads=reads, writes=writes, name="hierarchy", run_if=any_with(Parent))
         self._plan: _Plan | None = None
         self._world: Any = None
 

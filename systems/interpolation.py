@@ -5,13 +5,14 @@ system can draw it between its last two steps (see ecs.timestep and ecs.Schedule
 from __future__ import annotations
 
 from ecs_engine.components import PreviousTransform, Transform
-from ecs_engine.ecs.schedule import System
+from ecs_engine.ecs.schedule import System, any_with
 from ecs_engine.ecs.world import World
 
 
 class SnapshotSystem(System):
     def __init__(self) -> None:
-        super().__init__(reads=[Transform], writes=[PreviousTransform], name="snapshot")
+        both = any_with(Transform, PreviousTransform)
+        super().__init__(reads=[Transform], writes=[PreviousTransform], name="snapshot", run_if=both)
 
     def run(self, world: World, dt: float) -> None:
         for batch in world.query(Transform, PreviousTransform):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ecs_engine.components import AngularVelocity, Transform, Velocity
-from ecs_engine.ecs.schedule import System
+from ecs_engine.ecs.schedule import System, any_with
 from ecs_engine.ecs.world import World
 from ecs_engine.jobs import JobPool, over_rows
 from ecs_engine.maths.transform import integrate_angular, integrate_linear
@@ -16,7 +16,8 @@ class MotionSystem(System):
     Large tables are split across the world's JobPool resource, if it has one."""
 
     def __init__(self) -> None:
-        super().__init__(reads=[Velocity, AngularVelocity], writes=[Transform], name="motion")
+        moving = any_with(Transform, Velocity) | any_with(Transform, AngularVelocity)
+        super().__init__(reads=[Velocity, AngularVelocity], writes=[Transform], name="motion", run_if=moving)
 
     def run(self, world: World, dt: float) -> None:
         pool = world.resources.get(JobPool)

@@ -9,7 +9,7 @@ import numpy as np
 from ecs_engine import native
 from ecs_engine.components.orbit import Orbit
 from ecs_engine.components.transform import Transform
-from ecs_engine.ecs.schedule import System
+from ecs_engine.ecs.schedule import System, any_with
 from ecs_engine.ecs.world import World
 
 TAU = 2.0 * math.pi
@@ -65,7 +65,7 @@ class OrbitSystem(System):
     """Column-wise over every table with Orbit and Transform; no per-entity Python."""
 
     def __init__(self) -> None:
-        super().__init__(reads=[], writes=[Orbit, Transform], name="orbit")
+        super().__init__(reads=[], writes=[Orbit, Transform], name="orbit", run_if=any_with(Orbit, Transform))
 
     def run(self, world: World, dt: float) -> None:
         for batch in world.query(Orbit, Transform):

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ecs_engine.components import Spring, Transform, Velocity
-from ecs_engine.ecs.schedule import System
+from ecs_engine.ecs.schedule import System, any_with
 from ecs_engine.ecs.world import World
 from ecs_engine.maths.spring import INTEGRATORS, step
 
@@ -16,7 +16,8 @@ class SpringSystem(System):
     def __init__(self, integrator: str = "implicit") -> None:
         if integrator not in INTEGRATORS:
             raise ValueError(f"unknown integrator {integrator!r}; integrators: {', '.join(INTEGRATORS)}")
-        super().__init__(reads=[Spring], writes=[Transform, Velocity], name="spring")
+        springs = any_with(Transform, Velocity, Spring)
+        super().__init__(reads=[Spring], writes=[Transform, Velocity], name="spring", run_if=springs)
         self.integrator = integrator
 
     def run(self, world: World, dt: float) -> None:

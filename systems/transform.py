@@ -17,7 +17,7 @@ from ecs_engine.components import (
     active_camera,
     render_origin,
 )
-from ecs_engine.ecs.schedule import System
+from ecs_engine.ecs.schedule import System, any_with
 from ecs_engine.ecs.timestep import Interpolation
 from ecs_engine.ecs.world import World
 from ecs_engine.errors import UsageError
@@ -38,6 +38,9 @@ class TransformSystem(System):
         super().__init__(reads=[Transform, PreviousTransform], writes=[ModelMatrix, NormalMatrix], name="transform")
         self._origin: bytes | None = None  # the origin of the last run, as bytes
         self.rows_updated = 0
+        # which of the four table kinds the world has (answers kept while its structure stays)
+        self._normals = any_with(Transform, ModelMatrix, NormalMatrix)
+        self._previous = any_with(Transform, ModelMatrix, PreviousTransform)
 
     def run(self, world: World, dt: float) -> None:
         origin = render_origin(world)
@@ -48,7 +51,8 @@ class TransformSystem(System):
         interpolated = (PreviousTransform,) if interpolation is not None else ()
         pool = world.resources.get(JobPool)
         updated = 0
-        for with_normal in (False, True):
+        interpolate = interpolation is not None and self._previous(world)
+        for with_normal in (False, True) if self._normals(world) else (False,):
             query = _matrix_query(world, with_normal, (), interpolated)
             for batch in query.iter() if moved else query.iter(changed=(Transform,)):
                 t = batch[Transform]
@@ -60,7 +64,8 @@ class TransformSystem(System):
 
                 over_rows(pool, len(batch), rows)
                 updated += len(batch)
-            if interpolation is not None:
+            if interpolate:
+                assert interpolation is not None
                 alpha = float(interpolation.alpha)
                 for batch in _matrix_query(world, with_normal, (PreviousTransform,), ()):
                     t, prev = batch[Transform], batch[PreviousTransform]

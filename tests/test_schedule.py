@@ -95,6 +95,62 @@ def test_changed_filter_uses_last_run_tick_and_excludes_own_writes():
     assert seen == [1, 0, 1, 0]
 
 
+@pytest.mark.parametrize("parallel", [False, True])
+def test_a_run_condition_skips_a_system_and_keeps_its_change_tick(parallel):
+    """run_if=any_with(Velocity): not called while no entity has a Velocity; once one has, its
+    `changed` filter sees every change since its last run, made while it was skipped too. A
+    parallel schedule asks the condition as well."""
+    from ecs_engine import any_with
+    from ecs_engine.jobs import JobPool
+
+    w = World()
+    if parallel:
+        w.resources[JobPool] = JobPool(2)
+    e = w.spawn(Transform())
+    seen = []
+
+    @system(reads=[Transform, Velocity], run_if=any_with(Transform, Velocity))
+    def mover(world, dt):
+        seen.append(sum(len(b) for b in world.query(Transform, Velocity).iter(changed=[Transform])))
+
+    @system(reads=[Transform])
+    def other(world, dt):  # a second system, so the parallel schedule has a stage to spread
+        pass
+
+    s = Schedule(parallel=parallel)
+    s.add(mover)
+    s.add(other)
+    s.run(w, 0.0)
+    assert seen == []  # no Velocity anywhere: skipped
+    w.add(e, Velocity())
+    s.run(w, 0.0)  # first run: everything is new
+    s.run(w, 0.0)  # nothing changed
+    last = mover.last_run_tick
+    w.remove(e, Velocity)
+    s.run(w, 0.0)
+    assert mover.last_run_tick == last  # skipped: the tick stays
+    w.set(e, Transform, position=(1, 0, 0))  # a change while skipped
+    w.add(e, Velocity())
+    s.run(w, 0.0)
+    assert seen == [1, 0, 1]
+    if parallel:
+        w.resources[JobPool].close()
+
+
+def test_run_conditions_are_checked():
+    from ecs_engine import any_with
+
+    with pytest.raises(TypeError, match="run_if must be a function of the world"):
+        System(run_if=3)
+    with pytest.raises(ValueError, match="at least one component type"):
+        any_with()
+    either = any_with(Velocity) | any_with(Transform, AngularVelocity)
+    w = World()
+    assert not either(w)
+    w.spawn(Transform(), AngularVelocity())
+    assert either(w) and repr(either) == "any_with(Velocity) | any_with(Transform, AngularVelocity)"
+
+
 def test_class_system_and_plain_function():
     w = World()
     calls = []

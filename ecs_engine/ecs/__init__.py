@@ -5,7 +5,7 @@ components and systems (they build on it)."""
 from .errors import AccessError, DeadEntityError, EcsError, MissingComponentError
 from .events import Columns, Events, Reader
 from .query import Batch, ComponentView, Query
-from .schedule import FunctionSystem, Schedule, System, system
+from .schedule import FunctionSystem, Schedule, System, any_with, system
 from .schema import Component, Field, schema_of
 from .timestep import FixedTimestep, Interpolation
 from .world import World
@@ -29,6 +29,7 @@ __all__ = [
     "Schedule",
     "System",
     "World",
+    "any_with",
     "schema_of",
     "system",
 ]

@@ -112,6 +112,8 @@ class CommandQueue:
     def apply(self, storage: Storage, tick: Tick) -> None:
         """Apply every command; one that fails changes nothing and is reported (the first, with a
         count of the others) after all the others were applied."""
+        if not self._commands:
+            return  # nothing queued (most sync points): push fills the two sets only with a command
         commands, self._commands = self._commands, []
         self.pending_destroy.clear()
         self._touched.clear()

@@ -9,10 +9,16 @@ order; structural changes are applied at the stage's sync point in declared orde
 resources and event types the same way as components (`reads=[RenderOrigin]`): access the
 schedule cannot see is a data race in a parallel stage. Only numba kernels and large NumPy calls
 release the GIL, so only such systems gain.
+
+A system may have a run condition (`run_if`, as Bevy's): a function of the world, asked just
+before the system would run; False skips it, and its change tick stays where it was, so its next
+run sees every change since its last one. `any_with(A, B)` (some entity has A and B) is the usual
+one: the stock systems skip a frame's call when no entity has what they work on.
 """
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any, Protocol
 
@@ -42,27 +48,71 @@ def _types(items: Iterable[type] | None) -> frozenset[type] | None:
     return frozenset(schema_of(t) for t in items)
 
 
+RunCondition = Callable[[World], bool]
+
+
+class AnyWith:
+    """A run condition: some entity has every type of one of the groups (`any_with(A, B)`; `|`
+    adds a group). Reads only the world's tables (no system access is checked); the answer is
+    kept while the world's structure stays the same (a frame asks for the price of a lookup)."""
+
+    def __init__(self, *groups: tuple[type, ...]) -> None:
+        if not groups or not all(groups):
+            raise ValueError("any_with needs at least one component type")
+        self.groups = groups
+        self._kept: tuple[Any, int, bool] = (None, -1, False)  # (weakref to the world, version, answer)
+
+    def __call__(self, world: World) -> bool:
+        version = world.storage.structure_version
+        ref, kept_version, answer = self._kept
+        if kept_version == version and ref is not None and ref() is world:
+            return answer
+        answer = any(world.query(*group, write=()).count() for group in self.groups)
+        self._kept = (weakref.ref(world), version, answer)
+        return answer
+
+    def __or__(self, other: AnyWith) -> AnyWith:
+        return AnyWith(*self.groups, *other.groups)
+
+    def __repr__(self) -> str:
+        return " | ".join(f"any_with({', '.join(t.__name__ for t in g)})" for g in self.groups)
+
+
+def any_with(*types: type) -> AnyWith:
+    """The run condition "some entity has all of `types`"."""
+    return AnyWith(tuple(types))
+
+
 class System:
     """A unit of per-frame work that declares the components it reads and writes.
 
     Subclass and override `run(world, dt)`, or wrap a function with `@system(...)`. Inside a
     run, queries hand out read-only views of the components only read, writable views of the
     ones written (which marks them changed), and reject undeclared components. `reads` and
-    `writes` of None mean "anything" (an undeclared plain function).
+    `writes` of None mean "anything" (an undeclared plain function). `run_if`: the run
+    condition (see the module), None to run every time.
     """
 
     reads: frozenset[type] | None = frozenset()
     writes: frozenset[type] | None = frozenset()
     last_run_tick: int = 0
     exclusive: bool = False  # never run alongside another system (a parallel schedule)
+    run_if: RunCondition | None = None
 
     def __init__(
-        self, reads: Iterable[type] | None = (), writes: Iterable[type] | None = (), name: str | None = None
+        self,
+        reads: Iterable[type] | None = (),
+        writes: Iterable[type] | None = (),
+        name: str | None = None,
+        run_if: RunCondition | None = None,
     ) -> None:
         self.reads = _types(reads)
         self.writes = _types(writes)
         self.name = name or type(self).__name__
         self.last_run_tick = 0
+        if run_if is not None and not callable(run_if):
+            raise TypeError(f"system {self.name}: run_if must be a function of the world, got {run_if!r}")
+        self.run_if = run_if
 
     def run(self, world: World, dt: float) -> None:
         raise NotImplementedError
@@ -81,8 +131,9 @@ class FunctionSystem(System):
         reads: Iterable[type] | None = (),
         writes: Iterable[type] | None = (),
         name: str | None = None,
+        run_if: RunCondition | None = None,
     ) -> None:
-        super().__init__(reads, writes, name or getattr(fn, "__name__", "system"))
+        super().__init__(reads, writes, name or getattr(fn, "__name__", "system"), run_if)
         self.fn = fn
 
     def run(self, world: World, dt: float) -> None:
@@ -90,12 +141,15 @@ class FunctionSystem(System):
 
 
 def system(
-    reads: Iterable[type] = (), writes: Iterable[type] = (), name: str | None = None
+    reads: Iterable[type] = (),
+    writes: Iterable[type] = (),
+    name: str | None = None,
+    run_if: RunCondition | None = None,
 ) -> Callable[[Callable[[World, float], Any]], FunctionSystem]:
     """Decorator: `@system(reads=[Velocity], writes=[Transform])` over `def f(world, dt)`."""
 
     def wrap(fn: Callable[[World, float], Any]) -> FunctionSystem:
-        return FunctionSystem(fn, reads, writes, name)
+        return FunctionSystem(fn, reads, writes, name, run_if)
 
     return wrap
 
@@ -169,7 +223,10 @@ class Schedule:
             cached = self._levels[name] = (key, levels(systems))
         queues = [CommandQueue() for _ in systems]
         try:
-            for group in cached[1]:
+            for everyone in cached[1]:
+                group = [i for i in everyone if _due(systems[i], world)]
+                if not group:
+                    continue
                 chosen = [systems[i] for i in group]
                 spread = pool.map if len(chosen) > 1 else _inline  # alone: its own jobs may spread
                 world.run_systems_together(chosen, dt, spread, [queues[i] for i in group])
@@ -215,8 +272,16 @@ def _inline(fn: Callable[[Any], Any], chunks: Iterable[Any]) -> list[Any]:
     return [fn(chunk) for chunk in chunks]
 
 
+def _due(sys_: System, world: World) -> bool:
+    """Whether the system runs now (its run condition, if any)."""
+    condition = sys_.run_if
+    return condition is None or bool(condition(world))
+
+
 def _run_stage(world: World, systems: list[System], dt: float) -> None:
-    """A stage's systems in order, then the sync point (deferred structural changes applied)."""
+    """A stage's systems in order (those whose run condition holds), then the sync point
+    (deferred structural changes applied)."""
     for sys_ in systems:
-        world.run_system(sys_, dt)
+        if sys_.run_if is None or sys_.run_if(world):
+            world.run_system(sys_, dt)
     world.flush()

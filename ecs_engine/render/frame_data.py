@@ -26,6 +26,7 @@ from ..components import (
     Transform,
     render_origin,
 )
+from ..ecs.schedule import any_with
 from ..ecs.world import World
 from ..errors import UsageError
 from ..jobs import row_chunks
@@ -144,6 +145,8 @@ class FrameExtractor:
         self._split_key: tuple[object, ...] = ()
         self._split: list[tuple[np.ndarray, np.ndarray]] = []  # per table: chunk rows, rows set aside
         self.temporal = TemporalCulling()
+        # which light kinds the world has (kept while its structure stays): absent ones cost no query
+        self._kinds = (any_with(PointLight, Transform), any_with(SpotLight, Transform), any_with(DirectionalLight, Transform))
 
     def extract(
         self,
@@ -166,7 +169,7 @@ class FrameExtractor:
         origin = render_origin(world)
         origin_key = origin.tobytes()
         view = self.view(cam, origin, origin_key)
-        positional, directional = self.lights(world)
+        positional, directional = self.lights(world, self._kinds)
         chunks = self.chunks(world, mesh_count, material_count)
         aside = None
         if set_aside is not None and chunks:
@@ -240,18 +243,22 @@ class FrameExtractor:
         return self._planes
 
     @staticmethod
-    def lights(world: World) -> tuple[list[PositionalLights], list[DirectionalLights]]:
+    def lights(
+        world: World, kinds: tuple[Callable[[World], bool], ...] | None = None
+    ) -> tuple[list[PositionalLights], list[DirectionalLights]]:
         """Per table: point lights (views of their columns), spot lights (with the direction each
-        shines, from its rotation, and its cone) and directional lights (see light_rows.py)."""
+        shines, from its rotation, and its cone) and directional lights (see light_rows.py).
+        `kinds`: whether the world has each (point, spot, directional; run conditions)."""
+        points, spots, suns = kinds or (lambda w: True,) * 3
         positional = []
-        for batch in world.query(PointLight, Transform, write=()):
+        for batch in world.query(PointLight, Transform, write=()) if points(world) else ():
             light = batch[PointLight]
             positional.append(
                 PositionalLights(
                     batch[Transform].position, light.radius, light.color, light.intensity, entity=batch.entities
                 )
             )
-        for batch in world.query(SpotLight, Transform, write=()):
+        for batch in world.query(SpotLight, Transform, write=()) if spots(world) else ():
             spot, transform = batch[SpotLight], batch[Transform]
             positional.append(
                 PositionalLights(
@@ -265,7 +272,7 @@ class FrameExtractor:
                 )
             )
         directional = []
-        for batch in world.query(DirectionalLight, Transform, write=()):
+        for batch in world.query(DirectionalLight, Transform, write=()) if suns(world) else ():
             sun = batch[DirectionalLight]
             directional.append(
                 DirectionalLights(local_minus_z(batch[Transform].rotation), sun.color, sun.illuminance, batch.entities)

@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from ..components import Shadow
+from ..ecs.schedule import any_with
 from ..ecs.world import World
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
 from ..gpu.device import Device
@@ -66,6 +67,7 @@ class ShadowPass:
     def __init__(
         self, device: Device, frame_set_layout: DescriptorSetLayout, secondaries: SecondaryBuffers, frames: int
     ):
+        self._casters = any_with(Shadow)  # some light has a Shadow (kept while the structure stays)
         self.device = device
         self.vk = device.vk
         self.set_layout = frame_set_layout
@@ -97,7 +99,7 @@ class ShadowPass:
     def plan(self, world: World, data: FrameData, only: set[int] | None = None) -> list[ShadowView]:
         """This frame's drawn views (none without a Shadow: one query, no work), of every casting
         light or of those whose entities are in `only`."""
-        casts = any(len(batch) for batch in world.query(Shadow, write=()))
+        casts = self._casters(world)
         self.last_views = shadow_views(world, data.camera, data.origin, only) if casts else []
         return self.last_views
 
