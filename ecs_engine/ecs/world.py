@@ -412,9 +412,11 @@ class World:
         A queued `remove` of a component the entity no longer has is skipped; any other
         failing command is reported after all the others were applied.
         """
-        if self._local.iter_depth or self._local.system is not None:
+        local = self._local
+        if local.iter_depth or local.system is not None:
             raise EcsError("flush() cannot run while a system or a query loop is active")
-        self._queue.apply(self.storage, self.write_tick)
+        if len(self._queue):  # most sync points have nothing queued
+            self._queue.apply(self.storage, self.write_tick)
 
     # ---------------------------------------------------------------- systems
     def run_system(self, system: RunningSystem, dt: float) -> None:

@@ -147,6 +147,7 @@ class FrameExtractor:
         self.temporal = TemporalCulling()
         # which light kinds the world has (kept while its structure stays): absent ones cost no query
         self._kinds = (any_with(PointLight, Transform), any_with(SpotLight, Transform), any_with(DirectionalLight, Transform))
+        self._point_lights: dict[int, tuple[Any, int, int, PositionalLights]] = {}  # per table: views kept
 
     def extract(
         self,
@@ -169,7 +170,7 @@ class FrameExtractor:
         origin = render_origin(world)
         origin_key = origin.tobytes()
         view = self.view(cam, origin, origin_key)
-        positional, directional = self.lights(world, self._kinds)
+        positional, directional = self.lights(world, self._kinds, self._point_lights)
         chunks = self.chunks(world, mesh_count, material_count)
         aside = None
         if set_aside is not None and chunks:
@@ -244,20 +245,27 @@ class FrameExtractor:
 
     @staticmethod
     def lights(
-        world: World, kinds: tuple[Callable[[World], bool], ...] | None = None
+        world: World,
+        kinds: tuple[Callable[[World], bool], ...] | None = None,
+        kept: dict[int, tuple[Any, int, int, PositionalLights]] | None = None,
     ) -> tuple[list[PositionalLights], list[DirectionalLights]]:
         """Per table: point lights (views of their columns), spot lights (with the direction each
         shines, from its rotation, and its cone) and directional lights (see light_rows.py).
-        `kinds`: whether the world has each (point, spot, directional; run conditions)."""
+        `kinds`: whether the world has each (point, spot, directional; run conditions); `kept`:
+        a table's point lights, kept while it keeps its layout and rows (views see new values)."""
         points, spots, suns = kinds or (lambda w: True,) * 3
+        kept = {} if kept is None else kept
         positional = []
         for batch in world.query(PointLight, Transform, write=()) if points(world) else ():
-            light = batch[PointLight]
-            positional.append(
-                PositionalLights(
+            table = batch.table
+            found = kept.get(table.id)
+            if found is None or found[0] is not table or found[1] != table.version or found[2] != len(batch):
+                light = batch[PointLight]
+                made = PositionalLights(
                     batch[Transform].position, light.radius, light.color, light.intensity, entity=batch.entities
                 )
-            )
+                found = kept[table.id] = (table, table.version, len(batch), made)
+            positional.append(found[3])
         for batch in world.query(SpotLight, Transform, write=()) if spots(world) else ():
             spot, transform = batch[SpotLight], batch[Transform]
             positional.append(
