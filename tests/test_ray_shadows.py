@@ -231,7 +231,7 @@ def test_lights_past_the_traced_ones_read_shadow_maps():
         world, sun = two_lights(gpu)
         one, one_draws, one_mapped = draw(gpu, world, traced_lights=1, shadows="raytraced")
         none, _, none_mapped = draw(gpu, two_lights(gpu)[0], traced_lights=0, shadows="raytraced")
-        traced, _, traced_mapped = draw(gpu, two_lights(gpu)[0], shadows="raytraced")
+        _, _, traced_mapped = draw(gpu, two_lights(gpu)[0], shadows="raytraced")
         mapped, _, _ = draw(gpu, two_lights(gpu)[0], light_culling="deferred")
         plain, _, _ = draw(gpu, two_lights(gpu, shadow=False)[0], light_culling="deferred")
     spot = {e for e in none_mapped if e != sun}

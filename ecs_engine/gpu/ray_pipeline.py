@@ -38,7 +38,7 @@ class RayPipeline:
         layout: Any,
         raygen: str,
         misses: Sequence[str],
-        hits: Sequence[str | None | tuple[str | None, str | None]] = (),
+        hits: Sequence[str | tuple[str | None, str | None] | None] = (),
         constants: tuple[int, ...] = (),
         recursion: int = 1,
     ) -> None:

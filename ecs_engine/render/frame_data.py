@@ -146,7 +146,11 @@ class FrameExtractor:
         self._split: list[tuple[np.ndarray, np.ndarray]] = []  # per table: chunk rows, rows set aside
         self.temporal = TemporalCulling()
         # which light kinds the world has (kept while its structure stays): absent ones cost no query
-        self._kinds = (any_with(PointLight, Transform), any_with(SpotLight, Transform), any_with(DirectionalLight, Transform))
+        self._kinds = (
+            any_with(PointLight, Transform),
+            any_with(SpotLight, Transform),
+            any_with(DirectionalLight, Transform),
+        )
         self._point_lights: dict[int, tuple[Any, int, int, PositionalLights]] = {}  # per table: views kept
 
     def extract(

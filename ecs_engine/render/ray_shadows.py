@@ -64,7 +64,6 @@ from .ray_instances import write_instances
 from .shadow_denoise import ShadowDenoise
 from .shadow_mask import ShadowMask
 
-
 SHADOW_METHODS = ("maps", "raytraced")
 SOFT_RAYS = 4  # rays per pixel of a light whose Shadow asks for PCSS (an area light)
 REBUILD_EVERY = 30  # frames between full builds of the top level (refits in between)
@@ -279,7 +278,8 @@ class RayShadows:
             caster = not chunk.flags & NOT_CASTER
             at = slice(chunk.offset, end)
             own = pairs[at] if pairs is not None else None
-            write_instances(chunk.model, chunk.handle, blas, chunk.offset, caster, rows[at], chunk.material, cutout, own)
+            out = rows[at]
+            write_instances(chunk.model, chunk.handle, blas, chunk.offset, caster, out, chunk.material, cutout, own)
 
         if jobs is not None and len(chunks) > 1:
             jobs.map(job, chunks)
