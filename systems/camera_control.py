@@ -42,10 +42,13 @@ class FlyInput(NamedTuple):
     lift: float | np.ndarray = 0.0
 
 
+NO_INPUT = FlyInput()  # every axis 0.0
+
+
 def fly_input(state: InputState | None) -> FlyInput:
-    """The axes for this frame; all zero without input or while the UI has the keyboard."""
+    """The axes for this frame; all zero (NO_INPUT) without input or while the UI has the keyboard."""
     if state is None or state.keyboard_captured_by_ui:
-        return FlyInput()
+        return NO_INPUT
     keys = state.pressed
 
     def axis(plus: str, minus: str) -> float:
@@ -108,7 +111,7 @@ class FlyCameraSystem(System):
         # no key held: only cameras whose FlyCamera was changed (yaw, pitch set by code) need
         # their rotation rebuilt; the others stay put, and their Transform takes no write tick,
         # so the transform system skips them too
-        idle = all(a == 0 if isinstance(a, float) else not np.any(a) for a in axes)
+        idle = axes is NO_INPUT or all(a == 0 if isinstance(a, float) else not np.any(a) for a in axes)
         batches = query.iter(changed=(FlyCamera,)) if idle else query
         for batch in batches:
             t = batch[Transform]

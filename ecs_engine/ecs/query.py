@@ -213,7 +213,11 @@ class Query:
 
 def _changed(table: ArchetypeTable, keys: list[ColumnKey], since: int) -> bool:
     ticks = table.column_ticks
-    return any(ticks[k] > since for k in keys if k in ticks)
+    for k in keys:  # a loop, not any() over a generator: asked per table per frame
+        tick = ticks.get(k)
+        if tick is not None and tick > since:
+            return True
+    return False
 
 
 def check_access(

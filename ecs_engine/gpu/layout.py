@@ -50,6 +50,7 @@ class Struct:
     doc: str = ""
     members: list[Member] = field(init=False)
     dtype: np.dtype = field(init=False)
+    size: int = field(init=False)  # bytes a row (dtype.itemsize): read every frame, so a plain attribute
 
     def __post_init__(self) -> None:
         names, formats, offsets, members = [], [], [], []
@@ -70,10 +71,7 @@ class Struct:
         self.dtype = np.dtype(
             {"names": names, "formats": formats, "offsets": offsets, "itemsize": -(-offset // biggest) * biggest}
         )
-
-    @property
-    def size(self) -> int:
-        return self.dtype.itemsize
+        self.size = self.dtype.itemsize
 
     def offset(self, name: str) -> int:
         return next(m.offset for m in self.members if m.name == name)

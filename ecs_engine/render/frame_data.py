@@ -191,7 +191,7 @@ class FrameExtractor:
             planes=planes,
             lights=positional,
             directional=directional,
-            light_count=sum(len(p) for p in positional) + sum(len(d) for d in directional),
+            light_count=sum(map(len, positional)) + sum(map(len, directional)),
             chunks=chunks,
             candidates=sum(len(c.handle) for c in chunks),
             set_aside=aside,

@@ -67,10 +67,14 @@ class DirectionalLights:
 def light_features(positional: list[PositionalLights], directional: list[DirectionalLights]) -> int:
     """The FEATURE_* bits of the light kinds present: the mesh shaders read only those."""
     features = 0
-    if any(p.direction is not None and len(p) for p in positional):
-        features |= FEATURE_SPOT_LIGHTS
-    if any(len(d) for d in directional):
-        features |= FEATURE_DIRECTIONAL_LIGHTS
+    for p in positional:
+        if p.direction is not None and len(p):
+            features |= FEATURE_SPOT_LIGHTS
+            break
+    for d in directional:
+        if len(d):
+            features |= FEATURE_DIRECTIONAL_LIGHTS
+            break
     return features
 
 

@@ -196,7 +196,10 @@ class RenderPath(Protocol):
 
 def summed_counts(results: list[ChunkResult]) -> tuple[int, int, int]:
     """(draws, visible, triangles) over the chunks recorded on the CPU."""
-    return (sum(r.draws for r in results), sum(r.visible for r in results), sum(r.triangles for r in results))
+    draws = visible = triangles = 0
+    for r in results:
+        draws, visible, triangles = draws + r.draws, visible + r.visible, triangles + r.triangles
+    return draws, visible, triangles
 
 
 class PathFactory(Protocol):
