@@ -268,6 +268,7 @@ def write_light_shadows(
 
 
 def _name(out: np.ndarray, row: int, views: tuple[int, int] | None, place: int | None) -> None:
+    if views is None and place is None:
+        return  # a light that casts no shadow: cone.z and cone.w stay 0
     first, count = views if views is not None else (-1, 0)
-    if views is not None or place is not None:
-        out[row, 14:16] = (first + 1, count + (0 if place is None else RAY_PLACE * (place + 1)))
+    out[row, 14:16] = (first + 1, count + (0 if place is None else RAY_PLACE * (place + 1)))

@@ -33,6 +33,7 @@ import numpy as np
 
 from ..components import DirectionalLight, PointLight, Shadow, SpotLight, Transform
 from ..components.shadow import SHADOW_PCSS
+from ..ecs.schedule import any_with
 from ..ecs.world import World
 from ..errors import UsageError
 from ..gpu.acceleration import AS_INSTANCE, TopLevel, ray_input_usage
@@ -138,11 +139,11 @@ class _Slot:
         self.set = pool.allocate(layout)
         self.named: tuple[Any, ...] = ()
 
-    def pairs_for(self, device: Any, count: int) -> np.ndarray:
+    def pairs_for(self, count: int) -> np.ndarray:
         self.pairs = self.pairs.grown(max(count, 1) * 8)
         return self.pairs.array(np.uint32, (max(count, 1), 2))
 
-    def mesh_buffers(self, device: Any, meshes: Any) -> None:
+    def mesh_buffers(self, meshes: Any) -> None:
         """Every mesh's vertex and index buffer addresses (again when meshes were added)."""
         if self.mesh_count == len(meshes):
             return
@@ -238,11 +239,12 @@ class RayShadows:
         self._denoiser: ShadowDenoise | None = None
         self._traced: ShadowMask | None = None  # the rays' mask when they are filtered
         self._cutouts: tuple[Any, int, np.ndarray | None] = (None, -1, None)  # materials, version, cutouts()
+        self._casters = any_with(Shadow)  # some light has a Shadow (as ShadowPass asks)
 
     # ------------------------------------------------------------ per frame
     def plan(self, world: World, data: FrameData) -> list[RayLight]:
         """The lights traced this frame (`overflow`: those left to the shadow maps)."""
-        found = ray_lights(world, data.origin) if any(len(b) for b in world.query(Shadow, write=())) else []
+        found = ray_lights(world, data.origin) if self._casters(world) else []
         limit = max(0, min(self.max_lights, MAX_RAY_LIGHTS))
         self.lights, self.overflow = found[:limit], {light.entity for light in found[limit:]}
         return self.lights
@@ -269,9 +271,9 @@ class RayShadows:
         if covered != count:  # rows no chunk writes stay inactive (a strided write: only when needed)
             rows[:count]["blas"] = 0
         cutout = self.cutouts(materials)
-        pairs = s.pairs_for(self.device, count) if cutout is not None else None
+        pairs = s.pairs_for(count) if cutout is not None else None
         if cutout is not None:
-            s.mesh_buffers(self.device, self.meshes)
+            s.mesh_buffers(self.meshes)
 
         def job(chunk: Chunk) -> None:
             end = chunk.offset + len(chunk.handle)

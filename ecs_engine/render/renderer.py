@@ -392,9 +392,10 @@ class Renderer(TargetForms):
         deferred = self.target.form == "deferred"
         named = self.shadows.light_views(views) if views else {}
         places = ray.places(traced) if ray is not None and traced else {}
-        eye = data.camera.position - data.origin
-        light_shadows = (data.lights, data.directional, eye, data.origin, named)
-        name = partial(write_light_shadows, *light_shadows, places=places) if named or places else None
+        name = None  # a frame without shadows names nothing (and pays nothing for it)
+        if named or places:
+            eye = data.camera.position - data.origin
+            name = partial(write_light_shadows, data.lights, data.directional, eye, data.origin, named, places=places)
         positional = pf.write_frame(self.device, data, materials, grid, self.ambient, deferred, name)
         if ray is not None and traced:
             ray.prepare(slot, data, self.jobs, width, height, materials)
