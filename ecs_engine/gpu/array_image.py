@@ -33,6 +33,7 @@ class ArrayImage:
             flags, storage = vk.VK_IMAGE_CREATE_MUTABLE_FORMAT_BIT, vk.VK_FORMAT_R8G8B8A8_UNORM
             kind = vk.VK_IMAGE_VIEW_TYPE_2D_ARRAY
             views = [(vk.VK_FORMAT_R8G8B8A8_SRGB, kind), (vk.VK_FORMAT_R8G8B8A8_UNORM, kind)]
+        device.objects_version += 1
         self.handle = vk.vkCreateImage(
             device.handle,
             vk.VkImageCreateInfo(

@@ -36,6 +36,7 @@ def make_render_pass(device: Device, attachments: list[Any], subpasses: list[Any
 
 def create_framebuffer(device: Device, render_pass: Any, views: list[Any], width: int, height: int) -> Any:
     vk = device.vk
+    device.objects_version += 1
     return vk.vkCreateFramebuffer(
         device.handle,
         vk.VkFramebufferCreateInfo(renderPass=render_pass, pAttachments=views, width=width, height=height, layers=1),

@@ -66,6 +66,7 @@ class DescriptorPool:
 def write_buffers(device: Device, descriptor_set: Any, writes: Sequence[tuple[int, int, Buffer]]) -> None:
     """Point bindings of a set at whole buffers: (binding, descriptor type, buffer)."""
     vk = device.vk
+    device.objects_version += 1
     vk.vkUpdateDescriptorSets(
         device.handle,
         len(writes),
@@ -88,6 +89,7 @@ def write_buffers(device: Device, descriptor_set: Any, writes: Sequence[tuple[in
 def write_images(device: Device, descriptor_set: Any, binding: int, infos: Sequence[Any]) -> None:
     """Point a combined image sampler array binding at `infos` (VkDescriptorImageInfo), from element 0."""
     vk = device.vk
+    device.objects_version += 1
     vk.vkUpdateDescriptorSets(
         device.handle,
         1,
@@ -130,6 +132,7 @@ def write_acceleration_structure(device: Device, descriptor_set: Any, binding: i
             "descriptorType": lib.VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR,
         },
     )
+    device.objects_version += 1
     lib.vkUpdateDescriptorSets(device.handle, 1, write, 0, ffi.NULL)
 
 
@@ -175,4 +178,5 @@ def write_set(
         )
         for binding, view in storage_images
     ]
+    device.objects_version += 1
     vk.vkUpdateDescriptorSets(device.handle, len(writes), writes, 0, None)

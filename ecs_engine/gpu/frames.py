@@ -1,6 +1,9 @@
 """Frames in flight: per frame a command pool (reset whole), a primary command buffer, a fence,
 swapchain semaphores and a timestamp query pool read back without waiting.
 
+A slot's primary is recorded without ONE_TIME_SUBMIT, so a frame that would record the same
+commands again submits it as it stands (`resubmit`; render/frame_replay.py decides when).
+
 The per-frame calls go straight to the cffi library (`vk.lib`) with structs and arrays made
 once: the binding's wrappers cost ~3-4 us a call against ~0.7 us, and a small scene's whole CPU
 frame budget is 250 us. Results are checked as the wrappers do (same exceptions)."""
@@ -39,7 +42,7 @@ class FrameRing:
         self.index = 0
         self.last_wait_ms = 0.0  # time begin() spent waiting for the GPU (not CPU work)
         self.timestamps = device.info.timestamp_valid_bits > 0
-        self._begin_info = vk.VkCommandBufferBeginInfo(flags=vk.VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT)
+        self._begin_info = vk.VkCommandBufferBeginInfo(flags=0)  # not one-time: it may be submitted again
         self._begin_info_ptr = vk.ffi.addressof(self._begin_info)
         self._stamps = vk.ffi.new("uint64_t[2]")
         for _ in range(count):
@@ -66,29 +69,46 @@ class FrameRing:
         self._submits: dict[tuple[int, int, int], Any] = {}
 
     def begin(self) -> tuple[Frame, float | None]:
-        """Wait for the next frame slot, reset its pool; return it with the GPU time (ms) of the
-        work it last carried, which is complete once its fence is signalled (no extra wait)."""
-        vk = self.device.vk
-        lib = vk.lib
+        """`acquire`, then `open`: the next slot, its primary ready to record."""
+        frame, gpu_ms = self.acquire()
+        self.open(frame)
+        return frame, gpu_ms
+
+    def acquire(self) -> tuple[Frame, float | None]:
+        """Wait for the next frame slot; return it with the GPU time (ms) of the work it last
+        carried, which is complete once its fence is signalled (no extra wait). Its primary still
+        holds what was recorded last: `open` it to record, or `resubmit` it."""
         frame = self.frames[self.index]
         t0 = time.perf_counter()
         self.wait(frame)
         # some drivers (lavapipe) still block here until the queries land: count it as waiting
         gpu_ms = self._read_timestamps(frame) if frame.submitted else None
         self.last_wait_ms = (time.perf_counter() - t0) * 1e3
+        return frame, gpu_ms
+
+    def open(self, frame: Frame) -> None:
+        """Reset the slot's pool and begin its primary (the timestamps first)."""
+        vk = self.device.vk
+        lib = vk.lib
         check(vk, lib.vkResetCommandPool(self.device.handle, frame.pool, 0))
         check(vk, lib.vkBeginCommandBuffer(frame.command_buffer, self._begin_info_ptr))
         if self.timestamps:
             lib.vkCmdResetQueryPool(frame.command_buffer, frame.queries, 0, 2)
             lib.vkCmdWriteTimestamp(frame.command_buffer, vk.VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, frame.queries, 0)
-        return frame, gpu_ms
 
     def end(self, frame: Frame, wait: Any = None, signal: Any = None) -> None:
+        """End the slot's primary (the last timestamp) and submit it."""
         vk = self.device.vk
         lib = vk.lib
         if self.timestamps:
             lib.vkCmdWriteTimestamp(frame.command_buffer, vk.VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, frame.queries, 1)
         check(vk, lib.vkEndCommandBuffer(frame.command_buffer))
+        self.resubmit(frame, wait, signal)
+
+    def resubmit(self, frame: Frame, wait: Any = None, signal: Any = None) -> None:
+        """Submit the slot's primary as it was last recorded (its timestamps with it)."""
+        vk = self.device.vk
+        lib = vk.lib
         check(vk, lib.vkResetFences(self.device.handle, 1, frame.fence_array))
         check(vk, lib.vkQueueSubmit(self.device.queue, 1, self._submit_info(frame, wait, signal), frame.fence))
         frame.submitted = self.timestamps

@@ -30,6 +30,7 @@ class Buffer:
         self._views: dict[tuple[Any, Any, int], np.ndarray] = {}  # array()'s, made once each
         if where == DEVICE:
             usage |= vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
+        device.objects_version += 1
         self.handle = vk.vkCreateBuffer(
             device.handle,
             vk.VkBufferCreateInfo(size=max(self.size, 4), usage=usage, sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE),
@@ -137,6 +138,7 @@ class Image:
         vk = device.vk
         self.device = device
         self.width, self.height, self.format, self.aspect = width, height, fmt, aspect
+        device.objects_version += 1
         self.handle = vk.vkCreateImage(
             device.handle,
             vk.VkImageCreateInfo(

@@ -168,6 +168,7 @@ def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
             renderPass=spec.render_pass,
             subpass=spec.subpass,
         )
+        device.objects_version += 1
         return vk.vkCreateGraphicsPipelines(device.handle, device.pipeline_cache.handle, 1, [info], None)[0]
     finally:
         vk.vkDestroyShaderModule(device.handle, vert, None)
@@ -185,6 +186,7 @@ def compute_pipeline(device: Device, shader: str, layout: Any, constants: tuple[
             stage=vk.VK_SHADER_STAGE_COMPUTE_BIT, module=module, pName="main", pSpecializationInfo=info_
         )
         info = vk.VkComputePipelineCreateInfo(stage=stage, layout=layout)
+        device.objects_version += 1
         return vk.vkCreateComputePipelines(device.handle, device.pipeline_cache.handle, 1, [info], None)[0]
     finally:
         vk.vkDestroyShaderModule(device.handle, module, None)

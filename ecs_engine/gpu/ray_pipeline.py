@@ -99,6 +99,7 @@ class RayPipeline:
             info.layout = layout
             out = ffi.new("VkPipeline*")
             create = raw_device_function(device, "vkCreateRayTracingPipelinesKHR")
+            device.objects_version += 1
             check(vk, create(device.handle, ffi.NULL, device.pipeline_cache.handle, 1, info, ffi.NULL, out))
             self.handle = out[0]
         finally:

@@ -1,5 +1,6 @@
 """Secondary command buffers for worker threads: per frame in flight and per thread, one command
-pool (Vulkan pools are not thread-safe) that is reset whole when the frame slot comes round."""
+pool (Vulkan pools are not thread-safe) that is reset whole when the frame slot comes round,
+unless the slot's frame is replayed (render/frame_replay.py): then what it recorded stays."""
 
 from __future__ import annotations
 
@@ -71,13 +72,14 @@ class SecondaryBuffers:
         return cb
 
     def begin_info(self, render_pass: Any, subpass: int, framebuffer: Any) -> Any:
-        """Begin info for secondaries inside `render_pass`/`subpass` (one per frame, shared)."""
+        """Begin info for secondaries inside `render_pass`/`subpass` (one per frame, shared); not
+        one-time: a frame recorded the same way again executes them again (render/frame_replay.py)."""
         vk = self.device.vk
         inheritance = vk.VkCommandBufferInheritanceInfo(
             renderPass=render_pass, subpass=subpass, framebuffer=framebuffer
         )
         return vk.VkCommandBufferBeginInfo(
-            flags=vk.VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT | vk.VK_COMMAND_BUFFER_USAGE_RENDER_PASS_CONTINUE_BIT,
+            flags=vk.VK_COMMAND_BUFFER_USAGE_RENDER_PASS_CONTINUE_BIT,
             pInheritanceInfo=inheritance,
         )
 
@@ -85,6 +87,7 @@ class SecondaryBuffers:
         """Destroy the pools of threads that are gone (a resized worker pool); the device must be
         idle: their buffers may belong to frames in flight."""
         vk = self.device.vk
+        self.device.objects_version += 1  # what they recorded may not be submitted again
         for pools in self._pools:
             for ident in [k for k in pools if k not in alive]:
                 vk.vkDestroyCommandPool(self.device.handle, pools.pop(ident).handle, None)

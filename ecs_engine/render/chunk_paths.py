@@ -246,6 +246,7 @@ class ChunkPath:
     uses_recorder: ClassVar[bool] = True  # the CPU records the draws, with one of RECORDERS
     vertex_shader: ClassVar[str]
     instanced: ClassVar[bool]
+    replayable: ClassVar[bool]  # a chunk's draws depend on its run counts alone (frame_replay.py)
     push_bytes: ClassVar[int]  # push constant range of the mesh pipelines (0: none)
 
     def __init__(self, ctx: PathContext, recorder: str) -> None:
@@ -307,8 +308,14 @@ class ChunkPath:
             return ChunkResult(None, 0, 0, 0)
         if chunk.flags & NOT_RECEIVER:
             rows["misc"][:n, 2] = 1  # no shadow falls on these (mesh_vertex.glsl)
-        cb, draws, triangles = self._recorder.record(rows, key_counts, frame.row_base + chunk.offset, frame)
-        return ChunkResult(cb, n, draws, triangles)
+        first = frame.row_base + chunk.offset
+        recorded = (first, n, key_counts.tobytes())  # the draws depend on these alone (instanced)
+        if frame.reuse is not None:  # the slot's last frame was recorded like this one (frame_replay.py)
+            kept = frame.reuse.get(first)
+            if kept is not None and kept[0] == recorded:
+                return kept[1]  # its secondary, still recorded: the same draws over the rows just written
+        cb, draws, triangles = self._recorder.record(rows, key_counts, first, frame)
+        return ChunkResult(cb, n, draws, triangles, recorded=recorded)
 
     def finish(self, cb: Any, frame: FrameInputs, results: list[ChunkResult], candidates: int) -> list[Any]:
         return [r.command_buffer for r in results if r.command_buffer is not None]
@@ -327,6 +334,7 @@ class InstancedPath(ChunkPath):
     name = "instanced"
     vertex_shader = "mesh.vert"
     instanced = True
+    replayable = True
     push_bytes = 0
 
 
@@ -334,6 +342,7 @@ class PerEntityPath(ChunkPath):
     name = "per_entity"
     vertex_shader = "mesh_push.vert"
     instanced = False
+    replayable = False  # the rows are in the pushes: recorded anew each frame
     push_bytes = INSTANCE.size
 
     def __init__(self, ctx: PathContext, recorder: str) -> None:

@@ -118,6 +118,7 @@ class FrameInputs:
     ahead: Any = None  # the FrameData, where the culling decided the camera's rows ahead (temporal)
     occlusion: bool = False  # --culling occlusion: the indirect path culls what is hidden too (occlusion.py)
     lod: bool = False  # the indirect path draws each row at the coarsest level of detail its size allows
+    reuse: Any = None  # the chunks the slot's last frame recorded, to give back when unchanged (frame_replay.py)
 
 
 @dataclass
@@ -135,6 +136,7 @@ class FrameStats:
     record_ms: float = 0.0  # the chunk jobs: cull, write rows, record secondaries
     chunks: int = 0
     candidates: int = 0  # entities with a mesh, before culling
+    replayed: bool = False  # the slot's last recording was submitted again (frame_replay.py)
 
 
 @dataclass
@@ -144,6 +146,7 @@ class ChunkResult:
     draws: int
     triangles: int
     key_counts: np.ndarray | None = None  # rows per key (indirect: the GPU's regions)
+    recorded: tuple[int, int, bytes] | None = None  # what its secondary was recorded from (frame_replay.py)
 
 
 @dataclass

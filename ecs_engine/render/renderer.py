@@ -33,6 +33,7 @@ from .chunk_paths import RECORDERS, InstancedPath, PerEntityPath, check_recorder
 from .environment import EnvironmentMap
 from .frame_data import FrameData, FrameExtractor, check_culling
 from .frame_jobs import FrameJobs, job_name
+from .frame_replay import FrameReplay, replay_key, replayable
 from .frame_resources import FrameResources, frame_sets
 from .indirect_path import IndirectPath
 from .layouts import (
@@ -126,6 +127,7 @@ class Renderer(TargetForms):
         try:
             self.frames = FrameRing(device)
             n = len(self.frames.frames)
+            self.replay = FrameReplay(n)  # frames submitted again while their recording would repeat
             self.secondaries = SecondaryBuffers(device, n)
             self.set_layout, self.pool = frame_sets(device, n)
             traced = shadows == "raytraced"
@@ -255,40 +257,6 @@ class Renderer(TargetForms):
             self.fill = fill
             self._respecialise(lambda: setattr(self, "fill", old))
 
-    @property
-    def shadow_method(self) -> str:
-        """maps, or raytraced (ray_shadows.py)."""
-        return "raytraced" if self.ray_shadows is not None else "maps"
-
-    @property
-    def shadow_denoise(self) -> bool:
-        """Ray-traced soft shadows are filtered (shadow_denoise.py); kept while maps are drawn."""
-        return self._shadow_denoise
-
-    @shadow_denoise.setter
-    def shadow_denoise(self, on: bool) -> None:
-        self._shadow_denoise = bool(on)
-        if self.ray_shadows is not None:
-            self.ray_shadows.denoise = self._shadow_denoise
-
-    def set_shadow_method(self, method: str) -> None:
-        """Shadow maps or ray-traced shadows from the next frame (a device without ray tracing
-        refuses raytraced: UsageError, nothing changed)."""
-        check_shadow_method(method, self.device, self.target.samples)
-        if method == self.shadow_method:
-            return
-        self.device.wait_idle()
-        frames, layout = len(self.frames.frames), self.set_layout.handle
-        made = RayShadows(self.device, self.meshes, frames, layout) if method == "raytraced" else None
-        if self.ray_shadows is not None:
-            self.ray_shadows.destroy()
-        self.ray_shadows = self.output.ray_shadows = made
-        self.shadow_denoise = self._shadow_denoise
-        if made is None and self.material_features & FEATURE_RAY_SHADOWS:  # the maps' lookups again
-            self.material_features &= ~FEATURE_RAY_SHADOWS
-            self._swap_path(self._make_path(self.mode, self.cpu_recorder))
-        self.ensure_output()  # the deferred form for the rays, or the form the rest needs
-
     def _check_features(self, features: int) -> None:
         """Rebuild the path's pipelines when the world's materials or lights need a shading model,
         alpha mask or light kind they were specialised without (grown, never shrunk)."""
@@ -380,7 +348,7 @@ class Renderer(TargetForms):
         self._sync_textures(materials)
         if self.jobs is not None and self.jobs.generation != self._jobs_generation:
             self._forget_old_threads()
-        frame, gpu_ms = self.frames.begin()
+        frame, gpu_ms = self.frames.acquire()  # its primary is opened only when it must be recorded
         slot = frame.slot
         pf = self.per_frame[slot]
         if self.shadows.ensure(views):  # new maps (the device was waited for): every set names them
@@ -400,6 +368,10 @@ class Renderer(TargetForms):
         if ray is not None and traced:
             ray.prepare(slot, data, self.jobs, width, height, materials)
         target = self.target_state(framebuffer or self.target.framebuffer, width, height)
+        key = None  # a frame that may be submitted again (frame_replay.py): what its recording depends on
+        if replayable(self, views, traced, forward):
+            key = replay_key(self, target, positional, grid, data.light_count, readback)
+        reuse = self.replay.offer(slot, key)
         inputs = FrameInputs(
             slot=slot,
             descriptor_set=pf.descriptor_set,
@@ -413,10 +385,12 @@ class Renderer(TargetForms):
             ahead=data if data.masks is not None else None,
             occlusion=self.culling == "occlusion",
             lod=self.lod,
+            reuse=reuse,
         )
         path = self.path
         path.begin_frame(inputs)
-        self.secondaries.reset(slot)
+        if reuse is None:  # else the slot's secondaries stay recorded, for the chunks to give back
+            self.secondaries.reset(slot)
         if self.overlay is not None:
             self.overlay.prepare(slot, len(self.frames.frames))
         t0 = time.perf_counter()
@@ -427,29 +401,37 @@ class Renderer(TargetForms):
         done = self.jobs.map(work.run, work.work, job_name) if self.jobs is not None else list(map(work.run, work.work))
         results, shadow_buffers = work.results(done)
         record_ms = (time.perf_counter() - t0) * 1e3
-        cb = frame.command_buffer
-        secondaries = path.finish(cb, inputs, results, data.candidates)
-        aside = self._record_set_aside(inputs, data, materials)
-        if grid is not None:
-            self.lights.record(cb, pf, grid, data.light_count)
-        self.shadows.record(cb, views, shadow_buffers)
-        light_draws = self.output.record(
-            cb,
-            secondaries,
-            aside[0],
-            positional,
-            target,
-            pf.set_array,
-            (self.tone_map, self.exposure),
-            self.material_features,
-            self.overlay,
-            slot,
-            sky=self.environment.sky,
-            transparent=aside[4],
-        )
-        if readback:
-            self.target.record_readback(cb)
-        self.frames.end(frame, wait=wait, signal=signal)
+        again = self.replay.replay(slot, results) if reuse is not None else None
+        if again is not None:  # every chunk as the slot last recorded it: its primary as it stands
+            light_draws, aside = again.light_draws, (None, 0, 0, 0, None)
+            self.frames.resubmit(frame, wait=wait, signal=signal)
+        else:
+            self.frames.open(frame)
+            cb = frame.command_buffer
+            secondaries = path.finish(cb, inputs, results, data.candidates)
+            aside = self._record_set_aside(inputs, data, materials)
+            if grid is not None:
+                self.lights.record(cb, pf, grid, data.light_count)
+            self.shadows.record(cb, views, shadow_buffers)
+            light_draws = self.output.record(
+                cb,
+                secondaries,
+                aside[0],
+                positional,
+                target,
+                pf.set_array,
+                (self.tone_map, self.exposure),
+                self.material_features,
+                self.overlay,
+                slot,
+                sky=self.environment.sky,
+                transparent=aside[4],
+            )
+            if readback:
+                self.target.record_readback(cb)
+            self.frames.end(frame, wait=wait, signal=signal)
+            if reuse is None:
+                self.replay.keep(slot, key, results, light_draws)
         if readback:
             self.frames.wait(frame)
         draws, visible, triangles = path.counts(inputs, results)
@@ -464,6 +446,7 @@ class Renderer(TargetForms):
             record_ms=record_ms,
             chunks=len(data.chunks),
             candidates=data.all_rows,
+            replayed=again is not None,
         )
 
     def _record_set_aside(

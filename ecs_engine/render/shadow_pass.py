@@ -189,6 +189,7 @@ class ShadowPass:
                 for b, _, _, n in self.set_layout.bindings
                 if b != BINDING_GLOBALS
             ]
+            self.device.objects_version += 1
             vk.vkUpdateDescriptorSets(self.device.handle, 0, None, len(copies), copies)
             for s in sets[: len(views)]:
                 s.copied = (frame.descriptor_set, set_version)

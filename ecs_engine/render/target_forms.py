@@ -1,8 +1,9 @@
 """How the renderer's target is drawn (gpu/render_pass.py's forms): forward into the target
 ("direct"), through HDR colour ("hdr") or through a G-buffer lit in compute ("deferred"), as the
 light culling, tone map, exposure, MSAA, blended materials and ray-traced shadows need; switched
-between frames, and what was made against the old render passes made again. A part of Renderer
-(its base class), apart for its size."""
+between frames, and what was made against the old render passes made again; the shadow method
+too (ray-traced shadows need the deferred form). A part of Renderer (its base class), apart for
+its size."""
 
 from __future__ import annotations
 
@@ -10,7 +11,9 @@ from collections.abc import Callable
 from typing import Any
 
 from .frame_data import FrameData
+from .layouts import FEATURE_RAY_SHADOWS
 from .light_clusters import ClusterGrid, check_light_culling
+from .ray_shadows import RayShadows, check_shadow_method
 from .tone_map import wants_hdr
 
 
@@ -27,6 +30,11 @@ class TargetForms:
     overlay: Any
     ray_shadows: Any
     cpu_recorder: str
+    meshes: Any
+    frames: Any
+    set_layout: Any
+    material_features: int
+    _shadow_denoise: bool
     _blends: bool
     _target_generation: int
     _swap_path: Callable[[Any], None]
@@ -49,6 +57,40 @@ class TargetForms:
     @property
     def clustered(self) -> bool:
         return self.lights.clustered
+
+    @property
+    def shadow_method(self) -> str:
+        """maps, or raytraced (ray_shadows.py)."""
+        return "raytraced" if self.ray_shadows is not None else "maps"
+
+    @property
+    def shadow_denoise(self) -> bool:
+        """Ray-traced soft shadows are filtered (shadow_denoise.py); kept while maps are drawn."""
+        return self._shadow_denoise
+
+    @shadow_denoise.setter
+    def shadow_denoise(self, on: bool) -> None:
+        self._shadow_denoise = bool(on)
+        if self.ray_shadows is not None:
+            self.ray_shadows.denoise = self._shadow_denoise
+
+    def set_shadow_method(self, method: str) -> None:
+        """Shadow maps or ray-traced shadows from the next frame (a device without ray tracing
+        refuses raytraced: UsageError, nothing changed)."""
+        check_shadow_method(method, self.device, self.target.samples)
+        if method == self.shadow_method:
+            return
+        self.device.wait_idle()
+        frames, layout = len(self.frames.frames), self.set_layout.handle
+        made = RayShadows(self.device, self.meshes, frames, layout) if method == "raytraced" else None
+        if self.ray_shadows is not None:
+            self.ray_shadows.destroy()
+        self.ray_shadows = self.output.ray_shadows = made
+        self.shadow_denoise = self._shadow_denoise
+        if made is None and self.material_features & FEATURE_RAY_SHADOWS:  # the maps' lookups again
+            self.material_features &= ~FEATURE_RAY_SHADOWS
+            self._swap_path(self._make_path(self.mode, self.cpu_recorder))
+        self.ensure_output()  # the deferred form for the rays, or the form the rest needs
 
     def _light_clusters(self, data: FrameData, width: int, height: int, own_target: bool) -> ClusterGrid | None:
         """This frame's cluster grid, or None for the all-lights loop; a change either way

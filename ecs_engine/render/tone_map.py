@@ -85,6 +85,7 @@ class ToneMapPass:
             descriptorType=vk.VK_DESCRIPTOR_TYPE_INPUT_ATTACHMENT,
             pImageInfo=[info],
         )
+        self.device.objects_version += 1
         vk.vkUpdateDescriptorSets(self.device.handle, 1, [write], 0, None)
         found = self._sets[key] = vk.ffi.new("VkDescriptorSet[1]", [descriptor_set])
         return found
