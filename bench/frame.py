@@ -5,11 +5,15 @@ one thread, 640x360. The frame is what `ecs-engine run` counts (app/loop.py): th
 the render (extract, write, record, submit), minus the time spent waiting for the GPU's fence.
 Small frames need many samples: 2,400 timed frames after 300 of warm-up by default, and
 `--repeat` runs the whole configuration again in the same process (the host drifts).
+`--frame-reuse both` makes each repeat two runs, with the frames' recordings submitted again
+where nothing changed (render/frame_replay.py, the default) and with every frame recorded,
+one after the other: the two compared under the same drift. The target is judged on the first.
 
 JSON (schema_version 1): {"benchmark": "frame", "quick", "machine", "device", "config": {"scene",
-"mode", "threads", "width", "height", "frames", "warmup", "repeat"}, "results": [{"run",
-"cpu_ms_median", "cpu_ms_p99", "cpu_ms_mean", "record_ms_median", "gpu_ms_median", "fps",
-"draws"}], "targets": [{"name", "target", "measured", "unit", "op", "met"}]}.
+"mode", "threads", "width", "height", "frames", "warmup", "repeat", "frame_reuse"}, "results":
+[{"run", "frame_reuse", "replayed" (the share of timed frames submitted again), "cpu_ms_median",
+"cpu_ms_p99", "cpu_ms_mean", "record_ms_median", "gpu_ms_median", "fps", "draws"}], "targets": [{"name",
+"target", "measured", "unit", "op", "met"}]}.
 
 Standalone, `python3 bench/frame.py [options]` measures with whichever ecs_engine is importable
 (an older install too, for old/new runs alternated) and prints the table only.
@@ -21,6 +25,7 @@ import argparse
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -42,6 +47,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--frames", type=int, default=2400, help="timed frames (default 2,400)")
     parser.add_argument("--warmup", type=int, default=300)
     parser.add_argument("--repeat", type=int, default=1, help="runs of the configuration, one after another")
+    parser.add_argument(
+        "--frame-reuse",
+        default="on",
+        choices=("on", "off", "both"),
+        help="submit unchanged frames' recordings again (on, the default), record every frame (off), "
+        "or each repeat both ways, one after the other",
+    )
 
 
 def measure(options: RunOptions, warmup: int) -> dict[str, Any]:
@@ -57,6 +69,7 @@ def measure(options: RunOptions, warmup: int) -> dict[str, Any]:
         "gpu_ms_median": float(np.median(gpu)) if len(gpu) else None,
         "fps": float(result.fps_after(warmup)),
         "draws": result.last_stats.draws,
+        "replayed": float(np.mean(getattr(result, "replayed", [False])[warmup:] or [False])),  # share of frames
         "device": result.device,
     }
 
@@ -75,15 +88,19 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
         mode=args.mode,
         threads=args.threads,
     )
+    ways = {"on": [True], "off": [False], "both": [True, False]}[args.frame_reuse]
     results = []
-    progress.total = repeat
+    progress.total = repeat * len(ways)
     for i in range(repeat):
-        with progress.step(f"{args.scene}, {args.mode}, {args.threads} thread(s), {width}x{height}: run {i + 1}"):
-            results.append(measure(options, warmup) | {"run": i + 1})
+        for reuse in ways:
+            what = f"{args.scene}, {args.mode}, {args.threads} thread(s), {width}x{height}: run {i + 1}"
+            with progress.step(what + ("" if reuse else ", every frame recorded")):
+                run_options = options if reuse else replace(options, frame_reuse=False)  # (older engines: on only)
+                results.append(measure(run_options, warmup) | {"run": i + 1, "frame_reuse": reuse})
     device = results[0].pop("device")
     for r in results[1:]:
         r.pop("device")
-    medians = [r["cpu_ms_median"] for r in results]
+    medians = [r["cpu_ms_median"] for r in results if r["frame_reuse"] == ways[0]]
     targets = []
     if args.scene == "cube" and args.mode == "instanced" and args.threads == 1:
         measured = float(np.median(medians))
@@ -97,17 +114,23 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
                 "met": bool(measured <= TARGET_MS),
             }
         )
-    print(f"{'run':>3} {'cpu median ms':>13} {'cpu p99 ms':>10} {'cpu mean ms':>11} {'record ms':>9} {'gpu ms':>7}")
+    print(
+        f"{'run':>3} {'reuse':>5} {'cpu median ms':>13} {'cpu p99 ms':>10} {'cpu mean ms':>11} {'record ms':>9} "
+        f"{'gpu ms':>7}"
+    )
     for r in results:
         gpu = "n/a" if r["gpu_ms_median"] is None else f"{r['gpu_ms_median']:.3f}"
         print(
-            f"{r['run']:3} {r['cpu_ms_median']:13.4f} {r['cpu_ms_p99']:10.4f} {r['cpu_ms_mean']:11.4f} "
-            f"{r['record_ms_median']:9.4f} {gpu:>7}"
+            f"{r['run']:3} {'on' if r['frame_reuse'] else 'off':>5} {r['cpu_ms_median']:13.4f} {r['cpu_ms_p99']:10.4f} "
+            f"{r['cpu_ms_mean']:11.4f} {r['record_ms_median']:9.4f} {gpu:>7}"
         )
     print(
         f"{args.scene}, {args.mode}, {args.threads} thread(s), {width}x{height}, {frames:,} frames: "
-        f"CPU frame median {np.median(medians):.4f} ms"
+        f"CPU frame median {np.median(medians):.4f} ms (frame reuse {'on' if ways[0] else 'off'})"
     )
+    if len(ways) == 2:
+        off = float(np.median([r["cpu_ms_median"] for r in results if not r["frame_reuse"]]))
+        print(f"every frame recorded: CPU frame median {off:.4f} ms")
     for t in targets:
         print(f"target {'MET ' if t['met'] else 'MISS'} {t['name']}: {t['measured']:.4f} ms (target <= {t['target']})")
     return {
@@ -125,6 +148,7 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
             "frames": frames,
             "warmup": warmup,
             "repeat": repeat,
+            "frame_reuse": args.frame_reuse,
         },
         "results": results,
         "targets": targets,

@@ -12,10 +12,14 @@ def test_frame_quick_writes_json_with_the_target(tmp_path, monkeypatch):
     monkeypatch.syspath_prepend(str(ROOT))
     from bench.__main__ import main
 
-    assert main(["frame", "--quick", "--out", str(tmp_path), "--machine", "ci"]) == 0
+    assert main(["frame", "--quick", "--frame-reuse", "both", "--out", str(tmp_path), "--machine", "ci"]) == 0
     doc = json.loads((tmp_path / "frame-ci.json").read_text())
     assert doc["config"]["scene"] == "cube" and doc["config"]["mode"] == "instanced"
-    (row,) = doc["results"]
-    assert 0 < row["cpu_ms_median"] <= row["cpu_ms_p99"] and row["draws"] >= 1
+    reused, recorded = doc["results"]
+    for row in (reused, recorded):
+        assert 0 < row["cpu_ms_median"] <= row["cpu_ms_p99"] and row["draws"] >= 1
+    # the cube stands still: past the first frame of each slot, every frame is submitted again
+    assert reused["frame_reuse"] and reused["replayed"] == 1.0
+    assert not recorded["frame_reuse"] and recorded["replayed"] == 0.0
     (target,) = doc["targets"]
     assert target["target"] == 0.15 and type(target["met"]) is bool

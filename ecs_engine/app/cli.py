@@ -162,6 +162,13 @@ def render_flags() -> OneLineParser:
         action="store_false",
         help="--shadows raytraced: leave area lights' soft shadows unfiltered (4 rays a pixel: noisy)",
     )
+    common.add_argument(
+        "--no-frame-reuse",
+        dest="frame_reuse",
+        action="store_false",
+        help="record every frame, even one that would record what its frame slot recorded last time "
+        "(by default that recording is submitted again: render/frame_replay.py)",
+    )
     common.add_argument("--lights", type=int, help="lights scene: how many point and spot lights (default 1,024)")
     common.add_argument(
         "--no-shadows", action="store_true", help="shadows scene: no light casts a shadow (for comparison)"

@@ -34,6 +34,7 @@ class RunResult:
     settings: Any = None  # the session's Settings when the run ended
     recreations: int = 0  # swapchain recreations (windowed)
     minimised_waits: int = 0  # loop turns spent waiting while minimised (windowed)
+    replayed: list[bool] = field(default_factory=list)  # per frame: its slot's recording submitted again
 
     @property
     def fps(self) -> float:
@@ -47,6 +48,7 @@ class RunResult:
         self.cpu_ms.append(cpu_ms)
         self.frame_end.append(end)
         self.record_ms.append(stats.record_ms)
+        self.replayed.append(stats.replayed)
         if stats.gpu_ms is not None:
             self.gpu_ms.append(stats.gpu_ms)
         if ui_ms is not None:

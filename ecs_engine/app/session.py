@@ -135,6 +135,7 @@ class Session:
                 shadows=start.shadow_method,
                 shadow_denoise=start.shadow_denoise,
             )
+            self.renderer.replay.enabled = start.frame_reuse
             self.scene = start.scene
             self.world, self.schedule = self._build(start.scene, options.path)
             source.attach(self)
@@ -164,6 +165,7 @@ class Session:
             lod=self.renderer.lod,
             shadow_method=self.renderer.shadow_method,
             shadow_denoise=self.renderer.shadow_denoise,
+            frame_reuse=self.renderer.replay.enabled,
         )
 
     def _build(self, scene: str, path: str | None) -> tuple[World, Schedule]:
@@ -203,6 +205,7 @@ class Session:
         renderer.transparency = wanted.transparency
         renderer.set_shadow_method(wanted.shadow_method)
         renderer.shadow_denoise = wanted.shadow_denoise
+        renderer.replay.enabled = wanted.frame_reuse
         renderer.culling, renderer.lod = culling, wanted.lod
         pool.resize(wanted.threads)
         renderer.ensure_output()  # HDR colour or not, as the tone map and exposure now need

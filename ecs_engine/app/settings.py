@@ -43,6 +43,7 @@ class Settings:
     lod: bool = True  # levels of detail by projected size (the indirect mode: render/mesh_lod.py)
     shadow_method: str = "maps"  # maps | raytraced (render/ray_shadows.py)
     shadow_denoise: bool = True  # ray-traced soft shadows filtered (render/shadow_denoise.py)
+    frame_reuse: bool = True  # a frame that would record what its slot recorded submits that (render/frame_replay.py)
 
 
 @dataclass(frozen=True)
@@ -74,6 +75,7 @@ class RunOptions:
     shadows: bool = True  # the shadows scene's lights cast (--no-shadows: none do)
     shadow_method: str = "maps"  # maps | raytraced: how shadows are drawn (render/ray_shadows.py)
     shadow_denoise: bool = True  # --no-shadow-denoise: ray-traced soft shadows unfiltered
+    frame_reuse: bool = True  # --no-frame-reuse: every frame recorded (render/frame_replay.py)
     chunk_rows: int | None = None  # rows per render job (None: about one per thread, frame_data.MIN_CHUNK_ROWS)
     recorder: str | None = None  # native | python (None: native when numba is there)
     entities: int = 10_000  # the scaling scene's entity count
@@ -104,6 +106,7 @@ class RunOptions:
         "transparency",
         "shadow_method",
         "shadow_denoise",
+        "frame_reuse",
         "recorder",
         "perf_json",
         "input_script",
@@ -141,6 +144,7 @@ class RunOptions:
             lod=self.lod,
             shadow_method=self.shadow_method,
             shadow_denoise=self.shadow_denoise,
+            frame_reuse=self.frame_reuse,
         )
 
 
