@@ -251,7 +251,11 @@ class Schedule:
         steps = clock.advance(frame_dt)
         for _ in range(steps):
             self._run_stage(world, fixed_stage, clock.step)
-        world.resources[Interpolation] = Interpolation(clock.alpha)
+        kept = world.resources.get(Interpolation)
+        if type(kept) is Interpolation:
+            kept.alpha = clock.alpha  # the frame's, in the resource the systems know
+        else:
+            world.resources[Interpolation] = Interpolation(clock.alpha)
         variable_dt = min(float(frame_dt), max_frame_dt)
         for name in self.stages:
             if name != fixed_stage:

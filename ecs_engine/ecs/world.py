@@ -390,8 +390,10 @@ class World:
         self._local.iter_depth += 1
 
     def end_iteration(self) -> None:
-        self._local.iter_depth -= 1
-        if not self.deferring and self._commands:
+        local = self._local
+        local.iter_depth -= 1
+        # the last loop outside any system ended: apply what it queued (inside a system, the sync point does)
+        if not local.iter_depth and local.system is None and not self._defer_depth and len(self._queue):
             self.flush()
 
     # ------------------------------------------------------------ deferral

@@ -63,15 +63,19 @@ class OutputPasses:
             self.destroy()
             raise
         self._targets: dict[tuple[tuple[int, int, int], int], TargetState] = {}
+        self._last: tuple[Any, Any, Any, TargetState | None] = (None, None, None, None)  # target_state's last answer
 
     def target_state(self, framebuffer: Any, width: int, height: int) -> TargetState:
         """What a framebuffer of this size needs per frame, made once (kept for 16 framebuffers)."""
         vk = self.vk
         target = self.target
-        key = (int(vk.ffi.cast("uintptr_t", framebuffer)), width, height)
         # in the deferred form the G-buffer's framebuffer too: a swapchain remade at the same size
         # may hand the new framebuffers the old handle values, but not necessarily both
         gbuffer_fb = target.attachments.gbuffer.framebuffer if target.form == "deferred" else None
+        last = self._last
+        if last[0] is framebuffer and last[1] is gbuffer_fb and last[2] == (width, height) and last[3] is not None:
+            return last[3]  # the same framebuffer objects as the last frame's (offscreen: every frame)
+        key = (int(vk.ffi.cast("uintptr_t", framebuffer)), width, height)
         cache_key = (key, int(vk.ffi.cast("uintptr_t", gbuffer_fb)) if gbuffer_fb is not None else 0)
         state = self._targets.get(cache_key)
         if state is None:
@@ -93,6 +97,7 @@ class OutputPasses:
                 self.clear_color,
                 gbuffer,
             )
+        self._last = (framebuffer, gbuffer_fb, (width, height), state)
         return state
 
     def weighted(self, mode: str) -> WeightedTransparency | None:
@@ -126,6 +131,7 @@ class OutputPasses:
         self.tone_map_pass.destroy()  # its descriptor sets name the old HDR views
         self.tone_map_pass = ToneMapPass(self.device, self.target.render_pass)
         self._targets.clear()  # their begin infos name the old render passes and framebuffers
+        self._last = (None, None, None, None)
 
     def record(
         self,
