@@ -153,3 +153,31 @@ def test_a_slot_replays_only_when_every_chunk_came_back():
     assert replay.offer(0, None) is None and replay.offer(0, ("k",)) is None
     replay.keep(0, ("k",), [SimpleNamespace(command_buffer="x", recorded=None)], 0)  # type: ignore[list-item]
     assert replay.offer(0, ("k",)) is None  # a chunk that cannot say what it recorded
+
+
+def test_the_flag_turns_reuse_off_and_the_session_back_on():
+    from dataclasses import replace
+
+    from ecs_engine.app.cli import build_parser
+    from ecs_engine.app.offscreen import OffscreenSource
+    from ecs_engine.app.session import Session
+    from ecs_engine.app.settings import RunOptions
+
+    args = build_parser().parse_args(["demo", "cube", "--no-frame-reuse"])
+    options = replace(RunOptions.from_flags(args, scene="cube"), width=64, height=48, threads=1)
+    assert options.frame_reuse is False and RunOptions().settings().frame_reuse is True
+    source = OffscreenSource()
+    with Session(options, source) as session:
+        replay = session.renderer.replay
+
+        def frames(n: int) -> None:
+            for _ in range(n):
+                session.schedule.run(session.world, 0.0)
+                session.renderer.render(session.world)
+
+        frames(4)
+        assert session.settings.frame_reuse is False and replay.replayed == 0
+        session.apply(replace(session.settings, frame_reuse=True))
+        frames(4)
+        assert session.settings.frame_reuse is True and replay.replayed >= 2
+    assert source.validation_messages() == []
