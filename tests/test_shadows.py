@@ -13,6 +13,7 @@ from pixel_rays import pixel_rays
 from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import (
+    Camera,
     DirectionalLight,
     Mesh,
     NotShadowCaster,
@@ -393,3 +394,68 @@ def test_shadow_views_follow_the_frame_set_when_its_buffers_grow():
             renderer.destroy()
         fresh, _ = render(gpu, world)
     assert np.abs(grown - fresh).max() <= 1
+
+
+def test_the_kept_plan_follows_every_change_of_the_lights_and_camera():
+    """The views are planned again only when the camera, the origin or a casting light's columns
+    changed (ShadowPass.plan): while nothing does, the frame reuses the last list (and the slots
+    their rows); after each change the views equal a fresh plan's and the image a fresh
+    renderer's."""
+    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.shadow_views import shadow_views
+
+    with headless_gpu(W, H) as gpu:
+        world = scene(gpu, "spot")
+        world.spawn(Transform(position=POINT), PointLight(intensity=6.0, radius=20.0), Shadow(resolution=512))
+        sun = world.spawn(
+            Transform(rotation=look_rotation((0.3, -1.0, 0.2))), DirectionalLight(illuminance=0.3), Shadow()
+        )
+        spot = world.query(SpotLight).entities()[0]
+        camera = world.query(Camera).entities()[0]
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+        schedule = default_schedule()
+
+        def frames() -> list:
+            schedule.run(world, 0.0)
+            for _ in range(2):  # both slots
+                renderer.render(world, readback=True)
+            return renderer.shadows.last_views
+
+        def same_as_fresh(views: list) -> None:
+            cam = camera_matrices(world, W / H)
+            fresh = shadow_views(world, cam, world.get(camera, Transform).position)
+            assert len(views) == len(fresh)
+            for a, b in zip(views, fresh, strict=True):
+                assert (a.entity, a.kind, a.index, a.layer, a.resolution, a.bias) == (
+                    b.entity,
+                    b.kind,
+                    b.index,
+                    b.layer,
+                    b.resolution,
+                    b.bias,
+                )
+                assert np.allclose(a.view, b.view) and np.allclose(a.projection, b.projection)
+
+        try:
+            first = frames()
+            assert frames() is first  # nothing changed: the same plan
+            changes = [
+                lambda: world.set(spot, Transform, position=(-1.0, 5.0, 1.0)),  # a light moves
+                lambda: world.set(spot, SpotLight, inner_angle=0.6, outer_angle=0.8),  # its cone
+                lambda: world.set(sun, Shadow, bias=2.0),  # a Shadow setting
+                lambda: world.set(camera, Transform, position=(1.0, 7.0, 8.0)),  # the camera: the cascades
+                lambda: world.remove(sun, Shadow),  # a light stops casting
+            ]
+            last = first
+            for change in changes:
+                change()
+                views = frames()
+                assert views is not last
+                same_as_fresh(views)
+                assert frames() is views  # and kept again
+                last = views
+            image = gpu.target.pixels()[..., :3].astype(int)
+        finally:
+            renderer.destroy()
+        fresh, _ = render(gpu, world)
+    assert np.abs(image - fresh).max() <= 1

@@ -27,6 +27,7 @@ chunk jobs only write the camera's rows, and the CPU path culls and draws the se
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -46,7 +47,7 @@ from .instance_rows import cull_views, padded_planes
 from .layouts import BINDING_GLOBALS, GLOBALS, SHADOW_VIEW
 from .path import ChunkResult, FrameInputs, PathContext, RenderPath, TargetState
 from .shadow_indirect import IndirectShadows
-from .shadow_views import ShadowView, shadow_views
+from .shadow_views import ShadowView, shadow_views, views_stamp
 from .view_recording import ViewRecording, can_fuse
 
 
@@ -58,6 +59,7 @@ class ViewSet:
     descriptor_set: Any
     set_array: Any  # VkDescriptorSet[1], for raw calls
     copied: tuple[Any, int] | None = None  # (frame set, its version) last copied from
+    holds: Any = None  # the ShadowView its globals were last written for
 
 
 PROJECTIONS = {"cascade": 0, "spot": 1, "cube": 2}  # SHADOW_VIEW.info.w: orthographic, perspective, a cube face
@@ -90,6 +92,8 @@ class ShadowPass:
         self.gpu: IndirectShadows | None = None  # the indirect mode's GPU-culled views
         self._gpu_frame = False  # this frame's views are culled on the GPU
         self.last_views: list[ShadowView] = []  # the last plan's (the editor's map thumbnails)
+        self._planned: tuple[Any, Any, Any] | None = None  # (world, camera matrices, views_stamp...) it was for
+        self._views_written: list[tuple[Any, Any] | None] = [None] * frames  # per slot: (views, buffer) in its rows
         self._inputs: list[FrameInputs] = []  # this frame's views' (prepare)
         self._recording: Any = None  # the path this frame's jobs record with
         self._planes = padded_planes([])  # this frame's views' (V, 24) culling planes
@@ -98,9 +102,17 @@ class ShadowPass:
     # -------------------------------------------------------------- planning
     def plan(self, world: World, data: FrameData, only: set[int] | None = None) -> list[ShadowView]:
         """This frame's drawn views (none without a Shadow: one query, no work), of every casting
-        light or of those whose entities are in `only`."""
-        casts = self._casters(world)
-        self.last_views = shadow_views(world, data.camera, data.origin, only) if casts else []
+        light or of those whose entities are in `only`; the last frame's list itself while the
+        camera, the origin and the casting lights' columns are unchanged (views_stamp)."""
+        if not self._casters(world):
+            self.last_views = []
+            return self.last_views
+        key = (views_stamp(world), data.origin_key, None if only is None else frozenset(only))
+        kept = self._planned
+        if kept is not None and kept[0]() is world and kept[1] is data.camera and kept[2] == key:
+            return self.last_views
+        self.last_views = shadow_views(world, data.camera, data.origin, only)
+        self._planned = (weakref.ref(world), data.camera, key)
         return self.last_views
 
     def ensure(self, views: list[ShadowView]) -> bool:
@@ -196,10 +208,12 @@ class ShadowPass:
         out = []
         for k, view in enumerate(views):
             view_set = sets[k]
-            g = view_set.globals.array(GLOBALS.dtype, 1)
-            g[...] = 0
-            g["projection"] = view.projection.T
-            g["view"] = view.view.T
+            if view_set.holds is not view:  # (a plan kept from the last frame: the same views)
+                g = view_set.globals.array(GLOBALS.dtype, 1)
+                g[...] = 0
+                g["projection"] = view.projection.T
+                g["view"] = view.view.T
+                view_set.holds = view
             out.append(
                 replace(
                     frame,
@@ -245,7 +259,10 @@ class ShadowPass:
         if not views:
             self._inputs = []
             return
-        self.write_views(pf.shadow_views.array(SHADOW_VIEW.dtype, len(views)), views)
+        written = self._views_written[frame.slot]
+        if written is None or written[0] is not views or written[1] is not pf.shadow_views:  # not in these rows yet
+            self.write_views(pf.shadow_views.array(SHADOW_VIEW.dtype, len(views)), views)
+            self._views_written[frame.slot] = (views, pf.shadow_views)
         # the set-aside casters' rows sit after the chunks' in a view's region (their offsets): with
         # the GPU culling the chunks' rows in place, the region holds those alone
         gpu = isinstance(camera, IndirectPath)

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from ..components import DirectionalLight, PointLight, Shadow, SpotLight, Transform
+from ..ecs.schema import schema_of
 from ..ecs.world import World
 from ..maths.camera import perspective
 from ..maths.culling import frustum_planes, frustum_planes_many
@@ -95,6 +96,26 @@ def _cube_face(face: int, near: float, far: float, scale: float = 1.0) -> np.nda
         m[2, :3] = -near / (far - near) * forward
         m[2, 3] = far * near / (far - near)
     return m
+
+
+# what shadow_views reads of the lights: these components of the tables holding each kind
+_READS = ((DirectionalLight, Transform, Shadow), (SpotLight, Transform, Shadow), (PointLight, Transform, Shadow))
+_READ_COLUMNS: list[list[tuple[Any, str]]] = []  # per kind, its columns' keys (found on first use)
+
+
+def views_stamp(world: World) -> tuple[Any, ...]:
+    """A value that stays equal while nothing `shadow_views` reads of the lights can have
+    changed: per table holding a kind of casting light, its id, layout, rows and the change
+    ticks of the light's, Transform's and Shadow's columns (World.change_stamp's rule: a write
+    to any row of a table counts)."""
+    if not _READ_COLUMNS:
+        _READ_COLUMNS.extend([(ct, name) for ct in map(schema_of, kind) for name in ct.__fields__] for kind in _READS)
+    out: list[Any] = []
+    for kind, keys in zip(_READS, _READ_COLUMNS, strict=True):
+        for table in world.query(*kind, write=()).tables:
+            ticks = table.column_ticks
+            out.append((table.id, table.version, table.count, *[ticks.get(k) for k in keys]))
+    return tuple(out)
 
 
 def shadow_views(
