@@ -99,6 +99,47 @@ def test_replayed_frames_draw_what_recorded_frames_draw():
         step(lambda: world.set(camera, Transform, position=(0.0, 1.0, 6.0)))  # every row, the planes
 
 
+def test_a_frame_is_replayed_only_into_the_framebuffer_it_was_recorded_for():
+    """Twenty framebuffers drawn in turn: the renderer keeps 16 targets' states, so states are
+    freed and made again (a new one may get a freed one's id) while no framebuffer is made. A
+    replayed frame must be one its slot recorded for this framebuffer (the key holds the state
+    itself, not its id); a review found 3 of 400 frames replayed into another framebuffer."""
+    from ecs_engine.gpu.attachment import create_framebuffer
+    from ecs_engine.gpu.memory import Image
+    from ecs_engine.render.renderer import Renderer
+
+    with headless_gpu(32, 24) as gpu:
+        device, vk, target = gpu.device, gpu.device.vk, gpu.target
+        world = World()
+        world.spawn(Transform(), Mesh(handle=gpu.meshes.add(cube_mesh())))
+        add_camera(world, eye=(0.0, 1.0, 4.0), target=(0.0, 0.0, 0.0))
+        renderer = Renderer(device, target, gpu.meshes)
+        gpu.owned.append(renderer)
+        usage = vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT
+        images = [Image(device, 32, 24, target.color_format, usage, vk.VK_IMAGE_ASPECT_COLOR_BIT) for _ in range(20)]
+        views = [target.attachments.views(image.view) for image in images]
+        framebuffers = [create_framebuffer(device, target.render_pass, v, 32, 24) for v in views]
+        try:
+            default_schedule().run(world, 0.0)
+            recorded_for: dict[int, object] = {}
+            replays = 0
+            for f in range(400):
+                framebuffer, slot = framebuffers[f % len(framebuffers)], renderer.frames.index
+                stats = renderer.render(world, framebuffer=framebuffer, extent=(32, 24))
+                if stats.replayed:
+                    replays += 1
+                    assert recorded_for[slot] is framebuffer, f
+                else:
+                    recorded_for[slot] = framebuffer
+            assert replays == 0  # with an even count of framebuffers, a slot never meets the same one twice running
+        finally:
+            device.wait_idle()
+            for framebuffer in framebuffers:
+                vk.vkDestroyFramebuffer(device.handle, framebuffer, None)
+            for image in images:
+                image.destroy()
+
+
 @pytest.mark.parametrize("scene", ["per_entity", "shadows", "blended"])
 def test_frames_that_cannot_be_replayed_record(scene):
     from ecs_engine.components import Shadow
@@ -149,6 +190,7 @@ def test_a_slot_replays_only_when_every_chunk_came_back():
     replay.keep(0, ("k",), [a, b], 0)
     replay.offer(0, ("k",))
     assert replay.replay(0, [a]) is None  # a chunk fewer (nothing visible in it)
+    assert (replay.replayed, replay.recorded) == (1, 5)  # every frame counted once: replayed or recorded
     replay.keep(0, None, [a], 0)  # a frame that may not be replayed keeps nothing
     assert replay.offer(0, None) is None and replay.offer(0, ("k",)) is None
     replay.keep(0, ("k",), [SimpleNamespace(command_buffer="x", recorded=None)], 0)  # type: ignore[list-item]

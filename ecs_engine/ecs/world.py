@@ -391,8 +391,7 @@ class World:
 
     def end_iteration(self) -> None:
         local = self._local
-        local.iter_depth -= 1
-        # the last loop outside any system ended: apply what it queued (inside a system, the sync point does)
+        local.iter_depth -= 1  # the last loop outside any system and block ended: apply what it queued
         if not local.iter_depth and local.system is None and not self._defer_depth and len(self._queue):
             self.flush()
 

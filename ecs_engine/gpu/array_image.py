@@ -170,6 +170,7 @@ class ArrayImage:
     def destroy(self) -> None:
         if self.handle is None:
             return
+        self.device.objects_version += 1
         vk = self.device.vk
         for view in self.views:
             vk.vkDestroyImageView(self.device.handle, view, None)

@@ -59,6 +59,7 @@ class DescriptorPool:
 
     def destroy(self) -> None:
         if self.handle is not None:
+            self.device.objects_version += 1
             self.device.vk.vkDestroyDescriptorPool(self.device.handle, self.handle, None)
             self.handle = None
 

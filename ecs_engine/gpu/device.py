@@ -132,9 +132,9 @@ class Device:
         self.info = self._describe(props)
         self.allocator = BlockAllocator(vk, self.handle, self.memory_properties, props.deviceName)
         self._pipeline_cache: PipelineCache | None = None
-        # bumped when a buffer, image, framebuffer or pipeline is made, a descriptor set is written or
-        # secondaries' pools are destroyed: a command buffer kept to be submitted again
-        # (render/frame_replay.py) stays valid while it is the same
+        # bumped when a buffer, image, framebuffer or pipeline is made, a buffer, image or
+        # descriptor pool destroyed, a descriptor set written or secondaries' pools destroyed: a
+        # command buffer kept to be submitted again (render/frame_replay.py) is valid while it stays
         self.objects_version = 0
 
     @property

@@ -99,6 +99,7 @@ class Buffer:
     def destroy(self) -> None:
         if self.handle is None:
             return
+        self.device.objects_version += 1
         self.device.vk.vkDestroyBuffer(self.device.handle, self.handle, None)
         self.device.allocator.free(self.allocation)
         self._views.clear()  # they would see whatever is allocated there next
@@ -183,6 +184,7 @@ class Image:
     def destroy(self) -> None:
         if self.handle is None:
             return
+        self.device.objects_version += 1
         vk = self.device.vk
         vk.vkDestroyImageView(self.device.handle, self.view, None)
         vk.vkDestroyImage(self.device.handle, self.handle, None)

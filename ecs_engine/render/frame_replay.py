@@ -13,10 +13,12 @@ primary is recorded again around old and new secondaries, and the slot starts cl
 
 What a recording depends on goes into the key; anything else makes the frame record as before:
 - the device's `objects_version`, bumped by every buffer, image, framebuffer or pipeline made,
-  every descriptor set written (a command buffer is invalid once a set it binds is written) and
-  the worker threads' command pools destroyed (a resized pool);
+  every buffer, image or descriptor pool destroyed, every descriptor set written (a command
+  buffer is invalid once a set it binds is written) and the worker threads' command pools
+  destroyed (a resized pool);
 - the path object (a switched mode or recorder, or pipelines made again, is a new path), the
-  target's state object, generation and swapchain remakes, the number of meshes;
+  target's state object (both held and compared by identity: an id could be a freed object's),
+  its generation and swapchain remakes, the number of meshes;
 - the counts and settings the primary records: billboards, light size, tone map and exposure,
   material features, the sky, the read-back, the clustered lights' grid, whether the shadow maps
   were cleared once.
@@ -34,6 +36,20 @@ from typing import Any
 from .path import ChunkResult
 
 Key = tuple[Any, ...]
+
+
+class Same:
+    """A key's part that equals only the same object (held: an id could be a freed one's)."""
+
+    __slots__ = ("obj",)
+
+    def __init__(self, obj: Any) -> None:
+        self.obj = obj
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Same) and other.obj is self.obj
+
+    __hash__ = None  # type: ignore[assignment]
 
 
 @dataclass
@@ -74,14 +90,19 @@ class FrameReplay:
             if r.command_buffer is None:
                 continue
             if i == len(executed) or executed[i] is not r:
-                self._recorded[slot] = None
+                self._record_after(slot)
                 return None
             i += 1
         if i != len(executed):
-            self._recorded[slot] = None
+            self._record_after(slot)
             return None
         self.replayed += 1
         return last
+
+    def _record_after(self, slot: int) -> None:
+        """The frame offered its slot's chunks is recorded after all (and counted so)."""
+        self._recorded[slot] = None
+        self.recorded += 1
 
     def keep(self, slot: int, key: Key | None, results: list[ChunkResult], light_draws: int) -> None:
         """After a frame recorded whole (no chunk given back): what it was recorded from."""
@@ -107,8 +128,8 @@ def replay_key(renderer: Any, target: Any, positional: int, grid: Any, light_cou
     output, form = renderer.output, renderer.target
     return (
         renderer.device.objects_version,
-        id(renderer.path),
-        id(target),
+        Same(renderer.path),
+        Same(target),
         form.generation,
         getattr(form, "recreations", 0),
         len(renderer.meshes),
