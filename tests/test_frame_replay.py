@@ -178,7 +178,7 @@ def test_a_slot_replays_only_when_every_chunk_came_back():
     replay.keep(0, ("k",), [a, ChunkResult(None, 0, 0, 0), b], light_draws=1)
     assert replay.offer(1, ("k",)) is None  # another slot
     kept = replay.offer(0, ("k",))
-    assert kept == {0: (a.recorded, a), 64: (b.recorded, b)}
+    assert kept == {0: a, 64: b}
     again = replay.replay(0, [a, b])
     assert again is not None and again.light_draws == 1 and replay.replayed == 1
     assert replay.offer(0, ("other",)) is None  # another key drops what was kept

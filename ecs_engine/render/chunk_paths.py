@@ -312,8 +312,8 @@ class ChunkPath:
         recorded = (first, n, key_counts.tobytes())  # the draws depend on these alone (instanced)
         if frame.reuse is not None:  # the slot's last frame was recorded like this one (frame_replay.py)
             kept = frame.reuse.get(first)
-            if kept is not None and kept[0] == recorded:
-                return kept[1]  # its secondary, still recorded: the same draws over the rows just written
+            if kept is not None and kept.recorded == recorded:
+                return kept  # its secondary, still recorded: the same draws over the rows just written
         cb, draws, triangles = self._recorder.record(rows, key_counts, first, frame)
         return ChunkResult(cb, n, draws, triangles, recorded=recorded)
 

@@ -58,7 +58,7 @@ class Recorded:
 
     key: Key
     executed: list[ChunkResult]  # the chunks' results whose secondaries it executes, in order
-    kept: dict[int, tuple[tuple[int, int, bytes], ChunkResult]]  # by a chunk's first row
+    kept: dict[int, ChunkResult]  # by a chunk's first row (its `recorded` says from what)
     light_draws: int
 
 
@@ -69,7 +69,7 @@ class FrameReplay:
         self.replayed = 0  # frames submitted again
         self.recorded = 0  # frames recorded
 
-    def offer(self, slot: int, key: Key | None) -> dict[int, tuple[tuple[int, int, bytes], ChunkResult]] | None:
+    def offer(self, slot: int, key: Key | None) -> dict[int, ChunkResult] | None:
         """Before the chunk jobs: the slot's kept chunks (FrameInputs.reuse) when its last frame
         had this key (the caller then keeps the slot's secondaries), else None (reset them)."""
         last = self._recorded[slot]
@@ -111,15 +111,11 @@ class FrameReplay:
             self._recorded[slot] = None
             return
         executed = [r for r in results if r.command_buffer is not None]
-        kept = {r.recorded[0]: (r.recorded, r) for r in executed if r.recorded is not None}
+        kept = {r.recorded[0]: r for r in executed if r.recorded is not None}
         if len(kept) != len(executed):  # a chunk that cannot say what it recorded
             self._recorded[slot] = None
             return
         self._recorded[slot] = Recorded(key, executed, kept, light_draws)
-
-    def forget(self) -> None:
-        """Record every slot's next frame anew."""
-        self._recorded = [None] * len(self._recorded)
 
 
 def replay_key(renderer: Any, target: Any, positional: int, grid: Any, light_count: int, readback: bool) -> Key:
