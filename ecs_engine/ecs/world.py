@@ -132,7 +132,7 @@ class World:
         changed: where it lives (table, row, layout) and the last write tick of each column.
         Ticks belong to tables, not rows, so a write to another entity of the same table changes
         the stamp too (never the reverse). For caching what is derived from one entity."""
-        table, row = self.storage.locate(entity_id(eid))
+        table, row = self.storage.located(eid if type(eid) is int else entity_id(eid))
         keys = self._stamp_keys.get(component_types)
         if keys is None:
             keys = self._stamp_keys[component_types] = [
