@@ -13,7 +13,7 @@ from gpu_context import headless_gpu
 
 from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
-from ecs_engine.components import Camera, Mesh, PointLight, Transform
+from ecs_engine.components import Camera, FlyCamera, Mesh, PointLight, Transform
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.render.frame_replay import FrameReplay
 from ecs_engine.render.materials import Material, materials
@@ -96,6 +96,12 @@ def test_replayed_frames_draw_what_recorded_frames_draw():
         if gpu.device.features.get("fillModeNonSolid"):
             step(lambda: renderer.set_fill("wireframe"))  # new pipelines
         camera = world.query(Camera).entities()[0]
+        yaw = float(world.get(camera, FlyCamera).yaw)
+        # turned where it stands: no row is written (the origin stays), the planes cull others,
+        # and turned back, what was culled is drawn again (a still frame's rows are kept while
+        # the rows and the planes stay: chunk_paths.py)
+        step(lambda: world.set(camera, FlyCamera, yaw=yaw - 1.0))
+        step(lambda: world.set(camera, FlyCamera, yaw=yaw))
         step(lambda: world.set(camera, Transform, position=(0.0, 1.0, 6.0)))  # every row, the planes
 
 
@@ -138,6 +144,37 @@ def test_a_frame_is_replayed_only_into_the_framebuffer_it_was_recorded_for():
                 vk.vkDestroyFramebuffer(device.handle, framebuffer, None)
             for image in images:
                 image.destroy()
+
+
+def test_still_rows_seen_by_a_still_camera_are_not_written_again(monkeypatch):
+    """A slot's rows written from the same chunk, model ticks and planes are kept: only a
+    change writes them again, in each slot once."""
+    import ecs_engine.render.chunk_paths as chunk_paths
+    from ecs_engine.render.renderer import Renderer
+
+    with headless_gpu(32, 24) as gpu:
+        world = World()
+        cube = world.spawn(Transform(), Mesh(handle=gpu.meshes.add(cube_mesh())))
+        add_camera(world, eye=(0.0, 1.0, 4.0), target=(0.0, 0.0, 0.0))
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+        gpu.owned.append(renderer)
+        schedule = default_schedule()
+        writes = []
+        write_rows = chunk_paths.write_rows
+        monkeypatch.setattr(chunk_paths, "write_rows", lambda *a: writes.append(1) or write_rows(*a))
+
+        def frames(n: int) -> int:
+            writes.clear()
+            for _ in range(n):
+                schedule.run(world, 0.0)
+                renderer.render(world)
+            return len(writes)
+
+        assert frames(4) >= 2  # each slot writes its rows (again after the first frames' new objects)
+        replays = renderer.replay.replayed
+        assert frames(6) == 0 and renderer.replay.replayed == replays + 6
+        world.set(cube, Transform, position=(0.2, 0.0, 0.0))
+        assert frames(4) == 2
 
 
 @pytest.mark.parametrize("scene", ["per_entity", "shadows", "blended"])

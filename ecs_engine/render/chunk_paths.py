@@ -23,7 +23,7 @@ from .. import native
 from ..gpu.gbuffer import GBUFFER_COLORS
 from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
 from ..gpu.secondary import end_command_buffer
-from .frame_data import NOT_RECEIVER, Chunk
+from .frame_data import MODEL_COLUMN, NOT_RECEIVER, Chunk
 from .instance_rows import masked_keys, write_keyed, write_rows
 from .layouts import (
     FEATURE_ALPHA_MASK,
@@ -182,6 +182,19 @@ class PythonRecorder:
         return cb, draws, triangles
 
 
+def written_from(chunk: Chunk, frame: FrameInputs) -> tuple[Any, ...]:
+    """What a chunk's rows are written from: the chunk (its views, kept while its table's layout,
+    rows and Mesh columns stay), when its model matrices were last written, the frustum planes
+    (one array while the view stays), the mesh bounds and the material count."""
+    return (chunk, chunk.ticks[MODEL_COLUMN] if chunk.ticks else -1, frame.planes, frame.bounds, frame.material_count)
+
+
+def same_inputs(a: tuple[Any, ...] | None, b: tuple[Any, ...]) -> bool:
+    """Whether two `written_from` are the same: objects by identity (held, so never a freed
+    one's), ticks and counts by value."""
+    return a is not None and a[0] is b[0] and a[1] == b[1] and a[2] is b[2] and a[3] is b[3] and a[4] == b[4]
+
+
 class NativeRecorder:
     """The numba loop of gpu/native_recorder.py; its per-slot frame state lives with the target
     (TargetState.path_state), so both are dropped together when the framebuffer goes."""
@@ -274,7 +287,15 @@ class ChunkPath:
         return frame.instances[first : first + len(chunk.handle)]
 
     def record_chunk(self, chunk: Chunk, frame: FrameInputs) -> ChunkResult:
-        """One job: cull, write the visible rows sorted by key, record a secondary."""
+        """One job: cull, write the visible rows sorted by key, record a secondary. A chunk whose
+        rows in this slot were written from the same inputs (`written_from`) and recorded is
+        given back as it stands: a still camera over still rows writes nothing."""
+        written = None
+        if chunk.ticks is not None and frame.ahead is None:
+            written = written_from(chunk, frame)
+            kept = None if frame.reuse is None else frame.reuse.get(frame.row_base + chunk.offset)
+            if kept is not None and same_inputs(kept.written, written):
+                return kept
         centers, radii, index_counts = frame.bounds
         rows = self.rows_for(chunk, frame)
         key_counts = np.zeros(2 * len(index_counts), dtype=np.int64)
@@ -293,7 +314,9 @@ class ChunkPath:
             rows,
             key_counts,
         )
-        return self._recorded(chunk, frame, rows, n, key_counts)
+        result = self._recorded(chunk, frame, rows, n, key_counts)
+        result.written = written
+        return result
 
     def record_keyed(self, chunk: Chunk, frame: FrameInputs, keys: np.ndarray, key_counts: np.ndarray) -> ChunkResult:
         """record_chunk for a chunk already culled (instance_rows.cull_views: one view's keys)."""

@@ -37,6 +37,7 @@ from .temporal_culling import TemporalCulling
 
 _HANDLE = (Mesh, "handle")  # the columns whose writes make the extractor check handles again
 _MATERIAL = (Mesh, "material")
+MODEL_COLUMN = (ModelMatrix, "model")  # a Chunk's `ticks` key: when its model matrices were last written
 # Rows per job, by default about one job per thread but never under MIN_CHUNK_ROWS. Measured on
 # the H100 host (native recorder): 4,096-row jobs were slower on 16 threads than on 4 (per-job
 # Python under GIL contention); at 1M entities and 16 threads the instanced CPU frame took
@@ -82,6 +83,9 @@ class Chunk:
     flags: int = 0  # NOT_CASTER, NOT_RECEIVER: its table's shadow tags (components/shadow.py)
     table: int = -1  # the table's id and the chunk's first row in it (FrameData.masks)
     start: int = 0
+    # its table's column ticks, for views of the table's own columns (not gathered copies): what
+    # a frame slot's rows were written from can then be told unchanged (chunk_paths.py)
+    ticks: dict[Any, int] | None = None
 
     @property
     def name(self) -> str:
@@ -313,7 +317,8 @@ class FrameExtractor:
             m, mesh = batch[ModelMatrix], batch[Mesh]
             for s in row_chunks(len(batch), self.rows_per_job(len(batch))):
                 flags, table = shadow_flags(batch), batch.table.id
-                out.append(Chunk(m.model[s], mesh.handle[s], mesh.material[s], offset, flags, table, s.start))
+                ticks = batch.table.column_ticks
+                out.append(Chunk(m.model[s], mesh.handle[s], mesh.material[s], offset, flags, table, s.start, ticks))
                 offset += s.stop - s.start
         if out:
             top = max(int(c.handle.max()) for c in out)

@@ -147,6 +147,7 @@ class ChunkResult:
     triangles: int
     key_counts: np.ndarray | None = None  # rows per key (indirect: the GPU's regions)
     recorded: tuple[int, int, bytes] | None = None  # what its secondary was recorded from (frame_replay.py)
+    written: tuple[Any, ...] | None = None  # what the slot's rows of it were last written from (chunk_paths.py)
 
 
 @dataclass
