@@ -50,6 +50,8 @@ def fly_input(state: InputState | None) -> FlyInput:
     if state is None or state.keyboard_captured_by_ui:
         return NO_INPUT
     keys = state.pressed
+    if KEYS.isdisjoint(keys):
+        return NO_INPUT  # the usual frame: none of its keys held
 
     def axis(plus: str, minus: str) -> float:
         return float(plus in keys) - float(minus in keys)
