@@ -12,8 +12,9 @@ one after the other: the two compared under the same drift. The target is judged
 JSON (schema_version 1): {"benchmark": "frame", "quick", "machine", "device", "config": {"scene",
 "mode", "threads", "width", "height", "frames", "warmup", "repeat", "frame_reuse"}, "results":
 [{"run", "frame_reuse", "replayed" (the share of timed frames submitted again), "cpu_ms_median",
-"cpu_ms_p99", "cpu_ms_mean", "record_ms_median", "gpu_ms_median", "fps", "draws"}], "targets": [{"name",
-"target", "measured", "unit", "op", "met"}]}.
+"cpu_ms_p99", "cpu_ms_mean", "record_ms_median", "gpu_ms_median", "fps", "draws", "python_loop_ns"
+(the core's speed before and after the run: ns per iteration of a fixed Python loop, machine.py)}],
+"targets": [{"name", "target", "measured", "unit", "op", "met"}]}.
 
 Standalone, `python3 bench/frame.py [options]` measures with whichever ecs_engine is importable
 (an older install too, for old/new runs alternated) and prints the table only.
@@ -34,6 +35,11 @@ from ecs_engine.app.loop import run as run_scene
 from ecs_engine.app.scenes import SCENES
 from ecs_engine.app.settings import RunOptions
 from ecs_engine.render.renderer import MODES
+
+try:
+    from .machine import python_loop_ns
+except ImportError:  # run as a script (the standalone use below)
+    from machine import python_loop_ns  # type: ignore[import-not-found,no-redef]
 
 THREADS = 1
 TARGET_MS = 0.15  # issue 17: the 1-cube scene, instanced, one thread
@@ -57,7 +63,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def measure(options: RunOptions, warmup: int) -> dict[str, Any]:
+    before = python_loop_ns()
     result = run_scene(options)
+    after = python_loop_ns()
     cpu = np.array(result.cpu_ms[warmup:])
     gpu = np.array(result.gpu_ms[warmup:])
     record = np.array(result.record_ms[warmup:])
@@ -71,6 +79,7 @@ def measure(options: RunOptions, warmup: int) -> dict[str, Any]:
         "draws": result.last_stats.draws,
         "replayed": float(np.mean(getattr(result, "replayed", [False])[warmup:] or [False])),  # share of frames
         "device": result.device,
+        "python_loop_ns": [before, after],  # the core's speed before and after (bench/machine.py)
     }
 
 
@@ -116,13 +125,14 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
         )
     print(
         f"{'run':>3} {'reuse':>5} {'cpu median ms':>13} {'cpu p99 ms':>10} {'cpu mean ms':>11} {'record ms':>9} "
-        f"{'gpu ms':>7}"
+        f"{'gpu ms':>7} {'loop ns':>11}"
     )
     for r in results:
         gpu = "n/a" if r["gpu_ms_median"] is None else f"{r['gpu_ms_median']:.3f}"
         print(
             f"{r['run']:3} {'on' if r['frame_reuse'] else 'off':>5} {r['cpu_ms_median']:13.4f} {r['cpu_ms_p99']:10.4f} "
-            f"{r['cpu_ms_mean']:11.4f} {r['record_ms_median']:9.4f} {gpu:>7}"
+            f"{r['cpu_ms_mean']:11.4f} {r['record_ms_median']:9.4f} {gpu:>7} "
+            f"{r['python_loop_ns'][0]:5.1f}/{r['python_loop_ns'][1]:5.1f}"
         )
     print(
         f"{args.scene}, {args.mode}, {args.threads} thread(s), {width}x{height}, {frames:,} frames: "

@@ -18,6 +18,8 @@ def test_frame_quick_writes_json_with_the_target(tmp_path, monkeypatch):
     reused, recorded = doc["results"]
     for row in (reused, recorded):
         assert 0 < row["cpu_ms_median"] <= row["cpu_ms_p99"] and row["draws"] >= 1
+        before, after = row["python_loop_ns"]  # the core's speed around the run
+        assert 1 < before < 10_000 and 1 < after < 10_000
     # the cube stands still: past the first frame of each slot, every frame is submitted again
     assert reused["frame_reuse"] and reused["replayed"] == 1.0
     assert not recorded["frame_reuse"] and recorded["replayed"] == 0.0
