@@ -191,7 +191,7 @@ struct ShadowView {  // 112 bytes, std430
     mat4 view_projection;       // offset 0: render-relative positions -> the shadow map's clip space (reverse-Z)
     vec4 params;                // offset 64: x depth bias (NDC; perspective: times 1/w), y normal offset (world; perspective: times w), z far (a cascade: its slice's far view distance), w softness (PCF: texels; PCSS: light size)
     uvec4 info;                 // offset 80: x layer, y SHADOW_* filter, z resolution, w 0 orthographic, 1 spot, 2 cube face
-    vec4 depth_model;           // offset 96: x P22, y P23 of the projection (a light distance from a depth), z a texel's world size (perspective: at distance 1), w 0
+    vec4 depth_model;           // offset 96: x P22, y P23 of the projection (a light distance from a depth), z a texel's world size (perspective: at distance 1), w the view's share of its layer across (drawn in its corner)
 };
 
 struct DeferredPush {  // 8 bytes, std430

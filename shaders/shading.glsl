@@ -105,6 +105,15 @@ float light_at(Light light, vec3 p, vec3 fallback, out vec3 l) {
     return min(energy, 65504.0);
 }
 
+// A view's map fills the first info.z texels of its layer across (render/shadow_pass.py draws
+// it at its light's resolution; depth_model.w = that / the layer's): a point of the view's map
+// ([0, 1]) on its layer, kept half a texel inside the map, where the sampler's clamp to the
+// edge would have read the edge's texels.
+vec2 shadow_uv(ShadowView v, vec2 uv) {
+    float inside = 0.5 / float(v.info.z);
+    return clamp(uv, vec2(inside), vec2(1.0 - inside)) * v.depth_model.w;
+}
+
 // One comparison of the receiver's depth `ref` at `uv` of a shadow map layer: 1 lit, 0 shadowed.
 // Explicit (zero) gradients: legal in compute shaders and in non-uniform control flow.
 float shadow_tap(bool hard, vec2 uv, float layer, float ref) {
@@ -152,7 +161,7 @@ float pcss(ShadowView v, vec2 uv, float layer, float ref, float depth) {
     for (int i = 0; i < PCSS_TAPS; ++i) {
         vec2 at = uv + direction * (sqrt((float(i) + 0.5) / float(PCSS_TAPS)) * PCSS_SEARCH);
         direction = GOLDEN * direction;
-        float z = textureGrad(shadow_depth, vec3(at, layer), vec2(0.0), vec2(0.0)).r;
+        float z = textureGrad(shadow_depth, vec3(shadow_uv(v, at), layer), vec2(0.0), vec2(0.0)).r;
         if (z > ref) {   // reverse-Z: nearer the light than the receiver
             sum += z;
             found += 1.0;
@@ -170,7 +179,8 @@ float pcss(ShadowView v, vec2 uv, float layer, float ref, float depth) {
     float lit = 0.0;
     direction = first;
     for (int i = 0; i < PCSS_TAPS; ++i) {
-        lit += shadow_tap(false, uv + direction * (sqrt((float(i) + 0.5) / float(PCSS_TAPS)) * radius), layer, ref);
+        vec2 at = uv + direction * (sqrt((float(i) + 0.5) / float(PCSS_TAPS)) * radius);
+        lit += shadow_tap(false, shadow_uv(v, at), layer, ref);
         direction = GOLDEN * direction;
     }
     return lit / float(PCSS_TAPS);
@@ -232,7 +242,7 @@ float light_shadow(Light light, vec3 p, vec3 n) {
     float ref = ndc.z + (perspective ? v.params.x / c.w : v.params.x);
     float layer = float(v.info.x);
     if (v.info.y == SHADOW_HARD) {
-        return shadow_tap(true, uv, layer, ref);
+        return shadow_tap(true, shadow_uv(v, uv), layer, ref);
     }
     if (v.info.y == SHADOW_PCSS) {
         return pcss(v, uv, layer, ref, ndc.z);
@@ -242,7 +252,7 @@ float light_shadow(Light light, vec3 p, vec3 n) {
     float lit = 0.0;
     for (int y = -1; y <= 1; ++y) {
         for (int x = -1; x <= 1; ++x) {
-            lit += shadow_tap(false, uv + vec2(x, y) * step, layer, ref);
+            lit += shadow_tap(false, shadow_uv(v, uv + vec2(x, y) * step), layer, ref);
         }
     }
     return lit / 9.0;

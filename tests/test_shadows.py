@@ -459,3 +459,24 @@ def test_the_kept_plan_follows_every_change_of_the_lights_and_camera():
             renderer.destroy()
         fresh, _ = render(gpu, world)
     assert np.abs(image - fresh).max() <= 1
+
+
+@pytest.mark.parametrize("light", ["spot", "point"])
+def test_a_map_is_drawn_at_its_lights_resolution_whatever_another_asks(light):
+    """Each view is drawn at its own light's resolution, in the corner of a layer as large as
+    the largest any light asks (render/shadow_pass.py's target_state): the light's shadow is the
+    same beside an unlit caster asking for 256 texels or for 1024 (drawn at the largest, its
+    edges came out sharper)."""
+    with headless_gpu(W, H) as gpu:
+        images = []
+        for other in (256, 1024):
+            world = scene(gpu, light)
+            lit = world.query(Shadow).entities()[0]
+            world.set(lit, Shadow, resolution=256)
+            world.spawn(
+                Transform(rotation=look_rotation((0.3, -1.0, 0.2))),
+                DirectionalLight(illuminance=0.0),
+                Shadow(resolution=other),
+            )
+            images.append(render(gpu, world)[0])
+        assert np.abs(images[0] - images[1]).max() <= 1

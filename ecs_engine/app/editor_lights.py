@@ -100,17 +100,20 @@ class ShadowMapImages:
         columns = 3 if views[0].kind == "cube" else len(views)
         side = max(64.0, min(float(THUMBNAIL), (avail - (columns - 1) * spacing) / columns))
         per_row = max(1, int((avail + spacing) // (side + spacing)))
+        maps = self.shadows.maps
+        assert maps is not None
         for k, v in enumerate(views):
             if k % per_row:
                 imgui.same_line()
             tex_id = self.texture(v.layer)
-            imgui.image(imgui.ImTextureRef(tex_id), (side, side))
+            corner = (min(v.resolution, maps.resolution) / maps.resolution,) * 2  # its map: the layer's corner
+            imgui.image(imgui.ImTextureRef(tex_id), (side, side), (0.0, 0.0), corner)
             lo, hi = imgui.get_item_rect_min(), imgui.get_item_rect_max()
             self.drawn[v.layer], self.rects[v.layer] = tex_id, (lo.x, lo.y, hi.x, hi.y)
             if imgui.is_item_hovered():
                 imgui.begin_tooltip()
                 imgui.text(f"{_view_name(v)}: layer {v.layer}, {v.resolution} texels")
-                imgui.image(imgui.ImTextureRef(tex_id), (2 * THUMBNAIL, 2 * THUMBNAIL))
+                imgui.image(imgui.ImTextureRef(tex_id), (2 * THUMBNAIL, 2 * THUMBNAIL), (0.0, 0.0), corner)
                 imgui.end_tooltip()
 
 

@@ -207,7 +207,7 @@ SHADOW_VIEW = Struct(
             "depth_model",
             "vec4",
             "x P22, y P23 of the projection (a light distance from a depth), z a texel's world size "
-            "(perspective: at distance 1), w 0",
+            "(perspective: at distance 1), w the view's share of its layer across (drawn in its corner)",
         ),
     ],
     doc="One shadow view (render/shadow_views.py): a cascade, a spot light's map, a cube face.",
