@@ -177,6 +177,44 @@ def test_still_rows_seen_by_a_still_camera_are_not_written_again(monkeypatch):
         assert frames(4) == 2
 
 
+def test_rows_another_culling_wrote_are_written_again(monkeypatch):
+    """Rows the temporal culling decided (here: another set with the same counts) are never
+    taken for the frustum culling's: back on frustum culling, with the camera still, the frame
+    draws what a fresh renderer draws (a review found the kept result still said otherwise)."""
+    from ecs_engine.render.frame_data import FrameData
+    from ecs_engine.render.renderer import Renderer
+
+    with headless_gpu(64, 48) as gpu:
+        world = World()
+        cube = gpu.meshes.add(cube_mesh())
+        for x in (-1.0, 1.0, 60.0):  # two in view, one far out of it
+            world.spawn(Transform(position=(x, 0.0, 0.0), scale=(0.8,) * 3), Mesh(handle=cube))
+        add_camera(world, eye=(0.0, 1.0, 4.0), target=(0.0, 0.0, 0.0))
+        world.spawn(Transform(position=(2.0, 3.0, 3.0)), PointLight(intensity=8.0))
+        schedule = default_schedule()
+        schedule.run(world, 0.0)
+
+        def frames(renderer: Renderer, n: int) -> np.ndarray:
+            for _ in range(n):
+                schedule.run(world, 0.0)
+                renderer.render(world, readback=True)
+            return gpu.target.pixels()[..., :3].astype(int)
+
+        fresh = Renderer(gpu.device, gpu.target, gpu.meshes)
+        gpu.owned.append(fresh)
+        expected = frames(fresh, 2)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+        gpu.owned.append(renderer)
+        frames(renderer, 6)  # both slots keep their rows
+        # the temporal culling keeps the first and the far cube: as many rows of the one mesh
+        monkeypatch.setattr(FrameData, "visible", lambda self, chunk: np.array([True, False, True]))
+        renderer.culling = "temporal"
+        assert np.abs(frames(renderer, 2) - expected).max() > 5  # the second cube is missing
+        monkeypatch.undo()
+        renderer.culling = "frustum"
+        assert np.array_equal(frames(renderer, 4), expected)
+
+
 @pytest.mark.parametrize("scene", ["per_entity", "shadows", "blended"])
 def test_frames_that_cannot_be_replayed_record(scene):
     from ecs_engine.components import Shadow

@@ -322,7 +322,9 @@ class ChunkPath:
         """record_chunk for a chunk already culled (instance_rows.cull_views: one view's keys)."""
         rows = self.rows_for(chunk, frame)
         n = write_keyed(chunk.model, chunk.material, keys, key_counts, frame.material_count, rows)
-        return self._recorded(chunk, frame, rows, n, key_counts)
+        result = self._recorded(chunk, frame, rows, n, key_counts)
+        result.written = None  # rows from another culling (a kept result may say otherwise): never kept
+        return result
 
     def _recorded(
         self, chunk: Chunk, frame: FrameInputs, rows: np.ndarray, n: int, key_counts: np.ndarray

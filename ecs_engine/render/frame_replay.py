@@ -5,8 +5,9 @@ instance buffer), the draws do not. The CPU-recorded instanced path's draws depe
 many visible rows each (mesh, winding) run of a chunk has, and the primary's passes only on the
 target, the settings and a few counts. So each frame slot keeps what its primary was last recorded
 from (`Recorded`); the next frame on that slot whose key is the same leaves the slot's
-secondaries alone (no pool reset), and its chunk jobs still cull and write their rows but give
-back the chunk's old secondary when the run counts are those it was recorded with
+secondaries alone (no pool reset), and its chunk jobs cull and write their rows (unless the slot's
+rows were written from the same chunk, model tick and planes: chunk_paths.py's `written_from`) but
+give back the chunk's old secondary when the run counts are those it was recorded with
 (chunk_paths.py's `_recorded`). When every chunk did, the slot's primary is submitted as it
 stands (gpu/frames.py's `resubmit`): no recording at all. When some chunk recorded anew, the
 primary is recorded again around old and new secondaries, and the slot starts clean next time.

@@ -157,7 +157,8 @@ class ShadowPass:
         """The target of `layer`'s first `resolution` texels across (the whole layer by default):
         a view is drawn at the resolution its light asks for, in the corner of a layer as large as
         the largest any light asks (its render area, viewport and scissor; the lighting scales its
-        coordinates: write_views). The H100 drew the shadows demo's 11 layers at 2048 in ~5.4 ms,
+        coordinates: write_views, and never read past the corner, whose outside is left
+        undefined by each frame's pass). The H100 drew the shadows demo's 11 layers at 2048 in ~5.4 ms,
         rasterising and clearing texels that the 512-texel cube faces never read."""
         assert self.maps is not None
         res = self.maps.resolution if resolution is None else min(int(resolution), self.maps.resolution)
