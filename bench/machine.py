@@ -149,7 +149,7 @@ def check_slug(slug: str) -> str:
 def python_loop_ns(iterations: int = 200_000, repeats: int = 5) -> float:
     """How fast this core runs Python now: ns per iteration of a fixed loop of dict reads and
     additions, the best of `repeats`. A virtual machine's core speed drifts; the H100 host
-    measured 43 to 95 ns within minutes, and every part of a small frame moved with it, so the
+    measured 43 to 115 ns within minutes, and every part of a small frame moved with it, so the
     frame benchmark reports it beside each run."""
     table = {i: i for i in range(64)}
     best = float("inf")
