@@ -37,7 +37,10 @@ def plane_scene(gpu, light: str, facing_light: bool, material: str = "opaque", s
         "cutout": Material("leaf", "lambert", (0.8, 0.5, 0.3, 1.0), alpha_mode="mask"),  # the cutout pipelines
         "double-sided": Material("leaf", "lambert", (0.8, 0.5, 0.3, 1.0), double_sided=True),
     }
-    leaf = materials(world).add(made[material])
+    leaf = materials(world).add(made["opaque" if material == "beside double-sided" else material])
+    if material == "beside double-sided":  # a double-sided mesh elsewhere turns culling off for all
+        other = materials(world).add(made["double-sided"])
+        world.spawn(Transform(position=(-6.0, 0.5, -6.0), scale=(0.2, 0.2, 0.2)), Mesh(handle=plane, material=other))
     rotation = (0.0, 0.0, 0.0, 1.0) if facing_light else UPSIDE_DOWN
     world.spawn(Transform(position=(0.0, 1.0, 0.0), rotation=rotation), Mesh(handle=plane, material=leaf))
     cast = [Shadow(filter=SHADOW_HARD, resolution=512)] if shadow else []
@@ -79,6 +82,8 @@ CASES = [
     ("sun", "double-sided"),
     ("spot", "double-sided"),
     ("point", "double-sided"),
+    ("sun", "beside double-sided"),
+    ("point", "beside double-sided"),
 ]
 
 
@@ -86,7 +91,8 @@ CASES = [
 def test_single_sided_casters_cast_alike_under_every_light(light, material):
     """A plane facing the light casts its shadow; facing away, it casts one only when its
     material is double-sided: the same for sun, spot and point lights, for opaque and
-    alpha-masked (cutout pipelines) materials."""
+    alpha-masked (cutout pipelines) materials, and for a single-sided plane in a scene with a
+    double-sided material (whose shadow pipelines cull nothing)."""
     with headless_gpu(W, H) as gpu:
         world = plane_scene(gpu, light, True, material)
         towards = render_world(gpu, world)
