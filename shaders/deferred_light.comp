@@ -87,9 +87,8 @@ void main() {
         model = m.kind.x;
         n = nr.xyz;
         vec3 eye = g.eye.xyz - p;
-        float e2 = dot(eye, eye);
-        distance = sqrt(e2);
-        to_eye = e2 > 1e-24 ? eye * inversesqrt(e2) : vec3(0.0, 0.0, 1.0);
+        distance = sqrt(dot(eye, eye));   // the light grid's bins are shells around the camera's position
+        to_eye = eye_direction(p);
     }
     vec3 color = vec3(0.0);
     if (g.light_tiles.x == 0u) {

@@ -95,9 +95,7 @@ void main() {
             }
         }
 #endif
-        vec3 eye = g.eye.xyz - v_position;
-        float e2 = dot(eye, eye);
-        vec3 to_eye = e2 > 1e-24 ? eye * inversesqrt(e2) : vec3(0.0, 0.0, 1.0);
+        vec3 to_eye = eye_direction(v_position);
         bool environment = (MATERIAL_FEATURES & FEATURE_ENVIRONMENT) != 0u;
         if (environment && g.environment.z > 0.0) {
             color = environment_ambient(m, model, n, to_eye, occlusion);   // image-based ambient
@@ -118,7 +116,8 @@ void main() {
             // walked once for the whole subgroup (M. Drobot's scalarisation): the light index is
             // then uniform, so its row is read once for all. Each invocation adds only the lights
             // of its own cluster whose sphere holds the fragment (most candidates miss it).
-            uint bin = light_bin(sqrt(e2));
+            vec3 eye = g.eye.xyz - v_position;   // the bins are shells around the camera's position
+            uint bin = light_bin(sqrt(dot(eye, eye)));
             uint lo = cluster_data[CLUSTER_HEADER + bin];
             uint hi = cluster_data[CLUSTER_HEADER + LIGHT_BINS + bin];
             uint masks = tile_masks();

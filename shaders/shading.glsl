@@ -258,7 +258,21 @@ float light_shadow(Light light, vec3 p, vec3 n) {
     return lit / 9.0;
 }
 
-// What light i adds at p (normal n, unit direction to the eye to_eye) under the material's
+// The unit direction from p towards the eye, which every view-dependent term takes (specular,
+// Fresnel, Oren-Nayar, the environment's reflections): towards the camera's position in a
+// perspective view; in an orthographic one (P33 = 1, as sky.frag tells them apart) every ray is
+// parallel, so it is the camera's +Z (the view's third row) wherever p is: there the camera's
+// position only places the near plane, and moving the camera along its axis changes nothing seen.
+vec3 eye_direction(vec3 p) {
+    if (g.projection[3][3] == 1.0) {
+        return normalize(vec3(g.view[0][2], g.view[1][2], g.view[2][2]));
+    }
+    vec3 eye = g.eye.xyz - p;
+    float e2 = dot(eye, eye);
+    return e2 > 1e-24 ? eye * inversesqrt(e2) : vec3(0.0, 0.0, 1.0);
+}
+
+// What light i adds at p (normal n, unit direction to the eye to_eye: eye_direction) under the material's
 // model; `shadowed`: p receives shadows (a mesh without NotShadowReceiver).
 vec3 light_term(uint i, Material m, uint model, vec3 p, vec3 n, vec3 to_eye, bool shadowed) {
     Light light = lights[i];

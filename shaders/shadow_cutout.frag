@@ -1,8 +1,11 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
-// Shadow maps of scenes with alpha-masked materials (render/chunk_paths.py's shadow_pipelines):
-// where such a material's alpha (its factor times its base colour texture's) is below its
-// cutoff, nothing is drawn into the map, so light passes through the holes as it does on screen.
+// Shadow maps of scenes with alpha-masked or double-sided materials (render/chunk_paths.py's
+// shadow_pipelines): where an alpha-masked material's alpha (its factor times its base colour
+// texture's) is below its cutoff, nothing is drawn into the map, so light passes through the
+// holes as it does on screen. With a double-sided material in the scene culling is off, and a
+// single-sided material's back faces are dropped here, as mesh_fragment.glsl drops them on
+// screen: a single-sided caster holds the light with its front alone, as it does without.
 #include "common.glsl"
 #include "texture_pages.glsl"
 
@@ -14,7 +17,10 @@ layout(location = 1) flat in uint v_material;
 void main() {
     vec2 dx = dFdx(v_uv), dy = dFdy(v_uv);  // before any branch (derivatives need the whole quad)
     Material m = materials[v_material];
-    if (m.kind.y != ALPHA_MASK) {
+    if ((MATERIAL_FEATURES & FEATURE_DOUBLE_SIDED) != 0u && !gl_FrontFacing && m.kind.z == 0u) {
+        discard;
+    }
+    if ((MATERIAL_FEATURES & FEATURE_ALPHA_MASK) == 0u || m.kind.y != ALPHA_MASK) {
         return;
     }
     float alpha = m.base_color.a;

@@ -102,9 +102,10 @@ def test_a_spot_view_holds_its_cone_and_range():
 
 
 def test_cube_faces_follow_vulkans_cube_map_face_selection():
-    """The face a direction's major axis picks draws it, at the spec's (s, t) shrunk by the
-    margin; another face holds it only in its margin; depth runs from the near plane (1) to the
-    light's range along the face's axis (0)."""
+    """The face a direction's major axis picks draws it, at the spec's (s, t) with s negated (a
+    camera's view, not the spec's mirror image) shrunk by the margin; another face holds it only
+    in its margin; depth runs from the near plane (1) to the light's range along the face's axis
+    (0)."""
     world = scene()
     cam = camera_matrices(world, ASPECT)
     faces = shadow_views(world, cam, cam.position)[4:]
@@ -132,12 +133,70 @@ def test_cube_faces_follow_vulkans_cube_map_face_selection():
             holds = c[3] > 0 and abs(c[0]) <= c[3] and abs(c[1]) <= c[3]
             if v.index == face:
                 assert holds
-                assert (c[0] / c[3], c[1] / c[3]) == pytest.approx((sc / ma * scale, tc / ma * scale), abs=1e-5)
+                assert (c[0] / c[3], c[1] / c[3]) == pytest.approx((-sc / ma * scale, tc / ma * scale), abs=1e-5)
                 assert 0.0 <= c[2] / c[3] <= 1.0
             elif holds:  # another face holds it only within its margin, past its own edge
                 assert max(abs(c[0]), abs(c[1])) / c[3] > scale - 1e-6
         beyond = clip(faces[face], (light + r * (8.5 / ma))[None])[0]
         assert beyond[2] / beyond[3] < 0  # past the range along the face's axis: behind its far plane
+
+
+def front_facing(view_projection: np.ndarray, inverse: np.ndarray) -> bool:
+    """Whether a triangle facing the view (wound counter-clockwise around its normal, as every
+    mesh's outside) is front-facing to a pipeline with VK_FRONT_FACE_COUNTER_CLOCKWISE: the
+    spec's polygon area a = -1/2 sum(x_i y_(i+1) - x_(i+1) y_i) in framebuffer coordinates
+    (y down) is positive. Its centre is the view's middle at mid depth, its normal towards the
+    view (the middle nearer it)."""
+
+    def unproject(ndc):
+        p = inverse @ np.array([*ndc, 1.0])
+        return p[:3] / p[3]
+
+    centre, nearer = unproject((0.0, 0.0, 0.5)), unproject((0.0, 0.0, 0.9))  # reverse-Z: 0.9 is nearer
+    n = (nearer - centre) / np.linalg.norm(nearer - centre)
+    u = np.cross(n, [0.3, 0.5, 0.7])
+    u *= 0.01 * np.linalg.norm(centre - nearer) / np.linalg.norm(u)
+    v = np.cross(n, u)  # u x v = n: counter-clockwise around n
+    corners = np.array([centre, centre + u, centre + v])
+    c = np.c_[corners, np.ones(3)] @ view_projection.T
+    xy = (c[:, :2] / c[:, 3:] * 0.5 + 0.5) * 100.0  # framebuffer: x right, y down (Vulkan's NDC)
+    x, y = xy[:, 0], xy[:, 1]
+    area = -0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)
+    return bool(area > 0)
+
+
+def test_no_view_is_mirrored():
+    """A caster's side facing the light is front-facing in every shadow view, as a surface
+    facing the camera is in the camera's view: the shadow pipelines cull back faces with one
+    winding for all. The spec's cube faces are mirror images (sc x tc = -forward): point lights
+    drew their casters' far sides, so a single-sided plane facing one cast nothing."""
+    world = scene()
+    cam = camera_matrices(world, ASPECT)
+    camera = cam.projection.astype(np.float64) @ cam.view.astype(np.float64)
+    assert front_facing(camera, np.linalg.inv(camera))  # the rule holds for the camera's own view
+    views = shadow_views(world, cam, cam.position)
+    assert {v.kind for v in views} == {"cascade", "spot", "cube"}
+    for v in views:
+        vp = v.view_projection.astype(np.float64)
+        assert front_facing(vp, np.linalg.inv(vp)), (v.kind, v.index)
+
+
+def test_cube_faces_are_seen_as_from_a_camera_at_the_light():
+    """Each face's map (and so its editor thumbnail, texel (0, 0) at the top left) shows what a
+    camera at the light looking along the face sees: the side faces upright (world +Y up the
+    image) and right = forward x up, not the spec's mirror image."""
+    world = scene()
+    cam = camera_matrices(world, ASPECT)
+    faces = shadow_views(world, cam, cam.position)[4:]
+    light = np.array([-3.0, 2.0, -5.0]) - cam.position
+    forwards = np.array([(1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1)], np.float64)
+    for v, forward in zip(faces, forwards, strict=True):
+        up = np.array([0.0, 1.0, 0.0]) if forward[1] == 0 else np.array([0.0, 0.0, -forward[1]])
+        right = np.cross(forward, up)
+        for offset, expect in ((right, (1, 0)), (-right, (-1, 0)), (up, (0, -1)), (-up, (0, 1))):
+            c = clip(v, (light + 2.0 * forward + 0.5 * offset)[None])[0]
+            ndc = c[:2] / c[3]
+            assert np.sign(np.round(ndc, 6)).tolist() == list(expect), (v.index, offset, ndc)
 
 
 @pytest.mark.parametrize(

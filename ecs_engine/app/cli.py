@@ -12,6 +12,7 @@ from typing import NoReturn
 
 from ..ecs.errors import EcsError
 from ..errors import UsageError
+from ..gpu.array_image import ANISOTROPY_CHOICES
 from ..gpu.swapchain import PRESENT_MODES
 from ..render.frame_data import CULLING
 from ..render.light_clusters import LIGHT_MODES
@@ -133,6 +134,12 @@ def render_flags() -> OneLineParser:
     )
     common.add_argument(
         "--msaa", type=int, choices=(1, 2, 4, 8), default=1, help="samples per pixel (default 1: no MSAA)"
+    )
+    common.add_argument(
+        "--anisotropy",
+        type=int,
+        choices=ANISOTROPY_CHOICES,
+        help="textures' anisotropic filtering, at most this many samples (1: off; default: the GPU's best, up to 16)",
     )
     common.add_argument(
         "--light-culling",

@@ -4,7 +4,9 @@ the light as it was and shows the message).
 
 A light that casts shadows shows its shadow maps (ShadowMapImages): a thumbnail per layer (a
 directional light's cascades, a spot light's map, a point light's six cube faces), grey, near
-white and far black (reverse-Z depth), as the last frame drew them."""
+white and far black (reverse-Z depth), as the last frame drew them: texel (0, 0) at the top left,
+so each shows what a camera at the light sees (render/shadow_views.py draws the cube faces so,
+not as the spec's mirror images)."""
 
 from __future__ import annotations
 

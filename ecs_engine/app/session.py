@@ -134,6 +134,7 @@ class Session:
                 lod=start.lod,
                 shadows=start.shadow_method,
                 shadow_denoise=start.shadow_denoise,
+                anisotropy=options.anisotropy,
             )
             self.renderer.replay.enabled = start.frame_reuse
             self.scene = start.scene

@@ -69,6 +69,7 @@ class RunOptions:
     tone_map: str = "clamp"  # clamp | aces | reinhard
     exposure: float = 0.0  # stops: the HDR colour times 2^exposure before the tone map
     msaa: int = 1  # samples per pixel of the scene (1, 2, 4, 8), fixed for the run
+    anisotropy: int | None = None  # textures' maximum anisotropy (1: off; None: the device's, up to 16)
     light_culling: str = "auto"  # render/light_clusters.py LIGHT_MODES
     transparency: str = "sorted"  # blended materials: sorted, or weighted (order-independent)
     lights: int | None = None  # the lights scene's light count (None: its default, 1,024)
@@ -102,6 +103,7 @@ class RunOptions:
         "tone_map",
         "exposure",
         "msaa",
+        "anisotropy",
         "light_culling",
         "transparency",
         "shadow_method",

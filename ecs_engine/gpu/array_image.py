@@ -180,9 +180,28 @@ class ArrayImage:
         self.handle = None
 
 
-def texture_sampler(device: Device) -> Any:
-    """Trilinear, repeating, with the device's anisotropy (up to 16x) where it has the feature."""
-    anisotropy = min(16.0, float(device.limits.maxSamplerAnisotropy)) if device.features.get("samplerAnisotropy") else 0
+ANISOTROPY_CHOICES = (1, 2, 4, 8, 16)  # --anisotropy: 1 is off; 16, the most GPUs offer, the default's cap
+
+
+def sampler_anisotropy(device: Device, anisotropy: int | None = None) -> float:
+    """The material textures' maximum anisotropy: `anisotropy` (1: off, plain trilinear), or
+    None for the device's best up to 16 (1 without the samplerAnisotropy feature). A number the
+    device cannot filter with is a UsageError naming the flag and what the device offers."""
+    from ..errors import UsageError
+
+    offered = min(16.0, float(device.limits.maxSamplerAnisotropy)) if device.features.get("samplerAnisotropy") else 1.0
+    if anisotropy is None:
+        return offered
+    if anisotropy not in ANISOTROPY_CHOICES:
+        raise UsageError(f"--anisotropy {anisotropy!r}: one of {', '.join(map(str, ANISOTROPY_CHOICES))} (1: off)")
+    if anisotropy > offered:
+        what = f"at most {offered:g}" if offered > 1 else "no anisotropic filtering (use 1)"
+        raise UsageError(f"--anisotropy {anisotropy}: {device.info.name} offers {what}")
+    return float(anisotropy)
+
+
+def texture_sampler(device: Device, anisotropy: float = 1.0) -> Any:
+    """Trilinear, repeating, with `anisotropy` (sampler_anisotropy: above 1, anisotropic)."""
     return _trilinear(device, device.vk.VK_SAMPLER_ADDRESS_MODE_REPEAT, anisotropy, None)
 
 

@@ -100,10 +100,10 @@ SHADOW_DEPTH_BIAS = (-1.0, -1.5)
 def shadow_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple[Any, Any]:
     """The (plain, mirrored) depth-only pipelines of a path's shadow passes: the position alone
     (shadow.vert, shadow_push.vert for push-constant rows, shadow_indirect.vert for rows culled
-    on the GPU), no fragment shader; where some
-    material is alpha-masked, the _cutout variants and shadow_cutout.frag, which leave its holes
-    out of the map."""
-    cutout = bool(ctx.material_features & FEATURE_ALPHA_MASK)
+    on the GPU), no fragment shader; where some material is alpha-masked or double-sided, the
+    _cutout variants and shadow_cutout.frag, which leave the holes out of the map and, culling
+    being off for the double-sided, the single-sided materials' back faces."""
+    cutout = bool(ctx.material_features & (FEATURE_ALPHA_MASK | FEATURE_DOUBLE_SIDED))
     shader = {
         "mesh.vert": "shadow.vert",
         "mesh_push.vert": "shadow_push.vert",

@@ -24,6 +24,7 @@ from typing import Any
 from .. import native
 from ..ecs.world import World
 from ..errors import UsageError
+from ..gpu.array_image import sampler_anisotropy
 from ..gpu.descriptors import write_images
 from ..gpu.device import Device
 from ..gpu.frames import FrameRing
@@ -91,6 +92,7 @@ class Renderer(TargetForms):
         lod: bool = True,
         shadows: str = "maps",
         shadow_denoise: bool = True,
+        anisotropy: int | None = None,  # textures' (1: off; None: the device's best, up to 16)
     ) -> None:
         if mode not in PATHS:
             raise ValueError(f"unknown render mode {mode!r}; modes: {', '.join(MODES)}")
@@ -98,6 +100,7 @@ class Renderer(TargetForms):
         self.check_fill(fill)  # before anything is made: a refusal leaves nothing to destroy
         check_tone_map(tone_map, exposure)
         check_light_culling(light_culling)
+        sampler_anisotropy(device, anisotropy)
         check_transparency(transparency)
         check_shadow_method(shadows, device, target.samples)  # raytraced: a device that traces rays
         # blended rows: sorted, or weighted (oit_pass.py: deferred form); levels of detail (indirect mode)
@@ -136,7 +139,7 @@ class Renderer(TargetForms):
             self.lights = LightCulling(device, self.set_layout.handle, light_culling)
             self._fit_target()  # before anything is made against its render pass
             self._target_generation = target.generation
-            self.texture_pages = TexturePages(device)
+            self.texture_pages = TexturePages(device, anisotropy)
             self.shadows = ShadowPass(device, self.set_layout, self.secondaries, n)
             self.environment = EnvironmentMap(device)
             self.per_frame = [

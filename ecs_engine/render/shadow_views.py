@@ -7,10 +7,13 @@ matrices that take render-relative positions there and the planes its casters ar
   up to `distance` beyond a cascade's sphere towards the light still cast into it;
 - spot light: one perspective view from the light along its axis, as wide as its outer cone,
   as deep as its range;
-- point light: six views, the faces of a cube in Vulkan's order (+X, -X, +Y, -Y, +Z, -Z) and
-  orientation (the spec's cube map face selection: a direction's major axis picks the face, the
-  other two give s and t), each widened by CUBE_MARGIN texels: the lighting picks the face
-  itself and filters within one layer, so a face's edge needs texels beyond it (no seams).
+- point light: six views, the faces of a cube in Vulkan's order (+X, -X, +Y, -Y, +Z, -Z) (the
+  spec's cube map face selection: a direction's major axis picks the face), each widened by
+  CUBE_MARGIN texels: the lighting picks the face itself and filters within one layer, so a
+  face's edge needs texels beyond it (no seams). A face is drawn as a camera at the light would
+  see it, s = -sc, t = tc: the spec's (sc, tc) are a mirror image (sc x tc = -forward), under
+  which the rasteriser's front faces are the back faces seen from the light, and a shadow map
+  would hold the casters' far sides where spot and sun maps hold their near ones.
 
 Views come in a fixed order (directional, spot, point lights, each in world order), the layers
 numbered in that order. Depth is reverse-Z as everywhere (near 1, far 0).
@@ -83,13 +86,14 @@ def cube_face_scale(resolution: int) -> float:
 
 
 def _cube_face(face: int, near: float, far: float, scale: float = 1.0) -> np.ndarray:
-    """(4, 4) float64: a direction r from the light -> clip (sc, tc, depth, ma) * (scale, scale,
-    1, 1), ma = r on the face's major axis; x/w and y/w are then the face's s and t in [-1, 1]
-    (t down the image, as Vulkan's NDC y), shrunk by `scale`, depth reverse-Z from `near` (1) to
-    `far` (0, or infinite)."""
+    """(4, 4) float64: a direction r from the light -> clip (-sc, tc, depth, ma) * (scale, scale,
+    1, 1), ma = r on the face's major axis; x/w and y/w are then in [-1, 1] (t down the image,
+    as Vulkan's NDC y), shrunk by `scale`, depth reverse-Z from `near` (1) to `far` (0, or
+    infinite). The spec's sc is negated (the module says why): x x y = forward, as in every
+    other view (maths/camera.py's projections), so the shadow pipelines' winding holds."""
     forward, s_axis, t_axis = (np.array(v, np.float64) for v in CUBE_FACES[face])
     m = np.zeros((4, 4))
-    m[0, :3], m[1, :3], m[3, :3] = s_axis * scale, t_axis * scale, forward
+    m[0, :3], m[1, :3], m[3, :3] = -s_axis * scale, t_axis * scale, forward
     if math.isinf(far):
         m[2, 3] = near
     else:

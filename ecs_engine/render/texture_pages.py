@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import UsageError
-from ..gpu.array_image import ArrayImage, texture_sampler
+from ..gpu.array_image import ArrayImage, sampler_anisotropy, texture_sampler
 from ..gpu.device import Device
 from .layouts import NO_TEXTURE, TEXTURE_PAGES
 from .textures import CLASS_SIZES, Textures, mip_chain, resized, size_class
@@ -29,9 +29,14 @@ assert TEXTURE_PAGES == 2 * len(CLASS_SIZES)
 
 
 class TexturePages:
-    def __init__(self, device: Device) -> None:
+    def __init__(self, device: Device, anisotropy: int | None = None) -> None:
+        """`anisotropy`: the sampler's maximum (1: off; None: the device's, up to 16; checked by
+        gpu/array_image.sampler_anisotropy). Lavapipe's anisotropic filter, unlike its trilinear
+        one, strays from bilinear filtering where a texture is magnified (tests/test_textures.py):
+        tests that compare with a bilinear reference turn it off."""
         self.device = device
-        self.sampler = texture_sampler(device)
+        self.anisotropy = sampler_anisotropy(device, anisotropy)
+        self.sampler = texture_sampler(device, self.anisotropy)
         self.fallback = ArrayImage(device, 1, 1)  # bound where a class has no textures yet
         self.fallback.upload([[np.full((1, 1, 4), 255, np.uint8)]])
         self.pages: dict[int, ArrayImage] = {}
