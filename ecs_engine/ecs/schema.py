@@ -283,6 +283,49 @@ def object_component(py_type: type) -> type[Component]:
 _object_schemas: dict[type, type[Component]] = {}
 
 
+# Where the types of values that can never be components come from: a plain class of the
+# user's is a component (stored as objects), a builtin or NumPy value is a mistake (a None, a
+# stray float, a list where a Component value was meant) that would make a `NoneTypeStore`.
+_VALUE_MODULES = ("builtins", "numpy", "decimal", "fractions")
+
+
+def not_a_component(value: Any) -> str | None:
+    """What `value` is, in words, when it cannot be a component (None when it can): a class
+    instead of an instance, or a builtin or NumPy value (None, str, bytes, numbers, bools,
+    lists, tuples, dicts, sets, arrays)."""
+    if isinstance(value, Component):
+        return None
+    if isinstance(value, type):
+        return f"the class {value.__name__}"
+    module = type(value).__module__.partition(".")[0]
+    if module not in _VALUE_MODULES:
+        return None
+    if value is None:
+        return "None"
+    if isinstance(value, np.ndarray):
+        return f"a NumPy array of shape {value.shape}"
+    name = type(value).__name__
+    shown = _preview(value.item() if isinstance(value, np.generic) else value)
+    return f"{'an' if name[0] in 'aeiou' else 'a'} {name} ({shown})"
+
+
+def refuse_non_component(value: Any, call: str, position: int) -> None:
+    """TypeError naming the argument (`call`'s 1-based `position`) when `value` cannot be a
+    component."""
+    what = not_a_component(value)
+    if what is None:
+        return
+    if isinstance(value, type):
+        raise TypeError(
+            f"{call}: argument {position} is {what}: pass a component value such as {value.__name__}(), "
+            "not the class itself"
+        )
+    raise TypeError(
+        f"{call}: argument {position} is {what}, not a component: pass a Component value such as "
+        "Transform(), or an instance of a class of your own"
+    )
+
+
 def schema_of(t: Any) -> type[Component]:
     """The storage schema for a component type; plain Python classes map to an object column."""
     if isinstance(t, type):

@@ -17,7 +17,7 @@ from .errors import AccessError, DeadEntityError, EcsError, MissingComponentErro
 from .events import Events
 from .query import Query, check_access
 from .running import Running, ThreadRunning
-from .schema import Component, ObjectStore, closure, object_component, schema_of
+from .schema import Component, ObjectStore, closure, object_component, refuse_non_component, schema_of
 from .storage import Checked, Storage
 from .table import ArchetypeTable
 
@@ -159,14 +159,14 @@ class World:
         return self._local.system.last_run_tick
 
     # ------------------------------------------------------------ checking
-    def _bundles(self, values: Iterable[Any], n: int, who: Any) -> Checked:
+    def _bundles(self, values: Iterable[Any], n: int, who: Any, call: str, first: int) -> Checked:
+        """The checked values of components given to `call` from its argument `first` on."""
         checked: Checked = {}
-        for value in values:
-            if isinstance(value, type):
-                raise TypeError(f"pass a component value such as {value.__name__}(), not the class itself")
+        for position, value in enumerate(values, first):
             if isinstance(value, Component):
                 ct = type(value)
             else:
+                refuse_non_component(value, call, position)
                 if n != 1:
                     raise TypeError(
                         f"{type(value).__name__} is a plain Python object: spawn_batch needs "
@@ -207,7 +207,7 @@ class World:
     # ----------------------------------------------------------------- spawn
     def spawn(self, *values: Any) -> int:
         """Create one entity from component values; returns its id."""
-        checked = self._bundles(values, 1, _new_entity)
+        checked = self._bundles(values, 1, _new_entity, "spawn()", 1)
         types = self._closure(checked)
         if self.deferring:
             with self._ids_lock:
@@ -231,7 +231,7 @@ class World:
         n = int(n)
         if n < 0:
             raise ValueError(f"cannot spawn a negative number of entities ({n})")
-        checked = self._bundles(values, n, _new_entity)
+        checked = self._bundles(values, n, _new_entity, "spawn_batch()", 2)
         types = self._closure(checked)
         if self.deferring:
             with self._ids_lock:
@@ -261,7 +261,7 @@ class World:
     def add(self, target: Any, value: Any) -> None:
         """Add a component to one entity or many (rows move tables). An existing one is replaced."""
         ids = self._ids(target, allow_reserved=self.deferring)
-        checked = self._bundles([value], 1 if len(ids) == 1 else len(ids), self._who(ids))
+        checked = self._bundles([value], 1 if len(ids) == 1 else len(ids), self._who(ids), "add()", 2)
         ((ct, vals),) = checked.items()
         if not len(ids):
             return  # no entities: nothing to do (the value was still checked)
@@ -318,6 +318,7 @@ class World:
                 ct = type(value)
                 raw = value.values()
             else:
+                refuse_non_component(value, "set()", 2)
                 ct = object_component(type(value))
                 raw = {"value": value}
         self._check_write_access(ct)
