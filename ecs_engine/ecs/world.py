@@ -16,6 +16,7 @@ from .entities import INDEX_MASK
 from .errors import AccessError, DeadEntityError, EcsError, MissingComponentError, describe_entity
 from .events import Events
 from .query import Query, check_access
+from .read_only_writes import is_read_only_write, read_only_write_error
 from .running import Running, ThreadRunning
 from .schema import Component, ObjectStore, closure, object_component, refuse_non_component, schema_of
 from .storage import Checked, Storage
@@ -467,6 +468,11 @@ class World:
         local.system, local.tick, local.commands = system, tick, queue
         try:
             system.run(self, dt)
+        except ValueError as exc:  # free while nothing is raised (Python 3.11+): systems that behave pay nothing
+            if not is_read_only_write(exc):
+                raise
+            error = read_only_write_error(exc, system, self.storage.tables)
+            raise error.with_traceback(exc.__traceback__) from None
         finally:
             local.system, local.commands = None, None
             system.last_run_tick = tick
