@@ -1,6 +1,6 @@
-"""The world: the API over the storage. It checks values where they enter, defers structural
-changes while systems and query loops run (a typed command queue, see commands.py), hands out
-cached queries and keeps the change ticks of the running system."""
+"""The world: the API over the storage. It checks values where they enter (input_checks.py),
+defers structural changes while systems and query loops run (a typed command queue, see
+commands.py), hands out cached queries and keeps the change ticks of the running system."""
 
 from __future__ import annotations
 
@@ -13,8 +13,9 @@ import numpy as np
 
 from .commands import Add, CommandQueue, Destroy, Remove, Set, Spawn
 from .entities import INDEX_MASK
-from .errors import AccessError, DeadEntityError, EcsError, MissingComponentError, describe_entity
+from .errors import AccessError, EcsError, MissingComponentError, describe_entity
 from .events import Events
+from .input_checks import checked_components, checked_ids, entity_id, new_entity, who_of
 from .query import Query, check_access
 from .read_only_writes import is_read_only_write, read_only_write_error
 from .running import Running, ThreadRunning
@@ -32,17 +33,6 @@ class RunningSystem(Protocol):
     last_run_tick: int
 
     def run(self, world: Any, dt: float) -> None: ...
-
-
-def entity_id(eid: Any) -> int:
-    """One entity id as a Python int; integers only (one rule for every call that takes one)."""
-    if isinstance(eid, (int, np.integer)) and not isinstance(eid, (bool, np.bool_)):
-        return int(eid)
-    raise TypeError(f"entity ids must be integers, got {type(eid).__name__} {eid!r}")
-
-
-def _new_entity(row: int) -> str:
-    return "new entity" if row == 0 else f"new entity (row {row} of the batch)"
 
 
 class World:
@@ -160,45 +150,8 @@ class World:
         return self._local.system.last_run_tick
 
     # ------------------------------------------------------------ checking
-    def _bundles(self, values: Iterable[Any], n: int, who: Any, call: str, first: int) -> Checked:
-        """The checked values of components given to `call` from its argument `first` on."""
-        checked: Checked = {}
-        for position, value in enumerate(values, first):
-            if isinstance(value, Component):
-                ct = type(value)
-            else:
-                refuse_non_component(value, call, position)
-                if n != 1:
-                    raise TypeError(
-                        f"{type(value).__name__} is a plain Python object: spawn_batch needs "
-                        "Component schemas (plain objects can be spawned one at a time)"
-                    )
-                ct = object_component(type(value))
-                value = ct(value=value)
-            if ct in checked:
-                raise ValueError(f"{ct.__name__} given twice")
-            vals = {name: f.coerce(getattr(value, name), n, who) for name, f in ct.__fields__.items()}
-            ct.check(vals, who)
-            checked[ct] = vals
-        return checked
-
     def _ids(self, target: Any, allow_reserved: bool = False) -> np.ndarray:
-        """Validated, duplicate-free int64 ids; raises DeadEntityError naming the first bad id."""
-        ids = np.asarray(target)
-        if ids.dtype.kind not in "iu":
-            raise TypeError(f"entity ids must be integers, got {ids.dtype}")
-        ids = ids.astype(np.int64, copy=False).reshape(-1)
-        ok = self.storage.index.valid(ids) if allow_reserved else self.alive(ids)
-        if not ok.all():
-            bad = int(ids[~ok][0])
-            raise DeadEntityError(self.storage.dead_message(bad))
-        if len(ids) > 1 and len(np.unique(ids)) != len(ids):
-            raise ValueError("the same entity id appears more than once")
-        pending = self._commands.pending_destroy
-        if pending and np.isin(ids, list(pending)).any():
-            bad = int(ids[np.isin(ids, list(pending))][0])
-            raise DeadEntityError(f"{describe_entity(bad)} is already queued for destruction")
-        return ids
+        return checked_ids(self.storage, target, allow_reserved, self._commands.pending_destroy)
 
     def _check_write_access(self, ct: type[Component]) -> None:
         system = self._local.system
@@ -208,7 +161,7 @@ class World:
     # ----------------------------------------------------------------- spawn
     def spawn(self, *values: Any) -> int:
         """Create one entity from component values; returns its id."""
-        checked = self._bundles(values, 1, _new_entity, "spawn()", 1)
+        checked = checked_components(values, 1, new_entity, "spawn()", 1)
         types = self._closure(checked)
         if self.deferring:
             with self._ids_lock:
@@ -232,7 +185,7 @@ class World:
         n = int(n)
         if n < 0:
             raise ValueError(f"cannot spawn a negative number of entities ({n})")
-        checked = self._bundles(values, n, _new_entity, "spawn_batch()", 2)
+        checked = checked_components(values, n, new_entity, "spawn_batch()", 2)
         types = self._closure(checked)
         if self.deferring:
             with self._ids_lock:
@@ -262,7 +215,7 @@ class World:
     def add(self, target: Any, value: Any) -> None:
         """Add a component to one entity or many (rows move tables). An existing one is replaced."""
         ids = self._ids(target, allow_reserved=self.deferring)
-        checked = self._bundles([value], 1 if len(ids) == 1 else len(ids), self._who(ids), "add()", 2)
+        checked = checked_components([value], 1 if len(ids) == 1 else len(ids), who_of(ids), "add()", 2)
         ((ct, vals),) = checked.items()
         if not len(ids):
             return  # no entities: nothing to do (the value was still checked)
@@ -325,7 +278,7 @@ class World:
         self._check_write_access(ct)
         ids = self._ids(target, allow_reserved=self.deferring)
         n = len(ids)
-        who = self._who(ids)
+        who = who_of(ids)
         vals = {name: ct.__fields__[name].coerce(v, n, who) for name, v in raw.items()}
         if not n:
             return  # no entities: nothing to do (the values were still checked)
@@ -342,9 +295,6 @@ class World:
             self._commands.push(Set(ids, ct, vals, who))  # a partial one is checked again when applied
             return
         storage.write(ids, ct, vals, self.write_tick())
-
-    def _who(self, ids: np.ndarray) -> Any:
-        return lambda row: describe_entity(int(ids[row]))
 
     # --------------------------------------------------------------- queries
     def query(
