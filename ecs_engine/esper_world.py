@@ -96,7 +96,7 @@ class ComponentProxy:
     def _locate(self) -> tuple[Any, int]:
         world = self._world
         try:
-            table, row = world.locate(self._entity)
+            table, row = world.storage.locate(self._entity)
         except DeadEntityError as exc:
             raise EntityNotFoundError(str(exc)) from None
         if not table.has(self._schema):
@@ -194,7 +194,7 @@ class EsperWorld:
     # ------------------------------------------------------------------ helpers
     def _locate(self, entity: int) -> tuple[Any, int]:
         try:
-            return self.world.locate(int(entity))
+            return self.world.storage.locate(int(entity))
         except DeadEntityError as exc:
             raise EntityNotFoundError(str(exc)) from None
 
@@ -288,7 +288,7 @@ class EsperWorld:
     def try_component(self, entity: int, component_type: type) -> Any | None:
         """The component, or None if the entity does not exist or lacks it."""
         try:
-            table, row = self.world.locate(int(entity))
+            table, row = self.world.storage.locate(int(entity))
         except DeadEntityError:
             return None
         ct = _key(component_type)
@@ -297,7 +297,7 @@ class EsperWorld:
     def try_components(self, entity: int, *component_types: type) -> tuple[Any, ...] | None:
         """The components, or None if the entity does not exist or lacks one of them."""
         try:
-            table, row = self.world.locate(int(entity))
+            table, row = self.world.storage.locate(int(entity))
         except DeadEntityError:
             return None
         cts = [_key(t) for t in component_types]
