@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .entities import EntityIndex, make_ids
+from .entities import INDEX_BITS, EntityIndex, make_ids
 
 BLOCK = 64
 
@@ -33,9 +33,18 @@ class StageIds:
         self._used = index.used
         self._released = len(self._free)  # slots released meanwhile (not by systems) are kept
         self._taken: list[np.ndarray] = []  # positions handed out
+        self._taken_one: list[int] = []  # by single spawns
 
     def take(self, lane: int, n: int) -> np.ndarray:
         """n new ids for the system at place `lane` of the stage."""
+        nxt = self._next[lane]
+        if n == 1 and nxt < self._end[lane]:  # one spawn at a time: Python ints, no arrays
+            self._next[lane] = nxt + 1
+            self._taken_one.append(nxt)
+            free = len(self._free)
+            slot = int(self._free[nxt]) if nxt < free else self._used + nxt - free
+            self.index.claim(slot + 1)
+            return np.array([(int(self.index.generation[slot]) << INDEX_BITS) | slot], dtype=np.int64)
         positions = self._positions(lane, n)
         self._taken.append(positions)
         slots = np.empty(n, dtype=np.int64)
@@ -68,14 +77,15 @@ class StageIds:
     def close(self) -> None:
         """The stage's sync point: the free list keeps the slots no system took, and gets the
         fresh slots skipped between blocks (lowest first out)."""
-        if not self._taken:
+        if not self._taken and not self._taken_one:
             return
-        taken = np.concatenate(self._taken)
+        taken = np.concatenate([*self._taken, np.array(self._taken_one, dtype=np.int64)])
         free = len(self._free)
         kept = np.ones(free, dtype=bool)
         kept[taken[taken < free]] = False
-        fresh = self._used + taken[taken >= free] - free
-        gaps = np.setdiff1d(np.arange(self._used, self.index.used, dtype=np.int64), fresh)
+        skipped = np.ones(self.index.used - self._used, dtype=bool)
+        skipped[taken[taken >= free] - free] = False
+        gaps = self._used + np.flatnonzero(skipped)
         now = self.index.free_in_pop_order()
         released = now[: len(now) - self._released]
         self.index.replace_free(np.concatenate([released, self._free[kept], gaps]))
