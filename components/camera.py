@@ -17,33 +17,56 @@ from ecs_engine.ecs.schema import Component, Field
 from ecs_engine.ecs.world import World
 from ecs_engine.errors import UsageError
 
-from .transform import Transform
+from .transform import LIMIT, SMALLEST, Transform
 
 PERSPECTIVE = 0
 ORTHOGRAPHIC = 1
+MIN_FOV_Y = 1e-6  # radians
+MAX_ASPECT = 1e3
+# The largest orthographic view height: shadow cascades fitted to a wider view fail (their planes'
+# normals fall under the 1e-12 that maths/culling.py's frustum_planes_many takes as degenerate).
+MAX_VIEW_HEIGHT = 1e9
 
 
 class Camera(Component):
     """Reverse-Z projection parameters. `far` may be +inf (an infinite far plane); NaN and
     -inf are rejected like any other non-finite value. `aspect` 0 means "follow the viewport".
-    `height` is the view height of an orthographic camera."""
+    `height` is the view height of an orthographic camera.
+
+    The ranges keep the float32 projection finite and non-zero where it must be: near and far
+    within [SMALLEST, LIMIT] (far may also be +inf), height within [SMALLEST, MAX_VIEW_HEIGHT];
+    fov_y at least MIN_FOV_Y (1/tan of half of it at most 2e6); aspect 0 or within
+    [1/MAX_ASPECT, MAX_ASPECT]. A near plane of 1e300 made every frame print float32 overflow
+    warnings."""
 
     projection = Field(np.uint8, default=PERSPECTIVE, maximum=ORTHOGRAPHIC)
-    fov_y = Field(
-        np.float64, default=np.radians(50.0), finite=True, minimum=0.0, min_exclusive=True, maximum=np.pi - 1e-6
-    )
-    near = Field(np.float64, default=0.1, finite=True, minimum=0.0, min_exclusive=True)
-    far = Field(np.float64, default=np.inf, finite=True, allow_posinf=True, minimum=0.0, min_exclusive=True)
-    aspect = Field(np.float64, default=0.0, finite=True, minimum=0.0)
-    height = Field(np.float64, default=10.0, finite=True, minimum=0.0, min_exclusive=True)
+    fov_y = Field(np.float64, default=np.radians(50.0), finite=True, minimum=MIN_FOV_Y, maximum=np.pi - MIN_FOV_Y)
+    near = Field(np.float64, default=0.1, finite=True, minimum=SMALLEST, maximum=LIMIT)
+    far = Field(np.float64, default=np.inf, finite=True, allow_posinf=True, minimum=SMALLEST)
+    aspect = Field(np.float64, default=0.0, finite=True, minimum=0.0, maximum=MAX_ASPECT)
+    height = Field(np.float64, default=10.0, finite=True, minimum=SMALLEST, maximum=MAX_VIEW_HEIGHT)
 
     @classmethod
     def check(cls, values, who):
         near, far = np.broadcast_arrays(values["near"], values["far"])
-        bad = near >= far
-        if bad.any():
-            row = int(np.flatnonzero(bad)[0])
-            raise ValueError(f"{who(row)}: Camera.near ({near[row]}) must be less than Camera.far ({far[row]})")
+        _refuse(near >= far, who, lambda r: f"Camera.near ({near[r]}) must be less than Camera.far ({far[r]})")
+        too_far = np.isfinite(far) & (far > LIMIT)
+        _refuse(too_far, who, lambda r: f"Camera.far must be <= {LIMIT:g} or +inf, got {far[r]:g}")
+        aspect = values["aspect"].reshape(-1)
+        narrow = (aspect != 0.0) & (aspect < 1.0 / MAX_ASPECT)
+        _refuse(
+            narrow,
+            who,
+            lambda r: f"Camera.aspect must be 0 (the viewport's) or >= {1.0 / MAX_ASPECT:g}, got {aspect[r]:g}",
+        )
+
+
+def _refuse(bad: np.ndarray, who: Any, what: Any) -> None:
+    """ValueError naming the first row where `bad` holds (who: the entity, what: the rest)."""
+    bad = np.atleast_1d(bad)
+    if bad.any():
+        row = int(np.flatnonzero(bad)[0])
+        raise ValueError(f"{who(row)}: {what(row)}")
 
 
 class ActiveCamera(Component):

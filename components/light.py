@@ -14,14 +14,22 @@ import numpy as np
 
 from ecs_engine.ecs.schema import Component, Field
 
+# The largest colour component and intensity (or illuminance): the shaders multiply the two and a
+# BRDF in float32, and a directional light's product is not capped as a point light's is, so
+# these keep it finite (1e6 * 1e20 * a BRDF's peak is far below float32's 3.4e38).
+MAX_COLOR = 1e6
+MAX_INTENSITY = 1e20
+# The largest radius (range): its square, which the shaders take, stays a finite float32.
+MAX_RADIUS = 1e18
+
 
 class PointLight(Component):
     """Linear RGB colour, intensity and radius of influence (0 means unbounded). Within the
     radius the light falls off as 1/d^2 times a window that reaches 0 at the radius."""
 
-    color = Field(np.float32, (3,), default=(1.0, 1.0, 1.0), finite=True, minimum=0.0)
-    intensity = Field(np.float32, default=1.0, finite=True, minimum=0.0)
-    radius = Field(np.float32, default=10.0, finite=True, minimum=0.0)
+    color = Field(np.float32, (3,), default=(1.0, 1.0, 1.0), finite=True, minimum=0.0, maximum=MAX_COLOR)
+    intensity = Field(np.float32, default=1.0, finite=True, minimum=0.0, maximum=MAX_INTENSITY)
+    radius = Field(np.float32, default=10.0, finite=True, minimum=0.0, maximum=MAX_RADIUS)
 
 
 class SpotLight(Component):
@@ -29,9 +37,9 @@ class SpotLight(Component):
     of the axis, fading (smoothly, as glTF's KHR_lights_punctual) to none at `outer_angle`
     (radians, 0 <= inner < outer <= pi/2). `radius` is its range, as PointLight's."""
 
-    color = Field(np.float32, (3,), default=(1.0, 1.0, 1.0), finite=True, minimum=0.0)
-    intensity = Field(np.float32, default=1.0, finite=True, minimum=0.0)
-    radius = Field(np.float32, default=10.0, finite=True, minimum=0.0)
+    color = Field(np.float32, (3,), default=(1.0, 1.0, 1.0), finite=True, minimum=0.0, maximum=MAX_COLOR)
+    intensity = Field(np.float32, default=1.0, finite=True, minimum=0.0, maximum=MAX_INTENSITY)
+    radius = Field(np.float32, default=10.0, finite=True, minimum=0.0, maximum=MAX_RADIUS)
     inner_angle = Field(np.float32, default=0.0, finite=True, minimum=0.0, maximum=np.pi / 2)
     outer_angle = Field(np.float32, default=np.pi / 4, finite=True, minimum=0.0, maximum=np.pi / 2)
 
@@ -51,5 +59,5 @@ class DirectionalLight(Component):
     """Light from far away (the sun) along the entity's -Z axis: linear RGB colour and
     illuminance, the same everywhere in the scene."""
 
-    color = Field(np.float32, (3,), default=(1.0, 1.0, 1.0), finite=True, minimum=0.0)
-    illuminance = Field(np.float32, default=1.0, finite=True, minimum=0.0)
+    color = Field(np.float32, (3,), default=(1.0, 1.0, 1.0), finite=True, minimum=0.0, maximum=MAX_COLOR)
+    illuminance = Field(np.float32, default=1.0, finite=True, minimum=0.0, maximum=MAX_INTENSITY)

@@ -22,6 +22,9 @@ from ecs_engine.ecs.schema import Component, Field
 from ecs_engine.maths.shadow_cascades import MAX_CASCADES
 
 SHADOW_HARD, SHADOW_PCF, SHADOW_PCSS = range(3)
+# The farthest a directional light's cascades reach: cascades fitted to more fail (their planes'
+# normals fall under the 1e-12 that maths/culling.py's frustum_planes_many takes as degenerate).
+MAX_DISTANCE = 1e9
 SHADOW_FILTERS = ("hard", "pcf", "pcss")
 
 
@@ -30,7 +33,7 @@ class Shadow(Component):
 
     resolution = Field(np.uint16, default=2048, minimum=16, maximum=8192)
     cascades = Field(np.uint8, default=MAX_CASCADES, minimum=1, maximum=MAX_CASCADES)
-    distance = Field(np.float32, default=50.0, finite=True, minimum=0.0, min_exclusive=True)
+    distance = Field(np.float32, default=50.0, finite=True, minimum=0.0, min_exclusive=True, maximum=MAX_DISTANCE)
     bias = Field(np.float32, default=1.0, finite=True, minimum=0.0)
     normal_offset = Field(np.float32, default=1.0, finite=True, minimum=0.0)
     filter = Field(np.uint8, default=SHADOW_PCF, maximum=SHADOW_PCSS)

@@ -6,6 +6,13 @@ import numpy as np
 
 from ecs_engine.ecs.schema import Component, Field
 
+# The largest length a stock component holds (positions, scales, distances, radii): the float32
+# matrices and rows made from them stay finite (float32 ends at 3.4e38) with room to spare.
+LIMIT = 1e30
+# The smallest positive length where one must be positive (a near plane, a view's height): it
+# stays a normal float32 (those end at 1.2e-38), not 0.
+SMALLEST = 1e-30
+
 
 class Transform(Component):
     """Position stays float64 so a world 10,000 km across keeps millimetre precision; the
@@ -14,9 +21,9 @@ class Transform(Component):
     scale components stay within +-1e30 (LIMIT), so the float32 matrices made from them stay
     finite (float32 ends at 3.4e38) and no infinity or NaN reaches the GPU."""
 
-    position = Field(np.float64, (3,), default=(0.0, 0.0, 0.0), finite=True, minimum=-1e30, maximum=1e30)
+    position = Field(np.float64, (3,), default=(0.0, 0.0, 0.0), finite=True, minimum=-LIMIT, maximum=LIMIT)
     rotation = Field(np.float64, (4,), default=(0.0, 0.0, 0.0, 1.0), finite=True, unit=True)
-    scale = Field(np.float64, (3,), default=(1.0, 1.0, 1.0), finite=True, minimum=-1e30, maximum=1e30)
+    scale = Field(np.float64, (3,), default=(1.0, 1.0, 1.0), finite=True, minimum=-LIMIT, maximum=LIMIT)
 
 
 class ModelMatrix(Component):

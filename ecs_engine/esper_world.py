@@ -18,7 +18,7 @@ from weakref import WeakMethod, ref
 import numpy as np
 
 from .ecs.errors import DeadEntityError, MissingComponentError
-from .ecs.schema import Component, ObjectStore, object_component, schema_of
+from .ecs.schema import Component, ObjectStore, object_component, refuse_non_component, schema_of
 from .ecs.world import World
 
 __all__ = [
@@ -96,7 +96,7 @@ class ComponentProxy:
     def _locate(self) -> tuple[Any, int]:
         world = self._world
         try:
-            table, row = world.locate(self._entity)
+            table, row = world.storage.locate(self._entity)
         except DeadEntityError as exc:
             raise EntityNotFoundError(str(exc)) from None
         if not table.has(self._schema):
@@ -194,7 +194,7 @@ class EsperWorld:
     # ------------------------------------------------------------------ helpers
     def _locate(self, entity: int) -> tuple[Any, int]:
         try:
-            return self.world.locate(int(entity))
+            return self.world.storage.locate(int(entity))
         except DeadEntityError as exc:
             raise EntityNotFoundError(str(exc)) from None
 
@@ -211,9 +211,8 @@ class EsperWorld:
         """Create an entity with the given component instances; returns its (64-bit) id.
         Two components of the same type: the last one wins, as in esper."""
         by_schema: dict[type[Component], Any] = {}
-        for c in components:
-            if isinstance(c, type):
-                raise TypeError(f"pass a component instance such as {c.__name__}(), not the class")
+        for position, c in enumerate(components, 1):
+            refuse_non_component(c, "create_entity()", position)
             by_schema[type(c) if isinstance(c, Component) else object_component(type(c))] = c
         eid = self.world.spawn(*by_schema.values())
         self._changed()
@@ -289,7 +288,7 @@ class EsperWorld:
     def try_component(self, entity: int, component_type: type) -> Any | None:
         """The component, or None if the entity does not exist or lacks it."""
         try:
-            table, row = self.world.locate(int(entity))
+            table, row = self.world.storage.locate(int(entity))
         except DeadEntityError:
             return None
         ct = _key(component_type)
@@ -298,7 +297,7 @@ class EsperWorld:
     def try_components(self, entity: int, *component_types: type) -> tuple[Any, ...] | None:
         """The components, or None if the entity does not exist or lacks one of them."""
         try:
-            table, row = self.world.locate(int(entity))
+            table, row = self.world.storage.locate(int(entity))
         except DeadEntityError:
             return None
         cts = [_key(t) for t in component_types]
@@ -309,8 +308,7 @@ class EsperWorld:
     def add_component(self, entity: int, component_instance: Any, type_alias: type | None = None) -> None:
         """Add a component (replacing one of the same type), optionally under ``type_alias``."""
         value = component_instance
-        if isinstance(value, type):
-            raise TypeError(f"pass a component instance such as {value.__name__}(), not the class")
+        refuse_non_component(value, "add_component()", 2)
         if type_alias is not None:
             if not isinstance(type_alias, type):
                 raise TypeError(f"type_alias must be a class, got {type_alias!r}")

@@ -275,7 +275,7 @@ def test_range_checks():
     w = World()
     with pytest.raises(ValueError, match=r"Health\.hp must be >= 0"):
         w.spawn(Health(hp=-1))
-    with pytest.raises(ValueError, match=r"Camera\.near must be > 0"):
+    with pytest.raises(ValueError, match=r"Camera\.near must be >= 1e-30"):
         w.spawn(Camera(near=0.0))
     with pytest.raises(ValueError, match=r"PointLight\.radius must be >= 0"):
         w.spawn(PointLight(radius=-2))

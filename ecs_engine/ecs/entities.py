@@ -69,6 +69,21 @@ class EntityIndex:
             self.used += 1
         return (int(self.generation[index]) << INDEX_BITS) | index
 
+    def free_in_pop_order(self) -> np.ndarray:
+        """The free slots, the one `allocate` would take next first."""
+        return self._free[: self._free_count][::-1].copy()
+
+    def replace_free(self, pop_order: np.ndarray) -> None:
+        """Make these slots the free list, the first one to be taken next."""
+        self._free = np.array(pop_order[::-1], dtype=np.int64)
+        self._free_count = len(self._free)
+
+    def claim(self, top: int) -> None:
+        """Slots below `top` have been handed out (or skipped, see stage_ids.py): hold them."""
+        if top > self.used:
+            self._ensure(top)
+            self.used = top
+
     def reserve(self, ids: np.ndarray) -> None:
         """Mark freshly allocated ids as waiting for a deferred spawn (alive, in no table yet)."""
         self.table[ids & INDEX_MASK] = RESERVED

@@ -10,6 +10,13 @@ resources and event types the same way as components (`reads=[RenderOrigin]`): a
 schedule cannot see is a data race in a parallel stage. Only numba kernels and large NumPy calls
 release the GIL, so only such systems gain.
 
+In sequence as in parallel, each system of a stage queues its structural changes on its own (a
+change it asks for does not see what another system queued; one that names an entity an earlier
+system destroyed is left out at the sync point) and its spawns take the ids of its place in the
+stage (stage_ids.py), so a parallel stage gives the sequential result, entity ids included.
+Inside a system that declares its access, `world.get` and `change_stamp` are checked as queries
+are, and `world.locate` (a whole table, open to any write) is refused.
+
 A system may have a run condition (`run_if`, as Bevy's): a function of the world, asked just
 before the system would run; False skips it, and its change tick stays where it was, so its next
 run sees every change since its last one. `any_with(A, B)` (some entity has A and B) is the usual
@@ -192,6 +199,8 @@ class Schedule:
             raise ValueError("a schedule needs at least one stage")
         self.parallel = parallel
         self._levels: dict[str, tuple[tuple[int, ...], list[list[int]]]] = {}  # per stage, by its systems
+        # per stage, one per system (made as they are added): each system's structural changes
+        self._queues: dict[str, list[CommandQueue]] = {name: [] for name in self.stages}
 
     def add(self, obj: System | Callable[[World, float], Any], stage: str | None = None) -> System:
         stage = stage or next(iter(self.stages))
@@ -201,6 +210,7 @@ class Schedule:
         if any(s is sys_ for systems in self.stages.values() for s in systems):
             raise ValueError(f"system {sys_.name} is already scheduled")
         self.stages[stage].append(sys_)
+        self._queues[stage].append(CommandQueue())
         return sys_
 
     def order(self) -> list[tuple[str, list[str]]]:
@@ -212,27 +222,40 @@ class Schedule:
         return [[systems[i].name for i in group] for group in levels(systems)]
 
     def _run_stage(self, world: World, name: str, dt: float) -> None:
-        systems = self.stages[name]
+        """The stage's systems, then its sync point. Sequential or parallel, each system queues
+        its structural changes on its own and spawns the ids of its place in the stage, so the
+        result is the same in both (see the module)."""
+        systems, queues = self.stages[name], self._queues[name]
         pool = world.resources.get(JobPool) if self.parallel else None
-        if pool is None or pool.threads < 2 or len(systems) < 2:
-            _run_stage(world, systems, dt)
-            return
+        count = len(systems)
+        several = count > 1  # one system alone takes the ids a plain spawn would
+        if several:
+            world.open_stage(count)
+        try:
+            if pool is None or pool.threads < 2 or not several:
+                for i, sys_ in enumerate(systems):
+                    if sys_.run_if is None or sys_.run_if(world):
+                        world.run_system(sys_, dt, queues[i], i)
+            else:
+                self._run_together(world, name, systems, dt, pool, queues)
+        finally:
+            world.close_stage(queues)
+        world.flush()
+
+    def _run_together(
+        self, world: World, name: str, systems: list[System], dt: float, pool: JobPool, queues: list[CommandQueue]
+    ) -> None:
         key = tuple(id(s) for s in systems)
         cached = self._levels.get(name)
         if cached is None or cached[0] != key:
             cached = self._levels[name] = (key, levels(systems))
-        queues = [CommandQueue() for _ in systems]
-        try:
-            for everyone in cached[1]:
-                group = [i for i in everyone if _due(systems[i], world)]
-                if not group:
-                    continue
-                chosen = [systems[i] for i in group]
-                spread = pool.map if len(chosen) > 1 else _inline  # alone: its own jobs may spread
-                world.run_systems_together(chosen, dt, spread, [queues[i] for i in group])
-        finally:
-            world.join_commands(queues)
-        world.flush()
+        for everyone in cached[1]:
+            group = [i for i in everyone if _due(systems[i], world)]
+            if not group:
+                continue
+            chosen = [systems[i] for i in group]
+            spread = pool.map if len(chosen) > 1 else _inline  # alone: its own jobs may spread
+            world.run_systems_together(chosen, dt, spread, [queues[i] for i in group], group)
 
     def run_frame(
         self, world: World, frame_dt: float, clock: FixedClock, fixed_stage: str = "fixed", max_frame_dt: float = 0.1
@@ -280,12 +303,3 @@ def _due(sys_: System, world: World) -> bool:
     """Whether the system runs now (its run condition, if any)."""
     condition = sys_.run_if
     return condition is None or bool(condition(world))
-
-
-def _run_stage(world: World, systems: list[System], dt: float) -> None:
-    """A stage's systems in order (those whose run condition holds), then the sync point
-    (deferred structural changes applied)."""
-    for sys_ in systems:
-        if sys_.run_if is None or sys_.run_if(world):
-            world.run_system(sys_, dt)
-    world.flush()

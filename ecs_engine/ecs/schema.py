@@ -133,6 +133,11 @@ class Field:
             return arr.astype(target)
         if arr.dtype == object or not np.can_cast(arr.dtype, target, casting="same_kind"):
             raise ValueError(f"{self.qualname} holds {target} values; got {arr.dtype} ({_preview(value)})")
+        if target.kind == "f" and arr.dtype.kind == "f" and arr.dtype.itemsize > target.itemsize and arr.size:
+            largest = float(np.finfo(target).max)  # beyond it the cast would make a finite value inf
+            rows = self._rows(np.isfinite(arr) & (np.abs(arr) > largest))
+            if rows.any():
+                self._fail(rows, arr, who, f"must fit in {target} (magnitude at most {largest:.3g})")
         if target.kind == "U" and arr.dtype.kind == "U" and arr.dtype.itemsize > target.itemsize and arr.size:
             longest = target.itemsize // 4  # a cast would cut longer strings short without a word
             rows = self._rows(np.char.str_len(arr) > longest)
@@ -182,11 +187,11 @@ class Field:
             rows = self._rows(bad)
             if rows.any():
                 op = ">" if self.min_exclusive else ">="
-                self._fail(rows, arr, who, f"must be {op} {self.minimum}")
+                self._fail(rows, arr, who, f"must be {op} {self.minimum:g}")
         if self.maximum is not None:
             rows = self._rows(arr > self.maximum)
             if rows.any():
-                self._fail(rows, arr, who, f"must be <= {self.maximum}")
+                self._fail(rows, arr, who, f"must be <= {self.maximum:g}")
 
     def _normalise(self, arr: np.ndarray, who: Callable[[int], str]) -> np.ndarray:
         """Unit length per row. Scaled by the largest component first, so huge finite values
@@ -261,6 +266,8 @@ def _preview(value: Any) -> str:
         if value.size > 8:
             return f"array of shape {value.shape}"
         return repr(value.tolist())
+    if isinstance(value, np.generic):
+        value = value.item()  # 1e+300, not np.float64(1e+300)
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
 
@@ -281,6 +288,48 @@ def object_component(py_type: type) -> type[Component]:
 
 
 _object_schemas: dict[type, type[Component]] = {}
+
+
+# Where the types of values that can never be components come from: a plain class of the
+# user's is a component (stored as objects), a builtin or NumPy value is a mistake (a None, a
+# stray float, a list where a Component value was meant) that would make a `NoneTypeStore`.
+_VALUE_MODULES = ("builtins", "numpy", "decimal", "fractions")
+
+
+def not_a_component(value: Any) -> str | None:
+    """What `value` is, in words, when it cannot be a component (None when it can): a class
+    instead of an instance, or a builtin or NumPy value (None, str, bytes, numbers, bools,
+    lists, tuples, dicts, sets, arrays)."""
+    if isinstance(value, Component):
+        return None
+    if isinstance(value, type):
+        return f"the class {value.__name__}"
+    module = type(value).__module__.partition(".")[0]
+    if module not in _VALUE_MODULES:
+        return None
+    if value is None:
+        return "None"
+    if isinstance(value, np.ndarray):
+        return f"a NumPy array of shape {value.shape}"
+    name = type(value).__name__
+    return f"{'an' if name[0] in 'aeiou' else 'a'} {name} ({_preview(value)})"
+
+
+def refuse_non_component(value: Any, call: str, position: int) -> None:
+    """TypeError naming the argument (`call`'s 1-based `position`) when `value` cannot be a
+    component."""
+    what = not_a_component(value)
+    if what is None:
+        return
+    if isinstance(value, type):
+        raise TypeError(
+            f"{call}: argument {position} is {what}: pass a component value such as {value.__name__}(), "
+            "not the class itself"
+        )
+    raise TypeError(
+        f"{call}: argument {position} is {what}, not a component: pass a Component value such as "
+        "Transform(), or an instance of a class of your own"
+    )
 
 
 def schema_of(t: Any) -> type[Component]:

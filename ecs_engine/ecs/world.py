@@ -1,47 +1,27 @@
-"""The world: the API over the storage. It checks values where they enter, defers structural
-changes while systems and query loops run (a typed command queue, see commands.py), hands out
-cached queries and keeps the change ticks of the running system."""
+"""The world: the API over the storage. It checks values where they enter (input_checks.py),
+defers structural changes while systems and query loops run (a typed command queue, see
+commands.py), hands out cached queries and keeps the change ticks of the running system."""
 
 from __future__ import annotations
 
 import threading
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 
 from .commands import Add, CommandQueue, Destroy, Remove, Set, Spawn
 from .entities import INDEX_MASK
-from .errors import AccessError, DeadEntityError, EcsError, MissingComponentError, describe_entity
+from .errors import AccessError, EcsError, MissingComponentError, describe_entity
 from .events import Events
+from .input_checks import checked_components, checked_ids, entity_id, new_entity, who_of
 from .query import Query, check_access
-from .running import Running, ThreadRunning
-from .schema import Component, ObjectStore, closure, object_component, schema_of
+from .running import Running, RunningSystem, ThreadRunning, run_as, run_group
+from .schema import Component, ObjectStore, closure, object_component, refuse_non_component, schema_of
+from .stage_ids import StageIds
 from .storage import Checked, Storage
 from .table import ArchetypeTable
-
-
-class RunningSystem(Protocol):
-    """What the world needs of a system while it runs it (see schedule.System)."""
-
-    name: str
-    reads: frozenset[type] | None
-    writes: frozenset[type] | None
-    last_run_tick: int
-
-    def run(self, world: Any, dt: float) -> None: ...
-
-
-def entity_id(eid: Any) -> int:
-    """One entity id as a Python int; integers only (one rule for every call that takes one)."""
-    if isinstance(eid, (int, np.integer)) and not isinstance(eid, (bool, np.bool_)):
-        return int(eid)
-    raise TypeError(f"entity ids must be integers, got {type(eid).__name__} {eid!r}")
-
-
-def _new_entity(row: int) -> str:
-    return "new entity" if row == 0 else f"new entity (row {row} of the batch)"
 
 
 class World:
@@ -51,13 +31,14 @@ class World:
         self.storage = Storage()
         self._queries: dict[tuple[Any, ...], Query] = {}
         self._queries_by_call: dict[tuple[Any, ...], Query] = {}  # as called (see query)
-        self._stamp_keys: dict[tuple[type, ...], list[tuple[Any, str]]] = {}  # see change_stamp
+        self._stamp_keys: dict[tuple[type, ...], tuple[frozenset[Any], list[tuple[Any, str]]]] = {}  # change_stamp
         self._closures: dict[frozenset[type[Component]], frozenset[type[Component]]] = {}
         self.tick = 0
         self._queue = CommandQueue()
         self._local = Running()
         self._defer_depth = 0
         self._ids_lock = threading.Lock()  # id allocation by systems running in parallel
+        self._stage: tuple[int, StageIds | None] | None = None  # (systems, ids) while a stage runs
         self._events: dict[type, Events[Any]] = {}
         # Singletons shared by systems (render origin, input state, ...), keyed by type.
         self.resources: dict[Any, Any] = {}
@@ -85,7 +66,8 @@ class World:
     def _commands(self) -> CommandQueue:
         """Where structural changes queue: this thread's parallel system's own queue, else the
         world's."""
-        return self._local.commands or self._queue
+        commands = self._local.commands
+        return self._queue if commands is None else commands  # not `or`: an empty queue is falsy
 
     def running_system(self) -> RunningSystem | None:
         """The system running on this thread, if any."""
@@ -116,7 +98,15 @@ class World:
         return ok & (index.table[np.where(ok, ids & INDEX_MASK, 0)] >= 0)
 
     def locate(self, eid: int) -> tuple[ArchetypeTable, int]:
-        """The table and row holding a live entity (valid until the next structural change)."""
+        """The table and row holding a live entity (valid until the next structural change).
+        Not inside a system that declares its access: the table's columns are open to any read
+        or write, which no access check could follow (use get, set and queries there)."""
+        system = self._local.system
+        if system is not None and system.reads is not None and system.writes is not None:
+            raise AccessError(
+                f"system {system.name} called world.locate(): its table is open to reads and writes that its "
+                "declared access cannot cover; use world.get, world.set or a query"
+            )
         return self.storage.locate(entity_id(eid))
 
     def has(self, eid: int, component_type: type) -> bool:
@@ -133,11 +123,15 @@ class World:
         Ticks belong to tables, not rows, so a write to another entity of the same table changes
         the stamp too (never the reverse). For caching what is derived from one entity."""
         table, row = self.storage.located(eid if type(eid) is int else entity_id(eid))
-        keys = self._stamp_keys.get(component_types)
-        if keys is None:
-            keys = self._stamp_keys[component_types] = [
-                (ct, name) for ct in map(schema_of, component_types) for name in ct.__fields__
-            ]
+        kept = self._stamp_keys.get(component_types)
+        if kept is None:
+            cts = [schema_of(t) for t in component_types]
+            kept = self._stamp_keys[component_types] = (frozenset(cts), [(ct, n) for ct in cts for n in ct.__fields__])
+        schemas, keys = kept
+        system = self._local.system
+        if system is not None and system.reads is not None and system.writes is not None:
+            for ct in schemas - system.reads if not schemas <= system.reads else ():
+                self._check_read_access(ct, "change_stamp")
         ticks = table.column_ticks
         try:
             return (table.id, table.version, row, *[ticks[k] for k in keys])
@@ -159,45 +153,15 @@ class World:
         return self._local.system.last_run_tick
 
     # ------------------------------------------------------------ checking
-    def _bundles(self, values: Iterable[Any], n: int, who: Any) -> Checked:
-        checked: Checked = {}
-        for value in values:
-            if isinstance(value, type):
-                raise TypeError(f"pass a component value such as {value.__name__}(), not the class itself")
-            if isinstance(value, Component):
-                ct = type(value)
-            else:
-                if n != 1:
-                    raise TypeError(
-                        f"{type(value).__name__} is a plain Python object: spawn_batch needs "
-                        "Component schemas (plain objects can be spawned one at a time)"
-                    )
-                ct = object_component(type(value))
-                value = ct(value=value)
-            if ct in checked:
-                raise ValueError(f"{ct.__name__} given twice")
-            vals = {name: f.coerce(getattr(value, name), n, who) for name, f in ct.__fields__.items()}
-            ct.check(vals, who)
-            checked[ct] = vals
-        return checked
-
     def _ids(self, target: Any, allow_reserved: bool = False) -> np.ndarray:
-        """Validated, duplicate-free int64 ids; raises DeadEntityError naming the first bad id."""
-        ids = np.asarray(target)
-        if ids.dtype.kind not in "iu":
-            raise TypeError(f"entity ids must be integers, got {ids.dtype}")
-        ids = ids.astype(np.int64, copy=False).reshape(-1)
-        ok = self.storage.index.valid(ids) if allow_reserved else self.alive(ids)
-        if not ok.all():
-            bad = int(ids[~ok][0])
-            raise DeadEntityError(self.storage.dead_message(bad))
-        if len(ids) > 1 and len(np.unique(ids)) != len(ids):
-            raise ValueError("the same entity id appears more than once")
-        pending = self._commands.pending_destroy
-        if pending and np.isin(ids, list(pending)).any():
-            bad = int(ids[np.isin(ids, list(pending))][0])
-            raise DeadEntityError(f"{describe_entity(bad)} is already queued for destruction")
-        return ids
+        return checked_ids(self.storage, target, allow_reserved, self._commands.pending_destroy)
+
+    def _check_read_access(self, ct: type[Component], call: str) -> None:
+        system = self._local.system
+        if system is None or system.reads is None or system.writes is None:
+            return  # outside systems, or one that may read anything (it runs alone)
+        if ct not in system.reads and ct not in system.writes:
+            raise AccessError(f"system {system.name} reads {ct.__name__} (world.{call}) but does not declare it")
 
     def _check_write_access(self, ct: type[Component]) -> None:
         system = self._local.system
@@ -207,16 +171,14 @@ class World:
     # ----------------------------------------------------------------- spawn
     def spawn(self, *values: Any) -> int:
         """Create one entity from component values; returns its id."""
-        checked = self._bundles(values, 1, _new_entity)
+        checked = checked_components(values, 1, new_entity, "spawn()", 1)
         types = self._closure(checked)
         if self.deferring:
-            with self._ids_lock:
-                eid = self.storage.index.allocate_one()
-                self.storage.index.reserve(np.array([eid], dtype=np.int64))
-            self._commands.push(Spawn(np.array([eid], dtype=np.int64), types, checked))
-        else:
-            eid = self.storage.index.allocate_one()
-            self.storage.place_one(eid, types, checked, self.write_tick())
+            ids = self._reserve(1)
+            self._commands.push(Spawn(ids, types, checked))
+            return int(ids[0])
+        eid = self.storage.index.allocate_one() if self._stage is None else int(self._reserve(1)[0])
+        self.storage.place_one(eid, types, checked, self.write_tick())
         return eid
 
     def _closure(self, checked: Checked) -> frozenset[type[Component]]:
@@ -231,16 +193,31 @@ class World:
         n = int(n)
         if n < 0:
             raise ValueError(f"cannot spawn a negative number of entities ({n})")
-        checked = self._bundles(values, n, _new_entity)
+        checked = checked_components(values, n, new_entity, "spawn_batch()", 2)
         types = self._closure(checked)
         if self.deferring:
-            with self._ids_lock:
-                ids = self.storage.index.allocate(n)
-                self.storage.index.reserve(ids)
+            ids = self._reserve(n)
             self._commands.push(Spawn(ids, types, checked))
         else:
-            ids = self.storage.index.allocate(n)
+            ids = self.storage.index.allocate(n) if self._stage is None else self._reserve(n)
             self.storage.place(ids, types, checked, self.write_tick())
+        return ids
+
+    def _reserve(self, n: int) -> np.ndarray:
+        """n new ids for a deferred spawn; while a schedule stage runs, the running system's
+        (stage_ids.py: the same whatever order the stage's systems run in)."""
+        index = self.storage.index
+        with self._ids_lock:
+            if self._stage is None:
+                ids = index.allocate(n)
+            else:
+                systems, plan = self._stage
+                if plan is None:  # made at the first spawn: most stages spawn nothing
+                    plan = StageIds(index, systems)
+                    self._stage = (systems, plan)
+                lane = self._local.lane
+                ids = plan.take(0 if lane is None else lane, n)
+            index.reserve(ids)
         return ids
 
     # --------------------------------------------------------------- destroy
@@ -261,7 +238,7 @@ class World:
     def add(self, target: Any, value: Any) -> None:
         """Add a component to one entity or many (rows move tables). An existing one is replaced."""
         ids = self._ids(target, allow_reserved=self.deferring)
-        checked = self._bundles([value], 1 if len(ids) == 1 else len(ids), self._who(ids))
+        checked = checked_components([value], 1 if len(ids) == 1 else len(ids), who_of(ids), "add()", 2)
         ((ct, vals),) = checked.items()
         if not len(ids):
             return  # no entities: nothing to do (the value was still checked)
@@ -286,6 +263,9 @@ class World:
         """A copy of one entity's component (for a plain Python class: the stored object)."""
         eid = entity_id(eid)
         ct = schema_of(component_type)
+        system = self._local.system
+        if system is not None and system.reads is not None and ct not in system.reads:
+            self._check_read_access(ct, "get")
         table, row = self.storage.locate(eid)
         if not table.has(ct):
             raise MissingComponentError(f"{describe_entity(eid)} has no {ct.__name__}")
@@ -318,12 +298,13 @@ class World:
                 ct = type(value)
                 raw = value.values()
             else:
+                refuse_non_component(value, "set()", 2)
                 ct = object_component(type(value))
                 raw = {"value": value}
         self._check_write_access(ct)
         ids = self._ids(target, allow_reserved=self.deferring)
         n = len(ids)
-        who = self._who(ids)
+        who = who_of(ids)
         vals = {name: ct.__fields__[name].coerce(v, n, who) for name, v in raw.items()}
         if not n:
             return  # no entities: nothing to do (the values were still checked)
@@ -340,9 +321,6 @@ class World:
             self._commands.push(Set(ids, ct, vals, who))  # a partial one is checked again when applied
             return
         storage.write(ids, ct, vals, self.write_tick())
-
-    def _who(self, ids: np.ndarray) -> Any:
-        return lambda row: describe_entity(int(ids[row]))
 
     # --------------------------------------------------------------- queries
     def query(
@@ -420,55 +398,58 @@ class World:
             self._queue.apply(self.storage, self.write_tick)
 
     # ---------------------------------------------------------------- systems
-    def run_system(self, system: RunningSystem, dt: float) -> None:
-        """Run one system with its own change tick; structural changes wait for a flush."""
+    def open_stage(self, systems: int) -> None:
+        """A schedule stage of `systems` systems starts: until close_stage, spawns take the ids
+        of the running system's place in it (`lane`, see stage_ids.py)."""
+        self._stage = (systems, None)
+
+    def close_stage(self, queues: Iterable[CommandQueue]) -> None:
+        """The stage's systems have run: the ids none of them took go back, and what they queued
+        (`queues`, in declared order) joins the world's queue for the sync point that follows."""
+        stage, self._stage = self._stage, None
+        if stage is not None and stage[1] is not None:
+            stage[1].close()
+        self.join_commands(queues)
+
+    def run_system(
+        self, system: RunningSystem, dt: float, queue: CommandQueue | None = None, lane: int | None = None
+    ) -> None:
+        """Run one system with its own change tick; structural changes wait for a flush (in
+        `queue` when given, for the caller to join). `lane`: its place in the open stage."""
         if self._local.system is not None:
             raise EcsError(f"system {system.name} started inside system {self._local.system.name}")
         self.tick += 1
-        self._run_as(system, dt, self.tick, None)
+        run_as(self, self._local, system, dt, self.tick, queue, lane)
 
     def run_systems_together(
-        self, systems: Sequence[RunningSystem], dt: float, spread: Any, queues: Sequence[CommandQueue]
+        self,
+        systems: Sequence[RunningSystem],
+        dt: float,
+        spread: Any,
+        queues: Sequence[CommandQueue],
+        lanes: Sequence[int] | None = None,
     ) -> None:
         """Run systems whose declared access does not conflict at the same time:
         `spread(job, range(len(systems)))` runs the jobs (JobPool.map). Each gets its change tick
         (in the order given) and queues its structural changes in its own `queues[i]`, which the
         caller joins in its declared order (`join_commands`), so the result does not depend on
-        which thread finishes first. A system's error is raised as it was, after all finished."""
+        which thread finishes first; `lanes`: their places in the open stage (for their ids). A
+        system's error is raised as it was, after all finished."""
         if self._local.system is not None:
             raise EcsError(f"systems started inside system {self._local.system.name}")
         ticks = [self.tick + 1 + i for i in range(len(systems))]
         self.tick += len(systems)
-        errors: list[BaseException | None] = [None] * len(systems)
-
-        def job(i: int) -> None:
-            try:
-                self._run_as(systems[i], dt, ticks[i], queues[i])
-            except BaseException as exc:  # re-raised below, as the system raised it
-                errors[i] = exc
-
         single, self._local = self._local, ThreadRunning()  # each thread its own, for the group
         try:
-            spread(job, range(len(systems)))
+            run_group(self, self._local, systems, dt, spread, queues, lanes or range(len(systems)), ticks)
         finally:
             self._local = single
-        for exc in errors:
-            if exc is not None:
-                raise exc
 
     def join_commands(self, queues: Iterable[CommandQueue]) -> None:
         """Append queued structural changes (run_systems_together's) to the world's, in order."""
         for queue in queues:
-            self._queue.extend(queue)
-
-    def _run_as(self, system: RunningSystem, dt: float, tick: int, queue: CommandQueue | None) -> None:
-        local = self._local
-        local.system, local.tick, local.commands = system, tick, queue
-        try:
-            system.run(self, dt)
-        finally:
-            local.system, local.commands = None, None
-            system.last_run_tick = tick
+            if queue.commands:  # most systems queue nothing: skip them without a call
+                self._queue.extend(queue)
 
     # ------------------------------------------------------------ scene files
     def save(self, path: Any, resources: Any = None) -> None:
