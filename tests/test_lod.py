@@ -109,3 +109,33 @@ def test_lod_flag_and_settings():
     options = RunOptions.from_flags(args, scene="scaling")
     assert options.lod is False and options.settings().lod is False
     assert RunOptions().settings().lod is True
+
+
+def test_background_levels_arrive_later_and_equal_those_built_inline(monkeypatch):
+    """A window's registry builds a big mesh's levels in a child process: the frame that asks goes
+    on without them, and a later frame's bounds and merged buffers hold the same levels an inline
+    build makes (the knot is made to count as big here)."""
+    import time
+
+    from ecs_engine.render import mesh_registry
+    from ecs_engine.render.mesh_lod import build_lods
+    from ecs_engine.render.mesh_registry import MeshRegistry
+
+    monkeypatch.setattr(mesh_registry, "BACKGROUND_TRIANGLES", 1000)
+    monkeypatch.setattr(mesh_registry, "_LEVELS", mesh_registry.OrderedDict())  # no cached levels
+    mesh = normalized(load_mesh(DEFAULT_MODEL), 1.5)
+    with headless_gpu(W, H) as gpu:
+        registry = MeshRegistry(gpu.device, background_levels=True)
+        gpu.owned.append(registry)
+        k = registry.add(mesh)
+        registry.build_levels([k])
+        assert not registry.has_levels_built(k) and registry.merged().lod_levels.tolist() == [0]
+        deadline = time.monotonic() + 120.0
+        while not registry.has_levels_built(k) and time.monotonic() < deadline:
+            time.sleep(0.1)
+            registry.bounds()  # where a frame picks up finished builds
+        assert registry.has_levels_built(k)
+        inline = build_lods(mesh)
+        assert [lod.error for lod in registry.lods(k)] == [lod.error for lod in inline]
+        assert not registry.lods(k)[0].mesh.positions.flags.writeable  # MeshData's arrays stay read-only
+        assert registry.merged().lod_levels.tolist() == [len(inline)]

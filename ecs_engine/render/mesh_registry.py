@@ -22,12 +22,16 @@ import numpy as np
 from ..gpu.acceleration import MeshInput, Structure, build_bottom_levels, ray_input_usage
 from ..gpu.memory import Buffer, upload
 from .layouts import MAX_LODS, MESH_VERTEX
+from .lod_worker import LevelBuilder
 from .mesh_data import MeshData
 from .mesh_lod import Lod, build_lods
 
 if TYPE_CHECKING:
     from ..gpu.device import Device
 
+#: A mesh with fewer triangles has its levels built on the frame that first draws it even with
+#: `background_levels`: about 0.3 s on the 2-core box, less than starting the child process.
+BACKGROUND_TRIANGLES = 32_768
 _POSITION = int(MESH_VERTEX.fields["position"][1]) if MESH_VERTEX.fields else 0  # the position's byte offset
 
 
@@ -66,8 +70,14 @@ class GpuMesh:
 
 
 class MeshRegistry:
-    def __init__(self, device: Device) -> None:
+    """`background_levels`: build a big mesh's levels of detail in a child process (lod_worker.py),
+    drawing it at full detail until they arrive: for windows, where a build of seconds would freeze
+    the frames. Off (headless), they are built on the frame that first draws the mesh, so what a
+    frame shows never depends on timing."""
+
+    def __init__(self, device: Device, background_levels: bool = False) -> None:
         self.device = device
+        self._builder = LevelBuilder() if background_levels else None
         self._meshes: list[GpuMesh] = []
         self._lods: list[list[Lod] | None] = []  # per handle, its coarser levels (mesh_lod.py); None: not built
         self._digests: list[bytes] = []  # per handle, its content's digest (the levels' cache key)
@@ -108,29 +118,52 @@ class MeshRegistry:
         return len(self._meshes)
 
     def lods(self, handle: int) -> list[Lod]:
-        """The mesh's coarser levels of detail, finest first (none for a small mesh), built now if
-        they were not yet."""
+        """The mesh's coarser levels of detail, finest first (none for a small mesh), built now
+        (or waited for) if they were not yet."""
         levels = self._lods[handle]
         if levels is None:
-            levels = self._lods[handle] = _levels(self._meshes[handle].data, self._digests[handle])
-            if levels:
-                self._levels_built += 1
+            digest = self._digests[handle]
+            if self._builder is not None and self._builder.pending(handle):
+                levels = self._builder.wait(handle)
+                _remember(digest, levels)
+            else:
+                levels = _levels(self._meshes[handle].data, digest)
+            self._install(handle, levels)
         return levels
 
     def has_levels_built(self, handle: int) -> bool:
         return self._lods[handle] is not None
 
     def build_levels(self, handles: Iterable[int]) -> None:
-        """Build the levels of detail of `handles` that have none yet (the meshes a frame draws);
-        the next `merged()` and `bounds()` include them."""
-        for handle in handles:
-            if self._lods[int(handle)] is None:
-                self.lods(int(handle))
+        """Build the levels of detail of `handles` that have none yet (the meshes a frame draws):
+        now, or in the background for a big mesh when `background_levels`. The next `merged()`
+        and `bounds()` include those that are ready."""
+        for handle in map(int, handles):
+            if self._lods[handle] is not None:
+                continue
+            mesh = self._meshes[handle].data
+            if self._builder is None or mesh.triangle_count < BACKGROUND_TRIANGLES or self._digests[handle] in _LEVELS:
+                self.lods(handle)
+            else:
+                self._builder.submit(handle, mesh)
+
+    def _install(self, handle: int, levels: list[Lod]) -> None:
+        self._lods[handle] = levels
+        if levels:
+            self._levels_built += 1
+
+    def _collect(self) -> None:
+        """Levels built in the background since the last frame."""
+        if self._builder is not None:
+            for handle, levels in self._builder.finished():
+                _remember(self._digests[handle], levels)
+                self._install(handle, levels)
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Per mesh: bounding sphere centre (n, 3) and radius, index count (kept until meshes are
         added). The sphere holds the mesh's levels of detail too: whichever is drawn, culling it
         by the sphere is safe."""
+        self._collect()
         n = len(self._meshes)
         if self._bounds is None or self._bounds[0] != (n, self._levels_built):
             meshes = self._meshes
@@ -173,6 +206,7 @@ class MeshRegistry:
     def merged(self) -> MergedMeshes:
         """Every mesh, and the levels built so far, in one vertex and one index buffer: rebuilt
         when meshes were added or levels built."""
+        self._collect()
         built = (len(self._meshes), self._levels_built)
         if self._merged is not None and self._merged_for == built:
             return self._merged
@@ -215,6 +249,8 @@ class MeshRegistry:
             self._merged = None
 
     def destroy(self) -> None:
+        if self._builder is not None:
+            self._builder.close()
         self._destroy_merged()
         for structure in self._bottom:
             structure.destroy()
@@ -238,11 +274,16 @@ _LEVELS_KEPT = 32
 def _levels(mesh: MeshData, digest: bytes) -> list[Lod]:
     levels = _LEVELS.get(digest)
     if levels is None:
-        levels = _LEVELS[digest] = build_lods(mesh)[:MAX_LODS]
-        while len(_LEVELS) > _LEVELS_KEPT:
-            _LEVELS.popitem(last=False)
-    _LEVELS.move_to_end(digest)
+        levels = build_lods(mesh)[:MAX_LODS]
+    _remember(digest, levels)
     return levels
+
+
+def _remember(digest: bytes, levels: list[Lod]) -> None:
+    _LEVELS[digest] = levels
+    _LEVELS.move_to_end(digest)
+    while len(_LEVELS) > _LEVELS_KEPT:
+        _LEVELS.popitem(last=False)
 
 
 def _interleaved(mesh: MeshData) -> np.ndarray:
