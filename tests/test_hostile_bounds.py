@@ -5,8 +5,9 @@ regression fails here instead of taking the machine's memory). CPU time, not wal
 box shared with other jobs the wall clock ran 2.5 times the CPU time; a wall-clock watchdog of
 `WALL` seconds still stops a child that waits on nothing. The files: the scene with the issue's
 hostile recipe entries (a 1M-vertex sphere, eight of them), one with the largest recipe the cap
-lets through, and a 10 MB OBJ, loaded and given its levels of detail as the indirect mode's
-first frame would."""
+lets through, a 10 MB OBJ and an OBJ of one 100k-triangle fan (the simplifier's time grows with
+the square of a vertex's triangles), each loaded and given its levels of detail as the indirect
+mode's first frame would."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ import sys
 import time
 import zipfile
 
+import numpy as np
 import psutil
 import pytest
 
@@ -133,4 +135,17 @@ def test_a_10_mb_model_loads_with_its_levels_within_the_bound(tmp_path):
     obj_of(path, sphere_mesh(340, 340), (10 << 20) - 1)
     out, seconds, peak = open_bounded(path)
     assert out.startswith("loaded") and " 0 levels" not in out, out
+    assert seconds < SECONDS and peak < BYTES
+
+
+def test_a_fan_model_is_drawn_without_levels_within_the_bound(tmp_path):
+    n = 100_000
+    angle = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+    lines = ["v 0 0 0"] + [f"v {np.cos(a):.6f} {np.sin(a):.6f} 0" for a in angle.tolist()]
+    lines += [f"f 1 {2 + i} {2 + (i + 1) % n}" for i in range(n)]
+    path = tmp_path / "fan.obj"
+    path.write_text("\n".join(lines) + "\n")
+    assert path.stat().st_size < 10 << 20
+    out, seconds, peak = open_bounded(path)
+    assert out.startswith("loaded 100001 vertices, 0 levels"), out
     assert seconds < SECONDS and peak < BYTES

@@ -236,3 +236,44 @@ def test_a_part_collapsed_away_is_measured_against_the_rest(monkeypatch):
     assert 2.0 <= lods[0].error < 2.1  # from the speck down to the sphere's top
     monkeypatch.setattr(lod_error, "_LOST_BUDGET", 7)
     assert build_lods(both, ratios=(0.25,), min_triangles=8)[0].error >= lods[0].error
+
+
+def fan(n: int) -> MeshData:
+    """n triangles around one centre vertex: a disc in the XY plane facing +Z."""
+    angle = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+    rim = np.stack([np.cos(angle), np.sin(angle), np.zeros(n)], 1)
+    i = np.arange(n)
+    triangles = np.stack([np.zeros(n, np.int64), 1 + i, 1 + (i + 1) % n], 1)
+    positions = np.concatenate([[[0.0, 0.0, 0.0]], rim])
+    return MeshData.from_arrays(positions, np.tile([0.0, 0.0, 1.0], (n + 1, 1)), triangles.reshape(-1), "fan")
+
+
+def test_a_huge_fan_gets_no_levels_instead_of_seconds_of_simplifying():
+    """Issue 34's time bound: the library's time grows with the square of a vertex's triangles
+    (a 40k-triangle fan took about a second a level on the 2-core box, 100k six); past
+    MAX_VALENCE_SQUARES the mesh is drawn at full detail. A fan of 2,000 still gets levels, as a
+    UV sphere's 512-triangle poles at the scene-file cap do."""
+    import time
+
+    start = time.process_time()
+    assert build_lods(fan(40_000)) == []
+    assert time.process_time() - start < 0.5
+    assert len(build_lods(fan(2_000))) == len(DEFAULT_RATIOS)
+
+
+def test_a_vertex_repeated_per_triangle_is_searched_in_bounded_time():
+    """A fan whose centre has its own copy (UV) for each triangle: the corners that survived keep
+    their own copy, so choosing copies does not compare every corner with every copy."""
+    import time
+
+    n = 20_000
+    base = fan(n)
+    tri = base.indices.reshape(-1, 3)
+    centre_copies = np.zeros((n, 3))
+    positions = np.concatenate([base.positions[1:], centre_copies])
+    uvs = np.concatenate([np.zeros((n, 2)), np.stack([np.arange(n) / n, np.ones(n)], 1)])
+    triangles = np.stack([n + np.arange(n), tri[:, 1] - 1, tri[:, 2] - 1], 1)
+    mesh = MeshData.from_arrays(positions, np.tile([0.0, 0.0, 1.0], (2 * n, 1)), triangles.reshape(-1), "fan", uvs)
+    start = time.process_time()
+    lods = build_lods(mesh, ratios=(0.5,))
+    assert time.process_time() - start < 3.0 and lods

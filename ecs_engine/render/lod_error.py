@@ -30,6 +30,12 @@ __all__ = ["level_error", "point_triangle_distance"]
 
 #: Pairs (point, triangle) measured at once by the NumPy form: about 200 bytes each in temporaries.
 _BLOCK: Final = 1 << 16
+#: A survivor with more simplified triangles than this (a fan's centre, a UV sphere's pole) is not
+#: searched from an original vertex that has a smaller survivor nearby: the triangles they share
+#: are among the smaller one's, and searching every fan triangle from every rim vertex was
+#: quadratic (a 5.7 MB OBJ of a 100k-triangle fan passed 10 s). Any subset of triangles still
+#: bounds the distance from above.
+_BIG_FAN: Final = 256
 #: At most this many (lost vertex, triangle) distances: an original vertex none of whose
 #: neighbours survived (a part collapsed away) is measured against every simplified triangle,
 #: or against an evenly strided subset of them when that would cost more (the nearest of a subset
@@ -65,7 +71,7 @@ def level_error(
         outward = np.full(len(points), np.inf)
         _outward_kernel(points, original, triangles, near, outward)
         inward = np.full(len(original), np.inf)
-        _inward_kernel(original, triangles, vt_start, vt_tri, home, points, faces, ft_start, ft_face, inward)
+        _inward_kernel(original, triangles, vt_start, vt_tri, home, points, faces, ft_start, ft_face, _BIG_FAN, inward)
     else:
         outward = _outward_numpy(points, original, triangles, near)
         inward = _inward_numpy(original, triangles, vt_start, vt_tri, home, points, faces, ft_start, ft_face)
@@ -123,6 +129,10 @@ def _inward_numpy(
         keys = np.unique((query * len(points) + homes)[homes >= 0])
         query, homes = np.divmod(keys, len(points))
         count = ft_start[homes + 1] - ft_start[homes]
+        has_small = np.zeros(len(original), dtype=bool)
+        has_small[query[count <= _BIG_FAN]] = True
+        keep = (count <= _BIG_FAN) | ~has_small[query]
+        query, homes, count = query[keep], homes[keep], count[keep]
         ends = np.cumsum(count)
         begin = 0
         while begin < len(query):  # pairs whose faces fit one block (at least one pair)
@@ -247,15 +257,23 @@ def _outward(points, original, triangles, near, out):  # pragma: no cover - comp
             out[s] = d
 
 
-def _inward(original, triangles, vt_start, vt_tri, home, points, faces, ft_start, ft_face, out):  # pragma: no cover
+def _inward(
+    original, triangles, vt_start, vt_tri, home, points, faces, ft_start, ft_face, big_fan, out
+):  # pragma: no cover
     seen = np.full(points.shape[0], -1, np.int64)  # the last vertex that measured this survivor's faces
     for v in range(original.shape[0]):
         best = np.inf
+        small = False  # has v a survivor near it with at most big_fan triangles?
+        for j in range(vt_start[v], vt_start[v + 1]):
+            for k in range(3):
+                h = home[triangles[vt_tri[j], k]]
+                if h >= 0 and ft_start[h + 1] - ft_start[h] <= big_fan:
+                    small = True
         for j in range(vt_start[v], vt_start[v + 1]):
             t = vt_tri[j]
             for k in range(3):
                 h = home[triangles[t, k]]
-                if h < 0 or seen[h] == v:
+                if h < 0 or seen[h] == v or (small and ft_start[h + 1] - ft_start[h] > big_fan):
                     continue
                 seen[h] = v
                 for m in range(ft_start[h], ft_start[h + 1]):

@@ -33,7 +33,16 @@ import numpy as np
 from .lod_error import level_error
 from .mesh_data import MeshData
 
-__all__ = ["DEFAULT_RATIOS", "MIN_TRIANGLES", "Lod", "build_lods", "focal_pixels", "lod_errors", "lod_for_screen_size"]
+__all__ = [
+    "DEFAULT_RATIOS",
+    "MAX_VALENCE_SQUARES",
+    "MIN_TRIANGLES",
+    "Lod",
+    "build_lods",
+    "focal_pixels",
+    "lod_errors",
+    "lod_for_screen_size",
+]
 
 #: Fractions of the original triangles the levels aim for: each halves the last.
 DEFAULT_RATIOS: Final = (0.5, 0.25, 0.125)
@@ -46,6 +55,14 @@ MIN_DROP: Final = 0.1
 # Twice a triangle's area below this fraction of the mesh's squared size: no normal, so no quadric
 # (the library would divide by zero); as mesh_loading.py drops such triangles from files.
 _DEGENERATE_AREA: Final = 1e-12
+#: No levels for a mesh whose vertices' triangle counts, squared, add up past this: the library's
+#: time grows with the square of a vertex's triangles (a fan around one vertex: 0.07 s a level at
+#: 10k triangles, 3.9 s at 80k; a 5.7 MB OBJ of a 100k-triangle fan passed 10 s). Ordinary meshes
+#: sum about 36 a vertex (a million-vertex UV sphere: 4e7); this allows about 0.6 s a level.
+MAX_VALENCE_SQUARES: Final = 1 << 30
+# A moved corner takes the best of at most this many copies of its survivor (a UV sphere at the
+# scene-file recipe cap has 512 at each pole).
+_COPIES_SEARCHED: Final = 1024
 # The library keeps the mesh it works on in module state: one simplification at a time.
 _LIBRARY_LOCK = threading.Lock()
 
@@ -81,7 +98,8 @@ def build_lods(
     next (a level's is at least the one before's), so a selection rule can rely on their order.
 
     Degenerate triangles (repeated vertices, no area) are left out of the simplification; a mesh
-    with none left, like an empty one, gets no levels ([]). A MeshData cannot hold NaN or infinite
+    with none left, like an empty one, gets no levels ([]), nor does one with vertices shared by
+    very many triangles (fans: MAX_VALENCE_SQUARES). A MeshData cannot hold NaN or infinite
     positions (its constructor refuses them); should the library return any, that level and the
     coarser ones are not made. Bad `ratios` (not strictly decreasing within (0, 1)) or
     `min_triangles` (under 1) raise ValueError, anything but a MeshData TypeError."""
@@ -93,6 +111,9 @@ def build_lods(
     if isinstance(min_triangles, bool) or not isinstance(min_triangles, (int, np.integer)) or min_triangles < 1:
         raise ValueError(f"min_triangles must be an integer of at least 1, got {min_triangles!r}")
     welded = _welded(mesh)
+    valence = np.bincount(welded.triangles.reshape(-1)).astype(np.float64)
+    if float((valence * valence).sum()) > MAX_VALENCE_SQUARES:
+        return []
     total = len(welded.triangles)
     levels: list[Lod] = []
     previous, error = total, 0.0
@@ -219,16 +240,19 @@ def _simplified(mesh: MeshData, welded: _Welded, target: int, name: str) -> tupl
 
 def _closest_copies(mesh: MeshData, weld: np.ndarray, corners: np.ndarray, survivors: np.ndarray) -> np.ndarray:
     """For each corner (render vertex `corners`, now at welded vertex `survivors`), the render
-    vertex of that welded vertex whose UV and normal are nearest the corner's own."""
+    vertex of that welded vertex whose UV and normal are nearest the corner's own: the corner's
+    own vertex when it survived (nothing is nearer), else the best of the survivor's first
+    `_COPIES_SEARCHED` copies (a corner by each copy of a many-copied vertex made this quadratic:
+    a 100k-triangle fan whose centre had a copy per triangle)."""
     order = np.argsort(weld, kind="stable")
     counts = np.bincount(weld)
     starts = np.cumsum(counts) - counts
     flat, home = corners.reshape(-1), survivors.reshape(-1)
     uv, normal = mesh.uvs.astype(np.float64), mesh.normals.astype(np.float64)
-    best = order[starts[home]]
-    # corners by their survivor's copies, most first: the m-th copy exists for a prefix of them
-    # (a sphere's pole has hundreds of copies but few corners)
-    many = counts[home]
+    best = np.where(weld[flat] == home, flat, order[starts[home]])
+    # the moved corners by their survivor's copies, most first: the m-th copy exists for a prefix
+    # of them (a sphere's pole has hundreds of copies but few corners)
+    many = np.where(weld[flat] == home, 0, np.minimum(counts[home], _COPIES_SEARCHED))
     by_count = np.argsort(-many, kind="stable")
     descending = many[by_count]
     best_cost = np.full(flat.shape, np.inf)
