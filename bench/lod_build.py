@@ -64,4 +64,4 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
             f"{r['mesh']:>12} {r['vertices']:>10,} {r['seconds']:>7.2f} {r['cpu_seconds']:>6.2f}"
             f" {r['cpu_us_per_vertex']:>14.1f} {r['bytes_per_vertex']:>13,.0f}  {levels}"
         )
-    return {"benchmark": "lod-build", "machine": machine, "rows": rows}
+    return {"benchmark": "lod-build", "machine": machine, "quick": bool(args.quick), "rows": rows}
