@@ -40,6 +40,7 @@ REGISTRY: dict[str, str] = {
     "frame": "frame",
     "peers": "peers",
     "raytracing": "raytracing",
+    "lod-build": "lod_build",
 }
 
 # One line each for the list in the usage text (the modules are not imported to print it).
@@ -59,6 +60,7 @@ SUMMARY: dict[str, str] = {
     "frame": "one scene's CPU frame through the run loop, median and p99 (default: 1 cube, 2,400 frames) (Vulkan)",
     "peers": "the scaling workload here and in pygfx, wall ms a frame side by side, 1k to 1M (Vulkan, wgpu)",
     "raytracing": "bottom levels per mesh, top-level build and update at 10k to 1M instances (Vulkan ray tracing)",
+    "lod-build": "time and peak memory of building levels of detail, 16k to 263k vertices (CPU only)",
 }
 
 # The commands that work from any folder once ecs_engine is installed.

@@ -178,3 +178,102 @@ def test_selection_per_row_with_padding():
     assert lod_for_screen_size(errors, np.zeros(3), np.ones(3), 1000.0).tolist() == [0, 0, 0]
     with pytest.raises(ValueError, match="rows"):
         lod_for_screen_size(errors, np.ones(2), 1.0, 1000.0)
+
+
+def test_building_levels_takes_bounded_memory_per_vertex():
+    """Issue 34: the error measurement expanded every (vertex, nearby triangle) pair at once, about
+    10 KB a vertex traced here (16 KB at the process's peak); it now walks them in compiled loops or
+    NumPy blocks. A 16k-vertex sphere must stay under 4 KB a vertex (fixed costs weigh more here
+    than at the 263k vertices docs/performance.md quotes, ~0.7 KB)."""
+    import tracemalloc
+
+    sphere = sphere_mesh(128, 128)
+    build_lods(sphere_mesh(16, 8), min_triangles=8)  # compiled kernels loaded outside the measurement
+    tracemalloc.start()
+    try:
+        lods = build_lods(sphere)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert len(lods) == len(DEFAULT_RATIOS)
+    assert peak / sphere.vertex_count < 4096, f"{peak / sphere.vertex_count:.0f} bytes a vertex"
+
+
+def test_error_is_the_same_compiled_and_in_numpy_blocks(knot, monkeypatch):
+    """The NumPy form (no numba) walks the same pairs in blocks: the same errors, whatever the block
+    size, as the compiled kernels (float rounding aside)."""
+    from ecs_engine.render import lod_error
+
+    compiled = [lod.error for lod in build_lods(knot)]
+    monkeypatch.setattr(lod_error, "_outward_kernel", None)
+    monkeypatch.setattr(lod_error, "_inward_kernel", None)
+    monkeypatch.setattr(lod_error, "_nearest_kernel", None)
+    for block in (1 << 16, 97):  # 97: blocks split inside a vertex's pairs
+        monkeypatch.setattr(lod_error, "_BLOCK", block)
+        blocks = [lod.error for lod in build_lods(knot)]
+        np.testing.assert_allclose(blocks, compiled, rtol=1e-9)
+
+
+def test_a_part_collapsed_away_is_measured_against_the_rest(monkeypatch):
+    """A level that drops a small separate part (its vertices have no survivor left) is measured
+    from that part to the nearest remaining triangle; with a budget too small for every triangle, a
+    strided subset of them still gives a bound at least as large."""
+    from ecs_engine.render import lod_error
+
+    sphere = sphere_mesh(24, 12)
+    speck = MeshData.from_arrays(  # a tiny triangle 2 units above the sphere's top
+        [[0, 2.5, 0], [0.001, 2.5, 0], [0, 2.5, 0.001]], [[0, 1, 0]] * 3, [0, 2, 1], "speck"
+    )
+    both = MeshData.from_arrays(
+        np.concatenate([sphere.positions, speck.positions]),
+        np.concatenate([sphere.normals, speck.normals]),
+        np.concatenate([sphere.indices, speck.indices + sphere.vertex_count]),
+        "sphere and speck",
+        np.concatenate([sphere.uvs, speck.uvs]),
+    )
+    lods = build_lods(both, ratios=(0.25,), min_triangles=8)
+    assert lods and lods[0].mesh.positions[:, 1].max() < 1.0  # the speck is gone
+    assert 2.0 <= lods[0].error < 2.1  # from the speck down to the sphere's top
+    monkeypatch.setattr(lod_error, "_LOST_BUDGET", 7)
+    assert build_lods(both, ratios=(0.25,), min_triangles=8)[0].error >= lods[0].error
+
+
+def fan(n: int) -> MeshData:
+    """n triangles around one centre vertex: a disc in the XY plane facing +Z."""
+    angle = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+    rim = np.stack([np.cos(angle), np.sin(angle), np.zeros(n)], 1)
+    i = np.arange(n)
+    triangles = np.stack([np.zeros(n, np.int64), 1 + i, 1 + (i + 1) % n], 1)
+    positions = np.concatenate([[[0.0, 0.0, 0.0]], rim])
+    return MeshData.from_arrays(positions, np.tile([0.0, 0.0, 1.0], (n + 1, 1)), triangles.reshape(-1), "fan")
+
+
+def test_a_huge_fan_gets_no_levels_instead_of_seconds_of_simplifying():
+    """Issue 34's time bound: the library's time grows with the square of a vertex's triangles
+    (a 40k-triangle fan took about a second a level on the 2-core box, 100k six); past
+    MAX_VALENCE_SQUARES the mesh is drawn at full detail. A fan of 2,000 still gets levels, as a
+    UV sphere's 512-triangle poles at the scene-file cap do."""
+    import time
+
+    start = time.process_time()
+    assert build_lods(fan(40_000)) == []
+    assert time.process_time() - start < 0.5
+    assert len(build_lods(fan(2_000))) == len(DEFAULT_RATIOS)
+
+
+def test_a_vertex_repeated_per_triangle_is_searched_in_bounded_time():
+    """A fan whose centre has its own copy (UV) for each triangle: the corners that survived keep
+    their own copy, so choosing copies does not compare every corner with every copy."""
+    import time
+
+    n = 20_000
+    base = fan(n)
+    tri = base.indices.reshape(-1, 3)
+    centre_copies = np.zeros((n, 3))
+    positions = np.concatenate([base.positions[1:], centre_copies])
+    uvs = np.concatenate([np.zeros((n, 2)), np.stack([np.arange(n) / n, np.ones(n)], 1)])
+    triangles = np.stack([n + np.arange(n), tri[:, 1] - 1, tri[:, 2] - 1], 1)
+    mesh = MeshData.from_arrays(positions, np.tile([0.0, 0.0, 1.0], (2 * n, 1)), triangles.reshape(-1), "fan", uvs)
+    start = time.process_time()
+    lods = build_lods(mesh, ratios=(0.5,))
+    assert time.process_time() - start < 3.0 and lods

@@ -15,7 +15,15 @@ from ecs_engine.render.layouts import MESH_VERTEX
 from ecs_engine.render.mesh_data import MeshData, tangent_frames
 from ecs_engine.render.mesh_loading import load_mesh
 from ecs_engine.render.mesh_registry import _interleaved
-from ecs_engine.render.primitives import PRIMITIVES, cone_mesh, cylinder_mesh, plane_mesh, sphere_mesh, torus_mesh
+from ecs_engine.render.primitives import (
+    PRIMITIVES,
+    cone_mesh,
+    cylinder_mesh,
+    plane_mesh,
+    primitive_vertices,
+    sphere_mesh,
+    torus_mesh,
+)
 
 
 def triangle_frames(mesh: MeshData) -> tuple[np.ndarray, ...]:
@@ -209,3 +217,62 @@ def test_nan_texture_coordinate_is_one_line_usage_error(tmp_path):
     path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt nan 0\nvt 0 1\nf 1/1 2/2 3/3\n")
     with pytest.raises(UsageError, match="1 vertex has NaN or infinite texture coordinates"):
         load_mesh(path)
+
+
+BAD_ARGUMENTS = [
+    # issue 34: these raised ZeroDivisionError out of load_world ("internal error", exit 1)
+    ("cylinder", {"radius": 0}, "cylinder: radius"),
+    ("cone", {"radius": 0}, "cone: radius"),
+    ("cone", {"height": 0}, "cone: height"),
+    ("cylinder", {"height": -1.0}, "cylinder: height"),
+    ("sphere", {"radius": float("nan")}, "sphere: radius"),
+    ("sphere", {"radius": 1e300}, "sphere: radius"),
+    ("plane", {"size": float("inf")}, "plane: size"),
+    ("torus", {"minor": 0.0}, "torus: minor"),
+    ("torus", {"major": -0.35}, "torus: major"),
+    ("torus", {"major": 0.1, "minor": 0.2}, "torus: the tube radius"),
+    ("cylinder", {"radius": "0.5"}, "cylinder: radius must be a number"),
+    ("cone", {"height": True}, "cone: height must be a number"),
+    ("cylinder", {"caps": 3}, "cylinder: caps must be true or false"),
+    ("sphere", {"segments": 2}, "sphere: segments"),
+    ("sphere", {"rings": 8.0}, "sphere: rings"),
+    ("cone", {"rings": 0}, "cone: rings"),
+    ("torus", {"sides": "12"}, "torus: sides"),
+    ("plane", {"subdivisions": None}, "plane: subdivisions"),
+    ("cylinder", {"segments": False}, "cylinder: segments"),
+]
+
+
+@pytest.mark.parametrize(("name", "args", "message"), BAD_ARGUMENTS)
+def test_every_recipe_argument_is_checked(name, args, message):
+    """Zero, negative, NaN, huge and wrongly typed arguments: one ValueError naming the shape and
+    the argument, never a ZeroDivisionError or a mesh of NaN."""
+    with pytest.raises(ValueError, match=f"^{message}"):
+        PRIMITIVES[name](**args)
+
+
+@pytest.mark.parametrize(
+    ("name", "args"),
+    [
+        ("cube", {}),
+        ("sphere", {"segments": 7, "rings": 3}),
+        ("plane", {"subdivisions": 5}),
+        ("cylinder", {"segments": 9}),
+        ("cylinder", {"segments": 9, "caps": False}),
+        ("cone", {"segments": 5, "rings": 4}),
+        ("torus", {"segments": 6, "sides": 4}),
+        *((name, {}) for name in PRIMITIVES),
+    ],
+)
+def test_vertex_counts_are_known_before_making(name, args):
+    assert primitive_vertices(name, args) == PRIMITIVES[name](**args).vertex_count
+
+
+def test_vertex_count_of_an_unknown_shape_or_argument_is_refused():
+    assert primitive_vertices("sphere", {"segments": 1024, "rings": 1024}) == 1025 * 1025
+    with pytest.raises(ValueError, match="unknown primitive 'teapot'"):
+        primitive_vertices("teapot", {})
+    with pytest.raises(ValueError, match="sphere: unknown argument 'segs'"):
+        primitive_vertices("sphere", {"segs": 8})
+    with pytest.raises(ValueError, match="sphere: segments must be an integer"):
+        primitive_vertices("sphere", {"segments": 1e9})

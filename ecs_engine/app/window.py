@@ -128,7 +128,7 @@ class WindowSource:
         swapchain = self._keep(
             Swapchain(device, self._surface, lambda: glfw.get_framebuffer_size(window), options.present, options.msaa)
         )
-        meshes = self._keep(MeshRegistry(device))
+        meshes = self._keep(MeshRegistry(device, background_levels=True))  # a window keeps drawing meanwhile
         self.swapchain = swapchain
         return Gpu(instance, device, swapchain, meshes)
 

@@ -254,11 +254,13 @@ class IndirectPath:
     def finish(self, cb: Any, frame: FrameInputs, results: list[ChunkResult], candidates: int) -> list[Any]:
         """The compute passes into the primary (before the render pass) and the one secondary
         that draws what they wrote."""
-        merged = self.ctx.meshes.merged()
-        key_counts = np.zeros(2 * merged.count, dtype=np.int64)  # the meshes' keys: rows as written
+        key_counts = np.zeros(2 * len(frame.bounds[2]), dtype=np.int64)  # the meshes' keys: rows as written
         for r in results:
             if r.key_counts is not None:
                 key_counts += r.key_counts
+        if frame.lod:  # levels of detail only for the meshes drawn (mesh_registry.py)
+            self.ctx.meshes.build_levels(np.flatnonzero(key_counts.reshape(-1, 2).sum(axis=1)))
+        merged = self.ctx.meshes.merged()
         capacity = key_capacities(key_counts, merged)  # every draw mesh's keys: rows they may get
         keys = len(capacity)
         self._ensure_capacity(frame.slot, keys, int(capacity.sum()))

@@ -4,7 +4,7 @@ that error projected to the screen, in NumPy, as the culling shader does it per 
 
 Level 0 is the mesh itself (error 0); `build_lods` makes the coarser ones. A level's error is a
 distance in the mesh's own units (before an entity's scale): how far its surface strays from the
-original's, measured both ways at vertices (see `_deviation`). A level is good enough while that
+original's, measured both ways at vertices (lod_error.py). A level is good enough while that
 error covers under about a pixel on screen, so `lod_for_screen_size` takes the coarsest level whose
 error, projected at the nearest point of the bounding sphere, is at most `threshold_px`.
 
@@ -30,9 +30,19 @@ from typing import Final
 import fast_simplification
 import numpy as np
 
+from .lod_error import level_error
 from .mesh_data import MeshData
 
-__all__ = ["DEFAULT_RATIOS", "MIN_TRIANGLES", "Lod", "build_lods", "focal_pixels", "lod_errors", "lod_for_screen_size"]
+__all__ = [
+    "DEFAULT_RATIOS",
+    "MAX_VALENCE_SQUARES",
+    "MIN_TRIANGLES",
+    "Lod",
+    "build_lods",
+    "focal_pixels",
+    "lod_errors",
+    "lod_for_screen_size",
+]
 
 #: Fractions of the original triangles the levels aim for: each halves the last.
 DEFAULT_RATIOS: Final = (0.5, 0.25, 0.125)
@@ -45,6 +55,14 @@ MIN_DROP: Final = 0.1
 # Twice a triangle's area below this fraction of the mesh's squared size: no normal, so no quadric
 # (the library would divide by zero); as mesh_loading.py drops such triangles from files.
 _DEGENERATE_AREA: Final = 1e-12
+#: No levels for a mesh whose vertices' triangle counts, squared, add up past this: the library's
+#: time grows with the square of a vertex's triangles (a fan around one vertex: 0.07 s a level at
+#: 10k triangles, 3.9 s at 80k; a 5.7 MB OBJ of a 100k-triangle fan passed 10 s). Ordinary meshes
+#: sum about 36 a vertex (a million-vertex UV sphere: 4e7); this allows about 0.6 s a level.
+MAX_VALENCE_SQUARES: Final = 1 << 30
+# A moved corner takes the best of at most this many copies of its survivor (a UV sphere at the
+# scene-file recipe cap has 512 at each pole).
+_COPIES_SEARCHED: Final = 1024
 # The library keeps the mesh it works on in module state: one simplification at a time.
 _LIBRARY_LOCK = threading.Lock()
 
@@ -80,7 +98,8 @@ def build_lods(
     next (a level's is at least the one before's), so a selection rule can rely on their order.
 
     Degenerate triangles (repeated vertices, no area) are left out of the simplification; a mesh
-    with none left, like an empty one, gets no levels ([]). A MeshData cannot hold NaN or infinite
+    with none left, like an empty one, gets no levels ([]), nor does one with vertices shared by
+    very many triangles (fans: MAX_VALENCE_SQUARES). A MeshData cannot hold NaN or infinite
     positions (its constructor refuses them); should the library return any, that level and the
     coarser ones are not made. Bad `ratios` (not strictly decreasing within (0, 1)) or
     `min_triangles` (under 1) raise ValueError, anything but a MeshData TypeError."""
@@ -92,6 +111,9 @@ def build_lods(
     if isinstance(min_triangles, bool) or not isinstance(min_triangles, (int, np.integer)) or min_triangles < 1:
         raise ValueError(f"min_triangles must be an integer of at least 1, got {min_triangles!r}")
     welded = _welded(mesh)
+    valence = np.bincount(welded.triangles.reshape(-1)).astype(np.float64)
+    if float((valence * valence).sum()) > MAX_VALENCE_SQUARES:
+        return []
     total = len(welded.triangles)
     levels: list[Lod] = []
     previous, error = total, 0.0
@@ -212,22 +234,25 @@ def _simplified(mesh: MeshData, welded: _Welded, target: int, name: str) -> tupl
     positions = points[rank[welded.weld[vertices]]]
     normals = _facing_normals(positions, indices.reshape(-1, 3), mesh.normals[vertices].astype(np.float64))
     lod = MeshData.from_arrays(positions, normals, indices.astype(np.uint32), name, mesh.uvs[vertices])
-    error = _deviation(welded, root, rank, used, points, rank[mapped[kept]])
+    error = level_error(welded.positions, welded.triangles, root, rank, used, points, rank[mapped[kept]])
     return lod, error
 
 
 def _closest_copies(mesh: MeshData, weld: np.ndarray, corners: np.ndarray, survivors: np.ndarray) -> np.ndarray:
     """For each corner (render vertex `corners`, now at welded vertex `survivors`), the render
-    vertex of that welded vertex whose UV and normal are nearest the corner's own."""
+    vertex of that welded vertex whose UV and normal are nearest the corner's own: the corner's
+    own vertex when it survived (nothing is nearer), else the best of the survivor's first
+    `_COPIES_SEARCHED` copies (a corner by each copy of a many-copied vertex made this quadratic:
+    a 100k-triangle fan whose centre had a copy per triangle)."""
     order = np.argsort(weld, kind="stable")
     counts = np.bincount(weld)
     starts = np.cumsum(counts) - counts
     flat, home = corners.reshape(-1), survivors.reshape(-1)
     uv, normal = mesh.uvs.astype(np.float64), mesh.normals.astype(np.float64)
-    best = order[starts[home]]
-    # corners by their survivor's copies, most first: the m-th copy exists for a prefix of them
-    # (a sphere's pole has hundreds of copies but few corners)
-    many = counts[home]
+    best = np.where(weld[flat] == home, flat, order[starts[home]])
+    # the moved corners by their survivor's copies, most first: the m-th copy exists for a prefix
+    # of them (a sphere's pole has hundreds of copies but few corners)
+    many = np.where(weld[flat] == home, 0, np.minimum(counts[home], _COPIES_SEARCHED))
     by_count = np.argsort(-many, kind="stable")
     descending = many[by_count]
     best_cost = np.full(flat.shape, np.inf)
@@ -256,80 +281,3 @@ def _facing_normals(positions: np.ndarray, triangles: np.ndarray, carried: np.nd
     out = carried.copy()
     out[flip] = summed[flip] / length[flip, None]
     return out / np.linalg.norm(out, axis=1, keepdims=True)
-
-
-def _deviation(
-    welded: _Welded, root: np.ndarray, rank: np.ndarray, used: np.ndarray, points: np.ndarray, faces: np.ndarray
-) -> float:
-    """How far the simplified surface strays from the original, an upper bound sampled at vertices:
-    the largest of each simplified vertex's distance to the original triangles around the vertices
-    collapsed into it, and each original vertex's distance to the simplified triangles around its
-    and its neighbours' survivors. Each is a distance to some of the surface's triangles, so at
-    least the distance to the whole surface: the bound errs on the coarse level's side (it is
-    switched to later), never on the screen's. A Hausdorff distance measured at the vertices, in
-    the mesh's units; a vertex the optimum moved beyond its own collapsed region makes it loose
-    (up to about 3x seen on a subdivided knot, 1.3x on the torus knot).
-
-    Why not the library's quadric error: it is a sum of squared plane distances, not a length, and
-    grows with the number of collapses merged, so it cannot be projected to pixels."""
-    original, triangles = welded.positions, welded.triangles
-    # simplified vertex -> original triangles of its collapsed vertices (every corner names one)
-    near = rank[root[triangles.reshape(-1)]]
-    tri = np.repeat(np.arange(len(triangles)), 3)
-    d = _point_triangle_distance(points[near], *(original[triangles[tri, k]] for k in range(3)))
-    outward = np.full(len(points), np.inf)
-    np.minimum.at(outward, near, d)
-    # original vertex -> simplified triangles around its neighbours' survivors (CSR of the simplified
-    # corners); its own survivor's alone leave it often nearer a triangle one step further on
-    corner_vertex = faces.reshape(-1)
-    order = np.argsort(corner_vertex, kind="stable")
-    counts = np.bincount(corner_vertex, minlength=len(points))
-    starts = np.cumsum(counts) - counts
-    survivor = root[triangles]
-    alive = used[survivor]
-    query = np.repeat(triangles, 3, axis=1).reshape(-1)  # each corner with each corner's survivor
-    home = np.tile(np.where(alive, rank[survivor], -1), 3).reshape(-1)
-    keys = np.unique((query * len(points) + home)[home >= 0])  # each pair once
-    query, home = np.divmod(keys, len(points))
-    n = counts[home]
-    pair_query = np.repeat(query, n)
-    offsets = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)
-    pair_face = order[np.repeat(starts[home], n) + offsets] // 3
-    d = _point_triangle_distance(original[pair_query], *(points[faces[pair_face, k]] for k in range(3)))
-    inward = np.full(len(original), np.inf)
-    np.minimum.at(inward, pair_query, d)
-    # an original vertex with no neighbour's survivor left (a part collapsed away): every triangle
-    lost = np.flatnonzero(np.isinf(inward) & np.isin(np.arange(len(original)), triangles))
-    for v in lost:
-        many = np.broadcast_to(original[v], (len(faces), 3))
-        inward[v] = _point_triangle_distance(many, *(points[faces[:, k]] for k in range(3))).min()
-    inward = inward[np.isfinite(inward)]
-    both = np.concatenate([outward, inward])
-    return float(both.max()) if both.size else 0.0
-
-
-def _point_triangle_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """Distance from each point to its triangle (all (N, 3)): the closest point by the triangle's
-    Voronoi regions (Ericson, Real-Time Collision Detection, 5.1.5), vectorised. Worked as (3, N)
-    rows: sums over 3 contiguous rows are several times faster than over (N, 3)'s short rows."""
-    p, a, b, c = (np.ascontiguousarray(x.T, dtype=np.float64) for x in (p, a, b, c))
-    ab, ac, ap, bp, cp = b - a, c - a, p - a, p - b, p - c
-    d1, d2, d3, d4, d5, d6 = ((x * y).sum(0) for x, y in ((ab, ap), (ac, ap), (ab, bp), (ac, bp), (ab, cp), (ac, cp)))
-    va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
-    with np.errstate(divide="ignore", invalid="ignore"):
-        denom = va + vb + vc
-        closest = a + ab * (vb / denom) + ac * (vc / denom)  # inside the face
-        # edges, then vertices, each overriding where its region holds (the regions do not overlap)
-        t_ab, t_ac, t_bc = d1 / (d1 - d3), d2 / (d2 - d6), (d4 - d3) / ((d4 - d3) + (d5 - d6))
-        regions = (
-            ((vc <= 0) & (d1 >= 0) & (d3 <= 0), lambda: a + ab * t_ab),
-            ((vb <= 0) & (d2 >= 0) & (d6 <= 0), lambda: a + ac * t_ac),
-            ((va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0), lambda: b + (c - b) * t_bc),
-            ((d1 <= 0) & (d2 <= 0), lambda: a),
-            ((d3 >= 0) & (d4 <= d3), lambda: b),
-            ((d6 >= 0) & (d5 <= d6), lambda: c),
-        )
-        for region, point in regions:
-            if region.any():
-                closest = np.where(region, point(), closest)
-    return np.sqrt(((p - np.nan_to_num(closest)) ** 2).sum(0))

@@ -9,13 +9,28 @@ cube's, a cylinder's rims) have their own vertices so normals stay flat there.
 
 from __future__ import annotations
 
-from typing import Any
+import inspect
+from typing import Any, Final
 
 import numpy as np
 
 from .mesh_data import MeshData
 
-__all__ = ["PRIMITIVES", "cone_mesh", "cube_mesh", "cylinder_mesh", "plane_mesh", "sphere_mesh", "torus_mesh"]
+__all__ = [
+    "MAX_LENGTH",
+    "PRIMITIVES",
+    "cone_mesh",
+    "cube_mesh",
+    "cylinder_mesh",
+    "plane_mesh",
+    "primitive_vertices",
+    "sphere_mesh",
+    "torus_mesh",
+]
+
+#: The largest radius, height or size a primitive takes: past it float32 positions lose the
+#: shape's detail (and 1e300 would overflow to inf).
+MAX_LENGTH: Final = 1e6
 
 
 def _grid_indices(rows: int, cols: int, first: int = 0) -> np.ndarray:
@@ -34,10 +49,28 @@ def _source(name: str, **args: Any) -> dict[str, Any]:
     return {"primitive": name, "args": {k: v.item() if isinstance(v, np.generic) else v for k, v in args.items()}}
 
 
-def _checked(count: int, name: str, least: int) -> int:
-    if not isinstance(count, (int, np.integer)) or count < least:
-        raise ValueError(f"{name} must be an integer of at least {least}, got {count!r}")
+def _checked(count: Any, name: str, least: int, shape: str = "") -> int:
+    """`count` as an int of at least `least`; one ValueError naming the shape and argument else
+    (a bool, a float, a string, None)."""
+    if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < least:
+        raise ValueError(f"{shape + ': ' if shape else ''}{name} must be an integer of at least {least}, got {count!r}")
     return int(count)
+
+
+def _length(value: Any, name: str, shape: str) -> float:
+    """`value` as a finite float in (0, MAX_LENGTH]: zero or negative lengths made degenerate
+    shapes (and divisions by zero: a cone's slope, a cap's rim), NaN and inf non-finite ones."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ValueError(f"{shape}: {name} must be a number, got {value!r}")
+    if not 0.0 < float(value) <= MAX_LENGTH:  # NaN fails this too
+        raise ValueError(f"{shape}: {name} must be a finite number above 0 and at most {MAX_LENGTH:g}, got {value!r}")
+    return float(value)
+
+
+def _flag(value: Any, name: str, shape: str) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{shape}: {name} must be true or false, got {value!r}")
+    return bool(value)
 
 
 def cube_mesh() -> MeshData:
@@ -68,7 +101,8 @@ def cube_mesh() -> MeshData:
 def sphere_mesh(segments: int = 32, rings: int = 16, radius: float = 0.5) -> MeshData:
     """A UV sphere: `segments` around the Y axis, `rings` from pole to pole; u runs around (from +X
     towards -Z, counter-clockwise seen from above), v from the north pole (0) to the south (1)."""
-    segments, rings = _checked(segments, "segments", 3), _checked(rings, "rings", 2)
+    segments, rings = _checked(segments, "segments", 3, "sphere"), _checked(rings, "rings", 2, "sphere")
+    radius = _length(radius, "radius", "sphere")
     theta = np.linspace(0.0, np.pi, rings + 1)[:, None]  # from +Y
     phi = np.linspace(0.0, 2 * np.pi, segments + 1)[None, :]
     normals = np.stack(
@@ -92,9 +126,8 @@ def sphere_mesh(segments: int = 32, rings: int = 16, radius: float = 0.5) -> Mes
 def plane_mesh(size: float = 1.0, subdivisions: int = 1) -> MeshData:
     """A square in the XZ plane facing +Y, `size` on a side, cut into `subdivisions`^2 cells (more
     cells give per-vertex lighting and spot lights something to work with). u along +X, v along +Z."""
-    n = _checked(subdivisions, "subdivisions", 1)
-    if not 0.0 < size < np.inf:
-        raise ValueError(f"size must be a finite number above 0, got {size}")
+    n = _checked(subdivisions, "subdivisions", 1, "plane")
+    size = _length(size, "size", "plane")
     s = np.linspace(0.0, 1.0, n + 1)
     u, v = np.meshgrid(s, s)  # rows along +v (+Z), columns along +u (+X)
     positions = np.stack([(u - 0.5) * size, np.zeros_like(u), (v - 0.5) * size], -1).reshape(-1, 3)
@@ -162,7 +195,9 @@ def _solid_of_revolution(
 def cylinder_mesh(segments: int = 32, radius: float = 0.5, height: float = 1.0, caps: bool = True) -> MeshData:
     """A cylinder along Y; u runs around the side, v from the top rim (0) to the bottom (1); the
     caps map a disc of the texture."""
-    segments = _checked(segments, "segments", 3)
+    segments = _checked(segments, "segments", 3, "cylinder")
+    radius, height = _length(radius, "radius", "cylinder"), _length(height, "height", "cylinder")
+    caps = _flag(caps, "caps", "cylinder")
     h = height / 2
     return _solid_of_revolution(
         _source("cylinder", segments=segments, radius=radius, height=height, caps=caps),
@@ -177,7 +212,8 @@ def cylinder_mesh(segments: int = 32, radius: float = 0.5, height: float = 1.0, 
 def cone_mesh(segments: int = 32, radius: float = 0.5, height: float = 1.0, rings: int = 8) -> MeshData:
     """A cone along Y with its apex up and a base cap; the side has `rings` bands so its normals
     (tilted by radius / height) interpolate smoothly towards the apex."""
-    segments, rings = _checked(segments, "segments", 3), _checked(rings, "rings", 1)
+    segments, rings = _checked(segments, "segments", 3, "cone"), _checked(rings, "rings", 1, "cone")
+    radius, height = _length(radius, "radius", "cone"), _length(height, "height", "cone")
     t = np.linspace(0.0, 1.0, rings + 1)
     h = height / 2
     source = _source("cone", segments=segments, radius=radius, height=height, rings=rings)
@@ -187,9 +223,10 @@ def cone_mesh(segments: int = 32, radius: float = 0.5, height: float = 1.0, ring
 def torus_mesh(segments: int = 48, sides: int = 24, major: float = 0.35, minor: float = 0.15) -> MeshData:
     """A torus around Y: `segments` around the ring (u), `sides` around the tube (v, from the
     outer equator down and under)."""
-    segments, sides = _checked(segments, "segments", 3), _checked(sides, "sides", 3)
-    if not 0.0 < minor < major:
-        raise ValueError(f"the tube radius must be above 0 and below the ring's, got {minor} and {major}")
+    segments, sides = _checked(segments, "segments", 3, "torus"), _checked(sides, "sides", 3, "torus")
+    major, minor = _length(major, "major", "torus"), _length(minor, "minor", "torus")
+    if not minor < major:
+        raise ValueError(f"torus: the tube radius (minor) must be below the ring's (major), got {minor} and {major}")
     phi = np.linspace(0.0, 2 * np.pi, segments + 1)[None, :]
     psi = np.linspace(0.0, 2 * np.pi, sides + 1)[:, None]
     ring = np.stack(np.broadcast_arrays(np.cos(phi), 0 * psi, -np.sin(phi)), -1)
@@ -202,6 +239,8 @@ def torus_mesh(segments: int = 48, sides: int = 24, major: float = 0.35, minor: 
     return MeshData.from_arrays(positions, normals, tris, "torus", uvs, source=source)
 
 
+_COUNTS: Final = frozenset({"segments", "rings", "subdivisions", "sides"})
+
 #: name -> maker with its defaults, for scenes and the editor
 PRIMITIVES = {
     "cube": cube_mesh,
@@ -211,3 +250,30 @@ PRIMITIVES = {
     "cone": cone_mesh,
     "torus": torus_mesh,
 }
+
+
+def primitive_vertices(name: str, args: dict[str, Any]) -> int:
+    """The vertices PRIMITIVES[name](**args) would make, worked out without making them, so a scene
+    file's recipe can be refused before it allocates anything (scene_assets.py). Counts only: the
+    maker checks the rest. Unknown names or arguments, or a count that is not an integer, raise
+    ValueError naming them."""
+    maker = PRIMITIVES.get(name)
+    if maker is None:
+        raise ValueError(f"unknown primitive {str(name)[:40]!r}; known: {', '.join(PRIMITIVES)}")
+    defaults = {k: p.default for k, p in inspect.signature(maker).parameters.items()}
+    unknown = sorted(set(args) - set(defaults))
+    if unknown:
+        known = ", ".join(defaults) or "none"
+        raise ValueError(f"{name}: unknown argument {str(unknown[0])[:40]!r} (its arguments: {known})")
+    count = {k: _checked(v, k, 1, name) for k, v in {**defaults, **args}.items() if k in _COUNTS}
+    if name == "cube":
+        return 24
+    if name == "sphere":
+        return (count["segments"] + 1) * (count["rings"] + 1)
+    if name == "plane":
+        return (count["subdivisions"] + 1) ** 2
+    if name == "cylinder":
+        return 2 * (count["segments"] + 1) + (2 * (count["segments"] + 1) if args.get("caps", True) else 0)
+    if name == "cone":
+        return (count["segments"] + 1) * (count["rings"] + 1) + count["segments"] + 1
+    return (count["segments"] + 1) * (count["sides"] + 1)  # torus

@@ -34,10 +34,38 @@ from .materials import DEFAULT_PALETTE, TEXTURE_FIELDS, Material, Materials, mat
 from .mesh_data import MeshData
 from .textures import ImageError, Texture, read_image
 
-__all__ = ["EnvironmentCodec", "MaterialsCodec", "MeshReferences", "mesh_from_source", "scene_codecs"]
+__all__ = [
+    "MAX_RECIPE_VERTICES",
+    "EnvironmentCodec",
+    "MaterialsCodec",
+    "MeshReferences",
+    "RecipeBudget",
+    "mesh_from_source",
+    "scene_codecs",
+]
 
 MATERIAL_FIELDS = tuple(f.name for f in dataclasses.fields(Material))
-MAX_PRIMITIVE_COUNT = 1024  # segments, rings...: a hostile file cannot ask for a billion vertices
+#: The vertices that the primitive recipes of one scene file may make, all together (docs/scene-format.md):
+#: a 40 KB file once asked for eight million-vertex spheres (18 GB with their levels of detail). The
+#: largest shape a stock demo makes has 2,145; a 511 x 511 sphere fits.
+MAX_RECIPE_VERTICES = 1 << 18
+
+
+@dataclass
+class RecipeBudget:
+    """What is left of MAX_RECIPE_VERTICES for one load: each recipe takes its share before it
+    makes anything, so a hostile file is refused before it allocates."""
+
+    left: int = MAX_RECIPE_VERTICES
+
+    def take(self, vertices: int, what: str) -> None:
+        if vertices > self.left:
+            spent = MAX_RECIPE_VERTICES - self.left
+            raise ValueError(
+                f"{what} would make {vertices:,} vertices; a scene file's recipes may make at most "
+                f"{MAX_RECIPE_VERTICES:,} in all ({spent:,} made already)"
+            )
+        self.left -= vertices
 
 
 def _doc(value: Any, kind: type, what: str) -> Any:
@@ -237,6 +265,7 @@ class MeshReferences:
         doc = _doc(saved.doc, dict, "the meshes document")
         made: dict[int, MeshData] = {}
         cache: dict[str, Any] = {}  # a model file read once for all its parts
+        budget = RecipeBudget()
         for i, entry in enumerate(_doc(doc.get("meshes"), list, "meshes")):
             entry = _doc(entry, dict, f"mesh {i}")
             handle = _doc(entry.get("handle"), int, f"mesh {i}'s handle")
@@ -245,7 +274,7 @@ class MeshReferences:
             if entry.get("source") is None:
                 made[handle] = _mesh_arrays(saved.arrays, handle, str(entry.get("name", "mesh")))
             else:
-                made[handle] = mesh_from_source(entry["source"], cache)
+                made[handle] = mesh_from_source(entry["source"], cache, budget=budget)
                 count = entry.get("vertices")
                 if _made_in_code(entry["source"]) and count != made[handle].vertex_count:
                     raise ValueError(
@@ -278,34 +307,36 @@ def _made_in_code(source: dict[str, Any]) -> bool:
     return False
 
 
-def mesh_from_source(source: Any, cache: dict[str, Any] | None = None, depth: int = 0) -> MeshData:
-    """The mesh a MeshData.source recipe makes (ValueError for one that is not a recipe).
-    `cache`: meshes made so far in this load, so a model's parts read its file once."""
+def mesh_from_source(
+    source: Any, cache: dict[str, Any] | None = None, depth: int = 0, *, budget: RecipeBudget | None = None
+) -> MeshData:
+    """The mesh a MeshData.source recipe makes (ValueError for one that is not a recipe, or one
+    past `budget`). `cache`: meshes made so far in this load, so a model's parts read its file
+    once; `budget`: the vertices this load's primitive recipes may still make (default: a whole
+    MAX_RECIPE_VERTICES)."""
     cache = {} if cache is None else cache
+    budget = RecipeBudget() if budget is None else budget
     source = _doc(source, dict, "a mesh source")
     if depth > 8:
         raise ValueError("a mesh source nested more than 8 deep")
     key = json.dumps(source, sort_keys=True)
     if key not in cache:
-        cache[key] = _made(source, cache, depth)
+        cache[key] = _made(source, cache, depth, budget)
     made: MeshData = cache[key]
     return made
 
 
-def _made(source: dict[str, Any], cache: dict[str, Any], depth: int) -> MeshData:
+def _made(source: dict[str, Any], cache: dict[str, Any], depth: int, budget: RecipeBudget) -> MeshData:
     from ..errors import UsageError
     from .mesh_data import normalized, normalized_together
-    from .primitives import PRIMITIVES
+    from .primitives import PRIMITIVES, primitive_vertices
 
     if "primitive" in source:
-        maker = PRIMITIVES.get(source["primitive"])
+        name = _doc(source["primitive"], str, "a primitive's name")
         args = _doc(source.get("args", {}), dict, "a primitive's args")
-        if maker is None:
-            raise ValueError(f"unknown primitive {str(source['primitive'])[:40]!r}; known: {', '.join(PRIMITIVES)}")
-        for key, value in args.items():
-            if not isinstance(value, (int, float)) or abs(value) > MAX_PRIMITIVE_COUNT:
-                raise ValueError(f"primitive argument {str(key)[:40]} = {str(value)[:40]} is out of range")
-        return maker(**args)
+        vertices = primitive_vertices(name, args)  # unknown names and arguments, counts that are no integers
+        budget.take(vertices, f"the {name} recipe {json.dumps(args)[:120]}")
+        return PRIMITIVES[name](**args)  # which checks every argument's value
     if "file" in source:
         from .mesh_loading import load_mesh
         from .model_loading import model_part
@@ -319,7 +350,7 @@ def _made(source: dict[str, Any], cache: dict[str, Any], depth: int) -> MeshData
             raise ValueError(str(exc)) from None
     if "normalized" in source:
         size = _doc(source["normalized"], float, "a normalized size")
-        return normalized(mesh_from_source(source.get("of"), cache, depth + 1), size)
+        return normalized(mesh_from_source(source.get("of"), cache, depth + 1, budget=budget), size)
     if "normalized_together" in source:
         size = _doc(source["normalized_together"], float, "a normalized size")
         of = _doc(source.get("of"), list, "the parts normalized together")
@@ -328,7 +359,7 @@ def _made(source: dict[str, Any], cache: dict[str, Any], depth: int) -> MeshData
             raise ValueError(f"part {part} of {len(of)} parts normalized together")
         key = json.dumps({"normalized_together": size, "of": of}, sort_keys=True)
         if key not in cache:
-            cache[key] = normalized_together([mesh_from_source(o, cache, depth + 1) for o in of], size)
+            cache[key] = normalized_together([mesh_from_source(o, cache, depth + 1, budget=budget) for o in of], size)
         together: list[MeshData] = cache[key]
         return together[part]
     raise ValueError(f"not a mesh source: {str(source)[:80]}")
