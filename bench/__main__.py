@@ -68,13 +68,12 @@ OPTIONS = "NAME [--quick] [--out DIR] [--machine SLUG]"
 
 def default_out() -> Path:
     """The user's cache, never the package folder: a quick run must leave a checkout unchanged."""
-    cache = os.environ.get("XDG_CACHE_HOME", "")
-    if not os.path.isabs(cache):  # unset, empty or relative: the XDG spec says to ignore it
-        try:
-            cache = str(Path.home() / ".cache")
-        except RuntimeError:  # no home directory to be found
-            return Path.cwd() / "bench-results"
-    return Path(cache) / "ecs_engine" / "bench-results"
+    from ecs_engine.user_dirs import cache_home
+
+    try:
+        return cache_home() / "ecs_engine" / "bench-results"
+    except RuntimeError:  # no home directory to be found
+        return Path.cwd() / "bench-results"
 
 
 def usage() -> str:
