@@ -98,7 +98,14 @@ def write_json(doc: dict[str, Any], path: Path) -> None:
 
 
 def main(argv: list[str] | None = None, prog: str = COMMANDS[1]) -> int:
-    """Run one benchmark; `prog` is the command named in its --help (the CLI passes its own)."""
+    """Run one benchmark; `prog` is the command named in its --help (the CLI passes its own).
+    Ctrl-C is one line and exit 130, a closed stdout (`| head`) a quiet end (entry_point.py)."""
+    from ecs_engine.app.entry_point import run_command
+
+    return run_command(prog, lambda: run_benchmark(argv, prog))
+
+
+def run_benchmark(argv: list[str] | None, prog: str) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv[:1] in (["-h"], ["--help"]):
         print(usage())

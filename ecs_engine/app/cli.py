@@ -1,10 +1,15 @@
 """`ecs-engine` / `python -m ecs_engine`: run demos. Errors a user can cause print one line and
-exit 2; other failures exit 1; `--debug` shows the traceback instead."""
+exit 2; other failures exit 1; `--debug` shows the traceback as well (the exit status stays).
+Ctrl-C is one line and exit 130; a closed stdout (`| head`) ends it quietly (entry_point.py).
+
+The renderer's tables (modes, culling, present modes) are imported when the parser is built,
+inside main's guard: they bring vulkan and numba, seconds of start-up a Ctrl-C may land in."""
 
 from __future__ import annotations
 
 import argparse
 import sys
+import traceback
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
@@ -12,13 +17,9 @@ from typing import NoReturn
 
 from ..ecs.errors import EcsError
 from ..errors import UsageError
-from ..gpu.swapchain import PRESENT_MODES
-from ..render.frame_data import CULLING
-from ..render.light_clusters import LIGHT_MODES
-from ..render.renderer import MODES, PATHS, RECORDER_NAMES
+from .entry_point import run_command
 from .scenes import SCENE_FILE_SUFFIX, SEED_SCENES, is_scene_file
 from .scenes import SCENES as RENDERED_SCENES
-from .settings import check_entities, check_threads
 
 
 def positive_int(text: str) -> int:
@@ -68,6 +69,11 @@ class OneLineParser(argparse.ArgumentParser):
 
 def render_flags() -> OneLineParser:
     """The flags `demo` and `editor` share."""
+    from ..gpu.swapchain import PRESENT_MODES
+    from ..render.frame_data import CULLING
+    from ..render.light_clusters import LIGHT_MODES
+    from ..render.renderer import MODES, RECORDER_NAMES
+
     common = OneLineParser(add_help=False)
     common.add_argument("--headless", action="store_true", help="render offscreen, no window (no display needed)")
     common.add_argument(
@@ -238,6 +244,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
+    from .settings import check_entities, check_threads
+
     if args.command == "demo":
         if args.scene == "motion":
             from ..demos import motion
@@ -282,6 +290,8 @@ def refuse_unused(args: argparse.Namespace, used: tuple[str, ...], why: str) -> 
 
 def check_flags_apply(args: argparse.Namespace, scenes: tuple[str, ...], editor: bool) -> None:
     """Refuse a flag that would change nothing in this run, instead of ignoring it."""
+    from ..render.renderer import PATHS
+
     if args.entities is not None and "scaling" not in scenes:
         raise UsageError(f"--entities sizes the scaling and motion scenes; {', '.join(scenes)} has fixed content")
     if args.lights is not None and "lights" not in scenes:
@@ -343,20 +353,27 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    return run_command("ecs-engine", lambda: parse_and_run(argv))
+
+
+def parse_and_run(argv: Sequence[str] | None) -> int:
+    args = build_parser().parse_args(argv)
     try:
         return run(args)
+    except (KeyboardInterrupt, BrokenPipeError):
+        if args.debug:
+            traceback.print_exc()
+        raise  # run_command: one line, or quiet
     except (UsageError, EcsError, ValueError, OSError) as exc:
         if args.debug:
-            raise
+            traceback.print_exc()
         print(f"ecs-engine: error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        return 130
     except Exception as exc:
         if args.debug:
-            raise
+            traceback.print_exc()
+            print(f"ecs-engine: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
+            return 1
         print(
             f"ecs-engine: internal error: {type(exc).__name__}: {exc} (run with --debug for the traceback)",
             file=sys.stderr,
