@@ -111,6 +111,8 @@ def test_bad_flags(args, fragment):
         (["cube", "--entities", "50", "--headless"], "--entities sizes the scaling and motion scenes"),
         (["cube", "--headless", "--present", "mailbox"], "a --headless run has no window"),
         (["cube", "--headless", "--mode", "indirect", "--recorder", "python"], "--recorder does not apply"),
+        (["cube", "--headless", "--no-shadow-denoise"], "--no-shadow-denoise applies to --shadows raytraced"),
+        (["cube", "--headless", "--culling", "frustum", "--no-culling"], "--no-culling: not allowed with argument"),
     ],
 )
 def test_a_flag_that_would_change_nothing_is_refused(args, fragment):

@@ -37,7 +37,8 @@ def positive_int(text: str) -> int:
 SCENES = (*RENDERED_SCENES, "motion")  # motion: the text-mode ECS scene, no rendering
 EDITOR_SCENES = RENDERED_SCENES
 DEFAULT_SCENE = "grid100"
-HEADLESS_FALLBACK_FRAMES = 300
+HEADLESS_FALLBACK_FRAMES = 300  # no display for a windowed run: this many frames headless instead
+HEADLESS_FRAMES = {"demo": 1, "editor": 1, "play": 600}  # a --headless run without --frames
 
 
 def dimension(text: str) -> int:
@@ -67,8 +68,19 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
-def render_flags() -> OneLineParser:
-    """The flags `demo` and `editor` share."""
+def non_negative_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a number of 0 or more, got {value}")
+    return value
+
+
+def render_flags(headless_frames: int = 1) -> OneLineParser:
+    """The flags `demo`, `editor` and `play` share (`headless_frames`: the command's --headless
+    run without --frames, for the help)."""
     from ..gpu.swapchain import PRESENT_MODES
     from ..render.frame_data import CULLING
     from ..render.light_clusters import LIGHT_MODES
@@ -79,10 +91,10 @@ def render_flags() -> OneLineParser:
     common.add_argument(
         "--frames",
         type=positive_int,
-        help="frames to run (default: until the window closes; "
-        f"headless: 1, or {HEADLESS_FALLBACK_FRAMES} when falling back from a window)",
+        help=f"frames to run (default: until the window closes; headless: {headless_frames}, "
+        f"or {HEADLESS_FALLBACK_FRAMES} when falling back from a window)",
     )
-    common.add_argument("--screenshot", metavar="PNG", help="write the last frame to this PNG (headless)")
+    common.add_argument("--screenshot", metavar="PNG", help="write the last frame to this PNG file")
     common.add_argument("--width", type=dimension, default=1280)
     common.add_argument("--height", type=dimension, default=720)
     common.add_argument(
@@ -104,7 +116,8 @@ def render_flags() -> OneLineParser:
         choices=RECORDER_NAMES,
         help="native: numba loop without the GIL (default when numba is installed); python: the binding",
     )
-    common.add_argument(
+    culling = common.add_mutually_exclusive_group()  # --culling X --no-culling: which one was meant?
+    culling.add_argument(
         "--culling",
         choices=CULLING,
         default="frustum",
@@ -113,7 +126,7 @@ def render_flags() -> OneLineParser:
         "indirect only, the frustum and then what last frame's visible rows hide and what covers no pixel, on the "
         "GPU (two-phase, a depth pyramid; the image is frustum culling's); none: draw everything",
     )
-    common.add_argument(
+    culling.add_argument(
         "--no-culling", dest="culling", action="store_const", const="none", help="draw everything (--culling none)"
     )
     common.add_argument(
@@ -201,8 +214,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog="ecs-engine", description=__doc__)
     parser.add_argument("--debug", action="store_true", help="show tracebacks")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
-    common = render_flags()
-    demo = sub.add_parser("demo", help="run a demo scene", parents=[common])
+    demo = sub.add_parser("demo", help="run a demo scene", parents=[render_flags(HEADLESS_FRAMES["demo"])])
     demo.add_argument(
         "scene",
         nargs="?",
@@ -219,7 +231,11 @@ def build_parser() -> argparse.ArgumentParser:
         nargs="?",
         help="model file for the model scene (OBJ, glTF/GLB, PLY, STL); sky image for the environment scene",
     )
-    editor = sub.add_parser("editor", help="the ImGui editor and Perf window on demo scenes", parents=[common])
+    editor = sub.add_parser(
+        "editor",
+        help="the ImGui editor and Perf window on demo scenes",
+        parents=[render_flags(HEADLESS_FRAMES["editor"])],
+    )
     editor.add_argument(
         "scenes",
         nargs="*",
@@ -230,7 +246,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     from .play import add_parser as add_play_parser
 
-    add_play_parser(sub, common, positive_int)
+    add_play_parser(sub, render_flags(HEADLESS_FRAMES["play"]), positive_int, non_negative_int)
     # Every argument goes to the benchmark runner, --help first included: REMAINDER skips a leading
     # option, so this parser has a prefix no argument can start with ("\0") and sees none.
     bench = sub.add_parser(
@@ -259,7 +275,7 @@ def run(args: argparse.Namespace) -> int:
         from .play import run_play
 
         check_flags_apply(args, (args.game,), False)
-        return run_play(args, HEADLESS_FALLBACK_FRAMES)
+        return run_play(args, HEADLESS_FALLBACK_FRAMES, HEADLESS_FRAMES["play"])
     if args.command == "bench":
         from ..bench.__main__ import main as bench_main
 
@@ -289,7 +305,8 @@ def refuse_unused(args: argparse.Namespace, used: tuple[str, ...], why: str) -> 
 
 
 def check_flags_apply(args: argparse.Namespace, scenes: tuple[str, ...], editor: bool) -> None:
-    """Refuse a flag that would change nothing in this run, instead of ignoring it."""
+    """Refuse a flag that would change nothing in this run, instead of ignoring it (the editor
+    may switch to what makes --recorder and --no-shadow-denoise count later)."""
     from ..render.renderer import PATHS
 
     if args.entities is not None and "scaling" not in scenes:
@@ -302,6 +319,8 @@ def check_flags_apply(args: argparse.Namespace, scenes: tuple[str, ...], editor:
         raise UsageError("--present chooses a window's present mode; a --headless run has no window")
     if args.recorder is not None and not editor and not PATHS[args.mode].uses_recorder:
         raise UsageError(f"--recorder does not apply to --mode {args.mode}: the GPU writes its draws")
+    if not args.shadow_denoise and not editor and args.shadow_method != "raytraced":
+        raise UsageError("--no-shadow-denoise applies to --shadows raytraced; shadow maps have no denoiser")
 
 
 def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = None) -> int:
