@@ -299,3 +299,18 @@ def test_lights_demo_flags(tmp_path):
     assert "101 lights" in proc.stdout and shot.exists()
     one_line_error(cli("cube", "--lights", "10", "--headless"), "--lights", "cube")
     one_line_error(cli("lights", "--lights", "-1", "--headless"), "--lights -1")
+
+
+def test_a_scene_file_without_a_camera_is_named(tmp_path, capsys):
+    from ecs_engine import World
+    from ecs_engine.app.cli import main
+    from ecs_engine.components import Transform
+    from ecs_engine.ecs.scene_file import save_world
+
+    world = World()
+    world.spawn(Transform())
+    path = tmp_path / "empty.scene"
+    save_world(world, path)
+    assert main(["editor", str(path), "--headless", "--frames", "1", "--width", "32", "--height", "24"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"ecs-engine: error: scene file {path}: no camera") and len(err.splitlines()) == 1
