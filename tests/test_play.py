@@ -79,6 +79,23 @@ def test_the_frames_help_says_what_a_headless_run_does(monkeypatch, capsys):
             assert said == 1 and ran.pop() is None  # None: the offscreen source's one frame
 
 
+def test_the_score_is_printed_even_when_the_screenshot_cannot_be_written(tmp_path, monkeypatch, capsys):
+    import ecs_engine.app.loop as loop
+    from ecs_engine.app import cli
+    from ecs_engine.errors import UsageError
+
+    def full(pixels, path):
+        raise UsageError(f"cannot write {path}: No space left on device")
+
+    monkeypatch.setattr(loop, "save_png", full)
+    shot = tmp_path / "shot.png"
+    args = ["play", "asteroids", "--headless", "--autoplay", "--frames", "3", "--width", "64", "--height", "48"]
+    assert cli.main([*args, "--screenshot", str(shot), "--threads", "2"]) == 2
+    out, err = capsys.readouterr()
+    assert "asteroids: score" in out and "world " in out, out  # the run's result is not lost
+    assert err.strip() == f"ecs-engine: error: cannot write {shot}: No space left on device"
+
+
 def test_keys_and_buttons_become_ship_controls_unless_the_ui_has_them():
     """Through the game's actions: keys while the UI does not have the keyboard, mouse buttons
     while it does not have the mouse, gamepads always."""

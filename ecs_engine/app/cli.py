@@ -206,6 +206,12 @@ def render_flags(headless_frames: int = 1) -> OneLineParser:
         help="replay input by frame (keys, buttons, pad axes, mouse, scroll) from this file (app/input_script.py)",
     )
     common.add_argument("--record-input", metavar="PATH", help="write the run's input by frame to this file")
+    common.add_argument(
+        "--force",
+        action="store_true",
+        help="let --screenshot, --perf-json and --record-input replace a file of another kind (a PNG, a perf "
+        "log and an input script are replaced without it)",
+    )
     common.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show tracebacks")
     return common
 
@@ -325,6 +331,7 @@ def check_flags_apply(args: argparse.Namespace, scenes: tuple[str, ...], editor:
 
 def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = None) -> int:
     from .loop import run
+    from .output_files import check_run_files
     from .report import report_validation
     from .settings import RunOptions
 
@@ -345,6 +352,7 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
     if not args.headless:
         from .window import WindowSource, open_glfw
 
+        check_run_files(options)  # before a window opens
         glfw = open_glfw()
         if glfw is not None:
             return report_validation(run(options, WindowSource(glfw)))
@@ -354,21 +362,12 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
             frames=args.frames or HEADLESS_FALLBACK_FRAMES,
             screenshot=options.screenshot or f"{args.scene}.png",
         )
+        check_run_files(options)  # the screenshot's default too, before the message says where it goes
         shot = Path(options.screenshot or "").resolve()
         saved = f"last frame saved to {shot}" + (" (replacing the file there)" if shot.exists() else "")
-        if editor:
-            # the editor needs a window to be used; without one, the scene and its text overlay
-            options = replace(options, editor=False)
-            print(
-                f"no display found: the editor needs a window, so {args.scene} runs headless for "
-                f"{options.frames} frames with the text perf overlay ({saved})"
-            )
-        else:
-            print(f"no display found: rendering {options.frames} frames headless instead ({saved})")
-    result = run(options)
-    if options.screenshot:
-        print(f"wrote {options.screenshot}")
-    return report_validation(result)
+        what = "the editor and its scene" if editor else "the scene"
+        print(f"no display found: drawing {what} headless for {options.frames} frames instead ({saved})")
+    return report_validation(run(options))
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -4,7 +4,7 @@ A game module provides `build(world, add_mesh, path, seed=, autoplay=, level=)`,
 (how many levels there are: --level goes from 1 to it), `ACTIONS` (its actions' default
 bindings), `controls()` (the system turning actions into the game's controls),
 `schedule(autoplay, controls)` (its systems), `draw_hud(imgui, world)` and `summary(world)` (the
-line printed at the end). The run is the engine's one loop (loop.py) with a
+line printed at the end, before the run's files are written). The run is the engine's one loop (loop.py) with a
 `GameSession` (the game's world and schedule instead of a demo scene's) and a `GameUI` (the HUD
 on the ImGui session). Keys, mouse and gamepads reach the game through the InputState resource
 and the ActionMap resource (the game's ACTIONS with the user's `input-<game>.json` over them,
@@ -101,8 +101,10 @@ def run_play(args: argparse.Namespace, fallback_frames: int, headless_frames: in
     options = RunOptions.from_flags(args, scene="cube")  # the scene is unused: the game builds the world
     source = None
     if not args.headless:
+        from .output_files import check_run_files
         from .window import WindowSource, open_glfw
 
+        check_run_files(options)  # before a window opens
         glfw = open_glfw()
         if glfw is not None:
             source = WindowSource(glfw)
@@ -111,9 +113,6 @@ def run_play(args: argparse.Namespace, fallback_frames: int, headless_frames: in
             print(f"no display found: playing {options.frames} frames headless instead")
     elif options.frames is None:
         options = replace(options, frames=headless_frames)
-    result = run(options, source, make_session=make, ui=ui)
-    if holder:
-        print(module.summary(holder[-1].world))
-    if options.screenshot:
-        print(f"wrote {options.screenshot}")
+    # the score and world hash are said before the files are written: a failed write keeps them
+    result = run(options, source, make_session=make, ui=ui, summary=lambda session: module.summary(session.world))
     return report_validation(result)
