@@ -70,13 +70,12 @@ OPTIONS = "NAME [--quick] [--out DIR] [--machine SLUG]"
 
 def default_out() -> Path:
     """The user's cache, never the package folder: a quick run must leave a checkout unchanged."""
-    cache = os.environ.get("XDG_CACHE_HOME", "")
-    if not os.path.isabs(cache):  # unset, empty or relative: the XDG spec says to ignore it
-        try:
-            cache = str(Path.home() / ".cache")
-        except RuntimeError:  # no home directory to be found
-            return Path.cwd() / "bench-results"
-    return Path(cache) / "ecs_engine" / "bench-results"
+    from ecs_engine.user_dirs import cache_home
+
+    try:
+        return cache_home() / "ecs_engine" / "bench-results"
+    except RuntimeError:  # no home directory to be found
+        return Path.cwd() / "bench-results"
 
 
 def usage() -> str:
@@ -101,7 +100,14 @@ def write_json(doc: dict[str, Any], path: Path) -> None:
 
 
 def main(argv: list[str] | None = None, prog: str = COMMANDS[1]) -> int:
-    """Run one benchmark; `prog` is the command named in its --help (the CLI passes its own)."""
+    """Run one benchmark; `prog` is the command named in its --help (the CLI passes its own).
+    Ctrl-C is one line and exit 130, a closed stdout (`| head`) a quiet end (entry_point.py)."""
+    from ecs_engine.app.entry_point import run_command
+
+    return run_command(prog, lambda: run_benchmark(argv, prog))
+
+
+def run_benchmark(argv: list[str] | None, prog: str) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv[:1] in (["-h"], ["--help"]):
         print(usage())

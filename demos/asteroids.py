@@ -23,6 +23,7 @@ from ecs_engine.systems import ActionMap
 from .asteroids_bot import BotSystem
 from .asteroids_controls import ACTIONS, ShipControlSystem
 from .asteroids_game import (
+    LEVEL_ASTEROIDS,
     CollisionSystem,
     DamageSystem,
     FollowCameraSystem,
@@ -37,7 +38,9 @@ from .asteroids_game import (
 )
 from .asteroids_hud import draw_hud, summary
 
-__all__ = ["ACTIONS", "ShipControls", "build", "controls", "draw_hud", "schedule", "summary"]
+__all__ = ["ACTIONS", "LEVELS", "ShipControls", "build", "controls", "draw_hud", "schedule", "summary"]
+
+LEVELS = len(LEVEL_ASTEROIDS)  # `play --level` goes from 1 to this
 
 
 def rock_mesh(seed: int = 5) -> MeshData:

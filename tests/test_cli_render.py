@@ -111,10 +111,19 @@ def test_bad_flags(args, fragment):
         (["cube", "--entities", "50", "--headless"], "--entities sizes the scaling and motion scenes"),
         (["cube", "--headless", "--present", "mailbox"], "a --headless run has no window"),
         (["cube", "--headless", "--mode", "indirect", "--recorder", "python"], "--recorder does not apply"),
+        (["cube", "--headless", "--no-shadow-denoise"], "--no-shadow-denoise applies to --shadows raytraced"),
+        (["cube", "--headless", "--culling", "frustum", "--no-culling"], "--no-culling: not allowed with argument"),
     ],
 )
 def test_a_flag_that_would_change_nothing_is_refused(args, fragment):
     one_line_error(cli(*args), fragment)
+
+
+@pytest.mark.parametrize("name", ["out.txt", "out", "shot.PNG.jpg"])
+def test_a_screenshot_name_that_is_not_a_png_is_refused_before_the_run(tmp_path, name):
+    proc = cli("cube", "--headless", "--screenshot", str(tmp_path / name), "--width", "32", "--height", "24")
+    one_line_error(proc, f"--screenshot {tmp_path / name}: screenshots are written as PNG", "ending in .png")
+    assert "headless" not in proc.stdout  # refused before the scene started
 
 
 def test_argparse_errors_point_to_help():
@@ -216,13 +225,17 @@ def test_editor_headless_draws_the_ui_and_writes_perf_json(tmp_path):
     assert np.asarray(Image.open(shot)).shape == (320, 480, 3)
 
 
-def test_editor_without_a_display_runs_headless_with_the_text_overlay(tmp_path):
+def test_editor_without_a_display_draws_the_editor_headless(tmp_path):
+    """`make demo` with no display: the image is the editor the user asked for (its menu bar
+    across the top), not the scene alone."""
     env = {"DISPLAY": "", "WAYLAND_DISPLAY": ""}
-    proc = editor_cli("--frames", "3", "--width", "64", "--height", "48", env=env, cwd=tmp_path)
+    proc = editor_cli("--frames", "2", "--width", "320", "--height", "200", env=env, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
-    assert "no display found: the editor needs a window" in proc.stdout
+    assert "no display found: drawing the editor and its scene headless for 2 frames" in proc.stdout
     assert f"last frame saved to {tmp_path / 'grid100.png'}" in proc.stdout  # where, as a full path
-    assert (tmp_path / "grid100.png").is_file()
+    image = np.asarray(Image.open(tmp_path / "grid100.png"))
+    menu_bar = image[4:14, 60:-2]  # right of "File", inside the window's border
+    assert (menu_bar == (36, 36, 36)).all()  # ImGui's menu bar colour, edge to edge
     again = editor_cli("--frames", "1", "--width", "64", "--height", "48", env=env, cwd=tmp_path)
     assert again.returncode == 0 and "(replacing the file there)" in again.stdout  # says it overwrites
 
@@ -297,3 +310,80 @@ def test_lights_demo_flags(tmp_path):
     assert "101 lights" in proc.stdout and shot.exists()
     one_line_error(cli("cube", "--lights", "10", "--headless"), "--lights", "cube")
     one_line_error(cli("lights", "--lights", "-1", "--headless"), "--lights -1")
+
+
+@pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs a display (make test runs under Xvfb)")
+def test_a_windowed_screenshot_says_where_it_went(tmp_path):
+    shot = tmp_path / "window.png"
+    proc = cli("cube", "--frames", "2", "--width", "64", "--height", "48", "--screenshot", str(shot))
+    assert proc.returncode == 0, proc.stderr
+    assert f"wrote {shot}" in proc.stdout.splitlines()
+    assert np.asarray(Image.open(shot)).shape[2] == 3
+
+
+def test_outputs_never_replace_a_file_of_another_kind_nor_an_input(tmp_path):
+    """--record-input over a scene, the input script as its own recording, --perf-json over notes:
+    one line, exit 2, before the first frame, the file as it was; --force lets a kind be replaced."""
+    scene, script, notes = tmp_path / "level.scene", tmp_path / "s.txt", tmp_path / "notes.txt"
+    scene.write_bytes(b"PK\x03\x04 a saved scene")
+    script.write_text("10 down w\n20 up w\n")
+    notes.write_text("my notes\n")
+    small = ("--width", "32", "--height", "24", "--frames", "2")
+    for args, words in (
+        (["--record-input", str(scene)], ("--record-input", "not an input script", "--force")),
+        (["--input-script", str(script), "--record-input", str(script)], ("is also the --input-script",)),
+        (["--perf-json", str(notes)], ("--perf-json", "not a --perf-json log")),
+        (["--screenshot", str(notes.with_suffix(".png")), "--perf-json", str(notes.with_suffix(".png"))], ("is also",)),
+    ):
+        proc = cli("cube", "--headless", *small, *args)
+        one_line_error(proc, *words)
+        assert "headless" not in proc.stdout  # refused before the scene started
+    assert scene.read_bytes() == b"PK\x03\x04 a saved scene" and script.read_text() == "10 down w\n20 up w\n"
+    assert notes.read_text() == "my notes\n"
+    proc = cli("cube", "--headless", *small, "--perf-json", str(notes), "--force")
+    assert proc.returncode == 0 and json.loads(notes.read_text())["meta"]["frames"] == 2, proc.stderr
+
+
+@pytest.mark.skipif(not os.path.isdir("/sys"), reason="uses /sys, where no one may create a file")
+def test_an_output_where_nothing_can_be_written_is_refused_before_the_run():
+    one_line_error(cli("cube", "--headless", "--record-input", "/sys/input.txt"), "/sys/input.txt", "cannot write")
+
+
+def test_ctrl_c_after_some_frames_writes_the_perf_log_of_the_frames_run(tmp_path):
+    import signal
+
+    perf = tmp_path / "perf.json"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "ecs_engine", "demo", "cube", "--headless", "--frames", "100000"]
+        + ["--width", "32", "--height", "24", "--perf-json", str(perf)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        seen = [proc.stdout.readline() for _ in range(3)]  # the run's first line, then two perf summaries
+        assert seen[-1].startswith("fps"), seen
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+    assert proc.returncode == 130, err
+    assert err.splitlines() == ["ecs-engine: interrupted"]
+    doc = json.loads(perf.read_text())
+    assert len(doc["frames"]) >= 2 and doc["meta"]["frames"] == len(doc["frames"])
+    assert f"wrote {perf}" in out
+
+
+def test_a_scene_file_without_a_camera_is_named(tmp_path, capsys):
+    from ecs_engine import World
+    from ecs_engine.app.cli import main
+    from ecs_engine.components import Transform
+    from ecs_engine.ecs.scene_file import save_world
+
+    world = World()
+    world.spawn(Transform())
+    path = tmp_path / "empty.scene"
+    save_world(world, path)
+    assert main(["editor", str(path), "--headless", "--frames", "1", "--width", "32", "--height", "24"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"ecs-engine: error: scene file {path}: no camera") and len(err.splitlines()) == 1

@@ -48,9 +48,52 @@ def test_bad_arguments_are_one_clear_error():
         (("chess", "--headless"), "invalid choice: 'chess'"),
         (("asteroids", "--headless", "--level", "0"), "expected a number above 0"),
         (("asteroids", "--headless", "--entities", "5"), "--entities sizes the scaling"),
+        (("asteroids", "--headless", "--level", "99"), "--level 99: asteroids has levels 1 to 6"),
+        (("asteroids", "--headless", "--seed", "-1"), "argument --seed: expected a number of 0 or more, got -1"),
     ):
         run = play(*args)
         assert run.returncode == 2 and message in run.stderr and "Traceback" not in run.stderr, run.stderr
+        assert len(run.stderr.strip().splitlines()) == 1, run.stderr
+
+
+def test_the_frames_help_says_what_a_headless_run_does(monkeypatch, capsys):
+    """Each command's --frames help gives the frame count its --headless run has without
+    --frames (play's is not demo's)."""
+    import re
+
+    import ecs_engine.app.loop as loop
+    from ecs_engine.app import cli
+    from ecs_engine.app.report import RunResult
+
+    ran = []
+    monkeypatch.setattr(loop, "run", lambda options, *args, **kwargs: ran.append(options.frames) or RunResult())
+    monkeypatch.setenv("COLUMNS", "300")  # the help on one line
+    for command in ("play", "demo"):
+        with pytest.raises(SystemExit):
+            cli.main([command, "--help"])
+        said = int(re.search(r"headless: (\d+)", capsys.readouterr().out).group(1))
+        assert cli.main([command, "asteroids" if command == "play" else "cube", "--headless"]) == 0
+        if command == "play":
+            assert ran.pop() == said == 600
+        else:
+            assert said == 1 and ran.pop() is None  # None: the offscreen source's one frame
+
+
+def test_the_score_is_printed_even_when_the_screenshot_cannot_be_written(tmp_path, monkeypatch, capsys):
+    import ecs_engine.app.loop as loop
+    from ecs_engine.app import cli
+    from ecs_engine.errors import UsageError
+
+    def full(pixels, path):
+        raise UsageError(f"cannot write {path}: No space left on device")
+
+    monkeypatch.setattr(loop, "save_png", full)
+    shot = tmp_path / "shot.png"
+    args = ["play", "asteroids", "--headless", "--autoplay", "--frames", "3", "--width", "64", "--height", "48"]
+    assert cli.main([*args, "--screenshot", str(shot), "--threads", "2"]) == 2
+    out, err = capsys.readouterr()
+    assert "asteroids: score" in out and "world " in out, out  # the run's result is not lost
+    assert err.strip() == f"ecs-engine: error: cannot write {shot}: No space left on device"
 
 
 def test_keys_and_buttons_become_ship_controls_unless_the_ui_has_them():

@@ -1,10 +1,15 @@
 """`ecs-engine` / `python -m ecs_engine`: run demos. Errors a user can cause print one line and
-exit 2; other failures exit 1; `--debug` shows the traceback instead."""
+exit 2; other failures exit 1; `--debug` shows the traceback as well (the exit status stays).
+Ctrl-C is one line and exit 130; a closed stdout (`| head`) ends it quietly (entry_point.py).
+
+The renderer's tables (modes, culling, present modes) are imported when the parser is built,
+inside main's guard: they bring vulkan and numba, seconds of start-up a Ctrl-C may land in."""
 
 from __future__ import annotations
 
 import argparse
 import sys
+import traceback
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
@@ -12,14 +17,9 @@ from typing import NoReturn
 
 from ..ecs.errors import EcsError
 from ..errors import UsageError
-from ..gpu.array_image import ANISOTROPY_CHOICES
-from ..gpu.swapchain import PRESENT_MODES
-from ..render.frame_data import CULLING
-from ..render.light_clusters import LIGHT_MODES
-from ..render.renderer import MODES, PATHS, RECORDER_NAMES
+from .entry_point import run_command
 from .scenes import SCENE_FILE_SUFFIX, SEED_SCENES, is_scene_file
 from .scenes import SCENES as RENDERED_SCENES
-from .settings import check_entities, check_threads
 
 
 def positive_int(text: str) -> int:
@@ -37,7 +37,8 @@ def positive_int(text: str) -> int:
 SCENES = (*RENDERED_SCENES, "motion")  # motion: the text-mode ECS scene, no rendering
 EDITOR_SCENES = RENDERED_SCENES
 DEFAULT_SCENE = "grid100"
-HEADLESS_FALLBACK_FRAMES = 300
+HEADLESS_FALLBACK_FRAMES = 300  # no display for a windowed run: this many frames headless instead
+HEADLESS_FRAMES = {"demo": 1, "editor": 1, "play": 600}  # a --headless run without --frames
 
 
 def dimension(text: str) -> int:
@@ -67,17 +68,34 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
-def render_flags() -> OneLineParser:
-    """The flags `demo` and `editor` share."""
+def non_negative_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a number of 0 or more, got {value}")
+    return value
+
+
+def render_flags(headless_frames: int = 1) -> OneLineParser:
+    """The flags `demo`, `editor` and `play` share (`headless_frames`: the command's --headless
+    run without --frames, for the help)."""
+    from ..gpu.array_image import ANISOTROPY_CHOICES
+    from ..gpu.swapchain import PRESENT_MODES
+    from ..render.frame_data import CULLING
+    from ..render.light_clusters import LIGHT_MODES
+    from ..render.renderer import MODES, RECORDER_NAMES
+
     common = OneLineParser(add_help=False)
     common.add_argument("--headless", action="store_true", help="render offscreen, no window (no display needed)")
     common.add_argument(
         "--frames",
         type=positive_int,
-        help="frames to run (default: until the window closes; "
-        f"headless: 1, or {HEADLESS_FALLBACK_FRAMES} when falling back from a window)",
+        help=f"frames to run (default: until the window closes; headless: {headless_frames}, "
+        f"or {HEADLESS_FALLBACK_FRAMES} when falling back from a window)",
     )
-    common.add_argument("--screenshot", metavar="PNG", help="write the last frame to this PNG (headless)")
+    common.add_argument("--screenshot", metavar="PNG", help="write the last frame to this PNG file")
     common.add_argument("--width", type=dimension, default=1280)
     common.add_argument("--height", type=dimension, default=720)
     common.add_argument(
@@ -99,7 +117,8 @@ def render_flags() -> OneLineParser:
         choices=RECORDER_NAMES,
         help="native: numba loop without the GIL (default when numba is installed); python: the binding",
     )
-    common.add_argument(
+    culling = common.add_mutually_exclusive_group()  # --culling X --no-culling: which one was meant?
+    culling.add_argument(
         "--culling",
         choices=CULLING,
         default="frustum",
@@ -108,7 +127,7 @@ def render_flags() -> OneLineParser:
         "indirect only, the frustum and then what last frame's visible rows hide and what covers no pixel, on the "
         "GPU (two-phase, a depth pyramid; the image is frustum culling's); none: draw everything",
     )
-    common.add_argument(
+    culling.add_argument(
         "--no-culling", dest="culling", action="store_const", const="none", help="draw everything (--culling none)"
     )
     common.add_argument(
@@ -194,6 +213,12 @@ def render_flags() -> OneLineParser:
         help="replay input by frame (keys, buttons, pad axes, mouse, scroll) from this file (app/input_script.py)",
     )
     common.add_argument("--record-input", metavar="PATH", help="write the run's input by frame to this file")
+    common.add_argument(
+        "--force",
+        action="store_true",
+        help="let --screenshot, --perf-json and --record-input replace a file of another kind (a PNG, a perf "
+        "log and an input script are replaced without it)",
+    )
     common.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show tracebacks")
     return common
 
@@ -202,8 +227,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog="ecs-engine", description=__doc__)
     parser.add_argument("--debug", action="store_true", help="show tracebacks")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
-    common = render_flags()
-    demo = sub.add_parser("demo", help="run a demo scene", parents=[common])
+    demo = sub.add_parser("demo", help="run a demo scene", parents=[render_flags(HEADLESS_FRAMES["demo"])])
     demo.add_argument(
         "scene",
         nargs="?",
@@ -220,7 +244,11 @@ def build_parser() -> argparse.ArgumentParser:
         nargs="?",
         help="model file for the model scene (OBJ, glTF/GLB, PLY, STL); sky image for the environment scene",
     )
-    editor = sub.add_parser("editor", help="the ImGui editor and Perf window on demo scenes", parents=[common])
+    editor = sub.add_parser(
+        "editor",
+        help="the ImGui editor and Perf window on demo scenes",
+        parents=[render_flags(HEADLESS_FRAMES["editor"])],
+    )
     editor.add_argument(
         "scenes",
         nargs="*",
@@ -231,7 +259,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     from .play import add_parser as add_play_parser
 
-    add_play_parser(sub, common, positive_int)
+    add_play_parser(sub, render_flags(HEADLESS_FRAMES["play"]), positive_int, non_negative_int)
     # Every argument goes to the benchmark runner, --help first included: REMAINDER skips a leading
     # option, so this parser has a prefix no argument can start with ("\0") and sees none.
     bench = sub.add_parser(
@@ -245,6 +273,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
+    from .settings import check_entities, check_threads
+
     if args.command == "demo":
         if args.scene == "motion":
             from ..demos import motion
@@ -258,7 +288,7 @@ def run(args: argparse.Namespace) -> int:
         from .play import run_play
 
         check_flags_apply(args, (args.game,), False)
-        return run_play(args, HEADLESS_FALLBACK_FRAMES)
+        return run_play(args, HEADLESS_FALLBACK_FRAMES, HEADLESS_FRAMES["play"])
     if args.command == "bench":
         from ..bench.__main__ import main as bench_main
 
@@ -288,7 +318,10 @@ def refuse_unused(args: argparse.Namespace, used: tuple[str, ...], why: str) -> 
 
 
 def check_flags_apply(args: argparse.Namespace, scenes: tuple[str, ...], editor: bool) -> None:
-    """Refuse a flag that would change nothing in this run, instead of ignoring it."""
+    """Refuse a flag that would change nothing in this run, instead of ignoring it (the editor
+    may switch to what makes --recorder and --no-shadow-denoise count later)."""
+    from ..render.renderer import PATHS
+
     if args.entities is not None and "scaling" not in scenes:
         raise UsageError(f"--entities sizes the scaling and motion scenes; {', '.join(scenes)} has fixed content")
     if args.lights is not None and "lights" not in scenes:
@@ -299,10 +332,13 @@ def check_flags_apply(args: argparse.Namespace, scenes: tuple[str, ...], editor:
         raise UsageError("--present chooses a window's present mode; a --headless run has no window")
     if args.recorder is not None and not editor and not PATHS[args.mode].uses_recorder:
         raise UsageError(f"--recorder does not apply to --mode {args.mode}: the GPU writes its draws")
+    if not args.shadow_denoise and not editor and args.shadow_method != "raytraced":
+        raise UsageError("--no-shadow-denoise applies to --shadows raytraced; shadow maps have no denoiser")
 
 
 def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = None) -> int:
     from .loop import run
+    from .output_files import check_run_files
     from .report import report_validation
     from .settings import RunOptions
 
@@ -323,6 +359,7 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
     if not args.headless:
         from .window import WindowSource, open_glfw
 
+        check_run_files(options)  # before a window opens
         glfw = open_glfw()
         if glfw is not None:
             return report_validation(run(options, WindowSource(glfw)))
@@ -332,38 +369,36 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
             frames=args.frames or HEADLESS_FALLBACK_FRAMES,
             screenshot=options.screenshot or f"{args.scene}.png",
         )
+        check_run_files(options)  # the screenshot's default too, before the message says where it goes
         shot = Path(options.screenshot or "").resolve()
         saved = f"last frame saved to {shot}" + (" (replacing the file there)" if shot.exists() else "")
-        if editor:
-            # the editor needs a window to be used; without one, the scene and its text overlay
-            options = replace(options, editor=False)
-            print(
-                f"no display found: the editor needs a window, so {args.scene} runs headless for "
-                f"{options.frames} frames with the text perf overlay ({saved})"
-            )
-        else:
-            print(f"no display found: rendering {options.frames} frames headless instead ({saved})")
-    result = run(options)
-    if options.screenshot:
-        print(f"wrote {options.screenshot}")
-    return report_validation(result)
+        what = "the editor and its scene" if editor else "the scene"
+        print(f"no display found: drawing {what} headless for {options.frames} frames instead ({saved})")
+    return report_validation(run(options))
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    return run_command("ecs-engine", lambda: parse_and_run(argv))
+
+
+def parse_and_run(argv: Sequence[str] | None) -> int:
+    args = build_parser().parse_args(argv)
     try:
         return run(args)
+    except (KeyboardInterrupt, BrokenPipeError):
+        if args.debug:
+            traceback.print_exc()
+        raise  # run_command: one line, or quiet
     except (UsageError, EcsError, ValueError, OSError) as exc:
         if args.debug:
-            raise
+            traceback.print_exc()
         print(f"ecs-engine: error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        return 130
     except Exception as exc:
         if args.debug:
-            raise
+            traceback.print_exc()
+            print(f"ecs-engine: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
+            return 1
         print(
             f"ecs-engine: internal error: {type(exc).__name__}: {exc} (run with --debug for the traceback)",
             file=sys.stderr,

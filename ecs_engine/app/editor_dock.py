@@ -3,14 +3,16 @@ scene (the renderer draws the view for that rectangle: `region`), with the panel
 scene settings down the left, the inspector down the right, and under the scene the entity
 browser and the hierarchy (tabs) beside the Perf window. The user may rearrange them; ImGui keeps the layout in
 `editor.ini` in the user's config folder (XDG_CONFIG_HOME, else ~/.config, then `ecs_engine/`),
-so it is the same next run. The default layout is built only when that file has none.
+so it is the same next run. The default layout is built only when that file has none. A headless
+editor always has the default layout and leaves the file alone.
 """
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Any
+
+from ..user_dirs import config_home
 
 LEFT = ("Scene and render",)
 RIGHT = ("Inspector",)
@@ -22,10 +24,7 @@ DOCKSPACE = "editor dock space"
 
 def config_dir() -> Path:
     """The user's config folder for the engine (created when first written)."""
-    base = os.environ.get("XDG_CONFIG_HOME", "")
-    if not os.path.isabs(base):  # unset, empty or relative: the XDG spec says to ignore it
-        base = str(Path.home() / ".config")
-    return Path(base) / "ecs_engine"
+    return config_home() / "ecs_engine"
 
 
 def layout_file() -> Path:
@@ -40,7 +39,10 @@ class DockLayout:
         io = imgui.get_io()
         io.config_flags |= imgui.ConfigFlags_.docking_enable.value
         self.path: Path | None = None
-        if persist:
+        # Only a window's editor keeps the user's layout (ImGui's GLFW backend, set up before
+        # the editor, names itself): a headless one neither reads nor writes editor.ini, so its
+        # image is the default layout on every machine and the user's file stays as they left it.
+        if persist and io.backend_platform_name:
             self.path = layout_file()
             try:
                 self.path.parent.mkdir(parents=True, exist_ok=True)

@@ -20,7 +20,8 @@ from .editor_session import EditorSession
 from .imgui_session import ImGuiSession
 from .input_script import InputRecorder, read_script
 from .offscreen import OffscreenSource
-from .perf import PerfMonitor, check_writable
+from .output_files import check_run_files
+from .perf import PerfMonitor
 from .report import RunResult, describe_device, save_png, summary_line
 from .session import FrameSource, Session
 from .settings import RunOptions
@@ -33,21 +34,24 @@ def run(
     max_ui_hz: float | None = 120.0,
     make_session: Callable[[RunOptions, FrameSource], Session] = Session,
     ui: Callable[[Session, Any], ImGuiSession] | None = None,
+    summary: Callable[[Session], str] | None = None,
 ) -> RunResult:
     """Open the source, run `options.frames` frames (a window: until it closes), close it.
     Headless by default; pass a window.WindowSource to draw in a window. `make_session` makes
     the session (a game's, play.py); `ui(session, window)` its ImGui (the editor's by default
-    when options.editor is set)."""
+    when options.editor is set); `summary(session)` the line said when the frames are done (a
+    game's score), before the files are written, so a failed write or Ctrl-C does not lose it.
+
+    Stopped from outside (Ctrl-C, stdout's reader gone), the run writes the perf log and the
+    input recording of the frames it ran (no screenshot: the last frame was not read back),
+    then the KeyboardInterrupt or BrokenPipeError goes on to the caller."""
     say = log or (lambda text: None if options.quiet else print(text))
     source = source or OffscreenSource()
-    if options.screenshot is not None:
-        check_writable(options.screenshot, "the screenshot")  # now, not after the whole run
+    check_run_files(options)  # now, not after the whole run
     script = read_script(options.input_script) if options.input_script else None  # before a window opens
-    if options.record_input is not None:
-        check_writable(options.record_input, "the input recording")
     recorder = InputRecorder(options.record_input) if options.record_input else None
     result = RunResult()
-    perf = result.perf = PerfMonitor(log=options.perf_json or False)  # checks its path too
+    result.perf = PerfMonitor(log=options.perf_json or False)  # checks its path too
     session: Session | None = None
     editor: ImGuiSession | None = None
     try:
@@ -60,64 +64,26 @@ def run(
         say(f"{source.describe(session)} on {result.device}")
         start = time.perf_counter()
         frames = 0
-        while source.running(frames):
-            session.renderer.ensure_output()  # HDR colour or not, as settings and materials need
-            target = source.begin(session, frames)  # events, resize, acquire: not the frame's CPU work
-            if target is None:
-                continue
-            t0 = time.perf_counter()
-            if editor is not None and source.input is not None:
-                source.input.keyboard_captured_by_ui = editor.wants_keyboard  # keys typed into the UI
-                source.input.mouse_captured_by_ui = editor.wants_mouse  # over a UI window, or dragging one
-            if script is not None or recorder is not None:
-                keys = held_keys(session)
-                if source.window is None:  # headless: a script's mouse is in the offscreen image's pixels
-                    keys.viewport = (float(options.width), float(options.height))
-                if script is not None:
-                    script.apply(frames, keys)
-                if recorder is not None:
-                    recorder.frame(frames, keys)
-            session.schedule.run_frame(session.world, target.dt, source.clock, max_frame_dt=source.max_frame_dt)
-            held = session.world.resources.get(InputState)
-            if held is not None:
-                held.end_frame()  # the systems saw this frame's presses and releases
-            if editor is not None:
-                width, height = target.extent or (options.width, options.height)
-                editor.build(session.world, result.last_stats, perf, target.dt, width, height)
-            stats = session.renderer.render(
-                session.world,
-                readback=target.readback,
-                framebuffer=target.framebuffer,
-                extent=target.extent,
-                wait=target.wait,
-                signal=target.signal,
-                dt=target.dt,
-            )
-            end = time.perf_counter()
-            # CPU work: not the waits for the GPU (renderer); the wait for an image came before t0
-            result.add_frame(
-                stats,
-                (end - t0) * 1e3 - stats.wait_ms,
-                end,
-                target.waited_ms,
-                ui_ms=editor.cost_ms if editor is not None else None,
-            )
-            source.end(session, target)
-            frames += 1
-            if perf.summary_due():
-                say(perf.summary_line())
-            if editor is not None and source.running(frames):
-                apply_requests(session, editor)
+        stopped: BaseException | None = None
+        try:
+            frames = run_frames(options, source, session, editor, script, recorder, result, say)
+        except (KeyboardInterrupt, BrokenPipeError) as exc:
+            stopped, frames = exc, len(result.cpu_ms)
         session.device.wait_idle()
         result.frames = frames
         result.wall_s = time.perf_counter() - start
         result.settings = session.settings
         result.recreations = source.recreations
         result.minimised_waits = source.minimised_waits
+        if stopped is not None:
+            keep_what_ran(options, result, recorder, summary, session, say)
+            raise stopped
         if options.screenshot is not None:
             result.pixels = source.pixels()
         if frames:
             say(summary_line(result, frames, result.wall_s, final=True))
+        if summary is not None:
+            say(summary(session))
         write_outputs(options, result, say)
         if recorder is not None:
             recorder.write()
@@ -128,6 +94,91 @@ def run(
             session.close()  # a Session that failed half-built has closed its source already
         result.validation_messages = source.validation_messages()
     return result
+
+
+def run_frames(
+    options: RunOptions,
+    source: FrameSource,
+    session: Session,
+    editor: ImGuiSession | None,
+    script: Any,
+    recorder: InputRecorder | None,
+    result: RunResult,
+    say: Callable[[str], None],
+) -> int:
+    """The frames, until the source stops; how many ran."""
+    perf = result.perf
+    frames = 0
+    while source.running(frames):
+        session.renderer.ensure_output()  # HDR colour or not, as settings and materials need
+        target = source.begin(session, frames)  # events, resize, acquire: not the frame's CPU work
+        if target is None:
+            continue
+        t0 = time.perf_counter()
+        if editor is not None and source.input is not None:
+            source.input.keyboard_captured_by_ui = editor.wants_keyboard  # keys typed into the UI
+            source.input.mouse_captured_by_ui = editor.wants_mouse  # over a UI window, or dragging one
+        if script is not None or recorder is not None:
+            keys = held_keys(session)
+            if source.window is None:  # headless: a script's mouse is in the offscreen image's pixels
+                keys.viewport = (float(options.width), float(options.height))
+            if script is not None:
+                script.apply(frames, keys)
+            if recorder is not None:
+                recorder.frame(frames, keys)
+        session.schedule.run_frame(session.world, target.dt, source.clock, max_frame_dt=source.max_frame_dt)
+        held = session.world.resources.get(InputState)
+        if held is not None:
+            held.end_frame()  # the systems saw this frame's presses and releases
+        if editor is not None:
+            width, height = target.extent or (options.width, options.height)
+            editor.build(session.world, result.last_stats, perf, target.dt, width, height)
+        stats = session.renderer.render(
+            session.world,
+            readback=target.readback,
+            framebuffer=target.framebuffer,
+            extent=target.extent,
+            wait=target.wait,
+            signal=target.signal,
+            dt=target.dt,
+        )
+        end = time.perf_counter()
+        # CPU work: not the waits for the GPU (renderer); the wait for an image came before t0
+        result.add_frame(
+            stats,
+            (end - t0) * 1e3 - stats.wait_ms,
+            end,
+            target.waited_ms,
+            ui_ms=editor.cost_ms if editor is not None else None,
+        )
+        source.end(session, target)
+        frames += 1
+        if perf.summary_due():
+            say(perf.summary_line())
+        if editor is not None and source.running(frames):
+            apply_requests(session, editor)
+    return frames
+
+
+def keep_what_ran(
+    options: RunOptions,
+    result: RunResult,
+    recorder: InputRecorder | None,
+    summary: Callable[[Session], str] | None,
+    session: Session,
+    say: Callable[[str], None],
+) -> None:
+    """A run stopped early: its summary, perf log and input recording as far as it got."""
+    try:
+        if result.frames:
+            say(summary_line(result, result.frames, result.wall_s, final=True))
+        if summary is not None:
+            say(summary(session))
+    except BrokenPipeError:  # nobody reads stdout any more: the files still matter
+        say = lambda text: None
+    result.write_perf_json(options, say)
+    if recorder is not None:
+        recorder.write()
 
 
 def held_keys(session: Session) -> Any:
@@ -167,3 +218,4 @@ def write_outputs(options: RunOptions, result: RunResult, say: Callable[[str], N
 def _screenshot(options: RunOptions, result: RunResult, say: Callable[[str], None]) -> None:
     if options.screenshot is not None and result.pixels is not None:
         save_png(result.pixels, options.screenshot)
+        say(f"wrote {options.screenshot}")

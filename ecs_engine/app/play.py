@@ -1,9 +1,10 @@
 """`ecs-engine play GAME`: a game from demos/ in a window (or headless), with its HUD.
 
-A game module provides `build(world, add_mesh, path, seed=, autoplay=, level=)`,
-`ACTIONS` (its actions' default bindings), `controls()` (the system turning actions into the
-game's controls), `schedule(autoplay, controls)` (its systems), `draw_hud(imgui, world)` and
-`summary(world)` (the line printed at the end). The run is the engine's one loop (loop.py) with a
+A game module provides `build(world, add_mesh, path, seed=, autoplay=, level=)`, `LEVELS`
+(how many levels there are: --level goes from 1 to it), `ACTIONS` (its actions' default
+bindings), `controls()` (the system turning actions into the game's controls),
+`schedule(autoplay, controls)` (its systems), `draw_hud(imgui, world)` and `summary(world)` (the
+line printed at the end, before the run's files are written). The run is the engine's one loop (loop.py) with a
 `GameSession` (the game's world and schedule instead of a demo scene's) and a `GameUI` (the HUD
 on the ImGui session). Keys, mouse and gamepads reach the game through the InputState resource
 and the ActionMap resource (the game's ACTIONS with the user's `input-<game>.json` over them,
@@ -29,7 +30,6 @@ from .session import FrameSource, Session
 from .settings import RunOptions
 
 GAMES = {"asteroids": "ecs_engine.demos.asteroids"}
-HEADLESS_FRAMES = 600
 
 
 def game_module(name: str) -> Any:
@@ -69,19 +69,25 @@ class GameUI(ImGuiSession):
         self.rects = self.module.draw_hud(self.imgui, world)
 
 
-def add_parser(sub: Any, common: argparse.ArgumentParser, positive_int: Any) -> None:
+def add_parser(sub: Any, common: argparse.ArgumentParser, positive_int: Any, non_negative_int: Any) -> None:
     play = sub.add_parser("play", help="play a game written as systems (asteroids)", parents=[common])
     play.add_argument("game", choices=tuple(GAMES), help="the game")
     play.add_argument("--autoplay", action="store_true", help="a bot plays (reproducible with --seed)")
-    play.add_argument("--seed", type=int, default=1, help="the game's random seed (default 1)")
-    play.add_argument("--level", type=positive_int, default=1, help="the level to start at (6: 100,000 asteroids)")
+    play.add_argument("--seed", type=non_negative_int, default=1, help="the game's random seed, 0 or more (default 1)")
+    play.add_argument(
+        "--level", type=positive_int, default=1, help="the level to start at (asteroids: 1 to 6, 6: 100,000 asteroids)"
+    )
 
 
-def run_play(args: argparse.Namespace, fallback_frames: int) -> int:
+def run_play(args: argparse.Namespace, fallback_frames: int, headless_frames: int) -> int:
+    """`fallback_frames`: a run that wanted a window and found no display; `headless_frames`:
+    a --headless run without --frames."""
     from .loop import run
     from .report import report_validation
 
     module = game_module(args.game)
+    if args.level > module.LEVELS:
+        raise UsageError(f"--level {args.level}: {args.game} has levels 1 to {module.LEVELS}")
     holder: list[GameSession] = []
 
     def make(options: RunOptions, source: FrameSource) -> Session:
@@ -95,8 +101,10 @@ def run_play(args: argparse.Namespace, fallback_frames: int) -> int:
     options = RunOptions.from_flags(args, scene="cube")  # the scene is unused: the game builds the world
     source = None
     if not args.headless:
+        from .output_files import check_run_files
         from .window import WindowSource, open_glfw
 
+        check_run_files(options)  # before a window opens
         glfw = open_glfw()
         if glfw is not None:
             source = WindowSource(glfw)
@@ -104,10 +112,7 @@ def run_play(args: argparse.Namespace, fallback_frames: int) -> int:
             options = replace(options, headless=True, frames=args.frames or fallback_frames)
             print(f"no display found: playing {options.frames} frames headless instead")
     elif options.frames is None:
-        options = replace(options, frames=HEADLESS_FRAMES)
-    result = run(options, source, make_session=make, ui=ui)
-    if holder:
-        print(module.summary(holder[-1].world))
-    if options.screenshot:
-        print(f"wrote {options.screenshot}")
+        options = replace(options, frames=headless_frames)
+    # the score and world hash are said before the files are written: a failed write keeps them
+    result = run(options, source, make_session=make, ui=ui, summary=lambda session: module.summary(session.world))
     return report_validation(result)

@@ -18,6 +18,7 @@ from ..ecs.scene_file import load_world
 from ..ecs.schedule import Schedule
 from ..ecs.timestep import FixedTimestep
 from ..ecs.world import World
+from ..errors import UsageError
 from ..gpu.device import Device
 from ..gpu.instance import Instance
 from ..jobs import JobPool
@@ -176,7 +177,10 @@ class Session:
         world.resources[JobPool] = self.pool
         if is_scene_file(scene):
             load_world(scene, world, resources=scene_codecs(self.gpu.meshes))
-            active_camera(world)  # a scene without one is refused here, not at the first frame
+            try:
+                active_camera(world)  # a scene without one is refused here, not at the first frame
+            except UsageError as exc:
+                raise UsageError(f"scene file {scene}: {exc}") from None
         else:
             build = scene_builder(scene, self.options.entities, self.options.lights, self.options.shadows)
             build(world, self.gpu.meshes.add, path)

@@ -83,6 +83,7 @@ class RunOptions:
     perf_json: str | None = None  # write every frame's perf samples here at the end
     input_script: str | None = None  # input by frame to replay (app/input_script.py)
     record_input: str | None = None  # write the run's input by frame here at the end
+    force: bool = False  # the outputs may replace a file of another kind (app/output_files.py)
     editor: bool = False  # the ImGui editor and Perf window (headless: drawn into the image)
     scenes: tuple[str, ...] = SEED_SCENES  # the editor's scene switcher
 
@@ -113,6 +114,7 @@ class RunOptions:
         "perf_json",
         "input_script",
         "record_input",
+        "force",
     )
 
     @classmethod

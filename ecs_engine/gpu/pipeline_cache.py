@@ -1,4 +1,4 @@
-"""The device's VkPipelineCache, loaded from and saved to ~/.cache/ecs_engine.
+"""The device's VkPipelineCache, loaded from and saved to ~/.cache/ecs_engine (user_dirs.cache_home).
 
 One per device (Device.pipeline_cache), shared by every pipeline made on it: two caches on one
 file would each save what they saw, and the last one destroyed would overwrite the other's.
@@ -7,8 +7,9 @@ file would each save what they saw, and the last one destroyed would overwrite t
 from __future__ import annotations
 
 import os
-from pathlib import Path
 from typing import Any
+
+from ..user_dirs import cache_home
 
 
 class PipelineCache:
@@ -18,7 +19,7 @@ class PipelineCache:
     def __init__(self, vk: Any, device_handle: Any, info: Any) -> None:
         self.vk = vk
         self.device_handle = device_handle
-        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "ecs_engine"
+        base = cache_home() / "ecs_engine"
         self.path = base / f"pipelines-{info.vendor_id:04x}-{info.device_id:04x}-{info.driver_version:08x}.bin"
         data = b""
         try:
