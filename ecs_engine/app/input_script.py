@@ -37,6 +37,7 @@ from pathlib import Path
 
 from ..errors import UsageError
 from ..systems.input_state import InputState
+from ..user_files import INPUT_SCRIPT, UserFileError, read_user_file
 
 # action -> the words after it
 ACTIONS = {"down": ("KEY",), "up": ("KEY",), "axis": ("AXIS", "VALUE"), "move": ("X", "Y"), "scroll": ("DX", "DY")}
@@ -87,7 +88,9 @@ def _check_event(action: str, args: list[str]) -> None:
 def read_script(path: str | os.PathLike[str]) -> InputScript:
     file = Path(path)
     try:
-        text = file.read_text(encoding="utf-8")
+        text = read_user_file(file, INPUT_SCRIPT).decode("utf-8")
+    except UserFileError as exc:  # a FIFO, a device, or too large
+        raise UsageError(f"input script {file}: {exc.why}") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise UsageError(f"input script {file}: cannot be read ({exc})") from None
     script, last = InputScript(), -1

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import importlib.resources
 import io
-import json
 import os
 from pathlib import Path
 from typing import Any, Final
@@ -13,7 +12,10 @@ from typing import Any, Final
 import numpy as np
 
 from ..errors import UsageError
+from ..user_files import MODEL, UserFileError, read_user_file
+from ..user_json import parse_json
 from .mesh_data import MeshData
+from .named_files import NamedFiles
 
 __all__ = ["DEFAULT_MODEL", "SUPPORTED_FORMATS", "Part", "assemble", "load_mesh", "read_parts"]
 
@@ -50,7 +52,9 @@ def read_parts(
     file = Path(path)
     fmt = _check_path(file)
     try:
-        data = file.read_bytes()
+        data = read_user_file(file, MODEL)
+    except UserFileError as exc:
+        raise UsageError(str(exc)) from None
     except OSError as exc:
         raise UsageError(f"{file}: cannot read the file: {exc.strerror or exc}") from None
     if not data.strip():
@@ -72,8 +76,6 @@ def _check_path(file: Path) -> str:
     """Reject what cannot be a mesh file before reading it; return the format name."""
     if not file.exists():
         raise UsageError(f"{file}: no such file")
-    if file.is_dir():
-        raise UsageError(f"{file}: is a directory, not a mesh file")
     fmt = SUPPORTED_FORMATS.get(file.suffix.lower())
     if fmt is None:
         what = f"format '{file.suffix}'" if file.suffix else "file type (no extension)"
@@ -94,9 +96,9 @@ def _sniff(file: Path, fmt: str, data: bytes) -> None:
             raise UsageError(f"{file}: not a valid STL file (neither binary STL nor ASCII 'solid ...' text)")
     elif fmt == "glTF":
         try:
-            json.loads(data)
+            parse_json(data)
         except ValueError as exc:
-            raise UsageError(f"{file}: not a valid glTF file (not JSON: {exc})") from None
+            raise UsageError(f"{file}: not a valid glTF file ({exc})") from None
 
 
 def _check_obj_faces(file: Path, text: str) -> None:
@@ -153,7 +155,7 @@ def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[Part], list[obj
             io.BytesIO(data),
             file_type=fmt.lower(),
             process=False,
-            resolver=trimesh.resolvers.FilePathResolver(str(file)),
+            resolver=NamedFiles(file),
         )
         parts: list[Part] = []
         materials: list[object | None] = []
@@ -176,6 +178,8 @@ def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[Part], list[obj
             materials.append(getattr(getattr(geometry, "visual", None), "material", None))
     except UsageError:
         raise
+    except UserFileError as exc:  # a glTF's buffer that is a device, a FIFO, or too large
+        raise UsageError(str(exc)) from None
     except FileNotFoundError as exc:  # a glTF's buffer or image file is not next to it
         raise UsageError(f"{file}: refers to a file that is missing: {exc.filename or exc}") from None
     except Exception as exc:
