@@ -19,6 +19,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Final
@@ -185,8 +186,10 @@ def read_image(file: Path, max_pixels: int = MAX_TEXTURE_PIXELS) -> np.ndarray:
         raise ImageError(exc.why) from None
     except UnidentifiedImageError:
         raise ImageError("not an image Pillow can read") from None
-    except (Image.DecompressionBombError, Image.DecompressionBombWarning):  # over Pillow's own limit
-        raise ImageError(f"larger than an image may be (at most {max_pixels:,} pixels)") from None
+    except (Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:  # Pillow's limit, met first
+        claimed = re.search(r"\((\d+) pixels\)", str(exc))
+        size = f"{int(claimed[1]):,} pixels" if claimed else "it"
+        raise ImageError(f"{size} is larger than an image may be (at most {max_pixels:,} pixels)") from None
     except (OSError, ValueError, SyntaxError) as exc:  # truncated or corrupt data
         raise ImageError(f"cannot be decoded ({exc})") from None
 
