@@ -101,6 +101,30 @@ def _sniff(file: Path, fmt: str, data: bytes) -> None:
             raise UsageError(f"{file}: not a valid glTF file ({exc})") from None
 
 
+# OBJ lines of numbers: how many each may have (a vertex may carry a colour after x y z)
+_OBJ_NUMBERS: Final = {"v": (3, 4, 6, 7), "vn": (3,), "vt": (1, 2, 3)}
+_OBJ_WHAT: Final = {
+    "v": "a vertex needs 3 numbers (x y z; 4 with w, 6 or 7 with a colour)",
+    "vn": "a normal needs 3 numbers",
+    "vt": "a texture coordinate needs 1 to 3 numbers",
+}
+
+
+def _check_obj_numbers(file: Path, line_no: int, tokens: list[str]) -> None:
+    """A `v`, `vn` or `vt` line with too few or too many numbers, or a word that is no number:
+    trimesh reads the numbers of all such lines as one array, so one short line shifts every
+    vertex after it (an error far from the cause, or a wrong mesh)."""
+    key, numbers = tokens[0], tokens[1:]
+    allowed = _OBJ_NUMBERS[key]
+    if len(numbers) not in allowed:
+        raise UsageError(f"{file}: line {line_no}: {_OBJ_WHAT[key]}, got {len(numbers)}")
+    for word in numbers:
+        try:
+            float(word)
+        except ValueError:
+            raise UsageError(f"{file}: line {line_no}: {word[:40]!r} is not a number") from None
+
+
 def _check_obj_faces(file: Path, text: str) -> None:
     """Check every OBJ face index: trimesh crashes on indices past the end and silently wraps 0 and
     too-negative ones to other vertices, so the user would get a traceback or a wrong mesh."""
@@ -111,6 +135,8 @@ def _check_obj_faces(file: Path, text: str) -> None:
         tokens = line.split()
         if not tokens:
             continue
+        if tokens[0] in _OBJ_NUMBERS:
+            _check_obj_numbers(file, line_no, line.split("#", 1)[0].split())
         if tokens[0] == "v":
             vertices += 1
         elif tokens[0] == "f":
@@ -151,12 +177,13 @@ def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[Part], list[obj
     try:
         import trimesh
 
-        scene = trimesh.load_scene(
-            io.BytesIO(data),
-            file_type=fmt.lower(),
-            process=False,
-            resolver=NamedFiles(file),
-        )
+        with np.errstate(all="ignore"):  # NaNs in the file warn inside trimesh; _check_values names them
+            scene = trimesh.load_scene(
+                io.BytesIO(data),
+                file_type=fmt.lower(),
+                process=False,
+                resolver=NamedFiles(file),
+            )
         parts: list[Part] = []
         materials: list[object | None] = []
         non_mesh = 0
@@ -168,6 +195,7 @@ def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[Part], list[obj
                 continue
             # trimesh keeps normals read from the file in its cache; asking `vertex_normals` would compute them.
             normals = geometry._cache["vertex_normals"] if "vertex_normals" in geometry._cache else None
+            _check_shapes(file, fmt, geometry.vertices, geometry.faces, normals)
             positions, faces, normals = _transformed(
                 np.array(geometry.vertices, np.float64),
                 np.array(geometry.faces, np.int64).reshape(-1, 3),
@@ -186,6 +214,18 @@ def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[Part], list[obj
         reason = (str(exc).strip().splitlines() or [""])[0] or type(exc).__name__
         raise UsageError(f"{file}: not a valid {fmt} file ({reason})") from None
     return parts, materials, non_mesh > 0 and not any(len(f) for _, f, _, _ in parts)
+
+
+def _check_shapes(file: Path, fmt: str, vertices: Any, faces: Any, normals: Any) -> None:
+    """What trimesh read from a broken file can have any shape: refuse it before NumPy's own
+    errors (an AxisError that names no file) or a wrong mesh."""
+    v, f = np.shape(vertices), np.shape(faces)
+    if len(v) != 2 or v[1] != 3:
+        raise UsageError(f"{file}: not a valid {fmt} file (its vertices read as an array of shape {v}, not N x 3)")
+    if len(f) != 2 or f[1] != 3 or not np.issubdtype(np.asarray(faces).dtype, np.integer):
+        raise UsageError(f"{file}: not a valid {fmt} file (its faces read as an array of shape {f}, not N x 3)")
+    if normals is not None and np.shape(normals) != v:
+        raise UsageError(f"{file}: not a valid {fmt} file ({np.shape(normals)[0]} normals for {v[0]} vertices)")
 
 
 def _uvs(geometry: object, count: int) -> np.ndarray | None:

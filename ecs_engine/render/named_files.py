@@ -41,7 +41,8 @@ class NamedFiles(trimesh.resolvers.Resolver):
         candidates = [self.folder / name, self.folder / os.path.basename(name.replace("\\", "/"))]
         path = next((p for p in candidates if os.path.lexists(p)), None)
         if path is None:
-            raise FileNotFoundError(2, "no such file", name)  # as the model names it
+            shown = name if len(name) <= 120 else name[:100] + "..."  # a broken data: URI can be megabytes
+            raise FileNotFoundError(2, "no such file", shown)  # as the model names it
         return read_user_file(path, kind_of(name), named_by=str(self.model))
 
     def __getitem__(self, name: str) -> bytes:
