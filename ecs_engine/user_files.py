@@ -81,6 +81,10 @@ def _what(mode: int) -> str:
     return "not a regular file"
 
 
+def _a(name: str) -> str:
+    return f"{'an' if name[0] in 'aeiou' else 'a'} {name}"
+
+
 def _size(n: int) -> str:
     return f"{n / MiB:.1f} MiB" if n >= MiB else f"{n} bytes"
 
@@ -88,11 +92,11 @@ def _size(n: int) -> str:
 def _refuse(path: str | os.PathLike[str], mode: int, kind: FileKind, named_by: str | None) -> UserFileError:
     target = os.path.realpath(path)
     link = f" (a link to {target})" if target != os.path.abspath(path) else ""
-    return UserFileError(path, f"is {_what(mode)}{link}, not a regular file; a {kind.name} must be one", named_by)
+    return UserFileError(path, f"is {_what(mode)}{link}, not a regular file; {_a(kind.name)} must be one", named_by)
 
 
 def _too_large(path: str | os.PathLike[str], size: int, kind: FileKind, named_by: str | None) -> UserFileError:
-    why = f"is {_size(size)}, more than the {_size(kind.limit)} a {kind.name} may have"
+    why = f"is {_size(size)}, more than the {_size(kind.limit)} {_a(kind.name)} may have"
     return UserFileError(path, why, named_by)
 
 

@@ -158,6 +158,7 @@ def test_textures_and_environment_maps_that_are_devices(tmp_path, caplog):
 # ------------------------------------------------------------------------------ scene files
 def scene_naming(tmp_path, texture_file=None, environment=None):
     """A scene file whose texture (by reference) or environment names the given path."""
+    import ecs_engine.render.scene_assets  # noqa: F401 - registers the materials and environment codecs
     from ecs_engine.components.environment import Environment
     from ecs_engine.render.materials import Material, materials
     from ecs_engine.render.textures import Texture
