@@ -51,7 +51,7 @@ MODEL: Final = FileKind("model file", 1024 * MiB)  # OBJ, glTF and its buffers, 
 MATERIAL_LIBRARY: Final = FileKind("material library", 16 * MiB)  # .mtl text
 IMAGE: Final = FileKind("image", 512 * MiB)  # textures and environment maps (an 8k .hdr is ~100 MiB)
 SCENE: Final = FileKind("scene file", 64 << 30)  # read member by member, each checked (scene_file.py)
-INPUT_SCRIPT: Final = FileKind("input script", 64 * MiB)
+INPUT_SCRIPT: Final = FileKind("input script", 16 * MiB)  # hours of recording; parsed, ~20x its size
 BINDINGS: Final = FileKind("bindings file", 1 * MiB)
 
 

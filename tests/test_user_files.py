@@ -214,6 +214,10 @@ def test_an_input_script_or_bindings_file_that_is_a_fifo(tmp_path, monkeypatch):
 
     with pytest.raises(UsageError, match=r"input script .*pipe\.txt: is a FIFO"):
         read_script(fifo(tmp_path / "pipe.txt"))
+    with open(tmp_path / "long.txt", "wb") as sparse:  # 17 MiB that take no disk: refused from its size
+        sparse.truncate(17 << 20)
+    with pytest.raises(UsageError, match=r"long\.txt: is 17\.0 MiB, more than the 16\.0 MiB an input script may"):
+        read_script(tmp_path / "long.txt")
     monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path))
     path = bindings_file("game")
     path.parent.mkdir(parents=True)

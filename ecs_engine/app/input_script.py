@@ -25,7 +25,8 @@ ended up if it moved, and the scroll, in this format, so replaying a recording g
 input frame by frame. Scripts of only `down` and `up` lines (the first version of the format)
 read as before. A bad script (an unknown name or action, a frame out of order, a value that is
 not a finite number, a line with the wrong number of words) is one UsageError naming the file
-and the line, before the run starts.
+and the line, before the run starts; so is a script that is not a regular file (a FIFO such as
+/dev/stdin under a pipe) or is over 16 MiB (ecs_engine/user_files.py).
 """
 
 from __future__ import annotations
