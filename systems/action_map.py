@@ -32,6 +32,8 @@ from typing import Any
 
 from ecs_engine.ecs.world import World
 from ecs_engine.errors import UsageError
+from ecs_engine.user_files import BINDINGS, UserFileError, read_user_file
+from ecs_engine.user_json import parse_json
 
 from .input_state import MOUSE_BUTTONS, InputState, gamepad_axes, input_names
 
@@ -224,12 +226,14 @@ class ActionMap:
         if not file.exists():
             return actions
         where = f"input bindings {file}"
-        try:
-            data = json.loads(file.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError) as exc:
+        try:  # only a regular file, of bounded size, nesting and numbers (user_files, user_json)
+            data = parse_json(read_user_file(file, BINDINGS))
+        except UserFileError as exc:
+            raise InputConfigError(f"{where}: {exc.why}") from None
+        except OSError as exc:
             raise InputConfigError(f"{where}: cannot be read ({exc})") from None
-        except json.JSONDecodeError as exc:
-            raise InputConfigError(f"{where}: not JSON ({exc})") from None
+        except ValueError as exc:
+            raise InputConfigError(f"{where}: {exc}") from None
         try:
             actions.apply(data)
         except ValueError as exc:
@@ -245,8 +249,9 @@ class ActionMap:
         for key in data:
             if key not in FILE_KEYS:
                 raise ValueError(f"unknown key {key!r}{_close(key, FILE_KEYS)}; keys: {', '.join(FILE_KEYS)}")
-        if data.get("version") != VERSION:
-            raise ValueError(f"version {data.get('version')!r} is not {VERSION}")
+        version = data.get("version")
+        if type(version) is not int or version != VERSION:  # true == 1 and 1.0 == 1 in Python
+            raise ValueError(f"version {repr(version)[:40]} is not {VERSION}")
         dead_zone = data.get("dead_zone")
         ok = isinstance(dead_zone, int | float) and not isinstance(dead_zone, bool) and 0.0 <= dead_zone < 1.0
         if dead_zone is not None and not (ok and math.isfinite(dead_zone)):
@@ -260,7 +265,7 @@ class ActionMap:
             if action not in self.bindings:
                 raise ValueError(f"unknown action {action!r}{_close(action, self.bindings)}")
             if not isinstance(inputs, list):
-                raise ValueError(f"action {action!r}: expected a list of bindings, got {inputs!r}")
+                raise ValueError(f"action {action!r}: expected a list of bindings, got {repr(inputs)[:80]}")
             try:
                 trial.bind(action, *inputs)
             except ValueError as exc:

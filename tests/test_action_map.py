@@ -148,7 +148,13 @@ def test_bindings_save_and_load_over_the_defaults(tmp_path):
         ('{"version": 1, "dead_zone": true}', r"dead_zone must be a number from 0"),
         ("[1, 2]", r"expected an object"),
         ('{"version": 1, "actions": {', r"not JSON \(Expecting"),
-        (b"\xff\xfe{", r"cannot be read"),
+        (b"\xff\xfe{", r"not UTF-8 text"),
+        # issue 34 #9: these ended in a RecursionError, a game that stopped, or were accepted
+        ("[" * 100000 + "]" * 100000, r"nested too deeply"),
+        ('{"version": 1, "dead_zone": 1' + "0" * 5000 + "}", r"an integer of 5001 digits"),
+        ('{"version": 1, "dead_zone": 1e999}', r"the number 1e999 is too large"),
+        ('{"version": true, "actions": {}}', r"version True is not 1"),
+        ('{"version": 1.0, "actions": {}}', r"version 1\.0 is not 1"),
     ],
 )
 def test_a_bad_bindings_file_is_one_error_naming_it(tmp_path, text, message):
@@ -174,6 +180,20 @@ def test_a_bad_user_file_is_a_warning_and_the_defaults_and_stays_as_it_was(confi
     assert path.read_text() == '{"version": 1, "actions": {"fire": ["spcae"]}}'
     path.write_text('{"version": 1, "actions": {"fire": ["f"]}}')
     assert load_bindings(DEFAULTS, "asteroids", warn=said.append).bound("fire") == ["f"] and len(said) == 1
+
+
+@pytest.mark.parametrize(
+    "text", ["[" * 100000, '{"version": 1, "dead_zone": 1' + "0" * 5000 + "}", '{"version": true, "actions": {}}']
+)
+def test_a_hostile_user_file_is_a_warning_and_the_defaults(config_home, text):
+    """The README's promise, kept for hostile files too (issue 34 #9): one warning naming the file."""
+    path = bindings_file("asteroids")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+    said: list[str] = []
+    actions = load_bindings(DEFAULTS, "asteroids", warn=said.append)
+    assert actions.bound("fire") == DEFAULTS["fire"]
+    assert len(said) == 1 and str(path) in said[0] and "playing with the default bindings" in said[0]
 
 
 def test_play_with_a_bad_bindings_file_warns_once_and_plays(config_home):

@@ -298,10 +298,11 @@ def test_missing_file_and_directory(tmp_path):
 def test_unreadable_file(tmp_path, monkeypatch):
     path = write(tmp_path / "locked.obj", TRIANGLE + "f 1 2 3\n")
 
-    def denied(self):
-        raise PermissionError(13, "Permission denied", str(self))
+    def denied(path, *args, **kwargs):
+        raise PermissionError(13, "Permission denied", str(path))
 
-    monkeypatch.setattr(Path, "read_bytes", denied)  # chmod does not stop root, who may run the tests
+    # chmod does not stop root, who may run the tests
+    monkeypatch.setattr("ecs_engine.render.mesh_loading.read_user_file", denied)
     with pytest.raises(UsageError, match=r"locked\.obj: cannot read the file: Permission denied$"):
         load_mesh(path)
 

@@ -378,7 +378,7 @@ def test_hostile_archives(tmp_path):
             load_world(bad, World())
     with zipfile.ZipFile(tmp_path / "text.scene", "w") as archive:
         archive.writestr("header.json", "{not json")
-    with pytest.raises(SceneFileError, match=r"header\.json is not JSON"):
+    with pytest.raises(SceneFileError, match=r"header\.json: not JSON"):
         load_world(tmp_path / "text.scene", World())
     data = path.read_bytes()
     at = data.index(b"tables/0/0.npy", data.index(b"PK\x01\x02")) - 46  # its central directory entry
@@ -393,6 +393,61 @@ def test_hostile_archives(tmp_path):
         (tmp_path / name).write_bytes(content)
         with pytest.raises(SceneFileError, match="unreadable"):
             load_world(tmp_path / name, World())
+
+
+def environment_doc(header):
+    return next(r for r in header["resources"] if r["name"] == "environment")["doc"]
+
+
+def material_doc(header):
+    return next(r for r in header["resources"] if r["name"] == "materials")["doc"]["materials"][-1]
+
+
+HOSTILE_JSON = {  # issue 34 #9: each loaded, or escaped as an internal error, before user_json.py
+    "version true": (lambda h: h.update(version=True), None, r"format version True; this engine reads"),
+    "version 2.0": (lambda h: h.update(version=2.0), None, r"format version 2\.0; this engine reads"),
+    "a 401-digit intensity": (
+        lambda h: environment_doc(h).update(intensity=10**400),
+        None,
+        r"header\.json: an integer of 401 digits",
+    ),
+    "a 5000-digit count": (
+        None,
+        lambda text: text.replace('"entities": ', '"entities": 1' + "0" * 5000),
+        r"an integer of 50\d\d digits",
+    ),
+    "1e999": (None, lambda text: text.replace('"intensity": 2.0', '"intensity": 1e999'), "1e999 is too large"),
+    "NaN": (None, lambda text: text.replace('"intensity": 2.0', '"intensity": NaN'), "NaN is not a number"),
+    "a size of 2**40": (lambda h: environment_doc(h).update(size=2**40), None, r"size 1099511627776: must be a pow"),
+    "true for a number": (lambda h: material_doc(h).update(metallic=True), None, r"metallic takes numbers, not True"),
+    "true in a colour": (lambda h: material_doc(h).update(emissive=[1, True, 0]), None, r"emissive takes numbers"),
+    "nested 900 deep": (
+        lambda h: environment_doc(h).update(note=json.loads("[" * 900 + "]" * 900)),
+        None,
+        r"header\.json: nested 90\d deep; at most 64",
+    ),
+    "nested 100000 deep": (None, lambda text: "[" * 100000, r"header\.json: nested too deeply"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(HOSTILE_JSON))
+def test_a_hostile_header_is_one_clear_error(tmp_path, case):
+    world, registry, _ = dressed(tmp_path)
+    path = tmp_path / "d.scene"
+    save_world(world, path, resources=scene_codecs(registry))
+    header, members = members_of(path)
+    change, change_text, message = HOSTILE_JSON[case]
+    if change is not None:
+        change(header)
+    text = json.dumps(header)
+    if change_text is not None:
+        text = change_text(text)
+    with zipfile.ZipFile(tmp_path / "bad.scene", "w") as archive:
+        archive.writestr("header.json", text)
+        for name, data in members.items():
+            archive.writestr(name, data)
+    with pytest.raises(SceneFileError, match=message):
+        load_world(tmp_path / "bad.scene", World(), resources=scene_codecs(Registry()))
 
 
 def test_bad_resources_change_nothing(tmp_path):

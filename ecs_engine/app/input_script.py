@@ -25,7 +25,8 @@ ended up if it moved, and the scroll, in this format, so replaying a recording g
 input frame by frame. Scripts of only `down` and `up` lines (the first version of the format)
 read as before. A bad script (an unknown name or action, a frame out of order, a value that is
 not a finite number, a line with the wrong number of words) is one UsageError naming the file
-and the line, before the run starts.
+and the line, before the run starts; so is a script that is not a regular file (a FIFO such as
+/dev/stdin under a pipe) or is over 16 MiB (ecs_engine/user_files.py).
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ from pathlib import Path
 
 from ..errors import UsageError
 from ..systems.input_state import InputState
+from ..user_files import INPUT_SCRIPT, UserFileError, read_user_file
 
 # action -> the words after it
 ACTIONS = {"down": ("KEY",), "up": ("KEY",), "axis": ("AXIS", "VALUE"), "move": ("X", "Y"), "scroll": ("DX", "DY")}
@@ -87,7 +89,9 @@ def _check_event(action: str, args: list[str]) -> None:
 def read_script(path: str | os.PathLike[str]) -> InputScript:
     file = Path(path)
     try:
-        text = file.read_text(encoding="utf-8")
+        text = read_user_file(file, INPUT_SCRIPT).decode("utf-8")
+    except UserFileError as exc:  # a FIFO, a device, or too large
+        raise UsageError(f"input script {file}: {exc.why}") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise UsageError(f"input script {file}: cannot be read ({exc})") from None
     script, last = InputScript(), -1

@@ -24,53 +24,48 @@ and one SceneFileError says why.
 Resources (materials, environment) and session assets (meshes) are saved by codecs plugged in
 here (ResourceCodec; render/scene_assets.py has the stock ones), so the core needs no renderer:
 a codec saves JSON plus arrays and, on load, may rewrite handle columns through lookup tables.
+Only a regular file is opened (ecs_engine/user_files.py); scene_archive.py reads and checks its
+members, each resource array's size shown to its codec (`check_array`) before it is read.
 """
 
 from __future__ import annotations
 
 import json
-import math
 import os
-import re
 import secrets
 import zipfile
 from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
-from typing import Any, Protocol, TypeVar
+from typing import Any, Protocol
 
 import numpy as np
 
+from ..user_files import SCENE, UserFileError, open_user_file
 from .errors import EcsError
+from .scene_archive import (
+    ARRAY_KEY,
+    FORMAT,
+    READS,
+    SavedResource,
+    SavedTable,
+    SceneArchive,
+    SceneFileError,
+    check,
+    fail,
+)
 from .schema import Component
 
-FORMAT = "ecs_engine.scene"
+__all__ = ["FORMAT", "READS", "VERSION", "IdMap", "ResourceCodec", "SavedResource", "SceneFileError"]
+__all__ += ["component_name", "known_components", "load", "load_world", "register_codec", "save", "save_world"]
+
 VERSION = 2
-READS = (1, 2)  # format versions this engine loads
-HEADER_LIMIT = 16 << 20  # bytes of JSON header a scene may have
-DEFLATE_RATIO = 1100  # deflate never expands more than ~1032:1; a member claiming more is a bomb
-_MEMBER = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*(/[A-Za-z0-9_][A-Za-z0-9_.-]*)*\Z")  # no "..", "/x", "C:"
-_KEY = re.compile(r"[A-Za-z0-9_]{1,64}\Z")
 
 Remaps = dict[tuple[type[Component], str], np.ndarray]
-_T = TypeVar("_T")
 try:
     _ENGINE = metadata.version("ecs_engine")
 except metadata.PackageNotFoundError:  # run from a checkout that is not installed
     _ENGINE = "unknown"
-
-
-class SceneFileError(EcsError, ValueError):
-    """A scene file that cannot be saved or loaded; the world (and any old file) is unchanged."""
-
-
-@dataclass(frozen=True)
-class SavedResource:
-    """What a codec saves: a JSON-able document and named arrays (keys [A-Za-z0-9_], no objects)."""
-
-    doc: Any
-    arrays: Mapping[str, np.ndarray] = field(default_factory=dict)
 
 
 class PreparedResource(Protocol):
@@ -99,7 +94,7 @@ _codecs: dict[str, ResourceCodec] = {}
 def register_codec(codec: ResourceCodec) -> None:
     """Make `codec` one of the defaults of save_world and load_world (a later one of the same name
     replaces it). render/scene_assets.py registers the materials and environment codecs."""
-    if not _KEY.match(codec.name):
+    if not ARRAY_KEY.match(codec.name):
         raise ValueError(f"a codec's name is 1-64 of [A-Za-z0-9_], got {codec.name!r}")
     _codecs[codec.name] = codec
 
@@ -168,7 +163,7 @@ def save_world(world: Any, path: str | os.PathLike[str], *, resources: Iterable[
         for ct in sorted(table.types, key=component_name):
             for name, f in ct.__fields__.items():
                 why = "it holds Python objects, which only pickle could store (a scene file holds NumPy columns)"
-                _check(not f.is_object, target, f"cannot save {ct.__name__}.{name}: {why}")
+                check(not f.is_object, target, f"cannot save {ct.__name__}.{name}: {why}")
                 member = f"tables/{k}/{len(columns)}.npy"
                 columns.append({"component": component_name(ct), "field": name} | _described(member, f.dtype, f.shape))
                 members.append((member, table.columns[(ct, name)][:n]))
@@ -187,7 +182,7 @@ def save_world(world: Any, path: str | os.PathLike[str], *, resources: Iterable[
         arrays = {}
         for key, array in saved.arrays.items():
             array = np.asarray(array)
-            _check(bool(_KEY.match(key)) and not array.dtype.hasobject, target, f"{codec.name}: array {key!r}")
+            check(bool(ARRAY_KEY.match(key)) and not array.dtype.hasobject, target, f"{codec.name}: array {key!r}")
             arrays[key] = _described(f"resources/{codec.name}/{key}.npy", array.dtype, array.shape)
             members.append((arrays[key]["member"], array))
         module = type(codec).__module__
@@ -236,13 +231,6 @@ def _chosen(resources: Iterable[ResourceCodec] | None) -> list[ResourceCodec]:
 
 
 # ------------------------------------------------------------------------------------ loading
-@dataclass
-class _Table:
-    types: list[type[Component]]
-    ids: np.ndarray
-    values: dict[type[Component], dict[str, np.ndarray]]
-
-
 def load_world(
     path: str | os.PathLike[str],
     world: Any,
@@ -262,31 +250,33 @@ def load_world(
         known = {component_name(ct): ct for ct in known}
     codecs = {c.name: c for c in _chosen(resources)}
     try:
-        with zipfile.ZipFile(file) as archive:
-            reader = _Reader(archive, file)
+        with open_user_file(file, SCENE) as raw, zipfile.ZipFile(raw) as archive:
+            reader = SceneArchive(archive, file, os.fstat(raw.fileno()).st_size)
             header = reader.header()
             tables = [reader.table(k, spec, known) for k, spec in enumerate(header["tables"])]
-            saved = [reader.resource(spec) for spec in header["resources"]]
+            saved = [reader.resource(spec, codecs) for spec in header["resources"]]
             reader.all_used()
     except SceneFileError:
         raise
+    except UserFileError as exc:  # a FIFO, a device, a directory
+        raise fail(file, exc.why) from None
     except (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, OSError, RuntimeError, NotImplementedError) as exc:
-        raise _fail(file, f"unreadable ({exc})") from None
+        raise fail(file, f"unreadable ({exc})") from None
     except (ValueError, TypeError, KeyError) as exc:  # a value in the file that no check above caught
-        raise _fail(file, f"malformed ({exc})") from None
+        raise fail(file, f"malformed ({exc})") from None
     if header["entities"] != sum(len(t.ids) for t in tables):
-        raise _fail(file, f"the header counts {header['entities']} entities, its tables hold another number")
+        raise fail(file, f"the header counts {header['entities']} entities, its tables hold another number")
     saved_ids = np.concatenate([t.ids for t in tables]) if tables else np.empty(0, np.int64)
     order = np.argsort(saved_ids)
     ordered = saved_ids[order]
     if len(ordered) and (ordered[0] <= 0 or (ordered[1:] == ordered[:-1]).any()):
-        raise _fail(file, "its saved entity ids are not unique positive ids")
+        raise fail(file, "its saved entity ids are not unique positive ids")
     prepared = [_prepare(file, codecs, spec, world) for spec in saved]
     remaps: Remaps = {}
     for ready in prepared:
         for key, table in ready.remaps().items():
             if key in remaps:
-                raise _fail(file, f"two resources remap {key[0].__name__}.{key[1]}")
+                raise fail(file, f"two resources remap {key[0].__name__}.{key[1]}")
             remaps[key] = np.asarray(table, np.int64)
     for k, t in enumerate(tables):
         _apply(file, k, t, remaps)
@@ -298,14 +288,14 @@ def _prepare(file: Path, codecs: dict[str, ResourceCodec], spec: tuple[str, str,
     codec = codecs.get(name)
     if codec is None:
         why = f"no codec was given for its resource {name!r} (import {module[:100]} or pass resources=)"
-        raise _fail(file, why)
+        raise fail(file, why)
     try:
         return codec.read(saved, world)
     except (ValueError, TypeError, KeyError, LookupError) as exc:
-        raise _fail(file, f"resource {name!r}: {exc}") from None
+        raise fail(file, f"resource {name!r}: {exc}") from None
 
 
-def _apply(file: Path, k: int, table: _Table, remaps: Remaps) -> None:
+def _apply(file: Path, k: int, table: SavedTable, remaps: Remaps) -> None:
     """Rewrite handle columns through the codecs' lookup tables (saved value -> target's)."""
     for (ct, name), lookup in remaps.items():
         column = table.values.get(ct, {}).get(name)
@@ -316,11 +306,13 @@ def _apply(file: Path, k: int, table: _Table, remaps: Remaps) -> None:
         bad = ~ok | (new < 0)
         if bad.any():
             value = column[np.argmax(bad)]
-            raise _fail(file, f"table {k}: {ct.__name__}.{name} {value} names nothing the scene saved")
+            raise fail(file, f"table {k}: {ct.__name__}.{name} {value} names nothing the scene saved")
         table.values[ct][name] = new.astype(column.dtype)
 
 
-def _spawn(file: Path, world: Any, tables: list[_Table], saved: tuple[np.ndarray, ...], prepared: list[Any]) -> IdMap:
+def _spawn(
+    file: Path, world: Any, tables: list[SavedTable], saved: tuple[np.ndarray, ...], prepared: list[Any]
+) -> IdMap:
     """Spawn every table (entity fields as -1 first), then point the entity fields at the new
     ids and commit the resources; on any failure destroy what was spawned."""
     spawned: list[np.ndarray] = []
@@ -334,7 +326,7 @@ def _spawn(file: Path, world: Any, tables: list[_Table], saved: tuple[np.ndarray
                 spawned.append(world.spawn_batch(len(t.ids), *bundle))
             except (EcsError, ValueError, TypeError) as exc:  # a value the component's checks refuse
                 names = ", ".join(ct.__name__ for ct in t.types) or "no components"
-                raise _fail(file, f"table {k} ({names}): {exc}") from None
+                raise fail(file, f"table {k} ({names}): {exc}") from None
             _exact_units(world, t, spawned[-1])
         ids = IdMap(saved[0], np.concatenate(spawned) if spawned else np.empty(0, np.int64), saved[1])
         for t, new in zip(tables, spawned):
@@ -348,12 +340,12 @@ def _spawn(file: Path, world: Any, tables: list[_Table], saved: tuple[np.ndarray
         for new in spawned:
             world.destroy(new)
         if isinstance(exc, (EcsError, ValueError, TypeError)) and not isinstance(exc, SceneFileError):
-            raise _fail(file, str(exc)) from exc
+            raise fail(file, str(exc)) from exc
         raise
     return ids
 
 
-def _exact_units(world: Any, t: _Table, new: np.ndarray) -> None:
+def _exact_units(world: Any, t: SavedTable, new: np.ndarray) -> None:
     """Spawning normalised the unit fields (quaternions), which can move a row that was unit
     already by an ulp: put back the saved rows that were unit to rounding, so a round trip is exact."""
     table, row = world.locate(int(new[0])) if len(new) else (None, 0)
@@ -365,133 +357,6 @@ def _exact_units(world: Any, t: _Table, new: np.ndarray) -> None:
             if ct.__fields__[name].unit:  # |q|^2 - 1 is about 2 (|q| - 1): within a few ulps of unit
                 unit = np.abs(np.einsum("...i,...i->...", saved, saved) - 1) <= 16 * np.finfo(saved.dtype).eps
                 np.copyto(table.columns[(ct, name)][rows], saved, where=unit[..., None])
-
-
-def _fail(path: Path, why: str) -> SceneFileError:
-    return SceneFileError(f"scene file {path}: {why}")
-
-
-def _check(ok: bool, path: Path, why: str) -> None:
-    if not ok:
-        raise _fail(path, why)
-
-
-def _need(value: _T | None, path: Path, why: str) -> _T:
-    if value is None:
-        raise _fail(path, why)
-    return value
-
-
-def _int(value: Any) -> bool:
-    return isinstance(value, int) and not isinstance(value, bool) and value >= 0
-
-
-class _Reader:
-    """Reads members of one archive, each checked before anything the size of its data is
-    allocated: names safe and used once, sizes within the archive, .npy headers as expected."""
-
-    def __init__(self, archive: zipfile.ZipFile, path: Path) -> None:
-        self.archive, self.path = archive, path
-        infos = archive.infolist()
-        names = [i.filename for i in infos]
-        _check(len(names) == len(set(names)), path, "it names a member twice")
-        for info in infos:
-            _check(bool(_MEMBER.match(info.filename)), path, f"member name {info.filename[:80]!r} leaves the archive")
-            _check(not info.flag_bits & 1, path, f"member {info.filename} is encrypted")
-            _check(info.compress_type in (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED), path, "an unknown compression")
-        size = path.stat().st_size
-        _check(sum(i.compress_size for i in infos) <= size, path, "its members overlap or claim more than it holds")
-        for info in infos:
-            stored = info.compress_type == zipfile.ZIP_STORED
-            limit = info.compress_size if stored else DEFLATE_RATIO * info.compress_size + 1024
-            _check(info.file_size <= limit, path, f"member {info.filename} claims more than it holds")
-        self.infos = {i.filename: i for i in infos}
-        self.used: set[str] = set()
-
-    def info(self, member: Any) -> zipfile.ZipInfo:
-        _check(isinstance(member, str) and member in self.infos, self.path, f"member {str(member)[:80]} is missing")
-        _check(member not in self.used, self.path, f"member {member} is named twice in the header")
-        self.used.add(member)
-        return self.infos[member]
-
-    def header(self) -> dict[str, Any]:
-        info = self.info("header.json")
-        _check(info.file_size <= HEADER_LIMIT, self.path, f"header.json is over {HEADER_LIMIT} bytes")
-        try:
-            header = json.loads(self.archive.read(info))
-        except (ValueError, UnicodeDecodeError, RecursionError) as exc:
-            raise _fail(self.path, f"header.json is not JSON ({exc})") from None
-        _check(isinstance(header, dict) and header.get("format") == FORMAT, self.path, "not a scene file")
-        version = header.get("version")
-        _check(version in READS, self.path, f"format version {version!r}; this engine reads versions {READS}")
-        header.setdefault("resources", [])
-        ok = isinstance(header.get("tables"), list) and isinstance(header["resources"], list)
-        _check(ok and _int(header.get("entities")), self.path, "header.json lacks its entities, tables or resources")
-        return header
-
-    def array(self, member: Any, dtype: np.dtype | None, shape: tuple[int, ...] | None) -> np.ndarray:
-        """The member's array; its dtype and shape must be these (None: any, no objects)."""
-        info, path = self.info(member), self.path
-        with self.archive.open(info) as data:
-            try:
-                version = np.lib.format.read_magic(data)
-                _check(version in ((1, 0), (2, 0)), path, f"member {member} is .npy version {version}")
-                read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
-                got_shape, fortran, got = read(data)
-            except (ValueError, OSError, EOFError, SyntaxError) as exc:
-                raise _fail(path, f"member {member} is not a NumPy array ({exc})") from None
-            _check(not got.hasobject, path, f"member {member} holds Python objects")
-            _check(got.itemsize > 0 and min(got_shape, default=0) >= 0, path, f"member {member} has no sizes")
-            expect = f"{dtype} {shape}" if dtype is not None else "no objects"
-            ok = (dtype is None or got == dtype) and (shape is None or tuple(got_shape) == shape)
-            _check(ok, path, f"member {member} is {got} {tuple(got_shape)}, expected {expect}")
-            nbytes = math.prod(got_shape) * got.itemsize
-            _check(nbytes == info.file_size - data.tell(), path, f"member {member} does not hold {got_shape} of {got}")
-            raw = data.read(nbytes)
-            _check(len(raw) == nbytes and not data.read(1), path, f"member {member} is truncated")
-        return np.frombuffer(raw, got).reshape(got_shape, order="F" if fortran else "C")
-
-    def table(self, k: int, spec: Any, known: Mapping[str, type[Component] | None]) -> _Table:
-        path = self.path
-        ok = isinstance(spec, dict) and _int(spec.get("rows")) and isinstance(spec.get("components"), list)
-        _check(ok and isinstance(spec.get("columns"), list), path, f"table {k} lacks rows, components or columns")
-        rows, types = spec["rows"], []
-        for name in spec["components"]:
-            ct = known.get(name) if isinstance(name, str) else None
-            if ct is None:
-                why = "two classes have that name" if name in known else "import the module that defines it first"
-                raise _fail(path, f"unknown component {str(name)[:200]!r} ({why})")
-            _check(ct not in types, path, f"table {k} names {name} twice")
-            types.append(ct)
-        ids = self.array(spec.get("ids"), np.dtype(np.int64), (rows,))
-        values: dict[type[Component], dict[str, np.ndarray]] = {ct: {} for ct in types}
-        for column in spec["columns"]:
-            ok = isinstance(column, dict) and isinstance(column.get("component"), str)
-            ct = known.get(column["component"]) if ok else None
-            ct = _need(ct if ct in values else None, path, f"table {k}: a column of no component of it: {column}"[:300])
-            field = column.get("field")
-            f = _need(ct.__fields__.get(field) if isinstance(field, str) else None, path, f"no field {field}"[:200])
-            _check(f.name not in values[ct], path, f"table {k}: {f.qualname} is given twice")
-            said = (column.get("dtype"), column.get("shape"))
-            _check(said == (f.dtype.str, list(f.shape)), path, f"table {k}: {f.qualname} is {said}, the field is not")
-            values[ct][f.name] = self.array(column.get("member"), f.dtype, (rows, *f.shape))
-        return _Table(types, ids, values)  # fields not saved get their defaults (a field added since)
-
-    def resource(self, spec: Any) -> tuple[str, str, SavedResource]:
-        ok = isinstance(spec, dict) and isinstance(spec.get("name"), str) and isinstance(spec.get("arrays"), dict)
-        _check(ok, self.path, f"a resource lacks its name or arrays: {str(spec)[:200]}")
-        arrays = {}
-        for key, said in spec["arrays"].items():
-            _check(isinstance(said, dict) and bool(_KEY.match(key)), self.path, f"resource array {key[:80]!r}")
-            array = self.array(said.get("member"), None, None)
-            same = [array.dtype.str, list(array.shape)] == [said.get("dtype"), said.get("shape")]
-            _check(same, self.path, f"resource array {key} is not the dtype and shape its header says")
-            arrays[key] = array
-        return spec["name"], str(spec.get("module", "?")), SavedResource(spec.get("doc"), arrays)
-
-    def all_used(self) -> None:
-        extra = sorted(set(self.infos) - self.used)
-        _check(not extra, self.path, f"member {extra[0] if extra else ''} is not in the header")
 
 
 # the names World.save and World.load call

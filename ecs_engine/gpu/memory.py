@@ -111,6 +111,8 @@ def upload(device: Device, data: np.ndarray, usage: int) -> Buffer:
     vk = device.vk
     raw = np.ascontiguousarray(data).view(np.uint8).reshape(-1)
     target = Buffer(device, raw.nbytes, usage, DEVICE)
+    if not raw.nbytes:  # an empty mesh: a buffer to bind, nothing to copy (a zero-size copy is invalid)
+        return target
     staging = Buffer(device, raw.nbytes, vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT, HOST)
     try:
         staging.bytes()[:] = raw

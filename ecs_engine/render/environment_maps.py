@@ -34,6 +34,7 @@ from typing import Final
 import numpy as np
 
 from ..errors import UsageError
+from ..user_files import IMAGE, UserFileError, read_user_file
 from .shadow_views import CUBE_FACES
 from .textures import ImageError, read_image, srgb_to_linear
 
@@ -51,7 +52,11 @@ __all__ = [
 CUBE_FACE_NAMES: Final = ("px", "nx", "py", "ny", "pz", "nz")
 MIN_DEFAULT_SIZE: Final = 16  # an equirect map's default face size is clamped to these
 MAX_DEFAULT_SIZE: Final = 1024
-MAX_SIZE: Final = 4096  # the largest face size one may ask for
+MAX_SIZE: Final = 4096  # the largest face size one may ask for (every Vulkan device has cube maps this large)
+#: The most texels an environment's source may have: an 8192 x 4096 equirectangular map, or six
+#: faces of up to 2364 x 2364 (files and arrays, in code or in a scene file). Checked from an
+#: image file's header before its pixels are decoded; about 400 MiB as float32 RGB.
+MAX_SOURCE_TEXELS: Final = 1 << 25
 #: the SH basis constants, in the shader's order (Y0; Y1..Y3 = y, z, x; Y4..Y8 = order 2)
 SH_C0: Final = 0.282095
 SH_C1: Final = 0.488603
@@ -169,15 +174,18 @@ def _hdr_error(path: Path, why: str) -> UsageError:
     return UsageError(f"environment map {path}: {why}")
 
 
-def read_rgbe(path: str | os.PathLike[str]) -> np.ndarray:
+def read_rgbe(path: str | os.PathLike[str], max_texels: int = MAX_SOURCE_TEXELS) -> np.ndarray:
     """(H, W, 3) float32 linear radiance of a Radiance .hdr file: flat or new-style run-length
     scanlines, "-Y h +X w" orientation (rows top to bottom, columns left to right). Anything else,
-    a missing file or a broken or truncated one is a UsageError naming the file."""
+    a missing file or a broken or truncated one, or one of more than `max_texels` (checked before
+    the pixels are decoded), is a UsageError naming the file."""
     file = Path(path)
     try:
-        data = file.read_bytes()
+        data = read_user_file(file, IMAGE)
     except FileNotFoundError:
         raise _hdr_error(file, "no such file") from None
+    except UserFileError as exc:
+        raise _hdr_error(file, exc.why) from None
     except OSError as exc:
         raise _hdr_error(file, f"cannot be read ({exc.strerror or exc})") from None
     if not data.startswith(b"#?"):
@@ -202,6 +210,8 @@ def read_rgbe(path: str | os.PathLike[str]) -> np.ndarray:
     h, w = int(match[3]), int(match[6])
     if h < 1 or w < 1:
         raise _hdr_error(file, f"empty .hdr image ({w} x {h})")
+    if h * w > max_texels:
+        raise _hdr_error(file, f"{w} x {h} is more than the {max_texels:,} texels an environment map may have")
     rgbe = _rgbe_scanlines(data, line_end + 1, h, w, file)
     exponent = rgbe[..., 3:4].astype(np.int32)
     scale = np.where(exponent > 0, np.ldexp(1.0, exponent - 136), 0.0)  # Radiance's colr_color
@@ -256,12 +266,12 @@ def _nearest_power_of_two(x: float) -> int:
     return 1 << max(round(math.log2(max(x, 1.0))), 0)
 
 
-def _read_linear(file: Path) -> np.ndarray:
+def _read_linear(file: Path, max_texels: int) -> np.ndarray:
     """(H, W, 3) float32 linear RGB of an image file: .hdr as is, others decoded from 8-bit sRGB."""
     if file.suffix.lower() == ".hdr":
-        return read_rgbe(file)
+        return read_rgbe(file, max_texels)
     try:
-        rgba = read_image(file)
+        rgba = read_image(file, max_texels)
     except ImageError as exc:
         raise UsageError(f"environment map {file}: {exc}") from None
     return srgb_to_linear(rgba[..., :3].astype(np.float32) / np.float32(255.0)).astype(np.float32)
@@ -274,7 +284,17 @@ def _check_values(pixels: np.ndarray, name: str) -> None:
         raise UsageError(f"environment map {name}: has negative values (radiance is never negative)")
 
 
-def _check_size(size: int | None) -> None:
+def environment_texels(shape: tuple[int, ...], name: str) -> None:
+    """UsageError for a source of more than MAX_SOURCE_TEXELS texels (its shape: (..., channels))."""
+    texels = math.prod(shape[:-1])
+    if texels > MAX_SOURCE_TEXELS:
+        raise UsageError(
+            f"environment map {name}: shape {tuple(shape)} holds more than the {MAX_SOURCE_TEXELS:,} texels an "
+            "environment map may have (an 8192 x 4096 map, or six faces of 2364 x 2364)"
+        )
+
+
+def check_cube_size(size: int | None) -> None:
     if size is None:
         return
     if isinstance(size, bool) or not isinstance(size, int | np.integer):
@@ -314,11 +334,12 @@ def load_cube(
     - an array: (6, S, S, 3) faces, or an (H, 2H, 3) equirectangular map, linear.
 
     Any bad input is a UsageError naming the file (or the array) and what is wrong with it."""
-    _check_size(size)
+    check_cube_size(size)
     if isinstance(source, np.ndarray):
         pixels = source
         if not np.issubdtype(pixels.dtype, np.number) or np.iscomplexobj(pixels):
             raise UsageError(f"environment map array: must hold real numbers, not {pixels.dtype}")
+        environment_texels(pixels.shape, "array")
         if pixels.ndim == 4 and pixels.shape[0] == 6 and pixels.shape[3] == 3:
             if pixels.shape[1] != pixels.shape[2] or pixels.shape[1] < 1:
                 raise UsageError(f"environment map array: cube faces must be square, got {pixels.shape}")
@@ -330,7 +351,7 @@ def load_cube(
         )
     if isinstance(source, str | os.PathLike):
         file = Path(source)
-        return _cube_from_equirect(_read_linear(file), size, str(file))
+        return _cube_from_equirect(_read_linear(file, MAX_SOURCE_TEXELS), size, str(file))
     if not isinstance(source, Sequence):
         raise UsageError(f"environment map {source!r}: not a path, six paths or an array")
     if not all(isinstance(p, str | os.PathLike) for p in source):
@@ -338,7 +359,7 @@ def load_cube(
     files = [Path(p) for p in source]
     if len(files) != 6:
         raise UsageError(f"environment map faces: {len(files)} given, a cube needs 6 ({', '.join(CUBE_FACE_NAMES)})")
-    faces = [_read_linear(f) for f in files]
+    faces = [_read_linear(f, MAX_SOURCE_TEXELS // 6) for f in files]
     for file, face in zip(files, faces):
         if face.shape[0] != face.shape[1]:
             raise UsageError(f"environment map {file}: cube face is {face.shape[1]} x {face.shape[0]}, not square")

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import importlib.resources
 import io
-import json
 import os
 from pathlib import Path
 from typing import Any, Final
@@ -13,7 +12,10 @@ from typing import Any, Final
 import numpy as np
 
 from ..errors import UsageError
+from ..user_files import MODEL, UserFileError, read_user_file
+from ..user_json import parse_json
 from .mesh_data import MeshData
+from .named_files import NamedFiles
 
 __all__ = ["DEFAULT_MODEL", "SUPPORTED_FORMATS", "Part", "assemble", "load_mesh", "read_parts"]
 
@@ -50,7 +52,9 @@ def read_parts(
     file = Path(path)
     fmt = _check_path(file)
     try:
-        data = file.read_bytes()
+        data = read_user_file(file, MODEL)
+    except UserFileError as exc:
+        raise UsageError(str(exc)) from None
     except OSError as exc:
         raise UsageError(f"{file}: cannot read the file: {exc.strerror or exc}") from None
     if not data.strip():
@@ -72,8 +76,6 @@ def _check_path(file: Path) -> str:
     """Reject what cannot be a mesh file before reading it; return the format name."""
     if not file.exists():
         raise UsageError(f"{file}: no such file")
-    if file.is_dir():
-        raise UsageError(f"{file}: is a directory, not a mesh file")
     fmt = SUPPORTED_FORMATS.get(file.suffix.lower())
     if fmt is None:
         what = f"format '{file.suffix}'" if file.suffix else "file type (no extension)"
@@ -94,9 +96,33 @@ def _sniff(file: Path, fmt: str, data: bytes) -> None:
             raise UsageError(f"{file}: not a valid STL file (neither binary STL nor ASCII 'solid ...' text)")
     elif fmt == "glTF":
         try:
-            json.loads(data)
+            parse_json(data)
         except ValueError as exc:
-            raise UsageError(f"{file}: not a valid glTF file (not JSON: {exc})") from None
+            raise UsageError(f"{file}: not a valid glTF file ({exc})") from None
+
+
+# OBJ lines of numbers: how many each may have (a vertex may carry a colour after x y z)
+_OBJ_NUMBERS: Final = {"v": (3, 4, 6, 7), "vn": (3,), "vt": (1, 2, 3)}
+_OBJ_WHAT: Final = {
+    "v": "a vertex needs 3 numbers (x y z; 4 with w, 6 or 7 with a colour)",
+    "vn": "a normal needs 3 numbers",
+    "vt": "a texture coordinate needs 1 to 3 numbers",
+}
+
+
+def _check_obj_numbers(file: Path, line_no: int, tokens: list[str]) -> None:
+    """A `v`, `vn` or `vt` line with too few or too many numbers, or a word that is no number:
+    trimesh reads the numbers of all such lines as one array, so one short line shifts every
+    vertex after it (an error far from the cause, or a wrong mesh)."""
+    key, numbers = tokens[0], tokens[1:]
+    allowed = _OBJ_NUMBERS[key]
+    if len(numbers) not in allowed:
+        raise UsageError(f"{file}: line {line_no}: {_OBJ_WHAT[key]}, got {len(numbers)}")
+    for word in numbers:
+        try:
+            float(word)
+        except ValueError:
+            raise UsageError(f"{file}: line {line_no}: {word[:40]!r} is not a number") from None
 
 
 def _check_obj_faces(file: Path, text: str) -> None:
@@ -109,6 +135,8 @@ def _check_obj_faces(file: Path, text: str) -> None:
         tokens = line.split()
         if not tokens:
             continue
+        if tokens[0] in _OBJ_NUMBERS:
+            _check_obj_numbers(file, line_no, line.split("#", 1)[0].split())
         if tokens[0] == "v":
             vertices += 1
         elif tokens[0] == "f":
@@ -149,12 +177,13 @@ def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[Part], list[obj
     try:
         import trimesh
 
-        scene = trimesh.load_scene(
-            io.BytesIO(data),
-            file_type=fmt.lower(),
-            process=False,
-            resolver=trimesh.resolvers.FilePathResolver(str(file)),
-        )
+        with np.errstate(all="ignore"):  # NaNs in the file warn inside trimesh; _check_values names them
+            scene = trimesh.load_scene(
+                io.BytesIO(data),
+                file_type=fmt.lower(),
+                process=False,
+                resolver=NamedFiles(file),
+            )
         parts: list[Part] = []
         materials: list[object | None] = []
         non_mesh = 0
@@ -166,6 +195,7 @@ def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[Part], list[obj
                 continue
             # trimesh keeps normals read from the file in its cache; asking `vertex_normals` would compute them.
             normals = geometry._cache["vertex_normals"] if "vertex_normals" in geometry._cache else None
+            _check_shapes(file, fmt, geometry.vertices, geometry.faces, normals)
             positions, faces, normals = _transformed(
                 np.array(geometry.vertices, np.float64),
                 np.array(geometry.faces, np.int64).reshape(-1, 3),
@@ -176,12 +206,26 @@ def _read_parts(file: Path, fmt: str, data: bytes) -> tuple[list[Part], list[obj
             materials.append(getattr(getattr(geometry, "visual", None), "material", None))
     except UsageError:
         raise
+    except UserFileError as exc:  # a glTF's buffer that is a device, a FIFO, or too large
+        raise UsageError(str(exc)) from None
     except FileNotFoundError as exc:  # a glTF's buffer or image file is not next to it
         raise UsageError(f"{file}: refers to a file that is missing: {exc.filename or exc}") from None
     except Exception as exc:
         reason = (str(exc).strip().splitlines() or [""])[0] or type(exc).__name__
         raise UsageError(f"{file}: not a valid {fmt} file ({reason})") from None
     return parts, materials, non_mesh > 0 and not any(len(f) for _, f, _, _ in parts)
+
+
+def _check_shapes(file: Path, fmt: str, vertices: Any, faces: Any, normals: Any) -> None:
+    """What trimesh read from a broken file can have any shape: refuse it before NumPy's own
+    errors (an AxisError that names no file) or a wrong mesh."""
+    v, f = np.shape(vertices), np.shape(faces)
+    if len(v) != 2 or v[1] != 3:
+        raise UsageError(f"{file}: not a valid {fmt} file (its vertices read as an array of shape {v}, not N x 3)")
+    if len(f) != 2 or f[1] != 3 or not np.issubdtype(np.asarray(faces).dtype, np.integer):
+        raise UsageError(f"{file}: not a valid {fmt} file (its faces read as an array of shape {f}, not N x 3)")
+    if normals is not None and np.shape(normals) != v:
+        raise UsageError(f"{file}: not a valid {fmt} file ({np.shape(normals)[0]} normals for {v[0]} vertices)")
 
 
 def _uvs(geometry: object, count: int) -> np.ndarray | None:

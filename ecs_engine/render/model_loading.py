@@ -14,7 +14,6 @@ blended materials (set_aside_pass.py).
 
 from __future__ import annotations
 
-import json
 import logging
 import os
 import struct
@@ -25,10 +24,12 @@ from typing import Any
 import numpy as np
 
 from ..errors import UsageError
+from ..user_files import MODEL, read_user_file
+from ..user_json import parse_json
 from .materials import MAX_SHININESS, Material, Materials
 from .mesh_data import MeshData
 from .mesh_loading import assemble, read_parts
-from .mtl import MtlMaterial, mtl_libraries, read_mtl
+from .mtl import MtlMaterial, MtlTexture, mtl_libraries, read_mtl
 from .textures import ImageError, Texture, pixels_of
 
 __all__ = ["ModelPart", "load_model", "model_part"]
@@ -112,9 +113,13 @@ class _ObjMaterials:
     def __init__(self, file: Path, registry: Materials) -> None:
         self.registry = registry
         self.library: dict[str, MtlMaterial] = {}
-        text = file.read_text(encoding="utf-8", errors="replace")
+        try:
+            text = read_user_file(file, MODEL).decode("utf-8", errors="replace")
+        except OSError as exc:  # read a moment ago by read_parts: gone or changed since
+            log.warning("%s: cannot be read again for its materials (%s); drawn with defaults", file, exc)
+            text = ""
         for mtl in mtl_libraries(text, file):
-            self.library.update(read_mtl(mtl))
+            self.library.update(read_mtl(mtl, named_by=str(file)))
         self.handles: dict[str, int | None] = {}
 
     def __call__(self, material: object) -> int | None:
@@ -141,12 +146,20 @@ class _ObjMaterials:
                 shininess=float(np.clip(m.shininess, 1.0, MAX_SHININESS)),
                 specular=float(np.clip(np.mean(m.specular), 0.0, 1.0)),
                 emissive=_rgb(emissive, _positive),
-                base_color_texture=textures.load(maps["diffuse"].path) if "diffuse" in maps else None,
-                normal_texture=textures.load(maps["normal"].path, color=False) if "normal" in maps else None,
+                base_color_texture=_load(textures, maps.get("diffuse"), True),
+                normal_texture=_load(textures, maps.get("normal"), False),
                 normal_scale=maps["normal"].scale if "normal" in maps else 1.0,
-                emissive_texture=textures.load(maps["emissive"].path) if "emissive" in maps else None,
+                emissive_texture=_load(textures, maps.get("emissive"), True),
             )
         )
+
+
+def _load(textures: Any, texture: MtlTexture | None, color: bool) -> int | None:
+    if texture is None:
+        return None
+    named_by = None if texture.library is None else str(texture.library)
+    handle: int = textures.load(texture.path, color=color, named_by=named_by)
+    return handle
 
 
 def _unit(value: float) -> float:
@@ -268,13 +281,13 @@ def _or(value: object, default: float) -> float:
 def _gltf_json(file: Path) -> dict[str, Any]:
     """The JSON of a .gltf, or of a .glb's first chunk; {} if unreadable (trimesh read it already)."""
     try:
-        data = file.read_bytes()
+        data = read_user_file(file, MODEL)
         if file.suffix.lower() == ".glb":
             length, kind = struct.unpack_from("<II", data, 12)
             if kind != 0x4E4F534A:  # "JSON"
                 return {}
             data = data[20 : 20 + length]
-        found = json.loads(data)
+        found = parse_json(data)
     except (OSError, ValueError, struct.error):
         return {}
     return found if isinstance(found, dict) else {}

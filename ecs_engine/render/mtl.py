@@ -14,6 +14,8 @@ import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..user_files import MATERIAL_LIBRARY, UserFileError, read_user_file
+
 log = logging.getLogger("ecs_engine")
 
 # texture map options and how many values each takes (the file name is what follows them)
@@ -38,6 +40,7 @@ _MAP_OPTIONS = {
 class MtlTexture:
     path: Path
     scale: float = 1.0  # -bm
+    library: Path | None = None  # the .mtl naming it (warnings say who named a bad file)
 
 
 @dataclass
@@ -65,14 +68,20 @@ def mtl_libraries(obj_text: str, obj_file: Path) -> list[Path]:
     return out
 
 
-def read_mtl(file: Path) -> dict[str, MtlMaterial]:
-    """Materials by name; a missing or unreadable library logs one warning and gives none."""
+def read_mtl(file: Path, named_by: str | None = None) -> dict[str, MtlMaterial]:
+    """Materials by name; a missing or unreadable library (or a FIFO, a device, one over
+    MATERIAL_LIBRARY's size) logs one warning and gives none."""
     try:
-        text = file.read_text(encoding="utf-8", errors="replace")
+        text = read_user_file(file, MATERIAL_LIBRARY, named_by).decode("utf-8", errors="replace")
+    except UserFileError as exc:
+        log.warning("%s; its materials are drawn with defaults", exc)
+        return {}
     except OSError as exc:
+        by = f" (named by {named_by})" if named_by else ""
         log.warning(
-            "%s: cannot read the material library (%s); its materials are drawn with defaults",
+            "%s%s: cannot read the material library (%s); its materials are drawn with defaults",
             file,
+            by,
             exc.strerror or exc,
         )
         return {}
@@ -102,7 +111,7 @@ def read_mtl(file: Path) -> dict[str, MtlMaterial]:
             elif key == "tr":
                 current.opacity = 1.0 - float(args[0])
             elif key in _MAP_KEYS:
-                texture = _map(args, file.parent)
+                texture = _map(args, file)
                 if texture is not None:
                     current.maps[_MAP_KEYS[key]] = texture
         except (ValueError, IndexError):
@@ -110,7 +119,7 @@ def read_mtl(file: Path) -> dict[str, MtlMaterial]:
     return materials
 
 
-def _map(args: list[str], folder: Path) -> MtlTexture | None:
+def _map(args: list[str], library: Path) -> MtlTexture | None:
     scale = 1.0
     i = 0
     while i < len(args) and args[i].lower() in _MAP_OPTIONS:
@@ -119,4 +128,4 @@ def _map(args: list[str], folder: Path) -> MtlTexture | None:
             scale = float(args[i + 1])
         i += 1 + _MAP_OPTIONS[option]
     name = " ".join(args[i:]).replace("\\", "/")
-    return MtlTexture(folder / name, scale) if name else None
+    return MtlTexture(library.parent / name, scale, library) if name else None

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,9 +31,12 @@ import numpy as np
 from ..components.environment import Environment
 from ..components.mesh import Mesh
 from ..ecs.scene_file import Remaps, ResourceCodec, SavedResource, register_codec
+from ..errors import UsageError
+from ..user_files import IMAGE, check_user_file
+from .environment_maps import check_cube_size, environment_texels
 from .materials import DEFAULT_PALETTE, TEXTURE_FIELDS, Material, Materials, materials
 from .mesh_data import MeshData
-from .textures import ImageError, Texture, read_image
+from .textures import ImageError, Texture, read_image, texture_size_error
 
 __all__ = [
     "MAX_RECIPE_VERTICES",
@@ -68,6 +72,13 @@ class RecipeBudget:
         self.left -= vertices
 
 
+_BOOL_FIELDS = frozenset(f.name for f in dataclasses.fields(Material) if isinstance(f.default, bool))
+#: A mesh saved by value has at most this many vertices and triangles (a 16M-vertex mesh's arrays
+#: are about 1 GiB): the arrays' sizes are checked before they are read, and saving refuses more.
+MAX_SAVED_VERTICES = 1 << 24
+MAX_SAVED_TRIANGLES = 1 << 24
+
+
 def _doc(value: Any, kind: type, what: str) -> Any:
     """`value` if it is a `kind` (a float may be written as an int; a bool is no number)."""
     kinds = (int, float) if kind is float else kind
@@ -94,6 +105,14 @@ class _Prepared:
 class MaterialsCodec:
     name = "materials"
     resource_types: tuple[Any, ...] = (Materials,)
+
+    def check_array(self, key: str, dtype: np.dtype, shape: tuple[int, ...]) -> None:
+        """A texture's pixels, before they are read: RGBA8 of at most MAX_TEXTURE_PIXELS."""
+        if dtype != np.uint8 or len(shape) != 3 or shape[2] != 4:
+            raise ValueError(f"{key} is {dtype} {shape}, not RGBA8 pixels (height, width, 4)")
+        too_large = texture_size_error(shape[1], shape[0])
+        if too_large:
+            raise ValueError(f"{key}: {too_large}")
 
     def save(self, world: Any) -> SavedResource | None:
         found: Materials | None = world.resources.get(Materials)
@@ -138,6 +157,10 @@ class MaterialsCodec:
             unknown = set(fields) - set(MATERIAL_FIELDS)
             if unknown:
                 raise ValueError(f"material {i} has unknown fields {sorted(unknown)[:5]}")
+            for name, value in fields.items():  # Material takes true for 1.0: a file may not
+                values = value if isinstance(value, list) else [value]
+                if name not in _BOOL_FIELDS and any(isinstance(v, bool) for v in values):
+                    raise ValueError(f"material {i}'s {name} takes numbers, not {str(value)[:80]}")
             _doc(fields.get("name", ""), str, f"material {i}'s name")
             for name in TEXTURE_FIELDS:
                 if fields.get(name) is not None:
@@ -159,6 +182,24 @@ class MaterialsCodec:
                 registry.add(m)
 
         return _Prepared({(Mesh, "material"): np.array(handles, np.int64)}, apply)
+
+
+def _environment_check(check: Any) -> None:
+    """environment_maps' check, its UsageError as the ValueError codecs raise."""
+    try:
+        check()
+    except UsageError as exc:
+        raise ValueError(str(exc)) from None
+
+
+def _regular(path: str) -> None:
+    """An environment file that is there must be a regular file: loaded at the first frame, a
+    FIFO or a device would hang it (one missing is reported then, as before)."""
+    if os.path.lexists(path):
+        try:
+            check_user_file(path, IMAGE)
+        except OSError as exc:
+            raise ValueError(f"the environment's path {exc}") from None
 
 
 def _texture(i: int, name: str, color: bool, file: Any, pixels: np.ndarray | None) -> Texture:
@@ -184,13 +225,20 @@ class EnvironmentCodec:
     name = "environment"
     resource_types: tuple[Any, ...] = (Environment,)
 
+    def check_array(self, key: str, dtype: np.dtype, shape: tuple[int, ...]) -> None:
+        """The pixels, before they are read: numbers, at most MAX_SOURCE_TEXELS of them."""
+        if dtype.kind not in "uf" or dtype.itemsize > 8 or len(shape) not in (3, 4):
+            raise ValueError(f"the environment's {key} are {dtype} {shape}, not (H, 2H, 3) or (6, S, S, 3) numbers")
+        _environment_check(lambda: environment_texels(shape, key))
+
     def save(self, world: Any) -> SavedResource | None:
         env: Environment | None = world.resources.get(Environment)
         if env is None:
             return None
         size = None if env.size is None else int(env.size)
         settings = {"intensity": env.intensity, "sky": bool(env.sky), "ambient": bool(env.ambient), "size": size}
-        if isinstance(env.source, np.ndarray):
+        if isinstance(env.source, np.ndarray):  # one a load would refuse is not saved
+            _environment_check(lambda: environment_texels(env.source.shape, "pixels"))
             return SavedResource(settings | {"source": {"pixels": "pixels"}}, {"pixels": env.source})
         if isinstance(env.source, (str, Path)):
             return SavedResource(settings | {"source": {"path": str(env.source)}})
@@ -205,9 +253,14 @@ class EnvironmentCodec:
                 raise ValueError("the environment's pixels are missing or not numbers")
         elif "path" in source:
             value = _doc(source["path"], str, "the environment's path")
+            _regular(value)
         else:
             value = [_doc(p, str, "an environment path") for p in _doc(source.get("paths"), list, "paths")]
+            for path in value[:6]:
+                _regular(path)
         size = doc.get("size")
+        if size is not None:
+            _environment_check(lambda: check_cube_size(_doc(size, int, "size")))
         env = Environment(
             value,
             _doc(doc.get("intensity"), float, "intensity"),
@@ -240,6 +293,15 @@ class MeshReferences:
     def __init__(self, registry: MeshSource, *, by_value: bool = False) -> None:
         self.registry, self.by_value = registry, by_value
 
+    def check_array(self, key: str, dtype: np.dtype, shape: tuple[int, ...]) -> None:
+        """A mesh's array, before it is read: numbers, within MAX_SAVED_VERTICES/TRIANGLES."""
+        part = key.rpartition("_")[2]
+        width = {"positions": 3, "normals": 3, "uvs": 2, "tangents": 4, "indices": None}.get(part, -1)
+        ok = dtype.kind in "uif" and dtype.itemsize <= 8
+        if not ok or width == -1 or (width is None and len(shape) != 1) or (width and shape[1:] != (width,)):
+            raise ValueError(f"mesh array {key} is {dtype} {shape}, not a mesh's {part}")
+        _check_counts(key, shape[0] if width else 0, shape[0] // 3 if width is None else 0)
+
     def save(self, world: Any) -> SavedResource | None:
         used: set[int] = set()
         for table in world.tables:
@@ -255,6 +317,7 @@ class MeshReferences:
             mesh: MeshData = getattr(self.registry[handle], "data", self.registry[handle])
             entry = {"handle": handle, "name": mesh.name, "vertices": mesh.vertex_count, "source": mesh.source}
             if mesh.source is None or self.by_value:
+                _check_counts(f"mesh {handle} ({mesh.name})", mesh.vertex_count, mesh.triangle_count)
                 entry["source"] = None
                 for part in ("positions", "normals", "indices", "uvs", "tangents"):
                     arrays[f"mesh{handle}_{part}"] = getattr(mesh, part)
@@ -284,6 +347,15 @@ class MeshReferences:
         for handle, mesh in made.items():
             lookup[handle] = self.registry.add(mesh)  # the session's registry, not the world
         return _Prepared({(Mesh, "handle"): lookup}, lambda world: None)
+
+
+def _check_counts(what: str, vertices: int, triangles: int) -> None:
+    for count, name, limit in (
+        (vertices, "vertices", MAX_SAVED_VERTICES),
+        (triangles, "triangles", MAX_SAVED_TRIANGLES),
+    ):
+        if count > limit:
+            raise ValueError(f"{what} has {count:,} {name}; a mesh saved by value has at most {limit:,}")
 
 
 def _mesh_arrays(arrays: Mapping[str, np.ndarray], handle: int, name: str) -> MeshData:

@@ -19,13 +19,24 @@ from __future__ import annotations
 import logging
 import math
 import os
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Final
 
 import numpy as np
 
-__all__ = ["MAX_TEXTURE_SIZE", "MIN_TEXTURE_SIZE", "Texture", "Textures", "mip_chain", "size_class"]
+from ..user_files import IMAGE, UserFileError, open_user_file
+
+__all__ = [
+    "MAX_TEXTURE_PIXELS",
+    "MAX_TEXTURE_SIZE",
+    "MIN_TEXTURE_SIZE",
+    "Texture",
+    "Textures",
+    "mip_chain",
+    "size_class",
+]
 
 log = logging.getLogger("ecs_engine")
 
@@ -35,7 +46,12 @@ MAX_TEXTURE_SIZE: Final = 4096
 CLASS_SIZES: Final[tuple[int, ...]] = tuple(
     1 << k for k in range(int(math.log2(MIN_TEXTURE_SIZE)), int(math.log2(MAX_TEXTURE_SIZE)) + 1)
 )
-_IMAGE_LIMIT: Final = 1 << 28  # pixels: PIL's decompression-bomb guard, a 16k x 16k image
+#: The most texels a texture may have (8192 x 8192, 256 MiB of RGBA8), from a file, a model or a
+#: scene file: the GPU holds at most MAX_TEXTURE_SIZE a side, so more only costs memory, and an
+#: image file's header is checked against it before its pixels are decoded.
+MAX_TEXTURE_PIXELS: Final = 1 << 26
+#: The longest side a texture may have (the largest maxImageDimension2D of common GPUs).
+MAX_TEXTURE_SIDE: Final = 16384
 
 
 @dataclass(frozen=True, eq=False)
@@ -53,6 +69,9 @@ class Texture:
             pixels = np.repeat(pixels[:, :, None], 3, axis=2)
         if pixels.ndim != 3 or pixels.shape[2] not in (1, 2, 3, 4) or 0 in pixels.shape:
             raise ValueError(f"texture {self.name!r}: pixels must be (height, width, 1-4), got {pixels.shape}")
+        too_large = texture_size_error(pixels.shape[1], pixels.shape[0])
+        if too_large:
+            raise ValueError(f"texture {self.name!r}: {too_large}")
         if pixels.dtype != np.uint8:
             if not np.issubdtype(pixels.dtype, np.floating) or not np.isfinite(pixels).all():
                 raise ValueError(f"texture {self.name!r}: pixels must be uint8, or finite floats in [0, 1]")
@@ -104,9 +123,11 @@ class Textures:
             self._fallback = self.add(Texture("fallback", _fallback_pixels(), color=True))
         return self._fallback
 
-    def load(self, path: str | os.PathLike[str], *, color: bool = True) -> int:
+    def load(self, path: str | os.PathLike[str], *, color: bool = True, named_by: str | None = None) -> int:
         """The texture in an image file (PNG, JPEG, ... what Pillow reads), loaded once per file
-        and colour space. A missing or unreadable file logs one warning and gives the fallback."""
+        and colour space. A missing or unreadable file (or a FIFO, a device, one over the size
+        limits) logs one warning, naming the file and `named_by` (the file that named it), and
+        gives the fallback."""
         file = Path(path)
         key = (str(file.resolve()) if file.exists() else str(file), color)
         found = self._by_file.get(key)
@@ -115,7 +136,8 @@ class Textures:
         try:
             pixels = read_image(file)
         except ImageError as exc:
-            log.warning("%s: %s; drawn with the fallback texture", file, exc)
+            by = f" (named by {named_by})" if named_by else ""
+            log.warning("%s%s: %s; drawn with the fallback texture", file, by, exc)
             handle = self.fallback
         else:
             handle = self.add(Texture(file.name, pixels, color, str(file.resolve())))
@@ -135,28 +157,53 @@ class ImageError(Exception):
     """An image file that cannot be used as a texture (the message says why)."""
 
 
-def read_image(file: Path) -> np.ndarray:
-    """RGBA8 pixels of an image file, or ImageError."""
+def texture_size_error(width: int, height: int, max_pixels: int = MAX_TEXTURE_PIXELS) -> str | None:
+    """Why an image of this size is refused (None: it is not)."""
+    if max(width, height) > MAX_TEXTURE_SIDE or width * height > max_pixels:
+        limit = f"{MAX_TEXTURE_SIDE} a side and {max_pixels:,} pixels ({math.isqrt(max_pixels)} squared)"
+        return f"{width} x {height} pixels is larger than an image may be (at most {limit})"
+    return None
+
+
+def read_image(file: Path, max_pixels: int = MAX_TEXTURE_PIXELS) -> np.ndarray:
+    """RGBA8 pixels of an image file, or ImageError. Only a regular file is opened (user_files),
+    and its size is checked from its header before its pixels are decoded."""
+    import warnings
+
     from PIL import Image, UnidentifiedImageError
 
-    if not file.exists():
-        raise ImageError("no such file")
     try:
-        with Image.open(file) as image:
-            if image.width * image.height > _IMAGE_LIMIT:
-                raise ImageError(f"{image.width} x {image.height} is too large for a texture")
-            return np.asarray(image.convert("RGBA"))
+        with open_user_file(file, IMAGE) as raw, warnings.catch_warnings():
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            with Image.open(raw) as image:  # reads the header only
+                too_large = texture_size_error(image.width, image.height, max_pixels)
+                if too_large:
+                    raise ImageError(too_large)
+                return np.asarray(image.convert("RGBA"))
+    except FileNotFoundError:
+        raise ImageError("no such file") from None
+    except UserFileError as exc:
+        raise ImageError(exc.why) from None
     except UnidentifiedImageError:
         raise ImageError("not an image Pillow can read") from None
+    except (Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:  # Pillow's limit, met first
+        claimed = re.search(r"\((\d+) pixels\)", str(exc))
+        size = f"{int(claimed[1]):,} pixels" if claimed else "it"
+        raise ImageError(f"{size} is larger than an image may be (at most {max_pixels:,} pixels)") from None
     except (OSError, ValueError, SyntaxError) as exc:  # truncated or corrupt data
         raise ImageError(f"cannot be decoded ({exc})") from None
 
 
 def pixels_of(image: object) -> np.ndarray:
-    """RGBA8 pixels of a PIL image (what trimesh hands over for glTF textures)."""
+    """RGBA8 pixels of a PIL image (what trimesh hands over for glTF textures), its size checked
+    before it is decoded."""
     convert = getattr(image, "convert", None)
     if convert is None:
         raise ImageError(f"not an image ({type(image).__name__})")
+    size = getattr(image, "size", (0, 0))
+    too_large = texture_size_error(int(size[0]), int(size[1]))
+    if too_large:
+        raise ImageError(too_large)
     return np.asarray(convert("RGBA"))
 
 
