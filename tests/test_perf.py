@@ -286,8 +286,8 @@ def test_the_perf_windows_fps_line_never_shows_nan():
         mon.frame(1.0)
     assert "nan" not in " ".join(lines).lower()
     assert lines[:2] == [
-        "FPS -   (warming up: 0 of 2 frames left out)",
-        "FPS -   (warming up: 1 of 2 frames left out)",
+        "FPS -   (warm-up: 0 of 2 left out)",
+        "FPS -   (warm-up: 1 of 2 left out)",
     ]
     assert lines[2:] == ["FPS -   (measuring)", "FPS   100.0", "FPS   100.0"]
 

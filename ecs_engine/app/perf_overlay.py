@@ -78,13 +78,12 @@ class PerfOverlay:
                         imgui.table_set_column_index(i)
                         imgui.text(text)
                 imgui.end_table()
-            imgui.text(
-                f"CPU system {_ms(perf.cpu_system_percent, '5.1f')}%   "
-                f"process {_ms(perf.cpu_process_percent, '6.1f')}% "
-                f"({_ms(perf.cpu_process_percent_per_core, '4.1f')}%/core)"
-            )
-            imgui.text(f"resident memory {perf.rss_bytes / 2**20:7.1f} MiB")
-            imgui.text(f"overlay cost {overlay_ms:.3f} ms   monitor {_ms(perf.overhead_ms * 1e3, '.1f')} us")
+            # short lines: the window is 300 pixels wide in the editor's narrow layout
+            imgui.text(f"CPU system {_ms(perf.cpu_system_percent, '5.1f')}%")
+            per_core = _ms(perf.cpu_process_percent_per_core, ".1f")
+            imgui.text(f"    process {_ms(perf.cpu_process_percent, '5.1f')}% ({per_core}%/core)")
+            imgui.text(f"resident memory {perf.rss_bytes / 2**20:.1f} MiB")
+            imgui.text(f"overlay {overlay_ms:.3f} ms, monitor {_ms(perf.overhead_ms * 1e3, '.1f')} us")
             self._plot(perf)
         imgui.end()
 
@@ -106,7 +105,7 @@ def fps_placeholder(perf: PerfMonitor) -> str:
     """The FPS line while there is no rate yet (warm-up frames, or one frame: no interval); ""
     once there is one."""
     if perf.warming_up:
-        return f"FPS -   (warming up: {perf.frame_count} of {perf.warmup_frames} frames left out)"
+        return f"FPS -   (warm-up: {perf.frame_count} of {perf.warmup_frames} left out)"
     return "FPS -   (measuring)" if not np.isfinite(perf.fps) else ""
 
 
