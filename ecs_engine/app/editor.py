@@ -326,6 +326,7 @@ class Editor:
         eid = self.selected if self.selected is not None and world.is_alive(self.selected) else None
         if imgui.button("add cube"):
             self.selected = self.add_cube(world)
+        self._remember("add cube")
         same_line_if_fits(imgui, button_width(imgui, "add light"))
         if imgui.button("add light"):
             self.selected = self.add_light(world)

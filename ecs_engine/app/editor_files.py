@@ -14,7 +14,7 @@ headless, under Xvfb and in tests; no desktop file chooser is needed.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +36,9 @@ class FileMenu:
     dialog: str | None = None  # OPEN or SAVE while the dialog is to be shown
     focus: bool = False  # give the path field the keyboard on the dialog's first frame
     pending: str | None = None  # a file requested as the next scene, until the loop applied it
+    # screen rectangles (x0, y0, x1, y1) of the menu and its items as last drawn: where synthetic
+    # input (tests, scripted runs) should click
+    rects: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
 
     def draw(self, imgui: Any, world: World, editor: Any) -> None:
         """The menu bar, the shortcuts and the dialog (call before the dock space: the menu bar
@@ -45,9 +48,13 @@ class FileMenu:
             self._done(f"opened {self.pending}" if opened else editor.settings_status, failed=not opened)
             self.pending = None
         if imgui.begin_main_menu_bar():
-            if imgui.begin_menu("File"):
+            opened = imgui.begin_menu("File")
+            if not opened:  # (open, the last item is the menu's window)
+                self._remember(imgui, "File")
+            if opened:
                 if imgui.menu_item("Open...", "Ctrl+O", False)[0]:
                     self.ask(OPEN, editor)
+                self._remember(imgui, "Open...")
                 if imgui.menu_item("Save", "Ctrl+S", False)[0]:
                     self.save_or_ask(world, editor)
                 if imgui.menu_item("Save as...", "", False)[0]:
@@ -105,6 +112,10 @@ class FileMenu:
         name = _listed(editor, str(file))
         editor.requested.scene = self.pending = name
         return self._done(f"opening {file}")
+
+    def _remember(self, imgui: Any, name: str) -> None:
+        lo, hi = imgui.get_item_rect_min(), imgui.get_item_rect_max()
+        self.rects[name] = (lo.x, lo.y, hi.x, hi.y)
 
     def _done(self, status: str, failed: bool = False) -> bool:
         self.status, self.failed = status, failed

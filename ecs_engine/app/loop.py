@@ -66,20 +66,24 @@ def run(
             if target is None:
                 continue
             t0 = time.perf_counter()
-            if editor is not None and source.input is not None:
-                source.input.keyboard_captured_by_ui = editor.wants_keyboard  # keys typed into the UI
-                source.input.mouse_captured_by_ui = editor.wants_mouse  # over a UI window, or dragging one
-            if script is not None or recorder is not None:
-                keys = held_keys(session)
+            if script is not None or recorder is not None or source.input is not None:
+                keys = held_keys(session)  # a window's own InputState, or the script's headless
+                if editor is not None:
+                    keys.keyboard_captured_by_ui = editor.wants_keyboard  # keys typed into the UI
+                    keys.mouse_captured_by_ui = editor.wants_mouse  # over a UI window, or dragging one
                 if source.window is None:  # headless: a script's mouse is in the offscreen image's pixels
                     keys.viewport = (float(options.width), float(options.height))
                 if script is not None:
                     script.apply(frames, keys)
+                    if editor is not None:  # the UI gets the script's clicks, keys and text too
+                        editor.feed(script.events.get(frames, ()))
                 if recorder is not None:
                     recorder.frame(frames, keys)
             session.schedule.run_frame(session.world, target.dt, source.clock, max_frame_dt=source.max_frame_dt)
             held = session.world.resources.get(InputState)
             if held is not None:
+                if "escape" in held.just_pressed and not held.keyboard_captured_by_ui:
+                    source.request_close()  # Esc quits (unless a text field or dialog has the keys)
                 held.end_frame()  # the systems saw this frame's presses and releases
             if editor is not None:
                 width, height = target.extent or (options.width, options.height)

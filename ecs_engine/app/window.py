@@ -142,8 +142,7 @@ class WindowSource:
         names = key_names(glfw)
 
         def on_key(_win: Any, key: int, _code: int, action: int, _mods: int) -> None:
-            if key == glfw.KEY_ESCAPE and action == glfw.PRESS:
-                glfw.set_window_should_close(self.window, True)
+            # Esc goes to the InputState like any key: the run loop quits on it, a script's too
             if key == glfw.KEY_F12 and action == glfw.PRESS:
                 self.request_screenshot()
             apply_key(glfw, names, self.input, key, action)
@@ -178,6 +177,10 @@ class WindowSource:
             self._final_shot = True  # one more frame, read back: the --screenshot
             return True
         return not closing
+
+    def request_close(self) -> None:
+        """Close the window after this frame (Esc); with --screenshot one more frame is read back."""
+        self.glfw.set_window_should_close(self.window, True)
 
     def request_screenshot(self) -> None:
         """Read the next presented frame back and write it (F12)."""
