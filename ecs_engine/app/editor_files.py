@@ -5,8 +5,10 @@ menu bar above the docked panels, with Ctrl+O and Ctrl+S.
   where they can be made again (render/scene_assets.py), to the scene file it came from; a scene
   that came from no file asks for a path first (Save as). A failed save keeps the old file.
 - Open asks for a path and requests it as the next scene, like any scene switch: the run loop's
-  Session.apply loads it between frames; a bad file is refused with one line (under the scene
-  settings) and the scene in use stays.
+  Session.apply loads it between frames; a bad file is refused with one line (in the menu bar and
+  under the scene settings) and the scene in use stays. So is one that loads but fails in its
+  first frames (a Parent loop, a missing environment file): the loop goes back to the scene
+  before it (Session.roll_back). Opening a file never ends the editor.
 
 The dialog is ImGui's own (a path field and the scene files of its folder), so it works the same
 headless, under Xvfb and in tests; no desktop file chooser is needed.
@@ -112,6 +114,12 @@ class FileMenu:
         name = _listed(editor, str(file))
         editor.requested.scene = self.pending = name
         return self._done(f"opening {file}")
+
+    def failed_after_opening(self, message: str) -> None:
+        """The scene opened loaded but failed in its first frames (the run loop went back to the
+        one before it): the menu bar says so instead of "opened"."""
+        self.pending = None
+        self._done(message, failed=True)
 
     def _remember(self, imgui: Any, name: str) -> None:
         lo, hi = imgui.get_item_rect_min(), imgui.get_item_rect_max()

@@ -85,9 +85,29 @@ class ImGuiSession:
             io.delta_time = max(float(dt), 1e-6)
         self.scripted.flush()  # after the backend's events: the script's pointer wins
         imgui.new_frame()
-        self.draw(world, stats, perf)
-        imgui.render()
+        begun = imgui.internal.ErrorRecoveryState()
+        imgui.internal.error_recovery_store_state(begun)
+        try:
+            self.draw(world, stats, perf)
+        except Exception:
+            self._recover(begun)  # the windows left open are closed: the next frame can begin
+            raise
+        finally:
+            imgui.render()
         self.build_ms = (time.perf_counter() - t0) * 1e3
+
+    def _recover(self, begun: Any) -> None:
+        """End what a failed draw left begun (windows, IDs, ...), quietly: the error is raised."""
+        io = self.imgui.get_io()
+        flags = [f"config_error_recovery_enable_{what}" for what in ("assert", "debug_log", "tooltip")]
+        kept = [getattr(io, flag) for flag in flags]
+        for flag in flags:
+            setattr(io, flag, False)
+        try:
+            self.imgui.internal.error_recovery_try_to_recover_state(begun)
+        finally:
+            for flag, value in zip(flags, kept, strict=True):
+                setattr(io, flag, value)
 
     def draw(self, world: World, stats: Any, perf: PerfMonitor) -> None:
         """The windows (between new_frame and render)."""
@@ -101,6 +121,10 @@ class ImGuiSession:
 
     def refused(self, message: str) -> None:
         """A request the session refused."""
+
+    def scene_failed(self, message: str) -> None:
+        """The scene just opened failed in its first frames; the one before it is back."""
+        self.refused(message)
 
     def destroy(self) -> None:
         self.renderer.destroy()

@@ -3,7 +3,8 @@
 
 One turn: the source gives a frame target (or None: minimised, nothing to draw), the schedule
 runs (fixed steps, then the per-frame stages), the editor builds its UI, the renderer records
-and submits, the source presents, and the editor's requests are applied between frames.
+and submits, the source presents, and the editor's requests are applied between frames. A scene
+the editor opened that fails in its first frames is rolled back (Session.roll_back), not fatal.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from .input_script import InputRecorder, read_script
 from .offscreen import OffscreenSource
 from .perf import PerfMonitor, check_writable
 from .report import RunResult, describe_device, save_png, summary_line
-from .session import FrameSource, Session
+from .session import FrameSource, Session, one_line
 from .settings import RunOptions
 
 
@@ -79,24 +80,35 @@ def run(
                         editor.feed(script.events.get(frames, ()))
                 if recorder is not None:
                     recorder.frame(frames, keys)
-            session.schedule.run_frame(session.world, target.dt, source.clock, max_frame_dt=source.max_frame_dt)
-            held = session.world.resources.get(InputState)
-            if held is not None:
-                if "escape" in held.just_pressed and not held.keyboard_captured_by_ui:
-                    source.request_close()  # Esc quits (unless a text field or dialog has the keys)
-                held.end_frame()  # the systems saw this frame's presses and releases
-            if editor is not None:
-                width, height = target.extent or (options.width, options.height)
-                editor.build(session.world, result.last_stats, perf, target.dt, width, height)
-            stats = session.renderer.render(
-                session.world,
-                readback=target.readback,
-                framebuffer=target.framebuffer,
-                extent=target.extent,
-                wait=target.wait,
-                signal=target.signal,
-                dt=target.dt,
-            )
+            try:
+                session.schedule.run_frame(session.world, target.dt, source.clock, max_frame_dt=source.max_frame_dt)
+                held = session.world.resources.get(InputState)
+                if held is not None:
+                    if "escape" in held.just_pressed and not held.keyboard_captured_by_ui:
+                        source.request_close()  # Esc quits (unless a text field or dialog has the keys)
+                    held.end_frame()  # the systems saw this frame's presses and releases
+                if editor is not None:
+                    width, height = target.extent or (options.width, options.height)
+                    editor.build(session.world, result.last_stats, perf, target.dt, width, height)
+                stats = session.renderer.render(
+                    session.world,
+                    readback=target.readback,
+                    framebuffer=target.framebuffer,
+                    extent=target.extent,
+                    wait=target.wait,
+                    signal=target.signal,
+                    dt=target.dt,
+                )
+            except Exception as exc:  # a scene opened moments ago may fail in any way: not the run's end
+                failed = session.roll_back()  # the scene before it, if there is one to go back to
+                if failed is None:
+                    raise
+                source.abandon(session, target)
+                if editor is not None:
+                    editor.scene_failed(f"{failed} cannot run: {one_line(exc)}")
+                    editor.in_force(session.settings)
+                continue
+            session.frame_done()
             end = time.perf_counter()
             # CPU work: not the waits for the GPU (renderer); the wait for an image came before t0
             result.add_frame(

@@ -90,6 +90,9 @@ class OffscreenSource:
     def request_close(self) -> None:
         self._close = True
 
+    def abandon(self, session: Session, target: FrameTarget) -> None:
+        pass  # nothing was acquired
+
     def begin(self, session: Session, frames_done: int) -> FrameTarget:
         return FrameTarget(dt=FIXED_DT, readback=self.readback_last and frames_done == self.frames - 1)
 
