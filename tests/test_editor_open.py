@@ -151,6 +151,7 @@ def test_a_scene_that_loads_but_cannot_run_is_refused_and_the_old_one_stays(tmp_
     assert "a parent chain loops" in statuses[0] and "a parent chain loops" in statuses[1]
     assert "no-such-sky.hdr" in statuses[2]
     assert "Mesh.handle 4000000000" in statuses[3]
+    assert not set(bad.values()) & set(editor.editor.scenes)  # the switcher does not offer them
     # drawn as before any open: the same world, its sky map and cube still on the GPU
     plain, _, quiet = editor_run(start, {}, frames, tmp_path)
     assert np.abs(central(result, editor).astype(int) - central(plain, quiet)).max() <= 2
@@ -216,6 +217,7 @@ def test_broken_scene_files_leave_the_editor_running_with_the_old_scene(tmp_path
     assert result.frames == frames
     check_refused(editor.seen, opens, start)
     assert session.scene == start and session.world.query(Mesh, write=()).count() == 1
+    assert editor.editor.scenes == ("start",)  # no broken file is offered in the scene switcher
 
 
 @pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs a display (make test runs under Xvfb)")

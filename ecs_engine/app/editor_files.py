@@ -48,6 +48,8 @@ class FileMenu:
         if self.pending is not None and editor.requested == editor.settings:  # the loop answered
             opened = editor.settings.scene == self.pending
             self._done(f"opened {self.pending}" if opened else editor.settings_status, failed=not opened)
+            if not opened:
+                _unlisted(editor, self.pending)
             self.pending = None
         if imgui.begin_main_menu_bar():
             opened = imgui.begin_menu("File")
@@ -115,10 +117,12 @@ class FileMenu:
         editor.requested.scene = self.pending = name
         return self._done(f"opening {file}")
 
-    def failed_after_opening(self, message: str) -> None:
-        """The scene opened loaded but failed in its first frames (the run loop went back to the
-        one before it): the menu bar says so instead of "opened"."""
+    def failed_after_opening(self, editor: Any, scene: str, message: str) -> None:
+        """`scene` loaded but failed in its first frames (the run loop went back to the one
+        before it): the menu bar says so instead of "opened", and the scene switcher no longer
+        offers it."""
         self.pending = None
+        _unlisted(editor, scene)
         self._done(message, failed=True)
 
     def _remember(self, imgui: Any, name: str) -> None:
@@ -167,6 +171,12 @@ def _listed(editor: Any, name: str) -> str:
     if name not in editor.scenes:
         editor.scenes = (*editor.scenes, name)
     return name
+
+
+def _unlisted(editor: Any, name: str) -> None:
+    """A scene file that cannot be opened out of the scene switcher (unless it is in use)."""
+    if name != editor.settings.scene:
+        editor.scenes = tuple(s for s in editor.scenes if s != name)
 
 
 def _scene_files(path: str) -> list[Path]:

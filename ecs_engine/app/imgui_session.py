@@ -122,8 +122,8 @@ class ImGuiSession:
     def refused(self, message: str) -> None:
         """A request the session refused."""
 
-    def scene_failed(self, message: str) -> None:
-        """The scene just opened failed in its first frames; the one before it is back."""
+    def scene_failed(self, scene: str, message: str) -> None:
+        """`scene`, just opened, failed in its first frames; the one before it is back."""
         self.refused(message)
 
     def destroy(self) -> None:

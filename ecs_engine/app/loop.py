@@ -105,8 +105,8 @@ def run(
                     raise
                 source.abandon(session, target)
                 if editor is not None:
-                    editor.scene_failed(f"{failed} cannot run: {one_line(exc)}")
                     editor.in_force(session.settings)
+                    editor.scene_failed(failed, f"{failed} cannot run: {one_line(exc)}")
                 continue
             session.frame_done()
             end = time.perf_counter()
