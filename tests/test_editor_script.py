@@ -5,6 +5,7 @@ opens), and quits with Esc before --frames; Esc in the dialog closes the dialog,
 
 from __future__ import annotations
 
+import os
 from typing import Any
 
 import pytest
@@ -46,7 +47,8 @@ class Watched(EditorSession):
         )
 
 
-def editor_run(tmp_path, script: str, frames: int) -> tuple[Any, Watched, Session]:
+def editor_run(tmp_path, script: str, frames: int, window: Any = None) -> tuple[Any, Watched, Session]:
+    """A headless run, or in a window (`window`: True, or its on_frame hook)."""
     path = tmp_path / "script.txt"
     path.write_text(script)
     made: list[Any] = []
@@ -62,7 +64,17 @@ def editor_run(tmp_path, script: str, frames: int) -> tuple[Any, Watched, Sessio
     options = RunOptions(
         scene="cube", width=W, height=H, frames=frames, validate=True, quiet=True, editor=True, input_script=str(path)
     )
-    result = run(options, make_session=session, ui=ui)
+    source = None
+    if window:
+        from dataclasses import replace
+
+        from ecs_engine.app.window import WindowSource, open_glfw
+
+        glfw = open_glfw()
+        assert glfw is not None
+        hook = window if callable(window) else None
+        options, source = replace(options, headless=False), WindowSource(glfw, hook)
+    result = run(options, source, make_session=session, ui=ui)
     assert result.validation_messages == []
     return result, made[1], made[0]
 
@@ -131,3 +143,23 @@ def test_esc_in_the_open_dialog_closes_the_dialog_not_the_editor(tmp_path):
     seen = editor.seen
     assert seen[4]["dialog"] == "Open scene" and seen[7]["dialog"] is None
     assert result.frames == 10  # the run went on
+
+
+@pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs a display (make test runs under Xvfb)")
+def test_in_a_window_the_scripts_pointer_clicks_not_the_real_one(tmp_path, layout):
+    """ImGui's GLFW backend reports where the real cursor goes (here: moved over the settings
+    panel between the script's move and its click): the script's pointer goes to ImGui after it,
+    so the script's click lands where the script says."""
+    from test_quit_key import x_display
+
+    def real_pointer(frame: int, glfw: Any, window: Any) -> None:
+        if frame in (2, 4):
+            with x_display() as (x11, display):
+                x11.XSetInputFocus(display, glfw.get_x11_window(window), 1, 0)
+                x11.XWarpPointer(display, 0, glfw.get_x11_window(window), 0, 0, 0, 0, 20 + frame, 100)
+
+    script = click(3, centre(layout["central"])) + "6 down r\n7 up r\n"
+    result, editor, _ = editor_run(tmp_path, script, frames=10, window=real_pointer)
+    seen = editor.seen
+    assert seen[5]["selected"] is not None and seen[5]["picked"] == seen[5]["selected"]
+    assert seen[7]["gizmo"] == "scale" and result.frames == 10

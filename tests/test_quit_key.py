@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import ctypes
 import os
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -57,29 +58,36 @@ def test_a_scripted_esc_ends_a_headless_editor_run(tmp_path):
     assert result.frames == 4 and result.validation_messages == []
 
 
-def press_escape_on(glfw, window) -> None:
-    """A real Esc: a key press and release sent to the X server (XTest), to the focused window."""
-    x11, xtst = ctypes.CDLL("libX11.so.6"), ctypes.CDLL("libXtst.so.6")
+@contextmanager
+def x_display():
+    """Xlib (ctypes) and a connection to the X server the tests run under (Xvfb)."""
+    x11 = ctypes.CDLL("libX11.so.6")
     x11.XOpenDisplay.restype = ctypes.c_void_p
     x11.XOpenDisplay.argtypes = [ctypes.c_char_p]
-    for name in ("XSetInputFocus", "XKeysymToKeycode", "XSync", "XCloseDisplay"):
-        getattr(x11, name).argtypes = [ctypes.c_void_p] + {
-            "XSetInputFocus": [ctypes.c_ulong, ctypes.c_int, ctypes.c_ulong],
-            "XKeysymToKeycode": [ctypes.c_ulong],
-            "XSync": [ctypes.c_int],
-            "XCloseDisplay": [],
-        }[name]
-    xtst.XTestFakeKeyEvent.argtypes = [ctypes.c_void_p, ctypes.c_uint, ctypes.c_int, ctypes.c_ulong]
+    x11.XSetInputFocus.argtypes = [ctypes.c_void_p, ctypes.c_ulong, ctypes.c_int, ctypes.c_ulong]
+    x11.XKeysymToKeycode.argtypes = [ctypes.c_void_p, ctypes.c_ulong]
+    x11.XWarpPointer.argtypes = [ctypes.c_void_p, ctypes.c_ulong, ctypes.c_ulong] + [ctypes.c_int] * 2
+    x11.XWarpPointer.argtypes += [ctypes.c_uint] * 2 + [ctypes.c_int] * 2
+    x11.XSync.argtypes = [ctypes.c_void_p, ctypes.c_int]
+    x11.XCloseDisplay.argtypes = [ctypes.c_void_p]
     display = x11.XOpenDisplay(None)
     assert display, "no X display"
     try:
+        yield x11, display
+        x11.XSync(display, 0)
+    finally:
+        x11.XCloseDisplay(display)
+
+
+def press_escape_on(glfw, window) -> None:
+    """A real Esc: a key press and release sent to the X server (XTest), to the focused window."""
+    xtst = ctypes.CDLL("libXtst.so.6")
+    xtst.XTestFakeKeyEvent.argtypes = [ctypes.c_void_p, ctypes.c_uint, ctypes.c_int, ctypes.c_ulong]
+    with x_display() as (x11, display):
         x11.XSetInputFocus(display, glfw.get_x11_window(window), 1, 0)  # RevertToPointerRoot, CurrentTime
         code = x11.XKeysymToKeycode(display, 0xFF1B)  # XK_Escape
         xtst.XTestFakeKeyEvent(display, code, 1, 0)
         xtst.XTestFakeKeyEvent(display, code, 0, 0)
-        x11.XSync(display, 0)
-    finally:
-        x11.XCloseDisplay(display)
 
 
 def real_escape_at(frame: int):
