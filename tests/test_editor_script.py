@@ -163,3 +163,14 @@ def test_in_a_window_the_scripts_pointer_clicks_not_the_real_one(tmp_path, layou
     seen = editor.seen
     assert seen[5]["selected"] is not None and seen[5]["picked"] == seen[5]["selected"]
     assert seen[7]["gizmo"] == "scale" and result.frames == 10
+
+
+def test_a_headless_scripted_run_builds_the_ui_every_frame(tmp_path):
+    """The UI's rate limit (wall clock) would put a script's frames into whichever UI frame the
+    machine's speed gives; with a script the UI is built every frame, so a run replays the same
+    on a 2-core box and on the GPU host."""
+    path = tmp_path / "keys.txt"
+    path.write_text("2 down e\n3 up e\n")
+    options = RunOptions(scene="cube", width=320, height=240, frames=8, quiet=True, editor=True, input_script=str(path))
+    result = run(options, max_ui_hz=0.5)  # at most one UI every 2 s, were it not for the script
+    assert result.editor.builds == 8 and result.editor.editor.gizmo.operation == "rotate"

@@ -57,6 +57,8 @@ def run(
         if ui is not None:  # after the source's key callbacks: ImGui's GLFW backend chains to them
             editor = result.editor = ui(session, source.window)
         elif options.editor:
+            if script is not None and source.window is None:
+                max_ui_hz = None  # a UI built every frame: a script's frames are the UI's, whatever the speed
             editor = result.editor = EditorSession(session, options.scenes, default_threads(), source.window, max_ui_hz)
         say(f"{source.describe(session)} on {result.device}")
         start = time.perf_counter()
