@@ -115,3 +115,14 @@ def test_esc_quits_a_window_scripted_or_real(tmp_path, editor):
     glfw = open_glfw()
     real = run_windowed(replace(options(tmp_path, input_script=None, **extra), headless=False), glfw, real_escape_at(3))
     assert real.frames == 4 and real.validation_messages == []
+
+
+@windowed
+def test_a_scripted_esc_ends_a_windowed_game(tmp_path, capsys):
+    from ecs_engine.app.cli import main
+
+    code = main(
+        ["play", "asteroids", "--width", "96", "--height", "64", "--frames", "40", "--input-script", script(tmp_path)]
+    )
+    out = capsys.readouterr().out
+    assert code == 0 and "window 96x64" in out and "\nframe 4: " in out, out
