@@ -171,3 +171,18 @@ def test_the_hierarchy_window_shows_the_tree_and_a_drag_reparents(scene):
     scene.frame()
     assert world.get(c, Parent).entity == b
     np.testing.assert_allclose(world.get(c, WorldMatrix).matrix[:3, 3], world_before, atol=1e-6)
+
+
+def test_the_gizmo_draws_over_the_scene_not_in_imguis_fallback_window(scene):
+    """ImGuizmo with no draw list draws into the current window: outside every window that was
+    ImGui's fallback "Debug" window, which then showed (and clipped the gizmo to itself)."""
+    from imgui_bundle import imgui
+
+    editor, world = scene.session.editor, scene.state.world
+    editor.selected = int(world.query(Transform).entities()[0])
+    scene.frame()
+    scene.frame()
+    debug = imgui.internal.find_window_by_name("Debug##Default")
+    assert debug is None or not debug.was_active
+    drawn = imgui.get_draw_data()
+    assert drawn.cmd_lists_count >= 2  # the background list (the gizmo) and the windows'

@@ -84,7 +84,10 @@ class ShadowsEditor(Scene):
 
 
 @pytest.fixture
-def scene():
+def scene(monkeypatch):
+    from ecs_engine.app import editor_dock
+
+    monkeypatch.setattr(editor_dock, "WIDE", 0.0)  # the inspector down the whole right side
     s = ShadowsEditor()
     try:
         yield s

@@ -47,6 +47,10 @@ def test_a_script_parses_and_applies_by_frame(tmp_path):
         ("1 scroll inf 0\n", "DX 'inf' is not a finite number"),
         ("1\n", "line 1: expected one of FRAME down|up KEY, FRAME axis AXIS VALUE"),
         ("1 down gamepad_aa\n", "did you mean gamepad_a"),
+        ("1 text hello\n", "line 1: text is one JSON string in double quotes"),
+        ('1 text "a" b\n', "line 1: text is one JSON string"),
+        ("1 text\n", "line 1: text is one JSON string"),
+        ('1 text "open\n', "line 1: text is one JSON string"),
     ],
 )
 def test_a_bad_script_is_one_error_naming_the_line(tmp_path, text, message):
@@ -56,6 +60,35 @@ def test_a_bad_script_is_one_error_naming_the_line(tmp_path, text, message):
         read_script(path)
     with pytest.raises(UsageError, match="cannot be read"):
         read_script(tmp_path / "missing.txt")
+
+
+def test_text_is_one_json_string_and_a_recording_keeps_it(tmp_path):
+    """Typed text (for the editor's fields): quotes, a # and escapes inside the string, a comment
+    after it; the window's typed characters are recorded and replay the same."""
+    path = tmp_path / "type.txt"
+    path.write_text('2 text "level #2.scene"  # the path field\n3 text "a \\"quoted\\" \\u00e9"\n3 down enter\n')
+    script, state = read_script(path), InputState()
+    typed = []
+    for frame in range(4):
+        script.apply(frame, state)
+        typed.append(state.text)
+        state.end_frame()
+    assert typed == ["", "", "level #2.scene", 'a "quoted" \u00e9']
+    assert script.events[3] == [("text", 'a "quoted" \u00e9'), ("down", "enter")]
+    recorder, live = InputRecorder(tmp_path / "rec.txt"), InputState()
+    for frame, text in enumerate(typed):
+        live.text = text
+        if frame == 3:
+            live.press("enter")
+        recorder.frame(frame, live)
+        live.end_frame()
+    recorder.write()
+    replay, again = read_script(tmp_path / "rec.txt"), InputState()
+    for frame, text in enumerate(typed):
+        replay.apply(frame, again)
+        assert again.text == text
+        again.end_frame()
+    assert replay.events[3] == [("down", "enter"), ("text", 'a "quoted" \u00e9')]  # a key, then its character
 
 
 def test_gamepads_and_the_mouse_by_frame(tmp_path):

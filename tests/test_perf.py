@@ -12,7 +12,16 @@ import warnings
 import numpy as np
 import pytest
 
-from ecs_engine.app.perf import METRICS, PerfLog, PerfMonitor, ProcessSample, PsutilSampler, Stats, check_writable
+from ecs_engine.app.perf import (
+    METRICS,
+    WARMUP_FRAMES,
+    PerfLog,
+    PerfMonitor,
+    ProcessSample,
+    PsutilSampler,
+    Stats,
+    check_writable,
+)
 from ecs_engine.errors import UsageError
 
 MiB = 2**20
@@ -48,7 +57,9 @@ class FakeSampler:
 
 
 def monitor(clock: FakeClock, **kwargs) -> tuple[PerfMonitor, FakeSampler]:
+    """A monitor on `clock`; every frame counts unless `warmup_frames` is given."""
     sampler = kwargs.pop("sampler", None) or FakeSampler(clock)
+    kwargs.setdefault("warmup_frames", 0)
     return PerfMonitor(clock=clock, sampler=sampler, **kwargs), sampler
 
 
@@ -221,6 +232,66 @@ def test_latest_counters_are_those_of_the_last_frame():
     assert mon.counters == {"draws": 2, "visible": 100, "triangles": 1200}
 
 
+# -- warm-up ---------------------------------------------------------------------------------------
+
+
+def test_warm_up_frames_stay_out_of_the_window_the_summary_and_the_logs_figures(tmp_path):
+    """The first frames (6.5 s of pipeline creation and JIT on the 2-core box) would make the
+    rolling CPU mean seconds long for the whole window: they are logged but not counted."""
+    assert PerfMonitor().warmup_frames == WARMUP_FRAMES == 5  # what a run's monitor gets (loop.py)
+    clock = FakeClock()
+    mon, _ = monitor(clock, warmup_frames=5, log=tmp_path / "perf.json")
+    assert mon.warming_up
+    for cpu in (6500.0, 900.0, 40.0, 30.0):
+        clock.t += cpu / 1e3
+        mon.frame(cpu_ms=cpu, gpu_ms=cpu / 2)
+    assert mon.warming_up and mon.frame_count == 4
+    assert math.isnan(mon.fps) and math.isnan(mon.stats("cpu_ms").mean)
+    assert mon.summary_line().startswith("warm-up frame 4 of 5 (left out of the figures) | sys 6%")
+    clock.t += 0.02
+    mon.frame(cpu_ms=20.0)  # the last warm-up frame
+    assert not mon.warming_up and mon.series("cpu_ms").size == 0
+    run(mon, clock, 100, 0.002, cpu_ms=1.0, gpu_ms=0.5)
+    assert mon.stats("cpu_ms") == Stats(1.0, 1.0, 1.0)
+    assert mon.stats("gpu_ms") == Stats(0.5, 0.5, 0.5)
+    assert mon.fps == pytest.approx(500.0)  # the first counted frame's interval starts at the last warm-up frame
+    assert mon.summary_line().startswith("fps 500 | cpu 1.00 ms (p99 1.00) | record 0.00 | gpu 0.50 ms")
+    mon.write_json()
+    doc = json.loads((tmp_path / "perf.json").read_text())
+    assert len(doc["frames"]) == 105 and doc["frames"][0]["cpu_ms"] == 6500.0  # every frame is kept
+    assert doc["warmup_frames"] == 5
+    assert doc["summary"]["cpu_ms"] == {"min": 1.0, "mean": 1.0, "p99": 1.0}
+    assert doc["fps"] == pytest.approx(500.0)
+
+
+def test_a_run_shorter_than_the_warm_up_summarises_every_frame(tmp_path):
+    clock = FakeClock()
+    mon, _ = monitor(clock, warmup_frames=5, log=True)
+    run(mon, clock, 3, 0.01, cpu_ms=2.0)
+    doc = mon.log.to_dict({}, 16, mon.warmup_frames)
+    assert doc["warmup_frames"] == 0 and doc["summary"]["cpu_ms"]["mean"] == 2.0
+    with pytest.raises(ValueError, match="warmup_frames"):
+        PerfMonitor(clock=clock, sampler=FakeSampler(clock), warmup_frames=-1)
+
+
+def test_the_perf_windows_fps_line_never_shows_nan():
+    from ecs_engine.app.perf_overlay import fps_placeholder
+
+    clock = FakeClock()
+    mon, _ = monitor(clock, warmup_frames=2)
+    lines = []
+    for _ in range(5):
+        lines.append(fps_placeholder(mon) or f"FPS {mon.fps:7.1f}")
+        clock.t += 0.01
+        mon.frame(1.0)
+    assert "nan" not in " ".join(lines).lower()
+    assert lines[:2] == [
+        "FPS -   (warm-up: 0 of 2 left out)",
+        "FPS -   (warm-up: 1 of 2 left out)",
+    ]
+    assert lines[2:] == ["FPS -   (measuring)", "FPS   100.0", "FPS   100.0"]
+
+
 # -- ring capacity ---------------------------------------------------------------------------------
 
 
@@ -302,7 +373,7 @@ def test_process_percent_raw_and_per_core():
 
 
 def test_real_psutil_sampler_gives_finite_values():
-    mon = PerfMonitor()
+    mon = PerfMonitor(warmup_frames=0)
     mon.frame(cpu_ms=1.0, record_ms=0.5, gpu_ms=None, wait_ms=0.1, draws=1)
     assert mon.cores >= 1
     for value in (mon.cpu_system_percent, mon.cpu_process_percent, mon.cpu_process_percent_per_core):
@@ -392,7 +463,8 @@ def test_json_round_trip(tmp_path):
         mon.frame(cpu_ms=1.0 + k % 7, record_ms=0.25, gpu_ms=g, wait_ms=0.125, draws=2, visible=k)
     mon.write_json(meta={"scene": "cubes", "count": 100})
     doc = json.loads(path.read_text())
-    assert set(doc) == {"schema_version", "meta", "frames", "psutil", "summary", "fps"}
+    assert set(doc) == {"schema_version", "meta", "frames", "psutil", "warmup_frames", "summary", "fps"}
+    assert doc["warmup_frames"] == 0
     assert doc["schema_version"] == 1
     assert doc["meta"] == {"scene": "cubes", "count": 100, "logical_cores": 16}
     frames = doc["frames"]

@@ -33,8 +33,9 @@ from .editor_dock import DockLayout
 from .editor_files import FileMenu
 from .editor_gizmo import OPERATIONS, Gizmo
 from .editor_history import History
-from .editor_lights import LIGHT_SECTIONS, ShadowMapImages
-from .editor_materials import MaterialsPanel, mesh_section
+from .editor_layout import button_width, hint, push_label_room, radio_width, same_line_if_fits, wrapped_colored
+from .editor_lights import LIGHT_LABELS, LIGHT_SECTIONS, ShadowMapImages
+from .editor_materials import MESH_LABELS, MaterialsPanel, mesh_section
 from .editor_tree import HierarchyPanel, drag_source
 from .settings import Settings
 
@@ -43,6 +44,13 @@ if TYPE_CHECKING:
     from ..render.renderer import Renderer
 
 PRESENT_MODES = tuple(SWAPCHAIN_PRESENT_MODES)
+# the labels of each window's fields: the fields leave room for the widest (editor_layout.py)
+SETTINGS_LABELS = (
+    *("scene", "mode", "recorder", "threads", "culling", "fill", "tone map", "exposure (EV)", "light culling"),
+    *("transparency", "shadows", "present", "environment"),
+)
+BROWSER_LABELS = ("id or name", "with")
+ENTITY_LABELS = ("name", "position", "rotation (deg)", "scale", "fov (deg)", "near", "far")
 
 
 @dataclass
@@ -190,6 +198,7 @@ class Editor:
         imgui.set_next_window_pos((10, 10), imgui.Cond_.first_use_ever.value)
         imgui.set_next_window_size((300, 310), imgui.Cond_.first_use_ever.value)
         if imgui.begin("Scene and render")[0]:
+            push_label_room(imgui, SETTINGS_LABELS)
             req.scene = _combo(imgui, "scene", req.scene, self.scenes)
             req.mode = _combo(imgui, "mode", req.mode, MODES)
             if PATHS[req.mode].uses_recorder:
@@ -213,13 +222,14 @@ class Editor:
             if req.present is not None:
                 req.present = _combo(imgui, "present", req.present, PRESENT_MODES)
             self._environment(world)
+            imgui.pop_item_width()
             imgui.separator()
             imgui.text(f"entities   {stats.entities:,}")
             imgui.text(f"visible    {stats.visible:,}")
             imgui.text(f"draws      {stats.draws:,}")
             imgui.text(f"triangles  {stats.triangles:,}")
             if self.settings_status:
-                imgui.text_colored((1.0, 0.4, 0.3, 1.0), self.settings_status)
+                wrapped_colored(imgui, (1.0, 0.4, 0.3, 1.0), self.settings_status)
         imgui.end()
 
     def _environment(self, world: World) -> None:
@@ -285,9 +295,11 @@ class Editor:
     def _browser(self, world: World) -> None:
         imgui = self.imgui
         b = self.browser
+        push_label_room(imgui, BROWSER_LABELS)
         _, b.search = imgui.input_text("id or name", b.search)
         names = self.component_names(world)
         _, b.component = imgui.combo("with", min(b.component, len(names) - 1), names)
+        imgui.pop_item_width()
         ids = self.filtered_ids(world)
         imgui.text(f"{len(ids):,} entities")
         if imgui.begin_child("ids"):
@@ -311,35 +323,39 @@ class Editor:
     # --------------------------------------------------------------- inspector
     def _inspector(self, world: World) -> None:
         imgui = self.imgui
+        eid = self.selected if self.selected is not None and world.is_alive(self.selected) else None
         if imgui.button("add cube"):
             self.selected = self.add_cube(world)
-        imgui.same_line()
+        self._remember("add cube")
+        same_line_if_fits(imgui, button_width(imgui, "add light"))
         if imgui.button("add light"):
             self.selected = self.add_light(world)
+        if eid is not None:
+            same_line_if_fits(imgui, button_width(imgui, "destroy"))
+            if imgui.button("destroy"):
+                world.destroy(eid)
+                self.selected = eid = None
         if imgui.button("undo"):
             self.history.undo(world)
         self._remember("undo")
         imgui.same_line()
         if imgui.button("redo"):
             self.history.redo(world)
-        for operation in OPERATIONS:  # the gizmo's (W, E, R in the scene)
-            imgui.same_line()
+        for k, operation in enumerate(OPERATIONS):  # the gizmo's (W, E, R in the scene), a row of their own
+            if k:
+                same_line_if_fits(imgui, radio_width(imgui, operation))
             if imgui.radio_button(operation, self.gizmo.operation == operation):
                 self.gizmo.operation = operation
+            self._remember(operation)
         if self.history.status:
-            imgui.text_colored((1.0, 0.7, 0.3, 1.0), self.history.status)
-        eid = self.selected
-        if eid is None or not world.is_alive(eid):
+            wrapped_colored(imgui, (1.0, 0.7, 0.3, 1.0), self.history.status)
+        if eid is None:
             imgui.text("select an entity")
-            return
-        imgui.same_line()
-        if imgui.button("destroy"):
-            world.destroy(eid)
-            self.selected = None
             return
         if self.status_entity != eid:
             self.status = ""  # an error about another entity
         imgui.text(f"entity {eid & 0xFFFFFFFF} (gen {eid >> 32})")
+        push_label_room(imgui, ENTITY_LABELS + LIGHT_LABELS + MESH_LABELS)
         if Name in world.components(eid):
             changed, name = imgui.input_text("name", str(world.get(eid, Name).value))
             if changed:
@@ -358,8 +374,9 @@ class Editor:
                 self._camera(world, eid)
         except ValueError as exc:  # the world's checks (e.g. near >= far): keep the old value
             self.status, self.status_entity = str(exc), eid
+        imgui.pop_item_width()
         if self.status:
-            imgui.text_colored((1.0, 0.4, 0.3, 1.0), self.status)
+            wrapped_colored(imgui, (1.0, 0.4, 0.3, 1.0), self.status)
 
     def _materials(self, world: World) -> None:
         self.materials.draw(self.imgui, world)
@@ -378,7 +395,8 @@ class Editor:
         if changed:
             self.set(world, eid, Transform, position=np.array(pos, dtype=np.float64))
         angles = [math.degrees(a) for a in yaw_pitch_roll(t.rotation)]
-        changed, angles = imgui.drag_float3("yaw pitch roll (deg)", angles, 0.5)
+        changed, angles = imgui.drag_float3("rotation (deg)", angles, 0.5)
+        hint(imgui, "yaw, pitch and roll in degrees")
         if changed:
             q = yaw_pitch_roll_quat(*(math.radians(a) for a in angles))
             self.set(world, eid, Transform, rotation=q)

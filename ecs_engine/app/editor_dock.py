@@ -1,7 +1,10 @@
 """The editor's docked layout: a dock space over the whole window whose central node shows the
 scene (the renderer draws the view for that rectangle: `region`), with the panels docked around it:
 scene settings down the left, the inspector down the right, and under the scene the entity
-browser and the hierarchy (tabs) beside the Perf window. The user may rearrange them; ImGui keeps the layout in
+browser and the hierarchy (tabs) beside the Perf window. In a window narrower than `WIDE` the
+space under the scene would give those two panels under 250 pixels each, so the browser goes
+under the settings and Perf under the inspector instead, and the scene keeps the middle from top
+to bottom. The user may rearrange them; ImGui keeps the layout in
 `editor.ini` in the user's config folder (XDG_CONFIG_HOME, else ~/.config, then `ecs_engine/`),
 so it is the same next run. The default layout is built only when that file has none. A headless
 editor always has the default layout and leaves the file alone.
@@ -19,6 +22,7 @@ RIGHT = ("Inspector",)
 BOTTOM_LEFT = ("Hierarchy", "Entities")  # tabs; the entity browser in front
 BOTTOM_RIGHT = ("Perf",)
 PANEL_WIDTH = 300.0  # pixels the side columns get at least (up to 40% of the window each)
+WIDE = 1200.0  # pixels: from this width the browser and Perf go under the scene
 DOCKSPACE = "editor dock space"
 
 
@@ -87,8 +91,12 @@ class DockLayout:
         side = min(max(PANEL_WIDTH / max(viewport.size.x, 1.0), 0.2), 0.4)
         left, rest = internal.dock_builder_split_node_py(self.id, imgui.Dir.left, side)[1:]
         right, rest = internal.dock_builder_split_node_py(rest, imgui.Dir.right, min(side / (1.0 - side), 0.5))[1:]
-        bottom, _ = internal.dock_builder_split_node_py(rest, imgui.Dir.down, 0.3)[1:]
-        browser, perf = internal.dock_builder_split_node_py(bottom, imgui.Dir.left, 0.45)[1:]
+        if viewport.size.x >= WIDE:
+            bottom, _ = internal.dock_builder_split_node_py(rest, imgui.Dir.down, 0.3)[1:]
+            browser, perf = internal.dock_builder_split_node_py(bottom, imgui.Dir.left, 0.45)[1:]
+        else:
+            browser, left = internal.dock_builder_split_node_py(left, imgui.Dir.down, 0.4)[1:]
+            perf, right = internal.dock_builder_split_node_py(right, imgui.Dir.down, 0.45)[1:]
         for names, node in ((LEFT, left), (RIGHT, right), (BOTTOM_LEFT, browser), (BOTTOM_RIGHT, perf)):
             for name in names:
                 internal.dock_builder_dock_window(name, node)

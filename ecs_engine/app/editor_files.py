@@ -5,8 +5,10 @@ menu bar above the docked panels, with Ctrl+O and Ctrl+S.
   where they can be made again (render/scene_assets.py), to the scene file it came from; a scene
   that came from no file asks for a path first (Save as). A failed save keeps the old file.
 - Open asks for a path and requests it as the next scene, like any scene switch: the run loop's
-  Session.apply loads it between frames; a bad file is refused with one line (under the scene
-  settings) and the scene in use stays.
+  Session.apply loads it between frames; a bad file is refused with one line (in the menu bar and
+  under the scene settings) and the scene in use stays. So is one that loads but fails in its
+  first frames (a Parent loop, a missing environment file): the loop goes back to the scene
+  before it (Session.roll_back). Opening a file never ends the editor.
 
 The dialog is ImGui's own (a path field and the scene files of its folder), so it works the same
 headless, under Xvfb and in tests; no desktop file chooser is needed.
@@ -14,7 +16,7 @@ headless, under Xvfb and in tests; no desktop file chooser is needed.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +38,9 @@ class FileMenu:
     dialog: str | None = None  # OPEN or SAVE while the dialog is to be shown
     focus: bool = False  # give the path field the keyboard on the dialog's first frame
     pending: str | None = None  # a file requested as the next scene, until the loop applied it
+    # screen rectangles (x0, y0, x1, y1) of the menu and its items as last drawn: where synthetic
+    # input (tests, scripted runs) should click
+    rects: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
 
     def draw(self, imgui: Any, world: World, editor: Any) -> None:
         """The menu bar, the shortcuts and the dialog (call before the dock space: the menu bar
@@ -43,11 +48,17 @@ class FileMenu:
         if self.pending is not None and editor.requested == editor.settings:  # the loop answered
             opened = editor.settings.scene == self.pending
             self._done(f"opened {self.pending}" if opened else editor.settings_status, failed=not opened)
+            if not opened:
+                _unlisted(editor, self.pending)
             self.pending = None
         if imgui.begin_main_menu_bar():
-            if imgui.begin_menu("File"):
+            opened = imgui.begin_menu("File")
+            if not opened:  # (open, the last item is the menu's window)
+                self._remember(imgui, "File")
+            if opened:
                 if imgui.menu_item("Open...", "Ctrl+O", False)[0]:
                     self.ask(OPEN, editor)
+                self._remember(imgui, "Open...")
                 if imgui.menu_item("Save", "Ctrl+S", False)[0]:
                     self.save_or_ask(world, editor)
                 if imgui.menu_item("Save as...", "", False)[0]:
@@ -106,6 +117,18 @@ class FileMenu:
         editor.requested.scene = self.pending = name
         return self._done(f"opening {file}")
 
+    def failed_after_opening(self, editor: Any, scene: str, message: str) -> None:
+        """`scene` loaded but failed in its first frames (the run loop went back to the one
+        before it): the menu bar says so instead of "opened", and the scene switcher no longer
+        offers it."""
+        self.pending = None
+        _unlisted(editor, scene)
+        self._done(message, failed=True)
+
+    def _remember(self, imgui: Any, name: str) -> None:
+        lo, hi = imgui.get_item_rect_min(), imgui.get_item_rect_max()
+        self.rects[name] = (lo.x, lo.y, hi.x, hi.y)
+
     def _done(self, status: str, failed: bool = False) -> bool:
         self.status, self.failed = status, failed
         return not failed
@@ -148,6 +171,12 @@ def _listed(editor: Any, name: str) -> str:
     if name not in editor.scenes:
         editor.scenes = (*editor.scenes, name)
     return name
+
+
+def _unlisted(editor: Any, name: str) -> None:
+    """A scene file that cannot be opened out of the scene switcher (unless it is in use)."""
+    if name != editor.settings.scene:
+        editor.scenes = tuple(s for s in editor.scenes if s != name)
 
 
 def _scene_files(path: str) -> list[Path]:

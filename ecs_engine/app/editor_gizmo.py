@@ -56,8 +56,9 @@ class Gizmo:
     """Draws and applies the gizmo for one selected entity each frame."""
 
     def __init__(self) -> None:
-        from imgui_bundle import imguizmo
+        from imgui_bundle import imgui, imguizmo
 
+        self.imgui = imgui
         self.g = imguizmo.im_guizmo
         self.module = imguizmo
         self.operation = "translate"
@@ -78,7 +79,10 @@ class Gizmo:
         g.set_orthographic(int(camera.projection) == ORTHOGRAPHIC)
         x0, y0, x1, y1 = (float(v) for v in rect)
         g.set_rect(x0, y0, x1 - x0, y1 - y0)
-        g.set_drawlist()  # the foreground of the main viewport
+        # under the panels, over the scene (the central node has no window of its own); with no
+        # list given, ImGuizmo draws into the current window: outside any window, ImGui's
+        # fallback "Debug" window, which then shows and clips the gizmo to itself
+        g.set_drawlist(self.imgui.get_background_draw_list())
         view = np.eye(4)
         view[:3, :3] = rotation_matrix(eye.rotation)[:3, :3].T  # the camera at the origin
         t = world.get(entity, Transform)

@@ -19,6 +19,7 @@ import numpy as np
 from ..components import DirectionalLight, PointLight, Shadow, SpotLight
 from ..components.shadow import SHADOW_FILTERS
 from ..ecs.world import World
+from .editor_layout import hint
 
 if TYPE_CHECKING:
     from ..gpu.shadow_maps import ShadowMaps
@@ -96,7 +97,7 @@ class ShadowMapImages:
         views = self.views(eid)
         if not views:
             return
-        imgui.text("shadow maps (near white, far black)")
+        imgui.text_wrapped("shadow maps (near white, far black)")
         spacing = float(imgui.get_style().item_spacing.x)
         avail = float(imgui.get_content_region_avail().x)
         columns = 3 if views[0].kind == "cube" else len(views)
@@ -133,8 +134,13 @@ def _color(editor: Editor, world: World, eid: int, component: type, value: Any) 
         editor.set(world, eid, component, color=np.array(color, dtype=np.float32))
 
 
-def _amount(editor: Editor, world: World, eid: int, component: type, field: str, label: str, value: float) -> None:
+def _amount(
+    editor: Editor, world: World, eid: int, component: type, field: str, label: str, value: float, more: str = ""
+) -> None:
+    """A drag for a field of at least 0; `more`: a tooltip saying what the short label leaves out."""
     changed, new = editor.imgui.drag_float(label, float(value), 0.1, 0.0, 1e6)
+    if more:
+        hint(editor.imgui, more)
     if changed:
         editor.set(world, eid, component, **{field: max(new, 0.0)})
 
@@ -144,19 +150,21 @@ def point_light(editor: Editor, world: World, eid: int) -> None:
     editor.imgui.separator_text("PointLight")
     _color(editor, world, eid, PointLight, light.color)
     _amount(editor, world, eid, PointLight, "intensity", "intensity", light.intensity)
-    _amount(editor, world, eid, PointLight, "radius", "radius (0: unbounded)", light.radius)
+    _amount(editor, world, eid, PointLight, "radius", "radius", light.radius, "0: unbounded")
     shadow(editor, world, eid, directional=False)
 
 
 def spot_light(editor: Editor, world: World, eid: int) -> None:
     imgui = editor.imgui
     light = world.get(eid, SpotLight)
-    imgui.separator_text("SpotLight (aim it with the rotation)")
+    imgui.separator_text("SpotLight")
+    hint(imgui, "aim it with the rotation")
     _color(editor, world, eid, SpotLight, light.color)
     _amount(editor, world, eid, SpotLight, "intensity", "intensity", light.intensity)
-    _amount(editor, world, eid, SpotLight, "radius", "range (0: unbounded)", light.radius)
+    _amount(editor, world, eid, SpotLight, "radius", "range", light.radius, "0: unbounded")
     inner, outer = math.degrees(float(light.inner_angle)), math.degrees(float(light.outer_angle))
-    changed, angles = imgui.drag_float2("cone inner, outer (deg)", [inner, outer], 0.2, 0.0, 90.0)
+    changed, angles = imgui.drag_float2("cone (deg)", [inner, outer], 0.2, 0.0, 90.0)
+    hint(imgui, "the cone's inner and outer angles in degrees")
     if changed:
         editor.set(world, eid, SpotLight, inner_angle=math.radians(angles[0]), outer_angle=math.radians(angles[1]))
     shadow(editor, world, eid, directional=False)
@@ -164,7 +172,8 @@ def spot_light(editor: Editor, world: World, eid: int) -> None:
 
 def directional_light(editor: Editor, world: World, eid: int) -> None:
     light = world.get(eid, DirectionalLight)
-    editor.imgui.separator_text("DirectionalLight (aim it with the rotation)")
+    editor.imgui.separator_text("DirectionalLight")
+    hint(editor.imgui, "aim it with the rotation")
     _color(editor, world, eid, DirectionalLight, light.color)
     _amount(editor, world, eid, DirectionalLight, "illuminance", "illuminance", light.illuminance)
     shadow(editor, world, eid, directional=True)
@@ -188,7 +197,8 @@ def shadow(editor: Editor, world: World, eid: int, directional: bool) -> None:
         return
     s = world.get(eid, Shadow)
     at = RESOLUTIONS.index(int(s.resolution)) if int(s.resolution) in RESOLUTIONS else 3
-    changed, pick = imgui.combo("shadow map texels", at, [str(r) for r in RESOLUTIONS])
+    changed, pick = imgui.combo("map texels", at, [str(r) for r in RESOLUTIONS])
+    hint(imgui, "the shadow map's side in texels")
     if changed:
         editor.set(world, eid, Shadow, resolution=RESOLUTIONS[pick])
     if directional:
@@ -196,15 +206,21 @@ def shadow(editor: Editor, world: World, eid: int, directional: bool) -> None:
         if changed:
             editor.set(world, eid, Shadow, cascades=n)
         _amount(editor, world, eid, Shadow, "distance", "shadow distance", s.distance)
-    _amount(editor, world, eid, Shadow, "bias", "depth bias (texels)", s.bias)
-    _amount(editor, world, eid, Shadow, "normal_offset", "normal offset (texels)", s.normal_offset)
+    _amount(editor, world, eid, Shadow, "bias", "depth bias", s.bias, "in texels")
+    _amount(editor, world, eid, Shadow, "normal_offset", "normal offset", s.normal_offset, "in texels")
     changed, pick = imgui.combo("filter", int(s.filter), list(SHADOW_FILTERS))
     if changed:
         editor.set(world, eid, Shadow, filter=pick)
-    _amount(editor, world, eid, Shadow, "softness", "softness (PCF texels)", s.softness)
+    _amount(editor, world, eid, Shadow, "softness", "softness", s.softness, "the PCF filter's radius in texels")
     if editor.shadow_maps is not None:
         editor.shadow_maps.draw(imgui, eid)
 
+
+# the sections' field labels (the inspector leaves room for the widest: editor_layout.py)
+LIGHT_LABELS = (
+    *("colour", "intensity", "radius", "range", "cone (deg)", "illuminance", "map texels", "cascades"),
+    *("shadow distance", "depth bias", "normal offset", "filter", "softness"),
+)
 
 #: component type -> its inspector section, in the order they are drawn
 LIGHT_SECTIONS: dict[type, Callable[[Editor, World, int], None]] = {

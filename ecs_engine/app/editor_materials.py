@@ -11,9 +11,18 @@ from typing import Any
 from ..components import Mesh
 from ..ecs.world import World
 from ..render.materials import ALPHA_MODES, FILLS, SHADING_MODELS, TEXTURE_FIELDS, Material, Materials, materials
+from .editor_layout import button_width, hint, push_label_room, same_line_if_fits, wrapped_colored
 from .editor_lights import Editor
 
 _ALPHA_EDITABLE = ("opaque", "mask", "blend")
+# the fields' labels (the fields leave room for the widest: editor_layout.py); the texture slots
+# are named by their field, "metallic roughness" the longest
+MATERIAL_LABELS = (
+    *("shading model", "base colour", "metallic", "roughness", "shininess", "specular", "emissive"),
+    *("alpha mode", "alpha cutoff", "fill"),
+)
+TEXTURE_LABELS = (*(f.removesuffix("_texture").replace("_", " ") for f in TEXTURE_FIELDS), "normal scale", "occlusion")
+MESH_LABELS = ("material",)
 assert set(_ALPHA_EDITABLE) <= set(ALPHA_MODES)
 
 
@@ -34,9 +43,11 @@ class MaterialsPanel:
         imgui.end_child()
         if not 0 <= self.selected < len(library):
             self.selected = 0
+        push_label_room(imgui, MATERIAL_LABELS)
         self.edit(imgui, library, self.selected)
+        imgui.pop_item_width()
         if self.status:
-            imgui.text_colored((1.0, 0.4, 0.3, 1.0), self.status)
+            wrapped_colored(imgui, (1.0, 0.4, 0.3, 1.0), self.status)
 
     def edit(self, imgui: Any, library: Materials, handle: int) -> None:
         m = library[handle]
@@ -106,6 +117,7 @@ def texture_slots(imgui: Any, library: Materials, m: Material) -> dict[str, Any]
     names = ["none"] + [f"{h}: {textures[h].name}" for h in range(len(textures))]
     used = sum(getattr(m, f) is not None for f in TEXTURE_FIELDS)
     if imgui.tree_node_ex(f"textures ({used})###textures", imgui.TreeNodeFlags_.default_open.value):
+        push_label_room(imgui, TEXTURE_LABELS)  # indented: less room than the fields above
         for name in TEXTURE_FIELDS:
             current = getattr(m, name)
             changed, index = imgui.combo(
@@ -120,9 +132,11 @@ def texture_slots(imgui: Any, library: Materials, m: Material) -> dict[str, Any]
             if changed:
                 changes["normal_scale"] = value
         if m.occlusion_texture is not None:
-            changed, value = imgui.slider_float("occlusion strength", m.occlusion_strength, 0.0, 1.0)
+            changed, value = imgui.slider_float("occlusion", m.occlusion_strength, 0.0, 1.0)
+            hint(imgui, "the occlusion map's strength")
             if changed:
                 changes["occlusion_strength"] = value
+        imgui.pop_item_width()
         imgui.tree_pop()
     return changes
 
@@ -139,7 +153,7 @@ def mesh_section(editor: Editor, world: World, eid: int) -> None:
     changed, index = imgui.combo("material", current, names)
     if changed:
         editor.set(world, eid, Mesh, material=index)
-    imgui.same_line()
+    same_line_if_fits(imgui, button_width(imgui, "edit"))
     if imgui.button("edit"):
         editor.show_material(current)
 

@@ -52,3 +52,7 @@ class EditorSession(ImGuiSession):
 
     def refused(self, message: str) -> None:
         self.editor.refused(message)
+
+    def scene_failed(self, scene: str, message: str) -> None:
+        self.editor.refused(message)
+        self.editor.files.failed_after_opening(self.editor, scene, message)

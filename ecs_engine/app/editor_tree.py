@@ -13,6 +13,7 @@ from ..components import Name, Parent
 from ..components.hierarchy import parents, set_parent
 from ..ecs.errors import EcsError
 from ..ecs.world import World
+from .editor_layout import wrapped_colored
 
 PAYLOAD = "ECS_ENTITY"  # an entity id dragged between the tree and the browser
 
@@ -80,11 +81,13 @@ class HierarchyPanel:
         if target is not None and world.is_alive(target):
             self.reparent(world, target, None)
         if not roots:
+            imgui.push_text_wrap_pos(0.0)
             imgui.text_disabled("no entity has a parent: drag one onto another")
+            imgui.pop_text_wrap_pos()
         for entity in roots:
             self._node(imgui, world, editor, entity, below, 0)
         if self.status:
-            imgui.text_colored((1.0, 0.4, 0.3, 1.0), self.status)
+            wrapped_colored(imgui, (1.0, 0.4, 0.3, 1.0), self.status)
 
     def _node(
         self, imgui: Any, world: World, editor: Any, entity: int, below: dict[int, list[int]], depth: int

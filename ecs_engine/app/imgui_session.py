@@ -5,7 +5,8 @@ a rate limit on rebuilding it, and the GLFW backend when there is a window. The 
 The UI is rebuilt at most `max_ui_hz` times a second (default 120, a fast monitor's refresh);
 frames in between draw the last UI again. A scene running at 2,000 FPS would otherwise spend
 ~0.2-0.3 ms of every frame rebuilding windows nobody can see change that fast; input waits in
-ImGui's queue for at most one UI period.
+ImGui's queue for at most one UI period. An input script's events (`feed`) reach ImGui the same
+way, headless or in a window (imgui_input.py).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from typing import Any
 
 from ..ecs.world import World
 from ..render.imgui_pass import ImGuiRenderer
+from .imgui_input import ScriptedImGuiInput
 from .perf import PerfMonitor
 from .session import Session
 from .settings import Settings
@@ -42,6 +44,7 @@ class ImGuiSession:
             len(renderer.frames.frames),
         )
         renderer.overlay = self.renderer  # the renderer stays for the whole run: attached once
+        self.scripted = ScriptedImGuiInput(imgui, self.windowed)
         self.build_ms = 0.0
         self.min_interval_s = 0.0 if not max_ui_hz else 1.0 / max_ui_hz
         self._last_build = -1e9
@@ -51,6 +54,10 @@ class ImGuiSession:
     def cost_ms(self) -> float:
         """The UI's CPU time last frame: building it, copying its geometry, recording it."""
         return self.build_ms + self.renderer.cpu_ms
+
+    def feed(self, events: Any) -> None:
+        """An input script's events of this frame (action, *arguments), for the next UI built."""
+        self.scripted.queue(events)
 
     @property
     def wants_keyboard(self) -> bool:
@@ -76,10 +83,31 @@ class ImGuiSession:
             io = imgui.get_io()
             io.display_size = (float(width), float(height))
             io.delta_time = max(float(dt), 1e-6)
+        self.scripted.flush()  # after the backend's events: the script's pointer wins
         imgui.new_frame()
-        self.draw(world, stats, perf)
-        imgui.render()
+        begun = imgui.internal.ErrorRecoveryState()
+        imgui.internal.error_recovery_store_state(begun)
+        try:
+            self.draw(world, stats, perf)
+        except Exception:
+            self._recover(begun)  # the windows left open are closed: the next frame can begin
+            raise
+        finally:
+            imgui.render()
         self.build_ms = (time.perf_counter() - t0) * 1e3
+
+    def _recover(self, begun: Any) -> None:
+        """End what a failed draw left begun (windows, IDs, ...), quietly: the error is raised."""
+        io = self.imgui.get_io()
+        flags = [f"config_error_recovery_enable_{what}" for what in ("assert", "debug_log", "tooltip")]
+        kept = [getattr(io, flag) for flag in flags]
+        for flag in flags:
+            setattr(io, flag, False)
+        try:
+            self.imgui.internal.error_recovery_try_to_recover_state(begun)
+        finally:
+            for flag, value in zip(flags, kept, strict=True):
+                setattr(io, flag, value)
 
     def draw(self, world: World, stats: Any, perf: PerfMonitor) -> None:
         """The windows (between new_frame and render)."""
@@ -93,6 +121,10 @@ class ImGuiSession:
 
     def refused(self, message: str) -> None:
         """A request the session refused."""
+
+    def scene_failed(self, scene: str, message: str) -> None:
+        """`scene`, just opened, failed in its first frames; the one before it is back."""
+        self.refused(message)
 
     def destroy(self) -> None:
         self.renderer.destroy()

@@ -12,6 +12,7 @@ arguments, `#` starting a comment:
     80 axis gamepad_left_x -0.5  # a gamepad axis' raw value, -1..1 (triggers 0..1)
     90 move 412.5 120            # the mouse pointer, pixels from the top left of the view
     95 scroll 0 -1               # the wheel
+    100 text "level 2.scene"     # text typed (one JSON string)
     130 up w
 
 Names are the InputState resource's (ecs_engine.systems.input_state): GLFW's key names in lower
@@ -19,9 +20,12 @@ case without KEY_ (`left_shift`, `f12`, `space`), `mouse_left`, `mouse_right`, `
 the gamepad buttons `gamepad_a` ... `gamepad_dpad_left` and the axes `gamepad_left_x` ...
 `gamepad_right_trigger` (a script's gamepad is every gamepad at once, as the names are).
 Events of frame N are applied before frame N's systems run; in a headless run the mouse is in
-the offscreen image's pixels (--width x --height). A recording writes, for each frame, the keys
+the offscreen image's pixels (--width x --height). In the editor or a game's HUD they reach ImGui
+too (app/imgui_input.py), so a script clicks buttons and menus, types into fields and presses
+shortcuts; a key down is a key, not a character (as on a keyboard, where GLFW reports both):
+`text` types. A recording writes, for each frame, the keys
 and buttons that went down or up since the frame before, the axes that changed, where the mouse
-ended up if it moved, and the scroll, in this format, so replaying a recording gives the same
+ended up if it moved, the scroll and the text typed, in this format, so replaying a recording gives the same
 input frame by frame. Scripts of only `down` and `up` lines (the first version of the format)
 read as before. A bad script (an unknown name or action, a frame out of order, a value that is
 not a finite number, a line with the wrong number of words) is one UsageError naming the file
@@ -31,6 +35,7 @@ and the line, before the run starts; so is a script that is not a regular file (
 
 from __future__ import annotations
 
+import json
 import math
 import os
 from dataclasses import dataclass, field
@@ -41,7 +46,14 @@ from ..systems.input_state import InputState
 from ..user_files import INPUT_SCRIPT, UserFileError, read_user_file
 
 # action -> the words after it
-ACTIONS = {"down": ("KEY",), "up": ("KEY",), "axis": ("AXIS", "VALUE"), "move": ("X", "Y"), "scroll": ("DX", "DY")}
+ACTIONS = {
+    "down": ("KEY",),
+    "up": ("KEY",),
+    "axis": ("AXIS", "VALUE"),
+    "move": ("X", "Y"),
+    "scroll": ("DX", "DY"),
+    "text": ("TEXT",),
+}
 
 
 @dataclass
@@ -59,12 +71,27 @@ class InputScript:
                 state.set_axis(args[0], float(args[1]))
             elif action == "move":
                 state.move_mouse(float(args[0]), float(args[1]))
+            elif action == "text":
+                state.text += args[0]
             else:
                 state.scroll = (state.scroll[0] + float(args[0]), state.scroll[1] + float(args[1]))
 
 
 def _usage(action: str) -> str:
-    return f"FRAME {'down|up' if action in ('down', 'up') else action} {' '.join(ACTIONS[action])}"
+    words = '"TEXT"' if action == "text" else " ".join(ACTIONS[action])
+    return f"FRAME {'down|up' if action in ('down', 'up') else action} {words}"
+
+
+def _text(rest: str) -> str:
+    """The JSON string of a `text` line and nothing after it but a comment; ValueError if not."""
+    try:
+        text, end = json.JSONDecoder().raw_decode(rest)
+    except json.JSONDecodeError:
+        text, end = None, 0
+    after = rest[end:].strip()
+    if not isinstance(text, str) or (after and not after.startswith("#")):
+        raise ValueError('text is one JSON string in double quotes, e.g. "Hello, world"')
+    return text
 
 
 def _check_event(action: str, args: list[str]) -> None:
@@ -75,7 +102,7 @@ def _check_event(action: str, args: list[str]) -> None:
             InputState.check(value)
         elif word == "AXIS":
             InputState.check_axis(value)
-        else:
+        elif word != "TEXT":  # text was read as a JSON string: any is fine
             try:
                 number = float(value)
             except ValueError:
@@ -100,8 +127,14 @@ def read_script(path: str | os.PathLike[str]) -> InputScript:
         if not words:
             continue
         where = f"input script {file}, line {number}"
+        head = line.split(None, 2)
+        if len(head) >= 2 and head[1] == "text":  # the rest is a JSON string, which may hold a #
+            try:
+                words = [head[0], "text", _text(head[2] if len(head) > 2 else "")]
+            except ValueError as exc:
+                raise UsageError(f"{where}: {exc}; got {line.strip()!r}") from None
         if len(words) < 2:
-            usage = ", ".join(_usage(a) for a in ("down", "axis", "move", "scroll"))
+            usage = ", ".join(_usage(a) for a in ("down", "axis", "move", "scroll", "text"))
             raise UsageError(f"{where}: expected one of {usage}; got {line.strip()!r}")
         frame_text, action, *args = words
         try:
@@ -142,6 +175,7 @@ class InputRecorder:
         self.axes = dict(state.axes)
         if state.scroll != (0.0, 0.0):
             self.lines.append(f"{frame} scroll {state.scroll[0]!r} {state.scroll[1]!r}")
+        text = f"{frame} text {json.dumps(state.text, ensure_ascii=False)}" if state.text else None
         for key in sorted(state.just_pressed | state.just_released):
             down, up = key in state.just_pressed, key in state.just_released
             # both: released then pressed again if it is held now, else pressed then released
@@ -149,6 +183,8 @@ class InputRecorder:
             for action in order:
                 if (action == "down" and down) or (action == "up" and up):
                     self.lines.append(f"{frame} {action} {key}")
+        if text is not None:  # after its keys, as GLFW reports a character after its key
+            self.lines.append(text)
 
     def write(self) -> None:
         try:

@@ -3,7 +3,8 @@
 
 One turn: the source gives a frame target (or None: minimised, nothing to draw), the schedule
 runs (fixed steps, then the per-frame stages), the editor builds its UI, the renderer records
-and submits, the source presents, and the editor's requests are applied between frames.
+and submits, the source presents, and the editor's requests are applied between frames. A scene
+the editor opened that fails in its first frames is rolled back (Session.roll_back), not fatal.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from .offscreen import OffscreenSource
 from .output_files import check_run_files
 from .perf import PerfMonitor
 from .report import RunResult, describe_device, save_png, summary_line
-from .session import FrameSource, Session
+from .session import FrameSource, Session, one_line
 from .settings import RunOptions
 
 
@@ -60,6 +61,8 @@ def run(
         if ui is not None:  # after the source's key callbacks: ImGui's GLFW backend chains to them
             editor = result.editor = ui(session, source.window)
         elif options.editor:
+            if script is not None and source.window is None:
+                max_ui_hz = None  # a UI built every frame: a script's frames are the UI's, whatever the speed
             editor = result.editor = EditorSession(session, options.scenes, default_threads(), source.window, max_ui_hz)
         say(f"{source.describe(session)} on {result.device}")
         start = time.perf_counter()
@@ -115,33 +118,48 @@ def run_frames(
         if target is None:
             continue
         t0 = time.perf_counter()
-        if editor is not None and source.input is not None:
-            source.input.keyboard_captured_by_ui = editor.wants_keyboard  # keys typed into the UI
-            source.input.mouse_captured_by_ui = editor.wants_mouse  # over a UI window, or dragging one
-        if script is not None or recorder is not None:
-            keys = held_keys(session)
+        if script is not None or recorder is not None or source.input is not None:
+            keys = held_keys(session)  # a window's own InputState, or the script's headless
+            if editor is not None:
+                keys.keyboard_captured_by_ui = editor.wants_keyboard  # keys typed into the UI
+                keys.mouse_captured_by_ui = editor.wants_mouse  # over a UI window, or dragging one
             if source.window is None:  # headless: a script's mouse is in the offscreen image's pixels
                 keys.viewport = (float(options.width), float(options.height))
             if script is not None:
                 script.apply(frames, keys)
+                if editor is not None:  # the UI gets the script's clicks, keys and text too
+                    editor.feed(script.events.get(frames, ()))
             if recorder is not None:
                 recorder.frame(frames, keys)
-        session.schedule.run_frame(session.world, target.dt, source.clock, max_frame_dt=source.max_frame_dt)
-        held = session.world.resources.get(InputState)
-        if held is not None:
-            held.end_frame()  # the systems saw this frame's presses and releases
-        if editor is not None:
-            width, height = target.extent or (options.width, options.height)
-            editor.build(session.world, result.last_stats, perf, target.dt, width, height)
-        stats = session.renderer.render(
-            session.world,
-            readback=target.readback,
-            framebuffer=target.framebuffer,
-            extent=target.extent,
-            wait=target.wait,
-            signal=target.signal,
-            dt=target.dt,
-        )
+        try:
+            session.schedule.run_frame(session.world, target.dt, source.clock, max_frame_dt=source.max_frame_dt)
+            held = session.world.resources.get(InputState)
+            if held is not None:
+                if "escape" in held.just_pressed and not held.keyboard_captured_by_ui:
+                    source.request_close()  # Esc quits (unless a text field or dialog has the keys)
+                held.end_frame()  # the systems saw this frame's presses and releases
+            if editor is not None:
+                width, height = target.extent or (options.width, options.height)
+                editor.build(session.world, result.last_stats, perf, target.dt, width, height)
+            stats = session.renderer.render(
+                session.world,
+                readback=target.readback,
+                framebuffer=target.framebuffer,
+                extent=target.extent,
+                wait=target.wait,
+                signal=target.signal,
+                dt=target.dt,
+            )
+        except Exception as exc:  # a scene opened moments ago may fail in any way: not the run's end
+            failed = session.roll_back()  # the scene before it, if there is one to go back to
+            if failed is None:
+                raise
+            source.abandon(session, target)
+            if editor is not None:
+                editor.in_force(session.settings)
+                editor.scene_failed(failed, f"{failed} cannot run: {one_line(exc)}")
+            continue
+        session.frame_done()
         end = time.perf_counter()
         # CPU work: not the waits for the GPU (renderer); the wait for an image came before t0
         result.add_frame(

@@ -51,6 +51,7 @@ class OffscreenSource:
         self.max_frame_dt = FIXED_DT
         self.frames = 1
         self.readback_last = False
+        self._close = False  # Esc: the run ends after this frame
         self._gpu: Gpu | None = None
         self.instance: Instance | None = None  # its validation messages outlive the run
         self._first_message = 0  # on a borrowed device: the instance's messages before this run
@@ -81,7 +82,16 @@ class OffscreenSource:
         pass
 
     def running(self, frames_done: int) -> bool:
+        if self._close:  # one more frame, read back, when the run has a --screenshot to write
+            self._close = False
+            self.frames = min(self.frames, frames_done + (1 if self.readback_last else 0))
         return frames_done < self.frames
+
+    def request_close(self) -> None:
+        self._close = True
+
+    def abandon(self, session: Session, target: FrameTarget) -> None:
+        pass  # nothing was acquired
 
     def begin(self, session: Session, frames_done: int) -> FrameTarget:
         return FrameTarget(dt=FIXED_DT, readback=self.readback_last and frames_done == self.frames - 1)

@@ -10,6 +10,11 @@ by doubling up to what `max_fps` needs, so a frame costs a few microseconds and 
 not grow memory. psutil is asked about 4 times a second, not every frame: a sample costs about
 0.1 ms. With a log (`--perf-json`) every frame is also kept, in chunks, for the file
 written at the end. Clock and sampler are injectable so tests run on simulated time.
+
+The first `warmup_frames` frames (default 5) stay out of the rolling window and of the log's
+summary: pipeline creation and JIT compiles land there (the first frame took 6.5 s on the
+2-core development box), and one such frame would swamp the mean and p99 for the whole window.
+The log still keeps their rows.
 """
 
 from __future__ import annotations
@@ -36,6 +41,7 @@ _COL = {name: k for k, name in enumerate(_COLUMNS)}
 _T, _FRAME, _OVERHEAD = _COL["t"], _COL["frame_ms"], _COL["overhead_ms"]
 _START_ROWS = 1024  # 5 s at 200 fps before the first doubling
 _SLACK_ROWS = 16  # rounding at the window's edge never costs a sample
+WARMUP_FRAMES = 5  # left out of the rolling statistics (and of a run's closing summary, report.py)
 _NAN = math.nan
 
 
@@ -196,9 +202,11 @@ class PerfLog:
         }
         return rows, counters
 
-    def to_dict(self, meta: dict[str, Any], cores: int) -> dict[str, Any]:
-        """The JSON document (schema_version 1); NaN becomes null."""
+    def to_dict(self, meta: dict[str, Any], cores: int, warmup: int = 0) -> dict[str, Any]:
+        """The JSON document (schema_version 1); NaN becomes null. The summary and fps leave out
+        the first `warmup` frames (when there are more frames than that)."""
         rows, counters = self.columns()
+        steady = rows[warmup:] if len(rows) > warmup else rows
         fields = _COLUMNS[:_OVERHEAD]  # the per-frame cost is only summarised
         columns = [[_json_number(x) for x in rows[:, k].tolist()] for k in range(len(fields))]
         frames = [dict(zip(fields, values, strict=True)) for values in zip(*columns, strict=True)]
@@ -217,22 +225,23 @@ class PerfLog:
             for t, s in self.samples
         ]
         summary = {
-            name: {k: _json_number(v) for k, v in _stats(rows[:, _COL[name]])._asdict().items()} for name in METRICS
+            name: {k: _json_number(v) for k, v in _stats(steady[:, _COL[name]])._asdict().items()} for name in METRICS
         }
         return {
             "schema_version": SCHEMA_VERSION,
             "meta": meta,
             "frames": frames,
             "psutil": psutil_rows,
+            "warmup_frames": len(rows) - len(steady),
             "summary": summary,
-            "fps": _json_number(_rate(rows[:, _FRAME])),
+            "fps": _json_number(_rate(steady[:, _FRAME])),
         }
 
-    def write_json(self, path: str | os.PathLike[str], meta: dict[str, Any], cores: int) -> None:
+    def write_json(self, path: str | os.PathLike[str], meta: dict[str, Any], cores: int, warmup: int = 0) -> None:
         """Write to a temporary file in the same folder, then rename over the target: a reader
         (or a crash) never sees half a file."""
         target = Path(path)
-        document = self.to_dict(meta, cores)
+        document = self.to_dict(meta, cores, warmup)
         tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
         try:
             with open(tmp, "w") as f:
@@ -250,7 +259,8 @@ class PerfMonitor:
 
     Call `frame()` once per frame after submitting it. `log` keeps every frame for
     `write_json`: True in memory, or a path, checked for writability now and used by
-    `write_json()` when it gets none."""
+    `write_json()` when it gets none. The first `warmup_frames` frames are logged but left out
+    of the window."""
 
     def __init__(
         self,
@@ -260,11 +270,15 @@ class PerfMonitor:
         sampler: Sampler | None = None,
         log: bool | str | os.PathLike[str] = False,
         max_fps: float = 4000.0,
+        warmup_frames: int = WARMUP_FRAMES,
     ) -> None:
         if not (window_s > 0 and sample_hz > 0 and max_fps > 0):
             raise ValueError(
                 f"window_s, sample_hz and max_fps must be positive, got {window_s}, {sample_hz}, {max_fps}"
             )
+        if warmup_frames < 0:
+            raise ValueError(f"warmup_frames must be at least 0, got {warmup_frames}")
+        self.warmup_frames = int(warmup_frames)
         self.window_s = float(window_s)
         self.sample_hz = float(sample_hz)
         self.log = None if log is False else PerfLog(None if log is True else log)
@@ -296,6 +310,23 @@ class PerfMonitor:
         t = self._clock() - self._start
         row = (t, (t - self._last_t) * 1e3, cpu_ms, record_ms, _NAN if gpu_ms is None else gpu_ms, wait_ms, 0.0)
         self._last_t = t
+        i = self._insert(t, row) if self.frame_count >= self.warmup_frames else None  # warm-up: no row
+        self.frame_count += 1
+        self.counters = counters
+        log = self.log
+        if log is not None:
+            log.append(row, counters)
+        if t >= self._next_sample_t:
+            self._take_sample(t)
+        ms = (time.perf_counter() - start) * 1e3
+        if i is not None:
+            self._ring[i, _OVERHEAD] = ms
+        self.overhead_total_s += ms * 1e-3
+        if log is not None:
+            log.set_overhead(ms)
+
+    def _insert(self, t: float, row: tuple[float, ...]) -> int:
+        """Put a row in the ring (grown if its oldest row is still in the window); its index."""
         ring = self._ring
         if self._rows < len(ring):
             self._rows += 1
@@ -305,18 +336,12 @@ class PerfMonitor:
         i = self._next
         ring[i] = row
         self._next = i + 1 if i + 1 < len(ring) else 0
-        self.frame_count += 1
-        self.counters = counters
-        log = self.log
-        if log is not None:
-            log.append(row, counters)
-        if t >= self._next_sample_t:
-            self._take_sample(t)
-        ms = (time.perf_counter() - start) * 1e3
-        ring[i, _OVERHEAD] = ms
-        self.overhead_total_s += ms * 1e-3
-        if log is not None:
-            log.set_overhead(ms)
+        return i
+
+    @property
+    def warming_up(self) -> bool:
+        """Still in the warm-up frames: the window is empty, every statistic NaN."""
+        return self.frame_count < self.warmup_frames
 
     def _take_sample(self, t: float) -> None:
         self.sample = self._sampler.sample()
@@ -418,12 +443,15 @@ class PerfMonitor:
         """One line over the window, e.g. `fps 1234 | cpu 0.41 ms (p99 0.62) | record 0.08 |
         gpu 0.37 ms | sys 6% proc 101% (6.3%/core) | rss 210 MiB | 100 drawn in 2 draws`."""
         cpu, record, gpu = self.stats("cpu_ms"), self.stats("record_ms"), self.stats("gpu_ms")
-        parts = [
-            f"fps {_fmt(self.fps, '.0f')}",
-            f"cpu {_fmt(cpu.mean, '.2f')} ms (p99 {_fmt(cpu.p99, '.2f')})",
-            f"record {_fmt(record.mean, '.2f')}",
-            f"gpu {_fmt(gpu.mean, '.2f')} ms" if not math.isnan(gpu.mean) else "gpu n/a",
-        ]
+        if self.warming_up:
+            parts = [f"warm-up frame {self.frame_count} of {self.warmup_frames} (left out of the figures)"]
+        else:
+            parts = [
+                f"fps {_fmt(self.fps, '.0f')}",
+                f"cpu {_fmt(cpu.mean, '.2f')} ms (p99 {_fmt(cpu.p99, '.2f')})",
+                f"record {_fmt(record.mean, '.2f')}",
+                f"gpu {_fmt(gpu.mean, '.2f')} ms" if not math.isnan(gpu.mean) else "gpu n/a",
+            ]
         if self.sample is None:
             parts.append("sys n/a")
         else:
@@ -446,7 +474,7 @@ class PerfMonitor:
         target = path if path is not None else self.log.path
         if target is None:
             raise ValueError("write_json needs a path: the monitor was made with log=True, not a path")
-        self.log.write_json(target, {"logical_cores": self.cores, **(meta or {})}, self.cores)
+        self.log.write_json(target, {"logical_cores": self.cores, **(meta or {})}, self.cores, self.warmup_frames)
 
 
 def _fmt(x: float, spec: str) -> str:

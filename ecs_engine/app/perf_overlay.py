@@ -7,6 +7,8 @@ whole overlay may cost.
 FPS is wall clock; CPU frame, record and GPU ms (timestamps) come with min, mean and 99th
 percentile over the window; CPU system and process % (raw and per core) and resident memory
 come from psutil samples taken about 4 times a second; the overlay's own cost is shown too.
+The first frames (the monitor's warm-up: pipelines and JIT compiles) are left out of all of it;
+until the window has two frames the FPS line says so instead of showing NaN.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ class PerfOverlay:
         self.implot = implot
         self._next_refresh = 0.0
         self._fps = float("nan")
+        self._warmup = ""  # what the FPS line says while the monitor has no rate yet
         self._rows: list[tuple[str, str, str, str]] = []
         self._lines: list[tuple[str, np.ndarray, np.ndarray]] = []
         self._limits = (0.0, 1.0, 1.0)  # x from, x to, y top
@@ -40,6 +43,7 @@ class PerfOverlay:
             return
         self._next_refresh = now + REFRESH_S
         self._fps = perf.fps
+        self._warmup = fps_placeholder(perf)
         self._rows = []
         for name, label in PLOTTED[1:]:
             s = perf.stats(name)
@@ -63,7 +67,7 @@ class PerfOverlay:
         imgui.set_next_window_size((360, 330), imgui.Cond_.first_use_ever.value)
         self._refresh(perf)
         if imgui.begin("Perf")[0]:
-            imgui.text(f"FPS {self._fps:7.1f}   (wall clock)")
+            imgui.text(self._warmup or f"FPS {self._fps:7.1f}   (wall clock)")
             if imgui.begin_table("ms", 4, imgui.TableFlags_.borders_inner_h.value):
                 for title in ("ms", "min", "mean", "p99"):
                     imgui.table_setup_column(title)
@@ -74,12 +78,12 @@ class PerfOverlay:
                         imgui.table_set_column_index(i)
                         imgui.text(text)
                 imgui.end_table()
-            imgui.text(
-                f"CPU system {perf.cpu_system_percent:5.1f}%   process {perf.cpu_process_percent:6.1f}% "
-                f"({perf.cpu_process_percent_per_core:4.1f}%/core)"
-            )
-            imgui.text(f"resident memory {perf.rss_bytes / 2**20:7.1f} MiB")
-            imgui.text(f"overlay cost {overlay_ms:.3f} ms   monitor {perf.overhead_ms * 1e3:.1f} us")
+            # short lines: the window is 300 pixels wide in the editor's narrow layout
+            imgui.text(f"CPU system {_ms(perf.cpu_system_percent, '5.1f')}%")
+            per_core = _ms(perf.cpu_process_percent_per_core, ".1f")
+            imgui.text(f"    process {_ms(perf.cpu_process_percent, '5.1f')}% ({per_core}%/core)")
+            imgui.text(f"resident memory {perf.rss_bytes / 2**20:.1f} MiB")
+            imgui.text(f"overlay {overlay_ms:.3f} ms, monitor {_ms(perf.overhead_ms * 1e3, '.1f')} us")
             self._plot(perf)
         imgui.end()
 
@@ -97,6 +101,14 @@ class PerfOverlay:
             implot.end_plot()
 
 
+def fps_placeholder(perf: PerfMonitor) -> str:
+    """The FPS line while there is no rate yet (warm-up frames, or one frame: no interval); ""
+    once there is one."""
+    if perf.warming_up:
+        return f"FPS -   (warm-up: {perf.frame_count} of {perf.warmup_frames} left out)"
+    return "FPS -   (measuring)" if not np.isfinite(perf.fps) else ""
+
+
 def _peaks(t: np.ndarray, y: np.ndarray, points: int) -> tuple[np.ndarray, np.ndarray]:
     """At most `points` samples: the largest of each run of neighbours, so a spike stays visible."""
     if len(y) <= points:
@@ -105,5 +117,5 @@ def _peaks(t: np.ndarray, y: np.ndarray, points: int) -> tuple[np.ndarray, np.nd
     return np.ascontiguousarray(t[starts]), np.maximum.reduceat(y, starts)
 
 
-def _ms(value: float) -> str:
-    return "-" if not np.isfinite(value) else f"{value:.3f}"
+def _ms(value: float, spec: str = ".3f") -> str:
+    return "-" if not np.isfinite(value) else format(value, spec)

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..errors import UsageError
 from ..render.renderer import PATHS
+from .perf import WARMUP_FRAMES  # left out of the closing summary too
 from .settings import RunOptions
 
 
@@ -99,9 +100,6 @@ def describe_device(device: Any) -> str:
 def recorder_words(mode: str, recorder: str) -> str:
     """How a run's draws are recorded: by the recorder setting, or on the GPU."""
     return f"{recorder} recorder" if PATHS[mode].uses_recorder else "commands written on the GPU"
-
-
-WARMUP_FRAMES = 5  # left out of the closing summary: pipeline creation and JIT compiles land there
 
 
 def summary_line(result: RunResult, frames: int, wall_s: float, final: bool = False) -> str:

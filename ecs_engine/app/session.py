@@ -5,6 +5,12 @@ registry, the worker pool, the world with its schedule, and the renderer. `apply
 makes live changes (mode, recorder, threads, culling, present mode, scene) by changing their one
 owner each: the renderer's path, the pool (resized in place), the swapchain, a new world. The
 current settings are read back from those owners, never kept twice.
+
+A scene opened while running (the editor's File > Open, its scene switcher) may load and still
+fail in its first frames (a Parent loop, a missing environment file, a Mesh handle naming no
+mesh): the scene before it is kept for `PROBATION_FRAMES` frames, and `roll_back` brings it back,
+with its world untouched; the renderer follows whichever world it is given (its environment
+image, materials and shadow maps are matched to the world each frame).
 """
 
 from __future__ import annotations
@@ -14,6 +20,7 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 from ..components.camera import active_camera
+from ..ecs.errors import EcsError
 from ..ecs.scene_file import load_world
 from ..ecs.schedule import Schedule
 from ..ecs.timestep import FixedTimestep
@@ -32,6 +39,8 @@ from ..render.scene_assets import scene_codecs
 from ..render.tone_map import check_tone_map
 from .scenes import default_schedule, is_scene_file, scene_builder
 from .settings import RunOptions, Settings
+
+PROBATION_FRAMES = 3  # frames a newly opened scene must run before the one before it is let go
 
 
 @dataclass
@@ -99,6 +108,14 @@ class FrameSource(Protocol):
 
     def running(self, frames_done: int) -> bool: ...
 
+    def abandon(self, session: Session, target: FrameTarget) -> None:
+        """A frame that failed after `begin` (a scene rolled back): give back what it took."""
+        ...
+
+    def request_close(self) -> None:
+        """End the run after this frame (Esc), as closing the window does."""
+        ...
+
     def begin(self, session: Session, frames_done: int) -> FrameTarget | None: ...
 
     def end(self, session: Session, target: FrameTarget) -> None: ...
@@ -106,6 +123,14 @@ class FrameSource(Protocol):
     def describe(self, session: Session) -> str: ...
 
     def close(self) -> None: ...
+
+
+def one_line(exc: BaseException) -> str:
+    """An error as one line: the message of one a user can cause, else its type too."""
+    text = " ".join(str(exc).split())
+    if isinstance(exc, (UsageError, EcsError, ValueError)) and text:
+        return text
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
 class Session:
@@ -139,7 +164,9 @@ class Session:
             )
             self.renderer.replay.enabled = start.frame_reuse
             self.scene = start.scene
-            self.world, self.schedule = self._build(start.scene, options.path)
+            self.world, self.schedule = self._open(start.scene, options.path)
+            self._previous: tuple[str, World, Schedule] | None = None  # the scene before, on probation
+            self.probation = 0
             source.attach(self)
         except BaseException:
             self.close()
@@ -202,7 +229,7 @@ class Session:
         check_transparency(wanted.transparency)
         check_shadow_method(wanted.shadow_method, self.device, renderer.target.samples)
         culling = check_culling(wanted.culling, wanted.mode)
-        scene = self._build(wanted.scene, None) if wanted.scene != self.scene else None
+        scene = self._open(wanted.scene) if wanted.scene != self.scene else None
         renderer.set_path(wanted.mode, wanted.recorder)  # checks, then swaps
         renderer.set_fill(wanted.fill)
         renderer.tone_map, renderer.exposure = wanted.tone_map, float(wanted.exposure)
@@ -217,10 +244,47 @@ class Session:
         if present is not None:
             source.set_present(present)
         if scene is not None:
-            self.world, self.schedule = scene
-            self.scene = wanted.scene
-            for hook in self.on_world:
-                hook(self.world)
+            self._previous, self.probation = (self.scene, self.world, self.schedule), PROBATION_FRAMES
+            self._switch(wanted.scene, *scene)
+
+    def _open(self, scene: str, path: str | None = None) -> tuple[World, Schedule]:
+        """`_build`, where whatever loading a scene file raises (a file the loader did not
+        foresee, a scene without a camera) is a UsageError naming the file: bad input, which the
+        editor refuses while going on with the scene it has."""
+        try:
+            return self._build(scene, path)
+        except Exception as exc:
+            if not is_scene_file(scene):
+                raise
+            if isinstance(exc, (UsageError, EcsError, ValueError)):
+                if scene in str(exc):
+                    raise
+                raise UsageError(f"{scene}: {one_line(exc)}") from exc
+            raise UsageError(f"{scene}: cannot be opened ({one_line(exc)})") from exc
+
+    def _switch(self, scene: str, world: World, schedule: Schedule) -> None:
+        self.world, self.schedule, self.scene = world, schedule, scene
+        for hook in self.on_world:
+            hook(self.world)
+
+    def frame_done(self) -> None:
+        """A frame ran: one fewer for a new scene to prove it can run."""
+        if self.probation:
+            self.probation -= 1
+            if not self.probation:
+                self._previous = None
+
+    def roll_back(self) -> str | None:
+        """The scene opened in the last PROBATION_FRAMES frames failed: the one before it again
+        (its world as it was). The failed scene's name, or None when there is none to go back to
+        (the failure is the run's)."""
+        if self._previous is None:
+            return None
+        failed = self.scene
+        scene, world, schedule = self._previous
+        self._previous, self.probation = None, 0
+        self._switch(scene, world, schedule)
+        return failed
 
     def close(self) -> None:
         """Tear down in reverse: renderer, pool, then the source's Vulkan objects."""

@@ -104,6 +104,7 @@ class WindowSource:
         self._shot_requested = False  # F12: read back the next frame and write it
         self._final_shot = False  # the window closes: one more frame, read back
         self._took_final = False
+        self._slot = 0  # the renderer's frame slot when this frame began
         self.shots: list[str] = []  # files F12 wrote
 
     # ----------------------------------------------------------------- set-up
@@ -142,8 +143,7 @@ class WindowSource:
         names = key_names(glfw)
 
         def on_key(_win: Any, key: int, _code: int, action: int, _mods: int) -> None:
-            if key == glfw.KEY_ESCAPE and action == glfw.PRESS:
-                glfw.set_window_should_close(self.window, True)
+            # Esc goes to the InputState like any key: the run loop quits on it, a script's too
             if key == glfw.KEY_F12 and action == glfw.PRESS:
                 self.request_screenshot()
             apply_key(glfw, names, self.input, key, action)
@@ -179,6 +179,10 @@ class WindowSource:
             return True
         return not closing
 
+    def request_close(self) -> None:
+        """Close the window after this frame (Esc); with --screenshot one more frame is read back."""
+        self.glfw.set_window_should_close(self.window, True)
+
     def request_screenshot(self) -> None:
         """Read the next presented frame back and write it (F12)."""
         self._shot_requested = True
@@ -205,6 +209,7 @@ class WindowSource:
         now = time.perf_counter()
         dt, self._previous = now - self._previous, now
         image_available = session.renderer.next_image_semaphore()  # waits until the next frame slot is free
+        self._slot = session.renderer.frames.index  # abandon: did the frame get submitted?
         try:
             index, suboptimal = swapchain.acquire(image_available)  # may block on vsync
         except OutOfDate:
@@ -238,6 +243,22 @@ class WindowSource:
                 save_png(pixels, path)
                 self.shots.append(path)
                 print(f"wrote {path}")
+
+    def abandon(self, session: Session, target: FrameTarget) -> None:
+        """A frame that failed (a scene rolled back). Failed before its submit, it still holds an
+        acquired image whose semaphore is signalled: an empty submit waits the semaphore out and
+        the swapchain is made anew, which takes the image back unpresented (its pixels are
+        undefined). Failed after, it is presented as it is."""
+        if session.renderer.frames.index != self._slot:
+            self.end(session, target)
+            return
+        device = self.swapchain.device
+        vk = device.vk
+        stage = vk.VK_PIPELINE_STAGE_ALL_COMMANDS_BIT
+        vk.vkQueueSubmit(
+            device.queue, 1, [vk.VkSubmitInfo(pWaitSemaphores=[target.wait], pWaitDstStageMask=[stage])], None
+        )
+        self.swapchain.recreate()  # after waiting for the device
 
     def describe(self, session: Session) -> str:
         return (
