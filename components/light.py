@@ -14,11 +14,12 @@ import numpy as np
 
 from ecs_engine.ecs.schema import Component, Field
 
-# The largest colour component and intensity (or illuminance): the shaders multiply the two and a
-# BRDF in float32, and a directional light's product is not capped as a point light's is, so
-# these keep it finite (1e6 * 1e20 * a BRDF's peak is far below float32's 3.4e38).
+# The largest colour component and illuminance: the shaders multiply the two and a BRDF in float32,
+# and a directional light's product is not capped as a point or spot light's energy is (any
+# float32 intensity works there: tests/test_numerics_render.py), so these keep it finite
+# (1e6 * 1e20 * a BRDF's peak is far below float32's 3.4e38).
 MAX_COLOR = 1e6
-MAX_INTENSITY = 1e20
+MAX_ILLUMINANCE = 1e20
 # The largest radius (range): its square, which the shaders take, stays a finite float32.
 MAX_RADIUS = 1e18
 
@@ -28,7 +29,7 @@ class PointLight(Component):
     radius the light falls off as 1/d^2 times a window that reaches 0 at the radius."""
 
     color = Field(np.float32, (3,), default=(1.0, 1.0, 1.0), finite=True, minimum=0.0, maximum=MAX_COLOR)
-    intensity = Field(np.float32, default=1.0, finite=True, minimum=0.0, maximum=MAX_INTENSITY)
+    intensity = Field(np.float32, default=1.0, finite=True, minimum=0.0)
     radius = Field(np.float32, default=10.0, finite=True, minimum=0.0, maximum=MAX_RADIUS)
 
 
@@ -38,7 +39,7 @@ class SpotLight(Component):
     (radians, 0 <= inner < outer <= pi/2). `radius` is its range, as PointLight's."""
 
     color = Field(np.float32, (3,), default=(1.0, 1.0, 1.0), finite=True, minimum=0.0, maximum=MAX_COLOR)
-    intensity = Field(np.float32, default=1.0, finite=True, minimum=0.0, maximum=MAX_INTENSITY)
+    intensity = Field(np.float32, default=1.0, finite=True, minimum=0.0)
     radius = Field(np.float32, default=10.0, finite=True, minimum=0.0, maximum=MAX_RADIUS)
     inner_angle = Field(np.float32, default=0.0, finite=True, minimum=0.0, maximum=np.pi / 2)
     outer_angle = Field(np.float32, default=np.pi / 4, finite=True, minimum=0.0, maximum=np.pi / 2)
@@ -60,4 +61,4 @@ class DirectionalLight(Component):
     illuminance, the same everywhere in the scene."""
 
     color = Field(np.float32, (3,), default=(1.0, 1.0, 1.0), finite=True, minimum=0.0, maximum=MAX_COLOR)
-    illuminance = Field(np.float32, default=1.0, finite=True, minimum=0.0, maximum=MAX_INTENSITY)
+    illuminance = Field(np.float32, default=1.0, finite=True, minimum=0.0, maximum=MAX_ILLUMINANCE)

@@ -7,7 +7,8 @@
 #          imgui-bundle esper fast-simplification pillow pytest hypothesis (and their pure deps),
 #          never numpy (the host's numba is built against its own)
 # then `bash scripts/device_run.sh MODE...` with carry [".gl", ".whl"]; results land in $OUT.
-# Modes: tests (the whole suite with validation, from a copy of tests/ outside the checkout),
+# At most 8 files come back: each mode writes one text file and at most one tar of images.
+# Modes: tests or tests/K/N (the whole suite, or its K-th shard of N, with validation, from a copy of tests/ outside the checkout),
 # demos (every demo scene with --validate), aniso (tests/texture_reference.py: what the driver's
 # anisotropic filter does to a magnified texture), bench:NAME:ARGS (a benchmark, e.g.
 # bench:schedule:--quick).
@@ -16,7 +17,7 @@ export PYTHONUNBUFFERED=1
 for f in .gl/*.deb; do dpkg -x "$f" /; done; ldconfig
 export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 export VK_LAYER_PATH=/usr/share/vulkan/explicit_layer.d
-python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --target /tmp/site .whl/*.whl || exit 1
+python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl || exit 1
 python3 -m pip install -q --no-deps --no-build-isolation --no-index --target /tmp/new . >/dev/null 2>&1 || {
   echo "install failed"; exit 1; }
 export PYTHONPATH=/tmp/new:/tmp/site
@@ -27,13 +28,16 @@ REPO=$PWD
 # tests and demos run from a copy outside the checkout: in its root, `ecs_engine` would be the
 # source folder, not the installed package (whose components/ and systems/ live inside it)
 # (the tests read README.md, docs/, demos/, bench/, scripts/ and shaders/ beside tests/)
-rm -rf /tmp/t && cp -r tests /tmp/t && cp -r README.md pyproject.toml docs demos bench scripts shaders /tmp/
+rm -rf /tmp/t && cp -r tests /tmp/t && cp -r README.md Makefile pyproject.toml docs demos bench scripts shaders /tmp/
 for mode in "$@"; do
   case $mode in
-    tests)
-      (cd /tmp && timeout 560 python3 -m pytest -q -p no:cacheprovider -x --durations=15 /tmp/t \
+    tests|tests/*)
+      # tests/K/N: the K-th of N shards of the test files (the whole suite passes 10 minutes there)
+      shard=${mode#tests}; shard=${shard#/}; k=${shard%/*}; n=${shard#*/}; [ -z "$shard" ] && k=1 n=1
+      files=$(ls /tmp/t/test_*.py | awk -v k="$k" -v n="$n" '(NR - 1) % n == k - 1')
+      (cd /tmp && timeout 560 python3 -m pytest -q -rfE -p no:cacheprovider --durations=10 $files \
         > "$OUT/gpu_tests.txt" 2>&1; echo "pytest rc=$?" >> "$OUT/gpu_tests.txt")
-      tail -25 "$OUT/gpu_tests.txt" ;;
+      grep -v "^\.*s*\.* *\[" "$OUT/gpu_tests.txt" | tail -40 ;;
     tests:*)
       files=${mode#tests:}
       (cd /tmp && timeout 560 python3 -m pytest -q -p no:cacheprovider ${files//,/ } \
@@ -41,12 +45,16 @@ for mode in "$@"; do
       tail -15 "$OUT/gpu_tests_subset.txt" ;;
     demos)
       for scene in cube grid100 model materials lights shadows environment; do
+        mkdir -p /tmp/demos
         (cd /tmp && timeout 120 python3 -m ecs_engine demo $scene --headless --frames 40 --validate \
-          --screenshot "$OUT/demo-$scene.png" 2>&1 | tail -1 | sed "s/^/$scene: /")
-        echo "$scene rc=${PIPESTATUS[0]}"
-      done 2>&1 | tee "$OUT/demos.txt" ;;
+          --screenshot "/tmp/demos/$scene.png" > /tmp/demos/$scene.txt 2>&1; echo "$scene rc=$?";
+          tail -2 /tmp/demos/$scene.txt)
+      done 2>&1 | tee "$OUT/demos.txt"
+      tar -C /tmp -cf "$OUT/demos.tar" demos ;;
     aniso)
-      (cd /tmp && timeout 200 python3 /tmp/t/texture_reference.py "$OUT" --validate 2>&1 | tee "$OUT/aniso.txt") ;;
+      mkdir -p /tmp/aniso
+      (cd /tmp && timeout 200 python3 /tmp/t/texture_reference.py /tmp/aniso --validate 2>&1 | tee "$OUT/aniso.txt")
+      tar -C /tmp -cf "$OUT/aniso.tar" aniso ;;
     bench:*)
       spec=${mode#bench:}; name=${spec%%:*}; args=${spec#*:}; [ "$args" = "$spec" ] && args=
       (cd /tmp && timeout 560 python3 -m ecs_engine.bench $name $args --out "$OUT" 2>&1 | tail -20) ;;

@@ -107,9 +107,13 @@ def test_the_browser_finds_entities_by_name(scene):
     assert editor.filtered_ids(world).tolist() == [int(ids[3])]  # a renamed entity drops out
 
 
-def test_the_docked_layout_is_kept_between_runs(config_home):
+def test_the_docked_layout_is_kept_between_runs(config_home, monkeypatch):
+    """A window's editor keeps the layout (a headless one leaves editor.ini alone: test_user_dirs)."""
     from imgui_bundle import imgui
 
+    from ecs_engine.app import editor_dock
+
+    monkeypatch.setattr(editor_dock, "in_a_window", lambda io: True)
     first = Scene()
     try:
         for _ in range(2):

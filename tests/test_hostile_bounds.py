@@ -51,7 +51,10 @@ try:
 except ValueError as exc:  # SceneFileError, UsageError: the one clear refusal
     print("refused:", exc)
 usage = resource.getrusage(resource.RUSAGE_SELF)
-print("cpu", usage.ru_utime + usage.ru_stime, "peak", usage.ru_maxrss * 1024)
+# VmHWM, not ru_maxrss: Linux keeps ru_maxrss across exec, so a child of a big test process would
+# report its parent's size; the high-water mark belongs to this process's own memory map
+hwm = next(int(line.split()[1]) for line in open("/proc/self/status") if line.startswith("VmHWM:"))
+print("cpu", usage.ru_utime + usage.ru_stime, "peak", hwm * 1024)
 """
 
 

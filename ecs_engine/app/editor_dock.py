@@ -35,6 +35,12 @@ def layout_file() -> Path:
     return config_dir() / "editor.ini"
 
 
+def in_a_window(io: Any) -> bool:
+    """Whether this ImGui draws into a window: its GLFW backend, set up before the editor, names
+    itself (a headless editor has no platform backend)."""
+    return bool(io.backend_platform_name)
+
+
 class DockLayout:
     """Call `begin()` first in every UI frame (after imgui.new_frame)."""
 
@@ -43,10 +49,10 @@ class DockLayout:
         io = imgui.get_io()
         io.config_flags |= imgui.ConfigFlags_.docking_enable.value
         self.path: Path | None = None
-        # Only a window's editor keeps the user's layout (ImGui's GLFW backend, set up before
-        # the editor, names itself): a headless one neither reads nor writes editor.ini, so its
-        # image is the default layout on every machine and the user's file stays as they left it.
-        if persist and io.backend_platform_name:
+        # Only a window's editor keeps the user's layout: a headless one neither reads nor writes
+        # editor.ini, so its image is the default layout on every machine and the user's file
+        # stays as they left it.
+        if persist and in_a_window(io):
             self.path = layout_file()
             try:
                 self.path.parent.mkdir(parents=True, exist_ok=True)
