@@ -112,13 +112,19 @@ def check_writable(flag: str, target: Path, force: bool) -> None:
                 f"{flag} {target}: the file there is not {kind}; not replacing it with {what} "
                 "(choose another path, or add --force)"
             )
+    probe_write(target, f"{flag} {target}", what)
+
+
+def probe_write(target: Path, label: str, what: str) -> None:
+    """Refuse (one line starting with `label`) a path whose folder a file cannot be made in: a
+    probe file is made and removed beside it, the target itself left as it is."""
     probe = target.with_name(f".{target.name}.{os.getpid()}.probe")
     try:
         with open(probe, "w"):
             pass
         probe.unlink()
     except OSError as exc:
-        raise UsageError(f"{flag} {target}: cannot write {what} there: {exc.strerror or exc}") from None
+        raise UsageError(f"{label}: cannot write {what} there: {exc.strerror or exc}") from None
 
 
 def _is(is_kind: Callable[[Path], bool], target: Path) -> bool:

@@ -31,6 +31,7 @@ import numpy as np
 import psutil
 
 from ..errors import UsageError
+from .output_files import probe_write
 
 SCHEMA_VERSION = 1
 
@@ -99,13 +100,7 @@ def check_writable(path: str | os.PathLike[str], what: str = "the performance lo
         raise UsageError(f"{target}: is a directory, not a file to write {what} to")
     if not target.parent.is_dir():
         raise UsageError(f"{target}: cannot write {what} there: folder {target.parent} does not exist")
-    probe = target.with_name(f".{target.name}.{os.getpid()}.probe")
-    try:
-        with open(probe, "w"):
-            pass
-        probe.unlink()
-    except OSError as exc:
-        raise UsageError(f"{target}: cannot write {what} there: {exc.strerror or exc}") from None
+    probe_write(target, str(target), what)
     return target
 
 
