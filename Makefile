@@ -8,7 +8,7 @@ BENCH       ?=
 # setup installed it. The recipe prints the command it runs, not this shell test.
 HEADLESS = $$([ -z "$$DISPLAY" ] && command -v xvfb-run >/dev/null && echo "xvfb-run -a ")
 
-.PHONY: setup test demo shaders bench clean
+.PHONY: setup test test-slow demo shaders bench clean
 
 setup:
 	@bash scripts/bootstrap.sh
@@ -19,6 +19,11 @@ test: setup
 	$(PY) -m ruff format --check .
 	$(PY) -m mypy
 	@run="$(HEADLESS)$(PY) -m pytest $(PYTEST_ARGS)"; echo "$$run"; $$run
+
+# the long cases (marked slow: the 20,000-frame soak, 300 random parallel schedules), a CI step of
+# their own after `make test`, so the main suite stays under CI's 15 minutes
+test-slow: setup
+	@run="$(HEADLESS)$(PY) -m pytest -m slow $(PYTEST_ARGS)"; echo "$$run"; $$run
 
 demo: setup
 	.venv/bin/ecs-engine editor $(DEMO_ARGS)
