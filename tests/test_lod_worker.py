@@ -23,7 +23,8 @@ def test_levels_from_the_child_equal_an_inline_build():
     finally:
         builder.close()
     inline = build_lods(knot)
-    assert [lod.error for lod in got] == [lod.error for lod in inline]
+    # the same errors, to the last bits a summation order may move (the H200 host differed by 1 ulp)
+    assert [lod.error for lod in got] == pytest.approx([lod.error for lod in inline], rel=1e-12)
     assert [lod.mesh.triangle_count for lod in got] == [lod.mesh.triangle_count for lod in inline]
     assert all(not lod.mesh.positions.flags.writeable and not lod.mesh.indices.flags.writeable for lod in got)
 

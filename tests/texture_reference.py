@@ -38,14 +38,15 @@ def random_texture(side: int = 16, seed: int = 3) -> np.ndarray:
     return px
 
 
-def bilinear_srgb8(pixels: np.ndarray, width: int, height: int) -> np.ndarray:
+def bilinear_srgb8(pixels: np.ndarray, width: int, height: int, shift: tuple[float, float] = (0.0, 0.0)) -> np.ndarray:
     """(height, width, 3): an sRGB texture stretched over the whole image, each pixel centre
     filtered bilinearly (REPEAT addressing: the edges blend with the opposite side) in linear
-    light, as Vulkan's sRGB formats decode before filtering, then encoded for an sRGB target."""
+    light, as Vulkan's sRGB formats decode before filtering, then encoded for an sRGB target.
+    `shift`: every sample moved by this many texels (u, v)."""
     lin = srgb_to_linear(pixels[..., :3] / 255.0)
     rows, cols = lin.shape[:2]
-    u = (np.arange(width) + 0.5) / width * cols - 0.5
-    v = (np.arange(height) + 0.5) / height * rows - 0.5
+    u = (np.arange(width) + 0.5) / width * cols - 0.5 + shift[0]
+    v = (np.arange(height) + 0.5) / height * rows - 0.5 + shift[1]
     j0, i0 = np.floor(u).astype(int), np.floor(v).astype(int)
     fu, fv = (u - j0)[None, :, None], (v - i0)[:, None, None]
     j1, i1 = (j0 + 1) % cols, (i0 + 1) % rows
@@ -53,6 +54,17 @@ def bilinear_srgb8(pixels: np.ndarray, width: int, height: int) -> np.ndarray:
     top = lin[i0][:, j0] * (1 - fu) + lin[i0][:, j1] * fu
     bottom = lin[i1][:, j0] * (1 - fu) + lin[i1][:, j1] * fu
     return np.round(linear_to_srgb(top * (1 - fv) + bottom * fv) * 255.0)
+
+
+def bilinear_envelope(pixels: np.ndarray, width: int, height: int, subtexel_bits: int) -> tuple[np.ndarray, np.ndarray]:
+    """The lowest and highest value bilinear filtering may give per pixel on a device whose
+    filter weights have `subtexel_bits` bits (VkPhysicalDeviceLimits::subTexelPrecisionBits, at
+    least 4): the exact filter at every sample moved by up to one step of that precision. Where
+    neighbouring texels differ a lot and the result is dark, one step of 1/256 is several sRGB
+    levels (the NVIDIA H200's driver: up to 7 from the exact filter; lavapipe is exact)."""
+    step = 2.0**-subtexel_bits
+    images = [bilinear_srgb8(pixels, width, height, (du, dv)) for du in (-step, 0.0, step) for dv in (-step, 0.0, step)]
+    return np.min(images, axis=0), np.max(images, axis=0)
 
 
 def magnified_world(meshes: Any, pixels: np.ndarray) -> Any:
