@@ -11,7 +11,7 @@
 # Modes: tests or tests/K/N (the whole suite, or its K-th shard of N, with validation, from a copy of tests/ outside the checkout),
 # demos (every demo scene with --validate), aniso (tests/texture_reference.py: what the driver's
 # anisotropic filter does to a magnified texture), bench:NAME:ARGS (a benchmark, e.g.
-# bench:schedule:--quick).
+# bench:schedule:--quick), ab:NAME:ARGS:REPS (old against new, alternated; see below).
 set -u
 export PYTHONUNBUFFERED=1
 for f in .gl/*.deb; do dpkg -x "$f" /; done; ldconfig
@@ -58,6 +58,23 @@ for mode in "$@"; do
     bench:*)
       spec=${mode#bench:}; name=${spec%%:*}; args=${spec#*:}; [ "$args" = "$spec" ] && args=
       (cd /tmp && timeout 560 python3 -m ecs_engine.bench $name $args --out "$OUT" 2>&1 | tail -20) ;;
+    ab:*)
+      # ab:NAME:ARGS:REPS: benchmark NAME with ARGS, this tree ("new") and .ab/base ("old", carried:
+      # `git archive REV | tar -x -C .ab/base`), alternated REPS times in separate processes with
+      # the host's core speed (python_loop_ns) beside each; the JSONs in ab-NAME.tar
+      IFS=: read -r _ name args reps <<< "$mode"
+      [ -d /tmp/old ] || python3 -m pip install -q --no-deps --no-build-isolation --no-index --target /tmp/old \
+        .ab/base >/dev/null 2>&1 || { echo "install old failed"; continue; }
+      mkdir -p "/tmp/ab-$name"
+      for rep in $(seq "${reps:-2}"); do
+        if [ $((rep % 2)) = 1 ]; then order="new old"; else order="old new"; fi
+        for v in $order; do
+          mkdir -p "/tmp/ab-$name/$v$rep"
+          (cd /tmp && PYTHONPATH=/tmp/$v:/tmp/site timeout 300 python3 -m ecs_engine.bench $name $args \
+            --out "/tmp/ab-$name/$v$rep" 2>&1 | tail -3 | sed "s/^/$v$rep: /")
+        done
+      done 2>&1 | tee "$OUT/ab-$name.txt"
+      tar -C /tmp -cf "$OUT/ab-$name.tar" "ab-$name" ;;
     *) echo "unknown mode $mode" ;;
   esac
 done
