@@ -26,19 +26,24 @@ from texture_reference import (
 from ecs_engine.errors import UsageError
 from ecs_engine.gpu.array_image import sampler_anisotropy
 
+# Sub-texel precision the Vulkan spec guarantees (the least subTexelPrecisionBits a device may
+# have). The NVIDIA H200's driver reports 8 but strays up to 5 sRGB levels past the 8-bit envelope
+# (2 past 6 bits, none past 4); lavapipe is exact. Lavapipe's anisotropic artefact is 29 levels
+# past the 4-bit envelope, so the test still tells it apart.
+SPEC_SUBTEXEL_BITS = 4
+
 
 def test_a_magnified_texture_is_bilinear_in_linear_light_with_anisotropy_off():
     """A 16 x 16 random texture over 96 x 96 pixels: every pixel is the bilinear mix of its four
-    texels, decoded from sRGB, within 1 level of what the device's filter-weight precision allows
-    (bilinear_envelope). Lavapipe's anisotropic filter (on by default) misses this by up to 47
-    levels along the texels' edges."""
+    texels, decoded from sRGB, within 1 level of what a filter of the spec's sub-texel precision
+    may give (bilinear_envelope). Lavapipe's anisotropic filter (on by default) misses this by up
+    to 47 levels along the texels' edges."""
     pixels = random_texture()
     with headless_gpu() as gpu:
         image = render(gpu.device, lambda meshes: magnified_world(meshes, pixels), (MAGNIFIED, MAGNIFIED), anisotropy=1)
-        bits = int(gpu.device.limits.subTexelPrecisionBits)
-    low, high = bilinear_envelope(pixels, MAGNIFIED, MAGNIFIED, bits)
+    low, high = bilinear_envelope(pixels, MAGNIFIED, MAGNIFIED, SPEC_SUBTEXEL_BITS)
     outside = np.maximum(low - 1 - image, image - high - 1)
-    assert outside.max() <= 0, (outside.max(), (outside.max(axis=-1) > 0).sum(), bits)
+    assert outside.max() <= 0, (outside.max(), (outside.max(axis=-1) > 0).sum())
 
 
 def test_anisotropy_is_on_by_default_where_the_device_has_it():

@@ -60,8 +60,8 @@ def bilinear_envelope(pixels: np.ndarray, width: int, height: int, subtexel_bits
     """The lowest and highest value bilinear filtering may give per pixel on a device whose
     filter weights have `subtexel_bits` bits (VkPhysicalDeviceLimits::subTexelPrecisionBits, at
     least 4): the exact filter at every sample moved by up to one step of that precision. Where
-    neighbouring texels differ a lot and the result is dark, one step of 1/256 is several sRGB
-    levels (the NVIDIA H200's driver: up to 7 from the exact filter; lavapipe is exact)."""
+    neighbouring texels differ a lot and the result is dark, a small step is several sRGB levels
+    (the NVIDIA H200's driver: up to 7 from the exact filter; lavapipe is exact)."""
     step = 2.0**-subtexel_bits
     images = [bilinear_srgb8(pixels, width, height, (du, dv)) for du in (-step, 0.0, step) for dv in (-step, 0.0, step)]
     return np.min(images, axis=0), np.max(images, axis=0)
