@@ -1,7 +1,7 @@
 """Levels of detail: time and peak memory of build_lods at 16k to 1M vertices (CPU only).
 
-Each size runs in a fresh child process, so its peak resident memory (getrusage's ru_maxrss) is
-its own: the child makes the mesh, notes its peak, builds the levels and reports the time, the
+Each size runs in a fresh child process, so its peak resident memory (VmHWM: getrusage's ru_maxrss
+would carry the parent's across exec) is its own: the child makes the mesh, notes its peak, builds the levels and reports the time, the
 peak's growth per vertex, and each level's triangles and error. The meshes are UV spheres (the
 scene-file recipe of issue 34, `{"primitive": "sphere", "args": {"segments": n, "rings": n}}`) and
 the torus knot the `model` demo draws. The target (docs/performance.md): a few hundred bytes a
@@ -19,20 +19,21 @@ from typing import Any
 SIZES = (128, 256, 512)  # sphere segments = rings: 16,641, 66,049 and 263,169 vertices
 
 _CHILD = """
-import json, resource, sys, time
+import json, sys, time
 from ecs_engine.render.mesh_loading import DEFAULT_MODEL, load_mesh
 from ecs_engine.render.mesh_lod import build_lods
 from ecs_engine.render.primitives import sphere_mesh
 n = int(sys.argv[1])
 mesh = sphere_mesh(n, n) if n else load_mesh(DEFAULT_MODEL)
+def peak():
+    return next(int(line.split()[1]) * 1024 for line in open("/proc/self/status") if line.startswith("VmHWM:"))
 build_lods(sphere_mesh(16, 8), min_triangles=8)  # compile the kernels (cached on disk) outside the timing
-before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+before = peak()
 start, cpu = time.perf_counter(), time.process_time()
 lods = build_lods(mesh)
 seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
-peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 print(json.dumps({"mesh": mesh.name, "vertices": mesh.vertex_count, "triangles": mesh.triangle_count,
-                  "seconds": seconds, "cpu_seconds": cpu, "peak_growth_bytes": peak - before,
+                  "seconds": seconds, "cpu_seconds": cpu, "peak_growth_bytes": peak() - before,
                   "levels": [[lod.mesh.triangle_count, lod.error] for lod in lods]}))
 """
 
