@@ -39,13 +39,13 @@ def scene(tmp_path, with_empty: bool):
     return str(path)
 
 
-def render(path, mode):
-    screenshot = path.replace(".scene", f"-{mode}.png")
-    result = run(
-        RunOptions(
-            scene=path, width=64, height=48, frames=2, validate=True, quiet=True, mode=mode, screenshot=screenshot
-        )
-    )
+def render(path, mode, shadow_method="maps"):
+    screenshot = path.replace(".scene", f"-{mode}-{shadow_method}.png")
+    options = RunOptions(
+        scene=path, width=64, height=48, frames=2, validate=True, quiet=True, mode=mode, screenshot=screenshot,
+        shadow_method=shadow_method,
+    )  # fmt: skip
+    result = run(options)
     assert result.validation_messages == []
     return result
 
@@ -60,3 +60,16 @@ def test_an_empty_mesh_saved_by_value_loads_and_draws_nothing(tmp_path, referenc
     result = render(scene(tmp_path, True), mode)
     mean, outliers = image_difference(result.pixels, reference)
     assert mean < 0.05 and outliers == 0  # the same picture as without it
+
+
+def test_an_empty_mesh_is_left_out_of_the_ray_traced_shadows(tmp_path):
+    """A bottom level of no triangles is not built: the traced shadows' picture is that of the
+    scene without the empty mesh, traced the same way."""
+    from gpu_context import shared_device
+
+    if shared_device().ray_tracing is None:
+        pytest.skip(f"{shared_device().info.name} has no ray-tracing pipelines")
+    plain = render(scene(tmp_path, False), "instanced", "raytraced").pixels
+    result = render(scene(tmp_path, True), "instanced", "raytraced")
+    mean, outliers = image_difference(result.pixels, plain)
+    assert mean < 0.05 and outliers == 0
