@@ -1,11 +1,12 @@
 """Levels of detail: time and peak memory of build_lods at 16k to 1M vertices (CPU only).
 
-Each size runs in a fresh child process, so its peak resident memory (VmHWM: getrusage's ru_maxrss
-would carry the parent's across exec) is its own: the child makes the mesh, notes its peak, builds the levels and reports the time, the
-peak's growth per vertex, and each level's triangles and error. The meshes are UV spheres (the
-scene-file recipe of issue 34, `{"primitive": "sphere", "args": {"segments": n, "rings": n}}`) and
-the torus knot the `model` demo draws. The target (docs/performance.md): a few hundred bytes a
-vertex and time linear in the vertices, as meshoptimizer-class tools cost.
+Each size runs in a fresh child process, so its peak resident memory (VmHWM: getrusage's
+ru_maxrss would carry the parent's across exec) is its own: the child makes the mesh, notes its
+peak, builds the levels and reports the time, the peak's growth per vertex, and each level's
+triangles and error. The meshes are UV spheres (the scene-file recipe of issue 34,
+`{"primitive": "sphere", "args": {"segments": n, "rings": n}}`) and the torus knot the `model`
+demo draws. The target (docs/performance.md): a few hundred bytes a vertex and time linear in the
+vertices, as meshoptimizer-class tools cost.
 """
 
 from __future__ import annotations
