@@ -11,6 +11,8 @@ Rules of use, in short:
 - `world.events(Kind)` is a typed event channel, double-buffered per frame; `Schedule(parallel=
   True)` runs a stage's systems whose declared reads and writes do not conflict at the same time;
   `run_if=any_with(A, B)` skips a system while no entity has A and B.
+- States: `init_state(world, GameState.MENU)`, `schedule.add(f, run_if=in_state(...))`,
+  `schedule.on_enter(GameState.PLAYING, f)`, `request_state(world, GameState.PAUSED)`.
 """
 
 from .ecs import (
@@ -25,11 +27,17 @@ from .ecs import (
     FixedTimestep,
     FunctionSystem,
     MissingComponentError,
+    NextState,
     Query,
     Schedule,
+    State,
     System,
     World,
     any_with,
+    current_state,
+    in_state,
+    init_state,
+    request_state,
     system,
 )
 
@@ -47,10 +55,16 @@ __all__ = [
     "FixedTimestep",
     "FunctionSystem",
     "MissingComponentError",
+    "NextState",
     "Query",
     "Schedule",
+    "State",
     "System",
     "World",
     "any_with",
+    "current_state",
+    "in_state",
+    "init_state",
+    "request_state",
     "system",
 ]

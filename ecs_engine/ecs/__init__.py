@@ -7,6 +7,7 @@ from .events import Columns, Events, Reader
 from .query import Batch, ComponentView, Query
 from .schedule import FunctionSystem, Schedule, System, any_with, system
 from .schema import Component, Field, schema_of
+from .states import NextState, State, current_state, in_state, init_state, request_state
 from .timestep import FixedTimestep, Interpolation
 from .world import World
 
@@ -24,12 +25,18 @@ __all__ = [
     "FunctionSystem",
     "Interpolation",
     "MissingComponentError",
+    "NextState",
     "Query",
     "Reader",
     "Schedule",
+    "State",
     "System",
     "World",
     "any_with",
+    "current_state",
+    "in_state",
+    "init_state",
+    "request_state",
     "schema_of",
     "system",
 ]
