@@ -11,8 +11,8 @@ Rules of use, in short:
 - `world.events(Kind)` is a typed event channel, double-buffered per frame; `Schedule(parallel=
   True)` runs a stage's systems whose declared reads and writes do not conflict at the same time;
   `run_if=any_with(A, B)` skips a system while no entity has A and B.
-- States: `init_state(world, GameState.MENU)`, `schedule.add(f, run_if=in_state(...))`,
-  `schedule.on_enter(GameState.PLAYING, f)`, `request_state(world, GameState.PAUSED)`.
+- Game structure (docs/game-structure.md): `init_state` / `in_state` / `Schedule.on_enter`,
+  `world.add_observer(OnAdd(C), f)`, `world.removed(C).read()`, `run_once(world, f)`.
 """
 
 from .ecs import (
@@ -28,16 +28,23 @@ from .ecs import (
     FunctionSystem,
     MissingComponentError,
     NextState,
+    Observer,
+    OnAdd,
+    OnChange,
+    OnRemove,
     Query,
+    Removals,
     Schedule,
     State,
     System,
+    Trigger,
     World,
     any_with,
     current_state,
     in_state,
     init_state,
     request_state,
+    run_once,
     system,
 )
 
@@ -56,15 +63,22 @@ __all__ = [
     "FunctionSystem",
     "MissingComponentError",
     "NextState",
+    "Observer",
+    "OnAdd",
+    "OnChange",
+    "OnRemove",
     "Query",
+    "Removals",
     "Schedule",
     "State",
     "System",
+    "Trigger",
     "World",
     "any_with",
     "current_state",
     "in_state",
     "init_state",
     "request_state",
+    "run_once",
     "system",
 ]

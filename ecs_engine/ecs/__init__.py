@@ -1,10 +1,14 @@
 """The ECS core: entities, component schemas, archetype storage, the world, queries, systems,
-the schedule and the fixed step. It imports nothing from rendering, the app, or the stock
-components and systems (they build on it)."""
+the schedule and the fixed step, and the game structure built on them (states, observers,
+removal detection, one-shot systems). It imports nothing from rendering, the app, or
+the stock components and systems (they build on it)."""
 
 from .errors import AccessError, DeadEntityError, EcsError, MissingComponentError
 from .events import Columns, Events, Reader
+from .observers import Observer, OnAdd, OnChange, OnRemove, Trigger
+from .one_shot import run_once
 from .query import Batch, ComponentView, Query
+from .removals import Removals
 from .schedule import FunctionSystem, Schedule, System, any_with, system
 from .schema import Component, Field, schema_of
 from .states import NextState, State, current_state, in_state, init_state, request_state
@@ -26,17 +30,24 @@ __all__ = [
     "Interpolation",
     "MissingComponentError",
     "NextState",
+    "Observer",
+    "OnAdd",
+    "OnChange",
+    "OnRemove",
     "Query",
     "Reader",
+    "Removals",
     "Schedule",
     "State",
     "System",
+    "Trigger",
     "World",
     "any_with",
     "current_state",
     "in_state",
     "init_state",
     "request_state",
+    "run_once",
     "schema_of",
     "system",
 ]
