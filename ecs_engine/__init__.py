@@ -12,8 +12,10 @@ Rules of use, in short:
   True)` runs a stage's systems whose declared reads and writes do not conflict at the same time;
   `run_if=any_with(A, B)` skips a system while no entity has A and B.
 - Game structure (docs/game-structure.md): `init_state` / `in_state` / `Schedule.on_enter`,
-  `world.add_observer(OnAdd(C), f)`, `world.removed(C).read()`, `run_once(world, f)`.
+  `world.add_observer(OnAdd(C), f)`, `world.removed(C).read()`, `run_once(world, f)`, `Prefab`.
 """
+
+from typing import TYPE_CHECKING, Any
 
 from .ecs import (
     AccessError,
@@ -48,6 +50,19 @@ from .ecs import (
     system,
 )
 
+if TYPE_CHECKING:
+    from .ecs.prefabs import Prefab, spawn_prefab
+
+
+def __getattr__(name: str) -> Any:
+    """Prefab and spawn_prefab: imported when first asked for (see ecs/__init__.py)."""
+    if name in ("Prefab", "spawn_prefab"):
+        from .ecs import prefabs
+
+        return getattr(prefabs, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 __version__ = "0.1.0"
 
 __all__ = [
@@ -67,6 +82,7 @@ __all__ = [
     "OnAdd",
     "OnChange",
     "OnRemove",
+    "Prefab",
     "Query",
     "Removals",
     "Schedule",
@@ -80,5 +96,6 @@ __all__ = [
     "init_state",
     "request_state",
     "run_once",
+    "spawn_prefab",
     "system",
 ]
