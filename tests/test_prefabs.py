@@ -13,6 +13,7 @@ from ecs_engine import Component, Field, OnAdd, Prefab, Schedule, World, spawn_p
 from ecs_engine.components import Transform
 from ecs_engine.components.hierarchy import Parent
 from ecs_engine.ecs.scene_file import SavedResource, SceneFileError
+from ecs_engine.jobs import JobPool
 
 
 class Hull(Component):
@@ -213,3 +214,38 @@ def test_the_file_s_resources_go_into_the_world_once_and_its_handles_follow(tmp_
     prefab.spawn(world, 5)
     prefab.spawn(world, 5)
     assert len(world.resources[Palette]) == 5  # once per load, not per spawn
+
+
+def _waves(ship, parallel: bool) -> tuple[list, list]:
+    """Two systems of one stage spawn copies each frame; what the world holds after."""
+    world = World()
+    pool = world.resources[JobPool] = JobPool(4)
+    try:
+        prefab = Prefab.load(ship, world, resources=())
+        spawned: list = []
+
+        @system(reads=[Hull])
+        def left(world, dt):
+            spawned.append(("left", prefab.spawn(world, 3, overrides={Hull: {"hp": 1.0}}).tolist()))
+
+        @system(reads=[Target])
+        def right(world, dt):
+            spawned.append(("right", prefab.spawn(world, 2).tolist()))
+
+        schedule = Schedule(parallel=parallel)
+        schedule.add(left)
+        schedule.add(right)
+        for _ in range(3):
+            schedule.run(world, 0.0)
+        links = sorted((int(e), int(world.get(int(e), Parent).entity)) for b in world.query(Parent) for e in b.entities)
+        return sorted(spawned), links
+    finally:
+        pool.close()
+
+
+def test_a_parallel_schedule_spawns_the_same_copies_with_the_same_ids(ship):
+    sequential = _waves(ship, parallel=False)
+    assert len(sequential[0]) == 6 and len(sequential[1]) == 15
+    guns_to_hulls = {gun: hull for _, copies in sequential[0] for hull, gun in copies}
+    assert dict(sequential[1]) == guns_to_hulls  # each gun hangs on its own copy's hull
+    assert _waves(ship, parallel=True) == sequential
