@@ -84,3 +84,24 @@ def test_a_trace_path_that_cannot_be_written_is_refused_before_the_first_frame(t
     assert err.count("\n") == 1 and "Traceback" not in err and "frames" not in out  # refused before a frame ran
     assert cli.main([*base, "--trace", str(scene)]) == 2  # another kind of file: only with --force
     assert scene.read_text() == '{"not": "a trace"}'
+
+
+def test_ctrl_c_writes_the_trace_of_the_frames_run(tmp_path, monkeypatch):
+    from ecs_engine.app.session import Session
+
+    done = Session.frame_done
+    calls = []
+
+    def interrupted(self):  # Ctrl-C lands during the fourth frame
+        calls.append(1)
+        if len(calls) == 4:
+            raise KeyboardInterrupt
+        done(self)
+
+    monkeypatch.setattr(Session, "frame_done", interrupted)
+    path = tmp_path / "t.json"
+    with pytest.raises(KeyboardInterrupt):
+        run(tiny(tmp_path, trace=str(path), frames=100))
+    doc = json.loads(path.read_text())
+    assert doc["otherData"]["frames_recorded"] == 3
+    assert [e["name"] for e in doc["traceEvents"] if e.get("cat") == "frame"] == ["frame 0", "frame 1", "frame 2"]
