@@ -208,6 +208,12 @@ def render_flags(headless_frames: int = 1) -> OneLineParser:
         help="write every frame's perf samples (CPU, GPU, record ms, psutil) to this JSON file at the end",
     )
     common.add_argument(
+        "--trace",
+        metavar="PATH",
+        help="write a Chrome/Perfetto trace (JSON) of the frames, systems, jobs and GPU passes to this file at the "
+        "end (the last 3,000 frames)",
+    )
+    common.add_argument(
         "--input-script",
         metavar="PATH",
         help="replay input by frame (keys, buttons, pad axes, mouse, scroll) from this file (app/input_script.py)",
@@ -216,8 +222,8 @@ def render_flags(headless_frames: int = 1) -> OneLineParser:
     common.add_argument(
         "--force",
         action="store_true",
-        help="let --screenshot, --perf-json and --record-input replace a file of another kind (a PNG, a perf "
-        "log and an input script are replaced without it)",
+        help="let --screenshot, --perf-json, --trace and --record-input replace a file of another kind (a PNG, a "
+        "perf log, a trace and an input script are replaced without it)",
     )
     common.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show tracebacks")
     return common

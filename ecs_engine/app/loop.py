@@ -23,9 +23,11 @@ from .input_script import InputRecorder, read_script
 from .offscreen import OffscreenSource
 from .output_files import check_run_files
 from .perf import PerfMonitor
+from .profiling import Profiler
 from .report import RunResult, describe_device, save_png, summary_line
 from .session import FrameSource, Session, one_line
 from .settings import RunOptions
+from .trace import TraceRecorder
 
 
 def run(
@@ -53,6 +55,8 @@ def run(
     recorder = InputRecorder(options.record_input) if options.record_input else None
     result = RunResult()
     result.perf = PerfMonitor(log=options.perf_json or False)  # checks its path too
+    if options.trace or options.perf_json or options.editor or ui is not None:  # else nothing shows timings
+        result.profiler = Profiler(TraceRecorder(options.trace) if options.trace else None, bool(options.perf_json))
     session: Session | None = None
     editor: ImGuiSession | None = None
     try:
@@ -110,7 +114,7 @@ def run_frames(
     say: Callable[[str], None],
 ) -> int:
     """The frames, until the source stops; how many ran."""
-    perf = result.perf
+    perf, profiler = result.perf, result.profiler
     frames = 0
     while source.running(frames):
         session.renderer.ensure_output()  # HDR colour or not, as settings and materials need
@@ -118,6 +122,8 @@ def run_frames(
         if target is None:
             continue
         t0 = time.perf_counter()
+        if profiler is not None:  # timed while the Perf window is drawn (or always: a trace, a perf log)
+            profiler.begin_frame(session, getattr(getattr(editor, "overlay", None), "visible", False))
         if script is not None or recorder is not None or source.input is not None:
             keys = held_keys(session)  # a window's own InputState, or the script's headless
             if editor is not None:
@@ -161,6 +167,9 @@ def run_frames(
             continue
         session.frame_done()
         end = time.perf_counter()
+        timings = None
+        if profiler is not None:
+            timings = profiler.end_frame(frames, int(t0 * 1e9), int(end * 1e9), session.renderer.frames.last_gpu)
         # CPU work: not the waits for the GPU (renderer); the wait for an image came before t0
         result.add_frame(
             stats,
@@ -168,6 +177,7 @@ def run_frames(
             end,
             target.waited_ms,
             ui_ms=editor.cost_ms if editor is not None else None,
+            timings=timings,
         )
         source.end(session, target)
         frames += 1
@@ -195,6 +205,7 @@ def keep_what_ran(
     except BrokenPipeError:  # nobody reads stdout any more: the files still matter
         say = lambda text: None
     result.write_perf_json(options, say)
+    result.write_trace(options, say)
     if recorder is not None:
         recorder.write()
 
@@ -221,10 +232,15 @@ def apply_requests(session: Session, editor: ImGuiSession) -> None:
 
 
 def write_outputs(options: RunOptions, result: RunResult, say: Callable[[str], None]) -> None:
-    """The perf log, then the screenshot: each is written even when the other fails, and the
-    failures are reported together after both."""
+    """The perf log, the trace, then the screenshot: each is written even when another fails,
+    and the failures are reported together after all."""
     failed = []
-    for write in (lambda: result.write_perf_json(options, say), lambda: _screenshot(options, result, say)):
+    writes = (
+        lambda: result.write_perf_json(options, say),
+        lambda: result.write_trace(options, say),
+        lambda: _screenshot(options, result, say),
+    )
+    for write in writes:
         try:
             write()
         except UsageError as exc:

@@ -1,12 +1,12 @@
-"""The files a run writes (`--screenshot`, `--perf-json`, `--record-input`), checked before its
+"""The files a run writes (`--screenshot`, `--perf-json`, `--trace`, `--record-input`), checked before its
 first frame, so a long run never ends by failing to write, and never by destroying a user's file.
 
 Each output is refused, in one line naming it, when: its path is empty or a folder; its folder
 does not exist or cannot be written; a screenshot's name does not end in .png (it is always
 written as PNG); it is also one of the run's inputs (a model, a sky, a scene file, the input
 script: a run never writes over what it reads) or another of its outputs; or a file is there
-that is not of the kind written (a PNG for the screenshot, a perf log for --perf-json, an input
-script for --record-input): a scene, a script or a photo is not replaced without `--force`.
+that is not of the kind written (a PNG for the screenshot, a perf log for --perf-json, a trace
+for --trace, an input script for --record-input): a scene, a script or a photo is not replaced without `--force`.
 An empty file is replaced: nothing is lost; a device or a pipe (/dev/null) never is.
 """
 
@@ -42,6 +42,16 @@ def is_perf_log(path: Path) -> bool:
     return isinstance(doc, dict) and {"schema_version", "meta", "frames"} <= doc.keys()
 
 
+def is_trace(path: Path) -> bool:
+    """A file `--trace` wrote (app/trace.py's Chrome trace-event document)."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            doc = json.load(f)
+    except (ValueError, UnicodeDecodeError):
+        return False
+    return isinstance(doc, dict) and "traceEvents" in doc
+
+
 def is_input_script(path: Path) -> bool:
     """A file of input events (app/input_script.py's format) with at least one event, or a
     recording (which may have none)."""
@@ -60,6 +70,7 @@ def is_input_script(path: Path) -> bool:
 OUTPUTS: dict[str, tuple[str, Callable[[Path], bool], str]] = {
     "--screenshot": ("the screenshot", is_png, "a PNG image"),
     "--perf-json": ("the performance log", is_perf_log, "a --perf-json log"),
+    "--trace": ("the trace", is_trace, "a --trace file"),
     "--record-input": ("the input recording", is_input_script, "an input script"),
 }
 
@@ -143,6 +154,7 @@ def check_run_files(options: RunOptions) -> None:
     outputs = {
         "--screenshot": options.screenshot,
         "--perf-json": options.perf_json,
+        "--trace": options.trace,
         "--record-input": options.record_input,
     }
     check_outputs(outputs, inputs, options.force)

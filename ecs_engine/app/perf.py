@@ -15,49 +15,34 @@ The first `warmup_frames` frames (default 5) stay out of the rolling window and 
 summary: pipeline creation and JIT compiles land there (the first frame took 6.5 s on the
 2-core development box), and one such frame would swamp the mean and p99 for the whole window.
 The log still keeps their rows.
+
+A frame may bring its timings by name (`timings`: each system's CPU ms and the thread that ran
+it, each GPU pass's ms; app/profiling.py): they go into a window of their own
+(perf_breakdown.py) for the Perf window's lists and the summary line, and into the log.
 """
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import time
 from collections.abc import Callable
-from pathlib import Path
-from typing import Any, NamedTuple, Protocol
+from typing import Any, Protocol
 
 import numpy as np
 import psutil
 
-from ..errors import UsageError
-from .output_files import probe_write
+from .perf_breakdown import Breakdown, NamedTime, Timings
+from .perf_log import COL, COLUMNS, METRICS, PerfLog, ProcessSample, Stats, check_writable, frame_rate, window_stats
 
-SCHEMA_VERSION = 1
+__all__ = ["METRICS", "WARMUP_FRAMES", "PerfLog", "PerfMonitor", "ProcessSample", "PsutilSampler", "Stats"]
+__all__ += ["Timings", "check_writable"]
 
-# Columns of the ring and of the log, one row per frame; METRICS are what stats()/series() know.
-_COLUMNS = ("t", "frame_ms", "cpu_ms", "record_ms", "gpu_ms", "wait_ms", "overhead_ms")
-METRICS = _COLUMNS[1:]
-_COL = {name: k for k, name in enumerate(_COLUMNS)}
-_T, _FRAME, _OVERHEAD = _COL["t"], _COL["frame_ms"], _COL["overhead_ms"]
 _START_ROWS = 1024  # 5 s at 200 fps before the first doubling
 _SLACK_ROWS = 16  # rounding at the window's edge never costs a sample
 WARMUP_FRAMES = 5  # left out of the rolling statistics (and of a run's closing summary, report.py)
 _NAN = math.nan
-
-
-class Stats(NamedTuple):
-    """Window statistics of one metric; all NaN when it has no value in the window."""
-
-    min: float
-    mean: float
-    p99: float
-
-
-class ProcessSample(NamedTuple):
-    cpu_system_percent: float  # whole machine, 0-100
-    cpu_process_percent: float  # this process, 100 per busy core (can exceed 100)
-    rss_bytes: int
+_T, _FRAME, _OVERHEAD = COL["t"], COL["frame_ms"], COL["overhead_ms"]
 
 
 class Sampler(Protocol):
@@ -86,167 +71,6 @@ class PsutilSampler:
             process = self._process.cpu_percent(interval=None)
             rss = self._process.memory_info().rss
         return ProcessSample(psutil.cpu_percent(interval=None), process, rss)
-
-
-def check_writable(path: str | os.PathLike[str], what: str = "the performance log") -> Path:
-    """The path as a Path if a file can be written there, else UsageError in one line.
-
-    Called when the run starts, so a long run does not end by losing its data: a scratch file
-    is created (and removed) next to the target, as the final write will do."""
-    if not str(path):
-        raise UsageError(f"the path for {what} is empty")
-    target = Path(path)
-    if target.is_dir():
-        raise UsageError(f"{target}: is a directory, not a file to write {what} to")
-    if not target.parent.is_dir():
-        raise UsageError(f"{target}: cannot write {what} there: folder {target.parent} does not exist")
-    probe_write(target, str(target), what)
-    return target
-
-
-def _stats(values: np.ndarray) -> Stats:
-    """min, mean and 99th percentile ignoring NaNs. The percentile is np.percentile's default
-    (linear interpolation) from one partition: np.percentile costs ~75 us even on 300 values,
-    too much for an overlay that asks every frame."""
-    values = values[~np.isnan(values)]  # a copy, partitioned in place below
-    n = values.size
-    if n == 0:
-        return Stats(_NAN, _NAN, _NAN)
-    low, mean = float(values.min()), float(values.mean())
-    pos = 0.99 * (n - 1)
-    k = int(pos)
-    values.partition(k)
-    p99 = float(values[k])
-    if k + 1 < n:  # everything after k is >= values[k]; the next order statistic is their min
-        p99 += (float(values[k + 1 :].min()) - p99) * (pos - k)
-    return Stats(low, mean, p99)
-
-
-def _rate(frame_ms: np.ndarray) -> float:
-    """Frames per second from wall intervals: intervals counted / their total time."""
-    intervals = frame_ms[~np.isnan(frame_ms)]
-    total = float(intervals.sum())
-    return intervals.size * 1e3 / total if intervals.size and total > 0 else _NAN
-
-
-def _remove(path: Path) -> None:
-    try:
-        path.unlink()
-    except OSError:
-        pass
-
-
-def _json_number(x: float) -> float | None:
-    return None if math.isnan(x) else x
-
-
-class PerfLog:
-    """Every frame of the run (not just the window), for `--perf-json`.
-
-    Rows go into (CHUNK, columns) float64 blocks, a new block every CHUNK frames: ~60 bytes a
-    frame and no per-frame allocation. Counters get a NaN-filled column per block the first
-    time a block sees their name."""
-
-    CHUNK = 8192
-
-    def __init__(self, path: str | os.PathLike[str] | None = None) -> None:
-        self.path = None if path is None else check_writable(path)
-        self._blocks: list[np.ndarray] = []
-        self._block_counters: list[dict[str, np.ndarray]] = []
-        self._rows = np.empty((0, len(_COLUMNS)))
-        self._counters: dict[str, np.ndarray] = {}
-        self._j = self.CHUNK  # the first append opens a block
-        self.samples: list[tuple[float, ProcessSample]] = []
-
-    def __len__(self) -> int:
-        return (len(self._blocks) - 1) * self.CHUNK + self._j if self._blocks else 0
-
-    def append(self, row: tuple[float, ...], counters: dict[str, int]) -> None:
-        j = self._j
-        if j == self.CHUNK:
-            self._rows = np.empty((self.CHUNK, len(_COLUMNS)))
-            self._counters = {}
-            self._blocks.append(self._rows)
-            self._block_counters.append(self._counters)
-            j = 0
-        self._rows[j] = row
-        for name, value in counters.items():
-            column = self._counters.get(name)
-            if column is None:
-                column = self._counters[name] = np.full(self.CHUNK, _NAN)
-            column[j] = value
-        self._j = j + 1
-
-    def set_overhead(self, ms: float) -> None:
-        """The monitor's own cost for the last frame, known only once it is done."""
-        self._rows[self._j - 1, _OVERHEAD] = ms
-
-    def add_sample(self, t: float, sample: ProcessSample) -> None:
-        self.samples.append((t, sample))
-
-    def columns(self) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        """All rows (frames, columns) and the counters (NaN where a frame had none)."""
-        n = len(self)
-        if n == 0:
-            return np.empty((0, len(_COLUMNS))), {}
-        rows = np.concatenate(self._blocks)[:n]
-        names = dict.fromkeys(name for block in self._block_counters for name in block)
-        counters = {
-            name: np.concatenate([block.get(name, np.full(self.CHUNK, _NAN)) for block in self._block_counters])[:n]
-            for name in names
-        }
-        return rows, counters
-
-    def to_dict(self, meta: dict[str, Any], cores: int, warmup: int = 0) -> dict[str, Any]:
-        """The JSON document (schema_version 1); NaN becomes null. The summary and fps leave out
-        the first `warmup` frames (when there are more frames than that)."""
-        rows, counters = self.columns()
-        steady = rows[warmup:] if len(rows) > warmup else rows
-        fields = _COLUMNS[:_OVERHEAD]  # the per-frame cost is only summarised
-        columns = [[_json_number(x) for x in rows[:, k].tolist()] for k in range(len(fields))]
-        frames = [dict(zip(fields, values, strict=True)) for values in zip(*columns, strict=True)]
-        for name, column in counters.items():
-            for frame, value in zip(frames, column.tolist(), strict=True):
-                if not math.isnan(value):
-                    frame[name] = int(value)
-        psutil_rows = [
-            {
-                "t": t,
-                "cpu_system_percent": s.cpu_system_percent,
-                "cpu_process_percent": s.cpu_process_percent,
-                "cpu_process_percent_per_core": s.cpu_process_percent / cores,
-                "rss_bytes": int(s.rss_bytes),
-            }
-            for t, s in self.samples
-        ]
-        summary = {
-            name: {k: _json_number(v) for k, v in _stats(steady[:, _COL[name]])._asdict().items()} for name in METRICS
-        }
-        return {
-            "schema_version": SCHEMA_VERSION,
-            "meta": meta,
-            "frames": frames,
-            "psutil": psutil_rows,
-            "warmup_frames": len(rows) - len(steady),
-            "summary": summary,
-            "fps": _json_number(_rate(steady[:, _FRAME])),
-        }
-
-    def write_json(self, path: str | os.PathLike[str], meta: dict[str, Any], cores: int, warmup: int = 0) -> None:
-        """Write to a temporary file in the same folder, then rename over the target: a reader
-        (or a crash) never sees half a file."""
-        target = Path(path)
-        document = self.to_dict(meta, cores, warmup)
-        tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
-        try:
-            with open(tmp, "w") as f:
-                json.dump(document, f, allow_nan=False)
-            os.replace(tmp, target)
-        except BaseException as exc:
-            _remove(tmp)
-            if isinstance(exc, OSError):
-                raise UsageError(f"{target}: cannot write the performance log: {exc.strerror or exc}") from None
-            raise
 
 
 class PerfMonitor:
@@ -282,13 +106,16 @@ class PerfMonitor:
         self.cores = max(1, int(self._sampler.cores))
         # beyond max_fps the ring keeps the last max_rows frames: a shorter window, same rates
         self.max_rows = math.ceil(self.window_s * max_fps) + _SLACK_ROWS
-        self._ring = np.full((min(_START_ROWS, self.max_rows), len(_COLUMNS)), _NAN)
+        self._ring = np.full((min(_START_ROWS, self.max_rows), len(COLUMNS)), _NAN)
         self._next = 0  # row written next; the oldest row once the ring is full
         self._rows = 0
         self._cache = (-1, 0)  # (frame_count, first window row in age order)
         self.frame_count = 0
         self.overhead_total_s = 0.0
         self.counters: dict[str, int] = {}
+        self.systems = Breakdown(self.window_s, self.max_rows)  # CPU ms by system (timed frames)
+        self.gpu_passes = Breakdown(self.window_s, self.max_rows)  # GPU ms by pass
+        self.system_threads: dict[str, str] = {}  # the thread that last ran each system
         self.sample: ProcessSample | None = None
         self._start = clock()
         self._last_t = _NAN
@@ -296,11 +123,18 @@ class PerfMonitor:
         self._next_summary_t = 1.0
 
     def frame(
-        self, cpu_ms: float, record_ms: float = 0.0, gpu_ms: float | None = None, wait_ms: float = 0.0, **counters: int
+        self,
+        cpu_ms: float,
+        record_ms: float = 0.0,
+        gpu_ms: float | None = None,
+        wait_ms: float = 0.0,
+        timings: Timings | None = None,
+        **counters: int,
     ) -> None:
         """Record one frame. cpu_ms: frame start to submit; record_ms: command recording;
         gpu_ms: GPU time of the frame whose timestamps just came back, None if none did;
-        wait_ms: time blocked on fences/acquire; counters: draws, visible, triangles, ..."""
+        wait_ms: time blocked on fences/acquire; timings: by system and GPU pass, None when the
+        frame was not timed; counters: draws, visible, triangles, ..."""
         start = time.perf_counter()  # the monitor's own cost is real time, whatever the clock
         t = self._clock() - self._start
         row = (t, (t - self._last_t) * 1e3, cpu_ms, record_ms, _NAN if gpu_ms is None else gpu_ms, wait_ms, 0.0)
@@ -308,9 +142,15 @@ class PerfMonitor:
         i = self._insert(t, row) if self.frame_count >= self.warmup_frames else None  # warm-up: no row
         self.frame_count += 1
         self.counters = counters
+        if timings is not None:
+            self.system_threads.update(timings.threads)
+            if i is not None:
+                self.systems.add(t, timings.systems.items())
+                if timings.gpu_passes:
+                    self.gpu_passes.add(t, timings.gpu_passes)
         log = self.log
         if log is not None:
-            log.append(row, counters)
+            log.append(row, counters, timings)
         if t >= self._next_sample_t:
             self._take_sample(t)
         ms = (time.perf_counter() - start) * 1e3
@@ -349,7 +189,7 @@ class PerfMonitor:
 
     def _grow(self) -> np.ndarray:
         """Double the ring (up to max_rows), rows in age order; happens a few times a run."""
-        grown = np.full((min(2 * len(self._ring), self.max_rows), len(_COLUMNS)), _NAN)
+        grown = np.full((min(2 * len(self._ring), self.max_rows), len(COLUMNS)), _NAN)
         grown[: self._rows] = np.concatenate((self._ring[self._next :], self._ring[: self._next]))
         self._ring = grown
         self._next = self._rows
@@ -387,18 +227,18 @@ class PerfMonitor:
 
     def stats(self, name: str) -> Stats:
         """min, mean, p99 of a metric over the window, NaNs (missing GPU times) left out."""
-        return _stats(self.series(name))
+        return window_stats(self.series(name))
 
     @staticmethod
     def _column(name: str) -> int:
         if name not in METRICS:
             raise ValueError(f"unknown metric {name!r}; known: {', '.join(METRICS)}")
-        return _COL[name]
+        return COL[name]
 
     @property
     def fps(self) -> float:
         """Frames per second over the window, from wall-clock intervals; NaN before two frames."""
-        return _rate(self._window(_FRAME))
+        return frame_rate(self._window(_FRAME))
 
     @property
     def overhead_ms(self) -> float:
@@ -436,7 +276,9 @@ class PerfMonitor:
 
     def summary_line(self) -> str:
         """One line over the window, e.g. `fps 1234 | cpu 0.41 ms (p99 0.62) | record 0.08 |
-        gpu 0.37 ms | sys 6% proc 101% (6.3%/core) | rss 210 MiB | 100 drawn in 2 draws`."""
+        gpu 0.37 ms | sys 6% proc 101% (6.3%/core) | rss 210 MiB | 100 drawn in 2 draws`, and
+        while frames are timed the three slowest systems and GPU passes (`| systems TransformSystem
+        0.031, ... ms | gpu passes forward 0.290, ... ms`)."""
         cpu, record, gpu = self.stats("cpu_ms"), self.stats("record_ms"), self.stats("gpu_ms")
         if self.warming_up:
             parts = [f"warm-up frame {self.frame_count} of {self.warmup_frames} (left out of the figures)"]
@@ -459,7 +301,18 @@ class PerfMonitor:
         if "visible" in counters and "draws" in counters:
             parts.append(f"{counters.pop('visible')} drawn in {counters.pop('draws')} draws")
         parts.extend(f"{name} {value}" for name, value in counters.items())
+        for label, found in (("systems", self.system_times()), ("gpu passes", self.gpu_pass_times())):
+            if found:  # the slowest three: the line is read at a glance
+                parts.append(f"{label} " + ", ".join(f"{x.name} {x.mean:.3f}" for x in found[:3]) + " ms")
         return " | ".join(parts)
+
+    def system_times(self) -> list[NamedTime]:
+        """Each system's CPU ms per frame over the window (timed frames only), slowest first."""
+        return self.systems.window(self._last_t)
+
+    def gpu_pass_times(self) -> list[NamedTime]:
+        """Each GPU pass's ms per frame over the window (timed frames only), slowest first."""
+        return self.gpu_passes.window(self._last_t)
 
     def write_json(self, path: str | os.PathLike[str] | None = None, meta: dict[str, Any] | None = None) -> None:
         """Write every frame of the run (`--perf-json`); needs log=True or a log path. A path

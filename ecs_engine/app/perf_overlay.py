@@ -9,11 +9,16 @@ percentile over the window; CPU system and process % (raw and per core) and resi
 come from psutil samples taken about 4 times a second; the overlay's own cost is shown too.
 The first frames (the monitor's warm-up: pipelines and JIT compiles) are left out of all of it;
 until the window has two frames the FPS line says so instead of showing NaN.
+
+Below them, each system's CPU ms per frame (and the thread that last ran it) and each GPU pass's
+ms, slowest first, as means over the same window; they are measured only while this window is
+drawn (app/profiling.py), so the first frame after opening it has none yet.
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -34,8 +39,11 @@ class PerfOverlay:
         self._fps = float("nan")
         self._warmup = ""  # what the FPS line says while the monitor has no rate yet
         self._rows: list[tuple[str, str, str, str]] = []
+        self.systems: list[tuple[str, str, str]] = []  # (system, mean ms, thread) slowest first, as drawn
+        self.passes: list[tuple[str, str]] = []  # (GPU pass, mean ms) slowest first, as drawn
         self._lines: list[tuple[str, np.ndarray, np.ndarray]] = []
         self._limits = (0.0, 1.0, 1.0)  # x from, x to, y top
+        self.visible = False  # drawn last frame (not collapsed, its tab shown): the run loop times systems then
 
     def _refresh(self, perf: PerfMonitor) -> None:
         now = time.perf_counter()
@@ -48,6 +56,9 @@ class PerfOverlay:
         for name, label in PLOTTED[1:]:
             s = perf.stats(name)
             self._rows.append((label, _ms(s.min), _ms(s.mean), _ms(s.p99)))
+        threads = perf.system_threads
+        self.systems = [(x.name, _ms(x.mean), _thread(threads.get(x.name, ""))) for x in perf.system_times()]
+        self.passes = [(x.name, _ms(x.mean)) for x in perf.gpu_pass_times()]
         t = perf.times()
         self._lines = []
         top = 1.0
@@ -66,7 +77,8 @@ class PerfOverlay:
         imgui.set_next_window_pos((io.display_size.x - 370, 10), imgui.Cond_.first_use_ever.value)
         imgui.set_next_window_size((360, 330), imgui.Cond_.first_use_ever.value)
         self._refresh(perf)
-        if imgui.begin("Perf")[0]:
+        self.visible = imgui.begin("Perf")[0]
+        if self.visible:
             imgui.text(self._warmup or f"FPS {self._fps:7.1f}   (wall clock)")
             if imgui.begin_table("ms", 4, imgui.TableFlags_.borders_inner_h.value):
                 for title in ("ms", "min", "mean", "p99"):
@@ -84,8 +96,27 @@ class PerfOverlay:
             imgui.text(f"    process {_ms(perf.cpu_process_percent, '5.1f')}% ({per_core}%/core)")
             imgui.text(f"resident memory {perf.rss_bytes / 2**20:.1f} MiB")
             imgui.text(f"overlay {overlay_ms:.3f} ms, monitor {_ms(perf.overhead_ms * 1e3, '.1f')} us")
+            self._table("systems", ("system", "CPU ms", "thread"), self.systems)
+            self._table("GPU passes", ("GPU pass", "ms"), self.passes)
             self._plot(perf)
         imgui.end()
+
+    def _table(self, what: str, titles: tuple[str, ...], rows: Sequence[tuple[str, ...]]) -> None:
+        """One list: means per frame over the window, slowest first."""
+        imgui = self.imgui
+        if not rows:
+            imgui.text_disabled(f"{what}: no timed frame in the window yet")
+            return
+        if imgui.begin_table(what, len(titles), imgui.TableFlags_.borders_inner_h.value):
+            for title in titles:
+                imgui.table_setup_column(title)
+            imgui.table_headers_row()
+            for row in rows:
+                imgui.table_next_row()
+                for i, text in enumerate(row):
+                    imgui.table_set_column_index(i)
+                    imgui.text(text)
+            imgui.end_table()
 
     def _plot(self, perf: PerfMonitor) -> None:
         implot = self.implot
@@ -115,6 +146,15 @@ def _peaks(t: np.ndarray, y: np.ndarray, points: int) -> tuple[np.ndarray, np.nd
         return np.ascontiguousarray(t), np.ascontiguousarray(y)
     starts = np.linspace(0, len(y), points, endpoint=False).astype(np.int64)
     return np.ascontiguousarray(t[starts]), np.maximum.reduceat(y, starts)
+
+
+def _thread(name: str) -> str:
+    """A thread's name, short: the main thread, or the pool's worker (jobs.py names them)."""
+    if name == "MainThread":
+        return "main"
+    if name.startswith("ecs-job-"):
+        return f"worker {name.removeprefix('ecs-job-')}"
+    return name or "-"
 
 
 def _ms(value: float, spec: str = ".3f") -> str:

@@ -31,6 +31,7 @@ class RunResult:
     pixels: np.ndarray | None = None
     last_stats: Any = None
     perf: Any = None  # the run's perf.PerfMonitor
+    profiler: Any = None  # the run's profiling.Profiler (None: nothing can show the timings)
     editor: Any = None  # the run's editor_session.EditorSession, while it runs
     settings: Any = None  # the session's Settings when the run ended
     recreations: int = 0  # swapchain recreations (windowed)
@@ -42,10 +43,17 @@ class RunResult:
         return self.frames / self.wall_s if self.wall_s > 0 else 0.0
 
     def add_frame(
-        self, stats: Any, cpu_ms: float, end: float, waited_ms: float = 0.0, ui_ms: float | None = None
+        self,
+        stats: Any,
+        cpu_ms: float,
+        end: float,
+        waited_ms: float = 0.0,
+        ui_ms: float | None = None,
+        timings: Any = None,
     ) -> None:
         """One frame's figures, into the lists and the perf monitor. `waited_ms`: time blocked
-        outside the renderer (the swapchain), on top of `stats.wait_ms`."""
+        outside the renderer (the swapchain), on top of `stats.wait_ms`; `timings`: by system
+        and GPU pass (perf_breakdown.Timings), None when the frame was not timed."""
         self.cpu_ms.append(cpu_ms)
         self.frame_end.append(end)
         self.record_ms.append(stats.record_ms)
@@ -56,7 +64,13 @@ class RunResult:
             self.ui_ms.append(ui_ms)
         self.last_stats = stats
         self.perf.frame(
-            cpu_ms, stats.record_ms, stats.gpu_ms, stats.wait_ms + waited_ms, draws=stats.draws, visible=stats.instances
+            cpu_ms,
+            stats.record_ms,
+            stats.gpu_ms,
+            stats.wait_ms + waited_ms,
+            timings,
+            draws=stats.draws,
+            visible=stats.instances,
         )
 
     def write_perf_json(self, options: RunOptions, say: Callable[[str], None]) -> None:
@@ -64,6 +78,13 @@ class RunResult:
         if options.perf_json:
             self.perf.write_json(meta=self.meta(options))
             say(f"wrote {options.perf_json}")
+
+    def write_trace(self, options: RunOptions, say: Callable[[str], None]) -> None:
+        """`--trace`: the frames the trace kept (app/trace.py), with what the run was."""
+        trace = self.profiler.trace if self.profiler is not None else None
+        if options.trace and trace is not None:
+            trace.write(meta=self.meta(options))
+            say(f"wrote {options.trace}")
 
     def meta(self, options: RunOptions) -> dict[str, Any]:
         """What a --perf-json file says about its run (the settings it ended with)."""

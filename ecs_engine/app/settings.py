@@ -81,6 +81,7 @@ class RunOptions:
     recorder: str | None = None  # native | python (None: native when numba is there)
     entities: int = 10_000  # the scaling scene's entity count
     perf_json: str | None = None  # write every frame's perf samples here at the end
+    trace: str | None = None  # write a Chrome trace of systems, jobs and GPU passes here at the end (app/trace.py)
     input_script: str | None = None  # input by frame to replay (app/input_script.py)
     record_input: str | None = None  # write the run's input by frame here at the end
     force: bool = False  # the outputs may replace a file of another kind (app/output_files.py)
@@ -112,6 +113,7 @@ class RunOptions:
         "frame_reuse",
         "recorder",
         "perf_json",
+        "trace",
         "input_script",
         "record_input",
         "force",

@@ -1,6 +1,13 @@
 """Frames in flight: per frame a command pool (reset whole), a primary command buffer, a fence,
 swapchain semaphores and a timestamp query pool read back without waiting.
 
+The frame's GPU time is two timestamps, at the primary's start and end. With `pass_timing` on
+(the app's profiler turns it on while someone looks), the renderer also `mark`s the end of each
+pass it records (a bottom-of-pipe timestamp: written once everything before it has finished),
+so a pass's time is the span from the previous mark and the passes add up to the frame's time
+(less what was recorded after the last mark). They are read with the frame's total, once its
+fence has signalled (`last_gpu`).
+
 A slot's primary is recorded without ONE_TIME_SUBMIT, so a frame that would record the same
 commands again submits it as it stands (`resubmit`; render/frame_replay.py decides when).
 
@@ -10,14 +17,30 @@ frame budget is 250 us. Results are checked as the wrappers do (same exceptions)
 
 from __future__ import annotations
 
+import itertools
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from .device import Device
 
 FRAMES_IN_FLIGHT = 2
+MAX_PASSES = 30  # marks a frame may time; queries a slot holds: these, its start and its end
+
+
+@dataclass
+class GpuFrame:
+    """One frame's GPU work as its timestamps saw it. `start_ns`: the device's clock at its start
+    (ns, for placing it on the CPU's timeline: `submitted_ns` and `done_ns` are perf_counter_ns
+    just before its submit and once its fence was seen signalled, so it ran between them);
+    `passes`: (name, ms) in recorded order."""
+
+    ms: float
+    start_ns: int
+    passes: list[tuple[str, float]]
+    submitted_ns: int
+    done_ns: int
 
 
 @dataclass
@@ -32,6 +55,8 @@ class Frame:
     submitted: bool = False  # the query pool holds results of a submitted frame
     slot: int = 0  # its index in FrameRing.frames
     plain_submit: Any = None  # (VkSubmitInfo, its address) without semaphores (offscreen), made once
+    passes: list[str] = field(default_factory=list)  # the marks its primary holds, in order
+    submitted_ns: int = 0  # perf_counter_ns just before its last submit (pass timing only)
 
 
 class FrameRing:
@@ -42,9 +67,11 @@ class FrameRing:
         self.index = 0
         self.last_wait_ms = 0.0  # time begin() spent waiting for the GPU (not CPU work)
         self.timestamps = device.info.timestamp_valid_bits > 0
+        self.pass_timing = False  # mark() writes timestamps (from the next recorded frame)
+        self.last_gpu: GpuFrame | None = None  # what acquire() read, with pass_timing on
         self._begin_info = vk.VkCommandBufferBeginInfo(flags=0)  # not one-time: it may be submitted again
         self._begin_info_ptr = vk.ffi.addressof(self._begin_info)
-        self._stamps = vk.ffi.new("uint64_t[2]")
+        self._stamps = vk.ffi.new(f"uint64_t[{MAX_PASSES + 2}]")
         for _ in range(count):
             pool = vk.vkCreateCommandPool(
                 device.handle,
@@ -62,7 +89,9 @@ class FrameRing:
             fence = vk.vkCreateFence(device.handle, vk.VkFenceCreateInfo(flags=vk.VK_FENCE_CREATE_SIGNALED_BIT), None)
             sem = [vk.vkCreateSemaphore(device.handle, vk.VkSemaphoreCreateInfo(), None) for _ in range(2)]
             queries = vk.vkCreateQueryPool(
-                device.handle, vk.VkQueryPoolCreateInfo(queryType=vk.VK_QUERY_TYPE_TIMESTAMP, queryCount=2), None
+                device.handle,
+                vk.VkQueryPoolCreateInfo(queryType=vk.VK_QUERY_TYPE_TIMESTAMP, queryCount=MAX_PASSES + 2),
+                None,
             )
             fences = vk.ffi.new("VkFence[1]", [fence])
             self.frames.append(Frame(pool, cb, fence, sem[0], sem[1], queries, fences, slot=len(self.frames)))
@@ -81,6 +110,7 @@ class FrameRing:
         frame = self.frames[self.index]
         t0 = time.perf_counter()
         self.wait(frame)
+        self.last_gpu = None
         # some drivers (lavapipe) still block here until the queries land: count it as waiting
         gpu_ms = self._read_timestamps(frame) if frame.submitted else None
         self.last_wait_ms = (time.perf_counter() - t0) * 1e3
@@ -92,16 +122,34 @@ class FrameRing:
         lib = vk.lib
         check(vk, lib.vkResetCommandPool(self.device.handle, frame.pool, 0))
         check(vk, lib.vkBeginCommandBuffer(frame.command_buffer, self._begin_info_ptr))
+        if frame.passes:
+            frame.passes = []
         if self.timestamps:
-            lib.vkCmdResetQueryPool(frame.command_buffer, frame.queries, 0, 2)
+            lib.vkCmdResetQueryPool(frame.command_buffer, frame.queries, 0, MAX_PASSES + 2)
             lib.vkCmdWriteTimestamp(frame.command_buffer, vk.VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, frame.queries, 0)
+
+    def marker(self, frame: Frame) -> Any:
+        """mark(name) for the frame being recorded, or None when passes are not timed."""
+        if not (self.pass_timing and self.timestamps):
+            return None
+        return lambda name: self.mark(frame, name)
+
+    def mark(self, frame: Frame, name: str) -> None:
+        """The pass called `name` ends here (recorded after it; see the module)."""
+        passes = frame.passes
+        if len(passes) < MAX_PASSES:
+            vk = self.device.vk
+            stage = vk.VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT
+            vk.lib.vkCmdWriteTimestamp(frame.command_buffer, stage, frame.queries, len(passes) + 1)
+            passes.append(name)
 
     def end(self, frame: Frame, wait: Any = None, signal: Any = None) -> None:
         """End the slot's primary (the last timestamp) and submit it."""
         vk = self.device.vk
         lib = vk.lib
         if self.timestamps:
-            lib.vkCmdWriteTimestamp(frame.command_buffer, vk.VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, frame.queries, 1)
+            stage = vk.VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT
+            lib.vkCmdWriteTimestamp(frame.command_buffer, stage, frame.queries, len(frame.passes) + 1)
         check(vk, lib.vkEndCommandBuffer(frame.command_buffer))
         self.resubmit(frame, wait, signal)
 
@@ -110,6 +158,8 @@ class FrameRing:
         vk = self.device.vk
         lib = vk.lib
         check(vk, lib.vkResetFences(self.device.handle, 1, frame.fence_array))
+        if frame.passes:  # before the call: the GPU may start before it returns
+            frame.submitted_ns = time.perf_counter_ns()
         check(vk, lib.vkQueueSubmit(self.device.queue, 1, self._submit_info(frame, wait, signal), frame.fence))
         frame.submitted = self.timestamps
         self.index = (self.index + 1) % len(self.frames)
@@ -144,17 +194,27 @@ class FrameRing:
         check(vk, vk.lib.vkWaitForFences(self.device.handle, 1, frame.fence_array, vk.VK_TRUE, 2**64 - 1))
 
     def _read_timestamps(self, frame: Frame) -> float | None:
+        """The frame's GPU ms; with marks, its passes too (`last_gpu`)."""
         vk = self.device.vk
         data = self._stamps
+        count = len(frame.passes) + 2
         result = vk.lib.vkGetQueryPoolResults(
-            self.device.handle, frame.queries, 0, 2, 16, data, 8, vk.VK_QUERY_RESULT_64_BIT
+            self.device.handle, frame.queries, 0, count, 8 * count, data, 8, vk.VK_QUERY_RESULT_64_BIT
         )
         if result != vk.VK_SUCCESS:
             return None
         bits = self.device.info.timestamp_valid_bits
         mask = (1 << bits) - 1 if bits < 64 else (1 << 64) - 1
-        ticks = (int(data[1]) - int(data[0])) & mask
-        return ticks * self.device.info.timestamp_period_ns / 1e6
+        period = self.device.info.timestamp_period_ns
+        ticks = (int(data[count - 1]) - int(data[0])) & mask
+        ms = ticks * period / 1e6
+        if frame.passes:
+            stamps = [int(data[k]) for k in range(count - 1)]
+            spans = [((b - a) & mask) * period / 1e6 for a, b in itertools.pairwise(stamps)]
+            done = time.perf_counter_ns()
+            passes = list(zip(frame.passes, spans, strict=True))
+            self.last_gpu = GpuFrame(ms, round(stamps[0] * period), passes, frame.submitted_ns, done)
+        return ms
 
     def destroy(self) -> None:
         vk = self.device.vk

@@ -9,6 +9,10 @@ target's form (gpu/render_pass.py's FORMS):
   compute pass (deferred_pass.py), then the target's render pass as above with the sky and the
   set-aside rows alone in subpass 0.
 
+With `mark` (gpu/frames.py's FrameRing.mark, while passes are timed) each pass's end is marked
+with its name; a subpass whose contents are secondaries cannot hold a timestamp, so the target's
+pass is marked at its subpass changes and its end.
+
 It also keeps, per framebuffer, the structs a frame needs (path.TargetState), and remakes what
 was made against the target's render pass when the target changes form.
 """
@@ -16,6 +20,7 @@ was made against the target's render pass when the target changes form.
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from typing import Any
 
 from ..gpu.device import Device
@@ -147,12 +152,14 @@ class OutputPasses:
         slot: int = 0,
         sky: bool = False,
         transparent: Any = None,
+        mark: Callable[[str], None] | None = None,
     ) -> int:
         """Raw cffi calls with structs made once (see gpu/frames.py for why). `chunks`: the path's
         secondaries; `aside`: the set-aside rows' or None; `billboards` point and spot lights get
         one; `features`: the mesh pipelines' MATERIAL_FEATURES (the lighting's too); `sky`: the
         Environment is drawn behind; `transparent`: the blended rows' secondary for the weighted
-        transparency pass (the deferred form). Returns the light pass's draws."""
+        transparency pass (the deferred form); `mark`: see the module. Returns the light pass's
+        draws."""
         vk = self.vk
         lib = vk.lib
         target = self.target
@@ -163,15 +170,23 @@ class OutputPasses:
             if chunks:
                 lib.vkCmdExecuteCommands(cb, len(chunks), vk.ffi.new("VkCommandBuffer[]", chunks))
             lib.vkCmdEndRenderPass(cb)
+            if mark is not None:
+                mark("g-buffer")
             extent = state.area.extent
             ray = self.ray_shadows
             if ray is not None and ray.lights:  # the shadow mask the lighting reads (ray_shadows.py)
                 mask = self.deferred.named(target.attachments)
                 ray.record(cb, slot, frame_set[0], target.attachments, mask, extent.width, extent.height)
+                if mark is not None:
+                    mark("ray-traced shadows")
             self.deferred.record(cb, frame_set[0], target.attachments, features, extent.width, extent.height)
+            if mark is not None:
+                mark("lighting (compute)")
             if transparent is not None:
                 assert self.oit is not None
                 self.oit.accumulate(cb, transparent)
+                if mark is not None:
+                    mark("transparency (accumulate)")
             secondaries = []
         if sky:  # after the opaque chunks, before the blended rows
             assert self.sky is not None
@@ -185,14 +200,25 @@ class OutputPasses:
         if secondaries:
             lib.vkCmdExecuteCommands(cb, len(secondaries), vk.ffi.new("VkCommandBuffer[]", secondaries))
         lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
+        if mark is not None:
+            mark("forward" if state.gbuffer_begin_ptr is None else "sky and blended")
         draws = self.light_pass.record(cb, state, frame_set, billboards)
+        last = "billboards"
         if target.hdr:  # the direct form has no output subpass: the overlay follows the billboards
             assert self.tone_map_pass is not None
             lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
+            if mark is not None:
+                mark(last)
             self.tone_map_pass.record(cb, state, target, *tone_map)
+            last = "tone map"
         if overlay is not None:
+            if mark is not None:
+                mark(last)
             overlay.record(cb, slot, state.area.extent.width, state.area.extent.height)
+            last = "imgui"
         lib.vkCmdEndRenderPass(cb)
+        if mark is not None:
+            mark(last)  # with the render pass's end: its resolves and stores
         return draws
 
     def destroy(self) -> None:

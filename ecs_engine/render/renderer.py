@@ -411,11 +411,18 @@ class Renderer(TargetForms):
         else:
             self.frames.open(frame)
             cb = frame.command_buffer
+            mark = self.frames.marker(frame)  # None unless passes are timed (gpu/frames.py)
             secondaries = path.finish(cb, inputs, results, data.candidates)
+            if mark is not None and not path.uses_recorder:
+                mark("culling (compute)")  # the indirect path's compute passes
             aside = self._record_set_aside(inputs, data, materials)
             if grid is not None:
                 self.lights.record(cb, pf, grid, data.light_count)
+                if mark is not None:
+                    mark("light clusters")
             self.shadows.record(cb, views, shadow_buffers)
+            if mark is not None and views:
+                mark("shadow maps")
             light_draws = self.output.record(
                 cb,
                 secondaries,
@@ -429,9 +436,12 @@ class Renderer(TargetForms):
                 slot,
                 sky=self.environment.sky,
                 transparent=aside[4],
+                mark=mark,
             )
             if readback:
                 self.target.record_readback(cb)
+                if mark is not None:
+                    mark("readback")
             self.frames.end(frame, wait=wait, signal=signal)
             if reuse is None:
                 self.replay.keep(slot, key, results, light_draws)
