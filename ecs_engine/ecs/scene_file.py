@@ -14,6 +14,9 @@ stored (floats barely compress; stored members go at disk speed; deflated ones a
 
 A component's stable name is its class's own `scene_name` attribute if any, else module and
 qualified name: the loader finds it among the Component subclasses imported (or `components=`).
+A class of `__main__` is named for the module its script is when imported (`python catch.py`
+saves `catch.Star`, which `ecs-engine play catch.py` loads); one typed in the REPL is refused
+at save time.
 
 Loading gives every entity a new id (a world's own entities stay: nothing collides) and returns
 an IdMap, saved id -> new id; `Field(..., entity=True)` fields are rewritten to the new ids (-1
@@ -33,6 +36,7 @@ from __future__ import annotations
 import json
 import os
 import secrets
+import sys
 import zipfile
 from collections.abc import Iterable, Iterator, Mapping
 from importlib import metadata
@@ -106,7 +110,29 @@ def registered_codecs() -> list[ResourceCodec]:
 def component_name(ct: type[Component]) -> str:
     """The name a scene file gives a component type (see the module docstring)."""
     own = ct.__dict__.get("scene_name")
-    return own if isinstance(own, str) else f"{ct.__module__}.{ct.__qualname__}"
+    if isinstance(own, str):
+        return own
+    module = (main_module_name() or "__main__") if ct.__module__ == "__main__" else ct.__module__
+    return f"{module}.{ct.__qualname__}"
+
+
+def main_module_name() -> str | None:
+    """What `__main__` is called in a scene file: the name it has when imported. A script run as
+    `python catch.py` is `catch`, as `ecs-engine play catch.py` imports it, so what one saves the
+    other loads; `python -m pkg.game` is `pkg.game`. None for no file (the REPL, `python -c`)."""
+    main = sys.modules.get("__main__")
+    spec = getattr(main, "__spec__", None)
+    if spec is not None and spec.name and spec.name != "__main__":
+        return str(spec.name).removesuffix(".__main__")
+    file = getattr(main, "__file__", None)
+    return Path(file).stem if file else None
+
+
+def _check_saveable(ct: type[Component], target: Path) -> None:
+    """One line for a component type that no loader could find again by its name."""
+    if ct.__module__ == "__main__" and "scene_name" not in ct.__dict__ and main_module_name() is None:
+        why = "it is defined in __main__ with no file (typed in the REPL or python -c)"
+        check(False, target, f"cannot save {ct.__qualname__}: {why}; define it in a module or give it a scene_name")
 
 
 def known_components() -> dict[str, type[Component] | None]:
@@ -161,6 +187,7 @@ def save_world(world: Any, path: str | os.PathLike[str], *, resources: Iterable[
     for k, table in enumerate(t for t in world.tables if t.count):
         n, columns = table.count, list[dict[str, Any]]()
         for ct in sorted(table.types, key=component_name):
+            _check_saveable(ct, target)
             for name, f in ct.__fields__.items():
                 why = "it holds Python objects, which only pickle could store (a scene file holds NumPy columns)"
                 check(not f.is_object, target, f"cannot save {ct.__name__}.{name}: {why}")
