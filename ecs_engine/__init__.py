@@ -11,7 +11,11 @@ Rules of use, in short:
 - `world.events(Kind)` is a typed event channel, double-buffered per frame; `Schedule(parallel=
   True)` runs a stage's systems whose declared reads and writes do not conflict at the same time;
   `run_if=any_with(A, B)` skips a system while no entity has A and B.
+- `App` runs a game: `App(title=...).add_plugins(DefaultPlugins).add_systems("update", f).run()`
+  (docs/app.md); `ecs-engine play game.py` runs a module's `build(app)`.
 """
+
+from typing import Any
 
 from .ecs import (
     AccessError,
@@ -35,21 +39,49 @@ from .ecs import (
 
 __version__ = "0.1.0"
 
+# the App and its plugins load the renderer's modules (numba among them): imported on first use,
+# so `import ecs_engine` for the ECS alone stays quick
+_APP_NAMES = {
+    "App": "app",
+    "DefaultPlugins": "plugins",
+    "MinimalPlugins": "plugins",
+    "PluginGroup": "plugins",
+    "Plugin": "plugins",
+    "Window": "window_resource",
+    "Time": "clock",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _APP_NAMES:
+        import importlib
+
+        return getattr(importlib.import_module(f".app.{_APP_NAMES[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 __all__ = [
     "AccessError",
+    "App",
     "Batch",
     "Component",
     "ComponentView",
     "DeadEntityError",
+    "DefaultPlugins",
     "EcsError",
     "Events",
     "Field",
     "FixedTimestep",
     "FunctionSystem",
+    "MinimalPlugins",
     "MissingComponentError",
+    "Plugin",
+    "PluginGroup",
     "Query",
     "Schedule",
     "System",
+    "Time",
+    "Window",
     "World",
     "any_with",
     "system",

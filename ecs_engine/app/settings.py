@@ -85,6 +85,7 @@ class RunOptions:
     record_input: str | None = None  # write the run's input by frame here at the end
     force: bool = False  # the outputs may replace a file of another kind (app/output_files.py)
     editor: bool = False  # the ImGui editor and Perf window (headless: drawn into the image)
+    perf_lines: bool = True  # the perf lines (once a second headless, and the closing one): an App's PerfPlugin
     scenes: tuple[str, ...] = SEED_SCENES  # the editor's scene switcher
 
     # the command-line flags every rendering command shares (cli.render_flags), by field name
