@@ -29,25 +29,26 @@ from dataclasses import fields, replace
 from typing import Any
 
 from ..ecs.errors import EcsError
+from ..ecs.scene_file import main_module_name
 from ..ecs.schedule import FunctionSystem, RunCondition, Schedule, System
 from ..ecs.world import World
 from ..errors import UsageError
-from .cli import HEADLESS_FALLBACK_FRAMES
-from .cli import HEADLESS_FRAMES as CLI_HEADLESS_FRAMES
-from .plugins import PluginGroup, PluginLike, apply_plugin, plugin_key, plugin_name
+from .plugins import STAGES, PluginGroup, PluginLike, apply_plugin, plugin_key, plugin_name
 from .report import RunResult
-from .settings import RunOptions
+from .settings import HEADLESS_FALLBACK_FRAMES, RunOptions
+from .settings import HEADLESS_FRAMES as COMMAND_HEADLESS_FRAMES
 from .window_resource import Window, check_size
 
-STAGES = ("fixed", "update", "post_update")  # what the run loop's frame runs, in order
-HEADLESS_FRAMES = CLI_HEADLESS_FRAMES["play"]  # a run without a window and without frames=
+HEADLESS_FRAMES = COMMAND_HEADLESS_FRAMES["play"]  # a run without a window and without frames=
 
 Hook = Callable[[World, Any], None]  # (the App's world, the Session) when the run opens
 
 
 class App:
     def __init__(self, title: str | None = None, size: tuple[int, int] = (1280, 720), *, name: str | None = None):
-        self.name = name or _slug(title or "") or "game"
+        # what names the run (its first line, its input-NAME.json, NAME.png): the title's words,
+        # else the script's module name (python catch.py: catch, as `ecs-engine play catch.py`)
+        self.name = name or _slug(title or "") or (main_module_name() or "").rpartition(".")[2] or "game"
         self.world = World()
         self.schedule = Schedule(STAGES)
         self.window = self.world.resources[Window] = Window(title or self.name, size)
@@ -64,6 +65,7 @@ class App:
         self._startup: list[System] = []
         self._open_hooks: list[Hook] = []
         self._where: dict[str, str] = {}  # system name -> its stage
+        self._unnamed = 0  # lambdas numbered so far
         self._ran = False
 
     # ------------------------------------------------------------------ what the window says
@@ -190,13 +192,21 @@ class App:
         if isinstance(item, System):
             made = item
         elif callable(item) and not isinstance(item, type):
-            made = FunctionSystem(item, reads=None, writes=None)
+            made = FunctionSystem(item, reads=None, writes=None, name=self._name_for(item))
         else:
             what = f"the class {item.__qualname__} (pass an instance)" if isinstance(item, type) else f"{item!r:.80}"
             raise UsageError(f"not a system: {what}; a system is a function (world, dt) or a System")
         if run_if is not None:
             made.run_if = run_if if made.run_if is None else _both(made.run_if, run_if)
         return made
+
+    def _name_for(self, fn: Any) -> str:
+        """A function's own name; a lambda (or a callable without one) is numbered."""
+        name = getattr(fn, "__name__", None)
+        if name and name != "<lambda>":
+            return str(name)
+        self._unnamed += 1
+        return f"{name or 'system'}#{self._unnamed}"
 
     def _claim(self, made: System, stage: str) -> None:
         if made.name in self._where:

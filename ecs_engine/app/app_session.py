@@ -9,21 +9,20 @@ nothing and needs no GPU.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from ..ecs.schedule import Schedule
 from ..ecs.world import World
+from ..render.meshes import Meshes
 from .imgui_session import ImGuiSession
 from .perf import PerfMonitor
 from .session import FrameSource, Session
 from .settings import RunOptions, Settings
 
-if TYPE_CHECKING:
-    from .app import App
-
 
 class AppSession(Session):
-    def __init__(self, app: App, options: RunOptions, source: FrameSource) -> None:
+    def __init__(self, app: Any, options: RunOptions, source: FrameSource) -> None:
+        """`app`: the App (app.py, which imports this module when it runs)."""
         self.app = app
         super().__init__(replace(options, scene=app.name), source)  # the App's world comes first
 
@@ -41,6 +40,9 @@ class AppSession(Session):
 
     def close(self) -> None:
         self.app.window.unbind()
+        meshes, gpu = self.app.world.resources.get(Meshes), getattr(self, "gpu", None)
+        if meshes is not None and gpu is not None and meshes.registry is gpu.meshes:
+            meshes.keep_on_cpu()  # the world outlives the run: it can still be saved
         super().close()
 
 

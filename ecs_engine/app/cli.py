@@ -40,8 +40,6 @@ def positive_int(text: str) -> int:
 SCENES = (*RENDERED_SCENES, "motion")  # motion: the text-mode ECS scene, no rendering
 EDITOR_SCENES = RENDERED_SCENES
 DEFAULT_SCENE = "grid100"
-HEADLESS_FALLBACK_FRAMES = 300  # no display for a windowed run: this many frames headless instead
-HEADLESS_FRAMES = {"demo": 1, "editor": 1, "play": 600}  # a --headless run without --frames
 
 
 def dimension(text: str) -> int:
@@ -96,6 +94,7 @@ def render_flags(headless_frames: int = 1) -> OneLineParser:
     from ..render.frame_data import CULLING
     from ..render.light_clusters import LIGHT_MODES
     from ..render.renderer import MODES, RECORDER_NAMES
+    from .settings import HEADLESS_FALLBACK_FRAMES
 
     common = OneLineParser(add_help=False)
     common.add_argument("--headless", action="store_true", help="render offscreen, no window (no display needed)")
@@ -240,6 +239,7 @@ def build_parser(
     `play` and `editor`."""
     from .play import add_game_arguments
     from .play import add_parser as add_play_parser
+    from .settings import HEADLESS_FRAMES
 
     parser = parser_class(prog="ecs-engine", description=__doc__)
     parser.add_argument("--debug", action="store_true", help="show tracebacks")
@@ -360,7 +360,7 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
     from .loop import run
     from .output_files import check_run_files
     from .report import report_validation
-    from .settings import RunOptions
+    from .settings import HEADLESS_FALLBACK_FRAMES, RunOptions
 
     if args.path is not None and args.scene not in ("model", "environment"):
         raise UsageError(f"a path goes with the model scene (a model) or environment (a sky), not {args.scene!r}")
@@ -404,8 +404,10 @@ def main(argv: Sequence[str] | None = None) -> int:
 def run_game(args: argparse.Namespace, game: Game) -> int:
     """`play GAME` or `editor GAME [SCENE...]`."""
     from . import play
+    from .settings import HEADLESS_FRAMES
 
     editor = args.command == "editor"
+    check_flags_apply(args, (game.name,), editor)
     extra = tuple(dict.fromkeys(args.scenes[1:])) if editor else ()
     return play.run_game(args, game, editor, HEADLESS_FRAMES[args.command], extra)
 

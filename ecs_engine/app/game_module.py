@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import importlib.util
+import inspect
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -122,8 +123,17 @@ def _import_error(where: str, exc: Exception) -> str:
 
 
 def _checked(game: Game) -> Game:
-    if not callable(getattr(game.module, "build", None)):
+    build = getattr(game.module, "build", None)
+    if not callable(build):
         raise UsageError(f"{game.where}: has no build(app) function (what a game module defines)")
+    try:
+        signature = inspect.signature(build)
+        signature.bind(None)
+    except TypeError:
+        takes = ", ".join(signature.parameters)
+        raise UsageError(f"{game.where}: its build({takes}) is not a game's build(app), which takes the App") from None
+    except ValueError:  # a builtin without a signature: let the call say
+        pass
     return game
 
 

@@ -44,14 +44,13 @@ def add_game_arguments(parser: argparse.ArgumentParser, game: Game | None) -> No
 def run_game(
     args: argparse.Namespace, game: Game, editor: bool, headless_frames: int, scenes: tuple[str, ...] = ()
 ) -> int:
-    """Build `game` into an App with `args` as its options, and run it."""
-    from .cli import check_flags_apply
+    """Build `game` into an App with `args` as its options, and run it (the flags checked by the
+    caller: cli.check_flags_apply)."""
     from .scenes import SEED_SCENES
 
     app = make_app(game, args)
     if editor and not app.has_plugin(EditorPlugin):
         app.add_plugins(EditorPlugin)
-    check_flags_apply(args, (app.name,), editor)
     width, height = app.size
     switcher = tuple(dict.fromkeys((app.name, *scenes, *SEED_SCENES))) if editor else (app.name,)
     flags = replace_none(args, width=width, height=height)

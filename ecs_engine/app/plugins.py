@@ -21,13 +21,17 @@ A plugin adds nothing to a frame but its systems: its resources are made once, w
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
+from ..ecs.schedule import Schedule, System
 from ..errors import UsageError
 
-if TYPE_CHECKING:
-    from .app import App
-    from .session import Session
+STAGES = ("fixed", "update", "post_update")  # an App's stages: what the run loop's frame runs, in order
+
+# what a plugin builds into: app.py's App (not imported here: the App imports its plugins); and
+# the Session it hooks with on_open (session.py)
+App = Any
+Session = Any
 
 
 class Plugin:
@@ -248,6 +252,28 @@ def apply_plugin(app: App, plugin: PluginLike) -> None:
     if build is None:
         raise UsageError(f"not a plugin: {plugin!r:.80} (a function of the App, or a class with build(app))")
     build(app)
+
+
+class ScheduleOnly:
+    """What plugins that only add systems build into, for a schedule without an App."""
+
+    def __init__(self) -> None:
+        self.schedule = Schedule(STAGES)
+
+    def add_systems(self, stage: str, *systems: System) -> None:
+        for system in systems:
+            self.schedule.add(system, stage)
+
+    def on_open(self, hook: Any) -> None:
+        pass  # a plain schedule opens no run
+
+
+def schedule_of(group: PluginGroup) -> Schedule:
+    """The systems of `group`'s plugins, in order: the demo scenes' schedule is SCENE_PLUGINS'."""
+    target = ScheduleOnly()
+    for plugin in group:
+        apply_plugin(target, plugin)
+    return target.schedule
 
 
 # the systems the demo scenes run (scenes.default_schedule), in their order

@@ -38,7 +38,6 @@ def default_schedule() -> Schedule:
     for interpolation, orbits, motion, springs) in the fixed-step stage, the fly camera per frame,
     then render origin, matrices and the hierarchy's. `Schedule.run` runs every stage once; the
     run loop uses `Schedule.run_frame` with a FixedTimestep."""
-    from .app import App
-    from .plugins import SCENE_PLUGINS
+    from . import plugins
 
-    return App(name="scene").add_plugins(SCENE_PLUGINS).schedule
+    return plugins.schedule_of(plugins.SCENE_PLUGINS)

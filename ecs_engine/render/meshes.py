@@ -24,8 +24,8 @@ from .mesh_data import MeshData
 class MeshList:
     """A mesh registry without a GPU: MeshData by handle, an equal mesh reusing its handle."""
 
-    def __init__(self) -> None:
-        self._meshes: list[MeshData] = []
+    def __init__(self, meshes: list[MeshData] | None = None) -> None:
+        self._meshes: list[MeshData] = list(meshes or ())
 
     def add(self, mesh: MeshData) -> int:
         for handle, have in enumerate(self._meshes):
@@ -79,3 +79,8 @@ class Meshes:
 
     def __len__(self) -> int:
         return len(self.registry)
+
+    def keep_on_cpu(self) -> None:
+        """The registry is about to go (the run ends): keep its MeshData, same handles, so the
+        world can still be saved and run again."""
+        self.registry = MeshList([self[h] for h in range(len(self))])
