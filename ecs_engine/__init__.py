@@ -49,6 +49,7 @@ _APP_NAMES = {
     "Plugin": "plugins",
     "Window": "window_resource",
     "Time": "clock",
+    "SceneFiles": "scene_saves",
 }
 
 
@@ -78,6 +79,7 @@ __all__ = [
     "Plugin",
     "PluginGroup",
     "Query",
+    "SceneFiles",
     "Schedule",
     "System",
     "Time",

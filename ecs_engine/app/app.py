@@ -58,6 +58,7 @@ class App:
         self.editor = False  # EditorPlugin
         self.perf_lines = False  # PerfPlugin: the run's perf lines
         self.perf_overlay = False
+        self.scene_files: Any = None  # ScenePlugin: saves asked for by systems (scene_saves.SceneFiles)
         self.ui: list[Callable[[Any, World], Any]] = []  # draw(imgui, world) each UI frame
         self.summary: Callable[[World], str] | None = None
         self.started = False  # the startup systems ran (the run opened)

@@ -38,6 +38,12 @@ class AppSession(Session):
             return self.app.open(self)
         return super()._build(scene, path)  # the editor's demo scenes and scene files
 
+    def frame_done(self) -> None:
+        super().frame_done()
+        saves = self.app.scene_files
+        if saves is not None and saves.pending:  # a system asked for a save: the frame's changes are in
+            saves.flush()
+
     def close(self) -> None:
         self.app.window.unbind()
         meshes, gpu = self.app.world.resources.get(Meshes), getattr(self, "gpu", None)

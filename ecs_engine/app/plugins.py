@@ -153,14 +153,18 @@ class PickingPlugin(Plugin):
 
 class ScenePlugin(Plugin):
     """Scene files: `world.save(path)` keeps meshes, materials, textures and the environment by
-    reference; `load`: a scene file added to the world before the startup systems run."""
+    reference, and `world.resources[SceneFiles].save(path)` does it from a system (at the end of
+    the frame); `load`: a scene file added to the world before the startup systems run."""
 
     def __init__(self, load: str | None = None) -> None:
         self.load = load
 
     def build(self, app: App) -> None:
         from ..render import scene_assets  # noqa: F401 - registers the scene codecs
+        from .scene_saves import SceneFiles
 
+        app.scene_files = SceneFiles(app.world)
+        app.insert_resource(app.scene_files)
         path = self.load
         if path is not None:
 

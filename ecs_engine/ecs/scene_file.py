@@ -13,7 +13,8 @@ stored (floats barely compress; stored members go at disk speed; deflated ones a
 - one `.npy` member per column, shape (rows, *field shape), and per table's ids (int64).
 
 A component's stable name is its class's own `scene_name` attribute if any, else module and
-qualified name: the loader finds it among the Component subclasses imported (or `components=`).
+qualified name: the loader finds it among the Component subclasses imported (or `components=`;
+of two with one name, as after a game module is imported again, the one its module binds now).
 A class of `__main__` is named for the module its script is when imported (`python catch.py`
 saves `catch.Star`, which `ecs-engine play catch.py` loads); one typed in the REPL is refused
 at save time.
@@ -136,16 +137,30 @@ def _check_saveable(ct: type[Component], target: Path) -> None:
 
 
 def known_components() -> dict[str, type[Component] | None]:
-    """Every Component subclass imported, by component_name (None where two share a name)."""
-    found: dict[str, type[Component] | None] = {}
+    """Every Component subclass imported, by component_name. Where two share a name (a game
+    module imported again: a second run in one process, a reload) the one its module binds now
+    is the one; None where that does not settle it."""
+    found: dict[str, list[type[Component]]] = {}
     todo = list(Component.__subclasses__())
     while todo:
         ct = todo.pop()
         todo.extend(ct.__subclasses__())
         if not any(f.is_object for f in ct.__fields__.values()):
-            name = component_name(ct)
-            found[name] = None if found.get(name, ct) is not ct else ct
-    return found
+            same = found.setdefault(component_name(ct), [])
+            if ct not in same:
+                same.append(ct)
+    return {name: same[0] if len(same) == 1 else _bound_now(same) for name, same in found.items()}
+
+
+def _bound_now(classes: list[type[Component]]) -> type[Component] | None:
+    """Of classes sharing a name, the one their module's attribute is now (None if no one)."""
+    ct = classes[0]
+    where: Any = sys.modules.get(ct.__module__)
+    if ct.__module__ == "__main__" and main_module_name() is not None:
+        where = sys.modules.get(str(main_module_name()), where)
+    for part in ct.__qualname__.split("."):
+        where = getattr(where, part, None)
+    return where if any(where is c for c in classes) else None
 
 
 class IdMap(Mapping[int, int]):
