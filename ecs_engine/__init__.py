@@ -11,11 +11,13 @@ Rules of use, in short:
 - `world.events(Kind)` is a typed event channel, double-buffered per frame; `Schedule(parallel=
   True)` runs a stage's systems whose declared reads and writes do not conflict at the same time;
   `run_if=any_with(A, B)` skips a system while no entity has A and B.
+- Game structure (docs/game-structure.md): `init_state` / `in_state` / `Schedule.on_enter`,
+  `world.add_observer(OnAdd(C), f)`, `world.removed(C).read()`, `run_once(world, f)`, `Prefab`.
 - `App` runs a game: `App(title=...).add_plugins(DefaultPlugins).add_systems("update", f).run()`
   (docs/app.md); `ecs-engine play game.py` runs a module's `build(app)`.
 """
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .ecs import (
     AccessError,
@@ -29,13 +31,30 @@ from .ecs import (
     FixedTimestep,
     FunctionSystem,
     MissingComponentError,
+    NextState,
+    Observer,
+    OnAdd,
+    OnChange,
+    OnRemove,
     Query,
+    Removals,
     Schedule,
+    State,
     System,
+    Trigger,
     World,
     any_with,
+    current_state,
+    in_state,
+    init_state,
+    request_state,
+    run_once,
     system,
 )
+
+if TYPE_CHECKING:
+    from .ecs.prefabs import Prefab, spawn_prefab
+
 
 __version__ = "0.1.0"
 
@@ -54,6 +73,12 @@ _APP_NAMES = {
 
 
 def __getattr__(name: str) -> Any:
+    """The App's names and Prefab / spawn_prefab (see ecs/__init__.py): imported when first
+    asked for."""
+    if name in ("Prefab", "spawn_prefab"):
+        from .ecs import prefabs
+
+        return getattr(prefabs, name)
     if name in _APP_NAMES:
         import importlib
 
@@ -76,15 +101,30 @@ __all__ = [
     "FunctionSystem",
     "MinimalPlugins",
     "MissingComponentError",
+    "NextState",
+    "Observer",
+    "OnAdd",
+    "OnChange",
+    "OnRemove",
     "Plugin",
     "PluginGroup",
+    "Prefab",
     "Query",
+    "Removals",
     "SceneFiles",
     "Schedule",
+    "State",
     "System",
     "Time",
+    "Trigger",
     "Window",
     "World",
     "any_with",
+    "current_state",
+    "in_state",
+    "init_state",
+    "request_state",
+    "run_once",
+    "spawn_prefab",
     "system",
 ]

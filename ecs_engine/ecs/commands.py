@@ -24,6 +24,8 @@ Tick = Callable[[], int]  # the change tick for the columns a command writes
 
 
 class Command(Protocol):
+    ids: np.ndarray  # the entities it names (none for a one-shot system's run, one_shot.py)
+
     def apply(self, storage: Storage, tick: Tick) -> None: ...
 
 
@@ -127,7 +129,7 @@ class CommandQueue:
     def __len__(self) -> int:
         return len(self.commands)
 
-    def push(self, command: Spawn | Destroy | Add | Remove | Set) -> None:
+    def push(self, command: Command) -> None:
         if isinstance(command, Destroy):
             self.pending_destroy.update(command.ids.tolist())
         self._touched.update(command.ids.tolist())
@@ -136,7 +138,7 @@ class CommandQueue:
     def extend(self, other: CommandQueue) -> None:
         """Append `other`'s commands (a parallel system's queue) in their order; empties it."""
         for command in other.commands:
-            self.push(command)  # type: ignore[arg-type]
+            self.push(command)
         other.commands = []
         other.pending_destroy.clear()
         other._touched.clear()

@@ -79,6 +79,7 @@ class Events(Generic[T]):
             raise TypeError(f"an event type is a class, got {kind!r}")
         self.kind = kind
         self.access = schema_of(kind)  # how systems declare it
+        self.what = f"{kind.__name__} events"  # in errors
         self.host = host
         self.columns = issubclass(kind, Component)
         self._previous = _Frame(0)
@@ -95,9 +96,7 @@ class Events(Generic[T]):
         allowed = system.writes if writing else (system.writes | (system.reads or frozenset()))
         if self.access not in allowed:
             verb, where = ("sends", "writes") if writing else ("reads", "reads")
-            raise AccessError(
-                f"system {system.name} {verb} {self.kind.__name__} events but does not declare them in {where}"
-            )
+            raise AccessError(f"system {system.name} {verb} {self.what} but does not declare them in {where}")
         return system
 
     # ---------------------------------------------------------------- sending

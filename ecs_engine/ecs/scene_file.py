@@ -40,6 +40,7 @@ import secrets
 import sys
 import zipfile
 from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
 from typing import Any, Protocol
@@ -283,7 +284,31 @@ def load_world(
     """Add the scene at `path` to `world` (World.load passes a new one). `resources`: the codecs
     (default: the registered ones); `components`: name -> class, or classes (default: every
     Component subclass imported). Returns the world and the IdMap. Raises SceneFileError and
-    changes nothing on a bad file."""
+    changes nothing on a bad file. Observers see the loaded entities at once, remapped."""
+    scene = read_scene(path, world, resources=resources, components=components)
+    with world.observers_held():
+        return world, _spawn(scene.file, world, scene.tables, (scene.saved_ids, scene.order), scene.prepared)
+
+
+@dataclass
+class ReadScene:
+    """A scene file read and checked, its handle columns remapped, nothing spawned yet."""
+
+    file: Path
+    tables: list[SavedTable]
+    saved_ids: np.ndarray  # every table's ids, in table order
+    order: np.ndarray  # argsort of saved_ids
+    prepared: list[Any]  # its resources, planned against the world, not committed
+
+
+def read_scene(
+    path: str | os.PathLike[str],
+    world: Any,
+    *,
+    resources: Iterable[ResourceCodec] | None = None,
+    components: Mapping[str, type[Component]] | Iterable[type[Component]] | None = None,
+) -> ReadScene:
+    """The first half of load_world (prefabs.py spawns what it reads many times)."""
     file = Path(path)
     if world.deferring:
         raise SceneFileError("a scene cannot be loaded from inside a system or a query loop")
@@ -322,7 +347,7 @@ def load_world(
             remaps[key] = np.asarray(table, np.int64)
     for k, t in enumerate(tables):
         _apply(file, k, t, remaps)
-    return world, _spawn(file, world, tables, (saved_ids, order), prepared)
+    return ReadScene(file, tables, saved_ids, order, prepared)
 
 
 def _prepare(file: Path, codecs: dict[str, ResourceCodec], spec: tuple[str, str, SavedResource], world: Any) -> Any:

@@ -33,6 +33,7 @@ from ..jobs import JobPool
 from .commands import CommandQueue
 from .errors import EcsError
 from .schema import schema_of
+from .states import StateKinds, Transitions, checked_value
 from .timestep import Interpolation
 from .world import World
 
@@ -88,6 +89,19 @@ class AnyWith:
 def any_with(*types: type) -> AnyWith:
     """The run condition "some entity has all of `types`"."""
     return AnyWith(tuple(types))
+
+
+class AllOf:
+    """Run conditions that must all hold (a system's own and the one `Schedule.add` gives)."""
+
+    def __init__(self, *conditions: RunCondition) -> None:
+        self.conditions = conditions
+
+    def __call__(self, world: World) -> bool:
+        return all(condition(world) for condition in self.conditions)
+
+    def __repr__(self) -> str:
+        return " and ".join(map(repr, self.conditions))
 
 
 class System:
@@ -201,16 +215,43 @@ class Schedule:
         self._levels: dict[str, tuple[tuple[int, ...], list[list[int]]]] = {}  # per stage, by its systems
         # per stage, one per system (made as they are added): each system's structural changes
         self._queues: dict[str, list[CommandQueue]] = {name: [] for name in self.stages}
+        self.transitions = Transitions()  # OnEnter and OnExit systems (states.py)
 
-    def add(self, obj: System | Callable[[World, float], Any], stage: str | None = None) -> System:
+    def add(
+        self, obj: System | Callable[[World, float], Any], stage: str | None = None, run_if: RunCondition | None = None
+    ) -> System:
+        """Add a system to a stage (the first by default); `run_if`: a run condition, added to
+        the system's own if it has one (both must hold)."""
         stage = stage or next(iter(self.stages))
         if stage not in self.stages:
             raise ValueError(f"unknown stage {stage!r}; stages are {list(self.stages)}")
-        sys_ = as_system(obj)
-        if any(s is sys_ for systems in self.stages.values() for s in systems):
-            raise ValueError(f"system {sys_.name} is already scheduled")
+        sys_ = self._new(obj, run_if)
         self.stages[stage].append(sys_)
         self._queues[stage].append(CommandQueue())
+        return sys_
+
+    def _new(self, obj: System | Callable[[World, float], Any], run_if: RunCondition | None) -> System:
+        sys_ = as_system(obj)
+        if any(s is sys_ for systems in self.stages.values() for s in systems) or any(
+            s is sys_ for s in self.transitions.systems()
+        ):
+            raise ValueError(f"system {sys_.name} is already scheduled")
+        if run_if is not None:
+            if not callable(run_if):
+                raise TypeError(f"system {sys_.name}: run_if must be a function of the world, got {run_if!r}")
+            sys_.run_if = run_if if sys_.run_if is None else AllOf(sys_.run_if, run_if)
+        return sys_
+
+    def on_enter(self, state: Any, obj: System | Callable[[World, float], Any]) -> System:
+        """Run a system once each time the world's state becomes `state` (states.py)."""
+        sys_ = self._new(obj, None)
+        self.transitions.on_enter.setdefault(checked_value(state, "on_enter"), []).append(sys_)
+        return sys_
+
+    def on_exit(self, state: Any, obj: System | Callable[[World, float], Any]) -> System:
+        """Run a system once each time the world's state leaves `state` (states.py)."""
+        sys_ = self._new(obj, None)
+        self.transitions.on_exit.setdefault(checked_value(state, "on_exit"), []).append(sys_)
         return sys_
 
     def order(self) -> list[tuple[str, list[str]]]:
@@ -271,6 +312,9 @@ class Schedule:
         if world.deferring:
             raise EcsError("Schedule.run_frame() cannot be called from inside a system or a query loop")
         world.flush()
+        kinds = world.resources.get(StateKinds)
+        if kinds is not None:  # the state transition step: first in the frame (states.py)
+            self.transitions.step(world, kinds, min(float(frame_dt), max_frame_dt))
         steps = clock.advance(frame_dt)
         for _ in range(steps):
             self._run_stage(world, fixed_stage, clock.step)
@@ -290,6 +334,9 @@ class Schedule:
         if world.deferring:
             raise EcsError("Schedule.run() cannot be called from inside a system or a query loop")
         world.flush()
+        kinds = world.resources.get(StateKinds)
+        if kinds is not None:  # the state transition step: first in the frame (states.py)
+            self.transitions.step(world, kinds, dt)
         for name in self.stages:
             self._run_stage(world, name, dt)
         world.update_events()

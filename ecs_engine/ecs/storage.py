@@ -15,6 +15,7 @@ import numpy as np
 
 from .entities import INDEX_MASK, RESERVED, EntityIndex
 from .errors import DeadEntityError, EcsError, MissingComponentError, describe_entity
+from .lifecycle import LifecycleLog
 from .schema import Component, closure
 from .table import ArchetypeTable
 
@@ -31,6 +32,7 @@ class Storage:
         # Bumped by every spawn, destroy, add and remove that is applied (not when queued).
         self.structure_version = 0
         self._places: dict[int, tuple[int, ArchetypeTable, int]] = {}  # see located
+        self.log: LifecycleLog | None = None  # made when something watches components come and go
         self.table_for(frozenset())
 
     # ----------------------------------------------------------------- tables
@@ -132,6 +134,8 @@ class Storage:
         index = eid & INDEX_MASK
         self.index.table[index] = table.id
         self.index.row[index] = row
+        if self.log is not None:
+            self.log.placed(types, np.array([eid], np.int64))
 
     def place(self, ids: np.ndarray, types: frozenset[type[Component]], checked: Checked, tick: int) -> None:
         table = self.table_for(types)
@@ -145,10 +149,14 @@ class Storage:
         index = ids & INDEX_MASK
         self.index.table[index] = table.id
         self.index.row[index] = np.arange(rows.start, rows.stop)
+        if self.log is not None:
+            self.log.placed(types, ids)
 
     # ---------------------------------------------------------------- destroy
     def destroy_one(self, eid: int) -> None:
         table, row = self.locate(eid)
+        if self.log is not None:
+            self.log.destroyed(table, np.array([row]), np.array([eid], np.int64))
         self.structure_version += 1
         moved = table.remove_row(row)
         if moved:
@@ -165,6 +173,8 @@ class Storage:
         rows = self.index.row[index]
         for tid in np.unique(tables):
             sel = tables == tid
+            if self.log is not None:
+                self.log.destroyed(self.tables[tid], rows[sel], ids[sel])
             moved, new_rows = self.tables[tid].remove_rows(rows[sel])
             self.index.row[moved & INDEX_MASK] = new_rows
         self.index.release(index)
@@ -205,6 +215,8 @@ class Storage:
 
     def _move(self, src: ArchetypeTable, dst: ArchetypeTable, rows: np.ndarray, ids: np.ndarray, tick: int) -> slice:
         """Copy rows to `dst` (new columns get defaults), swap-remove them from `src`."""
+        if self.log is not None:
+            self.log.moved(src, dst, rows, ids)
         self.structure_version += 1
         dst_rows = dst.push(ids, tick)
         for key, col in dst.columns.items():

@@ -16,7 +16,9 @@ from .entities import INDEX_MASK
 from .errors import AccessError, EcsError, MissingComponentError, describe_entity
 from .events import Events
 from .input_checks import checked_components, checked_ids, entity_id, new_entity, who_of
+from .observing import Observing
 from .query import Query, check_access
+from .reactions import Reactions
 from .running import Running, RunningSystem, ThreadRunning, run_as, run_group
 from .schema import Component, ObjectStore, closure, object_component, refuse_non_component, schema_of
 from .stage_ids import StageIds
@@ -24,7 +26,7 @@ from .storage import Checked, Storage
 from .table import ArchetypeTable
 
 
-class World:
+class World(Observing):
     """Holds every entity and component. See the package docstring for the rules of use."""
 
     def __init__(self) -> None:
@@ -42,6 +44,8 @@ class World:
         self._events: dict[type, Events[Any]] = {}
         # Singletons shared by systems (render origin, input state, ...), keyed by type.
         self.resources: dict[Any, Any] = {}
+        self._reactions: Reactions | None = None  # observers, removal channels, one-shots: made on first use
+        self._held = 0  # observers_held blocks open
 
     # ------------------------------------------------------------------ state
     def __len__(self) -> int:
@@ -179,6 +183,8 @@ class World:
             return int(ids[0])
         eid = self.storage.index.allocate_one() if self._stage is None else int(self._reserve(1)[0])
         self.storage.place_one(eid, types, checked, self.write_tick())
+        if self._reactions is not None:
+            self._react()
         return eid
 
     def _closure(self, checked: Checked) -> frozenset[type[Component]]:
@@ -201,6 +207,8 @@ class World:
         else:
             ids = self.storage.index.allocate(n) if self._stage is None else self._reserve(n)
             self.storage.place(ids, types, checked, self.write_tick())
+            if self._reactions is not None:
+                self._react()
         return ids
 
     def _reserve(self, n: int) -> np.ndarray:
@@ -225,6 +233,8 @@ class World:
         """Destroy one entity or an array of them. Their ids never name an entity again."""
         if isinstance(target, (int, np.integer)) and not self.deferring:
             self.storage.destroy_one(entity_id(target))
+            if self._reactions is not None:
+                self._react()
             return
         ids = self._ids(target, allow_reserved=self.deferring)
         if not len(ids):
@@ -233,6 +243,8 @@ class World:
             self._commands.push(Destroy(ids))
             return
         self.storage.destroy(ids)
+        if self._reactions is not None:
+            self._react()
 
     # ------------------------------------------------------------ add/remove
     def add(self, target: Any, value: Any) -> None:
@@ -246,6 +258,8 @@ class World:
             self._commands.push(Add(ids, ct, vals))
             return
         self.storage.add(ids, ct, vals, self.write_tick())
+        if self._reactions is not None:
+            self._react()
 
     def remove(self, target: Any, component_type: type) -> None:
         """Remove a component from one entity or many; raises if one of them lacks it."""
@@ -257,6 +271,8 @@ class World:
             self._commands.push(Remove(ids, ct))
             return
         self.storage.remove(ids, ct, True, self.write_tick())
+        if self._reactions is not None:
+            self._react()
 
     # --------------------------------------------------------------- get/set
     def get(self, eid: int, component_type: type) -> Any:
@@ -396,6 +412,8 @@ class World:
             raise EcsError("flush() cannot run while a system or a query loop is active")
         if len(self._queue):  # most sync points have nothing queued
             self._queue.apply(self.storage, self.write_tick)
+        if self._reactions is not None:
+            self._react()
 
     # ---------------------------------------------------------------- systems
     def open_stage(self, systems: int) -> None:
