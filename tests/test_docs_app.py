@@ -1,7 +1,7 @@
 """docs/app.md's code blocks run, in order, in one scope (in a scratch folder): an App that draws
-and steers a cube headless, a MinimalPlugins simulation with a run condition, plugins and groups,
-a game module played with its own option and an input script that saves a scene with F5, which
-the editor reopens."""
+and steers a cube headless, a MinimalPlugins simulation with a run condition, plugins and
+groups, states and an observer, a game module played with its own option and an input script
+that saves a scene with F5, which the editor reopens."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ DOC = Path(__file__).resolve().parent.parent / "docs" / "app.md"
 def test_the_app_page_runs_block_by_block(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     blocks = re.findall(r"```python\n(.*?)```", DOC.read_text(), re.S)
-    assert len(blocks) == 6
+    assert len(blocks) == 7
     scope: dict = {}
     for k, block in enumerate(blocks, 1):
         exec(compile(block, f"docs/app.md block {k}", "exec"), scope)

@@ -26,11 +26,13 @@ import sys
 import traceback
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import fields, replace
+from enum import Enum
 from typing import Any
 
 from ..ecs.errors import EcsError
 from ..ecs.scene_file import main_module_name
 from ..ecs.schedule import FunctionSystem, RunCondition, Schedule, System
+from ..ecs.states import init_state
 from ..ecs.world import World
 from ..errors import UsageError
 from .plugins import STAGES, PluginGroup, PluginLike, apply_plugin, plugin_key, plugin_name
@@ -66,6 +68,7 @@ class App:
         self._startup: list[System] = []
         self._open_hooks: list[Hook] = []
         self._where: dict[str, str] = {}  # system name -> its stage
+        self._lists: dict[str, list[System]] = {}  # system name -> the list that runs it
         self._unnamed = 0  # lambdas numbered so far
         self._ran = False
 
@@ -124,7 +127,7 @@ class App:
         has its Meshes, Window, Time and the plugins' resources by then."""
         for item in systems:
             made = self._system(item, None)
-            self._claim(made, "startup")
+            self._claim(made, "startup", self._startup)
             self._startup.append(made)
         return self
 
@@ -138,7 +141,7 @@ class App:
             raise UsageError(f"add_systems({stage!r}) was given no systems")
         for item in systems:
             made = self._system(item, run_if)
-            self._claim(made, stage)
+            self._claim(made, stage, self.schedule.stages[stage])
             self.schedule.add(made, stage)
         return self
 
@@ -149,7 +152,7 @@ class App:
         stage = self._where.get(name)
         if stage is None:
             raise UsageError(f"no system named {name!r}; the App has {', '.join(self._where) or 'none'}")
-        listed = self._startup if stage == "startup" else self.schedule.stages[stage]
+        listed = self._lists[name]
         index = next(i for i, s in enumerate(listed) if s.name == name)
         old = listed[index]
         made = self._system(new, None)
@@ -159,9 +162,46 @@ class App:
             made.run_if = old.run_if
         made.last_run_tick = old.last_run_tick  # it sees what changed since the old one last ran
         listed[index] = made
-        del self._where[name]
-        self._where[made.name] = stage
+        del self._where[name], self._lists[name]
+        self._where[made.name], self._lists[made.name] = stage, listed
         return made
+
+    # ------------------------------------------------- game structure (ecs/states.py, observers.py)
+    def init_state(self, initial: Enum) -> App:
+        """A state: `initial`'s Enum as the world's `State[Kind]`, entered on the first frame.
+        Systems take `run_if=in_state(...)`; `request_state(world, value)` changes it."""
+        _as_usage(init_state, self.world, initial)
+        return self
+
+    def on_enter(self, state: Enum, *systems: Any) -> App:
+        """Systems run once each time the state becomes `state` (at the start of a frame)."""
+        return self._on_transition("on_enter", state, systems)
+
+    def on_exit(self, state: Enum, *systems: Any) -> App:
+        """Systems run once each time the state leaves `state`."""
+        return self._on_transition("on_exit", state, systems)
+
+    def add_observer(self, trigger: Any, fn: Callable[[World, Any], Any], **named: Any) -> App:
+        """`fn(world, trigger)` with every entity that gains (OnAdd), loses (OnRemove) or
+        changes (OnChange) a component, in bulk, at each sync point (World.add_observer)."""
+        _as_usage(self.world.add_observer, trigger, fn, **named)
+        return self
+
+    def _on_transition(self, when: str, state: Enum, systems: tuple[Any, ...]) -> App:
+        if not systems:
+            raise UsageError(f"{when}({state!r}) was given no systems")
+        add = getattr(self.schedule, when)
+        for item in systems:
+            made = self._system(item, None)
+            stage = f"{when} {type(state).__name__}.{getattr(state, 'name', state)}"
+            self._claim(made, stage, [])
+            try:
+                _as_usage(add, state, made)
+            except UsageError:
+                del self._where[made.name], self._lists[made.name]
+                raise
+            self._lists[made.name] = getattr(self.schedule.transitions, when)[state]
+        return self
 
     def systems(self) -> dict[str, str]:
         """Every system's name and its stage ("startup" for a startup system)."""
@@ -209,13 +249,13 @@ class App:
         self._unnamed += 1
         return f"{name or 'system'}#{self._unnamed}"
 
-    def _claim(self, made: System, stage: str) -> None:
+    def _claim(self, made: System, stage: str, listed: list[System]) -> None:
         if made.name in self._where:
             raise UsageError(
                 f"a system named {made.name!r} is already in the App (stage {self._where[made.name]}); "
                 f"names are unique (give one name=, or replace_system({made.name!r}, ...))"
             )
-        self._where[made.name] = stage
+        self._where[made.name], self._lists[made.name] = stage, listed
 
     # ----------------------------------------------------------------------- opening
     def open(self, session: Any) -> tuple[World, Schedule]:
@@ -338,6 +378,14 @@ class App:
 def _slug(title: str) -> str:
     """A name for files and the first line from a title: "Catch!" -> "catch"."""
     return re.sub(r"[^a-z0-9]+", "-", title.lower()).strip("-")
+
+
+def _as_usage(call: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
+    """The ECS core's TypeError or ValueError for bad input, as the App's one clear UsageError."""
+    try:
+        return call(*args, **kwargs)
+    except (TypeError, ValueError) as exc:
+        raise UsageError(str(exc)) from exc
 
 
 def _both(first: RunCondition, second: RunCondition) -> RunCondition:
