@@ -10,6 +10,7 @@ import sys
 import textwrap
 
 import numpy as np
+import pytest
 from PIL import Image
 from test_app import cube_app, drawn
 from test_play_file import main
@@ -17,6 +18,7 @@ from test_play_file import main
 GAME = '''
 """Rolls a ball; saves at step 2 (after spawning a marker in the same system); --load continues."""
 import numpy as np
+import pytest
 
 from ecs_engine import App, Component, DefaultPlugins, Field, SceneFiles, Time
 from ecs_engine.app.plugins import ScenePlugin
@@ -124,3 +126,30 @@ def test_a_script_saves_its_components_under_its_own_name_and_the_repl_is_refuse
         "cannot save Star: it is defined in __main__ with no file (typed in the REPL or python -c); "
         "define it in a module or give it a scene_name"
     ) in run.stderr.strip().splitlines()[-1]
+
+
+def test_meshes_load_a_model_file_and_save_it_by_reference_without_a_gpu(tmp_path):
+    """Meshes.load in a simulation (MinimalPlugins: a CPU MeshList); the scene keeps the file's path."""
+    from ecs_engine import App, MinimalPlugins, World
+    from ecs_engine.components import Mesh, Transform
+    from ecs_engine.errors import UsageError
+    from ecs_engine.render.meshes import Meshes
+
+    model = tmp_path / "tri.obj"
+    model.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    app = App(title="Models").add_plugins(MinimalPlugins)
+
+    def setup(world, dt):
+        world.spawn(Transform(), Mesh(handle=world.resources[Meshes].load(model)))
+
+    app.add_startup_systems(setup)
+    app.run(frames=1)
+    assert app.world.resources[Meshes][0].positions.shape == (3, 3)
+    app.world.save(tmp_path / "m.scene")
+    again = World()
+    again.resources[Meshes] = Meshes()
+    World.load(tmp_path / "m.scene", into=again)
+    assert again.resources[Meshes][0].source == {"file": str(model)}
+    (tmp_path / "bad.obj").write_text("v 0 0\n")
+    with pytest.raises(UsageError, match=r"bad\.obj"):
+        Meshes().load(tmp_path / "bad.obj")
