@@ -2,18 +2,21 @@
 levels rise), flown with the keyboard, mouse or a gamepad (through actions,
 asteroids_controls.py) or by a bot. The game itself is components and systems
 (asteroids_game.py, asteroids_bot.py); this module makes its meshes, materials, light, camera and
-schedule."""
+schedule, and is a game module: `build(app)` makes the App `ecs-engine play asteroids` runs, with
+the game's own options (`add_arguments`: --autoplay, --seed, --level)."""
 
 from __future__ import annotations
 
+import argparse
 import math
 from collections.abc import Callable
 
 import numpy as np
 
-from ecs_engine import World
+from ecs_engine import App, World
 from ecs_engine.components import Camera, DirectionalLight, Transform
-from ecs_engine.ecs import Schedule
+from ecs_engine.ecs import Schedule, System
+from ecs_engine.errors import UsageError
 from ecs_engine.maths.camera import look_rotation
 from ecs_engine.render.materials import Material, materials
 from ecs_engine.render.mesh_data import MeshData
@@ -38,7 +41,8 @@ from .asteroids_game import (
 )
 from .asteroids_hud import draw_hud, summary
 
-__all__ = ["ACTIONS", "LEVELS", "ShipControls", "build", "controls", "draw_hud", "schedule", "summary"]
+__all__ = ["ACTIONS", "LEVELS", "ShipControls", "add_arguments", "build", "build_world", "controls", "draw_hud"]
+__all__ += ["schedule", "summary"]
 
 LEVELS = len(LEVEL_ASTEROIDS)  # `play --level` goes from 1 to this
 
@@ -65,7 +69,7 @@ def ship_mesh() -> MeshData:
     )
 
 
-def build(
+def build_world(
     world: World,
     add_mesh: Callable[[MeshData], int],
     path: str | None = None,
@@ -110,22 +114,66 @@ def controls() -> ShipControlSystem:
     return ShipControlSystem()
 
 
-def schedule(autoplay: bool = False, controls: object | None = None) -> Schedule:
-    """The game's systems: controls (the bot, or `controls`, a system filling ShipControls from
-    the input), the ship, motion, wrap, lifetimes, collisions, damage, levels, restart in the
-    fixed step; the camera per frame; then the stock render origin and matrices."""
-    from ecs_engine.systems import MotionSystem, RenderOriginSystem, TransformSystem
+def game_systems(autoplay: bool = False, controls: System | None = None) -> dict[str, list[System]]:
+    """The game's own systems by stage: controls (the bot, or `controls`, a system filling
+    ShipControls from the input), the ship, motion, wrap, lifetimes, collisions, damage, levels,
+    restart in the fixed step; the camera per frame."""
+    from ecs_engine.systems import MotionSystem
+
+    fixed: list[System] = [BotSystem()] if autoplay else [controls] if controls is not None else []
+    fixed += [ShipSystem(), MotionSystem(), WrapSystem(), LifetimeSystem(), CollisionSystem()]
+    fixed += [DamageSystem(), LevelSystem(), RestartSystem()]
+    return {"fixed": fixed, "update": [FollowCameraSystem()]}
+
+
+def schedule(autoplay: bool = False, controls: System | None = None) -> Schedule:
+    """The game's systems (game_systems), then the stock render origin and matrices."""
+    from ecs_engine.systems import RenderOriginSystem, TransformSystem
 
     steps = Schedule(("fixed", "update", "post_update"))
-    if autoplay:
-        steps.add(BotSystem(), "fixed")
-    elif controls is not None:
-        steps.add(controls, "fixed")  # type: ignore[arg-type]
-    for system in (ShipSystem(), MotionSystem(), WrapSystem(), LifetimeSystem(), CollisionSystem()):
-        steps.add(system, "fixed")
-    for system in (DamageSystem(), LevelSystem(), RestartSystem()):
-        steps.add(system, "fixed")
-    steps.add(FollowCameraSystem(), "update")
+    for stage, systems in game_systems(autoplay, controls).items():
+        for system in systems:
+            steps.add(system, stage)
     steps.add(RenderOriginSystem(), "post_update")
     steps.add(TransformSystem(), "post_update")
     return steps
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The game's own command-line options (`ecs-engine play asteroids --level 3`)."""
+    from ecs_engine.app.cli import non_negative_int, positive_int
+
+    parser.add_argument("--autoplay", action="store_true", help="a bot plays (reproducible with --seed)")
+    parser.add_argument(
+        "--seed", type=non_negative_int, default=1, help="the game's random seed, 0 or more (default 1)"
+    )
+    parser.add_argument(
+        "--level",
+        type=positive_int,
+        default=1,
+        help=f"the level to start at, 1 to {LEVELS} ({LEVELS}: 100,000 asteroids)",
+    )
+
+
+def build(app: App) -> None:
+    """The game as an App: the stock plugins it uses (no fly camera, hierarchy or interpolated
+    motion: its own systems move everything), its HUD, its score line, its actions."""
+    from ecs_engine.app.plugins import CameraControlPlugin, DefaultPlugins, HierarchyPlugin, MotionPlugin, TimePlugin
+    from ecs_engine.render.meshes import Meshes
+
+    seed, autoplay, level = (getattr(app.options, k, d) for k, d in (("seed", 1), ("autoplay", False), ("level", 1)))
+    if not 1 <= level <= LEVELS:
+        raise UsageError(f"--level {level}: asteroids has levels 1 to {LEVELS}")
+    app.title = "Asteroids"
+    app.add_plugins(DefaultPlugins.without(TimePlugin, MotionPlugin, CameraControlPlugin, HierarchyPlugin))
+    if not autoplay:  # the bot needs no bindings (build_world puts the defaults there)
+        app.add_actions(ACTIONS)
+
+    def setup(world: World, dt: float) -> None:
+        build_world(world, world.resources[Meshes].add, seed=seed, autoplay=autoplay, level=level)
+
+    app.add_startup_systems(setup)
+    for stage, systems in game_systems(autoplay, None if autoplay else controls()).items():
+        app.add_systems(stage, *systems)
+    app.add_ui(draw_hud)
+    app.set_summary(summary)

@@ -13,6 +13,8 @@ Rules of use, in short:
   `run_if=any_with(A, B)` skips a system while no entity has A and B.
 - Game structure (docs/game-structure.md): `init_state` / `in_state` / `Schedule.on_enter`,
   `world.add_observer(OnAdd(C), f)`, `world.removed(C).read()`, `run_once(world, f)`, `Prefab`.
+- `App` runs a game: `App(title=...).add_plugins(DefaultPlugins).add_systems("update", f).run()`
+  (docs/app.md); `ecs-engine play game.py` runs a module's `build(app)`.
 """
 
 from typing import TYPE_CHECKING, Any
@@ -54,41 +56,68 @@ if TYPE_CHECKING:
     from .ecs.prefabs import Prefab, spawn_prefab
 
 
+__version__ = "0.1.0"
+
+# the App and its plugins load the renderer's modules (numba among them): imported on first use,
+# so `import ecs_engine` for the ECS alone stays quick
+_APP_NAMES = {
+    "App": "app",
+    "DefaultPlugins": "plugins",
+    "MinimalPlugins": "plugins",
+    "PluginGroup": "plugins",
+    "Plugin": "plugins",
+    "Window": "window_resource",
+    "Time": "clock",
+    "SceneFiles": "scene_saves",
+}
+
+
 def __getattr__(name: str) -> Any:
-    """Prefab and spawn_prefab: imported when first asked for (see ecs/__init__.py)."""
+    """The App's names and Prefab / spawn_prefab (see ecs/__init__.py): imported when first
+    asked for."""
     if name in ("Prefab", "spawn_prefab"):
         from .ecs import prefabs
 
         return getattr(prefabs, name)
+    if name in _APP_NAMES:
+        import importlib
+
+        return getattr(importlib.import_module(f".app.{_APP_NAMES[name]}", __name__), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__version__ = "0.1.0"
-
 __all__ = [
     "AccessError",
+    "App",
     "Batch",
     "Component",
     "ComponentView",
     "DeadEntityError",
+    "DefaultPlugins",
     "EcsError",
     "Events",
     "Field",
     "FixedTimestep",
     "FunctionSystem",
+    "MinimalPlugins",
     "MissingComponentError",
     "NextState",
     "Observer",
     "OnAdd",
     "OnChange",
     "OnRemove",
+    "Plugin",
+    "PluginGroup",
     "Prefab",
     "Query",
     "Removals",
+    "SceneFiles",
     "Schedule",
     "State",
     "System",
+    "Time",
     "Trigger",
+    "Window",
     "World",
     "any_with",
     "current_state",

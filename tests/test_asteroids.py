@@ -35,7 +35,7 @@ class Meshes:
 
 def game_world(seed: int = 1, autoplay: bool = False):
     world = World()
-    asteroids.build(world, Meshes().add, seed=seed, autoplay=autoplay)
+    asteroids.build_world(world, Meshes().add, seed=seed, autoplay=autoplay)
     return world, asteroids.schedule(autoplay=autoplay), FixedTimestep(1 / 60)
 
 

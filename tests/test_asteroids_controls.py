@@ -28,7 +28,7 @@ WIDTH, HEIGHT = 640, 400
 def player_world():
     """The game with the player's controls, the field cleared (nothing to hit the ship)."""
     world = World()
-    asteroids.build(world, Meshes().add, seed=1)
+    asteroids.build_world(world, Meshes().add, seed=1)
     world.destroy(world.query(Asteroid).entities())
     state = world.resources[InputState] = InputState(viewport=(float(WIDTH), float(HEIGHT)))
     schedule = asteroids.schedule(controls=asteroids.controls())

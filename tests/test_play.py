@@ -133,16 +133,17 @@ def test_the_hud_restarts_the_game_after_game_over():
     """Headless: the HUD shows game over with a Restart button; a click on it starts a new game."""
     from imgui_bundle import imgui
 
+    from ecs_engine.app.app_session import AppSession, AppUI
+    from ecs_engine.app.game_module import game_app
     from ecs_engine.app.offscreen import OffscreenSource
     from ecs_engine.app.perf import PerfMonitor
-    from ecs_engine.app.play import GameSession, GameUI
     from ecs_engine.app.settings import RunOptions
     from ecs_engine.demos.asteroids_game import Game
 
     source = OffscreenSource()
     options = RunOptions(scene="cube", width=320, height=240, threads=2, validate=True)
-    session = GameSession(options, source, "asteroids", 1, False, 1)
-    ui = GameUI(session, None)
+    session = AppSession(game_app("asteroids"), options, source)
+    ui = AppUI(session, None)
     perf = PerfMonitor()
     try:
         game = session.world.resources[Game]
@@ -179,8 +180,9 @@ def test_the_windowed_game_takes_keys_and_restarts_from_the_hud():
     ship fires; after game over R starts a new game."""
     import glfw as glfw_module
 
+    from ecs_engine.app.app_session import AppSession, AppUI
+    from ecs_engine.app.game_module import game_app
     from ecs_engine.app.loop import run
-    from ecs_engine.app.play import GameSession, GameUI
     from ecs_engine.app.settings import RunOptions
     from ecs_engine.app.window import WindowSource, apply_key, key_names, open_glfw
     from ecs_engine.components import Transform
@@ -208,11 +210,11 @@ def test_the_windowed_game_takes_keys_and_restarts_from_the_hud():
             apply_key(glfw_, names, source.input, glfw_.KEY_R, glfw_.RELEASE)
 
     def make(options, source):
-        holder["session"] = GameSession(options, source, "asteroids", 1, False, 1)
+        holder["session"] = AppSession(game_app("asteroids"), options, source)
         return holder["session"]
 
     def ui(session, window):
-        holder["ui"] = GameUI(session, window)
+        holder["ui"] = AppUI(session, window)
         return holder["ui"]
 
     source = holder["source"] = WindowSource(glfw, on_frame=script)
@@ -233,9 +235,10 @@ def test_the_hud_keeps_the_mouse_while_imgui_wants_it():
     is the world's, as the window's is, with the pointer fed to ImGui by hand.)"""
     from imgui_bundle import imgui
 
+    from ecs_engine.app.app_session import AppSession, AppUI
+    from ecs_engine.app.game_module import game_app
     from ecs_engine.app.loop import run
     from ecs_engine.app.offscreen import OffscreenSource
-    from ecs_engine.app.play import GameSession, GameUI
     from ecs_engine.app.settings import RunOptions
     from ecs_engine.demos.asteroids_game import Game
 
@@ -259,11 +262,11 @@ def test_the_hud_keeps_the_mouse_while_imgui_wants_it():
             return super().begin(session, frames_done)
 
     def make(options, source):
-        holder["session"] = GameSession(options, source, "asteroids", 1, False, 1)
+        holder["session"] = AppSession(game_app("asteroids"), options, source)
         return holder["session"]
 
     options = RunOptions(scene="cube", width=320, height=240, frames=16, validate=True, quiet=True, headless=True)
-    result = run(options, Probe(), make_session=make, ui=lambda session, window: GameUI(session, window))
+    result = run(options, Probe(), make_session=make, ui=lambda session, window: AppUI(session, window))
     assert result.validation_messages == []
     captured = [c for c, _, _ in seen]
     assert captured[:3] == [False, False, False] and captured[4:9] == [True] * 5 and captured[-3:] == [False] * 3

@@ -189,7 +189,10 @@ def test_a_resource_without_its_codec_is_refused(tmp_path):
     save_world(world, tmp_path / "d.scene", resources=scene_codecs(registry))
     target = World()
     with pytest.raises(SceneFileError, match="no codec was given for its resource 'meshes'"):
-        load_world(tmp_path / "d.scene", target)  # the registered codecs: materials, environment
+        load_world(tmp_path / "d.scene", target, resources=scene_codecs())  # materials, environment
+    assert len(target) == 0 and not target.resources
+    with pytest.raises(SceneFileError, match="resource 'meshes': the world it is loaded into has no Meshes"):
+        load_world(tmp_path / "d.scene", target)  # the registered codecs: meshes go to the world's Meshes
     assert len(target) == 0 and not target.resources
 
 

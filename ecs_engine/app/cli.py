@@ -13,13 +13,16 @@ import traceback
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
-from typing import NoReturn
+from typing import TYPE_CHECKING, NoReturn
 
 from ..ecs.errors import EcsError
 from ..errors import UsageError
 from .entry_point import run_command
 from .scenes import SCENE_FILE_SUFFIX, SEED_SCENES, is_scene_file
 from .scenes import SCENES as RENDERED_SCENES
+
+if TYPE_CHECKING:
+    from .game_module import Game
 
 
 def positive_int(text: str) -> int:
@@ -37,8 +40,6 @@ def positive_int(text: str) -> int:
 SCENES = (*RENDERED_SCENES, "motion")  # motion: the text-mode ECS scene, no rendering
 EDITOR_SCENES = RENDERED_SCENES
 DEFAULT_SCENE = "grid100"
-HEADLESS_FALLBACK_FRAMES = 300  # no display for a windowed run: this many frames headless instead
-HEADLESS_FRAMES = {"demo": 1, "editor": 1, "play": 600}  # a --headless run without --frames
 
 
 def dimension(text: str) -> int:
@@ -49,16 +50,23 @@ def dimension(text: str) -> int:
 
 
 def editor_scene(text: str) -> str:
-    """A demo scene's name or a saved scene file's path (ending in .scene)."""
+    """A demo scene's name, a saved scene file's path (ending in .scene), or a game (the first)."""
+    from .game_module import is_game_spec
+
     # a type, not choices=: argparse checks an empty nargs="*" list against choices and fails
+    if is_game_spec(text):
+        return text
     if is_scene_file(text):
         if not Path(text).is_file():
             raise argparse.ArgumentTypeError(f"no scene file {text!r}")
         return text
     if text not in EDITOR_SCENES:
-        choices = f"{', '.join(EDITOR_SCENES)}, or a {SCENE_FILE_SUFFIX} file"
+        choices = f"{', '.join(EDITOR_SCENES)}, a {SCENE_FILE_SUFFIX} file, or a game first (game.py)"
         raise argparse.ArgumentTypeError(f"invalid choice: {text!r} (choose from {choices})")
     return text
+
+
+HELP = ("-h", "--help")
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -86,6 +94,7 @@ def render_flags(headless_frames: int = 1) -> OneLineParser:
     from ..render.frame_data import CULLING
     from ..render.light_clusters import LIGHT_MODES
     from ..render.renderer import MODES, RECORDER_NAMES
+    from .settings import HEADLESS_FALLBACK_FRAMES
 
     common = OneLineParser(add_help=False)
     common.add_argument("--headless", action="store_true", help="render offscreen, no window (no display needed)")
@@ -229,10 +238,18 @@ def render_flags(headless_frames: int = 1) -> OneLineParser:
     return common
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = OneLineParser(prog="ecs-engine", description=__doc__)
+def build_parser(
+    game: Game | None = None, parser_class: type[OneLineParser] = OneLineParser
+) -> argparse.ArgumentParser:
+    """The command line; `game`: the game named on it, whose own options (add_arguments) join
+    `play` and `editor`."""
+    from .play import add_game_arguments
+    from .play import add_parser as add_play_parser
+    from .settings import HEADLESS_FRAMES
+
+    parser = parser_class(prog="ecs-engine", description=__doc__)
     parser.add_argument("--debug", action="store_true", help="show tracebacks")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=parser_class)
     demo = sub.add_parser("demo", help="run a demo scene", parents=[render_flags(HEADLESS_FRAMES["demo"])])
     demo.add_argument(
         "scene",
@@ -261,11 +278,15 @@ def build_parser() -> argparse.ArgumentParser:
         type=editor_scene,
         metavar="SCENE",
         help=f"scenes to switch between, the first one opened (default {DEFAULT_SCENE}; "
-        f"choices: {', '.join(EDITOR_SCENES)}, or a saved {SCENE_FILE_SUFFIX} file)",
+        f"choices: {', '.join(EDITOR_SCENES)}, or a saved {SCENE_FILE_SUFFIX} file); or a game first "
+        "(as `play` takes one: game.py, a folder, asteroids), its scenes after it",
     )
-    from .play import add_parser as add_play_parser
-
-    add_play_parser(sub, render_flags(HEADLESS_FRAMES["play"]), positive_int, non_negative_int)
+    if game is not None:
+        add_game_arguments(editor, game)
+    add_play_parser(sub, render_flags(HEADLESS_FRAMES["play"]), game)
+    new = sub.add_parser("new", help="write a starter game folder NAME/game.py (ecs-engine play NAME runs it)")
+    new.add_argument("name", metavar="NAME", help="the folder to make (it must not exist)")
+    new.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show tracebacks")
     # Every argument goes to the benchmark runner, --help first included: REMAINDER skips a leading
     # option, so this parser has a prefix no argument can start with ("\0") and sees none.
     bench = sub.add_parser(
@@ -290,11 +311,10 @@ def run(args: argparse.Namespace) -> int:
             check_threads(args.threads)
             return motion.main(args.entities or 100_000, args.frames or 300, args.threads)
         return run_scene(args)
-    if args.command == "play":
-        from .play import run_play
+    if args.command == "new":
+        from .new_game import write_game
 
-        check_flags_apply(args, (args.game,), False)
-        return run_play(args, HEADLESS_FALLBACK_FRAMES, HEADLESS_FRAMES["play"])
+        return write_game(args.name)
     if args.command == "bench":
         from ..bench.__main__ import main as bench_main
 
@@ -346,7 +366,7 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
     from .loop import run
     from .output_files import check_run_files
     from .report import report_validation
-    from .settings import RunOptions
+    from .settings import HEADLESS_FALLBACK_FRAMES, RunOptions
 
     if args.path is not None and args.scene not in ("model", "environment"):
         raise UsageError(f"a path goes with the model scene (a model) or environment (a sky), not {args.scene!r}")
@@ -387,10 +407,52 @@ def main(argv: Sequence[str] | None = None) -> int:
     return run_command("ecs-engine", lambda: parse_and_run(argv))
 
 
+def run_game(args: argparse.Namespace, game: Game) -> int:
+    """`play GAME` or `editor GAME [SCENE...]`."""
+    from . import play
+    from .settings import HEADLESS_FRAMES
+
+    editor = args.command == "editor"
+    check_flags_apply(args, (game.name,), editor)
+    extra = tuple(dict.fromkeys(args.scenes[1:])) if editor else ()
+    return play.run_game(args, game, editor, HEADLESS_FRAMES[args.command], extra)
+
+
+def game_of(args: argparse.Namespace) -> Game | None:
+    """The game a `play` or `editor` command line names (its module imported), or None."""
+    from .game_module import find_game, is_game_spec
+
+    if args.command == "play":
+        return find_game(args.game)
+    if args.command == "editor" and args.scenes and is_game_spec(args.scenes[0]):
+        return find_game(args.scenes[0])
+    return None
+
+
+class Refused(Exception):
+    pass
+
+
+class FirstReading(OneLineParser):
+    """The first reading of a command line, which only looks for the game: what it cannot read
+    the second reading reports."""
+
+    def error(self, message: str) -> NoReturn:
+        raise Refused(message)
+
+
 def parse_and_run(argv: Sequence[str] | None) -> int:
-    args = build_parser().parse_args(argv)
+    # read once to find the game (its own options are unknown then; --help waits for them), then
+    # again with its options
+    words = list(sys.argv[1:] if argv is None else argv)
     try:
-        return run(args)
+        args, _ = build_parser(parser_class=FirstReading).parse_known_args([w for w in words if w not in HELP])
+    except Refused:
+        args = build_parser().parse_args(words)  # says what is wrong, exit 2
+    try:
+        game = game_of(args)
+        args = build_parser(game).parse_args(words)
+        return run(args) if game is None else run_game(args, game)
     except (KeyboardInterrupt, BrokenPipeError):
         if args.debug:
             traceback.print_exc()

@@ -87,7 +87,7 @@ def run(
             raise stopped
         if options.screenshot is not None:
             result.pixels = source.pixels()
-        if frames:
+        if frames and options.perf_lines:
             say(summary_line(result, frames, result.wall_s, final=True))
         if summary is not None:
             say(summary(session))
@@ -181,7 +181,7 @@ def run_frames(
         )
         source.end(session, target)
         frames += 1
-        if perf.summary_due():
+        if options.perf_lines and perf.summary_due():
             say(perf.summary_line())
         if editor is not None and source.running(frames):
             apply_requests(session, editor)
@@ -198,7 +198,7 @@ def keep_what_ran(
 ) -> None:
     """A run stopped early: its summary, perf log and input recording as far as it got."""
     try:
-        if result.frames:
+        if result.frames and options.perf_lines:
             say(summary_line(result, result.frames, result.wall_s, final=True))
         if summary is not None:
             say(summary(session))

@@ -34,27 +34,10 @@ def scene_builder(name: str, entities: int = 10_000, lights: int | None = None, 
 
 
 def default_schedule() -> Schedule:
-    """Simulation (snapshot for interpolation, orbits, motion, springs) in the fixed-step stage,
-    the camera per frame, then render origin, matrices and the hierarchy's. `Schedule.run` runs every stage
-    once; the run loop uses `Schedule.run_frame` with a FixedTimestep."""
-    from ..systems import (
-        FlyCameraSystem,
-        HierarchySystem,
-        MotionSystem,
-        OrbitSystem,
-        RenderOriginSystem,
-        SnapshotSystem,
-        SpringSystem,
-        TransformSystem,
-    )
+    """The schedule of the engine's scene plugins (plugins.SCENE_PLUGINS): simulation (snapshot
+    for interpolation, orbits, motion, springs) in the fixed-step stage, the fly camera per frame,
+    then render origin, matrices and the hierarchy's. `Schedule.run` runs every stage once; the
+    run loop uses `Schedule.run_frame` with a FixedTimestep."""
+    from . import plugins
 
-    schedule = Schedule(("fixed", "update", "post_update"))
-    schedule.add(SnapshotSystem(), "fixed")  # first: what each step starts from, for interpolation
-    schedule.add(OrbitSystem(), "fixed")
-    schedule.add(MotionSystem(), "fixed")
-    schedule.add(SpringSystem(), "fixed")
-    schedule.add(FlyCameraSystem(), "update")
-    schedule.add(RenderOriginSystem(), "post_update")
-    schedule.add(TransformSystem(), "post_update")
-    schedule.add(HierarchySystem(), "post_update")  # after: children's matrices from their parents'
-    return schedule
+    return plugins.schedule_of(plugins.SCENE_PLUGINS)

@@ -32,6 +32,7 @@ from ..jobs import JobPool
 from ..render.frame_data import check_culling
 from ..render.light_clusters import check_light_culling
 from ..render.mesh_registry import MeshRegistry
+from ..render.meshes import Meshes
 from ..render.oit_pass import check_transparency
 from ..render.ray_shadows import check_shadow_method
 from ..render.renderer import Renderer
@@ -143,25 +144,7 @@ class Session:
             self.gpu = source.open(options)
             start = options.settings()
             self.pool = JobPool(start.threads)
-            self.renderer = Renderer(
-                self.gpu.device,
-                self.gpu.target,
-                self.gpu.meshes,
-                mode=start.mode,
-                recorder=start.recorder,
-                jobs=self.pool,
-                culling=start.culling,
-                chunk_rows=options.chunk_rows,
-                fill=start.fill,
-                tone_map=start.tone_map,
-                exposure=start.exposure,
-                light_culling=start.light_culling,
-                transparency=start.transparency,
-                lod=start.lod,
-                shadows=start.shadow_method,
-                shadow_denoise=start.shadow_denoise,
-                anisotropy=options.anisotropy,
-            )
+            self.renderer = self._make_renderer(start)
             self.renderer.replay.enabled = start.frame_reuse
             self.scene = start.scene
             self.world, self.schedule = self._open(start.scene, options.path)
@@ -171,6 +154,28 @@ class Session:
         except BaseException:
             self.close()
             raise
+
+    def _make_renderer(self, start: Settings) -> Renderer:
+        options = self.options
+        return Renderer(
+            self.gpu.device,
+            self.gpu.target,
+            self.gpu.meshes,
+            mode=start.mode,
+            recorder=start.recorder,
+            jobs=self.pool,
+            culling=start.culling,
+            chunk_rows=options.chunk_rows,
+            fill=start.fill,
+            tone_map=start.tone_map,
+            exposure=start.exposure,
+            light_culling=start.light_culling,
+            transparency=start.transparency,
+            lod=start.lod,
+            shadows=start.shadow_method,
+            shadow_denoise=start.shadow_denoise,
+            anisotropy=options.anisotropy,
+        )
 
     @property
     def device(self) -> Device:
@@ -202,6 +207,7 @@ class Session:
         pool and meshes) and its schedule."""
         world = World()
         world.resources[JobPool] = self.pool
+        world.resources[Meshes] = Meshes(self.gpu.meshes)  # world.save keeps the meshes by reference
         if is_scene_file(scene):
             load_world(scene, world, resources=scene_codecs(self.gpu.meshes))
             try:

@@ -25,6 +25,8 @@ from .scenes import SEED_SCENES
 FIXED_DT = 1.0 / 60.0  # headless runs: one fixed step a frame, so a run is reproducible frame for frame
 SIM_STEP = 1.0 / 120.0  # windowed runs: the fixed simulation step (ecs.FixedTimestep)
 MAX_DT = 0.1  # a hitch (dragging the window, a breakpoint) must not fling the camera (per-frame stages)
+HEADLESS_FALLBACK_FRAMES = 300  # no display for a windowed run: this many frames headless instead
+HEADLESS_FRAMES = {"demo": 1, "editor": 1, "play": 600}  # a --headless run without --frames (play: an App's too)
 
 
 @dataclass
@@ -86,6 +88,7 @@ class RunOptions:
     record_input: str | None = None  # write the run's input by frame here at the end
     force: bool = False  # the outputs may replace a file of another kind (app/output_files.py)
     editor: bool = False  # the ImGui editor and Perf window (headless: drawn into the image)
+    perf_lines: bool = True  # the perf lines (once a second headless, and the closing one): an App's PerfPlugin
     scenes: tuple[str, ...] = SEED_SCENES  # the editor's scene switcher
 
     # the command-line flags every rendering command shares (cli.render_flags), by field name

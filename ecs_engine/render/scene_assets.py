@@ -1,7 +1,10 @@
 """Saved scenes' render assets: the codecs (ecs/scene_file.py's ResourceCodec) that save a world's
 materials and environment and a session's meshes, kept out of the ECS core, which knows no
-renderer. Importing this module registers the two world codecs as defaults of World.save and
-World.load; meshes need the session's registry: `scene_codecs(session.meshes)`.
+renderer. Importing this module registers three codecs as defaults of World.save and World.load:
+materials, environment, and the meshes of the world's `Meshes` resource (render/meshes.py; an App
+puts one in its world, so `world.save(path)` there keeps its meshes with no extra argument). A
+world without one saves no meshes and refuses to load a file that has some; a registry that is
+not a world resource is passed as `scene_codecs(registry)`.
 
 - materials (`Materials` resource): every material as JSON (the dataclass's fields), texture
   fields as indices into the saved textures, whose pixels are arrays (by value: a `Texture` does
@@ -36,6 +39,7 @@ from ..user_files import IMAGE, check_user_file
 from .environment_maps import check_cube_size, environment_texels
 from .materials import DEFAULT_PALETTE, TEXTURE_FIELDS, Material, Materials, materials
 from .mesh_data import MeshData
+from .meshes import Meshes
 from .textures import ImageError, Texture, read_image, texture_size_error
 
 __all__ = [
@@ -44,6 +48,7 @@ __all__ = [
     "MaterialsCodec",
     "MeshReferences",
     "RecipeBudget",
+    "WorldMeshes",
     "mesh_from_source",
     "scene_codecs",
 ]
@@ -288,7 +293,7 @@ class MeshReferences:
     arrays, even those whose source could make them again."""
 
     name = "meshes"
-    resource_types: tuple[Any, ...] = ()
+    resource_types: tuple[Any, ...] = (Meshes,)  # a world's Meshes resource is what it saves
 
     def __init__(self, registry: MeshSource, *, by_value: bool = False) -> None:
         self.registry, self.by_value = registry, by_value
@@ -347,6 +352,28 @@ class MeshReferences:
         for handle, mesh in made.items():
             lookup[handle] = self.registry.add(mesh)  # the session's registry, not the world
         return _Prepared({(Mesh, "handle"): lookup}, lambda world: None)
+
+
+class WorldMeshes:
+    """Codec of the meshes of the world's own `Meshes` resource: MeshReferences over it, the
+    default of World.save and World.load (registered below)."""
+
+    name = MeshReferences.name
+    resource_types = MeshReferences.resource_types
+    check_array = MeshReferences.check_array
+
+    def save(self, world: Any) -> SavedResource | None:
+        found: Meshes | None = world.resources.get(Meshes)
+        return None if found is None else MeshReferences(found).save(world)
+
+    def read(self, saved: SavedResource, world: Any) -> _Prepared:
+        found: Meshes | None = world.resources.get(Meshes)
+        if found is None:
+            raise ValueError(
+                "the world it is loaded into has no Meshes resource to add its meshes to (load it into an "
+                "App's world, or pass resources=scene_codecs(registry))"
+            )
+        return MeshReferences(found).read(saved, world)
 
 
 def _check_counts(what: str, vertices: int, triangles: int) -> None:
@@ -447,3 +474,4 @@ def scene_codecs(meshes: MeshSource | None = None) -> list[ResourceCodec]:
 
 register_codec(MaterialsCodec())
 register_codec(EnvironmentCodec())
+register_codec(WorldMeshes())
