@@ -30,6 +30,7 @@ NOT_RUN = re.compile(r"<!-- not run: (?P<why>[^>]+?) -->\s*$")
 SUBSTITUTIONS = [  # (pattern, replacement): what a block needs to run in a test, quickly
     (re.compile(r"\b1_000_000\b"), "5_000"),
     (re.compile(r"\bapp\.run\(\)"), "app.run(frames=3, headless=True, width=160, height=90)"),
+    (re.compile(r"(\bapp\.run\([^)]*?\bframes=)\d+"), r"\g<1>3"),  # a run asked for more frames
 ]
 
 
@@ -166,6 +167,25 @@ def test_every_check_finds_its_block():
     exactly one block that runs."""
     found = {m: [b.where for p in PAGES for b in blocks(p) if m in b.code and b.not_run is None] for m in CHECKS}
     assert {m: w for m, w in found.items() if len(w) != 1} == {}
+
+
+def test_blocks_are_found_with_their_marks(tmp_path):
+    """Indented blocks (in a list) are found, a mark is read, and a test's substitutions apply."""
+    page = tmp_path / "page.md"
+    page.write_text(
+        "# A page\n\n```python\nx = 1\n```\n\n- an item:\n\n  <!-- not run: it needs a gamepad -->\n"
+        "  ```python\n  y = x\n  ```\n\n```bash\necs-engine demo cube  # a comment\n```\n"
+    )
+    found = blocks(page)
+    assert [(b.code, b.not_run) for b in found] == [("x = 1\n", None), ("y = x\n", "it needs a gamepad")]
+    assert [b.code for b in blocks(page, ("bash",))] == ["ecs-engine demo cube  # a comment\n"]
+    code = 'app.run()\napp.run(frames=120, headless=True, screenshot="catch.png")'
+    for pattern, replacement in SUBSTITUTIONS:
+        code = pattern.sub(replacement, code)
+    assert code.split("\n") == [
+        "app.run(frames=3, headless=True, width=160, height=90)",
+        'app.run(frames=3, headless=True, screenshot="catch.png")',
+    ]
 
 
 def test_blocks_marked_not_run_say_why():
