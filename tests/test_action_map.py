@@ -186,7 +186,7 @@ def test_a_bad_user_file_is_a_warning_and_the_defaults_and_stays_as_it_was(confi
     "text", ["[" * 100000, '{"version": 1, "dead_zone": 1' + "0" * 5000 + "}", '{"version": true, "actions": {}}']
 )
 def test_a_hostile_user_file_is_a_warning_and_the_defaults(config_home, text):
-    """The README's promise, kept for hostile files too (issue 34 #9): one warning naming the file."""
+    """docs/input.md's promise, kept for hostile files too (issue 34 #9): one warning naming the file."""
     path = bindings_file("asteroids")
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(text)
