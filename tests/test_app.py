@@ -298,3 +298,24 @@ def test_velocity_moves_entities_in_a_rendered_app_too():
     app.run(frames=10, headless=True, threads=1)
     ys = app.world.query(Transform, with_=[Velocity]).column(Transform.position)[:, 1]
     assert np.allclose(ys, 1.0)  # 10 steps of 1/60 s at 6 units a second
+
+
+@pytest.mark.parametrize("plugins", ["minimal", "default"])
+def test_the_action_map_of_add_actions_reads_the_run_s_input(tmp_path, plugins, config_home):
+    """`world.resources[ActionMap]` as add_actions made it hears the keys of the run (a script's
+    here, a window's in a game), not a still input of its own."""
+    from ecs_engine.systems import ActionMap
+
+    app = cube_app() if plugins == "default" else App(title="Keys").add_plugins(MinimalPlugins)
+    app.add_actions({"steer": ["a/d"], "jump": ["space"]})
+    seen = []
+    app.add_systems(
+        "update",
+        lambda world, dt: seen.append(
+            (world.resources[ActionMap].axis("steer"), world.resources[ActionMap].action_down("jump"))
+        ),
+    )
+    script = tmp_path / "keys.txt"
+    script.write_text("1 down d\n2 down space\n3 up d\n")
+    app.run(frames=5, headless=True, input_script=str(script))
+    assert seen == [(0.0, False), (1.0, False), (1.0, True), (0.0, True), (0.0, True)]

@@ -25,6 +25,12 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 HISTORY = ROOT / "docs" / "history.md"  # the one page that may tell how the engine got here
+# pages whose blocks a test of their own runs in order, with checks of what they built: not run twice
+OWN_TESTS = {
+    ROOT / "docs" / "app.md": ROOT / "tests" / "test_docs_app.py",
+    ROOT / "docs" / "game-structure.md": ROOT / "tests" / "test_game_structure_doc.py",
+    ROOT / "docs" / "tutorial.md": ROOT / "tests" / "test_tutorial.py",
+}
 FENCE = re.compile(r"^(?P<indent> *)```(?P<lang>[\w-]*)\n(?P<code>.*?)^(?P=indent)```$", re.S | re.M)
 NOT_RUN = re.compile(r"<!-- not run: (?P<why>[^>]+?) -->\s*$")
 SUBSTITUTIONS = [  # (pattern, replacement): what a block needs to run in a test, quickly
@@ -115,8 +121,8 @@ def _scene_file(scope: dict) -> None:
 CHECKS: dict[str, Callable[[dict], None]] = {  # a marker only its block contains -> its check
     "a million entities is one call": _ecs_five_minutes,
     "world.events(Hit)": _games_as_systems,
-    "Material(": _materials,
-    "ActionMap(": _input,
+    'Material("floor", "lambert"': _materials,
+    "world.resources[ActionMap] = ActionMap(": _input,
     'app = App(title="Cubes"': _readme_game,
     'save_world(world, "level.scene")': _scene_file,
 }
@@ -152,7 +158,9 @@ def run_page(page: Path) -> list[str]:
     return checked
 
 
-@pytest.mark.parametrize("page", [p for p in PAGES if blocks(p)], ids=lambda p: str(p.relative_to(ROOT)))
+@pytest.mark.parametrize(
+    "page", [p for p in PAGES if blocks(p) and p not in OWN_TESTS], ids=lambda p: str(p.relative_to(ROOT))
+)
 def test_every_python_block_runs(page, tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)  # files a block writes (level.scene, mygame.json) go here
     run_page(page)
@@ -160,6 +168,13 @@ def test_every_python_block_runs(page, tmp_path, monkeypatch, capsys):
     for block in blocks(page):
         if block.not_run is not None:
             assert f"{block.where}: not run:" in out
+
+
+def test_pages_with_their_own_test_are_run_there():
+    """Each page left out above has a test that reads that page and runs its python blocks."""
+    for page, test in OWN_TESTS.items():
+        text = test.read_text()
+        assert f'"{page.name}"' in text and "exec(compile(" in text, test.name
 
 
 def test_every_check_finds_its_block():

@@ -16,7 +16,7 @@ from typing import Any
 from ..ecs.errors import EcsError
 from ..errors import UsageError
 from ..jobs import default_threads
-from ..systems import InputState
+from ..systems import ActionMap, InputState
 from .editor_session import EditorSession
 from .imgui_session import ImGuiSession
 from .input_script import InputRecorder, read_script
@@ -215,6 +215,9 @@ def held_keys(session: Session) -> Any:
     state = session.world.resources.get(InputState)
     if state is None:
         state = session.world.resources[InputState] = InputState()
+    actions = session.world.resources.get(ActionMap)
+    if actions is not None:
+        actions.input = state  # the game's actions hear the script's keys
     return state
 
 

@@ -23,7 +23,7 @@ from ..gpu.instance import Instance
 from ..gpu.render_pass import check_samples
 from ..gpu.swapchain import OutOfDate, Swapchain
 from ..render.mesh_registry import MeshRegistry
-from ..systems import InputState
+from ..systems import ActionMap, InputState
 from ..systems.input_state import input_names
 from .gamepads import GamepadPoller
 from .report import save_png
@@ -150,6 +150,9 @@ class WindowSource:
 
         def give_input(world: World) -> None:
             world.resources[InputState] = self.input
+            actions = world.resources.get(ActionMap)
+            if actions is not None:
+                actions.input = self.input  # the game's actions hear this window's keys
 
         buttons = button_names(glfw)
 
