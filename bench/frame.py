@@ -8,9 +8,11 @@ Small frames need many samples: 2,400 timed frames after 300 of warm-up by defau
 `--frame-reuse both` makes each repeat two runs, with the frames' recordings submitted again
 where nothing changed (render/frame_replay.py, the default) and with every frame recorded,
 one after the other: the two compared under the same drift. The target is judged on the first.
+`--through app` runs the scene as a game through `App` (DefaultPlugins without the perf lines, the
+scene's builder as the startup system), to hold the App to the loop's cost.
 
 JSON (schema_version 1): {"benchmark": "frame", "quick", "machine", "device", "config": {"scene",
-"mode", "threads", "width", "height", "frames", "warmup", "repeat", "frame_reuse"}, "results":
+"mode", "threads", "width", "height", "frames", "warmup", "repeat", "frame_reuse", "through"}, "results":
 [{"run", "frame_reuse", "replayed" (the share of timed frames submitted again), "cpu_ms_median",
 "cpu_ms_p99", "cpu_ms_mean", "record_ms_median", "gpu_ms_median", "fps", "draws", "python_loop_ns"
 (the core's speed before and after the run: ns per iteration of a fixed Python loop, machine.py)}],
@@ -60,11 +62,39 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="submit unchanged frames' recordings again (on, the default), record every frame (off), "
         "or each repeat both ways, one after the other",
     )
+    parser.add_argument(
+        "--through",
+        default="loop",
+        choices=("loop", "app"),
+        help="run the scene as the demo does (loop, the default) or as a game through App (app: DefaultPlugins, "
+        "the scene's builder as a startup system)",
+    )
 
 
-def measure(options: RunOptions, warmup: int) -> dict[str, Any]:
+def through_app(options: RunOptions) -> Any:
+    """The scene as a game through `App` would run it: DefaultPlugins (without the perf lines),
+    the demo scene's builder as the startup system, `app.run` headless."""
+    from ecs_engine import App, DefaultPlugins
+    from ecs_engine.app.plugins import PerfPlugin
+    from ecs_engine.app.scenes import scene_builder
+    from ecs_engine.render.meshes import Meshes
+
+    build = scene_builder(options.scene)
+    app = App(title=options.scene, size=(options.width, options.height))
+    app.add_plugins(DefaultPlugins.without(PerfPlugin))
+    app.add_startup_systems(lambda world, dt: build(world, world.resources[Meshes].add))
+    return app.run(
+        frames=options.frames,
+        headless=True,
+        mode=options.mode,
+        threads=options.threads,
+        frame_reuse=options.frame_reuse,
+    )
+
+
+def measure(options: RunOptions, warmup: int, through: str = "loop") -> dict[str, Any]:
     before = python_loop_ns()
-    result = run_scene(options)
+    result = through_app(options) if through == "app" else run_scene(options)
     after = python_loop_ns()
     cpu = np.array(result.cpu_ms[warmup:])
     gpu = np.array(result.gpu_ms[warmup:])
@@ -105,7 +135,8 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
             what = f"{args.scene}, {args.mode}, {args.threads} thread(s), {width}x{height}: run {i + 1}"
             with progress.step(what + ("" if reuse else ", every frame recorded")):
                 run_options = options if reuse else replace(options, frame_reuse=False)  # (older engines: on only)
-                results.append(measure(run_options, warmup) | {"run": i + 1, "frame_reuse": reuse})
+                through = getattr(args, "through", "loop")
+                results.append(measure(run_options, warmup, through) | {"run": i + 1, "frame_reuse": reuse})
     device = results[0].pop("device")
     for r in results[1:]:
         r.pop("device")
@@ -159,6 +190,7 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
             "warmup": warmup,
             "repeat": repeat,
             "frame_reuse": args.frame_reuse,
+            "through": getattr(args, "through", "loop"),
         },
         "results": results,
         "targets": targets,

@@ -59,22 +59,25 @@ for mode in "$@"; do
       spec=${mode#bench:}; name=${spec%%:*}; args=${spec#*:}; [ "$args" = "$spec" ] && args=
       (cd /tmp && timeout 560 python3 -m ecs_engine.bench $name $args --out "$OUT" 2>&1 | tail -20) ;;
     ab:*)
-      # ab:NAME:ARGS:REPS: benchmark NAME with ARGS, this tree ("new") and .ab/base ("old", carried:
-      # `git archive REV | tar -x -C .ab/base`), alternated REPS times in separate processes with
-      # the host's core speed (python_loop_ns) beside each; the JSONs in ab-NAME.tar
-      IFS=: read -r _ name args reps <<< "$mode"
+      # ab:NAME:ARGS:REPS[:OLDARGS[:LABEL]]: benchmark NAME with ARGS, this tree ("new") and .ab/base
+      # ("old", carried: `git archive REV | tar -x -C .ab/base`; with OLDARGS when its options differ),
+      # alternated REPS times in separate processes with the host's core speed (python_loop_ns)
+      # beside each; the JSONs in ab-LABEL.tar (LABEL: NAME by default)
+      IFS=: read -r _ name args reps oldargs label <<< "$mode"
+      oldargs=${oldargs:-$args}; label=${label:-$name}
       [ -d /tmp/old ] || python3 -m pip install -q --no-deps --no-build-isolation --no-index --target /tmp/old \
         .ab/base >/dev/null 2>&1 || { echo "install old failed"; continue; }
-      mkdir -p "/tmp/ab-$name"
+      mkdir -p "/tmp/ab-$label"
       for rep in $(seq "${reps:-2}"); do
         if [ $((rep % 2)) = 1 ]; then order="new old"; else order="old new"; fi
         for v in $order; do
-          mkdir -p "/tmp/ab-$name/$v$rep"
-          (cd /tmp && PYTHONPATH=/tmp/$v:/tmp/site timeout 300 python3 -m ecs_engine.bench $name $args \
-            --out "/tmp/ab-$name/$v$rep" 2>&1 | tail -3 | sed "s/^/$v$rep: /")
+          mkdir -p "/tmp/ab-$label/$v$rep"
+          if [ $v = old ]; then a=$oldargs; else a=$args; fi
+          (cd /tmp && PYTHONPATH=/tmp/$v:/tmp/site timeout 300 python3 -m ecs_engine.bench $name $a \
+            --out "/tmp/ab-$label/$v$rep" 2>&1 | tail -3 | sed "s/^/$v$rep: /")
         done
-      done 2>&1 | tee "$OUT/ab-$name.txt"
-      tar -C /tmp -cf "$OUT/ab-$name.tar" "ab-$name" ;;
+      done 2>&1 | tee "$OUT/ab-$label.txt"
+      tar -C /tmp -cf "$OUT/ab-$label.tar" "ab-$label" ;;
     *) echo "unknown mode $mode" ;;
   esac
 done

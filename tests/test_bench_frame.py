@@ -25,3 +25,16 @@ def test_frame_quick_writes_json_with_the_target(tmp_path, monkeypatch):
     assert not recorded["frame_reuse"] and recorded["replayed"] == 0.0
     (target,) = doc["targets"]
     assert target["target"] == 0.15 and type(target["met"]) is bool
+
+
+def test_frame_through_app_runs_the_scene_as_a_game(tmp_path, monkeypatch):
+    """`--through app`: the cube scene built by an App's startup system, run by `app.run`: the
+    same draws, and the frames replayed as the demo's are (nothing but the App differs)."""
+    monkeypatch.syspath_prepend(str(ROOT))
+    from bench.__main__ import main
+
+    assert main(["frame", "--quick", "--through", "app", "--out", str(tmp_path), "--machine", "ci"]) == 0
+    doc = json.loads((tmp_path / "frame-ci.json").read_text())
+    assert doc["config"]["through"] == "app"
+    (row,) = doc["results"]
+    assert 0 < row["cpu_ms_median"] and row["draws"] >= 1 and row["replayed"] == 1.0
