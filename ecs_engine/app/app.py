@@ -43,6 +43,7 @@ STAGES = ("fixed", "update", "post_update")  # what the run loop's frame runs, i
 HEADLESS_FRAMES = CLI_HEADLESS_FRAMES["play"]  # a run without a window and without frames=
 
 Hook = Callable[[World, Any], None]  # (the App's world, the Session) when the run opens
+FrameHook = Callable[[Any, Any], None]  # (the Session, the editor or None) between two frames
 
 
 class App:
@@ -63,6 +64,7 @@ class App:
         self._plugins: dict[Any, str] = {}
         self._startup: list[System] = []
         self._open_hooks: list[Hook] = []
+        self._frame_hooks: list[FrameHook] = []
         self._where: dict[str, str] = {}  # system name -> its stage
         self._ran = False
 
@@ -160,6 +162,23 @@ class App:
         self._where[made.name] = stage
         return made
 
+    def remove_system(self, name: str) -> System:
+        """Take the system called `name` out of the App (a startup one too); it runs no more."""
+        stage = self._where.pop(name, None)
+        if stage is None:
+            raise UsageError(f"no system named {name!r}; the App has {', '.join(self._where) or 'none'}")
+        listed = self._startup if stage == "startup" else self.schedule.stages[stage]
+        index = next(i for i, s in enumerate(listed) if s.name == name)
+        return listed.pop(index)
+
+    def system(self, name: str) -> System:
+        """The system called `name` (a startup one too)."""
+        stage = self._where.get(name)
+        if stage is None:
+            raise UsageError(f"no system named {name!r}; the App has {', '.join(self._where) or 'none'}")
+        listed = self._startup if stage == "startup" else self.schedule.stages[stage]
+        return next(s for s in listed if s.name == name)
+
     def systems(self) -> dict[str, str]:
         """Every system's name and its stage ("startup" for a startup system)."""
         return dict(self._where)
@@ -168,6 +187,13 @@ class App:
         """`hook(world, session)` when the run opens, before the startup systems: for plugins
         whose resources need the GPU or the window (session.gpu, session.source)."""
         self._open_hooks.append(hook)
+        return self
+
+    def on_frame_end(self, hook: FrameHook) -> App:
+        """`hook(session, editor)` between frames (the editor: None without one), where the
+        schedule may change and GPU resources may be replaced (hot_reload.py). With no hook
+        the run loop does nothing there."""
+        self._frame_hooks.append(hook)
         return self
 
     def add_ui(self, draw: Callable[[Any, World], Any]) -> App:
@@ -319,9 +345,16 @@ class App:
         if (self.ui or self.perf_overlay) and not options.editor and self.renders:
             ui = AppUI
         summary = None if self.summary is None else (lambda session: self.summary(session.world))  # type: ignore[misc]
-        result = loop.run(options, source, make_session=lambda o, s: AppSession(self, o, s), ui=ui, summary=summary)
+        between = self._between_frames if self._frame_hooks else None
+        result = loop.run(
+            options, source, make_session=lambda o, s: AppSession(self, o, s), ui=ui, summary=summary, between=between
+        )
         report_validation(result)
         return result
+
+    def _between_frames(self, session: Any, editor: Any) -> None:
+        for hook in self._frame_hooks:
+            hook(session, editor)
 
 
 def _slug(title: str) -> str:
