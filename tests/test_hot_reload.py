@@ -283,3 +283,148 @@ def test_watch_needs_a_game_in_the_editor():
     assert run.stderr.strip() == (
         "ecs-engine: error: --watch reloads a game's code and assets: name a game first (editor game.py --watch)"
     )
+
+
+ASSET_GAME = """
+from ecs_engine import DefaultPlugins
+from ecs_engine.components import Camera, Mesh, Transform
+from ecs_engine.render.materials import Material, materials
+from ecs_engine.render.meshes import Meshes
+
+
+def setup(world, dt):
+    looks = materials(world)
+    glow = looks.textures.load(TEXTURE)
+    look = looks.add(Material("glow", base_color=(0.0, 0.0, 0.0, 1.0), emissive=(1.0, 1.0, 1.0), emissive_texture=glow))
+    world.spawn(Transform(), Mesh(handle=world.resources[Meshes].load(MODEL), material=look))
+    world.spawn(Transform(position=(0.0, 0.0, 3.0)), Camera())
+
+
+def build(app):
+    app.add_plugins(PLUGINS)
+    app.add_startup_systems(setup)
+"""
+
+
+def quad_obj(x0: float, x1: float) -> str:
+    """A quad over x in [x0, x1], y in [-2, 2], facing the camera (+Z), with texture coordinates."""
+    return (
+        f"v {x0} -2 0\nv {x1} -2 0\nv {x1} 2 0\nv {x0} 2 0\n"
+        "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n"
+    )
+
+
+def write_png(path: Path, rgb: tuple[int, int, int]) -> None:
+    from PIL import Image
+
+    before = path.stat().st_mtime_ns if path.exists() else 0
+    Image.new("RGB", (16, 16), rgb).save(path)
+    os.utime(path, ns=(before + 1_000_000_000, before + 1_000_000_000))
+
+
+def asset_game(tmp_path: Path, name: str, plugins: str = "DefaultPlugins") -> tuple[Path, Path, Path]:
+    texture, model = tmp_path / "glow.png", tmp_path / "quad.obj"
+    write_png(texture, (255, 0, 0))
+    model.write_text(quad_obj(-3.0, 0.0))  # the left half of the view
+    source = ASSET_GAME.replace("TEXTURE", repr(str(texture))).replace("MODEL", repr(str(model)))
+    game_file = tmp_path / f"{name}.py"
+    game_file.write_text(source.replace("PLUGINS", plugins).replace("import DefaultPlugins", f"import {plugins}"))
+    return game_file, texture, model
+
+
+@pytest.mark.parametrize("mode", ["instanced", "indirect", "per_entity"])
+def test_textures_and_meshes_changed_on_disk_show_in_the_next_frames(tmp_path, mode):
+    game_file, texture, model = asset_game(tmp_path, "hot_assets_gpu")
+    try:
+        game = find_game(str(game_file))
+        app = make_app(game)
+        app.size = (32, 32)
+
+        frames = [0]
+
+        def edit(session, editor):
+            frames[0] += 1
+            if frames[0] == 2:
+                write_png(texture, (0, 0, 255))
+                model.write_text(quad_obj(0.0, 3.0))  # now the right half
+
+        said: list[str] = []
+        app.on_frame_end(edit)
+        HotReload(app, game.module, game_file.name, interval=0.0, say=said.append, warn=said.append).install()
+        shot = tmp_path / "shot.png"
+        app.run(frames=4, headless=True, screenshot=str(shot), mode=mode)
+    finally:
+        sys.modules.pop("hot_assets_gpu", None)
+    from PIL import Image
+
+    pixels = np.asarray(Image.open(shot).convert("RGB")).astype(int)
+    left, right = pixels[8:24, 2:12], pixels[8:24, 20:30]
+    assert sorted(said) == ["hot reload: glow.png: texture reloaded", "hot reload: quad.obj: mesh reloaded"]
+    assert left.max() < 80  # the quad moved away: the background (about 40, 40, 48)
+    assert (right[..., 2] > 150).all() and (right[..., 0] < 60).all()  # blue, not red
+
+
+def test_a_broken_asset_file_keeps_the_old_one_and_says_one_line(tmp_path):
+    from ecs_engine.render.materials import materials
+    from ecs_engine.render.meshes import Meshes
+
+    game_file, texture, model = asset_game(tmp_path, "hot_assets_cpu", plugins="MinimalPlugins")
+    try:
+        game = find_game(str(game_file))
+        app = make_app(game)
+        kept: list[tuple[object, object]] = []
+
+        frames = [0]
+
+        def edit(session, editor):
+            frames[0] += 1
+            if frames[0] == 2:
+                write(texture, "not a PNG")
+                write(model, "v 0 0 0\nf 1 2 3\n")  # a face naming vertices that are not there
+            world = session.world
+            kept.append((materials(world).textures[0].pixels, world.resources[Meshes][0]))
+
+        said: list[str] = []
+        app.on_frame_end(edit)
+        HotReload(app, game.module, game_file.name, interval=0.0, say=said.append, warn=said.append).install()
+        app.run(frames=5)
+    finally:
+        sys.modules.pop("hot_assets_cpu", None)
+    assert all(k[0] is kept[0][0] and k[1] is kept[0][1] for k in kept)  # the old assets throughout
+    assert len(said) == 2, said
+    image, mesh = sorted(said, key=lambda line: "quad.obj" in line)
+    assert image.startswith("hot reload: glow.png: ") and image.endswith("; the old texture stays")
+    assert f"hot reload: {tmp_path / 'quad.obj'}: face 1 (line 2)" in mesh and mesh.endswith("; the old mesh stays")
+
+
+def test_the_editor_shows_a_failed_reload(tmp_path):
+    from ecs_engine.app.plugins import EditorPlugin
+
+    game_file, _, _ = asset_game(tmp_path, "hot_assets_editor")
+    try:
+        game = find_game(str(game_file))
+        app = make_app(game)
+        app.add_plugins(EditorPlugin)
+        app.size = (320, 240)
+        statuses: list[str] = []
+
+        frames = [0]
+
+        def edit(session, editor):
+            frames[0] += 1
+            if frames[0] == 1:
+                write(game_file, game_file.read_text() + "\ndef (\n")
+
+        def look(session, editor):
+            statuses.append(editor.editor.settings_status)
+
+        app.on_frame_end(edit)
+        HotReload(app, game.module, game_file.name, interval=0.0, warn=lambda line: None).install()
+        app.on_frame_end(look)
+        app.run(frames=2, headless=True)
+    finally:
+        sys.modules.pop("hot_assets_editor", None)
+    line = game_file.read_text().count("\n")
+    assert statuses == [
+        f"hot reload: {game_file.name}:{line}: syntax error: invalid syntax; the old code keeps running"
+    ]

@@ -1,5 +1,6 @@
 """Hot reload (`ecs-engine play game.py --watch`): a game's changed code goes into the running
-App between two frames; the world, its entities and resources stay as they are.
+App between two frames; the world, its entities and resources stay as they are. The textures and
+meshes it loaded from files are reloaded too (asset_reload.py).
 
 When the game's file changes (app/file_watch.py polls it at most every 0.25 s, between frames):
 1. its source is compiled and run into a fresh module object (not from a bytecode cache: an
@@ -35,6 +36,7 @@ from typing import TYPE_CHECKING, Any
 from ..ecs.schedule import System
 from ..ecs.schema import Component
 from ..errors import UsageError
+from .asset_reload import AssetReload
 from .file_watch import POLL_INTERVAL_S, FileWatch
 
 if TYPE_CHECKING:
@@ -81,6 +83,7 @@ class HotReload:
         self.say, self.warn = say, warn
         self.files = FileWatch(interval)
         self.files.watch([self.path])
+        self.assets = AssetReload(app.world, self.files)
         self.reloads = 0  # reloads that went in
         self.failures = 0  # reloads refused
         self.last_message = ""
@@ -90,9 +93,12 @@ class HotReload:
         return self
 
     def between_frames(self, session: Any, editor: Any) -> None:
+        self.assets.follow()
         changed = self.files.changed()
         if self.path in changed:
             self.report(self.reload(), editor)
+        for outcome in self.assets.reload([path for path in changed if path != self.path]):
+            self.report(outcome, editor)
 
     def report(self, outcome: tuple[bool, str], editor: Any) -> None:
         went_in, line = outcome
