@@ -5,6 +5,7 @@ line naming the file and line; the reload is seen within a second of the write."
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 import threading
@@ -428,3 +429,74 @@ def test_the_editor_shows_a_failed_reload(tmp_path):
     assert statuses == [
         f"hot reload: {game_file.name}:{line}: syntax error: invalid syntax; the old code keeps running"
     ]
+
+
+SHADER_GAME = """
+from ecs_engine import DefaultPlugins
+from ecs_engine.components import Camera, Mesh, Transform
+from ecs_engine.render.materials import Material, materials
+from ecs_engine.render.meshes import Meshes
+from ecs_engine.render.primitives import cube_mesh
+
+
+def setup(world, dt):
+    red = materials(world).add(Material("red", base_color=(0.0, 0.0, 0.0, 1.0), emissive=(1.0, 0.0, 0.0)))
+    world.spawn(Transform(scale=(10.0, 10.0, 1.0)), Mesh(handle=world.resources[Meshes].add(cube_mesh()), material=red))
+    world.spawn(Transform(position=(0.0, 0.0, 3.0)), Camera())
+
+
+def build(app):
+    app.add_plugins(DefaultPlugins)
+    app.add_startup_systems(setup)
+"""
+
+GREEN_FRAG = """#version 450
+layout(location = 0) in vec3 v_position;  // what mesh.vert writes, read (validation checks it)
+layout(location = 1) in vec3 v_normal;
+layout(location = 2) flat in uint v_material;
+layout(location = 0) out vec4 out_color;
+void main() {
+    out_color = vec4(0.0, 1.0, 0.0, 1.0);
+    if (v_material == 0xFFFFFFFFu && v_position.x + v_normal.x > 1e30) out_color = vec4(1.0);  // never
+}
+"""
+
+
+@pytest.mark.skipif(shutil.which("glslc") is None, reason="no glslc")
+def test_an_edited_shader_is_compiled_and_drawn_with_and_a_broken_one_kept(tmp_path, monkeypatch):
+    import ecs_engine.gpu.pipeline as pipeline
+
+    shaders = tmp_path / "shaders"
+    shutil.copytree(pipeline.SHADER_DIR, shaders, ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(pipeline, "SHADER_DIR", shaders)
+    game_file = tmp_path / "hot_shader_game.py"
+    game_file.write_text(SHADER_GAME)
+    try:
+        game = find_game(str(game_file))
+        app = make_app(game)
+        app.size = (32, 32)
+        frames = [0]
+
+        def edit(session, editor):
+            frames[0] += 1
+            if frames[0] == 1:
+                write(shaders / "mesh.frag", "#version 450\nvoid main() { nope }\n")
+            if frames[0] == 2:
+                write(shaders / "mesh.frag", GREEN_FRAG)
+
+        said: list[str] = []
+        app.on_frame_end(edit)
+        hot = HotReload(
+            app, game.module, game_file.name, interval=0.0, shader_dir=shaders, say=said.append, warn=said.append
+        ).install()
+        shot = tmp_path / "shot.png"
+        app.run(frames=4, headless=True, screenshot=str(shot))
+    finally:
+        sys.modules.pop("hot_shader_game", None)
+    from PIL import Image
+
+    assert said[0].startswith("hot reload: mesh.frag:2: error: ") and said[0].endswith("; the old shaders stay")
+    assert said[1:] == ["hot reload: mesh.frag: compiled, the mesh pipelines made again"]
+    assert hot.shaders is not None and hot.shaders.reloaded == 1
+    pixels = np.asarray(Image.open(shot).convert("RGB")).astype(int)[8:24, 8:24]
+    assert (pixels[..., 1] > 150).all() and (pixels[..., 0] < 60).all()  # green, drawn by the new shader

@@ -1,6 +1,7 @@
 """Hot reload (`ecs-engine play game.py --watch`): a game's changed code goes into the running
 App between two frames; the world, its entities and resources stay as they are. The textures and
-meshes it loaded from files are reloaded too (asset_reload.py).
+meshes it loaded from files are reloaded too (asset_reload.py), and in a run that draws, the
+engine's shaders (shader_reload.py).
 
 When the game's file changes (app/file_watch.py polls it at most every 0.25 s, between frames):
 1. its source is compiled and run into a fresh module object (not from a bytecode cache: an
@@ -38,6 +39,7 @@ from ..ecs.schema import Component
 from ..errors import UsageError
 from .asset_reload import AssetReload
 from .file_watch import POLL_INTERVAL_S, FileWatch
+from .shader_reload import ShaderReload
 
 if TYPE_CHECKING:
     from .app import App
@@ -70,6 +72,7 @@ class HotReload:
         *,
         debug: bool = False,
         interval: float = POLL_INTERVAL_S,
+        shader_dir: Path | None = None,
         say: Callable[[str], None] = print,
         warn: Callable[[str], None] = lambda line: print(line, file=sys.stderr),
     ) -> None:
@@ -84,6 +87,7 @@ class HotReload:
         self.files = FileWatch(interval)
         self.files.watch([self.path])
         self.assets = AssetReload(app.world, self.files)
+        self.shaders = ShaderReload(self.files, shader_dir) if app.renders else None
         self.reloads = 0  # reloads that went in
         self.failures = 0  # reloads refused
         self.last_message = ""
@@ -97,7 +101,13 @@ class HotReload:
         changed = self.files.changed()
         if self.path in changed:
             self.report(self.reload(), editor)
-        for outcome in self.assets.reload([path for path in changed if path != self.path]):
+        if not changed:
+            return
+        assets = [path for path in changed if path != self.path]
+        outcomes = self.assets.reload(assets)
+        if self.shaders is not None:
+            outcomes += self.shaders.reload(assets, session.renderer)
+        for outcome in outcomes:
             self.report(outcome, editor)
 
     def report(self, outcome: tuple[bool, str], editor: Any) -> None:

@@ -16,7 +16,7 @@ from .game_module import KNOWN_GAMES, Game, make_app
 from .plugins import EditorPlugin
 from .settings import RunOptions
 
-WATCH_HELP = "reload the game's systems, textures and meshes when their files change (docs/hot-reload.md)"
+WATCH_HELP = "reload the game's systems, textures and meshes, and the engine's shaders, as their files change"
 
 
 def add_parser(sub: Any, common: argparse.ArgumentParser, game: Game | None) -> argparse.ArgumentParser:

@@ -260,6 +260,11 @@ class Renderer(TargetForms):
             self.fill = fill
             self._respecialise(lambda: setattr(self, "fill", old))
 
+    def rebuild_pipelines(self) -> None:
+        """The path's pipelines made again from the shader files (hot reload: a shader changed);
+        if they cannot be made, the old path stays and the error is raised."""
+        self._respecialise(lambda: None)
+
     def _check_features(self, features: int) -> None:
         """Rebuild the path's pipelines when the world's materials or lights need a shading model,
         alpha mask or light kind they were specialised without (grown, never shrunk)."""
