@@ -18,6 +18,7 @@ import pytest
 from ecs_engine.app.file_watch import FileWatch
 from ecs_engine.app.game_module import find_game, make_app
 from ecs_engine.app.hot_reload import HotReload
+from ecs_engine.ecs.schema import object_component
 
 GAME = """
 import time
@@ -157,6 +158,16 @@ def test_a_resource_class_is_kept_so_the_new_systems_find_the_resource(game_file
     seen, hot, _ = run_with_edits(game_file, {2: game_source(step=3)})
     assert [values[0] for _, values in seen] == [1, 2, 5, 8, 11]
     assert hot.app.world.resources[hot.module.Tally].frames == 6
+
+
+def test_a_new_system_declaring_a_kept_class_reads_and_writes_the_worlds(game_file):
+    # @system(writes=[Counter]) runs as the module runs, with the new Counter class: the world's
+    # is the old one, which the new system must declare or its query is refused
+    declared = game_source(step=10).replace("def step(", "@system(writes=[Counter, Tally])\ndef step(")
+    declared = declared.replace("import Component,", "import Component, system,")
+    seen, hot, _ = run_with_edits(game_file, {2: declared})
+    assert [values[0] for _, values in seen] == [1, 2, 12, 22, 32]
+    assert hot.app.system("step").writes == {hot.module.Counter, object_component(hot.module.Tally)}
 
 
 def test_systems_added_and_removed_by_an_edit(game_file):

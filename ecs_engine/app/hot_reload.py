@@ -35,7 +35,7 @@ from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from ..ecs.schedule import System
-from ..ecs.schema import Component
+from ..ecs.schema import Component, object_component
 from ..errors import UsageError
 from .asset_reload import AssetReload
 from .file_watch import POLL_INTERVAL_S, FileWatch
@@ -149,7 +149,7 @@ class HotReload:
 
     def plan(self) -> Plan:
         module = self._execute()
-        self._keep_state_classes(module)
+        kept = self._keep_state_classes(module)
         stand_in = type(self.app)(name=self.app.name)
         stand_in.options = self.app.options
         try:
@@ -158,6 +158,8 @@ class HotReload:
             raise ReloadRefused(self._where(exc, "build(app) raised")) from exc
         new = self._game_systems(stand_in)
         old = self._game_systems(self.app)
+        for _, made in new.values():  # declared while the module ran, before the old classes were put back
+            made.reads, made.writes = _mapped(made.reads, kept), _mapped(made.writes, kept)
         plan = Plan(module)
         plan.new_startup = [n for n, (stage, _) in new.items() if stage == "startup" and n not in old]
         for name, (stage, made) in new.items():
@@ -202,11 +204,13 @@ class HotReload:
         text = " ".join(str(exc).split())
         return f"{at}: {what} {type(exc).__name__}" + (f": {text}" if text else "")
 
-    def _keep_state_classes(self, module: ModuleType) -> None:
+    def _keep_state_classes(self, module: ModuleType) -> dict[type, type]:
         """The new module's names of Component classes and resource keys bound to the old
-        classes, whose instances the world holds; refused if their fields changed."""
+        classes, whose instances the world holds; refused if their fields changed. Returns
+        {new class: old class}."""
         resources = self.app.world.resources
         name = self.module.__name__
+        kept: dict[type, type] = {}
         for attr, new in list(vars(module).items()):
             old = vars(self.module).get(attr)
             if not (isinstance(new, type) and isinstance(old, type)) or new.__module__ != name:
@@ -226,6 +230,8 @@ class HotReload:
                     f"{', '.join(now) or 'none'}): the world holds it as it was; restart to use the new fields"
                 )
             setattr(module, attr, old)
+            kept[new] = old
+        return kept
 
     def _game_systems(self, app: App) -> dict[str, tuple[str, System]]:
         """The systems of `app` written in the game's module: name -> (stage, system)."""
@@ -235,6 +241,15 @@ class HotReload:
             if _module_of(made) == self.module.__name__:
                 found[name] = (stage, made)
         return found
+
+
+def _mapped(types: frozenset[type] | None, kept: dict[type, type]) -> frozenset[type] | None:
+    """`types` (a system's reads or writes) with the old classes for the new: a plain class
+    declared there stands as its object store (ecs/schema.object_component)."""
+    if types is None:
+        return None
+    stores = {object_component(n): object_component(o) for n, o in kept.items() if not issubclass(o, Component)}
+    return frozenset(kept.get(t, stores.get(t, t)) for t in types)
 
 
 def _module_of(made: System) -> str | None:
