@@ -242,6 +242,7 @@ class Renderer(TargetForms):
             infos = self.texture_pages.image_infos()
             for pf in self.per_frame:
                 write_images(self.device, pf.descriptor_set, BINDING_TEXTURES, infos)
+                pf.set_version += 1  # the shadow views' copies of the set name the old pages
 
     def check_fill(self, fill: str) -> None:
         """Raise (UsageError) unless this device can draw meshes with `fill`."""
