@@ -131,6 +131,23 @@ def test_a_broken_edit_then_a_fixed_one_goes_in(game_file):
     assert (hot.failures, hot.reloads) == (1, 1)
 
 
+def test_a_reloaded_system_that_raises_brings_back_the_code_before(game_file):
+    raising = game_source(step=10).replace(
+        "    for batch in world.query(Counter):\n        batch[Counter].value += 10",
+        "    raise ZeroDivisionError('new code, bad code')",
+    )
+    assert "raise ZeroDivisionError" in raising
+    line = raising.splitlines().index("    raise ZeroDivisionError('new code, bad code')") + 1
+    seen, hot, said = run_with_edits(game_file, {2: raising}, frames=6)
+    assert [values[0] for _, values in seen] == [1, 2, 2, 3, 4]  # the frame it raised in, then the old step
+    assert (hot.reloads, hot.rolled_back) == (1, 1)
+    assert said[1] == (
+        f"hot reload: {game_file.name}:{line}: system step raised ZeroDivisionError: new code, bad code; "
+        "back to the code before the reload"
+    )
+    assert hot.app.system("step").fn.__module__ == game_file.stem  # the old function, not a guard's
+
+
 def test_a_component_keeps_its_class_unless_its_fields_change(game_file):
     same_fields = game_source(step=5).replace(
         "    value = Field(np.int64, default=0)\n",

@@ -20,6 +20,9 @@ When the game's file changes (app/file_watch.py polls it at most every 0.25 s, b
 Any failure in 1-3 (a syntax error, an exception on import or in build, a component's fields
 changed) is one line on stderr naming the file and line, also shown in the editor, and nothing
 changes: the old systems keep running. `--debug` adds the traceback.
+
+The systems a reload puts in are Guarded: one that raises in a later frame is caught, and at the
+next frame boundary the systems before the reload come back, with one line saying which raised.
 """
 
 from __future__ import annotations
@@ -60,6 +63,32 @@ class Plan:
     new_startup: list[str] = field(default_factory=list)  # startup systems that will not run
 
 
+@dataclass
+class Undo:
+    """What brings back the code before a reload: its module and systems."""
+
+    module: ModuleType
+    replaced: list[tuple[str, System]]  # (name, the system before)
+    added: list[str]
+    removed: list[tuple[str, System]]  # (stage, the system)
+
+
+class Guarded(System):
+    """A system a reload put in: an exception from it is caught and brings back the code before
+    the reload at the next frame boundary (HotReload.between_frames)."""
+
+    def __init__(self, inner: System, failed: Callable[[Guarded, Exception], None]) -> None:
+        super().__init__(None, None, inner.name, inner.run_if)
+        self.reads, self.writes, self.exclusive = inner.reads, inner.writes, inner.exclusive
+        self.inner, self.failed = inner, failed
+
+    def run(self, world: Any, dt: float) -> None:
+        try:
+            self.inner.run(world, dt)
+        except Exception as exc:
+            self.failed(self, exc)
+
+
 class HotReload:
     """Watches the game module `module` that built `app` (shown as `shown` in messages) and
     reloads it between frames. `install()` hooks it into the App's run."""
@@ -89,6 +118,9 @@ class HotReload:
         self.assets = AssetReload(app.world, self.files)
         self.shaders = ShaderReload(self.files, shader_dir) if app.renders else None
         self.reloads = 0  # reloads that went in
+        self.rolled_back = 0  # reloads taken back: a new system raised
+        self._undo: Undo | None = None
+        self._raised: tuple[str, Exception] | None = None  # a Guarded system's, since the last frame boundary
         self.failures = 0  # reloads refused
         self.last_message = ""
 
@@ -97,6 +129,8 @@ class HotReload:
         return self
 
     def between_frames(self, session: Any, editor: Any) -> None:
+        if self._raised is not None:
+            self.report(self.roll_back(), editor)
         self.assets.follow()
         changed = self.files.changed()
         if self.path in changed:
@@ -128,12 +162,18 @@ class HotReload:
             if self.debug and exc.__cause__ is not None:
                 traceback.print_exception(exc.__cause__)
             return False, f"hot reload: {exc}; the old code keeps running"
+        self._undo = Undo(
+            self.module,
+            [(name, self.app.system(name)) for name, _ in plan.replace],
+            [made.name for _, made in plan.add],
+            [(self.app.systems()[name], self.app.system(name)) for name in plan.remove],
+        )
         for name in plan.remove:
             self.app.remove_system(name)
         for name, made in plan.replace:
-            self.app.replace_system(name, made)
+            self.app.replace_system(name, Guarded(made, self._failed))
         for stage, made in plan.add:
-            self.app.add_systems(stage, made)
+            self.app.add_systems(stage, Guarded(made, self._failed))
         self.module = plan.module
         sys.modules[self.module.__name__] = self.module
         self.reloads += 1
@@ -146,6 +186,29 @@ class HotReload:
             parts.append(f"startup systems do not run again ({', '.join(plan.new_startup)} is new: restart to run it)")
         took = (time.perf_counter() - start) * 1e3
         return True, f"hot reload: {self.shown}: {'; '.join(parts)} ({took:.0f} ms)"
+
+    def _failed(self, made: Guarded, exc: Exception) -> None:
+        if self._raised is None:  # the first one says why
+            self._raised = (made.name, exc)
+
+    def roll_back(self) -> tuple[bool, str]:
+        """The systems and module before the last reload, in place of those a reload put in
+        (one of which raised)."""
+        assert self._raised is not None and self._undo is not None
+        (name, exc), undo = self._raised, self._undo
+        self._raised = self._undo = None
+        for added in undo.added:
+            self.app.remove_system(added)
+        for replaced, old in undo.replaced:
+            self.app.replace_system(replaced, old)
+        for stage, old in undo.removed:
+            self.app.add_systems(stage, old)
+        self.module = undo.module
+        sys.modules[self.module.__name__] = self.module
+        self.rolled_back += 1
+        if self.debug:
+            traceback.print_exception(exc)
+        return False, f"hot reload: {self._where(exc, f'system {name} raised')}; back to the code before the reload"
 
     def plan(self) -> Plan:
         module = self._execute()
@@ -253,6 +316,8 @@ def _mapped(types: frozenset[type] | None, kept: dict[type, type]) -> frozenset[
 
 
 def _module_of(made: System) -> str | None:
+    if isinstance(made, Guarded):
+        made = made.inner
     fn = getattr(made, "fn", None)
     return getattr(fn, "__module__", None) if fn is not None else type(made).__module__
 
