@@ -44,6 +44,7 @@ from .window_resource import Window, check_size
 HEADLESS_FRAMES = COMMAND_HEADLESS_FRAMES["play"]  # a run without a window and without frames=
 
 Hook = Callable[[World, Any], None]  # (the App's world, the Session) when the run opens
+FrameHook = Callable[[Any, Any], None]  # (the Session, the editor or None) between two frames
 
 
 class App:
@@ -67,6 +68,7 @@ class App:
         self._plugins: dict[Any, str] = {}
         self._startup: list[System] = []
         self._open_hooks: list[Hook] = []
+        self._frame_hooks: list[FrameHook] = []
         self._where: dict[str, str] = {}  # system name -> its stage
         self._lists: dict[str, list[System]] = {}  # system name -> the list that runs it
         self._unnamed = 0  # lambdas numbered so far
@@ -203,6 +205,20 @@ class App:
             self._lists[made.name] = getattr(self.schedule.transitions, when)[state]
         return self
 
+    def remove_system(self, name: str) -> System:
+        """Take the system called `name` out of the App (a startup one too); it runs no more."""
+        if self._where.pop(name, None) is None:
+            raise UsageError(f"no system named {name!r}; the App has {', '.join(self._where) or 'none'}")
+        listed = self._lists.pop(name)
+        index = next(i for i, s in enumerate(listed) if s.name == name)
+        return listed.pop(index)
+
+    def system(self, name: str) -> System:
+        """The system called `name` (a startup one too)."""
+        if name not in self._where:
+            raise UsageError(f"no system named {name!r}; the App has {', '.join(self._where) or 'none'}")
+        return next(s for s in self._lists[name] if s.name == name)
+
     def systems(self) -> dict[str, str]:
         """Every system's name and its stage ("startup" for a startup system)."""
         return dict(self._where)
@@ -211,6 +227,13 @@ class App:
         """`hook(world, session)` when the run opens, before the startup systems: for plugins
         whose resources need the GPU or the window (session.gpu, session.source)."""
         self._open_hooks.append(hook)
+        return self
+
+    def on_frame_end(self, hook: FrameHook) -> App:
+        """`hook(session, editor)` between frames (the editor: None without one), where the
+        schedule may change and GPU resources may be replaced (hot_reload.py). With no hook
+        the run loop does nothing there."""
+        self._frame_hooks.append(hook)
         return self
 
     def add_ui(self, draw: Callable[[Any, World], Any]) -> App:
@@ -370,9 +393,16 @@ class App:
         if (self.ui or self.perf_overlay) and not options.editor and self.renders:
             ui = AppUI
         summary = None if self.summary is None else (lambda session: self.summary(session.world))  # type: ignore[misc]
-        result = loop.run(options, source, make_session=lambda o, s: AppSession(self, o, s), ui=ui, summary=summary)
+        between = self._between_frames if self._frame_hooks else None
+        result = loop.run(
+            options, source, make_session=lambda o, s: AppSession(self, o, s), ui=ui, summary=summary, between=between
+        )
         report_validation(result)
         return result
+
+    def _between_frames(self, session: Any, editor: Any) -> None:
+        for hook in self._frame_hooks:
+            hook(session, editor)
 
 
 def _slug(title: str) -> str:

@@ -243,7 +243,7 @@ def build_parser(
 ) -> argparse.ArgumentParser:
     """The command line; `game`: the game named on it, whose own options (add_arguments) join
     `play` and `editor`."""
-    from .play import add_game_arguments
+    from .play import WATCH_HELP, add_game_arguments
     from .play import add_parser as add_play_parser
     from .settings import HEADLESS_FRAMES
 
@@ -281,6 +281,7 @@ def build_parser(
         f"choices: {', '.join(EDITOR_SCENES)}, or a saved {SCENE_FILE_SUFFIX} file); or a game first "
         "(as `play` takes one: game.py, a folder, asteroids), its scenes after it",
     )
+    editor.add_argument("--watch", action="store_true", help=WATCH_HELP)
     if game is not None:
         add_game_arguments(editor, game)
     add_play_parser(sub, render_flags(HEADLESS_FRAMES["play"]), game)
@@ -320,6 +321,8 @@ def run(args: argparse.Namespace) -> int:
 
         return bench_main(list(args.bench_args), prog="ecs-engine bench")
     if args.command == "editor":
+        if args.watch:
+            raise UsageError("--watch reloads a game's code and assets: name a game first (editor game.py --watch)")
         scenes = tuple(dict.fromkeys(args.scenes or [DEFAULT_SCENE]))
         args.scene, args.path = scenes[0], None
         switcher = tuple(dict.fromkeys(scenes + SEED_SCENES))

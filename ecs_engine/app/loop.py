@@ -38,12 +38,14 @@ def run(
     make_session: Callable[[RunOptions, FrameSource], Session] = Session,
     ui: Callable[[Session, Any], ImGuiSession] | None = None,
     summary: Callable[[Session], str] | None = None,
+    between: Callable[[Session, ImGuiSession | None], None] | None = None,
 ) -> RunResult:
     """Open the source, run `options.frames` frames (a window: until it closes), close it.
     Headless by default; pass a window.WindowSource to draw in a window. `make_session` makes
     the session (a game's, play.py); `ui(session, window)` its ImGui (the editor's by default
     when options.editor is set); `summary(session)` the line said when the frames are done (a
     game's score), before the files are written, so a failed write or Ctrl-C does not lose it.
+    `between(session, editor)` runs between two frames (an App's on_frame_end: hot reload).
 
     Stopped from outside (Ctrl-C, stdout's reader gone), the run writes the perf log and the
     input recording of the frames it ran (no screenshot: the last frame was not read back),
@@ -73,7 +75,7 @@ def run(
         frames = 0
         stopped: BaseException | None = None
         try:
-            frames = run_frames(options, source, session, editor, script, recorder, result, say)
+            frames = run_frames(options, source, session, editor, script, recorder, result, say, between)
         except (KeyboardInterrupt, BrokenPipeError) as exc:
             stopped, frames = exc, len(result.cpu_ms)
         session.device.wait_idle()
@@ -112,6 +114,7 @@ def run_frames(
     recorder: InputRecorder | None,
     result: RunResult,
     say: Callable[[str], None],
+    between: Callable[[Session, ImGuiSession | None], None] | None = None,
 ) -> int:
     """The frames, until the source stops; how many ran."""
     perf, profiler = result.perf, result.profiler
@@ -185,6 +188,8 @@ def run_frames(
             say(perf.summary_line())
         if editor is not None and source.running(frames):
             apply_requests(session, editor)
+        if between is not None and source.running(frames):
+            between(session, editor)
     return frames
 
 

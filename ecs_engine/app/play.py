@@ -16,6 +16,8 @@ from .game_module import KNOWN_GAMES, Game, make_app
 from .plugins import EditorPlugin
 from .settings import RunOptions
 
+WATCH_HELP = "reload the game's systems, textures and meshes, and the engine's shaders, as their files change"
+
 
 def add_parser(sub: Any, common: argparse.ArgumentParser, game: Game | None) -> argparse.ArgumentParser:
     play = sub.add_parser(
@@ -28,6 +30,7 @@ def add_parser(sub: Any, common: argparse.ArgumentParser, game: Game | None) -> 
         help=f"a known game ({', '.join(KNOWN_GAMES)}), a file or folder (ecs-engine new NAME writes one), "
         "or a module name; anything with build(app)",
     )
+    play.add_argument("--watch", action="store_true", help=WATCH_HELP)
     add_game_arguments(play, game)
     return play
 
@@ -46,11 +49,14 @@ def run_game(
 ) -> int:
     """Build `game` into an App with `args` as its options, and run it (the flags checked by the
     caller: cli.check_flags_apply)."""
+    from .hot_reload import HotReload
     from .scenes import SEED_SCENES
 
     app = make_app(game, args)
     if editor and not app.has_plugin(EditorPlugin):
         app.add_plugins(EditorPlugin)
+    if args.watch:
+        HotReload(app, game.module, game.where, debug=args.debug).install()
     width, height = app.size
     switcher = tuple(dict.fromkeys((app.name, *scenes, *SEED_SCENES))) if editor else (app.name,)
     flags = replace_none(args, width=width, height=height)

@@ -113,13 +113,16 @@ class NativeRecorder:
         self._cb_ints: dict[Any, int] = {}  # secondary -> handle_int (the pools reuse them every frame)
         self._meshes_seen = -1
 
-    def set_meshes(self, vertex_handles: list[Any], index_handles: list[Any], index_counts: list[int]) -> None:
+    def set_meshes(
+        self, vertex_handles: list[Any], index_handles: list[Any], index_counts: list[int], version: int
+    ) -> None:
+        """The meshes' buffers, as the registry's `version` has them."""
         vk = self.vk
         self._vertex = np.array([handle_int(vk, h) for h in vertex_handles], dtype=np.int64)
         self._index = np.array([handle_int(vk, h) for h in index_handles], dtype=np.int64)
         self._counts = np.array(index_counts, dtype=np.int64)
         self._vertex_addr = self._vertex.ctypes.data
-        self._meshes_seen = len(vertex_handles)
+        self._meshes_seen = version
 
     @property
     def meshes_known(self) -> int:

@@ -206,10 +206,13 @@ class NativeRecorder:
     def frame_state(self, frame: FrameInputs) -> dict[str, Any]:
         """Made once per target and slot (and after meshes were added)."""
         compiled, meshes = self.compiled, self.path.ctx.meshes
-        if compiled.meshes_known != len(meshes):
+        if compiled.meshes_known != meshes.version:  # added or replaced (hot reload)
             gpu = [meshes[h] for h in range(len(meshes))]
             compiled.set_meshes(
-                [m.vertices.handle for m in gpu], [m.indices.handle for m in gpu], [m.index_count for m in gpu]
+                [m.vertices.handle for m in gpu],
+                [m.indices.handle for m in gpu],
+                [m.index_count for m in gpu],
+                meshes.version,
             )
         key = (self, frame.slot)  # this recorder (not its id: a later one may get the same id)
         state = frame.target.path_state.get(key)

@@ -19,7 +19,7 @@ What a recording depends on goes into the key; anything else makes the frame rec
   destroyed (a resized pool);
 - the path object (a switched mode or recorder, or pipelines made again, is a new path), the
   target's state object (both held and compared by identity: an id could be a freed object's),
-  its generation and swapchain remakes, the number of meshes;
+  its generation and swapchain remakes, the mesh registry's version (meshes added or replaced);
 - the counts and settings the primary records: billboards, light size, tone map and exposure,
   material features, the sky, the read-back, the clustered lights' grid, whether the shadow maps
   were cleared once.
@@ -129,7 +129,7 @@ def replay_key(renderer: Any, target: Any, positional: int, grid: Any, light_cou
         Same(target),
         form.generation,
         getattr(form, "recreations", 0),
-        len(renderer.meshes),
+        renderer.meshes.version,  # meshes added or replaced: their buffers
         positional,
         output.light_pass.size,
         renderer.tone_map,

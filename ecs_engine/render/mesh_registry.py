@@ -89,6 +89,7 @@ class MeshRegistry:
         self._merged_for = (0, 0)  # (meshes, levels built) the merged buffers hold
         self._bottom: list[Structure] = []  # per handle, its bottom-level acceleration structure
         self._bottom_addresses = np.zeros(0, dtype=np.uint64)
+        self.version = 0  # counts meshes added and replaced: what caches of buffer handles are keyed on
 
     def add(self, mesh: MeshData) -> int:
         """Upload `mesh` once: the same MeshData, or an equal one (the same vertices and indices,
@@ -109,7 +110,36 @@ class MeshRegistry:
         self._lods.append(None)
         self._digests.append(digest)
         self._by_data[key] = self._by_content[digest] = handle
+        self.version += 1
         return handle
+
+    def replace(self, handle: int, mesh: MeshData) -> None:
+        """`mesh` uploaded under `handle` in place of the one there (hot reload), after the GPU is
+        idle; its levels of detail, the merged buffers, the bounds and the bottom levels are
+        made again as they are needed."""
+        vk = self.device.vk
+        self.device.wait_idle()  # frames in flight may draw from the buffers destroyed here
+        old = self._meshes[handle]
+        ray = ray_input_usage(self.device)
+        vertices = upload(self.device, _interleaved(mesh), vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | ray)
+        indices = upload(self.device, mesh.indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT | ray)
+        old.vertices.destroy()
+        old.indices.destroy()
+        for key in [k for k, h in self._by_data.items() if h == handle]:
+            del self._by_data[key]
+        if self._by_content.get(self._digests[handle]) == handle:
+            del self._by_content[self._digests[handle]]
+        digest = _digest(mesh)
+        self._meshes[handle] = GpuMesh(mesh, vertices, indices, len(mesh.indices))
+        self._lods[handle] = None
+        self._digests[handle] = digest
+        self._by_data[id(mesh)] = handle
+        self._by_content.setdefault(digest, handle)
+        self._bounds, self._merged_for = None, (-1, -1)
+        for structure in self._bottom:
+            structure.destroy()
+        self._bottom.clear()
+        self.version += 1
 
     def __getitem__(self, handle: int) -> GpuMesh:
         return self._meshes[handle]

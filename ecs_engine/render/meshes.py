@@ -16,6 +16,7 @@ a mesh by how it was made (a primitive's arguments, a file's path) where they ca
 from __future__ import annotations
 
 import os
+from pathlib import Path
 from typing import Any
 
 from .mesh_data import MeshData
@@ -40,6 +41,9 @@ class MeshList:
     def __len__(self) -> int:
         return len(self._meshes)
 
+    def replace(self, handle: int, mesh: MeshData) -> None:
+        self._meshes[handle] = mesh
+
 
 def _same(a: MeshData, b: MeshData) -> bool:
     import numpy as np
@@ -58,6 +62,7 @@ class Meshes:
 
     def __init__(self, registry: Any = None) -> None:
         self.registry = MeshList() if registry is None else registry
+        self.files: dict[int, Path] = {}  # handle -> the model file `load` read it from (hot reload watches them)
 
     def add(self, mesh: MeshData) -> int:
         if not isinstance(mesh, MeshData):
@@ -70,7 +75,18 @@ class Meshes:
         render.model_loading.load_model(path, materials(world)) and `add` each part's mesh."""
         from .mesh_loading import load_mesh
 
-        return self.add(load_mesh(path))
+        handle = self.add(load_mesh(path))
+        self.files.setdefault(handle, Path(path).resolve())
+        return handle
+
+    def replace(self, handle: int, mesh: MeshData) -> None:
+        """`mesh` under `handle`, where another was (hot reload: its file changed): entities
+        drawing `handle` draw the new one from the next frame."""
+        if not isinstance(mesh, MeshData):
+            raise TypeError(f"Meshes.replace takes a MeshData, not {mesh!r:.80}")
+        if not 0 <= handle < len(self.registry):
+            raise KeyError(f"no mesh {handle!r}; there are {len(self.registry)}")
+        self.registry.replace(handle, mesh)
 
     def __getitem__(self, handle: int) -> MeshData:
         entry = self.registry[handle]

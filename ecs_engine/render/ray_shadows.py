@@ -135,7 +135,7 @@ class _Slot:
         self.rows: Buffer | None = None
         self.pairs = Buffer(device, 8, storage, UPLOAD)  # uvec2 per instance (written with cutouts)
         self.meshes = Buffer(device, 16, storage, UPLOAD)  # uvec4 per mesh handle
-        self.mesh_count = -1  # the meshes the addresses were written for
+        self.mesh_version = -1  # the registry's version the addresses were written for
         self.set = pool.allocate(layout)
         self.named: tuple[Any, ...] = ()
 
@@ -144,14 +144,14 @@ class _Slot:
         return self.pairs.array(np.uint32, (max(count, 1), 2))
 
     def mesh_buffers(self, meshes: Any) -> None:
-        """Every mesh's vertex and index buffer addresses (again when meshes were added)."""
-        if self.mesh_count == len(meshes):
+        """Every mesh's vertex and index buffer addresses (again when meshes were added or replaced)."""
+        if self.mesh_version == meshes.version:
             return
         self.meshes = self.meshes.grown(max(len(meshes), 1) * 16)
         table = self.meshes.array(np.uint64, (max(len(meshes), 1), 2))
         for handle in range(len(meshes)):
             table[handle] = (meshes[handle].vertices.address, meshes[handle].indices.address)
-        self.mesh_count = len(meshes)
+        self.mesh_version = meshes.version
 
     def rows_for(self, device: Any, count: int) -> np.ndarray:
         """The slot's instance rows, room for `count` (its fence was waited for: safe to grow)."""

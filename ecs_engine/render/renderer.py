@@ -242,6 +242,7 @@ class Renderer(TargetForms):
             infos = self.texture_pages.image_infos()
             for pf in self.per_frame:
                 write_images(self.device, pf.descriptor_set, BINDING_TEXTURES, infos)
+                pf.set_version += 1  # the shadow views' copies of the set name the old pages
 
     def check_fill(self, fill: str) -> None:
         """Raise (UsageError) unless this device can draw meshes with `fill`."""
@@ -259,6 +260,11 @@ class Renderer(TargetForms):
             old = self.fill
             self.fill = fill
             self._respecialise(lambda: setattr(self, "fill", old))
+
+    def rebuild_pipelines(self) -> None:
+        """The path's pipelines made again from the shader files (hot reload: a shader changed);
+        if they cannot be made, the old path stays and the error is raised."""
+        self._respecialise(lambda: None)
 
     def _check_features(self, features: int) -> None:
         """Rebuild the path's pipelines when the world's materials or lights need a shading model,

@@ -9,8 +9,9 @@ indexing, which lavapipe, the CI's driver, lacks (Mesa 22: shaderSampledImageArr
 explicit gradients, legal everywhere; the layer is a coordinate. The price: each texture is resized
 to its class's square power of two.
 
-Textures only ever get added; a change uploads the classes that grew (after the GPU is idle: this
-happens when models load, not per frame).
+Textures get added, and replaced only by hot reload: an addition uploads the classes that grew,
+a replacement all of them (after the GPU is idle: this happens when models load or a file is
+edited, not per frame).
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ class TexturePages:
         self.pages: dict[int, ArrayImage] = {}
         self._chains: dict[int, list[np.ndarray]] = {}  # handle -> its mip chain (kept for re-uploads)
         self._layers: dict[int, list[int]] = {}  # class -> handles, by layer
-        self._source: tuple[Textures, int] | None = None  # (the registry, how many were uploaded)
+        self._source: tuple[Textures, int, int] | None = None  # (the registry, how many uploaded, its edits)
         self.refs = np.zeros(0, np.uint32)
         self.generation = 0  # counts uploads: descriptor sets and material rows written before are stale
         self.max_layers = int(device.limits.maxImageArrayLayers)
@@ -50,11 +51,11 @@ class TexturePages:
     def sync(self, textures: Textures) -> bool:
         """Upload what `textures` added since the last call (all of it for another registry);
         True when anything changed (the caller rewrites descriptors and material rows)."""
-        same = self._source is not None and self._source[0] is textures
+        same = self._source is not None and self._source[0] is textures and self._source[2] == textures.edits
         if same and self._source is not None and self._source[1] == len(textures):
             return False
         if not same and not len(textures) and not self.pages:
-            self._source = (textures, 0)  # nothing to upload, nothing bound to replace
+            self._source = (textures, 0, textures.edits)  # nothing to upload, nothing bound to replace
             return False
         self.device.wait_idle()  # frames in flight may sample the pages replaced below
         start = self._source[1] if same and self._source is not None else 0
@@ -84,7 +85,7 @@ class TexturePages:
             image = self.pages[cls] = ArrayImage(self.device, CLASS_SIZES[cls], len(handles))
             image.upload([self._chains[h] for h in handles])
         self.refs = refs
-        self._source = (textures, len(textures))
+        self._source = (textures, len(textures), textures.edits)
         self.generation += 1
         return True
 

@@ -101,13 +101,15 @@ def _fallback_pixels() -> np.ndarray:
 
 
 class Textures:
-    """Textures by handle. Handles are never reused; `version` counts additions."""
+    """Textures by handle. Handles are never reused; `version` counts additions, `edits`
+    replacements (hot reload: a file changed on disk)."""
 
     def __init__(self) -> None:
         self._textures: list[Texture] = []
         self._fallback: int | None = None
         self._by_file: dict[tuple[str, bool], int] = {}
         self.version = 0
+        self.edits = 0
 
     def add(self, texture: Texture) -> int:
         if not isinstance(texture, Texture):
@@ -143,6 +145,15 @@ class Textures:
             handle = self.add(Texture(file.name, pixels, color, str(file.resolve())))
         self._by_file[key] = handle
         return handle
+
+    def replace(self, handle: int, texture: Texture) -> None:
+        """`texture` under `handle`, where another was: materials naming it draw the new one
+        from the next frame (the GPU copy is made again)."""
+        if not isinstance(texture, Texture):
+            raise TypeError(f"Textures.replace takes a Texture, got {type(texture).__name__}")
+        self[handle]  # a handle that exists
+        self._textures[int(handle)] = texture
+        self.edits += 1
 
     def __getitem__(self, handle: int) -> Texture:
         if not isinstance(handle, (int, np.integer)) or not 0 <= handle < len(self._textures):
