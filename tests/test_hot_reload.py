@@ -553,3 +553,58 @@ def test_an_edited_shader_is_compiled_and_drawn_with_and_a_broken_one_kept(tmp_p
     assert hot.shaders is not None and hot.shaders.reloaded == 1
     pixels = np.asarray(Image.open(shot).convert("RGB")).astype(int)[8:24, 8:24]
     assert (pixels[..., 1] > 150).all() and (pixels[..., 0] < 60).all()  # green, drawn by the new shader
+
+
+STATE_GAME = """
+from enum import Enum
+import numpy as np
+from ecs_engine import Component, Field, MinimalPlugins, in_state, request_state, system, NextState
+
+
+class Mode(Enum):
+    MENU = 1
+    PLAYING = 2
+
+
+class Counter(Component):
+    value = Field(np.int64, default=0)
+
+
+def setup(world, dt):
+    world.spawn_batch(3, Counter())
+
+
+@system(writes=[NextState[Mode]])
+def start(world, dt):
+    request_state(world, Mode.PLAYING)
+
+
+def step(world, dt):
+    for batch in world.query(Counter):
+        batch[Counter].value += STEP
+
+
+def build(app):
+    app.add_plugins(MinimalPlugins)
+    app.init_state(Mode.MENU)
+    app.add_startup_systems(setup)
+    app.add_systems("update", start, run_if=in_state(Mode.MENU))
+    app.add_systems("update", step, run_if=in_state(Mode.PLAYING))
+"""
+
+
+def test_a_game_with_states_reloads_and_its_run_conditions_still_see_the_state(game_file):
+    """The state's Enum class keeps its old class as components do: the new systems' run
+    conditions ask about the state the world holds, not a new Enum of the same name."""
+    game_file.write_text(STATE_GAME.replace("STEP", "1"))
+    seen, hot, said = run_with_edits(game_file, {3: STATE_GAME.replace("STEP", "10")})
+    assert hot.failures == 0, said
+    assert [values[0] for _, values in seen] == [0, 1, 2, 12, 22]  # frame 1 starts, frame 2 on: steps
+
+
+def test_a_state_whose_values_changed_is_refused_and_the_old_code_runs(game_file):
+    game_file.write_text(STATE_GAME.replace("STEP", "1"))
+    edit = STATE_GAME.replace("STEP", "10").replace("    PLAYING = 2\n", "    PLAYING = 2\n    PAUSED = 3\n")
+    seen, hot, said = run_with_edits(game_file, {3: edit})
+    assert hot.failures == 1 and [values[0] for _, values in seen] == [0, 1, 2, 3, 4]
+    assert "state Mode's fields changed (MENU=1, PLAYING=2 -> MENU=1, PLAYING=2, PAUSED=3)" in said[0]

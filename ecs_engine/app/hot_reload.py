@@ -7,7 +7,8 @@ When the game's file changes (app/file_watch.py polls it at most every 0.25 s, b
 1. its source is compiled and run into a fresh module object (not from a bytecode cache: an
    edit in the same second with the same size must not be missed);
 2. classes the world holds state in keep their old class: a Component class (the world's
-   columns are the old class's) and a class that keys a world resource. The new module's name
+   columns are the old class's), a class that keys a world resource and a state's Enum (the
+   State resource holds its members). The new module's name
    is bound to the old class, so its systems find the world's data. If such a class's fields
    changed, the reload is refused: the columns cannot change shape under running entities;
 3. the new module's build(app) runs against a fresh App that never runs (a recording stand-in:
@@ -33,6 +34,7 @@ import time
 import traceback
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields, is_dataclass
+from enum import Enum
 from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
@@ -284,6 +286,8 @@ class HotReload:
                 kind = "component"
             elif any(key is old for key in resources):
                 kind = "resource"
+            elif issubclass(old, Enum) and any(getattr(key, "kind", None) is old for key in resources):
+                kind = "state"  # State[Kind] holds the old class's members: in_state must ask with them
             else:
                 continue  # a class the world holds nothing of: the new one is used
             was, now = _layout(old), _layout(new)
@@ -328,4 +332,6 @@ def _layout(cls: type) -> list[str]:
         return [f"{n}: {f.dtype}{list(f.shape) if f.shape else ''}" for n, f in cls.__fields__.items()]
     if is_dataclass(cls):
         return [f.name for f in fields(cls)]
+    if issubclass(cls, Enum):
+        return [f"{m.name}={m.value!r}" for m in cls]
     return []
