@@ -26,10 +26,11 @@ ROOT = Path(__file__).resolve().parent.parent
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 HISTORY = ROOT / "docs" / "history.md"  # the one page that may tell how the engine got here
 # pages whose blocks a test of their own runs in order, with checks of what they built: not run twice
+TESTS = Path(__file__).resolve().parent  # (not always ROOT / "tests": the GPU host runs a copy)
 OWN_TESTS = {
-    ROOT / "docs" / "app.md": ROOT / "tests" / "test_docs_app.py",
-    ROOT / "docs" / "game-structure.md": ROOT / "tests" / "test_game_structure_doc.py",
-    ROOT / "docs" / "tutorial.md": ROOT / "tests" / "test_tutorial.py",
+    ROOT / "docs" / "app.md": TESTS / "test_docs_app.py",
+    ROOT / "docs" / "game-structure.md": TESTS / "test_game_structure_doc.py",
+    ROOT / "docs" / "tutorial.md": TESTS / "test_tutorial.py",
 }
 FENCE = re.compile(r"^(?P<indent> *)```(?P<lang>[\w-]*)\n(?P<code>.*?)^(?P=indent)```$", re.S | re.M)
 NOT_RUN = re.compile(r"<!-- not run: (?P<why>[^>]+?) -->\s*$")

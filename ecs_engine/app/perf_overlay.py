@@ -105,7 +105,7 @@ class PerfOverlay:
         """One list: means per frame over the window, slowest first."""
         imgui = self.imgui
         if not rows:
-            imgui.text_disabled(f"{what}: no timed frame in the window yet")
+            imgui.text_disabled(f"{what}: none timed yet")  # short: the narrow layout
             return
         if imgui.begin_table(what, len(titles), imgui.TableFlags_.borders_inner_h.value):
             for title in titles:
