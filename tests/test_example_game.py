@@ -35,10 +35,11 @@ def play(capsys, *argv: str) -> tuple[int, str, str]:
 
 
 def ending(out: str) -> dict[str, str]:
-    """The game's summary line: `dodge: STATE path A>B score S lives L rocks R world HASH`."""
-    found = re.findall(r"^dodge: ([A-Z_]+) path (\S+) score (\d+) lives (\d+) rocks (\d+) world (\w+)$", out, re.M)
+    """The game's summary line: `dodge: STATE path A>B score S lives L rocks R x X world HASH`."""
+    line = r"^dodge: ([A-Z_]+) path (\S+) score (\d+) lives (\d+) rocks (\d+) x (-?[\d.]+) world (\w+)$"
+    found = re.findall(line, out, re.M)
     assert len(found) == 1, out
-    return dict(zip(("state", "path", "score", "lives", "rocks", "world"), found[0], strict=True))
+    return dict(zip(("state", "path", "score", "lives", "rocks", "x", "world"), found[0], strict=True))
 
 
 def colours(path: Path) -> dict[str, int]:
@@ -93,6 +94,24 @@ def test_a_recorded_run_replays_to_the_same_world(tmp_path, capsys, monkeypatch)
     assert code == 0, err
     other = ending(out)
     assert other["state"] == "PLAYING" and other["world"] != first["world"]
+
+
+def test_a_gamepad_starts_steers_and_pauses(tmp_path, capsys, monkeypatch):
+    """The actions' gamepad bindings: A starts, the left stick steers (right: +x), Start pauses
+    and resumes; keys and stick reach the same place."""
+    monkeypatch.chdir(tmp_path)
+    pad = "3 down gamepad_a\n4 up gamepad_a\n10 axis gamepad_left_x 1.0\n30 axis gamepad_left_x 0\n"
+    pad += "35 down gamepad_start\n36 up gamepad_start\n50 down gamepad_start\n51 up gamepad_start\n"
+    (tmp_path / "pad.txt").write_text(pad)
+    (tmp_path / "keys.txt").write_text("3 down enter\n4 up enter\n10 down right\n30 up right\n")
+    argv = ["play", GAME, "--headless", *SMALL, "--frames", "60"]
+    code, out, err = play(capsys, *argv, "--input-script", "pad.txt")
+    assert code == 0, err
+    by_pad = ending(out)
+    assert by_pad["path"] == "MENU>PLAYING>PAUSED>PLAYING" and float(by_pad["x"]) > 3.0
+    code, out, err = play(capsys, *argv, "--input-script", "keys.txt")
+    assert code == 0, err
+    assert ending(out)["x"] == by_pad["x"]
 
 
 @pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs a display (make test runs under Xvfb)")

@@ -14,7 +14,8 @@ P (gamepad Start) pauses, R (gamepad Y) restarts, Esc quits.
     ecs-engine editor docs/examples/dodge.py
 
 A run prints one line at its end: the state it ended in, the path of states it went through,
-the score, the lives and a hash of the world (the same input script gives the same hash).
+the score, the lives, the rocks falling, where the player is and a hash of the world (the same
+input script gives the same hash).
 """
 
 from __future__ import annotations
@@ -284,7 +285,9 @@ def summary(world):
     state = current_state(world, Play).name
     path = ">".join(game.path)
     rocks = world.query(Rock).count()
-    return f"dodge: {state} path {path} score {game.score} lives {game.lives} rocks {rocks} world {world_hash(world)}"
+    x = float(world.query(Transform, with_=[Player]).column(Transform.position)[0, 0])
+    hashed = world_hash(world)
+    return f"dodge: {state} path {path} score {game.score} lives {game.lives} rocks {rocks} x {x:.2f} world {hashed}"
 
 
 def lives(text: str) -> int:
