@@ -114,6 +114,25 @@ def test_a_gamepad_starts_steers_and_pauses(tmp_path, capsys, monkeypatch):
     assert ending(out)["x"] == by_pad["x"]
 
 
+def test_restart_from_pause_begins_a_new_game(tmp_path, capsys, monkeypatch):
+    """R (gamepad Y) while paused: a one-shot new game (every rock dropped anew, the player back in
+    the middle), then playing; the same run without it keeps its rocks and place."""
+    monkeypatch.chdir(tmp_path)
+    keys = "3 down space\n4 up space\n6 down d\n20 up d\n25 down p\n26 up p\n"
+    (tmp_path / "kept.txt").write_text(keys)
+    (tmp_path / "again.txt").write_text(keys + "30 down gamepad_y\n31 up gamepad_y\n")
+    argv = ["play", GAME, "--headless", *SMALL, "--frames", "40"]
+    code, out, err = play(capsys, *argv, "--input-script", "kept.txt")
+    assert code == 0, err
+    kept = ending(out)
+    assert kept["path"] == "MENU>PLAYING>PAUSED" and float(kept["x"]) > 1.0
+    code, out, err = play(capsys, *argv, "--input-script", "again.txt")
+    assert code == 0, err
+    again = ending(out)
+    assert again["path"] == "MENU>PLAYING>PAUSED>PLAYING" and again["x"] == "0.00" and again["rocks"] == "12"
+    assert again["world"] != kept["world"]
+
+
 @pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs a display (make test runs under Xvfb)")
 def test_windowed_under_xvfb_the_script_drives_the_states(tmp_path, capsys, monkeypatch):
     """In a window the fixed step follows the wall clock, so only the key-driven states are
