@@ -60,6 +60,7 @@ def drawn(pixels: np.ndarray) -> float:
         (lambda app: app.add_plugins(int), "int is not a plugin"),
         (lambda app: app.insert_resource(Time), "insert_resource takes a value, such as Time()"),
         (lambda app: app.add_systems("update", print, print), "a system named 'print' is already in the App"),
+        (lambda app: app.add_systems("update", print, print), "its own name (system(name='print_2')(print))"),
         (lambda app: app.replace_system("nothing", print), "no system named 'nothing'"),
         (lambda app: app.add_ui("hud"), "add_ui takes a function"),
         (lambda app: setattr(app, "size", (0, 10)), "a window size is (width, height)"),

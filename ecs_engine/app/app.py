@@ -274,9 +274,11 @@ class App:
 
     def _claim(self, made: System, stage: str, listed: list[System]) -> None:
         if made.name in self._where:
+            other = f"system(name='{made.name}_2')({made.name})" if isinstance(made, FunctionSystem) else "name="
             raise UsageError(
                 f"a system named {made.name!r} is already in the App (stage {self._where[made.name]}); "
-                f"names are unique (give one name=, or replace_system({made.name!r}, ...))"
+                f"names are unique: add the second under its own name ({other}), "
+                f"or put new code in its place with replace_system({made.name!r}, ...)"
             )
         self._where[made.name], self._lists[made.name] = stage, listed
 
