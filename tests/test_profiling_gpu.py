@@ -58,7 +58,7 @@ def test_a_trace_has_frames_systems_worker_jobs_and_gpu_passes(tmp_path):
 
 def test_the_editors_perf_window_lists_systems_and_gpu_passes(tmp_path, monkeypatch):
     pytest.importorskip("imgui_bundle")
-    from ecs_engine.app import imgui_session
+    from ecs_engine.app import imgui_session, perf_overlay
 
     made = imgui_session.ImGuiSession.__init__
 
@@ -67,6 +67,7 @@ def test_the_editors_perf_window_lists_systems_and_gpu_passes(tmp_path, monkeypa
         self.min_interval_s = 0.0
 
     monkeypatch.setattr(imgui_session.ImGuiSession, "__init__", every_frame)
+    monkeypatch.setattr(perf_overlay, "REFRESH_S", 0.0)  # and the lists refreshed every frame too
     result = run(tiny(tmp_path, editor=True, frames=9, width=1024, height=720))
     assert result.validation_messages == []
     overlay = result.editor.overlay
