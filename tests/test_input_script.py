@@ -51,6 +51,12 @@ def test_a_script_parses_and_applies_by_frame(tmp_path):
         ('1 text "a" b\n', "line 1: text is one JSON string"),
         ("1 text\n", "line 1: text is one JSON string"),
         ('1 text "open\n', "line 1: text is one JSON string"),
+        ("1 dt 0\n", "line 1: a frame's dt is from 1e-06 to 10 seconds, not 0"),
+        ("1 dt -0.5\n", "a frame's dt is from 1e-06 to 10 seconds"),
+        ("1 dt 1e9\n", "a frame's dt is from 1e-06 to 10 seconds, not 1e9"),
+        ("1 dt nan\n", "SECONDS 'nan' is not a finite number"),
+        ("1 dt\n", "expected 'FRAME dt SECONDS'"),
+        ("1 dt 0.02\n1 dt 0.03\n", "line 2: frame 1 has a dt already"),
     ],
 )
 def test_a_bad_script_is_one_error_naming_the_line(tmp_path, text, message):
@@ -206,3 +212,86 @@ def test_the_input_state_checks_names_and_keeps_edges_for_one_frame():
     state.end_frame()
     assert not state.pressed_now("a") and not state.released_now("a")
     assert state.mouse == (15.0, 18.0) and state.mouse_delta == (0.0, 0.0) and state.scroll == (0.0, 0.0)
+
+
+def test_a_frame_steps_by_its_dt_line_else_by_the_fixed_step(tmp_path):
+    from ecs_engine.app.settings import FIXED_DT, MAX_DT, SIM_STEP
+
+    path = tmp_path / "steps.txt"
+    path.write_text("0 dt 0.0213\n2 down w\n2 dt 0.25\n")
+    script = read_script(path)
+    assert [script.step(k) for k in range(4)] == [
+        (0.0213, MAX_DT),
+        (FIXED_DT, MAX_DT),
+        (0.25, MAX_DT),
+        (FIXED_DT, MAX_DT),
+    ]
+    assert script.clock().step == SIM_STEP  # steps as a window does
+    (tmp_path / "keys.txt").write_text("2 down w\n")
+    keys = read_script(tmp_path / "keys.txt")  # no dt lines: steps as a headless run, in a window too
+    assert keys.step(0) == (FIXED_DT, FIXED_DT) and keys.clock().step == FIXED_DT
+    state = InputState()
+    script.apply(2, state)  # the dt line is no input
+    assert state.pressed == {"w"}
+    recorder = InputRecorder(tmp_path / "rec.txt")
+    recorder.frame(0, InputState(), FIXED_DT)  # a headless frame: nothing to say
+    recorder.frame(1, InputState(), 0.1 / 3)  # a window's: its step, exactly
+    assert recorder.lines[1:] == [f"1 dt {0.1 / 3!r}"] and read_script_lines(tmp_path, recorder).steps == {1: 0.1 / 3}
+
+
+def read_script_lines(tmp_path, recorder):
+    recorder.write()
+    return read_script(recorder.path)
+
+
+STEPPED_GAME = """
+from ecs_engine import App, DefaultPlugins
+from ecs_engine.components import Camera, Mesh, Transform, Velocity
+from ecs_engine.render.meshes import Meshes
+from ecs_engine.render.primitives import cube_mesh
+
+
+class Clock:
+    seconds = 0.0
+
+
+def setup(world, dt):
+    cube = world.resources[Meshes].add(cube_mesh())
+    world.spawn(Transform(), Mesh(handle=cube, material=0), Velocity(linear=(1.0, 0.0, 0.0)))
+    world.spawn(Transform(position=(0.0, 0.0, 4.0)), Camera())
+
+
+def count(world, dt):  # a per-frame stage: it sees each frame's step
+    world.resources[Clock].seconds += dt
+
+
+def build(app):
+    app.add_plugins(DefaultPlugins)
+    app.insert_resource(Clock())
+    app.add_startup_systems(setup)
+    app.add_systems("update", count)
+    app.set_summary(lambda world: f"x {float(world.query(Velocity).column(Transform.position)[0, 0])!r} "
+                    f"seconds {world.resources[Clock].seconds!r}")
+"""
+
+
+@pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs a display (make test runs under Xvfb)")
+def test_a_window_s_recording_replays_exactly_in_a_window_and_headless(tmp_path):
+    """A window's frames take what they take: its recording writes each frame's dt, and replaying
+    it steps the same, so the fixed stage (motion) and the per-frame stages end where they did."""
+    game = tmp_path / "stepped.py"
+    game.write_text(STEPPED_GAME)
+    base = [sys.executable, "-m", "ecs_engine", "play", str(game), "--width", "48", "--height", "32", "--frames", "12"]
+
+    def summary(*flags: str) -> str:
+        run = subprocess.run([*base, *flags], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+        assert run.returncode == 0, run.stderr
+        (line,) = [row for row in run.stdout.splitlines() if row.startswith("x ")]
+        return line
+
+    live = summary("--record-input", "rec.txt")
+    steps = read_script(tmp_path / "rec.txt").steps
+    assert len(steps) == 12 and len(set(steps.values())) > 1  # the wall clock's steps, one a frame
+    assert summary("--headless", "--input-script", "rec.txt") == live
+    assert summary("--input-script", "rec.txt") == live  # in a window again
+    assert summary("--headless") != live  # (the fixed step alone ends elsewhere)

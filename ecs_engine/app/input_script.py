@@ -14,6 +14,14 @@ arguments, `#` starting a comment:
     95 scroll 0 -1               # the wheel
     100 text "level 2.scene"     # text typed (one JSON string)
     130 up w
+    131 dt 0.0213                # the frame's step in seconds (a window's recording writes one a frame)
+
+A script sets how its run steps, in a window as headless, so that it plays the same in both. A
+script without `dt` lines steps as a headless run: 1/60 s a frame, one fixed step. A recording
+made in a window writes each frame's `dt` (its frames take what they take), and a script with
+`dt` lines steps as a window does: each frame its `dt` (1/60 s where a frame has none), fixed
+steps of 1/120 s, the per-frame stages' step at most 0.1 s; so a window's recording replays
+exactly, in a window or headless. A `dt` is from 1e-6 to 10 seconds.
 
 Names are the InputState resource's (ecs_engine.systems.input_state): GLFW's key names in lower
 case without KEY_ (`left_shift`, `f12`, `space`), `mouse_left`, `mouse_right`, `mouse_middle`,
@@ -41,9 +49,11 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..ecs.timestep import FixedTimestep
 from ..errors import UsageError
 from ..systems.input_state import InputState
 from ..user_files import INPUT_SCRIPT, UserFileError, read_user_file
+from .settings import FIXED_DT, MAX_DT, SIM_STEP
 
 # action -> the words after it
 ACTIONS = {
@@ -53,16 +63,32 @@ ACTIONS = {
     "move": ("X", "Y"),
     "scroll": ("DX", "DY"),
     "text": ("TEXT",),
+    "dt": ("SECONDS",),
 }
+MIN_DT, MAX_SCRIPT_DT = 1e-6, 10.0  # a script's frame step: bounded, so a file cannot ask for a million fixed steps
 
 
 @dataclass
 class InputScript:
     events: dict[int, list[tuple[str, ...]]] = field(default_factory=dict)  # frame -> (action, *arguments)
+    steps: dict[int, float] = field(default_factory=dict)  # frame -> its dt line's seconds
+
+    def step(self, frame: int) -> tuple[float, float]:
+        """(dt, the per-frame stages' bound) of `frame` in a run this script drives: its `dt`
+        line's (else 1/60 s), bounded as a window bounds it when the script has `dt` lines (a
+        window's recording), else as a headless run does."""
+        return self.steps.get(frame, FIXED_DT), (MAX_DT if self.steps else FIXED_DT)
+
+    def clock(self) -> FixedTimestep:
+        """The fixed-step clock of a run this script drives: a window's (1/120 s steps) for a
+        script with `dt` lines, a headless run's (one 1/60 s step a frame) for one without."""
+        return FixedTimestep(SIM_STEP if self.steps else FIXED_DT)
 
     def apply(self, frame: int, state: InputState) -> None:
         """This frame's events into the input state (held keys, axes, mouse and this frame's edges)."""
         for action, *args in self.events.get(frame, ()):
+            if action == "dt":
+                continue  # the loop asks step()
             if action == "down":
                 state.press(args[0])
             elif action == "up":
@@ -111,6 +137,8 @@ def _check_event(action: str, args: list[str]) -> None:
                 raise ValueError(f"{word} {value!r} is not a finite number")
             if word == "VALUE" and abs(number) > 1.0:
                 raise ValueError(f"an axis value is from -1 to 1, not {value}")
+            if word == "SECONDS" and not MIN_DT <= number <= MAX_SCRIPT_DT:
+                raise ValueError(f"a frame's dt is from {MIN_DT:g} to {MAX_SCRIPT_DT:g} seconds, not {value}")
 
 
 def read_script(path: str | os.PathLike[str]) -> InputScript:
@@ -151,7 +179,11 @@ def read_script(path: str | os.PathLike[str]) -> InputScript:
             _check_event(action, args)
         except ValueError as exc:
             raise UsageError(f"{where}: {exc}") from None
+        if action == "dt" and frame in script.steps:
+            raise UsageError(f"{where}: frame {frame} has a dt already")
         script.events.setdefault(frame, []).append((action, *args))
+        if action == "dt":
+            script.steps[frame] = float(args[0])
         last = frame
     return script
 
@@ -165,7 +197,9 @@ class InputRecorder:
         self.mouse = (0.0, 0.0)  # a new InputState's
         self.axes: dict[str, float] = {}
 
-    def frame(self, frame: int, state: InputState) -> None:
+    def frame(self, frame: int, state: InputState, dt: float = FIXED_DT) -> None:
+        if dt != FIXED_DT:  # a window's frame: its step, so that a replay steps the same
+            self.lines.append(f"{frame} dt {dt!r}")
         if state.mouse != self.mouse:
             self.mouse = state.mouse
             self.lines.append(f"{frame} move {state.mouse[0]!r} {state.mouse[1]!r}")

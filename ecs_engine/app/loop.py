@@ -1,5 +1,6 @@
 """The one run loop, for every frame source: headless (offscreen image, fixed dt) and windowed
-(swapchain, wall-clock dt) differ only in the source's open, begin, end and close.
+(swapchain, wall-clock dt) differ only in the source's open, begin, end and close. A run driven
+by an input script steps as the script says, whatever the source (app/input_script.py).
 
 One turn: the source gives a frame target (or None: minimised, nothing to draw), the schedule
 runs (fixed steps, then the per-frame stages), the editor builds its UI, the renderer records
@@ -54,6 +55,8 @@ def run(
     source = source or OffscreenSource()
     check_run_files(options)  # now, not after the whole run
     script = read_script(options.input_script) if options.input_script else None  # before a window opens
+    if script is not None:
+        source.clock = script.clock()  # a script steps the same in a window and headless (input_script.py)
     recorder = InputRecorder(options.record_input) if options.record_input else None
     result = RunResult()
     result.perf = PerfMonitor(log=options.perf_json or False)  # checks its path too
@@ -127,6 +130,9 @@ def run_frames(
         t0 = time.perf_counter()
         if profiler is not None:  # timed while the Perf window is drawn (or always: a trace, a perf log)
             profiler.begin_frame(session, getattr(getattr(editor, "overlay", None), "visible", False))
+        dt, max_dt = target.dt, source.max_frame_dt
+        if script is not None:  # a script's frames step as it says (input_script.py), in a window too
+            dt, max_dt = script.step(frames)
         if script is not None or recorder is not None or source.input is not None:
             keys = held_keys(session)  # a window's own InputState, or the script's headless
             if editor is not None:
@@ -139,9 +145,9 @@ def run_frames(
                 if editor is not None:  # the UI gets the script's clicks, keys and text too
                     editor.feed(script.events.get(frames, ()))
             if recorder is not None:
-                recorder.frame(frames, keys)
+                recorder.frame(frames, keys, dt)
         try:
-            session.schedule.run_frame(session.world, target.dt, source.clock, max_frame_dt=source.max_frame_dt)
+            session.schedule.run_frame(session.world, dt, source.clock, max_frame_dt=max_dt)
             held = session.world.resources.get(InputState)
             if held is not None:
                 if "escape" in held.just_pressed and not held.keyboard_captured_by_ui:
@@ -149,7 +155,7 @@ def run_frames(
                 held.end_frame()  # the systems saw this frame's presses and releases
             if editor is not None:
                 width, height = target.extent or (options.width, options.height)
-                editor.build(session.world, result.last_stats, perf, target.dt, width, height)
+                editor.build(session.world, result.last_stats, perf, dt, width, height)
             stats = session.renderer.render(
                 session.world,
                 readback=target.readback,
@@ -157,7 +163,7 @@ def run_frames(
                 extent=target.extent,
                 wait=target.wait,
                 signal=target.signal,
-                dt=target.dt,
+                dt=dt,
             )
         except Exception as exc:  # a scene opened moments ago may fail in any way: not the run's end
             failed = session.roll_back()  # the scene before it, if there is one to go back to
