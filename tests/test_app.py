@@ -320,3 +320,22 @@ def test_the_action_map_of_add_actions_reads_the_run_s_input(tmp_path, plugins, 
     script.write_text("1 down d\n2 down space\n3 up d\n")
     app.run(frames=5, headless=True, input_script=str(script))
     assert seen == [(0.0, False), (1.0, False), (1.0, True), (0.0, True), (0.0, True)]
+
+
+def test_a_game_s_hud_is_drawn_in_the_editor_too(capsys):
+    """`add_ui` windows float over the editor as over the game: the HUD's draw runs each UI build."""
+    from ecs_engine.app.plugins import EditorPlugin
+
+    app = cube_app(size=(480, 320))
+    app.add_plugins(EditorPlugin)
+    seen = []
+
+    def hud(imgui, world):
+        imgui.begin("HUD")
+        imgui.text(f"{len(world)} entities")
+        imgui.end()
+        seen.append(len(world))
+
+    app.add_ui(hud)
+    app.run(frames=3, headless=True)
+    assert seen and seen[-1] == 3  # the cube, the light, the camera

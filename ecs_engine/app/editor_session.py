@@ -35,6 +35,8 @@ class EditorSession(ImGuiSession):
         self.editor.show_shadow_maps(session.renderer, self.renderer)
         self.scene_renderer = session.renderer  # draws the scene for the dock's central node
         self.overlay = PerfOverlay()
+        app = getattr(session, "app", None)  # an App's game (AppSession): its HUD floats over the editor too
+        self.game_ui: list[Any] = list(app.ui) if app is not None else []
         session.on_world.append(lambda world: self.editor.forget_world())
 
     def draw(self, world: World, stats: Any, perf: PerfMonitor) -> None:
@@ -42,6 +44,8 @@ class EditorSession(ImGuiSession):
         size = self.imgui.get_io().display_size
         self.scene_renderer.region = self.editor.dock.region(size.x, size.y)
         self.overlay.draw(perf, self.cost_ms)
+        for draw in self.game_ui:
+            draw(self.imgui, world)
 
     def take_requests(self) -> Settings | None:
         """What the user changed in the editor since the last call, or None."""
