@@ -549,7 +549,7 @@ def test_an_edited_shader_is_compiled_and_drawn_with_and_a_broken_one_kept(tmp_p
     from PIL import Image
 
     assert said[0].startswith("hot reload: mesh.frag:2: error: ") and said[0].endswith("; the old shaders stay")
-    assert said[1:] == ["hot reload: mesh.frag: compiled, the mesh pipelines made again"]
+    assert said[1:] == ["hot reload: mesh.frag: compiled, the pipelines made again"]
     assert hot.shaders is not None and hot.shaders.reloaded == 1
     pixels = np.asarray(Image.open(shot).convert("RGB")).astype(int)[8:24, 8:24]
     assert (pixels[..., 1] > 150).all() and (pixels[..., 0] < 60).all()  # green, drawn by the new shader
@@ -608,3 +608,54 @@ def test_a_state_whose_values_changed_is_refused_and_the_old_code_runs(game_file
     seen, hot, said = run_with_edits(game_file, {3: edit})
     assert hot.failures == 1 and [values[0] for _, values in seen] == [0, 1, 2, 3, 4]
     assert "state Mode's fields changed (MENU=1, PLAYING=2 -> MENU=1, PLAYING=2, PAUSED=3)" in said[0]
+
+
+GREEN_TONE_MAP = """#version 450
+#extension GL_GOOGLE_include_directive : require
+#include "layouts.glsl"
+layout(input_attachment_index = 0, set = 0, binding = 0) uniform subpassInput hdr;
+layout(push_constant) uniform Push { ToneMapPush push; };
+layout(location = 0) out vec4 out_color;
+void main() {
+    out_color = vec4(0.0, 1.0, 0.0, 1.0);
+    if (push.exposure < -1e30 && subpassLoad(hdr).r > 1e30) out_color = vec4(1.0);  // never
+}
+"""
+
+
+@pytest.mark.skipif(shutil.which("glslc") is None, reason="no glslc")
+def test_an_edited_output_pass_shader_is_drawn_with_too(tmp_path, monkeypatch):
+    """The tone map (a pass made once, against the render pass) takes the edited shader too."""
+    import ecs_engine.gpu.pipeline as pipeline
+
+    shaders = tmp_path / "shaders"
+    shutil.copytree(pipeline.SHADER_DIR, shaders, ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(pipeline, "SHADER_DIR", shaders)
+    game_file = tmp_path / "hot_tone_map_game.py"
+    game_file.write_text(SHADER_GAME)
+    try:
+        game = find_game(str(game_file))
+        app = make_app(game)
+        app.size = (32, 32)
+        frames = [0]
+
+        def edit(session, editor):
+            frames[0] += 1
+            if frames[0] == 1:
+                write(shaders / "tonemap.frag", GREEN_TONE_MAP)
+
+        said: list[str] = []
+        app.on_frame_end(edit)
+        HotReload(
+            app, game.module, game_file.name, interval=0.0, shader_dir=shaders, say=said.append, warn=said.append
+        ).install()
+        shot = tmp_path / "shot.png"
+        result = app.run(frames=3, headless=True, screenshot=str(shot), tone_map="aces", validate=True)
+    finally:
+        sys.modules.pop("hot_tone_map_game", None)
+    from PIL import Image
+
+    assert said == ["hot reload: tonemap.frag: compiled, the pipelines made again"]
+    assert result.validation_messages == []
+    pixels = np.asarray(Image.open(shot).convert("RGB")).astype(int)
+    assert (pixels[..., 1] > 200).all() and (pixels[..., 0] < 30).all()  # every pixel: the new tone map's

@@ -4,8 +4,10 @@
 A changed stage source (`*.vert`, `*.frag`, `*.comp`) is compiled with glslc to its `.spv`, as
 scripts/compile_shaders.py does; a changed include (`*.glsl`) recompiles every stage source. Then
 the renderer's path is made again (Renderer.rebuild_pipelines: the frames in flight are waited
-for), which remakes the mesh, shadow and set-aside pipelines from the new SPIR-V. Passes whose
-pipelines are made once (sky, tone map, lighting, ImGui) take a new shader at the next start.
+for), which remakes the mesh, shadow and set-aside pipelines and the output passes' (lighting, sky,
+tone map) and the UI's from the new SPIR-V. The compute passes made once (light clusters,
+occlusion culling, the deferred lighting's compute path) and the ray tracing shaders take a new
+shader at the next start.
 A compile error keeps the old `.spv` and is one line naming the file and line. The manifest is
 not touched: run scripts/compile_shaders.py before committing shaders.
 """
@@ -64,7 +66,7 @@ class ShaderReload:
             text = " ".join(str(exc).split())
             return [(False, f"hot reload: {_names(mine)}: the pipelines cannot be made: {text}; the old ones stay")]
         self.reloaded += 1
-        return [(True, f"hot reload: {_names(mine)}: compiled, the mesh pipelines made again")]
+        return [(True, f"hot reload: {_names(mine)}: compiled, the pipelines made again")]
 
 
 def _compile(glslc: str, source: Path) -> str | None:
