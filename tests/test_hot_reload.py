@@ -515,27 +515,30 @@ void main() {
 """
 
 
-@pytest.mark.skipif(shutil.which("glslc") is None, reason="no glslc")
-def test_an_edited_shader_is_compiled_and_drawn_with_and_a_broken_one_kept(tmp_path, monkeypatch):
+def run_shader_edits(tmp_path, monkeypatch, name: str, edits: dict[int, tuple[str, str]], frames: int, **run_args):
+    """SHADER_GAME run `frames` frames at 32x32 over a copy of the engine's shaders; after frame k
+    (1-based) the shader file edits[k][0] is written with edits[k][1]. Returns the HotReload,
+    the lines it said, the RunResult and the last frame's pixels."""
+    from PIL import Image
+
     import ecs_engine.gpu.pipeline as pipeline
 
     shaders = tmp_path / "shaders"
     shutil.copytree(pipeline.SHADER_DIR, shaders, ignore=shutil.ignore_patterns("__pycache__"))
     monkeypatch.setattr(pipeline, "SHADER_DIR", shaders)
-    game_file = tmp_path / "hot_shader_game.py"
+    game_file = tmp_path / f"{name}.py"
     game_file.write_text(SHADER_GAME)
     try:
         game = find_game(str(game_file))
         app = make_app(game)
         app.size = (32, 32)
-        frames = [0]
+        done = [0]
 
         def edit(session, editor):
-            frames[0] += 1
-            if frames[0] == 1:
-                write(shaders / "mesh.frag", "#version 450\nvoid main() { nope }\n")
-            if frames[0] == 2:
-                write(shaders / "mesh.frag", GREEN_FRAG)
+            done[0] += 1
+            if done[0] in edits:
+                file, text = edits[done[0]]
+                write(shaders / file, text)
 
         said: list[str] = []
         app.on_frame_end(edit)
@@ -543,15 +546,22 @@ def test_an_edited_shader_is_compiled_and_drawn_with_and_a_broken_one_kept(tmp_p
             app, game.module, game_file.name, interval=0.0, shader_dir=shaders, say=said.append, warn=said.append
         ).install()
         shot = tmp_path / "shot.png"
-        app.run(frames=4, headless=True, screenshot=str(shot))
+        result = app.run(frames=frames, headless=True, screenshot=str(shot), **run_args)
     finally:
-        sys.modules.pop("hot_shader_game", None)
-    from PIL import Image
+        sys.modules.pop(name, None)
+    return hot, said, result, np.asarray(Image.open(shot).convert("RGB")).astype(int)
 
+
+@pytest.mark.skipif(shutil.which("glslc") is None, reason="no glslc")
+def test_an_edited_shader_is_compiled_and_drawn_with_and_a_broken_one_kept(tmp_path, monkeypatch):
+    broken = ("mesh.frag", "#version 450\nvoid main() { nope }\n")
+    hot, said, _, pixels = run_shader_edits(
+        tmp_path, monkeypatch, "hot_shader_game", {1: broken, 2: ("mesh.frag", GREEN_FRAG)}, 4
+    )
     assert said[0].startswith("hot reload: mesh.frag:2: error: ") and said[0].endswith("; the old shaders stay")
     assert said[1:] == ["hot reload: mesh.frag: compiled, the pipelines made again"]
     assert hot.shaders is not None and hot.shaders.reloaded == 1
-    pixels = np.asarray(Image.open(shot).convert("RGB")).astype(int)[8:24, 8:24]
+    pixels = pixels[8:24, 8:24]
     assert (pixels[..., 1] > 150).all() and (pixels[..., 0] < 60).all()  # green, drawn by the new shader
 
 
@@ -626,36 +636,15 @@ void main() {
 @pytest.mark.skipif(shutil.which("glslc") is None, reason="no glslc")
 def test_an_edited_output_pass_shader_is_drawn_with_too(tmp_path, monkeypatch):
     """The tone map (a pass made once, against the render pass) takes the edited shader too."""
-    import ecs_engine.gpu.pipeline as pipeline
-
-    shaders = tmp_path / "shaders"
-    shutil.copytree(pipeline.SHADER_DIR, shaders, ignore=shutil.ignore_patterns("__pycache__"))
-    monkeypatch.setattr(pipeline, "SHADER_DIR", shaders)
-    game_file = tmp_path / "hot_tone_map_game.py"
-    game_file.write_text(SHADER_GAME)
-    try:
-        game = find_game(str(game_file))
-        app = make_app(game)
-        app.size = (32, 32)
-        frames = [0]
-
-        def edit(session, editor):
-            frames[0] += 1
-            if frames[0] == 1:
-                write(shaders / "tonemap.frag", GREEN_TONE_MAP)
-
-        said: list[str] = []
-        app.on_frame_end(edit)
-        HotReload(
-            app, game.module, game_file.name, interval=0.0, shader_dir=shaders, say=said.append, warn=said.append
-        ).install()
-        shot = tmp_path / "shot.png"
-        result = app.run(frames=3, headless=True, screenshot=str(shot), tone_map="aces", validate=True)
-    finally:
-        sys.modules.pop("hot_tone_map_game", None)
-    from PIL import Image
-
+    _, said, result, pixels = run_shader_edits(
+        tmp_path,
+        monkeypatch,
+        "hot_tone_map_game",
+        {1: ("tonemap.frag", GREEN_TONE_MAP)},
+        3,
+        tone_map="aces",
+        validate=True,
+    )
     assert said == ["hot reload: tonemap.frag: compiled, the pipelines made again"]
     assert result.validation_messages == []
-    pixels = np.asarray(Image.open(shot).convert("RGB")).astype(int)
     assert (pixels[..., 1] > 200).all() and (pixels[..., 0] < 30).all()  # every pixel: the new tone map's

@@ -262,15 +262,9 @@ class Renderer(TargetForms):
             self._respecialise(lambda: setattr(self, "fill", old))
 
     def rebuild_pipelines(self) -> None:
-        """The pipelines made again from the shader files (hot reload: a shader changed): the
-        path's (mesh, shadow, set-aside), then the output passes' (lighting, sky, tone map) and
-        the UI overlay's, as a new render pass would have them. If the path's cannot be made, the
-        old path stays and the error is raised."""
-        self._respecialise(lambda: None)
-        self.device.wait_idle()  # the output passes' frames in flight
-        self.output.retarget()
-        if self.overlay is not None:
-            self.overlay.retarget(self.target.render_pass, self.target.output_subpass)
+        """Pipelines made again from the shader files (hot reload): what a new render pass remakes,
+        the path's (the old stays if they cannot be made), the output passes' and the UI's."""
+        self._follow_target()
 
     def _check_features(self, features: int) -> None:
         """Rebuild the path's pipelines when the world's materials or lights need a shading model,
