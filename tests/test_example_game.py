@@ -12,8 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from PIL import Image
-
-from ecs_engine.app import cli
+from test_play_file import main as play  # the CLI in this process: (status, stdout, stderr)
 
 GAME = str(Path(__file__).resolve().parent.parent / "docs" / "examples" / "dodge.py")
 SMALL = ("--width", "160", "--height", "90", "--threads", "1")
@@ -22,16 +21,6 @@ SMALL = ("--width", "160", "--height", "90", "--threads", "1")
 # in the middle, is hit by a rock after about 90 frames of play: game over comes by frame 140.
 START_PAUSE_RESUME = "5 down space\n6 up space\n30 down p\n31 up p\n45 down p\n46 up p\n"
 RESTART = "150 down r\n151 up r\n"
-
-
-def play(capsys, *argv: str) -> tuple[int, str, str]:
-    """The CLI in this process: its exit status (argparse's SystemExit too), stdout, stderr."""
-    try:
-        code = cli.main(list(argv))
-    except SystemExit as exit_:
-        code = int(exit_.code or 0)
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def ending(out: str) -> dict[str, str]:
