@@ -16,7 +16,7 @@ import json
 import os
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..errors import UsageError
 from .scenes import is_scene_file
@@ -136,6 +136,24 @@ def probe_write(target: Path, label: str, what: str) -> None:
         probe.unlink()
     except OSError as exc:
         raise UsageError(f"{label}: cannot write {what} there: {exc.strerror or exc}") from None
+
+
+def write_json_file(target: Path, document: Any, label: str, what: str) -> None:
+    """`document` as JSON, written to a temporary file beside `target` and renamed over it (a
+    reader or a crash never sees half a file); an OSError is one line starting with `label`."""
+    tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+    try:
+        with open(tmp, "w", encoding="utf-8") as f:
+            json.dump(document, f, allow_nan=False)
+        os.replace(tmp, target)
+    except BaseException as exc:
+        try:
+            tmp.unlink()
+        except OSError:
+            pass
+        if isinstance(exc, OSError):
+            raise UsageError(f"{label}: cannot write {what}: {exc.strerror or exc}") from None
+        raise
 
 
 def _is(is_kind: Callable[[Path], bool], target: Path) -> bool:

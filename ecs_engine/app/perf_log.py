@@ -11,7 +11,6 @@ a system whose run condition skipped it, a pass the frame did not need).
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from pathlib import Path
@@ -20,7 +19,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 
 from ..errors import UsageError
-from .output_files import probe_write
+from .output_files import probe_write, write_json_file
 
 if TYPE_CHECKING:
     from .perf_breakdown import Timings
@@ -89,13 +88,6 @@ def frame_rate(frame_ms: np.ndarray) -> float:
     intervals = frame_ms[~np.isnan(frame_ms)]
     total = float(intervals.sum())
     return intervals.size * 1e3 / total if intervals.size and total > 0 else _NAN
-
-
-def _remove(path: Path) -> None:
-    try:
-        path.unlink()
-    except OSError:
-        pass
 
 
 def json_number(x: float) -> float | None:
@@ -256,14 +248,4 @@ class PerfLog:
         """Write to a temporary file in the same folder, then rename over the target: a reader
         (or a crash) never sees half a file."""
         target = Path(path)
-        document = self.to_dict(meta, cores, warmup)
-        tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
-        try:
-            with open(tmp, "w") as f:
-                json.dump(document, f, allow_nan=False)
-            os.replace(tmp, target)
-        except BaseException as exc:
-            _remove(tmp)
-            if isinstance(exc, OSError):
-                raise UsageError(f"{target}: cannot write the performance log: {exc.strerror or exc}") from None
-            raise
+        write_json_file(target, self.to_dict(meta, cores, warmup), str(target), "the performance log")

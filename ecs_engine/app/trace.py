@@ -21,7 +21,6 @@ than 64 valid bits wrap: a long trace on such a device may place frames wrongly.
 from __future__ import annotations
 
 import bisect
-import json
 import os
 import threading
 from collections import deque
@@ -29,8 +28,8 @@ from pathlib import Path
 from time import perf_counter_ns
 from typing import Any
 
-from ..errors import UsageError
 from ..gpu.frames import GpuFrame
+from .output_files import write_json_file
 
 DEFAULT_FRAMES = 3000
 CPU_PID, GPU_PID = 1, 2
@@ -162,18 +161,7 @@ class TraceRecorder:
     def write(self, meta: dict[str, Any] | None = None) -> None:
         """Write the file: to a temporary file beside it, renamed over the target (a reader or
         a crash never sees half a file). An OSError is a UsageError naming the path."""
-        document = self.document(meta)
-        target = self.path
-        tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
-        try:
-            with open(tmp, "w", encoding="utf-8") as f:
-                json.dump(document, f, allow_nan=False)
-            os.replace(tmp, target)
-        except BaseException as exc:
-            tmp.unlink(missing_ok=True)
-            if isinstance(exc, OSError):
-                raise UsageError(f"--trace {target}: cannot write the trace: {exc.strerror or exc}") from None
-            raise
+        write_json_file(self.path, self.document(meta), f"--trace {self.path}", "the trace")
 
 
 def gpu_clock(gpus: list[GpuFrame]) -> tuple[int, int] | None:
