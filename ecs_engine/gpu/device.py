@@ -53,15 +53,15 @@ class Device:
         for pd in physical:
             props = vk.vkGetPhysicalDeviceProperties(pd)
             family = self._graphics_family(pd, surface)
-            ok_version = vk.VK_VERSION_MAJOR(props.apiVersion) > 1 or vk.VK_VERSION_MINOR(props.apiVersion) >= 2
-            if family is None or not ok_version:
+            if family is None or not _has_vulkan13(vk, pd, props):
                 continue
             if prefer and prefer.lower() not in props.deviceName.lower():
                 continue
             candidates.append((_TYPE_RANK.get(props.deviceType, 9), pd, props, family))
         if not candidates:
             names = [vk.vkGetPhysicalDeviceProperties(pd).deviceName for pd in physical]
-            wanted = f" matching ECS_ENGINE_DEVICE={prefer!r}" if prefer else " with Vulkan 1.2 and a graphics queue"
+            wanted = " with Vulkan 1.3 (dynamic rendering, synchronization2) and a graphics queue"
+            wanted = f" matching ECS_ENGINE_DEVICE={prefer!r}" if prefer else wanted
             raise UsageError(f"no Vulkan device{wanted}; devices present: {', '.join(names)}")
         candidates.sort(key=lambda c: c[0])
         _, self.physical, props, self.queue_family = candidates[0]
@@ -81,8 +81,12 @@ class Device:
         ray_chain = ray_tracing_chain(vk, self.physical, supported, f12)  # kept until the device is made
         if ray_chain is not None:
             exts += [e for e in RAY_TRACING_EXTENSIONS if e not in exts]
+        # the frame graph records with dynamic rendering and emits synchronization2 barriers
+        want13 = vk.VkPhysicalDeviceVulkan13Features(
+            pNext=ray_chain[0] if ray_chain is not None else None, dynamicRendering=1, synchronization2=1
+        )
         want12 = vk.VkPhysicalDeviceVulkan12Features(
-            pNext=ray_chain[0] if ray_chain is not None else None,
+            pNext=want13,
             drawIndirectCount=f12.drawIndirectCount,
             hostQueryReset=f12.hostQueryReset,
             bufferDeviceAddress=1 if ray_chain is not None else 0,
@@ -211,6 +215,16 @@ class Device:
         vk.vkDestroyCommandPool(self.handle, self._pool, None)
         vk.vkDestroyDevice(self.handle, None)
         self.handle = None
+
+
+def _has_vulkan13(vk: Any, physical: Any, props: Any) -> bool:
+    """Vulkan 1.3 with dynamic rendering and synchronization2 (required in 1.3, checked anyway:
+    a driver that reports 1.3 without them would fail later with a less clear message)."""
+    if vk.VK_VERSION_MAJOR(props.apiVersion) == 1 and vk.VK_VERSION_MINOR(props.apiVersion) < 3:
+        return False
+    f13 = vk.VkPhysicalDeviceVulkan13Features()
+    vk.vkGetPhysicalDeviceFeatures2(physical, vk.VkPhysicalDeviceFeatures2(pNext=f13))
+    return bool(f13.dynamicRendering and f13.synchronization2)
 
 
 def _text(vk: Any, value: Any) -> str:

@@ -10,7 +10,7 @@ from .functions import instance_function
 from .loader import load_vulkan
 
 VALIDATION_LAYER = "VK_LAYER_KHRONOS_validation"
-API_VERSION = (1, 2, 0)
+API_VERSION = (1, 3, 0)  # dynamic rendering and synchronization2 (the frame graph) are core
 
 
 class Instance:

@@ -29,7 +29,7 @@ class RayTracingProperties:
 
 
 def ray_tracing_chain(vk: Any, physical: Any, supported: set[str], f12: Any) -> tuple[Any, ...] | None:
-    """The feature structs to chain to the device's Vulkan 1.2 features, head first (keep the
+    """The feature structs to chain to the device's Vulkan 1.3 features, head first (keep the
     tuple alive until the device is made: the head's pNext names the others); None where
     something is missing or ECS_ENGINE_RAY_TRACING=0. Only queried where the extensions exist: the validation layer
     names structs of extensions a device lacks."""
