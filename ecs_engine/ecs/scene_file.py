@@ -12,12 +12,12 @@ stored (floats barely compress; stored members go at disk speed; deflated ones a
   "not_saved": the world's resources that no codec saved (JobPool, input state...).
 - one `.npy` member per column, shape (rows, *field shape), and per table's ids (int64).
 
-A component's stable name is its class's own `scene_name` attribute if any, else module and
-qualified name: the loader finds it among the Component subclasses imported (or `components=`;
-of two with one name, as after a game module is imported again, the one its module binds now).
-A class of `__main__` is named for the module its script is when imported (`python catch.py`
-saves `catch.Star`, which `ecs-engine play catch.py` loads); one typed in the REPL is refused
-at save time.
+A component's stable name (scene_names.py) is its class's own `scene_name` attribute if any,
+else module and qualified name: the loader finds it among the Component subclasses imported (or
+`components=`; of two with one name, as after a game module is imported again, the one its
+module binds now). A class of `__main__` is named for the module its script is when imported
+(`python catch.py` saves `catch.Star`, which `ecs-engine play catch.py` loads); one typed in the
+REPL is refused at save time.
 
 Loading gives every entity a new id (a world's own entities stay: nothing collides) and returns
 an IdMap, saved id -> new id; `Field(..., entity=True)` fields are rewritten to the new ids (-1
@@ -37,7 +37,6 @@ from __future__ import annotations
 import json
 import os
 import secrets
-import sys
 import zipfile
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
@@ -60,10 +59,12 @@ from .scene_archive import (
     check,
     fail,
 )
+from .scene_names import check_saveable, component_name, known_components, main_module_name
 from .schema import Component
 
 __all__ = ["FORMAT", "READS", "VERSION", "IdMap", "ResourceCodec", "SavedResource", "SceneFileError"]
 __all__ += ["component_name", "known_components", "load", "load_world", "register_codec", "save", "save_world"]
+__all__ += ["main_module_name"]  # scene_names.py's, imported from here by app.py
 
 VERSION = 2
 
@@ -109,61 +110,6 @@ def registered_codecs() -> list[ResourceCodec]:
     return list(_codecs.values())
 
 
-def component_name(ct: type[Component]) -> str:
-    """The name a scene file gives a component type (see the module docstring)."""
-    own = ct.__dict__.get("scene_name")
-    if isinstance(own, str):
-        return own
-    module = (main_module_name() or "__main__") if ct.__module__ == "__main__" else ct.__module__
-    return f"{module}.{ct.__qualname__}"
-
-
-def main_module_name() -> str | None:
-    """What `__main__` is called in a scene file: the name it has when imported. A script run as
-    `python catch.py` is `catch`, as `ecs-engine play catch.py` imports it, so what one saves the
-    other loads; `python -m pkg.game` is `pkg.game`. None for no file (the REPL, `python -c`)."""
-    main = sys.modules.get("__main__")
-    spec = getattr(main, "__spec__", None)
-    if spec is not None and spec.name and spec.name != "__main__":
-        return str(spec.name).removesuffix(".__main__")
-    file = getattr(main, "__file__", None)
-    return Path(file).stem if file else None
-
-
-def _check_saveable(ct: type[Component], target: Path) -> None:
-    """One line for a component type that no loader could find again by its name."""
-    if ct.__module__ == "__main__" and "scene_name" not in ct.__dict__ and main_module_name() is None:
-        why = "it is defined in __main__ with no file (typed in the REPL or python -c)"
-        check(False, target, f"cannot save {ct.__qualname__}: {why}; define it in a module or give it a scene_name")
-
-
-def known_components() -> dict[str, type[Component] | None]:
-    """Every Component subclass imported, by component_name. Where two share a name (a game
-    module imported again: a second run in one process, a reload) the one its module binds now
-    is the one; None where that does not settle it."""
-    found: dict[str, list[type[Component]]] = {}
-    todo = list(Component.__subclasses__())
-    while todo:
-        ct = todo.pop()
-        todo.extend(ct.__subclasses__())
-        if not any(f.is_object for f in ct.__fields__.values()):
-            same = found.setdefault(component_name(ct), [])
-            if ct not in same:
-                same.append(ct)
-    return {name: same[0] if len(same) == 1 else _bound_now(same) for name, same in found.items()}
-
-
-def _bound_now(classes: list[type[Component]]) -> type[Component] | None:
-    """Of classes sharing a name, the one their module's attribute is now (None if no one)."""
-    ct = classes[0]
-    where: Any = sys.modules.get(ct.__module__)
-    if ct.__module__ == "__main__" and main_module_name() is not None:
-        where = sys.modules.get(str(main_module_name()), where)
-    for part in ct.__qualname__.split("."):
-        where = getattr(where, part, None)
-    return where if any(where is c for c in classes) else None
-
-
 class IdMap(Mapping[int, int]):
     """Saved entity id -> new id, kept as sorted arrays (a dict of a million ints costs a second)."""
 
@@ -203,7 +149,7 @@ def save_world(world: Any, path: str | os.PathLike[str], *, resources: Iterable[
     for k, table in enumerate(t for t in world.tables if t.count):
         n, columns = table.count, list[dict[str, Any]]()
         for ct in sorted(table.types, key=component_name):
-            _check_saveable(ct, target)
+            check_saveable(ct, target)
             for name, f in ct.__fields__.items():
                 why = "it holds Python objects, which only pickle could store (a scene file holds NumPy columns)"
                 check(not f.is_object, target, f"cannot save {ct.__name__}.{name}: {why}")
