@@ -1,8 +1,9 @@
-"""The object-oriented half of the esper adapter: `EsperWorld` and its helper classes.
+"""The object-oriented half of the esper adapter: `EsperWorld` and `Processor`.
 
 `EsperWorld` offers esper 3.x's functions as methods over an ecs_engine `World`; schema components
 come back as `ComponentProxy` objects, and missing entities/components raise the KeyError
-subclasses `EntityNotFoundError` / `ComponentNotFoundError`. Kept apart from `esper_compat`, which
+subclasses `EntityNotFoundError` / `ComponentNotFoundError` (esper_proxy.py holds those three,
+re-exported here). Kept apart from `esper_compat`, which
 holds the module-level "current world" functions and re-exports these classes, so that each stays
 a readable size; docs/esper.md and esper_compat's docstring describe the differences from esper.
 """
@@ -17,9 +18,10 @@ from weakref import WeakMethod, ref
 
 import numpy as np
 
-from .ecs.errors import DeadEntityError, MissingComponentError
+from .ecs.errors import DeadEntityError
 from .ecs.schema import Component, ObjectStore, object_component, refuse_non_component, schema_of
 from .ecs.world import World
+from .esper_proxy import ComponentNotFoundError, ComponentProxy, EntityNotFoundError
 
 __all__ = [
     "ComponentNotFoundError",
@@ -30,29 +32,7 @@ __all__ = [
 ]
 
 
-# ---------------------------------------------------------------------------- errors
-class EntityNotFoundError(DeadEntityError, KeyError):
-    """The entity does not exist (destroyed or never created). A KeyError, as in esper."""
-
-    def __str__(self) -> str:
-        return str(self.args[0]) if self.args else ""
-
-
-class ComponentNotFoundError(MissingComponentError, KeyError):
-    """The entity exists but lacks the component. A KeyError, as in esper."""
-
-    def __str__(self) -> str:
-        return str(self.args[0]) if self.args else ""
-
-
-def _key_error(exc: Exception) -> Exception:
-    if isinstance(exc, DeadEntityError):
-        return EntityNotFoundError(str(exc))
-    if isinstance(exc, MissingComponentError):
-        return ComponentNotFoundError(str(exc))
-    return exc
-
-
+# ---------------------------------------------------------------------------- component types
 def _is_object(ct: type[Component]) -> bool:
     return issubclass(ct, ObjectStore)
 
@@ -72,97 +52,6 @@ def _has(table: Any, ct: type[Component] | None) -> bool:
 
 def _name(ct: type[Component] | None, component_type: Any) -> str:
     return ct.__name__ if ct is not None else repr(component_type)
-
-
-# ---------------------------------------------------------------------------- proxy
-class ComponentProxy:
-    """One entity's component of an engine schema, read and written in place.
-
-    ``proxy.field`` reads the entity's current row (a writable NumPy view for array fields, a
-    Python scalar for shape-() fields); ``proxy.field = value`` writes through `World.set`. The
-    row is looked up on every access, so the proxy survives rows moving; once the entity or the
-    component is gone, access raises EntityNotFoundError / ComponentNotFoundError (KeyErrors).
-    ``copy.copy`` gives another proxy of the same component, ``copy.deepcopy`` and ``_copy()`` a
-    detached `Component` value. Proxies of the same component compare equal.
-    """
-
-    __slots__ = ("_entity", "_schema", "_world")
-
-    def __init__(self, world: World, entity: int, schema: type[Component]) -> None:
-        object.__setattr__(self, "_world", world)
-        object.__setattr__(self, "_entity", int(entity))
-        object.__setattr__(self, "_schema", schema)
-
-    def _locate(self) -> tuple[Any, int]:
-        world = self._world
-        try:
-            table, row = world.storage.locate(self._entity)
-        except DeadEntityError as exc:
-            raise EntityNotFoundError(str(exc)) from None
-        if not table.has(self._schema):
-            raise ComponentNotFoundError(f"entity {self._entity} no longer has {self._schema.__name__}")
-        return table, row
-
-    def __getattr__(self, name: str) -> Any:
-        if name.startswith("_"):  # slots not set yet (copy, pickle) or private lookups
-            raise AttributeError(name)
-        f = self._schema.__fields__.get(name)
-        if f is None:
-            raise AttributeError(f"{self._schema.__name__} has no field {name!r}")
-        table, row = self._locate()
-        key = (self._schema, name)
-        col = table.columns[key]
-        if f.shape:
-            # A writable view: mark the column changed, as a writable query view does.
-            table.column_ticks[key] = self._world.write_tick()
-            return col[row]
-        value = col[row]
-        return value if f.is_object else value.item()
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        if name not in self._schema.__fields__:
-            raise AttributeError(f"{self._schema.__name__} has no field {name!r}")
-        try:
-            self._world.set(self._entity, self._schema, **{name: value})
-        except (DeadEntityError, MissingComponentError) as exc:
-            raise _key_error(exc) from None
-
-    def __delattr__(self, name: str) -> None:
-        raise AttributeError("component fields cannot be deleted")
-
-    def __dir__(self) -> list[str]:
-        return sorted(set(super().__dir__()) | set(self._schema.__fields__))
-
-    def _copy(self) -> Component:
-        """A detached copy of the current values (a `Component` instance)."""
-        self._locate()
-        return self._world.get(self._entity, self._schema)
-
-    def __copy__(self) -> ComponentProxy:
-        return ComponentProxy(self._world, self._entity, self._schema)
-
-    def __deepcopy__(self, memo: dict[int, Any]) -> Component:
-        return self._copy()  # a snapshot of the values, detached from the World
-
-    def __reduce__(self) -> Any:
-        raise TypeError("a ComponentProxy cannot be pickled; pickle proxy._copy() instead")
-
-    def __eq__(self, other: object) -> bool:
-        if isinstance(other, ComponentProxy):
-            return other._world is self._world and other._entity == self._entity and other._schema is self._schema
-        if isinstance(other, Component):
-            return self._copy() == other
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash((id(self._world), self._entity, self._schema))
-
-    def __repr__(self) -> str:
-        try:
-            inner = repr(self._copy())
-        except KeyError:
-            inner = f"{self._schema.__name__} (gone)"
-        return f"<proxy of entity {self._entity}: {inner}>"
 
 
 # ---------------------------------------------------------------------------- processor
