@@ -12,7 +12,8 @@
 A game module is a file or module with `build(app)`; `ecs-engine play game.py` makes the App,
 calls it and runs it with the command line's flags (game_module.py). Every system has a name
 (a function's own name, a System's `name`) unique in the App: `replace_system(name, new)` swaps
-one in the running schedule at its place, which is how changed code goes in while a game runs.
+one in the running schedule at its place, which is how changed code goes in while a game runs
+(app_systems.py holds the App's systems by name).
 
 Nothing here runs per frame: systems are the schedule's own, resources are made when the run
 opens (`on_open`), and a frame is the loop's.
@@ -31,10 +32,11 @@ from typing import Any
 
 from ..ecs.errors import EcsError
 from ..ecs.scene_file import main_module_name
-from ..ecs.schedule import FunctionSystem, RunCondition, Schedule, System
+from ..ecs.schedule import Schedule, System
 from ..ecs.states import init_state
 from ..ecs.world import World
 from ..errors import UsageError
+from .app_systems import AppSystems, as_usage
 from .plugins import STAGES, PluginGroup, PluginLike, apply_plugin, plugin_key, plugin_name
 from .report import RunResult
 from .settings import HEADLESS_FALLBACK_FRAMES, RunOptions
@@ -47,7 +49,7 @@ Hook = Callable[[World, Any], None]  # (the App's world, the Session) when the r
 FrameHook = Callable[[Any, Any], None]  # (the Session, the editor or None) between two frames
 
 
-class App:
+class App(AppSystems):
     def __init__(self, title: str | None = None, size: tuple[int, int] = (1280, 720), *, name: str | None = None):
         # what names the run (its first line, its input-NAME.json, NAME.png): the title's words,
         # else the script's module name (python catch.py: catch, as `ecs-engine play catch.py`)
@@ -124,105 +126,20 @@ class App:
         self.world.resources[ActionMap] = load_bindings(defaults, self.name)
         return self
 
-    def add_startup_systems(self, *systems: Any) -> App:
-        """Systems run once when the run opens, in order, before the first frame: the world
-        has its Meshes, Window, Time and the plugins' resources by then."""
-        for item in systems:
-            made = self._system(item, None)
-            self._claim(made, "startup", self._startup)
-            self._startup.append(made)
-        return self
-
-    def add_systems(self, stage: str, *systems: Any, run_if: RunCondition | None = None) -> App:
-        """Systems run every frame in `stage` ("fixed": every fixed step; "update"; then
-        "post_update", where the engine computes matrices), in the order added. `run_if`: a
-        function of the world; False skips them that frame (e.g. a state's condition)."""
-        if stage not in self.schedule.stages:
-            raise UsageError(f"unknown stage {stage!r}; an App's stages are {', '.join(self.schedule.stages)}")
-        if not systems:
-            raise UsageError(f"add_systems({stage!r}) was given no systems")
-        for item in systems:
-            made = self._system(item, run_if)
-            self._claim(made, stage, self.schedule.stages[stage])
-            self.schedule.add(made, stage)
-        return self
-
-    def replace_system(self, name: str, new: Any) -> System:
-        """`new` in the place of the system called `name`, in the same stage (its run condition
-        kept unless `new` has one). The world and entities stay; for code changed while the
-        game runs."""
-        stage = self._where.get(name)
-        if stage is None:
-            raise UsageError(f"no system named {name!r}; the App has {', '.join(self._where) or 'none'}")
-        listed = self._lists[name]
-        index = next(i for i, s in enumerate(listed) if s.name == name)
-        old = listed[index]
-        made = self._system(new, None)
-        if made.name != name and made.name in self._where:
-            raise UsageError(f"a system named {made.name!r} is already in the App")
-        if made.run_if is None:
-            made.run_if = old.run_if
-        made.last_run_tick = old.last_run_tick  # it sees what changed since the old one last ran
-        listed[index] = made
-        del self._where[name], self._lists[name]
-        self._where[made.name], self._lists[made.name] = stage, listed
-        return made
-
     # ------------------------------------------------- game structure (ecs/states.py, observers.py)
     def init_state(self, initial: Enum) -> App:
         """A state: `initial`'s Enum as the world's `State[Kind]`, entered on the first frame.
         Systems take `run_if=in_state(...)`; `request_state(world, value)` changes it."""
-        _as_usage(init_state, self.world, initial)
+        as_usage(init_state, self.world, initial)
         return self
-
-    def on_enter(self, state: Enum, *systems: Any) -> App:
-        """Systems run once each time the state becomes `state` (at the start of a frame)."""
-        return self._on_transition("on_enter", state, systems)
-
-    def on_exit(self, state: Enum, *systems: Any) -> App:
-        """Systems run once each time the state leaves `state`."""
-        return self._on_transition("on_exit", state, systems)
 
     def add_observer(self, trigger: Any, fn: Callable[[World, Any], Any], **named: Any) -> App:
         """`fn(world, trigger)` with every entity that gains (OnAdd), loses (OnRemove) or
         changes (OnChange) a component, in bulk, at each sync point (World.add_observer)."""
-        _as_usage(self.world.add_observer, trigger, fn, **named)
+        as_usage(self.world.add_observer, trigger, fn, **named)
         return self
 
-    def _on_transition(self, when: str, state: Enum, systems: tuple[Any, ...]) -> App:
-        if not systems:
-            raise UsageError(f"{when}({state!r}) was given no systems")
-        add = getattr(self.schedule, when)
-        for item in systems:
-            made = self._system(item, None)
-            stage = f"{when} {type(state).__name__}.{getattr(state, 'name', state)}"
-            self._claim(made, stage, [])
-            try:
-                _as_usage(add, state, made)
-            except UsageError:
-                del self._where[made.name], self._lists[made.name]
-                raise
-            self._lists[made.name] = getattr(self.schedule.transitions, when)[state]
-        return self
-
-    def remove_system(self, name: str) -> System:
-        """Take the system called `name` out of the App (a startup one too); it runs no more."""
-        if self._where.pop(name, None) is None:
-            raise UsageError(f"no system named {name!r}; the App has {', '.join(self._where) or 'none'}")
-        listed = self._lists.pop(name)
-        index = next(i for i, s in enumerate(listed) if s.name == name)
-        return listed.pop(index)
-
-    def system(self, name: str) -> System:
-        """The system called `name` (a startup one too)."""
-        if name not in self._where:
-            raise UsageError(f"no system named {name!r}; the App has {', '.join(self._where) or 'none'}")
-        return next(s for s in self._lists[name] if s.name == name)
-
-    def systems(self) -> dict[str, str]:
-        """Every system's name and its stage ("startup" for a startup system)."""
-        return dict(self._where)
-
+    # ---------------------------------------------------------------- hooks, UI, summary
     def on_open(self, hook: Hook) -> App:
         """`hook(world, session)` when the run opens, before the startup systems: for plugins
         whose resources need the GPU or the window (session.gpu, session.source)."""
@@ -249,38 +166,6 @@ class App:
         its files are written."""
         self.summary = summary
         return self
-
-    def _system(self, item: Any, run_if: RunCondition | None) -> System:
-        if run_if is not None and not callable(run_if):
-            raise UsageError(f"run_if must be a function of the world, not {run_if!r:.80}")
-        if isinstance(item, System):
-            made = item
-        elif callable(item) and not isinstance(item, type):
-            made = FunctionSystem(item, reads=None, writes=None, name=self._name_for(item))
-        else:
-            what = f"the class {item.__qualname__} (pass an instance)" if isinstance(item, type) else f"{item!r:.80}"
-            raise UsageError(f"not a system: {what}; a system is a function (world, dt) or a System")
-        if run_if is not None:
-            made.run_if = run_if if made.run_if is None else _both(made.run_if, run_if)
-        return made
-
-    def _name_for(self, fn: Any) -> str:
-        """A function's own name; a lambda (or a callable without one) is numbered."""
-        name = getattr(fn, "__name__", None)
-        if name and name != "<lambda>":
-            return str(name)
-        self._unnamed += 1
-        return f"{name or 'system'}#{self._unnamed}"
-
-    def _claim(self, made: System, stage: str, listed: list[System]) -> None:
-        if made.name in self._where:
-            other = f"system(name='{made.name}_2')({made.name})" if isinstance(made, FunctionSystem) else "name="
-            raise UsageError(
-                f"a system named {made.name!r} is already in the App (stage {self._where[made.name]}); "
-                f"names are unique: add the second under its own name ({other}), "
-                f"or put new code in its place with replace_system({made.name!r}, ...)"
-            )
-        self._where[made.name], self._lists[made.name] = stage, listed
 
     # ----------------------------------------------------------------------- opening
     def open(self, session: Any) -> tuple[World, Schedule]:
@@ -410,18 +295,3 @@ class App:
 def _slug(title: str) -> str:
     """A name for files and the first line from a title: "Catch!" -> "catch"."""
     return re.sub(r"[^a-z0-9]+", "-", title.lower()).strip("-")
-
-
-def _as_usage(call: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
-    """The ECS core's TypeError or ValueError for bad input, as the App's one clear UsageError."""
-    try:
-        return call(*args, **kwargs)
-    except (TypeError, ValueError) as exc:
-        raise UsageError(str(exc)) from exc
-
-
-def _both(first: RunCondition, second: RunCondition) -> RunCondition:
-    def both(world: World) -> bool:
-        return bool(first(world)) and bool(second(world))
-
-    return both
