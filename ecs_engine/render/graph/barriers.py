@@ -22,6 +22,7 @@ from .compile import Structure, mips_of
 from .transient import Packing
 
 EMPTY: frozenset[str] = frozenset()
+WHOLE_SIZE = (1 << 64) - 1  # VK_WHOLE_SIZE (the binding has it as -1, which a VkDeviceSize refuses)
 
 
 @dataclass(frozen=True)
@@ -265,7 +266,7 @@ def record_barriers(
         }
         if b.base_mip is None:
             buffer_rows.append(
-                vk.VkBufferMemoryBarrier2(buffer=buffers[b.resource], offset=0, size=vk.VK_WHOLE_SIZE, **common)
+                vk.VkBufferMemoryBarrier2(buffer=buffers[b.resource], offset=0, size=WHOLE_SIZE, **common)
             )
             continue
         image_rows.append(

@@ -274,10 +274,12 @@ class GraphImage:
     def mip_view(self, mip: int) -> Any:
         if not 0 <= mip < self.mips:
             raise UsageError(f"image {self.name!r} has {self.mips} mip level(s); no mip {mip}")
+        if self.view is None:
+            raise UsageError(f"image {self.name!r} has no view: no pass samples, stores or attaches it")
         if self.mips == 1:
             return self.view
         if not self.mip_views:
-            raise UsageError(f"imported image {self.name!r} was imported without views of each mip")
+            raise UsageError(f"image {self.name!r} was imported without views of each mip (mip_views=)")
         return self.mip_views[mip]
 
     def mip_extent(self, mip: int) -> tuple[int, int]:
