@@ -53,10 +53,9 @@ class Clear(Pass):
         ctx.end_rendering()
 
 
-def layers(vk, mip=0):
-    return vk.VkImageSubresourceLayers(
-        aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=mip, baseArrayLayer=0, layerCount=1
-    )
+def layers(vk, mip=0, aspect=None):
+    aspect = aspect or vk.VK_IMAGE_ASPECT_COLOR_BIT
+    return vk.VkImageSubresourceLayers(aspectMask=aspect, mipLevel=mip, baseArrayLayer=0, layerCount=1)
 
 
 class Blit(Pass):
@@ -99,8 +98,8 @@ class Blit(Pass):
 class Readback(Pass):
     """Copies `src` (mip) into the imported buffer "out", made visible to the host."""
 
-    def __init__(self, src, mip=None, name="readback"):
-        self.name, self.src, self.mip = name, src, mip
+    def __init__(self, src, mip=None, name="readback", depth=False):
+        self.name, self.src, self.mip, self.depth = name, src, mip, depth
 
     def setup(self, b):
         b.read(self.src, Access.TRANSFER_READ, mip=self.mip)
@@ -115,7 +114,7 @@ class Readback(Pass):
             bufferOffset=0,
             bufferRowLength=0,
             bufferImageHeight=0,
-            imageSubresource=layers(vk, self.mip or 0),
+            imageSubresource=layers(vk, self.mip or 0, vk.VK_IMAGE_ASPECT_DEPTH_BIT if self.depth else None),
             imageOffset=vk.VkOffset3D(0, 0, 0),
             imageExtent=vk.VkExtent3D(w, h, 1),
         )
@@ -205,6 +204,58 @@ def test_msaa_renders_resolved_into_a_single_sample_image(run):
     graph, pixels = run([Clear("draw", "ms", desc=msaa, resolve="resolved"), Readback("resolved")])
     np.testing.assert_array_equal(pixels, pattern())
     assert graph.compiled.transients.images["ms"].samples == 4
+
+
+class Depth(Pass):
+    """Clears depth by its load op, then a rectangle deeper (vkCmdClearAttachments)."""
+
+    name = "depth"
+
+    def setup(self, b):
+        b.create("z", ImageDesc(format="VK_FORMAT_D32_SFLOAT"))
+        b.write("z", Access.DEPTH_WRITE, load=Load.CLEAR, clear=(0.25, 0.0, 0.0, 0.0))
+
+    def record(self, cb, ctx):
+        vk = ctx.vk
+        ctx.begin_rendering(depth="z")
+        x, y, w, h = RECT
+        value = vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=0.75, stencil=0))
+        attachment = vk.VkClearAttachment(aspectMask=vk.VK_IMAGE_ASPECT_DEPTH_BIT, colorAttachment=0, clearValue=value)
+        rect = vk.VkClearRect(
+            rect=vk.VkRect2D(vk.VkOffset2D(x, y), vk.VkExtent2D(w, h)), baseArrayLayer=0, layerCount=1
+        )
+        vk.vkCmdClearAttachments(cb, 1, [attachment], 1, [rect])
+        ctx.end_rendering()
+
+
+class DepthTested(Pass):
+    """Renders colour against the depth read-only (nothing drawn: the attachments are what counts)."""
+
+    name = "tested"
+
+    def setup(self, b):
+        b.create("lit", HDR)
+        b.write("lit", Access.COLOR_WRITE, load=Load.CLEAR, clear=BACK)
+        b.read("z", Access.DEPTH_READ)
+        b.side_effect()
+
+    def record(self, cb, ctx):
+        ctx.begin_rendering(colors=("lit",), depth="z")
+        ctx.end_rendering()
+
+
+def test_depth_written_then_tested_read_only_then_copied(run):
+    graph, raw = run([Depth(), DepthTested(), Readback("z", depth=True)], shape=(H, W, 2))
+    depth = raw.view(np.float32)[..., 0]
+    expected = np.full((H, W), 0.25, np.float32)
+    x, y, w, h = RECT
+    expected[y : y + h, x : x + w] = 0.75
+    np.testing.assert_array_equal(depth, expected)
+    (to_read,) = graph.compiled.barriers.before["tested"][1:]
+    assert (to_read.old_layout, to_read.new_layout) == (
+        "DEPTH_STENCIL_ATTACHMENT_OPTIMAL",
+        "DEPTH_STENCIL_READ_ONLY_OPTIMAL",
+    )
 
 
 def test_a_second_compile_with_the_same_inputs_makes_nothing(run):
