@@ -9,7 +9,7 @@ import pytest
 from gpu_context import shared_device
 
 from ecs_engine.gpu.memory import HOST, Buffer
-from ecs_engine.render.graph import Access, FrameGraph, ImageDesc, Load, Pass
+from ecs_engine.render.graph import Access, BufferDesc, FrameGraph, ImageDesc, Load, Pass
 
 W, H = 16, 12
 BACK = (0.25, 0.5, 1.0, 1.0)
@@ -119,6 +119,10 @@ class Readback(Pass):
             imageExtent=vk.VkExtent3D(w, h, 1),
         )
         vk.vkCmdCopyImageToBuffer(cb, image.handle, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, out.handle, 1, [region])
+        self.host_barrier(vk, cb)
+
+    @staticmethod
+    def host_barrier(vk, cb):
         to_host = vk.VkMemoryBarrier2(
             srcStageMask=vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT,
             srcAccessMask=vk.VK_ACCESS_2_TRANSFER_WRITE_BIT,
@@ -256,6 +260,42 @@ def test_depth_written_then_tested_read_only_then_copied(run):
         "DEPTH_STENCIL_ATTACHMENT_OPTIMAL",
         "DEPTH_STENCIL_READ_ONLY_OPTIMAL",
     )
+
+
+class ToBuffers(Pass):
+    """Copies image `src` into the transient buffer "staging", then (a second pass) that into "out"."""
+
+    def __init__(self, name, src=None):
+        self.name, self.src = name, src
+
+    def setup(self, b):
+        if self.src:
+            b.create("staging", BufferDesc(W * H * 8))
+            b.read(self.src, Access.TRANSFER_READ)
+            b.write("staging", Access.TRANSFER_WRITE)
+        else:
+            b.read("staging", Access.TRANSFER_READ)
+            b.write("out", Access.TRANSFER_WRITE)
+            b.side_effect()
+
+    def record(self, cb, ctx):
+        vk = ctx.vk
+        if self.src:
+            region = vk.VkBufferImageCopy(imageSubresource=layers(vk), imageExtent=vk.VkExtent3D(W, H, 1))
+            image = ctx.image(self.src).handle
+            staging = ctx.buffer("staging").handle
+            vk.vkCmdCopyImageToBuffer(cb, image, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, staging, 1, [region])
+            return
+        copy = vk.VkBufferCopy(srcOffset=0, dstOffset=0, size=W * H * 8)
+        vk.vkCmdCopyBuffer(cb, ctx.buffer("staging").handle, ctx.buffer("out").handle, 1, [copy])
+        Readback.host_barrier(vk, cb)
+
+
+def test_a_transient_buffer_between_two_copies(run):
+    graph, pixels = run([Clear("clear", "a"), ToBuffers("to_staging", "a"), ToBuffers("to_out")])
+    np.testing.assert_array_equal(pixels, pattern())
+    (row,) = [r for r in graph.compiled.barriers.before["to_out"] if r.resource == "staging"]
+    assert row.src_access == {"TRANSFER_WRITE"} and row.dst_access == {"TRANSFER_READ"}
 
 
 def test_a_second_compile_with_the_same_inputs_makes_nothing(run):
