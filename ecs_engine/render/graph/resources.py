@@ -149,15 +149,6 @@ class Access(Enum):
         return bool(self.usage.buffer_usage)
 
 
-ATTACHMENT_ACCESSES = (
-    Access.COLOR_WRITE,
-    Access.COLOR_READ_WRITE,
-    Access.DEPTH_WRITE,
-    Access.DEPTH_READ,
-    Access.RESOLVE_WRITE,
-)
-
-
 def flags(vk: Any, prefix: str, names: tuple[str, ...] | frozenset[str]) -> int:
     """The bits of `names` ("COMPUTE_SHADER") under `prefix` ("VK_PIPELINE_STAGE_2_")."""
     bits = 0
