@@ -36,6 +36,7 @@ class BloomPipelines:
         self.sampler = self.layout = None
         self.pipelines: dict[str, Any] = {}
         self._sets: dict[tuple[int, int], Any] = {}
+        self._chain: object = None  # the chain image the sets were made for (held: its id stays unique)
         try:
             self.layout = pipeline_layout(device, [self.set_layout.handle], [(stage, 0, _PUSH_BYTES)])
             self.pipelines["first"] = compute_pipeline(device, "bloom_downsample.comp", self.layout, (1,))
@@ -71,6 +72,16 @@ class BloomPipelines:
         vk.ffi.memmove(self._push, data, _PUSH_BYTES)
         lib.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_COMPUTE_BIT, 0, _PUSH_BYTES, self._push)
         lib.vkCmdDispatch(cb, -(-size[0] // GROUP), -(-size[1] // GROUP), 1)
+
+    def track(self, chain: object) -> None:
+        """Called with the chain image (the graph's GraphImage) before each step: a different
+        object means the graph was compiled again and made new transients, whose views may
+        reuse the handle values of destroyed ones, so the sets made so far go."""
+        if chain is not self._chain:
+            if self._sets:
+                self.device.wait_idle()
+            self.forget_views()
+            self._chain = chain
 
     def forget_views(self) -> None:
         """Drop every set (after the GPU is idle): call it when the views they name are
