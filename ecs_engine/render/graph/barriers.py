@@ -1,0 +1,288 @@
+"""Barriers from declared accesses: the state of each (resource, mip) is followed through the
+passes that run, and before each pass one batch of barriers brings what it uses into the
+layout and visibility its accesses need (synchronization2: one vkCmdPipelineBarrier2 per pass).
+
+The plan is data (Barrier rows of Vulkan names), made without a device; `record_barriers`
+turns a batch into Vulkan structs. Rules, per (resource, mip):
+- first use of a transient: from UNDEFINED, after the last accesses of any image placed in the
+  same bytes before it (aliasing), else after nothing;
+- first use of an import: from its layout_before, after any earlier work (ALL_COMMANDS);
+- a new layout, or a write after anything, or a read of a write not yet made visible to its
+  stages: a barrier from the writes and reads since the last write; a write that discards the
+  contents (CLEAR / DONT_CARE) transitions from UNDEFINED;
+- after the last pass, imported images go to their layout_after.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from .compile import Structure, mips_of
+from .transient import Packing
+
+EMPTY: frozenset[str] = frozenset()
+
+
+@dataclass(frozen=True)
+class Barrier:
+    """One barrier of the plan. Buffers have no mips and no layouts (None)."""
+
+    resource: str
+    base_mip: int | None
+    mip_count: int
+    old_layout: str | None
+    new_layout: str | None
+    src_stages: frozenset[str]
+    src_access: frozenset[str]
+    dst_stages: frozenset[str]
+    dst_access: frozenset[str]
+
+    def describe(self) -> str:
+        mips = (
+            ""
+            if self.base_mip is None
+            else f"[mip {self.base_mip}" + (f"..{self.base_mip + self.mip_count - 1}]" if self.mip_count > 1 else "]")
+        )
+        layouts = f" {self.old_layout} -> {self.new_layout}" if self.old_layout is not None else ""
+        src = "|".join(sorted(self.src_stages)) or "NONE"
+        dst = "|".join(sorted(self.dst_stages)) or "NONE"
+        return f"{self.resource}{mips}{layouts} ({src} -> {dst})"
+
+
+@dataclass
+class _State:
+    layout: str | None
+    write_stages: frozenset[str] = EMPTY
+    write_access: frozenset[str] = EMPTY
+    read_stages: frozenset[str] = EMPTY  # since the last write
+    synced_stages: frozenset[str] = EMPTY  # stages the last write was made visible to
+    synced_access: frozenset[str] = EMPTY
+
+
+@dataclass
+class _Need:
+    """What one pass needs of one (resource, mip): its accesses merged."""
+
+    stages: frozenset[str]
+    access: frozenset[str]
+    layout: str | None
+    writes: bool
+    discards: bool
+
+
+@dataclass
+class BarrierPlan:
+    before: dict[str, list[Barrier]] = field(default_factory=dict)  # pass name -> its batch
+    after: list[Barrier] = field(default_factory=list)  # imports to their layout_after
+
+
+def _needs(s: Structure, pass_name: str) -> dict[tuple[str, int], _Need]:
+    found: dict[tuple[str, int], _Need] = {}
+    for use in s.uses[pass_name]:
+        res = s.resources[use.resource]
+        u = use.access.usage
+        layout = u.layout if res.kind == "image" else None
+        for mip in mips_of(use, res) if res.kind == "image" else range(1):
+            had = found.get((res.name, mip))
+            need = _Need(frozenset(u.stages), frozenset(u.access), layout, use.write, not use.keeps_contents)
+            if had is not None:
+                need = _Need(
+                    had.stages | need.stages,
+                    had.access | need.access,
+                    layout,
+                    had.writes or need.writes,
+                    had.discards and need.discards,
+                )
+            found[(res.name, mip)] = need
+    return found
+
+
+def plan_barriers(s: Structure, packing: Packing) -> BarrierPlan:
+    plan = BarrierPlan()
+    states: dict[tuple[str, int], _State] = {}
+    for position, pass_name in enumerate(s.order):
+        rows: list[Barrier] = []
+        for (name, mip), need in _needs(s, pass_name).items():
+            res = s.resources[name]
+            image = res.kind == "image"
+            st = states.get((name, mip))
+            row: Barrier | None = None
+            if st is None:
+                if res.imported is not None:
+                    before = res.imported.layout_before if image else None
+                    if image and need.discards and before != need.layout:
+                        before = "UNDEFINED"
+                    st = _State(before, frozenset({"ALL_COMMANDS"}), frozenset({"MEMORY_WRITE"}))
+                    row = _row(name, mip, image, st.layout, need, st.write_stages, st.write_access)
+                elif image:
+                    src, access = _aliased_before(s, packing, states, name, position)
+                    st = _State("UNDEFINED")
+                    row = _row(name, mip, image, "UNDEFINED", need, src, access)
+                else:
+                    st = _State(None)
+            elif image and st.layout != need.layout:
+                old = "UNDEFINED" if need.discards else st.layout
+                row = _row(name, mip, image, old, need, st.write_stages | st.read_stages, st.write_access)
+            elif st.write_stages:
+                seen = need.stages <= st.synced_stages and need.access <= st.synced_access
+                if need.writes or not seen:
+                    row = _row(name, mip, image, st.layout, need, st.write_stages | st.read_stages, st.write_access)
+            elif need.writes and st.read_stages:  # a write after reads only: wait for the reads
+                row = _row(name, mip, image, st.layout, need, st.read_stages, EMPTY)
+            if row is not None:
+                rows.append(row)
+            if need.writes:
+                states[(name, mip)] = _State(need.layout, need.stages, need.access)
+                continue
+            st.layout = need.layout
+            st.read_stages |= need.stages
+            if row is not None:  # the last write is now visible to these stages
+                st.synced_stages |= need.stages
+                st.synced_access |= need.access
+            states[(name, mip)] = st
+        plan.before[pass_name] = merge_mips(rows)
+    plan.after = merge_mips(_final(s, states))
+    return plan
+
+
+def _row(
+    name: str, mip: int, image: bool, old: str | None, need: _Need, src: frozenset[str], access: frozenset[str]
+) -> Barrier:
+    return Barrier(
+        name,
+        mip if image else None,
+        1,
+        old if image else None,
+        need.layout if image else None,
+        src,
+        access,
+        need.stages,
+        need.access,
+    )
+
+
+def _aliased_before(
+    s: Structure, packing: Packing, states: dict[tuple[str, int], _State], name: str, position: int
+) -> tuple[frozenset[str], frozenset[str]]:
+    """The stages and writes of images that lived earlier in bytes `name` now takes."""
+    stages, access = EMPTY, EMPTY
+    if name not in packing.placements:
+        return stages, access
+    for other, (_, last) in s.lifetimes.items():
+        if other == name or last >= position or other not in packing.placements:
+            continue
+        if packing.overlapping(name, other):
+            for (res, _), st in states.items():
+                if res == other:
+                    stages |= st.write_stages | st.read_stages
+                    access |= st.write_access
+    return stages, access
+
+
+def _final(s: Structure, states: dict[tuple[str, int], _State]) -> list[Barrier]:
+    rows = []
+    for name, res in s.resources.items():
+        imp = res.imported
+        if imp is None or res.kind != "image" or imp.layout_after == "UNDEFINED":
+            continue
+        present = imp.layout_after == "PRESENT_SRC_KHR"
+        dst_stages = frozenset({"NONE"} if present else {"ALL_COMMANDS"})
+        dst_access = frozenset({"NONE"} if present else {"MEMORY_READ", "MEMORY_WRITE"})
+        for mip in range(res.mips):
+            st = states.get((name, mip))
+            if st is None:
+                if imp.layout_before != imp.layout_after:
+                    rows.append(
+                        Barrier(
+                            name,
+                            mip,
+                            1,
+                            imp.layout_before,
+                            imp.layout_after,
+                            frozenset({"ALL_COMMANDS"}),
+                            frozenset({"MEMORY_WRITE"}),
+                            dst_stages,
+                            dst_access,
+                        )
+                    )
+            elif st.layout != imp.layout_after or st.write_stages:
+                rows.append(
+                    Barrier(
+                        name,
+                        mip,
+                        1,
+                        st.layout,
+                        imp.layout_after,
+                        st.write_stages | st.read_stages,
+                        st.write_access,
+                        dst_stages,
+                        dst_access,
+                    )
+                )
+    return rows
+
+
+def merge_mips(rows: list[Barrier]) -> list[Barrier]:
+    """Barriers of consecutive mips of one image that differ only in the mip become one."""
+    merged: list[Barrier] = []
+    for row in rows:
+        last = merged[-1] if merged else None
+        if (
+            last is not None
+            and row.base_mip is not None
+            and last.base_mip is not None
+            and last.resource == row.resource
+            and last.base_mip + last.mip_count == row.base_mip
+            and (last.old_layout, last.new_layout, last.src_stages, last.src_access, last.dst_stages, last.dst_access)
+            == (row.old_layout, row.new_layout, row.src_stages, row.src_access, row.dst_stages, row.dst_access)
+        ):
+            merged[-1] = Barrier(last.resource, last.base_mip, last.mip_count + 1, *_tail(row))
+        else:
+            merged.append(row)
+    return merged
+
+
+def _tail(b: Barrier) -> tuple:
+    return (b.old_layout, b.new_layout, b.src_stages, b.src_access, b.dst_stages, b.dst_access)
+
+
+def record_barriers(
+    vk: Any, cb: Any, rows: list[Barrier], images: dict[str, Any], buffers: dict[str, Any], aspects: dict[str, int]
+) -> Any:
+    """One vkCmdPipelineBarrier2 of these rows (images/buffers: name -> handle)."""
+    from .resources import flags
+
+    image_rows, buffer_rows = [], []
+    for b in rows:
+        common = {
+            "srcStageMask": flags(vk, "VK_PIPELINE_STAGE_2_", b.src_stages),
+            "srcAccessMask": flags(vk, "VK_ACCESS_2_", b.src_access),
+            "dstStageMask": flags(vk, "VK_PIPELINE_STAGE_2_", b.dst_stages),
+            "dstAccessMask": flags(vk, "VK_ACCESS_2_", b.dst_access),
+            "srcQueueFamilyIndex": vk.VK_QUEUE_FAMILY_IGNORED,
+            "dstQueueFamilyIndex": vk.VK_QUEUE_FAMILY_IGNORED,
+        }
+        if b.base_mip is None:
+            buffer_rows.append(
+                vk.VkBufferMemoryBarrier2(buffer=buffers[b.resource], offset=0, size=vk.VK_WHOLE_SIZE, **common)
+            )
+            continue
+        image_rows.append(
+            vk.VkImageMemoryBarrier2(
+                oldLayout=getattr(vk, f"VK_IMAGE_LAYOUT_{b.old_layout}"),
+                newLayout=getattr(vk, f"VK_IMAGE_LAYOUT_{b.new_layout}"),
+                image=images[b.resource],
+                subresourceRange=vk.VkImageSubresourceRange(
+                    aspectMask=aspects[b.resource],
+                    baseMipLevel=b.base_mip,
+                    levelCount=b.mip_count,
+                    baseArrayLayer=0,
+                    layerCount=1,
+                ),
+                **common,
+            )
+        )
+    info = vk.VkDependencyInfo(pBufferMemoryBarriers=buffer_rows or None, pImageMemoryBarriers=image_rows or None)
+    vk.vkCmdPipelineBarrier2(cb, info)
+    return info

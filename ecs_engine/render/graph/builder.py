@@ -1,0 +1,128 @@
+"""What a pass is and what it declares: the `Pass` base class and the `PassBuilder` its `setup`
+declares with (the transients it creates, what it reads and writes, at which mip, how)."""
+
+from __future__ import annotations
+
+from collections.abc import Hashable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from ...errors import UsageError
+from .resources import Access, BufferDesc, ImageDesc, Load
+
+if TYPE_CHECKING:
+    from .context import PassContext
+
+
+@dataclass(frozen=True)
+class Use:
+    """One declared access of a pass: resource, access, mip (None: all), and for writes the load
+    op and clear value."""
+
+    resource: str
+    access: Access
+    mip: int | None
+    write: bool
+    load: Load = Load.LOAD
+    clear: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+
+    @property
+    def keeps_contents(self) -> bool:
+        """The access sees what was there before (a read, a LOAD, a read-modify-write)."""
+        return not self.write or self.load is Load.LOAD or self.access.usage.reads
+
+    def describe(self) -> str:
+        where = "" if self.mip is None else f"[mip {self.mip}]"
+        load = f" {self.load.value}" if self.write and self.load is not Load.LOAD else ""
+        return f"{self.resource}{where} {self.access.name}{load}"
+
+
+class Pass:
+    """A step of the frame. Subclasses set `name`, declare in `setup` (which only declares: the
+    graph calls it at each compile to see whether anything changed) and record in `record`."""
+
+    name: str = ""
+
+    def setup(self, builder: PassBuilder) -> None:
+        raise NotImplementedError
+
+    def record(self, cb: Any, ctx: PassContext) -> None:
+        raise NotImplementedError
+
+    def key(self) -> Hashable:
+        """What the recording depends on besides its resources (frame replay compares it)."""
+        return None
+
+    def destroy(self) -> None:
+        """Release what the pass made (pipelines...); the graph calls it in its own destroy."""
+
+
+@dataclass(frozen=True)
+class Declared:
+    """All a pass's setup declared."""
+
+    creates: tuple[tuple[str, ImageDesc | BufferDesc], ...]
+    uses: tuple[Use, ...]
+    side_effect: bool
+
+
+class PassBuilder:
+    """Handed to `Pass.setup`; collects its declarations."""
+
+    def __init__(self, pass_name: str) -> None:
+        self.pass_name = pass_name
+        self._creates: list[tuple[str, ImageDesc | BufferDesc]] = []
+        self._uses: list[Use] = []
+        self._side_effect = False
+
+    def create(self, name: str, desc: ImageDesc | BufferDesc) -> str:
+        """A transient image or buffer the graph allocates (and may alias) for this frame."""
+        if not isinstance(desc, (ImageDesc, BufferDesc)):
+            raise UsageError(f"pass {self.pass_name!r} creates {name!r} from {desc!r}, not an ImageDesc/BufferDesc")
+        if any(n == name for n, _ in self._creates):
+            raise UsageError(f"pass {self.pass_name!r} creates {name!r} twice")
+        self._creates.append((name, desc))
+        return name
+
+    def _check(self, name: str, access: Access, mip: int | None) -> None:
+        if not isinstance(access, Access):
+            raise UsageError(f"pass {self.pass_name!r}: {access!r} is not an Access")
+        if mip is not None and (not isinstance(mip, int) or mip < 0):
+            raise UsageError(f"pass {self.pass_name!r}: mip {mip!r} of {name!r} is not a level")
+
+    def read(self, name: str, access: Access, *, mip: int | None = None) -> None:
+        self._check(name, access, mip)
+        if not access.usage.reads:
+            raise UsageError(f"pass {self.pass_name!r} reads {name!r} as {access.name}, which writes: use write()")
+        if access.usage.writes:
+            raise UsageError(f"pass {self.pass_name!r} reads {name!r} as {access.name}, which also writes: use write()")
+        self._uses.append(Use(name, access, mip, False))
+
+    def write(
+        self,
+        name: str,
+        access: Access,
+        *,
+        mip: int | None = None,
+        load: Load = Load.DONT_CARE,
+        clear: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0),
+    ) -> None:
+        self._check(name, access, mip)
+        if not access.usage.writes:
+            raise UsageError(f"pass {self.pass_name!r} writes {name!r} as {access.name}, which only reads: use read()")
+        if access.usage.reads:  # a read-modify-write keeps what was there
+            load = Load.LOAD
+        self._uses.append(Use(name, access, mip, True, load, tuple(float(c) for c in clear)))  # type: ignore[arg-type]
+
+    def side_effect(self) -> None:
+        """The pass is never culled (it reads back, presents or writes outside the graph)."""
+        self._side_effect = True
+
+    def declared(self) -> Declared:
+        return Declared(tuple(self._creates), tuple(self._uses), self._side_effect)
+
+
+def declare(p: Pass) -> Declared:
+    builder = PassBuilder(p.name)
+    p.setup(builder)
+    return builder.declared()

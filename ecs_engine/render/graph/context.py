@@ -1,0 +1,144 @@
+"""What a pass records with: its images and buffers by name, and dynamic rendering over the
+attachments it declared (load ops and clear values as declared, viewport and scissor set)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ...errors import UsageError
+from .builder import Use
+from .resources import Access, GraphBuffer, GraphImage, Load, is_depth
+
+_INTEGER = ("_UINT", "_SINT")
+
+
+class PassContext:
+    def __init__(
+        self,
+        device: Any,
+        extent: tuple[int, int],
+        images: dict[str, GraphImage],
+        buffers: dict[str, GraphBuffer],
+        format_names: dict[str, str],
+    ) -> None:
+        self.device = device
+        self.vk = device.vk
+        self.extent = extent
+        self._images = images
+        self._buffers = buffers
+        self._formats = format_names
+        self.pass_name = ""
+        self._uses: tuple[Use, ...] = ()
+        self._rendering = False
+        self._cb: Any = None  # the command buffer of the pass being recorded
+
+    def _enter(self, cb: Any, pass_name: str, uses: tuple[Use, ...]) -> None:
+        self._cb, self.pass_name, self._uses = cb, pass_name, uses
+
+    def _leave(self) -> None:
+        if self._rendering:
+            raise UsageError(f"pass {self.pass_name!r} began rendering and did not end it")
+
+    def image(self, name: str) -> GraphImage:
+        found = self._images.get(name)
+        if found is None:
+            raise UsageError(f"pass {self.pass_name!r} asks for image {name!r}, which the graph does not have")
+        return found
+
+    def buffer(self, name: str) -> GraphBuffer:
+        found = self._buffers.get(name)
+        if found is None:
+            raise UsageError(f"pass {self.pass_name!r} asks for buffer {name!r}, which the graph does not have")
+        return found
+
+    def _declared(self, name: str, mip: int, accesses: tuple[Access, ...]) -> Use:
+        for use in self._uses:
+            if use.resource == name and use.access in accesses and use.mip in (None, mip):
+                return use
+        wanted = " or ".join(a.name for a in accesses)
+        raise UsageError(f"pass {self.pass_name!r} renders to {name!r} (mip {mip}) without declaring it as {wanted}")
+
+    def _attachment(self, name: str, mip: int, accesses: tuple[Access, ...], resolve: str | None = None) -> Any:
+        vk = self.vk
+        use = self._declared(name, mip, accesses)
+        image = self.image(name)
+        fmt = self._formats[name]
+        load = {
+            Load.LOAD: vk.VK_ATTACHMENT_LOAD_OP_LOAD,
+            Load.CLEAR: vk.VK_ATTACHMENT_LOAD_OP_CLEAR,
+            Load.DONT_CARE: vk.VK_ATTACHMENT_LOAD_OP_DONT_CARE,
+        }[use.load if use.write else Load.LOAD]
+        if is_depth(fmt):
+            clear = vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=use.clear[0], stencil=0))
+        elif fmt.endswith(_INTEGER):
+            kind = "uint32" if fmt.endswith("_UINT") else "int32"
+            clear = vk.VkClearValue(color=vk.VkClearColorValue(**{kind: [int(c) for c in use.clear]}))
+        else:
+            clear = vk.VkClearValue(color=vk.VkClearColorValue(float32=list(use.clear)))
+        extra: dict[str, Any] = {}
+        if resolve is not None:
+            self._declared(resolve, mip, (Access.RESOLVE_WRITE,))
+            integer = fmt.endswith(_INTEGER)
+            extra = {
+                "resolveMode": vk.VK_RESOLVE_MODE_SAMPLE_ZERO_BIT if integer else vk.VK_RESOLVE_MODE_AVERAGE_BIT,
+                "resolveImageView": self.image(resolve).mip_view(mip),
+                "resolveImageLayout": vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+            }
+        return vk.VkRenderingAttachmentInfo(
+            imageView=image.mip_view(mip),
+            imageLayout=getattr(vk, f"VK_IMAGE_LAYOUT_{use.access.usage.layout}"),
+            loadOp=load,
+            # a read-only depth attachment stores nothing (a store would be a write)
+            storeOp=vk.VK_ATTACHMENT_STORE_OP_STORE if use.write else vk.VK_ATTACHMENT_STORE_OP_NONE,
+            clearValue=clear,
+            **extra,
+        )
+
+    def begin_rendering(
+        self,
+        colors: tuple[str, ...] = (),
+        depth: str | None = None,
+        resolve: tuple[str | None, ...] | None = None,
+        *,
+        secondaries: bool = False,
+        mip: int = 0,
+    ) -> None:
+        """vkCmdBeginRendering over these declared attachments at `mip`; `resolve[i]` (declared
+        RESOLVE_WRITE) receives colour i resolved. Viewport and scissor cover the attachments
+        (not with `secondaries`: those set their own)."""
+        vk = self.vk
+        if isinstance(colors, str):
+            colors = (colors,)
+        if self._rendering:
+            raise UsageError(f"pass {self.pass_name!r} begins rendering twice")
+        if resolve is not None and len(resolve) != len(colors):
+            raise UsageError(f"pass {self.pass_name!r}: one resolve target (or None) per colour attachment")
+        color_accesses = (Access.COLOR_WRITE, Access.COLOR_READ_WRITE)
+        infos = [
+            self._attachment(name, mip, color_accesses, resolve[i] if resolve is not None else None)
+            for i, name in enumerate(colors)
+        ]
+        depth_info = self._attachment(depth, mip, (Access.DEPTH_WRITE, Access.DEPTH_READ)) if depth else None
+        named = [*colors, *([depth] if depth else [])]
+        if not named:
+            raise UsageError(f"pass {self.pass_name!r} begins rendering with no attachment")
+        w, h = self.image(named[0]).mip_extent(mip)
+        area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(w, h))
+        info = vk.VkRenderingInfo(
+            flags=vk.VK_RENDERING_CONTENTS_SECONDARY_COMMAND_BUFFERS_BIT if secondaries else 0,
+            renderArea=area,
+            layerCount=1,
+            pColorAttachments=infos or None,
+            pDepthAttachment=depth_info,
+        )
+        vk.vkCmdBeginRendering(self._cb, info)
+        self._rendering = True
+        if not secondaries:
+            vk.vkCmdSetViewport(self._cb, 0, 1, [vk.VkViewport(0.0, 0.0, float(w), float(h), 0.0, 1.0)])
+            vk.vkCmdSetScissor(self._cb, 0, 1, [area])
+
+    def end_rendering(self) -> None:
+        if not self._rendering:
+            raise UsageError(f"pass {self.pass_name!r} ends rendering it did not begin")
+        self.vk.vkCmdEndRendering(self._cb)
+        self._rendering = False

@@ -1,0 +1,245 @@
+"""The frame graph: passes added in order, resources imported from outside, outputs; compiled
+into an order, a culled set, transient resources (aliased) and barriers; executed into a
+command buffer. Without a device (`FrameGraph(None)`) it plans only (tests, `describe`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from ...errors import UsageError
+from ...gpu.functions import handle_int
+from ...gpu.owned import Owned
+from .barriers import BarrierPlan, plan_barriers, record_barriers
+from .builder import Declared, Pass, declare
+from .compile import Imported, Structure, plan_structure
+from .context import PassContext
+from .describe import describe
+from .resources import GraphBuffer, GraphImage, format_name, layout_name
+from .transient import Packing, Transients, aspect_of, estimated_requirements, pack
+
+
+@dataclass
+class Compiled:
+    """One compile's result: the structure (order, culled, lifetimes), where the transients
+    live, and the barrier plan; with a device, the transients themselves."""
+
+    signature: tuple
+    structure: Structure
+    packing: Packing
+    barriers: BarrierPlan
+    transients: Transients | None
+
+
+class FrameGraph:
+    def __init__(self, device: Any) -> None:
+        self.device = device
+        self._passes: list[Pass] = []
+        self._imports: dict[str, Imported] = {}
+        self._outputs: list[str] = []
+        self._owned = Owned(device) if device is not None else None
+        self.compiled: Compiled | None = None
+        self.compiles = 0  # how many compiles did work (a cached one does none)
+
+    # ------------------------------------------------------------------ declaring the frame
+    def add_pass(self, p: Pass, *, before: str | None = None) -> None:
+        """Add `p` after the passes added so far, or just before the pass named `before` (a
+        plugin placing itself ahead of, say, the tone map)."""
+        if not isinstance(p, Pass) or not p.name:
+            raise UsageError(f"{p!r} is not a Pass with a name")
+        if any(q.name == p.name for q in self._passes):
+            raise UsageError(f"the frame graph already has a pass named {p.name!r}")
+        at = len(self._passes)
+        if before is not None:
+            names = [q.name for q in self._passes]
+            if before not in names:
+                raise UsageError(f"no pass {before!r} to add {p.name!r} before; passes: {', '.join(names)}")
+            at = names.index(before)
+        self._passes.insert(at, p)
+
+    def remove_pass(self, name: str) -> Pass:
+        """Take a pass out (not destroyed: the caller now owns it)."""
+        for i, p in enumerate(self._passes):
+            if p.name == name:
+                return self._passes.pop(i)
+        raise UsageError(f"the frame graph has no pass named {name!r}")
+
+    @property
+    def passes(self) -> tuple[Pass, ...]:
+        return tuple(self._passes)
+
+    def _vk(self) -> Any:
+        if self.device is not None:
+            return self.device.vk
+        from ...gpu.loader import load_vulkan
+
+        return load_vulkan()
+
+    def import_image(
+        self,
+        name: str,
+        *,
+        handle: Any,
+        view: Any,
+        format: Any,
+        extent: tuple[int, int],
+        mips: int = 1,
+        samples: int = 1,
+        layout_before: Any,
+        layout_after: Any,
+        mip_views: tuple[Any, ...] = (),
+    ) -> None:
+        """An image owned outside the graph; importing a name again replaces it (a new
+        swapchain image each frame: only a change of format, size or layouts recompiles)."""
+        vk = self._vk() if not all(isinstance(v, str) for v in (format, layout_before, layout_after)) else None
+        fmt = format_name(vk, format)
+        value = int(format) if not isinstance(format, str) else int(getattr(vk, f"VK_FORMAT_{fmt}", 0)) if vk else 0
+        self._imports[name] = Imported(
+            name,
+            "image",
+            handle,
+            view,
+            fmt,
+            value,
+            (int(extent[0]), int(extent[1])),
+            mips,
+            samples,
+            layout_name(vk, layout_before),
+            layout_name(vk, layout_after),
+            mip_views=tuple(mip_views),
+        )
+
+    def import_buffer(self, name: str, *, handle: Any, size: int) -> None:
+        self._imports[name] = Imported(name, "buffer", handle, size=int(size))
+
+    def output(self, name: str) -> None:
+        """A resource the frame must produce: the passes writing it (and what they need) run."""
+        if name not in self._outputs:
+            self._outputs.append(name)
+
+    # ------------------------------------------------------------------ compiling
+    def compile(self, extent: tuple[int, int]) -> None:
+        """Order, cull, lifetimes, aliasing and barriers; nothing is done again while the
+        passes' declarations, the imports (other than their handles), the outputs and the
+        extent are the same."""
+        extent = (int(extent[0]), int(extent[1]))
+        if min(extent) < 1:
+            raise UsageError(f"the frame graph's extent must be positive, not {extent}")
+        declared: list[tuple[str, Declared]] = [(p.name, declare(p)) for p in self._passes]
+        signature = (
+            extent,
+            tuple(declared),
+            tuple(i.compile_key for i in self._imports.values()),
+            tuple(self._outputs),
+        )
+        if self.compiled is not None and self.compiled.signature == signature:
+            return
+        structure = plan_structure(declared, self._imports, tuple(self._outputs), extent)
+        transients = None
+        if self.device is not None:
+            assert self._owned is not None
+            if len(self._owned):
+                self.device.wait_idle()  # frames in flight may still use the old transients
+            self._owned.destroy()
+            self.compiled = None
+            try:
+                transients = Transients(self.device, structure, self._owned)
+            except BaseException:
+                self._owned.destroy()
+                raise
+            packing = transients.packing
+        else:
+            packing = pack(estimated_requirements(structure))
+        self.compiled = Compiled(signature, structure, packing, plan_barriers(structure, packing), transients)
+        self.compiles += 1
+
+    def _ready(self) -> Compiled:
+        if self.compiled is None:
+            raise UsageError("the frame graph is not compiled: call compile(extent) first")
+        return self.compiled
+
+    @property
+    def order(self) -> list[str]:
+        return list(self._ready().structure.order)
+
+    @property
+    def culled(self) -> list[str]:
+        return list(self._ready().structure.culled)
+
+    @property
+    def transient_bytes(self) -> int:
+        return self._ready().packing.transient_bytes
+
+    @property
+    def unaliased_bytes(self) -> int:
+        return self._ready().packing.unaliased_bytes
+
+    # ------------------------------------------------------------------ recording
+    def _resources(self, c: Compiled) -> tuple[dict[str, GraphImage], dict[str, GraphBuffer]]:
+        images = dict(c.transients.images) if c.transients else {}
+        buffers = dict(c.transients.buffers) if c.transients else {}
+        for name, imp in self._imports.items():
+            if imp.kind == "image":
+                images[name] = GraphImage(
+                    name, imp.handle, imp.view, imp.format_value, imp.extent, imp.mips, imp.samples, imp.mip_views
+                )
+            else:
+                buffers[name] = GraphBuffer(name, imp.handle, imp.size)
+        return images, buffers
+
+    def execute(self, cb: Any) -> None:
+        """Record the passes that run, each after its batch of barriers, then the imports'
+        transitions to their layout_after."""
+        c = self._ready()
+        if self.device is None:
+            raise UsageError("a frame graph without a device only plans; it cannot execute")
+        vk = self.device.vk
+        images, buffers = self._resources(c)
+        s = c.structure
+        formats = {name: res.format for name, res in s.resources.items()}
+        aspects = {name: aspect_of(vk, res.format) for name, res in s.resources.items() if res.kind == "image"}
+        image_handles = {name: image.handle for name, image in images.items()}
+        buffer_handles = {name: buffer.handle for name, buffer in buffers.items()}
+        ctx = PassContext(self.device, s.extent, images, buffers, formats)
+        by_name = {p.name: p for p in self._passes}
+        for name in s.order:
+            rows = c.barriers.before[name]
+            if rows:
+                record_barriers(vk, cb, rows, image_handles, buffer_handles, aspects)
+            ctx._enter(cb, name, s.uses[name])
+            by_name[name].record(cb, ctx)
+            ctx._leave()
+        if c.barriers.after:
+            record_barriers(vk, cb, c.barriers.after, image_handles, buffer_handles, aspects)
+
+    def key(self) -> tuple:
+        """What a recorded frame depends on: each running pass's (name, key()) in order, the
+        extent, and the imported handles. Equal keys: a kept command buffer draws the same."""
+        c = self._ready()
+        by_name = {p.name: p for p in self._passes}
+        vk = self.device.vk if self.device is not None else None
+        handles = tuple((name, _int(vk, imp.handle), _int(vk, imp.view)) for name, imp in sorted(self._imports.items()))
+        return (*((name, by_name[name].key()) for name in c.structure.order), c.structure.extent, handles)
+
+    def describe(self) -> str:
+        """The passes in order, what each reads and writes and the barriers before it, then
+        the transients with their sizes and places in memory."""
+        c = self._ready()
+        return describe(c.structure, c.packing, c.barriers)
+
+    def destroy(self) -> None:
+        """The transients and the passes (last added first); a second call does nothing."""
+        if self._owned is not None:
+            if len(self._owned):
+                self.device.wait_idle()
+            self._owned.destroy()
+        self.compiled = None
+        passes, self._passes = self._passes, []
+        for p in reversed(passes):
+            p.destroy()
+
+
+def _int(vk: Any, handle: Any) -> Any:
+    if handle is None or vk is None or isinstance(handle, int):
+        return handle
+    return handle_int(vk, handle)

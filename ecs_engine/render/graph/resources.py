@@ -1,0 +1,291 @@
+"""What the frame graph's resources are: descriptions of transient images and buffers, the one
+table that says what each kind of access means to Vulkan, and the images and buffers a pass
+records with.
+
+The table holds Vulkan names without their prefixes (stage "COMPUTE_SHADER", access
+"SHADER_SAMPLED_READ", layout "GENERAL"), so a graph can be planned and its barrier plan checked
+without a device; `flags()` turns names into bits when barriers are recorded.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from enum import Enum
+from typing import Any
+
+from ...errors import UsageError
+
+
+class Load(Enum):
+    """What a write does with what the resource held: LOAD keeps it (the pass reads it: it
+    depends on the pass that wrote it); CLEAR and DONT_CARE discard it (CLEAR fills attachments
+    with the write's clear value; other writes clear themselves if they need to)."""
+
+    LOAD = "load"
+    CLEAR = "clear"
+    DONT_CARE = "dont_care"
+
+
+@dataclass(frozen=True)
+class Usage:
+    """One access kind: pipeline stages, memory accesses, the image layout (None: buffers only),
+    whether it reads / writes, the image and buffer usage bits it needs, and whether it applies
+    to images, buffers or both."""
+
+    stages: tuple[str, ...]
+    access: tuple[str, ...]
+    layout: str | None
+    reads: bool
+    writes: bool
+    image_usage: tuple[str, ...] = ()
+    buffer_usage: tuple[str, ...] = ()
+
+
+_FRAG_TESTS = ("EARLY_FRAGMENT_TESTS", "LATE_FRAGMENT_TESTS")
+
+
+class Access(Enum):
+    COLOR_WRITE = Usage(
+        ("COLOR_ATTACHMENT_OUTPUT",),
+        ("COLOR_ATTACHMENT_WRITE",),
+        "COLOR_ATTACHMENT_OPTIMAL",
+        False,
+        True,
+        ("COLOR_ATTACHMENT",),
+    )
+    COLOR_READ_WRITE = Usage(
+        ("COLOR_ATTACHMENT_OUTPUT",),
+        ("COLOR_ATTACHMENT_READ", "COLOR_ATTACHMENT_WRITE"),
+        "COLOR_ATTACHMENT_OPTIMAL",
+        True,
+        True,
+        ("COLOR_ATTACHMENT",),
+    )
+    DEPTH_WRITE = Usage(
+        _FRAG_TESTS,
+        ("DEPTH_STENCIL_ATTACHMENT_READ", "DEPTH_STENCIL_ATTACHMENT_WRITE"),
+        "DEPTH_STENCIL_ATTACHMENT_OPTIMAL",
+        False,
+        True,
+        ("DEPTH_STENCIL_ATTACHMENT",),
+    )
+    DEPTH_READ = Usage(  # a depth attachment tested, not written (also sampled in this layout)
+        _FRAG_TESTS,
+        ("DEPTH_STENCIL_ATTACHMENT_READ",),
+        "DEPTH_STENCIL_READ_ONLY_OPTIMAL",
+        True,
+        False,
+        ("DEPTH_STENCIL_ATTACHMENT",),
+    )
+    RESOLVE_WRITE = Usage(  # MSAA resolves run in the colour output stage as attachment writes
+        ("COLOR_ATTACHMENT_OUTPUT",),
+        ("COLOR_ATTACHMENT_WRITE",),
+        "COLOR_ATTACHMENT_OPTIMAL",
+        False,
+        True,
+        ("COLOR_ATTACHMENT",),
+    )
+    FRAGMENT_SAMPLED = Usage(
+        ("FRAGMENT_SHADER",), ("SHADER_SAMPLED_READ",), "SHADER_READ_ONLY_OPTIMAL", True, False, ("SAMPLED",)
+    )
+    COMPUTE_SAMPLED = Usage(
+        ("COMPUTE_SHADER",), ("SHADER_SAMPLED_READ",), "SHADER_READ_ONLY_OPTIMAL", True, False, ("SAMPLED",)
+    )
+    COMPUTE_READ = Usage(
+        ("COMPUTE_SHADER",), ("SHADER_STORAGE_READ",), "GENERAL", True, False, ("STORAGE",), ("STORAGE_BUFFER",)
+    )
+    COMPUTE_WRITE = Usage(
+        ("COMPUTE_SHADER",), ("SHADER_STORAGE_WRITE",), "GENERAL", False, True, ("STORAGE",), ("STORAGE_BUFFER",)
+    )
+    COMPUTE_READ_WRITE = Usage(
+        ("COMPUTE_SHADER",),
+        ("SHADER_STORAGE_READ", "SHADER_STORAGE_WRITE"),
+        "GENERAL",
+        True,
+        True,
+        ("STORAGE",),
+        ("STORAGE_BUFFER",),
+    )
+    TRANSFER_READ = Usage(
+        ("TRANSFER",), ("TRANSFER_READ",), "TRANSFER_SRC_OPTIMAL", True, False, ("TRANSFER_SRC",), ("TRANSFER_SRC",)
+    )
+    TRANSFER_WRITE = Usage(
+        ("TRANSFER",), ("TRANSFER_WRITE",), "TRANSFER_DST_OPTIMAL", False, True, ("TRANSFER_DST",), ("TRANSFER_DST",)
+    )
+    INDIRECT_READ = Usage(("DRAW_INDIRECT",), ("INDIRECT_COMMAND_READ",), None, True, False, (), ("INDIRECT_BUFFER",))
+    VERTEX_READ = Usage(
+        ("VERTEX_INPUT",),
+        ("VERTEX_ATTRIBUTE_READ", "INDEX_READ"),
+        None,
+        True,
+        False,
+        (),
+        ("VERTEX_BUFFER", "INDEX_BUFFER"),
+    )
+    UNIFORM_READ = Usage(
+        ("VERTEX_SHADER", "FRAGMENT_SHADER", "COMPUTE_SHADER"),
+        ("UNIFORM_READ",),
+        None,
+        True,
+        False,
+        (),
+        ("UNIFORM_BUFFER",),
+    )
+    # handed to the presentation engine: nothing after it in the frame (the semaphore waits)
+    PRESENT = Usage(("NONE",), ("NONE",), "PRESENT_SRC_KHR", True, False)
+
+    @property
+    def usage(self) -> Usage:
+        return self.value
+
+    @property
+    def for_images(self) -> bool:
+        return self.usage.layout is not None
+
+    @property
+    def for_buffers(self) -> bool:
+        return bool(self.usage.buffer_usage)
+
+
+ATTACHMENT_ACCESSES = (
+    Access.COLOR_WRITE,
+    Access.COLOR_READ_WRITE,
+    Access.DEPTH_WRITE,
+    Access.DEPTH_READ,
+    Access.RESOLVE_WRITE,
+)
+
+
+def flags(vk: Any, prefix: str, names: tuple[str, ...] | frozenset[str]) -> int:
+    """The bits of `names` ("COMPUTE_SHADER") under `prefix` ("VK_PIPELINE_STAGE_2_")."""
+    bits = 0
+    for name in names:
+        value = getattr(vk, f"{prefix}{name}", None)
+        bits |= value if value is not None else getattr(vk, f"{prefix}{name}_BIT")
+    return bits
+
+
+def format_name(vk: Any, fmt: int | str) -> str:
+    """A VkFormat's name without the prefix ("R16G16B16A16_SFLOAT") from its value or name."""
+    if isinstance(fmt, str):
+        return fmt.removeprefix("VK_FORMAT_")
+    for name in dir(vk):
+        if name.startswith("VK_FORMAT_") and getattr(vk, name) == fmt and not name.endswith("_KHR"):
+            return name.removeprefix("VK_FORMAT_")
+    raise UsageError(f"unknown VkFormat {fmt}")
+
+
+def layout_name(vk: Any, layout: int | str) -> str:
+    """A VkImageLayout's name without the prefix from its value or name."""
+    if isinstance(layout, str):
+        return layout.removeprefix("VK_IMAGE_LAYOUT_")
+    for name in dir(vk):
+        if name.startswith("VK_IMAGE_LAYOUT_") and getattr(vk, name) == layout and not name.endswith(("_KHR", "_NV")):
+            return name.removeprefix("VK_IMAGE_LAYOUT_")
+    raise UsageError(f"unknown VkImageLayout {layout}")
+
+
+def is_depth(fmt: str) -> bool:
+    return fmt.startswith(("D16", "D24", "D32", "X8_D24"))
+
+
+def texel_bytes(fmt: str) -> int:
+    """Bytes per texel of an uncompressed format, from its name (planning without a device)."""
+    packed = re.search(r"PACK(\d+)", fmt)
+    if packed:
+        return int(packed[1]) // 8
+    if fmt.startswith("D32_SFLOAT_S8"):
+        return 8
+    bits = sum(int(b) for b in re.findall(r"[RGBADSX](\d+)", fmt.split("_")[0]))
+    if fmt.startswith(("D16_UNORM_S8", "D24_UNORM_S8")):
+        bits = 32
+    return max(1, bits // 8)
+
+
+@dataclass(frozen=True)
+class ImageDesc:
+    """A transient image: its format's name, its size relative to the graph's extent (or an
+    absolute `size`), mip levels and MSAA samples."""
+
+    format: str = "VK_FORMAT_R16G16B16A16_SFLOAT"
+    scale: float = 1.0
+    size: tuple[int, int] | None = None
+    mips: int = 1
+    samples: int = 1
+
+    def __post_init__(self) -> None:
+        if not self.format.removeprefix("VK_FORMAT_") or not re.fullmatch(r"(VK_FORMAT_)?[A-Z0-9_]+", self.format):
+            raise UsageError(f"image format {self.format!r} is not a VkFormat's name")
+        if self.scale <= 0 or (self.size is not None and min(self.size) < 1):
+            raise UsageError(f"image size must be positive (scale {self.scale}, size {self.size})")
+        if self.mips < 1 or self.samples not in (1, 2, 4, 8, 16, 32, 64):
+            raise UsageError(f"an image has mips >= 1 and 1, 2, 4 ... 64 samples, not {self.mips}, {self.samples}")
+        if self.mips > 1 and self.samples > 1:
+            raise UsageError("a multisampled image has one mip level")
+
+    @property
+    def format_name(self) -> str:
+        return self.format.removeprefix("VK_FORMAT_")
+
+    def extent(self, graph_extent: tuple[int, int]) -> tuple[int, int]:
+        if self.size is not None:
+            return (int(self.size[0]), int(self.size[1]))
+        w, h = graph_extent
+        return (max(1, math.ceil(w * self.scale)), max(1, math.ceil(h * self.scale)))
+
+    def estimated_bytes(self, graph_extent: tuple[int, int]) -> int:
+        """Memory the image takes by its texel size (the device's own figure replaces it)."""
+        w, h = self.extent(graph_extent)
+        texels = sum(max(1, w >> m) * max(1, h >> m) for m in range(self.mips))
+        return texels * texel_bytes(self.format_name) * self.samples
+
+
+@dataclass(frozen=True)
+class BufferDesc:
+    """A transient buffer of `size` bytes."""
+
+    size: int
+
+    def __post_init__(self) -> None:
+        if self.size < 1:
+            raise UsageError(f"a buffer has at least one byte, not {self.size}")
+
+
+def mip_extent(extent: tuple[int, int], mip: int) -> tuple[int, int]:
+    return (max(1, extent[0] >> mip), max(1, extent[1] >> mip))
+
+
+@dataclass
+class GraphImage:
+    """An image as a pass records with it: the handle, a view of all mips, views of each mip,
+    the VkFormat (its value), size, mips and samples."""
+
+    name: str
+    handle: Any
+    view: Any
+    format: int
+    extent: tuple[int, int]
+    mips: int
+    samples: int
+    mip_views: tuple[Any, ...] = ()
+
+    def mip_view(self, mip: int) -> Any:
+        if not 0 <= mip < self.mips:
+            raise UsageError(f"image {self.name!r} has {self.mips} mip level(s); no mip {mip}")
+        if self.mips == 1:
+            return self.view
+        if not self.mip_views:
+            raise UsageError(f"imported image {self.name!r} was imported without views of each mip")
+        return self.mip_views[mip]
+
+    def mip_extent(self, mip: int) -> tuple[int, int]:
+        return mip_extent(self.extent, mip)
+
+
+@dataclass
+class GraphBuffer:
+    name: str
+    handle: Any
+    size: int
