@@ -1,14 +1,10 @@
-"""The bloom post effect (ecs_engine/render/post/): its passes on lavapipe, with validation on,
-against the NumPy reference (bloom_reference.py) on a small HDR image; its settings' checks; the
-energy-conserving composite's bound."""
+"""The bloom post effect (ecs_engine/render/post/): its passes run through the frame graph on
+the device, with validation on, against the NumPy reference (bloom_reference.py) on a small HDR
+image; its settings' checks; the energy-conserving composite's bound; what the passes declare."""
 
 from __future__ import annotations
 
 import math
-import sys
-import types
-from dataclasses import dataclass
-from enum import Enum
 from typing import Any
 
 import numpy as np
@@ -18,6 +14,8 @@ from bloom_reference import bloom as reference_bloom
 from gpu_context import shared_device
 
 from ecs_engine.errors import UsageError
+from ecs_engine.render.graph import Access, FrameGraph, Pass, PassBuilder
+from ecs_engine.render.post.bloom import BloomPipelines, add_bloom, bloom_passes
 from ecs_engine.render.post.bloom_settings import (
     BloomComposite,
     BloomSettings,
@@ -123,15 +121,15 @@ def test_reference_conserves_energy_within_the_composite_bound():
 # --------------------------------------------------------------------------------- on the GPU
 
 
-class ChainImage:
-    """An R16G16B16A16_SFLOAT image with `mips` levels, a view of all and one per mip, usable as
-    the HDR image (sampled, storage, copied to and from) or as the bloom chain."""
+class HdrImage:
+    """The scene's HDR colour as the renderer would import it: R16G16B16A16_SFLOAT, sampled and
+    storage (bloom reads and writes it), copied to and from a buffer by the test."""
 
-    def __init__(self, device: Any, width: int, height: int, mips: int = 1) -> None:
-        from ecs_engine.gpu.allocator import DEVICE
+    def __init__(self, device: Any, width: int, height: int) -> None:
+        from ecs_engine.gpu.memory import Image
 
         vk = device.vk
-        self.device, self.extent, self.mips = device, (width, height), mips
+        self.device, self.extent = device, (width, height)
         usage = (
             vk.VK_IMAGE_USAGE_SAMPLED_BIT
             | vk.VK_IMAGE_USAGE_STORAGE_BIT
@@ -139,55 +137,17 @@ class ChainImage:
             | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT
         )
         self.format = vk.VK_FORMAT_R16G16B16A16_SFLOAT
-        self.handle = vk.vkCreateImage(
-            device.handle,
-            vk.VkImageCreateInfo(
-                imageType=vk.VK_IMAGE_TYPE_2D,
-                format=self.format,
-                extent=vk.VkExtent3D(width, height, 1),
-                mipLevels=mips,
-                arrayLayers=1,
-                samples=vk.VK_SAMPLE_COUNT_1_BIT,
-                tiling=vk.VK_IMAGE_TILING_OPTIMAL,
-                usage=usage,
-                initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
-            ),
-            None,
-        )
-        req = vk.vkGetImageMemoryRequirements(device.handle, self.handle)
-        self.allocation = device.allocator.allocate(req, DEVICE, "image")
-        vk.vkBindImageMemory(device.handle, self.handle, self.allocation.memory, self.allocation.offset)
-        self.view = self._view(0, mips)
-        self.mip_views = [self._view(m, 1) for m in range(mips)] if mips > 1 else [self.view]
+        self.image = Image(device, width, height, self.format, usage, vk.VK_IMAGE_ASPECT_COLOR_BIT)
+        self.handle, self.view = self.image.handle, self.image.view
 
-    def _view(self, base: int, count: int) -> Any:
-        vk = self.device.vk
-        rng = vk.VkImageSubresourceRange(
-            aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=base, levelCount=count, baseArrayLayer=0, layerCount=1
-        )
-        info = vk.VkImageViewCreateInfo(
-            image=self.handle, viewType=vk.VK_IMAGE_VIEW_TYPE_2D, format=self.format, subresourceRange=rng
-        )
-        return vk.vkCreateImageView(self.device.handle, info, None)
-
-    def mip_view(self, mip: int) -> Any:
-        return self.mip_views[mip]
-
-    def mip_extent(self, mip: int) -> tuple[int, int]:
-        return (max(1, self.extent[0] >> mip), max(1, self.extent[1] >> mip))
-
-    def barrier(self, cb: Any, old: int, new: int, mip: int | None = None) -> None:
+    def barrier(self, cb: Any, old: int, new: int) -> None:
         """Everything before (compute, transfer) done and visible before everything after."""
         vk = self.device.vk
         stages = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | vk.VK_PIPELINE_STAGE_TRANSFER_BIT
         memory = vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_SHADER_WRITE_BIT | vk.VK_ACCESS_TRANSFER_WRITE_BIT
         memory |= vk.VK_ACCESS_TRANSFER_READ_BIT
         rng = vk.VkImageSubresourceRange(
-            aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT,
-            baseMipLevel=mip or 0,
-            levelCount=self.mips if mip is None else 1,
-            baseArrayLayer=0,
-            layerCount=1,
+            aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=1
         )
         b = vk.VkImageMemoryBarrier(
             srcAccessMask=memory,
@@ -220,143 +180,72 @@ class ChainImage:
             )
 
     def destroy(self) -> None:
-        vk = self.device.vk
-        for view in {*self.mip_views, self.view}:
-            vk.vkDestroyImageView(self.device.handle, view, None)
-        vk.vkDestroyImage(self.device.handle, self.handle, None)
-        self.device.allocator.free(self.allocation)
+        self.image.destroy()
 
 
-try:  # the frame graph, once it is in this branch
-    from ecs_engine.render.graph import FrameGraph
-except ImportError:  # until then the passes run through DirectRecorder, against a stand-in of its API
-    FrameGraph = None
-    _stub = types.ModuleType("ecs_engine.render.graph")
-
-    class _Access(Enum):
-        COMPUTE_SAMPLED = "SHADER_READ_ONLY_OPTIMAL"
-        COMPUTE_WRITE = "GENERAL"
-        COMPUTE_READ_WRITE = "GENERAL "  # (a distinct value: not an alias of COMPUTE_WRITE)
-
-    @dataclass(frozen=True)
-    class _ImageDesc:
-        format: str = FORMAT
-        scale: float = 1.0
-        size: tuple[int, int] | None = None
-        mips: int = 1
-        samples: int = 1
-
-    class _Pass:
-        name = ""
-
-        def key(self) -> Any:
-            return None
-
-        def destroy(self) -> None:
-            pass
-
-    _stub.Access, _stub.ImageDesc, _stub.Pass = _Access, _ImageDesc, _Pass  # type: ignore[attr-defined]
-    sys.modules["ecs_engine.render.graph"] = _stub
-
-from ecs_engine.render.post.bloom import BloomPipelines, add_bloom, bloom_passes  # noqa: E402
-
-
-class DirectRecorder:
-    """Runs passes in the order given, as the frame graph will: each after a barrier that makes
-    everything before it visible and moves each (image, mip) it declares to its access's layout.
-    Used only until the frame graph is in this branch."""
-
-    def __init__(self, device: Any, images: dict[str, ChainImage], extent: tuple[int, int]) -> None:
-        self.device, self.images, self.extent, self.passes = device, images, extent, []
-        self.layouts: dict[tuple[str, int], int] = {}
-
-    def add_pass(self, p: Any) -> None:
-        self.passes.append(p)
-
-    def image(self, name: str) -> ChainImage:
-        return self.images[name]
-
-    def execute(self, cb: Any) -> None:
-        vk = self.device.vk
-        for p in self.passes:
-            builder = _Builder(self)
-            p.setup(builder)
-            for name, access, mip in builder.uses:
-                image = self.images[name]
-                storage = "WRITE" in access.name
-                want = vk.VK_IMAGE_LAYOUT_GENERAL if storage else vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
-                for m in range(image.mips) if mip is None else [mip]:
-                    old = self.layouts.get((name, m), vk.VK_IMAGE_LAYOUT_UNDEFINED)
-                    image.barrier(cb, old, want, m)
-                    self.layouts[name, m] = want
-            p.record(cb, self)
-
-    def _create(self, name: str, desc: Any) -> str:
-        w, h = (max(1, math.ceil(e * desc.scale)) for e in self.extent)
-        self.images[name] = ChainImage(self.device, w, h, desc.mips)
-        return name
-
-    def destroy(self) -> None:
-        for p in self.passes:
-            p.destroy()
-
-
-class _Builder:
-    def __init__(self, recorder: DirectRecorder) -> None:
-        self.recorder = recorder
-        self.uses: list[tuple[str, Any, int | None]] = []
-
-    def create(self, name: str, desc: Any) -> str:
-        return self.recorder._create(name, desc)
-
-    def read(self, name: str, access: Any, mip: int | None = None) -> None:
-        self.uses.append((name, access, mip))
-
-    def write(self, name: str, access: Any, mip: int | None = None, **_: Any) -> None:
-        self.uses.append((name, access, mip))
-
-
-def gpu_bloom(hdr: np.ndarray, settings: BloomSettings, every_pass: bool = False) -> tuple[np.ndarray, int]:
-    """`hdr` after the bloom passes on the device, and how many passes ran: those `add_bloom`
-    adds, or with `every_pass` the whole chain even where add_bloom would add none."""
+def gpu_bloom(
+    hdr: np.ndarray, settings: BloomSettings, every_pass: bool = False, sizes: tuple[tuple[int, int], ...] = ()
+) -> tuple[np.ndarray, int, int]:
+    """`hdr` after the bloom passes run through the frame graph on the device, how many passes
+    ran (those `add_bloom` adds, or with `every_pass` the whole chain even where add_bloom would
+    add none) and how many descriptor sets the pipelines held at the end. `sizes`: first run
+    the same graph over other sizes of the HDR image (each a compile with new transients), the
+    last run is `hdr`'s."""
     from ecs_engine.gpu.memory import HOST, Buffer
 
     device = shared_device()
     vk = device.vk
     height, width = hdr.shape[:2]
-    image = ChainImage(device, width, height)
     usage = vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT | vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
-    buffer = Buffer(device, hdr.nbytes, usage, HOST)
-    images = {"hdr": image}
-    graph = DirectRecorder(device, images, (width, height))
+    buffer = Buffer(device, hdr.nbytes * 2, usage, HOST)
+    graph = FrameGraph(device)
     pipelines = BloomPipelines(device).acquire()  # held until the end: the passes release theirs
+    images: list[HdrImage] = []
     try:
-        buffer.bytes()[:] = np.ascontiguousarray(hdr, np.float16).view(np.uint8).reshape(-1)
         if every_pass:
             passes = bloom_passes(pipelines, settings, (width, height))
             for p in passes:
                 graph.add_pass(p)
         else:
             passes = add_bloom(graph, settings, (width, height), pipelines=pipelines)
+        graph.output("hdr")
+        for w, h in (*sizes, (width, height)):
+            image = HdrImage(device, w, h)
+            images.append(image)
+            data = np.ascontiguousarray(np.resize(hdr, (h, w, 4)), np.float16)
+            buffer.bytes()[: data.nbytes] = data.view(np.uint8).reshape(-1)
+            graph.import_image(
+                "hdr",
+                handle=image.handle,
+                view=image.view,
+                format=image.format,
+                extent=(w, h),
+                layout_before=vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                layout_after=vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+            )
+            if passes:
+                graph.compile((w, h))
 
-        def record(cb: Any) -> None:
-            image.barrier(cb, vk.VK_IMAGE_LAYOUT_UNDEFINED, vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL)
-            image.copy(cb, buffer, to_image=True)
-            graph.layouts["hdr", 0] = vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL
-            graph.execute(cb)
-            old = graph.layouts["hdr", 0]
-            image.barrier(cb, old, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL)
-            image.copy(cb, buffer, to_image=False)
+            def record(cb: Any, image: HdrImage = image) -> None:
+                image.barrier(cb, vk.VK_IMAGE_LAYOUT_UNDEFINED, vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL)
+                image.copy(cb, buffer, to_image=True)
+                if passes:
+                    graph.execute(cb)  # ends with the image in TRANSFER_SRC_OPTIMAL
+                else:
+                    dst, src = vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
+                    image.barrier(cb, dst, src)
+                image.copy(cb, buffer, to_image=False)
 
-        device.submit_once(record)
-        out = buffer.bytes().view(np.float16).reshape(height, width, 4).copy()
+            device.submit_once(record)
+        out = buffer.bytes()[: hdr.nbytes].view(np.float16).reshape(height, width, 4).copy()
+        sets = len(pipelines._sets)
     finally:
         graph.destroy()
         pipelines.release()
-        for img in images.values():
-            img.destroy()
+        for image in images:
+            image.destroy()
         buffer.destroy()
-    return out, len(passes)
+    return out, len(passes), sets
 
 
 def error(got: np.ndarray, want: np.ndarray) -> float:
@@ -378,7 +267,7 @@ def test_bloom_on_the_gpu_matches_the_reference(size, settings):
     """Odd sizes too: there a level is not exactly half the one above, and the taps fall
     between texels at fractions other than a half."""
     image = scene(*size)
-    got, count = gpu_bloom(image, settings)
+    got, count, _ = gpu_bloom(image, settings)
     assert count == 2 * len(chain_extents(size, settings))  # N down, N - 1 up, the composite
     found = error(got, reference_bloom(image, settings))
     print(f"max error vs the reference: {found:.2e}")
@@ -389,10 +278,10 @@ def test_bloom_on_the_gpu_matches_the_reference(size, settings):
 def test_zero_intensity_leaves_the_image_as_it_was():
     image = scene()
     settings = BloomSettings(intensity=0.0, low_frequency_boost=1.0)
-    got, count = gpu_bloom(image, settings)
+    got, count, _ = gpu_bloom(image, settings)
     assert count == 0  # add_bloom adds nothing: c_0 = 0 whatever the boost
     assert np.array_equal(got, image)
-    got, count = gpu_bloom(image, settings, every_pass=True)  # and the chain itself, run anyway
+    got, count, _ = gpu_bloom(image, settings, every_pass=True)  # and the chain itself, run anyway
     assert count == 6 and np.array_equal(got.view(np.uint16), image.view(np.uint16))
 
 
@@ -400,9 +289,57 @@ def test_zero_intensity_leaves_the_image_as_it_was():
 def test_gpu_bloom_conserves_energy_within_the_composite_bound(settings):
     """Energy-conserving: the frame's light after lies in [(1 - c0) * before, before]."""
     image = scene()
-    got, _ = gpu_bloom(image, settings)
+    got, _, _ = gpu_bloom(image, settings)
     before = (image[..., :3].astype(np.float64) @ LUMA).sum()
     after = (got[..., :3].astype(np.float64) @ LUMA).sum()
     c0 = blend_weights(settings, len(chain_extents((64, 48), settings)))[0][0]
     assert (1 - c0) * before <= after <= before * (1 + 1e-3)
     assert after < before * (1 - 1e-3)  # the Karis weights took some of the fireflies' light
+
+
+def test_a_recompiled_graph_names_its_new_views():
+    """The same passes over a new HDR image of another size (the same chain depth): the graph
+    compiles again with a new chain, whose views may take the old ones' handle values, so the
+    descriptor sets made for the old views go (a stale one would name a destroyed view)."""
+    image, settings = scene(), BloomSettings()
+    got, count, sets = gpu_bloom(image, settings, sizes=((66, 50),))
+    assert error(got, reference_bloom(image, settings)) < 2e-3
+    assert sets == count  # one per pass, made for the last compile's views
+
+
+class ToneMap(Pass):
+    name = "tonemap"
+
+    def setup(self, builder: PassBuilder) -> None:
+        builder.read("hdr", Access.FRAGMENT_SAMPLED)
+        builder.side_effect()
+
+    def record(self, cb: Any, ctx: Any) -> None:
+        pass
+
+
+def test_passes_declare_their_mips_and_go_before_the_tone_map():
+    device = shared_device()
+    graph = FrameGraph(device)
+    try:
+        graph.import_image(
+            "hdr", handle=None, view=None, format=FORMAT, extent=(64, 48),
+            layout_before="SHADER_READ_ONLY_OPTIMAL", layout_after="SHADER_READ_ONLY_OPTIMAL",
+        )  # fmt: skip
+        graph.add_pass(ToneMap())
+        passes = add_bloom(graph, BloomSettings(), (64, 48), before="tonemap")
+        graph.compile((64, 48))
+        down = [f"bloom_downsample_{k}" for k in range(3)]
+        assert graph.order == [*down, "bloom_upsample_2", "bloom_upsample_1", "bloom_composite", "tonemap"]
+        declared = {}
+        for p in passes:
+            builder = PassBuilder(p.name)
+            p.setup(builder)
+            declared[p.name] = {(u.resource, u.access.name, u.mip) for u in builder.declared().uses}
+        assert declared["bloom_downsample_0"] == {("hdr", "COMPUTE_SAMPLED", None), ("bloom", "COMPUTE_WRITE", 0)}
+        assert declared["bloom_downsample_2"] == {("bloom", "COMPUTE_SAMPLED", 1), ("bloom", "COMPUTE_WRITE", 2)}
+        assert declared["bloom_upsample_2"] == {("bloom", "COMPUTE_SAMPLED", 2), ("bloom", "COMPUTE_READ_WRITE", 1)}
+        assert declared["bloom_composite"] == {("bloom", "COMPUTE_SAMPLED", 0), ("hdr", "COMPUTE_READ_WRITE", None)}
+        assert graph.transient_bytes >= 8 * (32 * 24 + 16 * 12 + 8 * 6)  # the chain: half size, 3 mips
+    finally:
+        graph.destroy()

@@ -34,7 +34,7 @@ from __future__ import annotations
 from collections.abc import Hashable
 from typing import Any
 
-from ..graph import Access, ImageDesc, Pass  # type: ignore[import-not-found]  # (until the graph is merged)
+from ..graph import Access, ImageDesc, Pass
 from .bloom_pipelines import BloomPipelines
 from .bloom_settings import (
     CHAIN_FORMAT,
