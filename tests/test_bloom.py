@@ -5,6 +5,7 @@ image; its settings' checks; the energy-conserving composite's bound; what the p
 from __future__ import annotations
 
 import math
+import types
 from typing import Any
 
 import numpy as np
@@ -343,3 +344,48 @@ def test_passes_declare_their_mips_and_go_before_the_tone_map():
         assert graph.transient_bytes >= 8 * (32 * 24 + 16 * 12 + 8 * 6)  # the chain: half size, 3 mips
     finally:
         graph.destroy()
+
+
+def test_the_output_passes_seam_effect_matches_the_reference():
+    """BloomEffect, as the output passes call a post effect (the HDR image in and out in
+    SHADER_READ_ONLY_OPTIMAL): right on a first image, on a second of the same size (a remade
+    target: its sets are made anew if its view reuses a handle value) and after a resize."""
+    from ecs_engine.gpu.memory import Buffer
+    from ecs_engine.render.post.bloom_effect import BloomEffect
+
+    device = shared_device()
+    vk = device.vk
+    read, dst, src = (
+        getattr(vk, f"VK_IMAGE_LAYOUT_{n}_OPTIMAL") for n in ("SHADER_READ_ONLY", "TRANSFER_DST", "TRANSFER_SRC")
+    )
+    effect = BloomEffect(device, BloomSettings())
+    buffer = Buffer(device, 66 * 50 * 8, vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT | vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT)
+    try:
+        for width, height in ((64, 48), (64, 48), (66, 50)):
+            hdr = scene(width, height)
+            image = HdrImage(device, width, height)
+            buffer.bytes()[: hdr.nbytes] = hdr.view(np.uint8).reshape(-1)
+
+            def record(cb: Any, image: HdrImage = image) -> None:
+                image.barrier(cb, vk.VK_IMAGE_LAYOUT_UNDEFINED, dst)
+                image.copy(cb, buffer, to_image=True)
+                image.barrier(cb, dst, read)
+                effect(cb, image.image)
+                image.barrier(cb, read, src)
+                image.copy(cb, buffer, to_image=False)
+
+            try:
+                device.submit_once(record)
+            finally:
+                got = buffer.bytes()[: hdr.nbytes].view(np.float16).reshape(height, width, 4).copy()
+                device.wait_idle()
+                image.destroy()
+            assert error(got, reference_bloom(hdr, effect.settings)) < 2e-3
+        first, again = types.SimpleNamespace(view=12345), types.SimpleNamespace(view=12345)
+        effect._note(first)  # (lavapipe's handle values do not come back: a reuse, by hand)
+        assert effect.pipelines._sets
+        effect._note(again)
+        assert not effect.pipelines._sets  # a new image with an old view's value: its sets went
+    finally:
+        effect.destroy()
+        buffer.destroy()
