@@ -19,9 +19,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from .compile import Structure, mips_of
+from .resources import flags
 from .transient import Packing
 
 EMPTY: frozenset[str] = frozenset()
+WHOLE_SIZE = (1 << 64) - 1  # VK_WHOLE_SIZE (the binding has it as -1, which a VkDeviceSize refuses)
 
 
 @dataclass(frozen=True)
@@ -44,7 +46,7 @@ class Barrier:
             if self.base_mip is None
             else f"[mip {self.base_mip}" + (f"..{self.base_mip + self.mip_count - 1}]" if self.mip_count > 1 else "]")
         )
-        layouts = f" {self.old_layout} -> {self.new_layout}" if self.old_layout is not None else ""
+        layouts = f" {self.old_layout} -> {self.new_layout}" if self.old_layout != self.new_layout else ""
         src = "|".join(sorted(self.src_stages)) or "NONE"
         dst = "|".join(sorted(self.dst_stages)) or "NONE"
         return f"{self.resource}{mips}{layouts} ({src} -> {dst})"
@@ -247,12 +249,11 @@ def _tail(b: Barrier) -> tuple:
     return (b.old_layout, b.new_layout, b.src_stages, b.src_access, b.dst_stages, b.dst_access)
 
 
-def record_barriers(
-    vk: Any, cb: Any, rows: list[Barrier], images: dict[str, Any], buffers: dict[str, Any], aspects: dict[str, int]
+def dependency_info(
+    vk: Any, rows: list[Barrier], images: dict[str, Any], buffers: dict[str, Any], aspects: dict[str, int]
 ) -> Any:
-    """One vkCmdPipelineBarrier2 of these rows (images/buffers: name -> handle)."""
-    from .resources import flags
-
+    """The VkDependencyInfo of these rows (images/buffers: name -> handle), for one
+    vkCmdPipelineBarrier2; it holds copies of its barriers, so it can be kept and recorded again."""
     image_rows, buffer_rows = [], []
     for b in rows:
         common = {
@@ -265,7 +266,7 @@ def record_barriers(
         }
         if b.base_mip is None:
             buffer_rows.append(
-                vk.VkBufferMemoryBarrier2(buffer=buffers[b.resource], offset=0, size=vk.VK_WHOLE_SIZE, **common)
+                vk.VkBufferMemoryBarrier2(buffer=buffers[b.resource], offset=0, size=WHOLE_SIZE, **common)
             )
             continue
         image_rows.append(
@@ -283,6 +284,4 @@ def record_barriers(
                 **common,
             )
         )
-    info = vk.VkDependencyInfo(pBufferMemoryBarriers=buffer_rows or None, pImageMemoryBarriers=image_rows or None)
-    vk.vkCmdPipelineBarrier2(cb, info)
-    return info
+    return vk.VkDependencyInfo(pBufferMemoryBarriers=buffer_rows or None, pImageMemoryBarriers=image_rows or None)

@@ -19,7 +19,7 @@ def describe(s: Structure, packing: Packing, barriers: BarrierPlan) -> str:
         reads = [u.describe() for u in uses if not u.write]
         writes = [u.describe() for u in uses if u.write]
         flag = " (side effect)" if name in s.side_effects else ""
-        lines.append(f"  {i} {name:<{width}}{flag}")
+        lines.append(f"  {i} {name:<{width}}{flag}".rstrip())
         if reads:
             lines.append(f"      reads  {', '.join(reads)}")
         if writes:

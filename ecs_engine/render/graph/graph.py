@@ -10,7 +10,7 @@ from typing import Any
 from ...errors import UsageError
 from ...gpu.functions import handle_int
 from ...gpu.owned import Owned
-from .barriers import BarrierPlan, plan_barriers, record_barriers
+from .barriers import Barrier, BarrierPlan, dependency_info, plan_barriers
 from .builder import Declared, Pass, declare
 from .compile import Imported, Structure, plan_structure
 from .context import PassContext
@@ -39,6 +39,9 @@ class FrameGraph:
         self._outputs: list[str] = []
         self._owned = Owned(device) if device is not None else None
         self.compiled: Compiled | None = None
+        # per barrier batch: the handles it was made for and its VkDependencyInfo (made once per
+        # compile, again only for an import's new handle)
+        self._infos: dict[str, tuple[tuple, Any]] = {}
         self.compiles = 0  # how many compiles did work (a cached one does none)
 
     # ------------------------------------------------------------------ declaring the frame
@@ -151,6 +154,7 @@ class FrameGraph:
         else:
             packing = pack(estimated_requirements(structure))
         self.compiled = Compiled(signature, structure, packing, plan_barriers(structure, packing), transients)
+        self._infos.clear()
         self.compiles += 1
 
     def _ready(self) -> Compiled:
@@ -196,21 +200,42 @@ class FrameGraph:
         vk = self.device.vk
         images, buffers = self._resources(c)
         s = c.structure
-        formats = {name: res.format for name, res in s.resources.items()}
-        aspects = {name: aspect_of(vk, res.format) for name, res in s.resources.items() if res.kind == "image"}
-        image_handles = {name: image.handle for name, image in images.items()}
-        buffer_handles = {name: buffer.handle for name, buffer in buffers.items()}
-        ctx = PassContext(self.device, s.extent, images, buffers, formats)
+        ctx = PassContext(self.device, s.extent, images, buffers, self._formats(c))
         by_name = {p.name: p for p in self._passes}
         for name in s.order:
             rows = c.barriers.before[name]
             if rows:
-                record_barriers(vk, cb, rows, image_handles, buffer_handles, aspects)
+                vk.vkCmdPipelineBarrier2(cb, self._info(c, name, rows, images, buffers))
             ctx._enter(cb, name, s.uses[name])
             by_name[name].record(cb, ctx)
             ctx._leave()
         if c.barriers.after:
-            record_barriers(vk, cb, c.barriers.after, image_handles, buffer_handles, aspects)
+            vk.vkCmdPipelineBarrier2(cb, self._info(c, "", c.barriers.after, images, buffers))
+
+    def _formats(self, c: Compiled) -> dict[str, str]:
+        return {name: res.format for name, res in c.structure.resources.items()}
+
+    def _info(
+        self,
+        c: Compiled,
+        batch: str,
+        rows: list[Barrier],
+        images: dict[str, GraphImage],
+        buffers: dict[str, GraphBuffer],
+    ) -> Any:
+        handles = tuple(
+            images[r.resource].handle if r.base_mip is not None else buffers[r.resource].handle for r in rows
+        )
+        cached = self._infos.get(batch)
+        if cached is not None and cached[0] == handles:
+            return cached[1]
+        vk = self.device.vk
+        aspects = {n: aspect_of(vk, res.format) for n, res in c.structure.resources.items() if res.kind == "image"}
+        info = dependency_info(
+            vk, rows, {n: i.handle for n, i in images.items()}, {n: b.handle for n, b in buffers.items()}, aspects
+        )
+        self._infos[batch] = (handles, info)
+        return info
 
     def key(self) -> tuple:
         """What a recorded frame depends on: each running pass's (name, key()) in order, the

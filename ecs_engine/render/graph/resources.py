@@ -149,15 +149,6 @@ class Access(Enum):
         return bool(self.usage.buffer_usage)
 
 
-ATTACHMENT_ACCESSES = (
-    Access.COLOR_WRITE,
-    Access.COLOR_READ_WRITE,
-    Access.DEPTH_WRITE,
-    Access.DEPTH_READ,
-    Access.RESOLVE_WRITE,
-)
-
-
 def flags(vk: Any, prefix: str, names: tuple[str, ...] | frozenset[str]) -> int:
     """The bits of `names` ("COMPUTE_SHADER") under `prefix` ("VK_PIPELINE_STAGE_2_")."""
     bits = 0
@@ -274,10 +265,12 @@ class GraphImage:
     def mip_view(self, mip: int) -> Any:
         if not 0 <= mip < self.mips:
             raise UsageError(f"image {self.name!r} has {self.mips} mip level(s); no mip {mip}")
+        if self.view is None:
+            raise UsageError(f"image {self.name!r} has no view: no pass samples, stores or attaches it")
         if self.mips == 1:
             return self.view
         if not self.mip_views:
-            raise UsageError(f"imported image {self.name!r} was imported without views of each mip")
+            raise UsageError(f"image {self.name!r} was imported without views of each mip (mip_views=)")
         return self.mip_views[mip]
 
     def mip_extent(self, mip: int) -> tuple[int, int]:

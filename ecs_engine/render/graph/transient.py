@@ -21,6 +21,7 @@ from ...gpu.owned import Owned
 from .compile import Structure
 from .resources import BufferDesc, GraphBuffer, GraphImage, ImageDesc, flags, is_depth
 
+VIEWED = {"SAMPLED", "STORAGE", "COLOR_ATTACHMENT", "DEPTH_STENCIL_ATTACHMENT"}  # usages an image view needs
 ESTIMATED_ALIGNMENT = 4096  # planning without a device: a typical optimal-tiling alignment
 
 
@@ -174,12 +175,13 @@ class Transients:
             self.memory[name] = heap.memory
             self.absolute_offset[name] = heap.offset + place.offset
             vk.vkBindImageMemory(device.handle, image, heap.memory, heap.offset + place.offset)
-            aspect = aspect_of(vk, desc.format_name)
-            if is_depth(desc.format_name):
-                aspect = int(vk.VK_IMAGE_ASPECT_DEPTH_BIT)  # views sample or attach the depth
-            views = [_view(vk, owned, image, fmt, aspect, 0, desc.mips)]
-            if desc.mips > 1:
-                views += [_view(vk, owned, image, fmt, aspect, m, 1) for m in range(desc.mips)]
+            # views sample or attach the depth; an image only copied has none (a view needs a usage that views)
+            aspect = int(vk.VK_IMAGE_ASPECT_DEPTH_BIT) if is_depth(desc.format_name) else aspect_of(vk, "")
+            views: list[Any] = [None]
+            if s.usage.get(name, set()) & VIEWED:
+                views = [_view(vk, owned, image, fmt, aspect, 0, desc.mips)]
+                if desc.mips > 1:
+                    views += [_view(vk, owned, image, fmt, aspect, m, 1) for m in range(desc.mips)]
             self.images[name] = GraphImage(
                 name, image, views[0], fmt, desc.extent(s.extent), desc.mips, desc.samples, tuple(views[1:])
             )
