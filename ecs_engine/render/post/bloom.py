@@ -8,15 +8,18 @@ point-spread function of small weight. It is built from a mip chain of the HDR i
 1. Downsample: the HDR image into mip 0 of a half-resolution R16G16B16A16_SFLOAT chain, then
    mip k-1 into mip k, each with the 13-tap filter (shaders/bloom_downsample.comp). The first
    step weights its five boxes by 1 / (1 + luma) (the Karis average, normalised) so that a single
-   firefly pixel does not bloom into a square. There is no threshold by default: all light
-   scatters, the bright light simply shows it.
+   firefly pixel does not bloom into a square (normalised as Jimenez's: a flat field passes
+   unchanged; Bevy's unnormalised weights dim it too). There is no threshold by default: all
+   light scatters, the bright light simply shows it.
 2. Upsample: from the smallest mip, the 3x3 tent of mip k+1 is blended into mip k
    (shaders/bloom_upsample.comp), mip_k = mip_k * (1 - c_(k+1)) + tent * c_(k+1), and last into
-   the HDR image itself: hdr = hdr * (1 - c_0) + tent(mip 0) * c_0.
+   the HDR image itself: hdr = mix(hdr, tent(mip 0), c_0) = hdr * (1 - c_0) + tent * c_0,
+   where c_0 is the intensity itself (the low-frequency boost is 0 at the finest level).
 
 Energy-conserving composite: every blend is a convex mix (c in [0, 1]) and every filter's
 weights sum to 1, so the bloom moves light around instead of adding it: the image's sum can
-only drop, and by at most the fraction c_0 of it (hdr keeps (1 - c_0) of its light where it
+only drop (up to the clamp-to-edge addressing at the borders), and by at most the fraction c_0
+of it (hdr keeps (1 - c_0) of its light where it
 was; the blurred part holds at most all of it, less what the Karis weights take from fireflies).
 A plain addition (hdr + bloom) would brighten the whole frame with the intensity and need a
 threshold to keep dark parts dark; the mix needs none. The weights c_k are Bevy's blend factors
