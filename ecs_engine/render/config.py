@@ -109,6 +109,8 @@ class RenderConfig:
     post: frozenset[str] = field(default_factory=frozenset)  # post effects by name (POST_EFFECTS)
 
     def __post_init__(self) -> None:
+        # names given become members here, once (hence object.__setattr__ on a frozen value),
+        # so the rules compare members and a bad name fails where it was given
         errors = []
         for name, (kind, label) in CHOICES.items():
             value = getattr(self, name)
