@@ -251,6 +251,28 @@ def test_caps_of_the_test_device(monkeypatch):
     assert not Caps.of(device).fill_mode_non_solid
 
 
+def test_the_renderer_refuses_every_setting_the_device_lacks_at_once_and_reports_its_config(monkeypatch):
+    from gpu_context import headless_gpu
+
+    from ecs_engine.render.chunk_paths import default_recorder
+    from ecs_engine.render.renderer import Renderer
+
+    with headless_gpu(32, 24) as gpu:
+        monkeypatch.setitem(gpu.device.features, "drawIndirectCount", False)
+        monkeypatch.setitem(gpu.device.features, "fillModeNonSolid", False)
+        with pytest.raises(UsageError) as err:
+            Renderer(gpu.device, gpu.target, gpu.meshes, mode="indirect", fill="points")
+        assert "lacks drawIndirectCount" in str(err.value) and "cannot draw points" in str(err.value)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, tone_map="aces", culling=False, light_culling="loop")
+        try:
+            wanted = RenderConfig(tone_map="aces", culling="none", light_culling="loop", recorder=default_recorder())
+            assert renderer.config == wanted.replace(msaa=gpu.target.samples)
+            renderer.light_culling = "clustered"
+            assert renderer.config.changed(wanted) == {"light_culling"}
+        finally:
+            renderer.destroy()
+
+
 def test_a_bad_flag_is_one_line_and_exit_2():
     from test_cli_render import cli, one_line_error
 
