@@ -2,8 +2,9 @@
 exit 2; other failures exit 1; `--debug` shows the traceback as well (the exit status stays).
 Ctrl-C is one line and exit 130; a closed stdout (`| head`) ends it quietly (entry_point.py).
 
-The renderer's tables (modes, culling, present modes) are imported when the parser is built,
-inside main's guard: they bring vulkan and numba, seconds of start-up a Ctrl-C may land in."""
+The render configuration's flags (render/config_flags.py: modes, culling...) and the present
+modes are imported when the parser is built, inside main's guard: they bring numba, seconds of
+start-up a Ctrl-C may land in."""
 
 from __future__ import annotations
 
@@ -35,8 +36,8 @@ def positive_int(text: str) -> int:
     return value
 
 
-# the lists come from their owners: the scenes module, the renderer's path table, its recorders,
-# the swapchain's present modes
+# the lists come from their owners: the scenes module, the render configuration's enums, the
+# swapchain's present modes
 SCENES = (*RENDERED_SCENES, "motion")  # motion: the text-mode ECS scene, no rendering
 EDITOR_SCENES = RENDERED_SCENES
 DEFAULT_SCENE = "grid100"
@@ -89,11 +90,8 @@ def non_negative_int(text: str) -> int:
 def render_flags(headless_frames: int = 1) -> OneLineParser:
     """The flags `demo`, `editor` and `play` share (`headless_frames`: the command's --headless
     run without --frames, for the help)."""
-    from ..gpu.array_image import ANISOTROPY_CHOICES
     from ..gpu.swapchain import PRESENT_MODES
-    from ..render.frame_data import CULLING
-    from ..render.light_clusters import LIGHT_MODES
-    from ..render.renderer import MODES, RECORDER_NAMES
+    from ..render.config_flags import add_config_flags
     from .settings import HEADLESS_FALLBACK_FRAMES
 
     common = OneLineParser(add_help=False)
@@ -112,91 +110,9 @@ def render_flags(headless_frames: int = 1) -> OneLineParser:
     )
     common.add_argument("--validate", action="store_true", help="enable the Vulkan validation layers")
     common.add_argument(
-        "--mode",
-        choices=MODES,
-        default="instanced",
-        help="instanced: one draw per mesh per chunk; per_entity: one draw per entity (the seed's "
-        "way); indirect: the GPU culls and writes the draws (compute + vkCmdDrawIndexedIndirectCount)",
-    )
-    common.add_argument(
         "--threads", type=positive_int, help="worker threads, counting the main one (default: all cores)"
     )
-    common.add_argument(
-        "--recorder",
-        choices=RECORDER_NAMES,
-        help="native: numba loop without the GIL (default when numba is installed); python: the binding",
-    )
-    culling = common.add_mutually_exclusive_group()  # --culling X --no-culling: which one was meant?
-    culling.add_argument(
-        "--culling",
-        choices=CULLING,
-        default="frustum",
-        help="frustum: every row tested each frame (default); temporal: a row tested again only when the camera's "
-        "and its own speed limits say it could have changed side (not with --mode indirect); occlusion: --mode "
-        "indirect only, the frustum and then what last frame's visible rows hide and what covers no pixel, on the "
-        "GPU (two-phase, a depth pyramid; the image is frustum culling's); none: draw everything",
-    )
-    culling.add_argument(
-        "--no-culling", dest="culling", action="store_const", const="none", help="draw everything (--culling none)"
-    )
-    common.add_argument(
-        "--no-lod",
-        dest="lod",
-        action="store_false",
-        help="--mode indirect draws every mesh in full, not at the coarsest level of detail its size on screen allows",
-    )
-    common.add_argument(
-        "--fill",
-        choices=("solid", "wireframe", "points"),
-        default="solid",
-        help="how meshes are rasterised (wireframe and points where the device has fillModeNonSolid)",
-    )
-    common.add_argument(
-        "--tone-map",
-        choices=("clamp", "aces", "reinhard"),
-        default="clamp",
-        help="how the HDR colour maps to the display: clamp (default), aces (filmic), reinhard",
-    )
-    common.add_argument(
-        "--exposure", type=float, default=0.0, help="stops: the scene's colour times 2^EV before the tone map"
-    )
-    common.add_argument(
-        "--msaa", type=int, choices=(1, 2, 4, 8), default=1, help="samples per pixel (default 1: no MSAA)"
-    )
-    common.add_argument(
-        "--anisotropy",
-        type=int,
-        choices=ANISOTROPY_CHOICES,
-        help="textures' anisotropic filtering, at most this many samples (1: off; default: the GPU's best, up to 16)",
-    )
-    common.add_argument(
-        "--light-culling",
-        choices=LIGHT_MODES,
-        default="auto",
-        help="auto (default): from 16 bounded lights, clusters and the opaque meshes lit in compute (deferred); "
-        "loop: every fragment over every light; clustered: clusters, lit in the fragment shader",
-    )
-    common.add_argument(
-        "--transparency",
-        choices=("sorted", "weighted"),
-        default="sorted",
-        help="blended materials: sorted back to front per object (default), or weighted blended "
-        "order-independent transparency (drawn in the deferred form)",
-    )
-    common.add_argument(
-        "--shadows",
-        dest="shadow_method",
-        choices=("maps", "raytraced"),
-        default="maps",
-        help="how lights with a Shadow cast: shadow maps (default), or ray-traced (needs a GPU with "
-        "ray-tracing pipelines; drawn in the deferred form)",
-    )
-    common.add_argument(
-        "--no-shadow-denoise",
-        dest="shadow_denoise",
-        action="store_false",
-        help="--shadows raytraced: leave area lights' soft shadows unfiltered (4 rays a pixel: noisy)",
-    )
+    add_config_flags(common)  # --mode, --culling, --tone-map...: the render configuration's (render/config.py)
     common.add_argument(
         "--no-frame-reuse",
         dest="frame_reuse",
@@ -349,7 +265,7 @@ def refuse_unused(args: argparse.Namespace, used: tuple[str, ...], why: str) -> 
 def check_flags_apply(args: argparse.Namespace, scenes: tuple[str, ...], editor: bool) -> None:
     """Refuse a flag that would change nothing in this run, instead of ignoring it (the editor
     may switch to what makes --recorder and --no-shadow-denoise count later)."""
-    from ..render.renderer import PATHS
+    from ..render.config import RenderConfig, inert_refusal
 
     if args.entities is not None and "scaling" not in scenes:
         raise UsageError(f"--entities sizes the scaling and motion scenes; {', '.join(scenes)} has fixed content")
@@ -359,10 +275,12 @@ def check_flags_apply(args: argparse.Namespace, scenes: tuple[str, ...], editor:
         raise UsageError(f"--no-shadows applies to the shadows scene, not {', '.join(scenes)}")
     if args.headless and args.present != "fifo":
         raise UsageError("--present chooses a window's present mode; a --headless run has no window")
-    if args.recorder is not None and not editor and not PATHS[args.mode].uses_recorder:
-        raise UsageError(f"--recorder does not apply to --mode {args.mode}: the GPU writes its draws")
-    if not args.shadow_denoise and not editor and args.shadow_method != "raytraced":
-        raise UsageError("--no-shadow-denoise applies to --shadows raytraced; shadow maps have no denoiser")
+    config = RenderConfig.from_strings(mode=args.mode, shadows=args.shadow_method)
+    given = {"recorder": args.recorder is not None, "shadow_denoise": not args.shadow_denoise}
+    for field in (f for f, on in given.items() if on and not editor):
+        refusal = inert_refusal(field, config)  # config.INERT: what a flag changes nothing in
+        if refusal is not None:
+            raise UsageError(refusal)
 
 
 def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = None) -> int:

@@ -22,13 +22,7 @@ from ..components.name import Name
 from ..ecs.world import World
 from ..gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
 from ..maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
-from ..render.frame_data import CULLING
-from ..render.light_clusters import LIGHT_MODES
-from ..render.oit_pass import TRANSPARENCY_MODES
-from ..render.path import FILL_MODES
-from ..render.ray_shadows import SHADOW_METHODS
-from ..render.renderer import MODES, PATHS, RECORDER_NAMES
-from ..render.tone_map import TONE_MAPS
+from ..render.config import CHOICES, RenderConfig, applies
 from .editor_dock import DockLayout
 from .editor_files import FileMenu
 from .editor_gizmo import OPERATIONS, Gizmo
@@ -200,24 +194,26 @@ class Editor:
         if imgui.begin("Scene and render")[0]:
             push_label_room(imgui, SETTINGS_LABELS)
             req.scene = _combo(imgui, "scene", req.scene, self.scenes)
-            req.mode = _combo(imgui, "mode", req.mode, MODES)
-            if PATHS[req.mode].uses_recorder:
-                req.recorder = _combo(imgui, "recorder", req.recorder, RECORDER_NAMES)
+            # the lists are the render configuration's names; a control shows where it applies
+            req.mode = _combo(imgui, "mode", req.mode, _names("mode"))
+            config = RenderConfig.from_strings(mode=req.mode)
+            if applies("recorder", config):
+                req.recorder = _combo(imgui, "recorder", req.recorder, _names("recorder"))
             _, req.threads = imgui.slider_int("threads", req.threads, 1, max(1, self.max_threads))
-            req.culling = _combo(imgui, "culling", req.culling, CULLING)
-            if req.mode == "indirect":
+            req.culling = _combo(imgui, "culling", req.culling, _names("culling"))
+            if applies("lod", config):
                 _, req.lod = imgui.checkbox("levels of detail", req.lod)
-            req.fill = _combo(imgui, "fill", req.fill, tuple(FILL_MODES))
-            req.tone_map = _combo(imgui, "tone map", req.tone_map, tuple(TONE_MAPS))
+            req.fill = _combo(imgui, "fill", req.fill, _names("fill"))
+            req.tone_map = _combo(imgui, "tone map", req.tone_map, _names("tone_map"))
             _, req.exposure = imgui.slider_float("exposure (EV)", req.exposure, -8.0, 8.0)
-            req.light_culling = _combo(imgui, "light culling", req.light_culling, LIGHT_MODES)
-            req.transparency = _combo(imgui, "transparency", req.transparency, TRANSPARENCY_MODES)
+            req.light_culling = _combo(imgui, "light culling", req.light_culling, _names("light_culling"))
+            req.transparency = _combo(imgui, "transparency", req.transparency, _names("transparency"))
             imgui.begin_disabled(not self.ray_tracing)  # greyed out where the device cannot trace rays
-            req.shadow_method = _combo(imgui, "shadows", req.shadow_method, SHADOW_METHODS)
+            req.shadow_method = _combo(imgui, "shadows", req.shadow_method, _names("shadows"))
             imgui.end_disabled()
             if not self.ray_tracing and imgui.is_item_hovered(imgui.HoveredFlags_.allow_when_disabled.value):
                 imgui.set_tooltip("ray-traced shadows need a GPU with ray-tracing pipelines")
-            if req.shadow_method == "raytraced":
+            if applies("shadow_denoise", config.replace(shadows=req.shadow_method)):
                 _, req.shadow_denoise = imgui.checkbox("denoise soft shadows", req.shadow_denoise)
             if req.present is not None:
                 req.present = _combo(imgui, "present", req.present, PRESENT_MODES)
@@ -464,6 +460,11 @@ class Editor:
         return world.spawn(
             Transform(position=self._in_front(world, 2.0)), PointLight(color=(1.0, 0.9, 0.7), intensity=5.0, radius=0.0)
         )
+
+
+def _names(field: str) -> tuple[str, ...]:
+    """A render setting's choices (render/config.py's enum of `field`)."""
+    return CHOICES[field][0].names()
 
 
 def _combo(imgui: Any, label: str, value: str, choices: tuple[str, ...]) -> str:

@@ -8,6 +8,7 @@ worker pool, the mode and recorder in the renderer's path, the present mode in t
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -15,11 +16,9 @@ import psutil
 
 from ..errors import UsageError
 from ..jobs import default_threads
-from ..render.light_clusters import check_light_culling
-from ..render.oit_pass import check_transparency
-from ..render.ray_shadows import check_shadow_method
+from ..render.config import RenderConfig, check
+from ..render.config_flags import RUN_FIELDS
 from ..render.renderer import default_recorder
-from ..render.tone_map import check_tone_map
 from .scenes import SEED_SCENES
 
 FIXED_DT = 1.0 / 60.0  # headless runs: one fixed step a frame, so a run is reproducible frame for frame
@@ -32,18 +31,19 @@ HEADLESS_FRAMES = {"demo": 1, "editor": 1, "play": 600}  # a --headless run with
 @dataclass
 class Settings:
     scene: str
+    # the render settings' names are render/config.py's enums (Mode, Culling, Fill, ToneMap...)
     mode: str
-    recorder: str  # native | python (the indirect mode records on the GPU: kept for switching back)
+    recorder: str  # config.Recorder (the indirect mode records on the GPU: kept for switching back)
     threads: int  # worker pool size, counting the main thread
-    culling: str  # frustum | temporal | occlusion | none (render/frame_data.py CULLING)
+    culling: str  # config.Culling
     present: str | None  # fifo | mailbox | immediate; None: headless, no swapchain
-    fill: str = "solid"  # solid | wireframe | points
-    tone_map: str = "clamp"  # clamp | aces | reinhard (render/tone_map.py)
+    fill: str = "solid"  # config.Fill
+    tone_map: str = "clamp"  # config.ToneMap (render/tone_map.py)
     exposure: float = 0.0  # stops
-    light_culling: str = "auto"  # render/light_clusters.py LIGHT_MODES (render/light_clusters.py)
-    transparency: str = "sorted"  # sorted | weighted (render/oit_pass.py)
+    light_culling: str = "auto"  # config.LightCulling (render/light_clusters.py)
+    transparency: str = "sorted"  # config.Transparency (render/oit_pass.py)
     lod: bool = True  # levels of detail by projected size (the indirect mode: render/mesh_lod.py)
-    shadow_method: str = "maps"  # maps | raytraced (render/ray_shadows.py)
+    shadow_method: str = "maps"  # config.Shadows (render/ray_shadows.py)
     shadow_denoise: bool = True  # ray-traced soft shadows filtered (render/shadow_denoise.py)
     frame_reuse: bool = True  # a frame that would record what its slot recorded submits that (render/frame_replay.py)
 
@@ -63,24 +63,24 @@ class RunOptions:
     validate: bool = False
     present: str = "fifo"
     quiet: bool = False
-    mode: str = "instanced"  # instanced | per_entity | indirect
+    mode: str = "instanced"  # the render settings: render/config.py's names (render_config())
     threads: int | None = None  # None: all cores
-    culling: str = "frustum"  # frustum | temporal | occlusion | none
+    culling: str = "frustum"
     lod: bool = True  # --no-lod: the indirect mode draws every mesh in full
-    fill: str = "solid"  # solid | wireframe | points (render/path.py's FILL_MODES)
-    tone_map: str = "clamp"  # clamp | aces | reinhard
+    fill: str = "solid"
+    tone_map: str = "clamp"
     exposure: float = 0.0  # stops: the HDR colour times 2^exposure before the tone map
     msaa: int = 1  # samples per pixel of the scene (1, 2, 4, 8), fixed for the run
     anisotropy: int | None = None  # textures' maximum anisotropy (1: off; None: the device's, up to 16)
-    light_culling: str = "auto"  # render/light_clusters.py LIGHT_MODES
+    light_culling: str = "auto"
     transparency: str = "sorted"  # blended materials: sorted, or weighted (order-independent)
     lights: int | None = None  # the lights scene's light count (None: its default, 1,024)
     shadows: bool = True  # the shadows scene's lights cast (--no-shadows: none do)
-    shadow_method: str = "maps"  # maps | raytraced: how shadows are drawn (render/ray_shadows.py)
+    shadow_method: str = "maps"  # config.Shadows: how shadows are drawn (render/ray_shadows.py)
     shadow_denoise: bool = True  # --no-shadow-denoise: ray-traced soft shadows unfiltered
     frame_reuse: bool = True  # --no-frame-reuse: every frame recorded (render/frame_replay.py)
     chunk_rows: int | None = None  # rows per render job (None: about one per thread, frame_data.MIN_CHUNK_ROWS)
-    recorder: str | None = None  # native | python (None: native when numba is there)
+    recorder: str | None = None  # config.Recorder (None: native when numba is there)
     entities: int = 10_000  # the scaling scene's entity count
     perf_json: str | None = None  # write every frame's perf samples here at the end
     trace: str | None = None  # write a Chrome trace of systems, jobs and GPU passes here at the end (app/trace.py)
@@ -130,12 +130,14 @@ class RunOptions:
     def __post_init__(self) -> None:
         check_threads(self.threads)
         check_entities(self.entities)
-        check_tone_map(self.tone_map, self.exposure)
-        check_light_culling(self.light_culling)
-        check_transparency(self.transparency)
-        check_shadow_method(self.shadow_method)  # the device's part once it is open
+        check(self.render_config())  # the configuration's own rules; the device's once it is open
         if self.lights is not None and not 0 <= self.lights <= MAX_LIGHTS:
             raise UsageError(f"--lights {self.lights}: from 0 to {MAX_LIGHTS:,}")
+
+    def render_config(self) -> RenderConfig:
+        """The render settings the run starts with, as one value (UsageError for a bad one)."""
+        names = [f.name for f in dataclasses.fields(RenderConfig) if f.name != "post"]
+        return RenderConfig.from_strings(**{n: getattr(self, RUN_FIELDS.get(n, n)) for n in names})
 
     def settings(self) -> Settings:
         return Settings(

@@ -55,13 +55,11 @@ def supported_samples(device: Device) -> tuple[int, ...]:
 
 
 def check_samples(device: Device, samples: int) -> None:
-    """UsageError unless the device renders the scene with `samples` (--msaa)."""
-    from ..errors import UsageError
+    """UsageError unless the device renders the scene with `samples` (--msaa): the render
+    configuration's rule (render/config.py; imported here, the Vulkan layer's one use of it)."""
+    from ..render.config import Caps, RenderConfig, check
 
-    offered = supported_samples(device)
-    if samples not in offered:
-        counts = ", ".join(str(n) for n in offered)
-        raise UsageError(f"--msaa {samples}: {device.info.name} offers {counts}")
+    check(RenderConfig.from_strings(msaa=samples), Caps.of(device), only=("msaa",))
 
 
 def output_subpass(form: str) -> int:

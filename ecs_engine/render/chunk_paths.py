@@ -23,6 +23,7 @@ from .. import native
 from ..gpu.gbuffer import GBUFFER_COLORS
 from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
 from ..gpu.secondary import end_command_buffer
+from .config import choice
 from .frame_data import MODEL_COLUMN, NOT_RECEIVER, Chunk
 from .instance_rows import masked_keys, write_keyed, write_rows
 from .layouts import (
@@ -251,8 +252,7 @@ def default_recorder() -> str:
 
 
 def check_recorder(name: str) -> None:
-    if name not in RECORDERS:
-        raise ValueError(f"unknown recorder {name!r}; recorders: {', '.join(RECORDERS)}")
+    choice("recorder", name)  # UsageError naming the choices (config.Recorder: RECORDERS' names)
 
 
 class ChunkPath:

@@ -28,10 +28,10 @@ from ..components import (
 )
 from ..ecs.schedule import any_with
 from ..ecs.world import World
-from ..errors import UsageError
 from ..jobs import row_chunks
 from ..maths.culling import frustum_planes
 from .camera import CameraMatrices, camera_matrices, view_from_origin
+from .config import Culling, RenderConfig, check, choice
 from .light_rows import DirectionalLights, PositionalLights, local_minus_z, spot_cones
 from .temporal_culling import TemporalCulling
 
@@ -49,21 +49,19 @@ MIN_CHUNK_ROWS = 16_384
 NOT_CASTER, NOT_RECEIVER = 1, 2
 # per frame; only when due (temporal_culling.py); the frustum, then what is hidden (the indirect
 # mode: render/occlusion.py); off
-CULLING = ("frustum", "temporal", "occlusion", "none")
+CULLING = Culling.names()
 
 
 def check_culling(culling: str | bool, mode: str | None = "instanced") -> str:
     """The culling method named (True: frustum, False: none); UsageError for an unknown one, or
-    (unless `mode` is None) temporal in the indirect mode, whose compute shader culls every row on
-    the GPU, or occlusion in another (a CPU-culled mode given occlusion culls the frustum alone)."""
+    (unless `mode` is None) one that `mode` cannot cull with (config.RULES: temporal is the CPU
+    modes', occlusion the indirect mode's)."""
     name = ("frustum" if culling else "none") if isinstance(culling, bool) else culling
-    if name not in CULLING:
-        raise UsageError(f"unknown culling {culling!r}; culling: {', '.join(CULLING)}")
-    if name == "temporal" and mode == "indirect":
-        raise UsageError("--culling temporal is for the CPU-culled modes; the indirect mode culls on the GPU")
-    if name == "occlusion" and mode not in ("indirect", None):
-        raise UsageError("--culling occlusion needs --mode indirect: the depth pyramid is tested on the GPU")
-    return str(name)
+    if mode is None and name in CULLING:
+        return str(name)  # extract's call each frame: the name alone, without building a config
+    if mode is None:
+        return str(choice("culling", name).value)
+    return str(check(RenderConfig.from_strings(culling=name, mode=mode), only=("culling",)).culling.value)
 
 
 def shadow_flags(batch: Any) -> int:

@@ -39,6 +39,8 @@ import numpy as np
 
 from ..gpu.device import Device
 from ..gpu.pipeline import compute_pipeline, pipeline_layout
+from .config import LightCulling as LightCullingMode
+from .config import choice
 from .layouts import CLUSTER_GROUP, CLUSTER_HEADER, LIGHT_BINS, MAX_GLOBAL_LIGHTS, UINT_BYTES
 from .light_rows import DirectionalLights, PositionalLights
 
@@ -48,7 +50,7 @@ TILE_PX: Final = 16
 # measured on the GPU host (H100, 1280x720, the lights demo, bench/results/lights-h100-16c.json):
 # 6 lights 1.33 ms looping, 1.75 clustered, 1.58 deferred; 16 lights 2.18, 2.13 and 1.58
 CLUSTER_MIN_LIGHTS: Final = 16
-LIGHT_MODES: Final = ("auto", "loop", "clustered", "deferred")
+LIGHT_MODES: Final = LightCullingMode.names()
 
 
 @dataclass(frozen=True)
@@ -140,10 +142,7 @@ def wants_clusters(mode: str, clustered_now: bool, bounded: int, unbounded: int)
 
 
 def check_light_culling(mode: str) -> None:
-    from ..errors import UsageError
-
-    if mode not in LIGHT_MODES:
-        raise UsageError(f"unknown light culling {mode!r}; choices: {', '.join(LIGHT_MODES)}")
+    choice("light_culling", mode)  # UsageError naming the choices
 
 
 class ClusterPass:

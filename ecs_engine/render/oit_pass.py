@@ -32,19 +32,17 @@ from ..gpu.memory import Image
 from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
 from ..gpu.render_pass import DEPTH_FORMAT_NAME
 from ..gpu.secondary import SecondaryBuffers
+from .config import Transparency, choice
 from .path import TargetState
 from .sky_pass import full_screen_secondary
 
 ACCUMULATION_FORMAT = "VK_FORMAT_R16G16B16A16_SFLOAT"
 REVEALAGE_FORMAT = "VK_FORMAT_R16_SFLOAT"
-TRANSPARENCY_MODES = ("sorted", "weighted")
+TRANSPARENCY_MODES = Transparency.names()
 
 
 def check_transparency(mode: str) -> None:
-    if mode not in TRANSPARENCY_MODES:
-        from ..errors import UsageError
-
-        raise UsageError(f"unknown transparency {mode!r}; modes: {', '.join(TRANSPARENCY_MODES)}")
+    choice("transparency", mode)  # UsageError naming the choices
 
 
 def create_oit_pass(device: Device) -> Any:

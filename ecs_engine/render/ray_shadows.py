@@ -35,7 +35,6 @@ from ..components import DirectionalLight, PointLight, Shadow, SpotLight, Transf
 from ..components.shadow import SHADOW_PCSS
 from ..ecs.schedule import any_with
 from ..ecs.world import World
-from ..errors import UsageError
 from ..gpu.acceleration import AS_INSTANCE, TopLevel, ray_input_usage
 from ..gpu.array_image import nearest_sampler
 from ..gpu.barrier import Barrier
@@ -43,6 +42,7 @@ from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_acceler
 from ..gpu.memory import UPLOAD, Buffer
 from ..gpu.pipeline import pipeline_layout
 from ..gpu.ray_pipeline import RayPipeline
+from .config import Caps, RenderConfig, Shadows, check
 from .frame_data import NOT_CASTER, Chunk, FrameData
 from .layouts import (
     ALPHA_MASK,
@@ -65,27 +65,16 @@ from .ray_instances import write_instances
 from .shadow_denoise import ShadowDenoise
 from .shadow_mask import ShadowMask
 
-SHADOW_METHODS = ("maps", "raytraced")
+SHADOW_METHODS = Shadows.names()
 SOFT_RAYS = 4  # rays per pixel of a light whose Shadow asks for PCSS (an area light)
 REBUILD_EVERY = 30  # frames between full builds of the top level (refits in between)
 
 
 def check_shadow_method(method: str, device: Any = None, samples: int = 1) -> None:
     """UsageError for an unknown method, or `raytraced` on a device that cannot trace rays or
-    with MSAA (the rays start from the G-buffer, which has one sample)."""
-    if method not in SHADOW_METHODS:
-        raise UsageError(f"unknown shadow method {method!r}; methods: {', '.join(SHADOW_METHODS)}")
-    if method != "raytraced":
-        return
-    if device is not None and device.ray_tracing is None:
-        raise UsageError(
-            f"--shadows raytraced needs ray-tracing pipelines (VK_KHR_ray_tracing_pipeline and "
-            f"VK_KHR_acceleration_structure), which {device.info.name} lacks: use --shadows maps"
-        )
-    if samples > 1:
-        raise UsageError(
-            f"--shadows raytraced traces from the one-sample G-buffer: it cannot draw with --msaa {samples}"
-        )
+    with MSAA (config.RULES; the device's rule waits while `device` is None)."""
+    config = RenderConfig.from_strings(shadows=method, msaa=samples)
+    check(config, None if device is None else Caps.of(device), only=("shadows",))
 
 
 @dataclass(frozen=True)

@@ -24,13 +24,13 @@ from typing import Any
 from .. import native
 from ..ecs.world import World
 from ..errors import UsageError
-from ..gpu.array_image import sampler_anisotropy
 from ..gpu.descriptors import write_images
 from ..gpu.device import Device
 from ..gpu.frames import FrameRing
 from ..gpu.secondary import SecondaryBuffers
 from ..jobs import JobPool
 from .chunk_paths import RECORDERS, InstancedPath, PerEntityPath, check_recorder, default_recorder
+from .config import Caps, RenderConfig, check
 from .environment import EnvironmentMap
 from .frame_data import FrameData, FrameExtractor, check_culling
 from .frame_jobs import FrameJobs, job_name
@@ -45,19 +45,17 @@ from .layouts import (
     FEATURE_SHADOWS,
     INSTANCE,
 )
-from .light_clusters import LightCulling, check_light_culling
+from .light_clusters import LightCulling
 from .light_rows import light_features, write_light_shadows
 from .materials import Materials
 from .mesh_registry import MeshRegistry
-from .oit_pass import check_transparency
 from .output_passes import OutputPasses
-from .path import FILL_MODES, FrameInputs, FrameStats, PathContext, PathFactory, RenderPath, TargetState
-from .ray_shadows import RayShadows, check_shadow_method
+from .path import FrameInputs, FrameStats, PathContext, PathFactory, RenderPath, TargetState
+from .ray_shadows import RayShadows
 from .set_aside_pass import SetAsidePass
 from .shadow_pass import ShadowPass
 from .target_forms import TargetForms
 from .texture_pages import TexturePages
-from .tone_map import check_tone_map
 
 PATHS: dict[str, PathFactory] = {
     "instanced": InstancedPath,
@@ -94,15 +92,14 @@ class Renderer(TargetForms):
         shadow_denoise: bool = True,
         anisotropy: int | None = None,  # textures' (1: off; None: the device's best, up to 16)
     ) -> None:
-        if mode not in PATHS:
-            raise ValueError(f"unknown render mode {mode!r}; modes: {', '.join(MODES)}")
         self.vk, self.device = device.vk, device
-        self.check_fill(fill)  # before anything is made: a refusal leaves nothing to destroy
-        check_tone_map(tone_map, exposure)
-        check_light_culling(light_culling)
-        sampler_anisotropy(device, anisotropy)
-        check_transparency(transparency)
-        check_shadow_method(shadows, device, target.samples)  # raytraced: a device that traces rays
+        # every setting against the one table (config.RULES), before anything is made: a refusal
+        # leaves nothing to destroy, and names every setting this device refuses at once
+        asked = dict(mode=mode, recorder=recorder, culling=culling, fill=fill, tone_map=tone_map, exposure=exposure)
+        asked.update(light_culling=light_culling, transparency=transparency, lod=lod, shadows=shadows)
+        asked.update(shadow_denoise=shadow_denoise, anisotropy=anisotropy, msaa=target.samples)
+        check(RenderConfig.from_strings(**asked), Caps.of(device))
+        self._anisotropy = anisotropy  # as asked (None: the device's best), for `config`
         # blended rows: sorted, or weighted (oit_pass.py: deferred form); levels of detail (indirect mode)
         self.transparency, self.lod = transparency, lod
         self.tone_map, self.exposure = tone_map, float(exposure)  # change them between frames (ensure_output)
@@ -111,7 +108,7 @@ class Renderer(TargetForms):
         self.meshes, self.clear_color, self.ambient = meshes, clear_color, ambient
         self.jobs = jobs
         self._jobs_generation = jobs.generation if jobs is not None else 0
-        self.culling = check_culling(culling, mode)  # CULLING: frustum, temporal, occlusion or none
+        self.culling = check_culling(culling, None)  # config.Culling's name (True: frustum; False: none)
         self.region: tuple[float, float, float, float] | None = None  # the view's part of the target (camera.py)
         self.extractor = FrameExtractor(lambda: self.jobs.threads if self.jobs is not None else 1, chunk_rows)
         self._native = native_recorder  # compiling one costs about a second: callers may share one
@@ -167,6 +164,14 @@ class Renderer(TargetForms):
     def recorder(self) -> str:
         """The path's: native or python, or gpu when the GPU writes the draws (indirect)."""
         return self.path.recorder
+
+    @property
+    def config(self) -> RenderConfig:
+        """The settings in force, as one value (config.py); changed through the setters."""
+        same = ("mode", "culling", "light_culling", "shadow_denoise", "transparency", "tone_map", "exposure", "fill")
+        kept = {"recorder": self.cpu_recorder, "shadows": self.shadow_method, "msaa": self.target.samples}
+        kept.update(lod=self.lod, anisotropy=self._anisotropy)
+        return RenderConfig.from_strings(**{n: getattr(self, n) for n in same}, **kept)
 
     @property
     def chunk_rows(self) -> int | None:
@@ -245,13 +250,8 @@ class Renderer(TargetForms):
                 pf.set_version += 1  # the shadow views' copies of the set name the old pages
 
     def check_fill(self, fill: str) -> None:
-        """Raise (UsageError) unless this device can draw meshes with `fill`."""
-        if fill not in FILL_MODES:
-            raise UsageError(f"unknown fill {fill!r}; fills: {', '.join(FILL_MODES)}")
-        if fill != "solid" and not self.device.features.get("fillModeNonSolid"):
-            raise UsageError(
-                f"{self.device.info.name} cannot draw {fill} (it lacks fillModeNonSolid); use --fill solid"
-            )
+        """Raise (UsageError) unless this device can draw meshes with `fill` (config.RULES)."""
+        check(RenderConfig.from_strings(fill=fill), Caps.of(self.device), only=("fill",))
 
     def set_fill(self, fill: str) -> None:
         """Rasterise meshes as `fill` from the next frame (the path's pipelines are rebuilt)."""

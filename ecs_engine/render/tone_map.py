@@ -14,20 +14,23 @@ Operators (TONE_MAPS, picked by name; the shader reads the number):
 
 from __future__ import annotations
 
-import math
 from typing import Any, Final
 
 import numpy as np
 
-from ..errors import UsageError
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout
 from ..gpu.device import Device
 from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
 from ..gpu.render_pass import SUBPASS_OUTPUT
+from .config import RenderConfig, ToneMap, check
 from .layouts import TONE_MAP_ACES, TONE_MAP_CLAMP, TONE_MAP_PUSH, TONE_MAP_REINHARD
 
-TONE_MAPS: Final[dict[str, int]] = {"clamp": TONE_MAP_CLAMP, "aces": TONE_MAP_ACES, "reinhard": TONE_MAP_REINHARD}
-MAX_EXPOSURE: Final = 20.0  # stops either way
+# the operators by config.ToneMap name (a member is its name: TONE_MAPS["aces"])
+TONE_MAPS: Final[dict[str, int]] = {
+    ToneMap.CLAMP: TONE_MAP_CLAMP,
+    ToneMap.ACES: TONE_MAP_ACES,
+    ToneMap.REINHARD: TONE_MAP_REINHARD,
+}
 _SETS = 8  # descriptor sets kept, one per HDR view seen (swapchains come and go)
 
 
@@ -40,12 +43,8 @@ def wants_hdr(name: str, exposure: float, samples: int, blends: bool = False) ->
 
 
 def check_tone_map(name: str, exposure: float) -> None:
-    if name not in TONE_MAPS:
-        raise UsageError(f"unknown tone map {name!r}; tone maps: {', '.join(TONE_MAPS)}")
-    if not isinstance(exposure, (int, float)) or not math.isfinite(exposure) or abs(exposure) > MAX_EXPOSURE:
-        raise UsageError(
-            f"exposure must be a number of stops in [-{MAX_EXPOSURE:g}, {MAX_EXPOSURE:g}], got {exposure!r}"
-        )
+    """UsageError for an unknown operator or an exposure out of range (config.RULES)."""
+    check(RenderConfig.from_strings(tone_map=name, exposure=exposure), only=("exposure",))
 
 
 class ToneMapPass:
