@@ -17,7 +17,7 @@ from ..errors import UsageError
 from ..gpu.device import Device
 from ..gpu.instance import Instance
 from ..gpu.offscreen import OffscreenTarget
-from ..gpu.render_pass import check_samples
+from ..render.config import check_samples
 from ..render.mesh_registry import MeshRegistry
 from .report import recorder_words
 from .session import FrameTarget, Gpu, Session

@@ -20,8 +20,8 @@ from ..errors import UsageError
 from ..gpu.device import Device
 from ..gpu.functions import instance_function
 from ..gpu.instance import Instance
-from ..gpu.render_pass import check_samples
 from ..gpu.swapchain import OutOfDate, Swapchain
+from ..render.config import check_samples
 from ..render.mesh_registry import MeshRegistry
 from ..systems import ActionMap, InputState
 from ..systems.input_state import input_names

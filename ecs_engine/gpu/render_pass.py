@@ -54,14 +54,6 @@ def supported_samples(device: Device) -> tuple[int, ...]:
     return tuple(n for n in MSAA_COUNTS if mask & n)
 
 
-def check_samples(device: Device, samples: int) -> None:
-    """UsageError unless the device renders the scene with `samples` (--msaa): the render
-    configuration's rule (render/config.py; imported here, the Vulkan layer's one use of it)."""
-    from ..render.config import Caps, RenderConfig, check
-
-    check(RenderConfig.from_strings(msaa=samples), Caps.of(device), only=("msaa",))
-
-
 def output_subpass(form: str) -> int:
     """The subpass the overlay (and, with HDR colour, the tone map) draws in: in the direct form
     the billboards', as before HDR existed (a third subpass there would hold only the overlay,

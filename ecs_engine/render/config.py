@@ -350,3 +350,10 @@ def inert_refusal(field: str, config: RenderConfig) -> str | None:
     if entry is None or entry[1] is None or entry[0](config):
         return None
     return entry[1].format(c=config)
+
+
+def check_samples(device: Any, samples: int) -> None:
+    """UsageError unless the device renders the scene with `samples` (--msaa): the table's rule,
+    checked where a target is made (here and not in gpu/: the Vulkan layer imports no render
+    module)."""
+    check(RenderConfig.from_strings(msaa=samples), Caps.of(device), only=("msaa",))

@@ -6,8 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 from ...errors import UsageError
-from .builder import Use
-from .resources import Access, GraphBuffer, GraphImage, Load, is_depth
+from .resources import Access, GraphBuffer, GraphImage, Load, Use, is_depth
 
 _INTEGER = ("_UINT", "_SINT")
 

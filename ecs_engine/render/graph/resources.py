@@ -282,3 +282,26 @@ class GraphBuffer:
     name: str
     handle: Any
     size: int
+
+
+@dataclass(frozen=True)
+class Use:
+    """One declared access of a pass: resource, access, mip (None: all), and for writes the load
+    op and clear value."""
+
+    resource: str
+    access: Access
+    mip: int | None
+    write: bool
+    load: Load = Load.LOAD
+    clear: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+
+    @property
+    def keeps_contents(self) -> bool:
+        """The access sees what was there before (a read, a LOAD, a read-modify-write)."""
+        return not self.write or self.load is Load.LOAD or self.access.usage.reads
+
+    def describe(self) -> str:
+        where = "" if self.mip is None else f"[mip {self.mip}]"
+        load = f" {self.load.value}" if self.write and self.load is not Load.LOAD else ""
+        return f"{self.resource}{where} {self.access.name}{load}"
