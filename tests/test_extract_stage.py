@@ -10,6 +10,7 @@ function that reads one (the extract functions, render_origin, active_camera).""
 from __future__ import annotations
 
 import ast
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -17,11 +18,13 @@ import pytest
 
 import ecs_engine.render
 from ecs_engine import World
-from ecs_engine.components import Camera, DirectionalLight, PointLight, Shadow, SpotLight, Transform
+from ecs_engine.components import Camera, DirectionalLight, Mesh, PointLight, Shadow, SpotLight, Transform
 from ecs_engine.components.environment import Environment
+from ecs_engine.ecs.errors import AccessError
+from ecs_engine.ecs.schedule import Schedule, system
 from ecs_engine.maths.camera import look_rotation
 from ecs_engine.render.frame_data import FrameExtractor
-from ecs_engine.render.materials import Material, materials
+from ecs_engine.render.materials import Material, Materials, materials
 from ecs_engine.render.ray_shadows import ray_lights
 from ecs_engine.render.shadow_views import shadow_views
 
@@ -256,3 +259,40 @@ def test_the_renderer_s_materials_are_the_snapshot_s(given: bool) -> None:
     library = materials(world)
     data = FrameExtractor(lambda: 1).extract(world, 1.0, 1, "none", materials=library if given else None)
     assert data.materials is library
+
+
+def _extract_systems() -> list[tuple[str, tuple[type, ...], Callable[[World], object]]]:
+    from ecs_engine.render.extract import camera, chunks, environment, lights, shadows
+    from ecs_engine.render.extract import materials as materials_extract
+
+    rows = chunks.ChunkExtract(lambda: 1)
+    return [
+        ("camera", camera.READS, lambda w: camera.camera_matrices(w, 1.5)),
+        ("lights", lights.READS, lambda w: lights.extract_lights(w, lights.light_kinds())),
+        ("shadows", shadows.READS, shadows.ShadowExtract()),
+        ("environment", environment.READS, environment.extract_environment),
+        ("materials", materials_extract.READS, lambda w: materials_extract.extract_materials(w, Materials())),
+        ("chunks", chunks.READS, lambda w: rows.chunks(w, 1)),
+    ]
+
+
+@pytest.mark.parametrize("index", range(6))
+def test_each_extract_function_runs_as_a_system_reading_what_it_declares(index: int) -> None:
+    """Each extract function run by a system declaring its module's READS (a query or get of
+    anything else fails there): what the parallel schedule needs to run them side by side."""
+    name, reads, extract = _extract_systems()[index]
+    world, _ = _scene()
+    world.spawn(Transform(), Mesh(handle=0))
+    world.resources[Environment] = Environment(source="sky")
+    materials(world)
+    out: list[object] = []
+    schedule = Schedule()
+    schedule.add(system(reads=reads, name=f"extract_{name}")(lambda w, dt: out.append(extract(w))))
+    schedule.run(world, 0.0)
+    assert out and out[0] is not None
+
+    if len(reads) > 1:  # the check holds: without one of the components, the system fails
+        narrow = Schedule()
+        narrow.add(system(reads=reads[1:], name=f"narrow_{name}")(lambda w, dt: extract(w)))
+        with pytest.raises(AccessError, match="does not declare"):
+            narrow.run(world, 0.0)

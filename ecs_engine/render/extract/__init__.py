@@ -1,7 +1,8 @@
 """The extract stage: the functions that turn the World into the frame's snapshot (FrameData,
 frame_data.py), the only render code that reads the World (tests/test_extract_stage.py holds the
 others to it). Each reads only what it names, so that each can become a system of the parallel
-schedule:
+schedule (each module's READS is what a system running it declares; tests/test_extract_stage.py
+runs each so, where an undeclared query or get fails):
 
 - camera.py: camera_matrices (extract_camera): the active camera's Camera and Transform;
 - lights.py: extract_lights: the point, spot and directional lights with a Transform;

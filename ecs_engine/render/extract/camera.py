@@ -11,12 +11,14 @@ from typing import Any
 
 import numpy as np
 
-from ecs_engine.components.camera import ORTHOGRAPHIC, Camera, active_camera
+from ecs_engine.components.camera import ORTHOGRAPHIC, ActiveCamera, Camera, active_camera
 from ecs_engine.components.transform import Transform
 
 from ...ecs.world import World
 from ...errors import UsageError
 from ...maths.camera import check_positive, check_region, orthographic, perspective, region_projection, rotation_matrix
+
+READS = (Camera, Transform, ActiveCamera)  # a system running camera_matrices declares these
 
 
 @dataclass(frozen=True)

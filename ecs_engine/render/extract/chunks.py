@@ -20,6 +20,7 @@ from ...components import Mesh, ModelMatrix, NotShadowCaster, NotShadowReceiver
 from ...ecs.world import World
 from ...jobs import row_chunks
 
+READS = (ModelMatrix, Mesh, NotShadowCaster, NotShadowReceiver)  # a system running ChunkExtract declares these
 _HANDLE = (Mesh, "handle")  # the columns whose writes make the extractor check handles again
 _MATERIAL = (Mesh, "material")
 MODEL_COLUMN = (ModelMatrix, "model")  # a Chunk's `ticks` key: when its model matrices were last written

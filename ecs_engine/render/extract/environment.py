@@ -6,6 +6,8 @@ from __future__ import annotations
 from ...components.environment import Environment
 from ...ecs.world import World
 
+READS = (Environment,)  # a system running extract_environment declares it
+
 
 def extract_environment(world: World) -> Environment | None:
     found: Environment | None = world.resources.get(Environment)

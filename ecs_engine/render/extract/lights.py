@@ -11,6 +11,7 @@ from ...ecs.schedule import any_with
 from ...ecs.world import World
 from ..light_rows import DirectionalLights, PositionalLights, local_minus_z, spot_cones
 
+READS = (PointLight, SpotLight, DirectionalLight, Transform)  # a system running extract_lights declares these
 LightKinds = tuple[Callable[[World], bool], ...]
 KeptPoints = dict[int, tuple[Any, int, int, PositionalLights]]
 

@@ -6,6 +6,8 @@ from __future__ import annotations
 from ...ecs.world import World
 from ..materials import Materials
 
+READS = (Materials,)  # a system running extract_materials declares it
+
 
 def extract_materials(world: World, default: Materials) -> Materials:
     found: Materials | None = world.resources.get(Materials)

@@ -20,6 +20,8 @@ from ...ecs.schedule import any_with
 from ...ecs.schema import schema_of
 from ...ecs.world import World
 
+READS = (DirectionalLight, SpotLight, PointLight, Transform, Shadow)  # a system extracting casters declares these
+
 
 @dataclass(frozen=True)
 class ShadowRows:
