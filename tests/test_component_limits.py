@@ -28,6 +28,7 @@ from ecs_engine.components import (
 )
 from ecs_engine.components.shadow import Shadow
 from ecs_engine.ecs.scene_file import SceneFileError
+from ecs_engine.render.extract.shadows import extract_shadow_casters
 from ecs_engine.render.frame_data import FrameExtractor
 from ecs_engine.render.light_clusters import cluster_grid, light_census
 from ecs_engine.render.light_rows import write_lights
@@ -143,7 +144,7 @@ def cpu_frame(world: World) -> list[np.ndarray]:
         warnings.simplefilter("error")
         default_schedule().run(world, 1 / 60)
         data = FrameExtractor(lambda: 1).extract(world, 4 / 3, mesh_count=1, culling="frustum")
-        views = shadow_views(world, data.camera, data.origin)
+        views = shadow_views(extract_shadow_casters(world), data.camera, data.origin)
         rows = np.zeros((data.light_count, 16), np.float32)
         write_lights(data.lights, data.directional, data.origin, data.camera.position - data.origin, rows)
         bounded, _, reach = light_census(data.lights, data.directional, data.camera.position)

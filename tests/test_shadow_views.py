@@ -14,6 +14,7 @@ from ecs_engine.components import Camera, DirectionalLight, PointLight, Shadow, 
 from ecs_engine.maths.camera import look_rotation
 from ecs_engine.maths.shadow_cascades import cascade_splits
 from ecs_engine.render.camera import camera_matrices
+from ecs_engine.render.extract.shadows import extract_shadow_casters
 from ecs_engine.render.shadow_views import cube_face_scale, shadow_views
 
 ASPECT = 16 / 9
@@ -47,7 +48,7 @@ def clip(view, points):
 def test_only_lights_with_a_shadow_get_views_in_layer_order():
     world = scene()
     cam = camera_matrices(world, ASPECT)
-    views = shadow_views(world, cam, cam.position)
+    views = shadow_views(extract_shadow_casters(world), cam, cam.position)
     assert [(v.kind, v.index) for v in views] == [
         ("cascade", 0),
         ("cascade", 1),
@@ -58,14 +59,14 @@ def test_only_lights_with_a_shadow_get_views_in_layer_order():
     assert [v.layer for v in views] == list(range(10))
     assert [v.resolution for v in views] == [2048] * 3 + [1024] + [512] * 6
     assert [v.far for v in views[:3]] == pytest.approx(cascade_splits(0.5, 30.0, 3)[1:].tolist())
-    assert shadow_views(World(), cam, cam.position) == []
+    assert shadow_views(extract_shadow_casters(World()), cam, cam.position) == []
 
 
 @pytest.mark.parametrize("origin", [(0.0, 0.0, 0.0), (1.0e5, 20.0, -3.0e5)])
 def test_each_cascade_holds_its_slice_of_the_view(origin):
     world = scene(origin)
     cam = camera_matrices(world, ASPECT)
-    views = shadow_views(world, cam, cam.position)
+    views = shadow_views(extract_shadow_casters(world), cam, cam.position)
     inv = np.linalg.inv(cam.projection.astype(np.float64))
     rot = cam.inverse_view[:3, :3].astype(np.float64)
     for v in views[:3]:
@@ -85,7 +86,7 @@ def test_each_cascade_holds_its_slice_of_the_view(origin):
 def test_a_spot_view_holds_its_cone_and_range():
     world = scene()
     cam = camera_matrices(world, ASPECT)
-    spot = shadow_views(world, cam, cam.position)[3]
+    spot = shadow_views(extract_shadow_casters(world), cam, cam.position)[3]
     rng = np.random.default_rng(2)
     axis = np.array([0.1, -1.0, 0.2]) / np.linalg.norm([0.1, -1.0, 0.2])
     apex = np.array([4.0, 3.0, -2.0]) - cam.position
@@ -108,7 +109,7 @@ def test_cube_faces_follow_vulkans_cube_map_face_selection():
     (0)."""
     world = scene()
     cam = camera_matrices(world, ASPECT)
-    faces = shadow_views(world, cam, cam.position)[4:]
+    faces = shadow_views(extract_shadow_casters(world), cam, cam.position)[4:]
     light = np.array([-3.0, 2.0, -5.0]) - cam.position
     rng = np.random.default_rng(5)
     for _ in range(300):
@@ -174,7 +175,7 @@ def test_no_view_is_mirrored():
     cam = camera_matrices(world, ASPECT)
     camera = cam.projection.astype(np.float64) @ cam.view.astype(np.float64)
     assert front_facing(camera, np.linalg.inv(camera))  # the rule holds for the camera's own view
-    views = shadow_views(world, cam, cam.position)
+    views = shadow_views(extract_shadow_casters(world), cam, cam.position)
     assert {v.kind for v in views} == {"cascade", "spot", "cube"}
     for v in views:
         vp = v.view_projection.astype(np.float64)
@@ -187,7 +188,7 @@ def test_cube_faces_are_seen_as_from_a_camera_at_the_light():
     image) and right = forward x up, not the spec's mirror image."""
     world = scene()
     cam = camera_matrices(world, ASPECT)
-    faces = shadow_views(world, cam, cam.position)[4:]
+    faces = shadow_views(extract_shadow_casters(world), cam, cam.position)[4:]
     light = np.array([-3.0, 2.0, -5.0]) - cam.position
     forwards = np.array([(1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1)], np.float64)
     for v, forward in zip(faces, forwards, strict=True):

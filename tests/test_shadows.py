@@ -401,6 +401,7 @@ def test_the_kept_plan_follows_every_change_of_the_lights_and_camera():
     changed (ShadowPass.plan): while nothing does, the frame reuses the last list (and the slots
     their rows); after each change the views equal a fresh plan's and the image a fresh
     renderer's."""
+    from ecs_engine.render.extract.shadows import extract_shadow_casters
     from ecs_engine.render.renderer import Renderer
     from ecs_engine.render.shadow_views import shadow_views
 
@@ -423,7 +424,7 @@ def test_the_kept_plan_follows_every_change_of_the_lights_and_camera():
 
         def same_as_fresh(views: list) -> None:
             cam = camera_matrices(world, W / H)
-            fresh = shadow_views(world, cam, world.get(camera, Transform).position)
+            fresh = shadow_views(extract_shadow_casters(world), cam, world.get(camera, Transform).position)
             assert len(views) == len(fresh)
             for a, b in zip(views, fresh, strict=True):
                 assert (a.entity, a.kind, a.index, a.layer, a.resolution, a.bias) == (

@@ -17,7 +17,6 @@ from typing import Any
 import numpy as np
 
 from ..components.environment import Environment
-from ..ecs.world import World
 from ..gpu.array_image import ArrayImage, clamped_sampler
 from ..gpu.device import Device
 from ..jobs import JobPool
@@ -59,11 +58,10 @@ class EnvironmentMap:
         """Whether the sky is drawn behind the scene."""
         return self.source is not None and self.source.sky
 
-    def sync(self, world: World, jobs: JobPool | None = None) -> bool:
-        """Load the world's Environment when it is new; True when the bound image changed (the
-        frame sets must name it again). A source that cannot be loaded raises UsageError and
-        leaves the previous one bound."""
-        env = world.resources.get(Environment)
+    def sync(self, env: Environment | None, jobs: JobPool | None = None) -> bool:
+        """Load the frame's Environment (FrameData.environment, the world's as extracted) when
+        it is new; True when the bound image changed (the frame sets must name it again). A
+        source that cannot be loaded raises UsageError and leaves the previous one bound."""
         if env is self.source:
             return False
         old = self.source

@@ -1,52 +1,63 @@
 """Frame extraction: the world turned into the plain arrays one frame draws (camera, render
-origin, view, frustum planes, lights, chunks of mesh rows), with no GPU in sight.
+origin, view, frustum planes, lights, shadow casters, environment, materials, chunks of mesh
+rows), with no GPU in sight.
 
 The renderer records from a `FrameData` only, so what a frame will draw can be tested without a
-device, and the world is read in one place. Everything here is kept between frames while its
-inputs are unchanged: a still scene of 100 cubes has a CPU budget of 250 us a frame, and
-rebuilding matrices, planes and chunk lists would spend a good part of it.
+device, and the world is read in one place: the extract stage, `FrameExtractor` calling the
+functions of extract/ (one per part of the snapshot, each reading only the components and
+resources it names, so that they can later run as systems of the parallel schedule). No other
+render module reads the world (tests/test_extract_stage.py). Everything here is kept between
+frames while its inputs are unchanged: a still scene of 100 cubes has a CPU budget of 250 us a
+frame, and rebuilding matrices, planes and chunk lists would spend a good part of it.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from ..components import (
-    DirectionalLight,
-    Mesh,
-    ModelMatrix,
-    NotShadowCaster,
-    NotShadowReceiver,
-    PointLight,
-    SpotLight,
-    Transform,
-    render_origin,
-)
-from ..ecs.schedule import any_with
+from ..components import render_origin
+from ..components.environment import Environment
 from ..ecs.world import World
-from ..jobs import row_chunks
 from ..maths.culling import frustum_planes
 from .camera import CameraMatrices, camera_matrices, view_from_origin
 from .config import Culling, RenderConfig, check, choice
-from .light_rows import DirectionalLights, PositionalLights, local_minus_z, spot_cones
+from .extract.chunks import (
+    MIN_CHUNK_ROWS,
+    MODEL_COLUMN,
+    NOT_CASTER,
+    NOT_RECEIVER,
+    Chunk,
+    ChunkExtract,
+    SetAsideRows,
+    shadow_flags,
+)
+from .extract.environment import extract_environment
+from .extract.lights import KeptPoints, LightKinds, extract_lights, light_kinds
+from .extract.materials import extract_materials
+from .extract.shadows import ShadowCasters, ShadowExtract
+from .light_rows import DirectionalLights, PositionalLights
+from .materials import Materials
 from .temporal_culling import TemporalCulling
 
-_HANDLE = (Mesh, "handle")  # the columns whose writes make the extractor check handles again
-_MATERIAL = (Mesh, "material")
-MODEL_COLUMN = (ModelMatrix, "model")  # a Chunk's `ticks` key: when its model matrices were last written
-# Rows per job, by default about one job per thread but never under MIN_CHUNK_ROWS. Measured on
-# the H100 host (native recorder): 4,096-row jobs were slower on 16 threads than on 4 (per-job
-# Python under GIL contention); at 1M entities and 16 threads the instanced CPU frame took
-# 21.49 ms with 16,384-row jobs, 17.98 ms with 32,768 and 14.06 ms with 65,536 (one per core);
-# but fixed 65,536-row jobs leave 100k entities in two jobs, so the size follows the thread count.
-MIN_CHUNK_ROWS = 16_384
+# names older code imports from here (they live in extract/chunks.py)
+__all__ = [
+    "CULLING",
+    "MIN_CHUNK_ROWS",
+    "MODEL_COLUMN",
+    "NOT_CASTER",
+    "NOT_RECEIVER",
+    "Chunk",
+    "FrameData",
+    "FrameExtractor",
+    "SetAsideRows",
+    "check_culling",
+    "shadow_flags",
+]
 
-
-NOT_CASTER, NOT_RECEIVER = 1, 2
 # per frame; only when due (temporal_culling.py); the frustum, then what is hidden (the indirect
 # mode: render/occlusion.py); off
 CULLING = Culling.names()
@@ -64,47 +75,6 @@ def check_culling(culling: str | bool, mode: str | None = "instanced") -> str:
     return str(check(RenderConfig.from_strings(culling=name, mode=mode), only=("culling",)).culling.value)
 
 
-def shadow_flags(batch: Any) -> int:
-    """A table's shadow tags as Chunk.flags: a tag is in every row of a table or in none."""
-    types = batch.table.type_set
-    return (NOT_CASTER if NotShadowCaster in types else 0) | (NOT_RECEIVER if NotShadowReceiver in types else 0)
-
-
-@dataclass
-class Chunk:
-    """A run of rows of one table: one job. Views into the world's columns."""
-
-    model: np.ndarray
-    handle: np.ndarray
-    material: np.ndarray
-    offset: int  # first row of this chunk's slice of the instance buffer
-    flags: int = 0  # NOT_CASTER, NOT_RECEIVER: its table's shadow tags (components/shadow.py)
-    table: int = -1  # the table's id and the chunk's first row in it (FrameData.masks)
-    start: int = 0
-    # its table's column ticks, for views of the table's own columns (not gathered copies): what
-    # a frame slot's rows were written from can then be told unchanged (chunk_paths.py)
-    ticks: dict[Any, int] | None = None
-
-    @property
-    def name(self) -> str:
-        return f"rows {self.offset}:{self.offset + len(self.handle)}"
-
-
-@dataclass
-class SetAsideRows:
-    """This frame's rows drawn apart from the chunks (set_aside_pass.py): those whose material is
-    alpha-blended (after the opaque ones, back to front) or has its own fill (wireframe, points)."""
-
-    model: np.ndarray
-    handle: np.ndarray
-    material: np.ndarray
-    # the same rows as shadow casters, per table (its shadow tags), offsets after the chunks' rows
-    casters: list[Chunk] = field(default_factory=list)
-
-    def __len__(self) -> int:
-        return len(self.handle)
-
-
 @dataclass
 class FrameData:
     camera: CameraMatrices
@@ -119,6 +89,9 @@ class FrameData:
     candidates: int  # rows with a mesh in the chunks (opaque and masked materials), before culling
     set_aside: SetAsideRows | None = None  # None: no material is blended or has its own fill
     masks: dict[int, np.ndarray] | None = None  # temporal culling: per table id, the rows to draw
+    shadows: ShadowCasters | None = None  # the lights with a Shadow (None: none has one)
+    environment: Environment | None = None  # the world's Environment resource
+    materials: Materials | None = None  # the world's Materials (or a default palette); None: not extracted
 
     def visible(self, chunk: Chunk) -> np.ndarray | None:
         """The rows of `chunk` to draw, where the culling decided ahead (temporal); else None."""
@@ -133,27 +106,29 @@ class FrameData:
 
 
 class FrameExtractor:
-    """Turns a world into `FrameData`. A table's rows are cut into jobs of `chunk_rows`, or
-    by default into about one job per thread of `threads()` (at least MIN_CHUNK_ROWS rows)."""
+    """Turns a world into `FrameData` through the extract functions (extract/), keeping what
+    each keeps between frames. A table's rows are cut into jobs of `chunk_rows`, or by default
+    into about one job per thread of `threads()` (at least MIN_CHUNK_ROWS rows)."""
 
     def __init__(self, threads: Callable[[], int], chunk_rows: int | None = None) -> None:
         self.threads = threads
-        self.chunk_rows = chunk_rows
+        self.rows = ChunkExtract(threads, chunk_rows)
         self._planes_for: np.ndarray | None = None  # the view matrix the planes were made with
         self._planes = np.zeros((0, 4))
         self._view: tuple[CameraMatrices, bytes, np.ndarray] | None = None
-        self._chunks_key: tuple[object, ...] = ()
-        self._chunks: list[Chunk] = []
-        self._split_key: tuple[object, ...] = ()
-        self._split: list[tuple[np.ndarray, np.ndarray]] = []  # per table: chunk rows, rows set aside
         self.temporal = TemporalCulling()
-        # which light kinds the world has (kept while its structure stays): absent ones cost no query
-        self._kinds = (
-            any_with(PointLight, Transform),
-            any_with(SpotLight, Transform),
-            any_with(DirectionalLight, Transform),
-        )
-        self._point_lights: dict[int, tuple[Any, int, int, PositionalLights]] = {}  # per table: views kept
+        self._kinds = light_kinds()  # which light kinds the world has: absent ones cost no query
+        self._point_lights: KeptPoints = {}  # per table: views kept
+        self.casters = ShadowExtract()
+        self._default_materials: Materials | None = None  # a world without Materials, when none is given
+
+    @property
+    def chunk_rows(self) -> int | None:
+        return self.rows.chunk_rows
+
+    @chunk_rows.setter
+    def chunk_rows(self, rows: int | None) -> None:
+        self.rows.chunk_rows = rows
 
     def extract(
         self,
@@ -166,25 +141,31 @@ class FrameExtractor:
         region: tuple[float, float, float, float] | None = None,
         dt: float | None = None,
         bounds: Any = None,
+        materials: Materials | None = None,
     ) -> FrameData:
         """`culling`: CULLING (a bool: frustum or none); `set_aside`: per material, whether its
         rows are drawn apart (Materials.set_aside); `region`: the part of the target the view
         shows in (camera_matrices), culled to it; temporal culling needs `dt` (the seconds since
-        the last frame) and `bounds` (the mesh registry's)."""
+        the last frame) and `bounds` (the mesh registry's); `materials`: the world's as the
+        caller found them (Renderer.materials), else extracted here."""
         culling = check_culling(culling, None)
         cam = camera_matrices(world, aspect, region)
         origin = render_origin(world)
         origin_key = origin.tobytes()
         view = self.view(cam, origin, origin_key)
-        positional, directional = self.lights(world, self._kinds, self._point_lights)
-        chunks = self.chunks(world, mesh_count, material_count)
+        positional, directional = extract_lights(world, self._kinds, self._point_lights)
+        chunks = self.rows.chunks(world, mesh_count, material_count)
         aside = None
         if set_aside is not None and chunks:
-            chunks, aside = self.split(world, chunks, set_aside)
+            chunks, aside = self.rows.split(world, chunks, set_aside)
         planes = self.planes(cam.lens, view) if culling != "none" else None
         masks = None
         if culling == "temporal" and planes is not None:
             masks = self.temporal.masks(world, cam, origin, planes, dt, bounds)
+        if materials is None:
+            if self._default_materials is None:
+                self._default_materials = Materials()
+            materials = extract_materials(world, self._default_materials)
         return FrameData(
             camera=cam,
             origin=origin,
@@ -198,43 +179,10 @@ class FrameExtractor:
             candidates=sum(len(c.handle) for c in chunks),
             set_aside=aside,
             masks=masks,
+            shadows=self.casters(world),
+            environment=extract_environment(world),
+            materials=materials,
         )
-
-    def split(self, world: World, chunks: list[Chunk], blend: np.ndarray) -> tuple[list[Chunk], SetAsideRows]:
-        """The chunks without the rows set aside (gathered copies, made each frame: the model
-        matrices change), and those rows. Which rows those are is kept while the tables, their
-        materials and the flags stay the same."""
-        query = world.query(ModelMatrix, Mesh, write=())
-        key = (
-            world,
-            blend.tobytes(),
-            *[(t.id, t.version, t.count, t.column_ticks[_MATERIAL]) for t in query.tables],
-        )
-        if key != self._split_key:
-            self._split = []
-            for batch in query:
-                flags = blend[batch[Mesh].material]
-                self._split.append((np.flatnonzero(~flags), np.flatnonzero(flags)))
-            self._split_key = key
-        opaque: list[Chunk] = []
-        models, handles, materials, flags = [], [], [], []
-        offset = 0
-        for batch, (keep, blended) in zip(query, self._split):
-            m, mesh = batch[ModelMatrix], batch[Mesh]
-            model, handle, material = m.model[keep], mesh.handle[keep], mesh.material[keep]
-            for s in row_chunks(len(keep), self.rows_per_job(len(keep))):
-                opaque.append(Chunk(model[s], handle[s], material[s], offset, shadow_flags(batch)))
-                offset += s.stop - s.start
-            models.append(m.model[blended])
-            handles.append(mesh.handle[blended])
-            materials.append(mesh.material[blended])
-            flags.append(shadow_flags(batch))
-        rows = SetAsideRows(np.concatenate(models), np.concatenate(handles), np.concatenate(materials))
-        for model, handle, material, tags in zip(models, handles, materials, flags, strict=True):
-            if len(handle):  # a shadow view's rows: the chunks', then these
-                rows.casters.append(Chunk(model, handle, material, offset, tags))
-                offset += len(handle)
-        return opaque, rows
 
     def view(self, cam: CameraMatrices, origin: np.ndarray, origin_key: bytes) -> np.ndarray:
         """view_from_origin, kept while the camera matrices and the origin stay the same (a new
@@ -249,89 +197,18 @@ class FrameExtractor:
             self._planes_for, self._planes = view, frustum_planes(projection, view)
         return self._planes
 
+    # the extract functions under the names older code calls (tests, benches)
     @staticmethod
     def lights(
-        world: World,
-        kinds: tuple[Callable[[World], bool], ...] | None = None,
-        kept: dict[int, tuple[Any, int, int, PositionalLights]] | None = None,
+        world: World, kinds: LightKinds | None = None, kept: KeptPoints | None = None
     ) -> tuple[list[PositionalLights], list[DirectionalLights]]:
-        """Per table: point lights (views of their columns), spot lights (with the direction each
-        shines, from its rotation, and its cone) and directional lights (see light_rows.py).
-        `kinds`: whether the world has each (point, spot, directional; run conditions); `kept`:
-        a table's point lights, kept while it keeps its layout and rows (views see new values)."""
-        points, spots, suns = kinds or (lambda w: True,) * 3
-        kept = {} if kept is None else kept
-        positional = []
-        for batch in world.query(PointLight, Transform, write=()) if points(world) else ():
-            table = batch.table
-            found = kept.get(table.id)
-            if found is None or found[0] is not table or found[1] != table.version or found[2] != len(batch):
-                light = batch[PointLight]
-                made = PositionalLights(
-                    batch[Transform].position, light.radius, light.color, light.intensity, entity=batch.entities
-                )
-                found = kept[table.id] = (table, table.version, len(batch), made)
-            positional.append(found[3])
-        for batch in world.query(SpotLight, Transform, write=()) if spots(world) else ():
-            spot, transform = batch[SpotLight], batch[Transform]
-            positional.append(
-                PositionalLights(
-                    transform.position,
-                    spot.radius,
-                    spot.color,
-                    spot.intensity,
-                    local_minus_z(transform.rotation),
-                    spot_cones(spot.inner_angle, spot.outer_angle),
-                    batch.entities,
-                )
-            )
-        directional = []
-        for batch in world.query(DirectionalLight, Transform, write=()) if suns(world) else ():
-            sun = batch[DirectionalLight]
-            directional.append(
-                DirectionalLights(local_minus_z(batch[Transform].rotation), sun.color, sun.illuminance, batch.entities)
-            )
-        return positional, directional
+        return extract_lights(world, kinds, kept)
 
     def chunks(self, world: World, mesh_count: int, material_count: int = 1 << 32) -> list[Chunk]:
-        """Row ranges of every table with a ModelMatrix and a Mesh, each with its buffer slice.
-        Kept while the world is the same and its tables keep their rows, layout and Mesh
-        columns (the views stay valid and see every value written since)."""
-        query = world.query(ModelMatrix, Mesh, write=())
-        tables = query.tables
-        key = (
-            world,
-            mesh_count,
-            material_count,
-            self.chunk_rows,
-            self.threads(),
-            *[(t.id, t.version, t.count, t.column_ticks[_HANDLE], t.column_ticks[_MATERIAL]) for t in tables],
-        )
-        if key == self._chunks_key:
-            return self._chunks
-        out: list[Chunk] = []
-        offset = 0
-        for batch in query:
-            m, mesh = batch[ModelMatrix], batch[Mesh]
-            for s in row_chunks(len(batch), self.rows_per_job(len(batch))):
-                flags, table = shadow_flags(batch), batch.table.id
-                ticks = batch.table.column_ticks
-                out.append(Chunk(m.model[s], mesh.handle[s], mesh.material[s], offset, flags, table, s.start, ticks))
-                offset += s.stop - s.start
-        if out:
-            top = max(int(c.handle.max()) for c in out)
-            if top >= mesh_count:
-                raise ValueError(f"Mesh.handle {top} does not name an uploaded mesh ({mesh_count} uploaded)")
-            top = max(int(c.material.max()) for c in out)
-            if top >= material_count:
-                raise ValueError(
-                    f"Mesh.material {top} does not name a material (the world has {material_count}: "
-                    "add materials with ecs_engine.render.materials.materials(world).add)"
-                )
-        self._chunks_key, self._chunks = key, out
-        return out
+        return self.rows.chunks(world, mesh_count, material_count)
+
+    def split(self, world: World, chunks: list[Chunk], blend: np.ndarray) -> tuple[list[Chunk], SetAsideRows]:
+        return self.rows.split(world, chunks, blend)
 
     def rows_per_job(self, rows: int) -> int:
-        if self.chunk_rows is not None:
-            return self.chunk_rows
-        return max(MIN_CHUNK_ROWS, -(-rows // self.threads()))
+        return self.rows.rows_per_job(rows)

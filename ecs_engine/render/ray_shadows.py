@@ -31,10 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from ..components import DirectionalLight, PointLight, Shadow, SpotLight, Transform
 from ..components.shadow import SHADOW_PCSS
-from ..ecs.schedule import any_with
-from ..ecs.world import World
 from ..gpu.acceleration import AS_INSTANCE, TopLevel, ray_input_usage
 from ..gpu.array_image import nearest_sampler
 from ..gpu.barrier import Barrier
@@ -43,6 +40,7 @@ from ..gpu.memory import UPLOAD, Buffer
 from ..gpu.pipeline import pipeline_layout
 from ..gpu.ray_pipeline import RayPipeline
 from .config import Caps, RenderConfig, Shadows, check
+from .extract.shadows import ShadowCasters, ShadowRows
 from .frame_data import NOT_CASTER, Chunk, FrameData
 from .layouts import (
     ALPHA_MASK,
@@ -86,23 +84,25 @@ class RayLight:
     reach: float  # a point or spot light's radius (0: unbounded)
 
 
-def ray_lights(world: World, origin: np.ndarray) -> list[RayLight]:
-    """The shadow-casting lights, in the shadow maps' order."""
+def ray_lights(casters: ShadowCasters | None, origin: np.ndarray) -> list[RayLight]:
+    """The shadow-casting lights of the frame's snapshot (extract/shadows.py), in the shadow
+    maps' order."""
     found: list[RayLight] = []
+    if casters is None:
+        return found
 
-    def size(shadow: Any, row: int) -> float:
+    def size(shadow: ShadowRows, row: int) -> float:
         return float(shadow.softness[row]) if int(shadow.filter[row]) == SHADOW_PCSS else 0.0
 
-    for batch in world.query(DirectionalLight, Transform, Shadow, write=()):
-        towards = -local_minus_z(batch[Transform].rotation)
-        for row, entity in enumerate(batch.entities.tolist()):
-            found.append(RayLight(entity, LIGHT_DIRECTIONAL, towards[row], size(batch[Shadow], row), 0.0))
-    for kind, component in ((LIGHT_SPOT, SpotLight), (LIGHT_POINT, PointLight)):
-        for batch in world.query(component, Transform, Shadow, write=()):
-            position = batch[Transform].position - origin
-            reach = batch[component].radius
-            for row, entity in enumerate(batch.entities.tolist()):
-                found.append(RayLight(entity, kind, position[row], size(batch[Shadow], row), float(reach[row])))
+    for rows in casters.directional:
+        towards = -local_minus_z(rows.rotation)
+        for row, entity in enumerate(rows.entities.tolist()):
+            found.append(RayLight(entity, LIGHT_DIRECTIONAL, towards[row], size(rows.shadow, row), 0.0))
+    for kind, groups in ((LIGHT_SPOT, casters.spot), (LIGHT_POINT, casters.point)):
+        for rows in groups:
+            position = rows.position - origin
+            for row, entity in enumerate(rows.entities.tolist()):
+                found.append(RayLight(entity, kind, position[row], size(rows.shadow, row), float(rows.radius[row])))
     return found
 
 
@@ -228,12 +228,11 @@ class RayShadows:
         self._denoiser: ShadowDenoise | None = None
         self._traced: ShadowMask | None = None  # the rays' mask when they are filtered
         self._cutouts: tuple[Any, int, np.ndarray | None] = (None, -1, None)  # materials, version, cutouts()
-        self._casters = any_with(Shadow)  # some light has a Shadow (as ShadowPass asks)
 
     # ------------------------------------------------------------ per frame
-    def plan(self, world: World, data: FrameData) -> list[RayLight]:
+    def plan(self, data: FrameData) -> list[RayLight]:
         """The lights traced this frame (`overflow`: those left to the shadow maps)."""
-        found = ray_lights(world, data.origin) if self._casters(world) else []
+        found = ray_lights(data.shadows, data.origin)
         limit = max(0, min(self.max_lights, MAX_RAY_LIGHTS))
         self.lights, self.overflow = found[:limit], {light.entity for light in found[limit:]}
         return self.lights

@@ -32,6 +32,7 @@ from ..jobs import JobPool
 from .chunk_paths import RECORDERS, InstancedPath, PerEntityPath, check_recorder, default_recorder
 from .config import Caps, RenderConfig, check
 from .environment import EnvironmentMap
+from .extract.materials import extract_materials
 from .frame_data import FrameData, FrameExtractor, check_culling
 from .frame_jobs import FrameJobs, job_name
 from .frame_replay import FrameReplay, replay_key, replayable
@@ -306,16 +307,15 @@ class Renderer(TargetForms):
 
     # -------------------------------------------------------------- per frame
     def materials(self, world: World) -> Materials:
-        """The world's materials, or the default palette."""
-        found = world.resources.get(Materials)
-        return found if found is not None else self.default_materials
+        """The world's materials, or the default palette (the extract stage's: extract/materials.py)."""
+        return extract_materials(world, self.default_materials)
 
     def extract(
         self, world: World, width: int, height: int, materials: Materials | None = None, dt: float | None = None
     ) -> FrameData:
         materials = self.materials(world) if materials is None else materials
         args = (self.culling, len(materials), materials.set_aside(), self.region, dt, self.meshes.bounds())
-        return self.extractor.extract(world, width / height, len(self.meshes), *args)
+        return self.extractor.extract(world, width / height, len(self.meshes), *args, materials=materials)
 
     def render(
         self,
@@ -328,7 +328,8 @@ class Renderer(TargetForms):
         dt: float | None = None,
     ) -> FrameStats:
         """Record and submit one frame (`dt`: seconds since the last, for temporal culling).
-        Headless targets read the image back when asked."""
+        Headless targets read the image back when asked. The world is read by the extract stage
+        alone (self.materials, self.extract); everything after it reads the frame's snapshot."""
         materials = self.materials(world)
         self._blends = materials.blends
         if framebuffer is None:
@@ -342,11 +343,11 @@ class Renderer(TargetForms):
         # too for the rows lit forward, which the rays' per-pixel mask does not cover, and for
         # the lights past the traced ones)
         ray = self.ray_shadows
-        traced = ray.plan(world, data) if ray is not None else []
+        traced = ray.plan(data) if ray is not None else []
         forward = data.set_aside is not None and len(data.set_aside) > 0
         only = None if ray is None or forward else ray.overflow
-        views = self.shadows.plan(world, data, only) if only is None or only else []
-        if self.environment.sync(world, self.jobs):  # a new Environment (the device was waited for)
+        views = self.shadows.plan(data, only) if only is None or only else []
+        if self.environment.sync(data.environment, self.jobs):  # a new Environment (the device was waited for)
             for each in self.per_frame:
                 each.name_environment(self.device)
         features = light_features(data.lights, data.directional) | (FEATURE_SHADOWS if views else 0)

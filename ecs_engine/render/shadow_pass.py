@@ -27,15 +27,11 @@ chunk jobs only write the camera's rows, and the CPU path culls and draws the se
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
-from ..components import Shadow
-from ..ecs.schedule import any_with
-from ..ecs.world import World
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
 from ..gpu.device import Device
 from ..gpu.memory import Buffer
@@ -47,7 +43,7 @@ from .instance_rows import cull_views, padded_planes
 from .layouts import BINDING_GLOBALS, GLOBALS, SHADOW_VIEW
 from .path import ChunkResult, FrameInputs, PathContext, RenderPath, TargetState
 from .shadow_indirect import IndirectShadows
-from .shadow_views import ShadowView, shadow_views, views_stamp
+from .shadow_views import ShadowView, shadow_views
 from .view_recording import ViewRecording, can_fuse
 
 
@@ -69,7 +65,6 @@ class ShadowPass:
     def __init__(
         self, device: Device, frame_set_layout: DescriptorSetLayout, secondaries: SecondaryBuffers, frames: int
     ):
-        self._casters = any_with(Shadow)  # some light has a Shadow (kept while the structure stays)
         self.device = device
         self.vk = device.vk
         self.set_layout = frame_set_layout
@@ -92,7 +87,7 @@ class ShadowPass:
         self.gpu: IndirectShadows | None = None  # the indirect mode's GPU-culled views
         self._gpu_frame = False  # this frame's views are culled on the GPU
         self.last_views: list[ShadowView] = []  # the last plan's (the editor's map thumbnails)
-        self._planned: tuple[Any, Any, Any] | None = None  # (world, camera matrices, views_stamp...) it was for
+        self._planned: tuple[Any, Any, Any] | None = None  # (casters, camera matrices, origin...) it was for
         # per slot: the (views, buffer, maps) its rows were written for
         self._views_written: list[tuple[Any, Any, Any] | None] = [None] * frames
         self._inputs: list[FrameInputs] = []  # this frame's views' (prepare)
@@ -101,19 +96,21 @@ class ShadowPass:
         self._fused: ViewRecording | None = None  # the views as one native call a job
 
     # -------------------------------------------------------------- planning
-    def plan(self, world: World, data: FrameData, only: set[int] | None = None) -> list[ShadowView]:
-        """This frame's drawn views (none without a Shadow: one query, no work), of every casting
-        light or of those whose entities are in `only`; the last frame's list itself while the
-        camera, the origin and the casting lights' columns are unchanged (views_stamp)."""
-        if not self._casters(world):
-            self.last_views = []
+    def plan(self, data: FrameData, only: set[int] | None = None) -> list[ShadowView]:
+        """This frame's drawn views (none without a Shadow: no work), of every casting light
+        (the snapshot's, data.shadows) or of those whose entities are in `only`; the last
+        frame's list itself while the camera, the origin and the casters are the same objects
+        (the extractor keeps them while their columns are unchanged: extract/shadows.py)."""
+        casters = data.shadows
+        if casters is None:
+            self.last_views, self._planned = [], None
             return self.last_views
-        key = (views_stamp(world), data.origin_key, None if only is None else frozenset(only))
+        key = (data.origin_key, None if only is None else frozenset(only))
         kept = self._planned
-        if kept is not None and kept[0]() is world and kept[1] is data.camera and kept[2] == key:
+        if kept is not None and kept[0] is casters and kept[1] is data.camera and kept[2] == key:
             return self.last_views
-        self.last_views = shadow_views(world, data.camera, data.origin, only)
-        self._planned = (weakref.ref(world), data.camera, key)
+        self.last_views = shadow_views(casters, data.camera, data.origin, only)
+        self._planned = (casters, data.camera, key)
         return self.last_views
 
     def ensure(self, views: list[ShadowView]) -> bool:

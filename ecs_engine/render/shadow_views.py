@@ -1,5 +1,6 @@
 """The frame's shadow views (issue 15): for every light with a `Shadow` (components/shadow.py),
-the views its shadow maps are drawn from, each with its layer of the shadow map array, the
+the views its shadow maps are drawn from (made from the frame's snapshot of the casting lights,
+extract/shadows.py), each with its layer of the shadow map array, the
 matrices that take render-relative positions there and the planes its casters are culled by.
 
 - directional light: one view per cascade (maths/shadow_cascades.py), fitted to a slice of the
@@ -27,13 +28,11 @@ from typing import Any
 
 import numpy as np
 
-from ..components import DirectionalLight, PointLight, Shadow, SpotLight, Transform
-from ..ecs.schema import schema_of
-from ..ecs.world import World
 from ..maths.camera import perspective
 from ..maths.culling import frustum_planes, frustum_planes_many
 from ..maths.shadow_cascades import cascade_splits, fit_cascades, light_rotation, view_slice_sphere
 from .camera import CameraMatrices
+from .extract.shadows import ShadowCasters
 from .light_rows import local_minus_z
 
 CUBE_MARGIN = 4  # texels a cube face's map reaches past its edges (PCF's 3x3 bilinear taps need 3)
@@ -102,28 +101,8 @@ def _cube_face(face: int, near: float, far: float, scale: float = 1.0) -> np.nda
     return m
 
 
-# what shadow_views reads of the lights: these components of the tables holding each kind
-_READS = ((DirectionalLight, Transform, Shadow), (SpotLight, Transform, Shadow), (PointLight, Transform, Shadow))
-_READ_COLUMNS: list[list[tuple[Any, str]]] = []  # per kind, its columns' keys (found on first use)
-
-
-def views_stamp(world: World) -> tuple[Any, ...]:
-    """A value that stays equal while nothing `shadow_views` reads of the lights can have
-    changed: per table holding a kind of casting light, its id, layout, rows and the change
-    ticks of the light's, Transform's and Shadow's columns (World.change_stamp's rule: a write
-    to any row of a table counts)."""
-    if not _READ_COLUMNS:
-        _READ_COLUMNS.extend([(ct, name) for ct in map(schema_of, kind) for name in ct.__fields__] for kind in _READS)
-    out: list[Any] = []
-    for kind, keys in zip(_READS, _READ_COLUMNS, strict=True):
-        for table in world.query(*kind, write=()).tables:
-            ticks = table.column_ticks
-            out.append((table.id, table.version, table.count, *[ticks.get(k) for k in keys]))
-    return tuple(out)
-
-
 def shadow_views(
-    world: World, cam: CameraMatrices, origin: np.ndarray, only: set[int] | None = None
+    casters: ShadowCasters | None, cam: CameraMatrices, origin: np.ndarray, only: set[int] | None = None
 ) -> list[ShadowView]:
     """The views of every shadow-casting light (or of the lights whose entities are in `only`),
     in layer order (see the module)."""
@@ -131,6 +110,8 @@ def shadow_views(
     eye = cam.position - origin
     forward = cam.inverse_view[:3, :3].astype(np.float64) @ np.array([0.0, 0.0, -1.0])
     views: list[ShadowView] = []
+    if casters is None:
+        return views
 
     def add(
         entity: int,
@@ -158,10 +139,10 @@ def shadow_views(
             ShadowView(entity, kind, index, len(views), view32, projection32, planes, resolution, texel, far, *settings)
         )
 
-    for batch in world.query(DirectionalLight, Transform, Shadow, write=()):
-        shadow = batch[Shadow]
-        directions = local_minus_z(batch[Transform].rotation)
-        for row, entity in enumerate(batch.entities.tolist()):
+    for rows in casters.directional:
+        shadow = rows.shadow
+        directions = local_minus_z(rows.rotation)
+        for row, entity in enumerate(rows.entities.tolist()):
             if only is not None and entity not in only:
                 continue
             distance = float(shadow.distance[row])
@@ -182,17 +163,17 @@ def shadow_views(
                 far_i = splits[i + 1]
                 add(entity, "cascade", i, c.view, c.projection, resolution, c.texel, far_i, shadow, row, planes[i])
 
-    for batch in world.query(SpotLight, Transform, Shadow, write=()):
-        spot, shadow, transform = batch[SpotLight], batch[Shadow], batch[Transform]
-        directions = local_minus_z(transform.rotation)
-        for row, entity in enumerate(batch.entities.tolist()):
+    for rows in casters.spot:
+        shadow = rows.shadow
+        directions = local_minus_z(rows.rotation)
+        for row, entity in enumerate(rows.entities.tolist()):
             if only is not None and entity not in only:
                 continue
-            reach = float(spot.radius[row])
+            reach = float(rows.radius[row])
             far = reach if reach > 0 else math.inf
-            fov = min(2.0 * float(spot.outer_angle[row]), MAX_SPOT_FOV)
+            fov = min(2.0 * float(rows.outer_angle[row]), MAX_SPOT_FOV)
             projection = perspective(fov, 1.0, SPOT_NEAR * reach if reach > 0 else 0.05, far).astype(np.float64)
-            view = _translation_view(light_rotation(directions[row]), transform.position[row] - origin)
+            view = _translation_view(light_rotation(directions[row]), rows.position[row] - origin)
             resolution = int(shadow.resolution[row])
             add(
                 entity,
@@ -207,15 +188,15 @@ def shadow_views(
                 row,
             )
 
-    for batch in world.query(PointLight, Transform, Shadow, write=()):
-        light, shadow, transform = batch[PointLight], batch[Shadow], batch[Transform]
-        for row, entity in enumerate(batch.entities.tolist()):
+    for rows in casters.point:
+        shadow = rows.shadow
+        for row, entity in enumerate(rows.entities.tolist()):
             if only is not None and entity not in only:
                 continue
-            reach = float(light.radius[row])
+            reach = float(rows.radius[row])
             far = reach if reach > 0 else math.inf
             near = SPOT_NEAR * reach if reach > 0 else 0.05
-            view = _translation_view(np.eye(3), transform.position[row] - origin)
+            view = _translation_view(np.eye(3), rows.position[row] - origin)
             resolution = int(shadow.resolution[row])
             for face in range(6):
                 add(
