@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import re
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -92,21 +93,17 @@ def _layers(vk):
     )
 
 
-def run_fxaa(pixels: np.ndarray, fmt: str = UNORM, settings: FxaaSettings | None = None) -> tuple[np.ndarray, str]:
-    """The bytes FXAA writes for `pixels` (bytes of format `fmt`, into a transient of `fmt`) and
-    the graph's description."""
+@contextmanager
+def fxaa_graph(pixels: np.ndarray, fmt: str = UNORM, settings: FxaaSettings | None = None):
+    """A graph that uploads `pixels` (bytes of format `fmt`) into the imported image "ldr",
+    runs FXAA into a transient "aa" of `fmt` and copies that into the host buffer "out":
+    (graph, the FXAA pass, a function that runs a frame and returns the bytes read back)."""
     device = shared_device()
     vk = device.vk
     made: list = []
     try:
-        source = Image(
-            device,
-            W,
-            H,
-            getattr(vk, fmt),
-            vk.VK_IMAGE_USAGE_SAMPLED_BIT | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-            vk.VK_IMAGE_ASPECT_COLOR_BIT,
-        )
+        usage = vk.VK_IMAGE_USAGE_SAMPLED_BIT | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT
+        source = Image(device, W, H, getattr(vk, fmt), usage, vk.VK_IMAGE_ASPECT_COLOR_BIT)
         made.append(source)
         staging = Buffer(device, pixels.nbytes, vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT, HOST)
         made.append(staging)
@@ -117,24 +114,34 @@ def run_fxaa(pixels: np.ndarray, fmt: str = UNORM, settings: FxaaSettings | None
         made.append(graph)
         graph.import_buffer("pixels", handle=staging.handle, size=staging.size)
         graph.import_buffer("out", handle=out.handle, size=out.size)
-        graph.import_image(
-            "ldr",
-            handle=source.handle,
-            view=source.view,
-            format=getattr(vk, fmt),
-            extent=(W, H),
-            layout_before=vk.VK_IMAGE_LAYOUT_UNDEFINED,
-            layout_after=vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-        )
+
+        def frame():
+            graph.import_image(  # again each frame, as a renderer imports its images
+                "ldr",
+                handle=source.handle,
+                view=source.view,
+                format=getattr(vk, fmt),
+                extent=(W, H),
+                layout_before=vk.VK_IMAGE_LAYOUT_UNDEFINED,
+                layout_after=vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+            )
+            graph.compile((W, H))
+            device.submit_once(graph.execute)
+            return out.array(np.uint8, (H, W, 4)).copy()
+
         graph.add_pass(Upload())
-        add_fxaa(graph, settings, source="ldr", target="aa", create=ImageDesc(format=fmt))
+        p = add_fxaa(graph, settings, source="ldr", target="aa", create=ImageDesc(format=fmt))
         graph.add_pass(Readback("aa"))
-        graph.compile((W, H))
-        device.submit_once(graph.execute)
-        return out.array(np.uint8, (H, W, 4)).copy(), graph.describe()
+        yield graph, p, frame
     finally:
         for thing in reversed(made):
             thing.destroy()
+
+
+def run_fxaa(pixels: np.ndarray, fmt: str = UNORM, settings: FxaaSettings | None = None) -> tuple[np.ndarray, str]:
+    """The bytes FXAA writes for `pixels` and the graph's description."""
+    with fxaa_graph(pixels, fmt, settings) as (graph, _, frame):
+        return frame(), graph.describe()
 
 
 def unorm_bytes(colour):
@@ -217,6 +224,21 @@ def test_srgb_source_is_filtered_linear_and_matches_the_reference():
     assert error.max() <= 2.0, np.argwhere(error > 2.0)[:10]
     np.testing.assert_array_equal(gpu[FLAT], image[FLAT])
     assert np.count_nonzero(np.any(gpu != image, axis=-1)) > 40
+
+
+def test_frames_reuse_the_descriptor_set_until_the_graph_compiles_again():
+    image = scene()
+    with fxaa_graph(image) as (graph, p, frame):
+        first = frame()
+        (kept,) = p._sets.values()
+        np.testing.assert_array_equal(frame(), first)  # the import is a new GraphImage: same set
+        assert list(p._sets.values()) == [kept] and graph.compiles == 1
+        graph.output("aa")  # a change of outputs compiles again: new transients
+        np.testing.assert_array_equal(frame(), first)
+        assert graph.compiles == 2 and len(p._sets) == 1 and next(iter(p._sets.values())) is not kept
+        graph.destroy()
+        p.destroy()  # again: nothing left to destroy
+        assert p._owned is None and not p._sets
 
 
 def test_the_quality_table_is_the_same_in_shader_module_and_reference():

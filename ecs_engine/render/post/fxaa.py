@@ -158,8 +158,9 @@ class FxaaPass(Pass):
         self._layout: Any = None
         self._sampler: Any = None
         self._pool: DescriptorPool | None = None
-        self._sets: dict[int, Any] = {}  # source view's handle value -> VkDescriptorSet[1]
-        self._source_image: object = None  # the GraphImage the sets were made for (held: its id stays unique)
+        self._sets: dict[tuple[int, int], Any] = {}  # source (image, view) handle values -> VkDescriptorSet[1]
+        self._generation: object = None  # what the sets were made for (see _set_for)
+        self.graph: Any = None  # the graph it is in (add_fxaa sets it): its compiles date the sets
         self._pipelines: dict[tuple[int, bool], Any] = {}  # (target format, linear source) -> pipeline
 
     def setup(self, builder: Any) -> None:
@@ -228,24 +229,34 @@ class FxaaPass(Pass):
 
     def _set_for(self, device: Any, source: Any) -> Any:
         """The set naming the source's view, written once (never rewritten: a command buffer
-        recorded with it, a replayed frame or one in flight, stays valid). A different source
-        image object means the graph was compiled again: its views may reuse the handle values
-        of destroyed ones, so the sets made so far go."""
+        recorded with it, a replayed frame or one in flight, stays valid). The sets are kept per
+        (image, view) handle values within one compile of the graph: a compile makes new
+        transients, whose handles may reuse the values of destroyed ones, so the sets made so
+        far go then. Without the graph known (a pass added by hand), a new source image object
+        counts as a new compile (right for a transient source; an imported one is a new object
+        each frame, so import sources through add_fxaa). An importer that remakes its source
+        image without the graph compiling again calls forget_views()."""
         vk = device.vk
         assert self._owned is not None
-        if source is not self._source_image:
+        if self.graph is not None:
+            generation: object = self.graph.compiles
+            changed = generation != self._generation
+        else:
+            generation = source
+            changed = source is not self._generation
+        if changed:
             if self._sets:
                 device.wait_idle()
-            self._forget_sets()
-            self._source_image = source
-        key = int(vk.ffi.cast("uintptr_t", source.view))
+            self.forget_views()
+            self._generation = generation
+        key = (int(vk.ffi.cast("uintptr_t", source.handle)), int(vk.ffi.cast("uintptr_t", source.view)))
         found = self._sets.get(key)
         if found is not None:
             return found
         if self._pool is None or len(self._sets) >= _SETS:
             if self._sets:
                 device.wait_idle()  # the old sets may be bound by frames in flight
-            self._forget_sets()
+            self.forget_views()
             pool = DescriptorPool(device, _SETS, {vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER: _SETS})
             self._pool = self._owned.add(pool)
         descriptor_set = self._pool.allocate(self._set_layout)
@@ -254,7 +265,8 @@ class FxaaPass(Pass):
         found = self._sets[key] = vk.ffi.new("VkDescriptorSet[1]", [descriptor_set])
         return found
 
-    def _forget_sets(self) -> None:
+    def forget_views(self) -> None:
+        """Drop every descriptor set (call it with the GPU idle, when views they name go)."""
         if self._pool is not None and self._owned is not None:
             self._owned.release(self._pool)
         self._pool = None
@@ -267,7 +279,7 @@ class FxaaPass(Pass):
         self._owned = self._pool = None
         self._sets.clear()
         self._pipelines.clear()
-        self._source_image = None
+        self._generation = None
 
 
 def add_fxaa(
@@ -283,6 +295,7 @@ def add_fxaa(
     far, or just before the pass named `before`: the UI); the pass it added. The graph
     destroys it with `graph.destroy()`."""
     p = FxaaPass(settings, source, target, create=create)
+    p.graph = graph
     if before is None:
         graph.add_pass(p)
     else:
