@@ -94,7 +94,7 @@ def _layers(vk):
 
 
 @contextmanager
-def fxaa_graph(pixels: np.ndarray, fmt: str = UNORM, settings: FxaaSettings | None = None):
+def fxaa_graph(pixels: np.ndarray, fmt: str = UNORM, settings: FxaaSettings | None = None, target_size=None):
     """A graph that uploads `pixels` (bytes of format `fmt`) into the imported image "ldr",
     runs FXAA into a transient "aa" of `fmt` and copies that into the host buffer "out":
     (graph, the FXAA pass, a function that runs a frame and returns the bytes read back)."""
@@ -130,7 +130,7 @@ def fxaa_graph(pixels: np.ndarray, fmt: str = UNORM, settings: FxaaSettings | No
             return out.array(np.uint8, (H, W, 4)).copy()
 
         graph.add_pass(Upload())
-        p = add_fxaa(graph, settings, source="ldr", target="aa", create=ImageDesc(format=fmt))
+        p = add_fxaa(graph, settings, source="ldr", target="aa", create=ImageDesc(format=fmt, size=target_size))
         graph.add_pass(Readback("aa"))
         yield graph, p, frame
     finally:
@@ -239,6 +239,12 @@ def test_frames_reuse_the_descriptor_set_until_the_graph_compiles_again():
         graph.destroy()
         p.destroy()  # again: nothing left to destroy
         assert p._owned is None and not p._sets
+
+
+def test_a_target_of_another_size_is_refused_when_recorded():
+    with fxaa_graph(scene(), target_size=(W // 2, H // 2)) as (_, _, frame):
+        with pytest.raises(UsageError, match="same size"):
+            frame()
 
 
 def test_the_quality_table_is_the_same_in_shader_module_and_reference():

@@ -63,6 +63,9 @@ _SETS = 8  # descriptor sets kept, one per source view seen
 
 @dataclass(frozen=True)
 class FxaaSettings:
+    """FXAA 3.11's three knobs, its defaults; each a number in [0, 1] (a NaN, a bool or one
+    outside is a UsageError naming it)."""
+
     subpix: float = 0.75
     edge_threshold: float = 0.166
     edge_threshold_min: float = 0.0833
@@ -181,6 +184,8 @@ class FxaaPass(Pass):
                 f"FXAA reads {self.source!r} ({source.extent[0]}x{source.extent[1]}) into {self.target!r} "
                 f"({target.extent[0]}x{target.extent[1]}): they must be the same size"
             )
+        if source.samples != 1 or target.samples != 1:
+            raise UsageError(f"FXAA reads and writes single-sampled images: resolve {self.source!r} first")
         if self._owned is None:
             self._make(ctx.device)
         linear = is_linear_source(format_name(vk, source.format))
