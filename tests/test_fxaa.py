@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import math
 import re
+import shutil
+import subprocess
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -14,6 +16,7 @@ import numpy as np
 import pytest
 from fxaa_reference import STEPS, fxaa_outcomes, linear_to_srgb, srgb_to_linear
 from gpu_context import shared_device
+from spirv_layout import struct_layouts
 
 from ecs_engine.errors import UsageError
 from ecs_engine.gpu.memory import HOST, Buffer, Image
@@ -253,6 +256,16 @@ def test_the_quality_table_is_the_same_in_shader_module_and_reference():
     assert table is not None
     assert tuple(float(v) for v in table[1].split(",")) == QUALITY_STEPS == STEPS
     assert PRESET == 39 and len(STEPS) == 12
+
+
+@pytest.mark.skipif(shutil.which("glslc") is None, reason="glslc not installed")
+def test_the_push_constants_are_laid_out_as_the_module_packs_them(tmp_path):
+    out = tmp_path / "fxaa.frag.spv"
+    src = Path(__file__).resolve().parent.parent / "shaders" / "fxaa.frag"
+    subprocess.run(["glslc", "--target-env=vulkan1.2", str(src), "-o", str(out)], check=True)  # no -O: names kept
+    fields = struct_layouts(out)["Push"].fields()
+    assert fields == [("subpix", 0), ("edge_threshold", 4), ("edge_threshold_min", 8)]
+    assert FxaaSettings(0.5, 0.25, 0.125).push().tolist() == [0.5, 0.25, 0.125, 0.0]
 
 
 def test_settings_defaults_and_bad_values():
