@@ -2,8 +2,10 @@
 Vulkan renderer, so this is one.
 
 Per frame: the draw lists' vertices and indices are copied (memmove from the addresses the
-bindings expose) into this frame slot's mapped buffers; in the render pass's output subpass
-(after the tone map, so the UI keeps its colours) each command is one indexed draw with its scissor and texture.
+bindings expose) into this frame slot's mapped buffers; after the tone map, in its dynamic
+rendering into the target (so the UI keeps its colours; in the direct form, in the scene pass's
+billboards subpass: gpu/render_pass.py's `overlay_pass`), each command is one indexed draw with
+its scissor and texture.
 Textures follow ImGui 1.92's protocol: the backend creates, updates and destroys them as
 `ImDrawData.textures` asks, and hands ImGui an id to put in its commands. Images the engine owns
 (the editor's shadow map thumbnails) are registered by view (`register_image`: imgui_images.py)
@@ -62,7 +64,8 @@ class OverlayCounts:
 
 
 class ImGuiRenderer:
-    def __init__(self, device: Device, render_pass: Any, subpass: int, frames: int) -> None:
+    def __init__(self, device: Device, target: Any, frames: int) -> None:
+        """`target`: the renderer's (offscreen.py, swapchain.py): where the overlay draws."""
         from imgui_bundle import imgui
 
         self.imgui = imgui
@@ -90,8 +93,7 @@ class ImGuiRenderer:
         self._pools: list[Any] = []
         self._free_sets: list[Any] = []
         self.layout = pipeline_layout(device, [self.set_layout], [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, IMGUI_PUSH.size)])
-        self.subpass = subpass
-        self.pipeline = self._pipeline(render_pass)
+        self.pipeline = self._pipeline(target)
         self._textures: dict[int, _Texture] = {}
         self._next_id = 1  # 0 means "no texture" to ImGui; user images' ids come from the same count
         self.images = UserImages(vk, device, self._allocate_set, lambda s: self._free_sets.append(s))
@@ -380,7 +382,8 @@ class ImGuiRenderer:
         return draws, push, lists, vbase, ibase
 
     def record(self, cb: Any, slot: int, width: int, height: int) -> None:
-        """Into the primary's overlay subpass (inline): one indexed draw per ImGui command."""
+        """Into the primary's overlay rendering or subpass (inline): one indexed draw per ImGui
+        command."""
         prepared = self._prepared.pop(slot, None)
         if not prepared or not prepared[0]:
             return
@@ -409,8 +412,11 @@ class ImGuiRenderer:
             draw(cb, count, 1, first_index, vertex_offset, 0)
         self.cpu_ms += (time.perf_counter() - t0) * 1e3
 
-    def _pipeline(self, render_pass: Any) -> Any:
+    def _pipeline(self, target: Any) -> Any:
+        """For the target's overlay pass: a render pass's subpass, or dynamic rendering into its
+        colour format."""
         vk = self.vk
+        render_pass, subpass = target.overlay_pass
         return graphics_pipeline(
             self.device,
             GraphicsPipelineSpec(
@@ -418,7 +424,8 @@ class ImGuiRenderer:
                 "imgui.frag",
                 layout=self.layout,
                 render_pass=render_pass,
-                subpass=self.subpass,
+                subpass=subpass,
+                color_formats=(target.color_format,) if render_pass is None else (),
                 vertex_stride=VERTEX_BYTES,
                 vertex_attributes=[
                     (0, vk.VK_FORMAT_R32G32_SFLOAT, 0),
@@ -432,14 +439,10 @@ class ImGuiRenderer:
             ),
         )
 
-    def retarget(self, render_pass: Any, subpass: int) -> None:
-        """Draw into another render pass and subpass (the target changed form: gpu/render_pass.py)."""
-        self.subpass, old_subpass = subpass, self.subpass
-        try:
-            pipeline = self._pipeline(render_pass)
-        except BaseException:
-            self.subpass = old_subpass
-            raise
+    def retarget(self, target: Any) -> None:
+        """Draw where the target's overlay now goes (it changed form: gpu/render_pass.py), or
+        with shaders made again; the old pipeline stays if the new one cannot be made."""
+        pipeline = self._pipeline(target)
         old, self.pipeline = self.pipeline, pipeline
         self.vk.vkDestroyPipeline(self.device.handle, old, None)
 
