@@ -4,6 +4,8 @@ the target, after the post effects' seam, and give the pixels the direct form gi
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 from gpu_context import headless_gpu
@@ -99,3 +101,35 @@ def test_the_tone_map_and_overlay_give_the_direct_forms_pixels(scene, form):
     assert (np.abs(with_ui - direct).max(axis=2) > 1).mean() < 0.001
     without = frame(overlay=False)
     assert (np.abs(with_ui - without).max(axis=2) > 24).mean() > 0.05
+
+
+@pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs a display (make test runs under Xvfb)")
+def test_a_window_in_the_hdr_form_presents_and_reads_back_the_tone_mapped_image(tmp_path):
+    """The swapchain image, drawn by the tone map's rendering, goes to PRESENT_SRC (presented
+    eight times over resizes-free frames) and is read back from there: its background is the
+    filmic curve's, as the offscreen target draws it."""
+    from dataclasses import replace
+
+    from PIL import Image
+
+    from ecs_engine.app.loop import run
+    from ecs_engine.app.settings import RunOptions
+    from ecs_engine.app.window import WindowSource, open_glfw
+
+    glfw = open_glfw()
+    assert glfw is not None
+    shots = {}
+    for headless in (True, False):
+        shot = tmp_path / f"{headless}.png"
+        options = RunOptions(
+            scene="cube", width=200, height=150, frames=8, validate=True, quiet=True, screenshot=str(shot)
+        )
+        options = replace(options, tone_map="aces", headless=headless)
+        result = run(options, None if headless else WindowSource(glfw))
+        assert result.validation_messages == [] and result.frames == 8
+        shots[headless] = np.asarray(Image.open(shot))[..., :3].astype(int)
+    window, offscreen = shots[False], shots[True]
+    assert window.shape == (150, 200, 3) and window.max() > 30  # the cube, lit
+    assert (window[0, 0] == offscreen[0, 0]).all()  # the background, tone mapped alike
+    r, _g, b = window[0, 0]
+    assert b > r and abs(r - 39) > 3  # RGB order, and not the clamp's clear colour

@@ -109,6 +109,7 @@ class OutputPasses:
         self._targets: dict[tuple[tuple[int, int, int], int], tuple[TargetState, OutputRendering | None]] = {}
         # target_state's last answer: framebuffer, G-buffer framebuffer, size, state, rendering
         self._last: tuple[Any, Any, Any, TargetState | None, OutputRendering | None] = (None,) * 5
+        self._recreations = getattr(target, "recreations", 0)  # the swapchain's, when _targets were made
 
     def target_state(self, framebuffer: Any, width: int, height: int) -> TargetState:
         """What a framebuffer of this size needs per frame, made once (kept for 16 framebuffers)."""
@@ -117,6 +118,11 @@ class OutputPasses:
         # in the deferred form the G-buffer's framebuffer too: a swapchain remade at the same size
         # may hand the new framebuffers the old handle values, but not necessarily both
         gbuffer_fb = target.attachments.gbuffer.framebuffer if target.form == "deferred" else None
+        recreations = getattr(target, "recreations", 0)
+        if recreations != self._recreations:  # new swapchain images: a framebuffer handle value
+            self._targets.clear()  # may come back, drawing another image (OutputRendering)
+            self._last = (None,) * 5
+            self._recreations = recreations
         last = self._last
         if last[0] is framebuffer and last[1] is gbuffer_fb and last[2] == (width, height) and last[3] is not None:
             return last[3]  # the same framebuffer objects as the last frame's (offscreen: every frame)
