@@ -1,10 +1,12 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_samplerless_texture_functions : require
 #include "layouts.glsl"
 
-// The HDR colour of this pixel (an input attachment: the same pixel, no filtering), scaled by the
-// exposure and mapped into [0, 1] by the operator; the sRGB target encodes it on write.
-layout(input_attachment_index = 0, set = 0, binding = 0) uniform subpassInput hdr;
+// The HDR colour of this pixel (a sampled image read with texelFetch: the same pixel, no
+// filtering, as the input attachment it once was), scaled by the exposure and mapped into [0, 1]
+// by the operator; the sRGB target encodes it on write.
+layout(set = 0, binding = 0) uniform texture2D hdr;
 layout(push_constant) uniform Push { ToneMapPush push; };
 
 layout(location = 0) out vec4 out_color;
@@ -15,7 +17,7 @@ vec3 aces(vec3 x) {
 }
 
 void main() {
-    vec3 c = max(subpassLoad(hdr).rgb, vec3(0.0)) * push.exposure;
+    vec3 c = max(texelFetch(hdr, ivec2(gl_FragCoord.xy), 0).rgb, vec3(0.0)) * push.exposure;
     if (push.operator == TONE_MAP_ACES) {
         c = aces(c);
     } else if (push.operator == TONE_MAP_REINHARD) {

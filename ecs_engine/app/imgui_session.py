@@ -37,12 +37,7 @@ class ImGuiSession:
             # our key callbacks are already set: the backend chains to them
             imgui.backends.glfw_init_for_vulkan(ctypes.cast(window, ctypes.c_void_p).value or 0, True)
         renderer = session.renderer
-        self.renderer = ImGuiRenderer(
-            session.device,
-            session.gpu.target.render_pass,
-            session.gpu.target.output_subpass,
-            len(renderer.frames.frames),
-        )
+        self.renderer = ImGuiRenderer(session.device, session.gpu.target, len(renderer.frames.frames))
         renderer.overlay = self.renderer  # the renderer stays for the whole run: attached once
         self.scripted = ScriptedImGuiInput(imgui, self.windowed)
         self.build_ms = 0.0
@@ -69,7 +64,7 @@ class ImGuiSession:
         return bool(self.imgui.get_io().want_capture_mouse)
 
     def build(self, world: World, stats: Any, perf: PerfMonitor, dt: float, width: int, height: int) -> None:
-        """This frame's UI, up to imgui.render(); the renderer draws it in the overlay subpass."""
+        """This frame's UI, up to imgui.render(); the renderer draws it after the tone map."""
         imgui = self.imgui
         t0 = time.perf_counter()
         if t0 - self._last_build < self.min_interval_s:

@@ -28,6 +28,7 @@ class OffscreenTarget(TargetForm):
         self.form = "hdr" if hdr or samples > 1 else "direct"  # gpu/render_pass.py's FORMS
         self.generation = 0  # counts changes of render pass (set_form)
         self.color_format = vk.VK_FORMAT_R8G8B8A8_SRGB
+        self.final_layout = vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL  # ready for record_readback
         self.color = Image(
             device,
             width,
@@ -45,7 +46,7 @@ class OffscreenTarget(TargetForm):
         device = self.device
         vk = device.vk
         render_pass, gbuffer_pass = create_target_passes(
-            device, self.color_format, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, self.samples, form
+            device, self.color_format, self.final_layout, self.samples, form
         )
         try:
             attachments = SceneAttachments(device, self.width, self.height, self.samples, form, gbuffer_pass)
@@ -87,7 +88,7 @@ class OffscreenTarget(TargetForm):
             self.generation += 1
 
     def record_readback(self, cb: Any) -> None:
-        """After the render pass (image in TRANSFER_SRC layout): copy it to the host buffer."""
+        """After the frame's output (image in TRANSFER_SRC layout): copy it to the host buffer."""
         vk = self.device.vk
         region = vk.VkBufferImageCopy(
             bufferOffset=0,
@@ -116,9 +117,19 @@ class OffscreenTarget(TargetForm):
         )
 
     @property
+    def hdr_image(self) -> Image | None:
+        """The HDR colour the post effects and the tone map read (the resolved one with MSAA);
+        None without HDR."""
+        return self.attachments.hdr_image
+
+    @property
     def hdr_view(self) -> Any:
-        """The HDR colour the tone map reads (the resolved one with MSAA); None without HDR."""
-        return self.attachments.input_view
+        image = self.attachments.hdr_image
+        return image.view if image is not None else None
+
+    def output_image(self, framebuffer: Any) -> tuple[Any, Any]:
+        """The one colour image, whichever framebuffer (frames in flight share it)."""
+        return self.color.handle, self.color.view
 
     def pixels(self) -> np.ndarray:
         """(height, width, 4) uint8 RGBA (sRGB-encoded), a copy of the last readback."""

@@ -51,7 +51,7 @@ class GraphicsPipelineSpec:
     vertex_shader: str
     fragment_shader: str | None  # None: depth only (shadow maps)
     layout: Any
-    render_pass: Any
+    render_pass: Any  # None: drawn with dynamic rendering into `color_formats` (and `depth_format`)
     subpass: int = 0
     vertex_stride: int = 0  # 0: no vertex buffer (vertices made in the shader)
     vertex_attributes: list[tuple[int, int, int]] = field(default_factory=list)  # location, format, offset
@@ -67,6 +67,8 @@ class GraphicsPipelineSpec:
     depth_bias: tuple[float, float] | None = None  # (constant, slope) factors: shadow casters
     depth_or_equal: bool = False  # compare GREATER_OR_EQUAL: the sky, drawn at depth 0 where nothing is
     blend: str = ""  # a BLEND_MODES name ("" with alpha_blend: "alpha")
+    color_formats: tuple[int, ...] = ()  # dynamic rendering (render_pass None): the attachments' VkFormats
+    depth_format: int = 0  # dynamic rendering: the depth attachment's VkFormat (0: none)
 
 
 # Blend factors per colour attachment (src colour, dst colour, src alpha, dst alpha), the last one
@@ -92,8 +94,27 @@ def specialization(vk: Any, values: tuple[int, ...]) -> tuple[Any, Any]:
     return vk.VkSpecializationInfo(pMapEntries=entries, dataSize=4 * len(values), pData=data), data
 
 
+def rendering_info(vk: Any, spec: GraphicsPipelineSpec) -> Any:
+    """What a pipeline for dynamic rendering (vkCmdBeginRendering) says instead of a render pass:
+    its attachments' formats, as VkPipelineRenderingCreateInfo; None for a render pass's."""
+    if spec.render_pass is not None:
+        return None
+    if len(spec.color_formats) != spec.color_attachments:
+        raise ValueError(
+            f"a dynamic-rendering pipeline needs {spec.color_attachments} colour formats, got {len(spec.color_formats)}"
+        )
+    return vk.VkPipelineRenderingCreateInfo(
+        viewMask=0,
+        colorAttachmentCount=len(spec.color_formats),
+        pColorAttachmentFormats=list(spec.color_formats),
+        depthAttachmentFormat=spec.depth_format,
+        stencilAttachmentFormat=0,
+    )
+
+
 def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
-    """A pipeline with dynamic viewport and scissor and reverse-Z depth (compare GREATER)."""
+    """A pipeline with dynamic viewport and scissor and reverse-Z depth (compare GREATER), for a
+    render pass's subpass, or for dynamic rendering when `spec.render_pass` is None."""
     vk = device.vk
     vert = shader_module(device, spec.vertex_shader)
     frag = shader_module(device, spec.fragment_shader) if spec.fragment_shader else None
@@ -139,6 +160,7 @@ def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
             )
         ]
         info = vk.VkGraphicsPipelineCreateInfo(
+            pNext=rendering_info(vk, spec),
             pStages=stages,
             pVertexInputState=vertex_input,
             pInputAssemblyState=vk.VkPipelineInputAssemblyStateCreateInfo(
@@ -165,8 +187,8 @@ def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
                 pDynamicStates=[vk.VK_DYNAMIC_STATE_VIEWPORT, vk.VK_DYNAMIC_STATE_SCISSOR]
             ),
             layout=spec.layout,
-            renderPass=spec.render_pass,
-            subpass=spec.subpass,
+            renderPass=spec.render_pass if spec.render_pass is not None else vk.ffi.NULL,
+            subpass=spec.subpass if spec.render_pass is not None else 0,
         )
         device.objects_version += 1
         return vk.vkCreateGraphicsPipelines(device.handle, device.pipeline_cache.handle, 1, [info], None)[0]

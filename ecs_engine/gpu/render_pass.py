@@ -1,25 +1,27 @@
-"""The frame's render pass, in one of a target's three forms (FORMS):
+"""The frame's scene render pass, in one of a target's three forms (FORMS):
 
-- `hdr`: the scene in 16-bit float (HDR) colour with reverse-Z depth, then tone mapped into the
-  target (sRGB swapchain image or offscreen image), then the UI on top;
+- `hdr`: the scene in 16-bit float (HDR) colour with reverse-Z depth; after the pass, the post
+  effects (render/output_passes.py's `post`) and the tone map into the target (sRGB swapchain
+  image or offscreen image) with the UI on top, drawn with dynamic rendering (vkCmdBeginRendering,
+  render/output_passes.py): this pass never touches the target;
 - `direct`: when the output needs no HDR colour (the clamp tone map at exposure 0 without MSAA,
   render/tone_map.py's wants_hdr), the scene straight into the target, as before HDR existed: the
   HDR colour and the tone map cost the seed scenes 0.12-0.17 ms of GPU time a frame on the H100;
 - `deferred`: as `hdr`, but the opaque meshes were drawn before, by the G-buffer pass
   (gpu/gbuffer.py), and lit in compute: this pass loads depth and HDR colour.
 
-Attachments: 0 the target (written only by the tone map; in the direct form cleared and drawn
-into by every subpass), 1 depth, 2 the HDR colour (multisampled with --msaa), 3 its single-sample
-resolve (only with --msaa).
+Attachments of the hdr and deferred forms: 0 the HDR colour (multisampled with --msaa), 1 depth,
+2 the HDR colour's single-sample resolve (only with --msaa). The single-sample HDR colour (the
+resolve with MSAA) ends the pass in SHADER_READ_ONLY_OPTIMAL, for the post effects and the tone
+map to sample. Attachments of the direct form: 0 the target (cleared and drawn into by every
+subpass), 1 depth. Attachment 0 is in both the colour the scene draws into, cleared to the
+background (render/path.py's TargetState lists the clear values in this order).
 
 - subpass 0 (SUBPASS_SCENE): the meshes, from the chunk jobs' secondary command buffers (in the
   deferred form only the rows set aside: blended materials and fills of their own);
 - subpass 1 (SUBPASS_BILLBOARDS): light billboards inline, depth-tested against the scene; with
   MSAA the HDR colour resolves at its end; in the direct form the overlay follows them here
-  (that form has no third subpass: `output_subpass`);
-- subpass 2 (SUBPASS_OUTPUT): the tone map reads the HDR colour as an input attachment (same
-  pixel, no sampling) and writes the target; the overlay (ImGui) draws after it, untouched by
-  exposure and tone curve.
+  (`TargetForm.overlay_pass`).
 
 The render passes of the forms are not compatible: a target
 that changes form (`set_form`) counts up its `generation`, and whoever made pipelines against its
@@ -38,7 +40,7 @@ from .memory import Image
 if TYPE_CHECKING:
     from .device import Device
 
-SUBPASS_SCENE, SUBPASS_BILLBOARDS, SUBPASS_OUTPUT = 0, 1, 2
+SUBPASS_SCENE, SUBPASS_BILLBOARDS = 0, 1
 #: a target's forms: straight into the target, HDR colour tone mapped, or HDR with the opaque
 #: meshes lit in compute first (gpu/gbuffer.py; this pass then loads depth and HDR colour)
 FORMS = ("direct", "hdr", "deferred")
@@ -54,17 +56,23 @@ def supported_samples(device: Device) -> tuple[int, ...]:
     return tuple(n for n in MSAA_COUNTS if mask & n)
 
 
-def output_subpass(form: str) -> int:
-    """The subpass the overlay (and, with HDR colour, the tone map) draws in: in the direct form
-    the billboards', as before HDR existed (a third subpass there would hold only the overlay,
-    and a subpass boundary is a barrier)."""
-    return SUBPASS_BILLBOARDS if form == "direct" else SUBPASS_OUTPUT
+def hdr_read_usage(device: Device) -> int:
+    """How the single-sample HDR colour may be read and written outside the scene pass: sampled
+    (the tone map, fragment post effects) and, where the device can store to the format, as a
+    storage image (compute post effects); the deferred lighting needs the latter anyway."""
+    vk = device.vk
+    props = vk.vkGetPhysicalDeviceFormatProperties(device.physical, getattr(vk, HDR_FORMAT_NAME))
+    storage = int(props.optimalTilingFeatures) & vk.VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT
+    return vk.VK_IMAGE_USAGE_SAMPLED_BIT | (vk.VK_IMAGE_USAGE_STORAGE_BIT if storage else 0)
 
 
 class TargetForm:
-    """What a target (offscreen.py, swapchain.py) says of its `form`."""
+    """What a target (offscreen.py, swapchain.py) says of its `form` and of where its output is
+    drawn: `render_pass` is the scene's, `final_layout` the target image's after the frame."""
 
     form: str
+    render_pass: Any
+    final_layout: int
 
     @property
     def hdr(self) -> bool:
@@ -72,12 +80,18 @@ class TargetForm:
         return self.form != "direct"
 
     @property
-    def output_subpass(self) -> int:
-        """Where the overlay draws."""
-        return output_subpass(self.form)
+    def overlay_pass(self) -> tuple[Any, int]:
+        """(render pass, subpass) the overlay draws in: the direct form's billboards subpass, or
+        (None, 0): dynamic rendering into the target after the tone map (pipelines made for the
+        target's `color_format`)."""
+        return (self.render_pass, SUBPASS_BILLBOARDS) if self.form == "direct" else (None, 0)
+
+    def output_image(self, framebuffer: Any) -> tuple[Any, Any]:
+        """(VkImage, VkImageView) of the target image a framebuffer of this target is drawn for."""
+        raise NotImplementedError
 
 
-def _to_readback(vk: Any, last: int = SUBPASS_OUTPUT) -> Any:
+def _to_readback(vk: Any, last: int) -> Any:
     """The target, written in the last subpass, before whatever reads it next (a copy for
     readback, or present)."""
     return vk.VkSubpassDependency(
@@ -93,6 +107,8 @@ def _to_readback(vk: Any, last: int = SUBPASS_OUTPUT) -> Any:
 def create_render_pass(
     device: Device, color_format: int, final_layout: int, samples: int = 1, form: str = "hdr"
 ) -> Any:
+    """The scene's render pass of a form; `color_format` and `final_layout` are the target's,
+    used by the direct form alone (the others leave the target to the tone map's rendering)."""
     if form != "hdr" and samples > 1:
         raise ValueError(f"MSAA resolves the HDR colour in the forward pass: the {form} form has one sample")
     if form == "direct":
@@ -109,7 +125,15 @@ def create_render_pass(
     hdr_format = getattr(vk, HDR_FORMAT_NAME)
     load = vk.VK_ATTACHMENT_LOAD_OP_LOAD if deferred else clear  # deferred: what the G-buffer pass and lighting left
     attachments = [
-        _attachment(vk, color_format, 1, dont_load, store, final_layout),  # every pixel written by the tone map
+        _attachment(  # the single-sample HDR colour is stored for the post effects and tone map
+            vk,
+            hdr_format,
+            samples,
+            load,
+            dont_store if msaa else store,
+            color_layout if msaa else read_layout,
+            vk.VK_IMAGE_LAYOUT_GENERAL if deferred else 0,
+        ),
         _attachment(
             vk,
             getattr(vk, DEPTH_FORMAT_NAME),
@@ -119,22 +143,13 @@ def create_render_pass(
             depth_layout,
             vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL if deferred else 0,
         ),
-        _attachment(
-            vk,
-            hdr_format,
-            samples,
-            load,
-            dont_store,
-            read_layout if not msaa else color_layout,
-            vk.VK_IMAGE_LAYOUT_GENERAL if deferred else 0,
-        ),
     ]
     if msaa:
-        attachments.append(_attachment(vk, hdr_format, 1, dont_load, dont_store, read_layout))
+        attachments.append(_attachment(vk, hdr_format, 1, dont_load, store, read_layout))
     ref = vk.VkAttachmentReference
-    hdr = ref(attachment=2, layout=color_layout)
+    hdr = ref(attachment=0, layout=color_layout)
     depth = ref(attachment=1, layout=depth_layout)
-    resolve = [ref(attachment=3, layout=color_layout)] if msaa else None
+    resolve = [ref(attachment=2, layout=color_layout)] if msaa else None
     subpasses = [
         vk.VkSubpassDescription(
             pipelineBindPoint=vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pColorAttachments=[hdr], pDepthStencilAttachment=depth
@@ -145,40 +160,26 @@ def create_render_pass(
             pResolveAttachments=resolve,
             pDepthStencilAttachment=depth,
         ),
-        vk.VkSubpassDescription(
-            pipelineBindPoint=vk.VK_PIPELINE_BIND_POINT_GRAPHICS,
-            pInputAttachments=[ref(attachment=3 if msaa else 2, layout=read_layout)],
-            pColorAttachments=[ref(attachment=0, layout=color_layout)],
-        ),
     ]
     color_stage = vk.VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT
-    fragment = vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT
+    shaders = vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
     depth_stages = vk.VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT | vk.VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT
     color_rw = vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | vk.VK_ACCESS_COLOR_ATTACHMENT_READ_BIT
     depth_rw = vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT | vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT
-    compute = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT if deferred else 0
-    shader_write = vk.VK_ACCESS_SHADER_WRITE_BIT if deferred else 0
     dependencies = [
-        # the previous frame's use of the shared attachments (its tone map read the HDR colour),
-        # or the presentation engine, before this frame clears and writes them; deferred: this
-        # frame's lighting wrote the HDR colour (the G-buffer pass's own dependencies order the rest)
+        # the previous frame's use of the shared attachments (its tone map and post effects read
+        # or wrote the HDR colour in fragment or compute shaders) before this frame clears and
+        # writes them; deferred: this frame's lighting wrote the HDR colour (the G-buffer pass's
+        # own dependencies order the rest)
         vk.VkSubpassDependency(
             srcSubpass=vk.VK_SUBPASS_EXTERNAL,
             dstSubpass=SUBPASS_SCENE,
-            srcStageMask=color_stage | depth_stages | fragment | compute,
+            srcStageMask=color_stage | depth_stages | shaders,
             dstStageMask=color_stage | depth_stages,
             srcAccessMask=vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT
             | vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT
-            | shader_write,
+            | vk.VK_ACCESS_SHADER_WRITE_BIT,
             dstAccessMask=color_rw | depth_rw,
-        ),
-        vk.VkSubpassDependency(
-            srcSubpass=vk.VK_SUBPASS_EXTERNAL,
-            dstSubpass=SUBPASS_OUTPUT,
-            srcStageMask=color_stage,
-            dstStageMask=color_stage,
-            srcAccessMask=0,
-            dstAccessMask=color_rw,
         ),
         # scene -> billboards: colour blended on top, depth tested against the scene
         vk.VkSubpassDependency(
@@ -190,17 +191,16 @@ def create_render_pass(
             dstAccessMask=color_rw | depth_rw,
             dependencyFlags=vk.VK_DEPENDENCY_BY_REGION_BIT,
         ),
-        # the HDR colour (or its resolve) -> the tone map's input attachment read, pixel for pixel
+        # the HDR colour (or its resolve), in its final layout, before the post effects and the
+        # tone map sample it (or a compute post effect writes it)
         vk.VkSubpassDependency(
             srcSubpass=SUBPASS_BILLBOARDS,
-            dstSubpass=SUBPASS_OUTPUT,
+            dstSubpass=vk.VK_SUBPASS_EXTERNAL,
             srcStageMask=color_stage,
-            dstStageMask=fragment,
+            dstStageMask=shaders,
             srcAccessMask=vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
-            dstAccessMask=vk.VK_ACCESS_INPUT_ATTACHMENT_READ_BIT,
-            dependencyFlags=vk.VK_DEPENDENCY_BY_REGION_BIT,
+            dstAccessMask=vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_SHADER_WRITE_BIT,
         ),
-        _to_readback(vk),
     ]
     return make_render_pass(device, attachments, subpasses, dependencies)
 
@@ -260,7 +260,8 @@ class SceneAttachments:
     MSAA) its resolve; in the direct form depth alone; in the deferred form also the G-buffer
     (gpu/gbuffer.py: its images and the first pass's framebuffer), depth sampled and the HDR
     colour a storage image for the lighting. `views(target_view)` lists a framebuffer's
-    attachments in render-pass order; `input_view` is what the tone map reads."""
+    attachments in render-pass order (the target's view only in the direct form); `hdr_image` is
+    the single-sample HDR colour the post effects and the tone map read."""
 
     def __init__(
         self,
@@ -273,7 +274,7 @@ class SceneAttachments:
     ) -> None:
         vk = device.vk
         self.samples = samples
-        self.images: list[Image] = []
+        self.images: list[Image] = []  # depth, HDR colour, its resolve (in the order made)
         self.gbuffer: GBuffer | None = None
         deferred = form == "deferred"
         try:
@@ -291,17 +292,13 @@ class SceneAttachments:
             if form == "direct":
                 return
             color = vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT
-            hdr_usage = color | (vk.VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT if samples > 1 else 0)
-            if samples == 1:
-                hdr_usage |= vk.VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT
-            if deferred:
-                hdr_usage |= vk.VK_IMAGE_USAGE_STORAGE_BIT
+            read = hdr_read_usage(device) | (vk.VK_IMAGE_USAGE_STORAGE_BIT if deferred else 0)
             hdr_format = getattr(vk, HDR_FORMAT_NAME)
             aspect = vk.VK_IMAGE_ASPECT_COLOR_BIT
-            self.images.append(Image(device, width, height, hdr_format, hdr_usage, aspect, samples))
-            if samples > 1:
-                resolve_usage = color | vk.VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT
-                self.images.append(Image(device, width, height, hdr_format, resolve_usage, aspect))
+            if samples > 1:  # resolved at the end of the pass, never read: may stay in tile memory
+                transient = color | vk.VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT
+                self.images.append(Image(device, width, height, hdr_format, transient, aspect, samples))
+            self.images.append(Image(device, width, height, hdr_format, color | read, aspect))
             if deferred:
                 self.gbuffer = GBuffer(device, gbuffer_pass, self.images[0].view, self.images[1].view, width, height)
         except BaseException:
@@ -313,11 +310,15 @@ class SceneAttachments:
         return self.images[0].view
 
     @property
-    def input_view(self) -> Any:
-        return self.images[-1].view if len(self.images) > 1 else None
+    def hdr_image(self) -> Image | None:
+        """The single-sample HDR colour (the resolve with MSAA), in SHADER_READ_ONLY_OPTIMAL after
+        the scene pass; None in the direct form."""
+        return self.images[-1] if len(self.images) > 1 else None
 
     def views(self, target_view: Any) -> list[Any]:
-        return [target_view] + [image.view for image in self.images]
+        if len(self.images) == 1:  # direct: the target, depth
+            return [target_view, self.images[0].view]
+        return [self.images[1].view, self.images[0].view, *(image.view for image in self.images[2:])]
 
     def destroy(self) -> None:
         if self.gbuffer is not None:

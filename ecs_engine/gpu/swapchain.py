@@ -11,7 +11,7 @@ import numpy as np
 from ..errors import UsageError
 from .attachment import create_framebuffer
 from .functions import device_function, instance_function, raw_device_function
-from .memory import HOST, Buffer
+from .memory import HOST, Buffer, Image
 from .render_pass import FORMS, SceneAttachments, TargetForm, create_target_passes
 
 if TYPE_CHECKING:
@@ -60,6 +60,7 @@ class Swapchain(TargetForm):
         ]
         chosen = srgb[0] if srgb else formats[0]
         self.color_format, self.color_space = chosen.format, chosen.colorSpace
+        self.final_layout = vk.VK_IMAGE_LAYOUT_PRESENT_SRC_KHR
         self.render_pass, self.gbuffer_pass = self._create_pass()
         self._create_fn = device_function(device, "vkCreateSwapchainKHR")
         self._destroy_fn = device_function(device, "vkDestroySwapchainKHR")
@@ -162,10 +163,24 @@ class Swapchain(TargetForm):
             self.attachments = None
 
     @property
-    def hdr_view(self) -> Any:
-        """The HDR colour the tone map reads (the resolved one with MSAA); None without HDR."""
+    def hdr_image(self) -> Image | None:
+        """The HDR colour the post effects and the tone map read (the resolved one with MSAA);
+        None without HDR."""
         assert self.attachments is not None
-        return self.attachments.input_view
+        return self.attachments.hdr_image
+
+    @property
+    def hdr_view(self) -> Any:
+        image = self.hdr_image
+        return image.view if image is not None else None
+
+    def output_image(self, framebuffer: Any) -> tuple[Any, Any]:
+        """The swapchain image a framebuffer of `framebuffers` draws (in the hdr and deferred
+        forms the framebuffers hold only the scene's attachments, alike but for this)."""
+        for index, made in enumerate(self.framebuffers):
+            if made == framebuffer:
+                return self.images[index], self.views[index]
+        raise ValueError("not a framebuffer of this swapchain")
 
     def present_mode_for(self, present: str) -> int:
         """The VkPresentModeKHR of a name; UsageError when the surface does not offer it."""
@@ -181,9 +196,7 @@ class Swapchain(TargetForm):
         self.recreate()
 
     def _create_pass(self, form: str | None = None) -> Any:
-        return create_target_passes(
-            self.device, self.color_format, self.vk.VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, self.samples, form or self.form
-        )
+        return create_target_passes(self.device, self.color_format, self.final_layout, self.samples, form or self.form)
 
     def _destroy_passes(self) -> None:
         for render_pass in (self.render_pass, self.gbuffer_pass):
@@ -238,7 +251,7 @@ class Swapchain(TargetForm):
         return True
 
     def record_readback(self, cb: Any) -> None:
-        """After the render pass: copy image `readback_image` (in PRESENT_SRC layout) to a host
+        """After the frame's output: copy image `readback_image` (in PRESENT_SRC layout) to a host
         buffer and put it back for presenting; `pixels()` reads it once the frame is done."""
         if self.readback_image is None:
             return

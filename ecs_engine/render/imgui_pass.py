@@ -2,8 +2,10 @@
 Vulkan renderer, so this is one.
 
 Per frame: the draw lists' vertices and indices are copied (memmove from the addresses the
-bindings expose) into this frame slot's mapped buffers; in the render pass's output subpass
-(after the tone map, so the UI keeps its colours) each command is one indexed draw with its scissor and texture.
+bindings expose) into this frame slot's mapped buffers; after the tone map, in its dynamic
+rendering into the target (so the UI keeps its colours; in the direct form, in the scene pass's
+billboards subpass: gpu/render_pass.py's `overlay_pass`), each command is one indexed draw with
+its scissor and texture.
 Textures follow ImGui 1.92's protocol: the backend creates, updates and destroys them as
 `ImDrawData.textures` asks, and hands ImGui an id to put in its commands. Images the engine owns
 (the editor's shadow map thumbnails) are registered by view (`register_image`: imgui_images.py)
@@ -28,6 +30,7 @@ from ..gpu.descriptors import write_images
 from ..gpu.memory import HOST, Buffer, Image
 from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
 from .imgui_images import UserImages
+from .imgui_upload import upload_rects
 from .layouts import IMGUI_PUSH
 
 if TYPE_CHECKING:
@@ -62,7 +65,8 @@ class OverlayCounts:
 
 
 class ImGuiRenderer:
-    def __init__(self, device: Device, render_pass: Any, subpass: int, frames: int) -> None:
+    def __init__(self, device: Device, target: Any, frames: int) -> None:
+        """`target`: the renderer's (offscreen.py, swapchain.py): where the overlay draws."""
         from imgui_bundle import imgui
 
         self.imgui = imgui
@@ -90,8 +94,7 @@ class ImGuiRenderer:
         self._pools: list[Any] = []
         self._free_sets: list[Any] = []
         self.layout = pipeline_layout(device, [self.set_layout], [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, IMGUI_PUSH.size)])
-        self.subpass = subpass
-        self.pipeline = self._pipeline(render_pass)
+        self.pipeline = self._pipeline(target)
         self._textures: dict[int, _Texture] = {}
         self._next_id = 1  # 0 means "no texture" to ImGui; user images' ids come from the same count
         self.images = UserImages(vk, device, self._allocate_set, lambda s: self._free_sets.append(s))
@@ -188,89 +191,8 @@ class ImGuiRenderer:
         self.images.unregister(tex_id)
 
     def _upload(self, texture: _Texture, tex: Any, rects: list[tuple[int, int, int, int]], fresh: bool) -> None:
-        """Copy rectangles of the texture's pixels to the image, through a staging buffer."""
-        vk = self.vk
-        if tex.bytes_per_pixel != 4:
-            raise ValueError(f"ImGui texture format {tex.format} is not RGBA32")
-        pixels = np.asarray(tex.get_pixels_array(), dtype=np.uint8).reshape(tex.height, tex.width, 4)
-        parts = [np.ascontiguousarray(pixels[y : y + h, x : x + w]) for x, y, w, h in rects]
-        staging = Buffer(self.device, max(sum(p.nbytes for p in parts), 4), vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT, HOST)
-        regions = []
-        offset = 0
-        raw = staging.bytes()
-        for (x, y, w, h), part in zip(rects, parts):
-            raw[offset : offset + part.nbytes] = part.reshape(-1)
-            regions.append(
-                vk.VkBufferImageCopy(
-                    bufferOffset=offset,
-                    bufferRowLength=0,
-                    bufferImageHeight=0,
-                    imageSubresource=vk.VkImageSubresourceLayers(
-                        aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=0, baseArrayLayer=0, layerCount=1
-                    ),
-                    imageOffset=vk.VkOffset3D(x, y, 0),
-                    imageExtent=vk.VkExtent3D(w, h, 1),
-                )
-            )
-            offset += part.nbytes
-        old = vk.VK_IMAGE_LAYOUT_UNDEFINED if fresh else vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
-
-        def record(cb: Any) -> None:
-            rng = vk.VkImageSubresourceRange(
-                aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=1
-            )
-            to_copy = vk.VkImageMemoryBarrier(
-                srcAccessMask=0 if fresh else vk.VK_ACCESS_SHADER_READ_BIT,
-                dstAccessMask=vk.VK_ACCESS_TRANSFER_WRITE_BIT,
-                oldLayout=old,
-                newLayout=vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                image=texture.image.handle,
-                subresourceRange=rng,
-            )
-            vk.vkCmdPipelineBarrier(
-                cb,
-                vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT,
-                vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
-                0,
-                0,
-                None,
-                0,
-                None,
-                1,
-                [to_copy],
-            )
-            vk.vkCmdCopyBufferToImage(
-                cb, staging.handle, texture.image.handle, vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, len(regions), regions
-            )
-            to_read = vk.VkImageMemoryBarrier(
-                srcAccessMask=vk.VK_ACCESS_TRANSFER_WRITE_BIT,
-                dstAccessMask=vk.VK_ACCESS_SHADER_READ_BIT,
-                oldLayout=vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                newLayout=vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                image=texture.image.handle,
-                subresourceRange=rng,
-            )
-            vk.vkCmdPipelineBarrier(
-                cb,
-                vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
-                vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT,
-                0,
-                0,
-                None,
-                0,
-                None,
-                1,
-                [to_read],
-            )
-
-        try:
-            self.device.submit_once(record)  # rare: the font atlas, new glyphs, user images
-        finally:
-            staging.destroy()
+        """Copy rectangles of the texture's pixels to the image (imgui_upload.py)."""
+        upload_rects(self.device, texture.image.handle, tex, rects, fresh)
 
     def _destroy_texture(self, tex_id: int) -> None:
         texture = self._textures.pop(tex_id, None)
@@ -380,7 +302,8 @@ class ImGuiRenderer:
         return draws, push, lists, vbase, ibase
 
     def record(self, cb: Any, slot: int, width: int, height: int) -> None:
-        """Into the primary's overlay subpass (inline): one indexed draw per ImGui command."""
+        """Into the primary's overlay rendering or subpass (inline): one indexed draw per ImGui
+        command."""
         prepared = self._prepared.pop(slot, None)
         if not prepared or not prepared[0]:
             return
@@ -409,8 +332,11 @@ class ImGuiRenderer:
             draw(cb, count, 1, first_index, vertex_offset, 0)
         self.cpu_ms += (time.perf_counter() - t0) * 1e3
 
-    def _pipeline(self, render_pass: Any) -> Any:
+    def _pipeline(self, target: Any) -> Any:
+        """For the target's overlay pass: a render pass's subpass, or dynamic rendering into its
+        colour format."""
         vk = self.vk
+        render_pass, subpass = target.overlay_pass
         return graphics_pipeline(
             self.device,
             GraphicsPipelineSpec(
@@ -418,7 +344,8 @@ class ImGuiRenderer:
                 "imgui.frag",
                 layout=self.layout,
                 render_pass=render_pass,
-                subpass=self.subpass,
+                subpass=subpass,
+                color_formats=(target.color_format,) if render_pass is None else (),
                 vertex_stride=VERTEX_BYTES,
                 vertex_attributes=[
                     (0, vk.VK_FORMAT_R32G32_SFLOAT, 0),
@@ -432,14 +359,10 @@ class ImGuiRenderer:
             ),
         )
 
-    def retarget(self, render_pass: Any, subpass: int) -> None:
-        """Draw into another render pass and subpass (the target changed form: gpu/render_pass.py)."""
-        self.subpass, old_subpass = subpass, self.subpass
-        try:
-            pipeline = self._pipeline(render_pass)
-        except BaseException:
-            self.subpass = old_subpass
-            raise
+    def retarget(self, target: Any) -> None:
+        """Draw where the target's overlay now goes (it changed form: gpu/render_pass.py), or
+        with shaders made again; the old pipeline stays if the new one cannot be made."""
+        pipeline = self._pipeline(target)
         old, self.pipeline = self.pipeline, pipeline
         self.vk.vkDestroyPipeline(self.device.handle, old, None)
 

@@ -1,20 +1,35 @@
 """What the frame's primary command buffer records around the render path's secondaries, by the
 target's form (gpu/render_pass.py's FORMS):
 
-- `direct` and `hdr`: the target's render pass: the chunks', the sky's (sky_pass.py) and the
-  set-aside rows' secondaries in subpass 0, the light billboards (light_pass.py) in subpass 1,
-  the tone map (tone_map.py, HDR only) and the overlay (the editor's ImGui) in subpass 2 (direct:
-  the overlay in subpass 1);
+- `direct`: the target's render pass: the chunks', the sky's (sky_pass.py) and the set-aside
+  rows' secondaries in subpass 0, the light billboards (light_pass.py) and then the overlay (the
+  editor's ImGui) in subpass 1;
+- `hdr`: the scene's render pass into the HDR colour as above (subpass 0 the secondaries, subpass
+  1 the billboards, the MSAA resolve at its end), which leaves the HDR colour in
+  SHADER_READ_ONLY_OPTIMAL; then the post effects (`post`); then the target image's barrier
+  (output_barriers.py), a dynamic rendering (vkCmdBeginRendering) into the target image with the
+  tone map (tone_map.py, sampling the HDR colour) and the overlay, and the barrier to the
+  target's final layout (readback or present);
 - `deferred`: the G-buffer pass with the chunks' secondaries (gpu/gbuffer.py), the lighting
-  compute pass (deferred_pass.py), then the target's render pass as above with the sky and the
-  set-aside rows alone in subpass 0.
+  compute pass (deferred_pass.py), then as `hdr` with the sky and the set-aside rows alone in
+  subpass 0.
+
+Post effects go in `OutputPasses.post`: callables `post(cb, hdr_image)` (hdr_image: the target's
+single-sample HDR colour, a gpu/memory.py Image with `handle`, `view`, `format`, `width`,
+`height`; sampled and, where the device can, storage usage), called in order after the scene's
+render pass and before the tone map, in the hdr and deferred forms only (the direct form has no
+HDR colour). Each finds the image in SHADER_READ_ONLY_OPTIMAL, its scene writes visible to
+fragment and compute shaders, and must leave it so, its own writes made visible to the tone map's
+fragment-shader reads (its own barriers, until the frame graph of issue 36 places them). Empty
+for now.
 
 With `mark` (gpu/frames.py's FrameRing.mark, while passes are timed) each pass's end is marked
 with its name; a subpass whose contents are secondaries cannot hold a timestamp, so the target's
 pass is marked at its subpass changes and its end.
 
-It also keeps, per framebuffer, the structs a frame needs (path.TargetState), and remakes what
-was made against the target's render pass when the target changes form.
+It also keeps, per framebuffer, the structs a frame needs (path.TargetState, and the output's
+rendering info and barriers), and remakes what was made against the target's render pass when
+the target changes form.
 """
 
 from __future__ import annotations
@@ -29,11 +44,34 @@ from ..gpu.secondary import SecondaryBuffers
 from .deferred_pass import DeferredPass
 from .light_pass import LightPass
 from .oit_pass import WeightedTransparency
+from .output_barriers import OutputBarriers
 from .path import TargetState
 from .sky_pass import SkyPass
 from .tone_map import ToneMapPass
 
 log = logging.getLogger("ecs_engine")
+
+#: a post effect: called with the primary command buffer and the HDR colour (see the module)
+PostPass = Callable[[Any, Any], None]
+
+
+class OutputRendering:
+    """The tone map's and the overlay's dynamic rendering into one target image (its view written
+    whole, so not loaded) and that image's barriers, made once per framebuffer."""
+
+    def __init__(self, vk: Any, target: Any, framebuffer: Any, area: Any) -> None:
+        image, view = target.output_image(framebuffer)
+        self.barriers = OutputBarriers(vk, image, target.final_layout)
+        color = vk.VkRenderingAttachmentInfo(
+            imageView=view,
+            imageLayout=vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+            resolveMode=vk.VK_RESOLVE_MODE_NONE,
+            loadOp=vk.VK_ATTACHMENT_LOAD_OP_DONT_CARE,
+            storeOp=vk.VK_ATTACHMENT_STORE_OP_STORE,
+        )
+        self.info = vk.VkRenderingInfo(renderArea=area, layerCount=1, pColorAttachments=[color])
+        self._keep = color
+        self.info_ptr = vk.ffi.addressof(self.info)
 
 
 class OutputPasses:
@@ -60,15 +98,18 @@ class OutputPasses:
         self.oit: WeightedTransparency | None = None  # made the first frame it is asked for
         self._warned_blend = False
         self.ray_shadows: Any = None  # render/ray_shadows.py's RayShadows where shadows are traced
+        self.post: list[PostPass] = []  # the post effects, in order (see the module)
         try:
-            self.tone_map_pass = ToneMapPass(device, target.render_pass)
+            self.tone_map_pass = ToneMapPass(device, target.color_format)
             self.deferred = DeferredPass(device, frame_set_layout)
             self.sky = SkyPass(device, frame_set_layout, secondaries, target)
         except BaseException:
             self.destroy()
             raise
-        self._targets: dict[tuple[tuple[int, int, int], int], TargetState] = {}
-        self._last: tuple[Any, Any, Any, TargetState | None] = (None, None, None, None)  # target_state's last answer
+        self._targets: dict[tuple[tuple[int, int, int], int], tuple[TargetState, OutputRendering | None]] = {}
+        # target_state's last answer: framebuffer, G-buffer framebuffer, size, state, rendering
+        self._last: tuple[Any, Any, Any, TargetState | None, OutputRendering | None] = (None,) * 5
+        self._recreations = getattr(target, "recreations", 0)  # the swapchain's, when _targets were made
 
     def target_state(self, framebuffer: Any, width: int, height: int) -> TargetState:
         """What a framebuffer of this size needs per frame, made once (kept for 16 framebuffers)."""
@@ -77,13 +118,18 @@ class OutputPasses:
         # in the deferred form the G-buffer's framebuffer too: a swapchain remade at the same size
         # may hand the new framebuffers the old handle values, but not necessarily both
         gbuffer_fb = target.attachments.gbuffer.framebuffer if target.form == "deferred" else None
+        recreations = getattr(target, "recreations", 0)
+        if recreations != self._recreations:  # new swapchain images: a framebuffer handle value
+            self._targets.clear()  # may come back, drawing another image (OutputRendering)
+            self._last = (None,) * 5
+            self._recreations = recreations
         last = self._last
         if last[0] is framebuffer and last[1] is gbuffer_fb and last[2] == (width, height) and last[3] is not None:
             return last[3]  # the same framebuffer objects as the last frame's (offscreen: every frame)
         key = (int(vk.ffi.cast("uintptr_t", framebuffer)), width, height)
         cache_key = (key, int(vk.ffi.cast("uintptr_t", gbuffer_fb)) if gbuffer_fb is not None else 0)
-        state = self._targets.get(cache_key)
-        if state is None:
+        made = self._targets.get(cache_key)
+        if made is None:
             if len(self._targets) > 16:  # swapchains come and go: drop the old framebuffers' entries
                 self._targets.clear()
             gbuffer = None
@@ -93,7 +139,7 @@ class OutputPasses:
                     gbuffer_fb,
                     self.secondaries.begin_info(target.gbuffer_pass, 0, gbuffer_fb),
                 )
-            state = self._targets[cache_key] = TargetState.make(
+            state = TargetState.make(
                 vk,
                 key,
                 framebuffer,
@@ -102,8 +148,19 @@ class OutputPasses:
                 self.clear_color,
                 gbuffer,
             )
-        self._last = (framebuffer, gbuffer_fb, (width, height), state)
-        return state
+            rendering = OutputRendering(vk, target, framebuffer, state.area) if target.hdr else None
+            made = self._targets[cache_key] = (state, rendering)
+        self._last = (framebuffer, gbuffer_fb, (width, height), *made)
+        return made[0]
+
+    def _rendering(self, state: TargetState) -> OutputRendering:
+        """The output rendering made with `state` (target_state's answer for this frame)."""
+        if self._last[3] is state and self._last[4] is not None:
+            return self._last[4]
+        for made, rendering in self._targets.values():
+            if made is state and rendering is not None:
+                return rendering
+        raise ValueError("a target state this output did not make, or made for the direct form")
 
     def weighted(self, mode: str) -> WeightedTransparency | None:
         """The weighted transparency pass ready for the target, when `mode` asks for it and the
@@ -123,7 +180,7 @@ class OutputPasses:
 
     def forget_path_state(self) -> None:
         """Drop what the old render path kept per target (its recorder's frame states)."""
-        for state in self._targets.values():
+        for state, _ in self._targets.values():
             state.path_state.clear()
 
     def retarget(self) -> None:
@@ -134,9 +191,9 @@ class OutputPasses:
         assert self.sky is not None
         self.sky.retarget()
         self.tone_map_pass.destroy()  # its descriptor sets name the old HDR views
-        self.tone_map_pass = ToneMapPass(self.device, self.target.render_pass)
+        self.tone_map_pass = ToneMapPass(self.device, self.target.color_format)
         self._targets.clear()  # their begin infos name the old render passes and framebuffers
-        self._last = (None, None, None, None)
+        self._last = (None,) * 5
 
     def record(
         self,
@@ -203,23 +260,56 @@ class OutputPasses:
         if mark is not None:
             mark("forward" if state.gbuffer_begin_ptr is None else "sky and blended")
         draws = self.light_pass.record(cb, state, frame_set, billboards)
-        last = "billboards"
-        if target.hdr:  # the direct form has no output subpass: the overlay follows the billboards
-            assert self.tone_map_pass is not None
-            lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
+        if not target.hdr:  # the direct form: the overlay follows the billboards in their subpass
+            last = "billboards"
+            if overlay is not None:
+                if mark is not None:
+                    mark(last)
+                overlay.record(cb, slot, state.area.extent.width, state.area.extent.height)
+                last = "imgui"
+            lib.vkCmdEndRenderPass(cb)
             if mark is not None:
-                mark(last)
-            self.tone_map_pass.record(cb, state, target, *tone_map)
-            last = "tone map"
+                mark(last)  # with the render pass's end: its resolves and stores
+            return draws
+        lib.vkCmdEndRenderPass(cb)
+        if mark is not None:
+            mark("billboards")  # with the render pass's end: the resolve and stores
+        if self.post:
+            hdr_image = target.hdr_image
+            for post in self.post:
+                post(cb, hdr_image)
+            if mark is not None:
+                mark("post effects")
+        self._record_output(cb, state, tone_map, overlay, slot, mark)
+        return draws
+
+    def _record_output(
+        self,
+        cb: Any,
+        state: TargetState,
+        tone_map: tuple[str, float],
+        overlay: Any,
+        slot: int,
+        mark: Callable[[str], None] | None,
+    ) -> None:
+        """The hdr and deferred forms' output: the target image ready to be drawn, the tone map
+        and the overlay in one dynamic rendering, the image to its final layout."""
+        lib = self.vk.lib
+        rendering = self._rendering(state)
+        rendering.barriers.before(lib, cb)
+        lib.vkCmdBeginRendering(cb, rendering.info_ptr)
+        assert self.tone_map_pass is not None
+        self.tone_map_pass.record(cb, state, self.target, *tone_map)
+        last = "tone map"
         if overlay is not None:
             if mark is not None:
                 mark(last)
             overlay.record(cb, slot, state.area.extent.width, state.area.extent.height)
             last = "imgui"
-        lib.vkCmdEndRenderPass(cb)
+        lib.vkCmdEndRendering(cb)
+        rendering.barriers.after(lib, cb)
         if mark is not None:
-            mark(last)  # with the render pass's end: its resolves and stores
-        return draws
+            mark(last)
 
     def destroy(self) -> None:
         self.light_pass.destroy()

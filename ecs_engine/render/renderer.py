@@ -115,8 +115,8 @@ class Renderer(TargetForms):
         self._native = native_recorder  # compiling one costs about a second: callers may share one
         self.cpu_recorder = recorder or default_recorder()  # the CPU paths' recorder, kept while indirect draws
         self._set_aside: SetAsidePass | None = None  # blended materials, made on first use
-        # drawn last, in the target's output_subpass: an object with prepare(slot, frames_in_flight),
-        # record(cb, slot, width, height) and retarget(render_pass, subpass), e.g. imgui_pass.ImGuiRenderer
+        # drawn last, after the tone map: an object with prepare(slot, frames_in_flight),
+        # record(cb, slot, width, height) and retarget(target), e.g. imgui_pass.ImGuiRenderer
         self.overlay: Any = None
         # what the mesh pipelines were specialised for (Materials.features): grown, never shrunk,
         # when a world's materials use another shading model (a pipeline rebuild, as a mode switch)

@@ -145,5 +145,5 @@ class TargetForms:
         self._swap_path(self._make_path(self.mode, self.cpu_recorder))
         self.output.retarget()
         if self.overlay is not None:
-            self.overlay.retarget(target.render_pass, target.output_subpass)
+            self.overlay.retarget(target)
         self._target_generation = target.generation

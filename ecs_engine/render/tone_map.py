@@ -1,5 +1,7 @@
 """The tone map: the scene is lit in 16-bit float colour (gpu/render_pass.py); this pass scales
-it by the exposure and maps it into what the display shows, in the render pass's output subpass.
+it by the exposure and maps it into what the display shows, drawn with dynamic rendering into the
+target after the scene's render pass and the post effects (render/output_passes.py), reading the
+HDR colour as a sampled image with texelFetch (the same pixel, unfiltered).
 
 Operators (TONE_MAPS, picked by name; the shader reads the number):
 
@@ -21,7 +23,6 @@ import numpy as np
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout
 from ..gpu.device import Device
 from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
-from ..gpu.render_pass import SUBPASS_OUTPUT
 from .config import RenderConfig, ToneMap, check
 from .layouts import TONE_MAP_ACES, TONE_MAP_CLAMP, TONE_MAP_PUSH, TONE_MAP_REINHARD
 
@@ -48,12 +49,14 @@ def check_tone_map(name: str, exposure: float) -> None:
 
 
 class ToneMapPass:
-    def __init__(self, device: Device, render_pass: Any) -> None:
+    """The full-screen triangle into a target of `color_format` (pipeline made at first use)."""
+
+    def __init__(self, device: Device, color_format: int) -> None:
         vk = self.vk = device.vk
         self.device = device
-        self.render_pass = render_pass
+        self.color_format = color_format
         stage = vk.VK_SHADER_STAGE_FRAGMENT_BIT
-        self.set_layout = DescriptorSetLayout(device, [(0, vk.VK_DESCRIPTOR_TYPE_INPUT_ATTACHMENT, stage)])
+        self.set_layout = DescriptorSetLayout(device, [(0, vk.VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, stage)])
         self.pool: DescriptorPool | None = None
         self._sets: dict[int, Any] = {}  # HDR view address -> VkDescriptorSet[1]
         self._views = 0  # the target's attachment remakes the sets were made for
@@ -72,7 +75,7 @@ class ToneMapPass:
             self.device.wait_idle()  # the old sets may be bound by frames in flight
             if self.pool is not None:
                 self.pool.destroy()
-            self.pool = DescriptorPool(self.device, _SETS, {vk.VK_DESCRIPTOR_TYPE_INPUT_ATTACHMENT: _SETS})
+            self.pool = DescriptorPool(self.device, _SETS, {vk.VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE: _SETS})
             self._sets.clear()
         descriptor_set = self.pool.allocate(self.set_layout)
         info = vk.VkDescriptorImageInfo(imageView=view, imageLayout=vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL)
@@ -81,7 +84,7 @@ class ToneMapPass:
             dstBinding=0,
             dstArrayElement=0,
             descriptorCount=1,
-            descriptorType=vk.VK_DESCRIPTOR_TYPE_INPUT_ATTACHMENT,
+            descriptorType=vk.VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE,
             pImageInfo=[info],
         )
         self.device.objects_version += 1
@@ -90,7 +93,8 @@ class ToneMapPass:
         return found
 
     def record(self, cb: Any, state: Any, target: Any, name: str, exposure: float) -> None:
-        """The full-screen triangle over `state`'s area (raw calls), reading `target`'s HDR view;
+        """The full-screen triangle over `state`'s area (raw calls, inside the output's
+        vkCmdBeginRendering), reading `target`'s HDR view;
         the set per view made once. A swapchain counts its remakes (`recreations`): a new view may
         reuse an old one's handle value, so the sets made for the old views go then."""
         vk = self.vk
@@ -111,8 +115,8 @@ class ToneMapPass:
                     "tonemap.vert",
                     "tonemap.frag",
                     layout=self.layout,
-                    render_pass=self.render_pass,
-                    subpass=SUBPASS_OUTPUT,
+                    render_pass=None,
+                    color_formats=(self.color_format,),
                     cull_back=False,
                     depth_test=False,
                     depth_write=False,
