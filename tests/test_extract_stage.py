@@ -43,6 +43,7 @@ ALLOWED: dict[str, set[str] | None] = {
     # scene files: the codecs World.save and World.load call with the world being saved or
     # loaded (its Materials, Meshes and Environment resources), never while a frame is drawn
     "scene_assets.py": None,
+    "scene_meshes.py": None,  # the meshes' codec, apart from scene_assets.py for size
     # the app's and editor's question "which entity is under this pixel", asked between frames
     # with the world in hand (a ray from the active camera against the rows' spheres)
     "picking.py": None,
