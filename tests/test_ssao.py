@@ -89,9 +89,10 @@ class Readback(Pass):
         vk.vkCmdPipelineBarrier2(cb, vk.VkDependencyInfo(pMemoryBarriers=[to_host]))
 
 
-def run_ssao(depth, projection, settings, composite=False):
-    """The passes on the device: {"ao": (H, W), "noisy": (H, W, 4), "hdr": (H, W, 4)} as float32,
-    and the graph's describe()."""
+def run_ssao(depth, projection, settings, composite=False, recompile=False):
+    """The passes on the device: {"ao": (H, W), "ao_noisy": (H, W, 4), "hdr": (H, W, 4)} as
+    float32, and the graph's describe(). `recompile`: a first frame, then a recompile (new
+    transients, whose views may reuse the old handles) and a second frame, which is returned."""
     device = shared_device()
     usage = device.vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
     shapes = {"ao": (H, W), "ao_noisy": (H, W, 4), **({"hdr": (H, W, 4)} if composite else {})}
@@ -117,6 +118,13 @@ def run_ssao(depth, projection, settings, composite=False):
             graph.add_pass(Readback(name, f"out_{name}"))
         graph.compile((W, H))
         device.submit_once(graph.execute)
+        if recompile:
+            for buf in outs.values():
+                buf.array(np.uint8)[:] = 0
+            graph.import_buffer("unused", handle=upload.handle, size=upload.size)  # imports changed
+            graph.compile((W, H))
+            assert graph.compiles == 2
+            device.submit_once(graph.execute)
         got = {name: outs[name].array(np.float16, shape).astype(np.float32) for name, shape in shapes.items()}
         return got, graph.describe()
     finally:
@@ -177,6 +185,19 @@ def test_the_composite_multiplies_the_hdr_image_by_ao():
     )
     np.testing.assert_allclose(got["hdr"], expected, rtol=2e-3, atol=1e-3)
     assert "hdr COMPUTE_READ_WRITE" in described
+
+
+def test_a_recompiled_graph_rewrites_the_passes_descriptor_sets(monkeypatch):
+    """Every view's handle read as 0: as a driver reusing a destroyed view's handle value for
+    the new transient's would look (the validation layer's handles are never reused); a set
+    kept across the recompile would name destroyed views, which validation reports."""
+    import ecs_engine.render.post.ssao_passes as passes
+
+    monkeypatch.setattr(passes, "handle_int", lambda vk, handle: 0)
+    depth, projection, _ = SCENE
+    first, _ = run_ssao(depth, projection, SsaoSettings())
+    second, _ = run_ssao(depth, projection, SsaoSettings(), recompile=True)
+    np.testing.assert_array_equal(second["ao"], first["ao"])
 
 
 def test_an_orthographic_camera_matches_the_reference():

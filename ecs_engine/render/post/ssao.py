@@ -148,11 +148,11 @@ def add_ssao(
     prefix = "ssao" if out == "ao" else f"ssao_{out}"
     noisy = f"{out}_noisy"
     passes = [
-        GtaoPass(f"{prefix}_gtao", settings, view, depth, noisy),
-        DenoisePass(f"{prefix}_denoise", settings, view, depth, noisy, out),
+        GtaoPass(f"{prefix}_gtao", settings, view, graph, depth, noisy),
+        DenoisePass(f"{prefix}_denoise", settings, view, graph, depth, noisy, out),
     ]
     if composite is not None:
-        passes.append(CompositePass(f"{prefix}_composite", settings, view, out, composite))
+        passes.append(CompositePass(f"{prefix}_composite", settings, view, graph, out, composite))
     for p in passes:
         graph.add_pass(p, before=before)
     return view

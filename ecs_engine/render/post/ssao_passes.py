@@ -1,7 +1,8 @@
 """The SSAO passes (see ssao.py): compute shaders over images the graph hands them. Each makes
 its pipeline at its first record (setup only declares) and keeps a descriptor set per set of
-image views it was recorded with (views change only when the graph recompiles or an import is
-replaced)."""
+image views it was recorded with. A recompile of its graph makes new transients (their views may
+even reuse the old handles' values), so the sets are dropped then; the graph waited for the
+device before destroying the old transients, so no frame in flight still uses them."""
 
 from __future__ import annotations
 
@@ -32,8 +33,9 @@ class _ComputePass(Pass):
 
     shader = ""
 
-    def __init__(self, name: str, settings: SsaoSettings, view: SsaoView) -> None:
-        self.name, self.settings, self.view = name, settings, view
+    def __init__(self, name: str, settings: SsaoSettings, view: SsaoView, graph: Any) -> None:
+        self.name, self.settings, self.view, self.graph = name, settings, view, graph
+        self._compiles = -1  # the graph's compile the sets were written for
         self.sampled: tuple[str, ...] = ()
         self.storage: tuple[str, ...] = ()
         self.over = ""
@@ -75,13 +77,16 @@ class _ComputePass(Pass):
         vk, device = ctx.vk, ctx.device
         views = tuple(ctx.image(n).view for n in (*self.sampled, *self.storage))
         key = tuple(v if isinstance(v, int) else handle_int(vk, v) for v in views)
-        found = self._sets.get(key)
+        compiles = self.graph.compiles
+        found = self._sets.get(key) if compiles == self._compiles else None
         if found is not None:
             return found
-        if len(self._sets) >= MAX_SETS:  # sets may still be in use by frames in flight
-            device.wait_idle()
+        if compiles != self._compiles or len(self._sets) >= MAX_SETS:
+            if compiles == self._compiles:  # only imports changed: frames in flight may use the sets
+                device.wait_idle()
             vk.vkResetDescriptorPool(device.handle, self._pool.handle, 0)
             self._sets.clear()
+            self._compiles = compiles
         descriptor_set = self._pool.allocate(self._set_layout)
         read_only = vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL  # Access.COMPUTE_SAMPLED's layout
         n = len(self.sampled)
@@ -123,8 +128,8 @@ class GtaoPass(_ComputePass):
 
     shader = "ssao_gtao.comp"
 
-    def __init__(self, name: str, settings: SsaoSettings, view: SsaoView, depth: str, noisy: str) -> None:
-        super().__init__(name, settings, view)
+    def __init__(self, name: str, settings: SsaoSettings, view: SsaoView, graph: Any, depth: str, noisy: str) -> None:
+        super().__init__(name, settings, view, graph)
         self.sampled, self.storage, self.over = (depth,), (noisy,), noisy
         self.depth, self.noisy = depth, noisy
 
@@ -139,8 +144,10 @@ class DenoisePass(_ComputePass):
 
     shader = "ssao_denoise.comp"
 
-    def __init__(self, name: str, settings: SsaoSettings, view: SsaoView, depth: str, noisy: str, out: str) -> None:
-        super().__init__(name, settings, view)
+    def __init__(
+        self, name: str, settings: SsaoSettings, view: SsaoView, graph: Any, depth: str, noisy: str, out: str
+    ) -> None:
+        super().__init__(name, settings, view, graph)
         self.sampled, self.storage, self.over = (depth, noisy), (out,), out
         self.depth, self.noisy, self.out = depth, noisy, out
 
@@ -156,8 +163,8 @@ class CompositePass(_ComputePass):
 
     shader = "ssao_composite.comp"
 
-    def __init__(self, name: str, settings: SsaoSettings, view: SsaoView, ao: str, hdr: str) -> None:
-        super().__init__(name, settings, view)
+    def __init__(self, name: str, settings: SsaoSettings, view: SsaoView, graph: Any, ao: str, hdr: str) -> None:
+        super().__init__(name, settings, view, graph)
         self.sampled, self.storage, self.over = (ao,), (hdr,), hdr
         self.ao, self.hdr = ao, hdr
 
