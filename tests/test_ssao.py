@@ -200,6 +200,12 @@ def test_a_recompiled_graph_rewrites_the_passes_descriptor_sets(monkeypatch):
     np.testing.assert_array_equal(second["ao"], first["ao"])
 
 
+def test_intensity_0_turns_it_off():
+    depth, projection, _ = SCENE
+    got, _ = run_ssao(depth, projection, SsaoSettings(intensity=0.0))
+    assert (got["ao"] == 1.0).all()
+
+
 def test_an_orthographic_camera_matches_the_reference():
     """The passes take any projection through its inverse: an orthographic view of the scene's
     depth (linear in reverse-Z) agrees too."""

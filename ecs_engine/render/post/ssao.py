@@ -21,13 +21,27 @@ Passes (ssao_passes.py; shaders/ssao_*.comp):
 3. optional composite: "<hdr>" *= ao in place (COMPUTE_READ_WRITE).
 
 Where AO belongs: physically it scales only the ambient / indirect light (the environment's
-diffuse and specular terms, shading.glsl's ambient), never the direct lights, which have their
-own shadows. Integrating it properly means the lit shaders (mesh_fragment.glsl for forward and
-clustered, deferred_light.comp) sample "ao" at their pixel and multiply their ambient term by
-it, which needs the SSAO passes to run after a depth prepass (forward) or the G-buffer pass
-(deferred) and before lighting, and those passes to declare "ao" as FRAGMENT_SAMPLED /
-COMPUTE_SAMPLED. Until then `add_ssao(..., composite="hdr")` multiplies the whole lit HDR
-image (a common fallback: it also darkens direct light in creases, slightly too dark).
+irradiance and prefiltered specular, or the flat ambient), never the direct lights, which have
+their own shadows. What integrating it into the renderer needs:
+- forward and clustered modes: the lit fragment shaders already multiply their ambient by the
+  material's `occlusion` (mesh_fragment.glsl: `environment_ambient(..., occlusion)` and the
+  flat `g.ambient` line); they would multiply it by `texelFetch(ao, ivec2(gl_FragCoord.xy))`
+  (a new sampled binding in the frame's set, render/layouts.py). "ao" must exist before the
+  lit pass draws, so these modes need a depth prepass of the opaque geometry (or the occlusion
+  culling's early depth, where it holds all of it) and the lit pass declares "ao"
+  FRAGMENT_SAMPLED;
+- deferred mode: the G-buffer pass writes the ambient term into the HDR image together with the
+  depth, so SSAO cannot come before it; the ambient would go to its own target (or its inputs
+  into the G-buffer) and deferred_light.comp, which runs after the G-buffer, would add it
+  multiplied by "ao" (declared COMPUTE_SAMPLED);
+- MSAA: the passes sample a single-sample depth (texelFetch of a sampler2D): a multisampled
+  depth needs a resolve first (dynamic rendering resolves depth with SAMPLE_ZERO);
+- the depth image needs VK_IMAGE_USAGE_SAMPLED (the graph adds it to a transient it makes; an
+  imported one must be made with it), and the renderer sets `SsaoView.projection` from the
+  frame's CameraMatrices.projection each frame (the passes' keys follow it: frame replay sees
+  a moved camera).
+Until then `add_ssao(..., composite="hdr")` multiplies the whole lit HDR image before the tone
+map: a common fallback, which also darkens direct light in creases (slightly too dark there).
 
 Use (a plugin's one line, once the renderer's graph has "depth"):
 
