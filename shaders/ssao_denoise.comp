@@ -41,7 +41,7 @@ void main() {
         return;
     }
     vec3 c = view_position(p, d);
-    float tolerance = TOLERANCE * abs(c.z);
+    float tolerance = max(TOLERANCE * abs(c.z), 1e-6);  // an orthographic near plane may be at 0
     float sum = 0.0;
     float total = 0.0;
     for (int y = -2; y <= 2; ++y) {

@@ -142,7 +142,7 @@ def denoise(depth: np.ndarray, projection: np.ndarray, noisy: np.ndarray) -> np.
     noisy = noisy.astype(np.float16).astype(F)
     d = img.at(x, y)
     c = img.position(x, y, np.where(d > 0, d, F(1)))
-    tolerance = TOLERANCE * np.abs(c[..., 2])
+    tolerance = np.maximum(TOLERANCE * np.abs(c[..., 2]), F(1e-6))
     total = np.zeros((h, w), F)
     acc = np.zeros((h, w), F)
     for dy in range(-2, 3):
