@@ -97,13 +97,15 @@ class Device:
         base = vk.vkGetPhysicalDeviceFeatures(self.physical)
         # the indirect render mode needs all three (checked there, with one message if one lacks)
         # anisotropic texture filtering and wireframe/point fill where the device has them;
-        # independent blending for weighted transparency's two targets (render/oit_pass.py)
+        # independent blending for weighted transparency's two targets (render/oit_pass.py); storage
+        # images of r16f and the like (the SSAO passes' ao image: render/post/ssao_passes.py)
         optional = (
             "multiDrawIndirect",
             "drawIndirectFirstInstance",
             "samplerAnisotropy",
             "fillModeNonSolid",
             "independentBlend",
+            "shaderStorageImageExtendedFormats",
         )
         features = vk.VkPhysicalDeviceFeatures(**{name: getattr(base, name) for name in optional})
         self.features.update({name: bool(getattr(base, name)) for name in optional})
