@@ -374,11 +374,11 @@ def test_shadow_views_follow_the_frame_set_when_its_buffers_grow():
             schedule.run(world, 0.0)
             for _ in range(3):
                 renderer.render(world, readback=True)
-            sets = [list(slot) for slot in renderer.shadows._view_sets]
+            sets = [list(slot) for slot in renderer.shadows.view_sets._sets]
             copied = [[s.copied for s in slot] for slot in sets]
             for _ in range(2):
                 renderer.render(world, readback=True)
-            assert [[s.copied for s in slot] for slot in renderer.shadows._view_sets] == copied
+            assert [[s.copied for s in slot] for slot in renderer.shadows.view_sets._sets] == copied
             # 3,000 small cubes floating over the ground (the instance buffer held a few rows)
             cube = gpu.meshes.add(cube_mesh())
             rng = np.random.default_rng(5)

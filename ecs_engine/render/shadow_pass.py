@@ -27,38 +27,24 @@ chunk jobs only write the camera's rows, and the CPU path culls and draws the se
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
-from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
+from ..gpu.descriptors import DescriptorSetLayout
 from ..gpu.device import Device
-from ..gpu.memory import Buffer
 from ..gpu.secondary import SecondaryBuffers
 from ..gpu.shadow_maps import ShadowMaps, create_shadow_pass
 from .frame_data import Chunk, FrameData
 from .indirect_path import IndirectPath
 from .instance_rows import cull_views, padded_planes
-from .layouts import BINDING_GLOBALS, GLOBALS, SHADOW_VIEW
+from .layouts import SHADOW_VIEW
 from .path import ChunkResult, FrameInputs, PathContext, RenderPath, TargetState
 from .shadow_indirect import IndirectShadows
-from .shadow_views import ShadowView, shadow_views
+from .shadow_view_sets import ShadowViewSets
+from .shadow_views import ShadowView, light_views, shadow_views, write_view_rows
 from .view_recording import ViewRecording, can_fuse
-
-
-@dataclass
-class ViewSet:
-    """A shadow view's set 0 in one frame slot: the frame's set copied, its own globals."""
-
-    globals: Buffer
-    descriptor_set: Any
-    set_array: Any  # VkDescriptorSet[1], for raw calls
-    copied: tuple[Any, int] | None = None  # (frame set, its version) last copied from
-    holds: Any = None  # the ShadowView its globals were last written for
-
-
-PROJECTIONS = {"cascade": 0, "spot": 1, "cube": 2}  # SHADOW_VIEW.info.w: orthographic, perspective, a cube face
 
 
 class ShadowPass:
@@ -72,16 +58,14 @@ class ShadowPass:
         self.frames = frames
         self.render_pass = create_shadow_pass(device)
         self.maps: ShadowMaps | None = None
-        self.pool: DescriptorPool | None = None
+        self.view_sets = ShadowViewSets(device, frame_set_layout, frames)
         try:
             self.maps = ShadowMaps(device, self.render_pass, 1, 1)  # bound until a light casts
         except BaseException:
             self.destroy()
             raise
         self.cleared = False  # the layers' layout made by a first (clearing) pass
-        self._view_sets: list[list[ViewSet]] = [[] for _ in range(frames)]
         self._targets: dict[tuple[int, int], TargetState] = {}  # by (layer, texels across)
-        self._pool_sets = 0  # view sets the pool holds per frame slot
         self.path: RenderPath | None = None
         self._counts = [0, 0]  # the last frame's shadow draws and triangles recorded on the CPU
         self.gpu: IndirectShadows | None = None  # the indirect mode's GPU-culled views
@@ -154,7 +138,7 @@ class ShadowPass:
         """The target of `layer`'s first `resolution` texels across (the whole layer by default):
         a view is drawn at the resolution its light asks for, in the corner of a layer as large as
         the largest any light asks (its render area, viewport and scissor; the lighting scales its
-        coordinates: write_views, and never read past the corner, whose outside is left
+        coordinates: shadow_views.write_view_rows, and never read past the corner, whose outside is left
         undefined by each frame's pass). The H100 drew the shadows demo's 11 layers at 2048 in ~5.4 ms,
         rasterising and clearing texels that the 512-texel cube faces never read."""
         assert self.maps is not None
@@ -179,46 +163,11 @@ class ShadowPass:
         """Per view: its set 0 (globals: the light's matrices; the rest the frame's, copied
         again only when the frame's set was written since: `set_version`) and the FrameInputs
         its chunk jobs read; view k's rows start at row_base + k * rows."""
-        sets = self._view_sets[frame.slot]
-        vk = self.vk
-        while len(sets) < len(views):
-            if self.pool is None or len(sets) >= self._pool_sets:
-                self._grow_pool(len(views))
-                sets = self._view_sets[frame.slot]
-                continue
-            assert self.pool is not None
-            descriptor_set = self.pool.allocate(self.set_layout)
-            globals_buffer = Buffer(self.device, GLOBALS.size, vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT)
-            write_buffers(
-                self.device, descriptor_set, [(BINDING_GLOBALS, vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, globals_buffer)]
-            )
-            sets.append(ViewSet(globals_buffer, descriptor_set, vk.ffi.new("VkDescriptorSet[1]", [descriptor_set])))
-        stale = [s.descriptor_set for s in sets[: len(views)] if s.copied != (frame.descriptor_set, set_version)]
-        if stale:
-            # the frame's set copied whole but for the globals (a driver may read every binding a
-            # shader declares, used or not: lavapipe crashed on unwritten ones); at 4 views this
-            # cost ~0.2 ms a frame when done every frame, so only after the frame's set changed
-            copies = [
-                vk.VkCopyDescriptorSet(
-                    srcSet=frame.descriptor_set, srcBinding=b, dstSet=dst, dstBinding=b, descriptorCount=n
-                )
-                for dst in stale
-                for b, _, _, n in self.set_layout.bindings
-                if b != BINDING_GLOBALS
-            ]
-            self.device.objects_version += 1
-            vk.vkUpdateDescriptorSets(self.device.handle, 0, None, len(copies), copies)
-            for s in sets[: len(views)]:
-                s.copied = (frame.descriptor_set, set_version)
+        sets = self.view_sets.ensure(frame.slot, len(views), frame.descriptor_set, set_version)
         out = []
         for k, view in enumerate(views):
             view_set = sets[k]
-            if view_set.holds is not view:  # (a plan kept from the last frame: the same views)
-                g = view_set.globals.array(GLOBALS.dtype, 1)
-                g[...] = 0
-                g["projection"] = view.projection.T
-                g["view"] = view.view.T
-                view_set.holds = view
+            view_set.hold(view)
             out.append(
                 replace(
                     frame,
@@ -232,18 +181,6 @@ class ShadowPass:
                 )
             )
         return out
-
-    def _grow_pool(self, views: int) -> None:
-        """A pool for `views` sets per frame slot (the old sets go: the device is waited for)."""
-        self.device.wait_idle()
-        self._release_sets()
-        per_slot = max(8, views)
-        count = per_slot * self.frames
-        sizes: dict[int, int] = {}
-        for _, kind, _, n in self.set_layout.bindings:
-            sizes[kind] = sizes.get(kind, 0) + count * n
-        self.pool = DescriptorPool(self.device, count, sizes)
-        self._pool_sets = per_slot
 
     def prepare(
         self,
@@ -267,7 +204,8 @@ class ShadowPass:
         written = self._views_written[frame.slot]
         now = (views, pf.shadow_views, self.maps)
         if written is None or any(a is not b for a, b in zip(written, now, strict=True)):  # not in these rows yet
-            self.write_views(pf.shadow_views.array(SHADOW_VIEW.dtype, len(views)), views)
+            assert self.maps is not None
+            write_view_rows(pf.shadow_views.array(SHADOW_VIEW.dtype, len(views)), views, self.maps.resolution)
             self._views_written[frame.slot] = now
         # the set-aside casters' rows sit after the chunks' in a view's region (their offsets): with
         # the GPU culling the chunks' rows in place, the region holds those alone
@@ -359,36 +297,7 @@ class ShadowPass:
                 self._counts[1] += r.triangles
         return per_view
 
-    @staticmethod
-    def light_views(views: list[ShadowView]) -> dict[int, tuple[int, int]]:
-        """Per shadow-casting light's entity: its first view and count, which its light row
-        names (light_rows.write_light_shadows)."""
-        first: dict[int, tuple[int, int]] = {}
-        for v in views:
-            start, count = first.get(v.entity, (v.layer, 0))
-            first[v.entity] = (start, count + 1)
-        return first
-
-    def write_views(self, out: np.ndarray, views: list[ShadowView]) -> None:
-        """SHADOW_VIEW rows of the views (shading.glsl's light_shadow reads them). Every layer
-        has the maps' resolution, the largest any light asks for; a view is drawn in the corner
-        of its layer at its own light's resolution (target_state), which the lighting's map
-        coordinates are scaled by (depth_model.w), and its bias, PCF width and PCSS search are in
-        its own texels."""
-        assert self.maps is not None
-        size = float(self.maps.resolution)
-        for k, v in enumerate(views):
-            perspective = v.kind != "cascade"
-            p = v.projection.astype(np.float64)
-            row = out[k]
-            row["view_projection"] = (p @ v.view.astype(np.float64)).T
-            if perspective:  # depth = P22 + P23 / d: a world bias b at distance d is P23 * b / d^2
-                bias, offset = p[2, 3] * v.bias * v.texel, v.normal_offset * v.texel
-            else:  # depth = P22 * z + P23: linear
-                bias, offset = p[2, 2] * v.bias * v.texel, v.normal_offset * v.texel
-            row["params"] = (bias, offset, v.far if np.isfinite(v.far) else 3.0e38, v.softness)
-            row["info"] = (v.layer, v.filter, v.resolution, PROJECTIONS[v.kind])
-            row["depth_model"] = (p[2, 2], p[2, 3], v.texel, min(v.resolution, size) / size)
+    light_views = staticmethod(light_views)  # the renderer names each light's views with it
 
     def record(self, cb: Any, views: list[ShadowView], secondaries: list[list[Any]]) -> None:
         """Each view's layer drawn from its secondaries (raw calls); the first time the maps are
@@ -412,15 +321,6 @@ class ShadowPass:
             lib.vkCmdEndRenderPass(cb)
         self.cleared = True
 
-    def _release_sets(self) -> None:
-        for sets in self._view_sets:
-            for view_set in sets:
-                view_set.globals.destroy()
-        self._view_sets = [[] for _ in range(self.frames)]
-        if self.pool is not None:
-            self.pool.destroy()
-            self.pool = None
-
     def destroy(self) -> None:
         if self.path is not None:
             self.path.destroy()
@@ -429,7 +329,7 @@ class ShadowPass:
         if gpu is not None:
             gpu.destroy()
             self.gpu = None
-        self._release_sets()
+        self.view_sets.destroy()
         if self.maps is not None:
             self.maps.destroy()
             self.maps = None

@@ -212,3 +212,37 @@ def shadow_views(
                     row,
                 )
     return views
+
+
+PROJECTIONS = {"cascade": 0, "spot": 1, "cube": 2}  # SHADOW_VIEW.info.w: orthographic, perspective, a cube face
+
+
+def light_views(views: list[ShadowView]) -> dict[int, tuple[int, int]]:
+    """Per shadow-casting light's entity: its first view and count, which its light row
+    names (light_rows.write_light_shadows)."""
+    first: dict[int, tuple[int, int]] = {}
+    for v in views:
+        start, count = first.get(v.entity, (v.layer, 0))
+        first[v.entity] = (start, count + 1)
+    return first
+
+
+def write_view_rows(out: np.ndarray, views: list[ShadowView], resolution: int) -> None:
+    """SHADOW_VIEW rows of the views (shading.glsl's light_shadow reads them). Every layer
+    has the maps' resolution, the largest any light asks for; a view is drawn in the corner
+    of its layer at its own light's resolution (ShadowPass.target_state), which the lighting's map
+    coordinates are scaled by (depth_model.w), and its bias, PCF width and PCSS search are in
+    its own texels."""
+    size = float(resolution)
+    for k, v in enumerate(views):
+        perspective = v.kind != "cascade"
+        p = v.projection.astype(np.float64)
+        row = out[k]
+        row["view_projection"] = (p @ v.view.astype(np.float64)).T
+        if perspective:  # depth = P22 + P23 / d: a world bias b at distance d is P23 * b / d^2
+            bias, offset = p[2, 3] * v.bias * v.texel, v.normal_offset * v.texel
+        else:  # depth = P22 * z + P23: linear
+            bias, offset = p[2, 2] * v.bias * v.texel, v.normal_offset * v.texel
+        row["params"] = (bias, offset, v.far if np.isfinite(v.far) else 3.0e38, v.softness)
+        row["info"] = (v.layer, v.filter, v.resolution, PROJECTIONS[v.kind])
+        row["depth_model"] = (p[2, 2], p[2, 3], v.texel, min(v.resolution, size) / size)
