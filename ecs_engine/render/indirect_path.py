@@ -55,7 +55,7 @@ from .layouts import (
     UINT_BYTES,
 )
 from .mesh_registry import MergedMeshes
-from .occlusion import OcclusionCulling, can_cull
+from .occlusion import OcclusionPasses
 from .path import ChunkResult, FrameInputs, MeshBounds, PathContext
 
 STATE_HEADER = DRAW_STATE.size // UINT_BYTES  # uints before the per-key counters
@@ -147,7 +147,7 @@ class IndirectPath:
         self.ctx = ctx
         self.vk = ctx.device.vk
         self.frames: list[_IndirectFrame] = []
-        self.occlusion: OcclusionCulling | None = None  # --culling occlusion, made on first use
+        self.occlusion: OcclusionPasses | None = None  # asked for by --culling occlusion (culling/occlusion.py)
         try:
             self._build(ctx)
         except BaseException:
@@ -345,7 +345,8 @@ class IndirectPath:
         lib = vk.lib
         f = self.frames[frame.slot]
         to_compute, compute_to_compute, to_draw, to_host, drawn_to_compute = self._barriers
-        occlusion = self._occlusion_for(frame, planes, rows)
+        _, width, height = frame.target.key
+        occlusion = frame.data.culling.gpu(self, width, height, rows)  # None: the frustum test alone
         # the previous frame in this slot read the commands and ids: its fence covered that
         lib.vkCmdFillBuffer(cb, f.state.handle, 0, f.state.size, 0)
         if occlusion is not None:
@@ -359,7 +360,6 @@ class IndirectPath:
             push["planes"][0, : len(planes)] = planes
             push["plane_count"] = len(planes)
         cull = self.cull
-        _, width, height = frame.target.key
         lod = CULL_LOD if frame.lod and merged.lod_levels.any() else 0
         push["occlusion"] = (width, height, 0, lod)  # cull.comp: the levels of detail's projection
         if occlusion is not None:
@@ -385,17 +385,11 @@ class IndirectPath:
         lib.vkCmdCopyBuffer(cb, f.state.handle, f.readback.handle, 1, f.copy_region)
         to_host.record(lib, cb)
 
-    def _occlusion_for(self, frame: FrameInputs, planes: np.ndarray | None, rows: int) -> OcclusionCulling | None:
-        """The frame's occlusion culling, made on first use; None where the frame culls the
-        frustum alone (asked so, culling off, wireframe or points: occlusion.can_cull)."""
-        if not frame.occlusion or planes is None or not can_cull(self.ctx) or rows == 0:
-            return None
+    def occlusion_passes(self) -> OcclusionPasses:
+        """Occlusion culling's passes (culling/occlusion.py asks), made on first use against this
+        path's layouts, and destroyed with it."""
         if self.occlusion is None:
-            self.occlusion = OcclusionCulling(
-                self.ctx, [self.ctx.frame_set_layout, self.set_layout.handle], self.layout
-            )
-        _, width, height = frame.target.key
-        self.occlusion.ensure(width, height, rows)
+            self.occlusion = OcclusionPasses(self.ctx, [self.ctx.frame_set_layout, self.set_layout.handle], self.layout)
         return self.occlusion
 
     def _cull_rows(self, cb: Any, pipeline: Any, rows: int) -> None:
