@@ -25,8 +25,7 @@ from ..ecs.world import World
 from ..maths.culling import frustum_planes
 from .camera import CameraMatrices, camera_matrices, view_from_origin
 from .config import Culling
-from .culling import METHODS, CullingMethod, check_culling, culling_name
-from .culling.temporal import TemporalCulling
+from .culling import METHODS, CullingMethod, TemporalCulling, check_culling, culling_name
 from .extract.chunks import (
     MIN_CHUNK_ROWS,
     MODEL_COLUMN,
