@@ -32,6 +32,7 @@ from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Camera, Mesh, Transform, Velocity
 from ecs_engine.maths.camera import yaw_pitch_quat
+from ecs_engine.render.culling import TemporalCulling
 from ecs_engine.render.frame_data import FrameExtractor
 from ecs_engine.render.instance_rows import cull_views, masked_keys, padded_planes
 from ecs_engine.render.primitives import cube_mesh
@@ -89,7 +90,7 @@ def run_path(n: int, path: str, frames: int, min_interval: float) -> dict[str, A
     mesh = cube_mesh()
     bounds = (np.array([mesh.center], np.float64), np.array([mesh.radius], np.float64), np.array([36]))
     schedule, extractor = default_schedule(), FrameExtractor(lambda: 1, chunk_rows=1 << 30)
-    extractor.temporal.min_interval = min_interval
+    temporal = TemporalCulling(min_interval)  # the culling method, timed apart from the extraction
     frustum_ms, temporal_ms, tested, missed, extra, visible = [], [], [], 0, [], []
     for x, y, z, yaw, pitch in camera_path(path, frames):
         world.set(int(camera), Transform, position=np.array([x, y, z]), rotation=yaw_pitch_quat(yaw, pitch))
@@ -103,7 +104,8 @@ def run_path(n: int, path: str, frames: int, min_interval: float) -> dict[str, A
             cull_views(chunk.model, chunk.handle, bounds[0], bounds[1], planes, keys, np.zeros((1, 2), np.int64))
             exact.append(keys[0] >= 0)
         t1 = time.perf_counter()
-        masks = extractor.temporal.masks(world, data.camera, data.origin, data.planes, DT, bounds)
+        masks = temporal.masks(world, data.camera, data.origin, data.planes, DT, bounds)
+        assert masks is not None
         drawn = []
         for chunk in data.chunks:
             mask = masks[chunk.table][chunk.start : chunk.start + len(chunk.handle)]
@@ -113,7 +115,7 @@ def run_path(n: int, path: str, frames: int, min_interval: float) -> dict[str, A
         e, d = np.concatenate(exact), np.concatenate(drawn)
         frustum_ms.append((t1 - t0) * 1e3)
         temporal_ms.append((t2 - t1) * 1e3)
-        tested.append(extractor.temporal.stats.tested)
+        tested.append(temporal.culler.stats.tested)
         missed += int((e & ~d).sum())
         extra.append(int((d & ~e).sum()))
         visible.append(int(e.sum()))

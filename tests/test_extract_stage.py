@@ -33,9 +33,11 @@ RENDER = Path(ecs_engine.render.__file__).parent
 EXTRACT = {
     "frame_data.py",  # FrameExtractor: hands the world to the extract functions
     # temporal culling's masks are decided while extracting (FrameData.masks), from the tables'
-    # ModelMatrix and Mesh columns and ticks; FrameExtractor.extract is its only caller (checked
-    # below). It stays at its path for the culling interface's rework (RenderConfig's culling).
+    # ModelMatrix and Mesh columns and ticks: the machinery (temporal_culling.py) and its culling
+    # method (culling/temporal.py, whose `masks` FrameExtractor.extract calls), reached through
+    # extraction alone (checked below)
     "temporal_culling.py",
+    "culling/temporal.py",
 }
 # category (b): modules that take a World outside the frame, per module the scopes ("<module>":
 # its imports; else a function or Class.method) allowed to, and why
@@ -204,11 +206,19 @@ def test_temporal_culling_is_reached_through_extraction_only() -> None:
     importers = [
         name
         for name, source in render_modules().items()
-        if "temporal_culling" in source and name not in ("frame_data.py", "temporal_culling.py")
+        if "temporal_culling" in source and name not in ("frame_data.py", *EXTRACT)
         for node in ast.walk(ast.parse(source))
         if isinstance(node, ast.ImportFrom) and (node.module or "").endswith("temporal_culling")
     ]
     assert importers == []
+    # a culling method's `masks` (render/culling/) is handed the world: called by the extract stage alone
+    callers = [
+        name
+        for name, source in render_modules().items()
+        for node in ast.walk(ast.parse(source))
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "masks"
+    ]
+    assert callers and set(callers) <= EXTRACT, callers
 
 
 def _scene() -> tuple[World, dict[str, int]]:

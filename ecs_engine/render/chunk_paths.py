@@ -293,8 +293,8 @@ class ChunkPath:
         """One job: cull, write the visible rows sorted by key, record a secondary. A chunk whose
         rows in this slot were written from the same inputs (`written_from`) and recorded is
         given back as it stands: a still camera over still rows writes nothing."""
-        written = None
-        if chunk.ticks is not None and frame.ahead is None:
+        written, culling = None, frame.data.culling
+        if chunk.ticks is not None and not culling.decides_ahead:
             written = written_from(chunk, frame)
             kept = None if frame.reuse is None else frame.reuse.get(frame.row_base + chunk.offset)
             if kept is not None and same_inputs(kept.written, written):
@@ -302,7 +302,7 @@ class ChunkPath:
         centers, radii, index_counts = frame.bounds
         rows = self.rows_for(chunk, frame)
         key_counts = np.zeros(2 * len(index_counts), dtype=np.int64)
-        visible = None if frame.ahead is None else frame.ahead.visible(chunk)
+        visible = culling.kept(frame.data, chunk)
         if visible is not None:  # culled ahead (temporal): write what it kept
             keys = masked_keys(chunk.model, chunk.handle, visible, key_counts)
             return self.record_keyed(chunk, frame, keys, key_counts)

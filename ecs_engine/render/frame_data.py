@@ -24,7 +24,8 @@ from ..components.environment import Environment
 from ..ecs.world import World
 from ..maths.culling import frustum_planes
 from .camera import CameraMatrices, camera_matrices, view_from_origin
-from .config import Culling, RenderConfig, check, choice
+from .config import Culling
+from .culling import METHODS, CullingMethod, TemporalCulling, check_culling, culling_name
 from .extract.chunks import (
     MIN_CHUNK_ROWS,
     MODEL_COLUMN,
@@ -41,7 +42,7 @@ from .extract.materials import extract_materials
 from .extract.shadows import ShadowCasters, ShadowExtract
 from .light_rows import DirectionalLights, PositionalLights
 from .materials import Materials
-from .temporal_culling import TemporalCulling
+from .temporal_culling import TemporalCuller
 
 # names older code imports from here (they live in extract/chunks.py)
 __all__ = [
@@ -58,21 +59,8 @@ __all__ = [
     "shadow_flags",
 ]
 
-# per frame; only when due (temporal_culling.py); the frustum, then what is hidden (the indirect
-# mode: render/occlusion.py); off
+# the culling methods' names (render/culling/: what each decides, and where)
 CULLING = Culling.names()
-
-
-def check_culling(culling: str | bool, mode: str | None = "instanced") -> str:
-    """The culling method named (True: frustum, False: none); UsageError for an unknown one, or
-    (unless `mode` is None) one that `mode` cannot cull with (config.RULES: temporal is the CPU
-    modes', occlusion the indirect mode's)."""
-    name = ("frustum" if culling else "none") if isinstance(culling, bool) else culling
-    if mode is None and name in CULLING:
-        return str(name)  # extract's call each frame: the name alone, without building a config
-    if mode is None:
-        return str(choice("culling", name).value)
-    return str(check(RenderConfig.from_strings(culling=name, mode=mode), only=("culling",)).culling.value)
 
 
 @dataclass
@@ -81,14 +69,15 @@ class FrameData:
     origin: np.ndarray  # float64: model matrices are relative to it
     origin_key: bytes
     view: np.ndarray  # float32 (4, 4): the camera's view for matrices relative to `origin`
-    planes: np.ndarray | None  # frustum planes (k, 4) float64, or None: culling off
+    culling: CullingMethod  # what decided the planes and masks; the chunk jobs and GPU passes ask it
+    planes: np.ndarray | None  # the planes the culling tests rows against (k, 4) float64; None: none
     lights: list[PositionalLights]  # per table of point or spot lights
     directional: list[DirectionalLights]
     light_count: int  # of every kind
     chunks: list[Chunk]
     candidates: int  # rows with a mesh in the chunks (opaque and masked materials), before culling
     set_aside: SetAsideRows | None = None  # None: no material is blended or has its own fill
-    masks: dict[int, np.ndarray] | None = None  # temporal culling: per table id, the rows to draw
+    masks: dict[int, np.ndarray] | None = None  # per table id, the rows to draw, where the culling decided ahead
     shadows: ShadowCasters | None = None  # the lights with a Shadow (None: none has one)
     environment: Environment | None = None  # the world's Environment resource
     materials: Materials | None = None  # the world's Materials (or a default palette); None: not extracted
@@ -116,11 +105,32 @@ class FrameExtractor:
         self._planes_for: np.ndarray | None = None  # the view matrix the planes were made with
         self._planes = np.zeros((0, 4))
         self._view: tuple[CameraMatrices, bytes, np.ndarray] | None = None
-        self.temporal = TemporalCulling()
+        # the methods callers name (a name each frame: one method kept per name, so temporal
+        # culling keeps its rows' state); a caller's own CullingMethod is used as given
+        self.methods: dict[str, CullingMethod] = {}  # (by Culling: a str)
         self._kinds = light_kinds()  # which light kinds the world has: absent ones cost no query
         self._point_lights: KeptPoints = {}  # per table: views kept
         self.casters = ShadowExtract()
         self._default_materials: Materials | None = None  # a world without Materials, when none is given
+
+    def method(self, culling: str | bool | Culling | CullingMethod) -> CullingMethod:
+        """The method `culling` is or names (culling.culling_name: UsageError for an unknown one)."""
+        if isinstance(culling, CullingMethod):
+            return culling
+        kept = self.methods.get(culling) if isinstance(culling, str) else None
+        if kept is None:
+            name = culling_name(culling)
+            kept = self.methods.get(name)
+            if kept is None:
+                kept = self.methods[name] = METHODS[name]()
+        return kept
+
+    @property
+    def temporal(self) -> TemporalCuller:
+        """Temporal culling's state, of the method the name `temporal` picks here (tests, benches)."""
+        method = self.method(Culling.TEMPORAL)
+        assert isinstance(method, TemporalCulling)
+        return method.culler
 
     @property
     def chunk_rows(self) -> int | None:
@@ -135,7 +145,7 @@ class FrameExtractor:
         world: World,
         aspect: float,
         mesh_count: int,
-        culling: str | bool,
+        culling: str | bool | Culling | CullingMethod,
         material_count: int = 1 << 32,
         set_aside: np.ndarray | None = None,
         region: tuple[float, float, float, float] | None = None,
@@ -143,12 +153,13 @@ class FrameExtractor:
         bounds: Any = None,
         materials: Materials | None = None,
     ) -> FrameData:
-        """`culling`: CULLING (a bool: frustum or none); `set_aside`: per material, whether its
-        rows are drawn apart (Materials.set_aside); `region`: the part of the target the view
-        shows in (camera_matrices), culled to it; temporal culling needs `dt` (the seconds since
-        the last frame) and `bounds` (the mesh registry's); `materials`: the world's as the
-        caller found them (Renderer.materials), else extracted here."""
-        culling = check_culling(culling, None)
+        """`culling`: a CullingMethod, or its name (CULLING; a bool: frustum or none);
+        `set_aside`: per material, whether its rows are drawn apart (Materials.set_aside);
+        `region`: the part of the target the view shows in (camera_matrices), culled to it;
+        temporal culling needs `dt` (the seconds since the last frame) and `bounds` (the mesh
+        registry's); `materials`: the world's as the caller found them (Renderer.materials),
+        else extracted here."""
+        method = self.method(culling)
         cam = camera_matrices(world, aspect, region)
         origin = render_origin(world)
         origin_key = origin.tobytes()
@@ -158,10 +169,8 @@ class FrameExtractor:
         aside = None
         if set_aside is not None and chunks:
             chunks, aside = self.rows.split(world, chunks, set_aside)
-        planes = self.planes(cam.lens, view) if culling != "none" else None
-        masks = None
-        if culling == "temporal" and planes is not None:
-            masks = self.temporal.masks(world, cam, origin, planes, dt, bounds)
+        planes = method.planes(lambda: self.planes(cam.lens, view))
+        masks = method.masks(world, cam, origin, planes, dt, bounds)  # (temporal culling's: it reads the world)
         if materials is None:
             if self._default_materials is None:
                 self._default_materials = Materials()
@@ -171,6 +180,7 @@ class FrameExtractor:
             origin=origin,
             origin_key=origin_key,
             view=view,
+            culling=method,
             planes=planes,
             lights=positional,
             directional=directional,

@@ -22,20 +22,25 @@ ROW_NOT_CASTER in misc.w, which their cull leaves out.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from ..errors import UsageError
 from ..gpu.barrier import Barrier
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
-from ..gpu.device import Device
 from ..gpu.memory import DEVICE, HOST, Buffer
 from ..gpu.pipeline import compute_pipeline, pipeline_layout
 from ..gpu.secondary import end_command_buffer
 from .chunk_paths import mesh_pipelines
 from .frame_data import NOT_CASTER, NOT_RECEIVER, Chunk
+from .indirect_draws import (
+    STATE_HEADER,
+    IndirectFrame,
+    check_support,
+    compute_barriers,
+    key_capacities,
+    record_indirect_draws,
+)
 from .instance_rows import write_rows
 from .layouts import (
     BINDING_COMMANDS,
@@ -55,86 +60,8 @@ from .layouts import (
     UINT_BYTES,
 )
 from .mesh_registry import MergedMeshes
-from .occlusion import OcclusionCulling, can_cull
+from .occlusion import OcclusionPasses
 from .path import ChunkResult, FrameInputs, MeshBounds, PathContext
-
-STATE_HEADER = DRAW_STATE.size // UINT_BYTES  # uints before the per-key counters
-FEATURES = ("drawIndirectCount", "multiDrawIndirect", "drawIndirectFirstInstance")
-
-
-@dataclass
-class _IndirectFrame:
-    descriptor_set: Any  # set 1
-    keys: Buffer  # HOST, KEY_INFO per key, written each frame
-    ids: Buffer  # DEVICE, one uint per candidate row
-    state: Buffer  # DEVICE, DRAW_STATE header then visible rows per key (zeroed each frame)
-    commands: Buffer  # DEVICE, 2 lists of `meshes` commands
-    readback: Buffer  # HOST, the state as the frame left it
-    key_slots: int  # keys the buffers hold
-    # per mesh, the triangles of one instance, of the frame whose counts `readback` holds (None:
-    # no frame yet); its length says how many keys that frame had (meshes may be added since)
-    recorded: np.ndarray | None = None
-    copy_region: Any = None  # VkBufferCopy* of the whole state buffer
-    written: tuple[bytes, int] | None = None  # (key counts, merged meshes) the key table holds
-    previous: tuple[int, int, int] | None = None  # the counts of the slot's last frame, read at begin_frame
-    # this frame's candidate rows per key and count (finish): what the shadow views cull
-    key_counts: np.ndarray | None = None
-    candidates: int = 0
-
-
-def record_indirect_draws(
-    vk: Any,
-    cb: Any,
-    pipelines: tuple[Any, Any],
-    merged: MergedMeshes,
-    key_counts: np.ndarray,
-    commands: Buffer,
-    state: Buffer,
-    offsets: Any,
-) -> None:
-    """One vkCmdDrawIndexedIndirectCount per winding that has candidates, over the merged mesh
-    buffers, reading compact.comp's `commands` and the counts in `state` (the camera's draws, and
-    each GPU-culled shadow view's: shadow_indirect.py)."""
-    lib = vk.lib
-    meshes = len(key_counts) // 2
-    if merged.vertex_array is None:
-        merged.vertex_array = vk.ffi.new("VkBuffer[1]", [merged.vertices.handle])
-    lib.vkCmdBindVertexBuffers(cb, 0, 1, merged.vertex_array, offsets)
-    lib.vkCmdBindIndexBuffer(cb, merged.indices.handle, 0, vk.VK_INDEX_TYPE_UINT32)
-    for winding, pipeline in enumerate(pipelines):
-        if not key_counts[winding::2].any():
-            continue
-        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline)
-        lib.vkCmdDrawIndexedIndirectCount(
-            cb,
-            commands.handle,
-            winding * meshes * DRAW_COMMAND.size,
-            state.handle,
-            DRAW_STATE.offset("draw_counts") + UINT_BYTES * winding,
-            meshes,
-            DRAW_COMMAND.size,
-        )
-
-
-def key_capacities(key_counts: np.ndarray, merged: MergedMeshes) -> np.ndarray:
-    """Per key of every draw mesh, the rows its region of `ids` must hold: a mesh's keys their
-    rows, each of its levels' keys the same (every row may be drawn at any level). The meshes'
-    keys come first, so their regions start where they did without levels (the shadow views'
-    ids hold those alone)."""
-    owners = merged.owners[merged.count :]
-    capacity = np.zeros(2 * merged.draw_meshes, dtype=np.int64)
-    capacity[: len(key_counts)] = key_counts
-    capacity[len(key_counts) :: 2] = key_counts[2 * owners]
-    capacity[len(key_counts) + 1 :: 2] = key_counts[2 * owners + 1]
-    return capacity
-
-
-def check_support(device: Device) -> None:
-    missing = [f for f in FEATURES if not device.features.get(f)]
-    if missing:
-        raise UsageError(
-            f"{device.info.name} lacks {', '.join(missing)}: the indirect mode needs it; use --mode instanced"
-        )
 
 
 class IndirectPath:
@@ -146,8 +73,8 @@ class IndirectPath:
         check_support(ctx.device)  # before anything is created
         self.ctx = ctx
         self.vk = ctx.device.vk
-        self.frames: list[_IndirectFrame] = []
-        self.occlusion: OcclusionCulling | None = None  # --culling occlusion, made on first use
+        self.frames: list[IndirectFrame] = []
+        self.occlusion: OcclusionPasses | None = None  # asked for by --culling occlusion (culling/occlusion.py)
         try:
             self._build(ctx)
         except BaseException:
@@ -181,13 +108,13 @@ class IndirectPath:
         self._barriers = compute_barriers(vk)
 
     # ---------------------------------------------------------------- buffers
-    def _make_frame(self, descriptor_set: Any, keys: int, rows: int) -> _IndirectFrame:
+    def _make_frame(self, descriptor_set: Any, keys: int, rows: int) -> IndirectFrame:
         vk = self.vk
         device = self.ctx.device
         ssbo = vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT
         indirect = vk.VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT
         state_bytes = DRAW_STATE.size + UINT_BYTES * keys
-        f = _IndirectFrame(
+        f = IndirectFrame(
             descriptor_set=descriptor_set,
             keys=Buffer(device, KEY_INFO.size * keys, ssbo),
             ids=Buffer(device, UINT_BYTES * rows, ssbo, DEVICE),
@@ -200,7 +127,7 @@ class IndirectPath:
         self._write_set(f)
         return f
 
-    def _write_set(self, f: _IndirectFrame) -> None:
+    def _write_set(self, f: IndirectFrame) -> None:
         ssbo = self.vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
         write_buffers(
             self.ctx.device,
@@ -345,7 +272,8 @@ class IndirectPath:
         lib = vk.lib
         f = self.frames[frame.slot]
         to_compute, compute_to_compute, to_draw, to_host, drawn_to_compute = self._barriers
-        occlusion = self._occlusion_for(frame, planes, rows)
+        _, width, height = frame.target.key
+        occlusion = frame.data.culling.gpu(self, width, height, rows)  # None: the frustum test alone
         # the previous frame in this slot read the commands and ids: its fence covered that
         lib.vkCmdFillBuffer(cb, f.state.handle, 0, f.state.size, 0)
         if occlusion is not None:
@@ -359,7 +287,6 @@ class IndirectPath:
             push["planes"][0, : len(planes)] = planes
             push["plane_count"] = len(planes)
         cull = self.cull
-        _, width, height = frame.target.key
         lod = CULL_LOD if frame.lod and merged.lod_levels.any() else 0
         push["occlusion"] = (width, height, 0, lod)  # cull.comp: the levels of detail's projection
         if occlusion is not None:
@@ -385,17 +312,11 @@ class IndirectPath:
         lib.vkCmdCopyBuffer(cb, f.state.handle, f.readback.handle, 1, f.copy_region)
         to_host.record(lib, cb)
 
-    def _occlusion_for(self, frame: FrameInputs, planes: np.ndarray | None, rows: int) -> OcclusionCulling | None:
-        """The frame's occlusion culling, made on first use; None where the frame culls the
-        frustum alone (asked so, culling off, wireframe or points: occlusion.can_cull)."""
-        if not frame.occlusion or planes is None or not can_cull(self.ctx) or rows == 0:
-            return None
+    def occlusion_passes(self) -> OcclusionPasses:
+        """Occlusion culling's passes (culling/occlusion.py asks), made on first use against this
+        path's layouts, and destroyed with it."""
         if self.occlusion is None:
-            self.occlusion = OcclusionCulling(
-                self.ctx, [self.ctx.frame_set_layout, self.set_layout.handle], self.layout
-            )
-        _, width, height = frame.target.key
-        self.occlusion.ensure(width, height, rows)
+            self.occlusion = OcclusionPasses(self.ctx, [self.ctx.frame_set_layout, self.set_layout.handle], self.layout)
         return self.occlusion
 
     def _cull_rows(self, cb: Any, pipeline: Any, rows: int) -> None:
@@ -455,41 +376,3 @@ class IndirectPath:
             owned = self.__dict__.pop(name, None)
             if owned is not None:
                 owned.destroy()
-
-
-def compute_barriers(vk: Any) -> list[Barrier]:
-    """The compute passes' barriers, in order: the counters zeroed -> cull, cull -> compact, the
-    commands written -> the draws (and the counters' copy), the copy -> the host's read; for
-    occlusion culling, the early draws and the pyramid -> the cleared counters and the late cull."""
-    compute = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
-    shader_rw = vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_SHADER_WRITE_BIT
-    return [
-        Barrier(vk, *b)
-        for b in (
-            (vk.VK_PIPELINE_STAGE_TRANSFER_BIT, compute, vk.VK_ACCESS_TRANSFER_WRITE_BIT, shader_rw),
-            (compute, compute, vk.VK_ACCESS_SHADER_WRITE_BIT, shader_rw),
-            (
-                compute,
-                vk.VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT
-                | vk.VK_PIPELINE_STAGE_VERTEX_SHADER_BIT
-                | vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
-                vk.VK_ACCESS_SHADER_WRITE_BIT,
-                vk.VK_ACCESS_INDIRECT_COMMAND_READ_BIT | vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_TRANSFER_READ_BIT,
-            ),
-            (
-                vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
-                vk.VK_PIPELINE_STAGE_HOST_BIT,
-                vk.VK_ACCESS_TRANSFER_WRITE_BIT,
-                vk.VK_ACCESS_HOST_READ_BIT,
-            ),
-            (
-                vk.VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT
-                | vk.VK_PIPELINE_STAGE_VERTEX_SHADER_BIT
-                | vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
-                | vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
-                compute | vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
-                vk.VK_ACCESS_SHADER_WRITE_BIT | vk.VK_ACCESS_TRANSFER_WRITE_BIT,
-                shader_rw | vk.VK_ACCESS_TRANSFER_WRITE_BIT,
-            ),
-        )
-    ]

@@ -1,4 +1,5 @@
-"""Two-phase occlusion culling for the indirect mode (`--culling occlusion`), after zeux/niagara.
+"""Two-phase occlusion culling for the indirect mode (`--culling occlusion`: culling/occlusion.py's
+method asks for these passes), after zeux/niagara.
 
 Per frame, in the primary before the scene's render pass (IndirectPath._record_compute):
 1. early cull (cull_early.comp): the rows the last frame found visible, still in the frustum,
@@ -21,7 +22,7 @@ no pixel centre is culled too (sub-pixel culling): it could not have produced a 
 MSAA the early depth has the target's samples and the pyramid's first level takes the farthest
 of them; rows are tested over every pixel they touch, and sub-pixel culling is off (samples lie
 off the centres). Wireframe and points show what is behind them: those frames cull the frustum
-alone (`can_cull`).
+alone (culling/occlusion.py's `can_cull`).
 
 The images, buffers and pipelines are shared by the frames in flight: the GPU runs frames in
 submission order and each frame's barriers order its writes after the last frame's reads.
@@ -63,12 +64,7 @@ def pyramid_levels(width: int, height: int) -> list[tuple[int, int, int]]:
             return levels
 
 
-def can_cull(ctx: PathContext) -> bool:
-    """Whether the triangles are filled (wireframe shows what is behind them)."""
-    return ctx.fill == "solid"
-
-
-class OcclusionCulling:
+class OcclusionPasses:
     """The early depth, the pyramid, last frame's visibility per row, and their passes."""
 
     def __init__(self, ctx: PathContext, sets: list[Any], graphics_layout: Any) -> None:

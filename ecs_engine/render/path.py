@@ -24,7 +24,7 @@ import numpy as np
 
 from ..gpu.device import Device
 from ..gpu.secondary import SecondaryBuffers
-from .frame_data import Chunk
+from .frame_data import Chunk, FrameData
 from .layouts import NO_MATERIAL
 from .mesh_registry import MeshRegistry
 
@@ -108,15 +108,14 @@ class FrameInputs:
     descriptor_set: Any  # the frame's set 0
     set_array: Any  # VkDescriptorSet[1] of it, for raw calls
     target: TargetState
-    planes: np.ndarray | None  # None: culling off
+    planes: np.ndarray | None  # what the rows are tested against (the view's; None: no test)
     instances: np.ndarray  # the mapped per-frame instance buffer (INSTANCE rows)
     bounds: MeshBounds
     readback: bool  # the frame is waited for: the path may read back what it counted on the GPU
+    data: FrameData  # the frame's snapshot: its culling (render/culling/) is what the jobs and GPU passes ask
     material_count: int = 1  # Mesh.material is below it (the extractor checked)
     path_state: Any = None  # what the path's begin_frame keeps for its jobs
     row_base: int = 0  # where this view's rows start in `instances` (a shadow view's come after the camera's)
-    ahead: Any = None  # the FrameData, where the culling decided the camera's rows ahead (temporal)
-    occlusion: bool = False  # --culling occlusion: the indirect path culls what is hidden too (occlusion.py)
     lod: bool = False  # the indirect path draws each row at the coarsest level of detail its size allows
     reuse: Any = None  # the chunks the slot's last frame recorded, to give back when unchanged (frame_replay.py)
 

@@ -31,9 +31,10 @@ from ..gpu.secondary import SecondaryBuffers
 from ..jobs import JobPool
 from .chunk_paths import RECORDERS, InstancedPath, PerEntityPath, check_recorder, default_recorder
 from .config import Caps, RenderConfig, check
+from .culling import CullingSetting
 from .environment import EnvironmentMap
 from .extract.materials import extract_materials
-from .frame_data import FrameData, FrameExtractor, check_culling
+from .frame_data import FrameData, FrameExtractor
 from .frame_jobs import FrameJobs, job_name
 from .frame_replay import FrameReplay, replay_key, replayable
 from .frame_resources import FrameResources, frame_sets
@@ -67,7 +68,7 @@ MODES = tuple(PATHS)
 RECORDER_NAMES = tuple(RECORDERS)
 
 
-class Renderer(TargetForms):
+class Renderer(TargetForms, CullingSetting):
     def __init__(
         self,
         device: Device,
@@ -109,7 +110,7 @@ class Renderer(TargetForms):
         self.meshes, self.clear_color, self.ambient = meshes, clear_color, ambient
         self.jobs = jobs
         self._jobs_generation = jobs.generation if jobs is not None else 0
-        self.culling = check_culling(culling, None)  # config.Culling's name (True: frustum; False: none)
+        self.culling = culling  # its method (culling_method; True: frustum; False: none): CullingSetting
         self.region: tuple[float, float, float, float] | None = None  # the view's part of the target (camera.py)
         self.extractor = FrameExtractor(lambda: self.jobs.threads if self.jobs is not None else 1, chunk_rows)
         self._native = native_recorder  # compiling one costs about a second: callers may share one
@@ -314,7 +315,7 @@ class Renderer(TargetForms):
         self, world: World, width: int, height: int, materials: Materials | None = None, dt: float | None = None
     ) -> FrameData:
         materials = self.materials(world) if materials is None else materials
-        args = (self.culling, len(materials), materials.set_aside(), self.region, dt, self.meshes.bounds())
+        args = (self.culling_method, len(materials), materials.set_aside(), self.region, dt, self.meshes.bounds())
         return self.extractor.extract(world, width / height, len(self.meshes), *args, materials=materials)
 
     def render(
@@ -392,8 +393,7 @@ class Renderer(TargetForms):
             bounds=self.meshes.bounds(),
             readback=readback,
             material_count=material_count,
-            ahead=data if data.masks is not None else None,
-            occlusion=self.culling == "occlusion",
+            data=data,
             lod=self.lod,
             reuse=reuse,
         )

@@ -46,7 +46,8 @@ from ..gpu.descriptors import DescriptorPool, write_buffers
 from ..gpu.memory import DEVICE, HOST, Buffer
 from ..gpu.secondary import end_command_buffer
 from .chunk_paths import shadow_pipelines
-from .indirect_path import STATE_HEADER, IndirectPath, compute_barriers, record_indirect_draws
+from .indirect_draws import STATE_HEADER, compute_barriers, record_indirect_draws
+from .indirect_path import IndirectPath
 from .layouts import (
     BINDING_COMMANDS,
     BINDING_DRAW_STATE,

@@ -138,7 +138,7 @@ class _Assumed:
         return valid
 
 
-class TemporalCulling:
+class TemporalCuller:
     def __init__(self, min_interval: float = 0.0) -> None:
         self.min_interval = float(min_interval)  # seconds a visible row is held at least
         self.now = 0.0
