@@ -208,7 +208,7 @@ def _exposure_ok(c: RenderConfig, caps: Caps) -> bool:
 
 
 def _indirect_needs(feature: str, name: str) -> Rule:
-    """The indirect mode's need of one device feature (indirect_path.FEATURES)."""
+    """The indirect mode's need of one device feature (indirect_draws.FEATURES)."""
     return Rule(
         "mode",
         lambda c: c.mode is Mode.INDIRECT,

@@ -17,7 +17,7 @@ from ...gpu.functions import handle_int
 from ...gpu.owned import Owned
 from ...gpu.pipeline import compute_pipeline, pipeline_layout
 from ..graph import Access, ImageDesc, Pass, PassBuilder, PassContext
-from .ssao import SsaoSettings, SsaoView
+from .ssao_settings import SsaoSettings, SsaoView
 
 GROUP = 8  # the shaders' local size, each way
 PUSH_BYTES = 112  # ssao.push_constants
