@@ -268,7 +268,18 @@ def test_transients_with_disjoint_lifetimes_share_memory():
     (t3,) = [r for r in g.compiled.barriers.before["p2"] if r.resource == "t3"]
     assert t3.old_layout == "UNDEFINED" and "TRANSFER" in t3.src_stages
     (t1,) = g.compiled.barriers.before["p0"]
-    assert t1.src_stages == set()  # nothing was in its bytes before
+    # nothing of this frame was in its bytes before; the frame before (in flight) drew into t1
+    # and copied through t3 there: its first use waits for both
+    assert t1.src_stages == {"COLOR_ATTACHMENT_OUTPUT", "TRANSFER"}
+
+
+def test_a_transients_first_use_waits_for_the_frame_before():
+    """Frames in flight run one graph over the same transients: a transient's first use must
+    wait for the previous submission's uses of its memory (a barrier's first scope reaches
+    earlier submissions), or the next frame writes what the last one still reads."""
+    g = aliasing_graph()
+    (t2,) = [r for r in g.compiled.barriers.before["p1"] if r.resource == "t2"]
+    assert t2.old_layout == "UNDEFINED" and t2.src_stages == {"TRANSFER"}
 
 
 def test_packing_never_overlaps_images_alive_together():

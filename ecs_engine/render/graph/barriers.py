@@ -119,10 +119,14 @@ def plan_barriers(s: Structure, packing: Packing) -> BarrierPlan:
                     row = _row(name, mip, image, st.layout, need, st.write_stages, st.write_access)
                 elif image:
                     src, access = _aliased_before(s, packing, states, name, position)
+                    prior, prior_writes = _last_frame(s, packing, name)
                     st = _State("UNDEFINED")
-                    row = _row(name, mip, image, "UNDEFINED", need, src, access)
+                    row = _row(name, mip, image, "UNDEFINED", need, src | prior, access | prior_writes)
                 else:
                     st = _State(None)
+                    if need.writes:  # the frame before may still read or write it (frames in flight)
+                        prior, prior_writes = _last_frame(s, packing, name)
+                        row = _row(name, mip, image, None, need, prior, prior_writes)
             elif image and st.layout != need.layout:
                 old = "UNDEFINED" if need.discards else st.layout
                 row = _row(name, mip, image, old, need, st.write_stages | st.read_stages, st.write_access)
@@ -180,6 +184,26 @@ def _aliased_before(
                     stages |= st.write_stages | st.read_stages
                     access |= st.write_access
     return stages, access
+
+
+def _last_frame(s: Structure, packing: Packing, name: str) -> tuple[frozenset[str], frozenset[str]]:
+    """The stages and writes of every use of the memory transient `name` takes (its own and those
+    of images aliased with it), for its first use's barrier to wait on: the frames in flight run
+    the same graph over the same transients, and a barrier's first scope reaches the commands of
+    earlier submissions on the queue, so the frame before's last reads and writes of that memory
+    are waited for (a write after read there needs no more than this execution dependency)."""
+    users = {name}
+    if name in packing.placements:
+        users |= {o for o in packing.placements if o != name and packing.overlapping(name, o)}
+    stages: set[str] = set()
+    writes: set[str] = set()
+    for pass_name in s.order:
+        for use in s.uses[pass_name]:
+            if use.resource in users:
+                stages.update(use.access.usage.stages)
+                if use.write:
+                    writes |= {a for a in use.access.usage.access if "WRITE" in a}
+    return frozenset(stages), frozenset(writes)
 
 
 def _final(s: Structure, states: dict[tuple[str, int], _State]) -> list[Barrier]:
