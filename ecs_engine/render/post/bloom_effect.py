@@ -2,7 +2,8 @@
 callables `post(cb, hdr_image)` run between the scene's render pass and the tone map), for as
 long as the renderer is not yet one frame graph: the effect keeps a small graph of its own with
 the HDR image imported, so its passes, barriers and chain are the same ones `add_bloom` adds to
-the renderer's graph later.
+the renderer's graph later. It registers itself as the post effect "bloom" (registry.py), of
+the hdr stage.
 
 The seam hands over the single-sample HDR colour (a gpu/memory.py Image: handle, view, format,
 width, height; sampled and storage usage) in SHADER_READ_ONLY_OPTIMAL and wants it back so, its
@@ -20,6 +21,7 @@ from ..graph import FrameGraph
 from .bloom import add_bloom
 from .bloom_pipelines import BloomPipelines
 from .bloom_settings import BloomSettings
+from .registry import PostEffectKind, register
 
 _READ = "SHADER_READ_ONLY_OPTIMAL"
 
@@ -94,3 +96,14 @@ class BloomEffect:
         if self.pipelines is not None:
             self.pipelines.release()
             self.pipelines = None  # type: ignore[assignment]
+
+
+register(
+    PostEffectKind(
+        "bloom",
+        "hdr",
+        BloomSettings,
+        BloomEffect,
+        "physically based bloom: bright light bleeds into its surroundings (a mip chain of the HDR colour)",
+    )
+)
