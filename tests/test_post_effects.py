@@ -313,3 +313,27 @@ def test_the_cli_flag_turns_effects_on_and_refuses_an_unknown_one(capsys, monkey
     assert exit_info.value.code == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "unknown post effect 'bogus'; choices: bloom, fxaa" in err
+
+
+def test_the_editor_has_a_toggle_per_effect_that_goes_through_the_renderer(scene):
+    """Clicking the "bloom" checkbox of the "Scene and render" window turns bloom on through
+    the session's apply (Renderer.set_post_effects): the form becomes hdr; again turns it off."""
+    from test_editor import centre
+
+    scene.frame()
+    scene.frame()  # the dock layout settles
+    editor = scene.session.editor
+    assert {"post bloom", "post fxaa"} <= set(editor.rects)
+    renderer = scene.state.renderer
+
+    def click(name: str) -> None:
+        scene.frame(mouse=centre(editor.rects[name]))
+        scene.frame(down=True)
+        scene.frame(down=False)
+        scene.frame()
+
+    click("post bloom")
+    assert renderer.post_effects == ("bloom",) and scene.gpu.target.form == "hdr"
+    assert scene.state.settings.post == {"bloom"}
+    click("post bloom")
+    assert renderer.post_effects == ()
