@@ -6,7 +6,8 @@ on (post/registry.py: FXAA), the output is a small frame graph instead of one re
     imgui      the overlay over "target" (loaded: drawn on top)
 
 "target" is the target's image for this frame, imported with its old contents discarded
-(UNDEFINED) and handed over in its final layout (readback or present); the graph places every
+(UNDEFINED) and left as a colour attachment, which output_barriers.py's `after` takes to its
+final layout (readback or present) as in the frame without the graph; the graph places every
 barrier between them, and the intermediates are its transients (made again only when the size,
 the format or the effects change). Each effect adds its own passes (`effect.add(graph, source,
 target, create)`), so the graph is made again when the effects change.
@@ -18,7 +19,7 @@ from collections.abc import Callable, Hashable
 from typing import Any
 
 from .graph import Access, FrameGraph, ImageDesc, Load, Pass
-from .graph.resources import format_name, layout_name
+from .graph.resources import format_name
 
 
 class _Frame:
@@ -81,7 +82,7 @@ class LdrOutput:
         self.frame = _Frame()
         self.graph: FrameGraph | None = None
         self._format: int | None = None
-        self._names: tuple[str, str, str] = ("", "", "")  # the HDR's and the target's formats, its final layout
+        self._names: tuple[str, str] = ("", "")  # the HDR's and the target's formats
         self._imports: dict[tuple[int, tuple[int, int]], tuple[Any, Any]] = {}  # see _import_target
 
     def _make(self, color_format: int) -> FrameGraph:
@@ -118,7 +119,7 @@ class LdrOutput:
             self.graph, self._format = self._make(int(target.color_format)), int(target.color_format)
             vk = self.output.device.vk  # the names once: looking a value's name up scans the binding
             formats = (format_name(vk, hdr.format), format_name(vk, target.color_format))
-            self._names = (*formats, layout_name(vk, target.final_layout))
+            self._names = formats
         graph = self.graph
         hdr_format = self._names[0]
         extent = (int(state.area.extent.width), int(state.area.extent.height))
@@ -137,6 +138,9 @@ class LdrOutput:
         frame.state, frame.tone_map, frame.overlay, frame.slot = state, tone_map, overlay, slot
         graph.compile(extent)
         graph.execute(cb)
+        # to the final layout by the output's own barrier: the graph's for present would end in
+        # no stage, which the swapchain's readback barrier (from colour output) cannot follow
+        rendering.barriers.after(self.output.vk.lib, cb)
         frame.state = frame.overlay = None
         if mark is not None:
             mark("tone map, post effects and imgui" if overlay is not None else "tone map and post effects")
@@ -157,7 +161,7 @@ class LdrOutput:
             format=self.output.target.color_format,
             extent=extent,
             layout_before="UNDEFINED",  # every pixel is written: the old contents go
-            layout_after=self._names[2],
+            layout_after="COLOR_ATTACHMENT_OPTIMAL",  # then OutputBarriers.after, as without the graph
         )
         if len(self._imports) >= 16:  # swapchains come and go
             self._imports.clear()
