@@ -337,3 +337,25 @@ def test_the_editor_has_a_toggle_per_effect_that_goes_through_the_renderer(scene
     assert scene.state.settings.post == {"bloom"}
     click("post bloom")
     assert renderer.post_effects == ()
+
+
+@pytest.mark.parametrize("settings", [{"light_culling": "deferred"}, {"samples": 4}], ids=["deferred", "msaa4"])
+def test_effects_run_in_the_deferred_form_and_over_msaa(settings):
+    """Both stages run after the G-buffer's lighting (the deferred form, the light culling's
+    choice here) and after the MSAA resolve, validation-clean, and change the frame."""
+    from ecs_engine.gpu.offscreen import OffscreenTarget
+    from ecs_engine.render.renderer import Renderer
+
+    with headless_gpu(48, 32) as gpu:
+        target = OffscreenTarget(gpu.device, 48, 32, samples=settings.get("samples", 1))
+        gpu.owned.append(target)
+        world = _world(gpu)
+        renderer = Renderer(gpu.device, target, gpu.meshes, light_culling=settings.get("light_culling", "auto"))
+        gpu.owned.append(renderer)
+        renderer.render(world, readback=True)
+        off = target.pixels()[..., :3].astype(np.int64)
+        renderer.set_post_effects({"bloom", "fxaa"})
+        renderer.render(world, readback=True)
+        on = target.pixels()[..., :3].astype(np.int64)
+        assert target.form == ("deferred" if "light_culling" in settings else "hdr")
+        assert np.abs(on - off).max() > 8
