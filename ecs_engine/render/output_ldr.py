@@ -82,7 +82,7 @@ class LdrOutput:
         self.frame = _Frame()
         self.graph: FrameGraph | None = None
         self._format: int | None = None
-        self._names: tuple[str, str] = ("", "")  # the HDR's and the target's formats
+        self._hdr_format = ""  # its name, looked up once (a value's name is found by scanning the binding)
         self._imports: dict[tuple[int, tuple[int, int]], tuple[Any, Any]] = {}  # see _import_target
 
     def _make(self, color_format: int) -> FrameGraph:
@@ -117,18 +117,15 @@ class LdrOutput:
         if self.graph is None or self._format != int(target.color_format):
             self.destroy()
             self.graph, self._format = self._make(int(target.color_format)), int(target.color_format)
-            vk = self.output.device.vk  # the names once: looking a value's name up scans the binding
-            formats = (format_name(vk, hdr.format), format_name(vk, target.color_format))
-            self._names = formats
+            self._hdr_format = format_name(self.output.device.vk, hdr.format)
         graph = self.graph
-        hdr_format = self._names[0]
         extent = (int(state.area.extent.width), int(state.area.extent.height))
         read = "SHADER_READ_ONLY_OPTIMAL"  # as the scene's pass and the hdr effects leave it
         graph.import_image(
             "hdr",
             handle=hdr.handle,
             view=hdr.view,
-            format=hdr_format,
+            format=self._hdr_format,
             extent=(int(hdr.width), int(hdr.height)),
             layout_before=read,
             layout_after=read,
