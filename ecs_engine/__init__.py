@@ -69,6 +69,9 @@ _APP_NAMES = {
     "Window": "window_resource",
     "Time": "clock",
     "SceneFiles": "scene_saves",
+    "BloomPlugin": "post_plugins",
+    "FxaaPlugin": "post_plugins",
+    "PostEffectPlugin": "post_plugins",
 }
 
 
@@ -90,6 +93,7 @@ __all__ = [
     "AccessError",
     "App",
     "Batch",
+    "BloomPlugin",
     "Component",
     "ComponentView",
     "DeadEntityError",
@@ -99,6 +103,7 @@ __all__ = [
     "Field",
     "FixedTimestep",
     "FunctionSystem",
+    "FxaaPlugin",
     "MinimalPlugins",
     "MissingComponentError",
     "NextState",
@@ -108,6 +113,7 @@ __all__ = [
     "OnRemove",
     "Plugin",
     "PluginGroup",
+    "PostEffectPlugin",
     "Prefab",
     "Query",
     "Removals",

@@ -12,7 +12,7 @@ only the visible rows.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -23,6 +23,7 @@ from ..ecs.world import World
 from ..gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
 from ..maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
 from ..render.config import CHOICES, RenderConfig, applies
+from .editor_browser import Browser, BrowserPanel
 from .editor_dock import DockLayout
 from .editor_files import FileMenu
 from .editor_gizmo import OPERATIONS, Gizmo
@@ -30,7 +31,8 @@ from .editor_history import History
 from .editor_layout import button_width, hint, push_label_room, radio_width, same_line_if_fits, wrapped_colored
 from .editor_lights import LIGHT_LABELS, LIGHT_SECTIONS, ShadowMapImages
 from .editor_materials import MESH_LABELS, MaterialsPanel, mesh_section
-from .editor_tree import HierarchyPanel, drag_source
+from .editor_post import post_toggles
+from .editor_tree import HierarchyPanel
 from .settings import Settings
 
 if TYPE_CHECKING:
@@ -43,7 +45,6 @@ SETTINGS_LABELS = (
     *("scene", "mode", "recorder", "threads", "culling", "fill", "tone map", "exposure (EV)", "light culling"),
     *("transparency", "shadows", "present", "environment"),
 )
-BROWSER_LABELS = ("id or name", "with")
 ENTITY_LABELS = ("name", "position", "rotation (deg)", "scale", "fov (deg)", "near", "far")
 
 
@@ -55,15 +56,7 @@ class SceneStats:
     triangles: int = 0
 
 
-@dataclass
-class _Browser:
-    search: str = ""
-    component: int = 0  # index into the component names; 0 = any
-    ids: np.ndarray = field(default_factory=lambda: np.empty(0, np.int64))
-    key: Any = None  # (structure version, search, component) the ids were built for
-
-
-class Editor:
+class Editor(BrowserPanel):
     def __init__(
         self, settings: Settings, scenes: tuple[str, ...], max_threads: int, ray_tracing: bool = False
     ) -> None:
@@ -76,7 +69,7 @@ class Editor:
         self.max_threads = max_threads
         self.ray_tracing = ray_tracing  # the device traces rays: ray-traced shadows can be picked
         self.selected: int | None = None
-        self.browser = _Browser()
+        self.browser = Browser()
         self.materials = MaterialsPanel()
         self.open_tab: str | None = None  # the Inspector's tab to bring forward on the next frame
         self.status = ""  # the last error from an edit, shown in the inspector
@@ -217,6 +210,7 @@ class Editor:
                 _, req.shadow_denoise = imgui.checkbox("denoise soft shadows", req.shadow_denoise)
             if req.present is not None:
                 req.present = _combo(imgui, "present", req.present, PRESENT_MODES)
+            req.post = post_toggles(imgui, req.post, self._remember)  # one per registered effect (editor_post.py)
             self._environment(world)
             imgui.pop_item_width()
             imgui.separator()
@@ -242,79 +236,6 @@ class Editor:
         ambient_changed, ambient = imgui.checkbox("image-based ambient", env.ambient)
         if changed or sky_changed or ambient_changed:
             world.resources[Environment] = replace(env, intensity=max(intensity, 0.0), sky=sky, ambient=ambient)
-
-    # ----------------------------------------------------------------- browser
-    def component_names(self, world: World) -> list[str]:
-        names = sorted({t.__name__ for table in world.tables for t in table.type_set})
-        return ["(any component)"] + names
-
-    def filtered_ids(self, world: World) -> np.ndarray:
-        """Entity ids matching the search text (a number: that id or its index; other text: the
-        names that contain it, any case) and the component filter; cached until rows come or go,
-        a Name is written or the filter changes."""
-        b = self.browser
-        names = self.component_names(world)
-        b.component = min(b.component, len(names) - 1)
-        # a table's version changes whenever rows come or go
-        key = (
-            tuple((t.id, t.version, t.column_ticks.get((Name, "value"), 0)) for t in world.tables),
-            b.search,
-            names[b.component],
-        )
-        if b.key == key:
-            return b.ids
-        if b.component == 0:
-            ids = world.entities()
-        else:
-            wanted = names[b.component]
-            parts = [
-                table.entities[: table.count]
-                for table in world.tables
-                if table.count and any(t.__name__ == wanted for t in table.type_set)
-            ]
-            ids = np.concatenate(parts) if parts else np.empty(0, np.int64)
-        text = b.search.strip()
-        if text:
-            try:
-                number = int(text, 0)
-            except ValueError:
-                named = [
-                    batch.entities[np.char.find(np.char.lower(batch[Name].value), text.lower()) >= 0]
-                    for batch in world.query(Name, write=())
-                ]
-                ids = ids[np.isin(ids, np.concatenate(named))] if named else ids[:0]
-            else:
-                ids = ids[(ids == number) | ((ids & 0xFFFFFFFF) == number)]
-        b.ids, b.key = np.asarray(ids, dtype=np.int64), key
-        return b.ids
-
-    def _browser(self, world: World) -> None:
-        imgui = self.imgui
-        b = self.browser
-        push_label_room(imgui, BROWSER_LABELS)
-        _, b.search = imgui.input_text("id or name", b.search)
-        names = self.component_names(world)
-        _, b.component = imgui.combo("with", min(b.component, len(names) - 1), names)
-        imgui.pop_item_width()
-        ids = self.filtered_ids(world)
-        imgui.text(f"{len(ids):,} entities")
-        if imgui.begin_child("ids"):
-            clipper = imgui.ListClipper()
-            clipper.begin(len(ids))
-            first = True
-            while clipper.step():  # the first step measures one row, later ones the visible rows
-                for row in range(clipper.display_start, clipper.display_end):
-                    eid = int(ids[row])
-                    name = str(world.get(eid, Name).value) if world.has(eid, Name) else ""
-                    label = f"{name or eid & 0xFFFFFFFF} ({eid & 0xFFFFFFFF}, gen {eid >> 32})##{eid}"
-                    if imgui.selectable(label, eid == self.selected)[0]:
-                        self.selected = eid
-                    drag_source(imgui, eid, label)  # onto a node of the Hierarchy window: parent it
-                    if first:
-                        self._remember("first row")
-                        first = False
-            clipper.end()
-        imgui.end_child()
 
     # --------------------------------------------------------------- inspector
     def _inspector(self, world: World) -> None:

@@ -29,6 +29,7 @@ from ..errors import UsageError
 from ..gpu.device import Device
 from ..gpu.instance import Instance
 from ..jobs import JobPool
+from ..render.config import RenderConfig, check
 from ..render.frame_data import check_culling
 from ..render.light_clusters import check_light_culling
 from ..render.mesh_registry import MeshRegistry
@@ -175,6 +176,7 @@ class Session:
             shadows=start.shadow_method,
             shadow_denoise=start.shadow_denoise,
             anisotropy=options.anisotropy,
+            post=start.post,
         )
 
     @property
@@ -200,6 +202,7 @@ class Session:
             shadow_method=self.renderer.shadow_method,
             shadow_denoise=self.renderer.shadow_denoise,
             frame_reuse=self.renderer.replay.enabled,
+            post=frozenset(getattr(self.renderer, "post_effects", ())),  # (a simulation has none)
         )
 
     def _build(self, scene: str, path: str | None) -> tuple[World, Schedule]:
@@ -235,6 +238,7 @@ class Session:
         check_transparency(wanted.transparency)
         check_shadow_method(wanted.shadow_method, self.device, renderer.target.samples)
         culling = check_culling(wanted.culling, wanted.mode)
+        check(RenderConfig(post=wanted.post), only=("post",))
         scene = self._open(wanted.scene) if wanted.scene != self.scene else None
         renderer.set_path(wanted.mode, wanted.recorder)  # checks, then swaps
         renderer.set_fill(wanted.fill)
@@ -243,6 +247,8 @@ class Session:
         renderer.transparency = wanted.transparency
         renderer.set_shadow_method(wanted.shadow_method)
         renderer.shadow_denoise = wanted.shadow_denoise
+        if frozenset(wanted.post) != frozenset(getattr(renderer, "post_effects", ())):
+            renderer.set_post_effects(wanted.post)
         renderer.replay.enabled = wanted.frame_reuse
         renderer.culling, renderer.lod = culling, wanted.lod
         pool.resize(wanted.threads)

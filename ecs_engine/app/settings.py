@@ -46,6 +46,7 @@ class Settings:
     shadow_method: str = "maps"  # config.Shadows (render/ray_shadows.py)
     shadow_denoise: bool = True  # ray-traced soft shadows filtered (render/shadow_denoise.py)
     frame_reuse: bool = True  # a frame that would record what its slot recorded submits that (render/frame_replay.py)
+    post: frozenset[str] = frozenset()  # the post effects on (render/post/registry.py's names)
 
 
 @dataclass(frozen=True)
@@ -78,6 +79,7 @@ class RunOptions:
     shadows: bool = True  # the shadows scene's lights cast (--no-shadows: none do)
     shadow_method: str = "maps"  # config.Shadows: how shadows are drawn (render/ray_shadows.py)
     shadow_denoise: bool = True  # --no-shadow-denoise: ray-traced soft shadows unfiltered
+    post: frozenset[str] = frozenset()  # --post bloom,fxaa: the post effects (render/post/registry.py)
     frame_reuse: bool = True  # --no-frame-reuse: every frame recorded (render/frame_replay.py)
     chunk_rows: int | None = None  # rows per render job (None: about one per thread, frame_data.MIN_CHUNK_ROWS)
     recorder: str | None = None  # config.Recorder (None: native when numba is there)
@@ -113,6 +115,7 @@ class RunOptions:
         "transparency",
         "shadow_method",
         "shadow_denoise",
+        "post",
         "frame_reuse",
         "recorder",
         "perf_json",
@@ -136,7 +139,7 @@ class RunOptions:
 
     def render_config(self) -> RenderConfig:
         """The render settings the run starts with, as one value (UsageError for a bad one)."""
-        names = [f.name for f in dataclasses.fields(RenderConfig) if f.name != "post"]
+        names = [f.name for f in dataclasses.fields(RenderConfig)]
         return RenderConfig.from_strings(**{n: getattr(self, RUN_FIELDS.get(n, n)) for n in names})
 
     def settings(self) -> Settings:
@@ -156,6 +159,7 @@ class RunOptions:
             shadow_method=self.shadow_method,
             shadow_denoise=self.shadow_denoise,
             frame_reuse=self.frame_reuse,
+            post=frozenset(self.post),
         )
 
 

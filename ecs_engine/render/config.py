@@ -27,7 +27,6 @@ from .config_support import (
     ANISOTROPY_CHOICES,
     MAX_EXPOSURE,
     MSAA_COUNTS,
-    POST_EFFECTS,
     Caps,
     Choice,
     Culling,
@@ -38,6 +37,7 @@ from .config_support import (
     Shadows,
     ToneMap,
     Transparency,
+    post_effects,
 )
 
 __all__ = [
@@ -46,7 +46,6 @@ __all__ = [
     "INERT",
     "MAX_EXPOSURE",
     "MSAA_COUNTS",
-    "POST_EFFECTS",
     "RULES",
     "Caps",
     "Culling",
@@ -106,7 +105,7 @@ class RenderConfig:
     fill: Fill = Fill.SOLID
     lod: bool = True  # the indirect mode picks levels of detail by projected size
     anisotropy: int | None = None  # textures' (1: off; None: the device's best, up to 16)
-    post: frozenset[str] = field(default_factory=frozenset)  # post effects by name (POST_EFFECTS)
+    post: frozenset[str] = field(default_factory=frozenset)  # post effects by name (post/registry.py)
 
     def __post_init__(self) -> None:
         # names given become members here, once (hence object.__setattr__ on a frozen value),
@@ -130,6 +129,10 @@ class RenderConfig:
     @property
     def post_names(self) -> str:
         return ", ".join(sorted(self.post)) or "none"
+
+    @property
+    def post_choices(self) -> str:
+        return ", ".join(sorted(post_effects())) or "none yet"
 
     def replace(self, **changes: Any) -> RenderConfig:
         """This configuration with `changes` (names or members), checked as a new one."""
@@ -301,8 +304,8 @@ RULES: Final[tuple[Rule, ...]] = (
     Rule(
         "post",
         lambda c: bool(c.post),
-        lambda c, caps: c.post <= POST_EFFECTS,
-        "unknown post effect in {c.post_names}; choices: " + (", ".join(sorted(POST_EFFECTS)) or "none yet"),
+        lambda c, caps: c.post <= post_effects(),
+        "unknown post effect in {c.post_names}; choices: {c.post_choices}",
     ),
 )
 
@@ -350,6 +353,12 @@ def inert_refusal(field: str, config: RenderConfig) -> str | None:
     if entry is None or entry[1] is None or entry[0](config):
         return None
     return entry[1].format(c=config)
+
+
+def __getattr__(name: str) -> Any:
+    if name == "POST_EFFECTS":  # config_support's, read from the post effects' registry when asked
+        return post_effects()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def check_samples(device: Any, samples: int) -> None:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 from typing import Final
 
+from ..errors import UsageError
 from .config import ANISOTROPY_CHOICES, CHOICES, MSAA_COUNTS, RenderConfig
 from .config_support import Choice, Culling, Fill, LightCulling, Mode, Recorder, Shadows, ToneMap, Transparency
 
@@ -68,6 +69,25 @@ def choice_help(field: str, what: str) -> str:
     return f"{what}. " + "; ".join(names)
 
 
+def post_list(text: str) -> frozenset[str]:
+    """`--post bloom,fxaa`: the post effects' names (post/registry.py), commas or spaces between."""
+    from .post.registry import ordered
+
+    names = frozenset(w for w in text.replace(",", " ").split() if w)
+    try:
+        ordered(names)
+    except UsageError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return names
+
+
+def post_help() -> str:
+    from .post.registry import kinds
+
+    effects = "; ".join(f"{name}: {kind.description}" for name, kind in kinds().items())
+    return f"post effects to run, comma-separated (default none). {effects}"
+
+
 def add_config_flags(parser: argparse.ArgumentParser) -> None:
     """The render configuration's flags, with RenderConfig's defaults; argparse refuses a name
     no enum has (one line: app/cli.py's OneLineParser), config.check the combinations."""
@@ -112,6 +132,7 @@ def add_config_flags(parser: argparse.ArgumentParser) -> None:
         choices=ANISOTROPY_CHOICES,
         help="textures' anisotropic filtering, at most this many samples (1: off; default: the GPU's best, up to 16)",
     )
+    parser.add_argument("--post", type=post_list, default=frozenset(), metavar="EFFECT[,EFFECT]", help=post_help())
     parser.add_argument(
         "--no-shadow-denoise",
         dest="shadow_denoise",

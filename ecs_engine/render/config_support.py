@@ -22,7 +22,6 @@ __all__ = [
     "ANISOTROPY_CHOICES",
     "MAX_EXPOSURE",
     "MSAA_COUNTS",
-    "POST_EFFECTS",
     "Caps",
     "Choice",
     "Culling",
@@ -33,11 +32,24 @@ __all__ = [
     "Shadows",
     "ToneMap",
     "Transparency",
+    "post_effects",
 ]
 
 MAX_EXPOSURE: Final = 20.0  # stops either way (tone_map.py: the colour times 2^exposure)
-# the post effects a configuration may name; each post-processing module adds its name here
-POST_EFFECTS: Final[frozenset[str]] = frozenset()
+
+
+def post_effects() -> frozenset[str]:
+    """The post effects a configuration may name: render/post/registry.py's, whose effect modules
+    register themselves (imported on first use: this vocabulary stays light)."""
+    from .post.registry import names
+
+    return names()
+
+
+def __getattr__(name: str) -> Any:
+    if name == "POST_EFFECTS":  # the names, read from the registry when asked
+        return post_effects()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 class Choice(StrEnum):

@@ -22,7 +22,7 @@ What a recording depends on goes into the key; anything else makes the frame rec
   its generation and swapchain remakes, the mesh registry's version (meshes added or replaced);
 - the counts and settings the primary records: billboards, light size, tone map and exposure,
   material features, the sky, the read-back, the clustered lights' grid, whether the shadow maps
-  were cleared once.
+  were cleared once, and the post effects' keys (which are on, their settings).
 
 Frames that always record: a path that is not `replayable` (per_entity pushes each row's data;
 indirect records its own passes), an overlay (the UI draws anew each frame), shadow maps drawn
@@ -139,6 +139,7 @@ def replay_key(renderer: Any, target: Any, positional: int, grid: Any, light_cou
         readback,
         None if grid is None else (grid.tiles_x, grid.tiles_y, light_count),
         renderer.shadows.cleared,
+        renderer.post_key(),  # the post effects on and their settings (post/effects.py)
     )
 
 

@@ -20,8 +20,12 @@ single-sample HDR colour, a gpu/memory.py Image with `handle`, `view`, `format`,
 render pass and before the tone map, in the hdr and deferred forms only (the direct form has no
 HDR colour). Each finds the image in SHADER_READ_ONLY_OPTIMAL, its scene writes visible to
 fragment and compute shaders, and must leave it so, its own writes made visible to the tone map's
-fragment-shader reads (its own barriers, until the frame graph of issue 36 places them). Empty
-for now.
+fragment-shader reads (its own barriers, until the frame graph of issue 36 places them). The
+renderer sets them from its post effects of the "hdr" stage (post/registry.py; `set_post`).
+
+Post effects of the "ldr" stage (FXAA) run on the tone-mapped image: with any on, the tone map
+writes an intermediate image, the effects write the target and the overlay draws over it, as a
+small frame graph (output_ldr.py) that places the target's barriers itself.
 
 With `mark` (gpu/frames.py's FrameRing.mark, while passes are timed) each pass's end is marked
 with its name; a subpass whose contents are secondaries cannot hold a timestamp, so the target's
@@ -45,6 +49,7 @@ from .deferred_pass import DeferredPass
 from .light_pass import LightPass
 from .oit_pass import WeightedTransparency
 from .output_barriers import OutputBarriers
+from .output_ldr import LdrOutput
 from .path import TargetState
 from .sky_pass import SkyPass
 from .tone_map import ToneMapPass
@@ -61,6 +66,7 @@ class OutputRendering:
 
     def __init__(self, vk: Any, target: Any, framebuffer: Any, area: Any) -> None:
         image, view = target.output_image(framebuffer)
+        self.image, self.view = image, view  # the ldr stage's graph imports them (output_ldr.py)
         self.barriers = OutputBarriers(vk, image, target.final_layout)
         color = vk.VkRenderingAttachmentInfo(
             imageView=view,
@@ -99,6 +105,7 @@ class OutputPasses:
         self._warned_blend = False
         self.ray_shadows: Any = None  # render/ray_shadows.py's RayShadows where shadows are traced
         self.post: list[PostPass] = []  # the post effects, in order (see the module)
+        self.ldr: LdrOutput | None = None  # the ldr stage's output graph, with effects of that stage on
         try:
             self.tone_map_pass = ToneMapPass(device, target.color_format)
             self.deferred = DeferredPass(device, frame_set_layout)
@@ -191,6 +198,8 @@ class OutputPasses:
         assert self.sky is not None
         self.sky.retarget()
         self.tone_map_pass.destroy()  # its descriptor sets name the old HDR views
+        if self.ldr is not None:  # its graph is made again for the new target at the next frame
+            self.ldr.destroy()
         self.tone_map_pass = ToneMapPass(self.device, self.target.color_format)
         self._targets.clear()  # their begin infos name the old render passes and framebuffers
         self._last = (None,) * 5
@@ -296,6 +305,9 @@ class OutputPasses:
         and the overlay in one dynamic rendering, the image to its final layout."""
         lib = self.vk.lib
         rendering = self._rendering(state)
+        if self.ldr is not None:
+            self.ldr.record(cb, state, rendering, tone_map, overlay, slot, mark)
+            return
         rendering.barriers.before(lib, cb)
         lib.vkCmdBeginRendering(cb, rendering.info_ptr)
         assert self.tone_map_pass is not None
@@ -311,7 +323,26 @@ class OutputPasses:
         if mark is not None:
             mark(last)
 
+    def set_post(self, hdr: list[Any], ldr: list[Any]) -> None:
+        """The post effects from the next frame: `hdr` called as `post` (see the module), `ldr`
+        (effect objects with `add`, post/registry.py) through the ldr stage's graph. The effects
+        are the caller's (destroy() destroys those set last); the graph is made again when the
+        ldr effects change (the caller waited for the device)."""
+        self.post = list(hdr)
+        if self.ldr is not None and self.ldr.effects == list(ldr):
+            return
+        if self.ldr is not None:
+            self.ldr.destroy()
+        self.ldr = LdrOutput(self, ldr) if ldr else None
+
     def destroy(self) -> None:
+        if self.ldr is not None:
+            for effect in self.ldr.effects:
+                effect.destroy()
+            self.ldr.destroy()
+        for post in self.post:
+            if hasattr(post, "destroy"):
+                post.destroy()
         self.light_pass.destroy()
         if self.sky is not None:
             self.sky.destroy()

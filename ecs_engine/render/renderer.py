@@ -93,6 +93,7 @@ class Renderer(TargetForms, CullingSetting):
         shadows: str = "maps",
         shadow_denoise: bool = True,
         anisotropy: int | None = None,  # textures' (1: off; None: the device's best, up to 16)
+        post: Any = (),  # post effects: names, or name -> settings (post/effects.py, set_post_effects)
     ) -> None:
         self.vk, self.device = device.vk, device
         # every setting against the one table (config.RULES), before anything is made: a refusal
@@ -126,6 +127,7 @@ class Renderer(TargetForms, CullingSetting):
         self.fill = fill
         self.ray_shadows: RayShadows | None = None  # shadows="raytraced" (ray_shadows.py): the deferred form
         self._shadow_denoise = bool(shadow_denoise)  # its soft shadows filtered (shadow_denoise.py)
+        self._post_init(post)  # checked, and the target's first form follows them
         try:
             self.frames = FrameRing(device)
             n = len(self.frames.frames)
@@ -151,6 +153,7 @@ class Renderer(TargetForms, CullingSetting):
                 device, target, self.set_layout.handle, self.secondaries, light_size, clear_color
             )
             self.output.ray_shadows = self.ray_shadows
+            self._post_make()
             self.path: RenderPath = self._make_path(mode, recorder or default_recorder())
         except BaseException:
             # a form or path the device cannot make (indirect), no numba, no memory: nothing leaks
@@ -172,7 +175,7 @@ class Renderer(TargetForms, CullingSetting):
         """The settings in force, as one value (config.py); changed through the setters."""
         same = ("mode", "culling", "light_culling", "shadow_denoise", "transparency", "tone_map", "exposure", "fill")
         kept = {"recorder": self.cpu_recorder, "shadows": self.shadow_method, "msaa": self.target.samples}
-        kept.update(lod=self.lod, anisotropy=self._anisotropy)
+        kept.update(lod=self.lod, anisotropy=self._anisotropy, post=self.post_effects)
         return RenderConfig.from_strings(**{n: getattr(self, n) for n in same}, **kept)
 
     @property
@@ -262,11 +265,6 @@ class Renderer(TargetForms, CullingSetting):
             old = self.fill
             self.fill = fill
             self._respecialise(lambda: setattr(self, "fill", old))
-
-    def rebuild_pipelines(self) -> None:
-        """Pipelines made again from the shader files (hot reload): what a new render pass remakes,
-        the path's (the old stays if they cannot be made), the output passes' and the UI's."""
-        self._follow_target()
 
     def _check_features(self, features: int) -> None:
         """Rebuild the path's pipelines when the world's materials or lights need a shading model,

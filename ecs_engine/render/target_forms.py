@@ -13,12 +13,14 @@ from typing import Any
 from .frame_data import FrameData
 from .layouts import FEATURE_RAY_SHADOWS
 from .light_clusters import ClusterGrid, check_light_culling
+from .post.effects import PostEffects
 from .ray_shadows import RayShadows, check_shadow_method
 from .tone_map import wants_hdr
 
 
-class TargetForms:
-    """Renderer's target-form methods; the attributes they use are the renderer's."""
+class TargetForms(PostEffects):
+    """Renderer's target-form methods; the attributes they use are the renderer's. The post
+    effects' methods (post/effects.py) come with them: they need the hdr form."""
 
     device: Any
     target: Any
@@ -123,20 +125,26 @@ class TargetForms:
             self._follow_target()
 
     def _wanted_form(self) -> str:
-        """The target form (gpu/render_pass.py) the light culling, tone map, exposure, MSAA and
-        blended materials need."""
+        """The target form (gpu/render_pass.py) the light culling, tone map, exposure, MSAA,
+        blended materials and post effects need."""
         samples = self.target.samples
         if self.ray_shadows is not None:
             return "deferred"  # the G-buffer pass is the rays' depth pre-pass (render/ray_shadows.py)
         if self.lights.deferred(samples) or (self.transparency == "weighted" and self._blends and samples == 1):
             return "deferred"
-        return "hdr" if wants_hdr(self.tone_map, self.exposure, samples, self._blends) else "direct"
+        post = bool(self.post_effects)
+        return "hdr" if wants_hdr(self.tone_map, self.exposure, samples, self._blends, post) else "direct"
 
     def _fit_target(self) -> None:
         form = self._wanted_form()
         if form != self.target.form:
             self.device.wait_idle()  # this or another renderer of the target may have frames in flight
             self.target.set_form(form)
+
+    def rebuild_pipelines(self) -> None:
+        """Pipelines made again from the shader files (hot reload): what a new render pass remakes,
+        the path's (the old stays if they cannot be made), the output passes' and the UI's."""
+        self._follow_target()
 
     def _follow_target(self) -> None:
         """The target's render pass changed: make again what was made against the old one."""

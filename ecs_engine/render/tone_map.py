@@ -35,12 +35,13 @@ TONE_MAPS: Final[dict[str, int]] = {
 _SETS = 8  # descriptor sets kept, one per HDR view seen (swapchains come and go)
 
 
-def wants_hdr(name: str, exposure: float, samples: int, blends: bool = False) -> bool:
+def wants_hdr(name: str, exposure: float, samples: int, blends: bool = False, post: bool = False) -> bool:
     """Whether the scene must be lit in HDR colour and tone mapped: not for the clamp operator at
     exposure 0 without MSAA, which the target's own sRGB encoding does as well (gpu/render_pass.py),
     unless some material blends: an 8-bit target clamps a blended colour before blending (glass lit
-    to 3.0 at alpha 0.5 over black: 0.5), the HDR colour after (1.0)."""
-    return name != "clamp" or exposure != 0.0 or samples > 1 or blends
+    to 3.0 at alpha 0.5 over black: 0.5), the HDR colour after (1.0); or post effects are on (they
+    run on the HDR colour, or between the tone map and the target: output_passes.py)."""
+    return name != "clamp" or exposure != 0.0 or samples > 1 or blends or post
 
 
 def check_tone_map(name: str, exposure: float) -> None:

@@ -1,2 +1,3 @@
-"""Post effects on the HDR colour before the tone map, each a module that adds its passes to
-the frame graph with one call (bloom.py: `add_bloom`)."""
+"""Post effects, each a module that registers itself in registry.py (bloom_effect.py: "bloom"
+before the tone map; fxaa_effect.py: "fxaa" after it) and adds its passes to a frame graph;
+`Renderer.set_post_effects({"bloom"})` turns them on (docs/post-processing.md)."""

@@ -2,7 +2,8 @@
 callables `post(cb, hdr_image)` run between the scene's render pass and the tone map), for as
 long as the renderer is not yet one frame graph: the effect keeps a small graph of its own with
 the HDR image imported, so its passes, barriers and chain are the same ones `add_bloom` adds to
-the renderer's graph later.
+the renderer's graph later. It registers itself as the post effect "bloom" (registry.py), of
+the hdr stage.
 
 The seam hands over the single-sample HDR colour (a gpu/memory.py Image: handle, view, format,
 width, height; sampled and storage usage) in SHADER_READ_ONLY_OPTIMAL and wants it back so, its
@@ -17,9 +18,11 @@ from typing import Any
 
 from ...gpu.functions import handle_int
 from ..graph import FrameGraph
+from ..graph.resources import format_name
 from .bloom import add_bloom
 from .bloom_pipelines import BloomPipelines
 from .bloom_settings import BloomSettings
+from .registry import PostEffectKind, register
 
 _READ = "SHADER_READ_ONLY_OPTIMAL"
 
@@ -35,6 +38,7 @@ class BloomEffect:
         self.graph: FrameGraph | None = None
         self.extent: tuple[int, int] | None = None
         self._images: dict[int, Any] = {}  # HDR view handle value -> the image it was seen on
+        self._formats: dict[int, str] = {}  # VkFormat value -> its name (looking it up scans the binding)
 
     def __call__(self, cb: Any, hdr_image: Any) -> None:
         extent = (int(hdr_image.width), int(hdr_image.height))
@@ -49,13 +53,19 @@ class BloomEffect:
             "hdr",
             handle=hdr_image.handle,
             view=hdr_image.view,
-            format=hdr_image.format,
+            format=self._format_name(hdr_image.format),
             extent=extent,
             layout_before=_READ,
             layout_after=_READ,
         )
         graph.compile(extent)
         graph.execute(cb)
+
+    def _format_name(self, value: int) -> str:
+        found = self._formats.get(int(value))
+        if found is None:
+            found = self._formats[int(value)] = format_name(self.device.vk, value)
+        return found
 
     def _note(self, hdr_image: Any) -> None:
         """The descriptor sets are kept per view handle value: a new HDR image of the same size
@@ -94,3 +104,14 @@ class BloomEffect:
         if self.pipelines is not None:
             self.pipelines.release()
             self.pipelines = None  # type: ignore[assignment]
+
+
+register(
+    PostEffectKind(
+        "bloom",
+        "hdr",
+        BloomSettings,
+        BloomEffect,
+        "physically based bloom: bright light bleeds into its surroundings (a mip chain of the HDR colour)",
+    )
+)

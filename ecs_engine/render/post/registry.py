@@ -1,0 +1,105 @@
+"""The post effects a renderer can run, by name: each effect's module registers itself here
+(`register(PostEffectKind(...))` at its end), and `BUILT_IN` lists the engine's effect modules,
+imported the first time the names are asked for. The render configuration's rule for `post`
+(config.py), the CLI's `--post`, the editor's toggles, the App's plugins and the renderer
+(`Renderer.set_post_effects`) all read this table: a new effect is its own module and shader
+plus one line in `BUILT_IN`.
+
+A kind says:
+- `stage`: "hdr" (on the scene's HDR colour, before the tone map: bloom) or "ldr" (on the
+  tone-mapped image, before the UI: FXAA);
+- `settings`: its settings class (a frozen dataclass; `settings()` gives the defaults);
+- `make(device, settings)`: the effect object for a renderer on `device`. An hdr one is called
+  `effect(cb, hdr_image)` (render/output_passes.py's seam); an ldr one adds its passes to the
+  output's frame graph with `effect.add(graph, source, target, create)` (the image names, and
+  the description of `target` when it is an intermediate the effect's pass must create). Both
+  have `key()` (what a recorded frame depends on: frame replay) and `destroy()`.
+
+This module imports nothing of the renderer or of Vulkan; the effects' modules do.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from typing import Any, Final
+
+from ...errors import UsageError
+
+STAGES: Final = ("hdr", "ldr")  # in the order a frame runs them
+
+# the engine's effects, one module each (it registers itself when imported); SSAO's module
+# joins here when it arrives
+BUILT_IN: Final[tuple[str, ...]] = (
+    "ecs_engine.render.post.bloom_effect",
+    "ecs_engine.render.post.fxaa_effect",
+)
+
+
+@dataclass(frozen=True)
+class PostEffectKind:
+    name: str  # what the config, the CLI (--post NAME) and the editor call it
+    stage: str  # "hdr" or "ldr" (see the module)
+    settings: type  # its settings class; settings() gives the defaults
+    make: Callable[[Any, Any], Any]  # (device, settings) -> the effect object
+    description: str = ""  # one line: the CLI's help, the editor's tooltip
+
+    def __post_init__(self) -> None:
+        if self.stage not in STAGES:
+            raise UsageError(f"post effect {self.name!r}: stage must be one of {', '.join(STAGES)}, got {self.stage!r}")
+        if not self.name or not self.name.replace("_", "").isalnum() or self.name != self.name.lower():
+            raise UsageError(f"post effect name {self.name!r}: lower-case letters, digits and _")
+
+    def check_settings(self, settings: Any) -> Any:
+        """`settings`, or the defaults for None; a UsageError for another class's value."""
+        if settings is None:
+            return self.settings()
+        if not isinstance(settings, self.settings):
+            raise UsageError(f"{self.name} settings must be {self.settings.__name__}, got {settings!r:.80}")
+        return settings
+
+
+_KINDS: dict[str, PostEffectKind] = {}
+_loaded = False
+
+
+def register(kind: PostEffectKind) -> PostEffectKind:
+    """Add (or replace: a reloaded module) the effect `kind`; returns it."""
+    _KINDS[kind.name] = kind
+    return kind
+
+
+def _load() -> None:
+    global _loaded
+    if not _loaded:
+        for module in BUILT_IN:
+            importlib.import_module(module)
+        _loaded = True
+
+
+def kinds() -> dict[str, PostEffectKind]:
+    """Every registered effect by name, in registration order."""
+    _load()
+    return dict(_KINDS)
+
+
+def names() -> frozenset[str]:
+    return frozenset(kinds())
+
+
+def kind(name: str) -> PostEffectKind:
+    found = kinds().get(name)
+    if found is None:
+        raise UsageError(f"unknown post effect {name!r}; choices: {', '.join(sorted(kinds())) or 'none'}")
+    return found
+
+
+def ordered(wanted: Iterable[str]) -> tuple[str, ...]:
+    """`wanted` in the order a frame runs them: the hdr stage's, then the ldr stage's, each in
+    registration order (UsageError naming an unknown one)."""
+    wanted = set(wanted)
+    for name in sorted(wanted):
+        kind(name)
+    every = kinds()
+    return tuple(n for stage in STAGES for n, k in every.items() if k.stage == stage and n in wanted)
