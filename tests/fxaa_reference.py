@@ -168,3 +168,13 @@ def _pixel(x, y, img, L, bilinear, luma_of, subpix, edge_threshold, edge_thresho
     final = np.array([cx, cy]) + across * sign * offset
     rgb = bilinear(final[0], final[1])[:3]
     return np.array([*rgb, img[y, x, 3]])
+
+
+def outcome_errors(gpu, reference, to_bytes):
+    """Per pixel, the largest channel error in 1/255 of `gpu` (bytes) against `reference` (as
+    fxaa_outcomes gives it); for a pixel with exact ties, against the nearest outcome they allow."""
+    want, tied = reference
+    err = np.abs(gpu.astype(np.float64) - to_bytes(want)).max(-1)
+    for (y, x), outcomes in tied.items():
+        err[y, x] = min(np.abs(gpu[y, x].astype(np.float64) - to_bytes(o)).max() for o in outcomes)
+    return err

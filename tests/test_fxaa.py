@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fxaa_reference import STEPS, fxaa_outcomes, linear_to_srgb, srgb_to_linear
+from fxaa_reference import STEPS, fxaa_outcomes, linear_to_srgb, outcome_errors, srgb_to_linear
 from gpu_context import shared_device
 from spirv_layout import struct_layouts
 
@@ -157,16 +157,6 @@ def srgb_bytes(colour):
     return np.concatenate([linear_to_srgb(colour[..., :3]), colour[..., 3:]], axis=-1) * 255.0
 
 
-def errors(gpu, reference, to_bytes):
-    """Per pixel, the largest channel error in 1/255 against the reference; for a pixel with
-    exact ties (fxaa_reference.py says why), against the nearest outcome they allow."""
-    want, tied = reference
-    err = np.abs(gpu.astype(np.float64) - to_bytes(want)).max(-1)
-    for (y, x), outcomes in tied.items():
-        err[y, x] = min(np.abs(gpu[y, x].astype(np.float64) - to_bytes(o)).max() for o in outcomes)
-    return err
-
-
 def ambiguous(reference, to_bytes):
     """How many pixels' ties allow outcomes more than 1.5/255 apart."""
     return sum(np.ptp(to_bytes(np.array(outcomes)), axis=0).max() > 1.5 for outcomes in reference[1].values())
@@ -185,7 +175,7 @@ def test_unorm_image_matches_the_reference(settings):
         edge_threshold=settings.edge_threshold,
         edge_threshold_min=settings.edge_threshold_min,
     )
-    error = errors(gpu, reference, unorm_bytes)
+    error = outcome_errors(gpu, reference, unorm_bytes)
     changed = np.any(np.abs(unorm_bytes(reference[0]) - image) > 2.0, axis=-1)
     open_ = ambiguous(reference, unorm_bytes)
     print(f"max error {error.max():.3f}/255; {changed.sum()} pixels changed, {open_} of them left open by ties")
@@ -222,7 +212,7 @@ def test_srgb_source_is_filtered_linear_and_matches_the_reference():
     reference = fxaa_outcomes(
         np.concatenate([srgb_to_linear(image[..., :3] / 255.0), image[..., 3:] / 255.0], -1), linear=True
     )
-    error = errors(gpu, reference, srgb_bytes)
+    error = outcome_errors(gpu, reference, srgb_bytes)
     print(f"max error {error.max():.3f}/255, {len(reference[1])} pixels with ties")
     assert error.max() <= 2.0, np.argwhere(error > 2.0)[:10]
     np.testing.assert_array_equal(gpu[FLAT], image[FLAT])
