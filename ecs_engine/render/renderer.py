@@ -1,35 +1,30 @@
 """The renderer: one frame from `FrameData` to a submitted command buffer.
 
-Data goes one way: the extractor reads the world (frame_data.py), the renderer writes the frame's
-mapped buffers (globals, lights, instance rows) and records; it never writes the world. The mesh
-rows are drawn by a render path picked by name from PATHS (path.py says what a path does); the
-chunks of rows are jobs on the worker pool, each recording a secondary command buffer (in
-`indirect` only writing rows for the compute shaders, which also pick levels of detail: `lod`).
+Data goes one way: the extract stage reads the world (frame_data.py, extract/), the renderer
+writes the frame's mapped buffers (globals, lights, instance rows) and records; it never writes
+the world. The mesh rows are drawn by a render path picked by name from PATHS (path.py says what
+a path does; path_settings.py switches it); the chunks of rows are jobs on the worker pool, each
+recording a secondary command buffer (in `indirect` only writing rows for the compute shaders).
 The primary records the passes around them by the target's form (output_passes.py): the G-buffer
-pass and the lighting compute pass in the deferred form, then the target's render pass (the
-path's secondaries, the light billboards, the tone map and the overlay). The form follows the
-tone map, exposure, MSAA, blended materials and the light culling (ensure_output switches it
-between frames; what was made against the old render passes is made again). Switching mode or
-recorder swaps the path; the frame slots, buffers, output passes and overlay stay."""
+pass and the lighting compute pass in the deferred form, the scene's render pass (the path's
+secondaries, the light billboards), the post effects, the tone map and the overlay. The form
+follows the settings (target_forms.py switches it between frames)."""
 
 from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Callable
 from dataclasses import replace
 from functools import partial
 from typing import Any
 
-from .. import native
 from ..ecs.world import World
-from ..errors import UsageError
 from ..gpu.descriptors import write_images
 from ..gpu.device import Device
 from ..gpu.frames import FrameRing
 from ..gpu.secondary import SecondaryBuffers
 from ..jobs import JobPool
-from .chunk_paths import RECORDERS, InstancedPath, PerEntityPath, check_recorder, default_recorder
+from .chunk_paths import InstancedPath, PerEntityPath, check_recorder, default_recorder
 from .config import Caps, RenderConfig, check
 from .culling import CullingSetting
 from .environment import EnvironmentMap
@@ -38,7 +33,6 @@ from .frame_data import FrameData, FrameExtractor
 from .frame_jobs import FrameJobs, job_name
 from .frame_replay import FrameReplay, replay_key, replayable
 from .frame_resources import FrameResources, frame_sets
-from .indirect_path import IndirectPath
 from .layouts import (
     BINDING_TEXTURES,
     FEATURE_CLUSTERED,
@@ -52,23 +46,16 @@ from .light_rows import light_features, write_light_shadows
 from .materials import Materials
 from .mesh_registry import MeshRegistry
 from .output_passes import OutputPasses
-from .path import FrameInputs, FrameStats, PathContext, PathFactory, RenderPath, TargetState
+from .path import FrameInputs, FrameStats, PathContext, RenderPath, TargetState
+from .path_settings import MODES, PATHS, RECORDER_NAMES, PathSettings  # noqa: F401 (importers name MODES here)
 from .ray_shadows import RayShadows
 from .set_aside_pass import SetAsidePass
 from .shadow_pass import ShadowPass
 from .target_forms import TargetForms
 from .texture_pages import TexturePages
 
-PATHS: dict[str, PathFactory] = {
-    "instanced": InstancedPath,
-    "per_entity": PerEntityPath,
-    "indirect": IndirectPath,
-}
-MODES = tuple(PATHS)
-RECORDER_NAMES = tuple(RECORDERS)
 
-
-class Renderer(TargetForms, CullingSetting):
+class Renderer(PathSettings, TargetForms, CullingSetting):
     def __init__(
         self,
         device: Device,
@@ -162,67 +149,13 @@ class Renderer(TargetForms, CullingSetting):
 
     # ------------------------------------------------------------------ paths
     @property
-    def mode(self) -> str:
-        return self.path.name
-
-    @property
-    def recorder(self) -> str:
-        """The path's: native or python, or gpu when the GPU writes the draws (indirect)."""
-        return self.path.recorder
-
-    @property
-    def config(self) -> RenderConfig:
-        """The settings in force, as one value (config.py); changed through the setters."""
-        same = ("mode", "culling", "light_culling", "shadow_denoise", "transparency", "tone_map", "exposure", "fill")
-        kept = {"recorder": self.cpu_recorder, "shadows": self.shadow_method, "msaa": self.target.samples}
-        kept.update(lod=self.lod, anisotropy=self._anisotropy, post=self.post_effects)
-        return RenderConfig.from_strings(**{n: getattr(self, n) for n in same}, **kept)
-
-    @property
     def chunk_rows(self) -> int | None:
         return self.extractor.chunk_rows
-
-    def set_path(self, mode: str, recorder: str | None = None) -> None:
-        """Draw with another path (or recorder) from the next frame; nothing else is rebuilt.
-        The recorder is kept for the CPU paths while the indirect one draws."""
-        recorder = recorder or self.cpu_recorder
-        if mode == self.mode and recorder == self.cpu_recorder:
-            return
-        if mode not in PATHS:
-            raise ValueError(f"unknown render mode {mode!r}; modes: {', '.join(MODES)}")
-        if mode == self.mode and not self.path.uses_recorder:
-            check_recorder(recorder)  # kept for when a CPU path draws again
-            self.cpu_recorder = recorder
-            return
-        self._swap_path(self._make_path(mode, recorder))  # raises before the old one goes
-
-    def _swap_path(self, new: RenderPath) -> None:
-        self.device.wait_idle()  # frames in flight may still use the old path's pipelines
-        self.path.destroy()
-        if self._set_aside is not None:  # its pipelines were made for the old path's context
-            self._set_aside.destroy()
-            self._set_aside = None
-        self.output.forget_path_state()
-        self.shadows.forget_path()  # made again for the new path's context
-        self.path = new
 
     def _make_shadow_path(self, ctx: PathContext) -> RenderPath:
         """The depth-only path of the shadow passes' CPU jobs: the per-entity one for per_entity,
         else the instanced one (indirect: the set-aside casters alone; shadow_indirect.py culls)."""
         return (PerEntityPath if self.mode == "per_entity" else InstancedPath)(ctx, self.cpu_recorder)
-
-    def _native_recorder(self) -> Any:
-        """The native recorder compiled for this device, made on first use (about a second)."""
-        if self._native is None:
-            if not native.AVAILABLE:
-                raise UsageError(
-                    "the native recorder needs numba (pip install numba, and unset "
-                    "ECS_ENGINE_NO_NUMBA); or use --recorder python"
-                )
-            from ..gpu.native_recorder import NativeRecorder
-
-            self._native = NativeRecorder(self.device)
-        return self._native
 
     def _make_path(self, mode: str, recorder: str) -> RenderPath:
         check_recorder(recorder)
@@ -253,37 +186,6 @@ class Renderer(TargetForms, CullingSetting):
             for pf in self.per_frame:
                 write_images(self.device, pf.descriptor_set, BINDING_TEXTURES, infos)
                 pf.set_version += 1  # the shadow views' copies of the set name the old pages
-
-    def check_fill(self, fill: str) -> None:
-        """Raise (UsageError) unless this device can draw meshes with `fill` (config.RULES)."""
-        check(RenderConfig.from_strings(fill=fill), Caps.of(self.device), only=("fill",))
-
-    def set_fill(self, fill: str) -> None:
-        """Rasterise meshes as `fill` from the next frame (the path's pipelines are rebuilt)."""
-        self.check_fill(fill)
-        if fill != self.fill:
-            old = self.fill
-            self.fill = fill
-            self._respecialise(lambda: setattr(self, "fill", old))
-
-    def _check_features(self, features: int) -> None:
-        """Rebuild the path's pipelines when the world's materials or lights need a shading model,
-        alpha mask or light kind they were specialised without (grown, never shrunk)."""
-        wanted = self.material_features | features
-        if wanted != self.material_features:
-            old = self.material_features
-            self.material_features = wanted
-            self._respecialise(lambda: setattr(self, "material_features", old))
-
-    def _respecialise(self, undo: Callable[[], None]) -> None:
-        """The current path again, its pipelines made for the settings just changed (fill,
-        material features, clustered lights); `undo` puts the old setting back if they cannot be
-        made, and the old path stays."""
-        try:
-            self._swap_path(self._make_path(self.mode, self.cpu_recorder))
-        except BaseException:
-            undo()
-            raise
 
     def target_state(self, framebuffer: Any, width: int, height: int) -> TargetState:
         """What a framebuffer of this size needs per frame, made once (output_passes.py)."""
