@@ -332,10 +332,11 @@ class OutputPasses:
 
     def begin_post(self, camera: Any) -> PostInputs | None:
         """The hdr stage's inputs for this frame (`camera`: the frame's CameraMatrices), kept
-        for `record`; None in the direct form. Called before the frame's replay key is taken."""
+        for `record`; None without an hdr-stage effect or HDR colour. Called before the frame's
+        replay key is taken (the effects' keys read it)."""
         target = self.target
-        hdr = target.hdr_image if target.hdr else None
-        if hdr is None:
+        hdr = target.hdr_image if target.hdr and self.post else None
+        if hdr is None:  # no hdr-stage effect (or no HDR colour): nothing to hand over
             self.inputs = None
             return None
         depth = target.depth_image
