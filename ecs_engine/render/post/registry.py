@@ -15,7 +15,8 @@ A kind says:
   its passes to the output's frame graph with `effect.add(graph, source, target, create)` (the
   image names, and the description of `target` when it is an intermediate the effect's pass
   must create). Both have `key(inputs)` (what a recorded frame depends on, given this frame's
-  PostInputs or None in the direct form: frame replay) and `destroy()`;
+  PostInputs, or None without an hdr-stage effect on or an HDR colour: frame replay) and
+  `destroy()`;
 - `depth`: it reads the scene's single-sample depth (config.py refuses it with MSAA);
 - `before`: effects of its stage it runs ahead of (SSAO's composite darkens the HDR colour
   before bloom spreads it); otherwise a stage runs in registration order.
@@ -104,7 +105,9 @@ def kind(name: str) -> PostEffectKind:
 
 def ordered(wanted: Iterable[str]) -> tuple[str, ...]:
     """`wanted` in the order a frame runs them: the hdr stage's, then the ldr stage's, each in
-    registration order (UsageError naming an unknown one)."""
+    registration order but for a kind's `before` (moved ahead of the first of those in its
+    stage; one pass: enough while no two kinds' `before` conflict); UsageError naming an
+    unknown one."""
     wanted = set(wanted)
     for name in sorted(wanted):
         kind(name)
