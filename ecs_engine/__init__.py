@@ -72,6 +72,7 @@ _APP_NAMES = {
     "BloomPlugin": "post_plugins",
     "FxaaPlugin": "post_plugins",
     "PostEffectPlugin": "post_plugins",
+    "SsaoPlugin": "post_plugins",
 }
 
 
@@ -119,6 +120,7 @@ __all__ = [
     "Removals",
     "SceneFiles",
     "Schedule",
+    "SsaoPlugin",
     "State",
     "System",
     "Time",

@@ -352,6 +352,7 @@ def test_the_output_passes_seam_effect_matches_the_reference():
     target: its sets are made anew if its view reuses a handle value) and after a resize."""
     from ecs_engine.gpu.memory import Buffer
     from ecs_engine.render.post.bloom_effect import BloomEffect
+    from ecs_engine.render.post.inputs import PostInputs
 
     device = shared_device()
     vk = device.vk
@@ -366,11 +367,13 @@ def test_the_output_passes_seam_effect_matches_the_reference():
             image = HdrImage(device, width, height)
             buffer.bytes()[: hdr.nbytes] = hdr.view(np.uint8).reshape(-1)
 
-            def record(cb: Any, image: HdrImage = image) -> None:
+            inputs = PostInputs(image.image, None, (width, height), np.eye(4))  # bloom reads the HDR colour
+
+            def record(cb: Any, image: HdrImage = image, inputs: PostInputs = inputs) -> None:
                 image.barrier(cb, vk.VK_IMAGE_LAYOUT_UNDEFINED, dst)
                 image.copy(cb, buffer, to_image=True)
                 image.barrier(cb, dst, read)
-                effect(cb, image.image)
+                effect(cb, inputs)
                 image.barrier(cb, read, src)
                 image.copy(cb, buffer, to_image=False)
 

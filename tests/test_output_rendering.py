@@ -28,9 +28,10 @@ def _cube_world(gpu):
 
 
 def test_post_effects_run_between_the_scene_pass_and_the_tone_map(monkeypatch):
-    """`OutputPasses.post` is called once a frame with the target's single-sample HDR colour
-    (sampled-capable), after the billboards' subpass ends and before the tone map; not in the
-    direct form, which has no HDR colour."""
+    """`OutputPasses.post` is called once a frame with the frame's PostInputs: the target's
+    single-sample HDR colour (sampled-capable), its single-sample depth and the camera's
+    projection, after the billboards' subpass ends and before the tone map; not in the direct
+    form, which has no HDR colour."""
     from ecs_engine.render.light_pass import LightPass
     from ecs_engine.render.renderer import Renderer
     from ecs_engine.render.tone_map import ToneMapPass
@@ -50,9 +51,9 @@ def test_post_effects_run_between_the_scene_pass_and_the_tone_map(monkeypatch):
         gpu.owned.append(renderer)
         seen = []
 
-        def post(cb, hdr_image):
+        def post(cb, inputs):
             order.append("post")
-            seen.append(hdr_image)
+            seen.append(inputs)
 
         renderer.output.post.append(post)
         renderer.render(world, readback=True)
@@ -63,8 +64,13 @@ def test_post_effects_run_between_the_scene_pass_and_the_tone_map(monkeypatch):
         assert order == ["billboards", "post", "tone map"]
         vk = gpu.device.vk
         image = gpu.target.hdr_image
-        assert seen == [image] and image.format == vk.VK_FORMAT_R16G16B16A16_SFLOAT
-        assert (image.width, image.height) == (32, 24)
+        (inputs,) = seen
+        assert inputs.hdr is image and image.format == vk.VK_FORMAT_R16G16B16A16_SFLOAT
+        assert (image.width, image.height) == inputs.extent == (32, 24)
+        depth = gpu.target.depth_image  # single-sample: stored for the effects that sample it
+        assert inputs.depth is depth and depth.format == vk.VK_FORMAT_D32_SFLOAT
+        camera = renderer.extract(world, 32, 24).camera
+        assert np.array_equal(inputs.projection, camera.projection)
 
 
 @pytest.mark.parametrize("form", ["hdr", "deferred"])

@@ -23,6 +23,7 @@ from ecs_engine.render.config import POST_EFFECTS, RenderConfig, validate
 from ecs_engine.render.post import registry
 from ecs_engine.render.post.bloom_settings import BloomSettings
 from ecs_engine.render.post.fxaa import FxaaSettings
+from ecs_engine.render.post.ssao import SsaoSettings
 from ecs_engine.render.primitives import cube_mesh
 
 # ------------------------------------------------------------------------------ the registry
@@ -30,10 +31,11 @@ from ecs_engine.render.primitives import cube_mesh
 
 def test_the_registry_names_the_built_in_effects_and_the_config_reads_it():
     kinds = registry.kinds()
-    built_in = {n: (k.stage, k.settings) for n, k in kinds.items() if n in ("bloom", "fxaa")}
-    assert built_in == {"bloom": ("hdr", BloomSettings), "fxaa": ("ldr", FxaaSettings)}  # (SSAO's joins)
+    built_in = {n: (k.stage, k.settings) for n, k in kinds.items() if n in ("bloom", "fxaa", "ssao")}
+    assert built_in == {"bloom": ("hdr", BloomSettings), "fxaa": ("ldr", FxaaSettings), "ssao": ("hdr", SsaoSettings)}
     assert POST_EFFECTS == frozenset(kinds)
     assert registry.ordered({"fxaa", "bloom"}) == ("bloom", "fxaa")  # the hdr stage first
+    assert registry.ordered({"fxaa", "bloom", "ssao"}) == ("ssao", "bloom", "fxaa")  # ssao before bloom
     assert validate(RenderConfig(post={"bloom", "fxaa"})) == []
     (refusal,) = validate(RenderConfig(post={"bloom", "sparkles"}))
     assert f"unknown post effect in bloom, sparkles; choices: {', '.join(sorted(kinds))}" in refusal
@@ -102,8 +104,9 @@ class HdrSpy:
         stages = vk.VK_PIPELINE_STAGE_ALL_COMMANDS_BIT
         vk.vkCmdPipelineBarrier(cb, stages, stages, 0, 0, None, 0, None, 1, [barrier])
 
-    def __call__(self, cb: Any, image: Any) -> None:
+    def __call__(self, cb: Any, inputs: Any) -> None:
         vk = self.vk
+        image = inputs.hdr
         read, src = vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
         self._barrier(cb, image, read, src)
         region = vk.VkBufferImageCopy(
@@ -325,7 +328,7 @@ def test_the_editor_has_a_toggle_per_effect_that_goes_through_the_renderer(scene
     scene.frame()
     scene.frame()  # the dock layout settles
     editor = scene.session.editor
-    assert {"post bloom", "post fxaa"} <= set(editor.rects)
+    assert {"post bloom", "post fxaa", "post ssao"} <= set(editor.rects)  # one per registered effect
     renderer = scene.state.renderer
 
     def click(name: str) -> None:

@@ -124,7 +124,7 @@ def test_every_rule_is_about_a_field_and_can_refuse():
     bad = [
         RenderConfig(mode="indirect", culling="temporal", shadows="raytraced", fill="points", msaa=4),
         RenderConfig(culling="occlusion", exposure=99, anisotropy=3, msaa=3, post={"x"}),
-        RenderConfig(anisotropy=16, msaa=8),
+        RenderConfig(anisotropy=16, msaa=8, post={"ssao"}),  # SSAO reads single-sample depth
     ]
     fired = {id(r) for r in RULES for c in bad if r.refusal(c, NOTHING) is not None}
     assert fired == {id(r) for r in RULES}

@@ -1,6 +1,6 @@
 """Post effects as App plugins: one line turns one on.
 
-    app.add_plugins(DefaultPlugins, BloomPlugin(), FxaaPlugin())
+    app.add_plugins(DefaultPlugins, SsaoPlugin(), BloomPlugin(), FxaaPlugin())
     app.add_plugins(BloomPlugin(BloomSettings(intensity=0.3)))
     app.add_plugins(PostEffectPlugin("ssao"))      # any registered effect by name (one such plugin an App)
 
@@ -59,3 +59,13 @@ class FxaaPlugin(PostEffectPlugin):
 
     def __init__(self, settings: Any = None) -> None:
         super().__init__("fxaa", settings)
+
+
+class SsaoPlugin(PostEffectPlugin):
+    """Screen-space ambient occlusion from the scene's depth, before bloom (render/post/ssao.py):
+    `SsaoPlugin(SsaoSettings(...))`; refused with MSAA (it reads single-sample depth)."""
+
+    effect = "ssao"
+
+    def __init__(self, settings: Any = None) -> None:
+        super().__init__("ssao", settings)

@@ -123,6 +123,11 @@ class OffscreenTarget(TargetForm):
         return self.attachments.hdr_image
 
     @property
+    def depth_image(self) -> Image | None:
+        """The scene's single-sample depth the post effects sample (SceneAttachments.depth_image)."""
+        return self.attachments.depth_image
+
+    @property
     def hdr_view(self) -> Any:
         image = self.attachments.hdr_image
         return image.view if image is not None else None

@@ -13,9 +13,17 @@
 Attachments of the hdr and deferred forms: 0 the HDR colour (multisampled with --msaa), 1 depth,
 2 the HDR colour's single-sample resolve (only with --msaa). The single-sample HDR colour (the
 resolve with MSAA) ends the pass in SHADER_READ_ONLY_OPTIMAL, for the post effects and the tone
-map to sample. Attachments of the direct form: 0 the target (cleared and drawn into by every
-subpass), 1 depth. Attachment 0 is in both the colour the scene draws into, cleared to the
-background (render/path.py's TargetState lists the clear values in this order).
+map to sample. Without MSAA depth is stored too and ends in SHADER_READ_ONLY_OPTIMAL (the layout
+of the frame graph's Access.COMPUTE_SAMPLED), for the post effects that read it (SSAO). It is
+stored whichever effects are on: the store op is baked into the render pass, and deciding it per
+effect would make the target change render pass (and its pipelines) with the effects; the cost
+is the depth written out once a frame (1280 x 720 D32: 3.7 MB of bandwidth) where a tiler could
+have dropped it, and a layout change that may decompress depth on some GPUs. A multisampled
+depth is not stored (resolving depth is not done here: SSAO is refused with MSAA, config.py).
+
+Attachments of the direct form: 0 the target (cleared and drawn into by every subpass), 1 depth.
+Attachment 0 is in both the colour the scene draws into, cleared to the background
+(render/path.py's TargetState lists the clear values in this order).
 
 - subpass 0 (SUBPASS_SCENE): the meshes, from the chunk jobs' secondary command buffers (in the
   deferred form only the rows set aside: blended materials and fills of their own);
@@ -134,13 +142,13 @@ def create_render_pass(
             color_layout if msaa else read_layout,
             vk.VK_IMAGE_LAYOUT_GENERAL if deferred else 0,
         ),
-        _attachment(
+        _attachment(  # single-sample depth is stored for the post effects that sample it (SSAO)
             vk,
             getattr(vk, DEPTH_FORMAT_NAME),
             samples,
             load,
-            dont_store,
-            depth_layout,
+            dont_store if msaa else store,
+            depth_layout if msaa else read_layout,
             vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL if deferred else 0,
         ),
     ]
@@ -191,14 +199,15 @@ def create_render_pass(
             dstAccessMask=color_rw | depth_rw,
             dependencyFlags=vk.VK_DEPENDENCY_BY_REGION_BIT,
         ),
-        # the HDR colour (or its resolve), in its final layout, before the post effects and the
-        # tone map sample it (or a compute post effect writes it)
+        # the HDR colour (or its resolve) and the single-sample depth, in their final layouts,
+        # before the post effects and the tone map sample them (or a compute post effect writes
+        # the colour)
         vk.VkSubpassDependency(
             srcSubpass=SUBPASS_BILLBOARDS,
             dstSubpass=vk.VK_SUBPASS_EXTERNAL,
-            srcStageMask=color_stage,
+            srcStageMask=color_stage | depth_stages,
             dstStageMask=shaders,
-            srcAccessMask=vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
+            srcAccessMask=vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
             dstAccessMask=vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_SHADER_WRITE_BIT,
         ),
     ]
@@ -277,6 +286,8 @@ class SceneAttachments:
         self.images: list[Image] = []  # depth, HDR colour, its resolve (in the order made)
         self.gbuffer: GBuffer | None = None
         deferred = form == "deferred"
+        # the deferred lighting samples depth; in the hdr form the post effects may (single-sample)
+        sampled = vk.VK_IMAGE_USAGE_SAMPLED_BIT if deferred or samples == 1 else 0
         try:
             self.images.append(
                 Image(
@@ -284,7 +295,7 @@ class SceneAttachments:
                     width,
                     height,
                     getattr(vk, DEPTH_FORMAT_NAME),
-                    vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | (vk.VK_IMAGE_USAGE_SAMPLED_BIT if deferred else 0),
+                    vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | (sampled if form != "direct" else 0),
                     vk.VK_IMAGE_ASPECT_DEPTH_BIT,
                     samples,
                 )
@@ -308,6 +319,12 @@ class SceneAttachments:
     @property
     def depth_view(self) -> Any:
         return self.images[0].view
+
+    @property
+    def depth_image(self) -> Image | None:
+        """The single-sample depth the hdr and deferred forms store, in SHADER_READ_ONLY_OPTIMAL
+        after the scene pass (the post effects sample it); None in the direct form and with MSAA."""
+        return self.images[0] if len(self.images) > 1 and self.samples == 1 else None
 
     @property
     def hdr_image(self) -> Image | None:

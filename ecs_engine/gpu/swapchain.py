@@ -170,6 +170,12 @@ class Swapchain(TargetForm):
         return self.attachments.hdr_image
 
     @property
+    def depth_image(self) -> Image | None:
+        """The scene's single-sample depth the post effects sample (SceneAttachments.depth_image)."""
+        assert self.attachments is not None
+        return self.attachments.depth_image
+
+    @property
     def hdr_view(self) -> Any:
         image = self.hdr_image
         return image.view if image is not None else None

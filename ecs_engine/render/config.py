@@ -131,6 +131,21 @@ class RenderConfig:
         return ", ".join(sorted(self.post)) or "none"
 
     @property
+    def depth_post(self) -> tuple[str, ...]:
+        """The post effects on that read the scene's single-sample depth (post/registry.py)."""
+        from .post.registry import depth_readers
+
+        return depth_readers(self.post)
+
+    @property
+    def depth_post_names(self) -> str:
+        return ",".join(self.depth_post)
+
+    @property
+    def depth_post_labels(self) -> str:
+        return ", ".join(name.upper() for name in self.depth_post)
+
+    @property
     def post_choices(self) -> str:
         return ", ".join(sorted(post_effects())) or "none yet"
 
@@ -306,6 +321,16 @@ RULES: Final[tuple[Rule, ...]] = (
         lambda c: bool(c.post),
         lambda c, caps: c.post <= post_effects(),
         "unknown post effect in {c.post_names}; choices: {c.post_choices}",
+    ),
+    # the effects that sample depth (SSAO) read one sample a pixel; resolving a multisampled
+    # depth would be a pass of its own (the render pass's depth resolve needs render passes 2)
+    Rule(
+        "post",
+        lambda c: isinstance(c.msaa, int) and c.msaa > 1 and bool(c.depth_post),
+        lambda c, caps: False,
+        "--post {c.depth_post_names} cannot draw with --msaa {c.msaa}: {c.depth_post_labels} reads "
+        "single-sample depth (use {suggest})",
+        "--msaa 1",
     ),
 )
 

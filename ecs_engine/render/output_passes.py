@@ -14,14 +14,17 @@ target's form (gpu/render_pass.py's FORMS):
   compute pass (deferred_pass.py), then as `hdr` with the sky and the set-aside rows alone in
   subpass 0.
 
-Post effects go in `OutputPasses.post`: callables `post(cb, hdr_image)` (hdr_image: the target's
-single-sample HDR colour, a gpu/memory.py Image with `handle`, `view`, `format`, `width`,
-`height`; sampled and, where the device can, storage usage), called in order after the scene's
-render pass and before the tone map, in the hdr and deferred forms only (the direct form has no
-HDR colour). Each finds the image in SHADER_READ_ONLY_OPTIMAL, its scene writes visible to
-fragment and compute shaders, and must leave it so, its own writes made visible to the tone map's
-fragment-shader reads (its own barriers, until the frame graph of issue 36 places them). The
-renderer sets them from its post effects of the "hdr" stage (post/registry.py; `set_post`).
+Post effects go in `OutputPasses.post`: callables `post(cb, inputs)` (inputs: the frame's
+post/inputs.py PostInputs: the target's single-sample HDR colour, a gpu/memory.py Image with
+`handle`, `view`, `format`, `width`, `height`, sampled and, where the device can, storage usage;
+the scene's single-sample depth (None with MSAA); the extent; the camera's projection), called in
+order after the scene's render pass and before the tone map, in the hdr and deferred forms only
+(the direct form has no HDR colour). Each finds the images in SHADER_READ_ONLY_OPTIMAL, the
+scene's writes visible to fragment and compute shaders, and must leave them so, its own writes
+made visible to the tone map's fragment-shader reads (its own barriers, until the frame graph of
+issue 36 places them). The renderer sets them from its post effects of the "hdr" stage
+(post/registry.py; `set_post`) and hands the frame's camera to `begin_post` before the frame's
+replay key is taken (the effects' keys read the inputs: SSAO's projection).
 
 Post effects of the "ldr" stage (FXAA) run on the tone-mapped image: with any on, the tone map
 writes an intermediate image, the effects write the target and the overlay draws over it, as a
@@ -51,13 +54,14 @@ from .oit_pass import WeightedTransparency
 from .output_barriers import OutputBarriers
 from .output_ldr import LdrOutput
 from .path import TargetState
+from .post.inputs import PostInputs
 from .sky_pass import SkyPass
 from .tone_map import ToneMapPass
 
 log = logging.getLogger("ecs_engine")
 
-#: a post effect: called with the primary command buffer and the HDR colour (see the module)
-PostPass = Callable[[Any, Any], None]
+#: a post effect: called with the primary command buffer and the frame's PostInputs (see the module)
+PostPass = Callable[[Any, PostInputs], None]
 
 
 class OutputRendering:
@@ -106,6 +110,7 @@ class OutputPasses:
         self.ray_shadows: Any = None  # render/ray_shadows.py's RayShadows where shadows are traced
         self.post: list[PostPass] = []  # the post effects, in order (see the module)
         self.ldr: LdrOutput | None = None  # the ldr stage's output graph, with effects of that stage on
+        self.inputs: PostInputs | None = None  # the frame's, for the hdr stage (begin_post)
         try:
             self.tone_map_pass = ToneMapPass(device, target.color_format)
             self.deferred = DeferredPass(device, frame_set_layout)
@@ -284,9 +289,11 @@ class OutputPasses:
         if mark is not None:
             mark("billboards")  # with the render pass's end: the resolve and stores
         if self.post:
-            hdr_image = target.hdr_image
+            inputs = self.inputs
+            if inputs is None or inputs.hdr is not target.hdr_image:
+                raise RuntimeError("OutputPasses.begin_post(camera) was not called for this frame's target")
             for post in self.post:
-                post(cb, hdr_image)
+                post(cb, inputs)
             if mark is not None:
                 mark("post effects")
         self._record_output(cb, state, tone_map, overlay, slot, mark)
@@ -322,6 +329,19 @@ class OutputPasses:
         rendering.barriers.after(lib, cb)
         if mark is not None:
             mark(last)
+
+    def begin_post(self, camera: Any) -> PostInputs | None:
+        """The hdr stage's inputs for this frame (`camera`: the frame's CameraMatrices), kept
+        for `record`; None without an hdr-stage effect or HDR colour. Called before the frame's
+        replay key is taken (the effects' keys read it)."""
+        target = self.target
+        hdr = target.hdr_image if target.hdr and self.post else None
+        if hdr is None:  # no hdr-stage effect (or no HDR colour): nothing to hand over
+            self.inputs = None
+            return None
+        depth = target.depth_image
+        self.inputs = PostInputs(hdr, depth, (int(hdr.width), int(hdr.height)), camera.projection)
+        return self.inputs
 
     def set_post(self, hdr: list[Any], ldr: list[Any]) -> None:
         """The post effects from the next frame: `hdr` called as `post` (see the module), `ldr`

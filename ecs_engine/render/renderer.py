@@ -279,6 +279,7 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
         if ray is not None and traced:
             ray.prepare(slot, data, self.jobs, width, height, materials)
         target = self.target_state(framebuffer or self.target.framebuffer, width, height)
+        self.output.begin_post(data.camera)  # the post effects' frame inputs: their keys (below) read them
         key = None  # a frame that may be submitted again (frame_replay.py): what its recording depends on
         if replayable(self, views, traced, forward):
             key = replay_key(self, target, positional, grid, data.light_count, readback)

@@ -1,14 +1,15 @@
 """Bloom as one post effect of the output passes (render/output_passes.py: `OutputPasses.post`,
-callables `post(cb, hdr_image)` run between the scene's render pass and the tone map), for as
+callables `post(cb, inputs)` run between the scene's render pass and the tone map), for as
 long as the renderer is not yet one frame graph: the effect keeps a small graph of its own with
 the HDR image imported, so its passes, barriers and chain are the same ones `add_bloom` adds to
 the renderer's graph later. It registers itself as the post effect "bloom" (registry.py), of
 the hdr stage.
 
-The seam hands over the single-sample HDR colour (a gpu/memory.py Image: handle, view, format,
-width, height; sampled and storage usage) in SHADER_READ_ONLY_OPTIMAL and wants it back so, its
-writes visible to the tone map's fragment shader: the import's layouts before and after say
-that, and the graph's last barrier (to ALL_COMMANDS) makes the composite's writes visible.
+The seam hands over the frame's PostInputs (post/inputs.py); bloom reads its single-sample HDR
+colour (a gpu/memory.py Image: handle, view, format, width, height; sampled and storage usage)
+in SHADER_READ_ONLY_OPTIMAL and gives it back so, its writes visible to the tone map's fragment
+shader: the import's layouts before and after say that, and the graph's last barrier (to
+ALL_COMMANDS) makes the composite's writes visible.
 """
 
 from __future__ import annotations
@@ -22,13 +23,14 @@ from ..graph.resources import format_name
 from .bloom import add_bloom
 from .bloom_pipelines import BloomPipelines
 from .bloom_settings import BloomSettings
+from .inputs import PostInputs
 from .registry import PostEffectKind, register
 
 _READ = "SHADER_READ_ONLY_OPTIMAL"
 
 
 class BloomEffect:
-    """`effect(cb, hdr_image)` records the bloom over `hdr_image`; the graph is made again when
+    """`effect(cb, inputs)` records the bloom over `inputs.hdr`; the graph is made again when
     the image's size changes (the chain's depth follows it), compiled again only then."""
 
     def __init__(self, device: Any, settings: BloomSettings | None = None) -> None:
@@ -40,8 +42,9 @@ class BloomEffect:
         self._images: dict[int, Any] = {}  # HDR view handle value -> the image it was seen on
         self._formats: dict[int, str] = {}  # VkFormat value -> its name (looking it up scans the binding)
 
-    def __call__(self, cb: Any, hdr_image: Any) -> None:
-        extent = (int(hdr_image.width), int(hdr_image.height))
+    def __call__(self, cb: Any, inputs: PostInputs) -> None:
+        hdr_image = inputs.hdr
+        extent = inputs.extent
         if self.graph is None or extent != self.extent:
             self._remake(extent)
         graph = self.graph
@@ -93,9 +96,10 @@ class BloomEffect:
             raise
         self.graph, self.extent = graph, extent
 
-    def key(self) -> Hashable:
-        """What a recorded frame's bloom depends on besides the HDR image (frame replay)."""
-        return (self.settings, self.extent)
+    def key(self, inputs: PostInputs | None = None) -> Hashable:
+        """What a recorded frame's bloom depends on besides the HDR image (frame replay): the
+        chain's depth follows the frame's extent."""
+        return (self.settings, inputs.extent if inputs is not None else self.extent)
 
     def destroy(self) -> None:
         if self.graph is not None:

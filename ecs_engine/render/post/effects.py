@@ -18,6 +18,7 @@ from collections.abc import Hashable, Iterable, Mapping
 from typing import Any
 
 from ...errors import UsageError
+from ..config import RenderConfig, check
 from .registry import kind, ordered
 
 
@@ -46,10 +47,12 @@ def _split(post: Iterable[str] | Mapping[str, Any]) -> tuple[set[str], dict[str,
 
 
 class PostEffects:
-    """Renderer's post-effect methods; `device`, `output` and `ensure_output` are the renderer's."""
+    """Renderer's post-effect methods; `device`, `output`, `target` and `ensure_output` are the
+    renderer's."""
 
     device: Any
     output: Any
+    target: Any
     post_effects: tuple[str, ...] = ()  # on, in the order a frame runs them
     post_settings: PostSettings
     _post_made: dict[str, Any]
@@ -64,9 +67,14 @@ class PostEffects:
         self._post_made = {}
         names, settings = _split(post)
         wanted = ordered(names)
+        self._post_check(wanted)
         for name, value in settings.items():
             dict.__setitem__(self.post_settings, name, kind(name).check_settings(value))
         self.post_effects = wanted
+
+    def _post_check(self, wanted: tuple[str, ...]) -> None:
+        """The config table's refusals of these effects on this target (SSAO with MSAA)."""
+        check(RenderConfig(post=frozenset(wanted), msaa=self.target.samples), only=("post",))
 
     def _post_make(self) -> None:
         self._post_apply(self.post_effects, ())
@@ -80,6 +88,7 @@ class PostEffects:
         wanted_names, given = _split(names)
         given.update(settings or {})
         wanted = ordered(wanted_names)
+        self._post_check(wanted)
         checked = {name: kind(name).check_settings(value) for name, value in given.items()}
         changed = {n for n, v in checked.items() if self.post_settings.get(n, kind(n).settings()) != v}
         for name, value in given.items():
@@ -116,6 +125,7 @@ class PostEffects:
         self.post_effects = wanted
 
     def post_key(self) -> Hashable:
-        """What the post effects recorded into a frame depend on (frame_replay.py)."""
-        made = self._post_made
-        return tuple((name, made[name].key()) for name in self.post_effects if name in made)
+        """What the post effects recorded into a frame depend on (frame_replay.py): each effect's
+        key of this frame's inputs (OutputPasses.begin_post: SSAO's holds the projection)."""
+        made, inputs = self._post_made, self.output.inputs
+        return tuple((name, made[name].key(inputs)) for name in self.post_effects if name in made)

@@ -22,8 +22,8 @@ class FxaaEffect:
         """FXAA from the image `source` into `target` (made by the pass when `create` says how)."""
         add_fxaa(graph, self.settings, source, target, create=create)
 
-    def key(self) -> Hashable:
-        return ("fxaa", self.settings)
+    def key(self, inputs: Any = None) -> Hashable:
+        return ("fxaa", self.settings)  # the tone-mapped image alone: no frame input
 
     def destroy(self) -> None:
         pass  # its pass is the graph's

@@ -10,10 +10,16 @@ A kind says:
   tone-mapped image, before the UI: FXAA);
 - `settings`: its settings class (a frozen dataclass; `settings()` gives the defaults);
 - `make(device, settings)`: the effect object for a renderer on `device`. An hdr one is called
-  `effect(cb, hdr_image)` (render/output_passes.py's seam); an ldr one adds its passes to the
-  output's frame graph with `effect.add(graph, source, target, create)` (the image names, and
-  the description of `target` when it is an intermediate the effect's pass must create). Both
-  have `key()` (what a recorded frame depends on: frame replay) and `destroy()`.
+  `effect(cb, inputs)` with the frame's post/inputs.py PostInputs (the HDR colour, the scene's
+  depth, the extent, the camera's projection: render/output_passes.py's seam); an ldr one adds
+  its passes to the output's frame graph with `effect.add(graph, source, target, create)` (the
+  image names, and the description of `target` when it is an intermediate the effect's pass
+  must create). Both have `key(inputs)` (what a recorded frame depends on, given this frame's
+  PostInputs, or None without an hdr-stage effect on or an HDR colour: frame replay) and
+  `destroy()`;
+- `depth`: it reads the scene's single-sample depth (config.py refuses it with MSAA);
+- `before`: effects of its stage it runs ahead of (SSAO's composite darkens the HDR colour
+  before bloom spreads it); otherwise a stage runs in registration order.
 
 This module imports nothing of the renderer or of Vulkan; the effects' modules do.
 """
@@ -29,9 +35,9 @@ from ...errors import UsageError
 
 STAGES: Final = ("hdr", "ldr")  # in the order a frame runs them
 
-# the engine's effects, one module each (it registers itself when imported); SSAO's module
-# joins here when it arrives
+# the engine's effects, one module each (it registers itself when imported)
 BUILT_IN: Final[tuple[str, ...]] = (
+    "ecs_engine.render.post.ssao_effect",
     "ecs_engine.render.post.bloom_effect",
     "ecs_engine.render.post.fxaa_effect",
 )
@@ -44,6 +50,8 @@ class PostEffectKind:
     settings: type  # its settings class; settings() gives the defaults
     make: Callable[[Any, Any], Any]  # (device, settings) -> the effect object
     description: str = ""  # one line: the CLI's help, the editor's tooltip
+    depth: bool = False  # reads PostInputs.depth (single-sample: refused with MSAA)
+    before: tuple[str, ...] = ()  # effects of its stage it runs ahead of
 
     def __post_init__(self) -> None:
         if self.stage not in STAGES:
@@ -97,9 +105,26 @@ def kind(name: str) -> PostEffectKind:
 
 def ordered(wanted: Iterable[str]) -> tuple[str, ...]:
     """`wanted` in the order a frame runs them: the hdr stage's, then the ldr stage's, each in
-    registration order (UsageError naming an unknown one)."""
+    registration order but for a kind's `before` (moved ahead of the first of those in its
+    stage; one pass: enough while no two kinds' `before` conflict); UsageError naming an
+    unknown one."""
     wanted = set(wanted)
     for name in sorted(wanted):
         kind(name)
     every = kinds()
-    return tuple(n for stage in STAGES for n, k in every.items() if k.stage == stage and n in wanted)
+    found: list[str] = []
+    for stage in STAGES:
+        names = [n for n, k in every.items() if k.stage == stage and n in wanted]
+        for name in list(names):  # each moved ahead of the first effect it must precede
+            ahead = [names.index(b) for b in every[name].before if b in names]
+            if ahead and min(ahead) < names.index(name):
+                names.remove(name)
+                names.insert(min(ahead), name)
+        found += names
+    return tuple(found)
+
+
+def depth_readers(names: Iterable[str]) -> tuple[str, ...]:
+    """Those of `names` (registered ones) that read the scene's depth, sorted."""
+    every = kinds()
+    return tuple(sorted(n for n in names if n in every and every[n].depth))
