@@ -238,7 +238,7 @@ class Session:
         check_transparency(wanted.transparency)
         check_shadow_method(wanted.shadow_method, self.device, renderer.target.samples)
         culling = check_culling(wanted.culling, wanted.mode)
-        check(RenderConfig(post=wanted.post), only=("post",))
+        check(RenderConfig(post=wanted.post, msaa=renderer.target.samples), only=("post",))  # SSAO: one sample
         scene = self._open(wanted.scene) if wanted.scene != self.scene else None
         renderer.set_path(wanted.mode, wanted.recorder)  # checks, then swaps
         renderer.set_fill(wanted.fill)
