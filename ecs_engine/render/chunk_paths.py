@@ -50,16 +50,6 @@ def vertex_attributes(vk: Any, inputs: tuple[str, ...] = VERTEX_INPUTS) -> list[
     return [(location, formats[fields[name][0].shape[0]], fields[name][1]) for location, name in enumerate(inputs)]
 
 
-def attachment_kwargs(ctx: PathContext) -> dict[str, Any]:
-    """The pipeline fields that say where it draws: the context's attachment formats (dynamic
-    rendering) when it has them, else its render pass's subpass 0 as set above."""
-    if ctx.formats is None:
-        return {}
-    if ctx.render_pass is not None:
-        raise ValueError("a path context gives either a render pass or attachment formats, not both")
-    return ctx.formats.spec_kwargs()
-
-
 def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str, blended: bool = False) -> tuple[Any, Any]:
     """The (plain, mirrored) mesh pipelines of a path: the same but for the front face. Textured
     materials take the `_textured` variants of both shaders (`mesh.vert` -> `mesh_textured.vert`);
@@ -91,7 +81,7 @@ def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str, blended: b
         depth_write=not blended,
         color_attachments=GBUFFER_COLORS if ctx.gbuffer else 2 if ctx.oit else 1,
     )
-    base.update(attachment_kwargs(ctx))
+    base.update(ctx.pipeline_target())
     vk = ctx.device.vk
     plain = graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, fragment_shader, **base))
     try:
@@ -134,7 +124,7 @@ def shadow_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple
         color_attachments=0,
         depth_bias=SHADOW_DEPTH_BIAS,
     )
-    base.update(attachment_kwargs(ctx))
+    base.update(ctx.pipeline_target())
     plain = graphics_pipeline(ctx.device, GraphicsPipelineSpec(shader, fragment, **base))
     try:
         mirrored = graphics_pipeline(ctx.device, GraphicsPipelineSpec(shader, fragment, front_face_ccw=False, **base))

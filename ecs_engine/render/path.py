@@ -172,6 +172,15 @@ class PathContext:
     oit: bool = False  # blended rows accumulate weighted transparency (render/oit_pass.py)
     formats: AttachmentFormats | None = None  # dynamic rendering (render_pass None): the attachments'
 
+    def pipeline_target(self) -> dict[str, Any]:
+        """GraphicsPipelineSpec fields that say where its pipelines draw: the attachment formats
+        (dynamic rendering) when it has them, else {} (the spec names render_pass, subpass 0)."""
+        if self.formats is None:
+            return {}
+        if self.render_pass is not None:
+            raise ValueError("a path context gives either a render pass or attachment formats, not both")
+        return self.formats.spec_kwargs()
+
 
 class RenderPath(Protocol):
     ctx: PathContext

@@ -321,7 +321,8 @@ class ShadowPass:
         lib.vkCmdPipelineBarrier2(cb, before)
         for layer in layers:
             # the first time, each layer whole (cleared); then each view's corner of its layer
-            lib.vkCmdBeginRendering(cb, maps.rendering(layer, sizes[layer] if self.cleared else maps.resolution))
+            size = min(sizes[layer], maps.resolution) if self.cleared else maps.resolution  # as target_state's
+            lib.vkCmdBeginRendering(cb, maps.rendering(layer, size))
             buffers = drawn.get(layer)
             if buffers:
                 lib.vkCmdExecuteCommands(cb, len(buffers), vk.ffi.new("VkCommandBuffer[]", buffers))
