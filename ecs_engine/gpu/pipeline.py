@@ -71,6 +71,28 @@ class GraphicsPipelineSpec:
     depth_format: int = 0  # dynamic rendering: the depth attachment's VkFormat (0: none)
 
 
+@dataclass(frozen=True)
+class AttachmentFormats:
+    """What a pipeline or a secondary drawn with dynamic rendering (vkCmdBeginRendering) must
+    know of the attachments instead of a render pass: their VkFormats and MSAA count. A target or
+    pass gives one; pipelines made for equal formats are interchangeable."""
+
+    colors: tuple[int, ...] = ()  # the colour attachments' VkFormats, in location order
+    depth: int = 0  # the depth attachment's VkFormat (0: none)
+    samples: int = 1
+
+    def spec_kwargs(self) -> dict[str, Any]:
+        """GraphicsPipelineSpec fields for these attachments (no render pass)."""
+        return dict(
+            render_pass=None,
+            subpass=0,
+            color_formats=self.colors,
+            depth_format=self.depth,
+            samples=self.samples,
+            color_attachments=len(self.colors),
+        )
+
+
 # Blend factors per colour attachment (src colour, dst colour, src alpha, dst alpha), the last one
 # repeated for further attachments; "" blends nothing. From a table, as pygfx picks its blend modes.
 BLEND_MODES: dict[str, tuple[tuple[str, str, str, str], ...]] = {

@@ -11,6 +11,7 @@ from .frames import check
 
 if TYPE_CHECKING:
     from .device import Device
+    from .pipeline import AttachmentFormats
 
 
 class _ThreadPool:
@@ -32,6 +33,9 @@ class SecondaryBuffers:
         self.device = device
         self._pools: list[dict[int, _ThreadPool]] = [{} for _ in range(frames)]
         self._lock = threading.Lock()  # only guards the dict when a new thread shows up
+        # per AttachmentFormats: the begin info of secondaries drawn with dynamic rendering and
+        # what its pointers point to (the jobs begin them on worker threads, any time later)
+        self._rendering_begins: dict[AttachmentFormats, tuple[Any, Any]] = {}
 
     def reset(self, frame: int) -> None:
         """Main thread, after the frame's fence: every buffer of that slot may be re-recorded."""
@@ -82,6 +86,43 @@ class SecondaryBuffers:
             flags=vk.VK_COMMAND_BUFFER_USAGE_RENDER_PASS_CONTINUE_BIT,
             pInheritanceInfo=inheritance,
         )
+
+    def begin_info_rendering(self, formats: AttachmentFormats) -> Any:
+        """Begin info for secondaries executed inside a vkCmdBeginRendering (begun with
+        VK_RENDERING_CONTENTS_SECONDARY_COMMAND_BUFFERS_BIT) over attachments of `formats`: no
+        render pass or framebuffer, the formats inherited instead. One per formats, kept for the
+        life of these buffers (equal formats share it); not one-time, as `begin_info`."""
+        kept = self._rendering_begins.get(formats)
+        if kept is not None:
+            return kept[0]
+        vk = self.device.vk
+        ffi = vk.ffi
+        colors = ffi.new("VkFormat[]", list(formats.colors) or [0])
+        rendering = ffi.new(
+            "VkCommandBufferInheritanceRenderingInfo*",
+            {
+                "sType": vk.VK_STRUCTURE_TYPE_COMMAND_BUFFER_INHERITANCE_RENDERING_INFO,
+                "colorAttachmentCount": len(formats.colors),
+                "pColorAttachmentFormats": colors if formats.colors else ffi.NULL,
+                "depthAttachmentFormat": formats.depth,
+                "rasterizationSamples": formats.samples,
+            },
+        )
+        inheritance = ffi.new(
+            "VkCommandBufferInheritanceInfo*",
+            {"sType": vk.VK_STRUCTURE_TYPE_COMMAND_BUFFER_INHERITANCE_INFO, "pNext": rendering},
+        )
+        begin = ffi.new(
+            "VkCommandBufferBeginInfo*",
+            {
+                "sType": vk.VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO,
+                "flags": vk.VK_COMMAND_BUFFER_USAGE_RENDER_PASS_CONTINUE_BIT,
+                "pInheritanceInfo": inheritance,
+            },
+        )
+        with self._lock:  # (the main thread makes them; a lock costs nothing here)
+            self._rendering_begins[formats] = (begin[0], (begin, inheritance, rendering, colors))
+        return begin[0]
 
     def keep_threads(self, alive: set[int]) -> None:
         """Destroy the pools of threads that are gone (a resized worker pool); the device must be

@@ -1,13 +1,13 @@
 """Shadow maps: one 32-bit depth image with a layer per shadow view (a cascade, a spot light's
-map; render/shadow_views.py), square, the depth-only render pass that draws a layer, a
-framebuffer per layer, and the view and samplers the lighting reads them through.
+map; render/shadow_views.py), square, a view per layer that dynamic rendering draws into
+(render/shadow_pass.py), and the view and samplers the lighting reads them through.
 
 Depth is reverse-Z, cleared to 0 (far); the comparison samplers compare with GREATER_OR_EQUAL,
 so a receiver whose depth is at least the nearest caster's is lit. The filtering one is linear
 (each tap a bilinear 2 x 2 comparison: percentage-closer filtering in hardware), the hard one
 nearest; a third reads the depths themselves (PCSS looks for its blockers with it).
-Frames in flight share the image: the render pass's dependencies order this frame's writes
-after the previous frame's reads and before this frame's lighting.
+Frames in flight share the image: the shadow pass's barriers (render/shadow_pass.py) order this
+frame's writes after the previous frame's reads and before this frame's lighting.
 
 The editor shows each layer (preview_view: the depth in R, G and B, read through the plain
 sampler) in the overlay, drawn after the lighting, where every layer is in READ_LAYOUT.
@@ -17,73 +17,79 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from .attachment import attachment, create_framebuffer, make_render_pass
 from .memory import Image
+from .pipeline import AttachmentFormats
 
 if TYPE_CHECKING:
     from .device import Device
 
 SHADOW_FORMAT_NAME = "VK_FORMAT_D32_SFLOAT"
 READ_LAYOUT_NAME = "VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL"  # after the shadow pass: sampled
+WRITE_LAYOUT_NAME = "VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL"  # while a layer is drawn
 
 
-def create_shadow_pass(device: Device, samples: int = 1) -> Any:
-    """A depth-only pass: cleared, stored, then sampled (READ_LAYOUT); `samples` per pixel (the
-    occlusion culling's early depth matches the target's MSAA, render/occlusion.py)."""
-    vk = device.vk
-    depth = attachment(
-        vk,
-        getattr(vk, SHADOW_FORMAT_NAME),
-        samples,
-        vk.VK_ATTACHMENT_LOAD_OP_CLEAR,
-        vk.VK_ATTACHMENT_STORE_OP_STORE,
-        getattr(vk, READ_LAYOUT_NAME),
-    )
-    subpass = vk.VkSubpassDescription(
-        pipelineBindPoint=vk.VK_PIPELINE_BIND_POINT_GRAPHICS,
-        pDepthStencilAttachment=vk.VkAttachmentReference(
-            attachment=0, layout=vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL
-        ),
-    )
-    depth_stages = vk.VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT | vk.VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT
-    readers = vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
-    depth_rw = vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT | vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT
-    dependencies = [
-        # the previous frame's lighting read the layer (and its pass wrote it) before this clear
-        vk.VkSubpassDependency(
-            srcSubpass=vk.VK_SUBPASS_EXTERNAL,
-            dstSubpass=0,
-            srcStageMask=readers | depth_stages,
-            dstStageMask=depth_stages,
-            srcAccessMask=vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
-            dstAccessMask=depth_rw,
-        ),
-        # the depth written -> the lighting's reads (forward fragments, the deferred compute pass)
-        vk.VkSubpassDependency(
-            srcSubpass=0,
-            dstSubpass=vk.VK_SUBPASS_EXTERNAL,
-            srcStageMask=depth_stages,
-            dstStageMask=readers,
-            srcAccessMask=vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
-            dstAccessMask=vk.VK_ACCESS_SHADER_READ_BIT,
-        ),
-    ]
-    return make_render_pass(device, [depth], [subpass], dependencies)
+def shadow_formats(vk: Any, samples: int = 1) -> AttachmentFormats:
+    """What the depth-only pipelines and secondaries are made for: 32-bit depth, no colour."""
+    return AttachmentFormats(colors=(), depth=getattr(vk, SHADOW_FORMAT_NAME), samples=samples)
+
+
+def depth_barriers(vk: Any, image: Any, layers: tuple[int, ...], discard: bool) -> tuple[Any, Any]:
+    """What a depth-only render pass's layouts and subpass dependencies did, as two
+    VkDependencyInfo for vkCmdPipelineBarrier2 (each (pointer, struct): keep the struct): before
+    drawing, `layers` of `image` from READ_LAYOUT (from UNDEFINED with `discard`: contents
+    dropped) to WRITE_LAYOUT once the previous frame's readers are done (frames in flight share
+    the image; a read before a write needs no memory dependency); after, the depth written to
+    READ_LAYOUT for the fragment and compute shaders that sample it."""
+    tests = vk.VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | vk.VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT
+    readers = vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT
+    write = vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT
+    read, written = getattr(vk, READ_LAYOUT_NAME), getattr(vk, WRITE_LAYOUT_NAME)
+
+    def batch(src: int, src_access: int, dst: int, dst_access: int, old: int, new: int) -> tuple[Any, Any]:
+        barriers = [
+            vk.VkImageMemoryBarrier2(
+                srcStageMask=src,
+                srcAccessMask=src_access,
+                dstStageMask=dst,
+                dstAccessMask=dst_access,
+                oldLayout=old,
+                newLayout=new,
+                srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+                dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+                image=image,
+                subresourceRange=vk.VkImageSubresourceRange(
+                    aspectMask=vk.VK_IMAGE_ASPECT_DEPTH_BIT,
+                    baseMipLevel=0,
+                    levelCount=1,
+                    baseArrayLayer=layer,
+                    layerCount=1,
+                ),
+            )
+            for layer in layers
+        ]
+        info = vk.VkDependencyInfo(pImageMemoryBarriers=barriers)
+        return vk.ffi.addressof(info), info
+
+    depth_rw = vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | write
+    before = batch(readers | tests, 0, tests, depth_rw, vk.VK_IMAGE_LAYOUT_UNDEFINED if discard else read, written)
+    return before, batch(tests, write, readers, vk.VK_ACCESS_2_SHADER_READ_BIT, written, read)
 
 
 class ShadowMaps:
-    """`layers` square depth maps of `resolution` texels, drawn with `render_pass` (a
-    create_shadow_pass; compatible ones may share pipelines)."""
+    """`layers` square depth maps of `resolution` texels, each drawn through its layer view with
+    dynamic rendering (pipelines and secondaries made for shadow_formats())."""
 
-    def __init__(self, device: Device, render_pass: Any, resolution: int, layers: int) -> None:
+    def __init__(self, device: Device, resolution: int, layers: int) -> None:
         vk = self.vk = device.vk
         self.device = device
         self.resolution, self.layers = int(resolution), int(layers)
         self.image: Image | None = None
         self.layer_views: list[Any] = []
-        self.framebuffers: list[Any] = []
         self.samplers: list[Any] = []
         self._previews: dict[int, Any] = {}  # layer -> its grey view (preview_view)
+        # built once (each cffi struct costs microseconds a frame), kept while the maps live:
+        self._renderings: dict[tuple[int, int], Any] = {}  # (layer, texels across) -> VkRenderingInfo
+        self._barriers: dict[tuple[tuple[int, ...], bool], tuple[Any, Any]] = {}  # see barriers()
         self.read_layout = getattr(vk, READ_LAYOUT_NAME)
         try:
             self.image = Image(
@@ -97,9 +103,6 @@ class ShadowMaps:
             )
             for layer in range(self.layers):
                 self.layer_views.append(self.image.layer_view(layer))
-                self.framebuffers.append(
-                    create_framebuffer(device, render_pass, [self.layer_views[-1]], self.resolution, self.resolution)
-                )
             kinds = ((vk.VK_FILTER_LINEAR, True), (vk.VK_FILTER_NEAREST, True), (vk.VK_FILTER_NEAREST, False))
             for filtering, compare in kinds:
                 self.samplers.append(
@@ -129,6 +132,43 @@ class ShadowMaps:
         assert self.image is not None
         view = self.image.view  # the 2D array of every layer
         return [vk.VkDescriptorImageInfo(sampler=s, imageView=view, imageLayout=layout) for s in self.samplers]
+
+    def rendering(self, layer: int, resolution: int) -> Any:
+        """VkRenderingInfo (a pointer, for the raw vkCmdBeginRendering) that draws `layer`'s
+        corner of `resolution` texels from secondaries: depth cleared to 0 (reverse-Z far) within
+        that area, stored; the layer in WRITE_LAYOUT (barriers())."""
+        key = (layer, resolution)
+        info = self._renderings.get(key)
+        if info is None:
+            vk = self.vk
+            depth = vk.VkRenderingAttachmentInfo(
+                imageView=self.layer_views[layer],
+                imageLayout=getattr(vk, WRITE_LAYOUT_NAME),
+                resolveMode=vk.VK_RESOLVE_MODE_NONE,
+                loadOp=vk.VK_ATTACHMENT_LOAD_OP_CLEAR,
+                storeOp=vk.VK_ATTACHMENT_STORE_OP_STORE,
+                clearValue=vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=0.0, stencil=0)),
+            )
+            area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(resolution, resolution))
+            struct = vk.VkRenderingInfo(
+                flags=vk.VK_RENDERING_CONTENTS_SECONDARY_COMMAND_BUFFERS_BIT,
+                renderArea=area,
+                layerCount=1,
+                colorAttachmentCount=0,
+                pDepthAttachment=depth,
+            )
+            info = self._renderings[key] = (vk.ffi.addressof(struct), struct, depth)
+        return info[0]
+
+    def barriers(self, layers: tuple[int, ...], first: bool) -> tuple[Any, Any]:
+        """depth_barriers' (before, after) pointers for drawing `layers`, from UNDEFINED the
+        `first` time (every layer is then cleared whole), else from READ_LAYOUT (kept)."""
+        key = (layers, first)
+        kept = self._barriers.get(key)
+        if kept is None:
+            assert self.image is not None
+            kept = self._barriers[key] = depth_barriers(self.vk, self.image.handle, layers, discard=first)
+        return kept[0][0], kept[1][0]
 
     @property
     def plain_sampler(self) -> Any:
@@ -173,14 +213,12 @@ class ShadowMaps:
         vk, handle = self.vk, self.device.handle
         for v in self._previews.values():
             vk.vkDestroyImageView(handle, v, None)
-        self._previews = {}
+        self._previews, self._renderings, self._barriers = {}, {}, {}
         for sampler in self.samplers:
             vk.vkDestroySampler(handle, sampler, None)
-        for fb in self.framebuffers:
-            vk.vkDestroyFramebuffer(handle, fb, None)
         for v in self.layer_views:
             vk.vkDestroyImageView(handle, v, None)
         if self.image is not None:
             self.image.destroy()
-        self.samplers, self.framebuffers, self.layer_views = [], [], []
+        self.samplers, self.layer_views = [], []
         self.image = None

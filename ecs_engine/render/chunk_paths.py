@@ -81,6 +81,7 @@ def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str, blended: b
         depth_write=not blended,
         color_attachments=GBUFFER_COLORS if ctx.gbuffer else 2 if ctx.oit else 1,
     )
+    base.update(ctx.pipeline_target())
     vk = ctx.device.vk
     plain = graphics_pipeline(ctx.device, GraphicsPipelineSpec(vertex_shader, fragment_shader, **base))
     try:
@@ -123,6 +124,7 @@ def shadow_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple
         color_attachments=0,
         depth_bias=SHADOW_DEPTH_BIAS,
     )
+    base.update(ctx.pipeline_target())
     plain = graphics_pipeline(ctx.device, GraphicsPipelineSpec(shader, fragment, **base))
     try:
         mirrored = graphics_pipeline(ctx.device, GraphicsPipelineSpec(shader, fragment, front_face_ccw=False, **base))

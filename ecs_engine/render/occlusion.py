@@ -4,9 +4,10 @@ method asks for these passes), after zeux/niagara.
 Per frame, in the primary before the scene's render pass (IndirectPath._record_compute):
 1. early cull (cull_early.comp): the rows the last frame found visible, still in the frustum,
    with an opaque one-sided material; compact.comp makes their draws;
-2. their depth alone, into this module's depth image (the target's samples; the shadow maps' depth-only
-   render pass, no bias; shadow_indirect.vert through the camera's set 0: the same position
-   arithmetic as mesh_indirect.vert);
+2. their depth alone, into this module's depth image (the target's samples; dynamic rendering
+   with the shadow maps' depth format and barriers, gpu/shadow_maps.py's depth_barriers; no bias;
+   shadow_indirect.vert through the camera's set 0: the same position arithmetic as
+   mesh_indirect.vert);
 3. the depth pyramid (depth_reduce.comp): level k holds, per texel, the farthest depth of the
    2^(k+1)-pixel square it covers, in a storage buffer;
 4. late cull (cull_late.comp): every row against the frustum and then its sphere's screen rect
@@ -33,11 +34,10 @@ from __future__ import annotations
 from typing import Any
 
 from ..gpu.array_image import nearest_sampler
-from ..gpu.attachment import create_framebuffer
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers, write_images
 from ..gpu.memory import DEVICE, Buffer, Image
 from ..gpu.pipeline import GraphicsPipelineSpec, compute_pipeline, graphics_pipeline, pipeline_layout
-from ..gpu.shadow_maps import SHADOW_FORMAT_NAME, create_shadow_pass
+from ..gpu.shadow_maps import READ_LAYOUT_NAME, SHADOW_FORMAT_NAME, WRITE_LAYOUT_NAME, depth_barriers, shadow_formats
 from .chunk_paths import vertex_attributes
 from .layouts import (
     BINDING_EARLY_DEPTH,
@@ -76,7 +76,6 @@ class OcclusionPasses:
         self.size = (0, 0)
         self.levels: list[tuple[int, int, int]] = []
         self.depth: Image | None = None
-        self.framebuffer: Any = None
         self.pyramid: Buffer | None = None
         self.visibility: Buffer | None = None
         self.fresh = False  # the visibility buffer is new: zero it before the first early pass
@@ -108,14 +107,11 @@ class OcclusionPasses:
         self.reduce = compute_pipeline(
             device, "depth_reduce_ms.comp" if self.samples > 1 else "depth_reduce.comp", self.layout
         )
-        self.render_pass = create_shadow_pass(device, self.samples)  # depth alone: cleared, stored, then sampled
         base = dict(
             layout=graphics_layout,
-            render_pass=self.render_pass,
             vertex_stride=MESH_VERTEX.itemsize,
             vertex_attributes=vertex_attributes(vk, ("position",)),
-            color_attachments=0,
-            samples=self.samples,
+            **shadow_formats(vk, self.samples).spec_kwargs(),  # depth alone, drawn with dynamic rendering
         )
         self.pipelines: tuple[Any, ...] = (
             graphics_pipeline(device, GraphicsPipelineSpec("shadow_indirect.vert", None, **base)),
@@ -125,8 +121,8 @@ class OcclusionPasses:
         self.sampler = nearest_sampler(device)
         self._reduce_push = vk.ffi.new("uint32_t[8]")
         self._set_array = vk.ffi.new("VkDescriptorSet[1]", [self.set])
-        self._clear = vk.ffi.new("VkClearValue[1]")  # depth 0: reverse-Z's far
-        self._begin: Any = None
+        self._begin: Any = None  # (VkRenderingInfo pointer, what it points to) at the depth's size
+        self._barriers: Any = None  # depth_barriers of the depth image
 
     # ------------------------------------------------------------ resources
     def ensure(self, width: int, height: int, rows: int) -> None:
@@ -154,30 +150,30 @@ class OcclusionPasses:
                 vk.VK_IMAGE_ASPECT_DEPTH_BIT,
                 samples=self.samples,
             )
-            self.framebuffer = create_framebuffer(device, self.render_pass, [self.depth.view], width, height)
             self.levels = pyramid_levels(width, height)
             first, w, h = self.levels[-1]
             self.pyramid = Buffer(device, 4 * (first + w * h), vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, DEVICE)
             self.size = (width, height)
             self._viewport = vk.ffi.new("VkViewport*", {"width": width, "height": height, "maxDepth": 1.0})
             self._area = vk.ffi.new("VkRect2D*", {"extent": {"width": width, "height": height}})
-            self._begin = vk.ffi.new(
-                "VkRenderPassBeginInfo*",
-                {
-                    "sType": vk.VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO,
-                    "renderPass": self.render_pass,
-                    "framebuffer": self.framebuffer,
-                    "renderArea": {"extent": {"width": width, "height": height}},
-                    "clearValueCount": 1,
-                    "pClearValues": self._clear,
-                },
+            depth_attachment = vk.VkRenderingAttachmentInfo(
+                imageView=self.depth.view,
+                imageLayout=getattr(vk, WRITE_LAYOUT_NAME),
+                resolveMode=vk.VK_RESOLVE_MODE_NONE,
+                loadOp=vk.VK_ATTACHMENT_LOAD_OP_CLEAR,  # 0: reverse-Z's far
+                storeOp=vk.VK_ATTACHMENT_STORE_OP_STORE,
+                clearValue=vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=0.0, stencil=0)),
             )
+            info = vk.VkRenderingInfo(renderArea=self._area[0], layerCount=1, pDepthAttachment=depth_attachment)
+            self._begin = (vk.ffi.addressof(info), info)
+            # each frame's depth is new: the last one's is dropped (UNDEFINED) once its pyramid read it
+            self._barriers = depth_barriers(vk, self.depth.handle, (0,), discard=True)
         assert self.visibility is not None and self.pyramid is not None and self.depth is not None
         ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
         write_buffers(
             device, self.set, [(BINDING_VISIBILITY, ssbo, self.visibility), (BINDING_PYRAMID, ssbo, self.pyramid)]
         )
-        layout = vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL  # the depth-only pass's final layout
+        layout = getattr(vk, READ_LAYOUT_NAME)  # after end_depth's barrier
         depth = vk.VkDescriptorImageInfo(sampler=self.sampler, imageView=self.depth.view, imageLayout=layout)
         write_images(device, self.set, BINDING_EARLY_DEPTH, [depth])
 
@@ -197,15 +193,18 @@ class OcclusionPasses:
             self.fresh = False
 
     def begin_depth(self, cb: Any) -> None:
-        """The early pass's render pass, viewport and scissor: the early rows' draws follow (with
-        `pipelines`), then end_depth."""
+        """The early pass's barrier and rendering (inline), viewport and scissor: the early rows'
+        draws follow (with `pipelines`), then end_depth."""
         lib = self.vk.lib
-        lib.vkCmdBeginRenderPass(cb, self._begin, self.vk.VK_SUBPASS_CONTENTS_INLINE)
+        lib.vkCmdPipelineBarrier2(cb, self._barriers[0][0])
+        lib.vkCmdBeginRendering(cb, self._begin[0])
         lib.vkCmdSetViewport(cb, 0, 1, self._viewport)
         lib.vkCmdSetScissor(cb, 0, 1, self._area)
 
     def end_depth(self, cb: Any) -> None:
-        self.vk.lib.vkCmdEndRenderPass(cb)
+        lib = self.vk.lib
+        lib.vkCmdEndRendering(cb)
+        lib.vkCmdPipelineBarrier2(cb, self._barriers[1][0])  # the depth -> the pyramid's reads
 
     def record_pyramid(self, cb: Any, barrier: Any) -> None:
         """Every level, each after the one below it (`barrier`: compute writes -> compute reads)."""
@@ -235,7 +234,6 @@ class OcclusionPasses:
                 vk.vkDestroyPipeline(handle, pipeline, None)
         for name, destroy in (
             ("layout", vk.vkDestroyPipelineLayout),
-            ("render_pass", vk.vkDestroyRenderPass),
             ("sampler", vk.vkDestroySampler),
         ):
             made = owned.pop(name, None)
@@ -247,10 +245,7 @@ class OcclusionPasses:
                 made.destroy()
 
     def _release_images(self) -> None:
-        vk, handle = self.vk, self.ctx.device.handle
-        if self.framebuffer is not None:
-            vk.vkDestroyFramebuffer(handle, self.framebuffer, None)
-            self.framebuffer = None
+        self._begin = self._barriers = None
         for owned in (self.depth, self.pyramid):
             if owned is not None:
                 owned.destroy()

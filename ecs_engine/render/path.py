@@ -23,6 +23,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from ..gpu.device import Device
+from ..gpu.pipeline import AttachmentFormats
 from ..gpu.secondary import SecondaryBuffers
 from .frame_data import Chunk, FrameData
 from .layouts import NO_MATERIAL
@@ -39,7 +40,7 @@ class TargetState:
     """Structs that depend only on the framebuffer and its size, built once: each binding struct
     costs microseconds of Python, and a small scene's whole frame budget is 250 us."""
 
-    key: tuple[int, int, int]  # framebuffer address, width, height
+    key: tuple[int, int, int]  # framebuffer (dynamic rendering: attachment view) address, width, height
     area: Any
     viewport: Any
     secondary_begin: Any  # the chunks' begin info with render-pass inheritance
@@ -79,14 +80,17 @@ class TargetState:
             viewport=vk.VkViewport(x=0.0, y=0.0, width=float(width), height=float(height), minDepth=0.0, maxDepth=1.0),
             secondary_begin=secondary_begin if gbuffer is None else gbuffer[2],
             aside_begin=secondary_begin,
-            pass_begin=vk.VkRenderPassBeginInfo(
+            pass_begin=None
+            if render_pass is None  # dynamic rendering: the pass begins its own (shadow_pass.py)
+            else vk.VkRenderPassBeginInfo(
                 renderPass=render_pass, framebuffer=framebuffer, renderArea=area, pClearValues=clears
             ),
             keep=[clears, framebuffer],
         )
         state.area_ptr = vk.ffi.addressof(state.area)
         state.viewport_ptr = vk.ffi.addressof(state.viewport)
-        state.pass_begin_ptr = vk.ffi.addressof(state.pass_begin)
+        if state.pass_begin is not None:
+            state.pass_begin_ptr = vk.ffi.addressof(state.pass_begin)
         if gbuffer is not None:
             zero = vk.VkClearValue(color=vk.VkClearColorValue(float32=[0.0, 0.0, 0.0, 0.0]))
             none = vk.VkClearValue(color=vk.VkClearColorValue(uint32=[NO_MATERIAL, 0, 0, 0]))
@@ -155,7 +159,7 @@ class PathContext:
 
     device: Device
     meshes: MeshRegistry
-    render_pass: Any
+    render_pass: Any  # what the pipelines draw in: a VkRenderPass's subpass 0, or None with `formats`
     frame_set_layout: Any  # set 0's VkDescriptorSetLayout
     secondaries: SecondaryBuffers
     frames_in_flight: int
@@ -166,6 +170,16 @@ class PathContext:
     gbuffer: bool = False  # the chunks draw into the G-buffer pass (the deferred form), lit later
     shadow: bool = False  # the chunks draw depth alone into a shadow map (render/shadow_pass.py)
     oit: bool = False  # blended rows accumulate weighted transparency (render/oit_pass.py)
+    formats: AttachmentFormats | None = None  # dynamic rendering (render_pass None): the attachments'
+
+    def pipeline_target(self) -> dict[str, Any]:
+        """GraphicsPipelineSpec fields that say where its pipelines draw: the attachment formats
+        (dynamic rendering) when it has them, else {} (the spec names render_pass, subpass 0)."""
+        if self.formats is None:
+            return {}
+        if self.render_pass is not None:
+            raise ValueError("a path context gives either a render pass or attachment formats, not both")
+        return self.formats.spec_kwargs()
 
 
 class RenderPath(Protocol):

@@ -4,7 +4,7 @@ In the indirect mode the CPU writes every candidate row once, unculled, into the
 buffer (indirect_path.py). Each shadow view (a cascade, a spot light's map, a cube face) culls
 those same rows with the camera path's shaders, against its own planes; no row is written twice.
 After the camera's path has written its key table and recorded its own passes (its finish),
-`record` adds to the primary, before the shadow render passes:
+`record` adds to the primary, before the shadow views' renderings:
 
 1. every view's draw state zeroed; barrier (transfer -> compute);
 2. per view, cull.comp over the camera's candidate rows [0, candidates) with the view's planes
@@ -15,7 +15,7 @@ After the camera's path has written its key table and recorded its own passes (i
 4. every view's draw state copied to a mapped buffer (the draws and triangles in FrameStats,
    read once the slot's fence has signalled, as the camera's); barrier (transfer -> host).
 
-It returns per view a secondary for the view's shadow render pass: per winding one
+It returns per view a secondary for the view's shadow rendering: per winding one
 vkCmdDrawIndexedIndirectCount with depth-only pipelines (shadow_indirect.vert: the row is
 instances[ids[gl_InstanceIndex]]; where some material is alpha-masked shadow_indirect_cutout.vert
 and shadow_cutout.frag, which cut the material's holes), the rasteriser's depth bias of the CPU
@@ -44,6 +44,7 @@ import numpy as np
 
 from ..gpu.descriptors import DescriptorPool, write_buffers
 from ..gpu.memory import DEVICE, HOST, Buffer
+from ..gpu.pipeline import AttachmentFormats
 from ..gpu.secondary import end_command_buffer
 from .chunk_paths import shadow_pipelines
 from .indirect_draws import STATE_HEADER, compute_barriers, record_indirect_draws
@@ -83,7 +84,7 @@ class _ViewBuffers:
 class IndirectShadows:
     """The shadow views of one IndirectPath (made again with the path: shadow_pass.py)."""
 
-    def __init__(self, camera: IndirectPath, render_pass: Any) -> None:
+    def __init__(self, camera: IndirectPath, formats: AttachmentFormats) -> None:
         ctx = camera.ctx
         self.camera = camera
         self.device = ctx.device
@@ -97,7 +98,9 @@ class IndirectShadows:
         self._counted: list[tuple[int, int, np.ndarray] | None] = [None] * ctx.frames_in_flight
         self._slot, self._waited, self._previous = 0, False, (0, 0)
         self._counted_now = False  # this frame recorded counts into the slot's readback
-        shadow_ctx = replace(ctx, render_pass=render_pass, gbuffer=False, shadow=True, samples=1, fill="solid")
+        shadow_ctx = replace(
+            ctx, render_pass=None, formats=formats, gbuffer=False, shadow=True, samples=1, fill="solid"
+        )
         self.pipelines = shadow_pipelines(shadow_ctx, camera.layout, "mesh_indirect.vert")
         self._push = np.zeros(1, dtype=CULL_PUSH.dtype)
         self._compact_push = np.zeros(1, dtype=COMPACT_PUSH.dtype)
@@ -123,7 +126,7 @@ class IndirectShadows:
 
     def record(self, cb: Any, views: list[FrameInputs], planes: np.ndarray) -> list[Any]:
         """The views' cull and commands into the primary `cb` (before the shadow render
-        passes); per view the secondary drawing them in its render pass (None: nothing to draw).
+        passes); per view the secondary drawing them in its rendering (None: nothing to draw).
         `views`: their FrameInputs (their set 0, target); `planes`: (V, 24), padded_planes'."""
         slot = self._slot
         frame = self.camera.frames[slot]  # its finish wrote this frame's key table

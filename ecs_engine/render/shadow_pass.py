@@ -6,8 +6,10 @@ matrices (so the render path's shaders draw from the light unchanged) and a slic
 frame's instance buffer after the camera's rows. The chunk jobs (frame_jobs.py) then cull each
 chunk against the camera and every view in one pass, write each view's visible rows and record
 a secondary per view with a depth-only pipeline (chunk_paths.py: the same paths, made for the
-shadow render pass; view_recording.py: all of it in one native call). The primary then draws
-each view's layer: begin, execute its secondaries, end.
+maps' formats; view_recording.py: all of it in one native call). The primary then draws each
+view's layer with dynamic rendering: one barrier batch (the layers to their attachment layout),
+per view begin rendering over its layer's corner, execute its secondaries, end; one barrier
+batch (the layers to the layout the lighting samples).
 
 The lighting reads SHADOW_VIEW rows (per view its matrix, bias, normal offset, cascade split,
 filter) and the map (shading.glsl's light_shadow); a light row names its first view and count.
@@ -20,7 +22,7 @@ A point light's six cube faces are layers of the same array, each widened by a f
 Alpha-masked materials cut their holes in the maps (chunk_paths.py's shadow_pipelines).
 
 In the indirect mode the chunks' rows are culled on the GPU per view (shadow_indirect.py): the
-compute passes and a secondary per view are recorded here, before the views' render passes; the
+compute passes and a secondary per view are recorded here, before the views' renderings; the
 chunk jobs only write the camera's rows, and the CPU path culls and draws the set-aside casters
 (blended materials and the like) alone.
 """
@@ -35,7 +37,7 @@ import numpy as np
 from ..gpu.descriptors import DescriptorSetLayout
 from ..gpu.device import Device
 from ..gpu.secondary import SecondaryBuffers
-from ..gpu.shadow_maps import ShadowMaps, create_shadow_pass
+from ..gpu.shadow_maps import ShadowMaps, shadow_formats
 from .frame_data import Chunk, FrameData
 from .indirect_path import IndirectPath
 from .instance_rows import cull_views, padded_planes
@@ -56,11 +58,12 @@ class ShadowPass:
         self.set_layout = frame_set_layout
         self.secondaries = secondaries
         self.frames = frames
-        self.render_pass = create_shadow_pass(device)
+        self.formats = shadow_formats(device.vk)  # what its pipelines and secondaries are made for
+        self.secondary_begin = secondaries.begin_info_rendering(self.formats)
         self.maps: ShadowMaps | None = None
         self.view_sets = ShadowViewSets(device, frame_set_layout, frames)
         try:
-            self.maps = ShadowMaps(device, self.render_pass, 1, 1)  # bound until a light casts
+            self.maps = ShadowMaps(device, 1, 1)  # bound until a light casts
         except BaseException:
             self.destroy()
             raise
@@ -107,7 +110,7 @@ class ShadowPass:
         if resolution == self.maps.resolution and len(views) <= self.maps.layers:
             return False
         self.device.wait_idle()
-        new = ShadowMaps(self.device, self.render_pass, resolution, max(len(views), self.maps.layers))
+        new = ShadowMaps(self.device, resolution, max(len(views), self.maps.layers))
         self.maps.destroy()
         self.maps = new
         self.cleared = False
@@ -118,7 +121,9 @@ class ShadowPass:
         """The depth-only render path (made on first use, for the renderer's current path
         context: `make(ctx)` builds a path of the right kind)."""
         if self.path is None:
-            shadow_ctx = replace(ctx, render_pass=self.render_pass, gbuffer=False, shadow=True, samples=1, fill="solid")
+            shadow_ctx = replace(
+                ctx, render_pass=None, formats=self.formats, gbuffer=False, shadow=True, samples=1, fill="solid"
+            )
             self.path = make(shadow_ctx)
         return self.path
 
@@ -145,13 +150,13 @@ class ShadowPass:
         res = self.maps.resolution if resolution is None else min(int(resolution), self.maps.resolution)
         state = self._targets.get((layer, res))
         if state is None:
-            fb = self.maps.framebuffers[layer]
+            view = self.maps.layer_views[layer]
             state = self._targets[(layer, res)] = TargetState.make(
                 self.vk,
-                (int(self.vk.ffi.cast("uintptr_t", fb)), res, res),
-                fb,
-                self.render_pass,
-                self.secondaries.begin_info(self.render_pass, 0, fb),
+                (int(self.vk.ffi.cast("uintptr_t", view)), res, res),
+                None,  # dynamic rendering: no framebuffer or render pass (record())
+                None,
+                self.secondary_begin,
                 (0.0, 0.0, 0.0),
                 depth_only=True,
             )
@@ -221,7 +226,7 @@ class ShadowPass:
                 self.gpu.destroy()
                 self.gpu = None
             if self.gpu is None:
-                self.gpu = IndirectShadows(camera, self.render_pass)
+                self.gpu = IndirectShadows(camera, self.formats)
             self.gpu.begin_frame(frame.slot, frame.readback)
             self._gpu_frame = True
         self._planes = padded_planes([frame.planes] + [view.planes for view in self._inputs])  # the camera's first
@@ -308,17 +313,21 @@ class ShadowPass:
         if self.gpu is not None and self.culls_on_gpu:  # the compute passes first, then each view's draws
             culled = self.gpu.record(cb, self._inputs, self._planes[1:])
             secondaries = [([g] if g is not None else []) + s for g, s in zip(culled, secondaries, strict=True)]
+        maps = self.maps
         drawn = {v.layer: s for v, s in zip(views, secondaries, strict=True)}
         sizes = {v.layer: v.resolution for v in views}
-        layers = range(self.maps.layers) if not self.cleared else drawn.keys()
+        layers = tuple(range(maps.layers)) if not self.cleared else tuple(drawn)
+        before, after = maps.barriers(layers, not self.cleared)
+        lib.vkCmdPipelineBarrier2(cb, before)
         for layer in layers:
             # the first time, each layer whole (cleared); then each view's corner of its layer
-            state = self.target_state(layer, sizes.get(layer) if self.cleared else None)
-            lib.vkCmdBeginRenderPass(cb, state.pass_begin_ptr, vk.VK_SUBPASS_CONTENTS_SECONDARY_COMMAND_BUFFERS)
+            size = min(sizes[layer], maps.resolution) if self.cleared else maps.resolution  # as target_state's
+            lib.vkCmdBeginRendering(cb, maps.rendering(layer, size))
             buffers = drawn.get(layer)
             if buffers:
                 lib.vkCmdExecuteCommands(cb, len(buffers), vk.ffi.new("VkCommandBuffer[]", buffers))
-            lib.vkCmdEndRenderPass(cb)
+            lib.vkCmdEndRendering(cb)
+        lib.vkCmdPipelineBarrier2(cb, after)
         self.cleared = True
 
     def destroy(self) -> None:
@@ -333,4 +342,3 @@ class ShadowPass:
         if self.maps is not None:
             self.maps.destroy()
             self.maps = None
-        self.vk.vkDestroyRenderPass(self.device.handle, self.render_pass, None)
