@@ -24,12 +24,12 @@ class Decisions:
     """The comparisons of one pixel's run; the near-ties among them numbered in order, those in
     `flips` taken the other way."""
 
-    def __init__(self, flips=frozenset()):
-        self.flips, self.ties = flips, 0
+    def __init__(self, flips=frozenset(), tie=TIE):
+        self.flips, self.ties, self.tie = flips, 0, tie
 
     def ge(self, a, b):
         """a >= b"""
-        if abs(a - b) > TIE:
+        if abs(a - b) > self.tie:
             return a >= b
         self.ties += 1
         return (a >= b) != (self.ties - 1 in self.flips)
@@ -54,9 +54,14 @@ def fxaa(image, subpix=0.75, edge_threshold=0.166, edge_threshold_min=0.0833, li
     return fxaa_outcomes(image, subpix, edge_threshold, edge_threshold_min, linear, ties=False)[0]
 
 
-def fxaa_outcomes(image, subpix=0.75, edge_threshold=0.166, edge_threshold_min=0.0833, linear=False, ties=True):
+def fxaa_outcomes(
+    image, subpix=0.75, edge_threshold=0.166, edge_threshold_min=0.0833, linear=False, ties=True, tie=TIE
+):
     """(the image without flipped ties, {(y, x): [every outcome the pixel's ties allow]} for the
-    pixels that have ties); with `ties` False, the image only (and an empty dict)."""
+    pixels that have ties); with `ties` False, the image only (and an empty dict). `tie`: how
+    near equality a comparison may go either way (TIE for exact ties; wider where the GPU's
+    inputs are known only to a coarser step than float64's, such as an 8-bit sRGB image it
+    decodes with its own precision)."""
     img = np.asarray(image, np.float64)
     h, w = img.shape[:2]
     luma_img = img[..., :3] @ WEIGHTS
@@ -86,19 +91,19 @@ def fxaa_outcomes(image, subpix=0.75, edge_threshold=0.166, edge_threshold_min=0
     tied = {}
     for y in range(h):
         for x in range(w):
-            d = Decisions()
+            d = Decisions(tie=tie)
             out[y, x] = _pixel(x, y, *args, d)
             if ties and d.ties:
-                tied[(y, x)] = _every_outcome(x, y, args, frozenset(), [])
+                tied[(y, x)] = _every_outcome(x, y, args, frozenset(), [], tie)
     return out, tied
 
 
-def _every_outcome(x, y, args, flips, outcomes):
+def _every_outcome(x, y, args, flips, outcomes, tie=TIE):
     """Runs with `flips`, then with each further tie (after the last flipped) flipped too."""
-    d = Decisions(flips)
+    d = Decisions(flips, tie)
     outcomes.append(_pixel(x, y, *args, d))
     for i in range(max(flips, default=-1) + 1, min(d.ties, 8)):
-        _every_outcome(x, y, args, flips | {i}, outcomes)
+        _every_outcome(x, y, args, flips | {i}, outcomes, tie)
     return outcomes
 
 

@@ -177,7 +177,10 @@ def test_fxaa_in_the_ldr_stage_is_the_reference_fxaa_of_the_tone_mapped_frame():
         on = _pixels(gpu, renderer, world)
         assert renderer.output.ldr is not None and "fxaa" in renderer.output.ldr.describe()
         linear = srgb_to_linear(np.concatenate([off, np.full(off.shape[:2] + (1,), 255)], axis=2) / 255.0)
-        reference = fxaa_outcomes(linear, linear=True)  # exact ties may go either way on a GPU
+        # comparisons within half an 8-bit step of luma may go either way: the intermediate image
+        # is 8-bit sRGB, which the GPU decodes with its own precision (the H200 differed by 4
+        # levels from the tie-free reference where such a comparison flipped)
+        reference = fxaa_outcomes(linear, linear=True, tie=0.5 / 255)
 
         def to_bytes(colour):
             return np.round(linear_to_srgb(np.asarray(colour)[..., :3]) * 255)
