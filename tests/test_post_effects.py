@@ -168,7 +168,7 @@ def test_bloom_in_the_renderer_is_the_reference_bloom_of_the_frames_hdr_colour(m
 def test_fxaa_in_the_ldr_stage_is_the_reference_fxaa_of_the_tone_mapped_frame():
     """With FXAA on, the tone map writes an intermediate image and FXAA the target: the frame
     is the NumPy FXAA of the frame without it (both tone mapped by ACES, the hdr form), within
-    a level; only pixels at edges change."""
+    two levels and the hardware filter's precision; only pixels at edges change."""
     with headless_gpu(64, 48) as gpu:
         world = _world(gpu)
         renderer = _renderer(gpu, tone_map="aces")
@@ -178,14 +178,32 @@ def test_fxaa_in_the_ldr_stage_is_the_reference_fxaa_of_the_tone_mapped_frame():
         assert renderer.output.ldr is not None and "fxaa" in renderer.output.ldr.describe()
         linear = srgb_to_linear(np.concatenate([off, np.full(off.shape[:2] + (1,), 255)], axis=2) / 255.0)
         # comparisons within half an 8-bit step of luma may go either way: the intermediate image
-        # is 8-bit sRGB, which the GPU decodes with its own precision (the H200 differed by 4
-        # levels from the tie-free reference where such a comparison flipped)
+        # is 8-bit sRGB, which the GPU decodes with its own precision
         reference = fxaa_outcomes(linear, linear=True, tie=0.5 / 255)
 
         def to_bytes(colour):
             return np.round(linear_to_srgb(np.asarray(colour)[..., :3]) * 255)
 
-        assert outcome_errors(on, reference, to_bytes).max() <= 2
+        # a GPU's bilinear weights have subTexelPrecisionBits of precision (the H200's frame
+        # differed from the reference by 4 levels): a blend's error is at most a weight step
+        # times the local contrast (linear), which the sRGB encode steepens in dark pixels
+        step = 2.0 ** -int(gpu.device.limits.subTexelPrecisionBits)
+        lin = linear[..., :3]
+        pad = np.pad(lin, ((1, 1), (1, 1), (0, 0)), mode="edge")
+        near3 = np.stack(
+            [
+                pad[1 + dy : 1 + dy + lin.shape[0], 1 + dx : 1 + dx + lin.shape[1]]
+                for dy in (-1, 0, 1)
+                for dx in (-1, 0, 1)
+            ]
+        )
+        contrast = (near3.max(axis=0) - near3.min(axis=0)).max(axis=-1)
+        want = np.asarray(reference[0])[..., :3]
+        slope = ((linear_to_srgb(np.clip(want + 1e-3, 0, 1)) - linear_to_srgb(want)) / 1e-3).max(axis=-1)
+        allowed = 2 + 255 * slope * contrast * step
+        assert (outcome_errors(on, reference, to_bytes) <= allowed).all()
+        print(f"allowed {allowed.max():.2f} levels at most; FXAA moved pixels by up to {np.abs(on - off).max()}")
+        assert allowed.max() < 16  # the allowance stays far below what FXAA changes at an edge
         changed = np.abs(on - off).max(axis=2) > 0
         luma = off @ np.array([0.299, 0.587, 0.114])
         pad = np.pad(luma, 1, mode="edge")
