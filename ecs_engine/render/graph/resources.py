@@ -158,24 +158,38 @@ def flags(vk: Any, prefix: str, names: tuple[str, ...] | frozenset[str]) -> int:
     return bits
 
 
+# per prefix, value -> name: looking a value up by scanning the binding's names took about 2 ms
+_NAMES: dict[str, dict[int, str]] = {}
+
+
+def _named(vk: Any, prefix: str, value: int, skip: tuple[str, ...], what: str) -> str:
+    table = _NAMES.get(prefix)
+    if table is None:
+        table = {}
+        for name in dir(vk):  # in sorted order: the first of several names of one value wins
+            if name.startswith(prefix) and not name.endswith(skip) and not name.startswith(prefix + "FEATURE_"):
+                number = getattr(vk, name)
+                if isinstance(number, int):
+                    table.setdefault(number, name.removeprefix(prefix))
+        _NAMES[prefix] = table
+    found = table.get(int(value))
+    if found is None:
+        raise UsageError(f"unknown {what} {value}")
+    return found
+
+
 def format_name(vk: Any, fmt: int | str) -> str:
     """A VkFormat's name without the prefix ("R16G16B16A16_SFLOAT") from its value or name."""
     if isinstance(fmt, str):
         return fmt.removeprefix("VK_FORMAT_")
-    for name in dir(vk):
-        if name.startswith("VK_FORMAT_") and getattr(vk, name) == fmt and not name.endswith("_KHR"):
-            return name.removeprefix("VK_FORMAT_")
-    raise UsageError(f"unknown VkFormat {fmt}")
+    return _named(vk, "VK_FORMAT_", fmt, ("_KHR",), "VkFormat")
 
 
 def layout_name(vk: Any, layout: int | str) -> str:
     """A VkImageLayout's name without the prefix from its value or name."""
     if isinstance(layout, str):
         return layout.removeprefix("VK_IMAGE_LAYOUT_")
-    for name in dir(vk):
-        if name.startswith("VK_IMAGE_LAYOUT_") and getattr(vk, name) == layout and not name.endswith(("_KHR", "_NV")):
-            return name.removeprefix("VK_IMAGE_LAYOUT_")
-    raise UsageError(f"unknown VkImageLayout {layout}")
+    return _named(vk, "VK_IMAGE_LAYOUT_", layout, ("_KHR", "_NV"), "VkImageLayout")
 
 
 def is_depth(fmt: str) -> bool:

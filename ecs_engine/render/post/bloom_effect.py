@@ -40,7 +40,6 @@ class BloomEffect:
         self.graph: FrameGraph | None = None
         self.extent: tuple[int, int] | None = None
         self._images: dict[int, Any] = {}  # HDR view handle value -> the image it was seen on
-        self._formats: dict[int, str] = {}  # VkFormat value -> its name (looking it up scans the binding)
 
     def __call__(self, cb: Any, inputs: PostInputs) -> None:
         hdr_image = inputs.hdr
@@ -56,19 +55,13 @@ class BloomEffect:
             "hdr",
             handle=hdr_image.handle,
             view=hdr_image.view,
-            format=self._format_name(hdr_image.format),
+            format=format_name(self.device.vk, hdr_image.format),
             extent=extent,
             layout_before=_READ,
             layout_after=_READ,
         )
         graph.compile(extent)
         graph.execute(cb)
-
-    def _format_name(self, value: int) -> str:
-        found = self._formats.get(int(value))
-        if found is None:
-            found = self._formats[int(value)] = format_name(self.device.vk, value)
-        return found
 
     def _note(self, hdr_image: Any) -> None:
         """The descriptor sets are kept per view handle value: a new HDR image of the same size

@@ -38,7 +38,6 @@ class SsaoEffect:
         self.graph: FrameGraph | None = None
         self.extent: tuple[int, int] | None = None
         self._images: tuple[Any, Any] = (None, None)  # (depth, hdr) the graph was made for
-        self._formats: dict[int, str] = {}  # VkFormat value -> its name (looking it up scans the binding)
 
     def __call__(self, cb: Any, inputs: PostInputs) -> None:
         if inputs.depth is None:  # MSAA: config.py refuses ssao there; a caller that skipped it
@@ -59,19 +58,13 @@ class SsaoEffect:
                 name,
                 handle=image.handle,
                 view=image.view,
-                format=self._format_name(image.format),
+                format=format_name(self.device.vk, image.format),
                 extent=inputs.extent,
                 layout_before=_READ,
                 layout_after=_READ,
             )
         graph.compile(inputs.extent)
         graph.execute(cb)
-
-    def _format_name(self, value: int) -> str:
-        found = self._formats.get(int(value))
-        if found is None:
-            found = self._formats[int(value)] = format_name(self.device.vk, value)
-        return found
 
     def _remake(self, extent: tuple[int, int]) -> None:
         if self.graph is not None:
