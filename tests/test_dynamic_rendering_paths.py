@@ -10,6 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from gpu_context import headless_gpu, shared_device
+from host_reads import host_barrier
 
 from ecs_engine.gpu.gbuffer import GBUFFER_FORMAT_NAMES
 from ecs_engine.gpu.memory import HOST, Buffer
@@ -108,13 +109,7 @@ class Readback(Pass):
         )
         layout = vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
         vk.vkCmdCopyImageToBuffer(cb, ctx.image("hdr").handle, layout, ctx.buffer("out").handle, 1, [region])
-        to_host = vk.VkMemoryBarrier2(
-            srcStageMask=vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT,
-            srcAccessMask=vk.VK_ACCESS_2_TRANSFER_WRITE_BIT,
-            dstStageMask=vk.VK_PIPELINE_STAGE_2_HOST_BIT,
-            dstAccessMask=vk.VK_ACCESS_2_HOST_READ_BIT,
-        )
-        vk.vkCmdPipelineBarrier2(cb, vk.VkDependencyInfo(pMemoryBarriers=[to_host]))
+        host_barrier(vk, cb)
 
 
 def test_a_secondary_inherits_the_formats_of_the_rendering_it_runs_in():

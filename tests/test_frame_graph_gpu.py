@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from gpu_context import shared_device
+from host_reads import host_barrier
 
 from ecs_engine.gpu.memory import HOST, Buffer
 from ecs_engine.render.graph import Access, BufferDesc, FrameGraph, ImageDesc, Load, Pass
@@ -119,17 +120,7 @@ class Readback(Pass):
             imageExtent=vk.VkExtent3D(w, h, 1),
         )
         vk.vkCmdCopyImageToBuffer(cb, image.handle, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, out.handle, 1, [region])
-        self.host_barrier(vk, cb)
-
-    @staticmethod
-    def host_barrier(vk, cb):
-        to_host = vk.VkMemoryBarrier2(
-            srcStageMask=vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT,
-            srcAccessMask=vk.VK_ACCESS_2_TRANSFER_WRITE_BIT,
-            dstStageMask=vk.VK_PIPELINE_STAGE_2_HOST_BIT,
-            dstAccessMask=vk.VK_ACCESS_2_HOST_READ_BIT,
-        )
-        vk.vkCmdPipelineBarrier2(cb, vk.VkDependencyInfo(pMemoryBarriers=[to_host]))
+        host_barrier(vk, cb)
 
 
 class NeverRecorded(Pass):
@@ -288,7 +279,7 @@ class ToBuffers(Pass):
             return
         copy = vk.VkBufferCopy(srcOffset=0, dstOffset=0, size=W * H * 8)
         vk.vkCmdCopyBuffer(cb, ctx.buffer("staging").handle, ctx.buffer("out").handle, 1, [copy])
-        Readback.host_barrier(vk, cb)
+        host_barrier(vk, cb)
 
 
 def test_a_transient_buffer_between_two_copies(run):

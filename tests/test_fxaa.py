@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from fxaa_reference import STEPS, fxaa_outcomes, linear_to_srgb, outcome_errors, srgb_to_linear
 from gpu_context import shared_device
+from host_reads import host_barrier
 from spirv_layout import struct_layouts
 
 from ecs_engine.errors import UsageError
@@ -81,13 +82,7 @@ class Readback(Pass):
         vk.vkCmdCopyImageToBuffer(
             cb, src, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, ctx.buffer("out").handle, 1, [region]
         )
-        to_host = vk.VkMemoryBarrier2(
-            srcStageMask=vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT,
-            srcAccessMask=vk.VK_ACCESS_2_TRANSFER_WRITE_BIT,
-            dstStageMask=vk.VK_PIPELINE_STAGE_2_HOST_BIT,
-            dstAccessMask=vk.VK_ACCESS_2_HOST_READ_BIT,
-        )
-        vk.vkCmdPipelineBarrier2(cb, vk.VkDependencyInfo(pMemoryBarriers=[to_host]))
+        host_barrier(vk, cb)
 
 
 def _layers(vk):

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 import ssao_reference as ref
 from gpu_context import shared_device
+from host_reads import host_barrier
 
 from ecs_engine.errors import UsageError
 from ecs_engine.gpu.memory import HOST, Buffer
@@ -80,13 +81,7 @@ class Readback(Pass):
         )
         src = vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
         vk.vkCmdCopyImageToBuffer(cb, ctx.image(self.src).handle, src, ctx.buffer(self.dst).handle, 1, [region])
-        to_host = vk.VkMemoryBarrier2(
-            srcStageMask=vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT,
-            srcAccessMask=vk.VK_ACCESS_2_TRANSFER_WRITE_BIT,
-            dstStageMask=vk.VK_PIPELINE_STAGE_2_HOST_BIT,
-            dstAccessMask=vk.VK_ACCESS_2_HOST_READ_BIT,
-        )
-        vk.vkCmdPipelineBarrier2(cb, vk.VkDependencyInfo(pMemoryBarriers=[to_host]))
+        host_barrier(vk, cb)
 
 
 def run_ssao(depth, projection, settings, composite=False, recompile=False):
