@@ -82,8 +82,6 @@ class LdrOutput:
         self.frame = _Frame()
         self.graph: FrameGraph | None = None
         self._format: int | None = None
-        self._hdr_format = ""  # its name, looked up once (a value's name is found by scanning the binding)
-        self._imports: dict[tuple[int, tuple[int, int]], tuple[Any, Any]] = {}  # see _import_target
 
     def _make(self, color_format: int) -> FrameGraph:
         device = self.output.device
@@ -117,7 +115,6 @@ class LdrOutput:
         if self.graph is None or self._format != int(target.color_format):
             self.destroy()
             self.graph, self._format = self._make(int(target.color_format)), int(target.color_format)
-            self._hdr_format = format_name(self.output.device.vk, hdr.format)
         graph = self.graph
         extent = (int(state.area.extent.width), int(state.area.extent.height))
         read = "SHADER_READ_ONLY_OPTIMAL"  # as the scene's pass and the hdr effects leave it
@@ -125,7 +122,7 @@ class LdrOutput:
             "hdr",
             handle=hdr.handle,
             view=hdr.view,
-            format=self._hdr_format,
+            format=hdr.format,
             extent=(int(hdr.width), int(hdr.height)),
             layout_before=read,
             layout_after=read,
@@ -143,14 +140,7 @@ class LdrOutput:
             mark("tone map, post effects and imgui" if overlay is not None else "tone map and post effects")
 
     def _import_target(self, graph: FrameGraph, rendering: Any, extent: tuple[int, int]) -> None:
-        """The target's image, imported with its format's value (FXAA's pipeline is made for it):
-        the graph looks a value's name up by scanning the binding (milliseconds), so the import
-        is made once per image and extent and put back as made on later frames."""
-        key = (id(rendering), extent)
-        found = self._imports.get(key)
-        if found is not None and found[0] is rendering:
-            graph._imports["target"] = found[1]
-            return
+        """The target's image, imported with its format's value (FXAA's pipeline is made for it)."""
         graph.import_image(
             "target",
             handle=rendering.image,
@@ -160,9 +150,6 @@ class LdrOutput:
             layout_before="UNDEFINED",  # every pixel is written: the old contents go
             layout_after="COLOR_ATTACHMENT_OPTIMAL",  # then OutputBarriers.after, as without the graph
         )
-        if len(self._imports) >= 16:  # swapchains come and go
-            self._imports.clear()
-        self._imports[key] = (rendering, graph._imports["target"])
 
     def describe(self) -> str:
         return self.graph.describe() if self.graph is not None and self.graph.compiled is not None else ""
@@ -172,4 +159,3 @@ class LdrOutput:
         if self.graph is not None:
             self.graph.destroy()
             self.graph = None
-        self._imports.clear()
