@@ -8,6 +8,7 @@ from __future__ import annotations
 import struct
 from typing import Any
 
+from ...gpu.array_image import clamped_sampler
 from ...gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_set
 from ...gpu.pipeline import compute_pipeline, pipeline_layout
 
@@ -42,7 +43,9 @@ class BloomPipelines:
             self.pipelines["first"] = compute_pipeline(device, "bloom_downsample.comp", self.layout, (1,))
             self.pipelines["down"] = compute_pipeline(device, "bloom_downsample.comp", self.layout, (0,))
             self.pipelines["up"] = compute_pipeline(device, "bloom_upsample.comp", self.layout)
-            self.sampler = _linear_clamp_sampler(device)
+            # bilinear, clamped, LOD 0: each step reads one mip through its own view, and the
+            # taps between texels are what makes 13 fetches cover 36 texels
+            self.sampler = clamped_sampler(device, max_lod=0.0)
         except BaseException:
             self.destroy()
             raise
@@ -128,24 +131,3 @@ class BloomPipelines:
             vk.vkDestroyPipelineLayout(handle, self.layout, None)
             self.layout = None
         self.set_layout.destroy()
-
-
-def _linear_clamp_sampler(device: Any) -> Any:
-    """Bilinear, clamped to the edges, LOD 0 only: each step reads one mip through its own view,
-    and the taps between texels are what makes 13 fetches cover 36 texels."""
-    vk = device.vk
-    clamp = vk.VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE
-    return vk.vkCreateSampler(
-        device.handle,
-        vk.VkSamplerCreateInfo(
-            magFilter=vk.VK_FILTER_LINEAR,
-            minFilter=vk.VK_FILTER_LINEAR,
-            mipmapMode=vk.VK_SAMPLER_MIPMAP_MODE_NEAREST,
-            addressModeU=clamp,
-            addressModeV=clamp,
-            addressModeW=clamp,
-            minLod=0.0,
-            maxLod=0.0,
-        ),
-        None,
-    )
