@@ -29,16 +29,11 @@ from ..errors import UsageError
 from ..gpu.device import Device
 from ..gpu.instance import Instance
 from ..jobs import JobPool
-from ..render.config import RenderConfig, check
-from ..render.frame_data import check_culling
-from ..render.light_clusters import check_light_culling
+from ..render.config import Caps, RenderConfig, check
 from ..render.mesh_registry import MeshRegistry
 from ..render.meshes import Meshes
-from ..render.oit_pass import check_transparency
-from ..render.ray_shadows import check_shadow_method
 from ..render.renderer import Renderer
 from ..render.scene_assets import scene_codecs
-from ..render.tone_map import check_tone_map
 from .scenes import default_schedule, is_scene_file, scene_builder
 from .settings import RunOptions, Settings
 
@@ -232,13 +227,24 @@ class Session:
         present = wanted.present if wanted.present != source.present_mode else None
         if present is not None:
             source.check_present(present)
-        renderer.check_fill(wanted.fill)
-        check_tone_map(wanted.tone_map, wanted.exposure)
-        check_light_culling(wanted.light_culling)
-        check_transparency(wanted.transparency)
-        check_shadow_method(wanted.shadow_method, self.device, renderer.target.samples)
-        culling = check_culling(wanted.culling, wanted.mode)
-        check(RenderConfig(post=wanted.post, msaa=renderer.target.samples), only=("post",))  # SSAO: one sample
+        # every render setting against the config's one table, as the renderer's constructor does
+        config = RenderConfig.from_strings(
+            mode=wanted.mode,
+            recorder=wanted.recorder,
+            culling=wanted.culling,
+            fill=wanted.fill,
+            tone_map=wanted.tone_map,
+            exposure=wanted.exposure,
+            light_culling=wanted.light_culling,
+            transparency=wanted.transparency,
+            lod=wanted.lod,
+            shadows=wanted.shadow_method,
+            shadow_denoise=wanted.shadow_denoise,
+            msaa=renderer.target.samples,
+            post=wanted.post,
+        )
+        check(config, Caps.of(self.device))
+        culling = config.culling.value
         scene = self._open(wanted.scene) if wanted.scene != self.scene else None
         renderer.set_path(wanted.mode, wanted.recorder)  # checks, then swaps
         renderer.set_fill(wanted.fill)

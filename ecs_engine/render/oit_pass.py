@@ -32,17 +32,13 @@ from ..gpu.memory import Image
 from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
 from ..gpu.render_pass import DEPTH_FORMAT_NAME
 from ..gpu.secondary import SecondaryBuffers
-from .config import Transparency, choice
+from .config import Transparency
 from .path import TargetState
 from .sky_pass import full_screen_secondary
 
 ACCUMULATION_FORMAT = "VK_FORMAT_R16G16B16A16_SFLOAT"
 REVEALAGE_FORMAT = "VK_FORMAT_R16_SFLOAT"
 TRANSPARENCY_MODES = Transparency.names()
-
-
-def check_transparency(mode: str) -> None:
-    choice("transparency", mode)  # UsageError naming the choices
 
 
 def create_oit_pass(device: Device) -> Any:

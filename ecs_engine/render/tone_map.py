@@ -23,7 +23,7 @@ import numpy as np
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout
 from ..gpu.device import Device
 from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
-from .config import RenderConfig, ToneMap, check
+from .config import ToneMap
 from .layouts import TONE_MAP_ACES, TONE_MAP_CLAMP, TONE_MAP_PUSH, TONE_MAP_REINHARD
 
 # the operators by config.ToneMap name (a member is its name: TONE_MAPS["aces"])
@@ -42,11 +42,6 @@ def wants_hdr(name: str, exposure: float, samples: int, blends: bool = False, po
     to 3.0 at alpha 0.5 over black: 0.5), the HDR colour after (1.0); or post effects are on (they
     run on the HDR colour, or between the tone map and the target: output_passes.py)."""
     return name != "clamp" or exposure != 0.0 or samples > 1 or blends or post
-
-
-def check_tone_map(name: str, exposure: float) -> None:
-    """UsageError for an unknown operator or an exposure out of range (config.RULES)."""
-    check(RenderConfig.from_strings(tone_map=name, exposure=exposure), only=("exposure",))
 
 
 class ToneMapPass:
