@@ -1,4 +1,4 @@
-"""Culling methods are one interface (render/culling/, issue 36): one factory gives each method
+"""Culling methods are one interface (render/culling/): one factory gives each method
 for its name, each method's answers to the extract stage, the chunk jobs and the indirect
 path's compute are what the old encodings (names compared, an `occlusion` flag, planes None for
 no culling, masks for temporal) decided, switching culling goes through it, and no module outside

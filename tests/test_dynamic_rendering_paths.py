@@ -1,4 +1,4 @@
-"""Steps toward dynamic rendering everywhere (issue 36): render paths whose pipelines are made
+"""Steps toward dynamic rendering everywhere: render paths whose pipelines are made
 from attachment formats instead of a render pass, and secondaries that inherit the formats of a
 vkCmdBeginRendering instead of a render pass and framebuffer. Validation is on: a pipeline or a
 secondary that does not match the rendering it is used in fails the test (conftest)."""

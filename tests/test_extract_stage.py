@@ -1,4 +1,4 @@
-"""The extract stage is the only render code that reads the World (issue 36): a scan of every
+"""The extract stage is the only render code that reads the World: a scan of every
 module under ecs_engine/render for what reads a world, which must find nothing outside the extract
 modules but the commented allow-list below; and the snapshot it makes (FrameData) carries what the
 shadow, ray and environment passes take, following the world from frame to frame.

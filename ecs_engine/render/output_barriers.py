@@ -3,7 +3,7 @@ the tone map and the overlay drawn with vkCmdBeginRendering into the swapchain o
 image), as explicit vkCmdPipelineBarrier2 calls. The scene's render pass no longer touches the
 target in the hdr and deferred forms, so nothing else moves the image between "whatever the last
 frame or the presentation engine left" and the layout its reader wants (readback: TRANSFER_SRC;
-present: PRESENT_SRC). The frame graph (issue 36) is to take these over: they are kept here, in
+present: PRESENT_SRC). The renderer's frame graph is to take these over: they are kept here, in
 one place, so that it replaces one class.
 
 - `before`: UNDEFINED -> COLOR_ATTACHMENT_OPTIMAL (the tone map writes every pixel, so the old

@@ -21,8 +21,8 @@ the scene's single-sample depth (None with MSAA); the extent; the camera's proje
 order after the scene's render pass and before the tone map, in the hdr and deferred forms only
 (the direct form has no HDR colour). Each finds the images in SHADER_READ_ONLY_OPTIMAL, the
 scene's writes visible to fragment and compute shaders, and must leave them so, its own writes
-made visible to the tone map's fragment-shader reads (its own barriers, until the frame graph of
-issue 36 places them). The renderer sets them from its post effects of the "hdr" stage
+made visible to the tone map's fragment-shader reads (its own barriers, until the renderer's frame
+graph places them). The renderer sets them from its post effects of the "hdr" stage
 (post/registry.py; `set_post`) and hands the frame's camera to `begin_post` before the frame's
 replay key is taken (the effects' keys read the inputs: SSAO's projection).
 

@@ -1,4 +1,4 @@
-"""Culling methods as one interface (issue 36): `CullingMethod` (method.py says what each stage
+"""Culling methods as one interface: `CullingMethod` (method.py says what each stage
 asks it) and its four implementations, picked from config.Culling by `culling_method`, the one
 factory. Before it, culling was decided under three encodings: names compared in the extractor
 and the renderer, a boolean `occlusion` in FrameInputs, and `planes is None` / `masks is None`

@@ -1,5 +1,5 @@
 """The culling interface: `CullingMethod`, one object per method config.Culling names, asked by
-each stage that culls instead of that stage comparing names or flags (issue 36).
+each stage that culls instead of that stage comparing names or flags.
 
 A method answers, per stage of a frame:
 - the config table (config.RULES): `supports(mode)` / `refusal(mode)`, whether a render mode
