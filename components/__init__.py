@@ -5,11 +5,15 @@ from .camera import (
     PERSPECTIVE,
     ActiveCamera,
     Camera,
+    RenderLayers,
     RenderOrigin,
+    RenderTexture,
+    Viewport,
     active_camera,
     render_origin,
 )
 from .camera_control import FlyCamera
+from .camera_views import CameraView, camera_views
 from .environment import Environment
 from .hierarchy import Parent, WorldMatrix
 from .light import DirectionalLight, PointLight, SpotLight
@@ -26,6 +30,7 @@ __all__ = [
     "ActiveCamera",
     "AngularVelocity",
     "Camera",
+    "CameraView",
     "DirectionalLight",
     "Environment",
     "FlyCamera",
@@ -39,13 +44,17 @@ __all__ = [
     "Parent",
     "PointLight",
     "PreviousTransform",
+    "RenderLayers",
     "RenderOrigin",
+    "RenderTexture",
     "Shadow",
     "SpotLight",
     "Spring",
     "Transform",
     "Velocity",
+    "Viewport",
     "WorldMatrix",
     "active_camera",
+    "camera_views",
     "render_origin",
 ]

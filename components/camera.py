@@ -1,5 +1,6 @@
-"""Cameras (position and orientation come from the entity's Transform), which one renders, and
-the render origin that matrices are made relative to.
+"""Cameras (position and orientation come from the entity's Transform), where and what each
+draws (Viewport, RenderTexture, RenderLayers: camera_views.py says how several cameras draw), which
+one the player looks through, and the render origin that matrices are made relative to.
 
 `active_camera` and `render_origin` are read by the stock systems and by the renderer alike,
 so they live with the data they read rather than in either of them.
@@ -17,6 +18,7 @@ from ecs_engine.ecs.schema import Component, Field
 from ecs_engine.ecs.world import World
 from ecs_engine.errors import UsageError
 
+from .name import NAME_LENGTH
 from .transform import LIMIT, SMALLEST, Transform
 
 PERSPECTIVE = 0
@@ -69,32 +71,95 @@ def _refuse(bad: np.ndarray, who: Any, what: Any) -> None:
         raise ValueError(f"{who(row)}: {what(row)}")
 
 
+MAX_TEXTURE_SIZE = 16384  # pixels a side; the renderer refuses what its device's maxImageDimension2D cannot make
+EDGE = 1e-9  # how far past the target's edge a viewport's float sum may land and still be its edge
+
+
+class Viewport(Component):
+    """The camera's rectangle of its target, as fractions from the top left, and its order."""
+
+    x = Field(np.float64, default=0.0, finite=True, minimum=0.0, maximum=1.0)
+    y = Field(np.float64, default=0.0, finite=True, minimum=0.0, maximum=1.0)
+    width = Field(np.float64, default=1.0, finite=True, minimum=0.0, min_exclusive=True, maximum=1.0)
+    height = Field(np.float64, default=1.0, finite=True, minimum=0.0, min_exclusive=True, maximum=1.0)
+    order = Field(np.int32, default=0)
+
+    @classmethod
+    def check(cls, values, who):
+        for start, size, axis in (("x", "width", "right"), ("y", "height", "bottom")):
+            end = np.atleast_1d(np.asarray(values[start]) + np.asarray(values[size]))
+            bad = np.flatnonzero(end > 1.0 + EDGE)
+            if bad.size:
+                row = int(bad[0])
+                raise ValueError(
+                    f"{who(row)}: Viewport.{start} + Viewport.{size} is {end[row]:g}: the viewport ends past "
+                    f"the target's {axis} edge (fractions of the target, at most 1)"
+                )
+
+
+class RenderTexture(Component):
+    """The camera draws into an image of its own, sampled by materials as texture `name`."""
+
+    name = Field(f"U{NAME_LENGTH}", default="")
+    width = Field(np.uint32, default=256, minimum=1, maximum=MAX_TEXTURE_SIZE)
+    height = Field(np.uint32, default=256, minimum=1, maximum=MAX_TEXTURE_SIZE)
+
+    @classmethod
+    def check(cls, values, who):
+        names = np.atleast_1d(values["name"])
+        empty = np.flatnonzero(np.char.str_len(names.astype(str)) == 0)
+        if empty.size:
+            raise ValueError(f"{who(int(empty[0]))}: RenderTexture.name is empty: materials sample it by name")
+
+
+class RenderLayers(Component):
+    """The layers a camera draws, or that a mesh entity is in (bit k = layer k)."""
+
+    mask = Field(np.uint32, default=1)
+
+
 class ActiveCamera(Component):
     """Tag: with several Camera entities, the one to render from (exactly one may carry it)."""
 
 
 def active_camera(world: World) -> int:
-    """The entity to render from: the only one with Camera and Transform, or else the only one
-    of those also tagged ActiveCamera. Raises UsageError otherwise."""
+    """The camera the player looks through (the render origin follows it, picking and the
+    editor use it): of the cameras with Camera and Transform that do not draw into a
+    RenderTexture, the only one, or else the one tagged ActiveCamera, or else (split screen) the
+    first by Viewport order, then entity id. Raises UsageError when there is none or it is
+    ambiguous. camera_views.py lists every camera that draws."""
     cached = _ACTIVE.get(world)
     if cached is not None and cached[0] == world.structure_version:
         return cached[1]  # which entity it is can only change with the world's structure
-    cameras = world.query(Camera, Transform, write=()).entities()
+    eid = _active_camera(world)
+    _ACTIVE[world] = (world.structure_version, eid)
+    return eid
+
+
+def _active_camera(world: World) -> int:
+    cameras = world.query(Camera, Transform, without=(RenderTexture,), write=()).entities()
     if len(cameras) == 1:
-        _ACTIVE[world] = (world.structure_version, int(cameras[0]))
         return int(cameras[0])
     if len(cameras) == 0:
+        if len(world.query(Camera, Transform, write=()).entities()):
+            raise UsageError("no camera draws into the window: every camera has a RenderTexture")
         raise UsageError("no camera: spawn an entity with Camera and Transform components")
-    tagged = world.query(Camera, Transform, with_=[ActiveCamera], write=()).entities()
+    tagged = world.query(Camera, Transform, with_=(ActiveCamera,), without=(RenderTexture,), write=()).entities()
     if len(tagged) == 1:
-        _ACTIVE[world] = (world.structure_version, int(tagged[0]))
         return int(tagged[0])
-    if len(tagged) == 0:
-        raise UsageError(
-            f"{len(cameras)} entities have Camera and Transform and none is tagged ActiveCamera: "
-            "add ActiveCamera() to the one to render from"
-        )
-    raise UsageError(f"{len(tagged)} cameras are tagged ActiveCamera: remove the tag from all but one")
+    if len(tagged) > 1:
+        raise UsageError(f"{len(tagged)} cameras are tagged ActiveCamera: remove the tag from all but one")
+    split = [
+        (int(order), int(eid))
+        for batch in world.query(Camera, Transform, Viewport, without=(RenderTexture,), write=())
+        for eid, order in zip(batch.entities, batch[Viewport].order, strict=True)
+    ]
+    if split:
+        return min(split)[1]
+    raise UsageError(
+        f"{len(cameras)} entities have Camera and Transform and none is tagged ActiveCamera: "
+        "add ActiveCamera() to the one to render from"
+    )
 
 
 # per world: (structure_version, active camera)

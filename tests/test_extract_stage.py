@@ -291,12 +291,13 @@ def test_the_renderer_s_materials_are_the_snapshot_s(given: bool) -> None:
 
 
 def _extract_systems() -> list[tuple[str, tuple[type, ...], Callable[[World], object]]]:
-    from ecs_engine.render.extract import camera, chunks, environment, lights, shadows
+    from ecs_engine.render.extract import camera, chunks, environment, lights, shadows, views
     from ecs_engine.render.extract import materials as materials_extract
 
     rows = chunks.ChunkExtract(lambda: 1)
     return [
         ("camera", camera.READS, lambda w: camera.camera_matrices(w, 1.5)),
+        ("views", views.READS, lambda w: views.extract_views(w, 64, 32)),
         ("lights", lights.READS, lambda w: lights.extract_lights(w, lights.light_kinds())),
         ("shadows", shadows.READS, shadows.ShadowExtract()),
         ("environment", environment.READS, environment.extract_environment),
@@ -305,7 +306,7 @@ def _extract_systems() -> list[tuple[str, tuple[type, ...], Callable[[World], ob
     ]
 
 
-@pytest.mark.parametrize("index", range(6))
+@pytest.mark.parametrize("index", range(7))
 def test_each_extract_function_runs_as_a_system_reading_what_it_declares(index: int) -> None:
     """Each extract function run by a system declaring its module's READS (a query or get of
     anything else fails there): what the parallel schedule needs to run them side by side."""

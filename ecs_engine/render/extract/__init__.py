@@ -5,6 +5,8 @@ schedule (each module's READS is what a system running it declares; tests/test_e
 runs each so, where an undeclared query or get fails):
 
 - camera.py: camera_matrices (extract_camera): the active camera's Camera and Transform;
+- views.py: extract_views: every camera that draws (Viewport, RenderTexture, RenderLayers),
+  with its rectangle and matrices;
 - lights.py: extract_lights: the point, spot and directional lights with a Transform;
 - shadows.py: ShadowExtract / extract_shadow_casters: the lights with a Shadow;
 - environment.py: extract_environment: the Environment resource;

@@ -48,25 +48,37 @@ def camera_matrices(
 
     The result is kept until the camera's Camera or Transform columns are written (see
     World.change_stamp), so a still camera costs a lookup; its arrays are read-only."""
+    return camera_matrices_of(world, active_camera(world), viewport_aspect, region)
+
+
+def camera_matrices_of(
+    world: World, eid: int, viewport_aspect: float, region: tuple[float, float, float, float] | None = None
+) -> CameraMatrices:
+    """camera_matrices for the camera `eid` (one of several drawing: extract/views.py)."""
     viewport_aspect = float(viewport_aspect)
     check_positive("viewport_aspect", viewport_aspect)
-    eid = active_camera(world)
     region = None if region is None else check_region(region)
     stamp = (world.change_stamp(eid, Camera, Transform), viewport_aspect, region)
-    cached = _MATRICES.get(world)
+    kept = _MATRICES.get(world)
+    if kept is None:
+        kept = _MATRICES[world] = {}
+    cached = kept.get(eid)
     if cached is not None and cached[0] == stamp:
         return cached[1]
     matrices = _camera_matrices(world, eid, viewport_aspect, region)
     for array in (matrices.projection, matrices.view, matrices.inverse_view, matrices.position, matrices.lens):
         array.flags.writeable = False
-    _MATRICES[world] = (stamp, matrices)
+    if len(kept) > MAX_KEPT:  # cameras come and go: keep the ones drawing now
+        kept.clear()
+    kept[eid] = (stamp, matrices)
     return matrices
 
 
 extract_camera = camera_matrices  # the extract stage's name for it (extract/__init__.py)
 
-# per world: (change stamp, CameraMatrices)
-_MATRICES: weakref.WeakKeyDictionary[Any, tuple[Any, CameraMatrices]] = weakref.WeakKeyDictionary()
+MAX_KEPT = 64  # cameras whose matrices are kept per world
+# per world: camera entity -> (change stamp, CameraMatrices)
+_MATRICES: weakref.WeakKeyDictionary[Any, dict[int, tuple[Any, CameraMatrices]]] = weakref.WeakKeyDictionary()
 
 
 def _camera_matrices(
