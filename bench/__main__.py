@@ -41,6 +41,7 @@ REGISTRY: dict[str, str] = {
     "peers": "peers",
     "raytracing": "raytracing",
     "lod-build": "lod_build",
+    "gpu-memory": "gpu_memory",
 }
 
 # One line each for the list in the usage text (the modules are not imported to print it).
@@ -61,6 +62,7 @@ SUMMARY: dict[str, str] = {
     "peers": "the scaling workload here and in pygfx, wall ms a frame side by side, 1k to 1M (Vulkan, wgpu)",
     "raytracing": "bottom levels per mesh, top-level build and update at 10k to 1M instances (Vulkan ray tracing)",
     "lod-build": "time and peak memory of building levels of detail, 16k to 263k vertices (CPU only)",
+    "gpu-memory": "device memory of the renderer's images per render configuration at 1280x720 (Vulkan)",
 }
 
 # The commands that work from any folder once ecs_engine is installed.
