@@ -274,17 +274,23 @@ def _tail(b: Barrier) -> tuple:
 
 
 def dependency_info(
-    vk: Any, rows: list[Barrier], images: dict[str, Any], buffers: dict[str, Any], aspects: dict[str, int]
+    vk: Any,
+    rows: list[Barrier],
+    images: dict[str, Any],
+    buffers: dict[str, Any],
+    aspects: dict[str, int],
+    drop: frozenset[str] = EMPTY,
 ) -> Any:
     """The VkDependencyInfo of these rows (images/buffers: name -> handle), for one
-    vkCmdPipelineBarrier2; it holds copies of its barriers, so it can be kept and recorded again."""
+    vkCmdPipelineBarrier2, without the stage and access names in `drop` (those of features the
+    device lacks); it holds copies of its barriers, so it can be kept and recorded again."""
     image_rows, buffer_rows = [], []
     for b in rows:
         common = {
-            "srcStageMask": flags(vk, "VK_PIPELINE_STAGE_2_", b.src_stages),
-            "srcAccessMask": flags(vk, "VK_ACCESS_2_", b.src_access),
-            "dstStageMask": flags(vk, "VK_PIPELINE_STAGE_2_", b.dst_stages),
-            "dstAccessMask": flags(vk, "VK_ACCESS_2_", b.dst_access),
+            "srcStageMask": flags(vk, "VK_PIPELINE_STAGE_2_", b.src_stages - drop),
+            "srcAccessMask": flags(vk, "VK_ACCESS_2_", b.src_access - drop),
+            "dstStageMask": flags(vk, "VK_PIPELINE_STAGE_2_", b.dst_stages - drop),
+            "dstAccessMask": flags(vk, "VK_ACCESS_2_", b.dst_access - drop),
             "srcQueueFamilyIndex": vk.VK_QUEUE_FAMILY_IGNORED,
             "dstQueueFamilyIndex": vk.VK_QUEUE_FAMILY_IGNORED,
         }

@@ -10,7 +10,8 @@ from typing import Any
 from ...errors import UsageError
 from ...gpu.functions import handle_int
 from ...gpu.owned import Owned
-from .barriers import Barrier, BarrierPlan, dependency_info, plan_barriers
+from .access import RAY_TRACING_ONLY
+from .barriers import EMPTY, Barrier, BarrierPlan, dependency_info, plan_barriers
 from .builder import Declared, Pass, declare
 from .compile import Imported, Structure, plan_structure
 from .context import PassContext
@@ -231,8 +232,9 @@ class FrameGraph:
             return cached[1]
         vk = self.device.vk
         aspects = {n: aspect_of(vk, res.format) for n, res in c.structure.resources.items() if res.kind == "image"}
+        drop = EMPTY if self.device.features.get("rayTracing") else RAY_TRACING_ONLY
         info = dependency_info(
-            vk, rows, {n: i.handle for n, i in images.items()}, {n: b.handle for n, b in buffers.items()}, aspects
+            vk, rows, {n: i.handle for n, i in images.items()}, {n: b.handle for n, b in buffers.items()}, aspects, drop
         )
         self._infos[batch] = (handles, info)
         return info

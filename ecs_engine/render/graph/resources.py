@@ -1,152 +1,16 @@
-"""What the frame graph's resources are: descriptions of transient images and buffers, the one
-table that says what each kind of access means to Vulkan, and the images and buffers a pass
-records with.
-
-The table holds Vulkan names without their prefixes (stage "COMPUTE_SHADER", access
-"SHADER_SAMPLED_READ", layout "GENERAL"), so a graph can be planned and its barrier plan checked
-without a device; `flags()` turns names into bits when barriers are recorded.
-"""
+"""What the frame graph's resources are: descriptions of transient images and buffers, the
+images and buffers a pass records with, and the names of Vulkan values (the access table is
+access.py; `flags()` turns its names into bits when barriers are recorded)."""
 
 from __future__ import annotations
 
 import math
 import re
 from dataclasses import dataclass
-from enum import Enum
 from typing import Any
 
 from ...errors import UsageError
-
-
-class Load(Enum):
-    """What a write does with what the resource held: LOAD keeps it (the pass reads it: it
-    depends on the pass that wrote it); CLEAR and DONT_CARE discard it (CLEAR fills attachments
-    with the write's clear value; other writes clear themselves if they need to)."""
-
-    LOAD = "load"
-    CLEAR = "clear"
-    DONT_CARE = "dont_care"
-
-
-@dataclass(frozen=True)
-class Usage:
-    """One access kind: pipeline stages, memory accesses, the image layout (None: buffers only),
-    whether it reads / writes, the image and buffer usage bits it needs, and whether it applies
-    to images, buffers or both."""
-
-    stages: tuple[str, ...]
-    access: tuple[str, ...]
-    layout: str | None
-    reads: bool
-    writes: bool
-    image_usage: tuple[str, ...] = ()
-    buffer_usage: tuple[str, ...] = ()
-
-
-_FRAG_TESTS = ("EARLY_FRAGMENT_TESTS", "LATE_FRAGMENT_TESTS")
-
-
-class Access(Enum):
-    COLOR_WRITE = Usage(
-        ("COLOR_ATTACHMENT_OUTPUT",),
-        ("COLOR_ATTACHMENT_WRITE",),
-        "COLOR_ATTACHMENT_OPTIMAL",
-        False,
-        True,
-        ("COLOR_ATTACHMENT",),
-    )
-    COLOR_READ_WRITE = Usage(
-        ("COLOR_ATTACHMENT_OUTPUT",),
-        ("COLOR_ATTACHMENT_READ", "COLOR_ATTACHMENT_WRITE"),
-        "COLOR_ATTACHMENT_OPTIMAL",
-        True,
-        True,
-        ("COLOR_ATTACHMENT",),
-    )
-    DEPTH_WRITE = Usage(
-        _FRAG_TESTS,
-        ("DEPTH_STENCIL_ATTACHMENT_READ", "DEPTH_STENCIL_ATTACHMENT_WRITE"),
-        "DEPTH_STENCIL_ATTACHMENT_OPTIMAL",
-        False,
-        True,
-        ("DEPTH_STENCIL_ATTACHMENT",),
-    )
-    DEPTH_READ = Usage(  # a depth attachment tested, not written (also sampled in this layout)
-        _FRAG_TESTS,
-        ("DEPTH_STENCIL_ATTACHMENT_READ",),
-        "DEPTH_STENCIL_READ_ONLY_OPTIMAL",
-        True,
-        False,
-        ("DEPTH_STENCIL_ATTACHMENT",),
-    )
-    RESOLVE_WRITE = Usage(  # MSAA resolves run in the colour output stage as attachment writes
-        ("COLOR_ATTACHMENT_OUTPUT",),
-        ("COLOR_ATTACHMENT_WRITE",),
-        "COLOR_ATTACHMENT_OPTIMAL",
-        False,
-        True,
-        ("COLOR_ATTACHMENT",),
-    )
-    FRAGMENT_SAMPLED = Usage(
-        ("FRAGMENT_SHADER",), ("SHADER_SAMPLED_READ",), "SHADER_READ_ONLY_OPTIMAL", True, False, ("SAMPLED",)
-    )
-    COMPUTE_SAMPLED = Usage(
-        ("COMPUTE_SHADER",), ("SHADER_SAMPLED_READ",), "SHADER_READ_ONLY_OPTIMAL", True, False, ("SAMPLED",)
-    )
-    COMPUTE_READ = Usage(
-        ("COMPUTE_SHADER",), ("SHADER_STORAGE_READ",), "GENERAL", True, False, ("STORAGE",), ("STORAGE_BUFFER",)
-    )
-    COMPUTE_WRITE = Usage(
-        ("COMPUTE_SHADER",), ("SHADER_STORAGE_WRITE",), "GENERAL", False, True, ("STORAGE",), ("STORAGE_BUFFER",)
-    )
-    COMPUTE_READ_WRITE = Usage(
-        ("COMPUTE_SHADER",),
-        ("SHADER_STORAGE_READ", "SHADER_STORAGE_WRITE"),
-        "GENERAL",
-        True,
-        True,
-        ("STORAGE",),
-        ("STORAGE_BUFFER",),
-    )
-    TRANSFER_READ = Usage(
-        ("TRANSFER",), ("TRANSFER_READ",), "TRANSFER_SRC_OPTIMAL", True, False, ("TRANSFER_SRC",), ("TRANSFER_SRC",)
-    )
-    TRANSFER_WRITE = Usage(
-        ("TRANSFER",), ("TRANSFER_WRITE",), "TRANSFER_DST_OPTIMAL", False, True, ("TRANSFER_DST",), ("TRANSFER_DST",)
-    )
-    INDIRECT_READ = Usage(("DRAW_INDIRECT",), ("INDIRECT_COMMAND_READ",), None, True, False, (), ("INDIRECT_BUFFER",))
-    VERTEX_READ = Usage(
-        ("VERTEX_INPUT",),
-        ("VERTEX_ATTRIBUTE_READ", "INDEX_READ"),
-        None,
-        True,
-        False,
-        (),
-        ("VERTEX_BUFFER", "INDEX_BUFFER"),
-    )
-    UNIFORM_READ = Usage(
-        ("VERTEX_SHADER", "FRAGMENT_SHADER", "COMPUTE_SHADER"),
-        ("UNIFORM_READ",),
-        None,
-        True,
-        False,
-        (),
-        ("UNIFORM_BUFFER",),
-    )
-    # handed to the presentation engine: nothing after it in the frame (the semaphore waits)
-    PRESENT = Usage(("NONE",), ("NONE",), "PRESENT_SRC_KHR", True, False)
-
-    @property
-    def usage(self) -> Usage:
-        return self.value
-
-    @property
-    def for_images(self) -> bool:
-        return self.usage.layout is not None
-
-    @property
-    def for_buffers(self) -> bool:
-        return bool(self.usage.buffer_usage)
+from .access import Access, Load
 
 
 def flags(vk: Any, prefix: str, names: tuple[str, ...] | frozenset[str]) -> int:
