@@ -5,10 +5,11 @@ do not overlap) and records the barriers between them. See docs/frame-graph.md."
 from .barriers import Barrier
 from .builder import Pass, PassBuilder
 from .context import PassContext
-from .graph import FrameGraph
+from .graph import UNREPLAYABLE, FrameGraph
 from .resources import Access, BufferDesc, GraphBuffer, GraphImage, ImageDesc, Load
 
 __all__ = [
+    "UNREPLAYABLE",
     "Access",
     "Barrier",
     "BufferDesc",

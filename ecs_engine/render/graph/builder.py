@@ -27,7 +27,8 @@ class Pass:
         raise NotImplementedError
 
     def key(self) -> Hashable:
-        """What the recording depends on besides its resources (frame replay compares it)."""
+        """What the recording depends on besides its resources (frame replay compares it);
+        `UNREPLAYABLE` (graph.py) for a pass that records something new every frame."""
         return None
 
     def destroy(self) -> None:

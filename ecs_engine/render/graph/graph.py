@@ -4,6 +4,7 @@ command buffer. Without a device (`FrameGraph(None)`) it plans only (tests, `des
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -20,6 +21,24 @@ from .resources import GraphBuffer, GraphImage, format_name, layout_name
 from .transient import Packing, Transients, aspect_of, estimated_requirements, pack
 
 
+class _Unreplayable:
+    """The key of a pass that records something new every frame (UI, sorted rows, rays): equal
+    to no key, itself included, and `FrameGraph.key()` puts a new object in its place each call
+    (a tuple compares its items by identity first, so the sentinel alone would equal itself)."""
+
+    def __eq__(self, other: object) -> bool:
+        return False
+
+    def __hash__(self) -> int:
+        return id(self)
+
+    def __repr__(self) -> str:
+        return "UNREPLAYABLE"
+
+
+UNREPLAYABLE: Any = _Unreplayable()
+
+
 @dataclass
 class Compiled:
     """One compile's result: the structure (order, culled, lifetimes), where the transients
@@ -33,6 +52,8 @@ class Compiled:
 
 
 class FrameGraph:
+    UNREPLAYABLE = UNREPLAYABLE  # what Pass.key() returns to make every frame record again
+
     def __init__(self, device: Any) -> None:
         self.device = device
         self._passes: list[Pass] = []
@@ -192,9 +213,10 @@ class FrameGraph:
                 buffers[name] = GraphBuffer(name, imp.handle, imp.size)
         return images, buffers
 
-    def execute(self, cb: Any) -> None:
+    def execute(self, cb: Any, on_pass_end: Callable[[str], None] | None = None) -> None:
         """Record the passes that run, each after its batch of barriers, then the imports'
-        transitions to their layout_after."""
+        transitions to their layout_after. `on_pass_end(name)` is called after each pass is
+        recorded (outside any rendering: a timestamp may be written there)."""
         c = self._ready()
         if self.device is None:
             raise UsageError("a frame graph without a device only plans; it cannot execute")
@@ -210,6 +232,8 @@ class FrameGraph:
             ctx._enter(cb, name, s.uses[name])
             by_name[name].record(cb, ctx)
             ctx._leave()
+            if on_pass_end is not None:
+                on_pass_end(name)
         if c.barriers.after:
             vk.vkCmdPipelineBarrier2(cb, self._info(c, "", c.barriers.after, images, buffers))
 
@@ -246,7 +270,15 @@ class FrameGraph:
         by_name = {p.name: p for p in self._passes}
         vk = self.device.vk if self.device is not None else None
         handles = tuple((name, _int(vk, imp.handle), _int(vk, imp.view)) for name, imp in sorted(self._imports.items()))
-        return (*((name, by_name[name].key()) for name in c.structure.order), c.structure.extent, handles)
+        keys = ((name, by_name[name].key()) for name in c.structure.order)
+        return (*((n, object() if k is UNREPLAYABLE else k) for n, k in keys), c.structure.extent, handles)
+
+    def replayable(self) -> bool:
+        """Whether a recorded frame can be replayed at all: no pass that runs returns
+        UNREPLAYABLE as its key."""
+        c = self._ready()
+        by_name = {p.name: p for p in self._passes}
+        return not any(by_name[name].key() is UNREPLAYABLE for name in c.structure.order)
 
     def describe(self) -> str:
         """The passes in order, what each reads and writes and the barriers before it, then

