@@ -50,16 +50,21 @@ class PassContext:
             raise UsageError(f"pass {self.pass_name!r} asks for buffer {name!r}, which the graph does not have")
         return found
 
-    def _declared(self, name: str, mip: int, accesses: tuple[Access, ...]) -> Use:
+    def _declared(self, name: str, mip: int, layer: int, accesses: tuple[Access, ...]) -> Use:
         for use in self._uses:
             if use.resource == name and use.access in accesses and use.mip in (None, mip):
-                return use
+                if use.layer in (None, layer):
+                    return use
         wanted = " or ".join(a.name for a in accesses)
-        raise UsageError(f"pass {self.pass_name!r} renders to {name!r} (mip {mip}) without declaring it as {wanted}")
+        raise UsageError(
+            f"pass {self.pass_name!r} renders to {name!r} (mip {mip}, layer {layer}) without declaring it as {wanted}"
+        )
 
-    def _attachment(self, name: str, mip: int, accesses: tuple[Access, ...], resolve: str | None = None) -> Any:
+    def _attachment(
+        self, name: str, mip: int, layer: int, accesses: tuple[Access, ...], resolve: str | None = None
+    ) -> Any:
         vk = self.vk
-        use = self._declared(name, mip, accesses)
+        use = self._declared(name, mip, layer, accesses)
         image = self.image(name)
         fmt = self._formats[name]
         load = {
@@ -76,15 +81,15 @@ class PassContext:
             clear = vk.VkClearValue(color=vk.VkClearColorValue(float32=list(use.clear)))
         extra: dict[str, Any] = {}
         if resolve is not None:
-            self._declared(resolve, mip, (Access.RESOLVE_WRITE,))
+            self._declared(resolve, mip, layer, (Access.RESOLVE_WRITE,))
             integer = fmt.endswith(_INTEGER)
             extra = {
                 "resolveMode": vk.VK_RESOLVE_MODE_SAMPLE_ZERO_BIT if integer else vk.VK_RESOLVE_MODE_AVERAGE_BIT,
-                "resolveImageView": self.image(resolve).mip_view(mip),
+                "resolveImageView": self.image(resolve).attachment_view(mip, layer),
                 "resolveImageLayout": vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
             }
         return vk.VkRenderingAttachmentInfo(
-            imageView=image.mip_view(mip),
+            imageView=image.attachment_view(mip, layer),
             imageLayout=getattr(vk, f"VK_IMAGE_LAYOUT_{use.access.usage.layout}"),
             loadOp=load,
             # a read-only depth attachment stores nothing (a store would be a write)
@@ -101,10 +106,14 @@ class PassContext:
         *,
         secondaries: bool = False,
         mip: int = 0,
+        layer: int = 0,
+        area: tuple[int, int, int, int] | None = None,
     ) -> None:
-        """vkCmdBeginRendering over these declared attachments at `mip`; `resolve[i]` (declared
-        RESOLVE_WRITE) receives colour i resolved. Viewport and scissor cover the attachments
-        (not with `secondaries`: those set their own)."""
+        """vkCmdBeginRendering over these declared attachments at `mip` and array `layer`;
+        `resolve[i]` (declared RESOLVE_WRITE) receives colour i resolved. `area` (x, y, w, h):
+        the render area (CLEAR clears it only; declare the write `region=True` to keep the
+        rest), default the whole attachment. Viewport and scissor are the area (not with
+        `secondaries`: those set their own)."""
         vk = self.vk
         if isinstance(colors, str):
             colors = (colors,)
@@ -114,18 +123,19 @@ class PassContext:
             raise UsageError(f"pass {self.pass_name!r}: one resolve target (or None) per colour attachment")
         color_accesses = (Access.COLOR_WRITE, Access.COLOR_READ_WRITE)
         infos = [
-            self._attachment(name, mip, color_accesses, resolve[i] if resolve is not None else None)
+            self._attachment(name, mip, layer, color_accesses, resolve[i] if resolve is not None else None)
             for i, name in enumerate(colors)
         ]
-        depth_info = self._attachment(depth, mip, (Access.DEPTH_WRITE, Access.DEPTH_READ)) if depth else None
+        depth_accesses = (Access.DEPTH_WRITE, Access.DEPTH_READ)
+        depth_info = self._attachment(depth, mip, layer, depth_accesses) if depth else None
         named = [*colors, *([depth] if depth else [])]
         if not named:
             raise UsageError(f"pass {self.pass_name!r} begins rendering with no attachment")
-        w, h = self.image(named[0]).mip_extent(mip)
-        area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(w, h))
+        x, y, w, h = self._area(named[0], mip, area)
+        rect = vk.VkRect2D(offset=vk.VkOffset2D(x, y), extent=vk.VkExtent2D(w, h))
         info = vk.VkRenderingInfo(
             flags=vk.VK_RENDERING_CONTENTS_SECONDARY_COMMAND_BUFFERS_BIT if secondaries else 0,
-            renderArea=area,
+            renderArea=rect,
             layerCount=1,
             pColorAttachments=infos or None,
             pDepthAttachment=depth_info,
@@ -133,8 +143,17 @@ class PassContext:
         vk.vkCmdBeginRendering(self._cb, info)
         self._rendering = True
         if not secondaries:
-            vk.vkCmdSetViewport(self._cb, 0, 1, [vk.VkViewport(0.0, 0.0, float(w), float(h), 0.0, 1.0)])
-            vk.vkCmdSetScissor(self._cb, 0, 1, [area])
+            vk.vkCmdSetViewport(self._cb, 0, 1, [vk.VkViewport(float(x), float(y), float(w), float(h), 0.0, 1.0)])
+            vk.vkCmdSetScissor(self._cb, 0, 1, [rect])
+
+    def _area(self, name: str, mip: int, area: tuple[int, int, int, int] | None) -> tuple[int, int, int, int]:
+        w, h = self.image(name).mip_extent(mip)
+        if area is None:
+            return (0, 0, w, h)
+        x, y, aw, ah = (int(v) for v in area)
+        if x < 0 or y < 0 or aw < 1 or ah < 1 or x + aw > w or y + ah > h:
+            raise UsageError(f"pass {self.pass_name!r}: render area {area} is not inside {name!r} ({w}x{h})")
+        return (x, y, aw, ah)
 
     def end_rendering(self) -> None:
         if not self._rendering:

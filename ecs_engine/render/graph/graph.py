@@ -113,9 +113,18 @@ class FrameGraph:
         layout_before: Any,
         layout_after: Any,
         mip_views: tuple[Any, ...] = (),
+        layers: int = 1,
+        layer_views: tuple[Any, ...] = (),
+        stage_before: str | tuple[str, ...] = "ALL_COMMANDS",
     ) -> None:
         """An image owned outside the graph; importing a name again replaces it (a new
-        swapchain image each frame: only a change of format, size or layouts recompiles)."""
+        swapchain image each frame: only a change of format, size, layers, layouts or
+        stage_before recompiles). `layers`: an array image, `layer_views` one view of each
+        layer (what `begin_rendering(layer=k)` renders to). `stage_before`: the pipeline stages
+        (names as "COLOR_ATTACHMENT_OUTPUT") whose earlier work its first barrier waits for; a
+        swapchain image names the acquire semaphore's wait stage so that the two chain."""
+        if layers < 1 or (layer_views and len(layer_views) != layers):
+            raise UsageError(f"image {name!r}: {layers} layer(s) and {len(layer_views)} layer view(s)")
         vk = self._vk() if not all(isinstance(v, str) for v in (format, layout_before, layout_after)) else None
         fmt = format_name(vk, format)
         value = int(format) if not isinstance(format, str) else int(getattr(vk, f"VK_FORMAT_{fmt}", 0)) if vk else 0
@@ -132,6 +141,9 @@ class FrameGraph:
             layout_name(vk, layout_before),
             layout_name(vk, layout_after),
             mip_views=tuple(mip_views),
+            layers=int(layers),
+            layer_views=tuple(layer_views),
+            stage_before=_stage_names(stage_before),
         )
 
     def import_buffer(self, name: str, *, handle: Any, size: int) -> None:
@@ -207,7 +219,16 @@ class FrameGraph:
         for name, imp in self._imports.items():
             if imp.kind == "image":
                 images[name] = GraphImage(
-                    name, imp.handle, imp.view, imp.format_value, imp.extent, imp.mips, imp.samples, imp.mip_views
+                    name,
+                    imp.handle,
+                    imp.view,
+                    imp.format_value,
+                    imp.extent,
+                    imp.mips,
+                    imp.samples,
+                    imp.mip_views,
+                    imp.layers,
+                    imp.layer_views,
                 )
             else:
                 buffers[name] = GraphBuffer(name, imp.handle, imp.size)
@@ -296,6 +317,19 @@ class FrameGraph:
         passes, self._passes = self._passes, []
         for p in reversed(passes):
             p.destroy()
+
+
+def _stage_names(stages: str | tuple[str, ...]) -> frozenset[str]:
+    """Stage names without the Vulkan prefix and bit suffix ("COLOR_ATTACHMENT_OUTPUT")."""
+    if isinstance(stages, str):
+        stages = (stages,)
+    names = set()
+    for stage in stages:
+        if not isinstance(stage, str) or not stage:
+            raise UsageError(f"stage_before takes pipeline stage names, not {stage!r}")
+        name = stage.removeprefix("VK_PIPELINE_STAGE_2_").removeprefix("VK_PIPELINE_STAGE_")
+        names.add(name[: -len("_BIT")] if name.endswith("_BIT") else name)
+    return frozenset(names)
 
 
 def _int(vk: Any, handle: Any) -> Any:

@@ -76,13 +76,14 @@ def texel_bytes(fmt: str) -> int:
 @dataclass(frozen=True)
 class ImageDesc:
     """A transient image: its format's name, its size relative to the graph's extent (or an
-    absolute `size`), mip levels and MSAA samples."""
+    absolute `size`), mip levels, MSAA samples and array layers."""
 
     format: str = "VK_FORMAT_R16G16B16A16_SFLOAT"
     scale: float = 1.0
     size: tuple[int, int] | None = None
     mips: int = 1
     samples: int = 1
+    layers: int = 1
 
     def __post_init__(self) -> None:
         if not self.format.removeprefix("VK_FORMAT_") or not re.fullmatch(r"(VK_FORMAT_)?[A-Z0-9_]+", self.format):
@@ -93,6 +94,8 @@ class ImageDesc:
             raise UsageError(f"an image has mips >= 1 and 1, 2, 4 ... 64 samples, not {self.mips}, {self.samples}")
         if self.mips > 1 and self.samples > 1:
             raise UsageError("a multisampled image has one mip level")
+        if self.layers < 1:
+            raise UsageError(f"an image has at least one layer, not {self.layers}")
 
     @property
     def format_name(self) -> str:
@@ -108,7 +111,7 @@ class ImageDesc:
         """Memory the image takes by its texel size (the device's own figure replaces it)."""
         w, h = self.extent(graph_extent)
         texels = sum(max(1, w >> m) * max(1, h >> m) for m in range(self.mips))
-        return texels * texel_bytes(self.format_name) * self.samples
+        return texels * texel_bytes(self.format_name) * self.samples * self.layers
 
 
 @dataclass(frozen=True)
@@ -128,8 +131,9 @@ def mip_extent(extent: tuple[int, int], mip: int) -> tuple[int, int]:
 
 @dataclass
 class GraphImage:
-    """An image as a pass records with it: the handle, a view of all mips, views of each mip,
-    the VkFormat (its value), size, mips and samples."""
+    """An image as a pass records with it: the handle, a view of all mips (and layers), views of
+    each mip, the VkFormat (its value), size, mips and samples; with layers, a view of each
+    layer (its first mip)."""
 
     name: str
     handle: Any
@@ -139,6 +143,25 @@ class GraphImage:
     mips: int
     samples: int
     mip_views: tuple[Any, ...] = ()
+    layers: int = 1
+    layer_views: tuple[Any, ...] = ()
+
+    def layer_view(self, layer: int) -> Any:
+        if not 0 <= layer < self.layers:
+            raise UsageError(f"image {self.name!r} has {self.layers} layer(s); no layer {layer}")
+        if self.layers == 1:
+            return self.mip_view(0)
+        if not self.layer_views:
+            raise UsageError(f"image {self.name!r} was imported without views of each layer (layer_views=)")
+        return self.layer_views[layer]
+
+    def attachment_view(self, mip: int, layer: int) -> Any:
+        """The view that renders to (mip, layer): a mip's view, or a layer's (of mip 0)."""
+        if self.layers == 1:
+            return self.mip_view(mip)
+        if mip != 0:
+            raise UsageError(f"image {self.name!r} has views of each layer at mip 0 only, not mip {mip}")
+        return self.layer_view(layer)
 
     def mip_view(self, mip: int) -> Any:
         if not 0 <= mip < self.mips:
@@ -164,8 +187,8 @@ class GraphBuffer:
 
 @dataclass(frozen=True)
 class Use:
-    """One declared access of a pass: resource, access, mip (None: all), and for writes the load
-    op and clear value."""
+    """One declared access of a pass: resource, access, mip and layer (None: all), for writes the
+    load op and clear value, and whether the write covers a region only (the rest is kept)."""
 
     resource: str
     access: Access
@@ -173,13 +196,22 @@ class Use:
     write: bool
     load: Load = Load.LOAD
     clear: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    layer: int | None = None
+    region: bool = False
 
     @property
     def keeps_contents(self) -> bool:
-        """The access sees what was there before (a read, a LOAD, a read-modify-write)."""
-        return not self.write or self.load is Load.LOAD or self.access.usage.reads
+        """The access sees or keeps what was there before (a read, a LOAD, a read-modify-write,
+        a write of a region: no UNDEFINED transition; it runs after the last writer)."""
+        return not self.write or self.load is Load.LOAD or self.access.usage.reads or self.region
+
+    @property
+    def needs_writer(self) -> bool:
+        """The access reads what an earlier pass wrote (a region write may be the first)."""
+        return self.keeps_contents and not (self.region and not self.access.usage.reads and self.load is not Load.LOAD)
 
     def describe(self) -> str:
         where = "" if self.mip is None else f"[mip {self.mip}]"
+        where += ("" if self.layer is None else f"[layer {self.layer}]") + (" region" if self.region else "")
         load = f" {self.load.value}" if self.write and self.load is not Load.LOAD else ""
         return f"{self.resource}{where} {self.access.name}{load}"
