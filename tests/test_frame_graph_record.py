@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 import test_frame_graph_gpu as gpu
-from test_frame_graph import Step, clear, copy, readback
+from test_frame_graph import Step, clear, copy, make, readback
 from test_frame_graph_gpu import Blit, Clear, Readback, pattern
 
-from ecs_engine.render.graph import UNREPLAYABLE, FrameGraph
+from ecs_engine.render.graph import UNREPLAYABLE, Access, FrameGraph, ImageDesc, Load
 
 run = gpu.run  # the fixture: a graph of passes executed on the shared device, read back
 
@@ -47,3 +47,34 @@ def test_on_pass_end_is_called_after_each_pass_that_runs():
         out.destroy()
     assert marks == ["clear", "flip", "readback"]
     np.testing.assert_array_equal(pixels, np.flipud(pattern()))
+
+
+def stores(g):
+    return sorted((name, use.resource) for name, use in g.compiled.structure.dont_store)
+
+
+def test_writes_nothing_later_reads_store_dont_care():
+    msaa = ImageDesc(format="VK_FORMAT_R16G16B16A16_SFLOAT", samples=4)
+
+    def scene(b):
+        b.create("ms", msaa)
+        b.create("hdr", ImageDesc())
+        b.create("depth", ImageDesc(format="VK_FORMAT_D32_SFLOAT", samples=4))
+        b.write("ms", Access.COLOR_WRITE, load=Load.CLEAR)
+        b.write("depth", Access.DEPTH_WRITE, load=Load.CLEAR)
+        b.write("hdr", Access.RESOLVE_WRITE)
+
+    g = make(("scene", scene), ("tone", lambda b: (b.read("hdr", Access.FRAGMENT_SAMPLED), b.side_effect())))
+    assert stores(g) == [("scene", "depth"), ("scene", "ms")]  # the resolve target is read: stored
+    assert "writes ms COLOR_WRITE clear store dont_care" in g.describe()
+    g = make(("scene", scene), ("ao", lambda b: (b.read("depth", Access.DEPTH_SAMPLED), b.side_effect())))
+    assert stores(g) == [("scene", "hdr"), ("scene", "ms")]  # the depth is sampled later: stored
+    g = make(("a", clear("x")), ("b", lambda b: b.write("x", Access.COLOR_READ_WRITE)), outputs=["x"])
+    assert g.order == ["a", "b"] and stores(g) == []  # loaded by b, then an output
+
+
+def test_an_msaa_image_stored_dont_care_still_resolves(run):
+    msaa = ImageDesc(format="VK_FORMAT_R16G16B16A16_SFLOAT", samples=4)
+    graph, pixels = run([Clear("draw", "ms", desc=msaa, resolve="resolved"), Readback("resolved")])
+    np.testing.assert_array_equal(pixels, pattern())
+    assert stores(graph) == [("draw", "ms")]

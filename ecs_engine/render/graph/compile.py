@@ -89,6 +89,8 @@ class Structure:
     lifetimes: dict[str, tuple[int, int]] = field(default_factory=dict)  # transient -> (first, last) index
     usage: dict[str, set[str]] = field(default_factory=dict)  # transient -> usage flag names
     outputs: tuple[str, ...] = ()
+    # (pass, use) of writes nothing later in the frame reads: their attachments store DONT_CARE
+    dont_store: frozenset[tuple[str, Use]] = frozenset()
 
 
 def mips_of(use: Use, resource: Resource) -> range:
@@ -229,6 +231,7 @@ def plan_structure(
         outputs=tuple(outputs),
     )
     _lifetimes(structure)
+    structure.dont_store = _dont_store(structure)
     return structure
 
 
@@ -247,3 +250,29 @@ def _lifetimes(s: Structure) -> None:
     for name in s.outputs:
         if name in s.lifetimes:
             s.lifetimes[name] = (s.lifetimes[name][0], max(len(s.order) - 1, 0))
+
+
+def _dont_store(s: Structure) -> frozenset[tuple[str, Use]]:
+    """Writes of transient images (not outputs) that no later pass of the frame sees: before
+    anything reads or keeps them, a later write discards them, or nothing uses them again (an
+    MSAA image after its resolve, a depth nobody samples). Storing them would be wasted bandwidth."""
+    found = set()
+    for i, pass_name in enumerate(s.order):
+        for use in s.uses[pass_name]:
+            res = s.resources[use.resource]
+            if use.write and res.kind == "image" and res.imported is None and res.name not in s.outputs:
+                if not _seen_later(s, i, res, set(subresources(use, res))):
+                    found.add((pass_name, use))
+    return frozenset(found)
+
+
+def _seen_later(s: Structure, position: int, res: Resource, pending: set[tuple[int, int]]) -> bool:
+    for later in s.order[position + 1 :]:
+        uses = [u for u in s.uses[later] if u.resource == res.name]
+        if any(u.keeps_contents and pending & set(subresources(u, res)) for u in uses):
+            return True
+        for u in uses:
+            pending -= set(subresources(u, res))
+        if not pending:
+            return False
+    return False

@@ -19,6 +19,7 @@ class PassContext:
         images: dict[str, GraphImage],
         buffers: dict[str, GraphBuffer],
         format_names: dict[str, str],
+        dont_store: frozenset[tuple[str, Use]] = frozenset(),
     ) -> None:
         self.device = device
         self.vk = device.vk
@@ -26,6 +27,7 @@ class PassContext:
         self._images = images
         self._buffers = buffers
         self._formats = format_names
+        self._dont_store = dont_store  # writes whose attachments store nothing (compile.py)
         self.pass_name = ""
         self._uses: tuple[Use, ...] = ()
         self._rendering = False
@@ -92,11 +94,18 @@ class PassContext:
             imageView=image.attachment_view(mip, layer),
             imageLayout=getattr(vk, f"VK_IMAGE_LAYOUT_{use.access.usage.layout}"),
             loadOp=load,
-            # a read-only depth attachment stores nothing (a store would be a write)
-            storeOp=vk.VK_ATTACHMENT_STORE_OP_STORE if use.write else vk.VK_ATTACHMENT_STORE_OP_NONE,
+            storeOp=self._store_op(use),
             clearValue=clear,
             **extra,
         )
+
+    def _store_op(self, use: Use) -> int:
+        vk = self.vk
+        if not use.write:  # a read-only depth attachment stores nothing (a store would be a write)
+            return int(vk.VK_ATTACHMENT_STORE_OP_NONE)
+        if (self.pass_name, use) in self._dont_store:  # nothing later reads it
+            return int(vk.VK_ATTACHMENT_STORE_OP_DONT_CARE)
+        return int(vk.VK_ATTACHMENT_STORE_OP_STORE)
 
     def begin_rendering(
         self,

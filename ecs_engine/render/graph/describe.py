@@ -17,7 +17,7 @@ def describe(s: Structure, packing: Packing, barriers: BarrierPlan) -> str:
     for i, name in enumerate(s.order):
         uses = s.uses[name]
         reads = [u.describe() for u in uses if not u.write]
-        writes = [u.describe() for u in uses if u.write]
+        writes = [u.describe() + (" store dont_care" if (name, u) in s.dont_store else "") for u in uses if u.write]
         flag = " (side effect)" if name in s.side_effects else ""
         lines.append(f"  {i} {name:<{width}}{flag}".rstrip())
         if reads:

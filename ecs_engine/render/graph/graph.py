@@ -244,7 +244,7 @@ class FrameGraph:
         vk = self.device.vk
         images, buffers = self._resources(c)
         s = c.structure
-        ctx = PassContext(self.device, s.extent, images, buffers, self._formats(c))
+        ctx = PassContext(self.device, s.extent, images, buffers, self._formats(c), s.dont_store)
         by_name = {p.name: p for p in self._passes}
         for name in s.order:
             rows = c.barriers.before[name]
