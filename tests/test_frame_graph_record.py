@@ -78,3 +78,18 @@ def test_an_msaa_image_stored_dont_care_still_resolves(run):
     graph, pixels = run([Clear("draw", "ms", desc=msaa, resolve="resolved"), Readback("resolved")])
     np.testing.assert_array_equal(pixels, pattern())
     assert stores(graph) == [("draw", "ms")]
+
+
+def test_renderings_are_made_once_per_compile_and_recorded_again(run):
+    graph, first = run([Clear("clear", "a"), Blit("flip", "a", "b"), Readback("b")])
+    (made,) = graph._renderings.values()
+    device = graph.device
+    device.submit_once(graph.execute)  # the second frame reuses the structs
+    (again,) = graph._renderings.values()
+    assert again is made
+    np.testing.assert_array_equal(first, np.flipud(pattern()))
+    graph.compile((gpu.W - 2, gpu.H))  # new transients: new views, new structs
+    assert graph._renderings == {}
+    device.submit_once(graph.execute)
+    (remade,) = graph._renderings.values()
+    assert remade is not made

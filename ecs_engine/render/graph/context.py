@@ -3,12 +3,24 @@ attachments it declared (load ops and clear values as declared, viewport and sci
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 from ...errors import UsageError
 from .resources import Access, GraphBuffer, GraphImage, Load, Use, is_depth
 
 _INTEGER = ("_UINT", "_SINT")
+
+
+@dataclass(frozen=True)
+class Rendering:
+    """One begin_rendering's structs: the VkRenderingInfo's address, the viewport and scissor
+    arrays, and what their pointers point to (kept alive with them)."""
+
+    info: Any
+    viewport: Any
+    scissor: Any
+    keep: Any
 
 
 class PassContext:
@@ -20,6 +32,7 @@ class PassContext:
         buffers: dict[str, GraphBuffer],
         format_names: dict[str, str],
         dont_store: frozenset[tuple[str, Use]] = frozenset(),
+        made: dict[tuple, Rendering] | None = None,
     ) -> None:
         self.device = device
         self.vk = device.vk
@@ -28,6 +41,8 @@ class PassContext:
         self._buffers = buffers
         self._formats = format_names
         self._dont_store = dont_store  # writes whose attachments store nothing (compile.py)
+        # begin_rendering's structs by what they were made from (the graph keeps them per compile)
+        self._made: dict[tuple, Rendering] = made if made is not None else {}
         self.pass_name = ""
         self._uses: tuple[Use, ...] = ()
         self._rendering = False
@@ -122,12 +137,42 @@ class PassContext:
         `resolve[i]` (declared RESOLVE_WRITE) receives colour i resolved. `area` (x, y, w, h):
         the render area (CLEAR clears it only; declare the write `region=True` to keep the
         rest), default the whole attachment. Viewport and scissor are the area (not with
-        `secondaries`: those set their own)."""
-        vk = self.vk
-        if isinstance(colors, str):
-            colors = (colors,)
+        `secondaries`: those set their own). The structs are made once per pass, attachments'
+        views and area (kept until the graph compiles again) and recorded by raw calls."""
+        colors = (colors,) if isinstance(colors, str) else tuple(colors)
+        resolve = tuple(resolve) if resolve is not None else None
+        area = tuple(area) if area is not None else None  # type: ignore[assignment]
         if self._rendering:
             raise UsageError(f"pass {self.pass_name!r} begins rendering twice")
+        images = self._images
+        try:
+            views = tuple(images[n].attachment_view(mip, layer) for n in (*colors, *(resolve or ()), depth) if n)
+        except KeyError as missing:
+            raise UsageError(f"pass {self.pass_name!r} renders to {missing}, which the graph does not have") from None
+        key = (self.pass_name, colors, depth, resolve, secondaries, mip, layer, area, views)
+        made = self._made.get(key)
+        if made is None:
+            if len(self._made) >= 64:  # imported images come and go (swapchain remakes)
+                self._made.clear()
+            made = self._made[key] = self._make(colors, depth, resolve, secondaries, mip, layer, area)
+        lib, cb = self.vk.lib, self._cb
+        lib.vkCmdBeginRendering(cb, made.info)
+        self._rendering = True
+        if not secondaries:
+            lib.vkCmdSetViewport(cb, 0, 1, made.viewport)
+            lib.vkCmdSetScissor(cb, 0, 1, made.scissor)
+
+    def _make(
+        self,
+        colors: tuple[str, ...],
+        depth: str | None,
+        resolve: tuple[str | None, ...] | None,
+        secondaries: bool,
+        mip: int,
+        layer: int,
+        area: tuple[int, int, int, int] | None,
+    ) -> Rendering:
+        vk = self.vk
         if resolve is not None and len(resolve) != len(colors):
             raise UsageError(f"pass {self.pass_name!r}: one resolve target (or None) per colour attachment")
         color_accesses = (Access.COLOR_WRITE, Access.COLOR_READ_WRITE)
@@ -149,11 +194,10 @@ class PassContext:
             pColorAttachments=infos or None,
             pDepthAttachment=depth_info,
         )
-        vk.vkCmdBeginRendering(self._cb, info)
-        self._rendering = True
-        if not secondaries:
-            vk.vkCmdSetViewport(self._cb, 0, 1, [vk.VkViewport(float(x), float(y), float(w), float(h), 0.0, 1.0)])
-            vk.vkCmdSetScissor(self._cb, 0, 1, [rect])
+        ffi = vk.ffi
+        viewport = ffi.new("VkViewport[1]", [(float(x), float(y), float(w), float(h), 0.0, 1.0)])
+        scissor = ffi.new("VkRect2D[1]", [((x, y), (w, h))])
+        return Rendering(ffi.addressof(info), viewport, scissor, (info, infos, depth_info))
 
     def _area(self, name: str, mip: int, area: tuple[int, int, int, int] | None) -> tuple[int, int, int, int]:
         w, h = self.image(name).mip_extent(mip)
@@ -167,5 +211,5 @@ class PassContext:
     def end_rendering(self) -> None:
         if not self._rendering:
             raise UsageError(f"pass {self.pass_name!r} ends rendering it did not begin")
-        self.vk.vkCmdEndRendering(self._cb)
+        self.vk.lib.vkCmdEndRendering(self._cb)
         self._rendering = False

@@ -5,7 +5,7 @@ command buffer. Without a device (`FrameGraph(None)`) it plans only (tests, `des
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from ...errors import UsageError
@@ -49,6 +49,7 @@ class Compiled:
     packing: Packing
     barriers: BarrierPlan
     transients: Transients | None
+    formats: dict[str, str] = field(default_factory=dict)  # resource -> its format's name
 
 
 class FrameGraph:
@@ -64,6 +65,7 @@ class FrameGraph:
         # per barrier batch: the handles it was made for and its VkDependencyInfo (made once per
         # compile, again only for an import's new handle)
         self._infos: dict[str, tuple[tuple, Any]] = {}
+        self._renderings: dict[tuple, Any] = {}  # PassContext.begin_rendering's, per compile
         self.compiles = 0  # how many compiles did work (a cached one does none)
 
     # ------------------------------------------------------------------ declaring the frame
@@ -187,8 +189,11 @@ class FrameGraph:
             packing = transients.packing
         else:
             packing = pack(estimated_requirements(structure))
-        self.compiled = Compiled(signature, structure, packing, plan_barriers(structure, packing), transients)
+        formats = {name: res.format for name, res in structure.resources.items()}
+        barriers = plan_barriers(structure, packing)
+        self.compiled = Compiled(signature, structure, packing, barriers, transients, formats)
         self._infos.clear()
+        self._renderings.clear()
         self.compiles += 1
 
     def _ready(self) -> Compiled:
@@ -241,25 +246,22 @@ class FrameGraph:
         c = self._ready()
         if self.device is None:
             raise UsageError("a frame graph without a device only plans; it cannot execute")
-        vk = self.device.vk
+        lib = self.device.vk.lib
         images, buffers = self._resources(c)
         s = c.structure
-        ctx = PassContext(self.device, s.extent, images, buffers, self._formats(c), s.dont_store)
+        ctx = PassContext(self.device, s.extent, images, buffers, c.formats, s.dont_store, self._renderings)
         by_name = {p.name: p for p in self._passes}
         for name in s.order:
             rows = c.barriers.before[name]
             if rows:
-                vk.vkCmdPipelineBarrier2(cb, self._info(c, name, rows, images, buffers))
+                lib.vkCmdPipelineBarrier2(cb, self._info(c, name, rows, images, buffers))
             ctx._enter(cb, name, s.uses[name])
             by_name[name].record(cb, ctx)
             ctx._leave()
             if on_pass_end is not None:
                 on_pass_end(name)
         if c.barriers.after:
-            vk.vkCmdPipelineBarrier2(cb, self._info(c, "", c.barriers.after, images, buffers))
-
-    def _formats(self, c: Compiled) -> dict[str, str]:
-        return {name: res.format for name, res in c.structure.resources.items()}
+            lib.vkCmdPipelineBarrier2(cb, self._info(c, "", c.barriers.after, images, buffers))
 
     def _info(
         self,
@@ -274,15 +276,16 @@ class FrameGraph:
         )
         cached = self._infos.get(batch)
         if cached is not None and cached[0] == handles:
-            return cached[1]
+            return cached[1][0]
         vk = self.device.vk
         aspects = {n: aspect_of(vk, res.format) for n, res in c.structure.resources.items() if res.kind == "image"}
         drop = EMPTY if self.device.features.get("rayTracing") else RAY_TRACING_ONLY
         info = dependency_info(
             vk, rows, {n: i.handle for n, i in images.items()}, {n: b.handle for n, b in buffers.items()}, aspects, drop
         )
-        self._infos[batch] = (handles, info)
-        return info
+        pointer = vk.ffi.addressof(info)  # for the raw call (the binding's wrapper costs more)
+        self._infos[batch] = (handles, (pointer, info))
+        return pointer
 
     def key(self) -> tuple:
         """What a recorded frame depends on: each running pass's (name, key()) in order, the
