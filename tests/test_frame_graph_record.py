@@ -5,12 +5,15 @@ renderings and secondaries' inheritance (planned, then on lavapipe with validati
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import test_frame_graph_gpu as gpu
 from test_frame_graph import Step, clear, copy, make, readback
 from test_frame_graph_gpu import Blit, Clear, Readback, pattern
 
-from ecs_engine.render.graph import UNREPLAYABLE, Access, FrameGraph, ImageDesc, Load
+from ecs_engine.errors import UsageError
+from ecs_engine.render.graph import UNREPLAYABLE, Access, FrameGraph, ImageDesc, Load, Pass
 
+DEPTH = "VK_FORMAT_D32_SFLOAT"
 run = gpu.run  # the fixture: a graph of passes executed on the shared device, read back
 
 
@@ -93,3 +96,73 @@ def test_renderings_are_made_once_per_compile_and_recorded_again(run):
     device.submit_once(graph.execute)
     (remade,) = graph._renderings.values()
     assert remade is not made
+
+
+def test_attachment_formats_come_from_the_declarations_without_a_compile():
+    from ecs_engine.gpu.loader import load_vulkan
+
+    vk = load_vulkan()
+    g = FrameGraph(None)
+    msaa = ImageDesc(format="VK_FORMAT_R16G16B16A16_SFLOAT", samples=4)
+    g.add_pass(Step("scene", lambda b: (b.create("ms", msaa), b.create("z", ImageDesc(format=DEPTH, samples=4)))))
+    formats = g.attachment_formats(("ms",), "z")
+    assert formats.colors == (vk.VK_FORMAT_R16G16B16A16_SFLOAT,) and formats.depth == vk.VK_FORMAT_D32_SFLOAT
+    assert formats.samples == 4 and g.compiled is None
+    g.add_pass(Step("ui", lambda b: b.create("one", ImageDesc())))
+    with pytest.raises(UsageError, match="different sample counts"):
+        g.attachment_formats(("ms", "one"))
+    with pytest.raises(UsageError, match="'nope' is neither"):
+        g.attachment_formats(("nope",))
+
+
+class DrawnBySecondary(Pass):
+    """Clears "a" by its load op; the rectangle is cleared by a secondary recorded before the
+    primary was begun, with the graph's inheritance."""
+
+    name = "secondary"
+
+    def __init__(self):
+        self.secondary = None
+
+    def setup(self, b):
+        b.create("a", gpu.HDR)
+        b.write("a", Access.COLOR_WRITE, load=Load.CLEAR, clear=gpu.BACK)
+
+    def record(self, cb, ctx):
+        ctx.begin_rendering(colors=("a",), secondaries=True)
+        ctx.vk.vkCmdExecuteCommands(cb, 1, [self.secondary])
+        ctx.end_rendering()
+
+
+def test_a_secondary_begun_before_the_primary_draws_inside_the_pass():
+    from ecs_engine.gpu.secondary import SecondaryBuffers, end_command_buffer
+
+    device = gpu.shared_device()
+    vk = device.vk
+    graph = FrameGraph(device)
+    secondaries = SecondaryBuffers(device, 1)
+    out = gpu.Buffer(device, gpu.W * gpu.H * 8, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, gpu.HOST)
+    try:
+        draw = DrawnBySecondary()
+        graph.add_pass(draw)
+        graph.add_pass(Readback("a"))
+        graph.import_buffer("out", handle=out.handle, size=out.size)
+        begin = graph.inheritance(secondaries, ("a",))  # before compile and before any primary
+        assert graph.inheritance(secondaries, ("a",)) is begin
+        sec = draw.secondary = secondaries.begin(0, begin)
+        x, y, w, h = gpu.RECT
+        value = vk.VkClearValue(color=vk.VkClearColorValue(float32=list(gpu.SPOT)))
+        attachment = vk.VkClearAttachment(aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, colorAttachment=0, clearValue=value)
+        rect = vk.VkClearRect(
+            rect=vk.VkRect2D(vk.VkOffset2D(x, y), vk.VkExtent2D(w, h)), baseArrayLayer=0, layerCount=1
+        )
+        vk.vkCmdClearAttachments(sec, 1, [attachment], 1, [rect])
+        end_command_buffer(vk, sec)
+        graph.compile((gpu.W, gpu.H))
+        device.submit_once(graph.execute)
+        pixels = out.array(np.float16, (gpu.H, gpu.W, 4)).copy()
+    finally:
+        graph.destroy()
+        secondaries.destroy()
+        out.destroy()
+    np.testing.assert_array_equal(pixels, pattern())

@@ -6,19 +6,23 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ...errors import UsageError
 from ...gpu.functions import handle_int
 from ...gpu.owned import Owned
+from ...gpu.pipeline import AttachmentFormats
 from .access import RAY_TRACING_ONLY
 from .barriers import EMPTY, Barrier, BarrierPlan, dependency_info, plan_barriers
 from .builder import Declared, Pass, declare
 from .compile import Imported, Structure, plan_structure
 from .context import PassContext
 from .describe import describe
-from .resources import GraphBuffer, GraphImage, format_name, layout_name
+from .resources import GraphBuffer, GraphImage, ImageDesc, format_name, layout_name
 from .transient import Packing, Transients, aspect_of, estimated_requirements, pack
+
+if TYPE_CHECKING:
+    from ...gpu.secondary import SecondaryBuffers
 
 
 class _Unreplayable:
@@ -286,6 +290,42 @@ class FrameGraph:
         pointer = vk.ffi.addressof(info)  # for the raw call (the binding's wrapper costs more)
         self._infos[batch] = (handles, (pointer, info))
         return pointer
+
+    def attachment_formats(self, colors: tuple[str, ...] = (), depth: str | None = None) -> AttachmentFormats:
+        """The VkFormats and sample count of these attachments, from the passes' declarations
+        and the imports (compiled or not): what a pipeline or a secondary drawn into them needs."""
+        if isinstance(colors, str):
+            colors = (colors,)
+        resources = self.compiled.structure.resources if self.compiled is not None else None
+        if resources is None:
+            declared = [(p.name, declare(p)) for p in self._passes]
+            descs = {name: desc for _, d in declared for name, desc in d.creates}
+        vk = self._vk()
+        values, samples = [], set()
+        for name in (*colors, *([depth] if depth else [])):
+            imp = self._imports.get(name)
+            desc = resources[name].desc if resources is not None and name in resources else None
+            if resources is None:
+                desc = descs.get(name)
+            if imp is not None and imp.kind == "image":
+                fmt, count = imp.format, imp.samples
+            elif isinstance(desc, ImageDesc):
+                fmt, count = desc.format_name, desc.samples
+            else:
+                raise UsageError(f"attachment {name!r} is neither an image a pass creates nor an imported one")
+            values.append(int(getattr(vk, f"VK_FORMAT_{fmt}")))
+            samples.add(count)
+        if len(samples) > 1:
+            raise UsageError(f"attachments {colors} {depth or ''} have different sample counts {sorted(samples)}")
+        n = len(colors)
+        return AttachmentFormats(tuple(values[:n]), values[n] if depth else 0, samples.pop() if samples else 1)
+
+    def inheritance(self, secondaries: SecondaryBuffers, colors: tuple[str, ...] = (), depth: str | None = None) -> Any:
+        """The begin info of secondaries drawn inside a pass's `begin_rendering(colors, depth,
+        secondaries=True)`: the attachments' formats inherited (SecondaryBuffers.begin_info_rendering,
+        one per formats, kept by it). Needs no compile, so jobs may begin their secondaries
+        before the primary is opened."""
+        return secondaries.begin_info_rendering(self.attachment_formats(colors, depth))
 
     def key(self) -> tuple:
         """What a recorded frame depends on: each running pass's (name, key()) in order, the
