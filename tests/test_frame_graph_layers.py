@@ -49,7 +49,10 @@ def test_layers_have_their_own_state_and_barriers_cover_layer_ranges():
     kept = [(r.base_layer, r.layer_count) for r in rows if r.old_layout == "DEPTH_STENCIL_READ_ONLY_OPTIMAL"]
     assert drawn == [(1, 1), (3, 1)] and kept == [(0, 1), (2, 1)]
     assert all(r.new_layout == "DEPTH_STENCIL_READ_ONLY_OPTIMAL" for r in rows)
-    assert "barrier shadows[mip 0][layer 3] DEPTH_STENCIL_ATTACHMENT_OPTIMAL" in shadow_graph().describe()
+    text = shadow_graph().describe()
+    assert "barrier shadows[mip 0][layer 3] DEPTH_STENCIL_ATTACHMENT_OPTIMAL" in text
+    assert "barrier shadows[mip 0][layer 0] (ALL_COMMANDS -> " in text  # a layer named even alone
+    assert "imported shadows: D32_SFLOAT 32x32, 4 layers, DEPTH_STENCIL_READ_ONLY_OPTIMAL -> " in text
 
 
 def test_a_use_of_every_layer_is_one_barrier_and_layers_are_checked():
@@ -108,6 +111,9 @@ def test_an_imports_first_barrier_waits_on_its_stage_before():
     g.compile((8, 8))
     (first,) = g.compiled.barriers.before["draw"]
     assert first.src_stages == {"COLOR_ATTACHMENT_OUTPUT"} and first.dst_stages == {"COLOR_ATTACHMENT_OUTPUT"}
+    assert (
+        "imported swap: B8G8R8A8_SRGB 8x8, UNDEFINED after COLOR_ATTACHMENT_OUTPUT -> PRESENT_SRC_KHR" in g.describe()
+    )
     swap(g, "COLOR_ATTACHMENT_OUTPUT", handle=5)  # the next image: nothing to compile
     g.compile((8, 8))
     assert g.compiles == 1

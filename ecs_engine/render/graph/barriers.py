@@ -44,13 +44,14 @@ class Barrier:
     base_layer: int = 0
     layer_count: int = 1
 
-    def describe(self) -> str:
+    def describe(self, layered: bool = False) -> str:
+        """One line; `layered`: the image has several layers, so the range is always named."""
         mips = (
             ""
             if self.base_mip is None
             else f"[mip {self.base_mip}" + (f"..{self.base_mip + self.mip_count - 1}]" if self.mip_count > 1 else "]")
         )
-        if self.base_mip is not None and (self.base_layer or self.layer_count > 1):
+        if self.base_mip is not None and (layered or self.base_layer or self.layer_count > 1):
             last = self.base_layer + self.layer_count - 1
             mips += f"[layer {self.base_layer}" + (f"..{last}]" if last > self.base_layer else "]")
         layouts = f" {self.old_layout} -> {self.new_layout}" if self.old_layout != self.new_layout else ""

@@ -14,6 +14,24 @@ if TYPE_CHECKING:
     from .context import PassContext
 
 
+class _Unreplayable:
+    """The key of a pass that records something new every frame (UI, sorted rows, rays): equal
+    to no key, itself included, and `FrameGraph.key()` puts a new object in its place each call
+    (a tuple compares its items by identity first, so the sentinel alone would equal itself)."""
+
+    def __eq__(self, other: object) -> bool:
+        return False
+
+    def __hash__(self) -> int:
+        return id(self)
+
+    def __repr__(self) -> str:
+        return "UNREPLAYABLE"
+
+
+UNREPLAYABLE: Any = _Unreplayable()
+
+
 class Pass:
     """A step of the frame. Subclasses set `name`, declare in `setup` (which only declares: the
     graph calls it at each compile to see whether anything changed) and record in `record`."""

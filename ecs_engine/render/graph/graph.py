@@ -14,33 +14,16 @@ from ...gpu.owned import Owned
 from ...gpu.pipeline import AttachmentFormats
 from .access import RAY_TRACING_ONLY
 from .barriers import EMPTY, Barrier, BarrierPlan, dependency_info, plan_barriers
-from .builder import Declared, Pass, declare
+from .builder import UNREPLAYABLE, Declared, Pass, declare
 from .compile import Imported, Structure, plan_structure
 from .context import PassContext
 from .describe import describe
-from .resources import GraphBuffer, GraphImage, ImageDesc, format_name, layout_name
+from .formats import attachment_formats
+from .resources import GraphBuffer, GraphImage, format_name, layout_name
 from .transient import Packing, Transients, aspect_of, estimated_requirements, pack
 
 if TYPE_CHECKING:
     from ...gpu.secondary import SecondaryBuffers
-
-
-class _Unreplayable:
-    """The key of a pass that records something new every frame (UI, sorted rows, rays): equal
-    to no key, itself included, and `FrameGraph.key()` puts a new object in its place each call
-    (a tuple compares its items by identity first, so the sentinel alone would equal itself)."""
-
-    def __eq__(self, other: object) -> bool:
-        return False
-
-    def __hash__(self) -> int:
-        return id(self)
-
-    def __repr__(self) -> str:
-        return "UNREPLAYABLE"
-
-
-UNREPLAYABLE: Any = _Unreplayable()
 
 
 @dataclass
@@ -294,31 +277,11 @@ class FrameGraph:
     def attachment_formats(self, colors: tuple[str, ...] = (), depth: str | None = None) -> AttachmentFormats:
         """The VkFormats and sample count of these attachments, from the passes' declarations
         and the imports (compiled or not): what a pipeline or a secondary drawn into them needs."""
-        if isinstance(colors, str):
-            colors = (colors,)
-        resources = self.compiled.structure.resources if self.compiled is not None else None
-        if resources is None:
-            declared = [(p.name, declare(p)) for p in self._passes]
-            descs = {name: desc for _, d in declared for name, desc in d.creates}
-        vk = self._vk()
-        values, samples = [], set()
-        for name in (*colors, *([depth] if depth else [])):
-            imp = self._imports.get(name)
-            desc = resources[name].desc if resources is not None and name in resources else None
-            if resources is None:
-                desc = descs.get(name)
-            if imp is not None and imp.kind == "image":
-                fmt, count = imp.format, imp.samples
-            elif isinstance(desc, ImageDesc):
-                fmt, count = desc.format_name, desc.samples
-            else:
-                raise UsageError(f"attachment {name!r} is neither an image a pass creates nor an imported one")
-            values.append(int(getattr(vk, f"VK_FORMAT_{fmt}")))
-            samples.add(count)
-        if len(samples) > 1:
-            raise UsageError(f"attachments {colors} {depth or ''} have different sample counts {sorted(samples)}")
-        n = len(colors)
-        return AttachmentFormats(tuple(values[:n]), values[n] if depth else 0, samples.pop() if samples else 1)
+        if self.compiled is not None:
+            descs = {n: r.desc for n, r in self.compiled.structure.resources.items() if r.desc is not None}
+        else:
+            descs = {name: desc for p in self._passes for name, desc in declare(p).creates}
+        return attachment_formats(self._vk(), colors, depth, descs, self._imports)
 
     def inheritance(self, secondaries: SecondaryBuffers, colors: tuple[str, ...] = (), depth: str | None = None) -> Any:
         """The begin info of secondaries drawn inside a pass's `begin_rendering(colors, depth,
