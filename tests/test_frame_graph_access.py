@@ -150,3 +150,23 @@ def test_depth_sampled_and_read_by_the_host_on_a_device(run):
     assert sampled.new_layout == "DEPTH_STENCIL_READ_ONLY_OPTIMAL" and RAY_SHADERS in sampled.dst_stages
     (host,) = graph.compiled.barriers.before["host"]
     assert host.dst_stages == {"HOST"}
+
+
+def test_ray_tracing_stages_are_left_out_where_the_device_has_none():
+    from ecs_engine.gpu.loader import load_vulkan
+    from ecs_engine.render.graph.access import RAY_TRACING_ONLY
+    from ecs_engine.render.graph.barriers import dependency_info
+
+    vk = load_vulkan()
+    g = make(
+        ("shadow", lambda b: (b.create("z", DEPTH), b.write("z", Access.DEPTH_WRITE, load=Load.CLEAR))),
+        ("light", lambda b: (b.read("z", Access.DEPTH_SAMPLED), b.side_effect())),
+    )
+    rows = g.compiled.barriers.before["light"]
+    aspects = {"z": vk.VK_IMAGE_ASPECT_DEPTH_BIT}
+    ray = vk.VK_PIPELINE_STAGE_2_RAY_TRACING_SHADER_BIT_KHR
+    shaders = vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT
+    kept = dependency_info(vk, rows, {"z": vk.ffi.NULL}, {}, aspects)
+    assert kept.pImageMemoryBarriers[0].dstStageMask == shaders | ray
+    dropped = dependency_info(vk, rows, {"z": vk.ffi.NULL}, {}, aspects, RAY_TRACING_ONLY)
+    assert dropped.pImageMemoryBarriers[0].dstStageMask == shaders

@@ -179,6 +179,10 @@ def test_each_layer_rendered_alone_and_one_area_kept_around(run):
     np.testing.assert_array_equal(pixels[1], np.broadcast_to(np.float16((0, 1, 0, 1)), (H, W, 4)))
     np.testing.assert_array_equal(pixels[2], pattern())  # the area cleared, the rest kept
     assert graph.compiled.transients.images["arr"].layers == 3
+    (made,) = [m for k, m in graph._renderings.items() if k[0] == "area"]
+    viewport, scissor = made.viewport[0], made.scissor[0]  # the render area's
+    assert (viewport.x, viewport.y, viewport.width, viewport.height) == (x, y, w, h)
+    assert (scissor.offset.x, scissor.offset.y, scissor.extent.width, scissor.extent.height) == (x, y, w, h)
     (to_read,) = graph.compiled.barriers.before["readback"][:1]
     assert (to_read.base_layer, to_read.layer_count) == (0, 3)
 
