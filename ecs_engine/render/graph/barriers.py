@@ -1,24 +1,25 @@
-"""Barriers from declared accesses: the state of each (resource, mip) is followed through the
-passes that run, and before each pass one batch of barriers brings what it uses into the
+"""Barriers from declared accesses: the state of each (resource, mip, layer) is followed through
+the passes that run, and before each pass one batch of barriers brings what it uses into the
 layout and visibility its accesses need (synchronization2: one vkCmdPipelineBarrier2 per pass).
 
 The plan is data (Barrier rows of Vulkan names), made without a device; `record_barriers`
-turns a batch into Vulkan structs. Rules, per (resource, mip):
+turns a batch into Vulkan structs. Rules, per (resource, mip, layer):
 - first use of a transient: from UNDEFINED, after the last accesses of any image placed in the
-  same bytes before it (aliasing), else after nothing;
-- first use of an import: from its layout_before, after any earlier work (ALL_COMMANDS);
+  same bytes before it (aliasing) and the frame before's uses of its memory;
+- first use of an import: from its layout_before, after the work of its stage_before (any
+  earlier work: ALL_COMMANDS, or a semaphore's wait stage);
 - a new layout, or a write after anything, or a read of a write not yet made visible to its
   stages: a barrier from the writes and reads since the last write; a write that discards the
-  contents (CLEAR / DONT_CARE) transitions from UNDEFINED;
+  contents (CLEAR / DONT_CARE, not of a region) transitions from UNDEFINED;
 - after the last pass, imported images go to their layout_after.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
-from .compile import Structure, mips_of
+from .compile import Structure, subresources
 from .resources import flags
 from .transient import Packing
 
@@ -28,7 +29,8 @@ WHOLE_SIZE = (1 << 64) - 1  # VK_WHOLE_SIZE (the binding has it as -1, which a V
 
 @dataclass(frozen=True)
 class Barrier:
-    """One barrier of the plan. Buffers have no mips and no layouts (None)."""
+    """One barrier of the plan: mips base_mip.. and layers base_layer.. (count of each). Buffers
+    have no mips and no layouts (None)."""
 
     resource: str
     base_mip: int | None
@@ -39,13 +41,19 @@ class Barrier:
     src_access: frozenset[str]
     dst_stages: frozenset[str]
     dst_access: frozenset[str]
+    base_layer: int = 0
+    layer_count: int = 1
 
-    def describe(self) -> str:
+    def describe(self, layered: bool = False) -> str:
+        """One line; `layered`: the image has several layers, so the range is always named."""
         mips = (
             ""
             if self.base_mip is None
             else f"[mip {self.base_mip}" + (f"..{self.base_mip + self.mip_count - 1}]" if self.mip_count > 1 else "]")
         )
+        if self.base_mip is not None and (layered or self.base_layer or self.layer_count > 1):
+            last = self.base_layer + self.layer_count - 1
+            mips += f"[layer {self.base_layer}" + (f"..{last}]" if last > self.base_layer else "]")
         layouts = f" {self.old_layout} -> {self.new_layout}" if self.old_layout != self.new_layout else ""
         src = "|".join(sorted(self.src_stages)) or "NONE"
         dst = "|".join(sorted(self.dst_stages)) or "NONE"
@@ -64,7 +72,7 @@ class _State:
 
 @dataclass
 class _Need:
-    """What one pass needs of one (resource, mip): its accesses merged."""
+    """What one pass needs of one (resource, mip, layer): its accesses merged."""
 
     stages: frozenset[str]
     access: frozenset[str]
@@ -79,14 +87,17 @@ class BarrierPlan:
     after: list[Barrier] = field(default_factory=list)  # imports to their layout_after
 
 
-def _needs(s: Structure, pass_name: str) -> dict[tuple[str, int], _Need]:
-    found: dict[tuple[str, int], _Need] = {}
+Sub = tuple[str, int, int]  # (resource, mip, layer)
+
+
+def _needs(s: Structure, pass_name: str) -> dict[Sub, _Need]:
+    found: dict[Sub, _Need] = {}
     for use in s.uses[pass_name]:
         res = s.resources[use.resource]
         u = use.access.usage
         layout = u.layout if res.kind == "image" else None
-        for mip in mips_of(use, res) if res.kind == "image" else range(1):
-            had = found.get((res.name, mip))
+        for mip, layer in subresources(use, res):
+            had = found.get((res.name, mip, layer))
             need = _Need(frozenset(u.stages), frozenset(u.access), layout, use.write, not use.keeps_contents)
             if had is not None:
                 need = _Need(
@@ -96,68 +107,75 @@ def _needs(s: Structure, pass_name: str) -> dict[tuple[str, int], _Need]:
                     had.writes or need.writes,
                     had.discards and need.discards,
                 )
-            found[(res.name, mip)] = need
+            found[(res.name, mip, layer)] = need
     return found
 
 
 def plan_barriers(s: Structure, packing: Packing) -> BarrierPlan:
     plan = BarrierPlan()
-    states: dict[tuple[str, int], _State] = {}
+    states: dict[Sub, _State] = {}
     for position, pass_name in enumerate(s.order):
         rows: list[Barrier] = []
-        for (name, mip), need in _needs(s, pass_name).items():
+        for (name, mip, layer), need in _needs(s, pass_name).items():
             res = s.resources[name]
             image = res.kind == "image"
-            st = states.get((name, mip))
+            st = states.get((name, mip, layer))
             row: Barrier | None = None
+            at = (mip, layer)
             if st is None:
                 if res.imported is not None:
                     before = res.imported.layout_before if image else None
                     if image and need.discards and before != need.layout:
                         before = "UNDEFINED"
-                    st = _State(before, frozenset({"ALL_COMMANDS"}), frozenset({"MEMORY_WRITE"}))
-                    row = _row(name, mip, image, st.layout, need, st.write_stages, st.write_access)
+                    st = _State(before, res.imported.stage_before, frozenset({"MEMORY_WRITE"}))
+                    row = _row(name, at, image, st.layout, need, st.write_stages, st.write_access)
                 elif image:
                     src, access = _aliased_before(s, packing, states, name, position)
                     prior, prior_writes = _last_frame(s, packing, name)
                     st = _State("UNDEFINED")
-                    row = _row(name, mip, image, "UNDEFINED", need, src | prior, access | prior_writes)
+                    row = _row(name, at, image, "UNDEFINED", need, src | prior, access | prior_writes)
                 else:
                     st = _State(None)
                     if need.writes:  # the frame before may still read or write it (frames in flight)
                         prior, prior_writes = _last_frame(s, packing, name)
-                        row = _row(name, mip, image, None, need, prior, prior_writes)
+                        row = _row(name, at, image, None, need, prior, prior_writes)
             elif image and st.layout != need.layout:
                 old = "UNDEFINED" if need.discards else st.layout
-                row = _row(name, mip, image, old, need, st.write_stages | st.read_stages, st.write_access)
+                row = _row(name, at, image, old, need, st.write_stages | st.read_stages, st.write_access)
             elif st.write_stages:
                 seen = need.stages <= st.synced_stages and need.access <= st.synced_access
                 if need.writes or not seen:
-                    row = _row(name, mip, image, st.layout, need, st.write_stages | st.read_stages, st.write_access)
+                    row = _row(name, at, image, st.layout, need, st.write_stages | st.read_stages, st.write_access)
             elif need.writes and st.read_stages:  # a write after reads only: wait for the reads
-                row = _row(name, mip, image, st.layout, need, st.read_stages, EMPTY)
+                row = _row(name, at, image, st.layout, need, st.read_stages, EMPTY)
             if row is not None:
                 rows.append(row)
             if need.writes:
-                states[(name, mip)] = _State(need.layout, need.stages, need.access)
+                states[(name, mip, layer)] = _State(need.layout, need.stages, need.access)
                 continue
             st.layout = need.layout
             st.read_stages |= need.stages
             if row is not None:  # the last write is now visible to these stages
                 st.synced_stages |= need.stages
                 st.synced_access |= need.access
-            states[(name, mip)] = st
+            states[(name, mip, layer)] = st
         plan.before[pass_name] = merge_mips(rows)
     plan.after = merge_mips(_final(s, states))
     return plan
 
 
 def _row(
-    name: str, mip: int, image: bool, old: str | None, need: _Need, src: frozenset[str], access: frozenset[str]
+    name: str,
+    at: tuple[int, int],
+    image: bool,
+    old: str | None,
+    need: _Need,
+    src: frozenset[str],
+    access: frozenset[str],
 ) -> Barrier:
     return Barrier(
         name,
-        mip if image else None,
+        at[0] if image else None,
         1,
         old if image else None,
         need.layout if image else None,
@@ -165,11 +183,12 @@ def _row(
         access,
         need.stages,
         need.access,
+        at[1],
     )
 
 
 def _aliased_before(
-    s: Structure, packing: Packing, states: dict[tuple[str, int], _State], name: str, position: int
+    s: Structure, packing: Packing, states: dict[Sub, _State], name: str, position: int
 ) -> tuple[frozenset[str], frozenset[str]]:
     """The stages and writes of images that lived earlier in bytes `name` now takes."""
     stages, access = EMPTY, EMPTY
@@ -179,7 +198,7 @@ def _aliased_before(
         if other == name or last >= position or other not in packing.placements:
             continue
         if packing.overlapping(name, other):
-            for (res, _), st in states.items():
+            for (res, _, _), st in states.items():
                 if res == other:
                     stages |= st.write_stages | st.read_stages
                     access |= st.write_access
@@ -206,7 +225,7 @@ def _last_frame(s: Structure, packing: Packing, name: str) -> tuple[frozenset[st
     return frozenset(stages), frozenset(writes)
 
 
-def _final(s: Structure, states: dict[tuple[str, int], _State]) -> list[Barrier]:
+def _final(s: Structure, states: dict[Sub, _State]) -> list[Barrier]:
     rows = []
     for name, res in s.resources.items():
         imp = res.imported
@@ -216,54 +235,43 @@ def _final(s: Structure, states: dict[tuple[str, int], _State]) -> list[Barrier]
         dst_stages = frozenset({"NONE"} if present else {"ALL_COMMANDS"})
         dst_access = frozenset({"NONE"} if present else {"MEMORY_READ", "MEMORY_WRITE"})
         for mip in range(res.mips):
-            st = states.get((name, mip))
-            if st is None:
-                if imp.layout_before != imp.layout_after:
-                    rows.append(
-                        Barrier(
-                            name,
-                            mip,
-                            1,
-                            imp.layout_before,
-                            imp.layout_after,
-                            frozenset({"ALL_COMMANDS"}),
-                            frozenset({"MEMORY_WRITE"}),
-                            dst_stages,
-                            dst_access,
-                        )
-                    )
-            elif st.layout != imp.layout_after or st.write_stages:
-                rows.append(
-                    Barrier(
-                        name,
-                        mip,
-                        1,
-                        st.layout,
-                        imp.layout_after,
-                        st.write_stages | st.read_stages,
-                        st.write_access,
-                        dst_stages,
-                        dst_access,
-                    )
-                )
+            for layer in range(res.layers):
+                st = states.get((name, mip, layer))
+                if st is None:
+                    st = _State(imp.layout_before, imp.stage_before, frozenset({"MEMORY_WRITE"}))
+                    if imp.layout_before == imp.layout_after:
+                        continue
+                elif st.layout == imp.layout_after and not st.write_stages:
+                    continue
+                src = st.write_stages | st.read_stages
+                tail = (imp.layout_after, src, st.write_access, dst_stages, dst_access, layer)
+                rows.append(Barrier(name, mip, 1, st.layout, *tail))
     return rows
 
 
 def merge_mips(rows: list[Barrier]) -> list[Barrier]:
-    """Barriers of consecutive mips of one image that differ only in the mip become one."""
+    """Barriers of neighbouring layers of one mip, then of neighbouring mips over the same layers,
+    of one image that differ in nothing else become one."""
+    return _merge(_merge(rows, layers=True), layers=False)
+
+
+def _merge(rows: list[Barrier], layers: bool) -> list[Barrier]:
     merged: list[Barrier] = []
     for row in rows:
         last = merged[-1] if merged else None
-        if (
-            last is not None
-            and row.base_mip is not None
-            and last.base_mip is not None
-            and last.resource == row.resource
+        if last is None or row.base_mip is None or last.base_mip is None or last.resource != row.resource:
+            merged.append(row)
+            continue
+        if _tail(last) != _tail(row):
+            merged.append(row)
+        elif layers and last.base_mip == row.base_mip and last.base_layer + last.layer_count == row.base_layer:
+            merged[-1] = replace(last, layer_count=last.layer_count + row.layer_count)
+        elif (
+            not layers
+            and (last.base_layer, last.layer_count) == (row.base_layer, row.layer_count)
             and last.base_mip + last.mip_count == row.base_mip
-            and (last.old_layout, last.new_layout, last.src_stages, last.src_access, last.dst_stages, last.dst_access)
-            == (row.old_layout, row.new_layout, row.src_stages, row.src_access, row.dst_stages, row.dst_access)
         ):
-            merged[-1] = Barrier(last.resource, last.base_mip, last.mip_count + 1, *_tail(row))
+            merged[-1] = replace(last, mip_count=last.mip_count + row.mip_count)
         else:
             merged.append(row)
     return merged
@@ -274,17 +282,23 @@ def _tail(b: Barrier) -> tuple:
 
 
 def dependency_info(
-    vk: Any, rows: list[Barrier], images: dict[str, Any], buffers: dict[str, Any], aspects: dict[str, int]
+    vk: Any,
+    rows: list[Barrier],
+    images: dict[str, Any],
+    buffers: dict[str, Any],
+    aspects: dict[str, int],
+    drop: frozenset[str] = EMPTY,
 ) -> Any:
     """The VkDependencyInfo of these rows (images/buffers: name -> handle), for one
-    vkCmdPipelineBarrier2; it holds copies of its barriers, so it can be kept and recorded again."""
+    vkCmdPipelineBarrier2, without the stage and access names in `drop` (those of features the
+    device lacks); it holds copies of its barriers, so it can be kept and recorded again."""
     image_rows, buffer_rows = [], []
     for b in rows:
         common = {
-            "srcStageMask": flags(vk, "VK_PIPELINE_STAGE_2_", b.src_stages),
-            "srcAccessMask": flags(vk, "VK_ACCESS_2_", b.src_access),
-            "dstStageMask": flags(vk, "VK_PIPELINE_STAGE_2_", b.dst_stages),
-            "dstAccessMask": flags(vk, "VK_ACCESS_2_", b.dst_access),
+            "srcStageMask": flags(vk, "VK_PIPELINE_STAGE_2_", b.src_stages - drop),
+            "srcAccessMask": flags(vk, "VK_ACCESS_2_", b.src_access - drop),
+            "dstStageMask": flags(vk, "VK_PIPELINE_STAGE_2_", b.dst_stages - drop),
+            "dstAccessMask": flags(vk, "VK_ACCESS_2_", b.dst_access - drop),
             "srcQueueFamilyIndex": vk.VK_QUEUE_FAMILY_IGNORED,
             "dstQueueFamilyIndex": vk.VK_QUEUE_FAMILY_IGNORED,
         }
@@ -302,8 +316,8 @@ def dependency_info(
                     aspectMask=aspects[b.resource],
                     baseMipLevel=b.base_mip,
                     levelCount=b.mip_count,
-                    baseArrayLayer=0,
-                    layerCount=1,
+                    baseArrayLayer=b.base_layer,
+                    layerCount=b.layer_count,
                 ),
                 **common,
             )

@@ -14,6 +14,24 @@ if TYPE_CHECKING:
     from .context import PassContext
 
 
+class _Unreplayable:
+    """The key of a pass that records something new every frame (UI, sorted rows, rays): equal
+    to no key, itself included, and `FrameGraph.key()` puts a new object in its place each call
+    (a tuple compares its items by identity first, so the sentinel alone would equal itself)."""
+
+    def __eq__(self, other: object) -> bool:
+        return False
+
+    def __hash__(self) -> int:
+        return id(self)
+
+    def __repr__(self) -> str:
+        return "UNREPLAYABLE"
+
+
+UNREPLAYABLE: Any = _Unreplayable()
+
+
 class Pass:
     """A step of the frame. Subclasses set `name`, declare in `setup` (which only declares: the
     graph calls it at each compile to see whether anything changed) and record in `record`."""
@@ -27,7 +45,8 @@ class Pass:
         raise NotImplementedError
 
     def key(self) -> Hashable:
-        """What the recording depends on besides its resources (frame replay compares it)."""
+        """What the recording depends on besides its resources (frame replay compares it);
+        `UNREPLAYABLE` (graph.py) for a pass that records something new every frame."""
         return None
 
     def destroy(self) -> None:
@@ -61,19 +80,22 @@ class PassBuilder:
         self._creates.append((name, desc))
         return name
 
-    def _check(self, name: str, access: Access, mip: int | None) -> None:
+    def _check(self, name: str, access: Access, mip: int | None, layer: int | None = None) -> None:
         if not isinstance(access, Access):
             raise UsageError(f"pass {self.pass_name!r}: {access!r} is not an Access")
         if mip is not None and (not isinstance(mip, int) or mip < 0):
             raise UsageError(f"pass {self.pass_name!r}: mip {mip!r} of {name!r} is not a level")
+        if layer is not None and (not isinstance(layer, int) or layer < 0):
+            raise UsageError(f"pass {self.pass_name!r}: layer {layer!r} of {name!r} is not a layer")
 
-    def read(self, name: str, access: Access, *, mip: int | None = None) -> None:
-        self._check(name, access, mip)
+    def read(self, name: str, access: Access, *, mip: int | None = None, layer: int | None = None) -> None:
+        """`mip`/`layer`: the one mip level / array layer read (None: all of them)."""
+        self._check(name, access, mip, layer)
         if not access.usage.reads:
             raise UsageError(f"pass {self.pass_name!r} reads {name!r} as {access.name}, which writes: use write()")
         if access.usage.writes:
             raise UsageError(f"pass {self.pass_name!r} reads {name!r} as {access.name}, which also writes: use write()")
-        self._uses.append(Use(name, access, mip, False))
+        self._uses.append(Use(name, access, mip, False, layer=layer))
 
     def write(
         self,
@@ -83,13 +105,19 @@ class PassBuilder:
         mip: int | None = None,
         load: Load = Load.DONT_CARE,
         clear: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0),
+        layer: int | None = None,
+        region: bool = False,
     ) -> None:
-        self._check(name, access, mip)
+        """`region=True`: the pass writes part of it (`begin_rendering(area=...)`, a corner of a
+        shadow layer) and the rest is kept: no transition from UNDEFINED, and the pass runs
+        after the one that wrote it before (if any); CLEAR then clears the area only."""
+        self._check(name, access, mip, layer)
         if not access.usage.writes:
             raise UsageError(f"pass {self.pass_name!r} writes {name!r} as {access.name}, which only reads: use read()")
         if access.usage.reads:  # a read-modify-write keeps what was there
             load = Load.LOAD
-        self._uses.append(Use(name, access, mip, True, load, tuple(float(c) for c in clear)))  # type: ignore[arg-type]
+        clear_value = tuple(float(c) for c in clear)
+        self._uses.append(Use(name, access, mip, True, load, clear_value, layer, bool(region)))  # type: ignore[arg-type]
 
     def side_effect(self) -> None:
         """The pass is never culled (it reads back, presents or writes outside the graph)."""

@@ -36,6 +36,11 @@ class Imported:
     layout_after: str = "UNDEFINED"
     size: int = 0
     mip_views: tuple[Any, ...] = ()
+    layers: int = 1
+    layer_views: tuple[Any, ...] = ()
+    # the stages whose work its first barrier waits for: ALL_COMMANDS, or the wait stage of the
+    # semaphore that hands it over (a swapchain image: COLOR_ATTACHMENT_OUTPUT)
+    stage_before: frozenset[str] = frozenset({"ALL_COMMANDS"})
 
     @property
     def compile_key(self) -> tuple:
@@ -49,6 +54,8 @@ class Imported:
             self.layout_before,
             self.layout_after,
             self.size,
+            self.layers,
+            self.stage_before,
         )
 
 
@@ -62,6 +69,7 @@ class Resource:
     imported: Imported | None = None
     desc: ImageDesc | BufferDesc | None = None
     created_by: str | None = None
+    layers: int = 1
 
     @property
     def format(self) -> str:
@@ -81,15 +89,28 @@ class Structure:
     lifetimes: dict[str, tuple[int, int]] = field(default_factory=dict)  # transient -> (first, last) index
     usage: dict[str, set[str]] = field(default_factory=dict)  # transient -> usage flag names
     outputs: tuple[str, ...] = ()
+    # (pass, use) of writes nothing later in the frame reads: their attachments store DONT_CARE
+    dont_store: frozenset[tuple[str, Use]] = frozenset()
 
 
 def mips_of(use: Use, resource: Resource) -> range:
     return range(resource.mips) if use.mip is None else range(use.mip, use.mip + 1)
 
 
+def layers_of(use: Use, resource: Resource) -> range:
+    return range(resource.layers) if use.layer is None else range(use.layer, use.layer + 1)
+
+
+def subresources(use: Use, resource: Resource) -> list[tuple[int, int]]:
+    """The (mip, layer) pairs a use covers, mips outer (a buffer has one: (0, 0))."""
+    if resource.kind != "image":
+        return [(0, 0)]
+    return [(m, k) for m in mips_of(use, resource) for k in layers_of(use, resource)]
+
+
 def _resources(passes: list[tuple[str, Declared]], imports: dict[str, Imported]) -> dict[str, Resource]:
     found: dict[str, Resource] = {
-        name: Resource(name, imp.kind, imp.mips if imp.kind == "image" else 1, imported=imp)
+        name: Resource(name, imp.kind, imp.mips if imp.kind == "image" else 1, imported=imp, layers=max(1, imp.layers))
         for name, imp in imports.items()
     }
     for pass_name, declared in passes:
@@ -100,7 +121,8 @@ def _resources(passes: list[tuple[str, Declared]], imports: dict[str, Imported])
                 raise UsageError(f"pass {pass_name!r} creates {name!r}, but {by}")
             kind = "image" if isinstance(desc, ImageDesc) else "buffer"
             mips = desc.mips if isinstance(desc, ImageDesc) else 1
-            found[name] = Resource(name, kind, mips, desc=desc, created_by=pass_name)
+            layers = desc.layers if isinstance(desc, ImageDesc) else 1
+            found[name] = Resource(name, kind, mips, desc=desc, created_by=pass_name, layers=layers)
     return found
 
 
@@ -116,15 +138,20 @@ def _check_use(pass_name: str, use: Use, res: Resource | None) -> Resource:
         raise UsageError(f"pass {pass_name!r} {verb} buffer {res.name!r} as {use.access.name}, an image access")
     if use.mip is not None and (res.kind == "buffer" or use.mip >= res.mips):
         raise UsageError(f"pass {pass_name!r} {verb} mip {use.mip} of {res.name!r}, which has {res.mips} mip(s)")
+    if use.layer is not None and (res.kind == "buffer" or use.layer >= res.layers):
+        raise UsageError(
+            f"pass {pass_name!r} {verb} layer {use.layer} of {res.name!r}, which has {res.layers} layer(s)"
+        )
     return res
 
 
 def _check_layouts(pass_name: str, uses: tuple[Use, ...], resources: dict[str, Resource]) -> None:
-    """One pass sees each (resource, mip) in one layout: two accesses needing two are an error."""
-    seen: dict[tuple[str, int], Use] = {}
+    """One pass sees each (resource, mip, layer) in one layout: two accesses needing two are an
+    error."""
+    seen: dict[tuple[str, int, int], Use] = {}
     for use in uses:
-        for mip in mips_of(use, resources[use.resource]):
-            other = seen.setdefault((use.resource, mip), use)
+        for mip, layer in subresources(use, resources[use.resource]):
+            other = seen.setdefault((use.resource, mip, layer), use)
             if other.access.usage.layout != use.access.usage.layout:
                 raise UsageError(
                     f"pass {pass_name!r} uses mip {mip} of {use.resource!r} as both {other.access.name} "
@@ -141,7 +168,7 @@ def plan_structure(
     """Order, culling and lifetimes of these passes (in the order added)."""
     resources = _resources(passes, imports)
     index = {name: i for i, (name, _) in enumerate(passes)}
-    last_writer: dict[tuple[str, int], int] = {}
+    last_writer: dict[tuple[str, int, int], int] = {}
     writers: dict[str, list[str]] = {}
     for pass_name, declared in passes:
         for use in declared.uses:
@@ -154,15 +181,16 @@ def plan_structure(
             res = _check_use(pass_name, use, resources.get(use.resource))
             if not use.keeps_contents:
                 continue
-            for mip in mips_of(use, res):
-                writer = last_writer.get((res.name, mip))
+            for mip, layer in subresources(use, res):
+                writer = last_writer.get((res.name, mip, layer))
                 if writer is not None:
                     needs.add(writer)
-                elif res.imported is None:
+                elif res.imported is None and use.needs_writer:
                     later = [w for w in writers.get(res.name, []) if index[w] >= i]
                     after = f" (written only by {', '.join(later)}, added after it)" if later else ""
                     what = "reads" if not use.write else "loads"
                     where = "" if res.mips == 1 else f"mip {mip} of "
+                    where += "" if res.layers == 1 else f"layer {layer} of "
                     raise UsageError(
                         f"pass {pass_name!r} {what} {where}{res.name!r}, which no pass before it writes "
                         f"and the graph does not import{after}"
@@ -170,8 +198,8 @@ def plan_structure(
         _check_layouts(pass_name, declared.uses, resources)
         for use in declared.uses:
             if use.write:
-                for mip in mips_of(use, resources[use.resource]):
-                    last_writer[(use.resource, mip)] = i
+                for mip, layer in subresources(use, resources[use.resource]):
+                    last_writer[(use.resource, mip, layer)] = i
         deps.append(needs)
 
     roots = {i for i, (_, d) in enumerate(passes) if d.side_effect}
@@ -179,7 +207,8 @@ def plan_structure(
         out = resources.get(name)
         if out is None:
             raise UsageError(f"output {name!r} is neither created by a pass nor imported")
-        found = [last_writer[(name, m)] for m in range(out.mips) if (name, m) in last_writer]
+        subs = [(name, m, k) for m in range(out.mips) for k in range(out.layers)]
+        found = [last_writer[sub] for sub in subs if sub in last_writer]
         if not found and out.imported is None:
             raise UsageError(f"output {name!r} is written by no pass")
         roots.update(found)
@@ -202,6 +231,7 @@ def plan_structure(
         outputs=tuple(outputs),
     )
     _lifetimes(structure)
+    structure.dont_store = _dont_store(structure)
     return structure
 
 
@@ -220,3 +250,29 @@ def _lifetimes(s: Structure) -> None:
     for name in s.outputs:
         if name in s.lifetimes:
             s.lifetimes[name] = (s.lifetimes[name][0], max(len(s.order) - 1, 0))
+
+
+def _dont_store(s: Structure) -> frozenset[tuple[str, Use]]:
+    """Writes of transient images (not outputs) that no later pass of the frame sees: before
+    anything reads or keeps them, a later write discards them, or nothing uses them again (an
+    MSAA image after its resolve, a depth nobody samples). Storing them would be wasted bandwidth."""
+    found = set()
+    for i, pass_name in enumerate(s.order):
+        for use in s.uses[pass_name]:
+            res = s.resources[use.resource]
+            if use.write and res.kind == "image" and res.imported is None and res.name not in s.outputs:
+                if not _seen_later(s, i, res, set(subresources(use, res))):
+                    found.add((pass_name, use))
+    return frozenset(found)
+
+
+def _seen_later(s: Structure, position: int, res: Resource, pending: set[tuple[int, int]]) -> bool:
+    for later in s.order[position + 1 :]:
+        uses = [u for u in s.uses[later] if u.resource == res.name]
+        if any(u.keeps_contents and pending & set(subresources(u, res)) for u in uses):
+            return True
+        for u in uses:
+            pending -= set(subresources(u, res))
+        if not pending:
+            return False
+    return False

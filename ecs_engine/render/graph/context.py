@@ -3,12 +3,24 @@ attachments it declared (load ops and clear values as declared, viewport and sci
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 from ...errors import UsageError
 from .resources import Access, GraphBuffer, GraphImage, Load, Use, is_depth
 
 _INTEGER = ("_UINT", "_SINT")
+
+
+@dataclass(frozen=True)
+class Rendering:
+    """One begin_rendering's structs: the VkRenderingInfo's address, the viewport and scissor
+    arrays, and what their pointers point to (kept alive with them)."""
+
+    info: Any
+    viewport: Any
+    scissor: Any
+    keep: Any
 
 
 class PassContext:
@@ -19,6 +31,8 @@ class PassContext:
         images: dict[str, GraphImage],
         buffers: dict[str, GraphBuffer],
         format_names: dict[str, str],
+        dont_store: frozenset[tuple[str, Use]] = frozenset(),
+        made: dict[tuple, Rendering] | None = None,
     ) -> None:
         self.device = device
         self.vk = device.vk
@@ -26,6 +40,9 @@ class PassContext:
         self._images = images
         self._buffers = buffers
         self._formats = format_names
+        self._dont_store = dont_store  # writes whose attachments store nothing (compile.py)
+        # begin_rendering's structs by what they were made from (the graph keeps them per compile)
+        self._made: dict[tuple, Rendering] = made if made is not None else {}
         self.pass_name = ""
         self._uses: tuple[Use, ...] = ()
         self._rendering = False
@@ -50,16 +67,21 @@ class PassContext:
             raise UsageError(f"pass {self.pass_name!r} asks for buffer {name!r}, which the graph does not have")
         return found
 
-    def _declared(self, name: str, mip: int, accesses: tuple[Access, ...]) -> Use:
+    def _declared(self, name: str, mip: int, layer: int, accesses: tuple[Access, ...]) -> Use:
         for use in self._uses:
             if use.resource == name and use.access in accesses and use.mip in (None, mip):
-                return use
+                if use.layer in (None, layer):
+                    return use
         wanted = " or ".join(a.name for a in accesses)
-        raise UsageError(f"pass {self.pass_name!r} renders to {name!r} (mip {mip}) without declaring it as {wanted}")
+        raise UsageError(
+            f"pass {self.pass_name!r} renders to {name!r} (mip {mip}, layer {layer}) without declaring it as {wanted}"
+        )
 
-    def _attachment(self, name: str, mip: int, accesses: tuple[Access, ...], resolve: str | None = None) -> Any:
+    def _attachment(
+        self, name: str, mip: int, layer: int, accesses: tuple[Access, ...], resolve: str | None = None
+    ) -> Any:
         vk = self.vk
-        use = self._declared(name, mip, accesses)
+        use = self._declared(name, mip, layer, accesses)
         image = self.image(name)
         fmt = self._formats[name]
         load = {
@@ -76,22 +98,29 @@ class PassContext:
             clear = vk.VkClearValue(color=vk.VkClearColorValue(float32=list(use.clear)))
         extra: dict[str, Any] = {}
         if resolve is not None:
-            self._declared(resolve, mip, (Access.RESOLVE_WRITE,))
+            self._declared(resolve, mip, layer, (Access.RESOLVE_WRITE,))
             integer = fmt.endswith(_INTEGER)
             extra = {
                 "resolveMode": vk.VK_RESOLVE_MODE_SAMPLE_ZERO_BIT if integer else vk.VK_RESOLVE_MODE_AVERAGE_BIT,
-                "resolveImageView": self.image(resolve).mip_view(mip),
+                "resolveImageView": self.image(resolve).attachment_view(mip, layer),
                 "resolveImageLayout": vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
             }
         return vk.VkRenderingAttachmentInfo(
-            imageView=image.mip_view(mip),
+            imageView=image.attachment_view(mip, layer),
             imageLayout=getattr(vk, f"VK_IMAGE_LAYOUT_{use.access.usage.layout}"),
             loadOp=load,
-            # a read-only depth attachment stores nothing (a store would be a write)
-            storeOp=vk.VK_ATTACHMENT_STORE_OP_STORE if use.write else vk.VK_ATTACHMENT_STORE_OP_NONE,
+            storeOp=self._store_op(use),
             clearValue=clear,
             **extra,
         )
+
+    def _store_op(self, use: Use) -> int:
+        vk = self.vk
+        if not use.write:  # a read-only depth attachment stores nothing (a store would be a write)
+            return int(vk.VK_ATTACHMENT_STORE_OP_NONE)
+        if (self.pass_name, use) in self._dont_store:  # nothing later reads it
+            return int(vk.VK_ATTACHMENT_STORE_OP_DONT_CARE)
+        return int(vk.VK_ATTACHMENT_STORE_OP_STORE)
 
     def begin_rendering(
         self,
@@ -101,43 +130,86 @@ class PassContext:
         *,
         secondaries: bool = False,
         mip: int = 0,
+        layer: int = 0,
+        area: tuple[int, int, int, int] | None = None,
     ) -> None:
-        """vkCmdBeginRendering over these declared attachments at `mip`; `resolve[i]` (declared
-        RESOLVE_WRITE) receives colour i resolved. Viewport and scissor cover the attachments
-        (not with `secondaries`: those set their own)."""
-        vk = self.vk
-        if isinstance(colors, str):
-            colors = (colors,)
+        """vkCmdBeginRendering over these declared attachments at `mip` and array `layer`;
+        `resolve[i]` (declared RESOLVE_WRITE) receives colour i resolved. `area` (x, y, w, h):
+        the render area (CLEAR clears it only; declare the write `region=True` to keep the
+        rest), default the whole attachment. Viewport and scissor are the area (not with
+        `secondaries`: those set their own). The structs are made once per pass, attachments'
+        views and area (kept until the graph compiles again) and recorded by raw calls."""
+        colors = (colors,) if isinstance(colors, str) else tuple(colors)
+        resolve = tuple(resolve) if resolve is not None else None
+        area = tuple(area) if area is not None else None  # type: ignore[assignment]
         if self._rendering:
             raise UsageError(f"pass {self.pass_name!r} begins rendering twice")
+        images = self._images
+        try:
+            views = tuple(images[n].attachment_view(mip, layer) for n in (*colors, *(resolve or ()), depth) if n)
+        except KeyError as missing:
+            raise UsageError(f"pass {self.pass_name!r} renders to {missing}, which the graph does not have") from None
+        key = (self.pass_name, colors, depth, resolve, secondaries, mip, layer, area, views)
+        made = self._made.get(key)
+        if made is None:
+            if len(self._made) >= 64:  # imported images come and go (swapchain remakes)
+                self._made.clear()
+            made = self._made[key] = self._make(colors, depth, resolve, secondaries, mip, layer, area)
+        lib, cb = self.vk.lib, self._cb
+        lib.vkCmdBeginRendering(cb, made.info)
+        self._rendering = True
+        if not secondaries:
+            lib.vkCmdSetViewport(cb, 0, 1, made.viewport)
+            lib.vkCmdSetScissor(cb, 0, 1, made.scissor)
+
+    def _make(
+        self,
+        colors: tuple[str, ...],
+        depth: str | None,
+        resolve: tuple[str | None, ...] | None,
+        secondaries: bool,
+        mip: int,
+        layer: int,
+        area: tuple[int, int, int, int] | None,
+    ) -> Rendering:
+        vk = self.vk
         if resolve is not None and len(resolve) != len(colors):
             raise UsageError(f"pass {self.pass_name!r}: one resolve target (or None) per colour attachment")
         color_accesses = (Access.COLOR_WRITE, Access.COLOR_READ_WRITE)
         infos = [
-            self._attachment(name, mip, color_accesses, resolve[i] if resolve is not None else None)
+            self._attachment(name, mip, layer, color_accesses, resolve[i] if resolve is not None else None)
             for i, name in enumerate(colors)
         ]
-        depth_info = self._attachment(depth, mip, (Access.DEPTH_WRITE, Access.DEPTH_READ)) if depth else None
+        depth_accesses = (Access.DEPTH_WRITE, Access.DEPTH_READ)
+        depth_info = self._attachment(depth, mip, layer, depth_accesses) if depth else None
         named = [*colors, *([depth] if depth else [])]
         if not named:
             raise UsageError(f"pass {self.pass_name!r} begins rendering with no attachment")
-        w, h = self.image(named[0]).mip_extent(mip)
-        area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(w, h))
+        x, y, w, h = self._area(named[0], mip, area)
+        rect = vk.VkRect2D(offset=vk.VkOffset2D(x, y), extent=vk.VkExtent2D(w, h))
         info = vk.VkRenderingInfo(
             flags=vk.VK_RENDERING_CONTENTS_SECONDARY_COMMAND_BUFFERS_BIT if secondaries else 0,
-            renderArea=area,
+            renderArea=rect,
             layerCount=1,
             pColorAttachments=infos or None,
             pDepthAttachment=depth_info,
         )
-        vk.vkCmdBeginRendering(self._cb, info)
-        self._rendering = True
-        if not secondaries:
-            vk.vkCmdSetViewport(self._cb, 0, 1, [vk.VkViewport(0.0, 0.0, float(w), float(h), 0.0, 1.0)])
-            vk.vkCmdSetScissor(self._cb, 0, 1, [area])
+        ffi = vk.ffi
+        viewport = ffi.new("VkViewport[1]", [(float(x), float(y), float(w), float(h), 0.0, 1.0)])
+        scissor = ffi.new("VkRect2D[1]", [((x, y), (w, h))])
+        return Rendering(ffi.addressof(info), viewport, scissor, (info, infos, depth_info))
+
+    def _area(self, name: str, mip: int, area: tuple[int, int, int, int] | None) -> tuple[int, int, int, int]:
+        w, h = self.image(name).mip_extent(mip)
+        if area is None:
+            return (0, 0, w, h)
+        x, y, aw, ah = (int(v) for v in area)
+        if x < 0 or y < 0 or aw < 1 or ah < 1 or x + aw > w or y + ah > h:
+            raise UsageError(f"pass {self.pass_name!r}: render area {area} is not inside {name!r} ({w}x{h})")
+        return (x, y, aw, ah)
 
     def end_rendering(self) -> None:
         if not self._rendering:
             raise UsageError(f"pass {self.pass_name!r} ends rendering it did not begin")
-        self.vk.vkCmdEndRendering(self._cb)
+        self.vk.lib.vkCmdEndRendering(self._cb)
         self._rendering = False

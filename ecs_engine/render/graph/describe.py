@@ -17,7 +17,7 @@ def describe(s: Structure, packing: Packing, barriers: BarrierPlan) -> str:
     for i, name in enumerate(s.order):
         uses = s.uses[name]
         reads = [u.describe() for u in uses if not u.write]
-        writes = [u.describe() for u in uses if u.write]
+        writes = [u.describe() + (" store dont_care" if (name, u) in s.dont_store else "") for u in uses if u.write]
         flag = " (side effect)" if name in s.side_effects else ""
         lines.append(f"  {i} {name:<{width}}{flag}".rstrip())
         if reads:
@@ -25,9 +25,9 @@ def describe(s: Structure, packing: Packing, barriers: BarrierPlan) -> str:
         if writes:
             lines.append(f"      writes {', '.join(writes)}")
         for b in barriers.before[name]:
-            lines.append(f"      barrier {b.describe()}")
+            lines.append(f"      barrier {b.describe(s.resources[b.resource].layers > 1)}")
     for b in barriers.after:
-        lines.append(f"  after: barrier {b.describe()}")
+        lines.append(f"  after: barrier {b.describe(s.resources[b.resource].layers > 1)}")
     if s.lifetimes:
         lines.append(f"transients: {packing.transient_bytes:,} bytes aliased, {packing.unaliased_bytes:,} unaliased")
     for name, (first, last) in s.lifetimes.items():
@@ -39,9 +39,7 @@ def describe(s: Structure, packing: Packing, barriers: BarrierPlan) -> str:
         assert isinstance(desc, ImageDesc)
         iw, ih = desc.extent(s.extent)
         place = packing.placements[name]
-        extra = (f", {desc.mips} mips" if desc.mips > 1 else "") + (
-            f", {desc.samples}x MSAA" if desc.samples > 1 else ""
-        )
+        extra = _counts(desc.mips, desc.samples, desc.layers)
         lines.append(
             f"  {name}: {desc.format_name} {iw}x{ih}{extra}, {place.size:,} bytes "
             f"at heap {place.heap} + {place.offset:,}, {life}"
@@ -51,10 +49,19 @@ def describe(s: Structure, packing: Packing, barriers: BarrierPlan) -> str:
         imp = res.imported
         assert imp is not None
         if imp.kind == "image":
+            after = "" if imp.stage_before == {"ALL_COMMANDS"} else f" after {'|'.join(sorted(imp.stage_before))}"
             lines.append(
-                f"  imported {res.name}: {imp.format} {imp.extent[0]}x{imp.extent[1]}, "
-                f"{imp.layout_before} -> {imp.layout_after}"
+                f"  imported {res.name}: {imp.format} {imp.extent[0]}x{imp.extent[1]}"
+                f"{_counts(imp.mips, imp.samples, imp.layers)}, {imp.layout_before}{after} -> {imp.layout_after}"
             )
         else:
             lines.append(f"  imported {res.name}: buffer {imp.size:,} bytes")
     return "\n".join(lines)
+
+
+def _counts(mips: int, samples: int, layers: int) -> str:
+    return (
+        (f", {mips} mips" if mips > 1 else "")
+        + (f", {samples}x MSAA" if samples > 1 else "")
+        + (f", {layers} layers" if layers > 1 else "")
+    )

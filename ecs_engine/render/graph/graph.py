@@ -4,19 +4,26 @@ command buffer. Without a device (`FrameGraph(None)`) it plans only (tests, `des
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 from ...errors import UsageError
 from ...gpu.functions import handle_int
 from ...gpu.owned import Owned
-from .barriers import Barrier, BarrierPlan, dependency_info, plan_barriers
-from .builder import Declared, Pass, declare
+from ...gpu.pipeline import AttachmentFormats
+from .access import RAY_TRACING_ONLY
+from .barriers import EMPTY, Barrier, BarrierPlan, dependency_info, plan_barriers
+from .builder import UNREPLAYABLE, Declared, Pass, declare
 from .compile import Imported, Structure, plan_structure
 from .context import PassContext
 from .describe import describe
+from .formats import attachment_formats
 from .resources import GraphBuffer, GraphImage, format_name, layout_name
 from .transient import Packing, Transients, aspect_of, estimated_requirements, pack
+
+if TYPE_CHECKING:
+    from ...gpu.secondary import SecondaryBuffers
 
 
 @dataclass
@@ -29,9 +36,12 @@ class Compiled:
     packing: Packing
     barriers: BarrierPlan
     transients: Transients | None
+    formats: dict[str, str] = field(default_factory=dict)  # resource -> its format's name
 
 
 class FrameGraph:
+    UNREPLAYABLE = UNREPLAYABLE  # what Pass.key() returns to make every frame record again
+
     def __init__(self, device: Any) -> None:
         self.device = device
         self._passes: list[Pass] = []
@@ -42,6 +52,7 @@ class FrameGraph:
         # per barrier batch: the handles it was made for and its VkDependencyInfo (made once per
         # compile, again only for an import's new handle)
         self._infos: dict[str, tuple[tuple, Any]] = {}
+        self._renderings: dict[tuple, Any] = {}  # PassContext.begin_rendering's, per compile
         self.compiles = 0  # how many compiles did work (a cached one does none)
 
     # ------------------------------------------------------------------ declaring the frame
@@ -91,9 +102,18 @@ class FrameGraph:
         layout_before: Any,
         layout_after: Any,
         mip_views: tuple[Any, ...] = (),
+        layers: int = 1,
+        layer_views: tuple[Any, ...] = (),
+        stage_before: str | tuple[str, ...] = "ALL_COMMANDS",
     ) -> None:
         """An image owned outside the graph; importing a name again replaces it (a new
-        swapchain image each frame: only a change of format, size or layouts recompiles)."""
+        swapchain image each frame: only a change of format, size, layers, layouts or
+        stage_before recompiles). `layers`: an array image, `layer_views` one view of each
+        layer (what `begin_rendering(layer=k)` renders to). `stage_before`: the pipeline stages
+        (names as "COLOR_ATTACHMENT_OUTPUT") whose earlier work its first barrier waits for; a
+        swapchain image names the acquire semaphore's wait stage so that the two chain."""
+        if layers < 1 or (layer_views and len(layer_views) != layers):
+            raise UsageError(f"image {name!r}: {layers} layer(s) and {len(layer_views)} layer view(s)")
         vk = self._vk() if not all(isinstance(v, str) for v in (format, layout_before, layout_after)) else None
         fmt = format_name(vk, format)
         value = int(format) if not isinstance(format, str) else int(getattr(vk, f"VK_FORMAT_{fmt}", 0)) if vk else 0
@@ -110,6 +130,9 @@ class FrameGraph:
             layout_name(vk, layout_before),
             layout_name(vk, layout_after),
             mip_views=tuple(mip_views),
+            layers=int(layers),
+            layer_views=tuple(layer_views),
+            stage_before=_stage_names(stage_before),
         )
 
     def import_buffer(self, name: str, *, handle: Any, size: int) -> None:
@@ -153,8 +176,11 @@ class FrameGraph:
             packing = transients.packing
         else:
             packing = pack(estimated_requirements(structure))
-        self.compiled = Compiled(signature, structure, packing, plan_barriers(structure, packing), transients)
+        formats = {name: res.format for name, res in structure.resources.items()}
+        barriers = plan_barriers(structure, packing)
+        self.compiled = Compiled(signature, structure, packing, barriers, transients, formats)
         self._infos.clear()
+        self._renderings.clear()
         self.compiles += 1
 
     def _ready(self) -> Compiled:
@@ -185,35 +211,44 @@ class FrameGraph:
         for name, imp in self._imports.items():
             if imp.kind == "image":
                 images[name] = GraphImage(
-                    name, imp.handle, imp.view, imp.format_value, imp.extent, imp.mips, imp.samples, imp.mip_views
+                    name,
+                    imp.handle,
+                    imp.view,
+                    imp.format_value,
+                    imp.extent,
+                    imp.mips,
+                    imp.samples,
+                    imp.mip_views,
+                    imp.layers,
+                    imp.layer_views,
                 )
             else:
                 buffers[name] = GraphBuffer(name, imp.handle, imp.size)
         return images, buffers
 
-    def execute(self, cb: Any) -> None:
+    def execute(self, cb: Any, on_pass_end: Callable[[str], None] | None = None) -> None:
         """Record the passes that run, each after its batch of barriers, then the imports'
-        transitions to their layout_after."""
+        transitions to their layout_after. `on_pass_end(name)` is called after each pass is
+        recorded (outside any rendering: a timestamp may be written there)."""
         c = self._ready()
         if self.device is None:
             raise UsageError("a frame graph without a device only plans; it cannot execute")
-        vk = self.device.vk
+        lib = self.device.vk.lib
         images, buffers = self._resources(c)
         s = c.structure
-        ctx = PassContext(self.device, s.extent, images, buffers, self._formats(c))
+        ctx = PassContext(self.device, s.extent, images, buffers, c.formats, s.dont_store, self._renderings)
         by_name = {p.name: p for p in self._passes}
         for name in s.order:
             rows = c.barriers.before[name]
             if rows:
-                vk.vkCmdPipelineBarrier2(cb, self._info(c, name, rows, images, buffers))
+                lib.vkCmdPipelineBarrier2(cb, self._info(c, name, rows, images, buffers))
             ctx._enter(cb, name, s.uses[name])
             by_name[name].record(cb, ctx)
             ctx._leave()
+            if on_pass_end is not None:
+                on_pass_end(name)
         if c.barriers.after:
-            vk.vkCmdPipelineBarrier2(cb, self._info(c, "", c.barriers.after, images, buffers))
-
-    def _formats(self, c: Compiled) -> dict[str, str]:
-        return {name: res.format for name, res in c.structure.resources.items()}
+            lib.vkCmdPipelineBarrier2(cb, self._info(c, "", c.barriers.after, images, buffers))
 
     def _info(
         self,
@@ -228,14 +263,32 @@ class FrameGraph:
         )
         cached = self._infos.get(batch)
         if cached is not None and cached[0] == handles:
-            return cached[1]
+            return cached[1][0]
         vk = self.device.vk
         aspects = {n: aspect_of(vk, res.format) for n, res in c.structure.resources.items() if res.kind == "image"}
+        drop = EMPTY if self.device.features.get("rayTracing") else RAY_TRACING_ONLY
         info = dependency_info(
-            vk, rows, {n: i.handle for n, i in images.items()}, {n: b.handle for n, b in buffers.items()}, aspects
+            vk, rows, {n: i.handle for n, i in images.items()}, {n: b.handle for n, b in buffers.items()}, aspects, drop
         )
-        self._infos[batch] = (handles, info)
-        return info
+        pointer = vk.ffi.addressof(info)  # for the raw call (the binding's wrapper costs more)
+        self._infos[batch] = (handles, (pointer, info))
+        return pointer
+
+    def attachment_formats(self, colors: tuple[str, ...] = (), depth: str | None = None) -> AttachmentFormats:
+        """The VkFormats and sample count of these attachments, from the passes' declarations
+        and the imports (compiled or not): what a pipeline or a secondary drawn into them needs."""
+        if self.compiled is not None:
+            descs = {n: r.desc for n, r in self.compiled.structure.resources.items() if r.desc is not None}
+        else:
+            descs = {name: desc for p in self._passes for name, desc in declare(p).creates}
+        return attachment_formats(self._vk(), colors, depth, descs, self._imports)
+
+    def inheritance(self, secondaries: SecondaryBuffers, colors: tuple[str, ...] = (), depth: str | None = None) -> Any:
+        """The begin info of secondaries drawn inside a pass's `begin_rendering(colors, depth,
+        secondaries=True)`: the attachments' formats inherited (SecondaryBuffers.begin_info_rendering,
+        one per formats, kept by it). Needs no compile, so jobs may begin their secondaries
+        before the primary is opened."""
+        return secondaries.begin_info_rendering(self.attachment_formats(colors, depth))
 
     def key(self) -> tuple:
         """What a recorded frame depends on: each running pass's (name, key()) in order, the
@@ -244,7 +297,15 @@ class FrameGraph:
         by_name = {p.name: p for p in self._passes}
         vk = self.device.vk if self.device is not None else None
         handles = tuple((name, _int(vk, imp.handle), _int(vk, imp.view)) for name, imp in sorted(self._imports.items()))
-        return (*((name, by_name[name].key()) for name in c.structure.order), c.structure.extent, handles)
+        keys = ((name, by_name[name].key()) for name in c.structure.order)
+        return (*((n, object() if k is UNREPLAYABLE else k) for n, k in keys), c.structure.extent, handles)
+
+    def replayable(self) -> bool:
+        """Whether a recorded frame can be replayed at all: no pass that runs returns
+        UNREPLAYABLE as its key."""
+        c = self._ready()
+        by_name = {p.name: p for p in self._passes}
+        return not any(by_name[name].key() is UNREPLAYABLE for name in c.structure.order)
 
     def describe(self) -> str:
         """The passes in order, what each reads and writes and the barriers before it, then
@@ -262,6 +323,19 @@ class FrameGraph:
         passes, self._passes = self._passes, []
         for p in reversed(passes):
             p.destroy()
+
+
+def _stage_names(stages: str | tuple[str, ...]) -> frozenset[str]:
+    """Stage names without the Vulkan prefix and bit suffix ("COLOR_ATTACHMENT_OUTPUT")."""
+    if isinstance(stages, str):
+        stages = (stages,)
+    names = set()
+    for stage in stages:
+        if not isinstance(stage, str) or not stage:
+            raise UsageError(f"stage_before takes pipeline stage names, not {stage!r}")
+        name = stage.removeprefix("VK_PIPELINE_STAGE_2_").removeprefix("VK_PIPELINE_STAGE_")
+        names.add(name[: -len("_BIT")] if name.endswith("_BIT") else name)
+    return frozenset(names)
 
 
 def _int(vk: Any, handle: Any) -> Any:

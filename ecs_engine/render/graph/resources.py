@@ -1,152 +1,16 @@
-"""What the frame graph's resources are: descriptions of transient images and buffers, the one
-table that says what each kind of access means to Vulkan, and the images and buffers a pass
-records with.
-
-The table holds Vulkan names without their prefixes (stage "COMPUTE_SHADER", access
-"SHADER_SAMPLED_READ", layout "GENERAL"), so a graph can be planned and its barrier plan checked
-without a device; `flags()` turns names into bits when barriers are recorded.
-"""
+"""What the frame graph's resources are: descriptions of transient images and buffers, the
+images and buffers a pass records with, and the names of Vulkan values (the access table is
+access.py; `flags()` turns its names into bits when barriers are recorded)."""
 
 from __future__ import annotations
 
 import math
 import re
 from dataclasses import dataclass
-from enum import Enum
 from typing import Any
 
 from ...errors import UsageError
-
-
-class Load(Enum):
-    """What a write does with what the resource held: LOAD keeps it (the pass reads it: it
-    depends on the pass that wrote it); CLEAR and DONT_CARE discard it (CLEAR fills attachments
-    with the write's clear value; other writes clear themselves if they need to)."""
-
-    LOAD = "load"
-    CLEAR = "clear"
-    DONT_CARE = "dont_care"
-
-
-@dataclass(frozen=True)
-class Usage:
-    """One access kind: pipeline stages, memory accesses, the image layout (None: buffers only),
-    whether it reads / writes, the image and buffer usage bits it needs, and whether it applies
-    to images, buffers or both."""
-
-    stages: tuple[str, ...]
-    access: tuple[str, ...]
-    layout: str | None
-    reads: bool
-    writes: bool
-    image_usage: tuple[str, ...] = ()
-    buffer_usage: tuple[str, ...] = ()
-
-
-_FRAG_TESTS = ("EARLY_FRAGMENT_TESTS", "LATE_FRAGMENT_TESTS")
-
-
-class Access(Enum):
-    COLOR_WRITE = Usage(
-        ("COLOR_ATTACHMENT_OUTPUT",),
-        ("COLOR_ATTACHMENT_WRITE",),
-        "COLOR_ATTACHMENT_OPTIMAL",
-        False,
-        True,
-        ("COLOR_ATTACHMENT",),
-    )
-    COLOR_READ_WRITE = Usage(
-        ("COLOR_ATTACHMENT_OUTPUT",),
-        ("COLOR_ATTACHMENT_READ", "COLOR_ATTACHMENT_WRITE"),
-        "COLOR_ATTACHMENT_OPTIMAL",
-        True,
-        True,
-        ("COLOR_ATTACHMENT",),
-    )
-    DEPTH_WRITE = Usage(
-        _FRAG_TESTS,
-        ("DEPTH_STENCIL_ATTACHMENT_READ", "DEPTH_STENCIL_ATTACHMENT_WRITE"),
-        "DEPTH_STENCIL_ATTACHMENT_OPTIMAL",
-        False,
-        True,
-        ("DEPTH_STENCIL_ATTACHMENT",),
-    )
-    DEPTH_READ = Usage(  # a depth attachment tested, not written (also sampled in this layout)
-        _FRAG_TESTS,
-        ("DEPTH_STENCIL_ATTACHMENT_READ",),
-        "DEPTH_STENCIL_READ_ONLY_OPTIMAL",
-        True,
-        False,
-        ("DEPTH_STENCIL_ATTACHMENT",),
-    )
-    RESOLVE_WRITE = Usage(  # MSAA resolves run in the colour output stage as attachment writes
-        ("COLOR_ATTACHMENT_OUTPUT",),
-        ("COLOR_ATTACHMENT_WRITE",),
-        "COLOR_ATTACHMENT_OPTIMAL",
-        False,
-        True,
-        ("COLOR_ATTACHMENT",),
-    )
-    FRAGMENT_SAMPLED = Usage(
-        ("FRAGMENT_SHADER",), ("SHADER_SAMPLED_READ",), "SHADER_READ_ONLY_OPTIMAL", True, False, ("SAMPLED",)
-    )
-    COMPUTE_SAMPLED = Usage(
-        ("COMPUTE_SHADER",), ("SHADER_SAMPLED_READ",), "SHADER_READ_ONLY_OPTIMAL", True, False, ("SAMPLED",)
-    )
-    COMPUTE_READ = Usage(
-        ("COMPUTE_SHADER",), ("SHADER_STORAGE_READ",), "GENERAL", True, False, ("STORAGE",), ("STORAGE_BUFFER",)
-    )
-    COMPUTE_WRITE = Usage(
-        ("COMPUTE_SHADER",), ("SHADER_STORAGE_WRITE",), "GENERAL", False, True, ("STORAGE",), ("STORAGE_BUFFER",)
-    )
-    COMPUTE_READ_WRITE = Usage(
-        ("COMPUTE_SHADER",),
-        ("SHADER_STORAGE_READ", "SHADER_STORAGE_WRITE"),
-        "GENERAL",
-        True,
-        True,
-        ("STORAGE",),
-        ("STORAGE_BUFFER",),
-    )
-    TRANSFER_READ = Usage(
-        ("TRANSFER",), ("TRANSFER_READ",), "TRANSFER_SRC_OPTIMAL", True, False, ("TRANSFER_SRC",), ("TRANSFER_SRC",)
-    )
-    TRANSFER_WRITE = Usage(
-        ("TRANSFER",), ("TRANSFER_WRITE",), "TRANSFER_DST_OPTIMAL", False, True, ("TRANSFER_DST",), ("TRANSFER_DST",)
-    )
-    INDIRECT_READ = Usage(("DRAW_INDIRECT",), ("INDIRECT_COMMAND_READ",), None, True, False, (), ("INDIRECT_BUFFER",))
-    VERTEX_READ = Usage(
-        ("VERTEX_INPUT",),
-        ("VERTEX_ATTRIBUTE_READ", "INDEX_READ"),
-        None,
-        True,
-        False,
-        (),
-        ("VERTEX_BUFFER", "INDEX_BUFFER"),
-    )
-    UNIFORM_READ = Usage(
-        ("VERTEX_SHADER", "FRAGMENT_SHADER", "COMPUTE_SHADER"),
-        ("UNIFORM_READ",),
-        None,
-        True,
-        False,
-        (),
-        ("UNIFORM_BUFFER",),
-    )
-    # handed to the presentation engine: nothing after it in the frame (the semaphore waits)
-    PRESENT = Usage(("NONE",), ("NONE",), "PRESENT_SRC_KHR", True, False)
-
-    @property
-    def usage(self) -> Usage:
-        return self.value
-
-    @property
-    def for_images(self) -> bool:
-        return self.usage.layout is not None
-
-    @property
-    def for_buffers(self) -> bool:
-        return bool(self.usage.buffer_usage)
+from .access import Access, Load
 
 
 def flags(vk: Any, prefix: str, names: tuple[str, ...] | frozenset[str]) -> int:
@@ -212,13 +76,14 @@ def texel_bytes(fmt: str) -> int:
 @dataclass(frozen=True)
 class ImageDesc:
     """A transient image: its format's name, its size relative to the graph's extent (or an
-    absolute `size`), mip levels and MSAA samples."""
+    absolute `size`), mip levels, MSAA samples and array layers."""
 
     format: str = "VK_FORMAT_R16G16B16A16_SFLOAT"
     scale: float = 1.0
     size: tuple[int, int] | None = None
     mips: int = 1
     samples: int = 1
+    layers: int = 1
 
     def __post_init__(self) -> None:
         if not self.format.removeprefix("VK_FORMAT_") or not re.fullmatch(r"(VK_FORMAT_)?[A-Z0-9_]+", self.format):
@@ -229,6 +94,8 @@ class ImageDesc:
             raise UsageError(f"an image has mips >= 1 and 1, 2, 4 ... 64 samples, not {self.mips}, {self.samples}")
         if self.mips > 1 and self.samples > 1:
             raise UsageError("a multisampled image has one mip level")
+        if self.layers < 1:
+            raise UsageError(f"an image has at least one layer, not {self.layers}")
 
     @property
     def format_name(self) -> str:
@@ -244,7 +111,7 @@ class ImageDesc:
         """Memory the image takes by its texel size (the device's own figure replaces it)."""
         w, h = self.extent(graph_extent)
         texels = sum(max(1, w >> m) * max(1, h >> m) for m in range(self.mips))
-        return texels * texel_bytes(self.format_name) * self.samples
+        return texels * texel_bytes(self.format_name) * self.samples * self.layers
 
 
 @dataclass(frozen=True)
@@ -264,8 +131,9 @@ def mip_extent(extent: tuple[int, int], mip: int) -> tuple[int, int]:
 
 @dataclass
 class GraphImage:
-    """An image as a pass records with it: the handle, a view of all mips, views of each mip,
-    the VkFormat (its value), size, mips and samples."""
+    """An image as a pass records with it: the handle, a view of all mips (and layers), views of
+    each mip, the VkFormat (its value), size, mips and samples; with layers, a view of each
+    layer (its first mip)."""
 
     name: str
     handle: Any
@@ -275,6 +143,25 @@ class GraphImage:
     mips: int
     samples: int
     mip_views: tuple[Any, ...] = ()
+    layers: int = 1
+    layer_views: tuple[Any, ...] = ()
+
+    def layer_view(self, layer: int) -> Any:
+        if not 0 <= layer < self.layers:
+            raise UsageError(f"image {self.name!r} has {self.layers} layer(s); no layer {layer}")
+        if self.layers == 1:
+            return self.mip_view(0)
+        if not self.layer_views:
+            raise UsageError(f"image {self.name!r} was imported without views of each layer (layer_views=)")
+        return self.layer_views[layer]
+
+    def attachment_view(self, mip: int, layer: int) -> Any:
+        """The view that renders to (mip, layer): a mip's view, or a layer's (of mip 0)."""
+        if self.layers == 1:
+            return self.mip_view(mip)
+        if mip != 0:
+            raise UsageError(f"image {self.name!r} has views of each layer at mip 0 only, not mip {mip}")
+        return self.layer_view(layer)
 
     def mip_view(self, mip: int) -> Any:
         if not 0 <= mip < self.mips:
@@ -300,8 +187,8 @@ class GraphBuffer:
 
 @dataclass(frozen=True)
 class Use:
-    """One declared access of a pass: resource, access, mip (None: all), and for writes the load
-    op and clear value."""
+    """One declared access of a pass: resource, access, mip and layer (None: all), for writes the
+    load op and clear value, and whether the write covers a region only (the rest is kept)."""
 
     resource: str
     access: Access
@@ -309,13 +196,22 @@ class Use:
     write: bool
     load: Load = Load.LOAD
     clear: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    layer: int | None = None
+    region: bool = False
 
     @property
     def keeps_contents(self) -> bool:
-        """The access sees what was there before (a read, a LOAD, a read-modify-write)."""
-        return not self.write or self.load is Load.LOAD or self.access.usage.reads
+        """The access sees or keeps what was there before (a read, a LOAD, a read-modify-write,
+        a write of a region: no UNDEFINED transition; it runs after the last writer)."""
+        return not self.write or self.load is Load.LOAD or self.access.usage.reads or self.region
+
+    @property
+    def needs_writer(self) -> bool:
+        """The access reads what an earlier pass wrote (a region write may be the first)."""
+        return self.keeps_contents and not (self.region and not self.access.usage.reads and self.load is not Load.LOAD)
 
     def describe(self) -> str:
         where = "" if self.mip is None else f"[mip {self.mip}]"
+        where += ("" if self.layer is None else f"[layer {self.layer}]") + (" region" if self.region else "")
         load = f" {self.load.value}" if self.write and self.load is not Load.LOAD else ""
         return f"{self.resource}{where} {self.access.name}{load}"

@@ -148,7 +148,7 @@ class Transients:
                     format=fmt,
                     extent=vk.VkExtent3D(w, h, 1),
                     mipLevels=desc.mips,
-                    arrayLayers=1,
+                    arrayLayers=desc.layers,
                     samples=desc.samples,
                     tiling=vk.VK_IMAGE_TILING_OPTIMAL,
                     usage=flags(vk, "VK_IMAGE_USAGE_", tuple(sorted(usage_names))),
@@ -178,24 +178,44 @@ class Transients:
             # views sample or attach the depth; an image only copied has none (a view needs a usage that views)
             aspect = int(vk.VK_IMAGE_ASPECT_DEPTH_BIT) if is_depth(desc.format_name) else aspect_of(vk, "")
             views: list[Any] = [None]
+            layer_views: list[Any] = []
+            n = desc.layers
             if s.usage.get(name, set()) & VIEWED:
-                views = [_view(vk, owned, image, fmt, aspect, 0, desc.mips)]
+                views = [_view(vk, owned, image, fmt, aspect, (0, desc.mips), (0, n))]
                 if desc.mips > 1:
-                    views += [_view(vk, owned, image, fmt, aspect, m, 1) for m in range(desc.mips)]
+                    views += [_view(vk, owned, image, fmt, aspect, (m, 1), (0, n)) for m in range(desc.mips)]
+                if n > 1:  # what a pass renders to one layer with
+                    layer_views = [_view(vk, owned, image, fmt, aspect, (0, 1), (k, 1)) for k in range(n)]
             self.images[name] = GraphImage(
-                name, image, views[0], fmt, desc.extent(s.extent), desc.mips, desc.samples, tuple(views[1:])
+                name,
+                image,
+                views[0],
+                fmt,
+                desc.extent(s.extent),
+                desc.mips,
+                desc.samples,
+                tuple(views[1:]),
+                n,
+                tuple(layer_views),
             )
 
 
-def _view(vk: Any, owned: Owned, image: Any, fmt: int, aspect: int, base: int, count: int) -> Any:
+def _view(
+    vk: Any, owned: Owned, image: Any, fmt: int, aspect: int, mips: tuple[int, int], layers: tuple[int, int]
+) -> Any:
+    """A view of mips (first, count) and layers (first, count); an array view over several layers."""
     return owned.create(
         "ImageView",
         vk.VkImageViewCreateInfo(
             image=image,
-            viewType=vk.VK_IMAGE_VIEW_TYPE_2D,
+            viewType=vk.VK_IMAGE_VIEW_TYPE_2D_ARRAY if layers[1] > 1 else vk.VK_IMAGE_VIEW_TYPE_2D,
             format=fmt,
             subresourceRange=vk.VkImageSubresourceRange(
-                aspectMask=aspect, baseMipLevel=base, levelCount=count, baseArrayLayer=0, layerCount=1
+                aspectMask=aspect,
+                baseMipLevel=mips[0],
+                levelCount=mips[1],
+                baseArrayLayer=layers[0],
+                layerCount=layers[1],
             ),
         ),
     )
