@@ -86,15 +86,20 @@ class Buffer:
         vk = self.device.vk
         return vk.VkDescriptorBufferInfo(buffer=self.handle, offset=offset, range=size or self.size)
 
-    def grown(self, needed: int) -> Buffer:
+    def grown(self, needed: int, owned: Owned | None = None) -> Buffer:
         """This buffer while it holds `needed` bytes; else a new one of the same usage and at
-        least twice the size, and this one is destroyed. Call it only when the GPU no longer
-        reads this buffer (a frame slot whose fence was waited on), and rewrite the descriptors
-        that named it (the handle changes)."""
+        least twice the size, and this one is destroyed (released from `owned`, the scope that
+        owns it, where given; the new one is then owned there in its place). Call it only when
+        the GPU no longer reads this buffer (a frame slot whose fence was waited on), and
+        rewrite the descriptors that named it (the handle changes)."""
         if needed <= self.size:
             return self
         bigger = Buffer(self.device, max(needed, 2 * self.size), self.usage, self.where)  # may fail: keep this one
-        self.destroy()
+        if owned is None:
+            self.destroy()
+        else:
+            owned.release(self)
+            owned.add(bigger)
         return bigger
 
     def destroy(self) -> None:
