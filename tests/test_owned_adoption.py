@@ -271,3 +271,50 @@ def test_a_buffer_grown_in_its_scope_replaces_itself_there():
     owned.destroy()
     assert big.handle is None and device.vk.left() == {}
     assert device.allocator.stats()["used_bytes"] == used
+
+
+class FakeAccelerationFunctions:
+    """acceleration_structure.functions(device) where the device traces no rays (lavapipe): a
+    structure's create and destroy are counted, its address made up; `fail` makes create fail."""
+
+    def __init__(self, vk: Any, fail: bool = False) -> None:
+        self.vk, self.fail, self.live, self.made = vk, fail, 0, 0
+
+    def create(self, device: Any, info: Any, allocator: Any, out: Any) -> int:
+        if self.fail:
+            return self.vk.VK_ERROR_OUT_OF_DEVICE_MEMORY
+        self.made += 1
+        self.live += 1
+        out[0] = self.vk.ffi.cast("VkAccelerationStructureKHR", 0x1000 + self.made)
+        return self.vk.VK_SUCCESS
+
+    def destroy(self, device: Any, handle: Any, allocator: Any) -> None:
+        self.live -= 1
+
+    def address(self, device: Any, info: Any) -> int:
+        return 0x10000 * self.made
+
+
+@pytest.mark.parametrize("fail", [False, True], ids=["destroyed twice", "create fails"])
+def test_an_acceleration_structure_and_its_buffer_go_together(fail, monkeypatch):
+    from ecs_engine.gpu import acceleration_structure
+    from ecs_engine.gpu.acceleration_structure import Structure
+
+    device = CountingDevice()
+    vk = device.vk
+    # a plain storage buffer: this device has neither acceleration structures nor device addresses
+    monkeypatch.setattr(acceleration_structure, "_usage", lambda vk, extra: vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT)
+    fns = device._acceleration_functions = FakeAccelerationFunctions(vk, fail)
+    used = device.allocator.stats()["used_bytes"]
+    level = vk.lib.VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR
+    if fail:
+        with pytest.raises(vk.exception_codes[vk.VK_ERROR_OUT_OF_DEVICE_MEMORY]):
+            Structure(device, level, 256)
+    else:
+        structure = Structure(device, level, 256)
+        assert fns.live == 1 and vk.left() == {"Buffer": 1}
+        structure.destroy()
+        structure.destroy()
+        assert structure.handle is None
+    assert (fns.live, vk.left()) == (0, {})  # the structure (if made) and its buffer, once each
+    assert device.allocator.stats()["used_bytes"] == used
