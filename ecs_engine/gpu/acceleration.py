@@ -31,6 +31,7 @@ from .acceleration_structure import (
 from .barrier import Barrier
 from .frames import check
 from .memory import Buffer
+from .owned import Owned
 
 __all__ = ["AS_INSTANCE", "MeshInput", "TopLevel", "build_bottom_levels", "triangle_geometry"]
 # acceleration_structure.py's, imported from here
@@ -239,6 +240,7 @@ class TopLevel:
         self.capacity = 0
         self.structure: Structure | None = None
         self.scratch: Scratch | None = None
+        self._parts = Owned(device)  # the structure and its scratch, made again together by reserve
         self.reserve(capacity)
 
     def reserve(self, capacity: int) -> bool:
@@ -249,13 +251,15 @@ class TopLevel:
             return False
         capacity = max(int(capacity), 2 * self.capacity, 64)
         size, build_scratch, update_scratch = build_sizes(self.device, self._info, capacity)
-        structure = Structure(self.device, self.level, size)
+        parts = Owned(self.device)
         try:
-            scratch = Scratch(self.device, max(build_scratch, update_scratch))
+            structure = parts.add(Structure(self.device, self.level, size))
+            scratch = parts.add(Scratch(self.device, max(build_scratch, update_scratch)))
         except BaseException:
-            structure.destroy()
+            parts.destroy()
             raise
         self.destroy()
+        self._parts = parts
         self.structure, self.scratch, self.capacity, self.built_count = structure, scratch, capacity, -1
         self._info.scratchData.deviceAddress = scratch.address
         return True
@@ -290,7 +294,5 @@ class TopLevel:
         return refit
 
     def destroy(self) -> None:
-        for part in (self.structure, self.scratch):
-            if part is not None:
-                part.destroy()
+        self._parts.destroy()
         self.structure = self.scratch = None

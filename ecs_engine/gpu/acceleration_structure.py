@@ -17,6 +17,7 @@ from typing import Any
 from .frames import check
 from .functions import raw_device_function
 from .memory import DEVICE, Buffer
+from .owned import Owned
 
 _FUNCTIONS = {
     "create": "vkCreateAccelerationStructureKHR",
@@ -78,9 +79,9 @@ class Structure:
         self.device = device
         self.level = level
         self.size = int(size)
-        self.buffer = Buffer(
-            device, self.size, _usage(vk, lib.VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_STORAGE_BIT_KHR), DEVICE
-        )
+        self.owned = Owned(device)  # the buffer, then the structure in it (destroyed first)
+        usage = _usage(vk, lib.VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_STORAGE_BIT_KHR)
+        self.buffer = self.owned.add(Buffer(device, self.size, usage, DEVICE))
         fns = functions(device)
         info = ffi.new(
             "VkAccelerationStructureCreateInfoKHR*",
@@ -95,9 +96,10 @@ class Structure:
         try:
             check(vk, fns.create(device.handle, info, ffi.NULL, out))
         except BaseException:
-            self.buffer.destroy()
+            self.owned.destroy()
             raise
-        self.handle = out[0]
+        handle = self.handle = out[0]
+        self.owned.add(handle, lambda: fns.destroy(device.handle, handle, ffi.NULL))
         where = ffi.new(
             "VkAccelerationStructureDeviceAddressInfoKHR*",
             {
@@ -108,10 +110,7 @@ class Structure:
         self.address = int(fns.address(device.handle, where))
 
     def destroy(self) -> None:
-        if self.handle is None:
-            return
-        functions(self.device).destroy(self.device.handle, self.handle, self.device.vk.ffi.NULL)
-        self.buffer.destroy()
+        self.owned.destroy()
         self.handle = None
 
 

@@ -13,6 +13,7 @@ import numpy as np
 from .allocator import DEVICE
 from .device import Device
 from .memory import HOST, Buffer
+from .owned import Owned
 
 _STAGING_BYTES = 64 * 2**20  # one submit copies at most this much (a 4096^2 layer's chain is 85 MiB: alone)
 
@@ -33,43 +34,33 @@ class ArrayImage:
             flags, storage = vk.VK_IMAGE_CREATE_MUTABLE_FORMAT_BIT, vk.VK_FORMAT_R8G8B8A8_UNORM
             kind = vk.VK_IMAGE_VIEW_TYPE_2D_ARRAY
             views = [(vk.VK_FORMAT_R8G8B8A8_SRGB, kind), (vk.VK_FORMAT_R8G8B8A8_UNORM, kind)]
-        device.objects_version += 1
-        self.handle = vk.vkCreateImage(
-            device.handle,
-            vk.VkImageCreateInfo(
-                flags=flags,
-                imageType=vk.VK_IMAGE_TYPE_2D,
-                format=storage,
-                extent=vk.VkExtent3D(side, side, 1),
-                mipLevels=self.levels,
-                arrayLayers=self.layers,
-                samples=vk.VK_SAMPLE_COUNT_1_BIT,
-                tiling=vk.VK_IMAGE_TILING_OPTIMAL,
-                usage=vk.VK_IMAGE_USAGE_SAMPLED_BIT | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE,
-                initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
-            ),
-            None,
-        )
+        self.owned = Owned(device)  # the image, its memory, its views: destroyed views first
         self.views: list[Any] = []
-        self.allocation = None
         try:
+            self.handle = self.owned.create(
+                "Image",
+                vk.VkImageCreateInfo(
+                    flags=flags,
+                    imageType=vk.VK_IMAGE_TYPE_2D,
+                    format=storage,
+                    extent=vk.VkExtent3D(side, side, 1),
+                    mipLevels=self.levels,
+                    arrayLayers=self.layers,
+                    samples=vk.VK_SAMPLE_COUNT_1_BIT,
+                    tiling=vk.VK_IMAGE_TILING_OPTIMAL,
+                    usage=vk.VK_IMAGE_USAGE_SAMPLED_BIT | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                    sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE,
+                    initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
+                ),
+            )
             req = vk.vkGetImageMemoryRequirements(device.handle, self.handle)
-            self.allocation = device.allocator.allocate(req, DEVICE, "image")
+            self.allocation = self.owned.allocation(device.allocator.allocate(req, DEVICE, "image"))
             vk.vkBindImageMemory(device.handle, self.handle, self.allocation.memory, self.allocation.offset)
             for fmt, view_type in views:
-                self.views.append(
-                    vk.vkCreateImageView(
-                        device.handle,
-                        vk.VkImageViewCreateInfo(
-                            image=self.handle,
-                            viewType=view_type,
-                            format=fmt,
-                            subresourceRange=self._range(),
-                        ),
-                        None,
-                    )
+                info = vk.VkImageViewCreateInfo(
+                    image=self.handle, viewType=view_type, format=fmt, subresourceRange=self._range()
                 )
+                self.views.append(self.owned.create("ImageView", info))
         except BaseException:
             self.destroy()
             raise
@@ -168,15 +159,7 @@ class ArrayImage:
         self.device.submit_once(lambda cb: vk.vkCmdPipelineBarrier(cb, src, dst, 0, 0, None, 0, None, 1, [barrier]))
 
     def destroy(self) -> None:
-        if self.handle is None:
-            return
-        self.device.objects_version += 1
-        vk = self.device.vk
-        for view in self.views:
-            vk.vkDestroyImageView(self.device.handle, view, None)
-        vk.vkDestroyImage(self.device.handle, self.handle, None)
-        if self.allocation is not None:
-            self.device.allocator.free(self.allocation)
+        self.owned.destroy()
         self.handle = None
 
 

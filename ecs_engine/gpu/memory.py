@@ -14,6 +14,7 @@ import numpy as np
 
 from .allocator import ADDRESSED, DEVICE, HOST, UPLOAD
 from .device import Device
+from .owned import Owned
 
 __all__ = ["DEVICE", "HOST", "UPLOAD", "Buffer", "Image", "upload"]
 
@@ -85,15 +86,20 @@ class Buffer:
         vk = self.device.vk
         return vk.VkDescriptorBufferInfo(buffer=self.handle, offset=offset, range=size or self.size)
 
-    def grown(self, needed: int) -> Buffer:
+    def grown(self, needed: int, owned: Owned | None = None) -> Buffer:
         """This buffer while it holds `needed` bytes; else a new one of the same usage and at
-        least twice the size, and this one is destroyed. Call it only when the GPU no longer
-        reads this buffer (a frame slot whose fence was waited on), and rewrite the descriptors
-        that named it (the handle changes)."""
+        least twice the size, and this one is destroyed (released from `owned`, the scope that
+        owns it, where given; the new one is then owned there in its place). Call it only when
+        the GPU no longer reads this buffer (a frame slot whose fence was waited on), and
+        rewrite the descriptors that named it (the handle changes)."""
         if needed <= self.size:
             return self
         bigger = Buffer(self.device, max(needed, 2 * self.size), self.usage, self.where)  # may fail: keep this one
-        self.destroy()
+        if owned is None:
+            self.destroy()
+        else:
+            owned.release(self)
+            owned.add(bigger)
         return bigger
 
     def destroy(self) -> None:
@@ -141,54 +147,50 @@ class Image:
         vk = device.vk
         self.device = device
         self.width, self.height, self.format, self.aspect = width, height, fmt, aspect
-        device.objects_version += 1
-        self.handle = vk.vkCreateImage(
-            device.handle,
-            vk.VkImageCreateInfo(
-                imageType=vk.VK_IMAGE_TYPE_2D,
-                format=fmt,
-                extent=vk.VkExtent3D(width, height, 1),
-                mipLevels=1,
-                arrayLayers=layers or 1,
-                samples=samples,  # VkSampleCountFlagBits: the count itself
-                tiling=vk.VK_IMAGE_TILING_OPTIMAL,
-                usage=usage,
-                sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE,
-                initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
-            ),
-            None,
-        )
-        req = vk.vkGetImageMemoryRequirements(device.handle, self.handle)
-        self.allocation = device.allocator.allocate(req, DEVICE, "image")
-        vk.vkBindImageMemory(device.handle, self.handle, self.allocation.memory, self.allocation.offset)
-        kind = vk.VK_IMAGE_VIEW_TYPE_2D if layers is None else vk.VK_IMAGE_VIEW_TYPE_2D_ARRAY
-        self.view = self._view(kind, 0, layers or 1)
-
-    def _view(self, kind: int, first: int, count: int) -> Any:
-        vk = self.device.vk
-        return vk.vkCreateImageView(
-            self.device.handle,
-            vk.VkImageViewCreateInfo(
-                image=self.handle,
-                viewType=kind,
-                format=self.format,
-                subresourceRange=vk.VkImageSubresourceRange(
-                    aspectMask=self.aspect, baseMipLevel=0, levelCount=1, baseArrayLayer=first, layerCount=count
+        # the image, its memory and its view, destroyed view first; a failure half-way (out of
+        # memory) leaves nothing behind
+        self.owned = Owned(device)
+        try:
+            self.handle = self.owned.create(
+                "Image",
+                vk.VkImageCreateInfo(
+                    imageType=vk.VK_IMAGE_TYPE_2D,
+                    format=fmt,
+                    extent=vk.VkExtent3D(width, height, 1),
+                    mipLevels=1,
+                    arrayLayers=layers or 1,
+                    samples=samples,  # VkSampleCountFlagBits: the count itself
+                    tiling=vk.VK_IMAGE_TILING_OPTIMAL,
+                    usage=usage,
+                    sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE,
+                    initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
                 ),
+            )
+            req = vk.vkGetImageMemoryRequirements(device.handle, self.handle)
+            self.allocation = self.owned.allocation(device.allocator.allocate(req, DEVICE, "image"))
+            vk.vkBindImageMemory(device.handle, self.handle, self.allocation.memory, self.allocation.offset)
+            kind = vk.VK_IMAGE_VIEW_TYPE_2D if layers is None else vk.VK_IMAGE_VIEW_TYPE_2D_ARRAY
+            self.view = self.owned.create("ImageView", self._view_info(kind, 0, layers or 1))
+        except BaseException:
+            self.owned.destroy()
+            raise
+
+    def _view_info(self, kind: int, first: int, count: int) -> Any:
+        vk = self.device.vk
+        return vk.VkImageViewCreateInfo(
+            image=self.handle,
+            viewType=kind,
+            format=self.format,
+            subresourceRange=vk.VkImageSubresourceRange(
+                aspectMask=self.aspect, baseMipLevel=0, levelCount=1, baseArrayLayer=first, layerCount=count
             ),
-            None,
         )
 
     def layer_view(self, layer: int) -> Any:
         """A 2D view of one layer (an attachment), for the caller to destroy before the image."""
-        return self._view(self.device.vk.VK_IMAGE_VIEW_TYPE_2D, layer, 1)
+        vk = self.device.vk
+        return vk.vkCreateImageView(self.device.handle, self._view_info(vk.VK_IMAGE_VIEW_TYPE_2D, layer, 1), None)
 
     def destroy(self) -> None:
-        if self.handle is None:
-            return
-        self.device.objects_version += 1
-        vk = self.device.vk
-        vk.vkDestroyImageView(self.device.handle, self.view, None)
-        vk.vkDestroyImage(self.device.handle, self.handle, None)
-        self.device.allocator.free(self.allocation)
+        self.owned.destroy()
         self.handle = None

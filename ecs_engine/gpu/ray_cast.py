@@ -12,6 +12,7 @@ from .acceleration import TopLevel
 from .barrier import Barrier
 from .descriptors import DescriptorPool, DescriptorSetLayout, write_acceleration_structure, write_buffers
 from .memory import HOST, Buffer
+from .owned import Owned
 from .pipeline import pipeline_layout
 from .ray_pipeline import RayPipeline
 
@@ -27,17 +28,29 @@ class RayCaster:
         self.device = device
         stages = lib.VK_SHADER_STAGE_RAYGEN_BIT_KHR
         storage = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
-        self.set_layout = DescriptorSetLayout(
-            device,
-            [
-                (0, lib.VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR, stages),
-                (1, storage, stages),
-                (2, storage, stages),
-            ],
-        )
-        self.pool = DescriptorPool(device, 1, {lib.VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR: 1, storage: 2})
-        self.layout = pipeline_layout(device, [self.set_layout.handle], [(stages, 0, 8)])
-        self.pipeline = RayPipeline(device, self.layout, "ray_cast.rgen", ["ray_cast.rmiss"], ["ray_cast.rchit"])
+        # the set layout, pool, pipeline layout and pipeline; a failure half-way leaves nothing
+        self.owned = owned = Owned(device)
+        try:
+            self.set_layout = owned.add(
+                DescriptorSetLayout(
+                    device,
+                    [
+                        (0, lib.VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR, stages),
+                        (1, storage, stages),
+                        (2, storage, stages),
+                    ],
+                )
+            )
+            sizes = {lib.VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR: 1, storage: 2}
+            self.pool = owned.add(DescriptorPool(device, 1, sizes))
+            layout = self.layout = pipeline_layout(device, [self.set_layout.handle], [(stages, 0, 8)])
+            owned.add(layout, lambda: vk.vkDestroyPipelineLayout(device.handle, layout, None))
+            self.pipeline = owned.add(
+                RayPipeline(device, self.layout, "ray_cast.rgen", ["ray_cast.rmiss"], ["ray_cast.rchit"])
+            )
+        except BaseException:
+            owned.destroy()
+            raise
         self.set = self.pool.allocate(self.set_layout)
         self.push = vk.ffi.new("uint32_t[2]")
         self._to_host = Barrier(
@@ -86,7 +99,4 @@ class RayCaster:
             hit_buffer.destroy()
 
     def destroy(self) -> None:
-        self.pipeline.destroy()
-        self.device.vk.vkDestroyPipelineLayout(self.device.handle, self.layout, None)
-        self.pool.destroy()
-        self.set_layout.destroy()
+        self.owned.destroy()

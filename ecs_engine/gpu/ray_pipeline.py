@@ -17,6 +17,7 @@ import numpy as np
 from .frames import check
 from .functions import raw_device_function
 from .memory import HOST, Buffer
+from .owned import Owned
 from .pipeline import shader_module, specialization
 
 UNUSED = 0xFFFFFFFF  # VK_SHADER_UNUSED_KHR (None in the binding)
@@ -48,6 +49,7 @@ class RayPipeline:
             raise RuntimeError(f"{device.info.name} has no ray-tracing pipelines")
         self.device = device
         self.layout = layout
+        self.owned = Owned(device)  # the pipeline, then its binding table
         pairs = [h if isinstance(h, tuple) else (h, None) for h in hits]
         names = [raygen, *misses]
         kinds = [lib.VK_SHADER_STAGE_RAYGEN_BIT_KHR] + [lib.VK_SHADER_STAGE_MISS_BIT_KHR] * len(misses)
@@ -101,14 +103,15 @@ class RayPipeline:
             create = raw_device_function(device, "vkCreateRayTracingPipelinesKHR")
             device.objects_version += 1
             check(vk, create(device.handle, ffi.NULL, device.pipeline_cache.handle, 1, info, ffi.NULL, out))
-            self.handle = out[0]
+            pipeline = self.handle = out[0]
+            self.owned.add(pipeline, lambda: vk.vkDestroyPipeline(device.handle, pipeline, None))
         finally:
             for module in modules:
                 vk.vkDestroyShaderModule(device.handle, module, None)
         try:
             self._make_table(len(groups), 1 + len(misses))
         except BaseException:
-            vk.vkDestroyPipeline(device.handle, self.handle, None)
+            self.owned.destroy()
             raise
         self._trace = raw_device_function(device, "vkCmdTraceRaysKHR")
         self.bind_point = lib.VK_PIPELINE_BIND_POINT_RAY_TRACING_KHR
@@ -130,7 +133,7 @@ class RayPipeline:
             starts.append(total)
             total += _align(max(count, 1) * stride, props.base_alignment)
         usage = lib.VK_BUFFER_USAGE_SHADER_BINDING_TABLE_BIT_KHR | lib.VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT
-        self.table = Buffer(device, total + props.base_alignment, usage, HOST)
+        self.table = self.owned.add(Buffer(device, total + props.base_alignment, usage, HOST))
         base = _align(self.table.address, props.base_alignment)
         skew = base - self.table.address
         out = self.table.bytes()
@@ -167,8 +170,5 @@ class RayPipeline:
         self._trace(cb, r + 0, r + 1, r + 2, r + 3, width, height, depth)
 
     def destroy(self) -> None:
-        if self.handle is None:
-            return
-        self.table.destroy()
-        self.device.vk.vkDestroyPipeline(self.device.handle, self.handle, None)
+        self.owned.destroy()
         self.handle = None

@@ -18,6 +18,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from .memory import Image
+from .owned import Owned
 from .pipeline import AttachmentFormats
 
 if TYPE_CHECKING:
@@ -91,23 +92,28 @@ class ShadowMaps:
         self._renderings: dict[tuple[int, int], Any] = {}  # (layer, texels across) -> VkRenderingInfo
         self._barriers: dict[tuple[tuple[int, ...], bool], tuple[Any, Any]] = {}  # see barriers()
         self.read_layout = getattr(vk, READ_LAYOUT_NAME)
+        # the image, then its layer views and samplers (and preview views, made later): destroyed
+        # last made first, so every view goes before its image
+        self.owned = Owned(device)
         try:
-            self.image = Image(
-                device,
-                self.resolution,
-                self.resolution,
-                getattr(vk, SHADOW_FORMAT_NAME),
-                vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT,
-                vk.VK_IMAGE_ASPECT_DEPTH_BIT,
-                layers=self.layers,
+            self.image = self.owned.add(
+                Image(
+                    device,
+                    self.resolution,
+                    self.resolution,
+                    getattr(vk, SHADOW_FORMAT_NAME),
+                    vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT,
+                    vk.VK_IMAGE_ASPECT_DEPTH_BIT,
+                    layers=self.layers,
+                )
             )
             for layer in range(self.layers):
-                self.layer_views.append(self.image.layer_view(layer))
+                self.layer_views.append(self._own_view(self.image.layer_view(layer)))
             kinds = ((vk.VK_FILTER_LINEAR, True), (vk.VK_FILTER_NEAREST, True), (vk.VK_FILTER_NEAREST, False))
             for filtering, compare in kinds:
                 self.samplers.append(
-                    vk.vkCreateSampler(
-                        device.handle,
+                    self.owned.create(
+                        "Sampler",
                         vk.VkSamplerCreateInfo(
                             magFilter=filtering,
                             minFilter=filtering,
@@ -117,12 +123,15 @@ class ShadowMaps:
                             compareEnable=vk.VK_TRUE if compare else vk.VK_FALSE,
                             compareOp=vk.VK_COMPARE_OP_GREATER_OR_EQUAL,
                         ),
-                        None,
                     )
                 )
         except BaseException:
             self.destroy()
             raise
+
+    def _own_view(self, view: Any) -> Any:
+        handle, vk = self.device.handle, self.vk
+        return self.owned.add(view, lambda: vk.vkDestroyImageView(handle, view, None))
 
     def image_infos(self) -> list[Any]:
         """VkDescriptorImageInfo of the array with the filtering comparison sampler, the hard
@@ -190,7 +199,7 @@ class ShadowMaps:
         if view is None:
             vk = self.vk
             r, one = vk.VK_COMPONENT_SWIZZLE_R, vk.VK_COMPONENT_SWIZZLE_ONE
-            view = self._previews[layer] = vk.vkCreateImageView(
+            view = vk.vkCreateImageView(
                 self.device.handle,
                 vk.VkImageViewCreateInfo(
                     image=self.image.handle,
@@ -207,18 +216,11 @@ class ShadowMaps:
                 ),
                 None,
             )
+            self._previews[layer] = self._own_view(view)
         return view
 
     def destroy(self) -> None:
-        vk, handle = self.vk, self.device.handle
-        for v in self._previews.values():
-            vk.vkDestroyImageView(handle, v, None)
+        self.owned.destroy()
         self._previews, self._renderings, self._barriers = {}, {}, {}
-        for sampler in self.samplers:
-            vk.vkDestroySampler(handle, sampler, None)
-        for v in self.layer_views:
-            vk.vkDestroyImageView(handle, v, None)
-        if self.image is not None:
-            self.image.destroy()
         self.samplers, self.layer_views = [], []
         self.image = None

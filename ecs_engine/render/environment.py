@@ -19,6 +19,7 @@ import numpy as np
 from ..components.environment import Environment
 from ..gpu.array_image import ArrayImage, clamped_sampler
 from ..gpu.device import Device
+from ..gpu.owned import Owned
 from ..jobs import JobPool
 from .environment_maps import cube_mips, irradiance_sh9, load_cube
 from .environment_prefilter import ggx_prefiltered_mips, roughness_levels
@@ -38,11 +39,13 @@ def _chains(mips: list[np.ndarray]) -> list[list[np.ndarray]]:
 class EnvironmentMap:
     def __init__(self, device: Device) -> None:
         self.device = device
-        self.sampler = clamped_sampler(device)
+        self.owned = Owned(device)  # the sampler, then the image (replaced by each new source)
         self.source: Environment | None = None  # what the image holds
         self.image: ArrayImage | None = None
         self.irradiance = np.zeros((9, 3), np.float32)
         try:
+            sampler = self.sampler = clamped_sampler(device)
+            self.owned.add(sampler, lambda: device.vk.vkDestroySampler(device.handle, sampler, None))
             self._upload(cube_mips(np.zeros((6, 1, 1, 3), np.float32)))
         except BaseException:
             self.destroy()
@@ -87,8 +90,8 @@ class EnvironmentMap:
             image.destroy()
             raise
         if self.image is not None:
-            self.image.destroy()
-        self.image = image
+            self.owned.release(self.image)
+        self.image = self.owned.add(image)
 
     def image_info(self) -> Any:
         vk = self.device.vk
@@ -110,9 +113,5 @@ class EnvironmentMap:
         return (env.intensity, float(roughness_levels(self.image.levels)), 1.0 if env.ambient else 0.0, 0.0), rows
 
     def destroy(self) -> None:
-        if self.image is not None:
-            self.image.destroy()
-            self.image = None
-        if self.sampler is not None:
-            self.device.vk.vkDestroySampler(self.device.handle, self.sampler, None)
-            self.sampler = None
+        self.owned.destroy()
+        self.image = self.sampler = None

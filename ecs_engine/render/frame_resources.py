@@ -13,6 +13,7 @@ import numpy as np
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers, write_images
 from ..gpu.device import Device
 from ..gpu.memory import DEVICE, UPLOAD, Buffer
+from ..gpu.owned import Owned
 from .camera import CameraMatrices
 from .frame_data import FrameData
 from .layouts import (
@@ -89,6 +90,7 @@ class FrameResources:
     pages: Any = None  # the TexturePages the set names
     environment: Any = None  # the render.environment.EnvironmentMap the set names
     set_version: int = 0  # bumped whenever the set is written: copies of it (shadow views') are then stale
+    owned: Any = None  # the gpu.owned.Owned scope of the buffers (each made anew in it as it grows)
 
     @classmethod
     def make(
@@ -103,29 +105,37 @@ class FrameResources:
         vk = device.vk
         ssbo = vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT
         descriptor_set = pool.allocate(layout)
-        frame = cls(
-            globals=Buffer(device, GLOBALS.size, vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT),
-            lights=Buffer(device, LIGHT.size * MIN_LIGHTS, ssbo),
-            # the GPU reads every row once a frame (the indirect mode's cull: twice): in device
-            # memory the CPU can write, where the device has it (H100, 1M rows, occlusion
-            # culling: GPU 9.4 -> 7.1 ms a frame against system memory), else in system memory
-            instances=Buffer(device, INSTANCE.size * 1024, ssbo, UPLOAD),
-            materials=Buffer(device, MATERIAL.size * MIN_MATERIALS, ssbo),
-            # bound always (the mesh shaders declare it), sized for a grid when lights are clustered
-            clusters=Buffer(
-                device,
-                ClusterGrid(1, 1, 1, 1.0, 1.0, 1, 1, tile=1).buffer_bytes,
-                ssbo | vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                DEVICE,
-            ),
-            shadow_views=Buffer(device, SHADOW_VIEW.size * 4, ssbo),
-            descriptor_set=descriptor_set,
-            set_array=vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]),
-            shadow_maps=shadow_maps,
-            pages=pages,
-            environment=environment,
-        )
-        frame.write_set(device, pages)
+        made = Owned(device)  # the buffers: destroyed with the frame, or at once if a later one cannot be made
+        try:
+            frame = cls(
+                globals=made.add(Buffer(device, GLOBALS.size, vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT)),
+                lights=made.add(Buffer(device, LIGHT.size * MIN_LIGHTS, ssbo)),
+                # the GPU reads every row once a frame (the indirect mode's cull: twice): in device
+                # memory the CPU can write, where the device has it (H100, 1M rows, occlusion
+                # culling: GPU 9.4 -> 7.1 ms a frame against system memory), else in system memory
+                instances=made.add(Buffer(device, INSTANCE.size * 1024, ssbo, UPLOAD)),
+                materials=made.add(Buffer(device, MATERIAL.size * MIN_MATERIALS, ssbo)),
+                # bound always (the mesh shaders declare it), sized for a grid when lights are clustered
+                clusters=made.add(
+                    Buffer(
+                        device,
+                        ClusterGrid(1, 1, 1, 1.0, 1.0, 1, 1, tile=1).buffer_bytes,
+                        ssbo | vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                        DEVICE,
+                    )
+                ),
+                shadow_views=made.add(Buffer(device, SHADOW_VIEW.size * 4, ssbo)),
+                descriptor_set=descriptor_set,
+                set_array=vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]),
+                shadow_maps=shadow_maps,
+                pages=pages,
+                environment=environment,
+                owned=made,
+            )
+            frame.write_set(device, pages)
+        except BaseException:
+            made.destroy()
+            raise
         return frame
 
     def write_set(self, device: Device, pages: TexturePages) -> None:
@@ -168,7 +178,7 @@ class FrameResources:
     ) -> None:
         """Grow the buffers (and name the new ones in the set), before anything records with it."""
         if shadow_views * SHADOW_VIEW.size > self.shadow_views.size:
-            self.shadow_views = self.shadow_views.grown(shadow_views * SHADOW_VIEW.size)
+            self.shadow_views = self.shadow_views.grown(shadow_views * SHADOW_VIEW.size, self.owned)
             self.write_set(device, pages)
         if (
             instances * INSTANCE.size <= self.instances.size
@@ -178,9 +188,9 @@ class FrameResources:
             return  # the usual frame: three comparisons, not three calls
         before = (self.instances, self.lights, self.materials)
         try:
-            self.instances = self.instances.grown(instances * INSTANCE.size)
-            self.lights = self.lights.grown(lights * LIGHT.size)
-            self.materials = self.materials.grown(materials * MATERIAL.size)
+            self.instances = self.instances.grown(instances * INSTANCE.size, self.owned)
+            self.lights = self.lights.grown(lights * LIGHT.size, self.owned)
+            self.materials = self.materials.grown(materials * MATERIAL.size, self.owned)
         finally:
             if (self.instances, self.lights, self.materials) != before:
                 if self.materials is not before[2]:
@@ -190,7 +200,7 @@ class FrameResources:
     def ensure_clusters(self, device: Device, pages: TexturePages, grid: ClusterGrid) -> None:
         """Room for `grid`'s light lists (safe: this slot's fence was waited on)."""
         if grid.buffer_bytes > self.clusters.size:
-            self.clusters = self.clusters.grown(grid.buffer_bytes)
+            self.clusters = self.clusters.grown(grid.buffer_bytes, self.owned)
             self.write_set(device, pages)
 
     def write_frame(
@@ -268,5 +278,4 @@ class FrameResources:
             self.materials_written = key
 
     def destroy(self) -> None:
-        for buffer in (self.globals, self.lights, self.instances, self.materials, self.clusters, self.shadow_views):
-            buffer.destroy()
+        self.owned.destroy()

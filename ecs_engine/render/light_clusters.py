@@ -38,6 +38,7 @@ from typing import Any, Final
 import numpy as np
 
 from ..gpu.device import Device
+from ..gpu.owned import Owned
 from ..gpu.pipeline import compute_pipeline, pipeline_layout
 from .config import LightCulling as LightCullingMode
 from .config import choice
@@ -51,6 +52,7 @@ TILE_PX: Final = 16
 # 6 lights 1.33 ms looping, 1.75 clustered, 1.58 deferred; 16 lights 2.18, 2.13 and 1.58
 CLUSTER_MIN_LIGHTS: Final = 16
 LIGHT_MODES: Final = LightCullingMode.names()
+_FORCED: Final = (LightCullingMode.CLUSTERED, LightCullingMode.DEFERRED)  # cluster whenever the lights allow
 
 
 @dataclass(frozen=True)
@@ -134,9 +136,9 @@ def wants_clusters(mode: str, clustered_now: bool, bounded: int, unbounded: int)
     """Whether this frame's lights are clustered: `clustered`, `deferred` and `loop` force it
     (clustered only while the unbounded ones fit the global list), `auto` switches at
     CLUSTER_MIN_LIGHTS bounded lights, off again below half of that."""
-    if unbounded > MAX_GLOBAL_LIGHTS or bounded == 0 or mode == "loop":
+    if unbounded > MAX_GLOBAL_LIGHTS or bounded == 0 or mode == LightCullingMode.LOOP:
         return False
-    if mode in ("clustered", "deferred"):
+    if mode in _FORCED:
         return True
     return bounded >= (CLUSTER_MIN_LIGHTS // 2 if clustered_now else CLUSTER_MIN_LIGHTS)
 
@@ -151,16 +153,16 @@ class ClusterPass:
 
     def __init__(self, device: Device, frame_set_layout: Any) -> None:
         self.device = device
-        self.layout = pipeline_layout(device, [frame_set_layout])
+        self.owned = Owned(device)  # the layout, then the pipelines (made on first record)
+        layout = self.layout = pipeline_layout(device, [frame_set_layout])
+        self.owned.add(layout, lambda: device.vk.vkDestroyPipelineLayout(device.handle, layout, None))
         self.pipelines: list[Any] = []
 
     def record(self, cb: Any, set_array: Any, grid: ClusterGrid, clusters: Any, light_count: int) -> None:
         vk = self.device.vk
         lib = vk.lib
         if not self.pipelines:
-            self.pipelines = [
-                compute_pipeline(self.device, name, self.layout) for name in ("light_bounds.comp", "light_tiles.comp")
-            ]
+            self.pipelines = [self._pipeline(name) for name in ("light_bounds.comp", "light_tiles.comp")]
         bins = CLUSTER_HEADER * UINT_BYTES
         vk.vkCmdFillBuffer(cb, clusters.handle, 0, UINT_BYTES, 0)  # the global list's count
         vk.vkCmdFillBuffer(cb, clusters.handle, bins, LIGHT_BINS * UINT_BYTES, 0xFFFFFFFF)  # lowest index
@@ -198,26 +200,37 @@ class ClusterPass:
         )
         vk.vkCmdPipelineBarrier(cb, src_stage, dst_stage, 0, 0, None, 1, [barrier], 0, None)
 
+    def _pipeline(self, shader: str) -> Any:
+        device = self.device
+        pipeline = compute_pipeline(device, shader, self.layout)
+        return self.owned.add(pipeline, lambda: device.vk.vkDestroyPipeline(device.handle, pipeline, None))
+
     def destroy(self) -> None:
-        vk = self.device.vk
-        for pipeline in self.pipelines:
-            vk.vkDestroyPipeline(self.device.handle, pipeline, None)
-        vk.vkDestroyPipelineLayout(self.device.handle, self.layout, None)
+        self.owned.destroy()
+        self.pipelines = []
 
 
 class LightCulling:
     """The renderer's choice between the all-lights loop and clusters, frame by frame, and the
     cluster passes. `plan` says whether the pipelines must change."""
 
-    def __init__(self, device: Device, frame_set_layout: Any, mode: str = "auto") -> None:
-        check_light_culling(mode)
-        self.mode = mode  # LIGHT_MODES
+    def __init__(self, device: Device, frame_set_layout: Any, mode: str = LightCullingMode.AUTO) -> None:
+        self.mode = mode
         self.clustered = False  # the mesh pipelines loop over cluster lists
         self.pass_ = ClusterPass(device, frame_set_layout)
         self.supported = bool(device.features.get("fragmentSubgroupArithmetic"))
         self.max_bytes = int(device.limits.maxStorageBufferRange)  # the cluster buffer is one binding
         self._warned = False
         self._warned_msaa = False
+
+    @property
+    def mode(self) -> LightCullingMode:
+        return self._mode
+
+    @mode.setter
+    def mode(self, mode: str) -> None:
+        check_light_culling(mode)  # UsageError naming the choices
+        self._mode = LightCullingMode(mode)
 
     @property
     def walked_by_fragments(self) -> bool:
@@ -232,13 +245,13 @@ class LightCulling:
         reach = 0.0
         # on a device without fragment subgroup arithmetic only the deferred lighting walks the
         # grid: no grid where the lights are lit forward (`clustered`, or MSAA)
-        if not self.supported and (self.mode == "clustered" or samples > 1):
-            if self.mode in ("clustered", "deferred") and not self._warned:
+        if not self.supported and (self.mode == LightCullingMode.CLUSTERED or samples > 1):
+            if self.mode in _FORCED and not self._warned:
                 self._warned = True
                 log.warning("this device has no subgroup arithmetic in fragment shaders: lights are not clustered")
             return None, False
-        if self.mode != "loop" and (
-            self.clustered or self.mode in ("clustered", "deferred") or data.light_count >= CLUSTER_MIN_LIGHTS // 2
+        if self.mode != LightCullingMode.LOOP and (
+            self.clustered or self.mode in _FORCED or data.light_count >= CLUSTER_MIN_LIGHTS // 2
         ):
             bounded, unbounded, reach = light_census(data.lights, data.directional, data.camera.position)
             clustered = wants_clusters(self.mode, self.clustered, bounded, unbounded)
@@ -263,9 +276,10 @@ class LightCulling:
         """Whether the opaque meshes are lit in compute (the target's deferred form): asked for,
         or `auto` with clustered lights; never with MSAA (the G-buffer has one sample: MSAA
         keeps forward lighting, with one warning when deferred was asked for)."""
-        wanted = self.mode == "deferred" or (self.mode == "auto" and self.clustered)
+        deferred = self.mode == LightCullingMode.DEFERRED
+        wanted = deferred or (self.mode == LightCullingMode.AUTO and self.clustered)
         if wanted and samples > 1:
-            if self.mode == "deferred" and not self._warned_msaa:
+            if deferred and not self._warned_msaa:
                 self._warned_msaa = True
                 log.warning("deferred lighting draws one sample per pixel: with --msaa %d lights stay forward", samples)
             return False

@@ -21,6 +21,7 @@ import numpy as np
 
 from ..gpu.acceleration import MeshInput, Structure, build_bottom_levels, ray_input_usage
 from ..gpu.memory import Buffer, upload
+from ..gpu.owned import Owned
 from .layouts import MAX_LODS, MESH_VERTEX
 from .lod_worker import LevelBuilder
 from .mesh_data import MeshData
@@ -90,6 +91,10 @@ class MeshRegistry:
         self._bottom: list[Structure] = []  # per handle, its bottom-level acceleration structure
         self._bottom_addresses = np.zeros(0, dtype=np.uint64)
         self.version = 0  # counts meshes added and replaced: what caches of buffer handles are keyed on
+        # the meshes' buffers; the merged buffers and the bottom levels, each made again as a whole
+        self._mesh_buffers = Owned(device)
+        self._merged_buffers = Owned(device)
+        self._bottom_levels = Owned(device)
 
     def add(self, mesh: MeshData) -> int:
         """Upload `mesh` once: the same MeshData, or an equal one (the same vertices and indices,
@@ -103,8 +108,10 @@ class MeshRegistry:
             return self._by_content[digest]
         vk = self.device.vk
         ray = ray_input_usage(self.device)  # a bottom level may be built from them
-        vertices = upload(self.device, _interleaved(mesh), vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | ray)
-        indices = upload(self.device, mesh.indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT | ray)
+        vertices = self._mesh_buffers.add(
+            upload(self.device, _interleaved(mesh), vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | ray)
+        )
+        indices = self._mesh_buffers.add(upload(self.device, mesh.indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT | ray))
         handle = len(self._meshes)
         self._meshes.append(GpuMesh(mesh, vertices, indices, len(mesh.indices)))
         self._lods.append(None)
@@ -121,10 +128,12 @@ class MeshRegistry:
         self.device.wait_idle()  # frames in flight may draw from the buffers destroyed here
         old = self._meshes[handle]
         ray = ray_input_usage(self.device)
-        vertices = upload(self.device, _interleaved(mesh), vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | ray)
-        indices = upload(self.device, mesh.indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT | ray)
-        old.vertices.destroy()
-        old.indices.destroy()
+        vertices = self._mesh_buffers.add(
+            upload(self.device, _interleaved(mesh), vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | ray)
+        )
+        indices = self._mesh_buffers.add(upload(self.device, mesh.indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT | ray))
+        self._mesh_buffers.release(old.vertices)
+        self._mesh_buffers.release(old.indices)
         for key in [k for k, h in self._by_data.items() if h == handle]:
             del self._by_data[key]
         if self._by_content.get(self._digests[handle]) == handle:
@@ -136,8 +145,7 @@ class MeshRegistry:
         self._by_data[id(mesh)] = handle
         self._by_content.setdefault(digest, handle)
         self._bounds, self._merged_for = None, (-1, -1)
-        for structure in self._bottom:
-            structure.destroy()
+        self._bottom_levels.destroy()
         self._bottom.clear()
         self.version += 1
 
@@ -229,7 +237,7 @@ class MeshRegistry:
                 MeshInput(m.vertices, len(m.data.positions), MESH_VERTEX.itemsize, m.indices, m.index_count, _POSITION)
                 for m in self._meshes[done:]
             ]
-            self._bottom += build_bottom_levels(self.device, inputs)
+            self._bottom += [self._bottom_levels.add(s) for s in build_bottom_levels(self.device, inputs)]
             self._bottom_addresses = np.array([s.address for s in self._bottom], dtype=np.uint64)
         return self._bottom_addresses
 
@@ -258,9 +266,10 @@ class MeshRegistry:
         vertex_offset = np.concatenate([[0], np.cumsum(vertex_counts)[:-1]]).astype(np.int32)
         vertices = np.concatenate([_interleaved(d) for d in datas]) if datas else np.zeros(1, MESH_VERTEX)
         indices = np.concatenate([d.indices for d in datas]).astype(np.uint32) if datas else np.zeros(1, np.uint32)
+        merged = self._merged_buffers
         self._merged = MergedMeshes(
-            upload(self.device, vertices, vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT),
-            upload(self.device, indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT),
+            merged.add(upload(self.device, vertices, vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT)),
+            merged.add(upload(self.device, indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT)),
             first_index,
             vertex_offset,
             index_counts,
@@ -273,21 +282,16 @@ class MeshRegistry:
         return self._merged
 
     def _destroy_merged(self) -> None:
-        if self._merged is not None:
-            self._merged.vertices.destroy()
-            self._merged.indices.destroy()
-            self._merged = None
+        self._merged_buffers.destroy()
+        self._merged = None
 
     def destroy(self) -> None:
         if self._builder is not None:
             self._builder.close()
         self._destroy_merged()
-        for structure in self._bottom:
-            structure.destroy()
+        self._bottom_levels.destroy()  # built from the meshes' buffers: before them
         self._bottom.clear()
-        for mesh in self._meshes:
-            mesh.vertices.destroy()
-            mesh.indices.destroy()
+        self._mesh_buffers.destroy()
         self._meshes.clear()
         self._lods.clear()
         self._digests.clear()

@@ -36,6 +36,7 @@ from typing import Any
 from ..gpu.array_image import nearest_sampler
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers, write_images
 from ..gpu.memory import DEVICE, Buffer, Image
+from ..gpu.owned import Owned
 from ..gpu.pipeline import GraphicsPipelineSpec, compute_pipeline, graphics_pipeline, pipeline_layout
 from ..gpu.shadow_maps import READ_LAYOUT_NAME, SHADOW_FORMAT_NAME, WRITE_LAYOUT_NAME, depth_barriers, shadow_formats
 from .chunk_paths import vertex_attributes
@@ -80,6 +81,10 @@ class OcclusionPasses:
         self.visibility: Buffer | None = None
         self.fresh = False  # the visibility buffer is new: zero it before the first early pass
         self.samples = ctx.samples  # the target's MSAA count: the early depth's too
+        # the passes' objects and the visibility; the depth image and pyramid, made again at
+        # each new size, in a scope of their own
+        self.owned = Owned(ctx.device)
+        self._sized = Owned(ctx.device)
         try:
             self._build(ctx, sets, graphics_layout)
         except BaseException:
@@ -91,34 +96,40 @@ class OcclusionPasses:
         ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
         sampled = vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
         compute = vk.VK_SHADER_STAGE_COMPUTE_BIT
-        self.set_layout = DescriptorSetLayout(
-            device,
-            [
-                (BINDING_VISIBILITY, ssbo, compute),
-                (BINDING_PYRAMID, ssbo, compute),
-                (BINDING_EARLY_DEPTH, sampled, compute),
-            ],
+        owned, handle = self.owned, device.handle
+
+        def pipeline(made: Any) -> Any:
+            return owned.add(made, lambda: vk.vkDestroyPipeline(handle, made, None))
+
+        self.set_layout = owned.add(
+            DescriptorSetLayout(
+                device,
+                [
+                    (BINDING_VISIBILITY, ssbo, compute),
+                    (BINDING_PYRAMID, ssbo, compute),
+                    (BINDING_EARLY_DEPTH, sampled, compute),
+                ],
+            )
         )
-        self.pool = DescriptorPool(device, 1, {ssbo: 2, sampled: 1})
+        self.pool = owned.add(DescriptorPool(device, 1, {ssbo: 2, sampled: 1}))
         self.set = self.pool.allocate(self.set_layout)
-        self.layout = pipeline_layout(device, [*sets, self.set_layout.handle], [(compute, 0, CULL_PUSH.size)])
-        self.early = compute_pipeline(device, "cull_early.comp", self.layout)
-        self.late = compute_pipeline(device, "cull_late.comp", self.layout)
-        self.reduce = compute_pipeline(
-            device, "depth_reduce_ms.comp" if self.samples > 1 else "depth_reduce.comp", self.layout
-        )
+        layout = self.layout = pipeline_layout(device, [*sets, self.set_layout.handle], [(compute, 0, CULL_PUSH.size)])
+        owned.add(layout, lambda: vk.vkDestroyPipelineLayout(handle, layout, None))
+        self.early = pipeline(compute_pipeline(device, "cull_early.comp", layout))
+        self.late = pipeline(compute_pipeline(device, "cull_late.comp", layout))
+        reduce = "depth_reduce_ms.comp" if self.samples > 1 else "depth_reduce.comp"
+        self.reduce = pipeline(compute_pipeline(device, reduce, layout))
         base = dict(
             layout=graphics_layout,
             vertex_stride=MESH_VERTEX.itemsize,
             vertex_attributes=vertex_attributes(vk, ("position",)),
             **shadow_formats(vk, self.samples).spec_kwargs(),  # depth alone, drawn with dynamic rendering
         )
-        self.pipelines: tuple[Any, ...] = (
-            graphics_pipeline(device, GraphicsPipelineSpec("shadow_indirect.vert", None, **base)),
-        )
+        plain = pipeline(graphics_pipeline(device, GraphicsPipelineSpec("shadow_indirect.vert", None, **base)))
         mirrored = GraphicsPipelineSpec("shadow_indirect.vert", None, front_face_ccw=False, **base)
-        self.pipelines = (self.pipelines[0], graphics_pipeline(device, mirrored))
-        self.sampler = nearest_sampler(device)
+        self.pipelines: tuple[Any, ...] = (plain, pipeline(graphics_pipeline(device, mirrored)))
+        sampler = self.sampler = nearest_sampler(device)
+        owned.add(sampler, lambda: vk.vkDestroySampler(handle, sampler, None))
         self._reduce_push = vk.ffi.new("uint32_t[8]")
         self._set_array = vk.ffi.new("VkDescriptorSet[1]", [self.set])
         self._begin: Any = None  # (VkRenderingInfo pointer, what it points to) at the depth's size
@@ -137,22 +148,25 @@ class OcclusionPasses:
             usage = vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
             bigger = Buffer(device, UINT_BYTES * max(rows + rows // 2, 1024), usage, DEVICE)  # may fail: keep the old
             if self.visibility is not None:
-                self.visibility.destroy()
-            self.visibility, self.fresh = bigger, True
+                self.owned.release(self.visibility)
+            self.visibility, self.fresh = self.owned.add(bigger), True
         if (width, height) != self.size:
             self._release_images()
-            self.depth = Image(
-                device,
-                width,
-                height,
-                getattr(vk, SHADOW_FORMAT_NAME),
-                vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT,
-                vk.VK_IMAGE_ASPECT_DEPTH_BIT,
-                samples=self.samples,
+            self.depth = self._sized.add(
+                Image(
+                    device,
+                    width,
+                    height,
+                    getattr(vk, SHADOW_FORMAT_NAME),
+                    vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT,
+                    vk.VK_IMAGE_ASPECT_DEPTH_BIT,
+                    samples=self.samples,
+                )
             )
             self.levels = pyramid_levels(width, height)
             first, w, h = self.levels[-1]
-            self.pyramid = Buffer(device, 4 * (first + w * h), vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, DEVICE)
+            usage = vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT
+            self.pyramid = self._sized.add(Buffer(device, 4 * (first + w * h), usage, DEVICE))
             self.size = (width, height)
             self._viewport = vk.ffi.new("VkViewport*", {"width": width, "height": height, "maxDepth": 1.0})
             self._area = vk.ffi.new("VkRect2D*", {"extent": {"width": width, "height": height}})
@@ -223,31 +237,12 @@ class OcclusionPasses:
 
     def destroy(self) -> None:
         """Also when half built (the constructor failed): what exists goes."""
-        vk, handle = self.vk, self.ctx.device.handle
         self._release_images()
-        if self.visibility is not None:
-            self.visibility.destroy()
-            self.visibility = None
-        owned = self.__dict__
-        for pipeline in (*owned.pop("pipelines", ()), *(owned.pop(n, None) for n in ("early", "late", "reduce"))):
-            if pipeline is not None:
-                vk.vkDestroyPipeline(handle, pipeline, None)
-        for name, destroy in (
-            ("layout", vk.vkDestroyPipelineLayout),
-            ("sampler", vk.vkDestroySampler),
-        ):
-            made = owned.pop(name, None)
-            if made is not None:
-                destroy(handle, made, None)
-        for name in ("pool", "set_layout"):
-            made = owned.pop(name, None)
-            if made is not None:
-                made.destroy()
+        self.owned.destroy()
+        self.visibility = None
 
     def _release_images(self) -> None:
         self._begin = self._barriers = None
-        for owned in (self.depth, self.pyramid):
-            if owned is not None:
-                owned.destroy()
+        self._sized.destroy()
         self.depth = self.pyramid = None
         self.size = (0, 0)

@@ -10,6 +10,7 @@ from typing import Any
 from ..gpu.array_image import nearest_sampler
 from ..gpu.barrier import Barrier
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_set
+from ..gpu.owned import Owned
 from ..gpu.pipeline import compute_pipeline, pipeline_layout
 from .layouts import BINDING_RAY_DENOISED, BINDING_RAY_DEPTH, BINDING_RAY_FRAME, BINDING_RAY_MASK, BINDING_RAY_NORMAL
 
@@ -22,31 +23,36 @@ class ShadowDenoise:
         self.device = device
         stage = vk.VK_SHADER_STAGE_COMPUTE_BIT
         image = vk.VK_DESCRIPTOR_TYPE_STORAGE_IMAGE
-        self.set_layout = DescriptorSetLayout(
-            device,
-            [
-                (BINDING_RAY_FRAME, vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, stage),
-                (BINDING_RAY_DEPTH, vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, stage),
-                (BINDING_RAY_NORMAL, image, stage),
-                (BINDING_RAY_MASK, image, stage),
-                (BINDING_RAY_DENOISED, image, stage),
-            ],
-        )
-        self.pool: DescriptorPool | None = None
-        self.layout = self.pipeline = self.sampler = None
+        self.owned = owned = Owned(device)
         try:
+            self.set_layout = owned.add(
+                DescriptorSetLayout(
+                    device,
+                    [
+                        (BINDING_RAY_FRAME, vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, stage),
+                        (BINDING_RAY_DEPTH, vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, stage),
+                        (BINDING_RAY_NORMAL, image, stage),
+                        (BINDING_RAY_MASK, image, stage),
+                        (BINDING_RAY_DENOISED, image, stage),
+                    ],
+                )
+            )
             sizes = {
                 vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER: frames,
                 vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER: frames,
                 image: 3 * frames,
             }
-            self.pool = DescriptorPool(device, frames, sizes)
-            self.layout = pipeline_layout(device, [self.set_layout.handle])
-            self.pipeline = compute_pipeline(device, "shadow_denoise.comp", self.layout)
-            self.sampler = nearest_sampler(device)
+            self.pool = owned.add(DescriptorPool(device, frames, sizes))
+            handle = device.handle
+            layout = self.layout = pipeline_layout(device, [self.set_layout.handle])
+            owned.add(layout, lambda: vk.vkDestroyPipelineLayout(handle, layout, None))
+            pipeline = self.pipeline = compute_pipeline(device, "shadow_denoise.comp", layout)
+            owned.add(pipeline, lambda: vk.vkDestroyPipeline(handle, pipeline, None))
+            sampler = self.sampler = nearest_sampler(device)
+            owned.add(sampler, lambda: vk.vkDestroySampler(handle, sampler, None))
             self.sets = [self.pool.allocate(self.set_layout) for _ in range(frames)]
         except BaseException:
-            self.destroy()
+            owned.destroy()
             raise
         self.named: list[tuple[Any, ...]] = [() for _ in range(frames)]
         compute = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
@@ -83,17 +89,4 @@ class ShadowDenoise:
         )
 
     def destroy(self) -> None:
-        vk, handle = self.device.vk, self.device.handle
-        if self.sampler is not None:
-            vk.vkDestroySampler(handle, self.sampler, None)
-            self.sampler = None
-        if self.pipeline is not None:
-            vk.vkDestroyPipeline(handle, self.pipeline, None)
-            self.pipeline = None
-        if self.layout is not None:
-            vk.vkDestroyPipelineLayout(handle, self.layout, None)
-            self.layout = None
-        if self.pool is not None:
-            self.pool.destroy()
-            self.pool = None
-        self.set_layout.destroy()
+        self.owned.destroy()  # the sampler, pipeline, pipeline layout, pool (its sets), set layout

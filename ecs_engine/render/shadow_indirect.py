@@ -37,6 +37,7 @@ these draws.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -44,6 +45,7 @@ import numpy as np
 
 from ..gpu.descriptors import DescriptorPool, write_buffers
 from ..gpu.memory import DEVICE, HOST, Buffer
+from ..gpu.owned import Owned
 from ..gpu.pipeline import AttachmentFormats
 from ..gpu.secondary import end_command_buffer
 from .chunk_paths import shadow_pipelines
@@ -77,9 +79,6 @@ class _ViewBuffers:
     key_slots: int
     named: tuple[Buffer, ...] = ()  # (ids, keys, state, commands) the set names
 
-    def buffers(self) -> tuple[Buffer, ...]:
-        return self.ids, self.state, self.commands
-
 
 class IndirectShadows:
     """The shadow views of one IndirectPath (made again with the path: shadow_pass.py)."""
@@ -91,6 +90,10 @@ class IndirectShadows:
         self.vk = vk = ctx.device.vk
         self.secondaries = ctx.secondaries
         self.pool: DescriptorPool | None = None
+        # the pipelines and readbacks live as long as this; the pool and the views' buffers go
+        # together when the pool grows (_pooled, destroyed first)
+        self.owned = Owned(self.device)
+        self._pooled = Owned(self.device)
         self._pool_sets = 0  # view sets the pool holds per frame slot
         self._views: list[list[_ViewBuffers]] = [[] for _ in range(ctx.frames_in_flight)]
         self._readback: list[Buffer | None] = [None] * ctx.frames_in_flight
@@ -102,6 +105,8 @@ class IndirectShadows:
             ctx, render_pass=None, formats=formats, gbuffer=False, shadow=True, samples=1, fill="solid"
         )
         self.pipelines = shadow_pipelines(shadow_ctx, camera.layout, "mesh_indirect.vert")
+        for pipeline in self.pipelines:
+            self.owned.add(pipeline, _pipeline_destroyer(self.device, pipeline))
         self._push = np.zeros(1, dtype=CULL_PUSH.dtype)
         self._compact_push = np.zeros(1, dtype=COMPACT_PUSH.dtype)
         self._push_ptr = vk.ffi.from_buffer(self._push)
@@ -223,11 +228,11 @@ class IndirectShadows:
             out.append(_ViewBuffers(self.pool.allocate(self.camera.set_layout), *self._key_buffers(1024, keys), keys))
         for b in out[:views]:
             if keys > b.key_slots:
-                b.state.destroy()
-                b.commands.destroy()
+                self._pooled.release(b.state)
+                self._pooled.release(b.commands)
                 b.ids, b.state, b.commands = self._key_buffers(b.ids.size // UINT_BYTES, keys, b.ids)
                 b.key_slots = keys
-            b.ids = b.ids.grown(UINT_BYTES * rows)
+            b.ids = b.ids.grown(UINT_BYTES * rows, self._pooled)
             named = (b.ids, key_table, b.state, b.commands)
             if len(b.named) != len(named) or any(x is not y for x, y in zip(named, b.named)):
                 kind = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
@@ -237,19 +242,19 @@ class IndirectShadows:
         size = views * (DRAW_STATE.size + UINT_BYTES * keys)
         readback = self._readback[slot]
         if readback is None:
-            readback = Buffer(self.device, size, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
-        self._readback[slot] = readback.grown(size)
+            readback = self.owned.add(Buffer(self.device, size, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST))
+        self._readback[slot] = readback.grown(size, self.owned)
         return out[:views]
 
     def _key_buffers(self, rows: int, keys: int, ids: Buffer | None = None) -> tuple[Buffer, Buffer, Buffer]:
         """(ids, state, commands) for `keys` keys (`ids` kept when given)."""
-        vk, device = self.vk, self.device
+        vk, device, owned = self.vk, self.device, self._pooled
         ssbo, indirect = vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, vk.VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT
         if ids is None:
-            ids = Buffer(device, UINT_BYTES * rows, ssbo, DEVICE)
+            ids = owned.add(Buffer(device, UINT_BYTES * rows, ssbo, DEVICE))
         state_usage = ssbo | indirect | vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT
-        state = Buffer(device, DRAW_STATE.size + UINT_BYTES * keys, state_usage, DEVICE)
-        commands = Buffer(device, DRAW_COMMAND.size * keys, ssbo | indirect, DEVICE)
+        state = owned.add(Buffer(device, DRAW_STATE.size + UINT_BYTES * keys, state_usage, DEVICE))
+        commands = owned.add(Buffer(device, DRAW_COMMAND.size * keys, ssbo | indirect, DEVICE))
         return ids, state, commands
 
     def _grow_pool(self, views: int) -> None:
@@ -259,26 +264,24 @@ class IndirectShadows:
         self._release()
         per_slot = max(8, views)
         count = per_slot * len(self._views)
-        self.pool = DescriptorPool(self.device, count, {self.vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER: 4 * count})
+        sizes = {self.vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER: 4 * count}
+        self.pool = self._pooled.add(DescriptorPool(self.device, count, sizes))
         self._pool_sets = per_slot
 
     def _release(self) -> None:
+        self._pooled.destroy()  # the views' buffers, then the pool (their sets with it)
         for slot in self._views:
-            for b in slot:
-                for buffer in b.buffers():
-                    buffer.destroy()
             slot.clear()
         self._counted = [None] * len(self._views)
-        if self.pool is not None:
-            self.pool.destroy()
-            self.pool = None
+        self.pool = None
 
     def destroy(self) -> None:
         """The caller waited for the device (frames in flight may use the pipelines)."""
         self._release()
-        for i, readback in enumerate(self._readback):
-            if readback is not None:
-                readback.destroy()
-                self._readback[i] = None
-        for pipeline in self.__dict__.pop("pipelines", ()):
-            self.vk.vkDestroyPipeline(self.device.handle, pipeline, None)
+        self.owned.destroy()  # the readbacks, then the pipelines
+        self._readback = [None] * len(self._readback)
+        self.__dict__.pop("pipelines", None)
+
+
+def _pipeline_destroyer(device: Any, pipeline: Any) -> Callable[[], None]:
+    return lambda: device.vk.vkDestroyPipeline(device.handle, pipeline, None)

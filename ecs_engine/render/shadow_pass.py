@@ -36,6 +36,7 @@ import numpy as np
 
 from ..gpu.descriptors import DescriptorSetLayout
 from ..gpu.device import Device
+from ..gpu.owned import Owned
 from ..gpu.secondary import SecondaryBuffers
 from ..gpu.shadow_maps import ShadowMaps, shadow_formats
 from .frame_data import Chunk, FrameData
@@ -61,17 +62,20 @@ class ShadowPass:
         self.formats = shadow_formats(device.vk)  # what its pipelines and secondaries are made for
         self.secondary_begin = secondaries.begin_info_rendering(self.formats)
         self.maps: ShadowMaps | None = None
-        self.view_sets = ShadowViewSets(device, frame_set_layout, frames)
+        self.path: RenderPath | None = None
+        self.gpu: IndirectShadows | None = None  # the indirect mode's GPU-culled views
+        # the view sets, the maps, the depth-only path and the GPU culling: the last three made
+        # again while it lives (released from here and the new ones added)
+        self.owned = Owned(device)
         try:
-            self.maps = ShadowMaps(device, 1, 1)  # bound until a light casts
+            self.view_sets = self.owned.add(ShadowViewSets(device, frame_set_layout, frames))
+            self.maps = self.owned.add(ShadowMaps(device, 1, 1))  # bound until a light casts
         except BaseException:
             self.destroy()
             raise
         self.cleared = False  # the layers' layout made by a first (clearing) pass
         self._targets: dict[tuple[int, int], TargetState] = {}  # by (layer, texels across)
-        self.path: RenderPath | None = None
         self._counts = [0, 0]  # the last frame's shadow draws and triangles recorded on the CPU
-        self.gpu: IndirectShadows | None = None  # the indirect mode's GPU-culled views
         self._gpu_frame = False  # this frame's views are culled on the GPU
         self.last_views: list[ShadowView] = []  # the last plan's (the editor's map thumbnails)
         self._planned: tuple[Any, Any, Any] | None = None  # (casters, camera matrices, origin...) it was for
@@ -111,8 +115,8 @@ class ShadowPass:
             return False
         self.device.wait_idle()
         new = ShadowMaps(self.device, resolution, max(len(views), self.maps.layers))
-        self.maps.destroy()
-        self.maps = new
+        self.owned.release(self.maps)
+        self.maps = self.owned.add(new)
         self.cleared = False
         self._targets.clear()
         return True
@@ -124,16 +128,16 @@ class ShadowPass:
             shadow_ctx = replace(
                 ctx, render_pass=None, formats=self.formats, gbuffer=False, shadow=True, samples=1, fill="solid"
             )
-            self.path = make(shadow_ctx)
+            self.path = self.owned.add(make(shadow_ctx))
         return self.path
 
     def forget_path(self) -> None:
         """The renderer's path changed (mode, recorder, features): made again when next needed."""
         if self.path is not None:
-            self.path.destroy()
+            self.owned.release(self.path)
             self.path = None
         if self.gpu is not None:
-            self.gpu.destroy()
+            self.owned.release(self.gpu)
             self.gpu = None
         for state in self._targets.values():
             state.path_state.clear()
@@ -223,10 +227,10 @@ class ShadowPass:
         if isinstance(camera, IndirectPath):  # the chunks' rows culled on the GPU per view
             if self.gpu is not None and self.gpu.camera is not camera:
                 self.device.wait_idle()  # made for a path that is gone (forget_path was not called)
-                self.gpu.destroy()
+                self.owned.release(self.gpu)
                 self.gpu = None
             if self.gpu is None:
-                self.gpu = IndirectShadows(camera, self.formats)
+                self.gpu = self.owned.add(IndirectShadows(camera, self.formats))
             self.gpu.begin_frame(frame.slot, frame.readback)
             self._gpu_frame = True
         self._planes = padded_planes([frame.planes] + [view.planes for view in self._inputs])  # the camera's first
@@ -331,14 +335,5 @@ class ShadowPass:
         self.cleared = True
 
     def destroy(self) -> None:
-        if self.path is not None:
-            self.path.destroy()
-            self.path = None
-        gpu = getattr(self, "gpu", None)  # (a failed __init__ has none)
-        if gpu is not None:
-            gpu.destroy()
-            self.gpu = None
-        self.view_sets.destroy()
-        if self.maps is not None:
-            self.maps.destroy()
-            self.maps = None
+        self.owned.destroy()
+        self.path = self.gpu = self.maps = None

@@ -10,6 +10,7 @@ from typing import Any
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
 from ..gpu.device import Device
 from ..gpu.memory import Buffer
+from ..gpu.owned import Owned
 from .layouts import BINDING_GLOBALS, GLOBALS
 
 
@@ -38,6 +39,7 @@ class ShadowViewSets:
     def __init__(self, device: Device, set_layout: DescriptorSetLayout, frames: int) -> None:
         self.device, self.set_layout, self.frames = device, set_layout, frames
         self.pool: DescriptorPool | None = None
+        self.owned = Owned(device)  # the pool and the sets' globals, made again when the pool grows
         self._sets: list[list[ViewSet]] = [[] for _ in range(frames)]
         self._pool_sets = 0  # view sets the pool holds per frame slot
 
@@ -52,7 +54,7 @@ class ShadowViewSets:
                 sets = self._sets[slot]
                 continue
             descriptor_set = self.pool.allocate(self.set_layout)
-            globals_buffer = Buffer(self.device, GLOBALS.size, vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT)
+            globals_buffer = self.owned.add(Buffer(self.device, GLOBALS.size, vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT))
             write_buffers(
                 self.device, descriptor_set, [(BINDING_GLOBALS, vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, globals_buffer)]
             )
@@ -83,14 +85,10 @@ class ShadowViewSets:
         sizes: dict[int, int] = {}
         for _, kind, _, n in self.set_layout.bindings:
             sizes[kind] = sizes.get(kind, 0) + count * n
-        self.pool = DescriptorPool(self.device, count, sizes)
+        self.pool = self.owned.add(DescriptorPool(self.device, count, sizes))
         self._pool_sets = per_slot
 
     def destroy(self) -> None:
-        for sets in self._sets:
-            for view_set in sets:
-                view_set.globals.destroy()
+        self.owned.destroy()  # the globals, then the pool (their sets with it)
         self._sets = [[] for _ in range(self.frames)]
-        if self.pool is not None:
-            self.pool.destroy()
-            self.pool = None
+        self.pool = None

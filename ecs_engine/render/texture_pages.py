@@ -23,6 +23,7 @@ import numpy as np
 from ..errors import UsageError
 from ..gpu.array_image import ArrayImage, sampler_anisotropy, texture_sampler
 from ..gpu.device import Device
+from ..gpu.owned import Owned
 from .layouts import NO_TEXTURE, TEXTURE_PAGES
 from .textures import CLASS_SIZES, Textures, mip_chain, resized, size_class
 
@@ -37,9 +38,18 @@ class TexturePages:
         tests that compare with a bilinear reference turn it off."""
         self.device = device
         self.anisotropy = sampler_anisotropy(device, anisotropy)
-        self.sampler = texture_sampler(device, self.anisotropy)
-        self.fallback = ArrayImage(device, 1, 1)  # bound where a class has no textures yet
-        self.fallback.upload([[np.full((1, 1, 4), 255, np.uint8)]])
+        # the sampler and the fallback live as long as this; the pages, made again as textures
+        # arrive, in a scope of their own
+        self.owned = Owned(device)
+        self._pages = Owned(device)
+        try:
+            sampler = self.sampler = texture_sampler(device, self.anisotropy)
+            self.owned.add(sampler, lambda: device.vk.vkDestroySampler(device.handle, sampler, None))
+            self.fallback = self.owned.add(ArrayImage(device, 1, 1))  # bound where a class has no textures yet
+            self.fallback.upload([[np.full((1, 1, 4), 255, np.uint8)]])
+        except BaseException:
+            self.owned.destroy()
+            raise
         self.pages: dict[int, ArrayImage] = {}
         self._chains: dict[int, list[np.ndarray]] = {}  # handle -> its mip chain (kept for re-uploads)
         self._layers: dict[int, list[int]] = {}  # class -> handles, by layer
@@ -80,9 +90,9 @@ class TexturePages:
         for cls in sorted(grown):
             old = self.pages.pop(cls, None)
             if old is not None:
-                old.destroy()
+                self._pages.release(old)
             handles = self._layers[cls]
-            image = self.pages[cls] = ArrayImage(self.device, CLASS_SIZES[cls], len(handles))
+            image = self.pages[cls] = self._pages.add(ArrayImage(self.device, CLASS_SIZES[cls], len(handles)))
             image.upload([self._chains[h] for h in handles])
         self.refs = refs
         self._source = (textures, len(textures), textures.edits)
@@ -112,8 +122,7 @@ class TexturePages:
                 handles[present] = self.refs[handles[present]]
 
     def _clear(self) -> None:
-        for page in self.pages.values():
-            page.destroy()
+        self._pages.destroy()
         self.pages.clear()
         self._chains.clear()
         self._layers.clear()
@@ -121,5 +130,4 @@ class TexturePages:
 
     def destroy(self) -> None:
         self._clear()
-        self.fallback.destroy()
-        self.device.vk.vkDestroySampler(self.device.handle, self.sampler, None)
+        self.owned.destroy()  # the fallback, then the sampler

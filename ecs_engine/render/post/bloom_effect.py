@@ -18,6 +18,7 @@ from collections.abc import Hashable
 from typing import Any
 
 from ...gpu.functions import handle_int
+from ...gpu.owned import Owned
 from ..graph import FrameGraph
 from ..graph.resources import format_name
 from .bloom import add_bloom
@@ -36,7 +37,11 @@ class BloomEffect:
     def __init__(self, device: Any, settings: BloomSettings | None = None) -> None:
         self.device = device
         self.settings = settings if settings is not None else BloomSettings()
-        self.pipelines = BloomPipelines(device).acquire()  # kept across the graphs made
+        # the pipelines (shared: released, destroyed by their last user), kept across the graphs
+        # made; the graph, made again with the extent (released from here and the new one added)
+        self.owned = Owned(device)
+        self.pipelines = BloomPipelines(device).acquire()
+        self.owned.add(self.pipelines, self.pipelines.release)
         self.graph: FrameGraph | None = None
         self.extent: tuple[int, int] | None = None
         self._images: dict[int, Any] = {}  # HDR view handle value -> the image it was seen on
@@ -78,7 +83,7 @@ class BloomEffect:
 
     def _remake(self, extent: tuple[int, int]) -> None:
         if self.graph is not None:
-            self.graph.destroy()  # waits for the frames in flight that use its chain
+            self.owned.release(self.graph)  # waits for the frames in flight that use its chain
         self.graph = None
         graph = FrameGraph(self.device)
         try:
@@ -87,7 +92,7 @@ class BloomEffect:
         except BaseException:
             graph.destroy()
             raise
-        self.graph, self.extent = graph, extent
+        self.graph, self.extent = self.owned.add(graph), extent
 
     def key(self, inputs: PostInputs | None = None) -> Hashable:
         """What a recorded frame's bloom depends on besides the HDR image (frame replay): the
@@ -95,12 +100,9 @@ class BloomEffect:
         return (self.settings, inputs.extent if inputs is not None else self.extent)
 
     def destroy(self) -> None:
-        if self.graph is not None:
-            self.graph.destroy()
-            self.graph = None
-        if self.pipelines is not None:
-            self.pipelines.release()
-            self.pipelines = None  # type: ignore[assignment]
+        self.owned.destroy()  # the graph, then the pipelines
+        self.graph = None
+        self.pipelines = None  # type: ignore[assignment]
 
 
 register(

@@ -10,6 +10,7 @@ from typing import Any
 
 from ...gpu.array_image import clamped_sampler
 from ...gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_set
+from ...gpu.owned import Owned
 from ...gpu.pipeline import compute_pipeline, pipeline_layout
 
 GROUP = 8  # the shaders' local size, each way
@@ -26,30 +27,44 @@ class BloomPipelines:
         self.device = device
         self.users = 0
         stage = vk.VK_SHADER_STAGE_COMPUTE_BIT
-        self.set_layout = DescriptorSetLayout(
-            device,
-            [
-                (0, vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, stage),
-                (1, vk.VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, stage),
-            ],
-        )
         self.pool: DescriptorPool | None = None
-        self.sampler = self.layout = None
         self.pipelines: dict[str, Any] = {}
         self._sets: dict[tuple[int, int], Any] = {}
         self._chain: object = None  # the chain image the sets were made for (held: its id stays unique)
+        # the set layout, pipeline layout, pipelines and sampler; the pool, made again when its
+        # sets run out or name stale views, released from it and added anew
+        self.owned = owned = Owned(device)
+        handle = device.handle
         try:
-            self.layout = pipeline_layout(device, [self.set_layout.handle], [(stage, 0, _PUSH_BYTES)])
-            self.pipelines["first"] = compute_pipeline(device, "bloom_downsample.comp", self.layout, (1,))
-            self.pipelines["down"] = compute_pipeline(device, "bloom_downsample.comp", self.layout, (0,))
-            self.pipelines["up"] = compute_pipeline(device, "bloom_upsample.comp", self.layout)
+            self.set_layout = owned.add(
+                DescriptorSetLayout(
+                    device,
+                    [
+                        (0, vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, stage),
+                        (1, vk.VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, stage),
+                    ],
+                )
+            )
+            layout = self.layout = pipeline_layout(device, [self.set_layout.handle], [(stage, 0, _PUSH_BYTES)])
+            owned.add(layout, lambda: vk.vkDestroyPipelineLayout(handle, layout, None))
+            for kind, shader, constants in (
+                ("first", "bloom_downsample.comp", (1,)),
+                ("down", "bloom_downsample.comp", (0,)),
+                ("up", "bloom_upsample.comp", ()),
+            ):
+                self.pipelines[kind] = self._own_pipeline(compute_pipeline(device, shader, layout, constants))
             # bilinear, clamped, LOD 0: each step reads one mip through its own view, and the
             # taps between texels are what makes 13 fetches cover 36 texels
-            self.sampler = clamped_sampler(device, max_lod=0.0)
+            sampler = self.sampler = clamped_sampler(device, max_lod=0.0)
+            owned.add(sampler, lambda: vk.vkDestroySampler(handle, sampler, None))
         except BaseException:
             self.destroy()
             raise
         self._push = vk.ffi.new("char[]", _PUSH_BYTES)
+
+    def _own_pipeline(self, pipeline: Any) -> Any:
+        vk, handle = self.vk, self.device.handle
+        return self.owned.add(pipeline, lambda: vk.vkDestroyPipeline(handle, pipeline, None))
 
     def acquire(self) -> BloomPipelines:
         self.users += 1
@@ -90,7 +105,7 @@ class BloomPipelines:
         """Drop every set (after the GPU is idle): call it when the views they name are
         destroyed, since a new view may come back with an old one's handle value."""
         if self.pool is not None:
-            self.pool.destroy()
+            self.owned.release(self.pool)
             self.pool = None
         self._sets.clear()
 
@@ -106,7 +121,7 @@ class BloomPipelines:
             self.device.wait_idle()  # the old sets may be bound by frames in flight
             self.forget_views()
             sizes = {vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER: _SETS, vk.VK_DESCRIPTOR_TYPE_STORAGE_IMAGE: _SETS}
-            self.pool = DescriptorPool(self.device, _SETS, sizes)
+            self.pool = self.owned.add(DescriptorPool(self.device, _SETS, sizes))
         descriptor_set = self.pool.allocate(self.set_layout)
         read_layout = vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
         write_set(
@@ -119,15 +134,7 @@ class BloomPipelines:
         return found
 
     def destroy(self) -> None:
-        vk, handle = self.vk, self.device.handle
-        self.forget_views()
-        for pipeline in self.pipelines.values():
-            vk.vkDestroyPipeline(handle, pipeline, None)
+        self.owned.destroy()  # the pool, sampler, pipelines, pipeline layout, set layout
+        self.pool = None
+        self._sets.clear()
         self.pipelines.clear()
-        if self.sampler is not None:
-            vk.vkDestroySampler(handle, self.sampler, None)
-            self.sampler = None
-        if self.layout is not None:
-            vk.vkDestroyPipelineLayout(handle, self.layout, None)
-            self.layout = None
-        self.set_layout.destroy()
