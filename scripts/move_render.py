@@ -210,8 +210,8 @@ def _public_imports(text: str, moves: dict[str, str]) -> str:
     return "\n".join(out)
 
 
-def rewrite_file(path: Path, moves: dict[str, str]) -> str:
-    text = path.read_text()
+def rewrite_file(path: Path, moves: dict[str, str], text: str | None = None) -> str:
+    text = path.read_text() if text is None else text
     rel = path.relative_to(ROOT).as_posix() if path.is_relative_to(ROOT) else path.as_posix()
     if path.suffix == ".py":
         where = module_of(path, moves) if path.is_relative_to(ROOT) else None
@@ -318,9 +318,11 @@ def main() -> int:
         return 0
     top = sorted(p.stem for p in RENDER.glob("*.py"))
     moves = {old: new for old, new in MOVES.items() if old in top}
-    for old in sorted(set(MOVES) - set(moves)):
-        state = "already moved" if new_file(old).exists() else "no such file, skipped"
-        print(f"table: render/{old}.py -> {new_file(old).relative_to(RENDER)} ({state})")
+    done = [old for old in MOVES if old not in top and new_file(old).exists()]
+    if done:
+        print(f"table: {len(done)} modules already moved")
+    for old in sorted(set(MOVES) - set(moves) - set(done)):
+        print(f"table: render/{old}.py -> {new_file(old).relative_to(RENDER)} (no such file, skipped)")
     unmapped = [m for m in top if m not in MOVES and m not in STAY]
     for m in unmapped:
         print(f"NOT IN THE TABLE, left in place: render/{m}.py")
@@ -328,19 +330,20 @@ def main() -> int:
         print(f"move: render/{old}.py -> render/{new_file(old).relative_to(RENDER)}")
     # references are rewritten even when nothing moves now: a branch merged after the move
     # brings old imports of modules that moved before
-    moved_before = {old: new for old, new in MOVES.items() if old not in top and new_file(old).exists()}
-    every = {**moved_before, **moves}
-    rewritten = {f: rewrite_file(f, every) for f in scanned_files()}
-    changed = {f: t for f, t in rewritten.items() if t != f.read_text()}
-    fixups = [(ROOT / f, a, b, why) for f, a, b, why in FIXUPS if a in changed.get(ROOT / f, (ROOT / f).read_text())]
-    for f in sorted(changed):
-        print(f"rewrite: {f.relative_to(ROOT)}")
-    for f, _, _, why in fixups:
-        print(f"fix-up: {f.relative_to(ROOT)}: {why}")
+    every = {old: MOVES[old] for old in [*done, *moves]}
+    changed = {}
+    for f in scanned_files():
+        text = original = f.read_text()
+        for module, name, old_text, new_text, why in FIXUPS:
+            if module in every and f == ROOT / name and old_text in text:
+                text = text.replace(old_text, new_text)
+                print(f"fix-up: {name}: {why}")
+        text = rewrite_file(f, every, text)
+        if text != original:
+            changed[f] = text
+            print(f"rewrite: {f.relative_to(ROOT)}")
     if args.dry_run:
         return 0
-    for f, a, b, _ in fixups:
-        changed[f] = changed.get(f, f.read_text()).replace(a, b)
     for old in sorted(moves):
         target = new_file(old)
         target.parent.mkdir(parents=True, exist_ok=True)

@@ -110,9 +110,10 @@ PUBLIC: dict[str, str] = {
     **dict.fromkeys(("DEFAULT_MODEL", "load_mesh"), "assets.mesh_loading"),
     "load_model": "assets.model_loading",
 }
-# edits a move needs beyond renames: (file, old text, new text, why)
+# edits a move needs beyond renames: (the module whose move needs it, file, old text, new text, why)
 FIXUPS = [
     (
+        "frame_data",
         "tests/test_extract_stage.py",
         '    "frame_data.py",  # FrameExtractor: hands the world to the extract functions\n',
         "",
