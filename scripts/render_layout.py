@@ -110,6 +110,29 @@ PUBLIC: dict[str, str] = {
     **dict.fromkeys(("DEFAULT_MODEL", "load_mesh"), "assets.mesh_loading"),
     "load_model": "assets.model_loading",
 }
+# scripts/ab_frames.py runs old code against new (issue 36's GPU A/B): it tries the new paths,
+# then the flat render/ of before the move, then the layout of before issue 13
+_AB_OLD = """\
+        from ecs_engine.render.mesh_registry import MeshRegistry
+        from ecs_engine.render.renderer import Renderer
+
+        return default_schedule, scene_builder, MeshRegistry, Renderer, World, {}
+    except ImportError:
+"""
+_AB_NEW = (
+    """\
+        from ecs_engine.render.assets.mesh_registry import MeshRegistry
+        from ecs_engine.render.frame.renderer import Renderer
+
+        return default_schedule, scene_builder, MeshRegistry, Renderer, World, {}
+    except ImportError:
+        pass
+    try:  # render/ before its sub-packages (issue 36)
+        from ecs_engine.app.scenes import default_schedule, scene_builder
+        from ecs_engine.ecs.world import World
+"""
+    + _AB_OLD
+)
 # edits a move needs beyond renames: (the module whose move needs it, file, old text, new text, why)
 FIXUPS = [
     (
@@ -119,4 +142,7 @@ FIXUPS = [
         "",
         "frame_data.py is inside extract/ now, whose every module is checked to read the world",
     ),
+    ("renderer", "scripts/ab_frames.py", _AB_OLD, _AB_NEW, "old code against new: the new paths, then the old"),
 ]
+# files that name the old paths on purpose (after their fix-ups): never renamed, nor checked
+KEEP_OLD_PATHS = ("scripts/ab_frames.py",)

@@ -53,6 +53,7 @@ def test_no_file_names_a_module_by_its_old_path() -> None:
     stale = [
         f.relative_to(ROOT).as_posix()
         for f in mover.scanned_files()
+        if f.relative_to(ROOT).as_posix() not in layout.KEEP_OLD_PATHS
         if mover.rewrite_file(f, layout.MOVES) != f.read_text()
     ]
     assert stale == []
