@@ -8,7 +8,7 @@ import numpy as np
 
 from .attachment import create_framebuffer
 from .memory import HOST, Buffer, Image
-from .render_pass import FORMS, SceneAttachments, TargetForm, create_target_passes
+from .render_pass import FORMS, SceneAttachments, TargetForm, create_render_pass
 
 if TYPE_CHECKING:
     from .device import Device
@@ -37,19 +37,17 @@ class OffscreenTarget(TargetForm):
             vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
             vk.VK_IMAGE_ASPECT_COLOR_BIT,
         )
-        self.render_pass, self.gbuffer_pass, self.attachments, self.framebuffer = self._build_pass(self.form)
+        self.render_pass, self.attachments, self.framebuffer = self._build_pass(self.form)
         self.readback = Buffer(device, width * height * 4, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
 
-    def _build_pass(self, form: str) -> tuple[Any, Any, SceneAttachments, Any]:
-        """The render pass, G-buffer pass, shared attachments and framebuffer of a form; on
-        failure nothing is left made."""
+    def _build_pass(self, form: str) -> tuple[Any, SceneAttachments, Any]:
+        """The render pass, shared attachments and framebuffer of a form; on failure nothing is
+        left made."""
         device = self.device
         vk = device.vk
-        render_pass, gbuffer_pass = create_target_passes(
-            device, self.color_format, self.final_layout, self.samples, form
-        )
+        render_pass = create_render_pass(device, self.color_format, self.final_layout, self.samples, form)
         try:
-            attachments = SceneAttachments(device, self.width, self.height, self.samples, form, gbuffer_pass)
+            attachments = SceneAttachments(device, self.width, self.height, self.samples, form)
             try:
                 framebuffer = create_framebuffer(
                     device, render_pass, attachments.views(self.color.view), self.width, self.height
@@ -59,18 +57,14 @@ class OffscreenTarget(TargetForm):
                 raise
         except BaseException:
             vk.vkDestroyRenderPass(device.handle, render_pass, None)
-            if gbuffer_pass is not None:
-                vk.vkDestroyRenderPass(device.handle, gbuffer_pass, None)
             raise
-        return render_pass, gbuffer_pass, attachments, framebuffer
+        return render_pass, attachments, framebuffer
 
     def _release_pass(self) -> None:
         vk = self.device.vk
         vk.vkDestroyFramebuffer(self.device.handle, self.framebuffer, None)
         self.attachments.destroy()
         vk.vkDestroyRenderPass(self.device.handle, self.render_pass, None)
-        if self.gbuffer_pass is not None:
-            vk.vkDestroyRenderPass(self.device.handle, self.gbuffer_pass, None)
 
     def set_form(self, form: str) -> None:
         """Render the scene through HDR colour and the tone map (`hdr`), with the opaque meshes
@@ -83,7 +77,7 @@ class OffscreenTarget(TargetForm):
         if form != self.form:
             new = self._build_pass(form)  # the new form first: if it fails, the old one stays whole
             self._release_pass()
-            self.render_pass, self.gbuffer_pass, self.attachments, self.framebuffer = new
+            self.render_pass, self.attachments, self.framebuffer = new
             self.form = form
             self.generation += 1
 

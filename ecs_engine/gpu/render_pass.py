@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING, Any
 
 from .attachment import attachment as _attachment
 from .attachment import make_render_pass
-from .gbuffer import GBuffer, create_gbuffer_pass
+from .gbuffer import GBuffer
 from .memory import Image
 
 if TYPE_CHECKING:
@@ -279,7 +279,6 @@ class SceneAttachments:
         height: int,
         samples: int = 1,
         form: str = "hdr",
-        gbuffer_pass: Any = None,
     ) -> None:
         vk = device.vk
         self.samples = samples
@@ -311,7 +310,7 @@ class SceneAttachments:
                 self.images.append(Image(device, width, height, hdr_format, transient, aspect, samples))
             self.images.append(Image(device, width, height, hdr_format, color | read, aspect))
             if deferred:
-                self.gbuffer = GBuffer(device, gbuffer_pass, self.images[0].view, self.images[1].view, width, height)
+                self.gbuffer = GBuffer(device, width, height)
         except BaseException:
             self.destroy()
             raise
@@ -344,16 +343,3 @@ class SceneAttachments:
         for image in self.images:
             image.destroy()
         self.images = []
-
-
-def create_target_passes(device: Device, color_format: int, final_layout: int, samples: int, form: str) -> Any:
-    """(the render pass, the G-buffer pass or None) of a target's form; on failure nothing is left made."""
-    vk = device.vk
-    render_pass = create_render_pass(device, color_format, final_layout, samples, form)
-    if form != "deferred":
-        return render_pass, None
-    try:
-        return render_pass, create_gbuffer_pass(device, getattr(vk, DEPTH_FORMAT_NAME), getattr(vk, HDR_FORMAT_NAME))
-    except BaseException:
-        vk.vkDestroyRenderPass(device.handle, render_pass, None)
-        raise

@@ -12,7 +12,7 @@ from ..errors import UsageError
 from .attachment import create_framebuffer
 from .functions import device_function, instance_function, raw_device_function
 from .memory import HOST, Buffer, Image
-from .render_pass import FORMS, SceneAttachments, TargetForm, create_target_passes
+from .render_pass import FORMS, SceneAttachments, TargetForm, create_render_pass
 
 if TYPE_CHECKING:
     from .device import Device
@@ -61,7 +61,7 @@ class Swapchain(TargetForm):
         chosen = srgb[0] if srgb else formats[0]
         self.color_format, self.color_space = chosen.format, chosen.colorSpace
         self.final_layout = vk.VK_IMAGE_LAYOUT_PRESENT_SRC_KHR
-        self.render_pass, self.gbuffer_pass = self._create_pass()
+        self.render_pass = self._create_pass()
         self._create_fn = device_function(device, "vkCreateSwapchainKHR")
         self._destroy_fn = device_function(device, "vkDestroySwapchainKHR")
         self._images_fn = device_function(device, "vkGetSwapchainImagesKHR")
@@ -121,9 +121,7 @@ class Swapchain(TargetForm):
             self._destroy_fn(self.device.handle, old, None)
         self.width, self.height = width, height
         self.images = self._images_fn(self.device.handle, self.handle)
-        self.attachments = attachments = SceneAttachments(
-            self.device, width, height, self.samples, self.form, self.gbuffer_pass
-        )
+        self.attachments = attachments = SceneAttachments(self.device, width, height, self.samples, self.form)
         for image in self.images:
             view = vk.vkCreateImageView(
                 self.device.handle,
@@ -202,12 +200,10 @@ class Swapchain(TargetForm):
         self.recreate()
 
     def _create_pass(self, form: str | None = None) -> Any:
-        return create_target_passes(self.device, self.color_format, self.final_layout, self.samples, form or self.form)
+        return create_render_pass(self.device, self.color_format, self.final_layout, self.samples, form or self.form)
 
     def _destroy_passes(self) -> None:
-        for render_pass in (self.render_pass, self.gbuffer_pass):
-            if render_pass is not None:
-                self.vk.vkDestroyRenderPass(self.device.handle, render_pass, None)
+        self.vk.vkDestroyRenderPass(self.device.handle, self.render_pass, None)
 
     def set_form(self, form: str) -> None:
         """Render the scene through HDR colour and the tone map (`hdr`), with the opaque meshes
@@ -222,7 +218,7 @@ class Swapchain(TargetForm):
             passes = self._create_pass(form)  # first: if it fails, the old form stays whole
             self._release()
             self._destroy_passes()
-            self.render_pass, self.gbuffer_pass = passes
+            self.render_pass = passes
             self.form = form
             self._build()
             self.generation += 1

@@ -46,6 +46,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ..gpu.device import Device
+from ..gpu.gbuffer import gbuffer_formats
 from ..gpu.render_pass import SUBPASS_BILLBOARDS
 from ..gpu.secondary import SecondaryBuffers
 from .deferred_pass import DeferredPass
@@ -55,6 +56,7 @@ from .output_barriers import OutputBarriers
 from .output_ldr import LdrOutput
 from .path import TargetState
 from .post.inputs import PostInputs
+from .scene_renderings import gbuffer_rendering
 from .sky_pass import SkyPass
 from .tone_map import ToneMapPass
 
@@ -127,9 +129,9 @@ class OutputPasses:
         """What a framebuffer of this size needs per frame, made once (kept for 16 framebuffers)."""
         vk = self.vk
         target = self.target
-        # in the deferred form the G-buffer's framebuffer too: a swapchain remade at the same size
-        # may hand the new framebuffers the old handle values, but not necessarily both
-        gbuffer_fb = target.attachments.gbuffer.framebuffer if target.form == "deferred" else None
+        # in the deferred form the G-buffer's images too: a swapchain remade at the same size may
+        # hand the new framebuffers the old handle values, but not necessarily new G-buffer images
+        gbuffer_fb = target.attachments.gbuffer.images[0].view if target.form == "deferred" else None
         recreations = getattr(target, "recreations", 0)
         if recreations != self._recreations:  # new swapchain images: a framebuffer handle value
             self._targets.clear()  # may come back, drawing another image (OutputRendering)
@@ -146,11 +148,8 @@ class OutputPasses:
                 self._targets.clear()
             gbuffer = None
             if gbuffer_fb is not None:
-                gbuffer = (
-                    target.gbuffer_pass,
-                    gbuffer_fb,
-                    self.secondaries.begin_info(target.gbuffer_pass, 0, gbuffer_fb),
-                )
+                begin = self.secondaries.begin_info_rendering(gbuffer_formats(vk))
+                gbuffer = gbuffer_rendering(vk, target.attachments, width, height, self.clear_color, begin)
             state = TargetState.make(
                 vk,
                 key,
@@ -187,7 +186,7 @@ class OutputPasses:
             return None
         if self.oit is None:
             self.oit = WeightedTransparency(self.device, self.secondaries)
-        self.oit.ensure(target.attachments.depth_view, target.width, target.height)
+        self.oit.ensure(target.attachments.images[0], target.width, target.height)
         return self.oit
 
     def forget_path_state(self) -> None:
@@ -235,12 +234,15 @@ class OutputPasses:
         lib = vk.lib
         target = self.target
         secondaries = chunks
-        if state.gbuffer_begin_ptr is not None:
+        if state.gbuffer_ptrs is not None:
             assert self.deferred is not None
-            lib.vkCmdBeginRenderPass(cb, state.gbuffer_begin_ptr, vk.VK_SUBPASS_CONTENTS_SECONDARY_COMMAND_BUFFERS)
+            rendering, before, after = state.gbuffer_ptrs
+            lib.vkCmdPipelineBarrier2(cb, before)
+            lib.vkCmdBeginRendering(cb, rendering)
             if chunks:
                 lib.vkCmdExecuteCommands(cb, len(chunks), vk.ffi.new("VkCommandBuffer[]", chunks))
-            lib.vkCmdEndRenderPass(cb)
+            lib.vkCmdEndRendering(cb)
+            lib.vkCmdPipelineBarrier2(cb, after)
             if mark is not None:
                 mark("g-buffer")
             extent = state.area.extent
@@ -272,7 +274,7 @@ class OutputPasses:
             lib.vkCmdExecuteCommands(cb, len(secondaries), vk.ffi.new("VkCommandBuffer[]", secondaries))
         lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
         if mark is not None:
-            mark("forward" if state.gbuffer_begin_ptr is None else "sky and blended")
+            mark("forward" if state.gbuffer_ptrs is None else "sky and blended")
         draws = self.light_pass.record(cb, state, frame_set, billboards)
         if not target.hdr:  # the direct form: the overlay follows the billboards in their subpass
             last = "billboards"

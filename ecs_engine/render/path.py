@@ -26,7 +26,6 @@ from ..gpu.device import Device
 from ..gpu.pipeline import AttachmentFormats
 from ..gpu.secondary import SecondaryBuffers
 from .frame_data import Chunk, FrameData
-from .layouts import NO_MATERIAL
 from .mesh_registry import MeshRegistry
 
 #: --fill: name -> VkPolygonMode (wireframe and points need the device's fillModeNonSolid)
@@ -50,7 +49,8 @@ class TargetState:
     area_ptr: Any = None  # pointers to the structs above, for raw calls
     viewport_ptr: Any = None
     pass_begin_ptr: Any = None
-    gbuffer_begin_ptr: Any = None  # the deferred form: the G-buffer pass's VkRenderPassBeginInfo
+    # the deferred form: the G-buffer's (VkRenderingInfo, barrier before, barrier after) pointers
+    gbuffer_ptrs: tuple[Any, Any, Any] | None = None
     path_state: dict[Any, Any] = field(default_factory=dict)  # what paths keep per target and slot
 
     @classmethod
@@ -62,11 +62,12 @@ class TargetState:
         render_pass: Any,
         secondary_begin: Any,
         clear_color: tuple[float, float, float],
-        gbuffer: tuple[Any, Any, Any] | None = None,
+        gbuffer: tuple[Any, Any, Any, Any] | None = None,
         depth_only: bool = False,
     ) -> TargetState:
-        """`gbuffer`, in the deferred form: the G-buffer pass, its framebuffer and the begin info
-        of secondaries inside it (the chunks'); `secondary_begin` is then the set-aside rows'."""
+        """`gbuffer`, in the deferred form: the G-buffer's gpu/rendering.py Rendering, its
+        Dependency before and after (render/scene_barriers.py) and the begin info of secondaries
+        inside it (the chunks'); `secondary_begin` is then the set-aside rows'."""
         width, height = key[1], key[2]
         area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(width, height))
         background = vk.VkClearValue(color=vk.VkClearColorValue(float32=[*clear_color, 1.0]))
@@ -78,7 +79,7 @@ class TargetState:
             key=key,
             area=area,
             viewport=vk.VkViewport(x=0.0, y=0.0, width=float(width), height=float(height), minDepth=0.0, maxDepth=1.0),
-            secondary_begin=secondary_begin if gbuffer is None else gbuffer[2],
+            secondary_begin=secondary_begin if gbuffer is None else gbuffer[3],
             aside_begin=secondary_begin,
             pass_begin=None
             if render_pass is None  # dynamic rendering: the pass begins its own (shadow_pass.py)
@@ -92,15 +93,8 @@ class TargetState:
         if state.pass_begin is not None:
             state.pass_begin_ptr = vk.ffi.addressof(state.pass_begin)
         if gbuffer is not None:
-            zero = vk.VkClearValue(color=vk.VkClearColorValue(float32=[0.0, 0.0, 0.0, 0.0]))
-            none = vk.VkClearValue(color=vk.VkClearColorValue(uint32=[NO_MATERIAL, 0, 0, 0]))
-            # depth, HDR colour, normal-roughness, base-metallic, material (gpu/gbuffer.py)
-            gbuffer_clears = [depth, background, zero, zero, none]
-            begin = vk.VkRenderPassBeginInfo(
-                renderPass=gbuffer[0], framebuffer=gbuffer[1], renderArea=area, pClearValues=gbuffer_clears
-            )
-            state.keep += [gbuffer_clears, begin, gbuffer]
-            state.gbuffer_begin_ptr = vk.ffi.addressof(begin)
+            state.keep.append(gbuffer)
+            state.gbuffer_ptrs = (gbuffer[0].ptr, gbuffer[1].ptr, gbuffer[2].ptr)
         return state
 
 

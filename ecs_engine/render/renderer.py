@@ -2,13 +2,10 @@
 
 Data goes one way: the extract stage reads the world (frame_data.py, extract/), the renderer
 writes the frame's mapped buffers (globals, lights, instance rows) and records; it never writes
-the world. The mesh rows are drawn by a render path picked by name from PATHS (path.py says what
-a path does; path_settings.py switches it); the chunks of rows are jobs on the worker pool, each
-recording a secondary command buffer (in `indirect` only writing rows for the compute shaders).
-The primary records the passes around them by the target's form (output_passes.py): the G-buffer
-pass and the lighting compute pass in the deferred form, the scene's render pass (the path's
-secondaries, the light billboards), the post effects, the tone map and the overlay. The form
-follows the settings (target_forms.py switches it between frames)."""
+the world. The mesh rows are drawn by a render path picked by name from PATHS (path.py, switched
+by path_settings.py); the chunks of rows are jobs on the worker pool, each recording a secondary
+(in `indirect` only writing rows for the compute shaders). The primary records the passes around
+them by the target's form (output_passes.py; target_forms.py picks the form between frames)."""
 
 from __future__ import annotations
 
@@ -22,6 +19,7 @@ from ..ecs.world import World
 from ..gpu.descriptors import write_images
 from ..gpu.device import Device
 from ..gpu.frames import FrameRing
+from ..gpu.gbuffer import gbuffer_formats
 from ..gpu.secondary import SecondaryBuffers
 from ..jobs import JobPool
 from .chunk_paths import InstancedPath, PerEntityPath, check_recorder, default_recorder
@@ -163,7 +161,8 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
         ctx = PathContext(
             device=self.device,
             meshes=self.meshes,
-            render_pass=self.target.gbuffer_pass if deferred else self.target.render_pass,
+            render_pass=None if deferred else self.target.render_pass,
+            formats=gbuffer_formats(self.vk) if deferred else None,
             frame_set_layout=self.set_layout.handle,
             secondaries=self.secondaries,
             frames_in_flight=len(self.frames.frames),
@@ -377,7 +376,8 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
         if data.set_aside is None or not len(data.set_aside):
             return None, 0, 0, 0, None
         if self._set_aside is None:  # forward, in the target's pass (deferred: over the lit scene)
-            self._set_aside = SetAsidePass(replace(self.path.ctx, render_pass=self.target.render_pass, gbuffer=False))
+            ctx = replace(self.path.ctx, render_pass=self.target.render_pass, formats=None, gbuffer=False)
+            self._set_aside = SetAsidePass(ctx)
         first = self.path.rows_needed(data.candidates)
         eye, oit = data.camera.position - data.origin, self.output.weighted(self.transparency)
         return self._set_aside.record(inputs, data.set_aside, first, eye, materials, oit)

@@ -139,7 +139,7 @@ class SetAsidePass:
         if found is None:
             ctx = self.ctx if fill == 0 else replace(self.ctx, fill=FILLS[fill])
             if oit is not None:  # the weighted transparency pass: one sample, two targets
-                ctx = replace(ctx, render_pass=oit.render_pass, oit=True, samples=1)
+                ctx = replace(ctx, render_pass=None, formats=oit.formats, oit=True, samples=1)
             found = self.pipelines[key] = mesh_pipelines(ctx, self.layout, "mesh.vert", blended=blended)
         return found[mirrored]
 
