@@ -12,8 +12,8 @@ close for layers of similar colour, nearer layers weighing more).
 It runs in the deferred form, where the opaque depth exists before the target's pass: after the
 lighting dispatch, a pass of its own draws the blended rows (mesh_*_oit.frag, the "weighted"
 blend, gpu/pipeline.py) into the two targets against the G-buffer's depth (read-only, no
-writes); the composite (oit_composite.frag) is the last draw of the target pass's first subpass,
-after the sky and the other set-aside rows.
+writes); the composite (oit_composite.frag) is the last secondary of the scene's rendering
+before the billboards, after the sky and the other set-aside rows.
 
 Known limit: blended surfaces are depth-tested against the G-buffer's opaque meshes only, not
 against the rows drawn forward after the lighting (mirroring, wireframe and point materials),
@@ -58,8 +58,7 @@ class WeightedTransparency:
         self.descriptor_set = self.pool.allocate(self.set_layout)
         self.set_array = vk.ffi.new("VkDescriptorSet[1]", [self.descriptor_set])
         self.layout = pipeline_layout(device, [self.set_layout.handle])
-        self.composite: Any = None  # made against the target's pass on first use
-        self._composite_pass: Any = None
+        self.composites: dict[AttachmentFormats, Any] = {}  # per formats of the scene it is drawn over
         self.images: list[Image] = []
         self._rendering: Any = None  # (Rendering, barrier before, barrier after) for the images
         self._made_for: tuple[Any, int, int] | None = None
@@ -115,27 +114,28 @@ class WeightedTransparency:
         lib.vkCmdEndRendering(cb)
         lib.vkCmdPipelineBarrier2(cb, after.ptr)
 
-    def record_composite(self, target_pass: Any, state: TargetState, slot: int) -> Any:
-        """The composite's secondary in the target pass's first subpass (after the set-aside rows)."""
-        if self.composite is None or self._composite_pass != target_pass:
-            self._destroy_composite()
+    def record_composite(self, formats: AttachmentFormats, state: TargetState, slot: int) -> Any:
+        """The composite's secondary in the scene's rendering (attachments of `formats`), after the
+        set-aside rows."""
+        composite = self.composites.get(formats)
+        if composite is None:
             spec = GraphicsPipelineSpec(
                 "tonemap.vert",  # one triangle over the screen
                 "oit_composite.frag",
                 layout=self.layout,
-                render_pass=target_pass,
                 cull_back=False,
                 depth_test=False,
                 depth_write=False,
                 blend="composite",
+                **formats.spec_kwargs(),
             )
-            self.composite, self._composite_pass = graphics_pipeline(self.device, spec), target_pass
-        return full_screen_secondary(self.secondaries, slot, state, self.composite, self.layout, self.set_array)
+            composite = self.composites[formats] = graphics_pipeline(self.device, spec)
+        return full_screen_secondary(self.secondaries, slot, state, composite, self.layout, self.set_array)
 
-    def _destroy_composite(self) -> None:
-        if self.composite is not None:
-            self.vk.vkDestroyPipeline(self.device.handle, self.composite, None)
-            self.composite = None
+    def forget_composites(self) -> None:
+        for composite in self.composites.values():
+            self.vk.vkDestroyPipeline(self.device.handle, composite, None)
+        self.composites = {}
 
     def _release_targets(self) -> None:
         self._rendering = None
@@ -147,7 +147,7 @@ class WeightedTransparency:
     def destroy(self) -> None:
         vk, handle = self.vk, self.device.handle
         self._release_targets()
-        self._destroy_composite()
+        self.forget_composites()
         vk.vkDestroyPipelineLayout(handle, self.layout, None)
         self.pool.destroy()
         self.set_layout.destroy()

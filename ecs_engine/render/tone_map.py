@@ -68,8 +68,8 @@ class ToneMapPass:
         if found is not None:
             return found
         if self.pool is None or len(self._sets) >= _SETS:
-            self.device.wait_idle()  # the old sets may be bound by frames in flight
             if self.pool is not None:
+                self.device.wait_idle()  # the old sets may be bound by frames in flight
                 self.pool.destroy()
             self.pool = DescriptorPool(self.device, _SETS, {vk.VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE: _SETS})
             self._sets.clear()
