@@ -198,7 +198,7 @@ def same_inputs(a: tuple[Any, ...] | None, b: tuple[Any, ...]) -> bool:
 
 class NativeRecorder:
     """The numba loop of gpu/native_recorder.py; its per-slot frame state lives with the target
-    (TargetState.path_state), so both are dropped together when the framebuffer goes."""
+    (TargetState.path_state), so both are dropped together when the output state goes."""
 
     def __init__(self, path: ChunkPath) -> None:
         self.path = path

@@ -303,7 +303,7 @@ class ImGuiRenderer:
         return draws, push, lists, vbase, ibase
 
     def record(self, cb: Any, slot: int, width: int, height: int) -> None:
-        """Into the primary's overlay rendering or subpass (inline): one indexed draw per ImGui
+        """Into the primary's overlay rendering (inline): one indexed draw per ImGui
         command."""
         prepared = self._prepared.pop(slot, None)
         if not prepared or not prepared[0]:

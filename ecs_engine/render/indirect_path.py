@@ -180,7 +180,7 @@ class IndirectPath(PipelinesPerTarget):
         return ChunkResult(None, 0, 0, 0, key_counts)
 
     def finish(self, cb: Any, frame: FrameInputs, results: list[ChunkResult], candidates: int) -> list[Any]:
-        """The compute passes into the primary (before the render pass) and the one secondary
+        """The compute passes into the primary (before the scene's rendering) and the one secondary
         that draws what they wrote."""
         key_counts = np.zeros(2 * len(frame.bounds[2]), dtype=np.int64)  # the meshes' keys: rows as written
         for r in results:
@@ -264,7 +264,7 @@ class IndirectPath(PipelinesPerTarget):
         merged: MergedMeshes,
         capacity: np.ndarray,
     ) -> None:
-        """Into the primary, before the render pass: zero the counters, cull (with occlusion
+        """Into the primary, before the scene's rendering: zero the counters, cull (with occlusion
         culling: its early pass, depth and pyramid first, occlusion.py), write commands, and copy
         the counters where the CPU can read them. `capacity`: per key of every draw mesh (levels
         of detail too), as key_capacities gives it."""

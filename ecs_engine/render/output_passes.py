@@ -129,14 +129,14 @@ class OutputPasses:
         at this size in its current form needs per frame, made once (kept for 16 of them)."""
         target = self.target
         key = (framebuffer, target.form, width, height)
-        last = self._last
-        if last[0] == key and last[1] is not None:
-            return last[1]  # the same output and form as the last frame's (offscreen: every frame)
         recreations = getattr(target, "recreations", 0)
-        if recreations != self._recreations:  # new swapchain images: an index names another image
+        if recreations != self._recreations:  # new swapchain images and attachments, maybe at the same size
             self._targets.clear()
             self._last = (None,) * 4
             self._recreations = recreations
+        last = self._last
+        if last[0] == key and last[1] is not None:
+            return last[1]  # the same output and form as the last frame's (offscreen: every frame)
         made = self._targets.get(key)
         if made is None:
             if len(self._targets) > 16:  # swapchains come and go: drop the old outputs' entries

@@ -10,7 +10,7 @@ Per frame:
 2. `record_chunk(chunk, frame)` for every chunk, on the worker pool (cull, write rows, record a
    secondary command buffer, or only write rows);
 3. `finish(cb, frame, results, candidates)` on the main thread: commands for the primary before the render
-   pass (compute), and the secondaries to execute in the mesh subpass;
+   pass (compute), and the secondaries to execute in the scene's (or G-buffer's) rendering;
 4. after submit, `counts(frame, results)`: draws, visible rows and triangles.
 """
 

@@ -186,7 +186,7 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
                 pf.set_version += 1  # the shadow views' copies of the set name the old pages
 
     def target_state(self, framebuffer: Any, width: int, height: int) -> TargetState:
-        """What a framebuffer of this size needs per frame, made once (output_passes.py)."""
+        """What drawing into output image `framebuffer` at this size needs per frame, made once (output_passes.py)."""
         return self.output.target_state(framebuffer, width, height)
 
     def next_image_semaphore(self) -> Any:

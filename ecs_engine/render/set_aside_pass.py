@@ -1,5 +1,5 @@
 """Rows drawn apart from the chunks (frame_data.SetAsideRows), after every chunk's rows in the
-same subpass, with pipelines the render paths do not have:
+same rendering, with pipelines the render paths do not have:
 
 - materials with a fill of their own (`Material.fill`: wireframe or points), drawn first, with
   depth writes, grouped by fill and (mesh, winding);
