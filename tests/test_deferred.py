@@ -288,7 +288,7 @@ def test_a_renderer_that_cannot_make_its_form_leaves_nothing(monkeypatch):
             real(self)
 
         monkeypatch.setattr(cls, "destroy", spy)
-    monkeypatch.setattr(render_pass, "create_gbuffer_pass", refuse)
+    monkeypatch.setattr(render_pass, "GBuffer", refuse)
     with headless_gpu(W, H) as gpu:
         used = gpu.device.allocator.stats()["used_bytes"]
         with pytest.raises(RuntimeError, match="no G-buffer"):

@@ -57,8 +57,8 @@ def test_render_paths_make_their_pipelines_from_formats(form):
             path = make(ctx, "python")
             assert len(path.pipelines) == 2 and all(p is not None for p in path.pipelines)
             path.destroy()
-        with pytest.raises(ValueError, match="either a render pass or attachment formats"):
-            InstancedPath(replace(ctx, render_pass=renderer.path.ctx.render_pass), "python")
+        with pytest.raises(ValueError, match="needs the attachment formats"):
+            InstancedPath(replace(ctx, formats=None), "python")
 
 
 class SecondaryClear(Pass):

@@ -47,7 +47,7 @@ def test_a_trace_has_frames_systems_worker_jobs_and_gpu_passes(tmp_path):
     gpu_frames = by_cat["gpu"]
     assert len(gpu_frames) >= 5 and all(e["pid"] == 2 for e in gpu_frames)
     passes = by_cat["gpu pass"]
-    assert {"forward", "billboards"} <= {e["name"] for e in passes}
+    assert "forward" in {e["name"] for e in passes}  # billboards included: one rendering of secondaries
     for frame in gpu_frames:
         inside = [p for p in passes if frame["ts"] <= p["ts"] < frame["ts"] + frame["dur"]]
         assert inside and all(p["dur"] > 0 for p in inside)

@@ -1,4 +1,5 @@
-"""Headless render target: colour and depth images, a framebuffer, and readback to NumPy."""
+"""Headless render target: a colour image the frame's output is drawn into, the scene's
+attachments of its forms, and readback to NumPy."""
 
 from __future__ import annotations
 
@@ -6,9 +7,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .attachment import create_framebuffer
 from .memory import HOST, Buffer, Image
-from .render_pass import FORMS, SceneAttachments, TargetForm, create_target_passes
+from .render_pass import SceneAttachments, TargetForm
 
 if TYPE_CHECKING:
     from .device import Device
@@ -18,7 +18,8 @@ class OffscreenTarget(TargetForm):
     """Renders into an sRGB RGBA8 image that can be copied to a host buffer each frame.
 
     One colour image is shared by the frames in flight: the renderer waits for a frame's fence
-    before reading its pixels, and frames in flight are ordered on the single queue."""
+    before reading its pixels, and frames in flight are ordered on the single queue. `framebuffer`
+    names that image as the renderer's `render` takes it (a swapchain has one per image)."""
 
     def __init__(self, device: Device, width: int, height: int, samples: int = 1, hdr: bool = False) -> None:
         vk = device.vk
@@ -26,7 +27,6 @@ class OffscreenTarget(TargetForm):
         self.width, self.height = width, height
         self.samples = samples  # MSAA of the scene's attachments (the target itself has one sample)
         self.form = "hdr" if hdr or samples > 1 else "direct"  # gpu/render_pass.py's FORMS
-        self.generation = 0  # counts changes of render pass (set_form)
         self.color_format = vk.VK_FORMAT_R8G8B8A8_SRGB
         self.final_layout = vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL  # ready for record_readback
         self.color = Image(
@@ -37,55 +37,17 @@ class OffscreenTarget(TargetForm):
             vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
             vk.VK_IMAGE_ASPECT_COLOR_BIT,
         )
-        self.render_pass, self.gbuffer_pass, self.attachments, self.framebuffer = self._build_pass(self.form)
+        self.framebuffer = self.color  # what the renderer draws the output into (output_image)
+        self._forms: dict[str, SceneAttachments] = {}
+        try:
+            self._forms[self.form] = self._attachments_for(self.form)
+        except BaseException:
+            self.color.destroy()
+            raise
         self.readback = Buffer(device, width * height * 4, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
 
-    def _build_pass(self, form: str) -> tuple[Any, Any, SceneAttachments, Any]:
-        """The render pass, G-buffer pass, shared attachments and framebuffer of a form; on
-        failure nothing is left made."""
-        device = self.device
-        vk = device.vk
-        render_pass, gbuffer_pass = create_target_passes(
-            device, self.color_format, self.final_layout, self.samples, form
-        )
-        try:
-            attachments = SceneAttachments(device, self.width, self.height, self.samples, form, gbuffer_pass)
-            try:
-                framebuffer = create_framebuffer(
-                    device, render_pass, attachments.views(self.color.view), self.width, self.height
-                )
-            except BaseException:
-                attachments.destroy()
-                raise
-        except BaseException:
-            vk.vkDestroyRenderPass(device.handle, render_pass, None)
-            if gbuffer_pass is not None:
-                vk.vkDestroyRenderPass(device.handle, gbuffer_pass, None)
-            raise
-        return render_pass, gbuffer_pass, attachments, framebuffer
-
-    def _release_pass(self) -> None:
-        vk = self.device.vk
-        vk.vkDestroyFramebuffer(self.device.handle, self.framebuffer, None)
-        self.attachments.destroy()
-        vk.vkDestroyRenderPass(self.device.handle, self.render_pass, None)
-        if self.gbuffer_pass is not None:
-            vk.vkDestroyRenderPass(self.device.handle, self.gbuffer_pass, None)
-
-    def set_form(self, form: str) -> None:
-        """Render the scene through HDR colour and the tone map (`hdr`), with the opaque meshes
-        lit in compute first (`deferred`), or straight into the target (`direct`): new render
-        passes (the caller waited until no frame uses the old ones). MSAA keeps `hdr`."""
-        if form not in FORMS:
-            raise ValueError(f"unknown target form {form!r}; forms: {', '.join(FORMS)}")
-        if self.samples > 1:
-            form = "hdr"
-        if form != self.form:
-            new = self._build_pass(form)  # the new form first: if it fails, the old one stays whole
-            self._release_pass()
-            self.render_pass, self.gbuffer_pass, self.attachments, self.framebuffer = new
-            self.form = form
-            self.generation += 1
+    def _attachments_for(self, form: str) -> SceneAttachments:
+        return SceneAttachments(self.device, self.width, self.height, self.samples, form)
 
     def record_readback(self, cb: Any) -> None:
         """After the frame's output (image in TRANSFER_SRC layout): copy it to the host buffer."""
@@ -132,9 +94,10 @@ class OffscreenTarget(TargetForm):
         image = self.attachments.hdr_image
         return image.view if image is not None else None
 
-    def output_image(self, framebuffer: Any) -> tuple[Any, Any]:
-        """The one colour image, whichever framebuffer (frames in flight share it)."""
-        return self.color.handle, self.color.view
+    def output_image(self, output: Any) -> tuple[Any, Any]:
+        """(VkImage, view) of `output`: `framebuffer` (the colour image, which frames in flight
+        share), or another gpu/memory.py Image of the colour format and size to draw into."""
+        return output.handle, output.view
 
     def pixels(self) -> np.ndarray:
         """(height, width, 4) uint8 RGBA (sRGB-encoded), a copy of the last readback."""
@@ -142,5 +105,5 @@ class OffscreenTarget(TargetForm):
 
     def destroy(self) -> None:
         self.readback.destroy()
-        self._release_pass()
+        self._release_forms()
         self.color.destroy()

@@ -51,8 +51,8 @@ class GraphicsPipelineSpec:
     vertex_shader: str
     fragment_shader: str | None  # None: depth only (shadow maps)
     layout: Any
-    render_pass: Any  # None: drawn with dynamic rendering into `color_formats` (and `depth_format`)
-    subpass: int = 0
+    render_pass: Any  # always None: drawn with dynamic rendering into `color_formats` (and `depth_format`)
+    subpass: int = 0  # always 0 (no render pass)
     vertex_stride: int = 0  # 0: no vertex buffer (vertices made in the shader)
     vertex_attributes: list[tuple[int, int, int]] = field(default_factory=list)  # location, format, offset
     cull_back: bool = True
@@ -62,13 +62,13 @@ class GraphicsPipelineSpec:
     alpha_blend: bool = False
     fragment_constants: tuple[int, ...] = ()  # uint specialisation constants, constant_id 0, 1, ...
     polygon_mode: int = 0  # VK_POLYGON_MODE_FILL; LINE (1) and POINT (2) need fillModeNonSolid
-    samples: int = 1  # the subpass's MSAA count
-    color_attachments: int = 1  # the subpass's; all written alike (the G-buffer pass has four)
+    samples: int = 1  # the rendering's MSAA count
+    color_attachments: int = 1  # the rendering's; all written alike (the G-buffer has four)
     depth_bias: tuple[float, float] | None = None  # (constant, slope) factors: shadow casters
     depth_or_equal: bool = False  # compare GREATER_OR_EQUAL: the sky, drawn at depth 0 where nothing is
     blend: str = ""  # a BLEND_MODES name ("" with alpha_blend: "alpha")
-    color_formats: tuple[int, ...] = ()  # dynamic rendering (render_pass None): the attachments' VkFormats
-    depth_format: int = 0  # dynamic rendering: the depth attachment's VkFormat (0: none)
+    color_formats: tuple[int, ...] = ()  # the colour attachments' VkFormats
+    depth_format: int = 0  # the depth attachment's VkFormat (0: none)
 
 
 @dataclass(frozen=True)
@@ -118,9 +118,9 @@ def specialization(vk: Any, values: tuple[int, ...]) -> tuple[Any, Any]:
 
 def rendering_info(vk: Any, spec: GraphicsPipelineSpec) -> Any:
     """What a pipeline for dynamic rendering (vkCmdBeginRendering) says instead of a render pass:
-    its attachments' formats, as VkPipelineRenderingCreateInfo; None for a render pass's."""
-    if spec.render_pass is not None:
-        return None
+    its attachments' formats, as VkPipelineRenderingCreateInfo."""
+    if spec.render_pass is not None or spec.subpass:
+        raise ValueError("pipelines are made for dynamic rendering: no render pass or subpass")
     if len(spec.color_formats) != spec.color_attachments:
         raise ValueError(
             f"a dynamic-rendering pipeline needs {spec.color_attachments} colour formats, got {len(spec.color_formats)}"
@@ -135,8 +135,8 @@ def rendering_info(vk: Any, spec: GraphicsPipelineSpec) -> Any:
 
 
 def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
-    """A pipeline with dynamic viewport and scissor and reverse-Z depth (compare GREATER), for a
-    render pass's subpass, or for dynamic rendering when `spec.render_pass` is None."""
+    """A pipeline with dynamic viewport and scissor and reverse-Z depth (compare GREATER), for
+    dynamic rendering into attachments of `spec.color_formats` and `spec.depth_format`."""
     vk = device.vk
     vert = shader_module(device, spec.vertex_shader)
     frag = shader_module(device, spec.fragment_shader) if spec.fragment_shader else None
@@ -209,8 +209,8 @@ def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
                 pDynamicStates=[vk.VK_DYNAMIC_STATE_VIEWPORT, vk.VK_DYNAMIC_STATE_SCISSOR]
             ),
             layout=spec.layout,
-            renderPass=spec.render_pass if spec.render_pass is not None else vk.ffi.NULL,
-            subpass=spec.subpass if spec.render_pass is not None else 0,
+            renderPass=vk.ffi.NULL,
+            subpass=0,
         )
         device.objects_version += 1
         return vk.vkCreateGraphicsPipelines(device.handle, device.pipeline_cache.handle, 1, [info], None)[0]

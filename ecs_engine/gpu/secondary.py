@@ -68,30 +68,19 @@ class SecondaryBuffers:
         return cb
 
     def begin(self, frame: int, begin_info: Any) -> Any:
-        """`acquire`, then begin it with `begin_info` (see `begin_info`); a raw call, as in
-        gpu/frames.py."""
+        """`acquire`, then begin it with `begin_info` (see `begin_info_rendering`); a raw call,
+        as in gpu/frames.py."""
         vk = self.device.vk
         cb = self.acquire(frame)
         check(vk, vk.lib.vkBeginCommandBuffer(cb, vk.ffi.addressof(begin_info)))
         return cb
 
-    def begin_info(self, render_pass: Any, subpass: int, framebuffer: Any) -> Any:
-        """Begin info for secondaries inside `render_pass`/`subpass` (one per frame, shared); not
-        one-time: a frame recorded the same way again executes them again (render/frame_replay.py)."""
-        vk = self.device.vk
-        inheritance = vk.VkCommandBufferInheritanceInfo(
-            renderPass=render_pass, subpass=subpass, framebuffer=framebuffer
-        )
-        return vk.VkCommandBufferBeginInfo(
-            flags=vk.VK_COMMAND_BUFFER_USAGE_RENDER_PASS_CONTINUE_BIT,
-            pInheritanceInfo=inheritance,
-        )
-
     def begin_info_rendering(self, formats: AttachmentFormats) -> Any:
         """Begin info for secondaries executed inside a vkCmdBeginRendering (begun with
         VK_RENDERING_CONTENTS_SECONDARY_COMMAND_BUFFERS_BIT) over attachments of `formats`: no
         render pass or framebuffer, the formats inherited instead. One per formats, kept for the
-        life of these buffers (equal formats share it); not one-time, as `begin_info`."""
+        life of these buffers (equal formats share it); not one-time: a frame recorded the same
+        way again executes them again (render/frame_replay.py)."""
         kept = self._rendering_begins.get(formats)
         if kept is not None:
             return kept[0]

@@ -1,5 +1,5 @@
-"""Window target: surface format and present mode choice, the swapchain with its depth image and
-framebuffers, recreated on resize; acquire and present."""
+"""Window target: surface format and present mode choice, the swapchain with its images' views
+and the scene's attachments, recreated on resize; acquire and present."""
 
 from __future__ import annotations
 
@@ -9,10 +9,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import UsageError
-from .attachment import create_framebuffer
 from .functions import device_function, instance_function, raw_device_function
 from .memory import HOST, Buffer, Image
-from .render_pass import FORMS, SceneAttachments, TargetForm, create_target_passes
+from .render_pass import SceneAttachments, TargetForm
 
 if TYPE_CHECKING:
     from .device import Device
@@ -42,7 +41,6 @@ class Swapchain(TargetForm):
         self.device = device
         self.samples = samples  # MSAA of the scene's attachments
         self.form = "hdr" if hdr or samples > 1 else "direct"  # gpu/render_pass.py's FORMS
-        self.generation = 0  # counts changes of render pass (set_form)
         self.surface = surface
         self.framebuffer_size = framebuffer_size
         inst = device.instance
@@ -61,7 +59,6 @@ class Swapchain(TargetForm):
         chosen = srgb[0] if srgb else formats[0]
         self.color_format, self.color_space = chosen.format, chosen.colorSpace
         self.final_layout = vk.VK_IMAGE_LAYOUT_PRESENT_SRC_KHR
-        self.render_pass, self.gbuffer_pass = self._create_pass()
         self._create_fn = device_function(device, "vkCreateSwapchainKHR")
         self._destroy_fn = device_function(device, "vkDestroySwapchainKHR")
         self._images_fn = device_function(device, "vkGetSwapchainImagesKHR")
@@ -72,9 +69,10 @@ class Swapchain(TargetForm):
         self._index = vk.ffi.new("uint32_t*")
         self.handle = None
         self.views: list[Any] = []
-        self.framebuffers: list[Any] = []
+        # per image, what the renderer's `render` takes to draw into it (output_image): its index
+        self.framebuffers: list[int] = []
         self.render_finished: list[Any] = []
-        self.attachments: SceneAttachments | None = None
+        self._forms: dict[str, SceneAttachments] = {}  # the scene's attachments of each form used
         self.width = self.height = 0
         self.recreations = 0
         # screenshots: an image can be copied out when the surface allows TRANSFER_SRC
@@ -121,9 +119,7 @@ class Swapchain(TargetForm):
             self._destroy_fn(self.device.handle, old, None)
         self.width, self.height = width, height
         self.images = self._images_fn(self.device.handle, self.handle)
-        self.attachments = attachments = SceneAttachments(
-            self.device, width, height, self.samples, self.form, self.gbuffer_pass
-        )
+        self._forms = {self.form: self._attachments_for(self.form)}
         for image in self.images:
             view = vk.vkCreateImageView(
                 self.device.handle,
@@ -141,38 +137,33 @@ class Swapchain(TargetForm):
                 ),
                 None,
             )
+            self.framebuffers.append(len(self.views))
             self.views.append(view)
-            self.framebuffers.append(
-                create_framebuffer(self.device, self.render_pass, attachments.views(view), width, height)
-            )
             # one per image: a semaphore waited on by present is free again only once that image
             # is acquired again
             self.render_finished.append(vk.vkCreateSemaphore(self.device.handle, vk.VkSemaphoreCreateInfo(), None))
 
     def _release(self) -> None:
         vk = self.vk
-        for fb in self.framebuffers:
-            vk.vkDestroyFramebuffer(self.device.handle, fb, None)
         for view in self.views:
             vk.vkDestroyImageView(self.device.handle, view, None)
         for sem in self.render_finished:
             vk.vkDestroySemaphore(self.device.handle, sem, None)
         self.framebuffers, self.views, self.render_finished = [], [], []
-        if self.attachments is not None:
-            self.attachments.destroy()
-            self.attachments = None
+        self._release_forms()
+
+    def _attachments_for(self, form: str) -> SceneAttachments:
+        return SceneAttachments(self.device, self.width, self.height, self.samples, form)
 
     @property
     def hdr_image(self) -> Image | None:
         """The HDR colour the post effects and the tone map read (the resolved one with MSAA);
         None without HDR."""
-        assert self.attachments is not None
         return self.attachments.hdr_image
 
     @property
     def depth_image(self) -> Image | None:
         """The scene's single-sample depth the post effects sample (SceneAttachments.depth_image)."""
-        assert self.attachments is not None
         return self.attachments.depth_image
 
     @property
@@ -180,13 +171,9 @@ class Swapchain(TargetForm):
         image = self.hdr_image
         return image.view if image is not None else None
 
-    def output_image(self, framebuffer: Any) -> tuple[Any, Any]:
-        """The swapchain image a framebuffer of `framebuffers` draws (in the hdr and deferred
-        forms the framebuffers hold only the scene's attachments, alike but for this)."""
-        for index, made in enumerate(self.framebuffers):
-            if made == framebuffer:
-                return self.images[index], self.views[index]
-        raise ValueError("not a framebuffer of this swapchain")
+    def output_image(self, output: Any) -> tuple[Any, Any]:
+        """The swapchain image `output` (an entry of `framebuffers`: its index) and its view."""
+        return self.images[output], self.views[output]
 
     def present_mode_for(self, present: str) -> int:
         """The VkPresentModeKHR of a name; UsageError when the surface does not offer it."""
@@ -200,32 +187,6 @@ class Swapchain(TargetForm):
         self.present_mode = self.present_mode_for(present)
         self.present_name = present
         self.recreate()
-
-    def _create_pass(self, form: str | None = None) -> Any:
-        return create_target_passes(self.device, self.color_format, self.final_layout, self.samples, form or self.form)
-
-    def _destroy_passes(self) -> None:
-        for render_pass in (self.render_pass, self.gbuffer_pass):
-            if render_pass is not None:
-                self.vk.vkDestroyRenderPass(self.device.handle, render_pass, None)
-
-    def set_form(self, form: str) -> None:
-        """Render the scene through HDR colour and the tone map (`hdr`), with the opaque meshes
-        lit in compute first (`deferred`), or straight into the images (`direct`): new render
-        passes and framebuffers (waits until no frame uses the old ones). MSAA keeps `hdr`."""
-        if form not in FORMS:
-            raise ValueError(f"unknown target form {form!r}; forms: {', '.join(FORMS)}")
-        if self.samples > 1:
-            form = "hdr"
-        if form != self.form:
-            self.device.wait_idle()
-            passes = self._create_pass(form)  # first: if it fails, the old form stays whole
-            self._release()
-            self._destroy_passes()
-            self.render_pass, self.gbuffer_pass = passes
-            self.form = form
-            self._build()
-            self.generation += 1
 
     def recreate(self) -> None:
         self.device.wait_idle()
@@ -356,4 +317,3 @@ class Swapchain(TargetForm):
         if self.handle is not None:
             self._destroy_fn(self.device.handle, self.handle, None)
             self.handle = None
-        self._destroy_passes()

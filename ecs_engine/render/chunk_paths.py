@@ -35,6 +35,7 @@ from .layouts import (
     MESH_VERTEX,
 )
 from .path import FILL_MODES, ChunkResult, FrameInputs, PathContext, summed_counts
+from .path_pipelines import PipelinesPerTarget
 
 # The MESH_VERTEX fields mesh_vertex.glsl reads, at locations 0, 1, ...: only those are bound (an
 # attribute the shader does not read is a validation performance warning). The textured variants
@@ -65,8 +66,6 @@ def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str, blended: b
         vertex_shader = vertex_shader.replace(".vert", "_textured.vert")
     base = dict(
         layout=layout,
-        render_pass=ctx.render_pass,
-        subpass=0,
         vertex_stride=MESH_VERTEX.itemsize,
         vertex_attributes=vertex_attributes(ctx.device.vk, TEXTURED_VERTEX_INPUTS if textured else VERTEX_INPUTS),
         fragment_constants=(ctx.material_features,),  # mesh.frag's MATERIAL_FEATURES
@@ -116,7 +115,6 @@ def shadow_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple
     fragment = "shadow_cutout.frag" if cutout else None
     base = dict(
         layout=layout,
-        render_pass=ctx.render_pass,
         vertex_stride=MESH_VERTEX.itemsize,
         vertex_attributes=vertex_attributes(ctx.device.vk, ("position", "uv") if cutout else ("position",)),
         fragment_constants=(ctx.material_features,) if cutout else (),
@@ -200,7 +198,7 @@ def same_inputs(a: tuple[Any, ...] | None, b: tuple[Any, ...]) -> bool:
 
 class NativeRecorder:
     """The numba loop of gpu/native_recorder.py; its per-slot frame state lives with the target
-    (TargetState.path_state), so both are dropped together when the framebuffer goes."""
+    (TargetState.path_state), so both are dropped together when the output state goes."""
 
     def __init__(self, path: ChunkPath) -> None:
         self.path = path
@@ -257,7 +255,7 @@ def check_recorder(name: str) -> None:
     choice("recorder", name)  # UsageError naming the choices (config.Recorder: RECORDERS' names)
 
 
-class ChunkPath:
+class ChunkPath(PipelinesPerTarget):
     """A CPU-recorded path; subclasses say how a row reaches the vertex shader."""
 
     name: ClassVar[str]
@@ -276,7 +274,7 @@ class ChunkPath:
         push = [(vk.VK_SHADER_STAGE_VERTEX_BIT, 0, self.push_bytes)] if self.push_bytes else []
         self.layout = pipeline_layout(ctx.device, [ctx.frame_set_layout], push)
         try:
-            self.pipelines = mesh_pipelines(ctx, self.layout, self.vertex_shader)
+            self._first_pipelines()
         except BaseException:
             vk.vkDestroyPipelineLayout(ctx.device.handle, self.layout, None)
             raise
@@ -354,10 +352,11 @@ class ChunkPath:
         return summed_counts(results)
 
     def destroy(self) -> None:
-        device = self.ctx.device
-        for pipeline in self.pipelines:
-            self.vk.vkDestroyPipeline(device.handle, pipeline, None)
-        self.vk.vkDestroyPipelineLayout(device.handle, self.layout, None)
+        self._destroy_pipelines()
+        self.vk.vkDestroyPipelineLayout(self.ctx.device.handle, self.layout, None)
+
+    def _make_pipelines(self, ctx: PathContext) -> tuple[Any, Any]:
+        return mesh_pipelines(ctx, self.layout, self.vertex_shader)
 
 
 class InstancedPath(ChunkPath):

@@ -1,10 +1,10 @@
-"""Deferred lighting of the opaque meshes, in compute, between the target's two render passes
-(the deferred form, gpu/render_pass.py): the G-buffer pass (gpu/gbuffer.py) leaves depth, the HDR
+"""Deferred lighting of the opaque meshes, in compute, between the G-buffer's rendering and the
+scene's (the deferred form, gpu/render_pass.py): the G-buffer (gpu/gbuffer.py) leaves depth, the HDR
 colour with ambient and emissive, and per pixel normal, roughness, base colour, metallic and the
 material index; deferred_light.comp adds every light's term, the same light_term the forward
 fragment shader uses, walking the light grid of render/light_clusters.py per 16 x 16-pixel
 workgroup when there is one. Blended materials and materials with a fill of their own stay
-forward (set_aside_pass.py), drawn in the second render pass over the lit scene.
+forward (set_aside_pass.py), drawn in the scene's rendering over the lit scene.
 
 Why it exists: on the H100, fragment shaders run on the few graphics-capable units of the chip and
 compute shaders on all of it; the forward frame with 4,096 clustered lights took 3.97x the 6-light

@@ -19,7 +19,7 @@ What a recording depends on goes into the key; anything else makes the frame rec
   destroyed (a resized pool);
 - the path object (a switched mode or recorder, or pipelines made again, is a new path), the
   target's state object (both held and compared by identity: an id could be a freed object's),
-  its generation and swapchain remakes, the mesh registry's version (meshes added or replaced);
+  its form and swapchain remakes, the mesh registry's version (meshes added or replaced);
 - the counts and settings the primary records: billboards, light size, tone map and exposure,
   material features, the sky, the read-back, the clustered lights' grid, whether the shadow maps
   were cleared once, and the post effects' keys (which are on, their settings).
@@ -127,7 +127,7 @@ def replay_key(renderer: Any, target: Any, positional: int, grid: Any, light_cou
         renderer.device.objects_version,
         Same(renderer.path),
         Same(target),
-        form.generation,
+        form.form,
         getattr(form, "recreations", 0),
         renderer.meshes.version,  # meshes added or replaced: their buffers
         positional,

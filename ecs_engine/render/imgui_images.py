@@ -2,7 +2,7 @@
 editor's shadow map thumbnails (app/editor_lights.py). Each registered image view gets a
 descriptor set of the ImGui renderer's layout (imgui_pass.py: one combined image sampler) and an
 ImGui texture id; the image, its view and sampler stay the caller's, and must be in `layout`
-whenever the overlay draws (after the tone map, or in the direct form the scene pass's last subpass).
+whenever the overlay draws (after the tone map, or in the direct form its rendering after the scene's).
 
 A view may go away under a UI already built (the shadow maps are made anew, larger, between the
 editor's build and the overlay's draw): the caller passes `alive`, asked at the start of every

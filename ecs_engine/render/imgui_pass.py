@@ -3,9 +3,10 @@ Vulkan renderer, so this is one.
 
 Per frame: the draw lists' vertices and indices are copied (memmove from the addresses the
 bindings expose) into this frame slot's mapped buffers; after the tone map, in its dynamic
-rendering into the target (so the UI keeps its colours; in the direct form, in the scene pass's
-billboards subpass: gpu/render_pass.py's `overlay_pass`), each command is one indexed draw with
-its scissor and texture.
+rendering into the target (so the UI keeps its colours; in the direct form, in a rendering of
+its own that loads the target after the scene's), each command is one indexed draw with its
+scissor and texture. Either way it draws into the target's colour format alone, so its one
+pipeline serves every form of the target.
 Textures follow ImGui 1.92's protocol: the backend creates, updates and destroys them as
 `ImDrawData.textures` asks, and hands ImGui an id to put in its commands. Images the engine owns
 (the editor's shadow map thumbnails) are registered by view (`register_image`: imgui_images.py)
@@ -302,7 +303,7 @@ class ImGuiRenderer:
         return draws, push, lists, vbase, ibase
 
     def record(self, cb: Any, slot: int, width: int, height: int) -> None:
-        """Into the primary's overlay rendering or subpass (inline): one indexed draw per ImGui
+        """Into the primary's overlay rendering (inline): one indexed draw per ImGui
         command."""
         prepared = self._prepared.pop(slot, None)
         if not prepared or not prepared[0]:
@@ -333,19 +334,16 @@ class ImGuiRenderer:
         self.cpu_ms += (time.perf_counter() - t0) * 1e3
 
     def _pipeline(self, target: Any) -> Any:
-        """For the target's overlay pass: a render pass's subpass, or dynamic rendering into its
-        colour format."""
+        """For dynamic rendering into the target's colour format."""
         vk = self.vk
-        render_pass, subpass = target.overlay_pass
         return graphics_pipeline(
             self.device,
             GraphicsPipelineSpec(
                 "imgui.vert",
                 "imgui.frag",
                 layout=self.layout,
-                render_pass=render_pass,
-                subpass=subpass,
-                color_formats=(target.color_format,) if render_pass is None else (),
+                render_pass=None,
+                color_formats=(target.color_format,),
                 vertex_stride=VERTEX_BYTES,
                 vertex_attributes=[
                     (0, vk.VK_FORMAT_R32G32_SFLOAT, 0),
@@ -359,9 +357,9 @@ class ImGuiRenderer:
             ),
         )
 
-    def retarget(self, target: Any) -> None:
-        """Draw where the target's overlay now goes (it changed form: gpu/render_pass.py), or
-        with shaders made again; the old pipeline stays if the new one cannot be made."""
+    def rebuild(self, target: Any) -> None:
+        """The pipeline made again from the shader files (hot reload; the caller waited for the
+        device); the old one stays if the new one cannot be made."""
         pipeline = self._pipeline(target)
         old, self.pipeline = self.pipeline, pipeline
         self.vk.vkDestroyPipeline(self.device.handle, old, None)

@@ -62,9 +62,10 @@ from .layouts import (
 from .mesh_registry import MergedMeshes
 from .occlusion import OcclusionPasses
 from .path import ChunkResult, FrameInputs, MeshBounds, PathContext
+from .path_pipelines import PipelinesPerTarget
 
 
-class IndirectPath:
+class IndirectPath(PipelinesPerTarget):
     name = "indirect"
     recorder = "gpu"
     uses_recorder = False  # compute shaders write the draws
@@ -92,7 +93,7 @@ class IndirectPath:
         sets = [ctx.frame_set_layout, self.set_layout.handle]
         self.layout = pipeline_layout(device, sets)
         self.compute_layout = pipeline_layout(device, sets, [(vk.VK_SHADER_STAGE_COMPUTE_BIT, 0, CULL_PUSH.size)])
-        self.pipelines = mesh_pipelines(ctx, self.layout, "mesh_indirect.vert")
+        self._first_pipelines()
         self.cull = compute_pipeline(device, "cull.comp", self.compute_layout)
         self.compact = compute_pipeline(device, "compact.comp", self.compute_layout)
         self.max_groups = int(device.limits.maxComputeWorkGroupCount[0])
@@ -179,7 +180,7 @@ class IndirectPath:
         return ChunkResult(None, 0, 0, 0, key_counts)
 
     def finish(self, cb: Any, frame: FrameInputs, results: list[ChunkResult], candidates: int) -> list[Any]:
-        """The compute passes into the primary (before the render pass) and the one secondary
+        """The compute passes into the primary (before the scene's rendering) and the one secondary
         that draws what they wrote."""
         key_counts = np.zeros(2 * len(frame.bounds[2]), dtype=np.int64)  # the meshes' keys: rows as written
         for r in results:
@@ -263,7 +264,7 @@ class IndirectPath:
         merged: MergedMeshes,
         capacity: np.ndarray,
     ) -> None:
-        """Into the primary, before the render pass: zero the counters, cull (with occlusion
+        """Into the primary, before the scene's rendering: zero the counters, cull (with occlusion
         culling: its early pass, depth and pyramid first, occlusion.py), write commands, and copy
         the counters where the CPU can read them. `capacity`: per key of every draw mesh (levels
         of detail too), as key_capacities gives it."""
@@ -353,6 +354,9 @@ class IndirectPath:
         f = self.frames[slot]
         record_indirect_draws(self.vk, cb, self.pipelines, merged, key_counts, f.commands, f.state, self._offsets)
 
+    def _make_pipelines(self, ctx: PathContext) -> tuple[Any, Any]:
+        return mesh_pipelines(ctx, self.layout, "mesh_indirect.vert")
+
     def destroy(self) -> None:
         """Also for a path half built (its constructor failed): what exists goes."""
         vk = self.vk
@@ -364,7 +368,9 @@ class IndirectPath:
         if self.__dict__.get("occlusion") is not None:
             self.occlusion.destroy()  # type: ignore[union-attr]
             self.occlusion = None
-        for name in ("pipelines", "cull", "compact"):
+        if "layout" in self.__dict__:
+            self._destroy_pipelines()
+        for name in ("cull", "compact"):
             made = self.__dict__.pop(name, None)
             for pipeline in made if isinstance(made, tuple) else (made,) if made is not None else ():
                 vk.vkDestroyPipeline(handle, pipeline, None)

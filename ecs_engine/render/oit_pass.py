@@ -12,8 +12,8 @@ close for layers of similar colour, nearer layers weighing more).
 It runs in the deferred form, where the opaque depth exists before the target's pass: after the
 lighting dispatch, a pass of its own draws the blended rows (mesh_*_oit.frag, the "weighted"
 blend, gpu/pipeline.py) into the two targets against the G-buffer's depth (read-only, no
-writes); the composite (oit_composite.frag) is the last draw of the target pass's first subpass,
-after the sky and the other set-aside rows.
+writes); the composite (oit_composite.frag) is the last secondary of the scene's rendering
+before the billboards, after the sky and the other set-aside rows.
 
 Known limit: blended surfaces are depth-tested against the G-buffer's opaque meshes only, not
 against the rows drawn forward after the lighting (mirroring, wireframe and point materials),
@@ -25,65 +25,21 @@ from __future__ import annotations
 from typing import Any
 
 from ..gpu.array_image import clamped_sampler
-from ..gpu.attachment import attachment, create_framebuffer, make_render_pass
 from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_images
 from ..gpu.device import Device
 from ..gpu.memory import Image
-from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
+from ..gpu.pipeline import AttachmentFormats, GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
 from ..gpu.render_pass import DEPTH_FORMAT_NAME
+from ..gpu.rendering import Attachment, Rendering, clear_color
 from ..gpu.secondary import SecondaryBuffers
 from .config import Transparency
 from .path import TargetState
+from .scene_barriers import oit_barriers
 from .sky_pass import full_screen_secondary
 
 ACCUMULATION_FORMAT = "VK_FORMAT_R16G16B16A16_SFLOAT"
 REVEALAGE_FORMAT = "VK_FORMAT_R16_SFLOAT"
 TRANSPARENCY_MODES = Transparency.names()
-
-
-def create_oit_pass(device: Device) -> Any:
-    """Accumulation (cleared to 0), revealage (cleared to 1), both read by the composite after
-    the pass; depth loaded and kept read-only (the G-buffer's, as the lighting left it)."""
-    vk = device.vk
-    clear, load, store = vk.VK_ATTACHMENT_LOAD_OP_CLEAR, vk.VK_ATTACHMENT_LOAD_OP_LOAD, vk.VK_ATTACHMENT_STORE_OP_STORE
-    read = vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
-    depth_read = vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL
-    attachments = [
-        attachment(vk, getattr(vk, ACCUMULATION_FORMAT), 1, clear, store, read),
-        attachment(vk, getattr(vk, REVEALAGE_FORMAT), 1, clear, store, read),
-        attachment(vk, getattr(vk, DEPTH_FORMAT_NAME), 1, load, store, depth_read, depth_read),
-    ]
-    color = vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL
-    subpass = vk.VkSubpassDescription(
-        pipelineBindPoint=vk.VK_PIPELINE_BIND_POINT_GRAPHICS,
-        pColorAttachments=[vk.VkAttachmentReference(attachment=k, layout=color) for k in (0, 1)],
-        pDepthStencilAttachment=vk.VkAttachmentReference(attachment=2, layout=depth_read),
-    )
-    color_stage = vk.VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT
-    fragment = vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT
-    tests = vk.VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT | vk.VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT
-    dependencies = [
-        # the G-buffer's depth and the lighting before the tests; last frame's composite reads
-        # before this frame's clears
-        vk.VkSubpassDependency(
-            srcSubpass=vk.VK_SUBPASS_EXTERNAL,
-            dstSubpass=0,
-            srcStageMask=tests | vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | fragment,
-            dstStageMask=tests | color_stage,
-            srcAccessMask=vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
-            dstAccessMask=vk.VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT | vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
-        ),
-        # the two targets before the composite samples them
-        vk.VkSubpassDependency(
-            srcSubpass=0,
-            dstSubpass=vk.VK_SUBPASS_EXTERNAL,
-            srcStageMask=color_stage,
-            dstStageMask=fragment,
-            srcAccessMask=vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
-            dstAccessMask=vk.VK_ACCESS_SHADER_READ_BIT,
-        ),
-    ]
-    return make_render_pass(device, attachments, [subpass], dependencies)
 
 
 class WeightedTransparency:
@@ -92,7 +48,9 @@ class WeightedTransparency:
     def __init__(self, device: Device, secondaries: SecondaryBuffers) -> None:
         self.device, self.vk, self.secondaries = device, device.vk, secondaries
         vk = self.vk
-        self.render_pass = create_oit_pass(device)
+        # the accumulation pass's attachments: the two targets and depth (read-only), one sample
+        colors = (getattr(vk, ACCUMULATION_FORMAT), getattr(vk, REVEALAGE_FORMAT))
+        self.formats = AttachmentFormats(colors, getattr(vk, DEPTH_FORMAT_NAME), 1)
         self.sampler = clamped_sampler(device, max_lod=0.0)
         sampler = vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
         self.set_layout = DescriptorSetLayout(device, [(b, sampler, vk.VK_SHADER_STAGE_FRAGMENT_BIT) for b in (0, 1)])
@@ -100,17 +58,17 @@ class WeightedTransparency:
         self.descriptor_set = self.pool.allocate(self.set_layout)
         self.set_array = vk.ffi.new("VkDescriptorSet[1]", [self.descriptor_set])
         self.layout = pipeline_layout(device, [self.set_layout.handle])
-        self.composite: Any = None  # made against the target's pass on first use
-        self._composite_pass: Any = None
+        self.composites: dict[AttachmentFormats, Any] = {}  # per formats of the scene it is drawn over
         self.images: list[Image] = []
-        self.framebuffer: Any = None
+        self._rendering: Any = None  # (Rendering, barrier before, barrier after) for the images
         self._made_for: tuple[Any, int, int] | None = None
         self.state: TargetState | None = None
 
-    def ensure(self, depth_view: Any, width: int, height: int) -> None:
-        """Targets, framebuffer and begin infos for a target of this size and depth (made again
-        when either changes: the caller's frames in flight are waited for)."""
-        key = (depth_view, width, height)
+    def ensure(self, depth: Any, width: int, height: int) -> None:
+        """Targets, rendering and begin infos for a target of this size and depth (made again
+        when either changes: the caller's frames in flight are waited for). `depth` is the
+        target's depth Image (gpu/memory.py)."""
+        key = (depth.view, width, height)
         if self._made_for == key:
             return
         vk = self.vk
@@ -120,66 +78,67 @@ class WeightedTransparency:
         aspect = vk.VK_IMAGE_ASPECT_COLOR_BIT
         for fmt in (ACCUMULATION_FORMAT, REVEALAGE_FORMAT):
             self.images.append(Image(self.device, width, height, getattr(vk, fmt), color, aspect))
-        views = [image.view for image in self.images] + [depth_view]
-        self.framebuffer = create_framebuffer(self.device, self.render_pass, views, width, height)
         read = vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
         for binding, image in enumerate(self.images):
             info = vk.VkDescriptorImageInfo(sampler=self.sampler, imageView=image.view, imageLayout=read)
             write_images(self.device, self.descriptor_set, binding, [info])
-        state = TargetState.make(
+        self.state = TargetState.make(
             vk,
-            (int(vk.ffi.cast("uintptr_t", self.framebuffer)), width, height),
-            self.framebuffer,
-            self.render_pass,
-            self.secondaries.begin_info(self.render_pass, 0, self.framebuffer),
+            (int(vk.ffi.cast("uintptr_t", self.images[0].view)), width, height),
+            None,  # dynamic rendering: no framebuffer or render pass (accumulate)
+            None,
+            self.secondaries.begin_info_rendering(self.formats),
             (0.0, 0.0, 0.0),
         )
-        # clear values in attachment order: accumulation 0, revealage 1 (depth is loaded)
-        zero = vk.VkClearValue(color=vk.VkClearColorValue(float32=[0.0, 0.0, 0.0, 0.0]))
-        one = vk.VkClearValue(color=vk.VkClearColorValue(float32=[1.0, 1.0, 1.0, 1.0]))
-        clears = [zero, one, zero]
-        begin = vk.VkRenderPassBeginInfo(
-            renderPass=self.render_pass, framebuffer=self.framebuffer, renderArea=state.area, pClearValues=clears
-        )
-        state.keep += [clears, begin]
-        state.pass_begin_ptr = vk.ffi.addressof(begin)
-        self.state = state
+        # accumulation cleared to 0, revealage to 1; depth loaded, read-only (the lighting's layout)
+        color = vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL
+        targets = [
+            Attachment(image.view, color, clear=clear_color(vk, (value,) * 4))
+            for image, value in zip(self.images, (0.0, 1.0), strict=True)
+        ]
+        read_only = Attachment(depth.view, vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL, load="LOAD")
+        rendering = Rendering(vk, width, height, targets, read_only)
+        self._rendering = (rendering, *oit_barriers(vk, [image.handle for image in self.images], depth.handle))
         self._made_for = key
 
     def accumulate(self, cb: Any, secondary: Any) -> None:
-        """The blended rows' secondary (recorded with `state.secondary_begin`) in the pass."""
-        assert self.state is not None
+        """The blended rows' secondary (recorded with `state.secondary_begin`) in the pass, with
+        the barriers its render pass's dependencies were (render/scene_barriers.py)."""
+        assert self._rendering is not None
         vk = self.vk
-        vk.lib.vkCmdBeginRenderPass(cb, self.state.pass_begin_ptr, vk.VK_SUBPASS_CONTENTS_SECONDARY_COMMAND_BUFFERS)
-        vk.lib.vkCmdExecuteCommands(cb, 1, vk.ffi.new("VkCommandBuffer[]", [secondary]))
-        vk.lib.vkCmdEndRenderPass(cb)
+        lib = vk.lib
+        rendering, before, after = self._rendering
+        lib.vkCmdPipelineBarrier2(cb, before.ptr)
+        lib.vkCmdBeginRendering(cb, rendering.ptr)
+        lib.vkCmdExecuteCommands(cb, 1, vk.ffi.new("VkCommandBuffer[]", [secondary]))
+        lib.vkCmdEndRendering(cb)
+        lib.vkCmdPipelineBarrier2(cb, after.ptr)
 
-    def record_composite(self, target_pass: Any, state: TargetState, slot: int) -> Any:
-        """The composite's secondary in the target pass's first subpass (after the set-aside rows)."""
-        if self.composite is None or self._composite_pass != target_pass:
-            self._destroy_composite()
+    def record_composite(self, formats: AttachmentFormats, state: TargetState, slot: int) -> Any:
+        """The composite's secondary in the scene's rendering (attachments of `formats`), after the
+        set-aside rows."""
+        composite = self.composites.get(formats)
+        if composite is None:
             spec = GraphicsPipelineSpec(
                 "tonemap.vert",  # one triangle over the screen
                 "oit_composite.frag",
                 layout=self.layout,
-                render_pass=target_pass,
                 cull_back=False,
                 depth_test=False,
                 depth_write=False,
                 blend="composite",
+                **formats.spec_kwargs(),
             )
-            self.composite, self._composite_pass = graphics_pipeline(self.device, spec), target_pass
-        return full_screen_secondary(self.secondaries, slot, state, self.composite, self.layout, self.set_array)
+            composite = self.composites[formats] = graphics_pipeline(self.device, spec)
+        return full_screen_secondary(self.secondaries, slot, state, composite, self.layout, self.set_array)
 
-    def _destroy_composite(self) -> None:
-        if self.composite is not None:
-            self.vk.vkDestroyPipeline(self.device.handle, self.composite, None)
-            self.composite = None
+    def forget_composites(self) -> None:
+        for composite in self.composites.values():
+            self.vk.vkDestroyPipeline(self.device.handle, composite, None)
+        self.composites = {}
 
     def _release_targets(self) -> None:
-        if self.framebuffer is not None:
-            self.vk.vkDestroyFramebuffer(self.device.handle, self.framebuffer, None)
-            self.framebuffer = None
+        self._rendering = None
         for image in self.images:
             image.destroy()
         self.images = []
@@ -188,9 +147,8 @@ class WeightedTransparency:
     def destroy(self) -> None:
         vk, handle = self.vk, self.device.handle
         self._release_targets()
-        self._destroy_composite()
+        self.forget_composites()
         vk.vkDestroyPipelineLayout(handle, self.layout, None)
         self.pool.destroy()
         self.set_layout.destroy()
         vk.vkDestroySampler(handle, self.sampler, None)
-        vk.vkDestroyRenderPass(handle, self.render_pass, None)

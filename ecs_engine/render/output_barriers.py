@@ -1,6 +1,6 @@
 """The target image's layout transitions around the output rendering (render/output_passes.py:
 the tone map and the overlay drawn with vkCmdBeginRendering into the swapchain or offscreen
-image), as explicit vkCmdPipelineBarrier2 calls. The scene's render pass no longer touches the
+image), as explicit vkCmdPipelineBarrier2 calls. The scene's rendering does not touch the
 target in the hdr and deferred forms, so nothing else moves the image between "whatever the last
 frame or the presentation engine left" and the layout its reader wants (readback: TRANSFER_SRC;
 present: PRESENT_SRC). The renderer's frame graph is to take these over: they are kept here, in

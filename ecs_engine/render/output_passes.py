@@ -1,24 +1,26 @@
 """What the frame's primary command buffer records around the render path's secondaries, by the
-target's form (gpu/render_pass.py's FORMS):
+target's form (gpu/render_pass.py's FORMS), every drawing a dynamic rendering (vkCmdBeginRendering,
+render/scene_renderings.py) between explicit barriers (render/scene_barriers.py):
 
-- `direct`: the target's render pass: the chunks', the sky's (sky_pass.py) and the set-aside
-  rows' secondaries in subpass 0, the light billboards (light_pass.py) and then the overlay (the
-  editor's ImGui) in subpass 1;
-- `hdr`: the scene's render pass into the HDR colour as above (subpass 0 the secondaries, subpass
-  1 the billboards, the MSAA resolve at its end), which leaves the HDR colour in
+- `direct`: the scene's rendering into the target: the chunks', the sky's (sky_pass.py), the
+  set-aside rows' and the light billboards' (light_pass.py) secondaries; then the overlay (the
+  editor's ImGui) in a rendering of its own that loads the target (its one pipeline, made for the
+  target's format, serves every form: no pipeline follows a change of form), and the barrier to
+  the target's final layout (readback or present);
+- `hdr`: the scene's rendering into the HDR colour as above (with MSAA resolved at its end),
+  then the barrier that leaves the HDR colour (and single-sample depth) in
   SHADER_READ_ONLY_OPTIMAL; then the post effects (`post`); then the target image's barrier
-  (output_barriers.py), a dynamic rendering (vkCmdBeginRendering) into the target image with the
-  tone map (tone_map.py, sampling the HDR colour) and the overlay, and the barrier to the
-  target's final layout (readback or present);
-- `deferred`: the G-buffer pass with the chunks' secondaries (gpu/gbuffer.py), the lighting
-  compute pass (deferred_pass.py), then as `hdr` with the sky and the set-aside rows alone in
-  subpass 0.
+  (output_barriers.py), a rendering into the target image with the tone map (tone_map.py,
+  sampling the HDR colour) and the overlay, and the barrier to the target's final layout;
+- `deferred`: the G-buffer rendering with the chunks' secondaries (gpu/gbuffer.py), the lighting
+  compute pass (deferred_pass.py), then as `hdr` with the sky, the set-aside rows and the
+  billboards alone in the scene's rendering.
 
 Post effects go in `OutputPasses.post`: callables `post(cb, inputs)` (inputs: the frame's
 post/inputs.py PostInputs: the target's single-sample HDR colour, a gpu/memory.py Image with
 `handle`, `view`, `format`, `width`, `height`, sampled and, where the device can, storage usage;
 the scene's single-sample depth (None with MSAA); the extent; the camera's projection), called in
-order after the scene's render pass and before the tone map, in the hdr and deferred forms only
+order after the scene's rendering and before the tone map, in the hdr and deferred forms only
 (the direct form has no HDR colour). Each finds the images in SHADER_READ_ONLY_OPTIMAL, the
 scene's writes visible to fragment and compute shaders, and must leave them so, its own writes
 made visible to the tone map's fragment-shader reads (its own barriers, until the renderer's frame
@@ -31,12 +33,12 @@ writes an intermediate image, the effects write the target and the overlay draws
 small frame graph (output_ldr.py) that places the target's barriers itself.
 
 With `mark` (gpu/frames.py's FrameRing.mark, while passes are timed) each pass's end is marked
-with its name; a subpass whose contents are secondaries cannot hold a timestamp, so the target's
-pass is marked at its subpass changes and its end.
+with its name; a rendering whose contents are secondaries cannot hold a timestamp, so the scene's
+(billboards included) is marked once, at its end.
 
-It also keeps, per framebuffer, the structs a frame needs (path.TargetState, and the output's
-rendering info and barriers), and remakes what was made against the target's render pass when
-the target changes form.
+It also keeps, per output image and form, the structs a frame needs (path.TargetState, and the
+output's rendering info and barriers); pipelines are made per AttachmentFormats, so a change of
+form remakes nothing and waits for nothing.
 """
 
 from __future__ import annotations
@@ -46,7 +48,6 @@ from collections.abc import Callable
 from typing import Any
 
 from ..gpu.device import Device
-from ..gpu.render_pass import SUBPASS_BILLBOARDS
 from ..gpu.secondary import SecondaryBuffers
 from .deferred_pass import DeferredPass
 from .light_pass import LightPass
@@ -55,6 +56,7 @@ from .output_barriers import OutputBarriers
 from .output_ldr import LdrOutput
 from .path import TargetState
 from .post.inputs import PostInputs
+from .scene_renderings import scene_state
 from .sky_pass import SkyPass
 from .tone_map import ToneMapPass
 
@@ -66,10 +68,10 @@ PostPass = Callable[[Any, PostInputs], None]
 
 class OutputRendering:
     """The tone map's and the overlay's dynamic rendering into one target image (its view written
-    whole, so not loaded) and that image's barriers, made once per framebuffer."""
+    whole, so not loaded) and that image's barriers, made once per output image."""
 
-    def __init__(self, vk: Any, target: Any, framebuffer: Any, area: Any) -> None:
-        image, view = target.output_image(framebuffer)
+    def __init__(self, vk: Any, target: Any, output: Any, area: Any) -> None:
+        image, view = target.output_image(output)
         self.image, self.view = image, view  # the ldr stage's graph imports them (output_ldr.py)
         self.barriers = OutputBarriers(vk, image, target.final_layout)
         color = vk.VkRenderingAttachmentInfo(
@@ -99,9 +101,7 @@ class OutputPasses:
         self.target = target
         self.secondaries = secondaries
         self.clear_color = clear_color
-        self.light_pass = LightPass(
-            device, frame_set_layout, target.render_pass, SUBPASS_BILLBOARDS, light_size, target.samples
-        )
+        self.light_pass = LightPass(device, frame_set_layout, secondaries, light_size)
         self.tone_map_pass: ToneMapPass | None = None
         self.deferred: DeferredPass | None = None
         self.sky: SkyPass | None = None
@@ -114,62 +114,50 @@ class OutputPasses:
         try:
             self.tone_map_pass = ToneMapPass(device, target.color_format)
             self.deferred = DeferredPass(device, frame_set_layout)
-            self.sky = SkyPass(device, frame_set_layout, secondaries, target)
+            self.sky = SkyPass(device, frame_set_layout, secondaries)
         except BaseException:
             self.destroy()
             raise
-        self._targets: dict[tuple[tuple[int, int, int], int], tuple[TargetState, OutputRendering | None]] = {}
-        # target_state's last answer: framebuffer, G-buffer framebuffer, size, state, rendering
-        self._last: tuple[Any, Any, Any, TargetState | None, OutputRendering | None] = (None,) * 5
+        # per (output, form, width, height): the frame's structs (see target_state)
+        self._targets: dict[tuple[Any, str, int, int], tuple[TargetState, OutputRendering | None, Any]] = {}
+        # target_state's last answer: its key, state, output rendering, the scene's formats
+        self._last: tuple[Any, TargetState | None, OutputRendering | None, Any] = (None,) * 4
         self._recreations = getattr(target, "recreations", 0)  # the swapchain's, when _targets were made
 
     def target_state(self, framebuffer: Any, width: int, height: int) -> TargetState:
-        """What a framebuffer of this size needs per frame, made once (kept for 16 framebuffers)."""
-        vk = self.vk
+        """What drawing into the target's output `framebuffer` (one of its images: output_image)
+        at this size in its current form needs per frame, made once (kept for 16 of them)."""
         target = self.target
-        # in the deferred form the G-buffer's framebuffer too: a swapchain remade at the same size
-        # may hand the new framebuffers the old handle values, but not necessarily both
-        gbuffer_fb = target.attachments.gbuffer.framebuffer if target.form == "deferred" else None
+        key = (framebuffer, target.form, width, height)
         recreations = getattr(target, "recreations", 0)
-        if recreations != self._recreations:  # new swapchain images: a framebuffer handle value
-            self._targets.clear()  # may come back, drawing another image (OutputRendering)
-            self._last = (None,) * 5
+        if recreations != self._recreations:  # new swapchain images and attachments, maybe at the same size
+            self._targets.clear()
+            self._last = (None,) * 4
             self._recreations = recreations
         last = self._last
-        if last[0] is framebuffer and last[1] is gbuffer_fb and last[2] == (width, height) and last[3] is not None:
-            return last[3]  # the same framebuffer objects as the last frame's (offscreen: every frame)
-        key = (int(vk.ffi.cast("uintptr_t", framebuffer)), width, height)
-        cache_key = (key, int(vk.ffi.cast("uintptr_t", gbuffer_fb)) if gbuffer_fb is not None else 0)
-        made = self._targets.get(cache_key)
+        if last[0] == key and last[1] is not None:
+            return last[1]  # the same output and form as the last frame's (offscreen: every frame)
+        made = self._targets.get(key)
         if made is None:
-            if len(self._targets) > 16:  # swapchains come and go: drop the old framebuffers' entries
+            if len(self._targets) > 16:  # swapchains come and go: drop the old outputs' entries
                 self._targets.clear()
-            gbuffer = None
-            if gbuffer_fb is not None:
-                gbuffer = (
-                    target.gbuffer_pass,
-                    gbuffer_fb,
-                    self.secondaries.begin_info(target.gbuffer_pass, 0, gbuffer_fb),
-                )
-            state = TargetState.make(
-                vk,
-                key,
-                framebuffer,
-                target.render_pass,
-                self.secondaries.begin_info(target.render_pass, 0, framebuffer),
-                self.clear_color,
-                gbuffer,
-            )
+            vk = self.vk
+            state, formats = scene_state(vk, target, framebuffer, width, height, self.clear_color, self.secondaries)
             rendering = OutputRendering(vk, target, framebuffer, state.area) if target.hdr else None
-            made = self._targets[cache_key] = (state, rendering)
-        self._last = (framebuffer, gbuffer_fb, (width, height), *made)
+            made = self._targets[key] = (state, rendering, formats)
+        self._last = (key, *made)
         return made[0]
+
+    @property
+    def formats(self) -> Any:
+        """The scene's rendering's AttachmentFormats for the last target_state's form."""
+        return self._last[3]
 
     def _rendering(self, state: TargetState) -> OutputRendering:
         """The output rendering made with `state` (target_state's answer for this frame)."""
-        if self._last[3] is state and self._last[4] is not None:
-            return self._last[4]
-        for made, rendering in self._targets.values():
+        if self._last[1] is state and self._last[2] is not None:
+            return self._last[2]
+        for made, rendering, _ in self._targets.values():
             if made is state and rendering is not None:
                 return rendering
         raise ValueError("a target state this output did not make, or made for the direct form")
@@ -187,27 +175,24 @@ class OutputPasses:
             return None
         if self.oit is None:
             self.oit = WeightedTransparency(self.device, self.secondaries)
-        self.oit.ensure(target.attachments.depth_view, target.width, target.height)
+        self.oit.ensure(target.attachments.images[0], target.width, target.height)
         return self.oit
 
     def forget_path_state(self) -> None:
         """Drop what the old render path kept per target (its recorder's frame states)."""
-        for state, _ in self._targets.values():
+        for state, _, _ in self._targets.values():
             state.path_state.clear()
 
-    def retarget(self) -> None:
-        """The target's render pass changed (the caller waited for the device): make again what
-        was made against the old one."""
-        assert self.tone_map_pass is not None
-        self.light_pass.retarget(self.target.render_pass)
-        assert self.sky is not None
-        self.sky.retarget()
-        self.tone_map_pass.destroy()  # its descriptor sets name the old HDR views
-        if self.ldr is not None:  # its graph is made again for the new target at the next frame
-            self.ldr.destroy()
+    def forget_pipelines(self) -> None:
+        """Pipelines made again from the shader files on next use (hot reload; the caller waited
+        for the device): the billboards', sky's, composite's and tone map's."""
+        assert self.tone_map_pass is not None and self.sky is not None
+        self.light_pass.forget_pipelines()
+        self.sky.forget_pipelines()
+        if self.oit is not None:
+            self.oit.forget_composites()
+        self.tone_map_pass.destroy()
         self.tone_map_pass = ToneMapPass(self.device, self.target.color_format)
-        self._targets.clear()  # their begin infos name the old render passes and framebuffers
-        self._last = (None,) * 5
 
     def record(
         self,
@@ -235,12 +220,15 @@ class OutputPasses:
         lib = vk.lib
         target = self.target
         secondaries = chunks
-        if state.gbuffer_begin_ptr is not None:
+        if state.gbuffer_ptrs is not None:
             assert self.deferred is not None
-            lib.vkCmdBeginRenderPass(cb, state.gbuffer_begin_ptr, vk.VK_SUBPASS_CONTENTS_SECONDARY_COMMAND_BUFFERS)
+            rendering, before, after = state.gbuffer_ptrs
+            lib.vkCmdPipelineBarrier2(cb, before)
+            lib.vkCmdBeginRendering(cb, rendering)
             if chunks:
                 lib.vkCmdExecuteCommands(cb, len(chunks), vk.ffi.new("VkCommandBuffer[]", chunks))
-            lib.vkCmdEndRenderPass(cb)
+            lib.vkCmdEndRendering(cb)
+            lib.vkCmdPipelineBarrier2(cb, after)
             if mark is not None:
                 mark("g-buffer")
             extent = state.area.extent
@@ -259,35 +247,39 @@ class OutputPasses:
                 if mark is not None:
                     mark("transparency (accumulate)")
             secondaries = []
+        formats = self.formats  # the scene rendering's, in this frame's form (target_state)
         if sky:  # after the opaque chunks, before the blended rows
             assert self.sky is not None
-            secondaries = [*secondaries, self.sky.record(state, frame_set, slot)]
+            secondaries = [*secondaries, self.sky.record(state, frame_set, slot, formats)]
         if aside is not None:
             secondaries = [*secondaries, aside]  # after every chunk's rows
         if transparent is not None:  # the weighted transparency over all of it
             assert self.oit is not None
-            secondaries = [*secondaries, self.oit.record_composite(target.render_pass, state, slot)]
-        lib.vkCmdBeginRenderPass(cb, state.pass_begin_ptr, vk.VK_SUBPASS_CONTENTS_SECONDARY_COMMAND_BUFFERS)
+            secondaries = [*secondaries, self.oit.record_composite(formats, state, slot)]
+        lights, draws = self.light_pass.record(slot, state, formats, frame_set, billboards)
+        if lights is not None:  # last, depth-tested against everything, blended over it
+            secondaries = [*secondaries, lights]
+        assert state.scene_ptrs is not None
+        rendering, before, after = state.scene_ptrs
+        lib.vkCmdPipelineBarrier2(cb, before)
+        lib.vkCmdBeginRendering(cb, rendering)
         if secondaries:
             lib.vkCmdExecuteCommands(cb, len(secondaries), vk.ffi.new("VkCommandBuffer[]", secondaries))
-        lib.vkCmdNextSubpass(cb, vk.VK_SUBPASS_CONTENTS_INLINE)
-        if mark is not None:
-            mark("forward" if state.gbuffer_begin_ptr is None else "sky and blended")
-        draws = self.light_pass.record(cb, state, frame_set, billboards)
-        if not target.hdr:  # the direct form: the overlay follows the billboards in their subpass
-            last = "billboards"
-            if overlay is not None:
-                if mark is not None:
-                    mark(last)
+        lib.vkCmdEndRendering(cb)  # with MSAA: the resolve
+        if mark is not None:  # one mark: a rendering of secondaries holds no timestamp
+            mark("forward" if state.gbuffer_ptrs is None else "sky and blended")
+        if not target.hdr:  # the direct form: the overlay in a rendering of its own, over the scene
+            if overlay is not None and state.overlay_ptrs is not None:
+                barrier, overlay_rendering = state.overlay_ptrs
+                lib.vkCmdPipelineBarrier2(cb, barrier)
+                lib.vkCmdBeginRendering(cb, overlay_rendering)
                 overlay.record(cb, slot, state.area.extent.width, state.area.extent.height)
-                last = "imgui"
-            lib.vkCmdEndRenderPass(cb)
-            if mark is not None:
-                mark(last)  # with the render pass's end: its resolves and stores
+                lib.vkCmdEndRendering(cb)
+                if mark is not None:
+                    mark("imgui")
+            lib.vkCmdPipelineBarrier2(cb, after)  # the target to its final layout
             return draws
-        lib.vkCmdEndRenderPass(cb)
-        if mark is not None:
-            mark("billboards")  # with the render pass's end: the resolve and stores
+        lib.vkCmdPipelineBarrier2(cb, after)  # the HDR colour and depth to the post effects' layout
         if self.post:
             inputs = self.inputs
             if inputs is None or inputs.hdr is not target.hdr_image:

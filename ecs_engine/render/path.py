@@ -10,7 +10,7 @@ Per frame:
 2. `record_chunk(chunk, frame)` for every chunk, on the worker pool (cull, write rows, record a
    secondary command buffer, or only write rows);
 3. `finish(cb, frame, results, candidates)` on the main thread: commands for the primary before the render
-   pass (compute), and the secondaries to execute in the mesh subpass;
+   pass (compute), and the secondaries to execute in the scene's (or G-buffer's) rendering;
 4. after submit, `counts(frame, results)`: draws, visible rows and triangles.
 """
 
@@ -26,7 +26,6 @@ from ..gpu.device import Device
 from ..gpu.pipeline import AttachmentFormats
 from ..gpu.secondary import SecondaryBuffers
 from .frame_data import Chunk, FrameData
-from .layouts import NO_MATERIAL
 from .mesh_registry import MeshRegistry
 
 #: --fill: name -> VkPolygonMode (wireframe and points need the device's fillModeNonSolid)
@@ -37,20 +36,23 @@ MeshBounds = tuple[np.ndarray, np.ndarray, np.ndarray]  # per mesh: centre (n, 3
 
 @dataclass
 class TargetState:
-    """Structs that depend only on the framebuffer and its size, built once: each binding struct
-    costs microseconds of Python, and a small scene's whole frame budget is 250 us."""
+    """Structs that depend only on the output image, the form and the size, built once: each
+    binding struct costs microseconds of Python, and a small scene's whole CPU frame is 100 us."""
 
-    key: tuple[int, int, int]  # framebuffer (dynamic rendering: attachment view) address, width, height
+    key: tuple[int, int, int]  # an attachment view's address, width, height
     area: Any
     viewport: Any
-    secondary_begin: Any  # the chunks' begin info with render-pass inheritance
-    aside_begin: Any  # the set-aside rows' (the deferred form: the second pass; else the same)
-    pass_begin: Any  # VkRenderPassBeginInfo with the clear values
+    secondary_begin: Any  # the chunks' begin info with rendering inheritance (gpu/secondary.py)
+    aside_begin: Any  # the set-aside rows', sky's, billboards' (the deferred form: the scene's; else the same)
     keep: Any  # what the structs point to
     area_ptr: Any = None  # pointers to the structs above, for raw calls
     viewport_ptr: Any = None
-    pass_begin_ptr: Any = None
-    gbuffer_begin_ptr: Any = None  # the deferred form: the G-buffer pass's VkRenderPassBeginInfo
+    # the scene's (VkRenderingInfo, barrier before, barrier after) pointers (render/scene_renderings.py)
+    scene_ptrs: tuple[Any, Any, Any] | None = None
+    # the direct form's overlay: (barrier after the scene, VkRenderingInfo) pointers
+    overlay_ptrs: tuple[Any, Any] | None = None
+    # the deferred form: the G-buffer's (VkRenderingInfo, barrier before, barrier after) pointers
+    gbuffer_ptrs: tuple[Any, Any, Any] | None = None
     path_state: dict[Any, Any] = field(default_factory=dict)  # what paths keep per target and slot
 
     @classmethod
@@ -58,49 +60,38 @@ class TargetState:
         cls,
         vk: Any,
         key: tuple[int, int, int],
-        framebuffer: Any,
-        render_pass: Any,
+        output: Any,
+        scene: tuple[Any, Any, Any, Any] | None,
         secondary_begin: Any,
         clear_color: tuple[float, float, float],
-        gbuffer: tuple[Any, Any, Any] | None = None,
+        gbuffer: tuple[Any, Any, Any, Any] | None = None,
         depth_only: bool = False,
     ) -> TargetState:
-        """`gbuffer`, in the deferred form: the G-buffer pass, its framebuffer and the begin info
-        of secondaries inside it (the chunks'); `secondary_begin` is then the set-aside rows'."""
+        """`output`: what the state draws into, kept; `scene`: the scene's gpu/rendering.py
+        Rendering, its Dependency before and after (render/scene_barriers.py) and the direct
+        form's overlay (Dependency, Rendering) or None; None where the caller begins its own
+        renderings (shadow maps, weighted transparency). `gbuffer`, in the deferred form: the
+        G-buffer's Rendering, Dependency before and after and the begin info of secondaries
+        inside it (the chunks'); `secondary_begin` is then the scene's. `clear_color` and
+        `depth_only` are what those renderings clear (kept for the callers that pass them)."""
         width, height = key[1], key[2]
         area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(width, height))
-        background = vk.VkClearValue(color=vk.VkClearColorValue(float32=[*clear_color, 1.0]))
-        depth = vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=0.0, stencil=0))  # reverse-Z
-        # in render-pass order (gpu/render_pass.py): the target is not cleared; a shadow map's one
-        # attachment is depth (gpu/shadow_maps.py)
-        clears = [depth] if depth_only else [background, depth, background]
         state = cls(
             key=key,
             area=area,
             viewport=vk.VkViewport(x=0.0, y=0.0, width=float(width), height=float(height), minDepth=0.0, maxDepth=1.0),
-            secondary_begin=secondary_begin if gbuffer is None else gbuffer[2],
+            secondary_begin=secondary_begin if gbuffer is None else gbuffer[3],
             aside_begin=secondary_begin,
-            pass_begin=None
-            if render_pass is None  # dynamic rendering: the pass begins its own (shadow_pass.py)
-            else vk.VkRenderPassBeginInfo(
-                renderPass=render_pass, framebuffer=framebuffer, renderArea=area, pClearValues=clears
-            ),
-            keep=[clears, framebuffer],
+            keep=[output, scene, gbuffer],
         )
         state.area_ptr = vk.ffi.addressof(state.area)
         state.viewport_ptr = vk.ffi.addressof(state.viewport)
-        if state.pass_begin is not None:
-            state.pass_begin_ptr = vk.ffi.addressof(state.pass_begin)
+        if scene is not None:
+            state.scene_ptrs = (scene[0].ptr, scene[1].ptr, scene[2].ptr)
+            if scene[3] is not None:
+                state.overlay_ptrs = (scene[3][0].ptr, scene[3][1].ptr)
         if gbuffer is not None:
-            zero = vk.VkClearValue(color=vk.VkClearColorValue(float32=[0.0, 0.0, 0.0, 0.0]))
-            none = vk.VkClearValue(color=vk.VkClearColorValue(uint32=[NO_MATERIAL, 0, 0, 0]))
-            # depth, HDR colour, normal-roughness, base-metallic, material (gpu/gbuffer.py)
-            gbuffer_clears = [depth, background, zero, zero, none]
-            begin = vk.VkRenderPassBeginInfo(
-                renderPass=gbuffer[0], framebuffer=gbuffer[1], renderArea=area, pClearValues=gbuffer_clears
-            )
-            state.keep += [gbuffer_clears, begin, gbuffer]
-            state.gbuffer_begin_ptr = vk.ffi.addressof(begin)
+            state.gbuffer_ptrs = (gbuffer[0].ptr, gbuffer[1].ptr, gbuffer[2].ptr)
         return state
 
 
@@ -159,7 +150,6 @@ class PathContext:
 
     device: Device
     meshes: MeshRegistry
-    render_pass: Any  # what the pipelines draw in: a VkRenderPass's subpass 0, or None with `formats`
     frame_set_layout: Any  # set 0's VkDescriptorSetLayout
     secondaries: SecondaryBuffers
     frames_in_flight: int
@@ -170,15 +160,13 @@ class PathContext:
     gbuffer: bool = False  # the chunks draw into the G-buffer pass (the deferred form), lit later
     shadow: bool = False  # the chunks draw depth alone into a shadow map (render/shadow_pass.py)
     oit: bool = False  # blended rows accumulate weighted transparency (render/oit_pass.py)
-    formats: AttachmentFormats | None = None  # dynamic rendering (render_pass None): the attachments'
+    formats: AttachmentFormats | None = None  # what the pipelines draw into (dynamic rendering)
+    render_pass: Any = None  # always None: nothing is drawn in a render pass (shadow_pass.py still replaces it)
 
     def pipeline_target(self) -> dict[str, Any]:
-        """GraphicsPipelineSpec fields that say where its pipelines draw: the attachment formats
-        (dynamic rendering) when it has them, else {} (the spec names render_pass, subpass 0)."""
+        """GraphicsPipelineSpec fields that say where its pipelines draw: the attachment formats."""
         if self.formats is None:
-            return {}
-        if self.render_pass is not None:
-            raise ValueError("a path context gives either a render pass or attachment formats, not both")
+            raise ValueError("a path context needs the attachment formats its pipelines draw into")
         return self.formats.spec_kwargs()
 
 
@@ -196,6 +184,10 @@ class RenderPath(Protocol):
     @property
     def recorder(self) -> str:
         """native or python; gpu when the GPU writes the draws."""
+        ...
+
+    def draw_into(self, formats: AttachmentFormats, gbuffer: bool) -> None:
+        """The pipelines for attachments of `formats` from now (path_pipelines.py)."""
         ...
 
     def rows_needed(self, candidates: int) -> int: ...

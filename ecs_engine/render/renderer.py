@@ -2,13 +2,10 @@
 
 Data goes one way: the extract stage reads the world (frame_data.py, extract/), the renderer
 writes the frame's mapped buffers (globals, lights, instance rows) and records; it never writes
-the world. The mesh rows are drawn by a render path picked by name from PATHS (path.py says what
-a path does; path_settings.py switches it); the chunks of rows are jobs on the worker pool, each
-recording a secondary command buffer (in `indirect` only writing rows for the compute shaders).
-The primary records the passes around them by the target's form (output_passes.py): the G-buffer
-pass and the lighting compute pass in the deferred form, the scene's render pass (the path's
-secondaries, the light billboards), the post effects, the tone map and the overlay. The form
-follows the settings (target_forms.py switches it between frames)."""
+the world. The mesh rows are drawn by a render path picked by name from PATHS (path.py, switched
+by path_settings.py); the chunks of rows are jobs on the worker pool, each recording a secondary
+(in `indirect` only writing rows for the compute shaders). The primary records the passes around
+them by the target's form (output_passes.py; target_forms.py picks the form between frames)."""
 
 from __future__ import annotations
 
@@ -22,6 +19,7 @@ from ..ecs.world import World
 from ..gpu.descriptors import write_images
 from ..gpu.device import Device
 from ..gpu.frames import FrameRing
+from ..gpu.gbuffer import gbuffer_formats
 from ..gpu.secondary import SecondaryBuffers
 from ..jobs import JobPool
 from .chunk_paths import InstancedPath, PerEntityPath, check_recorder, default_recorder
@@ -105,7 +103,7 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
         self.cpu_recorder = recorder or default_recorder()  # the CPU paths' recorder, kept while indirect draws
         self._set_aside: SetAsidePass | None = None  # blended materials, made on first use
         # drawn last, after the tone map: an object with prepare(slot, frames_in_flight),
-        # record(cb, slot, width, height) and retarget(target), e.g. imgui_pass.ImGuiRenderer
+        # record(cb, slot, width, height) and rebuild(target), e.g. imgui_pass.ImGuiRenderer
         self.overlay: Any = None
         # what the mesh pipelines were specialised for (Materials.features): grown, never shrunk,
         # when a world's materials use another shading model (a pipeline rebuild, as a mode switch)
@@ -125,8 +123,8 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
             self.ray_shadows = RayShadows(device, meshes, n, self.set_layout.handle) if traced else None
             self.shadow_denoise = shadow_denoise
             self.lights = LightCulling(device, self.set_layout.handle, light_culling)
-            self._fit_target()  # before anything is made against its render pass
-            self._target_generation = target.generation
+            self._fit_target()  # its first form's attachments: the path's formats follow it
+            self._gbuffer_formats = gbuffer_formats(device.vk)
             self.texture_pages = TexturePages(device, anisotropy)
             self.shadows = ShadowPass(device, self.set_layout, self.secondaries, n)
             self.environment = EnvironmentMap(device)
@@ -163,7 +161,7 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
         ctx = PathContext(
             device=self.device,
             meshes=self.meshes,
-            render_pass=self.target.gbuffer_pass if deferred else self.target.render_pass,
+            formats=gbuffer_formats(self.vk) if deferred else self.target.formats(self.vk),
             frame_set_layout=self.set_layout.handle,
             secondaries=self.secondaries,
             frames_in_flight=len(self.frames.frames),
@@ -188,7 +186,7 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
                 pf.set_version += 1  # the shadow views' copies of the set name the old pages
 
     def target_state(self, framebuffer: Any, width: int, height: int) -> TargetState:
-        """What a framebuffer of this size needs per frame, made once (output_passes.py)."""
+        """What drawing into output image `framebuffer` at this size needs per frame, made once (output_passes.py)."""
         return self.output.target_state(framebuffer, width, height)
 
     def next_image_semaphore(self) -> Any:
@@ -234,9 +232,7 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
         materials = self.materials(world)
         self._blends = materials.blends
         if framebuffer is None:
-            self.ensure_output()  # the target's own framebuffer: its form can change here
-        elif self.target.generation != self._target_generation:
-            self._follow_target()
+            self.ensure_output()  # the target's own image: its form can change here
         width, height = extent or (self.target.width, self.target.height)
         material_count = len(materials)
         data = self.extract(world, width, height, materials, dt)  # before any GPU state: a bad world fails here
@@ -278,7 +274,8 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
         positional = pf.write_frame(self.device, data, materials, grid, self.ambient, deferred, name)
         if ray is not None and traced:
             ray.prepare(slot, data, self.jobs, width, height, materials)
-        target = self.target_state(framebuffer or self.target.framebuffer, width, height)
+        target = self.target_state(self.target.framebuffer if framebuffer is None else framebuffer, width, height)
+        self.path.draw_into(self._gbuffer_formats if deferred else self.output.formats, deferred)  # the chunks'
         self.output.begin_post(data.camera)  # the post effects' frame inputs: their keys (below) read them
         key = None  # a frame that may be submitted again (frame_replay.py): what its recording depends on
         if replayable(self, views, traced, forward):
@@ -376,8 +373,11 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
         """The set-aside rows' secondary, draws, rows, triangles, weighted transparency's secondary."""
         if data.set_aside is None or not len(data.set_aside):
             return None, 0, 0, 0, None
-        if self._set_aside is None:  # forward, in the target's pass (deferred: over the lit scene)
-            self._set_aside = SetAsidePass(replace(self.path.ctx, render_pass=self.target.render_pass, gbuffer=False))
+        formats = self.output.formats  # forward, in the scene's rendering (deferred: over the lit scene)
+        if self._set_aside is None:
+            self._set_aside = SetAsidePass(replace(self.path.ctx, formats=formats, gbuffer=False))
+        elif self._set_aside.ctx.formats != formats:  # another form: its pipelines are per formats
+            self._set_aside.ctx = replace(self._set_aside.ctx, formats=formats, gbuffer=False)
         first = self.path.rows_needed(data.candidates)
         eye, oit = data.camera.position - data.origin, self.output.weighted(self.transparency)
         return self._set_aside.record(inputs, data.set_aside, first, eye, materials, oit)

@@ -1,5 +1,5 @@
 """Rows drawn apart from the chunks (frame_data.SetAsideRows), after every chunk's rows in the
-same subpass, with pipelines the render paths do not have:
+same rendering, with pipelines the render paths do not have:
 
 - materials with a fill of their own (`Material.fill`: wireframe or points), drawn first, with
   depth writes, grouped by fill and (mesh, winding);
@@ -37,7 +37,9 @@ class SetAsidePass:
     def __init__(self, ctx: PathContext) -> None:
         self.ctx = ctx
         self.layout = pipeline_layout(ctx.device, [ctx.frame_set_layout])
-        self.pipelines: dict[tuple[bool, str, bool], tuple[Any, Any]] = {}  # (blended, fill, oit) -> (plain, mirrored)
+        # (blended, fill, oit, the scene's formats) -> (plain, mirrored): `ctx.formats` is the scene's
+        # rendering's in the target's form now (the renderer sets `ctx` when the form changes)
+        self.pipelines: dict[tuple[bool, str, bool, Any], tuple[Any, Any]] = {}
         self.can_fill = bool(ctx.device.features.get("fillModeNonSolid"))
         self._warned = False
 
@@ -134,12 +136,12 @@ class SetAsidePass:
         return cb, len(starts), n, triangles, accumulated
 
     def _pipeline(self, blended: bool, fill: int, mirrored: int, oit: Any = None) -> Any:
-        key = (blended, FILLS[fill], oit is not None)
+        key = (blended, FILLS[fill], oit is not None, None if oit is not None else self.ctx.formats)
         found = self.pipelines.get(key)
         if found is None:
             ctx = self.ctx if fill == 0 else replace(self.ctx, fill=FILLS[fill])
             if oit is not None:  # the weighted transparency pass: one sample, two targets
-                ctx = replace(ctx, render_pass=oit.render_pass, oit=True, samples=1)
+                ctx = replace(ctx, formats=oit.formats, oit=True, samples=1)
             found = self.pipelines[key] = mesh_pipelines(ctx, self.layout, "mesh.vert", blended=blended)
         return found[mirrored]
 

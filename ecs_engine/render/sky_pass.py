@@ -1,16 +1,16 @@
 """The Environment's sky (components/environment.py) behind the scene: one full-screen triangle
 at depth 0, the far plane of reverse-Z, whose depth test passes on equal, so it shades only
-pixels no mesh covered. Recorded into a secondary of the target's first subpass after the
-chunks' and before the set-aside rows' (blended ones must blend over it); in the deferred form,
-first in the target's pass, over the lit G-buffer image. The pipeline is made the first frame a
-world has a sky."""
+pixels no mesh covered. Recorded into a secondary of the scene's rendering after the chunks' and
+before the set-aside rows' (blended ones must blend over it); in the deferred form, first in the
+scene's rendering, over the lit G-buffer image. The pipeline is made the first frame a world has
+a sky, once per set of attachment formats it is drawn into."""
 
 from __future__ import annotations
 
 from typing import Any
 
 from ..gpu.device import Device
-from ..gpu.pipeline import GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
+from ..gpu.pipeline import AttachmentFormats, GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
 from ..gpu.secondary import SecondaryBuffers, end_command_buffer
 from .path import TargetState
 
@@ -18,7 +18,7 @@ from .path import TargetState
 def full_screen_secondary(
     secondaries: SecondaryBuffers, slot: int, state: TargetState, pipeline: Any, layout: Any, set_array: Any
 ) -> Any:
-    """A secondary of the target pass's first subpass (its set-aside begin info) drawing one
+    """A secondary of the scene's rendering (its set-aside begin info) drawing one
     triangle over the screen with `pipeline` and set 0 `set_array`: the sky, and weighted
     transparency's composite (oit_pass.py). Raw calls, structs made once."""
     vk = secondaries.device.vk
@@ -34,35 +34,33 @@ def full_screen_secondary(
 
 
 class SkyPass:
-    def __init__(self, device: Device, frame_set_layout: Any, secondaries: SecondaryBuffers, target: Any) -> None:
-        self.device, self.vk, self.secondaries, self.target = device, device.vk, secondaries, target
+    def __init__(self, device: Device, frame_set_layout: Any, secondaries: SecondaryBuffers) -> None:
+        self.device, self.vk, self.secondaries = device, device.vk, secondaries
         self.layout = pipeline_layout(device, [frame_set_layout])
-        self.pipeline: Any = None
+        self.pipelines: dict[AttachmentFormats, Any] = {}  # per formats drawn into
 
-    def record(self, state: TargetState, set_array: Any, slot: int) -> Any:
-        """The sky's secondary for this frame."""
-        if self.pipeline is None:
-            self.pipeline = graphics_pipeline(
-                self.device,
-                GraphicsPipelineSpec(
-                    "sky.vert",
-                    "sky.frag",
-                    layout=self.layout,
-                    render_pass=self.target.render_pass,
-                    cull_back=False,
-                    depth_write=False,
-                    depth_or_equal=True,
-                    samples=self.target.samples,
-                ),
+    def record(self, state: TargetState, set_array: Any, slot: int, formats: AttachmentFormats) -> Any:
+        """The sky's secondary for this frame, drawn into attachments of `formats`."""
+        pipeline = self.pipelines.get(formats)
+        if pipeline is None:
+            spec = GraphicsPipelineSpec(
+                "sky.vert",
+                "sky.frag",
+                layout=self.layout,
+                cull_back=False,
+                depth_write=False,
+                depth_or_equal=True,
+                **formats.spec_kwargs(),
             )
-        return full_screen_secondary(self.secondaries, slot, state, self.pipeline, self.layout, set_array)
+            pipeline = self.pipelines[formats] = graphics_pipeline(self.device, spec)
+        return full_screen_secondary(self.secondaries, slot, state, pipeline, self.layout, set_array)
 
-    def retarget(self) -> None:
-        """The target's render pass changed: the pipeline is made again on first use."""
-        if self.pipeline is not None:
-            self.vk.vkDestroyPipeline(self.device.handle, self.pipeline, None)
-            self.pipeline = None
+    def forget_pipelines(self) -> None:
+        """Made again from the shader files on next use (hot reload; the caller waited for the device)."""
+        for pipeline in self.pipelines.values():
+            self.vk.vkDestroyPipeline(self.device.handle, pipeline, None)
+        self.pipelines = {}
 
     def destroy(self) -> None:
-        self.retarget()
+        self.forget_pipelines()
         self.vk.vkDestroyPipelineLayout(self.device.handle, self.layout, None)

@@ -1,9 +1,10 @@
 """How the renderer's target is drawn (gpu/render_pass.py's forms): forward into the target
 ("direct"), through HDR colour ("hdr") or through a G-buffer lit in compute ("deferred"), as the
 light culling, tone map, exposure, MSAA, blended materials and ray-traced shadows need; switched
-between frames, and what was made against the old render passes made again; the shadow method
-too (ray-traced shadows need the deferred form). A part of Renderer (its base class), apart for
-its size."""
+between frames without waiting for the device (the target keeps each form's attachments, the
+pipelines are made per attachment formats: render/path_pipelines.py); the shadow method too
+(ray-traced shadows need the deferred form). A part of Renderer (its base class), apart for its
+size."""
 
 from __future__ import annotations
 
@@ -38,7 +39,6 @@ class TargetForms(PostEffects):
     material_features: int
     _shadow_denoise: bool
     _blends: bool
-    _target_generation: int
     _swap_path: Callable[[Any], None]
     _make_path: Callable[[str, str], Any]
     _respecialise: Callable[[Callable[[], None]], None]
@@ -97,9 +97,9 @@ class TargetForms(PostEffects):
     def _light_clusters(self, data: FrameData, width: int, height: int, own_target: bool) -> ClusterGrid | None:
         """This frame's cluster grid, or None for the all-lights loop; a change either way
         rebuilds the mesh pipelines (FEATURE_CLUSTERED), undone if that fails. With `auto` it
-        also changes the form (deferred or not): on the target's own framebuffer at once, the
-        path made once for the new form; a swapchain's image was acquired in the old form, so
-        that frame stays in it and the next one switches (ensure_output, from the run loop)."""
+        also changes the form (deferred or not): on the target's own image at once; a
+        swapchain's frame stays in the form its output state was asked in and the next one
+        switches (ensure_output, from the run loop)."""
         grid, flipped = self.lights.plan(data, width, height, self.target.samples)
         if flipped:
 
@@ -118,11 +118,8 @@ class TargetForms(PostEffects):
 
     def ensure_output(self) -> None:
         """Give the target the form the tone map, exposure and blended materials need (HDR colour
-        or straight into the target), and follow it. Call between frames: a swapchain's
-        framebuffers change (the run loop calls it before each frame)."""
+        or straight into the target). Call between frames (the run loop calls it before each)."""
         self._fit_target()
-        if self.target.generation != self._target_generation:
-            self._follow_target()
 
     def _wanted_form(self) -> str:
         """The target form (gpu/render_pass.py) the light culling, tone map, exposure, MSAA,
@@ -137,21 +134,14 @@ class TargetForms(PostEffects):
 
     def _fit_target(self) -> None:
         form = self._wanted_form()
-        if form != self.target.form:
-            self.device.wait_idle()  # this or another renderer of the target may have frames in flight
+        if form != self.target.form:  # its attachments made the first time; nothing waits
             self.target.set_form(form)
 
     def rebuild_pipelines(self) -> None:
-        """Pipelines made again from the shader files (hot reload): what a new render pass remakes,
-        the path's (the old stays if they cannot be made), the output passes' and the UI's."""
-        self._follow_target()
-
-    def _follow_target(self) -> None:
-        """The target's render pass changed: make again what was made against the old one."""
-        self.device.wait_idle()
-        target = self.target
+        """Pipelines made again from the shader files (hot reload): the path's (the old stays if
+        they cannot be made), the output passes' and the UI's."""
+        self.device.wait_idle()  # frames in flight may use the old pipelines
         self._swap_path(self._make_path(self.mode, self.cpu_recorder))
-        self.output.retarget()
+        self.output.forget_pipelines()
         if self.overlay is not None:
-            self.overlay.retarget(target)
-        self._target_generation = target.generation
+            self.overlay.rebuild(self.target)

@@ -1,6 +1,6 @@
 """The tone map: the scene is lit in 16-bit float colour (gpu/render_pass.py); this pass scales
 it by the exposure and maps it into what the display shows, drawn with dynamic rendering into the
-target after the scene's render pass and the post effects (render/output_passes.py), reading the
+target after the scene's rendering and the post effects (render/output_passes.py), reading the
 HDR colour as a sampled image with texelFetch (the same pixel, unfiltered).
 
 Operators (TONE_MAPS, picked by name; the shader reads the number):
@@ -68,8 +68,8 @@ class ToneMapPass:
         if found is not None:
             return found
         if self.pool is None or len(self._sets) >= _SETS:
-            self.device.wait_idle()  # the old sets may be bound by frames in flight
             if self.pool is not None:
+                self.device.wait_idle()  # the old sets may be bound by frames in flight
                 self.pool.destroy()
             self.pool = DescriptorPool(self.device, _SETS, {vk.VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE: _SETS})
             self._sets.clear()
