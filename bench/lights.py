@@ -59,7 +59,7 @@ def measure(gpu: Any, n: int, culling: str, warmup: int, frames: int) -> dict[st
     return {
         **timed,
         "clustered": clustered,
-        "form": form,  # the target's (gpu/render_pass.py): deferred when the opaque meshes were lit in compute
+        "form": form,  # the target's (gpu/scene_attachments.py): deferred when the opaque meshes were lit in compute
     }
 
 

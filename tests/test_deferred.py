@@ -270,7 +270,7 @@ def test_one_renderer_switches_form_as_the_light_count_changes(tone_map, forward
 def test_a_renderer_that_cannot_make_its_form_leaves_nothing(monkeypatch):
     """The G-buffer pass fails to be made: the error comes out, the target keeps its old form,
     and whatever the renderer had made is destroyed."""
-    from ecs_engine.gpu import render_pass
+    from ecs_engine.gpu import scene_attachments as render_pass
     from ecs_engine.gpu.frames import FrameRing
     from ecs_engine.gpu.secondary import SecondaryBuffers
     from ecs_engine.render import renderer as renderer_module

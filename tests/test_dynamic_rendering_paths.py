@@ -50,9 +50,7 @@ def test_render_paths_make_their_pipelines_from_formats(form):
             "gbuffer": AttachmentFormats((hdr, *(getattr(vk, n) for n in GBUFFER_FORMAT_NAMES)), d32, 1),
             "shadow": shadow_formats(vk),
         }[form]
-        ctx = replace(
-            renderer.path.ctx, render_pass=None, formats=formats, gbuffer=form == "gbuffer", shadow=form == "shadow"
-        )
+        ctx = replace(renderer.path.ctx, formats=formats, gbuffer=form == "gbuffer", shadow=form == "shadow")
         for make in (InstancedPath, PerEntityPath):
             path = make(ctx, "python")
             assert len(path.pipelines) == 2 and all(p is not None for p in path.pipelines)

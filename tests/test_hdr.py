@@ -105,7 +105,7 @@ def _compose(a, b):
 
 
 def test_bad_settings_are_refused():
-    from ecs_engine.gpu.render_pass import supported_samples
+    from ecs_engine.gpu.scene_attachments import supported_samples
     from ecs_engine.render.config import check_samples
     from ecs_engine.render.renderer import Renderer
 

@@ -131,7 +131,7 @@ def test_bloom_in_the_renderer_is_the_reference_bloom_of_the_frames_hdr_colour(m
     before the bloom: the NumPy reference of the whole chain, within a level of 8-bit sRGB
     (it would fail with the bloom left out or run twice); around the bright billboard the
     frame is brighter than without bloom (the energy-conserving composite moves light there)."""
-    from ecs_engine.gpu import render_pass
+    from ecs_engine.gpu import scene_attachments as render_pass
 
     usage = render_pass.hdr_read_usage
     monkeypatch.setattr(render_pass, "hdr_read_usage", lambda d: usage(d) | d.vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT)

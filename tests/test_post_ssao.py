@@ -119,7 +119,7 @@ class InputsSpy:
 
 def _readable(monkeypatch: Any) -> None:
     """The scene's HDR colour and depth made with TRANSFER_SRC usage too (the spy copies them)."""
-    from ecs_engine.gpu import render_pass
+    from ecs_engine.gpu import scene_attachments as render_pass
 
     usage = render_pass.hdr_read_usage
     monkeypatch.setattr(render_pass, "hdr_read_usage", lambda d: usage(d) | d.vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT)

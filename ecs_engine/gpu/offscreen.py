@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .memory import HOST, Buffer, Image
-from .render_pass import SceneAttachments, TargetForm
+from .scene_attachments import SceneAttachments, TargetForm
 
 if TYPE_CHECKING:
     from .device import Device
@@ -26,7 +26,7 @@ class OffscreenTarget(TargetForm):
         self.device = device
         self.width, self.height = width, height
         self.samples = samples  # MSAA of the scene's attachments (the target itself has one sample)
-        self.form = "hdr" if hdr or samples > 1 else "direct"  # gpu/render_pass.py's FORMS
+        self.form = "hdr" if hdr or samples > 1 else "direct"  # gpu/scene_attachments.py's FORMS
         self.color_format = vk.VK_FORMAT_R8G8B8A8_SRGB
         self.final_layout = vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL  # ready for record_readback
         self.color = Image(

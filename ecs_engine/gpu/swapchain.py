@@ -11,7 +11,7 @@ import numpy as np
 from ..errors import UsageError
 from .functions import device_function, instance_function, raw_device_function
 from .memory import HOST, Buffer, Image
-from .render_pass import SceneAttachments, TargetForm
+from .scene_attachments import SceneAttachments, TargetForm
 
 if TYPE_CHECKING:
     from .device import Device
@@ -40,7 +40,7 @@ class Swapchain(TargetForm):
         vk = self.vk = device.vk
         self.device = device
         self.samples = samples  # MSAA of the scene's attachments
-        self.form = "hdr" if hdr or samples > 1 else "direct"  # gpu/render_pass.py's FORMS
+        self.form = "hdr" if hdr or samples > 1 else "direct"  # gpu/scene_attachments.py's FORMS
         self.surface = surface
         self.framebuffer_size = framebuffer_size
         inst = device.instance

@@ -16,7 +16,7 @@ from typing import Any, Final
 
 from ..errors import UsageError
 from ..gpu.array_image import ANISOTROPY_CHOICES
-from ..gpu.render_pass import MSAA_COUNTS
+from ..gpu.scene_attachments import MSAA_COUNTS
 
 __all__ = [
     "ANISOTROPY_CHOICES",
@@ -157,7 +157,7 @@ class Caps:
         samples: tuple[int, ...] = (1,)
         best = 1.0
         if limits is not None:
-            from ..gpu.render_pass import supported_samples
+            from ..gpu.scene_attachments import supported_samples
 
             if hasattr(limits, "framebufferColorSampleCounts"):
                 samples = supported_samples(device)

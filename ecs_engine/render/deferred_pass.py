@@ -1,5 +1,5 @@
 """Deferred lighting of the opaque meshes, in compute, between the G-buffer's rendering and the
-scene's (the deferred form, gpu/render_pass.py): the G-buffer (gpu/gbuffer.py) leaves depth, the HDR
+scene's (the deferred form, gpu/scene_attachments.py): the G-buffer (gpu/gbuffer.py) leaves depth, the HDR
 colour with ambient and emissive, and per pixel normal, roughness, base colour, metallic and the
 material index; deferred_light.comp adds every light's term, the same light_term the forward
 fragment shader uses, walking the light grid of render/light_clusters.py per 16 x 16-pixel

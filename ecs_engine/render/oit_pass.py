@@ -29,8 +29,8 @@ from ..gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_images
 from ..gpu.device import Device
 from ..gpu.memory import Image
 from ..gpu.pipeline import AttachmentFormats, GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
-from ..gpu.render_pass import DEPTH_FORMAT_NAME
 from ..gpu.rendering import Attachment, Rendering, clear_color
+from ..gpu.scene_attachments import DEPTH_FORMAT_NAME
 from ..gpu.secondary import SecondaryBuffers
 from .config import Transparency
 from .path import TargetState

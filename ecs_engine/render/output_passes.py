@@ -1,5 +1,5 @@
 """What the frame's primary command buffer records around the render path's secondaries, by the
-target's form (gpu/render_pass.py's FORMS), every drawing a dynamic rendering (vkCmdBeginRendering,
+target's form (gpu/scene_attachments.py's FORMS), every drawing a dynamic rendering (vkCmdBeginRendering,
 render/scene_renderings.py) between explicit barriers (render/scene_barriers.py):
 
 - `direct`: the scene's rendering into the target: the chunks', the sky's (sky_pass.py), the

@@ -161,7 +161,6 @@ class PathContext:
     shadow: bool = False  # the chunks draw depth alone into a shadow map (render/shadow_pass.py)
     oit: bool = False  # blended rows accumulate weighted transparency (render/oit_pass.py)
     formats: AttachmentFormats | None = None  # what the pipelines draw into (dynamic rendering)
-    render_pass: Any = None  # always None: nothing is drawn in a render pass (shadow_pass.py still replaces it)
 
     def pipeline_target(self) -> dict[str, Any]:
         """GraphicsPipelineSpec fields that say where its pipelines draw: the attachment formats."""

@@ -93,7 +93,7 @@ def oit_barriers(vk: Any, targets: Sequence[Any], depth: Any) -> tuple[Dependenc
 def scene_barriers(
     vk: Any, form: str, attachments: Any, target: Any = None, final_layout: int = 0
 ) -> tuple[Dependency, Dependency]:
-    """(before, after) the scene's rendering in a target's `form` (gpu/render_pass.py's FORMS)
+    """(before, after) the scene's rendering in a target's `form` (gpu/scene_attachments.py's FORMS)
     over `attachments` (SceneAttachments); in the direct form also the target image `target`,
     left in `final_layout` (readback or present).
 

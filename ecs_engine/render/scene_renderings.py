@@ -1,5 +1,5 @@
 """The scene's dynamic renderings (gpu/rendering.py Rendering) over a target's attachments
-(gpu/render_pass.py's SceneAttachments), with their clears, made once per set of images and
+(gpu/scene_attachments.py's SceneAttachments), with their clears, made once per set of images and
 size (output_passes.py keeps them per output), and the barriers around them
 (scene_barriers.py)."""
 
@@ -43,7 +43,7 @@ def scene_rendering(
     background: tuple[float, float, float],
     target_view: Any = None,
 ) -> Rendering:
-    """The scene's rendering in a target's `form` (gpu/render_pass.py's FORMS), its draws from
+    """The scene's rendering in a target's `form` (gpu/scene_attachments.py's FORMS), its draws from
     secondaries: hdr, the HDR colour (multisampled with MSAA, then not stored but resolved into
     the single-sample one) and depth cleared, both stored without MSAA (the post effects read
     them); deferred, both loaded (the G-buffer pass and the lighting wrote them) and stored;

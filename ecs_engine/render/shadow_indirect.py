@@ -101,9 +101,7 @@ class IndirectShadows:
         self._counted: list[tuple[int, int, np.ndarray] | None] = [None] * ctx.frames_in_flight
         self._slot, self._waited, self._previous = 0, False, (0, 0)
         self._counted_now = False  # this frame recorded counts into the slot's readback
-        shadow_ctx = replace(
-            ctx, render_pass=None, formats=formats, gbuffer=False, shadow=True, samples=1, fill="solid"
-        )
+        shadow_ctx = replace(ctx, formats=formats, gbuffer=False, shadow=True, samples=1, fill="solid")
         self.pipelines = shadow_pipelines(shadow_ctx, camera.layout, "mesh_indirect.vert")
         for pipeline in self.pipelines:
             self.owned.add(pipeline, _pipeline_destroyer(self.device, pipeline))

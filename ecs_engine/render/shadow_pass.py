@@ -125,9 +125,7 @@ class ShadowPass:
         """The depth-only render path (made on first use, for the renderer's current path
         context: `make(ctx)` builds a path of the right kind)."""
         if self.path is None:
-            shadow_ctx = replace(
-                ctx, render_pass=None, formats=self.formats, gbuffer=False, shadow=True, samples=1, fill="solid"
-            )
+            shadow_ctx = replace(ctx, formats=self.formats, gbuffer=False, shadow=True, samples=1, fill="solid")
             self.path = self.owned.add(make(shadow_ctx))
         return self.path
 

@@ -1,4 +1,4 @@
-"""How the renderer's target is drawn (gpu/render_pass.py's forms): forward into the target
+"""How the renderer's target is drawn (gpu/scene_attachments.py's forms): forward into the target
 ("direct"), through HDR colour ("hdr") or through a G-buffer lit in compute ("deferred"), as the
 light culling, tone map, exposure, MSAA, blended materials and ray-traced shadows need; switched
 between frames without waiting for the device (the target keeps each form's attachments, the
@@ -122,7 +122,7 @@ class TargetForms(PostEffects):
         self._fit_target()
 
     def _wanted_form(self) -> str:
-        """The target form (gpu/render_pass.py) the light culling, tone map, exposure, MSAA,
+        """The target form (gpu/scene_attachments.py) the light culling, tone map, exposure, MSAA,
         blended materials and post effects need."""
         samples = self.target.samples
         if self.ray_shadows is not None:

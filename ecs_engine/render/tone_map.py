@@ -1,4 +1,4 @@
-"""The tone map: the scene is lit in 16-bit float colour (gpu/render_pass.py); this pass scales
+"""The tone map: the scene is lit in 16-bit float colour (gpu/scene_attachments.py); this pass scales
 it by the exposure and maps it into what the display shows, drawn with dynamic rendering into the
 target after the scene's rendering and the post effects (render/output_passes.py), reading the
 HDR colour as a sampled image with texelFetch (the same pixel, unfiltered).
@@ -37,7 +37,7 @@ _SETS = 8  # descriptor sets kept, one per HDR view seen (swapchains come and go
 
 def wants_hdr(name: str, exposure: float, samples: int, blends: bool = False, post: bool = False) -> bool:
     """Whether the scene must be lit in HDR colour and tone mapped: not for the clamp operator at
-    exposure 0 without MSAA, which the target's own sRGB encoding does as well (gpu/render_pass.py),
+    exposure 0 without MSAA, which the target's own sRGB encoding does as well (gpu/scene_attachments.py),
     unless some material blends: an 8-bit target clamps a blended colour before blending (glass lit
     to 3.0 at alpha 0.5 over black: 0.5), the HDR colour after (1.0); or post effects are on (they
     run on the HDR colour, or between the tone map and the target: output_passes.py)."""

@@ -5,7 +5,7 @@ until the lit shaders read "ao" themselves (it darkens direct light in creases t
 
 As bloom does (bloom_effect.py), it keeps a small frame graph of its own with the seam's images
 imported: "depth" (D32_SFLOAT, single-sample, SHADER_READ_ONLY_OPTIMAL after the scene's render
-pass, gpu/render_pass.py) and "hdr" (SHADER_READ_ONLY_OPTIMAL, written in place by the
+pass, gpu/scene_attachments.py) and "hdr" (SHADER_READ_ONLY_OPTIMAL, written in place by the
 composite, GENERAL in between); the graph's barriers take them there and back. The graph is
 made again when the extent changes; the passes' descriptor sets follow the imported views.
 Refused with MSAA (config.py): the passes sample a single-sample depth, and resolving a
