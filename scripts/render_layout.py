@@ -17,6 +17,8 @@ MOVES: dict[str, str] = {
     "output_barriers": "frame.output_barriers",
     "target_forms": "frame.target_forms",
     "scene_barriers": "frame.scene_barriers",
+    "scene_renderings": "frame.scene_renderings",
+    "path_pipelines": "draw.path_pipelines",
     # FrameExtractor and FrameData: the extract stage's entry (it reads the World)
     "frame_data": "extract.frame_data",
     # the render paths: the mesh rows' draws (the interface and its implementations)
