@@ -80,7 +80,7 @@ def headless_gpu(width: int, height: int) -> Iterator[tuple[Any, Any, Any]]:
     from ecs_engine.gpu.device import Device
     from ecs_engine.gpu.instance import Instance
     from ecs_engine.gpu.offscreen import OffscreenTarget
-    from ecs_engine.render.mesh_registry import MeshRegistry
+    from ecs_engine.render.assets.mesh_registry import MeshRegistry
 
     with ExitStack() as made:
         instance = Instance()

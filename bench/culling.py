@@ -32,11 +32,11 @@ from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Camera, Mesh, Transform, Velocity
 from ecs_engine.maths.camera import yaw_pitch_quat
+from ecs_engine.render.assets.primitives import cube_mesh
 from ecs_engine.render.culling import TemporalCulling
-from ecs_engine.render.frame_data import FrameExtractor
-from ecs_engine.render.instance_rows import cull_views, masked_keys, padded_planes
-from ecs_engine.render.primitives import cube_mesh
-from ecs_engine.render.temporal_culling import SpeedLimits
+from ecs_engine.render.culling.temporal_culling import SpeedLimits
+from ecs_engine.render.draw.instance_rows import cull_views, masked_keys, padded_planes
+from ecs_engine.render.extract.frame_data import FrameExtractor
 
 LIMITS = SpeedLimits(move=20.0, turn=2.0)
 DT = 1.0 / 60.0

@@ -1,7 +1,7 @@
 """Culling methods on the GPU host: the scaling scene (every entity moving and spinning) headless
 at 1280x720, at 10k, 100k and 1M entities, with all threads, for each culling method a mode
 offers: the CPU-culled instanced mode with frustum, temporal and no culling, the indirect mode
-with frustum, occlusion (two-phase, render/occlusion.py) and no culling. Per configuration: CPU
+with frustum, occlusion (two-phase, render/culling/occlusion_passes.py) and no culling. Per configuration: CPU
 frame ms (systems + render, minus waits), GPU ms (timestamps), wall ms per frame (the loop runs
 flat out, frames in flight: the slower of the two), rows drawn. The target: the 1M scene at 120
 FPS or more (wall), occlusion culling.
@@ -55,7 +55,7 @@ def sweep(
 ) -> list[dict[str, Any]]:
     from ecs_engine.app.scenes import default_schedule, scene_builder
     from ecs_engine.ecs.world import World
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     rows = []
     with headless_gpu(*size) as (device, target, meshes), JobPool(threads) as pool:

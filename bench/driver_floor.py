@@ -43,7 +43,7 @@ def _loops(device: Any) -> dict[str, Any]:
 def measure(
     device: Any, target: Any, meshes: Any, draws: int, per_buffer: int = 16_384, repeats: int = 5
 ) -> dict[str, Any]:
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     vk = device.vk
     renderer = Renderer(device, target, meshes, mode="per_entity")

@@ -6,7 +6,7 @@ the render (extract, write, record, submit), minus the time spent waiting for th
 Small frames need many samples: 2,400 timed frames after 300 of warm-up by default, and
 `--repeat` runs the whole configuration again in the same process (the host drifts).
 `--frame-reuse both` makes each repeat two runs, with the frames' recordings submitted again
-where nothing changed (render/frame_replay.py, the default) and with every frame recorded,
+where nothing changed (render/frame/replay.py, the default) and with every frame recorded,
 one after the other: the two compared under the same drift. The target is judged on the first.
 `--through app` runs the scene as a game through `App` (DefaultPlugins without the perf lines, the
 scene's builder as the startup system), to hold the App to the loop's cost.
@@ -36,7 +36,7 @@ import numpy as np
 from ecs_engine.app.loop import run as run_scene
 from ecs_engine.app.scenes import SCENES
 from ecs_engine.app.settings import RunOptions
-from ecs_engine.render.renderer import MODES
+from ecs_engine.render.frame.renderer import MODES
 
 try:
     from .machine import python_loop_ns
@@ -77,7 +77,7 @@ def through_app(options: RunOptions) -> Any:
     from ecs_engine import App, DefaultPlugins
     from ecs_engine.app.plugins import PerfPlugin
     from ecs_engine.app.scenes import scene_builder
-    from ecs_engine.render.meshes import Meshes
+    from ecs_engine.render.assets.meshes import Meshes
 
     build = scene_builder(options.scene)
     app = App(title=options.scene, size=(options.width, options.height))

@@ -85,9 +85,15 @@ def measure(name: str, width: int, height: int, frames: int) -> dict[str, Any]:
     from ecs_engine.gpu.device import Device
     from ecs_engine.gpu.instance import Instance
     from ecs_engine.gpu.offscreen import OffscreenTarget
-    from ecs_engine.render.materials import Material, materials
-    from ecs_engine.render.mesh_registry import MeshRegistry
-    from ecs_engine.render.renderer import Renderer
+
+    try:
+        from ecs_engine.render.assets.materials import Material, materials
+        from ecs_engine.render.assets.mesh_registry import MeshRegistry
+        from ecs_engine.render.frame.renderer import Renderer
+    except ImportError:  # an older tree, before render/ had sub-packages (old against new)
+        from ecs_engine.render.materials import Material, materials  # type: ignore[no-redef]
+        from ecs_engine.render.mesh_registry import MeshRegistry  # type: ignore[no-redef]
+        from ecs_engine.render.renderer import Renderer  # type: ignore[no-redef]
 
     settings, samples, blended = CONFIGS[name]
     instance = Instance()

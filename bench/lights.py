@@ -44,7 +44,7 @@ def measure(gpu: Any, n: int, culling: str, warmup: int, frames: int) -> dict[st
     from ecs_engine.app.scenes import default_schedule
     from ecs_engine.demos import lights
     from ecs_engine.ecs.world import World
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     device, target, meshes = gpu
     world = World()

@@ -21,9 +21,9 @@ SIZES = (128, 256, 512)  # sphere segments = rings: 16,641, 66,049 and 263,169 v
 
 _CHILD = """
 import json, sys, time
-from ecs_engine.render.mesh_loading import DEFAULT_MODEL, load_mesh
-from ecs_engine.render.mesh_lod import build_lods
-from ecs_engine.render.primitives import sphere_mesh
+from ecs_engine.render.assets.mesh_loading import DEFAULT_MODEL, load_mesh
+from ecs_engine.render.assets.mesh_lod import build_lods
+from ecs_engine.render.assets.primitives import sphere_mesh
 n = int(sys.argv[1])
 mesh = sphere_mesh(n, n) if n else load_mesh(DEFAULT_MODEL)
 def peak():

@@ -99,7 +99,7 @@ def engine_rows(n: int, variants: list[str], frames: int, warmup: int) -> tuple[
     from ecs_engine.app.scenes import default_schedule, scene_builder
     from ecs_engine.ecs.world import World
     from ecs_engine.gpu.native_recorder import NativeRecorder
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     from .scaling import restore, snapshot
 

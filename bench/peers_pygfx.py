@@ -173,7 +173,7 @@ def palette_materials() -> list[Any]:
     """The engine's six default materials as pygfx Phong materials (colour and shininess)."""
     import pygfx as gfx
 
-    from ecs_engine.render.materials import DEFAULT_PALETTE
+    from ecs_engine.render.assets.materials import DEFAULT_PALETTE
 
     return [
         gfx.MeshPhongMaterial(color=(*m.base_color[:3], 1.0), shininess=m.shininess, side="front")

@@ -4,7 +4,7 @@ built and updated over 10k, 100k and 1M instances (issue 18).
 Bottom levels: the cube, a sphere, the torus knot (the demo model) and a 64k-triangle sphere,
 each built alone and compacted: the build's GPU ms (timestamps around it), the wall ms of the
 whole call (build, compacted-size query, copy), bytes before and after compaction. Top level,
-per instance count: the CPU ms of writing the instance rows (render/ray_instances.py, the chunk
+per instance count: the CPU ms of writing the instance rows (render/raytracing/instances.py, the chunk
 jobs' kernel: one thread, and split over the job pool), the GPU ms of a full build and of an
 update (refit) after every instance moved; medians of `--repeat` runs each. Frames: the scaling
 scene with one casting light (directional, spot, point) at 1280x720 on THREADS threads, drawn with
@@ -78,8 +78,8 @@ class GpuTimer:
 
 
 def _meshes(quick: bool) -> list[tuple[str, Any]]:
-    from ecs_engine.render.mesh_loading import DEFAULT_MODEL, load_mesh
-    from ecs_engine.render.primitives import cube_mesh, sphere_mesh
+    from ecs_engine.render.assets.mesh_loading import DEFAULT_MODEL, load_mesh
+    from ecs_engine.render.assets.primitives import cube_mesh, sphere_mesh
 
     meshes = [("cube", cube_mesh()), ("sphere 32x16", sphere_mesh())]
     if not quick:
@@ -89,8 +89,8 @@ def _meshes(quick: bool) -> list[tuple[str, Any]]:
 
 def bottom_levels(device: Any, timer: GpuTimer, quick: bool, repeat: int, progress: Any) -> list[dict[str, Any]]:
     from ecs_engine.gpu import acceleration as acc
+    from ecs_engine.render.assets.mesh_registry import MeshRegistry
     from ecs_engine.render.layouts import MESH_VERTEX
-    from ecs_engine.render.mesh_registry import MeshRegistry
 
     out = []
     meshes = MeshRegistry(device)
@@ -149,8 +149,8 @@ def top_levels(
     device: Any, timer: GpuTimer, counts: tuple[int, ...], repeat: int, progress: Any
 ) -> list[dict[str, Any]]:
     from ecs_engine.jobs import JobPool
-    from ecs_engine.render.mesh_registry import MeshRegistry
-    from ecs_engine.render.primitives import cube_mesh
+    from ecs_engine.render.assets.mesh_registry import MeshRegistry
+    from ecs_engine.render.assets.primitives import cube_mesh
 
     out = []
     meshes = MeshRegistry(device)
@@ -173,7 +173,7 @@ def _top_level(
     """One instance count: rows written on one thread and over the pool, built, refitted."""
     from ecs_engine.gpu.acceleration import AS_INSTANCE, TopLevel
     from ecs_engine.gpu.memory import UPLOAD, Buffer
-    from ecs_engine.render.ray_instances import write_instances
+    from ecs_engine.render.raytracing.instances import write_instances
 
     lib = device.vk.lib
     n = len(handles)
@@ -332,7 +332,7 @@ def _frame(gpu: Any, n: int, light: str, method: str, culling: str, warmup: int,
     from ecs_engine.app.scenes import default_schedule, scene_builder
     from ecs_engine.ecs.world import World
     from ecs_engine.jobs import JobPool
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     from . import timed_frames
     from .shadows import add_light

@@ -53,7 +53,7 @@ def sweep(
     from ecs_engine.app.scenes import default_schedule, scene_builder
     from ecs_engine.ecs.world import World
     from ecs_engine.gpu.native_recorder import NativeRecorder
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     rows = []
     with headless_gpu(*size) as (device, target, meshes):
@@ -310,7 +310,7 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
 
 def measure_driver_floor(draws: int, size: tuple[int, int]) -> dict[str, Any]:
     """See bench/driver_floor.py: what the driver alone costs per per_entity draw."""
-    from ecs_engine.render.primitives import cube_mesh
+    from ecs_engine.render.assets.primitives import cube_mesh
 
     from .driver_floor import measure as floor
 

@@ -22,10 +22,10 @@ import numpy as np
 from ecs_engine import World
 from ecs_engine.components import AngularVelocity, Mesh, Transform, Velocity
 from ecs_engine.ecs.scene_file import load_world, save_world
-from ecs_engine.render.materials import materials
-from ecs_engine.render.mesh_data import MeshData
-from ecs_engine.render.primitives import cube_mesh, torus_mesh
-from ecs_engine.render.scene_assets import scene_codecs
+from ecs_engine.render.assets.materials import materials
+from ecs_engine.render.assets.mesh_data import MeshData
+from ecs_engine.render.assets.primitives import cube_mesh, torus_mesh
+from ecs_engine.render.assets.scene_assets import scene_codecs
 
 THREADS = 1
 TARGET_S = 1.0

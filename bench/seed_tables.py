@@ -39,7 +39,7 @@ from ecs_engine.app.loop import run as run_scene
 from ecs_engine.app.scenes import SEED_SCENES
 from ecs_engine.app.settings import RunOptions
 from ecs_engine.jobs import default_threads
-from ecs_engine.render.renderer import MODES as RENDER_MODES
+from ecs_engine.render.frame.renderer import MODES as RENDER_MODES
 
 THREADS = default_threads()
 SCENES = SEED_SCENES  # the seed thesis measured these three

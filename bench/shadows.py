@@ -75,7 +75,7 @@ def measure(gpu: Any, n: int, light: str, filter_: str, threads: int, warmup: in
     from ecs_engine.app.scenes import default_schedule, scene_builder
     from ecs_engine.ecs.world import World
     from ecs_engine.jobs import JobPool
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     device, target, meshes = gpu
     world = World()

@@ -2,10 +2,10 @@
 `world.resources[Environment] = Environment("sky.hdr")`.
 
 `source` is an equirectangular image (a Radiance `.hdr` file, linear, or an 8-bit image, sRGB),
-six face images in the order +X, -X, +Y, -Y, +Z, -Z, or pixels (render/environment_maps.py's
+six face images in the order +X, -X, +Y, -Y, +Z, -Z, or pixels (render/lighting/environment_maps.py's
 load_cube says which shapes). With an Environment:
 - `sky`: it is drawn behind everything (where no mesh is);
-- materials with `reflectivity` or `refraction` show it (render/materials.py);
+- materials with `reflectivity` or `refraction` show it (render/assets/materials.py);
 - `ambient`: it lights every surface instead of the flat ambient colour: diffuse light from its
   spherical harmonics, and for Cook-Torrance materials the specular reflection of its mip chain;
 - `intensity` scales all of it (its pixels are radiance, as lights' intensities are);

@@ -18,9 +18,7 @@ from ecs_engine.components import Camera, DirectionalLight, Transform
 from ecs_engine.ecs import Schedule, System
 from ecs_engine.errors import UsageError
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.mesh_data import MeshData
-from ecs_engine.render.primitives import cone_mesh, sphere_mesh
+from ecs_engine.render import Material, MeshData, cone_mesh, materials, sphere_mesh
 from ecs_engine.systems import ActionMap
 
 from .asteroids_bot import BotSystem
@@ -159,7 +157,7 @@ def build(app: App) -> None:
     """The game as an App: the stock plugins it uses (no fly camera, hierarchy or interpolated
     motion: its own systems move everything), its HUD, its score line, its actions."""
     from ecs_engine.app.plugins import CameraControlPlugin, DefaultPlugins, HierarchyPlugin, MotionPlugin, TimePlugin
-    from ecs_engine.render.meshes import Meshes
+    from ecs_engine.render import Meshes
 
     seed, autoplay, level = (getattr(app.options, k, d) for k, d in (("seed", 1), ("autoplay", False), ("level", 1)))
     if not 1 <= level <= LEVELS:

@@ -8,8 +8,7 @@ import numpy as np
 
 from ecs_engine import World
 from ecs_engine.components import Mesh, Transform
-from ecs_engine.render.mesh_data import MeshData
-from ecs_engine.render.primitives import cube_mesh
+from ecs_engine.render import MeshData, cube_mesh
 
 from .scene_kit import add_camera, add_orbiting_lights
 

@@ -15,9 +15,7 @@ import numpy as np
 from ecs_engine import World
 from ecs_engine.components import DirectionalLight, Environment, Mesh, Shadow, Transform
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.mesh_data import MeshData
-from ecs_engine.render.primitives import cube_mesh, sphere_mesh
+from ecs_engine.render import Material, MeshData, cube_mesh, materials, sphere_mesh
 
 from .scene_kit import add_camera
 

@@ -1,6 +1,6 @@
 """Many lights: N small coloured point and spot lights (default 1,024; `--lights N`) wandering
 over a floor and a field of spheres and cubes. With more than a few dozen bounded lights the
-renderer clusters them (render/light_clusters.py); `--light-culling loop` draws the same image
+renderer clusters them (render/lighting/clusters.py); `--light-culling loop` draws the same image
 with every fragment looping over every light, for comparison. A dim directional light keeps the
 scene readable where no small light reaches.
 
@@ -21,9 +21,7 @@ import numpy as np
 from ecs_engine import World
 from ecs_engine.components import DirectionalLight, Mesh, Orbit, PointLight, SpotLight, Transform
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.mesh_data import MeshData
-from ecs_engine.render.primitives import cube_mesh, plane_mesh, sphere_mesh
+from ecs_engine.render import Material, MeshData, cube_mesh, materials, plane_mesh, sphere_mesh
 
 from .scene_kit import add_camera
 

@@ -12,9 +12,7 @@ import numpy as np
 from ecs_engine import World
 from ecs_engine.components import DirectionalLight, Mesh, PointLight, Transform
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.materials import SHADING_MODELS, Material, materials
-from ecs_engine.render.mesh_data import MeshData
-from ecs_engine.render.primitives import plane_mesh, sphere_mesh
+from ecs_engine.render import SHADING_MODELS, Material, MeshData, materials, plane_mesh, sphere_mesh
 
 from .scene_kit import add_camera
 

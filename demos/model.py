@@ -8,10 +8,7 @@ from collections.abc import Callable
 
 from ecs_engine import World
 from ecs_engine.components import Mesh, Transform
-from ecs_engine.render.materials import materials
-from ecs_engine.render.mesh_data import MeshData, normalized_together
-from ecs_engine.render.mesh_loading import DEFAULT_MODEL
-from ecs_engine.render.model_loading import load_model
+from ecs_engine.render import DEFAULT_MODEL, MeshData, load_model, materials, normalized_together
 
 from .scene_kit import add_camera, add_orbiting_lights
 

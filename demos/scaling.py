@@ -9,9 +9,7 @@ import numpy as np
 
 from ecs_engine import World
 from ecs_engine.components import AngularVelocity, Mesh, Transform, Velocity
-from ecs_engine.render.mesh_data import MeshData, normalized
-from ecs_engine.render.mesh_loading import DEFAULT_MODEL, load_mesh
-from ecs_engine.render.primitives import cube_mesh
+from ecs_engine.render import DEFAULT_MODEL, MeshData, cube_mesh, load_mesh, normalized
 
 from .scene_kit import add_camera, add_orbiting_lights
 

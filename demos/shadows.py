@@ -11,9 +11,7 @@ from collections.abc import Callable
 from ecs_engine import World
 from ecs_engine.components import DirectionalLight, Mesh, PointLight, Shadow, SpotLight, Transform
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.mesh_data import MeshData
-from ecs_engine.render.primitives import cube_mesh
+from ecs_engine.render import Material, MeshData, cube_mesh, materials
 
 from .scene_kit import add_camera
 

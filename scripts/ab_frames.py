@@ -44,6 +44,15 @@ def engine_api() -> tuple[Any, ...]:
     try:
         from ecs_engine.app.scenes import default_schedule, scene_builder
         from ecs_engine.ecs.world import World
+        from ecs_engine.render.assets.mesh_registry import MeshRegistry
+        from ecs_engine.render.frame.renderer import Renderer
+
+        return default_schedule, scene_builder, MeshRegistry, Renderer, World, {}
+    except ImportError:
+        pass
+    try:  # render/ before its sub-packages (issue 36)
+        from ecs_engine.app.scenes import default_schedule, scene_builder
+        from ecs_engine.ecs.world import World
         from ecs_engine.render.mesh_registry import MeshRegistry
         from ecs_engine.render.renderer import Renderer
 

@@ -51,7 +51,7 @@ class Gpu:
 @contextmanager
 def headless_gpu(width: int = 64, height: int = 48) -> Iterator[Gpu]:
     from ecs_engine.gpu.offscreen import OffscreenTarget
-    from ecs_engine.render.mesh_registry import MeshRegistry
+    from ecs_engine.render.assets.mesh_registry import MeshRegistry
 
     device = shared_device()
     gpu = Gpu(device.instance, device, OffscreenTarget(device, width, height), MeshRegistry(device))
@@ -70,7 +70,7 @@ def render_world(gpu: Gpu, world: Any, target: Any = None, frames: int = 1, **se
     import numpy as np
 
     from ecs_engine.app.scenes import default_schedule
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     target = target or gpu.target
     renderer = Renderer(gpu.device, target, gpu.meshes, **settings)

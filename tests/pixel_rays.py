@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ecs_engine import World
-from ecs_engine.render.camera import camera_matrices
+from ecs_engine.render.frame.camera import camera_matrices
 
 
 def pixel_rays(world: World, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:

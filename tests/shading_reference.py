@@ -152,7 +152,7 @@ def lobe_integral(faces: np.ndarray, normals: np.ndarray, roughness: float) -> n
     """sum over texels l of L(l) D(h) (n.l) dw / the same without L, h = (n + l) / |n + l|: the
     prefilter's definition with n = v (the importance sampler's pdf of l is D(h) / 4)."""
     side = faces.shape[1]
-    from ecs_engine.render.environment_maps import _texel_solid_angles, cube_directions
+    from ecs_engine.render.lighting.environment_maps import _texel_solid_angles, cube_directions
 
     light = cube_directions(side).reshape(-1, 3)
     solid_angle = np.tile(_texel_solid_angles(side).ravel(), 6)

@@ -18,8 +18,8 @@ from ecs_engine import App, DefaultPlugins, MinimalPlugins, Time, Window
 from ecs_engine.app.plugins import PerfPlugin, RenderPlugin
 from ecs_engine.components import Camera, DirectionalLight, Mesh, Transform, Velocity
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.meshes import Meshes
-from ecs_engine.render.primitives import cube_mesh
+from ecs_engine.render.assets.meshes import Meshes
+from ecs_engine.render.assets.primitives import cube_mesh
 
 BACKGROUND_TOLERANCE = 12
 

@@ -24,8 +24,8 @@ from ecs_engine import App, Component, DefaultPlugins, Field, SceneFiles, Time
 from ecs_engine.app.plugins import ScenePlugin
 from ecs_engine.components import Camera, DirectionalLight, Mesh, Transform
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.meshes import Meshes
-from ecs_engine.render.primitives import sphere_mesh
+from ecs_engine.render.assets.meshes import Meshes
+from ecs_engine.render.assets.primitives import sphere_mesh
 
 
 class Ball(Component):
@@ -133,7 +133,7 @@ def test_meshes_load_a_model_file_and_save_it_by_reference_without_a_gpu(tmp_pat
     from ecs_engine import App, MinimalPlugins, World
     from ecs_engine.components import Mesh, Transform
     from ecs_engine.errors import UsageError
-    from ecs_engine.render.meshes import Meshes
+    from ecs_engine.render.assets.meshes import Meshes
 
     model = tmp_path / "tri.obj"
     model.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")

@@ -19,7 +19,7 @@ from ecs_engine.demos import asteroids
 from ecs_engine.demos.asteroids_controls import plane_point
 from ecs_engine.demos.asteroids_game import Asteroid, Game, Ship, ShipControls
 from ecs_engine.ecs.timestep import FixedTimestep
-from ecs_engine.render.camera import camera_matrices
+from ecs_engine.render.frame.camera import camera_matrices
 from ecs_engine.systems import InputState
 
 WIDTH, HEIGHT = 640, 400

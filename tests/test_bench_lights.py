@@ -21,7 +21,7 @@ def test_lights_quick_writes_its_json(tmp_path, monkeypatch):
     assert all(r["gpu_ms"] and r["gpu_ms"] > 0 and len(r["runs"]) == 2 for r in doc["results"])
     assert not any(r["clustered"] for (n, c), r in rows.items() if c == "loop")
     assert all(r["clustered"] for (n, c), r in rows.items() if c == "clustered")
-    from ecs_engine.render.light_clusters import CLUSTER_MIN_LIGHTS
+    from ecs_engine.render.lighting.clusters import CLUSTER_MIN_LIGHTS
 
     wanted = [n >= CLUSTER_MIN_LIGHTS for n in QUICK_COUNTS]
     assert [rows[n, "auto"]["clustered"] for n in QUICK_COUNTS] == wanted

@@ -15,7 +15,7 @@ from ecs_engine.components.transform import Transform
 from ecs_engine.errors import UsageError
 from ecs_engine.maths.camera import orthographic, perspective, view_rotation, yaw_pitch_quat
 from ecs_engine.maths.transform import quat_to_mat3
-from ecs_engine.render.camera import camera_matrices
+from ecs_engine.render.frame.camera import camera_matrices
 
 FOV = math.radians(60.0)
 

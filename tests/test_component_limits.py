@@ -28,11 +28,11 @@ from ecs_engine.components import (
 )
 from ecs_engine.components.shadow import Shadow
 from ecs_engine.ecs.scene_file import SceneFileError
+from ecs_engine.render.extract.frame_data import FrameExtractor
 from ecs_engine.render.extract.shadows import extract_shadow_casters
-from ecs_engine.render.frame_data import FrameExtractor
-from ecs_engine.render.light_clusters import cluster_grid, light_census
-from ecs_engine.render.light_rows import write_lights
-from ecs_engine.render.shadow_views import shadow_views
+from ecs_engine.render.lighting.clusters import cluster_grid, light_census
+from ecs_engine.render.lighting.rows import write_lights
+from ecs_engine.render.shadows.views import shadow_views
 
 # (entity, component, field, value, what the message says)
 ABSURD = [

@@ -23,6 +23,7 @@ from ecs_engine.components import Mesh, Transform
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.errors import UsageError
 from ecs_engine.maths.culling import bounding_spheres, frustum_planes, spheres_visible
+from ecs_engine.render.assets.primitives import cube_mesh
 from ecs_engine.render.config import Culling, Mode, RenderConfig, validate
 from ecs_engine.render.culling import (
     METHODS,
@@ -34,8 +35,7 @@ from ecs_engine.render.culling import (
     check_culling,
     culling_method,
 )
-from ecs_engine.render.frame_data import FrameExtractor
-from ecs_engine.render.primitives import cube_mesh
+from ecs_engine.render.extract.frame_data import FrameExtractor
 
 EXPECTED = {
     Culling.FRUSTUM: FrustumCulling,
@@ -191,7 +191,7 @@ def test_the_culling_setting_switches_methods_by_name() -> None:
 
 
 def test_switching_the_renderers_culling_at_runtime_goes_through_the_interface() -> None:
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(32, 24) as gpu:
         world = World()

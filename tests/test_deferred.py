@@ -1,4 +1,4 @@
-"""Deferred lighting (the target's deferred form, render/deferred_pass.py): the opaque meshes lit in
+"""Deferred lighting (the target's deferred form, render/lighting/deferred.py): the opaque meshes lit in
 compute give the forward all-lights loop's image within 1/255 in 8-bit sRGB, with the light grid
 and without, for every render path, perspective and orthographic, grid tiles smaller and larger
 than the lighting's workgroup, more lights than a workgroup holds at once, and every material
@@ -20,17 +20,17 @@ from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Camera, DirectionalLight, Mesh, PointLight, Transform
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.light_clusters import CLUSTER_MIN_LIGHTS
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.primitives import cube_mesh, plane_mesh, sphere_mesh
-from ecs_engine.render.textures import Texture
+from ecs_engine.render.assets.materials import Material, materials
+from ecs_engine.render.assets.primitives import cube_mesh, plane_mesh, sphere_mesh
+from ecs_engine.render.assets.textures import Texture
+from ecs_engine.render.lighting.clusters import CLUSTER_MIN_LIGHTS
 
 W, H = 160, 96
 
 
 def render(gpu, world: World, culling: str, mode: str = "instanced", frames: int = 1, target=None):
     """(RGB pixels, the target's form, whether the lights were clustered) of the last frame."""
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     target = target or gpu.target
     renderer = Renderer(gpu.device, target, gpu.meshes, light_culling=culling, mode=mode, tone_map="aces")
@@ -54,7 +54,7 @@ def assert_same(a: np.ndarray, b: np.ndarray) -> None:
 def test_deferred_lighting_draws_what_the_loop_draws(ortho, mode, tile, monkeypatch):
     """Point, spot, directional and unbounded lights over Lambert and Cook-Torrance surfaces; grid
     tiles of 8 px (four under one 16-px workgroup, their masks ORed) and 64 px."""
-    from ecs_engine.render import light_clusters
+    from ecs_engine.render.lighting import clusters as light_clusters
 
     monkeypatch.setattr(light_clusters, "TILE_PX", tile)
     with headless_gpu(W, H) as gpu:
@@ -194,7 +194,7 @@ def test_more_lights_than_a_workgroup_holds_at_once():
 @pytest.mark.parametrize(("width", "height", "tile"), [(157, 93, 16), (33, 17, 8), (200, 7, 64)])
 def test_images_of_any_size_light_their_edges(width, height, tile, monkeypatch):
     """Sizes that are not multiples of the 16-pixel workgroup: the last ones are partial."""
-    from ecs_engine.render import light_clusters
+    from ecs_engine.render.lighting import clusters as light_clusters
 
     monkeypatch.setattr(light_clusters, "TILE_PX", tile)
     with headless_gpu(width, height) as gpu:
@@ -227,8 +227,8 @@ def test_one_renderer_switches_form_as_the_light_count_changes(tone_map, forward
     """auto: many lights defer, few go forward again (straight into the target with clamp); the
     image each time is what a new renderer draws. Going deferred builds the G-buffer pipelines
     once, not the forward clustered ones first."""
-    from ecs_engine.render import chunk_paths
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.draw import chunk_paths
+    from ecs_engine.render.frame.renderer import Renderer
 
     made: list[str] = []
     real = chunk_paths.graphics_pipeline
@@ -273,8 +273,8 @@ def test_a_renderer_that_cannot_make_its_form_leaves_nothing(monkeypatch):
     from ecs_engine.gpu import scene_attachments as render_pass
     from ecs_engine.gpu.frames import FrameRing
     from ecs_engine.gpu.secondary import SecondaryBuffers
-    from ecs_engine.render import renderer as renderer_module
-    from ecs_engine.render.light_clusters import LightCulling
+    from ecs_engine.render.frame import renderer as renderer_module
+    from ecs_engine.render.lighting.clusters import LightCulling
 
     def refuse(*args):
         raise RuntimeError("no G-buffer today")
@@ -303,7 +303,7 @@ def test_a_device_without_fragment_subgroups_still_walks_the_grid_in_compute(cul
     """The forward `_clustered` shaders need subgroup arithmetic in fragment shaders; the lighting
     pass does not: such a device still builds the grid and defers, and the rows drawn forward
     (glass, wireframe) loop over every light. No warning: nothing asked for is missing."""
-    from ecs_engine.render import chunk_paths
+    from ecs_engine.render.draw import chunk_paths
 
     made: list[str] = []
     real = chunk_paths.graphics_pipeline

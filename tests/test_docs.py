@@ -81,7 +81,7 @@ def _games_as_systems(scope: dict) -> None:
 
 def _materials(scope: dict) -> None:
     from ecs_engine.components import DirectionalLight, SpotLight
-    from ecs_engine.render.materials import materials
+    from ecs_engine.render.assets.materials import materials
 
     world = scope["world"]
     assert materials(world)[scope["gold"]].roughness == 0.6

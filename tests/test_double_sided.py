@@ -12,9 +12,9 @@ from gpu_context import headless_gpu, render_world
 from ecs_engine import World
 from ecs_engine.components import Camera, DirectionalLight, Mesh, Transform
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.primitives import plane_mesh
-from ecs_engine.render.textures import linear_to_srgb
+from ecs_engine.render.assets.materials import Material, materials
+from ecs_engine.render.assets.primitives import plane_mesh
+from ecs_engine.render.assets.textures import linear_to_srgb
 
 W, H = 96, 48
 FACING_MINUS_Z = (-math.sin(math.pi / 4), 0.0, 0.0, math.cos(math.pi / 4))  # +Y (the normal) -> -Z

@@ -17,9 +17,9 @@ from ecs_engine.gpu.memory import HOST, Buffer
 from ecs_engine.gpu.pipeline import AttachmentFormats
 from ecs_engine.gpu.secondary import SecondaryBuffers, end_command_buffer
 from ecs_engine.gpu.shadow_maps import shadow_formats
-from ecs_engine.render.chunk_paths import InstancedPath, PerEntityPath
+from ecs_engine.render.draw.chunk_paths import InstancedPath, PerEntityPath
+from ecs_engine.render.frame.renderer import Renderer
 from ecs_engine.render.graph import Access, FrameGraph, ImageDesc, Load, Pass
-from ecs_engine.render.renderer import Renderer
 
 W, H = 8, 6
 BACK = (0.25, 0.5, 1.0, 1.0)

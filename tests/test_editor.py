@@ -298,7 +298,7 @@ def test_ui_rate_limit_draws_the_last_ui_between_builds(scene):
 
 def test_materials_window_and_light_sections_draw_and_edit():
     from ecs_engine.components import DirectionalLight, SpotLight
-    from ecs_engine.render.materials import materials
+    from ecs_engine.render.assets.materials import materials
 
     scene = Scene("materials")
     try:
@@ -329,7 +329,7 @@ def test_materials_window_and_light_sections_draw_and_edit():
         assert "roughness" in editor.materials.status and library[handle].roughness == pytest.approx(0.2)
         scene.frame()
         # a texture set from the panel shows on the next frame; a handle the registry lacks is refused
-        from ecs_engine.render.textures import Texture
+        from ecs_engine.render.assets.textures import Texture
 
         red = library.textures.add(Texture("red", np.full((16, 16, 3), (255, 0, 0), np.uint8)))
         before = scene.gpu.target.pixels()[..., :3].copy()

@@ -11,7 +11,7 @@ from test_editor_scene import key_chord
 
 from ecs_engine.components import Transform
 from ecs_engine.ecs.scene_file import load_world
-from ecs_engine.render.scene_assets import scene_codecs
+from ecs_engine.render.assets.scene_assets import scene_codecs
 
 
 class Meshes(list):

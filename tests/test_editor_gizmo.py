@@ -13,7 +13,7 @@ from ecs_engine.app.editor_gizmo import column_major, from_column_major, gl_proj
 from ecs_engine.components import ORTHOGRAPHIC, Camera, Transform
 from ecs_engine.maths.decompose import decompose
 from ecs_engine.maths.transform import compose_numpy
-from ecs_engine.render.camera import camera_matrices
+from ecs_engine.render.frame.camera import camera_matrices
 
 
 @pytest.mark.parametrize("ortho", [False, True])

@@ -28,8 +28,8 @@ from ecs_engine.app.settings import RunOptions
 from ecs_engine.components import Camera, DirectionalLight, Environment, Mesh, Parent, Transform
 from ecs_engine.ecs.scene_file import save_world
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.primitives import cube_mesh
-from ecs_engine.render.scene_assets import scene_codecs
+from ecs_engine.render.assets.primitives import cube_mesh
+from ecs_engine.render.assets.scene_assets import scene_codecs
 
 W, H = 800, 480  # the narrow layout: the scene in the middle, 200 pixels wide
 FRAMES_PER_OPEN = 4  # the open is applied after its frame, the scene fails in the next

@@ -73,7 +73,7 @@ def test_the_gizmo_drags_the_selection_and_undo_redo_restore_it(scene):
     assert editor.selected == entity
     before = world.get(entity, Transform).position.copy()
     # the translate gizmo's centre handle moves the selection in the screen's plane
-    from ecs_engine.render.camera import camera_matrices
+    from ecs_engine.render.frame.camera import camera_matrices
 
     cam = camera_matrices(world, W / H, editor.dock.region(W, H))
     view = np.asarray(cam.view, np.float64)[:3, :3] @ (before - cam.position)

@@ -99,7 +99,7 @@ def saved_cube(tmp_path) -> str:
     from ecs_engine import World
     from ecs_engine.demos.cube import build
     from ecs_engine.ecs.scene_file import save_world
-    from ecs_engine.render.scene_assets import scene_codecs
+    from ecs_engine.render.assets.scene_assets import scene_codecs
 
     world, meshes = World(), Meshes()
     build(world, meshes.add)

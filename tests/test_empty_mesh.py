@@ -16,8 +16,8 @@ from ecs_engine.app.settings import RunOptions
 from ecs_engine.components import Mesh, Transform
 from ecs_engine.demos.shadows import build
 from ecs_engine.ecs.scene_file import save_world
-from ecs_engine.render.mesh_data import MeshData
-from ecs_engine.render.scene_assets import MeshReferences, scene_codecs
+from ecs_engine.render.assets.mesh_data import MeshData
+from ecs_engine.render.assets.scene_assets import MeshReferences, scene_codecs
 
 
 class Meshes(list):

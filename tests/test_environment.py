@@ -1,4 +1,4 @@
-"""Environment maps drawn (render/environment.py, sky_pass.py, shaders/environment.glsl): the sky
+"""Environment maps drawn (render/lighting/environment.py, sky_pass.py, shaders/environment.glsl): the sky
 shows the cube face each pixel looks at; a mirror's reflection follows Schlick's Fresnel with its
 reflectivity at normal incidence; glass bends the view through it (a sphere shows the far side of
 the sky); a uniform environment lights a white Lambert surface with its own radiance; the forward
@@ -19,10 +19,10 @@ from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Environment, Mesh, Transform
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.errors import UsageError
-from ecs_engine.render.environment_maps import cube_directions
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.primitives import cube_mesh, sphere_mesh
-from ecs_engine.render.textures import linear_to_srgb
+from ecs_engine.render.assets.materials import Material, materials
+from ecs_engine.render.assets.primitives import cube_mesh, sphere_mesh
+from ecs_engine.render.assets.textures import linear_to_srgb
+from ecs_engine.render.lighting.environment_maps import cube_directions
 
 W, H = 160, 100
 FACE_COLORS = np.array([(1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 0), (0, 1, 1), (1, 0, 1)], np.float32)
@@ -33,7 +33,7 @@ def flat_faces(colors=FACE_COLORS, side: int = 16) -> np.ndarray:
 
 
 def render(gpu, world: World, **settings) -> np.ndarray:
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     renderer = Renderer(gpu.device, gpu.target, gpu.meshes, **settings)
     try:
@@ -181,8 +181,8 @@ def test_a_uniform_environment_lights_white_with_its_radiance(light_culling):
 
 
 def test_a_world_without_an_environment_compiles_none_of_it():
+    from ecs_engine.render.frame.renderer import Renderer
     from ecs_engine.render.layouts import FEATURE_ENVIRONMENT
-    from ecs_engine.render.renderer import Renderer
 
     with headless_gpu(W, H) as gpu:
         world = World()
@@ -203,7 +203,7 @@ def test_a_world_without_an_environment_compiles_none_of_it():
 
 
 def test_a_broken_sky_file_is_one_clear_error_and_keeps_the_old_sky(tmp_path):
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     broken = tmp_path / "sky.hdr"
     broken.write_bytes(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 8 +X 16\n" + b"\x01" * 10)
@@ -241,7 +241,7 @@ def test_changing_the_intensity_keeps_the_image_and_scales_the_light():
     is not loaded again (same source and size), and the sky's radiance follows the intensity."""
     from dataclasses import replace
 
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(W, H) as gpu:
         world = World()

@@ -1,4 +1,4 @@
-"""Environment maps on the CPU (render/environment_maps.py): Radiance .hdr files read back what a
+"""Environment maps on the CPU (render/lighting/environment_maps.py): Radiance .hdr files read back what a
 small encoder here wrote, flat and run-length; cube faces are oriented as the Vulkan spec's face
 selection table says; an equirectangular map and six face images land on the right faces;
 spherical-harmonic irradiance matches constant and half-lit skies; bad inputs get one clear
@@ -15,8 +15,8 @@ import pytest
 from PIL import Image
 
 from ecs_engine.errors import UsageError
-from ecs_engine.render import environment_maps
-from ecs_engine.render.environment_maps import (
+from ecs_engine.render.lighting import environment_maps
+from ecs_engine.render.lighting.environment_maps import (
     CUBE_FACE_NAMES,
     cube_directions,
     cube_mips,

@@ -1,4 +1,4 @@
-"""The GGX-prefiltered specular chain (render/environment_prefilter.py): every blurred level
+"""The GGX-prefiltered specular chain (render/lighting/environment_prefilter.py): every blurred level
 matches the split sum's lobe integral over the sharp faces, computed here by brute force over
 every texel; the NumPy fallback and the numba kernel agree; the job pool's blocks give the serial
 result; a uniform sky stays uniform; roughness reaches 1 on 4 x 4 faces."""
@@ -11,9 +11,9 @@ from shading_reference import lobe_integral
 
 from ecs_engine import native
 from ecs_engine.jobs import JobPool
-from ecs_engine.render import environment_prefilter
-from ecs_engine.render.environment_maps import cube_directions
-from ecs_engine.render.environment_prefilter import ggx_prefiltered_mips, level_roughness, roughness_levels
+from ecs_engine.render.lighting import environment_prefilter
+from ecs_engine.render.lighting.environment_maps import cube_directions
+from ecs_engine.render.lighting.environment_prefilter import ggx_prefiltered_mips, level_roughness, roughness_levels
 
 SIDE = 16
 SUN = np.array([0.3, 0.8, -0.5]) / np.linalg.norm([0.3, 0.8, -0.5])

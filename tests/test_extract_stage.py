@@ -23,20 +23,19 @@ from ecs_engine.components.environment import Environment
 from ecs_engine.ecs.errors import AccessError
 from ecs_engine.ecs.schedule import Schedule, system
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.frame_data import FrameExtractor
-from ecs_engine.render.materials import Material, Materials, materials
-from ecs_engine.render.ray_shadows import ray_lights
-from ecs_engine.render.shadow_views import shadow_views
+from ecs_engine.render.assets.materials import Material, Materials, materials
+from ecs_engine.render.extract.frame_data import FrameExtractor
+from ecs_engine.render.raytracing.shadows import ray_lights
+from ecs_engine.render.shadows.views import shadow_views
 
 RENDER = Path(ecs_engine.render.__file__).parent
 # the extract stage: what FrameExtractor is made of
 EXTRACT = {
-    "frame_data.py",  # FrameExtractor: hands the world to the extract functions
     # temporal culling's masks are decided while extracting (FrameData.masks), from the tables'
     # ModelMatrix and Mesh columns and ticks: the machinery (temporal_culling.py) and its culling
     # method (culling/temporal.py, whose `masks` FrameExtractor.extract calls), reached through
     # extraction alone (checked below)
-    "temporal_culling.py",
+    "culling/temporal_culling.py",
     "culling/temporal.py",
 }
 # category (b): modules that take a World outside the frame, per module the scopes ("<module>":
@@ -44,17 +43,17 @@ EXTRACT = {
 ALLOWED: dict[str, set[str] | None] = {
     # scene files: the codecs World.save and World.load call with the world being saved or
     # loaded (its Materials, Meshes and Environment resources), never while a frame is drawn
-    "scene_assets.py": None,
-    "scene_meshes.py": None,  # the meshes' codec, apart from scene_assets.py for size
+    "assets/scene_assets.py": None,
+    "assets/scene_meshes.py": None,  # the meshes' codec, apart from scene_assets.py for size
     # the app's and editor's question "which entity is under this pixel", asked between frames
     # with the world in hand (a ray from the active camera against the rows' spheres)
     "picking.py": None,
     # materials(world): the set-up helper apps add materials with, making the resource on first
     # use; frames read the resource through extract/materials.py
-    "materials.py": {"<module>", "materials"},
+    "assets/materials.py": {"<module>", "materials"},
     # Renderer.render(world, ...) takes the world and hands it to the extract stage (its
     # `materials` and `extract` methods) before anything else; the passes get the snapshot
-    "renderer.py": {"<module>", "Renderer.materials"},
+    "frame/renderer.py": {"<module>", "Renderer.materials"},
 }
 # functions that read a world handed to them (a call of one outside the extract stage is a read)
 READERS = {
@@ -206,7 +205,7 @@ def test_temporal_culling_is_reached_through_extraction_only() -> None:
     importers = [
         name
         for name, source in render_modules().items()
-        if "temporal_culling" in source and name not in ("frame_data.py", *EXTRACT)
+        if "temporal_culling" in source and name not in ("extract/frame_data.py", *EXTRACT)
         for node in ast.walk(ast.parse(source))
         if isinstance(node, ast.ImportFrom) and (node.module or "").endswith("temporal_culling")
     ]

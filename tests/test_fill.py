@@ -15,14 +15,14 @@ from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Camera, Mesh, PointLight, Transform
 from ecs_engine.errors import UsageError
-from ecs_engine.render.primitives import sphere_mesh
+from ecs_engine.render.assets.primitives import sphere_mesh
 
 W, H = 96, 96
 
 
 def covered(gpu, fill: str) -> int:
     """Pixels not the clear colour, drawing a sphere with `fill`."""
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     world = World()
     world.spawn(Transform(), Mesh(handle=gpu.meshes.add(sphere_mesh(12, 6)), material=0))
@@ -48,7 +48,7 @@ def test_wireframe_and_points_cover_less_than_solid():
 
 
 def test_a_device_without_non_solid_fill_refuses_it(monkeypatch):
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(W, H) as gpu:
         monkeypatch.setitem(gpu.device.features, "fillModeNonSolid", False)
@@ -82,8 +82,8 @@ def test_cli_fill_flag(tmp_path):
 
 def two_spheres(gpu, left_fill: str) -> np.ndarray:
     """Two spheres of one mesh: the left with a material of fill `left_fill`, the right solid."""
-    from ecs_engine.render.materials import Material, materials
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.assets.materials import Material, materials
+    from ecs_engine.render.frame.renderer import Renderer
 
     world = World()
     mesh = gpu.meshes.add(sphere_mesh(12, 6))
@@ -115,7 +115,7 @@ def test_a_material_with_its_own_fill():
     assert (wire[:, half:] == solid[:, half:]).all()
     assert points[:, :half].sum() < 0.2 * wire[:, :half].sum()
     with pytest.raises(ValueError, match="fill must be one of"):
-        from ecs_engine.render.materials import Material
+        from ecs_engine.render.assets.materials import Material
 
         Material("m", fill="dots")
 

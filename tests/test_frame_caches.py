@@ -10,7 +10,7 @@ from gpu_context import shared_device
 from ecs_engine import World
 from ecs_engine.components import Transform, Velocity
 from ecs_engine.errors import UsageError
-from ecs_engine.render.frame_data import CULLING, check_culling
+from ecs_engine.render.extract.frame_data import CULLING, check_culling
 
 
 def test_buffer_views_are_kept_per_shape_and_follow_the_buffer():

@@ -10,7 +10,7 @@ from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Mesh, PointLight, Transform
 from ecs_engine.demos.scene_kit import add_camera
-from ecs_engine.render.frame_data import MIN_CHUNK_ROWS, FrameExtractor
+from ecs_engine.render.extract.frame_data import MIN_CHUNK_ROWS, FrameExtractor
 
 
 def scene(n: int = 50) -> World:

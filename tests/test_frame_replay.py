@@ -1,4 +1,4 @@
-"""Frames submitted again instead of recorded again (render/frame_replay.py): a replayed frame
+"""Frames submitted again instead of recorded again (render/frame/replay.py): a replayed frame
 must draw exactly what recording it would have drawn, through every kind of change, and the
 frames that cannot be replayed must record."""
 
@@ -15,11 +15,11 @@ from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Camera, FlyCamera, Mesh, PointLight, Transform
 from ecs_engine.demos.scene_kit import add_camera
-from ecs_engine.render.frame_replay import FrameReplay
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.path import ChunkResult
-from ecs_engine.render.primitives import cube_mesh, sphere_mesh
-from ecs_engine.render.textures import Texture
+from ecs_engine.render.assets.materials import Material, materials
+from ecs_engine.render.assets.primitives import cube_mesh, sphere_mesh
+from ecs_engine.render.assets.textures import Texture
+from ecs_engine.render.draw.path import ChunkResult
+from ecs_engine.render.frame.replay import FrameReplay
 
 
 def stripes(axis: int) -> np.ndarray:
@@ -34,7 +34,7 @@ def stripes(axis: int) -> np.ndarray:
 def test_replayed_frames_draw_what_recorded_frames_draw():
     """After each change, frames with replay on (some of them replayed) end on the image a
     recorded frame draws, and the change shows."""
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(80, 60) as gpu:
         world = World()
@@ -111,7 +111,7 @@ def test_a_frame_is_replayed_only_into_the_framebuffer_it_was_recorded_for():
     replayed frame must be one its slot recorded for this output (the key holds the state
     itself, not its id); a review found 3 of 400 frames replayed into another output."""
     from ecs_engine.gpu.memory import Image
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(32, 24) as gpu:
         device, vk, target = gpu.device, gpu.device.vk, gpu.target
@@ -145,8 +145,8 @@ def test_a_frame_is_replayed_only_into_the_framebuffer_it_was_recorded_for():
 def test_still_rows_seen_by_a_still_camera_are_not_written_again(monkeypatch):
     """A slot's rows written from the same chunk, model ticks and planes are kept: only a
     change writes them again, in each slot once."""
-    import ecs_engine.render.chunk_paths as chunk_paths
-    from ecs_engine.render.renderer import Renderer
+    import ecs_engine.render.draw.chunk_paths as chunk_paths
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(32, 24) as gpu:
         world = World()
@@ -177,8 +177,8 @@ def test_rows_another_culling_wrote_are_written_again(monkeypatch):
     """Rows the temporal culling decided (here: another set with the same counts) are never
     taken for the frustum culling's: back on frustum culling, with the camera still, the frame
     draws what a fresh renderer draws (a review found the kept result still said otherwise)."""
-    from ecs_engine.render.frame_data import FrameData
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.extract.frame_data import FrameData
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(64, 48) as gpu:
         world = World()
@@ -214,8 +214,8 @@ def test_rows_another_culling_wrote_are_written_again(monkeypatch):
 @pytest.mark.parametrize("scene", ["per_entity", "shadows", "blended"])
 def test_frames_that_cannot_be_replayed_record(scene):
     from ecs_engine.components import Shadow
-    from ecs_engine.render.materials import Materials
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.assets.materials import Materials
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(64, 48) as gpu:
         world = World()

@@ -16,9 +16,9 @@ from gpu_context import headless_gpu, render_world
 from ecs_engine import World
 from ecs_engine.components import Camera, Mesh, Transform
 from ecs_engine.errors import UsageError
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.primitives import plane_mesh
-from ecs_engine.render.textures import linear_to_srgb
+from ecs_engine.render.assets.materials import Material, materials
+from ecs_engine.render.assets.primitives import plane_mesh
+from ecs_engine.render.assets.textures import linear_to_srgb
 
 W, H = 64, 48
 FACING_Z = (math.sin(math.pi / 4), 0.0, 0.0, math.cos(math.pi / 4))
@@ -107,7 +107,7 @@ def _compose(a, b):
 def test_bad_settings_are_refused():
     from ecs_engine.gpu.scene_attachments import supported_samples
     from ecs_engine.render.config import check_samples
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(W, H) as gpu:
         assert 1 in supported_samples(gpu.device)
@@ -157,7 +157,7 @@ def test_the_target_takes_the_scene_straight_unless_the_tone_map_needs_hdr():
     target (no tone map pass). Another tone map or exposure switches the target to HDR between
     frames, and back; the pipelines follow, and the clamp image is the same either way."""
     from ecs_engine.app.scenes import default_schedule
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(W, H) as gpu:
         world = glowing_plane(gpu)
@@ -203,7 +203,7 @@ def test_blended_materials_are_drawn_through_hdr_colour():
     """An 8-bit target clamps a blended colour before blending: glass lit to 3.0 at alpha 0.5
     over a dark background would come out at 0.5. With a blended material in the world the
     target takes the HDR form even at clamp and exposure 0, and the glass is white."""
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(W, H) as gpu:
         world = World()

@@ -167,8 +167,8 @@ def test_picking_finds_a_child_where_its_parent_puts_it():
     from test_picking import Registry, pixel_of
 
     from ecs_engine.demos.scene_kit import add_camera
+    from ecs_engine.render.assets.primitives import cube_mesh
     from ecs_engine.render.picking import pick
-    from ecs_engine.render.primitives import cube_mesh
 
     world = World()
     add_camera(world, (0.0, 0.0, 10.0), (0.0, 0.0, 0.0))

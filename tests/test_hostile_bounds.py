@@ -26,8 +26,8 @@ import pytest
 from ecs_engine import World
 from ecs_engine.components import Mesh, Transform
 from ecs_engine.ecs.scene_file import save_world
-from ecs_engine.render.primitives import sphere_mesh
-from ecs_engine.render.scene_assets import scene_codecs
+from ecs_engine.render.assets.primitives import sphere_mesh
+from ecs_engine.render.assets.scene_assets import scene_codecs
 
 SECONDS, BYTES, WALL = 10.0, 2 << 30, 90.0
 
@@ -36,20 +36,20 @@ import sys, time
 path = sys.argv[1]
 # the levels' kernels compiled (numba, cached on disk after the first run) before the clock: the
 # bound is on what the file asks for, not on the engine's one-time start
-from ecs_engine.render.mesh_lod import build_lods
-from ecs_engine.render.primitives import sphere_mesh
+from ecs_engine.render.assets.mesh_lod import build_lods
+from ecs_engine.render.assets.primitives import sphere_mesh
 build_lods(sphere_mesh(16, 8), min_triangles=8)
 start = time.process_time()
 print("ready", flush=True)
 try:
     if path.endswith(".obj"):
-        from ecs_engine.render.mesh_loading import load_mesh
+        from ecs_engine.render.assets.mesh_loading import load_mesh
         mesh = load_mesh(path)
         print("loaded", mesh.vertex_count, "vertices,", len(build_lods(mesh)), "levels")
     else:
         from ecs_engine import World
         from ecs_engine.ecs.scene_file import load_world
-        from ecs_engine.render.scene_assets import scene_codecs
+        from ecs_engine.render.assets.scene_assets import scene_codecs
         class Registry(list):
             def add(self, mesh):
                 self.append(mesh)

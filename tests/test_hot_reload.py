@@ -317,8 +317,8 @@ def test_watch_needs_a_game_in_the_editor():
 ASSET_GAME = """
 from ecs_engine import DefaultPlugins
 from ecs_engine.components import Camera, Mesh, Transform
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.meshes import Meshes
+from ecs_engine.render.assets.materials import Material, materials
+from ecs_engine.render.assets.meshes import Meshes
 
 
 def setup(world, dt):
@@ -419,8 +419,8 @@ def test_textures_and_meshes_changed_on_disk_show_in_the_next_frames(tmp_path, m
 
 
 def test_a_broken_asset_file_keeps_the_old_one_and_says_one_line(tmp_path):
-    from ecs_engine.render.materials import materials
-    from ecs_engine.render.meshes import Meshes
+    from ecs_engine.render.assets.materials import materials
+    from ecs_engine.render.assets.meshes import Meshes
 
     game_file, texture, model = asset_game(tmp_path, "hot_assets_cpu", plugins="MinimalPlugins")
     try:
@@ -487,9 +487,9 @@ def test_the_editor_shows_a_failed_reload(tmp_path):
 SHADER_GAME = """
 from ecs_engine import DefaultPlugins
 from ecs_engine.components import Camera, Mesh, Transform
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.meshes import Meshes
-from ecs_engine.render.primitives import cube_mesh
+from ecs_engine.render.assets.materials import Material, materials
+from ecs_engine.render.assets.meshes import Meshes
+from ecs_engine.render.assets.primitives import cube_mesh
 
 
 def setup(world, dt):

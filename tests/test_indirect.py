@@ -13,16 +13,16 @@ from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Mesh, ModelMatrix, Transform
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.maths.culling import bounding_spheres, frustum_planes, spheres_visible
-from ecs_engine.render.camera import camera_matrices
-from ecs_engine.render.mesh_data import normalized
-from ecs_engine.render.mesh_loading import DEFAULT_MODEL, load_mesh
-from ecs_engine.render.primitives import cube_mesh
+from ecs_engine.render.assets.mesh_data import normalized
+from ecs_engine.render.assets.mesh_loading import DEFAULT_MODEL, load_mesh
+from ecs_engine.render.assets.primitives import cube_mesh
+from ecs_engine.render.frame.camera import camera_matrices
 
 W, H = 64, 48
 
 
 def indirect_renderer(gpu, **kw):
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     renderer = Renderer(gpu.device, gpu.target, gpu.meshes, mode="indirect", **kw)
     gpu.owned.append(renderer)

@@ -247,8 +247,8 @@ def read_script_lines(tmp_path, recorder):
 STEPPED_GAME = """
 from ecs_engine import App, DefaultPlugins
 from ecs_engine.components import Camera, Mesh, Transform, Velocity
-from ecs_engine.render.meshes import Meshes
-from ecs_engine.render.primitives import cube_mesh
+from ecs_engine.render.assets.meshes import Meshes
+from ecs_engine.render.assets.primitives import cube_mesh
 
 
 class Clock:

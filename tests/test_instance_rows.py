@@ -8,7 +8,7 @@ import pytest
 from ecs_engine.maths.camera import perspective, view_rotation, yaw_pitch_quat
 from ecs_engine.maths.culling import frustum_planes
 from ecs_engine.maths.transform import compose
-from ecs_engine.render import instance_rows as ir
+from ecs_engine.render.draw import instance_rows as ir
 
 rng = np.random.default_rng(4)
 

@@ -16,17 +16,17 @@ from ecs_engine.components import Camera, DirectionalLight, Mesh, PointLight, Sp
 from ecs_engine.components.camera import ORTHOGRAPHIC
 from ecs_engine.errors import UsageError
 from ecs_engine.maths.camera import look_rotation
+from ecs_engine.render.assets.materials import Material, materials
+from ecs_engine.render.assets.primitives import plane_mesh, sphere_mesh
 from ecs_engine.render.layouts import LIGHT_BINS
-from ecs_engine.render.light_clusters import (
+from ecs_engine.render.lighting.clusters import (
     CLUSTER_MIN_LIGHTS,
     TILE_PX,
     cluster_grid,
     light_census,
     wants_clusters,
 )
-from ecs_engine.render.light_rows import DirectionalLights, PositionalLights
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.primitives import plane_mesh, sphere_mesh
+from ecs_engine.render.lighting.rows import DirectionalLights, PositionalLights
 
 W, H = 160, 96
 
@@ -71,7 +71,7 @@ def lit_field(gpu, lights: int, ortho: bool = False, seed: int = 3) -> World:
 
 
 def render(gpu, world: World, culling: str, mode: str = "instanced") -> tuple[np.ndarray, bool]:
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     renderer = Renderer(gpu.device, gpu.target, gpu.meshes, light_culling=culling, mode=mode)
     try:
@@ -86,7 +86,7 @@ def render(gpu, world: World, culling: str, mode: str = "instanced") -> tuple[np
 @pytest.mark.parametrize("mode", ["instanced", "indirect"])
 @pytest.mark.parametrize("tile", [16, 64])
 def test_clustered_lights_draw_what_the_loop_draws(ortho, mode, tile, monkeypatch):
-    from ecs_engine.render import light_clusters
+    from ecs_engine.render.lighting import clusters as light_clusters
 
     monkeypatch.setattr(light_clusters, "TILE_PX", tile)  # 16 (the default): 10 x 6 tiles; 64: 3 x 2
     with headless_gpu(W, H) as gpu:
@@ -112,7 +112,7 @@ def crowd(gpu, n: int = 300) -> World:
 
 
 def frames(gpu, world: World, culling: str, count: int) -> tuple[np.ndarray, object]:
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     renderer = Renderer(gpu.device, gpu.target, gpu.meshes, light_culling=culling)
     try:
@@ -142,7 +142,7 @@ def test_spot_cones_of_every_width_draw_as_the_loop(outer, monkeypatch):
     """A spot light's cone is bounded by a tighter sphere than its radius (narrow cones, up to 45
     degrees; wider ones, up to 90, by the sphere around the cap): too tight a sphere would cut the
     light off at tile or bin borders."""
-    from ecs_engine.render import light_clusters
+    from ecs_engine.render.lighting import clusters as light_clusters
 
     monkeypatch.setattr(light_clusters, "TILE_PX", 8)  # many borders
     with headless_gpu(W, H) as gpu:
@@ -194,7 +194,7 @@ def test_census_grid_and_bad_mode():
     assert bins[0] == bins[1] == 0 and bins[-1] == LIGHT_BINS - 1 and bins[-2] == LIGHT_BINS - 1
     assert (np.diff(bins) >= 0).all()
     assert grid.buffer_bytes == 4 * (grid.masks_start + grid.tiles_x * grid.tiles_y * 2)
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(W, H) as gpu, pytest.raises(UsageError, match="light culling"):
         Renderer(gpu.device, gpu.target, gpu.meshes, light_culling="tiles")
@@ -227,7 +227,7 @@ def test_a_light_grid_larger_than_the_device_binds_keeps_the_loop(caplog):
 
     with headless_gpu(W, H) as gpu, caplog.at_level(logging.WARNING, logger="ecs_engine"):
         world = lit_field(gpu, 40)
-        from ecs_engine.render.renderer import Renderer
+        from ecs_engine.render.frame.renderer import Renderer
 
         renderer = Renderer(gpu.device, gpu.target, gpu.meshes, light_culling="clustered")
         try:

@@ -10,10 +10,10 @@ import pytest
 from ecs_engine.components import DirectionalLight, PointLight, SpotLight, Transform
 from ecs_engine.ecs.world import World
 from ecs_engine.maths.transform import quat_to_mat3
-from ecs_engine.render import light_rows
-from ecs_engine.render.frame_data import FrameExtractor
+from ecs_engine.render.extract.frame_data import FrameExtractor
 from ecs_engine.render.layouts import LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT
-from ecs_engine.render.light_rows import (
+from ecs_engine.render.lighting import rows as light_rows
+from ecs_engine.render.lighting.rows import (
     FLOATS,
     LIGHT_DTYPE,
     NO_CONE,
@@ -154,10 +154,10 @@ def test_the_mesh_shaders_read_only_the_light_kinds_a_scene_has():
     from ecs_engine.app.scenes import default_schedule
     from ecs_engine.components import Camera, Mesh, PointLight, SpotLight, Transform
     from ecs_engine.maths.camera import look_rotation
+    from ecs_engine.render.assets.primitives import plane_mesh
+    from ecs_engine.render.frame.renderer import Renderer
     from ecs_engine.render.layouts import FEATURE_DIRECTIONAL_LIGHTS, FEATURE_SPOT_LIGHTS
-    from ecs_engine.render.light_rows import light_features
-    from ecs_engine.render.primitives import plane_mesh
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.lighting.rows import light_features
 
     spot = PositionalLights(
         np.zeros((1, 3)), np.ones(1), np.ones((1, 3)), np.ones(1), np.zeros((1, 3)), np.ones((1, 2))

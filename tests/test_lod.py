@@ -16,11 +16,11 @@ from ecs_engine.app.scenes import default_schedule
 from ecs_engine.app.settings import RunOptions
 from ecs_engine.components import Mesh, Transform
 from ecs_engine.demos.scene_kit import add_camera
-from ecs_engine.render.mesh_data import normalized
-from ecs_engine.render.mesh_loading import DEFAULT_MODEL, load_mesh
-from ecs_engine.render.mesh_lod import focal_pixels, lod_errors, lod_for_screen_size
-from ecs_engine.render.primitives import cube_mesh
-from ecs_engine.render.renderer import Renderer
+from ecs_engine.render.assets.mesh_data import normalized
+from ecs_engine.render.assets.mesh_loading import DEFAULT_MODEL, load_mesh
+from ecs_engine.render.assets.mesh_lod import focal_pixels, lod_errors, lod_for_screen_size
+from ecs_engine.render.assets.primitives import cube_mesh
+from ecs_engine.render.frame.renderer import Renderer
 
 W, H = 96, 64
 FOV = math.radians(50.0)  # scene_kit.add_camera's
@@ -117,9 +117,9 @@ def test_background_levels_arrive_later_and_equal_those_built_inline(monkeypatch
     build makes (the knot is made to count as big here)."""
     import time
 
-    from ecs_engine.render import mesh_registry
-    from ecs_engine.render.mesh_lod import build_lods
-    from ecs_engine.render.mesh_registry import MeshRegistry
+    from ecs_engine.render.assets import mesh_registry
+    from ecs_engine.render.assets.mesh_lod import build_lods
+    from ecs_engine.render.assets.mesh_registry import MeshRegistry
 
     monkeypatch.setattr(mesh_registry, "BACKGROUND_TRIANGLES", 1000)
     monkeypatch.setattr(mesh_registry, "_LEVELS", mesh_registry.OrderedDict())  # no cached levels

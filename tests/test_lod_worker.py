@@ -1,14 +1,14 @@
-"""The child process that builds levels of detail for windows (render/lod_worker.py): the same
+"""The child process that builds levels of detail for windows (render/assets/lod_worker.py): the same
 levels as an inline build, read-only, and one clear error when the child is gone."""
 
 from __future__ import annotations
 
 import pytest
 
-from ecs_engine.render.lod_worker import LevelBuilder
-from ecs_engine.render.mesh_loading import DEFAULT_MODEL, load_mesh
-from ecs_engine.render.mesh_lod import build_lods
-from ecs_engine.render.primitives import cube_mesh
+from ecs_engine.render.assets.lod_worker import LevelBuilder
+from ecs_engine.render.assets.mesh_loading import DEFAULT_MODEL, load_mesh
+from ecs_engine.render.assets.mesh_lod import build_lods
+from ecs_engine.render.assets.primitives import cube_mesh
 
 
 def test_levels_from_the_child_equal_an_inline_build():

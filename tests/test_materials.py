@@ -14,6 +14,8 @@ from gpu_context import headless_gpu
 from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Camera, Mesh, PointLight, Transform
+from ecs_engine.render.assets.materials import DEFAULT_PALETTE, SHADING_MODELS, Material, Materials, materials
+from ecs_engine.render.assets.primitives import plane_mesh
 from ecs_engine.render.layouts import (
     FEATURE_ALPHA_MASK,
     FEATURE_BLEND,
@@ -23,8 +25,6 @@ from ecs_engine.render.layouts import (
     MODEL_UNLIT,
     NO_TEXTURE,
 )
-from ecs_engine.render.materials import DEFAULT_PALETTE, SHADING_MODELS, Material, Materials, materials
-from ecs_engine.render.primitives import plane_mesh
 
 W, H = 64, 48
 
@@ -123,7 +123,7 @@ def flat_scene(gpu, material: Material) -> tuple[World, int]:
 
 
 def test_edits_show_on_the_next_frame_and_new_models_get_pipelines():
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(W, H) as gpu:
         world, handle = flat_scene(gpu, Material("m", "lambert", (0.8, 0.1, 0.1, 1.0)))
@@ -160,7 +160,7 @@ def test_edits_show_on_the_next_frame_and_new_models_get_pipelines():
 
 
 def test_alpha_mask_drops_fragments_below_the_cutoff():
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(W, H) as gpu:
         material = Material("cut", "unlit", (1.0, 1.0, 1.0, 0.4), alpha_mode="mask", alpha_cutoff=0.5)
@@ -178,7 +178,7 @@ def test_alpha_mask_drops_fragments_below_the_cutoff():
 
 
 def test_a_mesh_naming_no_material_is_refused_before_drawing():
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(W, H) as gpu:
         world, handle = flat_scene(gpu, Material("m", "lambert"))

@@ -14,9 +14,9 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from ecs_engine.errors import UsageError
-from ecs_engine.render.mesh_data import MeshData, bounding_sphere, normalized
-from ecs_engine.render.mesh_loading import DEFAULT_MODEL, load_mesh
-from ecs_engine.render.primitives import cube_mesh
+from ecs_engine.render.assets.mesh_data import MeshData, bounding_sphere, normalized
+from ecs_engine.render.assets.mesh_loading import DEFAULT_MODEL, load_mesh
+from ecs_engine.render.assets.primitives import cube_mesh
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -302,7 +302,7 @@ def test_unreadable_file(tmp_path, monkeypatch):
         raise PermissionError(13, "Permission denied", str(path))
 
     # chmod does not stop root, who may run the tests
-    monkeypatch.setattr("ecs_engine.render.mesh_loading.read_user_file", denied)
+    monkeypatch.setattr("ecs_engine.render.assets.mesh_loading.read_user_file", denied)
     with pytest.raises(UsageError, match=r"locked\.obj: cannot read the file: Permission denied$"):
         load_mesh(path)
 

@@ -1,4 +1,4 @@
-"""Levels of detail (render/mesh_lod.py): the levels the torus knot gets, their errors checked
+"""Levels of detail (render/assets/mesh_lod.py): the levels the torus knot gets, their errors checked
 against a brute-force distance to the surface, attributes carried across seams, the meshes that get
 none, bad input, and the selection rule the culling shader mirrors."""
 
@@ -8,16 +8,16 @@ import numpy as np
 import pytest
 import trimesh
 
-from ecs_engine.render.mesh_data import MeshData
-from ecs_engine.render.mesh_loading import DEFAULT_MODEL, load_mesh
-from ecs_engine.render.mesh_lod import (
+from ecs_engine.render.assets.mesh_data import MeshData
+from ecs_engine.render.assets.mesh_loading import DEFAULT_MODEL, load_mesh
+from ecs_engine.render.assets.mesh_lod import (
     DEFAULT_RATIOS,
     build_lods,
     focal_pixels,
     lod_errors,
     lod_for_screen_size,
 )
-from ecs_engine.render.primitives import cube_mesh, sphere_mesh
+from ecs_engine.render.assets.primitives import cube_mesh, sphere_mesh
 
 
 @pytest.fixture(scope="module")
@@ -202,7 +202,7 @@ def test_building_levels_takes_bounded_memory_per_vertex():
 def test_error_is_the_same_compiled_and_in_numpy_blocks(knot, monkeypatch):
     """The NumPy form (no numba) walks the same pairs in blocks: the same errors, whatever the block
     size, as the compiled kernels (float rounding aside)."""
-    from ecs_engine.render import lod_error
+    from ecs_engine.render.assets import lod_error
 
     compiled = [lod.error for lod in build_lods(knot)]
     monkeypatch.setattr(lod_error, "_outward_kernel", None)
@@ -218,7 +218,7 @@ def test_a_part_collapsed_away_is_measured_against_the_rest(monkeypatch):
     """A level that drops a small separate part (its vertices have no survivor left) is measured
     from that part to the nearest remaining triangle; with a budget too small for every triangle, a
     strided subset of them still gives a bound at least as large."""
-    from ecs_engine.render import lod_error
+    from ecs_engine.render.assets import lod_error
 
     sphere = sphere_mesh(24, 12)
     speck = MeshData.from_arrays(  # a tiny triangle 2 units above the sphere's top

@@ -15,8 +15,8 @@ import pytest
 import trimesh
 
 from ecs_engine.errors import UsageError
-from ecs_engine.render.materials import Materials
-from ecs_engine.render.model_loading import load_model
+from ecs_engine.render.assets.materials import Materials
+from ecs_engine.render.assets.model_loading import load_model
 
 MUTANTS = 80  # per model; about 3 s for all eight on the 2-core dev box
 NUMBERS = [b"nan", b"inf", b"-inf", b"1e309", b"-1e309", b"0", b"-1", b"3", b"99999999", b"1.5", b"x", b"", b"1 2"]

@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from ecs_engine.render.materials import Materials
-from ecs_engine.render.mesh_loading import DEFAULT_MODEL, load_mesh
-from ecs_engine.render.model_loading import load_model
-from ecs_engine.render.mtl import read_mtl
+from ecs_engine.render.assets.materials import Materials
+from ecs_engine.render.assets.mesh_loading import DEFAULT_MODEL, load_mesh
+from ecs_engine.render.assets.model_loading import load_model
+from ecs_engine.render.assets.mtl import read_mtl
 
 QUAD_OBJ = """mtllib {mtl}
 v 0 0 0

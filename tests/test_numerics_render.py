@@ -22,14 +22,14 @@ from ecs_engine.components import (
     Transform,
 )
 from ecs_engine.demos.scene_kit import add_camera
-from ecs_engine.render.instance_rows import INSTANCE_DTYPE, write_rows
-from ecs_engine.render.primitives import cube_mesh
+from ecs_engine.render.assets.primitives import cube_mesh
+from ecs_engine.render.draw.instance_rows import INSTANCE_DTYPE, write_rows
 
 W, H = 160, 120
 
 
 def render(gpu, world: World, frames: int = 1) -> np.ndarray:
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
     try:

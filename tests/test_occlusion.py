@@ -1,4 +1,4 @@
-"""Two-phase occlusion culling (render/occlusion.py): the image equals frustum culling's, frame
+"""Two-phase occlusion culling (render/culling/occlusion_passes.py): the image equals frustum culling's, frame
 after frame while things move, with far fewer rows drawn in a dense scene; the pyramid's levels;
 sub-pixel rows culled; refusals and fallbacks."""
 
@@ -14,9 +14,9 @@ from ecs_engine.components import Mesh, Transform
 from ecs_engine.demos import scaling
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.errors import UsageError
-from ecs_engine.render.occlusion import pyramid_levels
-from ecs_engine.render.primitives import cube_mesh
-from ecs_engine.render.renderer import Renderer
+from ecs_engine.render.assets.primitives import cube_mesh
+from ecs_engine.render.culling.occlusion_passes import pyramid_levels
+from ecs_engine.render.frame.renderer import Renderer
 
 W, H = 96, 64
 
@@ -133,7 +133,7 @@ def test_occlusion_culling_outside_the_indirect_mode_is_one_clear_refusal():
 def test_with_levels_of_detail_and_mirrored_rows_the_early_pass_reads_the_scenes_command_lists(monkeypatch):
     """The early depth pass draws from the same per-winding lists as the scene (compact writes
     them a draw-mesh count apart), and the image still equals frustum culling's."""
-    import ecs_engine.render.indirect_path as indirect
+    import ecs_engine.render.draw.indirect_path as indirect
 
     lists = []
     real = indirect.record_indirect_draws

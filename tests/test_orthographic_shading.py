@@ -14,9 +14,9 @@ from gpu_context import headless_gpu, render_world
 from ecs_engine import World
 from ecs_engine.components import ORTHOGRAPHIC, Camera, DirectionalLight, Environment, Mesh, PointLight, Transform
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.primitives import cube_mesh, sphere_mesh
-from ecs_engine.render.textures import Texture
+from ecs_engine.render.assets.materials import Material, materials
+from ecs_engine.render.assets.primitives import cube_mesh, sphere_mesh
+from ecs_engine.render.assets.textures import Texture
 
 W, H = 96, 64
 AXIS = np.array([0.35, -0.55, -1.0]) / np.linalg.norm([0.35, -0.55, -1.0])  # where the camera looks

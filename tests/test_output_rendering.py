@@ -1,4 +1,4 @@
-"""The output after the scene's render pass (render/output_passes.py), on lavapipe with validation
+"""The output after the scene's render pass (render/frame/output_passes.py), on lavapipe with validation
 on: in the hdr and deferred forms the tone map and the overlay draw with dynamic rendering into
 the target, after the post effects' seam, and give the pixels the direct form gives."""
 
@@ -14,7 +14,7 @@ from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Mesh, PointLight, Transform
 from ecs_engine.demos.scene_kit import add_camera
-from ecs_engine.render.primitives import cube_mesh
+from ecs_engine.render.assets.primitives import cube_mesh
 
 
 def _cube_world(gpu):
@@ -32,9 +32,9 @@ def test_post_effects_run_between_the_scene_pass_and_the_tone_map(monkeypatch):
     single-sample HDR colour (sampled-capable), its single-sample depth and the camera's
     projection, after the billboards' subpass ends and before the tone map; not in the direct
     form, which has no HDR colour."""
-    from ecs_engine.render.light_pass import LightPass
-    from ecs_engine.render.renderer import Renderer
-    from ecs_engine.render.tone_map import ToneMapPass
+    from ecs_engine.render.frame.renderer import Renderer
+    from ecs_engine.render.passes.light_billboards import LightPass
+    from ecs_engine.render.passes.tone_map import ToneMapPass
 
     order: list[str] = []
     for cls, name in ((LightPass, "billboards"), (ToneMapPass, "tone map")):

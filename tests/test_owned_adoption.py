@@ -17,20 +17,20 @@ PACKAGE = Path(__file__).resolve().parent.parent / "ecs_engine"
 
 # Files other helpers are converting in this session (their destroys still name handles).
 NOT_YET = {
-    "render/output_passes.py",
-    "render/output_ldr.py",
-    "render/oit_pass.py",
-    "render/light_pass.py",
-    "render/sky_pass.py",
-    "render/set_aside_pass.py",
-    "render/imgui_pass.py",
-    "render/chunk_paths.py",
-    "render/indirect_path.py",
-    "render/deferred_pass.py",
-    "render/ray_shadows.py",
-    "render/tone_map.py",
-    "render/renderer.py",
-    "render/path.py",
+    "render/frame/output_passes.py",
+    "render/passes/output_ldr.py",
+    "render/passes/oit.py",
+    "render/passes/light_billboards.py",
+    "render/passes/sky.py",
+    "render/passes/set_aside.py",
+    "render/ui/imgui_pass.py",
+    "render/draw/chunk_paths.py",
+    "render/draw/indirect_path.py",
+    "render/lighting/deferred.py",
+    "render/raytracing/shadows.py",
+    "render/passes/tone_map.py",
+    "render/frame/renderer.py",
+    "render/draw/path.py",
     "gpu/scene_attachments.py",
     "gpu/gbuffer.py",
     "gpu/offscreen.py",
@@ -181,7 +181,7 @@ def _bloom(device: Any) -> Any:
 
 
 def _denoise(device: Any) -> Any:
-    from ecs_engine.render.shadow_denoise import ShadowDenoise
+    from ecs_engine.render.raytracing.denoise import ShadowDenoise
 
     return ShadowDenoise(device, 2)
 
@@ -232,8 +232,8 @@ def test_a_constructor_failing_half_way_leaves_nothing(maker, fail, before):
 def test_light_culling_modes_are_the_config_enum():
     from ecs_engine.errors import UsageError
     from ecs_engine.gpu.descriptors import DescriptorSetLayout
-    from ecs_engine.render.config_support import LightCulling as Mode
-    from ecs_engine.render.light_clusters import LightCulling, wants_clusters
+    from ecs_engine.render.config.choices import LightCulling as Mode
+    from ecs_engine.render.lighting.clusters import LightCulling, wants_clusters
 
     device = shared_device()
     layout = DescriptorSetLayout(device, [(0, device.vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1)])

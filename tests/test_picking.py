@@ -16,9 +16,9 @@ from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import ORTHOGRAPHIC, Camera, Mesh, Transform
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.materials import Material, materials
+from ecs_engine.render.assets.materials import Material, materials
+from ecs_engine.render.assets.primitives import cube_mesh
 from ecs_engine.render.picking import pick, pixel_ray, ray_triangles
-from ecs_engine.render.primitives import cube_mesh
 
 W, H = 96, 64
 
@@ -55,7 +55,7 @@ def scene(camera_at=(0.0, 0.0, 6.0), offset=(0.0, 0.0, 0.0)) -> tuple[World, dic
 
 def pixel_of(world: World, point) -> tuple[float, float]:
     """Where a world point lands on screen (pixel coordinates from the top left)."""
-    from ecs_engine.render.camera import camera_matrices
+    from ecs_engine.render.frame.camera import camera_matrices
 
     cam = camera_matrices(world, W / H)
     view = np.asarray(cam.view, np.float64)[:3, :3] @ (point - cam.position)
@@ -129,7 +129,7 @@ def test_picking_agrees_with_the_rendered_image():
         add_camera(world, (0.5, 1.0, 6.0), (0.0, 0.0, 0.0))
         places = [(-1.0, 0.0, 1.0), (-0.3, 0.2, -1.5), (2.0, 0.5, 0.0)]
         ids = [world.spawn(Transform(position=p), Mesh(handle=cube, material=m)) for p, m in zip(places, looks)]
-        from ecs_engine.render.renderer import Renderer
+        from ecs_engine.render.frame.renderer import Renderer
 
         renderer = Renderer(gpu.device, gpu.target, gpu.meshes, clear_color=(0.0, 0.0, 0.0))
         try:

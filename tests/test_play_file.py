@@ -26,8 +26,8 @@ import numpy as np
 from ecs_engine import App, Component, DefaultPlugins, Field
 from ecs_engine.components import Camera, DirectionalLight, Mesh, Transform
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.meshes import Meshes
-from ecs_engine.render.primitives import sphere_mesh
+from ecs_engine.render.assets.meshes import Meshes
+from ecs_engine.render.assets.primitives import sphere_mesh
 from ecs_engine.systems import InputState
 
 

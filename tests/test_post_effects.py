@@ -19,12 +19,12 @@ from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Mesh, PointLight, Transform
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.errors import UsageError
+from ecs_engine.render.assets.primitives import cube_mesh
 from ecs_engine.render.config import POST_EFFECTS, RenderConfig, validate
 from ecs_engine.render.post import registry
 from ecs_engine.render.post.bloom_settings import BloomSettings
 from ecs_engine.render.post.fxaa import FxaaSettings
 from ecs_engine.render.post.ssao import SsaoSettings
-from ecs_engine.render.primitives import cube_mesh
 
 # ------------------------------------------------------------------------------ the registry
 
@@ -61,7 +61,7 @@ def _world(gpu: Any) -> World:
 
 
 def _renderer(gpu: Any, **settings: Any) -> Any:
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     renderer = Renderer(gpu.device, gpu.target, gpu.meshes, **settings)
     gpu.owned.append(renderer)
@@ -267,7 +267,7 @@ def test_toggling_at_runtime_never_replays_a_stale_frame():
 
 def test_the_replay_key_holds_the_effects():
     """The key changes with an effect on or off and with its settings (frame_replay.replay_key)."""
-    from ecs_engine.render.frame_replay import replay_key
+    from ecs_engine.render.frame.replay import replay_key
 
     with headless_gpu(32, 24) as gpu:
         world = _world(gpu)
@@ -370,7 +370,7 @@ def test_effects_run_in_the_deferred_form_and_over_msaa(settings):
     """Both stages run after the G-buffer's lighting (the deferred form, the light culling's
     choice here) and after the MSAA resolve, validation-clean, and change the frame."""
     from ecs_engine.gpu.offscreen import OffscreenTarget
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(48, 32) as gpu:
         target = OffscreenTarget(gpu.device, 48, 32, samples=settings.get("samples", 1))

@@ -21,10 +21,10 @@ from ecs_engine.components import Camera, DirectionalLight, Mesh, Transform
 from ecs_engine.components.camera import active_camera
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.errors import UsageError
+from ecs_engine.render.assets.primitives import cube_mesh, plane_mesh
 from ecs_engine.render.config import RenderConfig, validate
 from ecs_engine.render.post import registry
 from ecs_engine.render.post.ssao import SsaoSettings
-from ecs_engine.render.primitives import cube_mesh, plane_mesh
 
 W, H = 64, 48
 EYE, AIM = (2.2, 1.6, 2.6), (0.0, 0.3, 0.0)
@@ -44,7 +44,7 @@ def _world(gpu: Any) -> World:
 
 
 def _renderer(gpu: Any, target: Any = None, **settings: Any) -> Any:
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     renderer = Renderer(gpu.device, target or gpu.target, gpu.meshes, **settings)
     gpu.owned.append(renderer)

@@ -11,11 +11,10 @@ import pytest
 import trimesh
 
 from ecs_engine.errors import UsageError
-from ecs_engine.render.layouts import MESH_VERTEX
-from ecs_engine.render.mesh_data import MeshData, tangent_frames
-from ecs_engine.render.mesh_loading import load_mesh
-from ecs_engine.render.mesh_registry import _interleaved
-from ecs_engine.render.primitives import (
+from ecs_engine.render.assets.mesh_data import MeshData, tangent_frames
+from ecs_engine.render.assets.mesh_loading import load_mesh
+from ecs_engine.render.assets.mesh_registry import _interleaved
+from ecs_engine.render.assets.primitives import (
     PRIMITIVES,
     cone_mesh,
     cylinder_mesh,
@@ -24,6 +23,7 @@ from ecs_engine.render.primitives import (
     sphere_mesh,
     torus_mesh,
 )
+from ecs_engine.render.layouts import MESH_VERTEX
 
 
 def triangle_frames(mesh: MeshData) -> tuple[np.ndarray, ...]:

@@ -1,4 +1,4 @@
-"""Ray-traced shadows (render/ray_shadows.py, `--shadows raytraced`). Everywhere: a device that
+"""Ray-traced shadows (render/raytracing/shadows.py, `--shadows raytraced`). Everywhere: a device that
 cannot trace rays (lavapipe), or MSAA, refuses in one message and changes nothing. On the GPU
 host (ray-tracing pipelines; the tests skip elsewhere, saying why), with the validation layers
 on: shadows fall where a NumPy ray cast says, agree with the shadow maps' but near edges, the
@@ -37,7 +37,7 @@ def _needs_ray_tracing():
 
 
 def test_a_device_without_ray_tracing_refuses_raytraced_shadows():
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(W, H) as gpu:
         if gpu.device.ray_tracing is not None:
@@ -64,7 +64,7 @@ def test_the_command_line_refuses_in_one_line(capsys):
 
 
 def test_unknown_methods_and_msaa_are_refused():
-    from ecs_engine.render.ray_shadows import check_shadow_method
+    from ecs_engine.render.raytracing.shadows import check_shadow_method
 
     with pytest.raises(UsageError, match="unknown shadow method 'soft'"):
         RunOptions(shadow_method="soft")
@@ -140,7 +140,7 @@ def test_alpha_cutouts_let_rays_through_where_the_maps_let_light_through():
     """The checkerboard-masked plane (test_shadows.py): the rays' any-hit shader reads the
     texture at each hit, so the ray-traced shadow is the checkerboard too, and agrees with the
     maps' but near edges; the same plane made opaque casts a square (the holes are the any-hit's)."""
-    from ecs_engine.render.materials import materials
+    from ecs_engine.render.assets.materials import materials
 
     _needs_ray_tracing()
     with headless_gpu(W, H) as gpu:
@@ -163,8 +163,8 @@ def glass_scene(gpu, glass: bool = True, shadow: bool = True):
     its shadow (a forward-lit row: the rays' mask holds the ground beneath it), casting nothing
     itself."""
     from ecs_engine.components import Mesh, Transform
-    from ecs_engine.render.materials import Material, materials
-    from ecs_engine.render.primitives import plane_mesh
+    from ecs_engine.render.assets.materials import Material, materials
+    from ecs_engine.render.assets.primitives import plane_mesh
 
     world = scene(gpu, "spot", shadow=shadow)
     if glass:
@@ -178,7 +178,7 @@ def draw(gpu, world, traced_lights: int | None = None, **settings) -> tuple[np.n
     """The frame's pixels, the shadow maps' draws and the entities of the lights they were drawn
     for; `traced_lights`: the rays' max_lights."""
     from ecs_engine.app.scenes import default_schedule
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     renderer = Renderer(gpu.device, gpu.target, gpu.meshes, **settings)
     try:
@@ -325,7 +325,7 @@ def test_the_denoise_smooths_soft_shadows_and_leaves_hard_ones():
 def test_switching_method_live_draws_what_a_fresh_renderer_draws():
     _needs_ray_tracing()
     from ecs_engine.app.scenes import default_schedule
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(W, H) as gpu:
         world = scene(gpu, "spot")

@@ -1,5 +1,5 @@
 """Acceleration structures and ray casting (gpu/acceleration.py, gpu/ray_cast.py,
-render/ray_instances.py). The instance layout and the row-writing kernel are checked everywhere;
+render/raytracing/instances.py). The instance layout and the row-writing kernel are checked everywhere;
 building and tracing need a device with ray-tracing pipelines (the GPU host: lavapipe has none,
 so those tests skip there, saying why), with the validation layers on."""
 
@@ -12,10 +12,10 @@ from gpu_context import shared_device
 
 from ecs_engine.gpu.acceleration import AS_INSTANCE, MeshInput, TopLevel, build_bottom_levels, functions
 from ecs_engine.gpu.memory import UPLOAD, Buffer
+from ecs_engine.render.assets.mesh_registry import MeshRegistry
+from ecs_engine.render.assets.primitives import cube_mesh, sphere_mesh
 from ecs_engine.render.layouts import MESH_VERTEX
-from ecs_engine.render.mesh_registry import MeshRegistry
-from ecs_engine.render.primitives import cube_mesh, sphere_mesh
-from ecs_engine.render.ray_instances import (
+from ecs_engine.render.raytracing.instances import (
     FACING_CULL_DISABLE,
     FORCE_NO_OPAQUE,
     INDEX_LIMIT,

@@ -23,7 +23,7 @@ from ecs_engine.app.scenes import default_schedule
 from ecs_engine.app.settings import RunOptions
 from ecs_engine.components import Camera, Mesh, PointLight, Transform
 from ecs_engine.demos.scene_kit import add_camera
-from ecs_engine.render.primitives import cube_mesh
+from ecs_engine.render.assets.primitives import cube_mesh
 
 
 def render(scene: str, frames: int = 8, **kw) -> object:
@@ -143,7 +143,7 @@ def test_degenerate_scales_render_without_validation_errors(monkeypatch, tmp_pat
 
 
 def test_scene_without_lights_builds_no_light_pipeline():
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu() as gpu:
         world = World()
@@ -234,7 +234,7 @@ def test_suballocator_serves_many_buffers_from_few_allocations():
 
 def test_what_the_renderer_keeps_between_frames_follows_the_world():
     """Chunks, uniforms and camera matrices are kept while unchanged: each change must show."""
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(80, 60) as gpu:
         world = World()
@@ -278,7 +278,7 @@ def test_what_the_renderer_keeps_between_frames_follows_the_world():
 def test_a_renderer_switched_to_another_world_draws_that_world():
     """Two worlds built the same way have tables with the same ids, layouts and ticks: what the
     renderer keeps from one must not be used for the other (the editor's scene switcher)."""
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(80, 60) as gpu:
         renderer = Renderer(gpu.device, gpu.target, gpu.meshes)

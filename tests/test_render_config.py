@@ -1,4 +1,4 @@
-"""The render configuration (render/config.py): the enums are the flags' words, the one table of
+"""The render configuration (render/config/__init__.py): the enums are the flags' words, the one table of
 rules refuses each combination a device cannot draw with its reason, from_strings names every bad
 value in one error, and the CLI's flags and the editor's lists come from the enums."""
 
@@ -28,7 +28,7 @@ from ecs_engine.render.config import (
     inert_refusal,
     validate,
 )
-from ecs_engine.render.config_flags import CHOICE_FLAGS, DESCRIPTIONS, RUN_FIELDS
+from ecs_engine.render.config.flags import CHOICE_FLAGS, DESCRIPTIONS, RUN_FIELDS
 
 NOTHING = Caps(
     name="Bare GPU",
@@ -178,14 +178,14 @@ def test_enums_round_trip_the_cli_strings(kind):
 
 def test_the_implementations_know_every_name():
     """The modules that draw a setting map the same names (their tables stay theirs)."""
-    from ecs_engine.render.chunk_paths import RECORDERS
-    from ecs_engine.render.frame_data import CULLING
-    from ecs_engine.render.light_clusters import LIGHT_MODES
-    from ecs_engine.render.oit_pass import TRANSPARENCY_MODES
-    from ecs_engine.render.path import FILL_MODES
-    from ecs_engine.render.ray_shadows import SHADOW_METHODS
-    from ecs_engine.render.renderer import MODES, PATHS
-    from ecs_engine.render.tone_map import TONE_MAPS
+    from ecs_engine.render.draw.chunk_paths import RECORDERS
+    from ecs_engine.render.draw.path import FILL_MODES
+    from ecs_engine.render.extract.frame_data import CULLING
+    from ecs_engine.render.frame.renderer import MODES, PATHS
+    from ecs_engine.render.lighting.clusters import LIGHT_MODES
+    from ecs_engine.render.passes.oit import TRANSPARENCY_MODES
+    from ecs_engine.render.passes.tone_map import TONE_MAPS
+    from ecs_engine.render.raytracing.shadows import SHADOW_METHODS
 
     assert MODES == tuple(PATHS) == Mode.names()
     assert tuple(RECORDERS) == Recorder.names()
@@ -254,8 +254,8 @@ def test_caps_of_the_test_device(monkeypatch):
 def test_the_renderer_refuses_every_setting_the_device_lacks_at_once_and_reports_its_config(monkeypatch):
     from gpu_context import headless_gpu
 
-    from ecs_engine.render.chunk_paths import default_recorder
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.draw.chunk_paths import default_recorder
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(32, 24) as gpu:
         monkeypatch.setitem(gpu.device.features, "drawIndirectCount", False)

@@ -99,7 +99,7 @@ def test_a_failing_job_names_its_chunk_and_the_next_frame_renders(monkeypatch):
     from ecs_engine.demos import grid100
     from ecs_engine.ecs.world import World
     from ecs_engine.jobs import JobPool
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu() as gpu:
         jobs = JobPool(3)
@@ -127,7 +127,7 @@ def test_a_failing_job_names_its_chunk_and_the_next_frame_renders(monkeypatch):
 
 
 def test_jobs_are_about_one_per_thread_but_never_tiny():
-    from ecs_engine.render.frame_data import MIN_CHUNK_ROWS, FrameExtractor
+    from ecs_engine.render.extract.frame_data import MIN_CHUNK_ROWS, FrameExtractor
 
     def rows(n, threads, chunk_rows=None):
         return FrameExtractor(lambda: threads, chunk_rows).rows_per_job(n)

@@ -1,4 +1,4 @@
-"""Saved scenes (ecs/scene_file.py, render/scene_assets.py): a round trip keeps every column and
+"""Saved scenes (ecs/scene_file.py, render/assets/scene_assets.py): a round trip keeps every column and
 archetype and remaps entity references, into a fresh world or one with entities; materials, the
 environment and meshes come back by reference or by value with their handles remapped; each kind
 of truncated, corrupt or hostile file is one SceneFileError and changes nothing; a failed save
@@ -19,11 +19,11 @@ from ecs_engine import Component, Field, World
 from ecs_engine.components import AngularVelocity, Mesh, Name, Parent, Transform, Velocity
 from ecs_engine.components.environment import Environment
 from ecs_engine.ecs.scene_file import IdMap, SceneFileError, load_world, save_world
-from ecs_engine.render.materials import Material, Materials, materials
-from ecs_engine.render.mesh_data import MeshData, normalized
-from ecs_engine.render.primitives import cube_mesh, sphere_mesh, torus_mesh
-from ecs_engine.render.scene_assets import MeshReferences, scene_codecs
-from ecs_engine.render.textures import Texture
+from ecs_engine.render.assets.materials import Material, Materials, materials
+from ecs_engine.render.assets.mesh_data import MeshData, normalized
+from ecs_engine.render.assets.primitives import cube_mesh, sphere_mesh, torus_mesh
+from ecs_engine.render.assets.scene_assets import MeshReferences, scene_codecs
+from ecs_engine.render.assets.textures import Texture
 
 
 class Registry(list):

@@ -1,6 +1,6 @@
 """What a scene file may ask a primitive recipe to make (issue 34): every argument checked, one
 SceneFileError naming the recipe and argument, and a cap on the vertices all of a file's recipes
-make together, checked before anything is made (render/scene_assets.py, docs/scene-format.md)."""
+make together, checked before anything is made (render/assets/scene_assets.py, docs/scene-format.md)."""
 
 from __future__ import annotations
 
@@ -14,9 +14,9 @@ import pytest
 from ecs_engine import World
 from ecs_engine.components import Mesh, Transform
 from ecs_engine.ecs.scene_file import SceneFileError, load_world, save_world
-from ecs_engine.render.mesh_data import MeshData
-from ecs_engine.render.primitives import sphere_mesh
-from ecs_engine.render.scene_assets import MAX_RECIPE_VERTICES, mesh_from_source, scene_codecs
+from ecs_engine.render.assets.mesh_data import MeshData
+from ecs_engine.render.assets.primitives import sphere_mesh
+from ecs_engine.render.assets.scene_assets import MAX_RECIPE_VERTICES, mesh_from_source, scene_codecs
 
 
 class Registry(list):

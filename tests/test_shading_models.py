@@ -16,8 +16,8 @@ from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Camera, DirectionalLight, Mesh, PointLight, SpotLight, Transform
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.primitives import plane_mesh, sphere_mesh
+from ecs_engine.render.assets.materials import Material, materials
+from ecs_engine.render.assets.primitives import plane_mesh, sphere_mesh
 
 W, H = 160, 120
 EYE = np.array([0.0, 0.0, 3.0])
@@ -82,7 +82,7 @@ def turning_y_to(normal) -> np.ndarray:
 
 
 def render(gpu, world: World) -> np.ndarray:
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     renderer = Renderer(gpu.device, gpu.target, gpu.meshes, ambient=AMBIENT)
     try:
@@ -111,7 +111,7 @@ def expected(
     world: World, shape: str, model: str, params: dict, lights: list[ref.Light]
 ) -> tuple[np.ndarray, np.ndarray]:
     """The reference image (h, w, 3) in 8-bit sRGB, and the pixels to compare (away from edges)."""
-    from ecs_engine.render.camera import camera_matrices
+    from ecs_engine.render.frame.camera import camera_matrices
 
     cam = camera_matrices(world, W / H)
     rays = ref.pixel_rays(cam.projection, cam.inverse_view, EYE, W, H)
@@ -191,7 +191,7 @@ def test_cook_torrance_reflects_no_more_than_it_receives(metallic, roughness):
         world.spawn(Transform(rotation=turning_y_to((0.0, 0.0, 1.0))), Mesh(handle=mesh, material=handle))
         world.spawn(Transform(position=EYE), Camera(fov_y=math.radians(50.0), near=0.05))
         add_lights(world, lights)
-        from ecs_engine.render.renderer import Renderer
+        from ecs_engine.render.frame.renderer import Renderer
 
         renderer = Renderer(gpu.device, gpu.target, gpu.meshes, ambient=(0.0, 0.0, 0.0, 0.0))
         try:
@@ -203,7 +203,7 @@ def test_cook_torrance_reflects_no_more_than_it_receives(metallic, roughness):
     ceiling = ref.srgb8(np.array(total))  # an albedo of exactly 1
     assert got.max() <= ceiling + 1, f"reflects {got.max():.0f} > {ceiling:.0f}: more than it receives"
     # and it is the albedo the formula gives (rough metal keeps only about a third: single scattering)
-    from ecs_engine.render.camera import camera_matrices
+    from ecs_engine.render.frame.camera import camera_matrices
 
     cam = camera_matrices(world, W / H)
     rays = ref.pixel_rays(cam.projection, cam.inverse_view, EYE, W, H)

@@ -1,4 +1,4 @@
-"""The indirect mode's shadow views culled and drawn on the GPU (render/shadow_indirect.py): the
+"""The indirect mode's shadow views culled and drawn on the GPU (render/shadows/indirect.py): the
 maps are the instanced mode's (the same images), the chunks' rows are culled per view by the
 compute shaders (no CPU shadow job records them; the GPU counts the instanced mode's draws and
 triangles), NotShadowCaster rows and alpha-masked holes are left out of the maps, and the
@@ -14,8 +14,8 @@ from test_shadows import H, W, render, scene
 from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Mesh, NotShadowCaster, Transform
-from ecs_engine.render.frame_data import NOT_CASTER
-from ecs_engine.render.primitives import cube_mesh
+from ecs_engine.render.assets.primitives import cube_mesh
+from ecs_engine.render.extract.frame_data import NOT_CASTER
 
 
 def max_difference(a: np.ndarray, b: np.ndarray) -> int:
@@ -37,7 +37,7 @@ class JobSpy:
     """The chunks the shadow pass's CPU jobs record (ShadowPass.record_chunk), in `chunks`."""
 
     def __init__(self, monkeypatch):
-        from ecs_engine.render.shadow_pass import ShadowPass
+        from ecs_engine.render.shadows.maps_pass import ShadowPass
 
         self.chunks: list[object] = []
         original = ShadowPass.record_chunk
@@ -52,7 +52,7 @@ class JobSpy:
 def shadow_counts(gpu, world: World, frames: int = 1, readback: bool = True, **settings) -> tuple[int, int, int]:
     """(shadow views, draws, triangles) of the shadow passes as the stats of the last of `frames`
     frames give them."""
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     renderer = Renderer(gpu.device, gpu.target, gpu.meshes, **settings)
     try:
@@ -98,9 +98,9 @@ def test_not_shadow_casters_are_left_out_in_the_indirect_mode():
 def test_an_alpha_masked_material_cuts_its_holes_in_the_indirect_modes_maps():
     """test_shadows' checkerboard plane: its shadow is the instanced mode's (where the holes are
     checked against a ray cast), not a square."""
-    from ecs_engine.render.materials import Material, materials
-    from ecs_engine.render.primitives import plane_mesh
-    from ecs_engine.render.textures import Texture
+    from ecs_engine.render.assets.materials import Material, materials
+    from ecs_engine.render.assets.primitives import plane_mesh
+    from ecs_engine.render.assets.textures import Texture
 
     images = {}
     with headless_gpu(W, H) as gpu:
@@ -128,7 +128,7 @@ def test_an_alpha_masked_material_cuts_its_holes_in_the_indirect_modes_maps():
 def test_blended_casters_still_cast_in_the_indirect_mode(monkeypatch):
     """A blended cube's rows are set aside (not among the indirect path's rows): the CPU shadow
     jobs draw them into the views, next to the GPU-culled chunks, as in the instanced mode."""
-    from ecs_engine.render.materials import Material, materials
+    from ecs_engine.render.assets.materials import Material, materials
 
     spy = JobSpy(monkeypatch)
 
@@ -157,7 +157,7 @@ def test_the_views_buffers_follow_new_meshes_rows_and_views():
     (4 views become 16: the pool of view sets grows). Each time the frame is a fresh instanced
     renderer's, and the GPU counted its draws and triangles."""
     from ecs_engine.components import PointLight, Shadow
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(W, H) as gpu:
         world = scene(gpu, "sun")
@@ -196,8 +196,8 @@ def test_the_indirect_mode_gives_the_views_no_copy_of_the_rows():
     """Culled in place on the GPU, the chunks' rows are not written again per view: with a sun's
     4 cascades the instance buffer holds the camera's rows (and the set-aside casters' per view),
     where the instanced mode writes every row again for each view."""
+    from ecs_engine.render.frame.renderer import Renderer
     from ecs_engine.render.layouts import INSTANCE
-    from ecs_engine.render.renderer import Renderer
 
     sizes = {}
     with headless_gpu(W, H) as gpu:

@@ -1,4 +1,4 @@
-"""Shadow views (render/shadow_views.py): which lights get views (only those with a Shadow), in
+"""Shadow views (render/shadows/views.py): which lights get views (only those with a Shadow), in
 what order and layers; cascades holding their slices of the camera's view; spot views holding
 their cone; cube faces in Vulkan's cube-map orientation. And the Shadow component's checks."""
 
@@ -13,9 +13,9 @@ from ecs_engine import World
 from ecs_engine.components import Camera, DirectionalLight, PointLight, Shadow, SpotLight, Transform
 from ecs_engine.maths.camera import look_rotation
 from ecs_engine.maths.shadow_cascades import cascade_splits
-from ecs_engine.render.camera import camera_matrices
 from ecs_engine.render.extract.shadows import extract_shadow_casters
-from ecs_engine.render.shadow_views import cube_face_scale, shadow_views
+from ecs_engine.render.frame.camera import camera_matrices
+from ecs_engine.render.shadows.views import cube_face_scale, shadow_views
 
 ASPECT = 16 / 9
 

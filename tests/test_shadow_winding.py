@@ -16,8 +16,8 @@ from ecs_engine.components import DirectionalLight, Mesh, PointLight, Shadow, Sp
 from ecs_engine.components.shadow import SHADOW_HARD, SHADOW_PCF
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.primitives import cube_mesh, plane_mesh
+from ecs_engine.render.assets.materials import Material, materials
+from ecs_engine.render.assets.primitives import cube_mesh, plane_mesh
 
 W, H = 128, 80
 LIGHT = np.array([0.3, 3.0, 0.2])  # the point and spot lights (the issue's)

@@ -1,4 +1,4 @@
-"""Shadow maps drawn and read (render/shadow_pass.py): shadows fall where a NumPy ray cast of the
+"""Shadow maps drawn and read (render/shadows/maps_pass.py): shadows fall where a NumPy ray cast of the
 scene says (a directional light's cascades, a spot light's map), open ground stays clean (no
 acne), the tags leave meshes out, every render path and the deferred lighting agree, and a scene
 without a Shadow pays for none of it."""
@@ -25,9 +25,9 @@ from ecs_engine.components import (
 )
 from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.camera import camera_matrices
+from ecs_engine.render.assets.primitives import cube_mesh
+from ecs_engine.render.frame.camera import camera_matrices
 from ecs_engine.render.layouts import FEATURE_SHADOWS
-from ecs_engine.render.primitives import cube_mesh
 
 W, H = 160, 100
 CUBE = (np.array([-0.5, 0.5, -0.5]), np.array([0.5, 1.5, 0.5]))  # the unit cube centred at (0, 1, 0)
@@ -58,7 +58,7 @@ def scene(gpu, light: str = "sun", shadow: bool = True, cube_tags=(), ground_tag
 
 
 def render(gpu, world: World, **settings) -> tuple[np.ndarray, object]:
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     renderer = Renderer(gpu.device, gpu.target, gpu.meshes, **settings)
     try:
@@ -160,7 +160,7 @@ def test_every_path_and_the_deferred_lighting_draw_the_same_shadows(settings):
 
 
 def test_a_scene_without_shadows_pays_for_none():
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(W, H) as gpu:
         world = scene(gpu, shadow=False)
@@ -208,9 +208,9 @@ CELLS = 4  # the cutout plane's checkerboard: CELLS x CELLS cells, every other o
 def cutout_scene(gpu) -> World:
     """The issue's scene with a 3-unit plane at y = 2.5 under the straight-down sun, alpha-masked
     by a checkerboard texture; the cube casts nothing."""
-    from ecs_engine.render.materials import Material, materials
-    from ecs_engine.render.primitives import plane_mesh
-    from ecs_engine.render.textures import Texture
+    from ecs_engine.render.assets.materials import Material, materials
+    from ecs_engine.render.assets.primitives import plane_mesh
+    from ecs_engine.render.assets.textures import Texture
 
     world = scene(gpu, cube_tags=[NotShadowCaster()])
     library = materials(world)
@@ -331,7 +331,7 @@ def test_cascades_do_not_shimmer_when_the_camera_moves():
     it and nothing else changes, shadow edges included (the cascades' texel grid stays put in
     the world). Without the snap the edges' pixels change as the map's texels slide."""
     from ecs_engine.components import ORTHOGRAPHIC, Camera
-    from ecs_engine.render.materials import Material, materials
+    from ecs_engine.render.assets.materials import Material, materials
 
     pixel = 3.0 / H  # world units per pixel of a 3-unit-high orthographic view
     shots = []
@@ -364,7 +364,7 @@ def test_shadow_views_follow_the_frame_set_when_its_buffers_grow():
     written (shadow_pass.view_inputs). When the instance buffer grows (far more casters), the
     views must read the new one: the frame then matches a fresh renderer's; and while nothing
     changes, the copies are not made again."""
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(W, H) as gpu:
         world = scene(gpu, "sun")
@@ -402,8 +402,8 @@ def test_the_kept_plan_follows_every_change_of_the_lights_and_camera():
     their rows); after each change the views equal a fresh plan's and the image a fresh
     renderer's."""
     from ecs_engine.render.extract.shadows import extract_shadow_casters
-    from ecs_engine.render.renderer import Renderer
-    from ecs_engine.render.shadow_views import shadow_views
+    from ecs_engine.render.frame.renderer import Renderer
+    from ecs_engine.render.shadows.views import shadow_views
 
     with headless_gpu(W, H) as gpu:
         world = scene(gpu, "spot")
@@ -465,7 +465,7 @@ def test_the_kept_plan_follows_every_change_of_the_lights_and_camera():
 @pytest.mark.parametrize("light", ["spot", "point"])
 def test_a_map_is_drawn_at_its_lights_resolution_whatever_another_asks(light):
     """Each view is drawn at its own light's resolution, in the corner of a layer as large as
-    the largest any light asks (render/shadow_pass.py's target_state): the light's shadow is the
+    the largest any light asks (render/shadows/maps_pass.py's target_state): the light's shadow is the
     same beside an unlit caster asking for 256 texels or for 1024 (drawn at the largest, its
     edges came out sharper)."""
     with headless_gpu(W, H) as gpu:

@@ -21,10 +21,10 @@ from ecs_engine.components import Mesh, Transform
 from ecs_engine.components.environment import Environment
 from ecs_engine.ecs.scene_file import SceneFileError, load_world, save_world
 from ecs_engine.errors import UsageError
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.mesh_data import MeshData
-from ecs_engine.render.scene_assets import MeshReferences
-from ecs_engine.render.textures import Texture
+from ecs_engine.render.assets.materials import Material, materials
+from ecs_engine.render.assets.mesh_data import MeshData
+from ecs_engine.render.assets.scene_assets import MeshReferences
+from ecs_engine.render.assets.textures import Texture
 
 
 class Registry(list):
@@ -130,8 +130,8 @@ def png_header(width: int, height: int) -> bytes:
 
 @pytest.mark.parametrize("side", [9000, 15000])
 def test_image_files_are_checked_from_their_header(tmp_path, caplog, side):
-    from ecs_engine.render.environment_maps import load_cube
-    from ecs_engine.render.textures import Textures
+    from ecs_engine.render.assets.textures import Textures
+    from ecs_engine.render.lighting.environment_maps import load_cube
 
     path = tmp_path / "huge.png"
     path.write_bytes(png_header(side, side))  # 15000: Pillow's own bomb error escaped as an internal error
@@ -144,7 +144,7 @@ def test_image_files_are_checked_from_their_header(tmp_path, caplog, side):
 
 
 def test_an_hdr_file_is_checked_from_its_header(tmp_path):
-    from ecs_engine.render.environment_maps import load_cube
+    from ecs_engine.render.lighting.environment_maps import load_cube
 
     path = tmp_path / "huge.hdr"
     path.write_bytes(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 8192 +X 16384\n" + bytes(64))

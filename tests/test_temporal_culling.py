@@ -1,4 +1,4 @@
-"""Temporal-coherence culling (maths/coherence.py, render/temporal_culling.py): a sphere keeps its
+"""Temporal-coherence culling (maths/coherence.py, render/culling/temporal_culling.py): a sphere keeps its
 side of the frustum for at least the time the bound gives, whatever the camera and the sphere do
 within their speed limits; over camera paths (walks, turns, a teleport, a change of fov) and
 world changes (a set, a spawn, moving entities, a wrap-around) the rows drawn are exactly those
@@ -18,9 +18,9 @@ from ecs_engine.demos.scene_kit import add_camera
 from ecs_engine.maths.camera import perspective, rotation_matrix, view_rotation, yaw_pitch_quat
 from ecs_engine.maths.coherence import NEVER, coherence, crossing_times
 from ecs_engine.maths.culling import bounding_spheres, frustum_planes, spheres_visible
-from ecs_engine.render.frame_data import FrameExtractor, check_culling
-from ecs_engine.render.primitives import cube_mesh
-from ecs_engine.render.temporal_culling import SpeedLimits
+from ecs_engine.render.assets.primitives import cube_mesh
+from ecs_engine.render.culling.temporal_culling import SpeedLimits
+from ecs_engine.render.extract.frame_data import FrameExtractor, check_culling
 
 
 def test_crossing_times_solve_the_bound():
@@ -113,7 +113,7 @@ def exact_and_temporal(extractor: FrameExtractor, world: World, dt: float | None
 
 @pytest.mark.parametrize("compiled", [True, False])
 def test_temporal_culling_draws_what_exact_culling_draws_over_a_camera_path(compiled, monkeypatch):
-    from ecs_engine.render import temporal_kernels
+    from ecs_engine.render.culling import temporal_kernels
 
     if compiled and temporal_kernels.moved_native is None:
         pytest.skip("ECS_ENGINE_NO_NUMBA set")
@@ -218,7 +218,7 @@ def test_a_child_moved_by_its_parent_is_followed():
 
 
 def test_the_compiled_test_equals_the_numpy_one():
-    from ecs_engine.render import temporal_culling, temporal_kernels
+    from ecs_engine.render.culling import temporal_culling, temporal_kernels
 
     if temporal_kernels.retest_native is None:
         pytest.skip("ECS_ENGINE_NO_NUMBA set")
@@ -245,7 +245,7 @@ def test_the_compiled_test_equals_the_numpy_one():
 
 
 def test_a_still_camera_lowers_the_assumed_speeds_and_a_start_raises_them():
-    from ecs_engine.render.temporal_culling import CALM_FRAMES, RUNGS
+    from ecs_engine.render.culling.temporal_culling import CALM_FRAMES, RUNGS
 
     rng = np.random.default_rng(6)
     world, camera, _ = world_with_rows(rng)

@@ -49,7 +49,7 @@ def test_a_magnified_texture_is_bilinear_in_linear_light_with_anisotropy_off():
 def test_anisotropy_is_on_by_default_where_the_device_has_it():
     """The textures' sampler asks for the device's best up to 16 (1 without the feature), and it
     shows: a floor's far stripes, grey under trilinear filtering, keep their contrast."""
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu() as gpu:
         device = gpu.device

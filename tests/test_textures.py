@@ -15,9 +15,9 @@ from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Camera, DirectionalLight, Mesh, Transform
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.materials import Material, Materials, materials
-from ecs_engine.render.primitives import cube_mesh, plane_mesh
-from ecs_engine.render.textures import (
+from ecs_engine.render.assets.materials import Material, Materials, materials
+from ecs_engine.render.assets.primitives import cube_mesh, plane_mesh
+from ecs_engine.render.assets.textures import (
     CLASS_SIZES,
     Texture,
     Textures,
@@ -297,7 +297,7 @@ def test_emissive_occlusion_and_metallic_roughness_maps():
 
 
 def test_textures_added_after_the_first_frame_are_uploaded():
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(W, H) as gpu:
         world = World()

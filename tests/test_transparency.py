@@ -13,9 +13,9 @@ from gpu_context import headless_gpu
 from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Camera, Mesh, Transform
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.primitives import plane_mesh
-from ecs_engine.render.textures import linear_to_srgb
+from ecs_engine.render.assets.materials import Material, materials
+from ecs_engine.render.assets.primitives import plane_mesh
+from ecs_engine.render.assets.textures import linear_to_srgb
 
 W, H = 64, 48
 FACING_Z = (math.sin(math.pi / 4), 0.0, 0.0, math.cos(math.pi / 4))
@@ -32,7 +32,7 @@ def plane(gpu, world, z: float, color, alpha: float = 1.0, size: float = 2.0) ->
 
 
 def draw(gpu, world: World, mode: str) -> tuple[np.ndarray, object]:
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     world.spawn(Transform(position=(0.0, 0.0, 2.0)), Camera(fov_y=math.radians(40.0), near=0.05))
     renderer = Renderer(gpu.device, gpu.target, gpu.meshes, mode=mode, clear_color=tuple(CLEAR))
@@ -92,7 +92,7 @@ def test_an_opaque_plane_in_front_hides_a_blended_one():
 
 
 def test_switching_a_material_to_blend_and_back():
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(W, H) as gpu:
         world = World()

@@ -1,4 +1,4 @@
-"""Weighted blended order-independent transparency (render/oit_pass.py, Renderer(transparency=
+"""Weighted blended order-independent transparency (render/passes/oit.py, Renderer(transparency=
 "weighted")): one layer blends exactly as the sorted path does; two layers of different colours
 give the same image whatever their order, McGuire and Bavoil's weighted average (worked out here,
 not the sorted blend); layers of one colour match the sorted blend; opaque surfaces in front hide
@@ -17,12 +17,12 @@ from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
 from ecs_engine.components import Camera, Mesh, Transform
 from ecs_engine.errors import UsageError
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.primitives import plane_mesh
+from ecs_engine.render.assets.materials import Material, materials
+from ecs_engine.render.assets.primitives import plane_mesh
 
 
 def draw(gpu, world: World, transparency: str = "weighted", **settings) -> tuple[np.ndarray, object]:
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     world.spawn(Transform(position=(0.0, 0.0, 2.0)), Camera(fov_y=math.radians(40.0), near=0.05))
     renderer = Renderer(
@@ -100,7 +100,7 @@ def test_an_opaque_surface_in_front_hides_them():
 
 
 def test_an_unknown_transparency_is_refused():
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.frame.renderer import Renderer
 
     with headless_gpu(W, H) as gpu, pytest.raises(UsageError, match="transparency"):
         Renderer(gpu.device, gpu.target, gpu.meshes, transparency="depth-peeled")

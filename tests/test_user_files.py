@@ -83,7 +83,7 @@ def test_a_file_that_says_it_is_empty_is_read_with_the_bound(tmp_path):
 
 # ------------------------------------------------------------------------------------ models
 def test_a_model_that_is_a_fifo_or_a_device_is_refused(tmp_path):
-    from ecs_engine.render.mesh_loading import load_mesh
+    from ecs_engine.render.assets.mesh_loading import load_mesh
 
     with pytest.raises(UsageError, match=r"pipe\.obj: is a FIFO"):
         load_mesh(fifo(tmp_path / "pipe.obj"))
@@ -92,8 +92,8 @@ def test_a_model_that_is_a_fifo_or_a_device_is_refused(tmp_path):
 
 
 def test_an_objs_material_library_and_textures_that_are_devices_only_warn(tmp_path, caplog):
-    from ecs_engine.render.materials import Materials
-    from ecs_engine.render.model_loading import load_model
+    from ecs_engine.render.assets.materials import Materials
+    from ecs_engine.render.assets.model_loading import load_model
 
     fifo(tmp_path / "pipe.mtl")
     (tmp_path / "a.obj").write_text("mtllib pipe.mtl\n" + TRIANGLE + "usemtl red\nf 1 2 3\n")
@@ -126,7 +126,7 @@ def test_an_objs_material_library_and_textures_that_are_devices_only_warn(tmp_pa
 def test_a_gltf_buffer_that_is_a_fifo_is_refused(tmp_path):
     import trimesh
 
-    from ecs_engine.render.mesh_loading import load_mesh
+    from ecs_engine.render.assets.mesh_loading import load_mesh
 
     files = trimesh.exchange.gltf.export_gltf(trimesh.Scene(trimesh.creation.box()))
     for name, data in files.items():
@@ -140,8 +140,8 @@ def test_a_gltf_buffer_that_is_a_fifo_is_refused(tmp_path):
 
 # ------------------------------------------------------------------ textures and environments
 def test_textures_and_environment_maps_that_are_devices(tmp_path, caplog):
-    from ecs_engine.render.environment_maps import load_cube
-    from ecs_engine.render.textures import Textures
+    from ecs_engine.render.assets.textures import Textures
+    from ecs_engine.render.lighting.environment_maps import load_cube
 
     textures = Textures()
     with caplog.at_level(logging.WARNING, "ecs_engine"):
@@ -158,10 +158,10 @@ def test_textures_and_environment_maps_that_are_devices(tmp_path, caplog):
 # ------------------------------------------------------------------------------ scene files
 def scene_naming(tmp_path, texture_file=None, environment=None):
     """A scene file whose texture (by reference) or environment names the given path."""
-    import ecs_engine.render.scene_assets  # noqa: F401 - registers the materials and environment codecs
+    import ecs_engine.render.assets.scene_assets  # noqa: F401 - registers the materials and environment codecs
     from ecs_engine.components.environment import Environment
-    from ecs_engine.render.materials import Material, materials
-    from ecs_engine.render.textures import Texture
+    from ecs_engine.render.assets.materials import Material, materials
+    from ecs_engine.render.assets.textures import Texture
 
     world = World()
     if texture_file is not None:

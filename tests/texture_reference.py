@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from ecs_engine.render.textures import linear_to_srgb, srgb_to_linear
+from ecs_engine.render.assets.textures import linear_to_srgb, srgb_to_linear
 
 MAGNIFIED = 96  # the magnified scene's square image, in pixels (16 texels: 6 pixels a texel)
 FACING_Z = (math.sin(math.pi / 4), 0.0, 0.0, math.cos(math.pi / 4))  # a plane's +Y normal -> +Z
@@ -71,9 +71,9 @@ def magnified_world(meshes: Any, pixels: np.ndarray) -> Any:
     """An unlit 2 x 2 plane textured with `pixels`, filling a 90-degree view from 1 unit away."""
     from ecs_engine import World
     from ecs_engine.components import Camera, Mesh, Transform
-    from ecs_engine.render.materials import Material, materials
-    from ecs_engine.render.primitives import plane_mesh
-    from ecs_engine.render.textures import Texture
+    from ecs_engine.render.assets.materials import Material, materials
+    from ecs_engine.render.assets.primitives import plane_mesh
+    from ecs_engine.render.assets.textures import Texture
 
     world = World()
     registry = materials(world)
@@ -92,9 +92,9 @@ def floor_world(meshes: Any) -> Any:
     from ecs_engine import World
     from ecs_engine.components import Camera, Mesh, Transform
     from ecs_engine.maths.camera import look_rotation
-    from ecs_engine.render.materials import Material, materials
-    from ecs_engine.render.primitives import plane_mesh
-    from ecs_engine.render.textures import Texture
+    from ecs_engine.render.assets.materials import Material, materials
+    from ecs_engine.render.assets.primitives import plane_mesh
+    from ecs_engine.render.assets.textures import Texture
 
     side = 256
     j = np.arange(side)
@@ -133,8 +133,8 @@ def render(device: Any, world_of: Any, size: tuple[int, int], **settings: Any) -
     """The RGB pixels (int64) of `world_of(meshes)` drawn by a new Renderer at `size`."""
     from ecs_engine.app.scenes import default_schedule
     from ecs_engine.gpu.offscreen import OffscreenTarget
-    from ecs_engine.render.mesh_registry import MeshRegistry
-    from ecs_engine.render.renderer import Renderer
+    from ecs_engine.render.assets.mesh_registry import MeshRegistry
+    from ecs_engine.render.frame.renderer import Renderer
 
     target = OffscreenTarget(device, *size)
     meshes = MeshRegistry(device)

@@ -19,9 +19,7 @@ from ecs_engine import App, Component, DefaultPlugins, Field, system
 from ecs_engine.components import Camera, DirectionalLight, Mesh, Transform, Velocity
 from ecs_engine.maths.broad_phase import overlapping_pairs
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.meshes import Meshes
-from ecs_engine.render.primitives import cube_mesh, sphere_mesh
+from ecs_engine.render import Material, Meshes, cube_mesh, materials, sphere_mesh
 from ecs_engine.systems import ActionMap
 
 ACTIONS = {"move": ["left/right", "a/d", "gamepad_left_x"]}  # -1 left, +1 right

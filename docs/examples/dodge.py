@@ -45,9 +45,7 @@ from ecs_engine import (
 from ecs_engine.components import Camera, DirectionalLight, Mesh, Transform
 from ecs_engine.maths.broad_phase import overlapping_pairs
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.meshes import Meshes
-from ecs_engine.render.primitives import cube_mesh, plane_mesh, sphere_mesh
+from ecs_engine.render import Material, Meshes, cube_mesh, materials, plane_mesh, sphere_mesh
 from ecs_engine.systems import ActionMap
 
 ACTIONS = {

@@ -173,7 +173,7 @@ class App(AppSystems):
         resources go in, the plugins' hooks run, then the startup systems."""
         if not self.started:
             from ..jobs import JobPool
-            from ..render.meshes import Meshes
+            from ..render.assets.meshes import Meshes
 
             world = self.world
             world.resources[JobPool] = session.pool

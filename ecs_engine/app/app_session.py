@@ -13,7 +13,7 @@ from typing import Any
 
 from ..ecs.schedule import Schedule
 from ..ecs.world import World
-from ..render.meshes import Meshes
+from ..render.assets.meshes import Meshes
 from .imgui_session import ImGuiSession
 from .perf import PerfMonitor
 from .session import FrameSource, Session

@@ -52,7 +52,7 @@ class AssetReload:
         return said
 
     def _reload_textures(self, path: Path) -> tuple[bool, str] | None:
-        from ..render.textures import ImageError, Texture, read_image
+        from ..render.assets.textures import ImageError, Texture, read_image
 
         textures = self._textures()
         handles = [] if textures is None else [h for h in range(len(textures)) if textures[h].source == str(path)]
@@ -69,7 +69,7 @@ class AssetReload:
         return True, f"hot reload: {path.name}: texture reloaded"
 
     def _reload_meshes(self, path: Path) -> tuple[bool, str] | None:
-        from ..render.mesh_loading import load_mesh
+        from ..render.assets.mesh_loading import load_mesh
 
         meshes = self._meshes()
         handles = [] if meshes is None else [h for h, file in meshes.files.items() if file == path]
@@ -85,12 +85,12 @@ class AssetReload:
         return True, f"hot reload: {path.name}: mesh reloaded"
 
     def _textures(self) -> Any:
-        from ..render.materials import Materials
+        from ..render.assets.materials import Materials
 
         found = self.world.resources.get(Materials)
         return None if found is None else found.textures
 
     def _meshes(self) -> Any:
-        from ..render.meshes import Meshes
+        from ..render.assets.meshes import Meshes
 
         return self.world.resources.get(Meshes)

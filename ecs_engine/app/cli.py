@@ -2,7 +2,7 @@
 exit 2; other failures exit 1; `--debug` shows the traceback as well (the exit status stays).
 Ctrl-C is one line and exit 130; a closed stdout (`| head`) ends it quietly (entry_point.py).
 
-The render configuration's flags (render/config_flags.py: modes, culling...) and the present
+The render configuration's flags (render/config/flags.py: modes, culling...) and the present
 modes are imported when the parser is built, inside main's guard: they bring numba, seconds of
 start-up a Ctrl-C may land in."""
 
@@ -91,7 +91,7 @@ def render_flags(headless_frames: int = 1) -> OneLineParser:
     """The flags `demo`, `editor` and `play` share (`headless_frames`: the command's --headless
     run without --frames, for the help)."""
     from ..gpu.swapchain import PRESENT_MODES
-    from ..render.config_flags import add_config_flags
+    from ..render.config.flags import add_config_flags
     from .settings import HEADLESS_FALLBACK_FRAMES
 
     common = OneLineParser(add_help=False)
@@ -112,13 +112,13 @@ def render_flags(headless_frames: int = 1) -> OneLineParser:
     common.add_argument(
         "--threads", type=positive_int, help="worker threads, counting the main one (default: all cores)"
     )
-    add_config_flags(common)  # --mode, --culling, --tone-map...: the render configuration's (render/config.py)
+    add_config_flags(common)  # --mode, --culling, --tone-map...: the render configuration's (render/config/__init__.py)
     common.add_argument(
         "--no-frame-reuse",
         dest="frame_reuse",
         action="store_false",
         help="record every frame, even one that would record what its frame slot recorded last time "
-        "(by default that recording is submitted again: render/frame_replay.py)",
+        "(by default that recording is submitted again: render/frame/replay.py)",
     )
     common.add_argument("--lights", type=int, help="lights scene: how many point and spot lights (default 1,024)")
     common.add_argument(

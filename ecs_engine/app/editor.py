@@ -36,8 +36,8 @@ from .editor_tree import HierarchyPanel
 from .settings import Settings
 
 if TYPE_CHECKING:
-    from ..render.imgui_pass import ImGuiRenderer
-    from ..render.renderer import Renderer
+    from ..render.frame.renderer import Renderer
+    from ..render.ui.imgui_pass import ImGuiRenderer
 
 PRESENT_MODES = tuple(SWAPCHAIN_PRESENT_MODES)
 # the labels of each window's fields: the fields leave room for the widest (editor_layout.py)
@@ -88,7 +88,7 @@ class Editor(BrowserPanel):
         self.files = FileMenu()
 
     def show_shadow_maps(self, renderer: Renderer, overlay: ImGuiRenderer) -> None:
-        """Show the shadow maps of `renderer` (render/renderer.py's Renderer) in the light sections,
+        """Show the shadow maps of `renderer` (render/frame/renderer.py's Renderer) in the light sections,
         drawn by `overlay` (the ImGuiRenderer that draws this editor)."""
         self.shadow_maps = ShadowMapImages(renderer.shadows, overlay)
         self.meshes = renderer.meshes
@@ -384,7 +384,7 @@ class Editor(BrowserPanel):
 
 
 def _names(field: str) -> tuple[str, ...]:
-    """A render setting's choices (render/config.py's enum of `field`)."""
+    """A render setting's choices (render/config/__init__.py's enum of `field`)."""
     return CHOICES[field][0].names()
 
 

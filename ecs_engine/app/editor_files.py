@@ -2,7 +2,7 @@
 menu bar above the docked panels, with Ctrl+O and Ctrl+S.
 
 - Save writes the world the editor shows, its meshes, materials and environment by reference
-  where they can be made again (render/scene_assets.py), to the scene file it came from; a scene
+  where they can be made again (render/assets/scene_assets.py), to the scene file it came from; a scene
   that came from no file asks for a path first (Save as). A failed save keeps the old file.
 - Open asks for a path and requests it as the next scene, like any scene switch: the run loop's
   Session.apply loads it between frames; a bad file is refused with one line (in the menu bar and
@@ -23,7 +23,7 @@ from typing import Any
 from ..ecs.errors import EcsError
 from ..ecs.scene_file import save_world
 from ..ecs.world import World
-from ..render.scene_assets import scene_codecs
+from ..render.assets.scene_assets import scene_codecs
 from .scenes import SCENE_FILE_SUFFIX, is_scene_file
 
 OPEN, SAVE = "Open scene", "Save scene as"

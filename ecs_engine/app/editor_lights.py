@@ -5,7 +5,7 @@ the light as it was and shows the message).
 A light that casts shadows shows its shadow maps (ShadowMapImages): a thumbnail per layer (a
 directional light's cascades, a spot light's map, a point light's six cube faces), grey, near
 white and far black (reverse-Z depth), as the last frame drew them: texel (0, 0) at the top left,
-so each shows what a camera at the light sees (render/shadow_views.py draws the cube faces so,
+so each shows what a camera at the light sees (render/shadows/views.py draws the cube faces so,
 not as the spec's mirror images)."""
 
 from __future__ import annotations
@@ -23,9 +23,9 @@ from .editor_layout import hint
 
 if TYPE_CHECKING:
     from ..gpu.shadow_maps import ShadowMaps
-    from ..render.imgui_pass import ImGuiRenderer
-    from ..render.shadow_pass import ShadowPass
-    from ..render.shadow_views import ShadowView
+    from ..render.shadows.maps_pass import ShadowPass
+    from ..render.shadows.views import ShadowView
+    from ..render.ui.imgui_pass import ImGuiRenderer
 
 CUBE_FACE_NAMES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")  # shadow_views.py's face order
 THUMBNAIL = 128  # a shadow map thumbnail's largest side in pixels (64 at least: smaller fit a row)

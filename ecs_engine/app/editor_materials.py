@@ -10,7 +10,7 @@ from typing import Any
 
 from ..components import Mesh
 from ..ecs.world import World
-from ..render.materials import ALPHA_MODES, FILLS, SHADING_MODELS, TEXTURE_FIELDS, Material, Materials, materials
+from ..render.assets.materials import ALPHA_MODES, FILLS, SHADING_MODELS, TEXTURE_FIELDS, Material, Materials, materials
 from .editor_layout import button_width, hint, push_label_room, same_line_if_fits, wrapped_colored
 from .editor_lights import Editor
 

@@ -16,7 +16,7 @@ import time
 from typing import Any
 
 from ..ecs.world import World
-from ..render.imgui_pass import ImGuiRenderer
+from ..render.ui.imgui_pass import ImGuiRenderer
 from .imgui_input import ScriptedImGuiInput
 from .perf import PerfMonitor
 from .session import Session

@@ -20,9 +20,7 @@ import numpy as np
 from ecs_engine import App, Component, DefaultPlugins, Field
 from ecs_engine.components import AngularVelocity, Camera, DirectionalLight, Mesh, Transform
 from ecs_engine.maths.camera import look_rotation
-from ecs_engine.render.materials import Material, materials
-from ecs_engine.render.meshes import Meshes
-from ecs_engine.render.primitives import cube_mesh
+from ecs_engine.render import Material, Meshes, cube_mesh, materials
 from ecs_engine.systems import InputState
 
 

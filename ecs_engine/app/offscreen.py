@@ -17,8 +17,8 @@ from ..errors import UsageError
 from ..gpu.device import Device
 from ..gpu.instance import Instance
 from ..gpu.offscreen import OffscreenTarget
+from ..render.assets.mesh_registry import MeshRegistry
 from ..render.config import check_samples
-from ..render.mesh_registry import MeshRegistry
 from .report import recorder_words
 from .session import FrameTarget, Gpu, Session
 from .settings import FIXED_DT, RunOptions

@@ -160,7 +160,7 @@ class ScenePlugin(Plugin):
         self.load = load
 
     def build(self, app: App) -> None:
-        from ..render import scene_assets  # noqa: F401 - registers the scene codecs
+        from ..render.assets import scene_assets  # noqa: F401 - registers the scene codecs
         from .scene_saves import SceneFiles
 
         app.scene_files = SceneFiles(app.world)

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import UsageError
-from ..render.renderer import PATHS
+from ..render.frame.renderer import PATHS
 from .perf import WARMUP_FRAMES  # left out of the closing summary too
 from .settings import RunOptions
 

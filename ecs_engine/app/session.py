@@ -29,11 +29,11 @@ from ..errors import UsageError
 from ..gpu.device import Device
 from ..gpu.instance import Instance
 from ..jobs import JobPool
+from ..render.assets.mesh_registry import MeshRegistry
+from ..render.assets.meshes import Meshes
+from ..render.assets.scene_assets import scene_codecs
 from ..render.config import Caps, RenderConfig, check
-from ..render.mesh_registry import MeshRegistry
-from ..render.meshes import Meshes
-from ..render.renderer import Renderer
-from ..render.scene_assets import scene_codecs
+from ..render.frame.renderer import Renderer
 from .scenes import default_schedule, is_scene_file, scene_builder
 from .settings import RunOptions, Settings
 

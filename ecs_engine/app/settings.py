@@ -17,8 +17,8 @@ import psutil
 from ..errors import UsageError
 from ..jobs import default_threads
 from ..render.config import RenderConfig, check
-from ..render.config_flags import RUN_FIELDS
-from ..render.renderer import default_recorder
+from ..render.config.flags import RUN_FIELDS
+from ..render.frame.renderer import default_recorder
 from .scenes import SEED_SCENES
 
 FIXED_DT = 1.0 / 60.0  # headless runs: one fixed step a frame, so a run is reproducible frame for frame
@@ -31,21 +31,21 @@ HEADLESS_FRAMES = {"demo": 1, "editor": 1, "play": 600}  # a --headless run with
 @dataclass
 class Settings:
     scene: str
-    # the render settings' names are render/config.py's enums (Mode, Culling, Fill, ToneMap...)
+    # the render settings' names are render/config/__init__.py's enums (Mode, Culling, Fill, ToneMap...)
     mode: str
     recorder: str  # config.Recorder (the indirect mode records on the GPU: kept for switching back)
     threads: int  # worker pool size, counting the main thread
     culling: str  # config.Culling
     present: str | None  # fifo | mailbox | immediate; None: headless, no swapchain
     fill: str = "solid"  # config.Fill
-    tone_map: str = "clamp"  # config.ToneMap (render/tone_map.py)
+    tone_map: str = "clamp"  # config.ToneMap (render/passes/tone_map.py)
     exposure: float = 0.0  # stops
-    light_culling: str = "auto"  # config.LightCulling (render/light_clusters.py)
-    transparency: str = "sorted"  # config.Transparency (render/oit_pass.py)
-    lod: bool = True  # levels of detail by projected size (the indirect mode: render/mesh_lod.py)
-    shadow_method: str = "maps"  # config.Shadows (render/ray_shadows.py)
-    shadow_denoise: bool = True  # ray-traced soft shadows filtered (render/shadow_denoise.py)
-    frame_reuse: bool = True  # a frame that would record what its slot recorded submits that (render/frame_replay.py)
+    light_culling: str = "auto"  # config.LightCulling (render/lighting/clusters.py)
+    transparency: str = "sorted"  # config.Transparency (render/passes/oit.py)
+    lod: bool = True  # levels of detail by projected size (the indirect mode: render/assets/mesh_lod.py)
+    shadow_method: str = "maps"  # config.Shadows (render/raytracing/shadows.py)
+    shadow_denoise: bool = True  # ray-traced soft shadows filtered (render/raytracing/denoise.py)
+    frame_reuse: bool = True  # a frame that would record what its slot recorded submits that (render/frame/replay.py)
     post: frozenset[str] = frozenset()  # the post effects on (render/post/registry.py's names)
 
 
@@ -64,7 +64,7 @@ class RunOptions:
     validate: bool = False
     present: str = "fifo"
     quiet: bool = False
-    mode: str = "instanced"  # the render settings: render/config.py's names (render_config())
+    mode: str = "instanced"  # the render settings: render/config/__init__.py's names (render_config())
     threads: int | None = None  # None: all cores
     culling: str = "frustum"
     lod: bool = True  # --no-lod: the indirect mode draws every mesh in full
@@ -77,10 +77,10 @@ class RunOptions:
     transparency: str = "sorted"  # blended materials: sorted, or weighted (order-independent)
     lights: int | None = None  # the lights scene's light count (None: its default, 1,024)
     shadows: bool = True  # the shadows scene's lights cast (--no-shadows: none do)
-    shadow_method: str = "maps"  # config.Shadows: how shadows are drawn (render/ray_shadows.py)
+    shadow_method: str = "maps"  # config.Shadows: how shadows are drawn (render/raytracing/shadows.py)
     shadow_denoise: bool = True  # --no-shadow-denoise: ray-traced soft shadows unfiltered
     post: frozenset[str] = frozenset()  # --post bloom,fxaa: the post effects (render/post/registry.py)
-    frame_reuse: bool = True  # --no-frame-reuse: every frame recorded (render/frame_replay.py)
+    frame_reuse: bool = True  # --no-frame-reuse: every frame recorded (render/frame/replay.py)
     chunk_rows: int | None = None  # rows per render job (None: about one per thread, frame_data.MIN_CHUNK_ROWS)
     recorder: str | None = None  # config.Recorder (None: native when numba is there)
     entities: int = 10_000  # the scaling scene's entity count

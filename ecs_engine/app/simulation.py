@@ -11,8 +11,8 @@ from typing import Any
 
 from ..ecs.timestep import FixedTimestep
 from ..errors import UsageError
-from ..render.meshes import MeshList
-from ..render.path import FrameStats
+from ..render.assets.meshes import MeshList
+from ..render.draw.path import FrameStats
 from .session import FrameTarget, Gpu, Session
 from .settings import FIXED_DT, RunOptions, Settings
 

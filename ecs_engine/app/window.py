@@ -21,8 +21,8 @@ from ..gpu.device import Device
 from ..gpu.functions import instance_function
 from ..gpu.instance import Instance
 from ..gpu.swapchain import OutOfDate, Swapchain
+from ..render.assets.mesh_registry import MeshRegistry
 from ..render.config import check_samples
-from ..render.mesh_registry import MeshRegistry
 from ..systems import ActionMap, InputState
 from ..systems.input_state import input_names
 from .gamepads import GamepadPoller

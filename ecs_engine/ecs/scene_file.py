@@ -26,7 +26,7 @@ then pass the components' own checks (spawn_batch). On any failure what was spaw
 and one SceneFileError says why.
 
 Resources (materials, environment) and session assets (meshes) are saved by codecs plugged in
-here (ResourceCodec; render/scene_assets.py has the stock ones), so the core needs no renderer:
+here (ResourceCodec; render/assets/scene_assets.py has the stock ones), so the core needs no renderer:
 a codec saves JSON plus arrays and, on load, may rewrite handle columns through lookup tables.
 Only a regular file is opened (ecs_engine/user_files.py); scene_archive.py reads and checks its
 members, each resource array's size shown to its codec (`check_array`) before it is read.
@@ -100,7 +100,7 @@ _codecs: dict[str, ResourceCodec] = {}
 
 def register_codec(codec: ResourceCodec) -> None:
     """Make `codec` one of the defaults of save_world and load_world (a later one of the same name
-    replaces it). render/scene_assets.py registers the materials and environment codecs."""
+    replaces it). render/assets/scene_assets.py registers the materials and environment codecs."""
     if not ARRAY_KEY.match(codec.name):
         raise ValueError(f"a codec's name is 1-64 of [A-Za-z0-9_], got {codec.name!r}")
     _codecs[codec.name] = codec

@@ -1,6 +1,6 @@
 """A sampled 2D array image with a full mip chain and two views of the same texels: sRGB (the
 sampler decodes to linear before filtering) and UNORM (data read as stored); or, with `cube`, six
-half-float RGBA layers seen as one cube map (render/environment.py). Layers are uploaded from
+half-float RGBA layers seen as one cube map (render/lighting/environment.py). Layers are uploaded from
 NumPy mip chains through a bounded staging buffer."""
 
 from __future__ import annotations

@@ -97,7 +97,7 @@ class Device:
         base = vk.vkGetPhysicalDeviceFeatures(self.physical)
         # the indirect render mode needs all three (checked there, with one message if one lacks)
         # anisotropic texture filtering and wireframe/point fill where the device has them;
-        # independent blending for weighted transparency's two targets (render/oit_pass.py); storage
+        # independent blending for weighted transparency's two targets (render/passes/oit.py); storage
         # images of r16f and the like (the SSAO passes' ao image: render/post/ssao_passes.py)
         optional = (
             "multiDrawIndirect",
@@ -140,7 +140,7 @@ class Device:
         self._pipeline_cache: PipelineCache | None = None
         # bumped when a buffer, image, framebuffer or pipeline is made, a buffer, image or
         # descriptor pool destroyed, a descriptor set written or secondaries' pools destroyed: a
-        # command buffer kept to be submitted again (render/frame_replay.py) is valid while it stays
+        # command buffer kept to be submitted again (render/frame/replay.py) is valid while it stays
         self.objects_version = 0
 
     @property

@@ -9,7 +9,7 @@ so a pass's time is the span from the previous mark and the passes add up to the
 fence has signalled (`last_gpu`).
 
 A slot's primary is recorded without ONE_TIME_SUBMIT, so a frame that would record the same
-commands again submits it as it stands (`resubmit`; render/frame_replay.py decides when).
+commands again submits it as it stands (`resubmit`; render/frame/replay.py decides when).
 
 The per-frame calls go straight to the cffi library (`vk.lib`) with structs and arrays made
 once: the binding's wrappers cost ~3-4 us a call against ~0.7 us, and a small scene's whole CPU

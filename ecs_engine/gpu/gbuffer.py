@@ -1,14 +1,14 @@
 """The deferred form's first rendering: the opaque meshes write what lighting needs per pixel
-(a G-buffer) instead of lighting themselves; a compute pass (render/deferred_pass.py) then lights
+(a G-buffer) instead of lighting themselves; a compute pass (render/lighting/deferred.py) then lights
 every pixel and adds into the HDR colour, and the target's scene rendering (form "deferred",
-render/output_passes.py) loads depth and HDR colour for the set-aside rows, billboards and tone map.
+render/frame/output_passes.py) loads depth and HDR colour for the set-aside rows, billboards and tone map.
 
 Why: on the H100 a fragment shader runs on the few graphics-capable units of the chip, a compute
 shader on all of it; thousands of lights cost the forward frame 4x the 6-light one
 (docs/performance.md).
 
-Attachments, drawn with dynamic rendering (gbuffer_formats; render/output_passes.py begins it,
-render/scene_barriers.py places its barriers):
+Attachments, drawn with dynamic rendering (gbuffer_formats; render/frame/output_passes.py begins it,
+render/frame/scene_barriers.py places its barriers):
 - depth (reverse-Z), kept for the lighting pass and the scene rendering;
 - colour 0, the HDR colour: ambient, emissive and unlit materials (the lighting pass adds the lights);
 - colour 1, normal xyz (unit, render-origin space) and roughness, RGBA32F;

@@ -98,7 +98,7 @@ class AttachmentFormats:
 BLEND_MODES: dict[str, tuple[tuple[str, str, str, str], ...]] = {
     "": (),
     "alpha": (("SRC_ALPHA", "ONE_MINUS_SRC_ALPHA", "ONE", "ONE_MINUS_SRC_ALPHA"),),
-    # weighted blended order-independent transparency (render/oit_pass.py): premultiplied colour
+    # weighted blended order-independent transparency (render/passes/oit.py): premultiplied colour
     # and alpha summed into the accumulation target, the revealage multiplied by (1 - alpha)
     "weighted": (("ONE", "ONE", "ONE", "ONE"), ("ZERO", "ONE_MINUS_SRC_COLOR", "ZERO", "ONE_MINUS_SRC_ALPHA")),
     # its composite: the average colour over the scene, by 1 - revealage (the fragment's alpha)

@@ -1,12 +1,12 @@
 """The target's "forms" (FORMS): which attachments the scene draws into, and with what formats;
-the renderings themselves are dynamic (vkCmdBeginRendering, render/scene_renderings.py) with
-explicit barriers (render/scene_barriers.py), so nothing here is made against a render pass.
+the renderings themselves are dynamic (vkCmdBeginRendering, render/frame/scene_renderings.py) with
+explicit barriers (render/frame/scene_barriers.py), so nothing here is made against a render pass.
 
 - `hdr`: the scene in 16-bit float (HDR) colour with reverse-Z depth; after it, the post effects
-  (render/output_passes.py's `post`) and the tone map into the target (sRGB swapchain image or
+  (render/frame/output_passes.py's `post`) and the tone map into the target (sRGB swapchain image or
   offscreen image) with the UI on top: the scene never touches the target;
 - `direct`: when the output needs no HDR colour (the clamp tone map at exposure 0 without MSAA,
-  render/tone_map.py's wants_hdr), the scene straight into the target, as before HDR existed: the
+  render/passes/tone_map.py's wants_hdr), the scene straight into the target, as before HDR existed: the
   HDR colour and the tone map cost the seed scenes 0.12-0.17 ms of GPU time a frame on the H100;
 - `deferred`: as `hdr`, but the opaque meshes were drawn before, into the G-buffer
   (gpu/gbuffer.py), and lit in compute: the scene's rendering loads depth and HDR colour.

@@ -1,6 +1,6 @@
 """Secondary command buffers for worker threads: per frame in flight and per thread, one command
 pool (Vulkan pools are not thread-safe) that is reset whole when the frame slot comes round,
-unless the slot's frame is replayed (render/frame_replay.py): then what it recorded stays."""
+unless the slot's frame is replayed (render/frame/replay.py): then what it recorded stays."""
 
 from __future__ import annotations
 
@@ -80,7 +80,7 @@ class SecondaryBuffers:
         VK_RENDERING_CONTENTS_SECONDARY_COMMAND_BUFFERS_BIT) over attachments of `formats`: no
         render pass or framebuffer, the formats inherited instead. One per formats, kept for the
         life of these buffers (equal formats share it); not one-time: a frame recorded the same
-        way again executes them again (render/frame_replay.py)."""
+        way again executes them again (render/frame/replay.py)."""
         kept = self._rendering_begins.get(formats)
         if kept is not None:
             return kept[0]

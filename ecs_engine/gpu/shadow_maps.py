@@ -1,12 +1,12 @@
 """Shadow maps: one 32-bit depth image with a layer per shadow view (a cascade, a spot light's
-map; render/shadow_views.py), square, a view per layer that dynamic rendering draws into
-(render/shadow_pass.py), and the view and samplers the lighting reads them through.
+map; render/shadows/views.py), square, a view per layer that dynamic rendering draws into
+(render/shadows/maps_pass.py), and the view and samplers the lighting reads them through.
 
 Depth is reverse-Z, cleared to 0 (far); the comparison samplers compare with GREATER_OR_EQUAL,
 so a receiver whose depth is at least the nearest caster's is lit. The filtering one is linear
 (each tap a bilinear 2 x 2 comparison: percentage-closer filtering in hardware), the hard one
 nearest; a third reads the depths themselves (PCSS looks for its blockers with it).
-Frames in flight share the image: the shadow pass's barriers (render/shadow_pass.py) order this
+Frames in flight share the image: the shadow pass's barriers (render/shadows/maps_pass.py) order this
 frame's writes after the previous frame's reads and before this frame's lighting.
 
 The editor shows each layer (preview_view: the depth in R, G and B, read through the plain

@@ -9,7 +9,7 @@ crowding of perspective depth, so depth keeps ~7 significant digits at any dista
 
 Rendering is camera-relative: model matrices already have the camera position subtracted (in
 float64, see systems/transform.py), so the view matrix is a pure rotation with no translation.
-What the active camera's components make of these is in render/camera.py.
+What the active camera's components make of these is in render/frame/camera.py.
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ greatest time over those planes), since it is culled while any one of them still
 The seed decremented only the head of its queue, ignored a change of speed or a turn of the
 camera for visible objects and never measured its error; here every time is a bound, so a row
 whose time has not run out has the state an exact test would give, provided the bounds hold
-(render/temporal_culling.py checks the camera's actual motion against them every frame).
+(render/culling/temporal_culling.py checks the camera's actual motion against them every frame).
 """
 
 from __future__ import annotations

@@ -22,7 +22,7 @@ import numpy as np
 from .. import native
 from ..components import Mesh, ModelMatrix, render_origin
 from ..ecs.world import World
-from .camera import camera_matrices
+from .frame.camera import camera_matrices
 
 
 @dataclass(frozen=True)

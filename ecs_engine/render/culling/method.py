@@ -27,7 +27,7 @@ from ..config import Culling, Mode, RenderConfig, validate
 
 if TYPE_CHECKING:
     from ..extract.chunks import Chunk
-    from ..occlusion import OcclusionPasses
+    from .occlusion_passes import OcclusionPasses
 
 
 class CullingMethod:

@@ -1,5 +1,5 @@
 """`--culling occlusion` as a culling method: the frustum test, then, in the indirect mode's
-compute, what is hidden behind last frame's visible rows (render/occlusion.py's two-phase
+compute, what is hidden behind last frame's visible rows (render/culling/occlusion_passes.py's two-phase
 `OcclusionPasses`: early depth, depth pyramid, late cull)."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from ..config import Culling
 from .method import CullingMethod
 
 if TYPE_CHECKING:
-    from ..occlusion import OcclusionPasses
+    from .occlusion_passes import OcclusionPasses
 
 
 class OcclusionHost(Protocol):

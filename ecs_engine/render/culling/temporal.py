@@ -12,8 +12,8 @@ import numpy as np
 from ...ecs.world import World
 from ..config import Culling
 from ..extract.chunks import Chunk
-from ..temporal_culling import TemporalCuller
 from .method import CullingMethod
+from .temporal_culling import TemporalCuller
 
 
 class TemporalCulling(CullingMethod):

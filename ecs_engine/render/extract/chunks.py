@@ -121,7 +121,7 @@ class ChunkExtract:
             if top >= material_count:
                 raise ValueError(
                     f"Mesh.material {top} does not name a material (the world has {material_count}: "
-                    "add materials with ecs_engine.render.materials.materials(world).add)"
+                    "add materials with ecs_engine.render.assets.materials.materials(world).add)"
                 )
         self._chunks_key, self._chunks = key, out
         return out

@@ -9,7 +9,7 @@ from typing import Any
 from ...components import DirectionalLight, PointLight, SpotLight, Transform
 from ...ecs.schedule import any_with
 from ...ecs.world import World
-from ..light_rows import DirectionalLights, PositionalLights, local_minus_z, spot_cones
+from ..lighting.rows import DirectionalLights, PositionalLights, local_minus_z, spot_cones
 
 READS = (PointLight, SpotLight, DirectionalLight, Transform)  # a system running extract_lights declares these
 LightKinds = tuple[Callable[[World], bool], ...]

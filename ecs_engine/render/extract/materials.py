@@ -4,7 +4,7 @@ without one. The frame's passes read the registry through the snapshot (FrameDat
 from __future__ import annotations
 
 from ...ecs.world import World
-from ..materials import Materials
+from ..assets.materials import Materials
 
 READS = (Materials,)  # a system running extract_materials declares it
 

@@ -1,4 +1,4 @@
-"""Bloom as one post effect of the output passes (render/output_passes.py: `OutputPasses.post`,
+"""Bloom as one post effect of the output passes (render/frame/output_passes.py: `OutputPasses.post`,
 callables `post(cb, inputs)` run between the scene's render pass and the tone map), for as
 long as the renderer is not yet one frame graph: the effect keeps a small graph of its own with
 the HDR image imported, so its passes, barriers and chain are the same ones `add_bloom` adds to

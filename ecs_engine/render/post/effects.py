@@ -1,4 +1,4 @@
-"""The renderer's post effects (a part of Renderer, through render/target_forms.py's base):
+"""The renderer's post effects (a part of Renderer, through render/frame/target_forms.py's base):
 which are on, their settings, and the effect objects the output passes run.
 
     renderer.set_post_effects({"bloom", "fxaa"})                   # from the next frame

@@ -1,5 +1,5 @@
 """FXAA as the post effect "fxaa" (registry.py) of the ldr stage: the output passes' frame graph
-(render/output_passes.py) has the tone map write an intermediate image, and this effect's pass
+(render/frame/output_passes.py) has the tone map write an intermediate image, and this effect's pass
 (fxaa.py's FxaaPass) reads it and writes the next image, the target last; the UI then draws
 over the target. The pass is made again with each graph (the graph destroys it)."""
 

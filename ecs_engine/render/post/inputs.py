@@ -1,4 +1,4 @@
-"""What the hdr stage's post effects get from a frame (render/output_passes.py's seam):
+"""What the hdr stage's post effects get from a frame (render/frame/output_passes.py's seam):
 
     effect.key(inputs)      # what a recorded frame depends on (frame replay), before recording
     effect(cb, inputs)      # records the effect, after the scene's render pass, before the tone map

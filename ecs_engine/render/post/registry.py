@@ -11,7 +11,7 @@ A kind says:
 - `settings`: its settings class (a frozen dataclass; `settings()` gives the defaults);
 - `make(device, settings)`: the effect object for a renderer on `device`. An hdr one is called
   `effect(cb, inputs)` with the frame's post/inputs.py PostInputs (the HDR colour, the scene's
-  depth, the extent, the camera's projection: render/output_passes.py's seam); an ldr one adds
+  depth, the extent, the camera's projection: render/frame/output_passes.py's seam); an ldr one adds
   its passes to the output's frame graph with `effect.add(graph, source, target, create)` (the
   image names, and the description of `target` when it is an intermediate the effect's pass
   must create). Both have `key(inputs)` (what a recorded frame depends on, given this frame's

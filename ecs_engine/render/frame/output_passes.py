@@ -1,0 +1,366 @@
+"""What the frame's primary command buffer records around the render path's secondaries, by the
+target's form (gpu/scene_attachments.py's FORMS), every drawing a dynamic rendering (vkCmdBeginRendering,
+render/frame/scene_renderings.py) between explicit barriers (render/frame/scene_barriers.py):
+
+- `direct`: the scene's rendering into the target: the chunks', the sky's (sky_pass.py), the
+  set-aside rows' and the light billboards' (light_pass.py) secondaries; then the overlay (the
+  editor's ImGui) in a rendering of its own that loads the target (its one pipeline, made for the
+  target's format, serves every form: no pipeline follows a change of form), and the barrier to
+  the target's final layout (readback or present);
+- `hdr`: the scene's rendering into the HDR colour as above (with MSAA resolved at its end),
+  then the barrier that leaves the HDR colour (and single-sample depth) in
+  SHADER_READ_ONLY_OPTIMAL; then the post effects (`post`); then the target image's barrier
+  (output_barriers.py), a rendering into the target image with the tone map (tone_map.py,
+  sampling the HDR colour) and the overlay, and the barrier to the target's final layout;
+- `deferred`: the G-buffer rendering with the chunks' secondaries (gpu/gbuffer.py), the lighting
+  compute pass (deferred_pass.py), then as `hdr` with the sky, the set-aside rows and the
+  billboards alone in the scene's rendering.
+
+Post effects go in `OutputPasses.post`: callables `post(cb, inputs)` (inputs: the frame's
+post/inputs.py PostInputs: the target's single-sample HDR colour, a gpu/memory.py Image with
+`handle`, `view`, `format`, `width`, `height`, sampled and, where the device can, storage usage;
+the scene's single-sample depth (None with MSAA); the extent; the camera's projection), called in
+order after the scene's rendering and before the tone map, in the hdr and deferred forms only
+(the direct form has no HDR colour). Each finds the images in SHADER_READ_ONLY_OPTIMAL, the
+scene's writes visible to fragment and compute shaders, and must leave them so, its own writes
+made visible to the tone map's fragment-shader reads (its own barriers, until the renderer's frame
+graph places them). The renderer sets them from its post effects of the "hdr" stage
+(post/registry.py; `set_post`) and hands the frame's camera to `begin_post` before the frame's
+replay key is taken (the effects' keys read the inputs: SSAO's projection).
+
+Post effects of the "ldr" stage (FXAA) run on the tone-mapped image: with any on, the tone map
+writes an intermediate image, the effects write the target and the overlay draws over it, as a
+small frame graph (output_ldr.py) that places the target's barriers itself.
+
+With `mark` (gpu/frames.py's FrameRing.mark, while passes are timed) each pass's end is marked
+with its name; a rendering whose contents are secondaries cannot hold a timestamp, so the scene's
+(billboards included) is marked once, at its end.
+
+It also keeps, per output image and form, the structs a frame needs (path.TargetState, and the
+output's rendering info and barriers); pipelines are made per AttachmentFormats, so a change of
+form remakes nothing and waits for nothing.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from typing import Any
+
+from ...gpu.device import Device
+from ...gpu.secondary import SecondaryBuffers
+from ..draw.path import TargetState
+from ..lighting.deferred import DeferredPass
+from ..passes.light_billboards import LightPass
+from ..passes.oit import WeightedTransparency
+from ..passes.output_ldr import LdrOutput
+from ..passes.sky import SkyPass
+from ..passes.tone_map import ToneMapPass
+from ..post.inputs import PostInputs
+from .output_barriers import OutputBarriers
+from .scene_renderings import scene_state
+
+log = logging.getLogger("ecs_engine")
+
+#: a post effect: called with the primary command buffer and the frame's PostInputs (see the module)
+PostPass = Callable[[Any, PostInputs], None]
+
+
+class OutputRendering:
+    """The tone map's and the overlay's dynamic rendering into one target image (its view written
+    whole, so not loaded) and that image's barriers, made once per output image."""
+
+    def __init__(self, vk: Any, target: Any, output: Any, area: Any) -> None:
+        image, view = target.output_image(output)
+        self.image, self.view = image, view  # the ldr stage's graph imports them (output_ldr.py)
+        self.barriers = OutputBarriers(vk, image, target.final_layout)
+        color = vk.VkRenderingAttachmentInfo(
+            imageView=view,
+            imageLayout=vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+            resolveMode=vk.VK_RESOLVE_MODE_NONE,
+            loadOp=vk.VK_ATTACHMENT_LOAD_OP_DONT_CARE,
+            storeOp=vk.VK_ATTACHMENT_STORE_OP_STORE,
+        )
+        self.info = vk.VkRenderingInfo(renderArea=area, layerCount=1, pColorAttachments=[color])
+        self._keep = color
+        self.info_ptr = vk.ffi.addressof(self.info)
+
+
+class OutputPasses:
+    def __init__(
+        self,
+        device: Device,
+        target: Any,
+        frame_set_layout: Any,
+        secondaries: SecondaryBuffers,
+        light_size: float,
+        clear_color: tuple[float, float, float],
+    ) -> None:
+        self.device = device
+        self.vk = device.vk
+        self.target = target
+        self.secondaries = secondaries
+        self.clear_color = clear_color
+        self.light_pass = LightPass(device, frame_set_layout, secondaries, light_size)
+        self.tone_map_pass: ToneMapPass | None = None
+        self.deferred: DeferredPass | None = None
+        self.sky: SkyPass | None = None
+        self.oit: WeightedTransparency | None = None  # made the first frame it is asked for
+        self._warned_blend = False
+        self.ray_shadows: Any = None  # render/raytracing/shadows.py's RayShadows where shadows are traced
+        self.post: list[PostPass] = []  # the post effects, in order (see the module)
+        self.ldr: LdrOutput | None = None  # the ldr stage's output graph, with effects of that stage on
+        self.inputs: PostInputs | None = None  # the frame's, for the hdr stage (begin_post)
+        try:
+            self.tone_map_pass = ToneMapPass(device, target.color_format)
+            self.deferred = DeferredPass(device, frame_set_layout)
+            self.sky = SkyPass(device, frame_set_layout, secondaries)
+        except BaseException:
+            self.destroy()
+            raise
+        # per (output, form, width, height): the frame's structs (see target_state)
+        self._targets: dict[tuple[Any, str, int, int], tuple[TargetState, OutputRendering | None, Any]] = {}
+        # target_state's last answer: its key, state, output rendering, the scene's formats
+        self._last: tuple[Any, TargetState | None, OutputRendering | None, Any] = (None,) * 4
+        self._recreations = getattr(target, "recreations", 0)  # the swapchain's, when _targets were made
+
+    def target_state(self, framebuffer: Any, width: int, height: int) -> TargetState:
+        """What drawing into the target's output `framebuffer` (one of its images: output_image)
+        at this size in its current form needs per frame, made once (kept for 16 of them)."""
+        target = self.target
+        key = (framebuffer, target.form, width, height)
+        recreations = getattr(target, "recreations", 0)
+        if recreations != self._recreations:  # new swapchain images and attachments, maybe at the same size
+            self._targets.clear()
+            self._last = (None,) * 4
+            self._recreations = recreations
+        last = self._last
+        if last[0] == key and last[1] is not None:
+            return last[1]  # the same output and form as the last frame's (offscreen: every frame)
+        made = self._targets.get(key)
+        if made is None:
+            if len(self._targets) > 16:  # swapchains come and go: drop the old outputs' entries
+                self._targets.clear()
+            vk = self.vk
+            state, formats = scene_state(vk, target, framebuffer, width, height, self.clear_color, self.secondaries)
+            rendering = OutputRendering(vk, target, framebuffer, state.area) if target.hdr else None
+            made = self._targets[key] = (state, rendering, formats)
+        self._last = (key, *made)
+        return made[0]
+
+    @property
+    def formats(self) -> Any:
+        """The scene's rendering's AttachmentFormats for the last target_state's form."""
+        return self._last[3]
+
+    def _rendering(self, state: TargetState) -> OutputRendering:
+        """The output rendering made with `state` (target_state's answer for this frame)."""
+        if self._last[1] is state and self._last[2] is not None:
+            return self._last[2]
+        for made, rendering, _ in self._targets.values():
+            if made is state and rendering is not None:
+                return rendering
+        raise ValueError("a target state this output did not make, or made for the direct form")
+
+    def weighted(self, mode: str) -> WeightedTransparency | None:
+        """The weighted transparency pass ready for the target, when `mode` asks for it and the
+        target is in the deferred form (it needs the opaque depth before the target's pass)."""
+        target = self.target
+        if mode != "weighted" or target.form != "deferred":
+            return None
+        if not self.device.features.get("independentBlend"):
+            if not self._warned_blend:
+                log.warning("%s lacks independentBlend: blended rows are sorted instead", self.device.info.name)
+                self._warned_blend = True
+            return None
+        if self.oit is None:
+            self.oit = WeightedTransparency(self.device, self.secondaries)
+        self.oit.ensure(target.attachments.images[0], target.width, target.height)
+        return self.oit
+
+    def forget_path_state(self) -> None:
+        """Drop what the old render path kept per target (its recorder's frame states)."""
+        for state, _, _ in self._targets.values():
+            state.path_state.clear()
+
+    def forget_pipelines(self) -> None:
+        """Pipelines made again from the shader files on next use (hot reload; the caller waited
+        for the device): the billboards', sky's, composite's and tone map's."""
+        assert self.tone_map_pass is not None and self.sky is not None
+        self.light_pass.forget_pipelines()
+        self.sky.forget_pipelines()
+        if self.oit is not None:
+            self.oit.forget_composites()
+        self.tone_map_pass.destroy()
+        self.tone_map_pass = ToneMapPass(self.device, self.target.color_format)
+
+    def record(
+        self,
+        cb: Any,
+        chunks: list[Any],
+        aside: Any,
+        billboards: int,
+        state: TargetState,
+        frame_set: Any,
+        tone_map: tuple[str, float],
+        features: int,
+        overlay: Any = None,
+        slot: int = 0,
+        sky: bool = False,
+        transparent: Any = None,
+        mark: Callable[[str], None] | None = None,
+    ) -> int:
+        """Raw cffi calls with structs made once (see gpu/frames.py for why). `chunks`: the path's
+        secondaries; `aside`: the set-aside rows' or None; `billboards` point and spot lights get
+        one; `features`: the mesh pipelines' MATERIAL_FEATURES (the lighting's too); `sky`: the
+        Environment is drawn behind; `transparent`: the blended rows' secondary for the weighted
+        transparency pass (the deferred form); `mark`: see the module. Returns the light pass's
+        draws."""
+        vk = self.vk
+        lib = vk.lib
+        target = self.target
+        secondaries = chunks
+        if state.gbuffer_ptrs is not None:
+            assert self.deferred is not None
+            rendering, before, after = state.gbuffer_ptrs
+            lib.vkCmdPipelineBarrier2(cb, before)
+            lib.vkCmdBeginRendering(cb, rendering)
+            if chunks:
+                lib.vkCmdExecuteCommands(cb, len(chunks), vk.ffi.new("VkCommandBuffer[]", chunks))
+            lib.vkCmdEndRendering(cb)
+            lib.vkCmdPipelineBarrier2(cb, after)
+            if mark is not None:
+                mark("g-buffer")
+            extent = state.area.extent
+            ray = self.ray_shadows
+            if ray is not None and ray.lights:  # the shadow mask the lighting reads (ray_shadows.py)
+                mask = self.deferred.named(target.attachments)
+                ray.record(cb, slot, frame_set[0], target.attachments, mask, extent.width, extent.height)
+                if mark is not None:
+                    mark("ray-traced shadows")
+            self.deferred.record(cb, frame_set[0], target.attachments, features, extent.width, extent.height)
+            if mark is not None:
+                mark("lighting (compute)")
+            if transparent is not None:
+                assert self.oit is not None
+                self.oit.accumulate(cb, transparent)
+                if mark is not None:
+                    mark("transparency (accumulate)")
+            secondaries = []
+        formats = self.formats  # the scene rendering's, in this frame's form (target_state)
+        if sky:  # after the opaque chunks, before the blended rows
+            assert self.sky is not None
+            secondaries = [*secondaries, self.sky.record(state, frame_set, slot, formats)]
+        if aside is not None:
+            secondaries = [*secondaries, aside]  # after every chunk's rows
+        if transparent is not None:  # the weighted transparency over all of it
+            assert self.oit is not None
+            secondaries = [*secondaries, self.oit.record_composite(formats, state, slot)]
+        lights, draws = self.light_pass.record(slot, state, formats, frame_set, billboards)
+        if lights is not None:  # last, depth-tested against everything, blended over it
+            secondaries = [*secondaries, lights]
+        assert state.scene_ptrs is not None
+        rendering, before, after = state.scene_ptrs
+        lib.vkCmdPipelineBarrier2(cb, before)
+        lib.vkCmdBeginRendering(cb, rendering)
+        if secondaries:
+            lib.vkCmdExecuteCommands(cb, len(secondaries), vk.ffi.new("VkCommandBuffer[]", secondaries))
+        lib.vkCmdEndRendering(cb)  # with MSAA: the resolve
+        if mark is not None:  # one mark: a rendering of secondaries holds no timestamp
+            mark("forward" if state.gbuffer_ptrs is None else "sky and blended")
+        if not target.hdr:  # the direct form: the overlay in a rendering of its own, over the scene
+            if overlay is not None and state.overlay_ptrs is not None:
+                barrier, overlay_rendering = state.overlay_ptrs
+                lib.vkCmdPipelineBarrier2(cb, barrier)
+                lib.vkCmdBeginRendering(cb, overlay_rendering)
+                overlay.record(cb, slot, state.area.extent.width, state.area.extent.height)
+                lib.vkCmdEndRendering(cb)
+                if mark is not None:
+                    mark("imgui")
+            lib.vkCmdPipelineBarrier2(cb, after)  # the target to its final layout
+            return draws
+        lib.vkCmdPipelineBarrier2(cb, after)  # the HDR colour and depth to the post effects' layout
+        if self.post:
+            inputs = self.inputs
+            if inputs is None or inputs.hdr is not target.hdr_image:
+                raise RuntimeError("OutputPasses.begin_post(camera) was not called for this frame's target")
+            for post in self.post:
+                post(cb, inputs)
+            if mark is not None:
+                mark("post effects")
+        self._record_output(cb, state, tone_map, overlay, slot, mark)
+        return draws
+
+    def _record_output(
+        self,
+        cb: Any,
+        state: TargetState,
+        tone_map: tuple[str, float],
+        overlay: Any,
+        slot: int,
+        mark: Callable[[str], None] | None,
+    ) -> None:
+        """The hdr and deferred forms' output: the target image ready to be drawn, the tone map
+        and the overlay in one dynamic rendering, the image to its final layout."""
+        lib = self.vk.lib
+        rendering = self._rendering(state)
+        if self.ldr is not None:
+            self.ldr.record(cb, state, rendering, tone_map, overlay, slot, mark)
+            return
+        rendering.barriers.before(lib, cb)
+        lib.vkCmdBeginRendering(cb, rendering.info_ptr)
+        assert self.tone_map_pass is not None
+        self.tone_map_pass.record(cb, state, self.target, *tone_map)
+        last = "tone map"
+        if overlay is not None:
+            if mark is not None:
+                mark(last)
+            overlay.record(cb, slot, state.area.extent.width, state.area.extent.height)
+            last = "imgui"
+        lib.vkCmdEndRendering(cb)
+        rendering.barriers.after(lib, cb)
+        if mark is not None:
+            mark(last)
+
+    def begin_post(self, camera: Any) -> PostInputs | None:
+        """The hdr stage's inputs for this frame (`camera`: the frame's CameraMatrices), kept
+        for `record`; None without an hdr-stage effect or HDR colour. Called before the frame's
+        replay key is taken (the effects' keys read it)."""
+        target = self.target
+        hdr = target.hdr_image if target.hdr and self.post else None
+        if hdr is None:  # no hdr-stage effect (or no HDR colour): nothing to hand over
+            self.inputs = None
+            return None
+        depth = target.depth_image
+        self.inputs = PostInputs(hdr, depth, (int(hdr.width), int(hdr.height)), camera.projection)
+        return self.inputs
+
+    def set_post(self, hdr: list[Any], ldr: list[Any]) -> None:
+        """The post effects from the next frame: `hdr` called as `post` (see the module), `ldr`
+        (effect objects with `add`, post/registry.py) through the ldr stage's graph. The effects
+        are the caller's (destroy() destroys those set last); the graph is made again when the
+        ldr effects change (the caller waited for the device)."""
+        self.post = list(hdr)
+        if self.ldr is not None and self.ldr.effects == list(ldr):
+            return
+        if self.ldr is not None:
+            self.ldr.destroy()
+        self.ldr = LdrOutput(self, ldr) if ldr else None
+
+    def destroy(self) -> None:
+        if self.ldr is not None:
+            for effect in self.ldr.effects:
+                effect.destroy()
+            self.ldr.destroy()
+        for post in self.post:
+            if hasattr(post, "destroy"):
+                post.destroy()
+        self.light_pass.destroy()
+        if self.sky is not None:
+            self.sky.destroy()
+        if self.oit is not None:
+            self.oit.destroy()
+        if self.tone_map_pass is not None:
+            self.tone_map_pass.destroy()
+        if self.deferred is not None:
+            self.deferred.destroy()

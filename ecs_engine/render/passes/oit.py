@@ -1,0 +1,154 @@
+"""Weighted blended order-independent transparency (issue 15; M. McGuire and L. Bavoil, "Weighted
+blended order-independent transparency", JCGT 2013), the renderer's `transparency="weighted"`.
+
+Sorting blended rows back to front (set_aside_pass.py) is per object: interleaved or
+intersecting surfaces blend in the wrong order within a pixel, and the sort costs time at large
+counts. Here the order does not matter: every blended fragment adds its premultiplied colour,
+weighted by its alpha and its distance from the eye, to an accumulation target, and multiplies a
+revealage target by (1 - alpha); a full-screen composite then draws the weighted average colour
+over the scene by 1 - revealage. The result approximates the sorted blend (exact for one layer,
+close for layers of similar colour, nearer layers weighing more).
+
+It runs in the deferred form, where the opaque depth exists before the target's pass: after the
+lighting dispatch, a pass of its own draws the blended rows (mesh_*_oit.frag, the "weighted"
+blend, gpu/pipeline.py) into the two targets against the G-buffer's depth (read-only, no
+writes); the composite (oit_composite.frag) is the last secondary of the scene's rendering
+before the billboards, after the sky and the other set-aside rows.
+
+Known limit: blended surfaces are depth-tested against the G-buffer's opaque meshes only, not
+against the rows drawn forward after the lighting (mirroring, wireframe and point materials),
+which the composite then draws over where a transparent surface lies behind them.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ...gpu.array_image import clamped_sampler
+from ...gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_images
+from ...gpu.device import Device
+from ...gpu.memory import Image
+from ...gpu.pipeline import AttachmentFormats, GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
+from ...gpu.rendering import Attachment, Rendering, clear_color
+from ...gpu.scene_attachments import DEPTH_FORMAT_NAME
+from ...gpu.secondary import SecondaryBuffers
+from ..config import Transparency
+from ..draw.path import TargetState
+from ..frame.scene_barriers import oit_barriers
+from .sky import full_screen_secondary
+
+ACCUMULATION_FORMAT = "VK_FORMAT_R16G16B16A16_SFLOAT"
+REVEALAGE_FORMAT = "VK_FORMAT_R16_SFLOAT"
+TRANSPARENCY_MODES = Transparency.names()
+
+
+class WeightedTransparency:
+    """The pass, its targets (made for a target's size and depth), and the composite."""
+
+    def __init__(self, device: Device, secondaries: SecondaryBuffers) -> None:
+        self.device, self.vk, self.secondaries = device, device.vk, secondaries
+        vk = self.vk
+        # the accumulation pass's attachments: the two targets and depth (read-only), one sample
+        colors = (getattr(vk, ACCUMULATION_FORMAT), getattr(vk, REVEALAGE_FORMAT))
+        self.formats = AttachmentFormats(colors, getattr(vk, DEPTH_FORMAT_NAME), 1)
+        self.sampler = clamped_sampler(device, max_lod=0.0)
+        sampler = vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
+        self.set_layout = DescriptorSetLayout(device, [(b, sampler, vk.VK_SHADER_STAGE_FRAGMENT_BIT) for b in (0, 1)])
+        self.pool = DescriptorPool(device, 1, {sampler: 2})
+        self.descriptor_set = self.pool.allocate(self.set_layout)
+        self.set_array = vk.ffi.new("VkDescriptorSet[1]", [self.descriptor_set])
+        self.layout = pipeline_layout(device, [self.set_layout.handle])
+        self.composites: dict[AttachmentFormats, Any] = {}  # per formats of the scene it is drawn over
+        self.images: list[Image] = []
+        self._rendering: Any = None  # (Rendering, barrier before, barrier after) for the images
+        self._made_for: tuple[Any, int, int] | None = None
+        self.state: TargetState | None = None
+
+    def ensure(self, depth: Any, width: int, height: int) -> None:
+        """Targets, rendering and begin infos for a target of this size and depth (made again
+        when either changes: the caller's frames in flight are waited for). `depth` is the
+        target's depth Image (gpu/memory.py)."""
+        key = (depth.view, width, height)
+        if self._made_for == key:
+            return
+        vk = self.vk
+        self.device.wait_idle()
+        self._release_targets()
+        color = vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT
+        aspect = vk.VK_IMAGE_ASPECT_COLOR_BIT
+        for fmt in (ACCUMULATION_FORMAT, REVEALAGE_FORMAT):
+            self.images.append(Image(self.device, width, height, getattr(vk, fmt), color, aspect))
+        read = vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
+        for binding, image in enumerate(self.images):
+            info = vk.VkDescriptorImageInfo(sampler=self.sampler, imageView=image.view, imageLayout=read)
+            write_images(self.device, self.descriptor_set, binding, [info])
+        self.state = TargetState.make(
+            vk,
+            (int(vk.ffi.cast("uintptr_t", self.images[0].view)), width, height),
+            None,  # dynamic rendering: no framebuffer or render pass (accumulate)
+            None,
+            self.secondaries.begin_info_rendering(self.formats),
+            (0.0, 0.0, 0.0),
+        )
+        # accumulation cleared to 0, revealage to 1; depth loaded, read-only (the lighting's layout)
+        color = vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL
+        targets = [
+            Attachment(image.view, color, clear=clear_color(vk, (value,) * 4))
+            for image, value in zip(self.images, (0.0, 1.0), strict=True)
+        ]
+        read_only = Attachment(depth.view, vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL, load="LOAD")
+        rendering = Rendering(vk, width, height, targets, read_only)
+        self._rendering = (rendering, *oit_barriers(vk, [image.handle for image in self.images], depth.handle))
+        self._made_for = key
+
+    def accumulate(self, cb: Any, secondary: Any) -> None:
+        """The blended rows' secondary (recorded with `state.secondary_begin`) in the pass, with
+        the barriers its render pass's dependencies were (render/frame/scene_barriers.py)."""
+        assert self._rendering is not None
+        vk = self.vk
+        lib = vk.lib
+        rendering, before, after = self._rendering
+        lib.vkCmdPipelineBarrier2(cb, before.ptr)
+        lib.vkCmdBeginRendering(cb, rendering.ptr)
+        lib.vkCmdExecuteCommands(cb, 1, vk.ffi.new("VkCommandBuffer[]", [secondary]))
+        lib.vkCmdEndRendering(cb)
+        lib.vkCmdPipelineBarrier2(cb, after.ptr)
+
+    def record_composite(self, formats: AttachmentFormats, state: TargetState, slot: int) -> Any:
+        """The composite's secondary in the scene's rendering (attachments of `formats`), after the
+        set-aside rows."""
+        composite = self.composites.get(formats)
+        if composite is None:
+            spec = GraphicsPipelineSpec(
+                "tonemap.vert",  # one triangle over the screen
+                "oit_composite.frag",
+                layout=self.layout,
+                cull_back=False,
+                depth_test=False,
+                depth_write=False,
+                blend="composite",
+                **formats.spec_kwargs(),
+            )
+            composite = self.composites[formats] = graphics_pipeline(self.device, spec)
+        return full_screen_secondary(self.secondaries, slot, state, composite, self.layout, self.set_array)
+
+    def forget_composites(self) -> None:
+        for composite in self.composites.values():
+            self.vk.vkDestroyPipeline(self.device.handle, composite, None)
+        self.composites = {}
+
+    def _release_targets(self) -> None:
+        self._rendering = None
+        for image in self.images:
+            image.destroy()
+        self.images = []
+        self._made_for, self.state = None, None
+
+    def destroy(self) -> None:
+        vk, handle = self.vk, self.device.handle
+        self._release_targets()
+        self.forget_composites()
+        vk.vkDestroyPipelineLayout(handle, self.layout, None)
+        self.pool.destroy()
+        self.set_layout.destroy()
+        vk.vkDestroySampler(handle, self.sampler, None)

@@ -1,0 +1,1 @@
+"""Ray-traced shadows: the top-level instances, the trace, its mask and denoise."""
