@@ -63,7 +63,8 @@ for mode in "$@"; do
       # ("old", carried: `git archive REV | tar -x -C .ab/base`; with OLDARGS when its options differ),
       # alternated REPS times in separate processes with the host's core speed (python_loop_ns)
       # beside each; the JSONs in ab-LABEL.tar (LABEL: NAME by default)
-      IFS=: read -r _ name args reps oldargs label <<< "$mode"
+      # (a ":" inside ARGS is written "@": culling-methods' --methods indirect@occlusion)
+      IFS=: read -r _ name args reps oldargs label <<< "$mode"; args=${args//@/:}; oldargs=${oldargs//@/:}
       oldargs=${oldargs:-$args}; label=${label:-$name}
       [ -d /tmp/old ] || python3 -m pip install -q --no-deps --no-build-isolation --no-index --target /tmp/old \
         .ab/base >/dev/null 2>&1 || { echo "install old failed"; continue; }

@@ -13,7 +13,9 @@ from typing import Any
 import pytest
 from gpu_context import shared_device
 
-PACKAGE = Path(__file__).resolve().parent.parent / "ecs_engine"
+import ecs_engine
+
+PACKAGE = Path(ecs_engine.__file__).resolve().parent  # the installed package (the GPU host runs tests from a copy)
 
 # Files other helpers are converting in this session (their destroys still name handles).
 NOT_YET = {
