@@ -2,7 +2,8 @@
 graph (render/passes/output_graph.py), one shape per target form (gpu/scene_attachments.py's
 FORMS):
 
-- `direct`: "target" cleared to the background and "depth" cleared to far (0.0, reverse-Z);
+- `direct`: "target" cleared to the background and "depth" cleared to far (0.0, reverse-Z), a
+  transient of the graph (nothing after the rendering reads it: never stored);
 - `hdr`: "hdr" cleared and "depth" cleared; with MSAA "hdr_msaa" (n samples) cleared and
   resolved into "hdr" at the rendering's end, and "depth" of n samples;
 - `deferred`: "hdr" and "depth" loaded (the G-buffer pass and the lighting wrote them, left in
@@ -24,7 +25,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..graph import Access, Load, Pass
+from ...gpu.scene_attachments import DEPTH_FORMAT_NAME
+from ..graph import Access, ImageDesc, Load, Pass
 
 FAR = (0.0, 0.0, 0.0, 0.0)  # reverse-Z's far plane: depth cleared to 0.0
 
@@ -52,6 +54,8 @@ class Forward(Pass):
             builder.write("hdr", Access.COLOR_READ_WRITE, load=Load.LOAD)
             builder.write(depth, Access.DEPTH_WRITE, load=Load.LOAD)
             return
+        if self.form == "direct":
+            builder.create(depth, ImageDesc(format=DEPTH_FORMAT_NAME))
         background = (*self.frame.background, 1.0)
         builder.write(colors[0], Access.COLOR_WRITE, load=Load.CLEAR, clear=background)
         if resolve is not None:

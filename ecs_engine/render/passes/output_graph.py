@@ -9,7 +9,8 @@ per target form (render/frame/output_passes.py; graph_plan.md step 7, first part
     imgui      the overlay over "target" (loaded: drawn on top); records nothing without one
 
 "hdr", "hdr_msaa" and "depth" are still the target's SceneAttachments (imported each frame: the
-deferred form's G-buffer pass and lighting write them before the graph runs). "target" is the
+deferred form's G-buffer pass and lighting write them before the graph runs), but for the direct
+form's depth, the graph's transient. "target" is the
 target's image for this frame, imported with its old contents discarded (UNDEFINED) after the
 acquire semaphore's wait (colour output) and the last frame's readback copy of the same image
 (transfer), and left as a colour attachment, which output_barriers.py's `after` takes to its
@@ -160,13 +161,15 @@ class OutputGraph:
 
     def _import_attachments(self, graph: FrameGraph, form: str, attachments: Any) -> None:
         """The target's SceneAttachments: depth, the HDR colour and, with MSAA, the multisampled
-        one (images: depth, colour, resolve). Nothing after the graph reads them: no final
-        layout (UNDEFINED). The deferred form's come from the lighting (see forward.py)."""
+        one (images: depth, colour, resolve); none in the direct form (its depth is a transient).
+        Nothing after the graph reads them: no final layout (UNDEFINED). The deferred form's
+        come from the lighting (see forward.py)."""
+        if form == "direct":
+            return
         images = attachments.images
         deferred = form == "deferred"
         named = [("depth", images[0], "DEPTH_STENCIL_READ_ONLY_OPTIMAL" if deferred else "UNDEFINED")]
-        if form != "direct":
-            named.append(("hdr", images[-1], "GENERAL" if deferred else "UNDEFINED"))
+        named.append(("hdr", images[-1], "GENERAL" if deferred else "UNDEFINED"))
         if form == "hdr" and attachments.samples > 1:
             named.append(("hdr_msaa", images[1], "UNDEFINED"))
         for name, image, before in named:
