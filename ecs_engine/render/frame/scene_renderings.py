@@ -52,4 +52,4 @@ def scene_state(
         gbuffer = gbuffer_rendering(vk, attachments, width, height, background, gbuffer_begin)
     named = view if direct else attachments.images[-1].view  # what the state draws into, by address
     key = (int(vk.ffi.cast("uintptr_t", named)), width, height)
-    return TargetState.make(vk, key, output, None, begin, background, gbuffer), formats
+    return TargetState.make(vk, key, output, begin, background, gbuffer), formats
