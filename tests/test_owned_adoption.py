@@ -20,7 +20,7 @@ PACKAGE = Path(ecs_engine.__file__).resolve().parent  # the installed package (t
 # Files other helpers are converting in this session (their destroys still name handles).
 NOT_YET = {
     "render/frame/output_passes.py",
-    "render/passes/output_ldr.py",
+    "render/passes/output_graph.py",
     "render/passes/oit.py",
     "render/passes/light_billboards.py",
     "render/passes/sky.py",

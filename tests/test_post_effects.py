@@ -1,4 +1,4 @@
-"""Post effects as features (render/post/registry.py, post/effects.py, output_ldr.py), on lavapipe
+"""Post effects as features (render/post/registry.py, post/effects.py, passes/output_graph.py), on lavapipe
 with validation on: the registry and the config's rule; bloom in the renderer against the NumPy
 reference applied to the same frame's HDR colour; FXAA in the output's ldr stage against its
 NumPy reference; toggling at runtime with frame replay on; the form switch; the plugins and
@@ -175,7 +175,7 @@ def test_fxaa_in_the_ldr_stage_is_the_reference_fxaa_of_the_tone_mapped_frame():
         off = _pixels(gpu, renderer, world)
         renderer.set_post_effects({"fxaa"})
         on = _pixels(gpu, renderer, world)
-        assert renderer.output.ldr is not None and "fxaa" in renderer.output.ldr.describe()
+        assert renderer.output.graph is not None and "fxaa" in renderer.output.graph.describe()
         linear = srgb_to_linear(np.concatenate([off, np.full(off.shape[:2] + (1,), 255)], axis=2) / 255.0)
         # comparisons within half an 8-bit step of luma may go either way: the intermediate image
         # is 8-bit sRGB, which the GPU decodes with its own precision

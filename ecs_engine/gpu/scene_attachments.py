@@ -121,8 +121,9 @@ class TargetForm:
 
 class SceneAttachments:
     """The attachments of one form that a target's images share: depth, HDR colour and (with
-    MSAA) its resolve; in the direct form depth alone; in the deferred form also the G-buffer
-    (gpu/gbuffer.py), depth sampled and the HDR colour a storage image for the lighting.
+    MSAA) its resolve; in the direct form nothing (its depth is the output graph's transient); in
+    the deferred form also the G-buffer (gpu/gbuffer.py), depth sampled and the HDR colour a
+    storage image for the lighting.
     `images` holds depth, then the HDR colour (with MSAA the multisampled one, then its resolve);
     `hdr_image` is the single-sample HDR colour the post effects and the tone map read."""
 
@@ -141,6 +142,8 @@ class SceneAttachments:
         deferred = form == "deferred"
         # the deferred lighting samples depth; in the hdr form the post effects may (single-sample)
         sampled = vk.VK_IMAGE_USAGE_SAMPLED_BIT if deferred or samples == 1 else 0
+        if form == "direct":  # its depth is the output graph's transient (render/passes/forward.py)
+            return
         try:
             self.images.append(
                 Image(
@@ -148,13 +151,11 @@ class SceneAttachments:
                     width,
                     height,
                     getattr(vk, DEPTH_FORMAT_NAME),
-                    vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | (sampled if form != "direct" else 0),
+                    vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | sampled,
                     vk.VK_IMAGE_ASPECT_DEPTH_BIT,
                     samples,
                 )
             )
-            if form == "direct":
-                return
             color = vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT
             read = hdr_read_usage(device) | (vk.VK_IMAGE_USAGE_STORAGE_BIT if deferred else 0)
             hdr_format = getattr(vk, HDR_FORMAT_NAME)

@@ -47,10 +47,6 @@ class TargetState:
     keep: Any  # what the structs point to
     area_ptr: Any = None  # pointers to the structs above, for raw calls
     viewport_ptr: Any = None
-    # the scene's (VkRenderingInfo, barrier before, barrier after) pointers (render/frame/scene_renderings.py)
-    scene_ptrs: tuple[Any, Any, Any] | None = None
-    # the direct form's overlay: (barrier after the scene, VkRenderingInfo) pointers
-    overlay_ptrs: tuple[Any, Any] | None = None
     # the deferred form: the G-buffer's (VkRenderingInfo, barrier before, barrier after) pointers
     gbuffer_ptrs: tuple[Any, Any, Any] | None = None
     path_state: dict[Any, Any] = field(default_factory=dict)  # what paths keep per target and slot
@@ -61,16 +57,13 @@ class TargetState:
         vk: Any,
         key: tuple[int, int, int],
         output: Any,
-        scene: tuple[Any, Any, Any, Any] | None,
         secondary_begin: Any,
         clear_color: tuple[float, float, float],
         gbuffer: tuple[Any, Any, Any, Any] | None = None,
         depth_only: bool = False,
     ) -> TargetState:
-        """`output`: what the state draws into, kept; `scene`: the scene's gpu/rendering.py
-        Rendering, its Dependency before and after (render/frame/scene_barriers.py) and the direct
-        form's overlay (Dependency, Rendering) or None; None where the caller begins its own
-        renderings (shadow maps, weighted transparency). `gbuffer`, in the deferred form: the
+        """`output`: what the state draws into, kept (the scene's own rendering is the output
+        graph's: render/passes/forward.py). `gbuffer`, in the deferred form: the
         G-buffer's Rendering, Dependency before and after and the begin info of secondaries
         inside it (the chunks'); `secondary_begin` is then the scene's. `clear_color` and
         `depth_only` are what those renderings clear (kept for the callers that pass them)."""
@@ -82,14 +75,10 @@ class TargetState:
             viewport=vk.VkViewport(x=0.0, y=0.0, width=float(width), height=float(height), minDepth=0.0, maxDepth=1.0),
             secondary_begin=secondary_begin if gbuffer is None else gbuffer[3],
             aside_begin=secondary_begin,
-            keep=[output, scene, gbuffer],
+            keep=[output, gbuffer],
         )
         state.area_ptr = vk.ffi.addressof(state.area)
         state.viewport_ptr = vk.ffi.addressof(state.viewport)
-        if scene is not None:
-            state.scene_ptrs = (scene[0].ptr, scene[1].ptr, scene[2].ptr)
-            if scene[3] is not None:
-                state.overlay_ptrs = (scene[3][0].ptr, scene[3][1].ptr)
         if gbuffer is not None:
             state.gbuffer_ptrs = (gbuffer[0].ptr, gbuffer[1].ptr, gbuffer[2].ptr)
         return state

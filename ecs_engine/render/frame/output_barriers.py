@@ -1,17 +1,10 @@
-"""The target image's layout transitions around the output rendering (render/frame/output_passes.py:
-the tone map and the overlay drawn with vkCmdBeginRendering into the swapchain or offscreen
-image), as explicit vkCmdPipelineBarrier2 calls. The scene's rendering does not touch the
-target in the hdr and deferred forms, so nothing else moves the image between "whatever the last
-frame or the presentation engine left" and the layout its reader wants (readback: TRANSFER_SRC;
-present: PRESENT_SRC). The renderer's frame graph is to take these over: they are kept here, in
-one place, so that it replaces one class.
-
-- `before`: UNDEFINED -> COLOR_ATTACHMENT_OPTIMAL (the tone map writes every pixel, so the old
-  contents go), after the acquire semaphore's wait (colour output stage) and the last frame's
-  readback copy of the same image (transfer stage);
-- `after`: COLOR_ATTACHMENT_OPTIMAL -> the target's final layout, the colour writes made visible
-  to the readback copy (TRANSFER_SRC) or, for present, ordered before the colour-output stage
-  the swapchain's readback barrier starts from (the submission's signal covers presentation).
+"""The target image's transition to its final layout after the output (render/frame/output_passes.py;
+render/passes/output_graph.py's graph places every barrier before it), as an explicit
+vkCmdPipelineBarrier2 call: COLOR_ATTACHMENT_OPTIMAL -> the target's final layout, the colour
+writes made visible to the readback copy (TRANSFER_SRC) or, for present, ordered before the
+colour-output stage the swapchain's readback barrier starts from (the submission's signal covers
+presentation). The graph's own transition to PRESENT_SRC ends in no stage, which that readback
+barrier could not follow; it goes when readback is a pass of the renderer's graph.
 """
 
 from __future__ import annotations
@@ -27,7 +20,7 @@ def _final_scope(vk: Any, final_layout: int) -> tuple[int, int]:
 
 
 class OutputBarriers:
-    """The two transitions of one target image, made once and recorded with raw calls."""
+    """The final transition of one target image, made once and recorded with a raw call."""
 
     def __init__(self, vk: Any, image: Any, final_layout: int) -> None:
         color_stage = vk.VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT
@@ -55,17 +48,8 @@ class OutputBarriers:
             return vk.ffi.addressof(info)
 
         self._keep: list[Any] = []
-        self.before_ptr = dependency(
-            (color_stage | vk.VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, 0),
-            (color_stage, color_write | vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT),
-            vk.VK_IMAGE_LAYOUT_UNDEFINED,
-            attachment,
-        )
         final = _final_scope(vk, final_layout)
         self.after_ptr = dependency((color_stage, color_write), final, attachment, final_layout)
-
-    def before(self, lib: Any, cb: Any) -> None:
-        lib.vkCmdPipelineBarrier2(cb, self.before_ptr)
 
     def after(self, lib: Any, cb: Any) -> None:
         lib.vkCmdPipelineBarrier2(cb, self.after_ptr)

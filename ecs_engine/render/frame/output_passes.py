@@ -9,9 +9,10 @@ render/frame/scene_renderings.py) between explicit barriers (render/frame/scene_
   the target's final layout (readback or present);
 - `hdr`: the scene's rendering into the HDR colour as above (with MSAA resolved at its end),
   then the barrier that leaves the HDR colour (and single-sample depth) in
-  SHADER_READ_ONLY_OPTIMAL; then the post effects (`post`); then the target image's barrier
-  (output_barriers.py), a rendering into the target image with the tone map (tone_map.py,
-  sampling the HDR colour) and the overlay, and the barrier to the target's final layout;
+  SHADER_READ_ONLY_OPTIMAL; then the post effects (`post`); then the output graph
+  (render/passes/output_graph.py: the tone map sampling the HDR colour, the ldr effects, the
+  overlay, every barrier of the target image but the one to its final layout), and the barrier
+  to the target's final layout (output_barriers.py);
 - `deferred`: the G-buffer rendering with the chunks' secondaries (gpu/gbuffer.py), the lighting
   compute pass (deferred_pass.py), then as `hdr` with the sky, the set-aside rows and the
   billboards alone in the scene's rendering.
@@ -28,16 +29,16 @@ graph places them). The renderer sets them from its post effects of the "hdr" st
 (post/registry.py; `set_post`) and hands the frame's camera to `begin_post` before the frame's
 replay key is taken (the effects' keys read the inputs: SSAO's projection).
 
-Post effects of the "ldr" stage (FXAA) run on the tone-mapped image: with any on, the tone map
-writes an intermediate image, the effects write the target and the overlay draws over it, as a
-small frame graph (output_ldr.py) that places the target's barriers itself.
+Post effects of the "ldr" stage (FXAA) run on the tone-mapped image in the output graph: with any
+on, the tone map writes an intermediate image (a transient), the effects write the target and the
+overlay draws over it.
 
 With `mark` (gpu/frames.py's FrameRing.mark, while passes are timed) each pass's end is marked
-with its name; a rendering whose contents are secondaries cannot hold a timestamp, so the scene's
-(billboards included) is marked once, at its end.
+with its name (the output graph's passes by theirs); a rendering whose contents are secondaries
+cannot hold a timestamp, so the scene's (billboards included) is marked once, at its end.
 
 It also keeps, per output image and form, the structs a frame needs (path.TargetState, and the
-output's rendering info and barriers); pipelines are made per AttachmentFormats, so a change of
+output image's final barrier); pipelines are made per AttachmentFormats, so a change of
 form remakes nothing and waits for nothing.
 """
 
@@ -53,7 +54,7 @@ from ..draw.path import TargetState
 from ..lighting.deferred import DeferredPass
 from ..passes.light_billboards import LightPass
 from ..passes.oit import WeightedTransparency
-from ..passes.output_ldr import LdrOutput
+from ..passes.output_graph import OutputGraph
 from ..passes.sky import SkyPass
 from ..passes.tone_map import ToneMapPass
 from ..post.inputs import PostInputs
@@ -67,23 +68,12 @@ PostPass = Callable[[Any, PostInputs], None]
 
 
 class OutputRendering:
-    """The tone map's and the overlay's dynamic rendering into one target image (its view written
-    whole, so not loaded) and that image's barriers, made once per output image."""
+    """One target image (its handle and view, which the output graph imports) and its barrier to
+    the target's final layout, made once per output image."""
 
-    def __init__(self, vk: Any, target: Any, output: Any, area: Any) -> None:
-        image, view = target.output_image(output)
-        self.image, self.view = image, view  # the ldr stage's graph imports them (output_ldr.py)
-        self.barriers = OutputBarriers(vk, image, target.final_layout)
-        color = vk.VkRenderingAttachmentInfo(
-            imageView=view,
-            imageLayout=vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-            resolveMode=vk.VK_RESOLVE_MODE_NONE,
-            loadOp=vk.VK_ATTACHMENT_LOAD_OP_DONT_CARE,
-            storeOp=vk.VK_ATTACHMENT_STORE_OP_STORE,
-        )
-        self.info = vk.VkRenderingInfo(renderArea=area, layerCount=1, pColorAttachments=[color])
-        self._keep = color
-        self.info_ptr = vk.ffi.addressof(self.info)
+    def __init__(self, vk: Any, target: Any, output: Any) -> None:
+        self.image, self.view = target.output_image(output)
+        self.barriers = OutputBarriers(vk, self.image, target.final_layout)
 
 
 class OutputPasses:
@@ -109,7 +99,7 @@ class OutputPasses:
         self._warned_blend = False
         self.ray_shadows: Any = None  # render/raytracing/shadows.py's RayShadows where shadows are traced
         self.post: list[PostPass] = []  # the post effects, in order (see the module)
-        self.ldr: LdrOutput | None = None  # the ldr stage's output graph, with effects of that stage on
+        self.graph: OutputGraph | None = None  # the hdr and deferred forms' output (set_post makes it)
         self.inputs: PostInputs | None = None  # the frame's, for the hdr stage (begin_post)
         try:
             self.tone_map_pass = ToneMapPass(device, target.color_format)
@@ -119,7 +109,7 @@ class OutputPasses:
             self.destroy()
             raise
         # per (output, form, width, height): the frame's structs (see target_state)
-        self._targets: dict[tuple[Any, str, int, int], tuple[TargetState, OutputRendering | None, Any]] = {}
+        self._targets: dict[tuple[Any, str, int, int], tuple[TargetState, OutputRendering, Any]] = {}
         # target_state's last answer: its key, state, output rendering, the scene's formats
         self._last: tuple[Any, TargetState | None, OutputRendering | None, Any] = (None,) * 4
         self._recreations = getattr(target, "recreations", 0)  # the swapchain's, when _targets were made
@@ -143,7 +133,7 @@ class OutputPasses:
                 self._targets.clear()
             vk = self.vk
             state, formats = scene_state(vk, target, framebuffer, width, height, self.clear_color, self.secondaries)
-            rendering = OutputRendering(vk, target, framebuffer, state.area) if target.hdr else None
+            rendering = OutputRendering(vk, target, framebuffer)
             made = self._targets[key] = (state, rendering, formats)
         self._last = (key, *made)
         return made[0]
@@ -160,7 +150,7 @@ class OutputPasses:
         for made, rendering, _ in self._targets.values():
             if made is state and rendering is not None:
                 return rendering
-        raise ValueError("a target state this output did not make, or made for the direct form")
+        raise ValueError("a target state this output did not make")
 
     def weighted(self, mode: str) -> WeightedTransparency | None:
         """The weighted transparency pass ready for the target, when `mode` asks for it and the
@@ -259,68 +249,10 @@ class OutputPasses:
         lights, draws = self.light_pass.record(slot, state, formats, frame_set, billboards)
         if lights is not None:  # last, depth-tested against everything, blended over it
             secondaries = [*secondaries, lights]
-        assert state.scene_ptrs is not None
-        rendering, before, after = state.scene_ptrs
-        lib.vkCmdPipelineBarrier2(cb, before)
-        lib.vkCmdBeginRendering(cb, rendering)
-        if secondaries:
-            lib.vkCmdExecuteCommands(cb, len(secondaries), vk.ffi.new("VkCommandBuffer[]", secondaries))
-        lib.vkCmdEndRendering(cb)  # with MSAA: the resolve
-        if mark is not None:  # one mark: a rendering of secondaries holds no timestamp
-            mark("forward" if state.gbuffer_ptrs is None else "sky and blended")
-        if not target.hdr:  # the direct form: the overlay in a rendering of its own, over the scene
-            if overlay is not None and state.overlay_ptrs is not None:
-                barrier, overlay_rendering = state.overlay_ptrs
-                lib.vkCmdPipelineBarrier2(cb, barrier)
-                lib.vkCmdBeginRendering(cb, overlay_rendering)
-                overlay.record(cb, slot, state.area.extent.width, state.area.extent.height)
-                lib.vkCmdEndRendering(cb)
-                if mark is not None:
-                    mark("imgui")
-            lib.vkCmdPipelineBarrier2(cb, after)  # the target to its final layout
-            return draws
-        lib.vkCmdPipelineBarrier2(cb, after)  # the HDR colour and depth to the post effects' layout
-        if self.post:
-            inputs = self.inputs
-            if inputs is None or inputs.hdr is not target.hdr_image:
-                raise RuntimeError("OutputPasses.begin_post(camera) was not called for this frame's target")
-            for post in self.post:
-                post(cb, inputs)
-            if mark is not None:
-                mark("post effects")
-        self._record_output(cb, state, tone_map, overlay, slot, mark)
+        if self.graph is None:
+            self.graph = OutputGraph(self, [])
+        self.graph.record(cb, state, self._rendering(state), secondaries, tone_map, overlay, slot, mark)
         return draws
-
-    def _record_output(
-        self,
-        cb: Any,
-        state: TargetState,
-        tone_map: tuple[str, float],
-        overlay: Any,
-        slot: int,
-        mark: Callable[[str], None] | None,
-    ) -> None:
-        """The hdr and deferred forms' output: the target image ready to be drawn, the tone map
-        and the overlay in one dynamic rendering, the image to its final layout."""
-        lib = self.vk.lib
-        rendering = self._rendering(state)
-        if self.ldr is not None:
-            self.ldr.record(cb, state, rendering, tone_map, overlay, slot, mark)
-            return
-        rendering.barriers.before(lib, cb)
-        lib.vkCmdBeginRendering(cb, rendering.info_ptr)
-        assert self.tone_map_pass is not None
-        self.tone_map_pass.record(cb, state, self.target, *tone_map)
-        last = "tone map"
-        if overlay is not None:
-            if mark is not None:
-                mark(last)
-            overlay.record(cb, slot, state.area.extent.width, state.area.extent.height)
-            last = "imgui"
-        lib.vkCmdEndRendering(cb)
-        rendering.barriers.after(lib, cb)
-        if mark is not None:
-            mark(last)
 
     def begin_post(self, camera: Any) -> PostInputs | None:
         """The hdr stage's inputs for this frame (`camera`: the frame's CameraMatrices), kept
@@ -337,21 +269,21 @@ class OutputPasses:
 
     def set_post(self, hdr: list[Any], ldr: list[Any]) -> None:
         """The post effects from the next frame: `hdr` called as `post` (see the module), `ldr`
-        (effect objects with `add`, post/registry.py) through the ldr stage's graph. The effects
-        are the caller's (destroy() destroys those set last); the graph is made again when the
-        ldr effects change (the caller waited for the device)."""
+        (effect objects with `add`, post/registry.py) in the output graph. The effects are the
+        caller's (destroy() destroys those set last); the graph is made again when the ldr
+        effects change (the caller waited for the device)."""
         self.post = list(hdr)
-        if self.ldr is not None and self.ldr.effects == list(ldr):
+        if self.graph is not None and self.graph.effects == list(ldr):
             return
-        if self.ldr is not None:
-            self.ldr.destroy()
-        self.ldr = LdrOutput(self, ldr) if ldr else None
+        if self.graph is not None:
+            self.graph.destroy()
+        self.graph = OutputGraph(self, ldr)
 
     def destroy(self) -> None:
-        if self.ldr is not None:
-            for effect in self.ldr.effects:
+        if self.graph is not None:
+            for effect in self.graph.effects:
                 effect.destroy()
-            self.ldr.destroy()
+            self.graph.destroy()
         for post in self.post:
             if hasattr(post, "destroy"):
                 post.destroy()

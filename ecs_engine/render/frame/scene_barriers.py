@@ -11,9 +11,8 @@ for the renderer's frame graph to take over (it derives them from the passes' de
 - weighted transparency's accumulation (oit_pass.py): its two targets cleared from UNDEFINED,
   depth (read-only, as the lighting left it) tested once the G-buffer's writes are visible; after,
   the targets SHADER_READ_ONLY for the composite's fragment reads;
-- the scene's rendering in each form (scene_barriers: the forward pass's two subpasses were one
-  render pass; their dependency on each other needs nothing now: draws in one rendering are
-  ordered by rasterization order).
+(the scene's rendering in each form is the output graph's forward pass, render/passes/forward.py:
+the graph places its barriers).
 """
 
 from __future__ import annotations
@@ -88,84 +87,3 @@ def oit_barriers(vk: Any, targets: Sequence[Any], depth: Any) -> tuple[Dependenc
         [(image, color_aspect, color_layout, vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL) for image in targets],
     )
     return before, after
-
-
-def scene_barriers(
-    vk: Any, form: str, attachments: Any, target: Any = None, final_layout: int = 0
-) -> tuple[Dependency, Dependency]:
-    """(before, after) the scene's rendering in a target's `form` (gpu/scene_attachments.py's FORMS)
-    over `attachments` (SceneAttachments); in the direct form also the target image `target`,
-    left in `final_layout` (readback or present).
-
-    hdr and deferred: the previous frame's post effects and tone map (fragment or compute
-    shaders) and, deferred, this frame's lighting are done with the HDR colour and depth before
-    they are cleared (hdr: from UNDEFINED) or loaded (deferred: from GENERAL and
-    DEPTH_STENCIL_READ_ONLY); after, the single-sample HDR colour (the resolve with MSAA) and
-    the single-sample depth in SHADER_READ_ONLY for the post effects and the tone map (an MSAA
-    colour and depth stay as they are: neither is stored). direct: the previous frame's depth
-    and colour writes and its readback copy of the image before the clears; after, the target
-    in its final layout, its writes visible to the readback copy."""
-    color_stage, tests, fragment, compute = _stages(vk)
-    color_write = vk.VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT
-    depth_write = vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT
-    color_rw = color_write | vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT
-    depth_rw = depth_write | vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT
-    undefined, read = vk.VK_IMAGE_LAYOUT_UNDEFINED, vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
-    color_layout = vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL
-    depth_layout = vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL
-    color_aspect, depth_aspect = vk.VK_IMAGE_ASPECT_COLOR_BIT, vk.VK_IMAGE_ASPECT_DEPTH_BIT
-    images = attachments.images  # depth, then (hdr, deferred) the HDR colour (MSAA: and its resolve)
-    depth = images[0]
-    attachment_stages = color_stage | tests
-    if form == "direct":
-        before = Dependency(
-            vk,
-            (attachment_stages | vk.VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, color_write | depth_write),
-            (attachment_stages, color_rw | depth_rw),
-            [(target, color_aspect, undefined, color_layout), (depth.handle, depth_aspect, undefined, depth_layout)],
-        )
-        after = Dependency(
-            vk,
-            (color_stage, color_write),
-            (vk.VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT),
-            [(target, color_aspect, color_layout, final_layout)],
-        )
-        return before, after
-    deferred = form == "deferred"
-    single = attachments.samples == 1
-    first = (
-        [
-            (images[1].handle, color_aspect, vk.VK_IMAGE_LAYOUT_GENERAL, color_layout),
-            (depth.handle, depth_aspect, vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL, depth_layout),
-        ]
-        if deferred
-        else [(image.handle, color_aspect, undefined, color_layout) for image in images[1:]]
-        + [(depth.handle, depth_aspect, undefined, depth_layout)]
-    )
-    before = Dependency(
-        vk,
-        (attachment_stages | fragment | compute, color_write | depth_write | vk.VK_ACCESS_2_SHADER_WRITE_BIT),
-        (attachment_stages, color_rw | depth_rw),
-        first,
-    )
-    last = [(images[-1].handle, color_aspect, color_layout, read)]
-    if single:
-        last.append((depth.handle, depth_aspect, depth_layout, read))
-    after = Dependency(
-        vk,
-        (attachment_stages, color_write | depth_write),
-        (fragment | compute, vk.VK_ACCESS_2_SHADER_READ_BIT | vk.VK_ACCESS_2_SHADER_WRITE_BIT),
-        last,
-    )
-    return before, after
-
-
-def overlay_barrier(vk: Any) -> Dependency:
-    """Between the direct form's scene rendering and the overlay's (both draw into the target,
-    which stays in COLOR_ATTACHMENT_OPTIMAL): the scene's colour writes before the overlay's
-    load and blend (the render pass's scene -> billboards subpass dependency did this)."""
-    color_stage = vk.VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT
-    color_write = vk.VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT
-    return Dependency(
-        vk, (color_stage, color_write), (color_stage, color_write | vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT), []
-    )

@@ -86,7 +86,6 @@ class WeightedTransparency:
             vk,
             (int(vk.ffi.cast("uintptr_t", self.images[0].view)), width, height),
             None,  # dynamic rendering: no framebuffer or render pass (accumulate)
-            None,
             self.secondaries.begin_info_rendering(self.formats),
             (0.0, 0.0, 0.0),
         )

@@ -6,7 +6,7 @@ which are on, their settings, and the effect objects the output passes run.
     renderer.post_settings["bloom"] = BloomSettings(intensity=0.05)  # the effect made again if on
 
 The names are post/registry.py's; a frame runs the "hdr" stage's effects on the HDR colour
-before the tone map (OutputPasses.post) and the "ldr" stage's after it (output_ldr.py), each
+before the tone map (OutputPasses.post) and the "ldr" stage's after it (render/passes/output_graph.py), each
 stage in registration order. Any effect on needs the HDR colour, so the target's form follows
 (target_forms._wanted_form). Frame replay's key holds each effect's key (`post_key`): a frame
 recorded with other effects or settings is never submitted again.

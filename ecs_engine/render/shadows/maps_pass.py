@@ -157,7 +157,6 @@ class ShadowPass:
                 self.vk,
                 (int(self.vk.ffi.cast("uintptr_t", view)), res, res),
                 None,  # dynamic rendering: no framebuffer or render pass (record())
-                None,
                 self.secondary_begin,
                 (0.0, 0.0, 0.0),
                 depth_only=True,
