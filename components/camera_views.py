@@ -10,7 +10,8 @@ materials can sample), in which order, and which entities it sees.
   are drawn before the window's cameras, which may show them.
 - `RenderLayers` on a camera: the layers (bits of `mask`) it draws; on a mesh entity: the layers
   it is in. Without the component both are layer 0 (mask 1), so a camera sees an entity when
-  their masks share a bit.
+  their masks share a bit. An entity its camera does not see casts no shadow in its picture
+  either (the rows are left out of the frame by the extract stage, render/extract/chunks.py).
 
 `camera_views(world)` lists the cameras that draw this frame, in drawing order. The window's
 cameras are those with a Viewport and no RenderTexture, plus the one camera without either

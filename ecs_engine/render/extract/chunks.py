@@ -1,6 +1,10 @@
 """Extract: the rows with a mesh, as chunks of one table's rows (one job each) with their slices
 of the instance buffer, and the rows set aside (drawn apart: blended materials, fills of their
-own). Reads the ModelMatrix and Mesh columns and the shadow tags' presence only.
+own). Reads the ModelMatrix, Mesh and RenderLayers columns and the shadow tags' presence only.
+
+A camera draws the rows whose RenderLayers share a bit with its own (components/camera_views.py;
+rows without the component are on layer 0). While every row is seen, chunks are views; rows left
+out are gathered into copies each frame, as the rows set aside are.
 
 Chunks are views into the world's columns: a frame's jobs read the values written since (the
 frame is extracted after the systems ran and drawn before they run again). They are kept while
@@ -17,12 +21,16 @@ from typing import Any
 import numpy as np
 
 from ...components import Mesh, ModelMatrix, NotShadowCaster, NotShadowReceiver
+from ...components.camera import RenderLayers
+from ...components.camera_views import DEFAULT_LAYERS
 from ...ecs.world import World
 from ...jobs import row_chunks
 
-READS = (ModelMatrix, Mesh, NotShadowCaster, NotShadowReceiver)  # a system running ChunkExtract declares these
+# what a system running ChunkExtract declares
+READS = (ModelMatrix, Mesh, NotShadowCaster, NotShadowReceiver, RenderLayers)
 _HANDLE = (Mesh, "handle")  # the columns whose writes make the extractor check handles again
 _MATERIAL = (Mesh, "material")
+_LAYERS = (RenderLayers, "mask")
 MODEL_COLUMN = (ModelMatrix, "model")  # a Chunk's `ticks` key: when its model matrices were last written
 # Rows per job, by default about one job per thread but never under MIN_CHUNK_ROWS. Measured on
 # the H100 host (native recorder): 4,096-row jobs were slower on 16 threads than on 4 (per-job
@@ -87,6 +95,8 @@ class ChunkExtract:
         self._chunks: list[Chunk] = []
         self._split_key: tuple[object, ...] = ()
         self._split: list[tuple[np.ndarray, np.ndarray]] = []  # per table: chunk rows, rows set aside
+        self._layered_key: tuple[object, ...] = ()
+        self._layered = False  # whether a table with a mesh holds RenderLayers rows
 
     def chunks(self, world: World, mesh_count: int, material_count: int = 1 << 32) -> list[Chunk]:
         """Row ranges of every table with a ModelMatrix and a Mesh, each with its buffer slice.
@@ -126,21 +136,38 @@ class ChunkExtract:
         self._chunks_key, self._chunks = key, out
         return out
 
-    def split(self, world: World, chunks: list[Chunk], blend: np.ndarray) -> tuple[list[Chunk], SetAsideRows]:
-        """The chunks without the rows set aside (gathered copies, made each frame: the model
-        matrices change), and those rows. Which rows those are is kept while the tables, their
-        materials and the flags stay the same."""
+    def hides_rows(self, world: World, layers: int) -> bool:
+        """Whether a camera seeing `layers` misses some row with a mesh (then `split` keeps
+        only the rows it sees)."""
+        if not layers & DEFAULT_LAYERS:
+            return True
+        key = (world, world.structure_version)  # which tables hold RenderLayers rows changes no other way
+        if key != self._layered_key:
+            tables = world.query(ModelMatrix, Mesh, write=()).tables
+            self._layered_key, self._layered = key, any(t.has(RenderLayers) and t.count for t in tables)
+        return self._layered
+
+    def split(
+        self, world: World, chunks: list[Chunk], blend: np.ndarray | None, layers: int = DEFAULT_LAYERS
+    ) -> tuple[list[Chunk], SetAsideRows]:
+        """(Called with the chunks of a world with a mesh.) The chunks without the rows set
+        aside (`blend`: per material, or None for none) or outside `layers` (gathered copies,
+        made each frame: the model matrices change), and the rows set aside that the camera
+        sees. Which rows those are is kept while the tables, their materials and layers,
+        `blend` and `layers` stay the same."""
         query = world.query(ModelMatrix, Mesh, write=())
         key = (
             world,
-            blend.tobytes(),
-            *[(t.id, t.version, t.count, t.column_ticks[_MATERIAL]) for t in query.tables],
+            None if blend is None else blend.tobytes(),
+            layers,
+            *[(t.id, t.version, t.count, t.column_ticks[_MATERIAL], t.column_ticks.get(_LAYERS)) for t in query.tables],
         )
         if key != self._split_key:
             self._split = []
             for batch in query:
-                flags = blend[batch[Mesh].material]
-                self._split.append((np.flatnonzero(~flags), np.flatnonzero(flags)))
+                seen = _seen(batch.table, len(batch), layers)
+                flags = np.zeros(len(batch), bool) if blend is None else blend[batch[Mesh].material]
+                self._split.append((np.flatnonzero(seen & ~flags), np.flatnonzero(seen & flags)))
             self._split_key = key
         opaque: list[Chunk] = []
         models, handles, materials, flags = [], [], [], []
@@ -166,3 +193,10 @@ class ChunkExtract:
         if self.chunk_rows is not None:
             return self.chunk_rows
         return max(MIN_CHUNK_ROWS, -(-rows // self.threads()))
+
+
+def _seen(table: Any, rows: int, layers: int) -> np.ndarray:
+    """Per row of `table`, whether a camera seeing `layers` sees it."""
+    if not table.has(RenderLayers):
+        return np.full(rows, bool(layers & DEFAULT_LAYERS))
+    return (table.columns[_LAYERS][:rows] & np.uint32(layers)) != 0

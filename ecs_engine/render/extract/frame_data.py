@@ -20,6 +20,8 @@ from typing import Any
 import numpy as np
 
 from ...components import render_origin
+from ...components.camera import RenderLayers, active_camera
+from ...components.camera_views import DEFAULT_LAYERS
 from ...components.environment import Environment
 from ...ecs.world import World
 from ...maths.culling import frustum_planes
@@ -167,8 +169,10 @@ class FrameExtractor:
         positional, directional = extract_lights(world, self._kinds, self._point_lights)
         chunks = self.rows.chunks(world, mesh_count, material_count)
         aside = None
-        if set_aside is not None and chunks:
-            chunks, aside = self.rows.split(world, chunks, set_aside)
+        layers = camera_layers(world)
+        if chunks and (set_aside is not None or self.rows.hides_rows(world, layers)):
+            chunks, seen_aside = self.rows.split(world, chunks, set_aside, layers)
+            aside = seen_aside if set_aside is not None else None
         planes = method.planes(lambda: self.planes(cam.lens, view))
         masks = method.masks(world, cam, origin, planes, dt, bounds)  # (temporal culling's: it reads the world)
         if materials is None:
@@ -222,3 +226,11 @@ class FrameExtractor:
 
     def rows_per_job(self, rows: int) -> int:
         return self.rows.rows_per_job(rows)
+
+
+def camera_layers(world: World) -> int:
+    """The layers the window's camera draws (its RenderLayers' mask; layer 0 without one)."""
+    if not world.query(RenderLayers, write=()).count():  # the usual world: no layers at all
+        return DEFAULT_LAYERS
+    eid = active_camera(world)
+    return int(world.get(eid, RenderLayers).mask) if world.has(eid, RenderLayers) else DEFAULT_LAYERS
