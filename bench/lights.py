@@ -38,13 +38,37 @@ THREADS = 1
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--width", type=int, default=1280)
     parser.add_argument("--height", type=int, default=720)
+    parser.add_argument("--counts", type=_ints, help="light counts, e.g. 6,4096 (default: 1 to 16,384)")
+    parser.add_argument("--cullings", type=_cullings, help=f"light cullings, e.g. auto (default: {','.join(CULLINGS)})")
+
+
+def _ints(text: str) -> tuple[int, ...]:
+    try:
+        counts = tuple(int(part) for part in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"light counts are integers separated by commas, not {text!r}") from None
+    if not counts or min(counts) < 1:
+        raise argparse.ArgumentTypeError(f"light counts must be at least 1, not {text!r}")
+    return counts
+
+
+def _cullings(text: str) -> tuple[str, ...]:
+    names = tuple(text.split(","))
+    unknown = [n for n in names if n not in CULLINGS]
+    if unknown:
+        raise argparse.ArgumentTypeError(f"unknown light culling {unknown[0]!r}: one of {', '.join(CULLINGS)}")
+    return names
 
 
 def measure(gpu: Any, n: int, culling: str, warmup: int, frames: int) -> dict[str, Any]:
     from ecs_engine.app.scenes import default_schedule
     from ecs_engine.demos import lights
     from ecs_engine.ecs.world import World
-    from ecs_engine.render.frame.renderer import Renderer
+
+    try:
+        from ecs_engine.render.frame.renderer import Renderer
+    except ImportError:  # a tree before render/ was split into sub-packages (old/new runs)
+        from ecs_engine.render.renderer import Renderer  # type: ignore[no-redef]
 
     device, target, meshes = gpu
     world = World()
@@ -53,7 +77,7 @@ def measure(gpu: Any, n: int, culling: str, warmup: int, frames: int) -> dict[st
     renderer = Renderer(device, target, meshes, light_culling=culling)
     try:
         timed = timed_frames(world, schedule, renderer, warmup, frames)
-        clustered, form = renderer.clustered, target.form
+        clustered, form = renderer.clustered, getattr(target, "form", None)
     finally:
         renderer.destroy()
     return {
@@ -66,14 +90,15 @@ def measure(gpu: Any, n: int, culling: str, warmup: int, frames: int) -> dict[st
 def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dict[str, Any]:
     from . import headless_gpu
 
-    counts = QUICK_COUNTS if args.quick else COUNTS
+    counts = args.counts or (QUICK_COUNTS if args.quick else COUNTS)
+    cullings = args.cullings or CULLINGS
     warmup, frames = (2, 4) if args.quick else (15, 60)
     width, height = (320, 180) if args.quick else (args.width, args.height)
     runs: dict[tuple[int, str], list[dict[str, Any]]] = {}
-    progress.total = 2 * len(counts) * len(CULLINGS)
+    progress.total = 2 * len(counts) * len(cullings)
     with headless_gpu(width, height) as gpu:
         for round_ in range(2):
-            order = CULLINGS if round_ == 0 else CULLINGS[::-1]
+            order = cullings if round_ == 0 else cullings[::-1]
             for n in counts:
                 for culling in order:
                     with progress.step(f"round {round_ + 1}: {n:,} lights, {culling}"):

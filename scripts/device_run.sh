@@ -64,10 +64,14 @@ for mode in "$@"; do
       # alternated REPS times in separate processes with the host's core speed (python_loop_ns)
       # beside each; the JSONs in ab-LABEL.tar (LABEL: NAME by default)
       # (a ":" inside ARGS is written "@": culling-methods' --methods indirect@occlusion)
+      # (NAME written +NAME: this tree's bench/NAME.py measures the old package too, for options
+      # the old benchmark lacks, e.g. +lights with --counts 6,4096)
       IFS=: read -r _ name args reps oldargs label <<< "$mode"; args=${args//@/:}; oldargs=${oldargs//@/:}
+      overlay=; [ "${name#+}" != "$name" ] && { overlay=1; name=${name#+}; }
       oldargs=${oldargs:-$args}; label=${label:-$name}
       [ -d /tmp/old ] || python3 -m pip install -q --no-deps --no-build-isolation --no-index --target /tmp/old \
         .ab/base >/dev/null 2>&1 || { echo "install old failed"; continue; }
+      [ -n "$overlay" ] && cp "bench/$name.py" /tmp/old/ecs_engine/bench/
       mkdir -p "/tmp/ab-$label"
       for rep in $(seq "${reps:-2}"); do
         if [ $((rep % 2)) = 1 ]; then order="new old"; else order="old new"; fi

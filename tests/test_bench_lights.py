@@ -35,3 +35,23 @@ def test_lights_quick_writes_its_json(tmp_path, monkeypatch):
         [{"lights": 4096, "culling": "auto", "gpu_ms": 3.0}, {"lights": 6, "culling": "auto", "gpu_ms": 2.0}]
     )
     assert made["ratio"] == 1.5 and made["met"]
+
+
+def test_counts_and_cullings_pick_the_configurations(tmp_path, monkeypatch, capsys):
+    """`--counts 6 --cullings auto` measures that one configuration (the old/new runs' 4,096 and 6
+    lights with auto, scripts/device_run.sh); a bad list is refused by the parser (exit 2)."""
+    monkeypatch.syspath_prepend(str(ROOT))
+    import pytest
+
+    from bench.__main__ import main
+
+    args = ["lights", "--quick", "--counts", "6", "--cullings", "auto", "--out", str(tmp_path), "--machine", "ci"]
+    assert main(args) == 0
+    doc = json.loads((tmp_path / "lights-ci.json").read_text())
+    assert [(r["lights"], r["culling"]) for r in doc["results"]] == [(6, "auto")]
+    assert doc["config"]["counts"] == [6]
+    for bad in (["--counts", "6,x"], ["--counts", "0"], ["--cullings", "auto,fast"]):
+        with pytest.raises(SystemExit) as exited:
+            main(["lights", "--quick", *bad, "--out", str(tmp_path)])
+        assert exited.value.code == 2
+    assert "unknown light culling 'fast'" in capsys.readouterr().err
