@@ -111,3 +111,39 @@ def test_the_tone_map_pass_keys_the_exposure():
         renderer.overlay = object()  # the UI pass draws anew each frame
         assert key() is None
         renderer.overlay = None
+
+
+def test_a_frame_recorded_without_a_key_leaves_no_stale_target_in_the_next_key():
+    """The key's imports are skipped while the graph holds them already; a frame that records
+    without a key (replay off here) imports its own output image, so the next key imports again
+    and names the image it draws into."""
+    from ecs_engine.gpu.functions import handle_int
+    from ecs_engine.gpu.memory import Image
+    from ecs_engine.render.frame.renderer import Renderer
+    from ecs_engine.render.frame.replay import frame_key
+
+    with headless_gpu(32, 24) as gpu:
+        device, vk = gpu.device, gpu.device.vk
+        world = World()
+        world.spawn(Transform(), Mesh(handle=gpu.meshes.add(cube_mesh())))
+        add_camera(world, eye=(0.0, 1.0, 4.0), target=(0.0, 0.0, 0.0))
+        renderer = Renderer(device, gpu.target, gpu.meshes)
+        gpu.owned.append(renderer)
+        usage = vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT
+        images = [Image(device, 32, 24, gpu.target.color_format, usage, vk.VK_IMAGE_ASPECT_COLOR_BIT) for _ in range(2)]
+        try:
+            default_schedule().run(world, 0.0)
+            for _ in range(3):
+                renderer.render(world, framebuffer=images[0], extent=(32, 24))
+            renderer.replay.enabled = False  # recorded without a key, into the other image
+            renderer.render(world, framebuffer=images[1], extent=(32, 24))
+            renderer.replay.enabled = True
+            state = renderer.target_state(images[0], 32, 24)
+            key = frame_key(renderer, state, renderer.frames.index, (0, None, 0, False), ([], [], False))
+            assert key is not None
+            handles = {name: handle for name, handle, _ in key[-1][-1]}
+            assert handles["target"] == handle_int(vk, images[0].handle) != handle_int(vk, images[1].handle)
+        finally:
+            device.wait_idle()
+            for image in images:
+                image.destroy()

@@ -77,6 +77,9 @@ class FrameReplay:
         self._recorded: list[Recorded | None] = [None] * slots
         self.replayed = 0  # frames submitted again
         self.recorded = 0  # frames recorded
+        # what output_graph last imported into a graph (see there), while the recordings since
+        # imported the same: None when a frame recorded without it
+        self.imported: tuple[Any, ...] | None = None
 
     def offer(self, slot: int, key: Key | None) -> dict[int, ChunkResult] | None:
         """Before the chunk jobs: the slot's kept chunks (FrameInputs.reuse) when its last frame
@@ -168,8 +171,16 @@ def output_graph(renderer: Any, state: Any, slot: int) -> Any:
     if graph is None:
         return None
     extent = (int(state.area.extent.width), int(state.area.extent.height))
-    outputs._import_attachments(graph, target.form, attachments)
-    outputs._import_target(graph, output._rendering(state), extent)
+    rendering = output._rendering(state)
+    # importing costs more than the rest of the key: skipped when the graph holds these imports
+    # already (the last frame imported them, here and in its recording; a new image bumps the
+    # device's objects_version)
+    imported = (graph, rendering, extent, attachments, renderer.device.objects_version)
+    last = renderer.replay.imported
+    if last is None or len(last) != len(imported) or any(a is not b and a != b for a, b in zip(last, imported)):
+        outputs._import_attachments(graph, target.form, attachments)
+        outputs._import_target(graph, rendering, extent)
+        renderer.replay.imported = imported
     frame = outputs.frame
     frame.tone_map, frame.overlay, frame.slot = (renderer.tone_map, renderer.exposure), renderer.overlay, slot
     graph.compile(extent)
@@ -182,6 +193,7 @@ def frame_key(renderer: Any, state: Any, slot: int, prelude: tuple[Any, ...], st
     order, the extent and the imported handles), or None when the frame must record: the
     prelude forbids it, or a pass returned UNREPLAYABLE (graph.replayable())."""
     if not prelude_replayable(renderer, *stops):
+        renderer.replay.imported = None  # this frame's recording imports what output_graph did not
         return None
     graph = output_graph(renderer, state, slot)
     replayable = graph is not None and graph.replayable()
