@@ -266,17 +266,20 @@ def test_toggling_at_runtime_never_replays_a_stale_frame():
 
 
 def test_the_replay_key_holds_the_effects():
-    """The key changes with an effect on or off and with its settings (frame_replay.replay_key)."""
-    from ecs_engine.render.frame.replay import replay_key
+    """The frame's replay key changes with an effect on or off and with its settings: the output
+    graph's passes' keys hold them (fxaa's pass; render/frame/replay.py frame_key)."""
+    from ecs_engine.render.frame.replay import frame_key
 
     with headless_gpu(32, 24) as gpu:
         world = _world(gpu)
         renderer = _renderer(gpu, tone_map="aces")
-        renderer.render(world, readback=True)
-        state = renderer.output._last[3]
 
         def key() -> Any:
-            return replay_key(renderer, state, 0, None, 0, True)[-1]
+            renderer.render(world, readback=True)  # the output graph of these effects is made
+            state = renderer.output._last[1]
+            frame = frame_key(renderer, state, 0, (0, None, 0, True), ([], [], False))
+            assert frame is not None
+            return frame[-1][:-2]  # the graph's passes' (name, key) in order
 
         keys = [key()]
         renderer.set_post_effects({"fxaa"})
@@ -285,7 +288,8 @@ def test_the_replay_key_holds_the_effects():
         keys.append(key())
         renderer.set_post_effects(set())
         keys.append(key())
-        assert keys[0] == keys[3] == () and len({repr(k) for k in keys}) == 3
+        assert keys[0] == keys[3] and len({repr(k) for k in keys}) == 3
+        assert "fxaa" not in dict(keys[0]) and dict(keys[1])["fxaa"] != dict(keys[2])["fxaa"]
 
 
 # ------------------------------------------------------------------------------ the one line

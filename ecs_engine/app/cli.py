@@ -18,6 +18,8 @@ from typing import TYPE_CHECKING, NoReturn
 
 from ..ecs.errors import EcsError
 from ..errors import UsageError
+from .cli_graph import PRINT_GRAPH_HELP, print_graph
+from .cli_types import dimension, non_negative_int, positive_int  # noqa: F401 (games import them from here)
 from .entry_point import run_command
 from .scenes import SCENE_FILE_SUFFIX, SEED_SCENES, is_scene_file
 from .scenes import SCENES as RENDERED_SCENES
@@ -26,28 +28,11 @@ if TYPE_CHECKING:
     from .game_module import Game
 
 
-def positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"expected a number above 0, got {value}")
-    return value
-
-
 # the lists come from their owners: the scenes module, the render configuration's enums, the
 # swapchain's present modes
 SCENES = (*RENDERED_SCENES, "motion")  # motion: the text-mode ECS scene, no rendering
 EDITOR_SCENES = RENDERED_SCENES
 DEFAULT_SCENE = "grid100"
-
-
-def dimension(text: str) -> int:
-    value = positive_int(text)
-    if value > 16384:
-        raise argparse.ArgumentTypeError(f"expected at most 16384 pixels, got {value}")
-    return value
 
 
 def editor_scene(text: str) -> str:
@@ -75,16 +60,6 @@ class OneLineParser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
-
-
-def non_negative_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a number of 0 or more, got {value}")
-    return value
 
 
 def render_flags(headless_frames: int = 1) -> OneLineParser:
@@ -183,6 +158,7 @@ def build_parser(
         nargs="?",
         help="model file for the model scene (OBJ, glTF/GLB, PLY, STL); sky image for the environment scene",
     )
+    demo.add_argument("--print-graph", action="store_true", help=PRINT_GRAPH_HELP)
     editor = sub.add_parser(
         "editor",
         help="the ImGui editor and Perf window on demo scenes",
@@ -223,7 +199,7 @@ def run(args: argparse.Namespace) -> int:
         if args.scene == "motion":
             from ..demos import motion
 
-            refuse_unused(args, MOTION_FLAGS, "motion is a text-mode ECS scene (no rendering)")
+            refuse_unused(args, MOTION_FLAGS, "motion is a text-mode ECS scene (no rendering)", ("print_graph",))
             check_entities(args.entities or 100_000)
             check_threads(args.threads)
             return motion.main(args.entities or 100_000, args.frames or 300, args.threads)
@@ -250,9 +226,9 @@ def run(args: argparse.Namespace) -> int:
 MOTION_FLAGS = ("entities", "frames", "threads", "debug")
 
 
-def refuse_unused(args: argparse.Namespace, used: tuple[str, ...], why: str) -> None:
-    """UsageError naming every render flag given that `used` does not include."""
-    defaults = vars(render_flags().parse_args([]))
+def refuse_unused(args: argparse.Namespace, used: tuple[str, ...], why: str, more: tuple[str, ...] = ()) -> None:
+    """UsageError naming every render flag (and switch in `more`) given that `used` does not include."""
+    defaults = vars(render_flags().parse_args([])) | dict.fromkeys(more, False)
     given = [
         f"--{name.replace('_', '-')}"
         for name, default in defaults.items()
@@ -303,6 +279,8 @@ def run_scene(args: argparse.Namespace, editor_scenes: tuple[str, ...] | None = 
         editor=editor,
         scenes=editor_scenes or (),
     )
+    if getattr(args, "print_graph", False):  # demo --print-graph: the graph of one frame, no window
+        return print_graph(options)
     if not args.headless:
         from .window import WindowSource, open_glfw
 

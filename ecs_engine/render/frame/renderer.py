@@ -48,7 +48,7 @@ from ..shadows.maps_pass import ShadowPass
 from .jobs import FrameJobs, job_name
 from .output_passes import OutputPasses
 from .path_settings import MODES, PATHS, RECORDER_NAMES, PathSettings  # noqa: F401 (importers name MODES here)
-from .replay import FrameReplay, replay_key, replayable
+from .replay import FrameReplay, frame_key
 from .resources import FrameResources, frame_sets
 from .target_forms import TargetForms
 
@@ -277,9 +277,8 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
         target = self.target_state(self.target.framebuffer if framebuffer is None else framebuffer, width, height)
         self.path.draw_into(self._gbuffer_formats if deferred else self.output.formats, deferred)  # the chunks'
         self.output.begin_post(data.camera)  # the post effects' frame inputs: their keys (below) read them
-        key = None  # a frame that may be submitted again (frame_replay.py): what its recording depends on
-        if replayable(self, views, traced, forward):
-            key = replay_key(self, target, positional, grid, data.light_count, readback)
+        # None: the frame records; else the output graph's passes' keys and the prelude's (replay.py)
+        key = frame_key(self, target, slot, (positional, grid, data.light_count, readback), (views, traced, forward))
         reuse = self.replay.offer(slot, key)
         inputs = FrameInputs(
             slot=slot,

@@ -12,21 +12,29 @@ give back the chunk's old secondary when the run counts are those it was recorde
 stands (gpu/frames.py's `resubmit`): no recording at all. When some chunk recorded anew, the
 primary is recorded again around old and new secondaries, and the slot starts clean next time.
 
-What a recording depends on goes into the key; anything else makes the frame record as before:
-- the device's `objects_version`, bumped by every buffer, image, framebuffer or pipeline made,
-  every buffer, image or descriptor pool destroyed, every descriptor set written (a command
-  buffer is invalid once a set it binds is written) and the worker threads' command pools
-  destroyed (a resized pool);
-- the path object (a switched mode or recorder, or pipelines made again, is a new path), the
-  target's state object (both held and compared by identity: an id could be a freed object's),
-  its form and swapchain remakes, the mesh registry's version (meshes added or replaced);
-- the counts and settings the primary records: billboards, light size, tone map and exposure,
-  material features, the sky, the read-back, the clustered lights' grid, whether the shadow maps
-  were cleared once, and the post effects' keys (which are on, their settings).
+What a recording depends on goes into the key (`frame_key`), taken before the jobs; anything
+else makes the frame record as before. The key is the output frame graph's (render/graph/graph.py
+`key()`: each running pass's `key()` in order, the extent and the imported images' handles; the
+graph object itself, one per target form), so a pass keys what it records from and one that
+forgets cannot replay a stale frame; and a prelude of what is still recorded by hand outside the
+graph (`prelude_key`), which shrinks as that work becomes passes:
+- the device's `objects_version`, bumped by every buffer, image or pipeline made, every buffer,
+  image or descriptor pool destroyed, every descriptor set written (a command buffer is invalid
+  once a set it binds is written) and the worker threads' command pools destroyed (a resized
+  pool): it stays beside the graph's key;
+- the forward pass's secondaries, gathered outside the graph: the path object (a switched mode
+  or recorder, or pipelines made again, is a new path; held and compared by identity), the mesh
+  registry's version, the light billboards' count and size, the sky;
+- the deferred lighting's material features, the read-back, the clustered lights' grid, whether
+  the shadow maps were cleared once, a swapchain's remakes (its new images may reuse handles).
+The tone map and exposure (`tone_map`), the post effects' keys (`post`, the ldr effects' own
+passes), the target's form (`forward`, and the graph per form) and output image (the "target"
+import) are the graph's.
 
 Frames that always record: a path that is not `replayable` (per_entity pushes each row's data;
-indirect records its own passes), an overlay (the UI draws anew each frame), shadow maps drawn
-(their views' jobs), ray-traced shadows, and blended rows (sorted each frame).
+indirect records its own passes), shadow maps drawn (their views' jobs), ray-traced shadows and
+blended rows (sorted each frame): `prelude_replayable`; and a pass whose key is UNREPLAYABLE
+(`graph.replayable()`): the overlay (the UI draws anew each frame), a post effect without a key.
 """
 
 from __future__ import annotations
@@ -69,6 +77,9 @@ class FrameReplay:
         self._recorded: list[Recorded | None] = [None] * slots
         self.replayed = 0  # frames submitted again
         self.recorded = 0  # frames recorded
+        # what output_graph last imported into a graph (see there), while the recordings since
+        # imported the same: None when a frame recorded without it
+        self.imported: tuple[Any, ...] | None = None
 
     def offer(self, slot: int, key: Key | None) -> dict[int, ChunkResult] | None:
         """Before the chunk jobs: the slot's kept chunks (FrameInputs.reuse) when its last frame
@@ -119,37 +130,75 @@ class FrameReplay:
         self._recorded[slot] = Recorded(key, executed, kept, light_draws)
 
 
-def replay_key(renderer: Any, target: Any, positional: int, grid: Any, light_count: int, readback: bool) -> Key:
-    """What this frame's primary records besides the chunks' secondaries (see the module), for a
-    frame `replayable` allows."""
-    output, form = renderer.output, renderer.target
+def prelude_key(renderer: Any, positional: int, grid: Any, light_count: int, readback: bool) -> Key:
+    """What a frame's recording depends on that no pass of the output graph keys yet (see the
+    module): the device's objects, and the work recorded by hand before and after the graph.
+    Each field leaves this list when the pass that records it joins the graph with its key()."""
     return (
-        renderer.device.objects_version,
-        Same(renderer.path),
-        Same(target),
-        form.form,
-        getattr(form, "recreations", 0),
-        renderer.meshes.version,  # meshes added or replaced: their buffers
-        positional,
-        output.light_pass.size,
-        renderer.tone_map,
-        renderer.exposure,
-        renderer.material_features,
-        renderer.environment.sky,
-        readback,
-        None if grid is None else (grid.tiles_x, grid.tiles_y, light_count),
-        renderer.shadows.cleared,
-        renderer.post_key(),  # the post effects on and their settings (post/effects.py)
+        renderer.device.objects_version,  # the device's: stays beside the graph's key
+        Same(renderer.path),  # the chunks' secondaries (forward executes them)
+        renderer.meshes.version,  # the chunks' meshes: their buffers
+        getattr(renderer.target, "recreations", 0),  # a remade swapchain's images may reuse handles
+        positional,  # forward's light billboards (output_passes.py gathers its secondaries)
+        renderer.output.light_pass.size,  # the billboards' too
+        renderer.environment.sky,  # forward's sky secondary
+        renderer.material_features,  # the deferred lighting (recorded before the graph)
+        readback,  # the copy recorded after the graph (until a readback pass)
+        None if grid is None else (grid.tiles_x, grid.tiles_y, light_count),  # light clusters (compute)
+        renderer.shadows.cleared,  # the shadow maps' first clear
     )
 
 
-def replayable(renderer: Any, views: list[Any], traced: list[Any], forward: bool) -> bool:
-    """Whether this frame may be submitted again later (see the module for those that may not)."""
-    return (
-        renderer.replay.enabled
-        and getattr(renderer.path, "replayable", False)
-        and renderer.overlay is None
-        and not views
-        and not traced
-        and not forward
-    )
+def prelude_replayable(renderer: Any, views: list[Any], traced: list[Any], forward: bool) -> bool:
+    """Whether the work outside the graph may be submitted again: the path's chunks (not
+    per_entity's or indirect's), no shadow maps drawn, no rays, no blended rows (see the module)."""
+    path_ok = getattr(renderer.path, "replayable", False)
+    return renderer.replay.enabled and path_ok and not views and not traced and not forward
+
+
+def output_graph(renderer: Any, state: Any, slot: int) -> Any:
+    """This frame's output graph set up before its jobs, as OutputGraph.record sets it up
+    (imports, the frame's tone map and overlay, compiled: cached while nothing changed), so
+    that its passes' keys are this frame's; None before the graph of the target's form exists
+    (that frame records, and makes it)."""
+    output = renderer.output
+    outputs = output.graph
+    if outputs is None:
+        return None
+    target = output.target
+    attachments = target.attachments
+    graph = outputs.graphs.get((target.form, int(attachments.samples), int(target.color_format)))
+    if graph is None:
+        return None
+    extent = (int(state.area.extent.width), int(state.area.extent.height))
+    rendering = output._rendering(state)
+    # importing costs more than the rest of the key: skipped when the graph holds these imports
+    # already (the last frame imported them, here and in its recording; a new image bumps the
+    # device's objects_version)
+    imported = (graph, rendering, extent, attachments, renderer.device.objects_version)
+    last = renderer.replay.imported
+    if last is None or len(last) != len(imported) or any(a is not b and a != b for a, b in zip(last, imported)):
+        outputs._import_attachments(graph, target.form, attachments)
+        outputs._import_target(graph, rendering, extent)
+        renderer.replay.imported = imported
+    frame = outputs.frame
+    frame.tone_map, frame.overlay, frame.slot = (renderer.tone_map, renderer.exposure), renderer.overlay, slot
+    graph.compile(extent)
+    return graph
+
+
+def frame_key(renderer: Any, state: Any, slot: int, prelude: tuple[Any, ...], stops: tuple[Any, ...]) -> Key | None:
+    """This frame's replay key: the prelude's (`prelude`: prelude_key's arguments; `stops`:
+    prelude_replayable's) and the output graph's (graph.key(): each running pass's key() in
+    order, the extent and the imported handles), or None when the frame must record: the
+    prelude forbids it, or a pass returned UNREPLAYABLE (graph.replayable())."""
+    if not prelude_replayable(renderer, *stops):
+        renderer.replay.imported = None  # this frame's recording imports what output_graph did not
+        return None
+    graph = output_graph(renderer, state, slot)
+    replayable = graph is not None and graph.replayable()
+    key = (prelude_key(renderer, *prelude), Same(graph), graph.key()) if replayable else None
+    graph_frame = renderer.output.graph.frame if graph is not None else None
+    if graph_frame is not None:
+        graph_frame.overlay = None  # the recording sets it again: keep no reference past the key
+    return key

@@ -23,10 +23,11 @@ descriptors expect.
 
 from __future__ import annotations
 
+from collections.abc import Hashable
 from typing import Any
 
 from ...gpu.scene_attachments import DEPTH_FORMAT_NAME
-from ..graph import Access, ImageDesc, Load, Pass
+from ..graph import UNREPLAYABLE, Access, ImageDesc, Load, Pass
 
 FAR = (0.0, 0.0, 0.0, 0.0)  # reverse-Z's far plane: depth cleared to 0.0
 
@@ -70,6 +71,11 @@ class Forward(Pass):
             ctx.vk.lib.vkCmdExecuteCommands(cb, len(secondaries), ctx.vk.ffi.new("VkCommandBuffer[]", secondaries))
         ctx.end_rendering()  # with MSAA: the resolve
 
+    def key(self) -> Hashable:
+        """Its form and samples (what it loads or clears and resolves); the secondaries it
+        executes are keyed by frame replay's prelude until their passes have keys."""
+        return (self.form, self.samples)
+
 
 class PostSeam(Pass):
     """The hdr-stage post effects (see the module), in order; nothing without one."""
@@ -94,3 +100,11 @@ class PostSeam(Pass):
             raise RuntimeError("OutputPasses.begin_post(camera) was not called for this frame's target")
         for post in output.post:
             post(cb, inputs)
+
+    def key(self) -> Hashable:
+        """The effects' keys of this frame's inputs (their settings; SSAO's projection): an
+        effect without a key makes every frame record."""
+        posts = self.output.post
+        if not all(hasattr(post, "key") for post in posts):
+            return UNREPLAYABLE
+        return tuple(post.key(self.output.inputs) for post in posts)

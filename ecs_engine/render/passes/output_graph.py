@@ -26,7 +26,7 @@ from __future__ import annotations
 from collections.abc import Callable, Hashable
 from typing import Any
 
-from ..graph import Access, FrameGraph, ImageDesc, Load, Pass
+from ..graph import UNREPLAYABLE, Access, FrameGraph, ImageDesc, Load, Pass
 from ..graph.resources import format_name
 from .forward import Forward, PostSeam
 
@@ -88,6 +88,10 @@ class OverlayOver(Pass):
         ctx.begin_rendering(colors=("target",))
         overlay.record(cb, self.frame.slot, width, height)
         ctx.end_rendering()
+
+    def key(self) -> Hashable:
+        """The UI draws anew each frame: a frame with an overlay is never replayed."""
+        return UNREPLAYABLE if self.frame.overlay is not None else None
 
 
 class OutputGraph:
