@@ -5,14 +5,13 @@ render/frame/scene_renderings.py) between explicit barriers (render/frame/scene_
 - `direct`: the scene's rendering into the target: the chunks', the sky's (sky_pass.py), the
   set-aside rows' and the light billboards' (light_pass.py) secondaries; then the overlay (the
   editor's ImGui) in a rendering of its own that loads the target (its one pipeline, made for the
-  target's format, serves every form: no pipeline follows a change of form), and the barrier to
-  the target's final layout (readback or present);
+  target's format, serves every form: no pipeline follows a change of form), and the readback
+  (render/passes/readback.py) where asked;
 - `hdr`: the scene's rendering into the HDR colour as above (with MSAA resolved at its end),
   then the barrier that leaves the HDR colour (and single-sample depth) in
   SHADER_READ_ONLY_OPTIMAL; then the post effects (`post`); then the output graph
   (render/passes/output_graph.py: the tone map sampling the HDR colour, the ldr effects, the
-  overlay, every barrier of the target image but the one to its final layout), and the barrier
-  to the target's final layout (output_barriers.py);
+  overlay, the readback, every barrier of the target image up to its final layout);
 - `deferred`: the G-buffer rendering with the chunks' secondaries (gpu/gbuffer.py), the lighting
   compute pass (deferred_pass.py), then as `hdr` with the sky, the set-aside rows and the
   billboards alone in the scene's rendering.
@@ -58,7 +57,6 @@ from ..passes.output_graph import OutputGraph
 from ..passes.sky import SkyPass
 from ..passes.tone_map import ToneMapPass
 from ..post.inputs import PostInputs
-from .output_barriers import OutputBarriers
 from .scene_renderings import scene_state
 
 log = logging.getLogger("ecs_engine")
@@ -68,12 +66,10 @@ PostPass = Callable[[Any, PostInputs], None]
 
 
 class OutputRendering:
-    """One target image (its handle and view, which the output graph imports) and its barrier to
-    the target's final layout, made once per output image."""
+    """One target image: its handle and view, which the output graph imports."""
 
-    def __init__(self, vk: Any, target: Any, output: Any) -> None:
+    def __init__(self, target: Any, output: Any) -> None:
         self.image, self.view = target.output_image(output)
-        self.barriers = OutputBarriers(vk, self.image, target.final_layout)
 
 
 class OutputPasses:
@@ -133,7 +129,7 @@ class OutputPasses:
                 self._targets.clear()
             vk = self.vk
             state, formats = scene_state(vk, target, framebuffer, width, height, self.clear_color, self.secondaries)
-            rendering = OutputRendering(vk, target, framebuffer)
+            rendering = OutputRendering(target, framebuffer)
             made = self._targets[key] = (state, rendering, formats)
         self._last = (key, *made)
         return made[0]
@@ -199,13 +195,15 @@ class OutputPasses:
         sky: bool = False,
         transparent: Any = None,
         mark: Callable[[str], None] | None = None,
+        readback: bool = False,
     ) -> int:
         """Raw cffi calls with structs made once (see gpu/frames.py for why). `chunks`: the path's
         secondaries; `aside`: the set-aside rows' or None; `billboards` point and spot lights get
         one; `features`: the mesh pipelines' MATERIAL_FEATURES (the lighting's too); `sky`: the
         Environment is drawn behind; `transparent`: the blended rows' secondary for the weighted
-        transparency pass (the deferred form); `mark`: see the module. Returns the light pass's
-        draws."""
+        transparency pass (the deferred form); `mark`: see the module; `readback`: the target
+        copied to the host (the target's take_readback says for which image). Returns the light
+        pass's draws."""
         vk = self.vk
         lib = vk.lib
         target = self.target
@@ -251,7 +249,8 @@ class OutputPasses:
             secondaries = [*secondaries, lights]
         if self.graph is None:
             self.graph = OutputGraph(self, [])
-        self.graph.record(cb, state, self._rendering(state), secondaries, tone_map, overlay, slot, mark)
+        rendering = self._rendering(state)
+        self.graph.record(cb, state, rendering, secondaries, tone_map, overlay, slot, mark, readback)
         return draws
 
     def begin_post(self, camera: Any) -> PostInputs | None:

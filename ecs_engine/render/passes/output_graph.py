@@ -7,16 +7,17 @@ per target form (render/frame/output_passes.py; graph_plan.md step 7, first part
                effects of the "ldr" stage on (post/registry.py: FXAA)
     <effect i> "ldr_i" -> "ldr_i+1", the last one -> "target"
     imgui      the overlay over "target" (loaded: drawn on top); records nothing without one
+    readback   "target" copied to the host (render/passes/readback.py): every frame of a
+               headless target (copying only when asked), a swapchain's reading-back frames
 
 "hdr", "hdr_msaa" and "depth" are still the target's SceneAttachments (imported each frame: the
 deferred form's G-buffer pass and lighting write them before the graph runs), but for the direct
 form's depth, the graph's transient. "target" is the
 target's image for this frame, imported with its old contents discarded (UNDEFINED) after the
 acquire semaphore's wait (colour output) and the last frame's readback copy of the same image
-(transfer), and left as a colour attachment, which output_barriers.py's `after` takes to its
-final layout (readback or present): the graph's own transition to PRESENT_SRC ends in no stage,
-which the swapchain's readback barrier (from colour output) cannot follow. The graph places every
-barrier between them, and the intermediates are its transients. Each ldr effect adds its own
+(transfer), and left in the target's final layout (`final_layout`: TRANSFER_SRC headless,
+PRESENT_SRC for a swapchain). The graph places every barrier between them, and the
+intermediates are its transients. Each ldr effect adds its own
 passes (`effect.add(graph, source, target, create)`), so the graphs are made again when the
 effects change; one graph is kept per (form, samples, target format).
 """
@@ -29,9 +30,15 @@ from typing import Any
 from ..graph import Access, FrameGraph, ImageDesc, Load, Pass
 from ..graph.resources import format_name
 from .forward import Forward, PostSeam
+from .readback import Copy, Readback
 
 #: the graph's pass names -> the names the frame's timing marks have always used
 _MARKS = {"tone_map": "tone map", "post": "post effects"}
+
+
+def _final_layout(vk: Any, layout: int) -> str:
+    """The graph's name of a target's final layout: readback's (headless) or present's."""
+    return "TRANSFER_SRC_OPTIMAL" if layout == vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL else "PRESENT_SRC_KHR"
 
 
 class _Frame:
@@ -43,6 +50,7 @@ class _Frame:
     slot: int = 0
     secondaries: tuple[Any, ...] | list[Any] = ()  # the scene rendering's, in order (output_passes.py)
     background: tuple[float, float, float] = (0.0, 0.0, 0.0)  # fixed per renderer
+    readback: Copy | None = None  # the target's record_copy on a frame read back
 
 
 class ToneMapInto(Pass):
@@ -129,9 +137,10 @@ class OutputGraph:
         overlay: Any,
         slot: int,
         mark: Callable[[str], None] | None,
+        readback: bool = False,
     ) -> None:
         """This frame's output: `rendering` (output_passes.OutputRendering) names the target's
-        image and holds its barrier to the final layout; `secondaries` are the scene's draws."""
+        image; `secondaries` are the scene's draws; `readback`: copy the target to the host."""
         target = self.output.target
         attachments = target.attachments
         form, samples, color_format = target.form, int(attachments.samples), int(target.color_format)
@@ -140,24 +149,38 @@ class OutputGraph:
         if graph is None:
             graph = self.graphs[shape] = self._make(*shape)
         self.graph = graph
+        copies = readback and target.take_readback()  # a swapchain's: only for the image asked
+        headless = target.final_layout == self.output.vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
+        self._place_readback(graph, copies or headless)
         extent = (int(state.area.extent.width), int(state.area.extent.height))
         self._import_attachments(graph, form, attachments)
         self._import_target(graph, rendering, extent)
         frame = self.frame
         frame.state, frame.tone_map, frame.overlay, frame.slot = state, tone_map, overlay, slot
         frame.secondaries = secondaries
+        frame.readback = target.record_copy if copies else None
         graph.compile(extent)
         names = {"forward": "sky and blended"} if form == "deferred" else {}
 
         def ended(name: str) -> None:
             if mark is None or (name == "imgui" and overlay is None) or (name == "post" and not self.output.post):
                 return
+            if name == "readback" and not copies:
+                return
             mark(names.get(name, _MARKS.get(name, name)))
 
         graph.execute(cb, on_pass_end=ended if mark is not None else None)
-        rendering.barriers.after(self.output.vk.lib, cb)
-        frame.state = frame.overlay = None
+        frame.state = frame.overlay = frame.readback = None
         frame.secondaries = ()
+
+    def _place_readback(self, graph: FrameGraph, wanted: bool) -> None:
+        """The readback pass last in `graph` or not (a change recompiles the graph: a swapchain's
+        screenshot frame and the one after)."""
+        has = any(p.name == Readback.name for p in graph.passes)
+        if wanted and not has:
+            graph.add_pass(Readback(self.frame))
+        elif has and not wanted:
+            graph.remove_pass(Readback.name).destroy()
 
     def _import_attachments(self, graph: FrameGraph, form: str, attachments: Any) -> None:
         """The target's SceneAttachments: depth, the HDR colour and, with MSAA, the multisampled
@@ -193,7 +216,7 @@ class OutputGraph:
             format=self.output.target.color_format,
             extent=extent,
             layout_before="UNDEFINED",  # every pixel is written: the old contents go
-            layout_after="COLOR_ATTACHMENT_OPTIMAL",  # then OutputBarriers.after (see the module)
+            layout_after=_final_layout(self.output.vk, self.output.target.final_layout),
             stage_before=("COLOR_ATTACHMENT_OUTPUT", "ALL_TRANSFER"),  # acquire's wait, last readback
         )
 
