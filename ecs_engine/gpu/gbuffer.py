@@ -7,8 +7,8 @@ Why: on the H100 a fragment shader runs on the few graphics-capable units of the
 shader on all of it; thousands of lights cost the forward frame 4x the 6-light one
 (docs/performance.md).
 
-Attachments, drawn with dynamic rendering (gbuffer_formats; render/frame/output_passes.py begins it,
-render/frame/scene_barriers.py places its barriers):
+Attachments, drawn with dynamic rendering (gbuffer_formats; the output graph's gbuffer pass,
+render/passes/deferred_passes.py, begins it and the graph places its barriers):
 - depth (reverse-Z), kept for the lighting pass and the scene rendering;
 - colour 0, the HDR colour: ambient, emissive and unlit materials (the lighting pass adds the lights);
 - colour 1, normal xyz (unit, render-origin space) and roughness, RGBA32F;

@@ -1,6 +1,7 @@
 """The target's "forms" (FORMS): which attachments the scene draws into, and with what formats;
-the renderings themselves are dynamic (vkCmdBeginRendering, render/frame/scene_renderings.py) with
-explicit barriers (render/frame/scene_barriers.py), so nothing here is made against a render pass.
+the renderings themselves are dynamic (vkCmdBeginRendering) in passes of the output graph
+(render/passes/output_graph.py), which places the barriers, so nothing here is made against a
+render pass.
 
 - `hdr`: the scene in 16-bit float (HDR) colour with reverse-Z depth; after it, the post effects
   (render/frame/output_passes.py's `post`) and the tone map into the target (sRGB swapchain image or

@@ -1,6 +1,6 @@
 """What the frame's primary command buffer records around the render path's secondaries, by the
-target's form (gpu/scene_attachments.py's FORMS), every drawing a dynamic rendering (vkCmdBeginRendering,
-render/frame/scene_renderings.py) between explicit barriers (render/frame/scene_barriers.py):
+target's form (gpu/scene_attachments.py's FORMS), every drawing a dynamic rendering in a pass of
+the output graph (render/passes/output_graph.py), which places the barriers:
 
 - `direct`: the scene's rendering into the target: the chunks', the sky's (sky_pass.py), the
   set-aside rows' and the light billboards' (light_pass.py) secondaries; then the overlay (the
@@ -12,8 +12,10 @@ render/frame/scene_renderings.py) between explicit barriers (render/frame/scene_
   SHADER_READ_ONLY_OPTIMAL; then the post effects (`post`); then the output graph
   (render/passes/output_graph.py: the tone map sampling the HDR colour, the ldr effects, the
   overlay, the readback, every barrier of the target image up to its final layout);
-- `deferred`: the G-buffer rendering with the chunks' secondaries (gpu/gbuffer.py), the lighting
-  compute pass (deferred_pass.py), then as `hdr` with the sky, the set-aside rows and the
+- `deferred`: the G-buffer rendering with the chunks' secondaries (gpu/gbuffer.py), the ray
+  shadows where traced, the lighting compute pass (lighting/deferred.py), weighted
+  transparency's accumulation where on (passes of the output graph too:
+  render/passes/deferred_passes.py), then as `hdr` with the sky, the set-aside rows and the
   billboards alone in the scene's rendering.
 
 Post effects go in `OutputPasses.post`: callables `post(cb, inputs)` (inputs: the frame's
@@ -204,36 +206,22 @@ class OutputPasses:
         transparency pass (the deferred form); `mark`: see the module; `readback`: the target
         copied to the host (the target's take_readback says for which image). Returns the light
         pass's draws."""
-        vk = self.vk
-        lib = vk.lib
         target = self.target
         secondaries = chunks
-        if state.gbuffer_ptrs is not None:
+        if self.graph is None:
+            self.graph = OutputGraph(self, [])
+        frame = self.graph.frame
+        if target.form == "deferred":  # the chunks in the G-buffer pass, lit before the scene's rendering
             assert self.deferred is not None
-            rendering, before, after = state.gbuffer_ptrs
-            lib.vkCmdPipelineBarrier2(cb, before)
-            lib.vkCmdBeginRendering(cb, rendering)
-            if chunks:
-                lib.vkCmdExecuteCommands(cb, len(chunks), vk.ffi.new("VkCommandBuffer[]", chunks))
-            lib.vkCmdEndRendering(cb)
-            lib.vkCmdPipelineBarrier2(cb, after)
-            if mark is not None:
-                mark("g-buffer")
-            extent = state.area.extent
+            frame.chunks, frame.frame_set, frame.features = chunks, frame_set[0], features
+            frame.attachments = target.attachments
             ray = self.ray_shadows
-            if ray is not None and ray.lights:  # the shadow mask the lighting reads (ray_shadows.py)
-                mask = self.deferred.named(target.attachments)
-                ray.record(cb, slot, frame_set[0], target.attachments, mask, extent.width, extent.height)
-                if mark is not None:
-                    mark("ray-traced shadows")
-            self.deferred.record(cb, frame_set[0], target.attachments, features, extent.width, extent.height)
-            if mark is not None:
-                mark("lighting (compute)")
+            self.deferred.traced = ray is not None  # the lighting's mask full size only if traced into
+            if ray is not None and ray.lights:  # the shadow mask the lighting reads (raytracing/shadows.py)
+                frame.ray = (ray, self.deferred.named(target.attachments))
             if transparent is not None:
                 assert self.oit is not None
-                self.oit.accumulate(cb, transparent)
-                if mark is not None:
-                    mark("transparency (accumulate)")
+                frame.transparent, frame.oit_images = transparent, tuple(self.oit.images)
             secondaries = []
         formats = self.formats  # the scene rendering's, in this frame's form (target_state)
         if sky:  # after the opaque chunks, before the blended rows
@@ -247,8 +235,6 @@ class OutputPasses:
         lights, draws = self.light_pass.record(slot, state, formats, frame_set, billboards)
         if lights is not None:  # last, depth-tested against everything, blended over it
             secondaries = [*secondaries, lights]
-        if self.graph is None:
-            self.graph = OutputGraph(self, [])
         rendering = self._rendering(state)
         self.graph.record(cb, state, rendering, secondaries, tone_map, overlay, slot, mark, readback)
         return draws

@@ -6,8 +6,9 @@ FORMS):
   transient of the graph (nothing after the rendering reads it: never stored);
 - `hdr`: "hdr" cleared and "depth" cleared; with MSAA "hdr_msaa" (n samples) cleared and
   resolved into "hdr" at the rendering's end, and "depth" of n samples;
-- `deferred`: "hdr" and "depth" loaded (the G-buffer pass and the lighting wrote them, left in
-  GENERAL and DEPTH_STENCIL_READ_ONLY: their imports' layout_before).
+- `deferred`: "hdr" and "depth" loaded (the G-buffer pass and the lighting wrote them:
+  render/passes/deferred_passes.py), and with weighted transparency "oit_accum" and
+  "oit_reveal" sampled by its composite.
 
 Every draw is a secondary (the chunks', the sky's, the set-aside rows', the weighted
 transparency's composite and the light billboards', in that order: output_passes.py gathers
@@ -27,6 +28,7 @@ from typing import Any
 
 from ...gpu.scene_attachments import DEPTH_FORMAT_NAME
 from ..graph import Access, ImageDesc, Load, Pass
+from .deferred_passes import OIT
 
 FAR = (0.0, 0.0, 0.0, 0.0)  # reverse-Z's far plane: depth cleared to 0.0
 
@@ -37,8 +39,8 @@ class Forward(Pass):
 
     name = "forward"
 
-    def __init__(self, frame: Any, form: str, samples: int) -> None:
-        self.frame, self.form, self.samples = frame, form, samples
+    def __init__(self, frame: Any, form: str, samples: int, oit: bool = False) -> None:
+        self.frame, self.form, self.samples, self.oit = frame, form, samples, oit
 
     def attachments(self) -> tuple[tuple[str, ...], str, tuple[str | None, ...] | None]:
         """(colours, depth, resolves) of the rendering."""
@@ -53,6 +55,8 @@ class Forward(Pass):
         if self.form == "deferred":  # over the lit scene
             builder.write("hdr", Access.COLOR_READ_WRITE, load=Load.LOAD)
             builder.write(depth, Access.DEPTH_WRITE, load=Load.LOAD)
+            for name in OIT if self.oit else ():  # the weighted transparency's composite samples them
+                builder.read(name, Access.FRAGMENT_SAMPLED)
             return
         if self.form == "direct":
             builder.create(depth, ImageDesc(format=DEPTH_FORMAT_NAME))

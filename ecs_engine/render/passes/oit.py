@@ -10,10 +10,11 @@ over the scene by 1 - revealage. The result approximates the sorted blend (exact
 close for layers of similar colour, nearer layers weighing more).
 
 It runs in the deferred form, where the opaque depth exists before the target's pass: after the
-lighting dispatch, a pass of its own draws the blended rows (mesh_*_oit.frag, the "weighted"
-blend, gpu/pipeline.py) into the two targets against the G-buffer's depth (read-only, no
-writes); the composite (oit_composite.frag) is the last secondary of the scene's rendering
-before the billboards, after the sky and the other set-aside rows.
+lighting dispatch, a pass of its own (the output graph's oit_accumulate) draws the blended
+rows (mesh_*_oit.frag, the "weighted" blend, gpu/pipeline.py) into the two targets against the
+G-buffer's depth (read-only, no writes); the composite (oit_composite.frag) is the last
+secondary of the scene's rendering before the billboards, after the sky and the other set-aside
+rows.
 
 Known limit: blended surfaces are depth-tested against the G-buffer's opaque meshes only, not
 against the rows drawn forward after the lighting (mirroring, wireframe and point materials),
@@ -29,12 +30,10 @@ from ...gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_images
 from ...gpu.device import Device
 from ...gpu.memory import Image
 from ...gpu.pipeline import AttachmentFormats, GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
-from ...gpu.rendering import Attachment, Rendering, clear_color
 from ...gpu.scene_attachments import DEPTH_FORMAT_NAME
 from ...gpu.secondary import SecondaryBuffers
 from ..config import Transparency
 from ..draw.path import TargetState
-from ..frame.scene_barriers import oit_barriers
 from .sky import full_screen_secondary
 
 ACCUMULATION_FORMAT = "VK_FORMAT_R16G16B16A16_SFLOAT"
@@ -59,15 +58,15 @@ class WeightedTransparency:
         self.set_array = vk.ffi.new("VkDescriptorSet[1]", [self.descriptor_set])
         self.layout = pipeline_layout(device, [self.set_layout.handle])
         self.composites: dict[AttachmentFormats, Any] = {}  # per formats of the scene it is drawn over
-        self.images: list[Image] = []
-        self._rendering: Any = None  # (Rendering, barrier before, barrier after) for the images
+        self.images: list[Image] = []  # accumulation, revealage (the output graph imports them)
         self._made_for: tuple[Any, int, int] | None = None
         self.state: TargetState | None = None
 
     def ensure(self, depth: Any, width: int, height: int) -> None:
-        """Targets, rendering and begin infos for a target of this size and depth (made again
-        when either changes: the caller's frames in flight are waited for). `depth` is the
-        target's depth Image (gpu/memory.py)."""
+        """Targets and begin infos for a target of this size and depth (made again when either
+        changes: the caller's frames in flight are waited for). `depth` is the target's depth
+        Image (gpu/memory.py); the accumulation is the output graph's oit_accumulate pass
+        (render/passes/deferred_passes.py), which clears the targets and places the barriers."""
         key = (depth.view, width, height)
         if self._made_for == key:
             return
@@ -89,29 +88,7 @@ class WeightedTransparency:
             self.secondaries.begin_info_rendering(self.formats),
             (0.0, 0.0, 0.0),
         )
-        # accumulation cleared to 0, revealage to 1; depth loaded, read-only (the lighting's layout)
-        color = vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL
-        targets = [
-            Attachment(image.view, color, clear=clear_color(vk, (value,) * 4))
-            for image, value in zip(self.images, (0.0, 1.0), strict=True)
-        ]
-        read_only = Attachment(depth.view, vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL, load="LOAD")
-        rendering = Rendering(vk, width, height, targets, read_only)
-        self._rendering = (rendering, *oit_barriers(vk, [image.handle for image in self.images], depth.handle))
         self._made_for = key
-
-    def accumulate(self, cb: Any, secondary: Any) -> None:
-        """The blended rows' secondary (recorded with `state.secondary_begin`) in the pass, with
-        the barriers its render pass's dependencies were (render/frame/scene_barriers.py)."""
-        assert self._rendering is not None
-        vk = self.vk
-        lib = vk.lib
-        rendering, before, after = self._rendering
-        lib.vkCmdPipelineBarrier2(cb, before.ptr)
-        lib.vkCmdBeginRendering(cb, rendering.ptr)
-        lib.vkCmdExecuteCommands(cb, 1, vk.ffi.new("VkCommandBuffer[]", [secondary]))
-        lib.vkCmdEndRendering(cb)
-        lib.vkCmdPipelineBarrier2(cb, after.ptr)
 
     def record_composite(self, formats: AttachmentFormats, state: TargetState, slot: int) -> Any:
         """The composite's secondary in the scene's rendering (attachments of `formats`), after the
@@ -137,7 +114,6 @@ class WeightedTransparency:
         self.composites = {}
 
     def _release_targets(self) -> None:
-        self._rendering = None
         for image in self.images:
             image.destroy()
         self.images = []

@@ -29,11 +29,27 @@ from typing import Any
 
 from ..graph import Access, FrameGraph, ImageDesc, Load, Pass
 from ..graph.resources import format_name
+from .deferred_passes import (
+    GBUFFER,
+    OIT,
+    DeferredLightingPass,
+    GBufferPass,
+    OitAccumulatePass,
+    RayDenoisePass,
+    RayShadowsPass,
+)
 from .forward import Forward, PostSeam
 from .readback import Copy, Readback
 
 #: the graph's pass names -> the names the frame's timing marks have always used
-_MARKS = {"tone_map": "tone map", "post": "post effects"}
+_MARKS = {
+    "tone_map": "tone map",
+    "post": "post effects",
+    "gbuffer": "g-buffer",
+    "ray_denoise": "ray-traced shadows",
+    "deferred_lighting": "lighting (compute)",
+    "oit_accumulate": "transparency (accumulate)",
+}
 
 
 def _final_layout(vk: Any, layout: int) -> str:
@@ -51,6 +67,14 @@ class _Frame:
     secondaries: tuple[Any, ...] | list[Any] = ()  # the scene rendering's, in order (output_passes.py)
     background: tuple[float, float, float] = (0.0, 0.0, 0.0)  # fixed per renderer
     readback: Copy | None = None  # the target's record_copy on a frame read back
+    # the deferred form's (render/passes/deferred_passes.py; output_passes.py sets them)
+    chunks: tuple[Any, ...] | list[Any] = ()  # the opaque chunks' secondaries, in the G-buffer
+    frame_set: Any = None  # the slot's frame descriptor set
+    features: int = 0  # the mesh pipelines' MATERIAL_FEATURES (the lighting's)
+    attachments: Any = None  # the target's SceneAttachments (the lighting's and rays' sets name them)
+    ray: tuple[Any, Any] | None = None  # (RayShadows, the lighting's mask) with a traced light
+    transparent: Any = None  # weighted transparency's blended rows' secondary
+    oit_images: tuple[Any, ...] = ()  # its accumulation and revealage Images
 
 
 class ToneMapInto(Pass):
@@ -105,14 +129,23 @@ class OutputGraph:
         self.output, self.effects = output, list(effects)
         self.frame = _Frame()
         self.frame.background = output.clear_color
-        self.graphs: dict[tuple[str, int, int], FrameGraph] = {}
+        self.graphs: dict[tuple[str, int, int, bool, bool], FrameGraph] = {}
         self.graph: FrameGraph | None = None  # the last frame's
 
-    def _make(self, form: str, samples: int, color_format: int) -> FrameGraph:
+    def _make(self, form: str, samples: int, color_format: int, ray: bool, oit: bool) -> FrameGraph:
         device = self.output.device
         graph = FrameGraph(device)
         try:
-            graph.add_pass(Forward(self.frame, form, samples))
+            if form == "deferred":
+                frame = self.frame
+                graph.add_pass(GBufferPass(frame))
+                if ray:
+                    graph.add_pass(RayShadowsPass(frame))
+                    graph.add_pass(RayDenoisePass(frame))
+                graph.add_pass(DeferredLightingPass(frame, self.output.deferred))
+                if oit:
+                    graph.add_pass(OitAccumulatePass(frame))
+            graph.add_pass(Forward(self.frame, form, samples, oit))
             if form != "direct":
                 graph.add_pass(PostSeam(self.output, samples))
                 desc = ImageDesc(format=f"VK_FORMAT_{format_name(device.vk, color_format)}")
@@ -144,7 +177,9 @@ class OutputGraph:
         target = self.output.target
         attachments = target.attachments
         form, samples, color_format = target.form, int(attachments.samples), int(target.color_format)
-        shape = (form, samples, color_format)
+        deferred = form == "deferred"
+        ray, oit = deferred and self.frame.ray is not None, deferred and self.frame.transparent is not None
+        shape = (form, samples, color_format, ray, oit)
         graph = self.graphs.get(shape)
         if graph is None:
             graph = self.graphs[shape] = self._make(*shape)
@@ -153,7 +188,7 @@ class OutputGraph:
         headless = target.final_layout == self.output.vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
         self._place_readback(graph, copies or headless)
         extent = (int(state.area.extent.width), int(state.area.extent.height))
-        self._import_attachments(graph, form, attachments)
+        self._import_attachments(graph, form, attachments, oit)
         self._import_target(graph, rendering, extent)
         frame = self.frame
         frame.state, frame.tone_map, frame.overlay, frame.slot = state, tone_map, overlay, slot
@@ -165,13 +200,13 @@ class OutputGraph:
         def ended(name: str) -> None:
             if mark is None or (name == "imgui" and overlay is None) or (name == "post" and not self.output.post):
                 return
-            if name == "readback" and not copies:
+            if (name == "readback" and not copies) or name == "ray_shadows":  # marked with its denoise
                 return
             mark(names.get(name, _MARKS.get(name, name)))
 
         graph.execute(cb, on_pass_end=ended if mark is not None else None)
-        frame.state = frame.overlay = frame.readback = None
-        frame.secondaries = ()
+        frame.state = frame.overlay = frame.readback = frame.ray = frame.transparent = frame.frame_set = None
+        frame.secondaries = frame.chunks = frame.oit_images = ()
 
     def _place_readback(self, graph: FrameGraph, wanted: bool) -> None:
         """The readback pass last in `graph` or not (a change recompiles the graph: a swapchain's
@@ -182,28 +217,31 @@ class OutputGraph:
         elif has and not wanted:
             graph.remove_pass(Readback.name).destroy()
 
-    def _import_attachments(self, graph: FrameGraph, form: str, attachments: Any) -> None:
+    def _import_attachments(self, graph: FrameGraph, form: str, attachments: Any, oit: bool) -> None:
         """The target's SceneAttachments: depth, the HDR colour and, with MSAA, the multisampled
-        one (images: depth, colour, resolve); none in the direct form (its depth is a transient).
-        Nothing after the graph reads them: no final layout (UNDEFINED). The deferred form's
-        come from the lighting (see forward.py)."""
+        one (images: depth, colour, resolve), in the deferred form the G-buffer's and (`oit`)
+        weighted transparency's targets; none in the direct form (its depth is a transient).
+        Every pass clears what it writes first and nothing after the graph reads them: their
+        old contents go (UNDEFINED) and they have no final layout (UNDEFINED)."""
         if form == "direct":
             return
         images = attachments.images
-        deferred = form == "deferred"
-        named = [("depth", images[0], "DEPTH_STENCIL_READ_ONLY_OPTIMAL" if deferred else "UNDEFINED")]
-        named.append(("hdr", images[-1], "GENERAL" if deferred else "UNDEFINED"))
+        named = [("depth", images[0]), ("hdr", images[-1])]
         if form == "hdr" and attachments.samples > 1:
-            named.append(("hdr_msaa", images[1], "UNDEFINED"))
-        for name, image, before in named:
+            named.append(("hdr_msaa", images[1]))
+        if form == "deferred":
+            named += list(zip(GBUFFER, attachments.gbuffer.images, strict=True))
+            if oit:
+                named += list(zip(OIT, self.frame.oit_images, strict=True))
+        for name, image in named:
             graph.import_image(
                 name,
                 handle=image.handle,
                 view=image.view,
                 format=image.format,
                 extent=(int(image.width), int(image.height)),
-                samples=int(attachments.samples) if name != "hdr" else 1,
-                layout_before=before,
+                samples=int(attachments.samples) if name in ("depth", "hdr_msaa") else 1,
+                layout_before="UNDEFINED",
                 layout_after="UNDEFINED",
             )
 
