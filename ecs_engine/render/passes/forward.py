@@ -15,11 +15,10 @@ transparency's composite and the light billboards', in that order: output_passes
 them), begun with the inheritance of the target's scene formats, so the rendering is begun with
 `secondaries=True`.
 
-`post` runs the hdr stage's post effects (OutputPasses.post, callables with their own barriers
-and private graphs) on "hdr" and the single-sample "depth", both sampled (SHADER_READ_ONLY), as
-the seam has always promised them. It reads both even without an effect: the tone map samples
-"hdr" anyway, and a single-sample depth in SHADER_READ_ONLY is what the effects' next frame's
-descriptors expect.
+A hdr-stage post effect with `add_hdr` (post/bloom_effect.py, ssao_effect.py) adds its own
+passes between `forward` and the tone map; one given as a callable `post(cb, inputs)` runs in a
+`PostCall` pass there, with "hdr" and the single-sample "depth" sampled (SHADER_READ_ONLY), as
+the seam has always promised them, its barriers its own.
 """
 
 from __future__ import annotations
@@ -75,26 +74,22 @@ class Forward(Pass):
         ctx.end_rendering()  # with MSAA: the resolve
 
 
-class PostSeam(Pass):
-    """The hdr-stage post effects (see the module), in order; nothing without one."""
+class PostCall(Pass):
+    """A hdr-stage post effect given as a callable `post(cb, inputs)` (OutputPasses.post's
+    entries without `add_hdr`: a test's spy, a game's own effect); see the module."""
 
-    name = "post"
-
-    def __init__(self, output: Any, samples: int) -> None:
-        self.output, self.samples = output, samples
+    def __init__(self, output: Any, index: int, post: Any, samples: int) -> None:
+        self.name = f"post_call_{index}"
+        self.output, self.post, self.samples = output, post, samples
 
     def setup(self, builder: Any) -> None:
         builder.read("hdr", Access.COMPUTE_SAMPLED)
         if self.samples == 1:  # a multisampled depth is not stored for the effects
             builder.read("depth", Access.COMPUTE_SAMPLED)
-        builder.side_effect()  # the effects write "hdr" behind the graph's back (their own barriers)
+        builder.side_effect()  # it may write "hdr" behind the graph's back (its own barriers)
 
     def record(self, cb: Any, ctx: Any) -> None:
-        output = self.output
-        if not output.post:
-            return
-        inputs = output.inputs
-        if inputs is None or inputs.hdr is not output.target.hdr_image:
+        inputs = self.output.inputs
+        if inputs is None or inputs.hdr is not self.output.target.hdr_image:
             raise RuntimeError("OutputPasses.begin_post(camera) was not called for this frame's target")
-        for post in output.post:
-            post(cb, inputs)
+        self.post(cb, inputs)

@@ -2,7 +2,8 @@
 per target form (render/frame/output_passes.py; graph_plan.md step 7, first part):
 
     forward    the scene's rendering (render/passes/forward.py): into "target" (direct) or "hdr"
-    post       the hdr stage's post effects (hdr and deferred forms)
+    <post>     the hdr stage's post effects' passes (hdr and deferred forms; `add_hdr`,
+               or a PostCall pass for a plain callable: render/passes/forward.py)
     tone_map   "hdr" -> "target", or -> "ldr_0" (a transient of the target's format) with post
                effects of the "ldr" stage on (post/registry.py: FXAA)
     <effect i> "ldr_i" -> "ldr_i+1", the last one -> "target"
@@ -38,13 +39,12 @@ from .deferred_passes import (
     RayDenoisePass,
     RayShadowsPass,
 )
-from .forward import Forward, PostSeam
+from .forward import Forward, PostCall
 from .readback import Copy, Readback
 
 #: the graph's pass names -> the names the frame's timing marks have always used
 _MARKS = {
     "tone_map": "tone map",
-    "post": "post effects",
     "gbuffer": "g-buffer",
     "ray_denoise": "ray-traced shadows",
     "deferred_lighting": "lighting (compute)",
@@ -129,10 +129,12 @@ class OutputGraph:
         self.output, self.effects = output, list(effects)
         self.frame = _Frame()
         self.frame.background = output.clear_color
-        self.graphs: dict[tuple[str, int, int, bool, bool], FrameGraph] = {}
+        self.graphs: dict[tuple[Any, ...], FrameGraph] = {}
+        self._post_names: frozenset[str] = frozenset()  # the hdr effects' passes (marked once, at the last)
         self.graph: FrameGraph | None = None  # the last frame's
+        self._recreations = getattr(output.target, "recreations", 0)  # the swapchain's, the graphs made in
 
-    def _make(self, form: str, samples: int, color_format: int, ray: bool, oit: bool) -> FrameGraph:
+    def _make(self, form: str, samples: int, color_format: int, ray: bool, oit: bool, post: Any) -> FrameGraph:
         device = self.output.device
         graph = FrameGraph(device)
         try:
@@ -147,7 +149,7 @@ class OutputGraph:
                     graph.add_pass(OitAccumulatePass(frame))
             graph.add_pass(Forward(self.frame, form, samples, oit))
             if form != "direct":
-                graph.add_pass(PostSeam(self.output, samples))
+                self._add_post(graph, samples, post)
                 desc = ImageDesc(format=f"VK_FORMAT_{format_name(device.vk, color_format)}")
                 names = [f"ldr_{i}" for i in range(len(self.effects))] + ["target"]
                 graph.add_pass(ToneMapInto(self.output, self.frame, names[0], desc if self.effects else None))
@@ -179,15 +181,35 @@ class OutputGraph:
         form, samples, color_format = target.form, int(attachments.samples), int(target.color_format)
         deferred = form == "deferred"
         ray, oit = deferred and self.frame.ray is not None, deferred and self.frame.transparent is not None
-        shape = (form, samples, color_format, ray, oit)
+        extent = (int(state.area.extent.width), int(state.area.extent.height))
+        post = self.output.post if form != "direct" else []
+        # the effects' passes follow the extent (bloom's chain) and the list (made again with it)
+        post_shape = (extent, tuple(id(p) for p in post)) if post else None
+        shape = (form, samples, color_format, ray, oit, post_shape)
+        recreations = getattr(target, "recreations", 0)
+        if recreations != self._recreations:
+            # new attachments, whose views may reuse destroyed ones' handle values, which the
+            # effects' passes keep descriptor sets by: new graphs, new passes and sets
+            self._recreations = recreations
+            for made in self.graphs.values():
+                made.destroy()
+            self.graphs.clear()
         graph = self.graphs.get(shape)
         if graph is None:
+            for old in [k for k in self.graphs if k[5] != post_shape]:  # another size or list: gone
+                self.graphs.pop(old).destroy()
             graph = self.graphs[shape] = self._make(*shape)
+        if post and self.output.inputs is not None:
+            for effect in post:
+                if hasattr(effect, "begin_frame"):
+                    effect.begin_frame(self.output.inputs)
+        order = [p.name for p in graph.passes]
+        posts = [n for n in order if n in self._post_names]
+        last_post = posts[-1] if posts else None
         self.graph = graph
         copies = readback and target.take_readback()  # a swapchain's: only for the image asked
         headless = target.final_layout == self.output.vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
         self._place_readback(graph, copies or headless)
-        extent = (int(state.area.extent.width), int(state.area.extent.height))
         self._import_attachments(graph, form, attachments, oit)
         self._import_target(graph, rendering, extent)
         frame = self.frame
@@ -198,7 +220,11 @@ class OutputGraph:
         names = {"forward": "sky and blended"} if form == "deferred" else {}
 
         def ended(name: str) -> None:
-            if mark is None or (name == "imgui" and overlay is None) or (name == "post" and not self.output.post):
+            if mark is None or (name == "imgui" and overlay is None):
+                return
+            if name in self._post_names:  # the effects' passes: marked once, after the last
+                if name == last_post:
+                    mark("post effects")
                 return
             if (name == "readback" and not copies) or name == "ray_shadows":  # marked with its denoise
                 return
@@ -207,6 +233,19 @@ class OutputGraph:
         graph.execute(cb, on_pass_end=ended if mark is not None else None)
         frame.state = frame.overlay = frame.readback = frame.ray = frame.transparent = frame.frame_set = None
         frame.secondaries = frame.chunks = frame.oit_images = ()
+
+    def _add_post(self, graph: FrameGraph, samples: int, post: Any) -> None:
+        """The hdr stage's effects in order: their own passes (`add_hdr`) or a PostCall each."""
+        if post is None:
+            return
+        extent = post[0]
+        before = {p.name for p in graph.passes}
+        for i, effect in enumerate(self.output.post):
+            if hasattr(effect, "add_hdr"):
+                effect.add_hdr(graph, extent)
+            else:
+                graph.add_pass(PostCall(self.output, i, effect, samples))
+        self._post_names = self._post_names | {p.name for p in graph.passes if p.name not in before}
 
     def _place_readback(self, graph: FrameGraph, wanted: bool) -> None:
         """The readback pass last in `graph` or not (a change recompiles the graph: a swapchain's
