@@ -29,7 +29,6 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from .gbuffer import GBuffer
 from .memory import Image
 from .pipeline import AttachmentFormats
 
@@ -123,8 +122,8 @@ class TargetForm:
 class SceneAttachments:
     """The attachments of one form that a target's images share: depth, HDR colour and (with
     MSAA) its resolve; in the direct form nothing (its depth is the output graph's transient); in
-    the deferred form also the G-buffer (gpu/gbuffer.py), depth sampled and the HDR colour a
-    storage image for the lighting.
+    the deferred form depth sampled and the HDR colour a storage image for the lighting (the
+    G-buffer itself is the output graph's transient: render/passes/deferred_passes.py).
     `images` holds depth, then the HDR colour (with MSAA the multisampled one, then its resolve);
     `hdr_image` is the single-sample HDR colour the post effects and the tone map read."""
 
@@ -139,7 +138,6 @@ class SceneAttachments:
         vk = device.vk
         self.samples = samples
         self.images: list[Image] = []  # depth, HDR colour, its resolve (in the order made)
-        self.gbuffer: GBuffer | None = None
         deferred = form == "deferred"
         # the deferred lighting samples depth; in the hdr form the post effects may (single-sample)
         sampled = vk.VK_IMAGE_USAGE_SAMPLED_BIT if deferred or samples == 1 else 0
@@ -165,8 +163,6 @@ class SceneAttachments:
                 transient = color | vk.VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT
                 self.images.append(Image(device, width, height, hdr_format, transient, aspect, samples))
             self.images.append(Image(device, width, height, hdr_format, color | read, aspect))
-            if deferred:
-                self.gbuffer = GBuffer(device, width, height)
         except BaseException:
             self.destroy()
             raise
@@ -188,9 +184,6 @@ class SceneAttachments:
         return self.images[-1] if len(self.images) > 1 else None
 
     def destroy(self) -> None:
-        if self.gbuffer is not None:
-            self.gbuffer.destroy()
-            self.gbuffer = None
         for image in self.images:
             image.destroy()
         self.images = []

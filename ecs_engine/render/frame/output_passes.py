@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
+from functools import partial
 from typing import Any
 
 from ...gpu.device import Device
@@ -214,14 +215,11 @@ class OutputPasses:
         if target.form == "deferred":  # the chunks in the G-buffer pass, lit before the scene's rendering
             assert self.deferred is not None
             frame.chunks, frame.frame_set, frame.features = chunks, frame_set[0], features
-            frame.attachments = target.attachments
             ray = self.ray_shadows
             self.deferred.traced = ray is not None  # the lighting's mask full size only if traced into
             if ray is not None and ray.lights:  # the shadow mask the lighting reads (raytracing/shadows.py)
-                frame.ray = (ray, self.deferred.named(target.attachments))
-            if transparent is not None:
-                assert self.oit is not None
-                frame.transparent, frame.oit_images = transparent, tuple(self.oit.images)
+                frame.ray = ray
+            frame.transparent = transparent
             secondaries = []
         formats = self.formats  # the scene rendering's, in this frame's form (target_state)
         if sky:  # after the opaque chunks, before the blended rows
@@ -231,13 +229,20 @@ class OutputPasses:
             secondaries = [*secondaries, aside]  # after every chunk's rows
         if transparent is not None:  # the weighted transparency over all of it
             assert self.oit is not None
-            secondaries = [*secondaries, self.oit.record_composite(formats, state, slot)]
+            secondaries = [*secondaries, partial(self._composite, formats, state, slot)]  # forward records it
         lights, draws = self.light_pass.record(slot, state, formats, frame_set, billboards)
         if lights is not None:  # last, depth-tested against everything, blended over it
             secondaries = [*secondaries, lights]
         rendering = self._rendering(state)
         self.graph.record(cb, state, rendering, secondaries, tone_map, overlay, slot, mark, readback)
         return draws
+
+    def _composite(self, formats: Any, state: TargetState, slot: int, ctx: Any) -> Any:
+        """Weighted transparency's composite secondary, its set naming the graph's targets
+        (called by the forward pass, once the graph is compiled: render/passes/forward.py)."""
+        assert self.oit is not None
+        self.oit.name_targets((ctx.image("oit_accum"), ctx.image("oit_reveal")))
+        return self.oit.record_composite(formats, state, slot)
 
     def begin_post(self, camera: Any) -> PostInputs | None:
         """The hdr stage's inputs for this frame (`camera`: the frame's CameraMatrices), kept

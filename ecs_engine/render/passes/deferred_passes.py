@@ -14,9 +14,11 @@
                        (cleared to 0 and 1) against "depth" (read-only); only with it on
                        (render/passes/oit.py; the composite in `forward` samples them)
 
-The graph places every barrier between them (gpu/gbuffer.py's attachments in the layouts the
-passes' descriptors name: depth DEPTH_STENCIL_READ_ONLY, the rest GENERAL). The shadow mask
-stays the lighting's own image (GENERAL, its barriers the ray pass's own).
+The G-buffer's colours and weighted transparency's targets are the graph's transients (their
+lifetimes do not overlap: the graph may alias them); "hdr" and "depth" are still the target's
+SceneAttachments. The graph places every barrier between them (in the layouts the passes'
+descriptors name: depth DEPTH_STENCIL_READ_ONLY, the rest GENERAL). The shadow mask stays the
+lighting's own image (GENERAL, its barriers the ray pass's own).
 """
 
 from __future__ import annotations
@@ -24,13 +26,32 @@ from __future__ import annotations
 from collections.abc import Hashable
 from typing import Any
 
-from ..graph import Access, Load, Pass
+from ...gpu.gbuffer import GBUFFER_FORMAT_NAMES
+from ..graph import Access, ImageDesc, Load, Pass
 from ..layouts import NO_MATERIAL
+from .oit import ACCUMULATION_FORMAT, REVEALAGE_FORMAT
 
 #: the G-buffer's colours after "hdr", in the mesh pipelines' attachment order (gpu/gbuffer.py)
 GBUFFER = ("normal_roughness", "base_metallic", "material")
 OIT = ("oit_accum", "oit_reveal")
 FAR = (0.0, 0.0, 0.0, 0.0)  # reverse-Z's far plane
+
+
+class GBufferViews:
+    """What the lighting's and the rays' descriptor sets name (render/lighting/deferred.py,
+    raytracing/shadows.py, denoise.py), in the target's SceneAttachments' shape: its depth and
+    HDR colour (`images`, `depth_view`) and the graph's G-buffer transients (`gbuffer.views`).
+    One per compile of a graph and attachments (OutputGraph keeps it), so those passes' "named
+    is not this" checks name their sets again exactly when a compile made new transients."""
+
+    class _Views:
+        def __init__(self, views: list[Any]) -> None:
+            self.views = views
+
+    def __init__(self, attachments: Any, images: dict[str, Any]) -> None:
+        self.images = attachments.images
+        self.depth_view = attachments.depth_view
+        self.gbuffer = self._Views([images[name].view for name in GBUFFER])
 
 
 def _execute(ctx: Any, cb: Any, secondaries: Any) -> None:
@@ -47,6 +68,8 @@ class GBufferPass(Pass):
         self.frame = frame
 
     def setup(self, builder: Any) -> None:
+        for name, fmt in zip(GBUFFER, GBUFFER_FORMAT_NAMES, strict=True):
+            builder.create(name, ImageDesc(format=fmt))
         builder.write("hdr", Access.COLOR_WRITE, load=Load.CLEAR, clear=(*self.frame.background, 1.0))
         clears = ((0.0,) * 4, (0.0,) * 4, (float(NO_MATERIAL), 0.0, 0.0, 0.0))
         for name, clear in zip(GBUFFER, clears, strict=True):
@@ -60,13 +83,13 @@ class GBufferPass(Pass):
 
 
 class RayShadowsPass(Pass):
-    """The rays into the lighting's mask (see the module); `frame.ray`: (RayShadows, mask)
-    on a frame with a traced light, else None."""
+    """The rays into the lighting's mask (see the module); `frame.ray`: the RayShadows on a
+    frame with a traced light, else None."""
 
     name = "ray_shadows"
 
-    def __init__(self, frame: Any) -> None:
-        self.frame = frame
+    def __init__(self, frame: Any, lighting: Any) -> None:
+        self.frame, self.lighting = frame, lighting
 
     def setup(self, builder: Any) -> None:
         builder.read("depth", Access.DEPTH_SAMPLED)
@@ -74,11 +97,10 @@ class RayShadowsPass(Pass):
         builder.side_effect()  # writes the mask, outside the graph
 
     def record(self, cb: Any, ctx: Any) -> None:
-        ray = self.frame.ray
-        if ray is None:
+        shadows, frame = self.frame.ray, self.frame
+        if shadows is None:
             return
-        shadows, mask = ray
-        frame = self.frame
+        mask = self.lighting.named(frame.attachments)  # its set names this compile's G-buffer
         width, height = ctx.extent
         shadows.record_trace(cb, frame.slot, frame.frame_set, frame.attachments, mask, width, height)
 
@@ -88,8 +110,8 @@ class RayDenoisePass(Pass):
 
     name = "ray_denoise"
 
-    def __init__(self, frame: Any) -> None:
-        self.frame = frame
+    def __init__(self, frame: Any, lighting: Any) -> None:
+        self.frame, self.lighting = frame, lighting
 
     def setup(self, builder: Any) -> None:
         builder.read("depth", Access.DEPTH_SAMPLED)
@@ -97,12 +119,12 @@ class RayDenoisePass(Pass):
         builder.side_effect()
 
     def record(self, cb: Any, ctx: Any) -> None:
-        ray = self.frame.ray
-        if ray is None:
+        shadows, frame = self.frame.ray, self.frame
+        if shadows is None:
             return
-        shadows, mask = ray
+        mask = self.lighting.named(frame.attachments)
         width, height = ctx.extent
-        shadows.record_denoise(cb, self.frame.slot, self.frame.attachments, mask, width, height)
+        shadows.record_denoise(cb, frame.slot, frame.attachments, mask, width, height)
 
 
 class DeferredLightingPass(Pass):
@@ -138,6 +160,8 @@ class OitAccumulatePass(Pass):
         self.frame = frame
 
     def setup(self, builder: Any) -> None:
+        for name, fmt in zip(OIT, (ACCUMULATION_FORMAT, REVEALAGE_FORMAT), strict=True):
+            builder.create(name, ImageDesc(format=fmt))
         builder.write(OIT[0], Access.COLOR_WRITE, load=Load.CLEAR, clear=(0.0,) * 4)
         builder.write(OIT[1], Access.COLOR_WRITE, load=Load.CLEAR, clear=(1.0,) * 4)
         builder.read("depth", Access.DEPTH_READ)

@@ -23,6 +23,7 @@ the seam has always promised them, its barriers its own.
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Any
 
 from ...gpu.scene_attachments import DEPTH_FORMAT_NAME
@@ -68,7 +69,9 @@ class Forward(Pass):
     def record(self, cb: Any, ctx: Any) -> None:
         colors, depth, resolve = self.attachments()
         ctx.begin_rendering(colors=colors, depth=depth, resolve=resolve, secondaries=True)
-        secondaries = self.frame.secondaries
+        # a partial is a secondary recorded now, from the compiled graph's images (the
+        # weighted transparency's composite, whose set names the graph's transients)
+        secondaries = [s(ctx) if isinstance(s, partial) else s for s in self.frame.secondaries]
         if secondaries:
             ctx.vk.lib.vkCmdExecuteCommands(cb, len(secondaries), ctx.vk.ffi.new("VkCommandBuffer[]", secondaries))
         ctx.end_rendering()  # with MSAA: the resolve

@@ -31,10 +31,9 @@ from typing import Any
 from ..graph import Access, FrameGraph, ImageDesc, Load, Pass
 from ..graph.resources import format_name
 from .deferred_passes import (
-    GBUFFER,
-    OIT,
     DeferredLightingPass,
     GBufferPass,
+    GBufferViews,
     OitAccumulatePass,
     RayDenoisePass,
     RayShadowsPass,
@@ -71,10 +70,9 @@ class _Frame:
     chunks: tuple[Any, ...] | list[Any] = ()  # the opaque chunks' secondaries, in the G-buffer
     frame_set: Any = None  # the slot's frame descriptor set
     features: int = 0  # the mesh pipelines' MATERIAL_FEATURES (the lighting's)
-    attachments: Any = None  # the target's SceneAttachments (the lighting's and rays' sets name them)
-    ray: tuple[Any, Any] | None = None  # (RayShadows, the lighting's mask) with a traced light
+    attachments: Any = None  # GBufferViews: what the lighting's and rays' sets name (set by record)
+    ray: Any = None  # the RayShadows on a frame with a traced light
     transparent: Any = None  # weighted transparency's blended rows' secondary
-    oit_images: tuple[Any, ...] = ()  # its accumulation and revealage Images
 
 
 class ToneMapInto(Pass):
@@ -132,6 +130,7 @@ class OutputGraph:
         self.graphs: dict[tuple[Any, ...], FrameGraph] = {}
         self._post_names: frozenset[str] = frozenset()  # the hdr effects' passes (marked once, at the last)
         self.graph: FrameGraph | None = None  # the last frame's
+        self._views: tuple[Any, Any, GBufferViews] | None = None  # _gbuffer_views' last
         self._recreations = getattr(output.target, "recreations", 0)  # the swapchain's, the graphs made in
 
     def _make(self, form: str, samples: int, color_format: int, ray: bool, oit: bool, post: Any) -> FrameGraph:
@@ -142,8 +141,8 @@ class OutputGraph:
                 frame = self.frame
                 graph.add_pass(GBufferPass(frame))
                 if ray:
-                    graph.add_pass(RayShadowsPass(frame))
-                    graph.add_pass(RayDenoisePass(frame))
+                    graph.add_pass(RayShadowsPass(frame, self.output.deferred))
+                    graph.add_pass(RayDenoisePass(frame, self.output.deferred))
                 graph.add_pass(DeferredLightingPass(frame, self.output.deferred))
                 if oit:
                     graph.add_pass(OitAccumulatePass(frame))
@@ -180,7 +179,11 @@ class OutputGraph:
         attachments = target.attachments
         form, samples, color_format = target.form, int(attachments.samples), int(target.color_format)
         deferred = form == "deferred"
-        ray, oit = deferred and self.frame.ray is not None, deferred and self.frame.transparent is not None
+        # the rays' and weighted transparency's passes from the first frame that has them on
+        # (they record nothing on a frame without traced lights or blended rows): one graph,
+        # one set of transients, however those come and go
+        ray = deferred and self.output.ray_shadows is not None
+        oit = deferred and (self.output.oit is not None or self.frame.transparent is not None)
         extent = (int(state.area.extent.width), int(state.area.extent.height))
         post = self.output.post if form != "direct" else []
         # the effects' passes follow the extent (bloom's chain) and the list (made again with it)
@@ -196,7 +199,7 @@ class OutputGraph:
             self.graphs.clear()
         graph = self.graphs.get(shape)
         if graph is None:
-            for old in [k for k in self.graphs if k[5] != post_shape]:  # another size or list: gone
+            for old in [k for k in self.graphs if k[5] != post_shape or k[:3] == shape[:3]]:  # outdone: gone
                 self.graphs.pop(old).destroy()
             graph = self.graphs[shape] = self._make(*shape)
         if post and self.output.inputs is not None:
@@ -210,13 +213,16 @@ class OutputGraph:
         copies = readback and target.take_readback()  # a swapchain's: only for the image asked
         headless = target.final_layout == self.output.vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
         self._place_readback(graph, copies or headless)
-        self._import_attachments(graph, form, attachments, oit)
+        self._import_attachments(graph, form, attachments)
         self._import_target(graph, rendering, extent)
         frame = self.frame
         frame.state, frame.tone_map, frame.overlay, frame.slot = state, tone_map, overlay, slot
         frame.secondaries = secondaries
         frame.readback = target.record_copy if copies else None
+        oit_now = frame.transparent is not None
         graph.compile(extent)
+        if deferred:
+            frame.attachments = self._gbuffer_views(graph, attachments)
         names = {"forward": "sky and blended"} if form == "deferred" else {}
 
         def ended(name: str) -> None:
@@ -228,11 +234,15 @@ class OutputGraph:
                 return
             if (name == "readback" and not copies) or name == "ray_shadows":  # marked with its denoise
                 return
+            idle = (name == "ray_denoise" and frame.ray is None) or (name == "oit_accumulate" and not oit_now)
+            if idle:  # the pass recorded nothing
+                return
             mark(names.get(name, _MARKS.get(name, name)))
 
         graph.execute(cb, on_pass_end=ended if mark is not None else None)
         frame.state = frame.overlay = frame.readback = frame.ray = frame.transparent = frame.frame_set = None
-        frame.secondaries = frame.chunks = frame.oit_images = ()
+        frame.attachments = None
+        frame.secondaries = frame.chunks = ()
 
     def _add_post(self, graph: FrameGraph, samples: int, post: Any) -> None:
         """The hdr stage's effects in order: their own passes (`add_hdr`) or a PostCall each."""
@@ -256,10 +266,18 @@ class OutputGraph:
         elif has and not wanted:
             graph.remove_pass(Readback.name).destroy()
 
-    def _import_attachments(self, graph: FrameGraph, form: str, attachments: Any, oit: bool) -> None:
+    def _gbuffer_views(self, graph: FrameGraph, attachments: Any) -> GBufferViews:
+        """The GBufferViews of this compile of `graph` over `attachments` (one per pair)."""
+        compiled = graph.compiled
+        assert compiled is not None and compiled.transients is not None
+        kept = self._views
+        if kept is None or kept[0] is not compiled or kept[1] is not attachments:
+            kept = self._views = (compiled, attachments, GBufferViews(attachments, compiled.transients.images))
+        return kept[2]
+
+    def _import_attachments(self, graph: FrameGraph, form: str, attachments: Any) -> None:
         """The target's SceneAttachments: depth, the HDR colour and, with MSAA, the multisampled
-        one (images: depth, colour, resolve), in the deferred form the G-buffer's and (`oit`)
-        weighted transparency's targets; none in the direct form (its depth is a transient).
+        one (images: depth, colour, resolve); none in the direct form (its depth is a transient).
         Every pass clears what it writes first and nothing after the graph reads them: their
         old contents go (UNDEFINED) and they have no final layout (UNDEFINED)."""
         if form == "direct":
@@ -268,10 +286,6 @@ class OutputGraph:
         named = [("depth", images[0]), ("hdr", images[-1])]
         if form == "hdr" and attachments.samples > 1:
             named.append(("hdr_msaa", images[1]))
-        if form == "deferred":
-            named += list(zip(GBUFFER, attachments.gbuffer.images, strict=True))
-            if oit:
-                named += list(zip(OIT, self.frame.oit_images, strict=True))
         for name, image in named:
             graph.import_image(
                 name,
