@@ -346,9 +346,8 @@ def test_passes_declare_their_mips_and_go_before_the_tone_map():
 
 
 def test_the_effect_added_to_a_graph_matches_the_reference():
-    """BloomEffect as the output graph adds it (`add_hdr`: its passes over the graph's "hdr",
-    imported here in and out of SHADER_READ_ONLY_OPTIMAL): right on a first image, on a second
-    of the same size (a remade target) and after a resize (a new graph: the chain's depth)."""
+    """BloomEffect's passes as the output graph adds them (`add_hdr`) over an imported "hdr": right
+    on a first image, on a second of the same size (a remade target) and after a resize."""
     from ecs_engine.gpu.memory import Buffer
     from ecs_engine.render.graph import FrameGraph
     from ecs_engine.render.post.bloom_effect import BloomEffect
@@ -369,17 +368,13 @@ def test_the_effect_added_to_a_graph_matches_the_reference():
             if graph is None or graph.compiled.structure.extent != (width, height):
                 if graph is not None:
                     graph.destroy()
-                graph = FrameGraph(device)
+                graph = FrameGraph(device)  # a new size: a new graph (the chain's depth follows it)
                 effect.add_hdr(graph, (width, height))
                 graph.output("hdr")
+            read_only = {"layout_before": "SHADER_READ_ONLY_OPTIMAL", "layout_after": "SHADER_READ_ONLY_OPTIMAL"}
+            view, fmt = image.image.view, "VK_FORMAT_R16G16B16A16_SFLOAT"
             graph.import_image(
-                "hdr",
-                handle=image.image.handle,
-                view=image.image.view,
-                format="VK_FORMAT_R16G16B16A16_SFLOAT",
-                extent=(width, height),
-                layout_before="SHADER_READ_ONLY_OPTIMAL",
-                layout_after="SHADER_READ_ONLY_OPTIMAL",
+                "hdr", handle=image.image.handle, view=view, format=fmt, extent=(width, height), **read_only
             )
             graph.compile((width, height))
 
