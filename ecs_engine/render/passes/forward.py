@@ -5,7 +5,8 @@ FORMS):
 - `direct`: "target" cleared to the background and "depth" cleared to far (0.0, reverse-Z), a
   transient of the graph (nothing after the rendering reads it: never stored);
 - `hdr`: "hdr" cleared and "depth" cleared; with MSAA "hdr_msaa" (n samples) cleared and
-  resolved into "hdr" at the rendering's end, and "depth" of n samples;
+  resolved into "hdr" at the rendering's end, and "depth" of n samples, both transients of the
+  graph (never stored);
 - `deferred`: "hdr" and "depth" loaded (the G-buffer pass and the lighting wrote them:
   render/passes/deferred_passes.py), and with weighted transparency "oit_accum" and
   "oit_reveal" sampled by its composite.
@@ -26,7 +27,7 @@ from __future__ import annotations
 from functools import partial
 from typing import Any
 
-from ...gpu.scene_attachments import DEPTH_FORMAT_NAME
+from ...gpu.scene_attachments import DEPTH_FORMAT_NAME, HDR_FORMAT_NAME
 from ..graph import Access, ImageDesc, Load, Pass
 from .deferred_passes import OIT
 
@@ -58,8 +59,10 @@ class Forward(Pass):
             for name in OIT if self.oit else ():  # the weighted transparency's composite samples them
                 builder.read(name, Access.FRAGMENT_SAMPLED)
             return
-        if self.form == "direct":
-            builder.create(depth, ImageDesc(format=DEPTH_FORMAT_NAME))
+        if self.form == "direct" or resolve is not None:  # nothing after the rendering reads them
+            builder.create(depth, ImageDesc(format=DEPTH_FORMAT_NAME, samples=self.samples))
+        if resolve is not None:
+            builder.create(colors[0], ImageDesc(format=HDR_FORMAT_NAME, samples=self.samples))
         background = (*self.frame.background, 1.0)
         builder.write(colors[0], Access.COLOR_WRITE, load=Load.CLEAR, clear=background)
         if resolve is not None:

@@ -11,16 +11,20 @@ per target form (render/frame/output_passes.py; graph_plan.md step 7, first part
     readback   "target" copied to the host (render/passes/readback.py): every frame of a
                headless target (copying only when asked), a swapchain's reading-back frames
 
-"hdr", "hdr_msaa" and "depth" are still the target's SceneAttachments (imported each frame: the
-deferred form's G-buffer pass and lighting write them before the graph runs), but for the direct
-form's depth, the graph's transient. "target" is the
-target's image for this frame, imported with its old contents discarded (UNDEFINED) after the
-acquire semaphore's wait (colour output) and the last frame's readback copy of the same image
-(transfer), and left in the target's final layout (`final_layout`: TRANSFER_SRC headless,
-PRESENT_SRC for a swapchain). The graph places every barrier between them, and the
-intermediates are its transients. Each ldr effect adds its own
-passes (`effect.add(graph, source, target, create)`), so the graphs are made again when the
-effects change; one graph is kept per (form, samples, target format).
+In the deferred form the scene's rendering follows the G-buffer, ray shadow, lighting and
+weighted transparency passes (render/passes/deferred_passes.py).
+
+The single-sample "hdr" and "depth" are still the target's SceneAttachments (imported each
+frame; the tone map, PostInputs and the tone map's descriptor sets name them); the direct form's
+depth, the MSAA colour and depth, the G-buffer, weighted transparency's targets, the effects'
+images and "ldr_i" are the graph's transients (aliased where their lifetimes allow). "target" is
+the target's image for this frame, imported with its old contents discarded (UNDEFINED) after
+the acquire semaphore's wait (colour output) and the last frame's readback copy of the same
+image (transfer), and left in the target's final layout (`final_layout`: TRANSFER_SRC
+headless, PRESENT_SRC for a swapchain). The graph places every barrier. Each ldr effect adds
+its own passes (`effect.add(graph, source, target, create)`), so the graphs are made again when
+the effects change; one graph is kept per (form, samples, target format, rays, weighted
+transparency, hdr effects and extent), the last two only with hdr effects on.
 """
 
 from __future__ import annotations
@@ -277,15 +281,16 @@ class OutputGraph:
 
     def _import_attachments(self, graph: FrameGraph, form: str, attachments: Any) -> None:
         """The target's SceneAttachments: depth, the HDR colour and, with MSAA, the multisampled
-        one (images: depth, colour, resolve); none in the direct form (its depth is a transient).
+        one's resolve (single-sample: the multisampled colour and depth are transients); none in
+        the direct form (its depth is a transient).
         Every pass clears what it writes first and nothing after the graph reads them: their
         old contents go (UNDEFINED) and they have no final layout (UNDEFINED)."""
         if form == "direct":
             return
         images = attachments.images
-        named = [("depth", images[0]), ("hdr", images[-1])]
-        if form == "hdr" and attachments.samples > 1:
-            named.append(("hdr_msaa", images[1]))
+        named = [("hdr", images[-1])]
+        if attachments.samples == 1:  # with MSAA depth and colour are forward's transients
+            named.append(("depth", images[0]))
         for name, image in named:
             graph.import_image(
                 name,
@@ -293,7 +298,6 @@ class OutputGraph:
                 view=image.view,
                 format=image.format,
                 extent=(int(image.width), int(image.height)),
-                samples=int(attachments.samples) if name in ("depth", "hdr_msaa") else 1,
                 layout_before="UNDEFINED",
                 layout_after="UNDEFINED",
             )
