@@ -268,8 +268,9 @@ def test_one_renderer_switches_form_as_the_light_count_changes(tone_map, forward
 
 
 def test_a_renderer_that_cannot_make_its_form_leaves_nothing(monkeypatch):
-    """The G-buffer pass fails to be made: the error comes out, the target keeps its old form,
-    and whatever the renderer had made is destroyed."""
+    """The deferred form's attachments fail to be made (its depth and HDR colour; the G-buffer
+    is the output graph's): the error comes out, the target keeps its old form, and whatever
+    the renderer had made is destroyed."""
     from ecs_engine.gpu import scene_attachments as render_pass
     from ecs_engine.gpu.frames import FrameRing
     from ecs_engine.gpu.secondary import SecondaryBuffers
@@ -288,7 +289,7 @@ def test_a_renderer_that_cannot_make_its_form_leaves_nothing(monkeypatch):
             real(self)
 
         monkeypatch.setattr(cls, "destroy", spy)
-    monkeypatch.setattr(render_pass, "GBuffer", refuse)
+    monkeypatch.setattr(render_pass, "Image", refuse)
     with headless_gpu(W, H) as gpu:
         used = gpu.device.allocator.stats()["used_bytes"]
         with pytest.raises(RuntimeError, match="no G-buffer"):

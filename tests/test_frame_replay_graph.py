@@ -114,9 +114,8 @@ def test_the_tone_map_pass_keys_the_exposure():
 
 
 def test_a_frame_recorded_without_a_key_leaves_no_stale_target_in_the_next_key():
-    """The key's imports are skipped while the graph holds them already; a frame that records
-    without a key (replay off here) imports its own output image, so the next key imports again
-    and names the image it draws into."""
+    """A frame that records without a key (replay off here) imports its own output image into
+    the graph; the next key (OutputGraph.prepare) imports again and names the image it draws into."""
     from ecs_engine.gpu.functions import handle_int
     from ecs_engine.gpu.memory import Image
     from ecs_engine.render.frame.renderer import Renderer

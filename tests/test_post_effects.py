@@ -318,11 +318,11 @@ def test_the_plugin_line_turns_an_effect_on():
 def test_the_cli_flag_turns_effects_on_and_refuses_an_unknown_one(capsys, monkeypatch):
     from ecs_engine.app.cli import main
     from ecs_engine.app.settings import RunOptions
-    from ecs_engine.render.post.bloom_effect import BloomEffect
+    from ecs_engine.render.post.bloom import BloomDownsample
     from ecs_engine.render.post.fxaa import FxaaPass
 
-    ran: list[str] = []
-    for cls, name, method in ((BloomEffect, "bloom", "__call__"), (FxaaPass, "fxaa", "record")):
+    ran: list[str] = []  # the effects' passes recorded (bloom's in the output graph)
+    for cls, name, method in ((BloomDownsample, "bloom", "record"), (FxaaPass, "fxaa", "record")):
         real = getattr(cls, method)
 
         def logged(self, *args, _real=real, _name=name):

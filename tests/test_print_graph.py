@@ -40,12 +40,13 @@ def test_the_default_config_draws_the_scene_straight_into_the_target():
     assert "hdr" not in text
 
 
-def test_aces_with_msaa_renders_hdr_resolves_and_tone_maps():
-    text, names = printed("--tone-map", "aces", "--msaa", "4")
-    assert {"forward", "post", "tone_map", "imgui"} <= set(names)
-    assert names.index("forward") < names.index("post") < names.index("tone_map") < names.index("imgui")
-    assert "writes hdr_msaa COLOR_WRITE clear, hdr COLOR_WRITE" in text  # hdr: the resolve target
-    assert "imported hdr_msaa: R16G16B16A16_SFLOAT 64x48, 4x MSAA" in text
+def test_aces_with_msaa_and_bloom_renders_hdr_resolves_blooms_and_tone_maps():
+    text, names = printed("--tone-map", "aces", "--msaa", "4", "--post", "bloom")
+    assert {"forward", "bloom_downsample_0", "bloom_composite", "tone_map", "imgui"} <= set(names)
+    order = [names.index(n) for n in ("forward", "bloom_downsample_0", "bloom_composite", "tone_map", "imgui")]
+    assert order == sorted(order)
+    assert "writes hdr_msaa COLOR_WRITE clear store dont_care, hdr COLOR_WRITE" in text  # hdr: the resolve target
+    assert "  hdr_msaa: R16G16B16A16_SFLOAT 64x48, 4x MSAA" in text  # the multisampled colour: a transient
     assert "reads  hdr FRAGMENT_SAMPLED" in text  # the tone map samples the resolved colour
 
 

@@ -7,25 +7,24 @@ Why: on the H100 a fragment shader runs on the few graphics-capable units of the
 shader on all of it; thousands of lights cost the forward frame 4x the 6-light one
 (docs/performance.md).
 
-Attachments, drawn with dynamic rendering (gbuffer_formats; render/frame/output_passes.py begins it,
-render/frame/scene_barriers.py places its barriers):
+Attachments, drawn with dynamic rendering (gbuffer_formats; the output graph's gbuffer pass,
+render/passes/deferred_passes.py, begins it and the graph places its barriers):
 - depth (reverse-Z), kept for the lighting pass and the scene rendering;
 - colour 0, the HDR colour: ambient, emissive and unlit materials (the lighting pass adds the lights);
 - colour 1, normal xyz (unit, render-origin space) and roughness, RGBA32F;
 - colour 2, base colour rgb (linear, after its texture) and metallic, RGBA16F;
 - colour 3, the material index, R32_UINT (NO_MATERIAL, render/layouts.py, where no lit surface
   is: background, unlit materials).
+Depth and the HDR colour are the target's (gpu/scene_attachments.py); colours 1-3 are the
+output graph's transients, dead after the lighting (the graph may alias them with later images:
+weighted transparency's targets).
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from .memory import Image
 from .pipeline import AttachmentFormats
-
-if TYPE_CHECKING:
-    from .device import Device
 
 GBUFFER_FORMAT_NAMES = ("VK_FORMAT_R32G32B32A32_SFLOAT", "VK_FORMAT_R16G16B16A16_SFLOAT", "VK_FORMAT_R32_UINT")
 GBUFFER_COLORS = 1 + len(GBUFFER_FORMAT_NAMES)  # the mesh pipelines' colour attachments here
@@ -36,29 +35,3 @@ def gbuffer_formats(vk: Any) -> AttachmentFormats:
     G-buffer colours, depth, one sample (the deferred form has no MSAA)."""
     colors = ("VK_FORMAT_R16G16B16A16_SFLOAT", *GBUFFER_FORMAT_NAMES)
     return AttachmentFormats(tuple(getattr(vk, name) for name in colors), vk.VK_FORMAT_D32_SFLOAT, 1)
-
-
-class GBuffer:
-    """The G-buffer images (normal, base colour, material) of one size."""
-
-    def __init__(self, device: Device, width: int, height: int):
-        vk = device.vk
-        self.device = device
-        self.images: list[Image] = []
-        usage = vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_STORAGE_BIT
-        try:
-            for name in GBUFFER_FORMAT_NAMES:
-                self.images.append(Image(device, width, height, getattr(vk, name), usage, vk.VK_IMAGE_ASPECT_COLOR_BIT))
-        except BaseException:
-            self.destroy()
-            raise
-
-    @property
-    def views(self) -> list[Any]:
-        """Normal-roughness, base-metallic, material."""
-        return [image.view for image in self.images]
-
-    def destroy(self) -> None:
-        for image in self.images:
-            image.destroy()
-        self.images = []

@@ -28,7 +28,7 @@ class OffscreenTarget(TargetForm):
         self.samples = samples  # MSAA of the scene's attachments (the target itself has one sample)
         self.form = "hdr" if hdr or samples > 1 else "direct"  # gpu/scene_attachments.py's FORMS
         self.color_format = vk.VK_FORMAT_R8G8B8A8_SRGB
-        self.final_layout = vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL  # ready for record_readback
+        self.final_layout = vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL  # the output graph's readback pass leaves it so
         self.color = Image(
             device,
             width,
@@ -49,8 +49,14 @@ class OffscreenTarget(TargetForm):
     def _attachments_for(self, form: str) -> SceneAttachments:
         return SceneAttachments(self.device, self.width, self.height, self.samples, form)
 
-    def record_readback(self, cb: Any) -> None:
-        """After the frame's output (image in TRANSFER_SRC layout): copy it to the host buffer."""
+    def take_readback(self) -> bool:
+        """Whether this frame's output is read back when the renderer is asked to: always (the
+        output graph's readback pass, render/passes/readback.py, then calls record_copy)."""
+        return True
+
+    def record_copy(self, cb: Any, image: Any, extent: tuple[int, int]) -> None:
+        """Copy `image` (the frame's output, in TRANSFER_SRC layout: the graph's barrier) to the
+        host buffer, visible to the host once the frame's fence is signalled."""
         vk = self.device.vk
         region = vk.VkBufferImageCopy(
             bufferOffset=0,
@@ -60,11 +66,9 @@ class OffscreenTarget(TargetForm):
                 aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=0, baseArrayLayer=0, layerCount=1
             ),
             imageOffset=vk.VkOffset3D(0, 0, 0),
-            imageExtent=vk.VkExtent3D(self.width, self.height, 1),
+            imageExtent=vk.VkExtent3D(min(extent[0], self.width), min(extent[1], self.height), 1),
         )
-        vk.vkCmdCopyImageToBuffer(
-            cb, self.color.handle, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, self.readback.handle, 1, [region]
-        )
+        vk.vkCmdCopyImageToBuffer(cb, image, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, self.readback.handle, 1, [region])
         barrier = vk.VkBufferMemoryBarrier(
             srcAccessMask=vk.VK_ACCESS_TRANSFER_WRITE_BIT,
             dstAccessMask=vk.VK_ACCESS_HOST_READ_BIT,

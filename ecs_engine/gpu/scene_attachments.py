@@ -1,6 +1,7 @@
 """The target's "forms" (FORMS): which attachments the scene draws into, and with what formats;
-the renderings themselves are dynamic (vkCmdBeginRendering, render/frame/scene_renderings.py) with
-explicit barriers (render/frame/scene_barriers.py), so nothing here is made against a render pass.
+the renderings themselves are dynamic (vkCmdBeginRendering) in passes of the output graph
+(render/passes/output_graph.py), which places the barriers, so nothing here is made against a
+render pass.
 
 - `hdr`: the scene in 16-bit float (HDR) colour with reverse-Z depth; after it, the post effects
   (render/frame/output_passes.py's `post`) and the tone map into the target (sRGB swapchain image or
@@ -28,7 +29,6 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from .gbuffer import GBuffer
 from .memory import Image
 from .pipeline import AttachmentFormats
 
@@ -122,10 +122,12 @@ class TargetForm:
 class SceneAttachments:
     """The attachments of one form that a target's images share: depth, HDR colour and (with
     MSAA) its resolve; in the direct form nothing (its depth is the output graph's transient); in
-    the deferred form also the G-buffer (gpu/gbuffer.py), depth sampled and the HDR colour a
-    storage image for the lighting.
-    `images` holds depth, then the HDR colour (with MSAA the multisampled one, then its resolve);
-    `hdr_image` is the single-sample HDR colour the post effects and the tone map read."""
+    the deferred form depth sampled and the HDR colour a storage image for the lighting (the
+    G-buffer itself is the output graph's transient: render/passes/deferred_passes.py).
+    `images` holds depth (single-sample only), then the HDR colour (single-sample: with MSAA the
+    resolve; the multisampled colour and depth are the output graph's transients, which nothing
+    after the scene's rendering reads); `hdr_image` is the HDR colour the post effects and the
+    tone map read."""
 
     def __init__(
         self,
@@ -138,34 +140,27 @@ class SceneAttachments:
         vk = device.vk
         self.samples = samples
         self.images: list[Image] = []  # depth, HDR colour, its resolve (in the order made)
-        self.gbuffer: GBuffer | None = None
         deferred = form == "deferred"
         # the deferred lighting samples depth; in the hdr form the post effects may (single-sample)
         sampled = vk.VK_IMAGE_USAGE_SAMPLED_BIT if deferred or samples == 1 else 0
         if form == "direct":  # its depth is the output graph's transient (render/passes/forward.py)
             return
         try:
-            self.images.append(
-                Image(
-                    device,
-                    width,
-                    height,
-                    getattr(vk, DEPTH_FORMAT_NAME),
-                    vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | sampled,
-                    vk.VK_IMAGE_ASPECT_DEPTH_BIT,
-                    samples,
+            if samples == 1:  # with MSAA depth and colour are the output graph's (forward.py)
+                self.images.append(
+                    Image(
+                        device,
+                        width,
+                        height,
+                        getattr(vk, DEPTH_FORMAT_NAME),
+                        vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | sampled,
+                        vk.VK_IMAGE_ASPECT_DEPTH_BIT,
+                    )
                 )
-            )
             color = vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT
             read = hdr_read_usage(device) | (vk.VK_IMAGE_USAGE_STORAGE_BIT if deferred else 0)
             hdr_format = getattr(vk, HDR_FORMAT_NAME)
-            aspect = vk.VK_IMAGE_ASPECT_COLOR_BIT
-            if samples > 1:  # resolved at the end of the rendering, never read: may stay in tile memory
-                transient = color | vk.VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT
-                self.images.append(Image(device, width, height, hdr_format, transient, aspect, samples))
-            self.images.append(Image(device, width, height, hdr_format, color | read, aspect))
-            if deferred:
-                self.gbuffer = GBuffer(device, width, height)
+            self.images.append(Image(device, width, height, hdr_format, color | read, vk.VK_IMAGE_ASPECT_COLOR_BIT))
         except BaseException:
             self.destroy()
             raise
@@ -178,18 +173,15 @@ class SceneAttachments:
     def depth_image(self) -> Image | None:
         """The single-sample depth the hdr and deferred forms store, in SHADER_READ_ONLY_OPTIMAL
         after the scene (the post effects sample it); None in the direct form and with MSAA."""
-        return self.images[0] if len(self.images) > 1 and self.samples == 1 else None
+        return self.images[0] if len(self.images) > 1 else None
 
     @property
     def hdr_image(self) -> Image | None:
         """The single-sample HDR colour (the resolve with MSAA), in SHADER_READ_ONLY_OPTIMAL after
         the scene; None in the direct form."""
-        return self.images[-1] if len(self.images) > 1 else None
+        return self.images[-1] if self.images else None
 
     def destroy(self) -> None:
-        if self.gbuffer is not None:
-            self.gbuffer.destroy()
-            self.gbuffer = None
         for image in self.images:
             image.destroy()
         self.images = []

@@ -78,7 +78,7 @@ class Swapchain(TargetForm):
         # screenshots: an image can be copied out when the surface allows TRANSFER_SRC
         supported = self._caps(device.physical, surface).supportedUsageFlags
         self.copy_usage = supported & vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT
-        self.readback_image: int | None = None  # the image index the next record_readback copies
+        self.readback_image: int | None = None  # the image index the next frame reads back (take_readback)
         self._readback: Buffer | None = None
         self._readback_size: tuple[int, int] = (0, 0)
         self._build()
@@ -217,53 +217,30 @@ class Swapchain(TargetForm):
             raise RuntimeError(f"vkQueuePresentKHR failed with VkResult {result}")
         return True
 
-    def record_readback(self, cb: Any) -> None:
-        """After the frame's output: copy image `readback_image` (in PRESENT_SRC layout) to a host
-        buffer and put it back for presenting; `pixels()` reads it once the frame is done."""
+    def take_readback(self) -> bool:
+        """Whether this frame's image is read back (`readback_image` was set to it; cleared
+        here): the output graph then ends with its readback pass (render/passes/readback.py),
+        which calls record_copy. UsageError when the surface's images cannot be copied."""
         if self.readback_image is None:
-            return
+            return False
         if not self.copy_usage:
+            self.readback_image = None
             raise UsageError(
                 "this window's swapchain images cannot be copied (no TRANSFER_SRC usage): "
                 "no screenshot; run with --headless for one"
             )
+        self.readback_image = None
+        return True
+
+    def record_copy(self, cb: Any, image: Any, extent: tuple[int, int]) -> None:
+        """Copy `image` (this frame's, in TRANSFER_SRC layout: the graph's barrier, which takes
+        it to PRESENT_SRC after) to a host buffer; `pixels()` reads it once the frame is done."""
         vk = self.vk
-        size = (self.width, self.height)
+        size = (int(extent[0]), int(extent[1]))
         if self._readback is None:
             self._readback = Buffer(self.device, 4 * size[0] * size[1], vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
         self._readback = self._readback.grown(4 * size[0] * size[1])
         self._readback_size = size
-        image = self.images[self.readback_image]
-        self.readback_image = None
-        color = vk.VkImageSubresourceRange(
-            aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=1
-        )
-
-        def layout(old: int, new: int, src_access: int, dst_access: int) -> Any:
-            return vk.VkImageMemoryBarrier(
-                srcAccessMask=src_access,
-                dstAccessMask=dst_access,
-                oldLayout=old,
-                newLayout=new,
-                srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                image=image,
-                subresourceRange=color,
-            )
-
-        present, transfer = vk.VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
-        vk.vkCmdPipelineBarrier(
-            cb,
-            vk.VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
-            vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
-            0,
-            0,
-            None,
-            0,
-            None,
-            1,
-            [layout(present, transfer, vk.VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT, vk.VK_ACCESS_TRANSFER_READ_BIT)],
-        )
         region = vk.VkBufferImageCopy(
             bufferOffset=0,
             bufferRowLength=0,
@@ -274,6 +251,7 @@ class Swapchain(TargetForm):
             imageOffset=vk.VkOffset3D(0, 0, 0),
             imageExtent=vk.VkExtent3D(size[0], size[1], 1),
         )
+        transfer = vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
         vk.vkCmdCopyImageToBuffer(cb, image, transfer, self._readback.handle, 1, [region])
         to_host = vk.VkBufferMemoryBarrier(
             srcAccessMask=vk.VK_ACCESS_TRANSFER_WRITE_BIT,
@@ -285,16 +263,7 @@ class Swapchain(TargetForm):
             size=self._readback.size,
         )
         vk.vkCmdPipelineBarrier(
-            cb,
-            vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
-            vk.VK_PIPELINE_STAGE_HOST_BIT | vk.VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT,
-            0,
-            0,
-            None,
-            1,
-            [to_host],
-            1,
-            [layout(transfer, present, vk.VK_ACCESS_TRANSFER_READ_BIT, 0)],
+            cb, vk.VK_PIPELINE_STAGE_TRANSFER_BIT, vk.VK_PIPELINE_STAGE_HOST_BIT, 0, 0, None, 1, [to_host], 0, None
         )
 
     def pixels(self) -> np.ndarray | None:

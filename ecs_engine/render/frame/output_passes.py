@@ -1,20 +1,21 @@
 """What the frame's primary command buffer records around the render path's secondaries, by the
-target's form (gpu/scene_attachments.py's FORMS), every drawing a dynamic rendering (vkCmdBeginRendering,
-render/frame/scene_renderings.py) between explicit barriers (render/frame/scene_barriers.py):
+target's form (gpu/scene_attachments.py's FORMS), every drawing a dynamic rendering in a pass of
+the output graph (render/passes/output_graph.py), which places the barriers:
 
 - `direct`: the scene's rendering into the target: the chunks', the sky's (sky_pass.py), the
   set-aside rows' and the light billboards' (light_pass.py) secondaries; then the overlay (the
   editor's ImGui) in a rendering of its own that loads the target (its one pipeline, made for the
-  target's format, serves every form: no pipeline follows a change of form), and the barrier to
-  the target's final layout (readback or present);
+  target's format, serves every form: no pipeline follows a change of form), and the readback
+  (render/passes/readback.py) where asked;
 - `hdr`: the scene's rendering into the HDR colour as above (with MSAA resolved at its end),
   then the barrier that leaves the HDR colour (and single-sample depth) in
   SHADER_READ_ONLY_OPTIMAL; then the post effects (`post`); then the output graph
   (render/passes/output_graph.py: the tone map sampling the HDR colour, the ldr effects, the
-  overlay, every barrier of the target image but the one to its final layout), and the barrier
-  to the target's final layout (output_barriers.py);
-- `deferred`: the G-buffer rendering with the chunks' secondaries (gpu/gbuffer.py), the lighting
-  compute pass (deferred_pass.py), then as `hdr` with the sky, the set-aside rows and the
+  overlay, the readback, every barrier of the target image up to its final layout);
+- `deferred`: the G-buffer rendering with the chunks' secondaries (gpu/gbuffer.py), the ray
+  shadows where traced, the lighting compute pass (lighting/deferred.py), weighted
+  transparency's accumulation where on (passes of the output graph too:
+  render/passes/deferred_passes.py), then as `hdr` with the sky, the set-aside rows and the
   billboards alone in the scene's rendering.
 
 Post effects go in `OutputPasses.post`: callables `post(cb, inputs)` (inputs: the frame's
@@ -46,6 +47,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
+from functools import partial
 from typing import Any
 
 from ...gpu.device import Device
@@ -58,7 +60,6 @@ from ..passes.output_graph import OutputGraph
 from ..passes.sky import SkyPass
 from ..passes.tone_map import ToneMapPass
 from ..post.inputs import PostInputs
-from .output_barriers import OutputBarriers
 from .scene_renderings import scene_state
 
 log = logging.getLogger("ecs_engine")
@@ -68,12 +69,10 @@ PostPass = Callable[[Any, PostInputs], None]
 
 
 class OutputRendering:
-    """One target image (its handle and view, which the output graph imports) and its barrier to
-    the target's final layout, made once per output image."""
+    """One target image: its handle and view, which the output graph imports."""
 
-    def __init__(self, vk: Any, target: Any, output: Any) -> None:
+    def __init__(self, target: Any, output: Any) -> None:
         self.image, self.view = target.output_image(output)
-        self.barriers = OutputBarriers(vk, self.image, target.final_layout)
 
 
 class OutputPasses:
@@ -133,7 +132,7 @@ class OutputPasses:
                 self._targets.clear()
             vk = self.vk
             state, formats = scene_state(vk, target, framebuffer, width, height, self.clear_color, self.secondaries)
-            rendering = OutputRendering(vk, target, framebuffer)
+            rendering = OutputRendering(target, framebuffer)
             made = self._targets[key] = (state, rendering, formats)
         self._last = (key, *made)
         return made[0]
@@ -199,43 +198,28 @@ class OutputPasses:
         sky: bool = False,
         transparent: Any = None,
         mark: Callable[[str], None] | None = None,
+        readback: bool = False,
     ) -> int:
         """Raw cffi calls with structs made once (see gpu/frames.py for why). `chunks`: the path's
         secondaries; `aside`: the set-aside rows' or None; `billboards` point and spot lights get
         one; `features`: the mesh pipelines' MATERIAL_FEATURES (the lighting's too); `sky`: the
         Environment is drawn behind; `transparent`: the blended rows' secondary for the weighted
-        transparency pass (the deferred form); `mark`: see the module. Returns the light pass's
-        draws."""
-        vk = self.vk
-        lib = vk.lib
+        transparency pass (the deferred form); `mark`: see the module; `readback`: the target
+        copied to the host (the target's take_readback says for which image). Returns the light
+        pass's draws."""
         target = self.target
         secondaries = chunks
-        if state.gbuffer_ptrs is not None:
+        if self.graph is None:
+            self.graph = OutputGraph(self, [])
+        frame = self.graph.frame
+        if target.form == "deferred":  # the chunks in the G-buffer pass, lit before the scene's rendering
             assert self.deferred is not None
-            rendering, before, after = state.gbuffer_ptrs
-            lib.vkCmdPipelineBarrier2(cb, before)
-            lib.vkCmdBeginRendering(cb, rendering)
-            if chunks:
-                lib.vkCmdExecuteCommands(cb, len(chunks), vk.ffi.new("VkCommandBuffer[]", chunks))
-            lib.vkCmdEndRendering(cb)
-            lib.vkCmdPipelineBarrier2(cb, after)
-            if mark is not None:
-                mark("g-buffer")
-            extent = state.area.extent
+            frame.chunks, frame.frame_set, frame.features = chunks, frame_set[0], features
             ray = self.ray_shadows
-            if ray is not None and ray.lights:  # the shadow mask the lighting reads (ray_shadows.py)
-                mask = self.deferred.named(target.attachments)
-                ray.record(cb, slot, frame_set[0], target.attachments, mask, extent.width, extent.height)
-                if mark is not None:
-                    mark("ray-traced shadows")
-            self.deferred.record(cb, frame_set[0], target.attachments, features, extent.width, extent.height)
-            if mark is not None:
-                mark("lighting (compute)")
-            if transparent is not None:
-                assert self.oit is not None
-                self.oit.accumulate(cb, transparent)
-                if mark is not None:
-                    mark("transparency (accumulate)")
+            self.deferred.traced = ray is not None  # the lighting's mask full size only if traced into
+            if ray is not None and ray.lights:  # the shadow mask the lighting reads (raytracing/shadows.py)
+                frame.ray = ray
+            frame.transparent = transparent
             secondaries = []
         formats = self.formats  # the scene rendering's, in this frame's form (target_state)
         if sky:  # after the opaque chunks, before the blended rows
@@ -245,14 +229,20 @@ class OutputPasses:
             secondaries = [*secondaries, aside]  # after every chunk's rows
         if transparent is not None:  # the weighted transparency over all of it
             assert self.oit is not None
-            secondaries = [*secondaries, self.oit.record_composite(formats, state, slot)]
+            secondaries = [*secondaries, partial(self._composite, formats, state, slot)]  # forward records it
         lights, draws = self.light_pass.record(slot, state, formats, frame_set, billboards)
         if lights is not None:  # last, depth-tested against everything, blended over it
             secondaries = [*secondaries, lights]
-        if self.graph is None:
-            self.graph = OutputGraph(self, [])
-        self.graph.record(cb, state, self._rendering(state), secondaries, tone_map, overlay, slot, mark)
+        rendering = self._rendering(state)
+        self.graph.record(cb, state, rendering, secondaries, tone_map, overlay, slot, mark, readback)
         return draws
+
+    def _composite(self, formats: Any, state: TargetState, slot: int, ctx: Any) -> Any:
+        """Weighted transparency's composite secondary, its set naming the graph's targets
+        (called by the forward pass, once the graph is compiled: render/passes/forward.py)."""
+        assert self.oit is not None
+        self.oit.name_targets((ctx.image("oit_accum"), ctx.image("oit_reveal")))
+        return self.oit.record_composite(formats, state, slot)
 
     def begin_post(self, camera: Any) -> PostInputs | None:
         """The hdr stage's inputs for this frame (`camera`: the frame's CameraMatrices), kept

@@ -341,11 +341,8 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
                 sky=self.environment.sky,
                 transparent=aside[4],
                 mark=mark,
+                readback=readback,  # the output graph's last pass
             )
-            if readback:
-                self.target.record_readback(cb)
-                if mark is not None:
-                    mark("readback")
             self.frames.end(frame, wait=wait, signal=signal)
             if reuse is None:
                 self.replay.keep(slot, key, results, light_draws)

@@ -77,9 +77,6 @@ class FrameReplay:
         self._recorded: list[Recorded | None] = [None] * slots
         self.replayed = 0  # frames submitted again
         self.recorded = 0  # frames recorded
-        # what output_graph last imported into a graph (see there), while the recordings since
-        # imported the same: None when a frame recorded without it
-        self.imported: tuple[Any, ...] | None = None
 
     def offer(self, slot: int, key: Key | None) -> dict[int, ChunkResult] | None:
         """Before the chunk jobs: the slot's kept chunks (FrameInputs.reuse) when its last frame
@@ -156,35 +153,16 @@ def prelude_replayable(renderer: Any, views: list[Any], traced: list[Any], forwa
     return renderer.replay.enabled and path_ok and not views and not traced and not forward
 
 
-def output_graph(renderer: Any, state: Any, slot: int) -> Any:
-    """This frame's output graph set up before its jobs, as OutputGraph.record sets it up
-    (imports, the frame's tone map and overlay, compiled: cached while nothing changed), so
-    that its passes' keys are this frame's; None before the graph of the target's form exists
-    (that frame records, and makes it)."""
+def output_graph(renderer: Any, state: Any, slot: int, readback: bool) -> Any:
+    """This frame's output graph prepared before its jobs (OutputGraph.prepare: its shape, imports,
+    the frame's tone map and overlay, compiled; the frame's recording reuses it), so that its
+    passes' keys are this frame's; None before the output passes have a graph."""
     output = renderer.output
-    outputs = output.graph
-    if outputs is None:
+    if output.graph is None:
         return None
-    target = output.target
-    attachments = target.attachments
-    graph = outputs.graphs.get((target.form, int(attachments.samples), int(target.color_format)))
-    if graph is None:
-        return None
-    extent = (int(state.area.extent.width), int(state.area.extent.height))
     rendering = output._rendering(state)
-    # importing costs more than the rest of the key: skipped when the graph holds these imports
-    # already (the last frame imported them, here and in its recording; a new image bumps the
-    # device's objects_version)
-    imported = (graph, rendering, extent, attachments, renderer.device.objects_version)
-    last = renderer.replay.imported
-    if last is None or len(last) != len(imported) or any(a is not b and a != b for a, b in zip(last, imported)):
-        outputs._import_attachments(graph, target.form, attachments)
-        outputs._import_target(graph, rendering, extent)
-        renderer.replay.imported = imported
-    frame = outputs.frame
-    frame.tone_map, frame.overlay, frame.slot = (renderer.tone_map, renderer.exposure), renderer.overlay, slot
-    graph.compile(extent)
-    return graph
+    tone_map = (renderer.tone_map, renderer.exposure)
+    return output.graph.prepare(state, rendering, tone_map, renderer.overlay, slot, readback)
 
 
 def frame_key(renderer: Any, state: Any, slot: int, prelude: tuple[Any, ...], stops: tuple[Any, ...]) -> Key | None:
@@ -192,13 +170,14 @@ def frame_key(renderer: Any, state: Any, slot: int, prelude: tuple[Any, ...], st
     prelude_replayable's) and the output graph's (graph.key(): each running pass's key() in
     order, the extent and the imported handles), or None when the frame must record: the
     prelude forbids it, or a pass returned UNREPLAYABLE (graph.replayable())."""
-    if not prelude_replayable(renderer, *stops):
-        renderer.replay.imported = None  # this frame's recording imports what output_graph did not
+    outputs = renderer.output.graph
+    if outputs is not None:
+        outputs.forget_prepared()  # a replayed frame's: this one prepares (or records) anew
+    readback = prelude[-1]
+    # a screenshot of a window's image records (asking prepare would take its readback request)
+    screenshot = readback and getattr(renderer.target, "readback_image", None) is not None
+    if screenshot or not prelude_replayable(renderer, *stops):
         return None
-    graph = output_graph(renderer, state, slot)
+    graph = output_graph(renderer, state, slot, readback)
     replayable = graph is not None and graph.replayable()
-    key = (prelude_key(renderer, *prelude), Same(graph), graph.key()) if replayable else None
-    graph_frame = renderer.output.graph.frame if graph is not None else None
-    if graph_frame is not None:
-        graph_frame.overlay = None  # the recording sets it again: keep no reference past the key
-    return key
+    return (prelude_key(renderer, *prelude), Same(graph), graph.key()) if replayable else None

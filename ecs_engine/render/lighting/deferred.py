@@ -63,6 +63,9 @@ class DeferredPass:
         self.pipelines: dict[int, Any] = {}  # MATERIAL_FEATURES -> pipeline
         self._named: Any = None  # the target's SceneAttachments the set names
         self.mask: ShadowMask | None = None  # ray-traced shadows' mask, made with the attachments named
+        # whether the mask is traced into (the renderer traces shadows): else it is never read
+        # (deferred_light.comp reads it under FEATURE_RAY_SHADOWS alone) and one pixel is enough
+        self.traced = True
         self._push = np.zeros(1, DEFERRED_PUSH.dtype)
         self._push_ptr = vk.ffi.from_buffer(self._push)
 
@@ -75,7 +78,7 @@ class DeferredPass:
         if self.mask is not None:
             self.mask.destroy()
             self.mask = None
-        self.mask = ShadowMask(self.device, hdr.width, hdr.height)
+        self.mask = ShadowMask(self.device, *((hdr.width, hdr.height) if self.traced else (1, 1)))
         views = [(BINDING_HDR, hdr.view)] + list(
             zip((BINDING_NORMAL_ROUGHNESS, BINDING_BASE_METALLIC, BINDING_MATERIAL_IDS), gbuffer.views, strict=True)
         )

@@ -5,29 +5,32 @@ FORMS):
 - `direct`: "target" cleared to the background and "depth" cleared to far (0.0, reverse-Z), a
   transient of the graph (nothing after the rendering reads it: never stored);
 - `hdr`: "hdr" cleared and "depth" cleared; with MSAA "hdr_msaa" (n samples) cleared and
-  resolved into "hdr" at the rendering's end, and "depth" of n samples;
-- `deferred`: "hdr" and "depth" loaded (the G-buffer pass and the lighting wrote them, left in
-  GENERAL and DEPTH_STENCIL_READ_ONLY: their imports' layout_before).
+  resolved into "hdr" at the rendering's end, and "depth" of n samples, both transients of the
+  graph (never stored);
+- `deferred`: "hdr" and "depth" loaded (the G-buffer pass and the lighting wrote them:
+  render/passes/deferred_passes.py), and with weighted transparency "oit_accum" and
+  "oit_reveal" sampled by its composite.
 
 Every draw is a secondary (the chunks', the sky's, the set-aside rows', the weighted
 transparency's composite and the light billboards', in that order: output_passes.py gathers
 them), begun with the inheritance of the target's scene formats, so the rendering is begun with
 `secondaries=True`.
 
-`post` runs the hdr stage's post effects (OutputPasses.post, callables with their own barriers
-and private graphs) on "hdr" and the single-sample "depth", both sampled (SHADER_READ_ONLY), as
-the seam has always promised them. It reads both even without an effect: the tone map samples
-"hdr" anyway, and a single-sample depth in SHADER_READ_ONLY is what the effects' next frame's
-descriptors expect.
+A hdr-stage post effect with `add_hdr` (post/bloom_effect.py, ssao_effect.py) adds its own
+passes between `forward` and the tone map; one given as a callable `post(cb, inputs)` runs in a
+`PostCall` pass there, with "hdr" and the single-sample "depth" sampled (SHADER_READ_ONLY), as
+the seam has always promised them, its barriers its own.
 """
 
 from __future__ import annotations
 
 from collections.abc import Hashable
+from functools import partial
 from typing import Any
 
-from ...gpu.scene_attachments import DEPTH_FORMAT_NAME
+from ...gpu.scene_attachments import DEPTH_FORMAT_NAME, HDR_FORMAT_NAME
 from ..graph import UNREPLAYABLE, Access, ImageDesc, Load, Pass
+from .deferred_passes import OIT
 
 FAR = (0.0, 0.0, 0.0, 0.0)  # reverse-Z's far plane: depth cleared to 0.0
 
@@ -38,8 +41,8 @@ class Forward(Pass):
 
     name = "forward"
 
-    def __init__(self, frame: Any, form: str, samples: int) -> None:
-        self.frame, self.form, self.samples = frame, form, samples
+    def __init__(self, frame: Any, form: str, samples: int, oit: bool = False) -> None:
+        self.frame, self.form, self.samples, self.oit = frame, form, samples, oit
 
     def attachments(self) -> tuple[tuple[str, ...], str, tuple[str | None, ...] | None]:
         """(colours, depth, resolves) of the rendering."""
@@ -54,9 +57,13 @@ class Forward(Pass):
         if self.form == "deferred":  # over the lit scene
             builder.write("hdr", Access.COLOR_READ_WRITE, load=Load.LOAD)
             builder.write(depth, Access.DEPTH_WRITE, load=Load.LOAD)
+            for name in OIT if self.oit else ():  # the weighted transparency's composite samples them
+                builder.read(name, Access.FRAGMENT_SAMPLED)
             return
-        if self.form == "direct":
-            builder.create(depth, ImageDesc(format=DEPTH_FORMAT_NAME))
+        if self.form == "direct" or resolve is not None:  # nothing after the rendering reads them
+            builder.create(depth, ImageDesc(format=DEPTH_FORMAT_NAME, samples=self.samples))
+        if resolve is not None:
+            builder.create(colors[0], ImageDesc(format=HDR_FORMAT_NAME, samples=self.samples))
         background = (*self.frame.background, 1.0)
         builder.write(colors[0], Access.COLOR_WRITE, load=Load.CLEAR, clear=background)
         if resolve is not None:
@@ -66,7 +73,9 @@ class Forward(Pass):
     def record(self, cb: Any, ctx: Any) -> None:
         colors, depth, resolve = self.attachments()
         ctx.begin_rendering(colors=colors, depth=depth, resolve=resolve, secondaries=True)
-        secondaries = self.frame.secondaries
+        # a partial is a secondary recorded now, from the compiled graph's images (the
+        # weighted transparency's composite, whose set names the graph's transients)
+        secondaries = [s(ctx) if isinstance(s, partial) else s for s in self.frame.secondaries]
         if secondaries:
             ctx.vk.lib.vkCmdExecuteCommands(cb, len(secondaries), ctx.vk.ffi.new("VkCommandBuffer[]", secondaries))
         ctx.end_rendering()  # with MSAA: the resolve
@@ -77,34 +86,27 @@ class Forward(Pass):
         return (self.form, self.samples)
 
 
-class PostSeam(Pass):
-    """The hdr-stage post effects (see the module), in order; nothing without one."""
+class PostCall(Pass):
+    """A hdr-stage post effect given as a callable `post(cb, inputs)` (OutputPasses.post's
+    entries without `add_hdr`: a test's spy, a game's own effect); see the module."""
 
-    name = "post"
-
-    def __init__(self, output: Any, samples: int) -> None:
-        self.output, self.samples = output, samples
+    def __init__(self, output: Any, index: int, post: Any, samples: int) -> None:
+        self.name = f"post_call_{index}"
+        self.output, self.post, self.samples = output, post, samples
 
     def setup(self, builder: Any) -> None:
         builder.read("hdr", Access.COMPUTE_SAMPLED)
         if self.samples == 1:  # a multisampled depth is not stored for the effects
             builder.read("depth", Access.COMPUTE_SAMPLED)
-        builder.side_effect()  # the effects write "hdr" behind the graph's back (their own barriers)
+        builder.side_effect()  # it may write "hdr" behind the graph's back (its own barriers)
 
     def record(self, cb: Any, ctx: Any) -> None:
-        output = self.output
-        if not output.post:
-            return
-        inputs = output.inputs
-        if inputs is None or inputs.hdr is not output.target.hdr_image:
+        inputs = self.output.inputs
+        if inputs is None or inputs.hdr is not self.output.target.hdr_image:
             raise RuntimeError("OutputPasses.begin_post(camera) was not called for this frame's target")
-        for post in output.post:
-            post(cb, inputs)
+        self.post(cb, inputs)
 
     def key(self) -> Hashable:
-        """The effects' keys of this frame's inputs (their settings; SSAO's projection): an
-        effect without a key makes every frame record."""
-        posts = self.output.post
-        if not all(hasattr(post, "key") for post in posts):
-            return UNREPLAYABLE
-        return tuple(post.key(self.output.inputs) for post in posts)
+        """The effect's key of this frame's inputs; an effect without one makes every frame record."""
+        key = getattr(self.post, "key", None)
+        return UNREPLAYABLE if key is None else key(self.output.inputs)

@@ -10,10 +10,11 @@ over the scene by 1 - revealage. The result approximates the sorted blend (exact
 close for layers of similar colour, nearer layers weighing more).
 
 It runs in the deferred form, where the opaque depth exists before the target's pass: after the
-lighting dispatch, a pass of its own draws the blended rows (mesh_*_oit.frag, the "weighted"
-blend, gpu/pipeline.py) into the two targets against the G-buffer's depth (read-only, no
-writes); the composite (oit_composite.frag) is the last secondary of the scene's rendering
-before the billboards, after the sky and the other set-aside rows.
+lighting dispatch, a pass of its own (the output graph's oit_accumulate) draws the blended
+rows (mesh_*_oit.frag, the "weighted" blend, gpu/pipeline.py) into the two targets against the
+G-buffer's depth (read-only, no writes); the composite (oit_composite.frag) is the last
+secondary of the scene's rendering before the billboards, after the sky and the other set-aside
+rows.
 
 Known limit: blended surfaces are depth-tested against the G-buffer's opaque meshes only, not
 against the rows drawn forward after the lighting (mirroring, wireframe and point materials),
@@ -27,14 +28,11 @@ from typing import Any
 from ...gpu.array_image import clamped_sampler
 from ...gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_images
 from ...gpu.device import Device
-from ...gpu.memory import Image
 from ...gpu.pipeline import AttachmentFormats, GraphicsPipelineSpec, graphics_pipeline, pipeline_layout
-from ...gpu.rendering import Attachment, Rendering, clear_color
 from ...gpu.scene_attachments import DEPTH_FORMAT_NAME
 from ...gpu.secondary import SecondaryBuffers
 from ..config import Transparency
 from ..draw.path import TargetState
-from ..frame.scene_barriers import oit_barriers
 from .sky import full_screen_secondary
 
 ACCUMULATION_FORMAT = "VK_FORMAT_R16G16B16A16_SFLOAT"
@@ -59,59 +57,43 @@ class WeightedTransparency:
         self.set_array = vk.ffi.new("VkDescriptorSet[1]", [self.descriptor_set])
         self.layout = pipeline_layout(device, [self.set_layout.handle])
         self.composites: dict[AttachmentFormats, Any] = {}  # per formats of the scene it is drawn over
-        self.images: list[Image] = []
-        self._rendering: Any = None  # (Rendering, barrier before, barrier after) for the images
+        self._named: tuple[Any, ...] | None = None  # the targets the composite's set names
         self._made_for: tuple[Any, int, int] | None = None
         self.state: TargetState | None = None
 
     def ensure(self, depth: Any, width: int, height: int) -> None:
-        """Targets, rendering and begin infos for a target of this size and depth (made again
-        when either changes: the caller's frames in flight are waited for). `depth` is the
-        target's depth Image (gpu/memory.py)."""
+        """The begin infos for a target of this size and depth (made again when either
+        changes). `depth` is the target's depth Image (gpu/memory.py). The two targets are
+        transients of the output graph (its oit_accumulate pass, render/passes/deferred_passes.py,
+        creates and clears them; the graph places the barriers and may alias them with the
+        G-buffer, dead by then)."""
         key = (depth.view, width, height)
         if self._made_for == key:
             return
         vk = self.vk
-        self.device.wait_idle()
-        self._release_targets()
-        color = vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT
-        aspect = vk.VK_IMAGE_ASPECT_COLOR_BIT
-        for fmt in (ACCUMULATION_FORMAT, REVEALAGE_FORMAT):
-            self.images.append(Image(self.device, width, height, getattr(vk, fmt), color, aspect))
-        read = vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
-        for binding, image in enumerate(self.images):
-            info = vk.VkDescriptorImageInfo(sampler=self.sampler, imageView=image.view, imageLayout=read)
-            write_images(self.device, self.descriptor_set, binding, [info])
         self.state = TargetState.make(
             vk,
-            (int(vk.ffi.cast("uintptr_t", self.images[0].view)), width, height),
+            (int(vk.ffi.cast("uintptr_t", depth.view)), width, height),
             None,  # dynamic rendering: no framebuffer or render pass (accumulate)
             self.secondaries.begin_info_rendering(self.formats),
             (0.0, 0.0, 0.0),
         )
-        # accumulation cleared to 0, revealage to 1; depth loaded, read-only (the lighting's layout)
-        color = vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL
-        targets = [
-            Attachment(image.view, color, clear=clear_color(vk, (value,) * 4))
-            for image, value in zip(self.images, (0.0, 1.0), strict=True)
-        ]
-        read_only = Attachment(depth.view, vk.VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL, load="LOAD")
-        rendering = Rendering(vk, width, height, targets, read_only)
-        self._rendering = (rendering, *oit_barriers(vk, [image.handle for image in self.images], depth.handle))
         self._made_for = key
 
-    def accumulate(self, cb: Any, secondary: Any) -> None:
-        """The blended rows' secondary (recorded with `state.secondary_begin`) in the pass, with
-        the barriers its render pass's dependencies were (render/frame/scene_barriers.py)."""
-        assert self._rendering is not None
+    def name_targets(self, targets: tuple[Any, ...]) -> None:
+        """Point the composite's set at the two targets (the graph's GraphImages, kept: a new
+        compile makes new ones, whose views may reuse destroyed ones' handle values), before
+        the composite is recorded; the frames in flight are waited for when they change."""
+        if self._named is not None and all(a is b for a, b in zip(self._named, targets, strict=True)):
+            return
+        if self._named is not None:
+            self.device.wait_idle()  # frames in flight bind the set
         vk = self.vk
-        lib = vk.lib
-        rendering, before, after = self._rendering
-        lib.vkCmdPipelineBarrier2(cb, before.ptr)
-        lib.vkCmdBeginRendering(cb, rendering.ptr)
-        lib.vkCmdExecuteCommands(cb, 1, vk.ffi.new("VkCommandBuffer[]", [secondary]))
-        lib.vkCmdEndRendering(cb)
-        lib.vkCmdPipelineBarrier2(cb, after.ptr)
+        read = vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
+        for binding, image in enumerate(targets):
+            info = vk.VkDescriptorImageInfo(sampler=self.sampler, imageView=image.view, imageLayout=read)
+            write_images(self.device, self.descriptor_set, binding, [info])
+        self._named = tuple(targets)
 
     def record_composite(self, formats: AttachmentFormats, state: TargetState, slot: int) -> Any:
         """The composite's secondary in the scene's rendering (attachments of `formats`), after the
@@ -137,11 +119,7 @@ class WeightedTransparency:
         self.composites = {}
 
     def _release_targets(self) -> None:
-        self._rendering = None
-        for image in self.images:
-            image.destroy()
-        self.images = []
-        self._made_for, self.state = None, None
+        self._made_for, self.state, self._named = None, None, None
 
     def destroy(self) -> None:
         vk, handle = self.vk, self.device.handle

@@ -2,23 +2,29 @@
 per target form (render/frame/output_passes.py; graph_plan.md step 7, first part):
 
     forward    the scene's rendering (render/passes/forward.py): into "target" (direct) or "hdr"
-    post       the hdr stage's post effects (hdr and deferred forms)
+    <post>     the hdr stage's post effects' passes (hdr and deferred forms; `add_hdr`,
+               or a PostCall pass for a plain callable: render/passes/forward.py)
     tone_map   "hdr" -> "target", or -> "ldr_0" (a transient of the target's format) with post
                effects of the "ldr" stage on (post/registry.py: FXAA)
     <effect i> "ldr_i" -> "ldr_i+1", the last one -> "target"
     imgui      the overlay over "target" (loaded: drawn on top); records nothing without one
+    readback   "target" copied to the host (render/passes/readback.py): every frame of a
+               headless target (copying only when asked), a swapchain's reading-back frames
 
-"hdr", "hdr_msaa" and "depth" are still the target's SceneAttachments (imported each frame: the
-deferred form's G-buffer pass and lighting write them before the graph runs), but for the direct
-form's depth, the graph's transient. "target" is the
-target's image for this frame, imported with its old contents discarded (UNDEFINED) after the
-acquire semaphore's wait (colour output) and the last frame's readback copy of the same image
-(transfer), and left as a colour attachment, which output_barriers.py's `after` takes to its
-final layout (readback or present): the graph's own transition to PRESENT_SRC ends in no stage,
-which the swapchain's readback barrier (from colour output) cannot follow. The graph places every
-barrier between them, and the intermediates are its transients. Each ldr effect adds its own
-passes (`effect.add(graph, source, target, create)`), so the graphs are made again when the
-effects change; one graph is kept per (form, samples, target format).
+In the deferred form the scene's rendering follows the G-buffer, ray shadow, lighting and
+weighted transparency passes (render/passes/deferred_passes.py).
+
+The single-sample "hdr" and "depth" are still the target's SceneAttachments (imported each
+frame; the tone map, PostInputs and the tone map's descriptor sets name them); the direct form's
+depth, the MSAA colour and depth, the G-buffer, weighted transparency's targets, the effects'
+images and "ldr_i" are the graph's transients (aliased where their lifetimes allow). "target" is
+the target's image for this frame, imported with its old contents discarded (UNDEFINED) after
+the acquire semaphore's wait (colour output) and the last frame's readback copy of the same
+image (transfer), and left in the target's final layout (`final_layout`: TRANSFER_SRC
+headless, PRESENT_SRC for a swapchain). The graph places every barrier. Each ldr effect adds
+its own passes (`effect.add(graph, source, target, create)`), so the graphs are made again when
+the effects change; one graph is kept per (form, samples, target format, rays, weighted
+transparency, hdr effects and extent), the last two only with hdr effects on.
 """
 
 from __future__ import annotations
@@ -28,10 +34,30 @@ from typing import Any
 
 from ..graph import UNREPLAYABLE, Access, FrameGraph, ImageDesc, Load, Pass
 from ..graph.resources import format_name
-from .forward import Forward, PostSeam
+from .deferred_passes import (
+    DeferredLightingPass,
+    GBufferPass,
+    GBufferViews,
+    OitAccumulatePass,
+    RayDenoisePass,
+    RayShadowsPass,
+)
+from .forward import Forward, PostCall
+from .readback import Copy, Readback
 
 #: the graph's pass names -> the names the frame's timing marks have always used
-_MARKS = {"tone_map": "tone map", "post": "post effects"}
+_MARKS = {
+    "tone_map": "tone map",
+    "gbuffer": "g-buffer",
+    "ray_denoise": "ray-traced shadows",
+    "deferred_lighting": "lighting (compute)",
+    "oit_accumulate": "transparency (accumulate)",
+}
+
+
+def _final_layout(vk: Any, layout: int) -> str:
+    """The graph's name of a target's final layout: readback's (headless) or present's."""
+    return "TRANSFER_SRC_OPTIMAL" if layout == vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL else "PRESENT_SRC_KHR"
 
 
 class _Frame:
@@ -43,6 +69,14 @@ class _Frame:
     slot: int = 0
     secondaries: tuple[Any, ...] | list[Any] = ()  # the scene rendering's, in order (output_passes.py)
     background: tuple[float, float, float] = (0.0, 0.0, 0.0)  # fixed per renderer
+    readback: Copy | None = None  # the target's record_copy on a frame read back
+    # the deferred form's (render/passes/deferred_passes.py; output_passes.py sets them)
+    chunks: tuple[Any, ...] | list[Any] = ()  # the opaque chunks' secondaries, in the G-buffer
+    frame_set: Any = None  # the slot's frame descriptor set
+    features: int = 0  # the mesh pipelines' MATERIAL_FEATURES (the lighting's)
+    attachments: Any = None  # GBufferViews: what the lighting's and rays' sets name (set by record)
+    ray: Any = None  # the RayShadows on a frame with a traced light
+    transparent: Any = None  # weighted transparency's blended rows' secondary
 
 
 class ToneMapInto(Pass):
@@ -101,16 +135,30 @@ class OutputGraph:
         self.output, self.effects = output, list(effects)
         self.frame = _Frame()
         self.frame.background = output.clear_color
-        self.graphs: dict[tuple[str, int, int], FrameGraph] = {}
+        self.graphs: dict[tuple[Any, ...], FrameGraph] = {}
+        self._post_names: frozenset[str] = frozenset()  # the hdr effects' passes (marked once, at the last)
         self.graph: FrameGraph | None = None  # the last frame's
+        self._views: tuple[Any, Any, GBufferViews] | None = None  # _gbuffer_views' last
+        self._recreations = getattr(output.target, "recreations", 0)  # the swapchain's, the graphs made in
+        self._prepared: tuple[Any, Any, FrameGraph] | None = None  # prepare's, until record takes it
+        self._copies = False  # this frame's readback copies the target
 
-    def _make(self, form: str, samples: int, color_format: int) -> FrameGraph:
+    def _make(self, form: str, samples: int, color_format: int, ray: bool, oit: bool, post: Any) -> FrameGraph:
         device = self.output.device
         graph = FrameGraph(device)
         try:
-            graph.add_pass(Forward(self.frame, form, samples))
+            if form == "deferred":
+                frame = self.frame
+                graph.add_pass(GBufferPass(frame))
+                if ray:
+                    graph.add_pass(RayShadowsPass(frame, self.output.deferred))
+                    graph.add_pass(RayDenoisePass(frame, self.output.deferred))
+                graph.add_pass(DeferredLightingPass(frame, self.output.deferred))
+                if oit:
+                    graph.add_pass(OitAccumulatePass(frame))
+            graph.add_pass(Forward(self.frame, form, samples, oit))
             if form != "direct":
-                graph.add_pass(PostSeam(self.output, samples))
+                self._add_post(graph, samples, post)
                 desc = ImageDesc(format=f"VK_FORMAT_{format_name(device.vk, color_format)}")
                 names = [f"ldr_{i}" for i in range(len(self.effects))] + ["target"]
                 graph.add_pass(ToneMapInto(self.output, self.frame, names[0], desc if self.effects else None))
@@ -123,6 +171,71 @@ class OutputGraph:
             raise
         return graph
 
+    def prepare(
+        self, state: Any, rendering: Any, tone_map: tuple[str, float], overlay: Any, slot: int, readback: bool = False
+    ) -> FrameGraph:
+        """This frame's graph, chosen by the target's shape, its imports made and compiled
+        (cached while nothing changed), the frame's settings set: what its passes' keys read
+        (frame replay asks before the jobs, render/frame/replay.py; `record` then reuses it).
+        `rendering` (output_passes.OutputRendering) names the target's image; `readback`:
+        copy the target to the host."""
+        target = self.output.target
+        attachments = target.attachments
+        form, samples, color_format = target.form, int(attachments.samples), int(target.color_format)
+        deferred = form == "deferred"
+        # the rays' and weighted transparency's passes from the first frame that has them on
+        # (they record nothing on a frame without traced lights or blended rows): one graph,
+        # one set of transients, however those come and go
+        ray = deferred and self.output.ray_shadows is not None
+        oit = deferred and (self.output.oit is not None or self.frame.transparent is not None)
+        extent = (int(state.area.extent.width), int(state.area.extent.height))
+        post = self.output.post if form != "direct" else []
+        # the effects' passes follow the extent (bloom's chain) and the list (made again with it)
+        post_shape = (extent, tuple(id(p) for p in post)) if post else None
+        shape = (form, samples, color_format, ray, oit, post_shape)
+        recreations = getattr(target, "recreations", 0)
+        if recreations != self._recreations:
+            # new attachments, whose views may reuse destroyed ones' handle values, which the
+            # effects' passes keep descriptor sets by: new graphs, new passes and sets
+            self._recreations = recreations
+            for made in self.graphs.values():
+                made.destroy()
+            self.graphs.clear()
+        graph = self.graphs.get(shape)
+        if graph is None:
+            for old in [k for k in self.graphs if k[5] != post_shape or k[:3] == shape[:3]]:  # outdone: gone
+                self.graphs.pop(old).destroy()
+            graph = self.graphs[shape] = self._make(*shape)
+        if post and self.output.inputs is not None:
+            for effect in post:
+                if hasattr(effect, "begin_frame"):
+                    effect.begin_frame(self.output.inputs)
+        self.graph = graph
+        self._copies = readback and target.take_readback()  # a swapchain's: only for the image asked
+        headless = target.final_layout == self.output.vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
+        self._place_readback(graph, self._copies or headless)
+        self._import_attachments(graph, form, attachments)
+        self._import_target(graph, rendering, extent)
+        frame = self.frame
+        frame.state, frame.tone_map, frame.overlay, frame.slot = state, tone_map, overlay, slot
+        graph.compile(extent)
+        if deferred:
+            frame.attachments = self._gbuffer_views(graph, attachments)
+        self._prepared = ((state, rendering, overlay), (tone_map, slot, readback, shape), graph)
+        return graph
+
+    def forget_prepared(self) -> None:
+        """A frame that asked `prepare` and is not recorded (replayed, or keyed no further):
+        the next `record` prepares anew."""
+        self._prepared = None
+
+    def _taken(self, state: Any, rendering: Any, tone_map: Any, overlay: Any, slot: int, readback: bool) -> Any:
+        """The graph `prepare` made this frame for the same arguments, or None."""
+        kept, self._prepared = self._prepared, None
+        if kept is None or any(a is not b for a, b in zip(kept[0], (state, rendering, overlay))):
+            return None
+        return kept[2] if kept[1][:3] == (tone_map, slot, readback) else None
+
     def record(
         self,
         cb: Any,
@@ -133,58 +246,96 @@ class OutputGraph:
         overlay: Any,
         slot: int,
         mark: Callable[[str], None] | None,
+        readback: bool = False,
     ) -> None:
-        """This frame's output: `rendering` (output_passes.OutputRendering) names the target's
-        image and holds its barrier to the final layout; `secondaries` are the scene's draws."""
-        target = self.output.target
-        attachments = target.attachments
-        form, samples, color_format = target.form, int(attachments.samples), int(target.color_format)
-        shape = (form, samples, color_format)
-        graph = self.graphs.get(shape)
+        """This frame's output (prepared here unless `prepare` was asked the same this frame);
+        `secondaries` are the scene's draws."""
+        graph = self._taken(state, rendering, tone_map, overlay, slot, readback)
         if graph is None:
-            graph = self.graphs[shape] = self._make(*shape)
-        self.graph = graph
-        extent = (int(state.area.extent.width), int(state.area.extent.height))
-        self._import_attachments(graph, form, attachments)
-        self._import_target(graph, rendering, extent)
+            graph = self.prepare(state, rendering, tone_map, overlay, slot, readback)
+            self._prepared = None
+        target = self.output.target
+        form = target.form
+        copies = self._copies
+        order = [p.name for p in graph.passes]
+        posts = [n for n in order if n in self._post_names]
+        last_post = posts[-1] if posts else None
         frame = self.frame
-        frame.state, frame.tone_map, frame.overlay, frame.slot = state, tone_map, overlay, slot
         frame.secondaries = secondaries
-        graph.compile(extent)
+        frame.readback = target.record_copy if copies else None
+        oit_now = frame.transparent is not None
         names = {"forward": "sky and blended"} if form == "deferred" else {}
 
         def ended(name: str) -> None:
-            if mark is None or (name == "imgui" and overlay is None) or (name == "post" and not self.output.post):
+            if mark is None or (name == "imgui" and overlay is None):
+                return
+            if name in self._post_names:  # the effects' passes: marked once, after the last
+                if name == last_post:
+                    mark("post effects")
+                return
+            if (name == "readback" and not copies) or name == "ray_shadows":  # marked with its denoise
+                return
+            idle = (name == "ray_denoise" and frame.ray is None) or (name == "oit_accumulate" and not oit_now)
+            if idle:  # the pass recorded nothing
                 return
             mark(names.get(name, _MARKS.get(name, name)))
 
         graph.execute(cb, on_pass_end=ended if mark is not None else None)
-        rendering.barriers.after(self.output.vk.lib, cb)
-        frame.state = frame.overlay = None
-        frame.secondaries = ()
+        frame.state = frame.overlay = frame.readback = frame.ray = frame.transparent = frame.frame_set = None
+        frame.attachments = None
+        frame.secondaries = frame.chunks = ()
+
+    def _add_post(self, graph: FrameGraph, samples: int, post: Any) -> None:
+        """The hdr stage's effects in order: their own passes (`add_hdr`) or a PostCall each."""
+        if post is None:
+            return
+        extent = post[0]
+        before = {p.name for p in graph.passes}
+        for i, effect in enumerate(self.output.post):
+            if hasattr(effect, "add_hdr"):
+                effect.add_hdr(graph, extent)
+            else:
+                graph.add_pass(PostCall(self.output, i, effect, samples))
+        self._post_names = self._post_names | {p.name for p in graph.passes if p.name not in before}
+
+    def _place_readback(self, graph: FrameGraph, wanted: bool) -> None:
+        """The readback pass last in `graph` or not (a change recompiles the graph: a swapchain's
+        screenshot frame and the one after)."""
+        has = any(p.name == Readback.name for p in graph.passes)
+        if wanted and not has:
+            graph.add_pass(Readback(self.frame))
+        elif has and not wanted:
+            graph.remove_pass(Readback.name).destroy()
+
+    def _gbuffer_views(self, graph: FrameGraph, attachments: Any) -> GBufferViews:
+        """The GBufferViews of this compile of `graph` over `attachments` (one per pair)."""
+        compiled = graph.compiled
+        assert compiled is not None and compiled.transients is not None
+        kept = self._views
+        if kept is None or kept[0] is not compiled or kept[1] is not attachments:
+            kept = self._views = (compiled, attachments, GBufferViews(attachments, compiled.transients.images))
+        return kept[2]
 
     def _import_attachments(self, graph: FrameGraph, form: str, attachments: Any) -> None:
         """The target's SceneAttachments: depth, the HDR colour and, with MSAA, the multisampled
-        one (images: depth, colour, resolve); none in the direct form (its depth is a transient).
-        Nothing after the graph reads them: no final layout (UNDEFINED). The deferred form's
-        come from the lighting (see forward.py)."""
+        one's resolve (single-sample: the multisampled colour and depth are transients); none in
+        the direct form (its depth is a transient).
+        Every pass clears what it writes first and nothing after the graph reads them: their
+        old contents go (UNDEFINED) and they have no final layout (UNDEFINED)."""
         if form == "direct":
             return
         images = attachments.images
-        deferred = form == "deferred"
-        named = [("depth", images[0], "DEPTH_STENCIL_READ_ONLY_OPTIMAL" if deferred else "UNDEFINED")]
-        named.append(("hdr", images[-1], "GENERAL" if deferred else "UNDEFINED"))
-        if form == "hdr" and attachments.samples > 1:
-            named.append(("hdr_msaa", images[1], "UNDEFINED"))
-        for name, image, before in named:
+        named = [("hdr", images[-1])]
+        if attachments.samples == 1:  # with MSAA depth and colour are forward's transients
+            named.append(("depth", images[0]))
+        for name, image in named:
             graph.import_image(
                 name,
                 handle=image.handle,
                 view=image.view,
                 format=image.format,
                 extent=(int(image.width), int(image.height)),
-                samples=int(attachments.samples) if name != "hdr" else 1,
-                layout_before=before,
+                layout_before="UNDEFINED",
                 layout_after="UNDEFINED",
             )
 
@@ -197,7 +348,7 @@ class OutputGraph:
             format=self.output.target.color_format,
             extent=extent,
             layout_before="UNDEFINED",  # every pixel is written: the old contents go
-            layout_after="COLOR_ATTACHMENT_OPTIMAL",  # then OutputBarriers.after (see the module)
+            layout_after=_final_layout(self.output.vk, self.output.target.final_layout),
             stage_before=("COLOR_ATTACHMENT_OUTPUT", "ALL_TRANSFER"),  # acquire's wait, last readback
         )
 

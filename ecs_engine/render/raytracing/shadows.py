@@ -296,19 +296,22 @@ class RayShadows:
             self._cutouts = (materials, materials.version, found)
         return found
 
-    def record(self, cb: Any, slot: int, frame_set: Any, attachments: Any, mask: Any, width: int, height: int) -> None:
-        """After the G-buffer pass, before the deferred lighting: the top level, the rays into
-        `mask` (the lighting's ShadowMask), or into a mask of their own that the denoise filters
-        into it where some light is soft and `denoise` is on. `frame_set`: the slot's frame
-        descriptor set (the materials and textures of the any-hit shader)."""
+    def record_trace(
+        self, cb: Any, slot: int, frame_set: Any, attachments: Any, mask: Any, width: int, height: int
+    ) -> None:
+        """After the G-buffer pass, before the deferred lighting (the output graph's ray_shadows
+        pass, render/passes/deferred_passes.py, whose barriers order the G-buffer's depth and
+        normals before the rays): the top level, the rays into `mask` (the lighting's
+        ShadowMask), or into a mask of their own that record_denoise filters into it where some
+        light is soft and `denoise` is on. `frame_set`: the slot's frame descriptor set (the
+        materials and textures of the any-hit shader)."""
         lib = self.device.vk.lib
         s = self.slots[slot]
         assert s.rows is not None
         update = self._since_build < REBUILD_EVERY
         refit = self.top.record(cb, s.rows.address, self._count, update)
         self._since_build = self._since_build + 1 if refit else 1
-        filtered = self.denoise and any(light.size > 0 for light in self.lights)
-        traced = self._traced_mask(mask) if filtered else mask
+        traced = self._traced_mask(mask) if self._filtered() else mask
         named = (attachments, traced, self.top.handle, s.pairs.handle, s.meshes.handle)
         if s.named != named:
             self._name(s, attachments, traced)
@@ -317,10 +320,20 @@ class RayShadows:
         self.pipeline.bind(cb, [frame_set, s.set])
         self.pipeline.trace(cb, width, height)
         self._after.record(lib, cb)
-        if filtered:
-            if self._denoiser is None:
-                self._denoiser = ShadowDenoise(self.device, len(self.slots))
-            self._denoiser.record(cb, slot, s.frame, attachments, traced, mask, width, height)
+
+    def record_denoise(self, cb: Any, slot: int, attachments: Any, mask: Any, width: int, height: int) -> None:
+        """After record_trace (the output graph's ray_denoise pass): its own mask filtered into
+        `mask`, where it traced into its own; nothing otherwise."""
+        if not self._filtered():
+            return
+        if self._denoiser is None:
+            self._denoiser = ShadowDenoise(self.device, len(self.slots))
+        traced = self._traced_mask(mask)
+        self._denoiser.record(cb, slot, self.slots[slot].frame, attachments, traced, mask, width, height)
+
+    def _filtered(self) -> bool:
+        """Whether this frame's rays go into a mask of their own, denoised into the lighting's."""
+        return bool(self.denoise and any(light.size > 0 for light in self.lights))
 
     def _traced_mask(self, mask: Any) -> ShadowMask:
         """The rays' own mask, the size of the lighting's (made again when that one is)."""
