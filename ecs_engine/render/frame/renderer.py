@@ -50,6 +50,7 @@ from .output_passes import OutputPasses
 from .path_settings import MODES, PATHS, RECORDER_NAMES, PathSettings  # noqa: F401 (importers name MODES here)
 from .replay import FrameReplay, replay_key, replayable
 from .resources import FrameResources, frame_sets
+from .scene_passes import ScenePasses
 from .target_forms import TargetForms
 
 
@@ -138,6 +139,7 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
                 device, target, self.set_layout.handle, self.secondaries, light_size, clear_color
             )
             self.output.ray_shadows = self.ray_shadows
+            self.output.scene = self.scene = ScenePasses(device, self.lights)
             self._post_make()
             self.path: RenderPath = self._make_path(mode, recorder or default_recorder())
         except BaseException:
@@ -321,10 +323,9 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
             if mark is not None and not path.uses_recorder:
                 mark("culling (compute)")  # the indirect path's compute passes
             aside = self._record_set_aside(inputs, data, materials)
-            if grid is not None:
-                self.lights.record(cb, pf, grid, data.light_count)
-                if mark is not None:
-                    mark("light clusters")
+            self.scene.begin(pf, grid, data.light_count)  # passes ahead of the output's forward
+            if not self.scene.joins(self.target.form):  # deferred: ahead of the hand-recorded G-buffer
+                self.scene.record_alone(cb, (width, height), mark)
             self.shadows.record(cb, views, shadow_buffers)
             if mark is not None and views:
                 mark("shadow maps")
@@ -391,10 +392,8 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
         """What the renderer made, in reverse (what a failed __init__ had not made yet is skipped)."""
         if self._set_aside is not None:
             self._set_aside.destroy()
-        names = (
-            "output per_frame shadows environment texture_pages lights ray_shadows pool set_layout secondaries frames"
-        )
-        for name in names.split():
+        names = "scene output per_frame shadows environment texture_pages lights ray_shadows pool set_layout"
+        for name in [*names.split(), "secondaries", "frames"]:
             made = getattr(self, name, None)
             for part in made if isinstance(made, list) else [made] if made is not None else []:
                 part.destroy()

@@ -11,7 +11,8 @@ turns a batch into Vulkan structs. Rules, per (resource, mip, layer):
 - a new layout, or a write after anything, or a read of a write not yet made visible to its
   stages: a barrier from the writes and reads since the last write; a write that discards the
   contents (CLEAR / DONT_CARE, not of a region) transitions from UNDEFINED;
-- after the last pass, imported images go to their layout_after.
+- after the last pass, imported images go to their layout_after, and the last writes of imported
+  buffers marked visible_after are made visible to every later command.
 """
 
 from __future__ import annotations
@@ -229,6 +230,12 @@ def _final(s: Structure, states: dict[Sub, _State]) -> list[Barrier]:
     rows = []
     for name, res in s.resources.items():
         imp = res.imported
+        if imp is not None and res.kind == "buffer" and imp.visible_after:
+            st = states.get((name, 0, 0))
+            if st is not None and st.write_stages:
+                everything = (frozenset({"ALL_COMMANDS"}), frozenset({"MEMORY_READ", "MEMORY_WRITE"}))
+                rows.append(Barrier(name, None, 1, None, None, st.write_stages, st.write_access, *everything))
+            continue
         if imp is None or res.kind != "image" or imp.layout_after == "UNDEFINED":
             continue
         present = imp.layout_after == "PRESENT_SRC_KHR"

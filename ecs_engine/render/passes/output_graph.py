@@ -42,6 +42,7 @@ class _Frame:
     overlay: Any = None
     slot: int = 0
     secondaries: tuple[Any, ...] | list[Any] = ()  # the scene rendering's, in order (output_passes.py)
+    reads: tuple[Any, ...] | list[Any] = ()  # (name, Access) forward reads of the scene's passes
     background: tuple[float, float, float] = (0.0, 0.0, 0.0)  # fixed per renderer
 
 
@@ -104,6 +105,9 @@ class OutputGraph:
         device = self.output.device
         graph = FrameGraph(device)
         try:
+            scene = self.output.scene  # the renderer's passes ahead of forward (frame/scene_passes.py)
+            if scene is not None and scene.joins(form):
+                scene.add_to(graph)
             graph.add_pass(Forward(self.frame, form, samples))
             if form != "direct":
                 graph.add_pass(PostSeam(self.output, samples))
@@ -146,13 +150,17 @@ class OutputGraph:
         frame = self.frame
         frame.state, frame.tone_map, frame.overlay, frame.slot = state, tone_map, overlay, slot
         frame.secondaries = secondaries
+        scene = self.output.scene if self.output.scene is not None and self.output.scene.joins(form) else None
+        if scene is not None:
+            scene.import_into(graph)
+        frame.reads = scene.reads if scene is not None else ()
         graph.compile(extent)
         names = {"forward": "sky and blended"} if form == "deferred" else {}
 
         def ended(name: str) -> None:
             if mark is None or (name == "imgui" and overlay is None) or (name == "post" and not self.output.post):
                 return
-            mark(names.get(name, _MARKS.get(name, name)))
+            mark(names.get(name, _MARKS.get(name, scene.marks.get(name, name) if scene is not None else name)))
 
         graph.execute(cb, on_pass_end=ended if mark is not None else None)
         rendering.barriers.after(self.output.vk.lib, cb)
