@@ -139,7 +139,7 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
                 device, target, self.set_layout.handle, self.secondaries, light_size, clear_color
             )
             self.output.ray_shadows = self.ray_shadows
-            self.output.scene = self.scene = ScenePasses(device, self.lights)
+            self.output.scene = self.scene = ScenePasses(device, self.lights, self.shadows)
             self._post_make()
             self.path: RenderPath = self._make_path(mode, recorder or default_recorder())
         except BaseException:
@@ -319,16 +319,11 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
             self.frames.open(frame)
             cb = frame.command_buffer
             mark = self.frames.marker(frame)  # None unless passes are timed (gpu/frames.py)
-            secondaries = path.finish(cb, inputs, results, data.candidates)
-            if mark is not None and not path.uses_recorder:
-                mark("culling (compute)")  # the indirect path's compute passes
+            secondaries = path.finish(cb, inputs, results, data.candidates)  # its compute: the graph's "cull"
             aside = self._record_set_aside(inputs, data, materials)
-            self.scene.begin(pf, grid, data.light_count)  # passes ahead of the output's forward
+            self.scene.begin(path, slot, pf, grid, data.light_count, views, shadow_buffers)  # ahead of forward
             if not self.scene.joins(self.target.form):  # deferred: ahead of the hand-recorded G-buffer
                 self.scene.record_alone(cb, (width, height), mark)
-            self.shadows.record(cb, views, shadow_buffers)
-            if mark is not None and views:
-                mark("shadow maps")
             light_draws = self.output.record(
                 cb,
                 secondaries,

@@ -1,0 +1,71 @@
+"""The shadow maps as the frame graph's "shadow_maps" pass (graph_plan.md step 9): ShadowPass
+(maps_pass.py) draws this frame's views into their layers of the map array, which the graph
+imports as "shadow_maps" (every layer in the layout the lighting samples before and after the
+frame). The pass declares a write of each drawn layer's corner (`region`: the rest of the layer
+is kept), or the first time of every layer whole (cleared, so none is ever read undefined);
+the passes that sample the maps declare DEPTH_SAMPLED reads, so the graph places the barriers
+that ShadowMaps.barriers made by hand. A frame without views (after the first) declares nothing
+and the graph culls the pass. The views' secondaries are recorded by the chunk jobs with the
+maps' formats' inheritance (ShadowPass.secondary_begin), as the rendering expects."""
+
+from __future__ import annotations
+
+from collections.abc import Hashable
+from typing import Any
+
+from ...gpu.shadow_maps import READ_LAYOUT_NAME, SHADOW_FORMAT_NAME
+from ..graph import Access, FrameGraph, Load, Pass
+from .views import ShadowView
+
+NAME = "shadow_maps"
+
+
+class ShadowMapsPass(Pass):
+    name = NAME
+
+    def __init__(self, shadows: Any) -> None:
+        self.shadows = shadows  # the renderer's ShadowPass
+        self.views: list[ShadowView] = []  # this frame's (begin)
+        self.secondaries: list[list[Any]] = []
+
+    def begin(self, views: list[ShadowView], secondaries: list[list[Any]]) -> None:
+        self.views, self.secondaries = views, secondaries
+
+    @staticmethod
+    def reads() -> list[tuple[str, Access]]:
+        """What the scene's rendering reads of the maps: every frame, as the frame's descriptor
+        set names them (the 1-texel maps too) in the layout the lighting samples."""
+        return [(NAME, Access.DEPTH_SAMPLED)]
+
+    def setup(self, builder: Any) -> None:
+        if not self.shadows.cleared:  # the first frame of these maps: every layer cleared whole
+            builder.write(NAME, Access.DEPTH_WRITE, load=Load.CLEAR)
+        elif not self.views:
+            return
+        for view in self.views if self.shadows.cleared else ():
+            builder.write(NAME, Access.DEPTH_WRITE, layer=view.layer, load=Load.CLEAR, region=True)
+        builder.side_effect()  # the lighting may sample them outside the graph (frame/scene_passes.py)
+
+    def record(self, cb: Any, ctx: Any) -> None:
+        self.shadows.record(cb, ctx, self.views, self.secondaries)
+
+    def key(self) -> Hashable:
+        # the views' secondaries are recorded anew each frame (frame/replay.py's rule)
+        return FrameGraph.UNREPLAYABLE if self.views else None
+
+    def import_into(self, graph: FrameGraph) -> None:
+        maps = self.shadows.maps
+        graph.import_image(
+            NAME,
+            handle=maps.image.handle,
+            view=maps.image.view,
+            format=SHADOW_FORMAT_NAME,
+            extent=(maps.resolution, maps.resolution),
+            layers=maps.layers,
+            layer_views=tuple(maps.layer_views),
+            layout_before=READ_LAYOUT_NAME,  # or never written: the first frame clears every layer
+            layout_after=READ_LAYOUT_NAME,
+            # the last frame's readers and depth tests (frames in flight share the maps): what
+            # ShadowMaps.barriers waited for by hand
+            stage_before=("FRAGMENT_SHADER", "COMPUTE_SHADER", "EARLY_FRAGMENT_TESTS", "LATE_FRAGMENT_TESTS"),
+        )
