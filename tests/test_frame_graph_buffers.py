@@ -55,3 +55,20 @@ def test_a_read_of_the_buffer_in_a_later_pass_waits_for_the_writes():
     g.compile((8, 8))
     (row,) = g.compiled.barriers.before["forward"]
     assert row.src_stages == {"TRANSFER", "COMPUTE_SHADER"} and "FRAGMENT_SHADER" in row.dst_stages
+
+
+def test_a_fenced_buffer_has_no_first_barrier_but_its_readers_still_wait():
+    g = FrameGraph(None)
+    g.import_buffer("draws", handle=3, size=64, stage_before="NONE")  # the frame slot's last use was fenced
+
+    def cull(b):
+        b.write("draws", Access.COMPUTE_READ_WRITE)
+        b.side_effect()
+
+    g.add_pass(Step("cull", cull))
+    g.add_pass(Step("forward", lambda b: (b.read("draws", Access.INDIRECT_READ), b.side_effect())))
+    g.compile((8, 8))
+    plan = g.compiled.barriers
+    assert plan.before["cull"] == []  # nothing in flight to wait for
+    (row,) = plan.before["forward"]
+    assert row.src_stages == {"COMPUTE_SHADER"} and row.dst_stages == {"DRAW_INDIRECT"}

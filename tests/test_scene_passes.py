@@ -15,9 +15,9 @@ from ecs_engine.render.graph import FrameGraph
 buffer = NS  # handle, size
 
 
-def scene(cleared=True):
+def scene(cleared=True, gpu=None):
     maps = NS(image=NS(handle=50, view=51), resolution=64, layers=3, layer_views=(60, 61, 62))
-    shadows = NS(cleared=cleared, maps=maps)
+    shadows = NS(cleared=cleared, maps=maps, gpu=gpu, gpu_culled=lambda secondaries: secondaries)
     return ScenePasses(None, NS(pass_=None), shadows)
 
 
@@ -64,7 +64,25 @@ def test_forward_waits_for_the_cull_the_clusters_and_the_drawn_layers():
 
 def test_passes_without_work_declare_nothing_and_are_culled_but_new_maps_are_cleared():
     g = graph(scene(cleared=False), [], grid=False, path=indirect(pending=False))
-    assert g.order == ["shadow_maps", "forward"] and set(g.culled) == {"cull", "light_clusters"}
+    assert g.order == ["shadow_maps", "forward"] and set(g.culled) == {"cull", "light_clusters", "shadow_cull"}
     (clear,) = g.compiled.barriers.before["shadow_maps"]  # every layer, contents dropped
     assert (clear.base_layer, clear.layer_count, clear.old_layout) == (0, 3, "UNDEFINED")
     assert graph(scene(), [], grid=False, path=indirect(pending=False)).order == ["forward"]
+
+
+def test_the_views_culled_on_the_gpu_are_drawn_after_their_compute():
+    names = [f"shadow_draws.0.{n}" for n in ("ids", "state", "commands")] + ["shadow_draws.readback"]
+    gpu = NS(draw_buffers=lambda: {n: buffer(handle=70 + i, size=32) for i, n in enumerate(names)})
+    g = graph(scene(gpu=gpu), [NS(layer=0, resolution=64)])
+    assert g.order == ["cull", "light_clusters", "shadow_cull", "shadow_maps", "forward"]
+    rows = {b.resource: b for b in g.compiled.barriers.before["shadow_maps"]}
+    assert rows["shadow_draws.0.commands"].src_stages == {"COMPUTE_SHADER"}
+    assert rows["shadow_draws.0.commands"].dst_stages == {"DRAW_INDIRECT"}
+    assert rows["shadow_draws.0.state"].dst_stages == {"DRAW_INDIRECT"}
+    assert rows["shadow_draws.0.ids"].dst_stages == {"VERTEX_SHADER"}
+
+
+def test_the_frame_slots_buffers_are_not_waited_for_at_their_first_use():
+    g = graph(scene(), [])
+    firsts = {b.resource for name in ("cull", "light_clusters") for b in g.compiled.barriers.before[name]}
+    assert not firsts & {"clusters", "draws.ids", "draws.commands", "draws.state", "draws.readback"}

@@ -19,11 +19,16 @@ from typing import Any
 from ..draw.cull_pass import CullPass
 from ..graph import Access, FrameGraph, Pass
 from ..lighting.clusters import ClusterGrid, LightClustersPass
-from ..shadows.maps_graph import ShadowMapsPass
+from ..shadows.maps_graph import ShadowCullPass, ShadowMapsPass
 from ..shadows.views import ShadowView
 
 #: the passes' names -> the names the frame's timing marks have always used
-MARKS = {"cull": "culling (compute)", "light_clusters": "light clusters", "shadow_maps": "shadow maps"}
+MARKS = {
+    "cull": "culling (compute)",
+    "light_clusters": "light clusters",
+    "shadow_cull": "shadow culling (compute)",  # was timed within "shadow maps"
+    "shadow_maps": "shadow maps",
+}
 
 
 class ScenePasses:
@@ -32,7 +37,7 @@ class ScenePasses:
         self.cull = CullPass()
         self.clusters = LightClustersPass(lights.pass_)
         self.shadows = ShadowMapsPass(shadows)
-        self.passes: list[Pass] = [self.cull, self.clusters, self.shadows]
+        self.passes: list[Pass] = [self.cull, self.clusters, ShadowCullPass(self.shadows), self.shadows]
         self.buffers: dict[str, Any] = {}  # name -> the frame slot's Buffer, imported this frame
         self.reads: list[tuple[str, Access]] = []  # what `forward` reads of them this frame
         self._alone: FrameGraph | None = None
@@ -69,8 +74,10 @@ class ScenePasses:
             graph.add_pass(p)
 
     def import_into(self, graph: FrameGraph, visible_after: bool = False) -> None:
-        for name, buffer in self.buffers.items():
-            graph.import_buffer(name, handle=buffer.handle, size=buffer.size, visible_after=visible_after)
+        for name, buffer in self.buffers.items():  # the frame slot's: its last use was fenced
+            graph.import_buffer(
+                name, handle=buffer.handle, size=buffer.size, visible_after=visible_after, stage_before="NONE"
+            )
         self.shadows.import_into(graph)
 
     def record_alone(self, cb: Any, extent: tuple[int, int], mark: Callable[[str], None] | None) -> None:

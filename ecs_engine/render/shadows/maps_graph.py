@@ -27,9 +27,12 @@ class ShadowMapsPass(Pass):
         self.shadows = shadows  # the renderer's ShadowPass
         self.views: list[ShadowView] = []  # this frame's (begin)
         self.secondaries: list[list[Any]] = []
+        self.culled: dict[str, Any] = {}  # the buffers ShadowCullPass writes this frame
 
     def begin(self, views: list[ShadowView], secondaries: list[list[Any]]) -> None:
-        self.views, self.secondaries = views, secondaries
+        self.views, self.secondaries = views, self.shadows.gpu_culled(secondaries) if views else secondaries
+        gpu = self.shadows.gpu if views else None
+        self.culled = gpu.draw_buffers() if gpu is not None else {}  # shadow_cull's, this frame
 
     @staticmethod
     def reads() -> list[tuple[str, Access]]:
@@ -38,6 +41,11 @@ class ShadowMapsPass(Pass):
         return [(NAME, Access.DEPTH_SAMPLED)]
 
     def setup(self, builder: Any) -> None:
+        for name in self.culled:  # the GPU-culled views' commands, counts and ids
+            if name.endswith(".commands") or name.endswith(".state"):
+                builder.read(name, Access.INDIRECT_READ)
+            elif name.endswith(".ids"):
+                builder.read(name, Access.VERTEX_STORAGE_READ)
         if not self.shadows.cleared:  # the first frame of these maps: every layer cleared whole
             builder.write(NAME, Access.DEPTH_WRITE, load=Load.CLEAR)
         elif not self.views:
@@ -54,6 +62,8 @@ class ShadowMapsPass(Pass):
         return FrameGraph.UNREPLAYABLE if self.views else None
 
     def import_into(self, graph: FrameGraph) -> None:
+        for name, buffer in self.culled.items():  # the frame slot's: its last use was fenced
+            graph.import_buffer(name, handle=buffer.handle, size=buffer.size, stage_before="NONE")
         maps = self.shadows.maps
         graph.import_image(
             NAME,
@@ -69,3 +79,29 @@ class ShadowMapsPass(Pass):
             # ShadowMaps.barriers waited for by hand
             stage_before=("FRAGMENT_SHADER", "COMPUTE_SHADER", "EARLY_FRAGMENT_TESTS", "LATE_FRAGMENT_TESTS"),
         )
+
+
+class ShadowCullPass(Pass):
+    """The indirect mode's GPU culling of the shadow views (indirect.py: cull, compact, the
+    counters' copy for the host) ahead of "shadow_maps", which declares its reads of the
+    views' buffers: the graph places the barrier to their draws (compute_barriers' `to_draw`
+    before). Nothing to cull: nothing declared, culled."""
+
+    name = "shadow_cull"
+
+    def __init__(self, maps: ShadowMapsPass) -> None:
+        self.maps = maps
+
+    def setup(self, builder: Any) -> None:
+        culled = self.maps.culled
+        if not culled:
+            return
+        for name in culled:
+            if name.endswith(".state"):
+                builder.write(name, Access.TRANSFER_WRITE)  # zeroed
+                builder.read(name, Access.TRANSFER_READ)  # copied for the host
+            builder.write(name, Access.TRANSFER_WRITE if name.endswith("readback") else Access.COMPUTE_READ_WRITE)
+        builder.side_effect()
+
+    def record(self, cb: Any, ctx: Any) -> None:
+        self.maps.shadows.gpu.record_compute(cb)

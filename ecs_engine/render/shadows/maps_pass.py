@@ -306,6 +306,14 @@ class ShadowPass:
 
     light_views = staticmethod(light_views)  # the renderer names each light's views with it
 
+    def gpu_culled(self, secondaries: list[list[Any]]) -> list[list[Any]]:
+        """Per view its secondaries, the GPU-culled draws' first in the indirect mode (their
+        compute made ready for the frame graph's "shadow_cull" pass)."""
+        if self.gpu is None or not self.culls_on_gpu:
+            return secondaries
+        culled = self.gpu.prepare(self._inputs, self._planes[1:])
+        return [([g] if g is not None else []) + s for g, s in zip(culled, secondaries, strict=True)]
+
     def record(self, cb: Any, ctx: Any, views: list[ShadowView], secondaries: list[list[Any]]) -> None:
         """Each view's layer drawn from its secondaries, in the frame graph's "shadow_maps" pass
         (maps_graph.py: it declares the layers, so the graph places the barriers); the first
@@ -313,9 +321,6 @@ class ShadowPass:
         assert self.maps is not None
         vk = self.vk
         lib = vk.lib
-        if self.gpu is not None and self.culls_on_gpu:  # the compute passes first, then each view's draws
-            culled = self.gpu.record(cb, self._inputs, self._planes[1:])
-            secondaries = [([g] if g is not None else []) + s for g, s in zip(culled, secondaries, strict=True)]
         maps = self.maps
         drawn = {v.layer: s for v, s in zip(views, secondaries, strict=True)}
         sizes = {v.layer: v.resolution for v in views}
