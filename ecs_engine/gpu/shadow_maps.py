@@ -102,7 +102,9 @@ class ShadowMaps:
                     self.resolution,
                     self.resolution,
                     getattr(vk, SHADOW_FORMAT_NAME),
-                    vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT,
+                    vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT
+                    | vk.VK_IMAGE_USAGE_SAMPLED_BIT
+                    | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT,
                     vk.VK_IMAGE_ASPECT_DEPTH_BIT,
                     layers=self.layers,
                 )
@@ -125,9 +127,45 @@ class ShadowMaps:
                         ),
                     )
                 )
+            device.submit_once(self._clear)
         except BaseException:
             self.destroy()
             raise
+
+    def _clear(self, cb: Any) -> None:
+        """Every layer cleared to the far plane and left in READ_LAYOUT, once, when the maps are
+        made: a frame then draws only its views' corners, and a layer no view drew is read
+        as lit (so the frame graph's shadow pass declares the same accesses every frame)."""
+        vk = self.vk
+        assert self.image is not None
+        image = self.image.handle
+        depth_aspect, layers = vk.VK_IMAGE_ASPECT_DEPTH_BIT, self.layers
+        whole = vk.VkImageSubresourceRange(
+            aspectMask=depth_aspect, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=layers
+        )
+
+        def barrier(old: int, new: int, src_access: int, dst_access: int) -> Any:
+            return vk.VkImageMemoryBarrier(
+                srcAccessMask=src_access,
+                dstAccessMask=dst_access,
+                oldLayout=old,
+                newLayout=new,
+                srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+                dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+                image=image,
+                subresourceRange=whole,
+            )
+
+        dst = vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL
+        write = vk.VK_ACCESS_TRANSFER_WRITE_BIT
+        top, transfer = vk.VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, vk.VK_PIPELINE_STAGE_TRANSFER_BIT
+        to_clear = barrier(vk.VK_IMAGE_LAYOUT_UNDEFINED, dst, 0, write)
+        vk.vkCmdPipelineBarrier(cb, top, transfer, 0, 0, None, 0, None, 1, [to_clear])
+        depth = vk.VkClearDepthStencilValue(depth=0.0, stencil=0)  # reverse-Z's far plane
+        vk.vkCmdClearDepthStencilImage(cb, image, dst, depth, 1, [whole])
+        to_read = barrier(dst, self.read_layout, write, vk.VK_ACCESS_SHADER_READ_BIT)
+        readers = vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
+        vk.vkCmdPipelineBarrier(cb, transfer, readers, 0, 0, None, 0, None, 1, [to_read])
 
     def _own_view(self, view: Any) -> Any:
         handle, vk = self.device.handle, self.vk

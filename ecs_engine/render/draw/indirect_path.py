@@ -106,7 +106,10 @@ class IndirectPath(PipelinesPerTarget):
         self._compact_ptr = vk.ffi.from_buffer(self._compact_push)
         self._sets = vk.ffi.new("VkDescriptorSet[2]")
         self._offsets = vk.ffi.new("VkDeviceSize[1]", [0])
-        self._barriers = compute_barriers(vk)
+        compute, transfer = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, vk.VK_PIPELINE_STAGE_TRANSFER_BIT
+        to_copy = Barrier(vk, compute, transfer, vk.VK_ACCESS_SHADER_WRITE_BIT, vk.VK_ACCESS_TRANSFER_READ_BIT)
+        self._barriers = [*compute_barriers(vk), to_copy]  # the last: the counters -> their copy
+        self.pending: tuple | None = None  # finish's, for record_compute
 
     # ---------------------------------------------------------------- buffers
     def _make_frame(self, descriptor_set: Any, keys: int, rows: int) -> IndirectFrame:
@@ -180,8 +183,8 @@ class IndirectPath(PipelinesPerTarget):
         return ChunkResult(None, 0, 0, 0, key_counts)
 
     def finish(self, cb: Any, frame: FrameInputs, results: list[ChunkResult], candidates: int) -> list[Any]:
-        """The compute passes into the primary (before the scene's rendering) and the one secondary
-        that draws what they wrote."""
+        """The compute passes made ready for the frame graph's "cull" pass (cull_pass.py:
+        record_compute) and the one secondary that draws what they write."""
         key_counts = np.zeros(2 * len(frame.bounds[2]), dtype=np.int64)  # the meshes' keys: rows as written
         for r in results:
             if r.key_counts is not None:
@@ -197,7 +200,7 @@ class IndirectPath(PipelinesPerTarget):
         f.key_counts, f.candidates = key_counts, candidates  # what the shadow views cull (shadow_indirect.py)
         self._sets[0], self._sets[1] = frame.descriptor_set, f.descriptor_set
         planes = None if frame.planes is None else frame.planes.astype(np.float32)
-        self._record_compute(cb, frame, planes, candidates, merged, capacity)
+        self.pending = (frame, planes, candidates, merged, capacity)  # the graph's "cull" pass records it
         f.recorded = merged.index_count // 3  # the triangles the counts will weigh, per draw mesh
         vk = self.vk
         lib = vk.lib
@@ -255,6 +258,17 @@ class IndirectPath(PipelinesPerTarget):
         table["lod_error"] = 0.0
         table["lod_error"][own] = merged.lod_error[owner[own]]
 
+    def record_compute(self, cb: Any) -> None:
+        """This frame's compute passes (finish made them ready), in the frame graph's "cull" pass."""
+        assert self.pending is not None
+        pending, self.pending = self.pending, None
+        self._record_compute(cb, *pending)
+
+    def draw_buffers(self, slot: int) -> dict[str, Any]:
+        """The slot's buffers the compute passes write and the draws read, by graph name."""
+        f = self.frames[slot]
+        return {"draws.ids": f.ids, "draws.commands": f.commands, "draws.state": f.state, "draws.readback": f.readback}
+
     def _record_compute(
         self,
         cb: Any,
@@ -264,15 +278,15 @@ class IndirectPath(PipelinesPerTarget):
         merged: MergedMeshes,
         capacity: np.ndarray,
     ) -> None:
-        """Into the primary, before the scene's rendering: zero the counters, cull (with occlusion
-        culling: its early pass, depth and pyramid first, occlusion.py), write commands, and copy
-        the counters where the CPU can read them. `capacity`: per key of every draw mesh (levels
-        of detail too), as key_capacities gives it."""
+        """Zero the counters, cull (with occlusion culling: its early pass, depth and pyramid
+        first, occlusion.py), write commands, and copy the counters where the CPU can read them
+        (the graph orders the commands, ids and counters before the draws). `capacity`: per key
+        of every draw mesh (levels of detail too), as key_capacities gives it."""
         keys = len(capacity)
         vk = self.vk
         lib = vk.lib
         f = self.frames[frame.slot]
-        to_compute, compute_to_compute, to_draw, to_host, drawn_to_compute = self._barriers
+        to_compute, compute_to_compute, to_draw, to_host, drawn_to_compute, to_copy = self._barriers
         _, width, height = frame.target.key
         occlusion = frame.data.culling.gpu(self, width, height, rows)  # None: the frustum test alone
         # the previous frame in this slot read the commands and ids: its fence covered that
@@ -309,7 +323,7 @@ class IndirectPath(PipelinesPerTarget):
             drawn_to_compute.record(lib, cb)  # the zeroed counters and the pyramid -> the late cull
             cull = occlusion.late
         self._cull_rows(cb, cull, rows)
-        self._compact(cb, keys, compute_to_compute, to_draw)
+        self._compact(cb, keys, compute_to_compute, to_copy)  # the draws' barrier: the graph's
         lib.vkCmdCopyBuffer(cb, f.state.handle, f.readback.handle, 1, f.copy_region)
         to_host.record(lib, cb)
 

@@ -99,6 +99,7 @@ class OutputPasses:
         self.ray_shadows: Any = None  # render/raytracing/shadows.py's RayShadows where shadows are traced
         self.post: list[PostPass] = []  # the post effects, in order (see the module)
         self.graph: OutputGraph | None = None  # the hdr and deferred forms' output (set_post makes it)
+        self.scene: Any = None  # the renderer's ScenePasses (scene_passes.py): ahead of forward
         self.inputs: PostInputs | None = None  # the frame's, for the hdr stage (begin_post)
         try:
             self.tone_map_pass = ToneMapPass(device, target.color_format)

@@ -50,6 +50,7 @@ from .output_passes import OutputPasses
 from .path_settings import MODES, PATHS, RECORDER_NAMES, PathSettings  # noqa: F401 (importers name MODES here)
 from .replay import FrameReplay, frame_key
 from .resources import FrameResources, frame_sets
+from .scene_passes import ScenePasses
 from .target_forms import TargetForms
 
 
@@ -138,6 +139,7 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
                 device, target, self.set_layout.handle, self.secondaries, light_size, clear_color
             )
             self.output.ray_shadows = self.ray_shadows
+            self.output.scene = self.scene = ScenePasses(device, self.lights, self.shadows)
             self._post_make()
             self.path: RenderPath = self._make_path(mode, recorder or default_recorder())
         except BaseException:
@@ -278,6 +280,7 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
         self.path.draw_into(self._gbuffer_formats if deferred else self.output.formats, deferred)  # the chunks'
         self.output.begin_post(data.camera)  # the post effects' frame inputs: their keys (below) read them
         # None: the frame records; else the output graph's passes' keys and the prelude's (replay.py)
+        self.scene.begin_slot(self.path, slot, pf, grid, data.light_count, views)
         key = frame_key(self, target, slot, (positional, grid, data.light_count, readback), (views, traced, forward))
         reuse = self.replay.offer(slot, key)
         inputs = FrameInputs(
@@ -316,17 +319,9 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
             self.frames.open(frame)
             cb = frame.command_buffer
             mark = self.frames.marker(frame)  # None unless passes are timed (gpu/frames.py)
-            secondaries = path.finish(cb, inputs, results, data.candidates)
-            if mark is not None and not path.uses_recorder:
-                mark("culling (compute)")  # the indirect path's compute passes
+            secondaries = path.finish(cb, inputs, results, data.candidates)  # its compute: the graph's "cull"
             aside = self._record_set_aside(inputs, data, materials)
-            if grid is not None:
-                self.lights.record(cb, pf, grid, data.light_count)
-                if mark is not None:
-                    mark("light clusters")
-            self.shadows.record(cb, views, shadow_buffers)
-            if mark is not None and views:
-                mark("shadow maps")
+            self.scene.begin(path, slot, pf, grid, data.light_count, views, shadow_buffers)  # ahead of forward
             light_draws = self.output.record(
                 cb,
                 secondaries,
@@ -387,10 +382,8 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
         """What the renderer made, in reverse (what a failed __init__ had not made yet is skipped)."""
         if self._set_aside is not None:
             self._set_aside.destroy()
-        names = (
-            "output per_frame shadows environment texture_pages lights ray_shadows pool set_layout secondaries frames"
-        )
-        for name in names.split():
+        names = "scene output per_frame shadows environment texture_pages lights ray_shadows pool set_layout"
+        for name in [*names.split(), "secondaries", "frames"]:
             made = getattr(self, name, None)
             for part in made if isinstance(made, list) else [made] if made is not None else []:
                 part.destroy()

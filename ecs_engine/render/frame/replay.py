@@ -142,7 +142,6 @@ def prelude_key(renderer: Any, positional: int, grid: Any, light_count: int, rea
         renderer.material_features,  # the deferred lighting (recorded before the graph)
         readback,  # the copy recorded after the graph (until a readback pass)
         None if grid is None else (grid.tiles_x, grid.tiles_y, light_count),  # light clusters (compute)
-        renderer.shadows.cleared,  # the shadow maps' first clear
     )
 
 

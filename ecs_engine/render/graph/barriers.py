@@ -7,11 +7,13 @@ turns a batch into Vulkan structs. Rules, per (resource, mip, layer):
 - first use of a transient: from UNDEFINED, after the last accesses of any image placed in the
   same bytes before it (aliasing) and the frame before's uses of its memory;
 - first use of an import: from its layout_before, after the work of its stage_before (any
-  earlier work: ALL_COMMANDS, or a semaphore's wait stage);
+  earlier work: ALL_COMMANDS, or a semaphore's wait stage); none for a buffer whose
+  stage_before is NONE (a frame slot's, whose last use a fence covered);
 - a new layout, or a write after anything, or a read of a write not yet made visible to its
   stages: a barrier from the writes and reads since the last write; a write that discards the
   contents (CLEAR / DONT_CARE, not of a region) transitions from UNDEFINED;
-- after the last pass, imported images go to their layout_after.
+- after the last pass, imported images go to their layout_after, and the last writes of imported
+  buffers marked visible_after are made visible to every later command.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from .resources import flags
 from .transient import Packing
 
 EMPTY: frozenset[str] = frozenset()
+NONE = frozenset({"NONE"})  # an import's stage_before with nothing to wait for
 WHOLE_SIZE = (1 << 64) - 1  # VK_WHOLE_SIZE (the binding has it as -1, which a VkDeviceSize refuses)
 
 
@@ -123,7 +126,9 @@ def plan_barriers(s: Structure, packing: Packing) -> BarrierPlan:
             row: Barrier | None = None
             at = (mip, layer)
             if st is None:
-                if res.imported is not None:
+                if res.imported is not None and not image and res.imported.stage_before == NONE:
+                    st = _State(None)  # nothing earlier to wait for (a frame slot's, fenced)
+                elif res.imported is not None:
                     before = res.imported.layout_before if image else None
                     if image and need.discards and before != need.layout:
                         before = "UNDEFINED"
@@ -229,6 +234,12 @@ def _final(s: Structure, states: dict[Sub, _State]) -> list[Barrier]:
     rows = []
     for name, res in s.resources.items():
         imp = res.imported
+        if imp is not None and res.kind == "buffer" and imp.visible_after:
+            st = states.get((name, 0, 0))
+            if st is not None and st.write_stages:
+                everything = (frozenset({"ALL_COMMANDS"}), frozenset({"MEMORY_READ", "MEMORY_WRITE"}))
+                rows.append(Barrier(name, None, 1, None, None, st.write_stages, st.write_access, *everything))
+            continue
         if imp is None or res.kind != "image" or imp.layout_after == "UNDEFINED":
             continue
         present = imp.layout_after == "PRESENT_SRC_KHR"

@@ -41,6 +41,9 @@ class Imported:
     # the stages whose work its first barrier waits for: ALL_COMMANDS, or the wait stage of the
     # semaphore that hands it over (a swapchain image: COLOR_ATTACHMENT_OUTPUT)
     stage_before: frozenset[str] = frozenset({"ALL_COMMANDS"})
+    # a buffer read after the graph by work recorded outside it: its last writes are made
+    # visible to every later command by the graph's final barrier
+    visible_after: bool = False
 
     @property
     def compile_key(self) -> tuple:
@@ -56,6 +59,7 @@ class Imported:
             self.size,
             self.layers,
             self.stage_before,
+            self.visible_after,
         )
 
 
@@ -150,6 +154,8 @@ def _check_layouts(pass_name: str, uses: tuple[Use, ...], resources: dict[str, R
     error."""
     seen: dict[tuple[str, int, int], Use] = {}
     for use in uses:
+        if resources[use.resource].kind != "image":  # a buffer has no layout: any accesses mix
+            continue
         for mip, layer in subresources(use, resources[use.resource]):
             other = seen.setdefault((use.resource, mip, layer), use)
             if other.access.usage.layout != use.access.usage.layout:

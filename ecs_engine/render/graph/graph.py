@@ -135,8 +135,29 @@ class FrameGraph:
             stage_before=_stage_names(stage_before),
         )
 
-    def import_buffer(self, name: str, *, handle: Any, size: int) -> None:
-        self._imports[name] = Imported(name, "buffer", handle, size=int(size))
+    def import_buffer(
+        self,
+        name: str,
+        *,
+        handle: Any,
+        size: int,
+        visible_after: bool = False,
+        stage_before: str | tuple[str, ...] = "ALL_COMMANDS",
+    ) -> None:
+        """A buffer owned outside the graph (a frame slot's: import it again each frame).
+        `visible_after`: commands recorded after the graph read it, so its last writes get a
+        final barrier to all later commands (as images get theirs to layout_after).
+        `stage_before`: as import_image's; "NONE" when nothing on the queue may still use it (a
+        frame slot's buffer, whose last frame's fence was waited for): no first barrier, so
+        this frame's first use need not wait for the frames still in flight."""
+        self._imports[name] = Imported(
+            name,
+            "buffer",
+            handle,
+            size=int(size),
+            visible_after=bool(visible_after),
+            stage_before=_stage_names(stage_before),
+        )
 
     def output(self, name: str) -> None:
         """A resource the frame must produce: the passes writing it (and what they need) run."""

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Hashable
 from dataclasses import dataclass
 from typing import Any, Final
 
@@ -42,6 +43,7 @@ from ...gpu.owned import Owned
 from ...gpu.pipeline import compute_pipeline, pipeline_layout
 from ..config import LightCulling as LightCullingMode
 from ..config import choice
+from ..graph import Access, Pass
 from ..layouts import CLUSTER_GROUP, CLUSTER_HEADER, LIGHT_BINS, MAX_GLOBAL_LIGHTS, UINT_BYTES
 from .rows import DirectionalLights, PositionalLights
 
@@ -148,8 +150,8 @@ def check_light_culling(mode: str) -> None:
 
 
 class ClusterPass:
-    """light_bounds.comp then light_tiles.comp, recorded into the frame's primary command buffer
-    before the render pass."""
+    """light_bounds.comp then light_tiles.comp over the cluster buffer (the frame graph's
+    "light_clusters" pass records them: LightClustersPass below)."""
 
     def __init__(self, device: Device, frame_set_layout: Any) -> None:
         self.device = device
@@ -159,6 +161,8 @@ class ClusterPass:
         self.pipelines: list[Any] = []
 
     def record(self, cb: Any, set_array: Any, grid: ClusterGrid, clusters: Any, light_count: int) -> None:
+        """The fills and both dispatches, with the two barriers between them (inside the pass);
+        the graph orders the buffer after its earlier uses and before its readers."""
         vk = self.device.vk
         lib = vk.lib
         if not self.pipelines:
@@ -178,14 +182,6 @@ class ClusterPass:
         self._barrier(cb, clusters, vk.VK_ACCESS_SHADER_WRITE_BIT, shader_rw, compute, compute)
         lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.pipelines[1])
         lib.vkCmdDispatch(cb, grid.tiles_x, grid.tiles_y, 1)
-        self._barrier(
-            cb,
-            clusters,
-            vk.VK_ACCESS_SHADER_WRITE_BIT,
-            vk.VK_ACCESS_SHADER_READ_BIT,
-            compute,
-            vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT | compute,  # forward fragments, or the deferred lighting
-        )
 
     def _barrier(self, cb: Any, buffer: Any, src: int, dst: int, src_stage: int, dst_stage: int) -> None:
         vk = self.device.vk
@@ -285,8 +281,38 @@ class LightCulling:
             return False
         return wanted
 
-    def record(self, cb: Any, frame: Any, grid: ClusterGrid, light_count: int) -> None:
-        self.pass_.record(cb, frame.set_array, grid, frame.clusters, light_count)
-
     def destroy(self) -> None:
         self.pass_.destroy()
+
+
+class LightClustersPass(Pass):
+    """The frame graph's "light_clusters": the frame slot's cluster buffer ("clusters", imported
+    per frame) filled then written by ClusterPass's dispatches; its readers (forward fragments,
+    the deferred lighting) declare their reads, so the graph places the barriers around it. A
+    frame without a grid declares nothing, and the graph culls the pass."""
+
+    name = "light_clusters"
+
+    def __init__(self, clusters: ClusterPass) -> None:
+        self.clusters = clusters
+        self.grid: ClusterGrid | None = None  # this frame's (begin)
+        self.set_array: Any = None
+        self.light_count = 0
+
+    def begin(self, grid: ClusterGrid | None, set_array: Any, light_count: int) -> None:
+        self.grid, self.set_array, self.light_count = grid, set_array, light_count
+
+    def setup(self, builder: Any) -> None:
+        if self.grid is None:
+            return
+        builder.write("clusters", Access.TRANSFER_WRITE)  # the fills
+        builder.write("clusters", Access.COMPUTE_READ_WRITE)  # the dispatches
+        builder.side_effect()  # its readers may be recorded outside the graph (frame/scene_passes.py)
+
+    def record(self, cb: Any, ctx: Any) -> None:
+        assert self.grid is not None
+        self.clusters.record(cb, self.set_array, self.grid, ctx.buffer("clusters"), self.light_count)
+
+    def key(self) -> Hashable:
+        grid = self.grid
+        return None if grid is None else (grid.tiles_x, grid.tiles_y, self.light_count)

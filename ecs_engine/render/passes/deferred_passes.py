@@ -75,6 +75,9 @@ class GBufferPass(Pass):
         for name, clear in zip(GBUFFER, clears, strict=True):
             builder.write(name, Access.COLOR_WRITE, load=Load.CLEAR, clear=clear)
         builder.write("depth", Access.DEPTH_WRITE, load=Load.CLEAR, clear=FAR)
+        for name, access in self.frame.reads:  # the GPU-culled draws (frame/scene_passes.py)
+            if name.startswith("draws."):
+                builder.read(name, access)
 
     def record(self, cb: Any, ctx: Any) -> None:
         ctx.begin_rendering(colors=("hdr", *GBUFFER), depth="depth", secondaries=True)
@@ -137,6 +140,11 @@ class DeferredLightingPass(Pass):
 
     def setup(self, builder: Any) -> None:
         builder.read("depth", Access.DEPTH_SAMPLED)
+        for name, _ in self.frame.reads:  # the light clusters and shadow maps it lights with
+            if name == "clusters":
+                builder.read(name, Access.COMPUTE_READ)
+            elif name == "shadow_maps":
+                builder.read(name, Access.DEPTH_SAMPLED)
         for name in GBUFFER:
             builder.read(name, Access.COMPUTE_READ)
         builder.write("hdr", Access.COMPUTE_READ_WRITE)
@@ -165,6 +173,9 @@ class OitAccumulatePass(Pass):
         builder.write(OIT[0], Access.COLOR_WRITE, load=Load.CLEAR, clear=(0.0,) * 4)
         builder.write(OIT[1], Access.COLOR_WRITE, load=Load.CLEAR, clear=(1.0,) * 4)
         builder.read("depth", Access.DEPTH_READ)
+        for name, access in self.frame.reads:  # the blended rows are lit forward: clusters, maps
+            if not name.startswith("draws."):
+                builder.read(name, access)
 
     def record(self, cb: Any, ctx: Any) -> None:
         transparent = self.frame.transparent

@@ -54,6 +54,8 @@ class Forward(Pass):
 
     def setup(self, builder: Any) -> None:
         colors, depth, resolve = self.attachments()
+        for name, access in self.frame.reads:  # what the scene's passes wrote for its draws
+            builder.read(name, access)
         if self.form == "deferred":  # over the lit scene
             builder.write("hdr", Access.COLOR_READ_WRITE, load=Load.LOAD)
             builder.write(depth, Access.DEPTH_WRITE, load=Load.LOAD)

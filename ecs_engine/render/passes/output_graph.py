@@ -68,6 +68,7 @@ class _Frame:
     overlay: Any = None
     slot: int = 0
     secondaries: tuple[Any, ...] | list[Any] = ()  # the scene rendering's, in order (output_passes.py)
+    reads: tuple[Any, ...] | list[Any] = ()  # (name, Access) forward reads of the scene's passes
     background: tuple[float, float, float] = (0.0, 0.0, 0.0)  # fixed per renderer
     readback: Copy | None = None  # the target's record_copy on a frame read back
     # the deferred form's (render/passes/deferred_passes.py; output_passes.py sets them)
@@ -147,6 +148,9 @@ class OutputGraph:
         device = self.output.device
         graph = FrameGraph(device)
         try:
+            scene = self.output.scene  # the renderer's passes ahead of the scene (frame/scene_passes.py)
+            if scene is not None:
+                scene.add_to(graph)
             if form == "deferred":
                 frame = self.frame
                 graph.add_pass(GBufferPass(frame))
@@ -216,6 +220,7 @@ class OutputGraph:
         self._place_readback(graph, self._copies or headless)
         self._import_attachments(graph, form, attachments)
         self._import_target(graph, rendering, extent)
+        self._import_scene(graph)
         frame = self.frame
         frame.state, frame.tone_map, frame.overlay, frame.slot = state, tone_map, overlay, slot
         graph.compile(extent)
@@ -264,6 +269,12 @@ class OutputGraph:
         frame.secondaries = secondaries
         frame.readback = target.record_copy if copies else None
         oit_now = frame.transparent is not None
+        scene = self.output.scene
+        if scene is not None:  # its frame's inputs came after `prepare` (the jobs'): imported again
+            self._import_scene(graph)
+            graph.compile((int(state.area.extent.width), int(state.area.extent.height)))
+            if form == "deferred":
+                frame.attachments = self._gbuffer_views(graph, target.attachments)
         names = {"forward": "sky and blended"} if form == "deferred" else {}
 
         def ended(name: str) -> None:
@@ -278,12 +289,19 @@ class OutputGraph:
             idle = (name == "ray_denoise" and frame.ray is None) or (name == "oit_accumulate" and not oit_now)
             if idle:  # the pass recorded nothing
                 return
-            mark(names.get(name, _MARKS.get(name, name)))
+            mark(names.get(name, _MARKS.get(name, scene.marks.get(name, name) if scene is not None else name)))
 
         graph.execute(cb, on_pass_end=ended if mark is not None else None)
         frame.state = frame.overlay = frame.readback = frame.ray = frame.transparent = frame.frame_set = None
         frame.attachments = None
         frame.secondaries = frame.chunks = ()
+
+    def _import_scene(self, graph: FrameGraph) -> None:
+        """The scene passes' buffers and maps, and what the scene's passes read of them."""
+        scene = self.output.scene
+        if scene is not None:
+            scene.import_into(graph)
+        self.frame.reads = scene.reads if scene is not None else ()
 
     def _add_post(self, graph: FrameGraph, samples: int, post: Any) -> None:
         """The hdr stage's effects in order: their own passes (`add_hdr`) or a PostCall each."""

@@ -43,6 +43,7 @@ from typing import Any
 
 import numpy as np
 
+from ...gpu.barrier import Barrier
 from ...gpu.descriptors import DescriptorPool, write_buffers
 from ...gpu.memory import DEVICE, HOST, Buffer
 from ...gpu.owned import Owned
@@ -110,7 +111,11 @@ class IndirectShadows:
         self._push_ptr = vk.ffi.from_buffer(self._push)
         self._compact_ptr = vk.ffi.from_buffer(self._compact_push)
         self._offsets = vk.ffi.new("VkDeviceSize[1]", [0])
-        self._barriers = compute_barriers(vk)
+        barriers = compute_barriers(vk)
+        compute, transfer = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, vk.VK_PIPELINE_STAGE_TRANSFER_BIT
+        to_copy = Barrier(vk, compute, transfer, vk.VK_ACCESS_SHADER_WRITE_BIT, vk.VK_ACCESS_TRANSFER_READ_BIT)
+        self._barriers = [barriers[0], barriers[1], to_copy, barriers[3]]  # the counters -> their copy: third
+        self.pending: tuple | None = None  # prepare's, for record_compute
 
     # -------------------------------------------------------------- per frame
     def begin_frame(self, slot: int, readback: bool) -> None:
@@ -127,11 +132,13 @@ class IndirectShadows:
             return self._read_counts(self._slot)
         return self._previous
 
-    def record(self, cb: Any, views: list[FrameInputs], planes: np.ndarray) -> list[Any]:
-        """The views' cull and commands into the primary `cb` (before the shadow render
-        passes); per view the secondary drawing them in its rendering (None: nothing to draw).
-        `views`: their FrameInputs (their set 0, target); `planes`: (V, 24), padded_planes'."""
+    def prepare(self, views: list[FrameInputs], planes: np.ndarray) -> list[Any]:
+        """The views' cull and commands made ready for the frame graph's "shadow_cull" pass
+        (maps_graph.py: record_compute); per view the secondary drawing them in its rendering
+        (None: nothing to draw). `views`: their FrameInputs (their set 0, target); `planes`:
+        (V, 24), padded_planes'."""
         slot = self._slot
+        self.pending = None  # nothing to cull unless made ready below
         frame = self.camera.frames[slot]  # its finish wrote this frame's key table
         key_counts, rows = frame.key_counts, frame.candidates
         self._counted[slot] = None
@@ -142,11 +149,28 @@ class IndirectShadows:
         sets = [
             self.vk.ffi.new("VkDescriptorSet[2]", [v.descriptor_set, b.descriptor_set]) for v, b in zip(views, buffers)
         ]
-        self._record_compute(cb, slot, buffers, sets, planes, rows, keys)
+        self.pending = (slot, buffers, sets, planes, rows, keys)
         triangles = np.repeat(views[0].bounds[2] // 3, 2)[:keys]
         self._counted[slot] = (len(views), DRAW_STATE.size + UINT_BYTES * keys, triangles)
         self._counted_now = True
         return [self._record_draws(slot, view, b, s, key_counts) for view, b, s in zip(views, buffers, sets)]
+
+    def draw_buffers(self) -> dict[str, Any]:
+        """This frame's views' buffers that the compute writes and their draws read, by graph
+        name ("shadow_draws.<view>.ids" ...), and the counters' host copy; none when nothing
+        is culled."""
+        if self.pending is None:
+            return {}
+        slot, buffers = self.pending[0], self.pending[1]
+        kinds = ("ids", "state", "commands")
+        named = {f"shadow_draws.{k}.{n}": getattr(b, n) for k, b in enumerate(buffers) for n in kinds}
+        return {**named, "shadow_draws.readback": self._readback[slot]}
+
+    def record_compute(self, cb: Any) -> None:
+        """The views' cull, compaction and counters' copy (prepare made them ready)."""
+        assert self.pending is not None
+        pending, self.pending = self.pending, None
+        self._record_compute(cb, *pending)
 
     # ------------------------------------------------------------ GPU work
     def _record_compute(
@@ -156,7 +180,7 @@ class IndirectShadows:
         lib = vk.lib
         compute, stage = vk.VK_PIPELINE_BIND_POINT_COMPUTE, vk.VK_SHADER_STAGE_COMPUTE_BIT
         layout = camera.compute_layout
-        to_compute, compute_to_compute, to_draw, to_host = self._barriers[:4]
+        to_compute, compute_to_compute, to_copy, to_host = self._barriers[:4]
         for b in buffers:  # the previous frame in this slot read them: its fence covered that
             lib.vkCmdFillBuffer(cb, b.state.handle, 0, b.state.size, 0)
         to_compute.record(lib, cb)
@@ -179,7 +203,7 @@ class IndirectShadows:
         for view_sets in sets:
             lib.vkCmdBindDescriptorSets(cb, compute, layout, 0, 2, view_sets, 0, vk.ffi.NULL)
             lib.vkCmdDispatch(cb, -(-keys // COMPACT_GROUP), 1, 1)
-        to_draw.record(lib, cb)
+        to_copy.record(lib, cb)  # the draws' barrier is the graph's (their reads are declared)
         readback = self._readback[slot]
         assert readback is not None
         size = DRAW_STATE.size + UINT_BYTES * keys

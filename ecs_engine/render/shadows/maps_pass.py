@@ -6,10 +6,11 @@ matrices (so the render path's shaders draw from the light unchanged) and a slic
 frame's instance buffer after the camera's rows. The chunk jobs (frame_jobs.py) then cull each
 chunk against the camera and every view in one pass, write each view's visible rows and record
 a secondary per view with a depth-only pipeline (chunk_paths.py: the same paths, made for the
-maps' formats; view_recording.py: all of it in one native call). The primary then draws each
-view's layer with dynamic rendering: one barrier batch (the layers to their attachment layout),
-per view begin rendering over its layer's corner, execute its secondaries, end; one barrier
-batch (the layers to the layout the lighting samples).
+maps' formats; view_recording.py: all of it in one native call). The frame graph's
+"shadow_maps" pass (maps_graph.py) then draws each view's layer with dynamic rendering: per
+view begin rendering over its layer's corner, execute its secondaries, end; it declares the
+layers it writes and the passes that sample the maps declare their reads, so the graph places
+the barriers (the layers to their attachment layout, then to the one the lighting samples).
 
 The lighting reads SHADOW_VIEW rows (per view its matrix, bias, normal offset, cascade split,
 filter) and the map (shading.glsl's light_shadow); a light row names its first view and count.
@@ -73,7 +74,6 @@ class ShadowPass:
         except BaseException:
             self.destroy()
             raise
-        self.cleared = False  # the layers' layout made by a first (clearing) pass
         self._targets: dict[tuple[int, int], TargetState] = {}  # by (layer, texels across)
         self._counts = [0, 0]  # the last frame's shadow draws and triangles recorded on the CPU
         self._gpu_frame = False  # this frame's views are culled on the GPU
@@ -117,7 +117,6 @@ class ShadowPass:
         new = ShadowMaps(self.device, resolution, max(len(views), self.maps.layers))
         self.owned.release(self.maps)
         self.maps = self.owned.add(new)
-        self.cleared = False
         self._targets.clear()
         return True
 
@@ -305,31 +304,31 @@ class ShadowPass:
 
     light_views = staticmethod(light_views)  # the renderer names each light's views with it
 
-    def record(self, cb: Any, views: list[ShadowView], secondaries: list[list[Any]]) -> None:
-        """Each view's layer drawn from its secondaries (raw calls); the first time the maps are
-        used, every layer is cleared, so none is read in an undefined layout."""
+    def gpu_culled(self, secondaries: list[list[Any]]) -> list[list[Any]]:
+        """Per view its secondaries, the GPU-culled draws' first in the indirect mode (their
+        compute made ready for the frame graph's "shadow_cull" pass)."""
+        if self.gpu is None or not self.culls_on_gpu:
+            return secondaries
+        culled = self.gpu.prepare(self._inputs, self._planes[1:])
+        return [([g] if g is not None else []) + s for g, s in zip(culled, secondaries, strict=True)]
+
+    def record(self, cb: Any, ctx: Any, views: list[ShadowView], secondaries: list[list[Any]]) -> None:
+        """Each view's layer drawn from its secondaries, in the frame graph's "shadow_maps" pass
+        (maps_graph.py: it declares the layers, so the graph places the barriers); the first
+        maps were cleared whole when made (gpu/shadow_maps.py), so none is read undefined."""
         assert self.maps is not None
         vk = self.vk
         lib = vk.lib
-        if self.gpu is not None and self.culls_on_gpu:  # the compute passes first, then each view's draws
-            culled = self.gpu.record(cb, self._inputs, self._planes[1:])
-            secondaries = [([g] if g is not None else []) + s for g, s in zip(culled, secondaries, strict=True)]
         maps = self.maps
         drawn = {v.layer: s for v, s in zip(views, secondaries, strict=True)}
         sizes = {v.layer: v.resolution for v in views}
-        layers = tuple(range(maps.layers)) if not self.cleared else tuple(drawn)
-        before, after = maps.barriers(layers, not self.cleared)
-        lib.vkCmdPipelineBarrier2(cb, before)
-        for layer in layers:
-            # the first time, each layer whole (cleared); then each view's corner of its layer
-            size = min(sizes[layer], maps.resolution) if self.cleared else maps.resolution  # as target_state's
-            lib.vkCmdBeginRendering(cb, maps.rendering(layer, size))
+        for layer in drawn:  # each view's corner of its layer (all were cleared when made: ShadowMaps)
+            size = min(sizes[layer], maps.resolution)  # as target_state's
+            ctx.begin_rendering(depth="shadow_maps", layer=layer, area=(0, 0, size, size), secondaries=True)
             buffers = drawn.get(layer)
             if buffers:
                 lib.vkCmdExecuteCommands(cb, len(buffers), vk.ffi.new("VkCommandBuffer[]", buffers))
-            lib.vkCmdEndRendering(cb)
-        lib.vkCmdPipelineBarrier2(cb, after)
-        self.cleared = True
+            ctx.end_rendering()
 
     def destroy(self) -> None:
         self.owned.destroy()

@@ -1,0 +1,89 @@
+"""The scene's passes that run ahead of the output's `forward` in the output's frame graph
+(render/passes/output_graph.py; graph_plan.md step 9): the indirect path's compute ("cull"),
+the light clusters, then the shadow maps. The renderer owns them (their pipelines live in the
+renderer's parts: the path, LightCulling, ShadowPass); `begin` hands them the frame's inputs
+and names the frame slot's buffers the graph imports (the maps are imported too), and `reads`
+is what `forward` reads of what they write (so the graph places the barriers between them).
+
+The deferred form's G-buffer and lighting read them too (render/passes/deferred_passes.py takes
+`reads` from the frame as forward does).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..draw.cull_pass import CullPass
+from ..graph import Access, FrameGraph, Pass
+from ..lighting.clusters import ClusterGrid, LightClustersPass
+from ..shadows.maps_graph import ShadowCullPass, ShadowMapsPass
+from ..shadows.views import ShadowView
+
+#: the passes' names -> the names the frame's timing marks have always used
+MARKS = {
+    "cull": "culling (compute)",
+    "light_clusters": "light clusters",
+    "shadow_cull": "shadow culling (compute)",  # was timed within "shadow maps"
+    "shadow_maps": "shadow maps",
+}
+
+
+class ScenePasses:
+    def __init__(self, device: Any, lights: Any, shadows: Any) -> None:
+        self.device = device
+        self.cull = CullPass()
+        self.clusters = LightClustersPass(lights.pass_)
+        self.shadows = ShadowMapsPass(shadows)
+        self.passes: list[Pass] = [self.cull, self.clusters, ShadowCullPass(self.shadows), self.shadows]
+        self.buffers: dict[str, Any] = {}  # name -> the frame slot's Buffer, imported this frame
+        self.reads: list[tuple[str, Access]] = []  # what `forward` reads of them this frame
+        self.marks = MARKS
+
+    def begin(
+        self,
+        path: Any,
+        slot: int,
+        frame: Any,
+        grid: ClusterGrid | None,
+        light_count: int,
+        views: list[ShadowView],
+        shadow_buffers: list[list[Any]],
+    ) -> None:
+        """This frame's inputs; `path`: the render path (its compute made ready by finish);
+        `frame`: the slot's FrameResources; `shadow_buffers`: per view the secondaries the jobs
+        recorded."""
+        self.cull.begin(path, slot)
+        self.clusters.begin(grid, frame.set_array, light_count)
+        self.shadows.begin(views, shadow_buffers)
+        self.buffers = {"clusters": frame.clusters, **self.cull.buffers}
+        self.reads = self._reads(grid)
+
+    def begin_slot(
+        self, path: Any, slot: int, frame: Any, grid: ClusterGrid | None, light_count: int, views: list[ShadowView]
+    ) -> None:
+        """Before the frame's replay key (render/frame/replay.py) and its jobs: what the passes
+        declare and the key's imports read (the slot's buffers, the clusters' inputs, the shadow
+        views), so that the graph compiled for the key is the one recorded; `begin` then adds
+        what the jobs made."""
+        self.cull.begin(path, slot)  # the indirect path's compute as its last frame left it
+        self.clusters.begin(grid, frame.set_array, light_count)
+        self.shadows.begin_views(views)
+        self.buffers = {"clusters": frame.clusters, **self.cull.buffers}
+        self.reads = self._reads(grid)
+
+    def _reads(self, grid: ClusterGrid | None) -> list[tuple[str, Access]]:
+        reads = self.cull.reads()
+        reads += [("clusters", Access.FRAGMENT_READ)] if grid is not None else []
+        return reads + self.shadows.reads()
+
+    def add_to(self, graph: FrameGraph) -> None:
+        for p in self.passes:
+            graph.add_pass(p)
+
+    def import_into(self, graph: FrameGraph) -> None:
+        for name, buffer in self.buffers.items():  # the frame slot's: its last use was fenced
+            graph.import_buffer(name, handle=buffer.handle, size=buffer.size, stage_before="NONE")
+        self.shadows.import_into(graph)
+
+    def destroy(self) -> None:
+        """Nothing: the passes' pipelines are their owners' (the path, LightCulling, ShadowPass)."""
