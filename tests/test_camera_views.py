@@ -131,3 +131,15 @@ def test_bad_view_components_are_refused_where_they_enter(bad, match) -> None:
     w = World()
     with pytest.raises(ValueError, match=match):
         _camera(w, bad())
+
+
+def test_the_split_screen_scene_gives_each_player_half_and_a_picture_in_picture_on_top() -> None:
+    """demos/split_screen.py (drawn by the renderer's views once it draws several cameras)."""
+    from ecs_engine.demos.split_screen import build
+
+    w = World()
+    build(w, lambda mesh: 0)
+    left, right, inset = extract_views(w, 1280, 720)
+    assert (left.rect, right.rect) == ((0, 0, 640, 720), (640, 0, 640, 720))
+    x, y, width, height = inset.rect
+    assert inset.view.order == 1 and x >= 640 and x + width <= 1280 and y + height <= 720
