@@ -147,4 +147,5 @@ FIXUPS = [
     ("renderer", "scripts/ab_frames.py", _AB_OLD, _AB_NEW, "old code against new: the new paths, then the old"),
 ]
 # files that name the old paths on purpose (after their fix-ups): never renamed, nor checked
-KEEP_OLD_PATHS = ("scripts/ab_frames.py", "bench/gpu_memory.py")  # they run older trees too (old against new)
+# (they run older trees too: old against new)
+KEEP_OLD_PATHS = ("scripts/ab_frames.py", "bench/gpu_memory.py", "bench/lights.py")
