@@ -21,12 +21,16 @@ def grid_positions() -> np.ndarray:
     return (cells - cells.mean(axis=0)) * SPACING
 
 
-def build(world: World, add_mesh: Callable[[MeshData], int], path: str | None = None) -> None:
-    cube = add_mesh(cube_mesh())
+def spawn_grid(world: World, cube: int) -> None:
+    """The 100 cubes (mesh `cube`), each with one of the six palette materials in turn."""
     pos = grid_positions()
     n = len(pos)
     world.spawn_batch(
         n, Transform(position=pos, scale=(0.7, 0.7, 0.7)), Mesh(handle=cube, material=np.arange(n, dtype=np.uint32) % 6)
     )
+
+
+def build(world: World, add_mesh: Callable[[MeshData], int], path: str | None = None) -> None:
+    spawn_grid(world, add_mesh(cube_mesh()))
     add_camera(world, eye=(7.0, 5.5, 9.0), target=(0.0, -0.3, 0.0), move_speed=6.0)
     add_orbiting_lights(world, radius=5.0, height=3.5, intensity=6.0)

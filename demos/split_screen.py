@@ -12,11 +12,11 @@ from collections.abc import Callable
 import numpy as np
 
 from ecs_engine import World
-from ecs_engine.components import Camera, Mesh, Transform, Viewport
+from ecs_engine.components import Camera, Transform, Viewport
 from ecs_engine.maths.camera import look_rotation
 from ecs_engine.render import MeshData, cube_mesh
 
-from .grid100 import grid_positions
+from .grid100 import spawn_grid
 from .scene_kit import add_camera, add_orbiting_lights
 
 
@@ -26,12 +26,7 @@ def _look(eye: tuple[float, float, float], target: tuple[float, float, float] = 
 
 
 def build(world: World, add_mesh: Callable[[MeshData], int], path: str | None = None) -> None:
-    cube = add_mesh(cube_mesh())
-    pos = grid_positions()
-    n = len(pos)
-    world.spawn_batch(
-        n, Transform(position=pos, scale=(0.7, 0.7, 0.7)), Mesh(handle=cube, material=np.arange(n, dtype=np.uint32) % 6)
-    )
+    spawn_grid(world, add_mesh(cube_mesh()))
     add_orbiting_lights(world, radius=5.0, height=3.5, intensity=6.0)
     left = add_camera(world, eye=(7.0, 5.5, 9.0), target=(0.0, -0.3, 0.0), move_speed=6.0)
     world.add(left, Viewport(x=0.0, y=0.0, width=0.5, height=1.0))
