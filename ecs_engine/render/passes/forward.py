@@ -72,6 +72,9 @@ class Forward(Pass):
             builder.write("hdr", Access.RESOLVE_WRITE)
         builder.write(depth, Access.DEPTH_WRITE, load=Load.CLEAR, clear=FAR)
 
+    def declares(self) -> Hashable:
+        return (self.frame.reads, self.frame.background)
+
     def record(self, cb: Any, ctx: Any) -> None:
         colors, depth, resolve = self.attachments()
         ctx.begin_rendering(colors=colors, depth=depth, resolve=resolve, secondaries=True)
@@ -101,6 +104,9 @@ class PostCall(Pass):
         if self.samples == 1:  # a multisampled depth is not stored for the effects
             builder.read("depth", Access.COMPUTE_SAMPLED)
         builder.side_effect()  # it may write "hdr" behind the graph's back (its own barriers)
+
+    def declares(self) -> Hashable:
+        return ()  # its setup declares the same every frame
 
     def record(self, cb: Any, ctx: Any) -> None:
         inputs = self.output.inputs

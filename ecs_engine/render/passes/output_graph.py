@@ -95,6 +95,9 @@ class ToneMapInto(Pass):
         builder.read("hdr", Access.FRAGMENT_SAMPLED)
         builder.write(self.image, Access.COLOR_WRITE)  # every pixel: not loaded
 
+    def declares(self) -> Hashable:
+        return ()  # its setup declares the same every frame
+
     def record(self, cb: Any, ctx: Any) -> None:
         ctx.begin_rendering(colors=(self.image,))
         self.output.tone_map_pass.record(cb, self.frame.state, self.output.target, *self.frame.tone_map)
@@ -114,6 +117,9 @@ class OverlayOver(Pass):
 
     def setup(self, builder: Any) -> None:
         builder.write("target", Access.COLOR_READ_WRITE, load=Load.LOAD)
+
+    def declares(self) -> Hashable:
+        return ()  # its setup declares the same every frame
 
     def record(self, cb: Any, ctx: Any) -> None:
         overlay = self.frame.overlay
@@ -319,7 +325,7 @@ class OutputGraph:
     def _place_readback(self, graph: FrameGraph, wanted: bool) -> None:
         """The readback pass last in `graph` or not (a change recompiles the graph: a swapchain's
         screenshot frame and the one after)."""
-        has = any(p.name == Readback.name for p in graph.passes)
+        has = graph.has_pass(Readback.name)
         if wanted and not has:
             graph.add_pass(Readback(self.frame))
         elif has and not wanted:
@@ -347,6 +353,9 @@ class OutputGraph:
         if attachments.samples == 1:  # with MSAA depth and colour are forward's transients
             named.append(("depth", images[0]))
         for name, image in named:
+            token = (image, image.handle)
+            if graph.reuse_import(name, token):
+                continue
             graph.import_image(
                 name,
                 handle=image.handle,
@@ -355,10 +364,15 @@ class OutputGraph:
                 extent=(int(image.width), int(image.height)),
                 layout_before="UNDEFINED",
                 layout_after="UNDEFINED",
+                token=token,
             )
 
     def _import_target(self, graph: FrameGraph, rendering: Any, extent: tuple[int, int]) -> None:
         """The target's image, imported with its format's value (FXAA's pipeline is made for it)."""
+        target = self.output.target
+        token = (rendering.image, rendering.view, extent, target.color_format, target.final_layout)
+        if graph.reuse_import("target", token):
+            return
         graph.import_image(
             "target",
             handle=rendering.image,
@@ -368,6 +382,7 @@ class OutputGraph:
             layout_before="UNDEFINED",  # every pixel is written: the old contents go
             layout_after=_final_layout(self.output.vk, self.output.target.final_layout),
             stage_before=("COLOR_ATTACHMENT_OUTPUT", "ALL_TRANSFER"),  # acquire's wait, last readback
+            token=token,
         )
 
     def describe(self) -> str:
