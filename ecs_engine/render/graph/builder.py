@@ -157,12 +157,18 @@ class Declarations:
 
     def __init__(self) -> None:
         self._kept: dict[int, tuple[Pass, Hashable, Declared]] = {}
+        self._last: tuple[list[Pass], tuple, list[tuple[str, Declared]]] | None = None  # the last call's
 
     def of(self, passes: list[Pass], verify: bool = False) -> tuple[list[tuple[str, Declared]], bool]:
         """Each pass's (name, Declared), and whether any changed since the last call."""
+        marks = tuple([p.declares() for p in passes])
+        last_call = self._last
+        if last_call is not None and not verify and last_call[0] == passes and last_call[1] == marks:
+            if SETUP_EACH_COMPILE not in marks:  # the same passes, all declaring as before
+                return last_call[2], False
         out, kept, changed = [], self._kept, False
-        for p in passes:
-            mark, last = p.declares(), kept.get(id(p))
+        for p, mark in zip(passes, marks, strict=True):
+            last = kept.get(id(p))
             if last is not None and last[0] is not p:  # another pass at a freed one's id
                 last = None
             same = last is not None and mark is not SETUP_EACH_COMPILE and last[1] == mark
@@ -182,4 +188,5 @@ class Declarations:
             alive = {id(p) for p in passes}
             for gone in [k for k in kept if k not in alive]:
                 del kept[gone]
+        self._last = (list(passes), marks, out)
         return out, changed
