@@ -25,7 +25,7 @@ from ...jobs import JobPool
 from ..assets.materials import Materials
 from ..assets.mesh_registry import MeshRegistry
 from ..assets.texture_pages import TexturePages
-from ..config import Caps, RenderConfig, check
+from ..config import Caps, Form, Mode, RenderConfig, Shadows, check
 from ..culling import CullingSetting
 from ..draw.chunk_paths import InstancedPath, PerEntityPath, check_recorder, default_recorder
 from ..draw.path import FrameInputs, FrameStats, PathContext, RenderPath, TargetState
@@ -120,7 +120,7 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
             self.replay = FrameReplay(n)  # frames submitted again while their recording would repeat
             self.secondaries = SecondaryBuffers(device, n)
             self.set_layout, self.pool = frame_sets(device, n)
-            traced = shadows == "raytraced"
+            traced = shadows == Shadows.RAYTRACED
             self.ray_shadows = RayShadows(device, meshes, n, self.set_layout.handle) if traced else None
             self.shadow_denoise = shadow_denoise
             self.lights = LightCulling(device, self.set_layout.handle, light_culling)
@@ -155,11 +155,11 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
     def _make_shadow_path(self, ctx: PathContext) -> RenderPath:
         """The depth-only path of the shadow passes' CPU jobs: the per-entity one for per_entity,
         else the instanced one (indirect: the set-aside casters alone; shadow_indirect.py culls)."""
-        return (PerEntityPath if self.mode == "per_entity" else InstancedPath)(ctx, self.cpu_recorder)
+        return (PerEntityPath if self.mode == Mode.PER_ENTITY else InstancedPath)(ctx, self.cpu_recorder)
 
     def _make_path(self, mode: str, recorder: str) -> RenderPath:
         check_recorder(recorder)
-        deferred = self.target.form == "deferred"
+        deferred = self.target.form == Form.DEFERRED
         ctx = PathContext(
             device=self.device,
             meshes=self.meshes,
@@ -266,7 +266,7 @@ class Renderer(PathSettings, TargetForms, CullingSetting):
         camera_rows = self.path.rows_needed(data.candidates) + len(data.set_aside or ())
         rows = camera_rows + len(views) * ShadowPass.view_rows(data, self.path)  # each view's after the camera's
         pf.ensure_capacity(self.device, self.texture_pages, rows, data.light_count, material_count, len(views))
-        deferred = self.target.form == "deferred"
+        deferred = self.target.form == Form.DEFERRED
         named = self.shadows.light_views(views) if views else {}
         places = ray.places(traced) if ray is not None and traced else {}
         name = None  # a frame without shadows names nothing (and pays nothing for it)

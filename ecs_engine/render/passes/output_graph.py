@@ -32,6 +32,7 @@ from __future__ import annotations
 from collections.abc import Callable, Hashable
 from typing import Any
 
+from ..config import Form
 from ..graph import UNREPLAYABLE, Access, FrameGraph, ImageDesc, Load, Pass
 from ..graph.resources import format_name
 from .deferred_passes import (
@@ -150,14 +151,14 @@ class OutputGraph:
         self._prepared: tuple[Any, Any, FrameGraph] | None = None  # prepare's, until record takes it
         self._copies = False  # this frame's readback copies the target
 
-    def _make(self, form: str, samples: int, color_format: int, ray: bool, oit: bool, post: Any) -> FrameGraph:
+    def _make(self, form: Form, samples: int, color_format: int, ray: bool, oit: bool, post: Any) -> FrameGraph:
         device = self.output.device
         graph = FrameGraph(device)
         try:
             scene = self.output.scene  # the renderer's passes ahead of the scene (frame/scene_passes.py)
             if scene is not None:
                 scene.add_to(graph)
-            if form == "deferred":
+            if form == Form.DEFERRED:
                 frame = self.frame
                 graph.add_pass(GBufferPass(frame))
                 if ray:
@@ -167,7 +168,7 @@ class OutputGraph:
                 if oit:
                     graph.add_pass(OitAccumulatePass(frame))
             graph.add_pass(Forward(self.frame, form, samples, oit))
-            if form != "direct":
+            if form != Form.DIRECT:
                 self._add_post(graph, samples, post)
                 desc = ImageDesc(format=f"VK_FORMAT_{format_name(device.vk, color_format)}")
                 names = [f"ldr_{i}" for i in range(len(self.effects))] + ["target"]
@@ -192,14 +193,14 @@ class OutputGraph:
         target = self.output.target
         attachments = target.attachments
         form, samples, color_format = target.form, int(attachments.samples), int(target.color_format)
-        deferred = form == "deferred"
+        deferred = form == Form.DEFERRED
         # the rays' and weighted transparency's passes from the first frame that has them on
         # (they record nothing on a frame without traced lights or blended rows): one graph,
         # one set of transients, however those come and go
         ray = deferred and self.output.ray_shadows is not None
         oit = deferred and (self.output.oit is not None or self.frame.transparent is not None)
         extent = (int(state.area.extent.width), int(state.area.extent.height))
-        post = self.output.post if form != "direct" else []
+        post = self.output.post if form != Form.DIRECT else []
         # the effects' passes follow the extent (bloom's chain) and the list (made again with it)
         post_shape = (extent, tuple(id(p) for p in post)) if post else None
         shape = (form, samples, color_format, ray, oit, post_shape)
@@ -279,9 +280,9 @@ class OutputGraph:
         if scene is not None:  # its frame's inputs came after `prepare` (the jobs'): imported again
             self._import_scene(graph)
             graph.compile((int(state.area.extent.width), int(state.area.extent.height)))
-            if form == "deferred":
+            if form == Form.DEFERRED:
                 frame.attachments = self._gbuffer_views(graph, target.attachments)
-        names = {"forward": "sky and blended"} if form == "deferred" else {}
+        names = {"forward": "sky and blended"} if form == Form.DEFERRED else {}
 
         def ended(name: str) -> None:
             if mark is None or (name == "imgui" and overlay is None):
@@ -340,13 +341,13 @@ class OutputGraph:
             kept = self._views = (compiled, attachments, GBufferViews(attachments, compiled.transients.images))
         return kept[2]
 
-    def _import_attachments(self, graph: FrameGraph, form: str, attachments: Any) -> None:
+    def _import_attachments(self, graph: FrameGraph, form: Form, attachments: Any) -> None:
         """The target's SceneAttachments: depth, the HDR colour and, with MSAA, the multisampled
         one's resolve (single-sample: the multisampled colour and depth are transients); none in
         the direct form (its depth is a transient).
         Every pass clears what it writes first and nothing after the graph reads them: their
         old contents go (UNDEFINED) and they have no final layout (UNDEFINED)."""
-        if form == "direct":
+        if form == Form.DIRECT:
             return
         images = attachments.images
         named = [("hdr", images[-1])]
