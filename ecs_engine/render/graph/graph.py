@@ -245,22 +245,8 @@ class FrameGraph:
     def _resources(self, c: Compiled) -> tuple[dict[str, GraphImage], dict[str, GraphBuffer]]:
         images = dict(c.transients.images) if c.transients else {}
         buffers = dict(c.transients.buffers) if c.transients else {}
-        for name, imp in self._table.by_name.items():
-            if imp.kind == "image":
-                images[name] = GraphImage(
-                    name,
-                    imp.handle,
-                    imp.view,
-                    imp.format_value,
-                    imp.extent,
-                    imp.mips,
-                    imp.samples,
-                    imp.mip_views,
-                    imp.layers,
-                    imp.layer_views,
-                )
-            else:
-                buffers[name] = GraphBuffer(name, imp.handle, imp.size)
+        images.update(self._table.images)
+        buffers.update(self._table.buffers)
         return images, buffers
 
     def execute(self, cb: Any, on_pass_end: Callable[[str], None] | None = None) -> None:

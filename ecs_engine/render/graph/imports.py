@@ -11,7 +11,7 @@ from typing import Any
 from ...errors import UsageError
 from ...gpu.functions import handle_int
 from .compile import Imported
-from .resources import format_name, layout_name
+from .resources import GraphBuffer, GraphImage, format_name, layout_name
 
 TOKEN = object()  # marks a caller's token among the argument tuples
 KEPT = 4  # arguments remembered per name: a swapchain's images or the frame slots; more is churn
@@ -23,7 +23,11 @@ class Imports:
         when a Vulkan enum must be named without a device."""
         self.vk, self._load_vk = vk, load_vk
         self.by_name: dict[str, Imported] = {}
-        self._made: dict[str, dict[tuple, tuple[Imported, tuple[Any, Any]]]] = {}  # with its handle ints
+        # per name: what each distinct call made, with its handles as integers and the
+        # GraphImage/GraphBuffer passes record with
+        self._made: dict[str, dict[tuple, tuple[Imported, tuple[Any, Any], Any]]] = {}
+        self.images: dict[str, GraphImage] = {}  # the current imports as passes see them
+        self.buffers: dict[str, GraphBuffer] = {}
         self._ints: dict[str, tuple[Any, Any]] = {}  # the handle and view as integers
         self._names: list[str] | None = None  # sorted
 
@@ -98,17 +102,29 @@ class Imports:
         if len(made) >= KEPT:
             made.clear()
         ints = (_int(self.vk, imported.handle), _int(self.vk, imported.view))
-        made[args] = (imported, ints)
-        return self._use(name, imported, ints)
+        made[args] = (imported, ints, _resource(imported))
+        return self._use(name, *made[args])
 
-    def _use(self, name: str, imported: Imported, ints: tuple[Any, Any]) -> bool:
+    def _use(self, name: str, imported: Imported, ints: tuple[Any, Any], resource: Any) -> bool:
         old = self.by_name.get(name)
         if old is imported:
             return False
         self.by_name[name], self._ints[name] = imported, ints
+        if imported.kind == "image":
+            self.images[name] = resource
+        else:
+            self.buffers[name] = resource
         if old is None:
             self._names = None
         return old is None or old.compile_key != imported.compile_key
+
+
+def _resource(i: Imported) -> GraphImage | GraphBuffer:
+    if i.kind == "buffer":
+        return GraphBuffer(i.name, i.handle, i.size)
+    return GraphImage(
+        i.name, i.handle, i.view, i.format_value, i.extent, i.mips, i.samples, i.mip_views, i.layers, i.layer_views
+    )
 
 
 def stage_names(stages: str | tuple[str, ...]) -> frozenset[str]:

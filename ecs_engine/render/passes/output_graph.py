@@ -263,7 +263,8 @@ class OutputGraph:
         """This frame's output (prepared here unless `prepare` was asked the same this frame);
         `secondaries` are the scene's draws."""
         graph = self._taken(state, rendering, tone_map, overlay, slot, readback)
-        if graph is None:
+        taken = graph is not None
+        if graph is None:  # prepared now, after the jobs: with their inputs
             graph = self.prepare(state, rendering, tone_map, overlay, slot, readback)
             self._prepared = None
         target = self.output.target
@@ -277,7 +278,7 @@ class OutputGraph:
         frame.readback = target.record_copy if copies else None
         oit_now = frame.transparent is not None
         scene = self.output.scene
-        if scene is not None:  # its frame's inputs came after `prepare` (the jobs'): imported again
+        if scene is not None and taken:  # its frame's inputs came after `prepare` (the jobs'): imported again
             self._import_scene(graph)
             graph.compile((int(state.area.extent.width), int(state.area.extent.height)))
             if form == Form.DEFERRED:
