@@ -80,6 +80,23 @@ class ScenePasses:
         for p in self.passes:
             graph.add_pass(p)
 
+    def signature(self) -> tuple:
+        """What import_into imports and the passes declare from, by identity: equal signatures,
+        equal imports and declarations (the output graph's prepare keeps a frame slot's imports
+        under it: passes/output_graph.py)."""
+        shadows = self.shadows
+        maps = shadows.shadows.maps
+        image = maps.image if maps is not None else None
+        return (
+            self.cull.path,
+            tuple((n, b, b.handle) for n, b in self.buffers.items()),
+            tuple((n, b, b.handle) for n, b in shadows.culled.items()),
+            maps,
+            image.handle if image is not None else None,
+            self.reads,
+            tuple(view.layer for view in shadows.views) if shadows.views else (),
+        )
+
     def import_into(self, graph: FrameGraph) -> None:
         graph.import_slot_buffers(self.buffers)
         self.shadows.import_into(graph)

@@ -172,6 +172,25 @@ class FrameGraph:
             self._changed()
         return changed is not None
 
+    @property
+    def version(self) -> int:
+        """Moves with every change a compile plans again for: passes, outputs, an import's shape,
+        a pass's declarations."""
+        return self._version
+
+    def imports_snapshot(self) -> tuple:
+        """The imports as they stand (restore_imports brings them back)."""
+        return (self._version, self._table.snapshot())
+
+    def restore_imports(self, snapshot: tuple) -> bool:
+        """The imports of `snapshot` again, if it was taken at this version (their shapes are
+        then today's: nothing recompiles); False, and nothing done, otherwise."""
+        version, imports = snapshot
+        if version != self._version:
+            return False
+        self._table.restore(imports)
+        return True
+
     def _changed(self) -> None:
         """Passes, outputs or an import's shape changed: the next compile plans again."""
         self._version += 1

@@ -89,6 +89,19 @@ class Imports:
         kept = self._made.get(name, {}).get((TOKEN, token))
         return None if kept is None else self._use(name, *kept)
 
+    def snapshot(self) -> tuple:
+        """The imports as they stand, for `restore` (a frame slot's, brought back when it comes
+        round again with the same inputs)."""
+        return (dict(self.by_name), dict(self.images), dict(self.buffers), dict(self._ints))
+
+    def restore(self, snapshot: tuple) -> None:
+        """The imports of `snapshot`; the caller knows their shapes are today's (the graph's
+        version is the one it was taken at), so nothing recompiles."""
+        by_name, images, buffers, ints = snapshot
+        if by_name.keys() != self.by_name.keys():
+            self._names = None
+        self.by_name, self.images, self.buffers, self._ints = dict(by_name), dict(images), dict(buffers), dict(ints)
+
     def handles(self) -> tuple:
         """(name, handle, view) of each import as integers, by name: what frame replay's key holds."""
         names = self._names

@@ -29,11 +29,11 @@ transparency, hdr effects and extent), the last two only with hdr effects on.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Hashable
+from collections.abc import Callable
 from typing import Any
 
 from ..config import Form
-from ..graph import UNREPLAYABLE, Access, FrameGraph, ImageDesc, Load, Pass
+from ..graph import FrameGraph, ImageDesc
 from ..graph.resources import format_name
 from .deferred_passes import (
     DeferredLightingPass,
@@ -44,7 +44,8 @@ from .deferred_passes import (
     RayShadowsPass,
 )
 from .forward import Forward, PostCall
-from .readback import Copy, Readback
+from .output_frame import OutputFrame, OverlayOver, ToneMapInto
+from .readback import Readback
 
 #: the graph's pass names -> the names the frame's timing marks have always used
 _MARKS = {
@@ -61,88 +62,12 @@ def _final_layout(vk: Any, layout: int) -> str:
     return "TRANSFER_SRC_OPTIMAL" if layout == vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL else "PRESENT_SRC_KHR"
 
 
-class _Frame:
-    """What this frame's passes draw with (set before each execute)."""
-
-    state: Any = None
-    tone_map: tuple[str, float] = ("clamp", 0.0)
-    overlay: Any = None
-    slot: int = 0
-    secondaries: tuple[Any, ...] | list[Any] = ()  # the scene rendering's, in order (output_passes.py)
-    reads: tuple[Any, ...] | list[Any] = ()  # (name, Access) forward reads of the scene's passes
-    background: tuple[float, float, float] = (0.0, 0.0, 0.0)  # fixed per renderer
-    readback: Copy | None = None  # the target's record_copy on a frame read back
-    # the deferred form's (render/passes/deferred_passes.py; output_passes.py sets them)
-    chunks: tuple[Any, ...] | list[Any] = ()  # the opaque chunks' secondaries, in the G-buffer
-    frame_set: Any = None  # the slot's frame descriptor set
-    features: int = 0  # the mesh pipelines' MATERIAL_FEATURES (the lighting's)
-    attachments: Any = None  # GBufferViews: what the lighting's and rays' sets name (set by record)
-    ray: Any = None  # the RayShadows on a frame with a traced light
-    transparent: Any = None  # weighted transparency's blended rows' secondary
-
-
-class ToneMapInto(Pass):
-    """The output's tone map (tone_map.py's pass, owned by the output passes) into `image`
-    (made by the graph when `desc` is given, else an import: the target)."""
-
-    name = "tone_map"
-
-    def __init__(self, output: Any, frame: _Frame, image: str, desc: ImageDesc | None) -> None:
-        self.output, self.frame, self.image, self.desc = output, frame, image, desc
-
-    def setup(self, builder: Any) -> None:
-        if self.desc is not None:
-            builder.create(self.image, self.desc)
-        builder.read("hdr", Access.FRAGMENT_SAMPLED)
-        builder.write(self.image, Access.COLOR_WRITE)  # every pixel: not loaded
-
-    def declares(self) -> Hashable:
-        return ()  # its setup declares the same every frame
-
-    def record(self, cb: Any, ctx: Any) -> None:
-        ctx.begin_rendering(colors=(self.image,))
-        self.output.tone_map_pass.record(cb, self.frame.state, self.output.target, *self.frame.tone_map)
-        ctx.end_rendering()
-
-    def key(self) -> Hashable:
-        return self.frame.tone_map
-
-
-class OverlayOver(Pass):
-    """The UI over the finished target (loaded, blended over it); nothing without an overlay."""
-
-    name = "imgui"
-
-    def __init__(self, frame: _Frame) -> None:
-        self.frame = frame
-
-    def setup(self, builder: Any) -> None:
-        if self.frame.overlay is not None:  # none: culled, with its barrier
-            builder.write("target", Access.COLOR_READ_WRITE, load=Load.LOAD)
-
-    def declares(self) -> Hashable:
-        return self.frame.overlay is not None
-
-    def record(self, cb: Any, ctx: Any) -> None:
-        overlay = self.frame.overlay
-        if overlay is None:
-            return
-        width, height = ctx.extent
-        ctx.begin_rendering(colors=("target",))
-        overlay.record(cb, self.frame.slot, width, height)
-        ctx.end_rendering()
-
-    def key(self) -> Hashable:
-        """The UI draws anew each frame: a frame with an overlay is never replayed."""
-        return UNREPLAYABLE if self.frame.overlay is not None else None
-
-
 class OutputGraph:
     """The output graphs (see the module) of one list of ldr effects (maybe none)."""
 
     def __init__(self, output: Any, effects: list[Any]) -> None:
         self.output, self.effects = output, list(effects)
-        self.frame = _Frame()
+        self.frame = OutputFrame()
         self.frame.background = output.clear_color
         self.graphs: dict[tuple[Any, ...], FrameGraph] = {}
         self._post_names: frozenset[str] = frozenset()  # the hdr effects' passes (marked once, at the last)
@@ -150,6 +75,9 @@ class OutputGraph:
         self._views: tuple[Any, Any, GBufferViews] | None = None  # _gbuffer_views' last
         self._recreations = getattr(output.target, "recreations", 0)  # the swapchain's, the graphs made in
         self._prepared: tuple[Any, Any, FrameGraph] | None = None  # prepare's, until record takes it
+        # per frame slot: what its last full prepare read (_inputs), the shape, the graph and its
+        # imports then (the slots alternate: each comes round with its own buffers)
+        self._kept: dict[int, tuple[tuple, tuple, FrameGraph, tuple]] = {}
         self._copies = False  # this frame's readback copies the target
 
     def _make(self, form: Form, samples: int, color_format: int, ray: bool, oit: bool, post: Any) -> FrameGraph:
@@ -190,7 +118,78 @@ class OutputGraph:
         (cached while nothing changed), the frame's settings set: what its passes' keys read
         (frame replay asks before the jobs, render/frame/replay.py; `record` then reuses it).
         `rendering` (output_passes.OutputRendering) names the target's image; `readback`:
-        copy the target to the host."""
+        copy the target to the host. When nothing it reads changed since the slot's last
+        prepare, that one's imports are brought back instead of made again (_again)."""
+        inputs = self._inputs(state, rendering) if not readback else None
+        graph = self._again(inputs, slot)
+        if graph is not None:
+            self._copies = False  # (a frame reading back prepares in full)
+            if not FrameGraph.verify_declares:
+                self._set_frame(graph, state, rendering, tone_map, overlay, slot, readback)
+                return graph
+            again = dict(graph._table.by_name)  # the tests: the full prepare must import the same
+            full = self._prepare(state, rendering, tone_map, overlay, slot, readback, inputs)
+            assert full is graph and graph._table.by_name == again, "the kept imports are not this frame's"
+            return graph
+        return self._prepare(state, rendering, tone_map, overlay, slot, readback, inputs)
+
+    def _inputs(self, state: Any, rendering: Any) -> tuple:
+        """What a prepare's graph and imports follow from, besides the frame's settings: equal
+        inputs, equal shape and imports."""
+        output = self.output
+        target, scene = output.target, output.scene
+        return (
+            state,
+            rendering,
+            rendering.image,
+            rendering.view,
+            target.form,
+            target.attachments,
+            target.color_format,
+            getattr(target, "recreations", 0),
+            target.final_layout,
+            output.ray_shadows,
+            output.oit,
+            self.frame.transparent is not None,
+            tuple(output.post),
+            scene.signature() if scene is not None else None,
+        )
+
+    def _again(self, inputs: tuple | None, slot: int) -> FrameGraph | None:
+        """The slot's last graph with its imports back, if `inputs` are those it was prepared from."""
+        kept = self._kept.get(slot)
+        if inputs is None or kept is None or kept[0] != inputs or self.graphs.get(kept[1]) is not kept[2]:
+            return None
+        return kept[2] if kept[2].restore_imports(kept[3]) else None
+
+    def _set_frame(
+        self, graph: FrameGraph, state: Any, rendering: Any, tone_map: Any, overlay: Any, slot: int, readback: bool
+    ) -> None:
+        """This frame's settings into the graph's passes (their keys and declarations read them),
+        the graph compiled (cached), and kept for `record`."""
+        output = self.output
+        if output.post and output.inputs is not None:
+            for effect in output.post:
+                if hasattr(effect, "begin_frame"):
+                    effect.begin_frame(output.inputs)
+        self.graph = graph
+        frame = self.frame
+        frame.state, frame.tone_map, frame.overlay, frame.slot = state, tone_map, overlay, slot
+        graph.compile((int(state.area.extent.width), int(state.area.extent.height)))
+        if output.target.form == Form.DEFERRED:
+            frame.attachments = self._gbuffer_views(graph, output.target.attachments)
+        self._prepared = ((state, rendering, overlay), (tone_map, slot, readback), graph)
+
+    def _prepare(
+        self,
+        state: Any,
+        rendering: Any,
+        tone_map: tuple[str, float],
+        overlay: Any,
+        slot: int,
+        readback: bool,
+        inputs: tuple | None,
+    ) -> FrameGraph:
         target = self.output.target
         attachments = target.attachments
         form, samples, color_format = target.form, int(attachments.samples), int(target.color_format)
@@ -218,23 +217,15 @@ class OutputGraph:
             for old in [k for k in self.graphs if k[5] != post_shape or k[:3] == shape[:3]]:  # outdone: gone
                 self.graphs.pop(old).destroy()
             graph = self.graphs[shape] = self._make(*shape)
-        if post and self.output.inputs is not None:
-            for effect in post:
-                if hasattr(effect, "begin_frame"):
-                    effect.begin_frame(self.output.inputs)
-        self.graph = graph
         self._copies = readback and target.take_readback()  # a swapchain's: only for the image asked
         headless = target.final_layout == self.output.vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
         self._place_readback(graph, self._copies or headless)
         self._import_attachments(graph, form, attachments)
         self._import_target(graph, rendering, extent)
         self._import_scene(graph)
-        frame = self.frame
-        frame.state, frame.tone_map, frame.overlay, frame.slot = state, tone_map, overlay, slot
-        graph.compile(extent)
-        if deferred:
-            frame.attachments = self._gbuffer_views(graph, attachments)
-        self._prepared = ((state, rendering, overlay), (tone_map, slot, readback, shape), graph)
+        self._set_frame(graph, state, rendering, tone_map, overlay, slot, readback)
+        if inputs is not None:  # this slot's imports, for its next frame with the same inputs
+            self._kept[slot] = (inputs, shape, graph, graph.imports_snapshot())
         return graph
 
     def forget_prepared(self) -> None:
@@ -247,7 +238,7 @@ class OutputGraph:
         kept, self._prepared = self._prepared, None
         if kept is None or any(a is not b for a, b in zip(kept[0], (state, rendering, overlay))):
             return None
-        return kept[2] if kept[1][:3] == (tone_map, slot, readback) else None
+        return kept[2] if kept[1] == (tone_map, slot, readback) else None
 
     def record(
         self,
