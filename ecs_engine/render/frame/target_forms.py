@@ -130,6 +130,9 @@ class TargetForms(PostEffects):
         if self.lights.deferred(samples) or (self.transparency == "weighted" and self._blends and samples == 1):
             return "deferred"
         post = bool(self.post_effects)
+        views = getattr(self, "views", None)  # (made in Renderer.__init__ before the first form)
+        if views is not None and views.on:
+            return "hdr"  # several camera views draw through the HDR colour (view_graph.py)
         return "hdr" if wants_hdr(self.tone_map, self.exposure, samples, self._blends, post) else "direct"
 
     def _fit_target(self) -> None:

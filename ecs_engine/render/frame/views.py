@@ -1,0 +1,155 @@
+"""Several camera views into the window (components/camera_views.py: split screen, a
+picture-in-picture): each view drawn as a frame of its own through the renderer's one-frame
+machinery (draw_frame.py), in the views' order, into its rectangle of the same target image.
+
+- A world whose cameras have no Viewport or RenderTexture draws as before: `several_views` is
+  the one check the window's one camera pays (kept per world structure).
+- Each view's frame takes the next frame slot (its buffers, descriptor set, secondaries, replay
+  record are the slot's); the swapchain's acquire semaphore is waited by the first view's submit,
+  the present semaphore signalled by the last one's; the readback and the overlay go with the
+  last view. The queue runs the submits in order; each graph's barriers chain with the one
+  before's (view_graph.py).
+- Per view: its camera's matrices and layers, a FrameExtractor per camera entity (temporal
+  culling's history, the planes and chunk splits kept per camera), the shadow views planned
+  from its camera (cascades follow it), its light clusters, its output graph (view_graph.py: one
+  per place in the order, so each keeps its own compiled graph and transients at its size).
+  Shared: the world's snapshot of materials, textures, meshes, the environment and the shadow
+  map images (drawn again in each view's frame, before its scene reads them).
+- Frame replay is per slot, and a slot's key names its view's graph, rectangle and camera: with
+  as many views as slots each view keeps its slot and replays; otherwise the views take turns
+  over the slots and every frame records (correct, at the cost of recording).
+- Refused with several views (UsageError, one message): occlusion culling (the GPU keeps one
+  depth pyramid of the last frame, which would be another view's) and post effects (they run
+  over the target's whole HDR image, not a view's corner of it: not done yet). Cameras drawing
+  into a RenderTexture are left out until render textures land.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from ...errors import UsageError
+from ..config import Culling
+from ..draw.path import FrameStats
+from ..extract.frame_data import FrameData, FrameExtractor
+from ..extract.views import ViewData, extract_views, several_views
+from ..passes.output_graph import OutputGraph
+from .view_graph import Placement, ViewGraph
+
+
+class Views:
+    """The renderer's per-view state (see the module); `on` while the last world drew through it
+    (the target's form follows: target_forms.py)."""
+
+    def __init__(self, threads: Callable[[], int]) -> None:
+        self.threads = threads
+        self.on = False
+        self.graphs: list[ViewGraph] = []  # by place in the drawing order
+        self.extractors: dict[int, FrameExtractor] = {}  # by camera entity
+        self._recreations = 0
+
+    def graph(self, output: Any, index: int) -> ViewGraph:
+        while len(self.graphs) <= index:
+            self.graphs.append(ViewGraph(output, first=not self.graphs))
+        return self.graphs[index]
+
+    def extractor(self, camera: int, chunk_rows: int | None) -> FrameExtractor:
+        found = self.extractors.get(camera)
+        if found is None:
+            found = self.extractors[camera] = FrameExtractor(self.threads, chunk_rows)
+        return found
+
+    def draw(
+        self,
+        r: Any,
+        world: Any,
+        readback: bool,
+        framebuffer: Any,
+        extent: tuple[int, int] | None,
+        wait: Any,
+        signal: Any,
+        dt: float | None,
+    ) -> FrameStats | None:
+        """The frame of every window view (renderer `r`: render's arguments), or None when the
+        world draws its one camera over the whole window (Renderer.render's own path)."""
+        width, height = extent or (r.target.width, r.target.height)
+        views = [v for v in extract_views(world, width, height) if v.texture is None] if several_views(world) else []
+        if not views or (len(views) == 1 and views[0].rect == (0, 0, width, height)):
+            if self.on:
+                self.on = False
+                self.forget()
+            return None
+        self._refuse(r)
+        materials = r.materials(world)
+        r._blends = materials.blends
+        self.on = True
+        r.ensure_output()  # the hdr form at least (view_graph.py)
+        datas = [self._extract(r, world, view, materials, dt) for view in views]  # a bad world fails here
+        output = r.output
+        if output.graph is None:
+            output.graph = OutputGraph(output, [])
+        plain, overlay = output.graph, r.overlay
+        stats = []
+        try:
+            for i, (view, data) in enumerate(zip(views, datas, strict=True)):
+                first, last = i == 0, i == len(views) - 1
+                graph = output.graph = self.graph(output, i)
+                graph.placement = Placement(view.rect, (width, height), last, view.view.entity)
+                r.overlay = overlay if last else None
+                w, h = view.rect[2:]
+                semaphores = (wait if first else None, signal if last else None)
+                stats.append(r._draw(data, materials, w, h, framebuffer, readback and last, *semaphores))
+        finally:
+            output.graph, r.overlay = plain, overlay
+        return _total(stats)
+
+    def _refuse(self, r: Any) -> None:
+        if r.culling_method.name is Culling.OCCLUSION:
+            raise UsageError(
+                "occlusion culling with several camera views: it culls by the last frame's depth, "
+                "which is another view's; use frustum or temporal culling"
+            )
+        if r.post_effects:
+            raise UsageError(
+                "post effects with several camera views are not drawn yet (they run over the whole "
+                "HDR image, not one view's): turn them off for this scene"
+            )
+
+    def _extract(self, r: Any, world: Any, view: ViewData, materials: Any, dt: float | None) -> FrameData:
+        """The view's snapshot by its camera's own extractor (its culling's state its own)."""
+        extractor = self.extractor(view.view.entity, r.chunk_rows)
+        w, h = view.rect[2:]
+        culling = r.culling_method.name  # a method per extractor: temporal culling keeps its rows per camera
+        args = (culling, len(materials), materials.set_aside(), None, dt, r.meshes.bounds())
+        return extractor.extract(
+            world, w / h, len(r.meshes), *args, materials=materials, camera=view.camera, layers=view.layers
+        )
+
+    def forget(self) -> None:
+        """Back to one view: the extractors go (a camera's history would be stale); the graphs
+        stay (made again only by a change of form or target)."""
+        self.extractors.clear()
+
+    def destroy(self) -> None:
+        for graph in self.graphs:
+            graph.destroy()
+        self.graphs.clear()
+        self.extractors.clear()
+
+
+def _total(stats: list[FrameStats]) -> FrameStats:
+    """The views' frames counted as one."""
+    gpu = [s.gpu_ms for s in stats if s.gpu_ms is not None]
+    return FrameStats(
+        draws=sum(s.draws for s in stats),
+        instances=sum(s.instances for s in stats),
+        triangles=sum(s.triangles for s in stats),
+        lights=stats[-1].lights,
+        gpu_ms=sum(gpu) if gpu else None,
+        wait_ms=sum(s.wait_ms for s in stats),
+        record_ms=sum(s.record_ms for s in stats),
+        chunks=sum(s.chunks for s in stats),
+        candidates=sum(s.candidates for s in stats),
+        replayed=all(s.replayed for s in stats),
+    )

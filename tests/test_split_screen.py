@@ -1,0 +1,128 @@
+"""Several camera views drawn into one window (render/frame/views.py, view_graph.py): each
+camera's picture lands in its Viewport's rectangle, in order, with its own matrices and layers;
+a world of one camera draws exactly as before."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from gpu_context import headless_gpu
+
+from ecs_engine import World
+from ecs_engine.components import Camera, DirectionalLight, Mesh, RenderLayers, Transform, Viewport
+from ecs_engine.errors import UsageError
+from ecs_engine.maths.camera import look_rotation
+from ecs_engine.render.assets.materials import Material, materials
+from ecs_engine.render.assets.primitives import cube_mesh
+
+W, H = 64, 32
+RED, GREEN = -20.0, 20.0  # the cubes' x: far apart, so each camera sees only its own
+
+
+def _world(mesh: int, split: bool = True, layers: bool = False) -> World:
+    """A red cube and a green one; with `split` a camera over each in the window's left and right
+    halves (with `layers`: both cameras at the same place, the red cube on layer 1 seen by the
+    left one only, the green on layer 2 by the right one), else one camera on the red one."""
+    world = World()
+    red = materials(world).add(Material("red", "lambert", (1.0, 0.0, 0.0, 1.0)))
+    green = materials(world).add(Material("green", "lambert", (0.0, 1.0, 0.0, 1.0)))
+    for x, material, mask in ((RED, red, 0b10), (GREEN, green, 0b100)):
+        x = 0.0 if layers else x
+        extra = (RenderLayers(mask=mask),) if layers else ()
+        place = Transform(position=(x, 0.0, 0.0), scale=(1.5, 1.5, 1.5))
+        world.spawn(place, Mesh(handle=mesh, material=material), *extra)
+    world.spawn(Transform(rotation=look_rotation((0.3, -0.5, -1.0))), DirectionalLight(illuminance=3.0))
+    cams = [(RED, Viewport(width=0.5), 0b11), (GREEN, Viewport(x=0.5, width=0.5), 0b101)] if split else [(RED, None, 1)]
+    for x, viewport, mask in cams:
+        x = 0.0 if layers else x
+        extra = [e for e in (viewport, RenderLayers(mask=mask) if layers else None) if e is not None]
+        world.spawn(Transform(position=(x, 0.0, 4.0)), Camera(fov_y=math.radians(60.0)), *extra)
+    return world
+
+
+def _render(gpu, world: World, frames: int = 1, **settings) -> np.ndarray:
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.render.frame.renderer import Renderer
+
+    renderer = Renderer(gpu.device, gpu.target, gpu.meshes, **settings)
+    try:
+        default_schedule().run(world, 0.0)
+        for _ in range(frames):
+            renderer.render(world, readback=True)
+        return gpu.target.pixels()[..., :3].astype(np.int64)
+    finally:
+        renderer.destroy()
+
+
+def _share(img: np.ndarray, channel: int) -> float:
+    """The part of `img`'s pixels where `channel` clearly dominates."""
+    px = img.reshape(-1, 3)
+    others = np.delete(px, channel, axis=1).max(axis=1)
+    return float(((px[:, channel] > 60) & (others < 30)).mean())
+
+
+def _halves(img: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return img[:, : W // 2], img[:, W // 2 :]
+
+
+@pytest.mark.parametrize("layers", [False, True])
+def test_each_camera_draws_into_its_half(layers: bool) -> None:
+    with headless_gpu(W, H) as gpu:
+        mesh = gpu.meshes.add(cube_mesh())
+        img = _render(gpu, _world(mesh, layers=layers), frames=3)
+    left, right = _halves(img)
+    assert _share(left, 0) > 0.1 and _share(left, 1) == 0.0  # the red cube, nothing green
+    assert _share(right, 1) > 0.1 and _share(right, 0) == 0.0
+    # each half is centred on its cube: its own camera's matrices, not the window's
+    for half, channel in ((left, 0), (right, 1)):
+        cols = np.flatnonzero((half[..., channel] > 60).any(axis=0))
+        assert abs((cols.min() + cols.max()) / 2 - (W // 4 - 0.5)) <= 1.5
+
+
+def test_one_camera_draws_as_before_and_a_full_viewport_too() -> None:
+    with headless_gpu(W, H) as gpu:
+        mesh = gpu.meshes.add(cube_mesh())
+        before = _render(gpu, _world(mesh, split=False))
+        world = _world(mesh, split=False)
+        (cam,) = world.query(Camera, write=()).entities()
+        world.add(int(cam), Viewport())  # the whole window: the one camera's own path
+        assert np.array_equal(_render(gpu, world), before)
+        world.set(int(cam), Viewport(x=0.5, width=0.5))  # half the window: the rest cleared
+        half = _render(gpu, world)
+    assert _share(before, 0) > 0.05
+    assert _share(half[:, W // 2 :], 0) > 0.1 and _share(half[:, : W // 2], 0) == 0.0
+    assert len(np.unique(half[:, : W // 4].reshape(-1, 3), axis=0)) == 1  # the background alone
+
+
+def test_a_split_window_back_to_one_camera_draws_as_before() -> None:
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.render.frame.renderer import Renderer
+
+    with headless_gpu(W, H) as gpu:
+        mesh = gpu.meshes.add(cube_mesh())
+        before = _render(gpu, _world(mesh, split=False))
+        world = _world(mesh)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+        try:
+            default_schedule().run(world, 0.0)
+            renderer.render(world, readback=True)
+            assert renderer.target.form == "hdr" and renderer.views.on
+            right = [int(e) for e in world.query(Camera, write=()).entities()][1]
+            world.destroy(right)
+            left = int(world.query(Camera, write=()).entities()[0])
+            world.remove(left, Viewport)
+            renderer.ensure_output()
+            renderer.render(world, readback=True)
+            assert not renderer.views.on and renderer.target.form == "direct"
+            assert np.array_equal(gpu.target.pixels()[..., :3].astype(np.int64), before)
+        finally:
+            renderer.destroy()
+
+
+def test_post_effects_are_refused_with_several_views() -> None:
+    with headless_gpu(W, H) as gpu:
+        mesh = gpu.meshes.add(cube_mesh())
+        with pytest.raises(UsageError, match="post effects with several camera views"):
+            _render(gpu, _world(mesh), post=("fxaa",))
