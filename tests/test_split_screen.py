@@ -126,3 +126,34 @@ def test_post_effects_are_refused_with_several_views() -> None:
         mesh = gpu.meshes.add(cube_mesh())
         with pytest.raises(UsageError, match="post effects with several camera views"):
             _render(gpu, _world(mesh), post=("fxaa",))
+
+
+def test_each_view_replays_its_own_slot_and_never_another_view_s() -> None:
+    """Two views, two frame slots: each view keeps its slot, a still frame is submitted again;
+    a moved camera's half follows it, the other half stays."""
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.render.frame.renderer import Renderer
+
+    with headless_gpu(W, H) as gpu:
+        mesh = gpu.meshes.add(cube_mesh())
+        world = _world(mesh)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+        try:
+            schedule = default_schedule()
+            schedule.run(world, 0.0)
+            for _ in range(4):
+                renderer.render(world, readback=False)
+            assert renderer.replay.replayed >= 2
+            renderer.render(world, readback=True)
+            still = gpu.target.pixels()[..., :3].astype(np.int64)
+            right = int(world.query(Camera, write=()).entities()[1])
+            world.set(right, Transform(position=(GREEN + 1.0, 0.0, 4.0)))  # the green cube moves left in its half
+            schedule.run(world, 0.0)
+            renderer.render(world, readback=True)
+            moved = gpu.target.pixels()[..., :3].astype(np.int64)
+        finally:
+            renderer.destroy()
+    assert np.array_equal(_halves(moved)[0], _halves(still)[0])
+    assert not np.array_equal(_halves(moved)[1], _halves(still)[1])
+    cols = np.flatnonzero((_halves(moved)[1][..., 1] > 60).any(axis=0))
+    assert (cols.min() + cols.max()) / 2 < W // 4 - 2
