@@ -251,6 +251,8 @@ def test_a_sync_that_remakes_the_page_keeps_the_render_target_and_changes_the_ke
     assert np.abs(mip0 - halves(16, "y")).max() <= 1 and np.abs(mip1 - halves(8, "y")).max() <= 1
     with pytest.raises(UsageError, match="not on the GPU yet"):
         pages.place(len(textures))
+    with pytest.raises(UsageError, match="texture 1 is not a render target"):
+        RenderTexturePass(pages, 1).key()  # "late", a texture with pixels of its own
 
 
 def test_a_material_samples_the_render_target_as_any_texture():
@@ -278,3 +280,26 @@ def test_a_material_samples_the_render_target_as_any_texture():
     q = size // 4
     assert np.abs(img[q, q, :3] - srgb8(A)[:3]).max() <= 2, img[q, q]  # the view's top is the texture's top
     assert np.abs(img[3 * q, 3 * q, :3] - srgb8(B)[:3]).max() <= 2, img[3 * q, 3 * q]
+
+
+def test_without_linear_blits_it_blits_nearest_and_without_blits_it_copies_mip_0(pages, monkeypatch):
+    """The fallbacks for a device whose format features lack linear filtering or blits (none
+    known: Vulkan requires both for R8G8B8A8_SRGB), forced here."""
+    import ecs_engine.render.passes.render_texture as module
+
+    vk = pages.device.vk
+    textures = Textures()
+    tv = textures.render_target("tv", 16, 16)
+    pages.sync(textures)
+    monkeypatch.setattr(module, "blit_filter", lambda device, *formats: vk.VK_FILTER_NEAREST)
+    draw_into(pages, tv, 16, 16)
+    mip0, mip1, last = read_layer(pages, tv, [0, 1, 4])
+    assert np.abs(mip0 - halves(16)).max() <= 1 and np.abs(mip1 - halves(8)).max() <= 1
+    assert any(np.abs(last[0, 0] - srgb8(c)).max() <= 1 for c in (A, B))  # one texel picked, not a mean
+    monkeypatch.setattr(module, "blit_filter", lambda device, *formats: None)
+    draw_into(pages, tv, 16, 16, split="y")
+    mip0, mip1 = read_layer(pages, tv, [0, 1])
+    assert np.abs(mip0 - halves(16, "y")).max() <= 1  # copied as it is
+    assert np.abs(mip1 - halves(8)).max() <= 1  # the lower mips keep what they held
+    with pytest.raises(UsageError, match="cannot blit 8 x 8 pixels into its 16 x 16 layer"):
+        draw_into(pages, tv, 8, 8)

@@ -8,9 +8,9 @@ Usage (a view's graph, for a camera with `RenderTexture(name, width, height)`):
     image.import_into(graph, "target")                # each frame (a new handle recompiles nothing)
     ... the view's passes draw "target" as the window's graph does (forward, tone_map, post) ...
     graph.add_pass(RenderTexturePass(renderer.texture_pages, handle, source="target"))
-    # after tone mapping and post effects, in place of the readback pass; it is a side effect,
-    # so no graph.output() is needed for it (declare one for "target" all the same, so that the
-    # passes drawing it are not culled)
+    # after tone mapping and post effects, in place of the readback pass; a side effect that
+    # reads "target": it and the passes drawing "target" are kept without a graph.output().
+    # Several render textures in one graph: give each pass its own name= ("render_texture:tv").
 
 `RenderTargetImage` is RGBA8 sRGB (VK_FORMAT_R8G8B8A8_SRGB, the window's format: pipelines made
 for the window draw into it), with COLOR_ATTACHMENT, TRANSFER_SRC and SAMPLED usage. Draw the view
@@ -111,13 +111,18 @@ class RenderTexturePass(Pass):
         builder.read(self.source, Access.TRANSFER_READ)
         builder.side_effect()  # writes the page, outside the graph
 
+    def _place(self) -> TexturePlace:
+        if self.handle not in self.pages.render_targets:  # a texture with pixels of its own: never drawn over
+            raise UsageError(f"texture {self.handle} is not a render target (Textures.render_target makes them)")
+        return self.pages.place(self.handle)
+
     def key(self) -> Hashable:
-        place = self.pages.place(self.handle)
+        place = self._place()
         return (place.generation, handle_int(self.pages.device.vk, place.image.handle), place.layer, place.side)
 
     def record(self, cb: Any, ctx: PassContext) -> None:
         vk = ctx.vk
-        place = self.pages.place(self.handle)
+        place = self._place()
         src = ctx.image(self.source)
         if src.format not in self._filters:
             self._filters[src.format] = blit_filter(ctx.device, src.format, place.image.format)
