@@ -7,6 +7,7 @@ material that samples the layer, drawn by the Renderer."""
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 
 import numpy as np
 import pytest
@@ -98,24 +99,33 @@ class Halves(Pass):
         ctx.end_rendering()
 
 
-def draw_into(pages, handle, width, height, split="x"):
-    """A graph drawing halves into a RenderTargetImage and the pass copying it into the layer."""
+@contextmanager
+def render_view(pages, handle, width, height, split="x"):
+    """A graph drawing halves into a RenderTargetImage, then the pass copying it into the layer;
+    yields a function that records and submits one frame of it and returns the graph's key."""
     device = pages.device
     image = RenderTargetImage(device, width, height)
     graph = FrameGraph(device)
     try:
         image.import_into(graph)
         graph.add_pass(Halves(split))
-        p = RenderTexturePass(pages, handle)
-        graph.add_pass(p)
+        graph.add_pass(RenderTexturePass(pages, handle))
         graph.compile((width, height))
         assert graph.order == ["halves", "render_texture"]
-        key = graph.key()
-        device.submit_once(graph.execute)
-        return key
+
+        def frame():
+            device.submit_once(graph.execute)
+            return graph.key()
+
+        yield frame
     finally:
         graph.destroy()
         image.destroy()
+
+
+def draw_into(pages, handle, width, height, split="x"):
+    with render_view(pages, handle, width, height, split) as frame:
+        return frame()
 
 
 def read_layer(pages, handle, mips):
@@ -235,18 +245,17 @@ def test_a_sync_that_remakes_the_page_keeps_the_render_target_and_changes_the_ke
     tv = textures.render_target("tv", 16, 16)
     pages.sync(textures)
     first = pages.place(tv)
-    p = RenderTexturePass(pages, tv)
-    key = p.key()
-    draw_into(pages, tv, 16, 16)
-    textures.add(Texture("late", np.full((16, 16, 4), 255, np.uint8)))  # the same class: its page is remade
-    assert pages.sync(textures)
-    again = pages.place(tv)
-    assert (again.layer, again.side, again.page) == (first.layer, first.side, first.page)
-    assert again.generation > first.generation and p.key() != key
-    assert pages.render_targets == {tv}
-    (black,) = read_layer(pages, tv, [0])
-    assert (black == [0, 0, 0, 255]).all()  # filled black again: the next frame draws it
-    draw_into(pages, tv, 16, 16, split="y")
+    with render_view(pages, tv, 16, 16, split="y") as frame:
+        key = frame()
+        textures.add(Texture("late", np.full((16, 16, 4), 255, np.uint8)))  # the same class: its page is remade
+        assert pages.sync(textures)
+        again = pages.place(tv)
+        assert (again.layer, again.side, again.page) == (first.layer, first.side, first.page)
+        assert again.generation > first.generation and again.image is not first.image
+        assert pages.render_targets == {tv}
+        (black,) = read_layer(pages, tv, [0])
+        assert (black == [0, 0, 0, 255]).all()  # filled black again: the next frame draws it
+        assert frame() != key  # the same graph and pass record the new page (frame replay records anew)
     mip0, mip1 = read_layer(pages, tv, [0, 1])
     assert np.abs(mip0 - halves(16, "y")).max() <= 1 and np.abs(mip1 - halves(8, "y")).max() <= 1
     with pytest.raises(UsageError, match="not on the GPU yet"):

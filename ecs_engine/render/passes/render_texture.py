@@ -34,7 +34,7 @@ generation, so frame replay records again when a sync remakes the page.
 
 from __future__ import annotations
 
-from collections.abc import Hashable
+from collections.abc import Callable, Hashable
 from typing import Any
 
 from ...errors import UsageError
@@ -44,6 +44,9 @@ from ..assets.texture_pages import TexturePages, TexturePlace
 from ..graph import Access, FrameGraph, Pass, PassBuilder, PassContext
 
 __all__ = ["RenderTargetImage", "RenderTexturePass", "blit_filter"]
+
+#: one command of the pass, its structs made: called with (vk.lib, the command buffer)
+Step = Callable[[Any, Any], None]
 
 
 class RenderTargetImage:
@@ -106,6 +109,7 @@ class RenderTexturePass(Pass):
     def __init__(self, pages: TexturePages, handle: int, source: str = "target", name: str = "render_texture") -> None:
         self.pages, self.handle, self.source, self.name = pages, int(handle), source, name
         self._filters: dict[int, int | None] = {}  # source format -> blit_filter with the page's
+        self._steps: tuple[tuple, list[Step]] | None = None  # (what they were made for, the steps)
 
     def setup(self, builder: PassBuilder) -> None:
         builder.read(self.source, Access.TRANSFER_READ)
@@ -121,38 +125,47 @@ class RenderTexturePass(Pass):
         return (place.generation, handle_int(self.pages.device.vk, place.image.handle), place.layer, place.side)
 
     def record(self, cb: Any, ctx: PassContext) -> None:
-        vk = ctx.vk
         place = self._place()
         src = ctx.image(self.source)
-        if src.format not in self._filters:
-            self._filters[src.format] = blit_filter(ctx.device, src.format, place.image.format)
-        blit = self._filters[src.format]
-        width, height = src.extent
-        if blit is None and (width, height) != (place.side, place.side):
+        made_for = (place.generation, place.layer, handle_int(ctx.vk, src.handle), src.extent, src.format)
+        if self._steps is None or self._steps[0] != made_for:
+            self._steps = (made_for, self._plan(ctx.device, place, src.handle, src.extent, src.format))
+        lib = ctx.vk.lib  # raw calls with structs made once: the wrappers cost about 2 ms a frame
+        for step in self._steps[1]:
+            step(lib, cb)
+
+    def _plan(self, device: Any, place: TexturePlace, src: Any, extent: tuple[int, int], fmt: int) -> list[Step]:
+        """The steps recording the copy: barriers, blits (or the one copy), with their structs."""
+        vk = device.vk
+        if fmt not in self._filters:
+            self._filters[fmt] = blit_filter(device, fmt, place.image.format)
+        blit = self._filters[fmt]
+        if blit is None and extent != (place.side, place.side):
             raise UsageError(
-                f"render texture {self.handle}: the device cannot blit {width} x {height} pixels into its "
-                f"{place.side} x {place.side} layer; draw the view at {place.side} x {place.side}"
+                f"render texture {self.handle}: the device cannot blit {extent[0]} x {extent[1]} pixels into "
+                f"its {place.side} x {place.side} layer; draw the view at {place.side} x {place.side}"
             )
         read_only, dst, src_layout = (
             vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
             vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
             vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
         )
-        barriers = _Barriers(ctx.device, place)
-        barriers.record(cb, [barriers.make(0, place.mips, read_only, dst)])
+        barriers = _Barriers(device, place)
+        steps = [barriers.step([barriers.make(0, place.mips, read_only, dst)])]
         if blit is None:
-            _copy(vk, cb, src.handle, place, width, height)
-            barriers.record(cb, [barriers.make(0, place.mips, dst, read_only)])
-            return
-        _blit(vk, cb, (src.handle, 0, 0), (width, height), place, 0, blit)
+            steps.append(_copy(vk, src, place, extent))
+            steps.append(barriers.step([barriers.make(0, place.mips, dst, read_only)]))
+            return steps
+        steps.append(_blit(vk, (src, 0, 0), extent, place, 0, blit))
         for mip in range(1, place.mips):
-            barriers.record(cb, [barriers.make(mip - 1, 1, dst, src_layout)])
-            _blit(vk, cb, (place.image.handle, mip - 1, place.layer), _side(place, mip - 1), place, mip, blit)
+            steps.append(barriers.step([barriers.make(mip - 1, 1, dst, src_layout)]))
+            steps.append(_blit(vk, (place.image.handle, mip - 1, place.layer), _side(place, mip - 1), place, mip, blit))
         last = place.mips - 1
         finals = [barriers.make(last, 1, dst, read_only)]
         if last:
             finals.insert(0, barriers.make(0, last, src_layout, read_only))
-        barriers.record(cb, finals)
+        steps.append(barriers.step(finals))
+        return steps
 
 
 def _side(place: TexturePlace, mip: int) -> tuple[int, int]:
@@ -166,8 +179,8 @@ def _layers(vk: Any, mip: int, layer: int) -> Any:
 
 
 def _blit(
-    vk: Any, cb: Any, src: tuple[Any, int, int], extent: tuple[int, int], place: TexturePlace, mip: int, blit: int
-) -> None:
+    vk: Any, src: tuple[Any, int, int], extent: tuple[int, int], place: TexturePlace, mip: int, blit: int
+) -> Step:
     """`src` (image, mip, layer: the camera's image, or the layer's mip above), its whole
     `extent`, into the layer's `mip`."""
     dw, dh = _side(place, mip)
@@ -177,36 +190,31 @@ def _blit(
         dstSubresource=_layers(vk, mip, place.layer),
         dstOffsets=[vk.VkOffset3D(0, 0, 0), vk.VkOffset3D(dw, dh, 1)],
     )
-    vk.vkCmdBlitImage(
-        cb,
-        src[0],
-        vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-        place.image.handle,
-        vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-        1,
-        [region],
-        blit,
-    )
+    pointer, image, dst = vk.ffi.addressof(region), src[0], place.image.handle
+    from_layout, to_layout = vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL
+
+    def step(lib: Any, cb: Any, keep: Any = region) -> None:  # holds `region`: the pointer does not
+        lib.vkCmdBlitImage(cb, image, from_layout, dst, to_layout, 1, pointer, blit)
+
+    return step
 
 
-def _copy(vk: Any, cb: Any, src: Any, place: TexturePlace, width: int, height: int) -> None:
+def _copy(vk: Any, src: Any, place: TexturePlace, extent: tuple[int, int]) -> Step:
     """Mip 0 copied as it is (sRGB bytes into the page's sRGB storage)."""
     region = vk.VkImageCopy(
         srcSubresource=_layers(vk, 0, 0),
         srcOffset=vk.VkOffset3D(0, 0, 0),
         dstSubresource=_layers(vk, 0, place.layer),
         dstOffset=vk.VkOffset3D(0, 0, 0),
-        extent=vk.VkExtent3D(width, height, 1),
+        extent=vk.VkExtent3D(extent[0], extent[1], 1),
     )
-    vk.vkCmdCopyImage(
-        cb,
-        src,
-        vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-        place.image.handle,
-        vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-        1,
-        [region],
-    )
+    pointer, dst = vk.ffi.addressof(region), place.image.handle
+    from_layout, to_layout = vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL
+
+    def step(lib: Any, cb: Any, keep: Any = region) -> None:  # holds `region`: the pointer does not
+        lib.vkCmdCopyImage(cb, src, from_layout, dst, to_layout, 1, pointer)
+
+    return step
 
 
 class _Barriers:
@@ -255,5 +263,11 @@ class _Barriers:
             ),
         )
 
-    def record(self, cb: Any, barriers: list[Any]) -> None:
-        self.vk.vkCmdPipelineBarrier2(cb, self.vk.VkDependencyInfo(pImageMemoryBarriers=barriers))
+    def step(self, barriers: list[Any]) -> Step:
+        info = self.vk.VkDependencyInfo(pImageMemoryBarriers=barriers)  # keeps the barriers alive
+        pointer = self.vk.ffi.addressof(info)
+
+        def step(lib: Any, cb: Any, keep: Any = info) -> None:  # holds `info`: the pointer does not
+            lib.vkCmdPipelineBarrier2(cb, pointer)
+
+        return step
