@@ -152,6 +152,7 @@ def build_parser(
         "shadows: a cube, a pillar and boxes under casting lights (--no-shadows: none cast); "
         "environment: spheres mirroring, refracting and lit by a sky (PATH: an equirectangular .hdr or image); "
         "split_screen: grid100 seen by two cameras, half the window each, and a picture-in-picture; "
+        "monitor: a room with a screen showing a second camera's picture (render to texture); "
         "motion: text-mode ECS scene (no rendering)",
     )
     demo.add_argument(

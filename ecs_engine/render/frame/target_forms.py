@@ -131,7 +131,7 @@ class TargetForms(PostEffects):
             return "deferred"
         post = bool(self.post_effects)
         views = getattr(self, "views", None)  # (made in Renderer.__init__ before the first form)
-        if views is not None and views.on:
+        if views is not None and views.split:
             return "hdr"  # several camera views draw through the HDR colour (view_graph.py)
         return "hdr" if wants_hdr(self.tone_map, self.exposure, samples, self._blends, post) else "direct"
 

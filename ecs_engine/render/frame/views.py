@@ -1,6 +1,10 @@
-"""Several camera views into the window (components/camera_views.py: split screen, a
-picture-in-picture): each view drawn as a frame of its own through the renderer's one-frame
-machinery (draw_frame.py), in the views' order, into its rectangle of the same target image.
+"""Several camera views (components/camera_views.py): cameras drawing into a RenderTexture
+(texture_views.py: its own target, copied into the texture's layer) first, then the window's
+(split screen, a picture-in-picture), each into its rectangle of the same target image
+(view_graph.py). Each view is drawn as a frame of its own through the renderer's one-frame
+machinery (draw_frame.py). A window drawn whole by one camera keeps the window's own output
+graph and form (a world with a monitor but no split screen); a split window is drawn in the hdr
+form at least (target_forms.py). A texture view whose texture no material samples is skipped.
 
 - A world whose cameras have no Viewport or RenderTexture draws as before: `several_views` is
   the one check the window's one camera pays (kept per world structure).
@@ -20,8 +24,8 @@ machinery (draw_frame.py), in the views' order, into its rectangle of the same t
   over the slots and every frame records (correct, at the cost of recording).
 - Refused with several views (UsageError, one message): occlusion culling (the GPU keeps one
   depth pyramid of the last frame, which would be another view's) and post effects (they run
-  over the target's whole HDR image, not a view's corner of it: not done yet). Cameras drawing
-  into a RenderTexture are left out until render textures land.
+  over the target's whole HDR image, not a view's corner of it; and one effect's passes would
+  sit in several graphs: not done yet).
 """
 
 from __future__ import annotations
@@ -35,6 +39,7 @@ from ..draw.path import FrameStats
 from ..extract.frame_data import FrameData, FrameExtractor
 from ..extract.views import ViewData, extract_views, several_views
 from ..passes.output_graph import OutputGraph
+from .texture_views import TextureGraph, TextureTarget
 from .view_graph import Placement, ViewGraph
 
 
@@ -44,10 +49,12 @@ class Views:
 
     def __init__(self, threads: Callable[[], int]) -> None:
         self.threads = threads
-        self.on = False
-        self.graphs: list[ViewGraph] = []  # by place in the drawing order
+        self.on = False  # the views' path drew the last frame
+        self.split = False  # ... with the window split (or a part of it drawn): the hdr form
+        self.graphs: list[ViewGraph] = []  # the window's views', by place in the drawing order
         self.extractors: dict[int, FrameExtractor] = {}  # by camera entity
-        self._recreations = 0
+        self.targets: dict[str, TextureTarget] = {}  # the texture views', by texture name
+        self.texture_graphs: dict[str, TextureGraph] = {}  # and their output graphs
 
     def graph(self, output: Any, index: int) -> ViewGraph:
         while len(self.graphs) <= index:
@@ -71,38 +78,97 @@ class Views:
         signal: Any,
         dt: float | None,
     ) -> FrameStats | None:
-        """The frame of every window view (renderer `r`: render's arguments), or None when the
-        world draws its one camera over the whole window (Renderer.render's own path)."""
+        """The frame of every view (renderer `r`: render's arguments), or None when the world
+        draws its one camera over the whole window (Renderer.render's own path)."""
         width, height = extent or (r.target.width, r.target.height)
-        views = [v for v in extract_views(world, width, height) if v.texture is None] if several_views(world) else []
-        if not views or (len(views) == 1 and views[0].rect == (0, 0, width, height)):
+        views = extract_views(world, width, height) if several_views(world) else ()
+        window = [v for v in views if v.texture is None]
+        split = bool(views) and not (len(window) == 1 and window[0].rect == (0, 0, width, height))
+        materials = r.materials(world) if views else None
+        handles = [(v, self._handle(materials, v)) for v in views if v.texture is not None]
+        textures = [(v, h) for v, h in handles if h is not None]
+        if not textures and not split:
             if self.on:
-                self.on = False
+                self.on = self.split = False
                 self.forget()
             return None
         self._refuse(r)
-        materials = r.materials(world)
+        assert materials is not None
         r._blends = materials.blends
-        self.on = True
-        r.ensure_output()  # the hdr form at least (view_graph.py)
-        datas = [self._extract(r, world, view, materials, dt) for view in views]  # a bad world fails here
+        self.on, self.split = True, split
+        r.ensure_output()  # with several window views the hdr form at least (view_graph.py)
+        drawn: list[tuple[ViewData, int | None]] = [*textures, *((v, None) for v in window)]
+        datas = [self._extract(r, world, view, materials, dt) for view, _ in drawn]  # a bad world fails here
         output = r.output
         if output.graph is None:
             output.graph = OutputGraph(output, [])
-        plain, overlay = output.graph, r.overlay
+        plain, overlay, target = output.graph, r.overlay, r.target
         stats = []
         try:
-            for i, (view, data) in enumerate(zip(views, datas, strict=True)):
-                first, last = i == 0, i == len(views) - 1
-                graph = output.graph = self.graph(output, i)
-                graph.placement = Placement(view.rect, (width, height), last, view.view.entity)
-                r.overlay = overlay if last else None
-                w, h = view.rect[2:]
+            r.overlay = None
+            for i, ((view, handle), data) in enumerate(zip(drawn, datas, strict=True)):
+                first, last = i == 0, i == len(drawn) - 1
                 semaphores = (wait if first else None, signal if last else None)
+                w, h = view.rect[2:]
+                if handle is not None:  # into its own target, copied into the texture's layer
+                    output.graph = self._texture_graph(r, view, handle)
+                    r.target = output.target = self._target(r, view, target)
+                    stats.append(r._draw(data, materials, w, h, None, False, *semaphores))
+                    r.target = output.target = target
+                    continue
+                output.graph = plain
+                if split:
+                    graph = output.graph = self.graph(output, i - len(textures))
+                    graph.placement = Placement(view.rect, (width, height), last, view.view.entity)
+                r.overlay = overlay if last else None
                 stats.append(r._draw(data, materials, w, h, framebuffer, readback and last, *semaphores))
         finally:
-            output.graph, r.overlay = plain, overlay
+            output.graph, r.overlay, r.target, output.target = plain, overlay, target, target
         return _total(stats)
+
+    def _handle(self, materials: Any, view: ViewData) -> int | None:
+        """The texture a texture view draws: the render target of its name that a material
+        samples (Textures.render_target), or None when none does (nothing would show it)."""
+        assert view.view.texture is not None
+        name, width, height = view.view.texture
+        textures = materials.textures
+        handle = textures.render_target_handle(name)
+        if handle is None:
+            return None
+        made = textures.render_target_of(handle)
+        if (made.width, made.height) != (width, height):
+            raise UsageError(
+                f"the camera drawing render texture {name!r} draws {width} x {height} pixels, and the "
+                f"texture the materials sample was made {made.width} x {made.height}: make them one size"
+            )
+        return int(handle)
+
+    def _target(self, r: Any, view: ViewData, window: Any) -> TextureTarget:
+        """The texture view's own target, made again when its size or the window's format,
+        samples change (after the device is idle: frames in flight may draw the old one)."""
+        name = view.texture
+        assert name is not None
+        w, h = view.rect[2:]
+        found = self.targets.get(name)
+        if found is not None and not found.fits(w, h, window):
+            r.device.wait_idle()
+            self.targets.pop(name).destroy()
+            found = None
+        if found is None:
+            found = self.targets[name] = TextureTarget(r.device, w, h, window)
+        if found.form != window.form:  # the window's formats: its pipelines draw into it
+            found.set_form(window.form)
+        return found
+
+    def _texture_graph(self, r: Any, view: ViewData, handle: int) -> TextureGraph:
+        name = view.texture
+        assert name is not None
+        found = self.texture_graphs.get(name)
+        if found is None or found.handle != handle:
+            if found is not None:
+                found.destroy()
+            found = self.texture_graphs[name] = TextureGraph(r.output, r.texture_pages, handle, name)
+        return found
 
     def _refuse(self, r: Any) -> None:
         if r.culling_method.name is Culling.OCCLUSION:
@@ -132,9 +198,13 @@ class Views:
         self.extractors.clear()
 
     def destroy(self) -> None:
-        for graph in self.graphs:
+        for graph in [*self.graphs, *self.texture_graphs.values()]:
             graph.destroy()
+        for target in self.targets.values():
+            target.destroy()
         self.graphs.clear()
+        self.texture_graphs.clear()
+        self.targets.clear()
         self.extractors.clear()
 
 

@@ -1,0 +1,65 @@
+"""Render to texture (render/frame/texture_views.py): the monitor demo's screen shows what its
+second camera sees (a magenta cube only that camera's layers hold), follows that camera when it
+moves, and is black without it."""
+
+from __future__ import annotations
+
+import numpy as np
+from gpu_context import headless_gpu
+
+from ecs_engine import World
+from ecs_engine.components import Camera, RenderTexture, Transform
+
+W, H = 80, 60
+
+
+def _magenta(img: np.ndarray) -> np.ndarray:
+    """Where the picture is clearly magenta (red and blue far above green)."""
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    return (r > 90) & (b > 80) & (g < 0.5 * np.minimum(r, b))
+
+
+def _monitor_camera(world: World) -> int:
+    return int(world.query(Camera, RenderTexture, write=()).entities()[0])
+
+
+def test_the_screen_shows_the_second_camera_s_picture_and_follows_it() -> None:
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.demos import monitor
+    from ecs_engine.render.frame.renderer import Renderer
+
+    with headless_gpu(W, H) as gpu:
+        world = World()
+        monitor.build(world, gpu.meshes.add)
+        schedule = default_schedule()
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+        try:
+
+            def frame() -> np.ndarray:
+                schedule.run(world, 0.0)
+                renderer.render(world, readback=True)
+                return gpu.target.pixels()[..., :3].astype(np.int64)
+
+            shown = frame()
+            cam = _monitor_camera(world)
+            place = world.get(cam, Transform)
+            world.set(cam, Transform(position=np.asarray(place.position) + (1.2, 0.0, 0.0), rotation=place.rotation))
+            moved = frame()
+            world.remove(cam, RenderTexture)  # no camera draws it: the screen stays black
+            world.remove(cam, Camera)
+            schedule.run(world, 0.0)
+            renderer.destroy()
+            renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+            dark = frame()
+        finally:
+            renderer.destroy()
+    seen, after = _magenta(shown), _magenta(moved)
+    assert seen.sum() >= 20  # the cube on the screen, in the room's picture
+    assert not _magenta(dark).any()  # the room's camera never sees the cube itself
+    # the second camera moved right: its cube moved left in its picture, and on the screen
+    cols = np.flatnonzero(seen.any(axis=0)), np.flatnonzero(after.any(axis=0))
+    assert after.sum() >= 20 and cols[1].mean() < cols[0].mean() - 1.0
+    # only the screen changed (and what its light falls on: nothing), the room stayed
+    changed = np.abs(moved - shown).max(axis=-1) > 8
+    rows, columns = np.flatnonzero(changed.any(axis=1)), np.flatnonzero(changed.any(axis=0))
+    assert changed.sum() and np.ptp(rows) < H // 2 and np.ptp(columns) < W // 2
