@@ -5,7 +5,8 @@ moves, and is black without it."""
 from __future__ import annotations
 
 import numpy as np
-from gpu_context import headless_gpu
+import pytest
+from gpu_context import headless_gpu, render_world
 
 from ecs_engine import World
 from ecs_engine.components import Camera, RenderTexture, Transform
@@ -63,3 +64,36 @@ def test_the_screen_shows_the_second_camera_s_picture_and_follows_it() -> None:
     changed = np.abs(moved - shown).max(axis=-1) > 8
     rows, columns = np.flatnonzero(changed.any(axis=1)), np.flatnonzero(changed.any(axis=0))
     assert changed.sum() and np.ptp(rows) < H // 2 and np.ptp(columns) < W // 2
+
+
+@pytest.mark.parametrize("settings", [{"light_culling": "deferred"}, {"tone_map": "aces"}, {"msaa": 4}])
+def test_the_screen_shows_it_in_every_form(settings: dict) -> None:
+    """The texture view draws in the window's form (direct above; hdr, deferred, MSAA here)."""
+    from ecs_engine.demos import monitor
+    from ecs_engine.gpu.offscreen import OffscreenTarget
+
+    samples = settings.pop("msaa", 1)
+    with headless_gpu(W, H) as gpu:
+        if samples > 1:
+            gpu.target.destroy()
+            gpu.target = OffscreenTarget(gpu.device, W, H, samples=samples)
+        world = World()
+        monitor.build(world, gpu.meshes.add)
+        shown = render_world(gpu, world, **settings)
+    assert _magenta(shown).sum() >= 20
+
+
+def test_a_texture_view_and_a_split_window_in_one_frame() -> None:
+    """The texture view first, then the window's view in its part of the window (the hdr form)."""
+    from ecs_engine.components import FlyCamera, Viewport
+    from ecs_engine.demos import monitor
+
+    with headless_gpu(W, H) as gpu:
+        world = World()
+        monitor.build(world, gpu.meshes.add)
+        (room,) = world.query(Camera, FlyCamera, write=()).entities()
+        world.add(int(room), Viewport(x=0.25, width=0.5))
+        shown = render_world(gpu, world)
+    seen = _magenta(shown)
+    assert seen.sum() >= 5 and not seen[:, : W // 4].any() and not seen[:, 3 * W // 4 :].any()
+    assert len(np.unique(shown[:, : W // 4 - 1].reshape(-1, 3), axis=0)) == 1  # outside the view: background

@@ -81,6 +81,26 @@ def test_each_camera_draws_into_its_half(layers: bool) -> None:
         assert abs((cols.min() + cols.max()) / 2 - (W // 4 - 0.5)) <= 1.5
 
 
+@pytest.mark.parametrize(
+    "settings",
+    [{"light_culling": "deferred"}, {"mode": "indirect"}, {"culling": "temporal"}, {"mode": "per_entity"}, {"msaa": 4}],
+)
+def test_split_screen_in_every_form_and_mode(settings: dict) -> None:
+    """The deferred form (the G-buffer and lighting at the view's size), MSAA (the resolve into
+    the view's corner), the GPU-driven path, temporal culling per camera."""
+    from ecs_engine.gpu.offscreen import OffscreenTarget
+
+    samples = settings.pop("msaa", 1)
+    with headless_gpu(W, H) as gpu:
+        mesh = gpu.meshes.add(cube_mesh())
+        if samples > 1:
+            gpu.target.destroy()
+            gpu.target = OffscreenTarget(gpu.device, W, H, samples=samples)
+        left, right = _halves(_render(gpu, _world(mesh), frames=3, **settings))
+    assert _share(left, 0) > 0.1 and _share(left, 1) == 0.0
+    assert _share(right, 1) > 0.1 and _share(right, 0) == 0.0
+
+
 def test_one_camera_draws_as_before_and_a_full_viewport_too() -> None:
     with headless_gpu(W, H) as gpu:
         mesh = gpu.meshes.add(cube_mesh())
@@ -121,9 +141,11 @@ def test_a_split_window_back_to_one_camera_draws_as_before() -> None:
             renderer.destroy()
 
 
-def test_post_effects_are_refused_with_several_views() -> None:
+def test_occlusion_culling_and_post_effects_are_refused_with_several_views() -> None:
     with headless_gpu(W, H) as gpu:
         mesh = gpu.meshes.add(cube_mesh())
+        with pytest.raises(UsageError, match="occlusion culling with several camera views"):
+            _render(gpu, _world(mesh), mode="indirect", culling="occlusion")
         with pytest.raises(UsageError, match="post effects with several camera views"):
             _render(gpu, _world(mesh), post=("fxaa",))
 
