@@ -179,3 +179,20 @@ def test_each_view_replays_its_own_slot_and_never_another_view_s() -> None:
     assert not np.array_equal(_halves(moved)[1], _halves(still)[1])
     cols = np.flatnonzero((_halves(moved)[1][..., 1] > 60).any(axis=0))
     assert (cols.min() + cols.max()) / 2 < W // 4 - 2
+
+
+def test_print_graph_shows_each_view_s_graph_in_order() -> None:
+    import subprocess
+    import sys
+
+    args = ["split_screen", "--print-graph", "--validate", "--width", "64", "--height", "48"]
+    proc = subprocess.run(
+        [sys.executable, "-m", "ecs_engine", "demo", *args], capture_output=True, text=True, timeout=300
+    )
+    assert proc.returncode == 0 and proc.stderr == "", proc.stdout + proc.stderr
+    text = proc.stdout
+    heads = [line for line in text.splitlines() if line.startswith("view ")]
+    assert [h.split(":")[0] for h in heads] == ["view 1 of 3", "view 2 of 3", "view 3 of 3"]
+    assert heads[0].endswith("into the window at (0, 0, 32, 48)") and "frame graph 32x48" in text
+    assert text.count("clear_target") == 1 and text.count("readback (side effect)") == 1
+    assert text.count("writes target region COLOR_WRITE") == 3

@@ -91,6 +91,7 @@ class TextureGraph(OutputGraph):
     def _make(self, form: str, samples: int, color_format: int, ray: bool, oit: bool, post: Any) -> FrameGraph:
         graph = super()._make(form, samples, color_format, ray, oit, post)
         try:
+            graph.remove_pass("imgui").destroy()  # the window's overlay is drawn over the window alone
             graph.add_pass(_TextureCopy(self.pages, self.handle, self.name))
         except BaseException:
             graph.destroy()

@@ -55,6 +55,7 @@ class Views:
         self.extractors: dict[int, FrameExtractor] = {}  # by camera entity
         self.targets: dict[str, TextureTarget] = {}  # the texture views', by texture name
         self.texture_graphs: dict[str, TextureGraph] = {}  # and their output graphs
+        self.drawn: list[tuple[str, Any]] = []  # the last frame's views: (what, its output graph)
 
     def graph(self, output: Any, index: int) -> ViewGraph:
         while len(self.graphs) <= index:
@@ -104,6 +105,7 @@ class Views:
             output.graph = OutputGraph(output, [])
         plain, overlay, target = output.graph, r.overlay, r.target
         stats = []
+        self.drawn = []
         try:
             r.overlay = None
             for i, ((view, handle), data) in enumerate(zip(drawn, datas, strict=True)):
@@ -115,6 +117,9 @@ class Views:
                     r.target = output.target = self._target(r, view, target)
                     stats.append(r._draw(data, materials, w, h, None, False, *semaphores))
                     r.target = output.target = target
+                    self.drawn.append(
+                        (f"camera {view.view.entity} into texture {view.texture!r} {w}x{h}", output.graph)
+                    )
                     continue
                 output.graph = plain
                 if split:
@@ -122,6 +127,7 @@ class Views:
                     graph.placement = Placement(view.rect, (width, height), last, view.view.entity)
                 r.overlay = overlay if last else None
                 stats.append(r._draw(data, materials, w, h, framebuffer, readback and last, *semaphores))
+                self.drawn.append((f"camera {view.view.entity} into the window at {view.rect}", output.graph))
         finally:
             output.graph, r.overlay, r.target, output.target = plain, overlay, target, target
         return _total(stats)
@@ -191,6 +197,14 @@ class Views:
         return extractor.extract(
             world, w / h, len(r.meshes), *args, materials=materials, camera=view.camera, layers=view.layers
         )
+
+    def describe(self) -> str:
+        """The last frame's views, in order, each with its output graph (--print-graph)."""
+        parts = [
+            f"view {i + 1} of {len(self.drawn)}: {what}\n{graph.describe()}"
+            for i, (what, graph) in enumerate(self.drawn)
+        ]
+        return "\n".join(parts)
 
     def forget(self) -> None:
         """Back to one view: the extractors go (a camera's history would be stale); the graphs
