@@ -7,6 +7,10 @@ import pytest
 from gpu_context import close_shared, shared_device, shared_instance
 
 from ecs_engine.app.offscreen import sharing
+from ecs_engine.render.graph import FrameGraph
+
+# every compile calls each pass's setup and fails where a pass's declares() hid a change
+FrameGraph.verify_declares = True
 
 
 @pytest.fixture(autouse=True)

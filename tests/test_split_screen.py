@@ -16,6 +16,7 @@ from ecs_engine.errors import UsageError
 from ecs_engine.maths.camera import look_rotation
 from ecs_engine.render.assets.materials import Material, materials
 from ecs_engine.render.assets.primitives import cube_mesh
+from ecs_engine.render.config import Form
 
 W, H = 64, 32
 RED, GREEN = -20.0, 20.0  # the cubes' x: far apart, so each camera sees only its own
@@ -128,14 +129,14 @@ def test_a_split_window_back_to_one_camera_draws_as_before() -> None:
         try:
             default_schedule().run(world, 0.0)
             renderer.render(world, readback=True)
-            assert renderer.target.form == "hdr" and renderer.views.on
+            assert renderer.target.form == Form.HDR and renderer.views.on
             right = [int(e) for e in world.query(Camera, write=()).entities()][1]
             world.destroy(right)
             left = int(world.query(Camera, write=()).entities()[0])
             world.remove(left, Viewport)
             renderer.ensure_output()
             renderer.render(world, readback=True)
-            assert not renderer.views.on and renderer.target.form == "direct"
+            assert not renderer.views.on and renderer.target.form == Form.DIRECT
             assert np.array_equal(gpu.target.pixels()[..., :3].astype(np.int64), before)
         finally:
             renderer.destroy()

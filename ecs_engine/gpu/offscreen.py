@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .memory import HOST, Buffer, Image
-from .scene_attachments import SceneAttachments, TargetForm
+from .scene_attachments import Form, SceneAttachments, TargetForm
 
 if TYPE_CHECKING:
     from .device import Device
@@ -26,7 +26,7 @@ class OffscreenTarget(TargetForm):
         self.device = device
         self.width, self.height = width, height
         self.samples = samples  # MSAA of the scene's attachments (the target itself has one sample)
-        self.form = "hdr" if hdr or samples > 1 else "direct"  # gpu/scene_attachments.py's FORMS
+        self.form = Form.HDR if hdr or samples > 1 else Form.DIRECT
         self.color_format = vk.VK_FORMAT_R8G8B8A8_SRGB
         self.final_layout = vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL  # the output graph's readback pass leaves it so
         self.color = Image(
@@ -38,7 +38,7 @@ class OffscreenTarget(TargetForm):
             vk.VK_IMAGE_ASPECT_COLOR_BIT,
         )
         self.framebuffer = self.color  # what the renderer draws the output into (output_image)
-        self._forms: dict[str, SceneAttachments] = {}
+        self._forms: dict[Form, SceneAttachments] = {}
         try:
             self._forms[self.form] = self._attachments_for(self.form)
         except BaseException:
@@ -46,7 +46,7 @@ class OffscreenTarget(TargetForm):
             raise
         self.readback = Buffer(device, width * height * 4, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
 
-    def _attachments_for(self, form: str) -> SceneAttachments:
+    def _attachments_for(self, form: Form) -> SceneAttachments:
         return SceneAttachments(self.device, self.width, self.height, self.samples, form)
 
     def take_readback(self) -> bool:

@@ -1,4 +1,4 @@
-"""The target's "forms" (FORMS): which attachments the scene draws into, and with what formats;
+"""The target's forms (`Form`): which attachments the scene draws into, and with what formats;
 the renderings themselves are dynamic (vkCmdBeginRendering) in passes of the output graph
 (render/passes/output_graph.py), which places the barriers, so nothing here is made against a
 render pass.
@@ -27,6 +27,7 @@ the forms' AttachmentFormats (`scene_formats`), so those of two forms coexist.
 
 from __future__ import annotations
 
+from enum import StrEnum
 from typing import TYPE_CHECKING, Any
 
 from .memory import Image
@@ -35,9 +36,17 @@ from .pipeline import AttachmentFormats
 if TYPE_CHECKING:
     from .device import Device
 
-#: a target's forms: straight into the target, HDR colour tone mapped, or HDR with the opaque
-#: meshes lit in compute first (gpu/gbuffer.py; the scene's rendering then loads depth and HDR colour)
-FORMS = ("direct", "hdr", "deferred")
+
+class Form(StrEnum):
+    """A target's forms, named here once (render/config re-exports it: this module is below the
+    configuration's, which reads MSAA_COUNTS from it). A `StrEnum`: a member equals its name."""
+
+    DIRECT = "direct"  # straight into the target
+    HDR = "hdr"  # HDR colour, tone mapped
+    DEFERRED = "deferred"  # HDR with the opaque meshes lit in compute first (gpu/gbuffer.py; the
+    # scene's rendering then loads depth and HDR colour)
+
+
 HDR_FORMAT_NAME = "VK_FORMAT_R16G16B16A16_SFLOAT"
 DEPTH_FORMAT_NAME = "VK_FORMAT_D32_SFLOAT"
 MSAA_COUNTS = (1, 2, 4, 8)
@@ -60,28 +69,28 @@ def hdr_read_usage(device: Device) -> int:
     return vk.VK_IMAGE_USAGE_SAMPLED_BIT | (vk.VK_IMAGE_USAGE_STORAGE_BIT if storage else 0)
 
 
-def scene_formats(vk: Any, form: str, color_format: int, samples: int) -> AttachmentFormats:
+def scene_formats(vk: Any, form: Form, color_format: int, samples: int) -> AttachmentFormats:
     """What the scene's pipelines and secondaries (the chunks' outside the deferred form, the
     sky's, the set-aside rows', the billboards') are made for in `form`: the target's format in
     the direct form, else the HDR colour with the target's MSAA count; depth either way."""
-    color = color_format if form == "direct" else getattr(vk, HDR_FORMAT_NAME)
-    return AttachmentFormats((color,), getattr(vk, DEPTH_FORMAT_NAME), 1 if form == "direct" else samples)
+    color = color_format if form == Form.DIRECT else getattr(vk, HDR_FORMAT_NAME)
+    return AttachmentFormats((color,), getattr(vk, DEPTH_FORMAT_NAME), 1 if form == Form.DIRECT else samples)
 
 
 class TargetForm:
     """What a target (offscreen.py, swapchain.py) says of its `form`, of the attachments its
     scene draws into in it and of its output: `final_layout` is the target image's after the frame."""
 
-    form: str
+    form: Form
     final_layout: int
     color_format: int
     samples: int
-    _forms: dict[str, SceneAttachments]
+    _forms: dict[Form, SceneAttachments]
 
     @property
     def hdr(self) -> bool:
         """The scene is drawn in HDR colour and tone mapped (the hdr and deferred forms)."""
-        return self.form != "direct"
+        return self.form != Form.DIRECT
 
     @property
     def attachments(self) -> SceneAttachments:
@@ -92,21 +101,23 @@ class TargetForm:
         """The scene's attachment formats in the current form (scene_formats)."""
         return scene_formats(vk, self.form, self.color_format, self.samples)
 
-    def set_form(self, form: str) -> None:
+    def set_form(self, form: Form | str) -> None:
         """Draw the scene through HDR colour and the tone map (`hdr`), with the opaque meshes lit
         in compute first (`deferred`), or straight into the target (`direct`) from the next
         frame: the form's attachments are made the first time (if that fails, the old form
         stays), never destroyed before the target's, so no frame in flight loses its images and
         nobody waits for the device. MSAA keeps `hdr`."""
-        if form not in FORMS:
-            raise ValueError(f"unknown target form {form!r}; forms: {', '.join(FORMS)}")
+        try:
+            form = Form(form)
+        except ValueError:
+            raise ValueError(f"unknown target form {form!r}; forms: {', '.join(Form)}") from None
         if self.samples > 1:
-            form = "hdr"
+            form = Form.HDR
         if form not in self._forms:
             self._forms[form] = self._attachments_for(form)
         self.form = form
 
-    def _attachments_for(self, form: str) -> SceneAttachments:
+    def _attachments_for(self, form: Form) -> SceneAttachments:
         raise NotImplementedError
 
     def _release_forms(self) -> None:
@@ -135,15 +146,15 @@ class SceneAttachments:
         width: int,
         height: int,
         samples: int = 1,
-        form: str = "hdr",
+        form: Form = Form.HDR,
     ) -> None:
         vk = device.vk
         self.samples = samples
         self.images: list[Image] = []  # depth, HDR colour, its resolve (in the order made)
-        deferred = form == "deferred"
+        deferred = form == Form.DEFERRED
         # the deferred lighting samples depth; in the hdr form the post effects may (single-sample)
         sampled = vk.VK_IMAGE_USAGE_SAMPLED_BIT if deferred or samples == 1 else 0
-        if form == "direct":  # its depth is the output graph's transient (render/passes/forward.py)
+        if form == Form.DIRECT:  # its depth is the output graph's transient (render/passes/forward.py)
             return
         try:
             if samples == 1:  # with MSAA depth and colour are the output graph's (forward.py)

@@ -11,7 +11,7 @@ import numpy as np
 from ..errors import UsageError
 from .functions import device_function, instance_function, raw_device_function
 from .memory import HOST, Buffer, Image
-from .scene_attachments import SceneAttachments, TargetForm
+from .scene_attachments import Form, SceneAttachments, TargetForm
 
 if TYPE_CHECKING:
     from .device import Device
@@ -40,7 +40,7 @@ class Swapchain(TargetForm):
         vk = self.vk = device.vk
         self.device = device
         self.samples = samples  # MSAA of the scene's attachments
-        self.form = "hdr" if hdr or samples > 1 else "direct"  # gpu/scene_attachments.py's FORMS
+        self.form = Form.HDR if hdr or samples > 1 else Form.DIRECT
         self.surface = surface
         self.framebuffer_size = framebuffer_size
         inst = device.instance
@@ -72,7 +72,7 @@ class Swapchain(TargetForm):
         # per image, what the renderer's `render` takes to draw into it (output_image): its index
         self.framebuffers: list[int] = []
         self.render_finished: list[Any] = []
-        self._forms: dict[str, SceneAttachments] = {}  # the scene's attachments of each form used
+        self._forms: dict[Form, SceneAttachments] = {}  # the scene's attachments of each form used
         self.width = self.height = 0
         self.recreations = 0
         # screenshots: an image can be copied out when the surface allows TRANSFER_SRC
@@ -152,7 +152,7 @@ class Swapchain(TargetForm):
         self.framebuffers, self.views, self.render_finished = [], [], []
         self._release_forms()
 
-    def _attachments_for(self, form: str) -> SceneAttachments:
+    def _attachments_for(self, form: Form) -> SceneAttachments:
         return SceneAttachments(self.device, self.width, self.height, self.samples, form)
 
     @property

@@ -6,6 +6,8 @@ The enums are `StrEnum`s: a member is the string the flags, the editor and the s
 use (`Culling("temporal") == "temporal"`), so code that still passes names keeps working. Each
 name is spelled here once; the modules that implement a setting map these names to what they
 draw (tone_map.py's operator numbers, path.py's polygon modes, renderer.PATHS' classes).
+`Form`, the target's form the settings lead to, is not picked by name: gpu/scene_attachments.py
+declares it (this module reads MSAA_COUNTS from there) and it is re-exported here.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from typing import Any, Final
 
 from ...errors import UsageError
 from ...gpu.array_image import ANISOTROPY_CHOICES
-from ...gpu.scene_attachments import MSAA_COUNTS
+from ...gpu.scene_attachments import MSAA_COUNTS, Form
 
 __all__ = [
     "ANISOTROPY_CHOICES",
@@ -26,6 +28,7 @@ __all__ = [
     "Choice",
     "Culling",
     "Fill",
+    "Form",
     "LightCulling",
     "Mode",
     "Recorder",

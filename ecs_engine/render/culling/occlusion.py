@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any, Protocol
 
-from ..config import Culling
+from ..config import Culling, Fill
 from .method import CullingMethod
 
 if TYPE_CHECKING:
@@ -25,7 +25,7 @@ class OcclusionHost(Protocol):
 def can_cull(ctx: Any) -> bool:
     """Whether the path's triangles are filled (wireframe and points show what is behind them:
     those frames cull the frustum alone)."""
-    return bool(ctx.fill == "solid")
+    return bool(ctx.fill == Fill.SOLID)
 
 
 class OcclusionCulling(CullingMethod):

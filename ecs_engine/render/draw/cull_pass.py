@@ -10,6 +10,7 @@ own for now. A path without compute passes (the CPU ones) declares nothing: the 
 
 from __future__ import annotations
 
+from collections.abc import Hashable
 from typing import Any
 
 from ..graph import Access, Pass
@@ -47,6 +48,9 @@ class CullPass(Pass):
         builder.write("draws.commands", Access.COMPUTE_READ_WRITE)
         builder.write("draws.readback", Access.TRANSFER_WRITE)
         builder.side_effect()  # the host reads the counts; the G-buffer may draw outside the graph
+
+    def declares(self) -> Hashable:
+        return self.path is not None
 
     def record(self, cb: Any, ctx: Any) -> None:
         self.path.record_compute(cb)

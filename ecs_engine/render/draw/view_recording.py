@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from ...gpu.functions import handle_int
+from ..config import Recorder
 from ..extract.frame_data import NOT_RECEIVER, Chunk
 from ..layouts import INSTANCE
 from .instance_rows import _cull_views_native, _write_keyed
@@ -114,7 +115,7 @@ def can_fuse(paths: list[Any]) -> bool:
     """Whether views drawn by these paths can be recorded in one call: instanced rows in the
     frame's mapped buffer and the native recorder (numba present)."""
     return _cull_views_native is not None and all(
-        getattr(p, "instanced", False) and p.recorder == "native" and p.uses_recorder for p in paths
+        getattr(p, "instanced", False) and p.recorder == Recorder.NATIVE and p.uses_recorder for p in paths
     )
 
 

@@ -11,6 +11,7 @@ from functools import partial
 from typing import Any
 
 from ..assets.materials import Materials
+from ..config import Form
 from ..draw.path import FrameInputs, FrameStats
 from ..extract.frame_data import FrameData
 from ..layouts import FEATURE_ENVIRONMENT, FEATURE_RAY_SHADOWS, FEATURE_SHADOWS, INSTANCE
@@ -97,7 +98,7 @@ class FrameDrawing:
         camera_rows = self.path.rows_needed(data.candidates) + len(data.set_aside or ())
         rows = camera_rows + len(views) * ShadowPass.view_rows(data, self.path)  # each view's after the camera's
         pf.ensure_capacity(self.device, self.texture_pages, rows, data.light_count, material_count, len(views))
-        deferred = self.target.form == "deferred"
+        deferred = self.target.form == Form.DEFERRED
         named = self.shadows.light_views(views) if views else {}
         places = ray.places(traced) if ray is not None and traced else {}
         name = None  # a frame without shadows names nothing (and pays nothing for it)

@@ -1,5 +1,5 @@
 """What the frame's primary command buffer records around the render path's secondaries, by the
-target's form (gpu/scene_attachments.py's FORMS), every drawing a dynamic rendering in a pass of
+target's form (gpu/scene_attachments.py's Form), every drawing a dynamic rendering in a pass of
 the output graph (render/passes/output_graph.py), which places the barriers:
 
 - `direct`: the scene's rendering into the target: the chunks', the sky's (sky_pass.py), the
@@ -52,6 +52,7 @@ from typing import Any
 
 from ...gpu.device import Device
 from ...gpu.secondary import SecondaryBuffers
+from ..config import Form, Transparency
 from ..draw.path import TargetState
 from ..lighting.deferred import DeferredPass
 from ..passes.light_billboards import LightPass
@@ -156,7 +157,7 @@ class OutputPasses:
         """The weighted transparency pass ready for the target, when `mode` asks for it and the
         target is in the deferred form (it needs the opaque depth before the target's pass)."""
         target = self.target
-        if mode != "weighted" or target.form != "deferred":
+        if mode != Transparency.WEIGHTED or target.form != Form.DEFERRED:
             return None
         if not self.device.features.get("independentBlend"):
             if not self._warned_blend:
@@ -213,7 +214,7 @@ class OutputPasses:
         if self.graph is None:
             self.graph = OutputGraph(self, [])
         frame = self.graph.frame
-        if target.form == "deferred":  # the chunks in the G-buffer pass, lit before the scene's rendering
+        if target.form == Form.DEFERRED:  # the chunks in the G-buffer pass, lit before the scene's rendering
             assert self.deferred is not None
             frame.chunks, frame.frame_set, frame.features = chunks, frame_set[0], features
             ray = self.ray_shadows

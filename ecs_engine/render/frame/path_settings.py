@@ -10,7 +10,7 @@ from typing import Any
 
 from ... import native
 from ...errors import UsageError
-from ..config import Caps, RenderConfig, check
+from ..config import Caps, RenderConfig, Shadows, check
 from ..draw.chunk_paths import RECORDERS, InstancedPath, PerEntityPath, check_recorder
 from ..draw.indirect_path import IndirectPath
 from ..draw.path import PathFactory, RenderPath
@@ -42,7 +42,7 @@ class PathSettings:
     _native: Any
     _anisotropy: Any
     _make_path: Callable[[str, str], RenderPath]
-    shadow_method: str  # TargetForms'
+    shadow_method: Shadows  # TargetForms'
     post_effects: Any  # post/effects.py's
 
     @property

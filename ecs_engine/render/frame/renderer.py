@@ -22,7 +22,7 @@ from ...jobs import JobPool
 from ..assets.materials import Materials
 from ..assets.mesh_registry import MeshRegistry
 from ..assets.texture_pages import TexturePages
-from ..config import Caps, RenderConfig, check
+from ..config import Caps, Form, Mode, RenderConfig, Shadows, check
 from ..culling import CullingSetting
 from ..draw.chunk_paths import InstancedPath, PerEntityPath, check_recorder, default_recorder
 from ..draw.path import FrameStats, PathContext, RenderPath, TargetState
@@ -114,7 +114,7 @@ class Renderer(FrameDrawing, PathSettings, TargetForms, CullingSetting):
             self.replay = FrameReplay(n)  # frames submitted again while their recording would repeat
             self.secondaries = SecondaryBuffers(device, n)
             self.set_layout, self.pool = frame_sets(device, n)
-            traced = shadows == "raytraced"
+            traced = shadows == Shadows.RAYTRACED
             self.ray_shadows = RayShadows(device, meshes, n, self.set_layout.handle) if traced else None
             self.shadow_denoise = shadow_denoise
             self.lights = LightCulling(device, self.set_layout.handle, light_culling)
@@ -149,11 +149,11 @@ class Renderer(FrameDrawing, PathSettings, TargetForms, CullingSetting):
     def _make_shadow_path(self, ctx: PathContext) -> RenderPath:
         """The depth-only path of the shadow passes' CPU jobs: the per-entity one for per_entity,
         else the instanced one (indirect: the set-aside casters alone; shadow_indirect.py culls)."""
-        return (PerEntityPath if self.mode == "per_entity" else InstancedPath)(ctx, self.cpu_recorder)
+        return (PerEntityPath if self.mode == Mode.PER_ENTITY else InstancedPath)(ctx, self.cpu_recorder)
 
     def _make_path(self, mode: str, recorder: str) -> RenderPath:
         check_recorder(recorder)
-        deferred = self.target.form == "deferred"
+        deferred = self.target.form == Form.DEFERRED
         ctx = PathContext(
             device=self.device,
             meshes=self.meshes,

@@ -178,5 +178,5 @@ def frame_key(renderer: Any, state: Any, slot: int, prelude: tuple[Any, ...], st
     if screenshot or not prelude_replayable(renderer, *stops):
         return None
     graph = output_graph(renderer, state, slot, readback)
-    replayable = graph is not None and graph.replayable()
-    return (prelude_key(renderer, *prelude), Same(graph), graph.key()) if replayable else None
+    key = graph.key(replayable=True) if graph is not None else None
+    return None if key is None else (prelude_key(renderer, *prelude), Same(graph), key)

@@ -36,7 +36,7 @@ class ScenePasses:
         self.shadows = ShadowMapsPass(shadows)
         self.passes: list[Pass] = [self.cull, self.clusters, ShadowCullPass(self.shadows), self.shadows]
         self.buffers: dict[str, Any] = {}  # name -> the frame slot's Buffer, imported this frame
-        self.reads: list[tuple[str, Access]] = []  # what `forward` reads of them this frame
+        self.reads: tuple[tuple[str, Access], ...] = ()  # what `forward` reads of them this frame
         self.marks = MARKS
 
     def begin(
@@ -71,18 +71,17 @@ class ScenePasses:
         self.buffers = {"clusters": frame.clusters, **self.cull.buffers}
         self.reads = self._reads(grid)
 
-    def _reads(self, grid: ClusterGrid | None) -> list[tuple[str, Access]]:
+    def _reads(self, grid: ClusterGrid | None) -> tuple[tuple[str, Access], ...]:
         reads = self.cull.reads()
         reads += [("clusters", Access.FRAGMENT_READ)] if grid is not None else []
-        return reads + self.shadows.reads()
+        return tuple(reads + self.shadows.reads())  # a tuple: the passes' declares() return it
 
     def add_to(self, graph: FrameGraph) -> None:
         for p in self.passes:
             graph.add_pass(p)
 
     def import_into(self, graph: FrameGraph) -> None:
-        for name, buffer in self.buffers.items():  # the frame slot's: its last use was fenced
-            graph.import_buffer(name, handle=buffer.handle, size=buffer.size, stage_before="NONE")
+        graph.import_slot_buffers(self.buffers)
         self.shadows.import_into(graph)
 
     def destroy(self) -> None:

@@ -7,6 +7,7 @@ from __future__ import annotations
 from typing import Any
 
 from ...gpu.gbuffer import gbuffer_formats
+from ..config import Form
 from ..draw.path import TargetState
 
 
@@ -21,10 +22,10 @@ def scene_state(
     formats = target.formats(vk)
     begin = secondaries.begin_info_rendering(formats)
     _, view = target.output_image(output)
-    direct = form == "direct"
+    direct = form == Form.DIRECT
     named = view if direct else attachments.images[-1].view  # what the state draws into, by address
     key = (int(vk.ffi.cast("uintptr_t", named)), width, height)
     state = TargetState.make(vk, key, output, begin, background)
-    if form == "deferred":  # the chunks draw in the G-buffer pass; aside_begin stays the scene's
+    if form == Form.DEFERRED:  # the chunks draw in the G-buffer pass; aside_begin stays the scene's
         state.secondary_begin = secondaries.begin_info_rendering(gbuffer_formats(vk))
     return state, formats

@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from ..config import Form, Shadows, Transparency
 from ..extract.frame_data import FrameData
 from ..layouts import FEATURE_RAY_SHADOWS
 from ..lighting.clusters import ClusterGrid, check_light_culling
@@ -61,9 +62,9 @@ class TargetForms(PostEffects):
         return self.lights.clustered
 
     @property
-    def shadow_method(self) -> str:
+    def shadow_method(self) -> Shadows:
         """maps, or raytraced (ray_shadows.py)."""
-        return "raytraced" if self.ray_shadows is not None else "maps"
+        return Shadows.RAYTRACED if self.ray_shadows is not None else Shadows.MAPS
 
     @property
     def shadow_denoise(self) -> bool:
@@ -84,7 +85,7 @@ class TargetForms(PostEffects):
             return
         self.device.wait_idle()
         frames, layout = len(self.frames.frames), self.set_layout.handle
-        made = RayShadows(self.device, self.meshes, frames, layout) if method == "raytraced" else None
+        made = RayShadows(self.device, self.meshes, frames, layout) if method == Shadows.RAYTRACED else None
         if self.ray_shadows is not None:
             self.ray_shadows.destroy()
         self.ray_shadows = self.output.ray_shadows = made
@@ -121,19 +122,20 @@ class TargetForms(PostEffects):
         or straight into the target). Call between frames (the run loop calls it before each)."""
         self._fit_target()
 
-    def _wanted_form(self) -> str:
+    def _wanted_form(self) -> Form:
         """The target form (gpu/scene_attachments.py) the light culling, tone map, exposure, MSAA,
         blended materials and post effects need."""
         samples = self.target.samples
         if self.ray_shadows is not None:
-            return "deferred"  # the G-buffer pass is the rays' depth pre-pass (render/raytracing/shadows.py)
-        if self.lights.deferred(samples) or (self.transparency == "weighted" and self._blends and samples == 1):
-            return "deferred"
+            return Form.DEFERRED  # the G-buffer pass is the rays' depth pre-pass (render/raytracing/shadows.py)
+        weighted = self.transparency == Transparency.WEIGHTED
+        if self.lights.deferred(samples) or (weighted and self._blends and samples == 1):
+            return Form.DEFERRED
         post = bool(self.post_effects)
         views = getattr(self, "views", None)  # (made in Renderer.__init__ before the first form)
         if views is not None and views.split:
-            return "hdr"  # several camera views draw through the HDR colour (view_graph.py)
-        return "hdr" if wants_hdr(self.tone_map, self.exposure, samples, self._blends, post) else "direct"
+            return Form.HDR  # several camera views draw through the HDR colour (view_graph.py)
+        return Form.HDR if wants_hdr(self.tone_map, self.exposure, samples, self._blends, post) else Form.DIRECT
 
     def _fit_target(self) -> None:
         form = self._wanted_form()

@@ -17,6 +17,7 @@ from typing import Any
 
 from ...gpu.memory import Image
 from ...gpu.scene_attachments import SceneAttachments, TargetForm
+from ..config import Form
 from ..graph import FrameGraph
 from ..passes.output_graph import OutputGraph
 from ..passes.render_texture import RenderTexturePass
@@ -37,7 +38,7 @@ class TextureTarget(TargetForm):
         usage = vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT
         self.color = Image(device, self.width, self.height, self.color_format, usage, vk.VK_IMAGE_ASPECT_COLOR_BIT)
         self.framebuffer = self.color
-        self._forms: dict[str, SceneAttachments] = {}
+        self._forms: dict[Form, SceneAttachments] = {}
         try:
             self._forms[self.form] = self._attachments_for(self.form)
         except BaseException:
@@ -53,7 +54,7 @@ class TextureTarget(TargetForm):
     def recreations(self) -> int:
         return int(getattr(self.window, "recreations", 0))
 
-    def _attachments_for(self, form: str) -> SceneAttachments:
+    def _attachments_for(self, form: Form) -> SceneAttachments:
         return SceneAttachments(self.device, self.width, self.height, self.samples, form)
 
     def take_readback(self) -> bool:
@@ -88,7 +89,7 @@ class TextureGraph(OutputGraph):
         super().__init__(output, [])
         self.pages, self.handle, self.name = pages, int(handle), name
 
-    def _make(self, form: str, samples: int, color_format: int, ray: bool, oit: bool, post: Any) -> FrameGraph:
+    def _make(self, form: Form, samples: int, color_format: int, ray: bool, oit: bool, post: Any) -> FrameGraph:
         graph = super()._make(form, samples, color_format, ray, oit, post)
         try:
             graph.remove_pass("imgui").destroy()  # the window's overlay is drawn over the window alone

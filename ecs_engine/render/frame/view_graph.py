@@ -27,6 +27,7 @@ from collections.abc import Hashable
 from dataclasses import dataclass
 from typing import Any
 
+from ..config import Form
 from ..graph import Access, FrameGraph, Load, Pass
 from ..passes.output_graph import OutputGraph, OverlayOver, _final_layout
 
@@ -108,8 +109,8 @@ class ViewGraph(OutputGraph):
         self.first = first
         self.placement = Placement((0, 0, 1, 1), (1, 1), True, -1)
 
-    def _make(self, form: str, samples: int, color_format: int, ray: bool, oit: bool, post: Any) -> FrameGraph:
-        if form == "direct":
+    def _make(self, form: Form, samples: int, color_format: int, ray: bool, oit: bool, post: Any) -> FrameGraph:
+        if form == Form.DIRECT:
             raise RuntimeError("several camera views draw through the HDR colour (target_forms.py)")
         graph = super()._make(form, samples, color_format, ray, oit, post)
         try:
@@ -127,7 +128,7 @@ class ViewGraph(OutputGraph):
     def _place_readback(self, graph: FrameGraph, wanted: bool) -> None:
         super()._place_readback(graph, wanted and self.placement.last)
 
-    def _import_attachments(self, graph: FrameGraph, form: str, attachments: Any) -> None:
+    def _import_attachments(self, graph: FrameGraph, form: Form, attachments: Any) -> None:
         """The HDR colour and depth as the view's size: its picture is drawn from their corner."""
         images = attachments.images
         named = [("hdr", images[-1])] + ([("depth", images[0])] if attachments.samples == 1 else [])

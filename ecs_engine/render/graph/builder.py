@@ -32,6 +32,15 @@ class _Unreplayable:
 UNREPLAYABLE: Any = _Unreplayable()
 
 
+class _SetupEachCompile:
+    def __repr__(self) -> str:
+        return "SETUP_EACH_COMPILE"
+
+
+#: what `Pass.declares()` returns by default: its setup is called at every compile
+SETUP_EACH_COMPILE: Any = _SetupEachCompile()
+
+
 class Pass:
     """A step of the frame. Subclasses set `name`, declare in `setup` (which only declares: the
     graph calls it at each compile to see whether anything changed) and record in `record`."""
@@ -43,6 +52,15 @@ class Pass:
 
     def record(self, cb: Any, ctx: PassContext) -> None:
         raise NotImplementedError
+
+    def declares(self) -> Hashable:
+        """What `setup`'s declarations depend on: while this returns an equal value, a compile
+        reuses the pass's last declarations without calling `setup` (the per-frame check of a
+        graph whose passes did not change is then a comparison per pass). The default,
+        SETUP_EACH_COMPILE, calls setup each time. With `FrameGraph.verify_declares` on (the
+        tests), setup is called anyway and a declaration that changed under an equal value
+        is an error: an incomplete `declares` fails there, not as a stale graph."""
+        return SETUP_EACH_COMPILE
 
     def key(self) -> Hashable:
         """What the recording depends on besides its resources (frame replay compares it);
@@ -131,3 +149,44 @@ def declare(p: Pass) -> Declared:
     builder = PassBuilder(p.name)
     p.setup(builder)
     return builder.declared()
+
+
+class Declarations:
+    """The passes' last declarations, each kept with its `declares()` value: a compile asks
+    `setup` again only of a pass whose value changed or that has none (see Pass.declares)."""
+
+    def __init__(self) -> None:
+        self._kept: dict[int, tuple[Pass, Hashable, Declared]] = {}
+        self._last: tuple[list[Pass], tuple, list[tuple[str, Declared]]] | None = None  # the last call's
+
+    def of(self, passes: list[Pass], verify: bool = False) -> tuple[list[tuple[str, Declared]], bool]:
+        """Each pass's (name, Declared), and whether any changed since the last call."""
+        marks = tuple([p.declares() for p in passes])
+        last_call = self._last
+        if last_call is not None and not verify and last_call[0] == passes and last_call[1] == marks:
+            if SETUP_EACH_COMPILE not in marks:  # the same passes, all declaring as before
+                return last_call[2], False
+        out, kept, changed = [], self._kept, False
+        for p, mark in zip(passes, marks, strict=True):
+            last = kept.get(id(p))
+            if last is not None and last[0] is not p:  # another pass at a freed one's id
+                last = None
+            same = last is not None and mark is not SETUP_EACH_COMPILE and last[1] == mark
+            if same and not verify:
+                out.append((p.name, last[2]))  # type: ignore[index]
+                continue
+            declared = declare(p)
+            if last is None or last[2] != declared:
+                if same:
+                    raise AssertionError(f"pass {p.name!r} declared anew under the same declares() {mark!r}")
+                changed = True
+            else:
+                declared = last[2]
+            kept[id(p)] = (p, mark, declared)
+            out.append((p.name, declared))
+        if len(kept) > len(passes):  # passes removed: forget them
+            alive = {id(p) for p in passes}
+            for gone in [k for k in kept if k not in alive]:
+                del kept[gone]
+        self._last = (list(passes), marks, out)
+        return out, changed

@@ -11,6 +11,7 @@ or a side-effect pass, transitively.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 from ...errors import UsageError
@@ -45,7 +46,7 @@ class Imported:
     # visible to every later command by the graph's final barrier
     visible_after: bool = False
 
-    @property
+    @cached_property
     def compile_key(self) -> tuple:
         return (
             self.name,

@@ -4,22 +4,22 @@ command buffer. Without a device (`FrameGraph(None)`) it plans only (tests, `des
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, overload
 
 from ...errors import UsageError
-from ...gpu.functions import handle_int
 from ...gpu.owned import Owned
 from ...gpu.pipeline import AttachmentFormats
 from .access import RAY_TRACING_ONLY
 from .barriers import EMPTY, Barrier, BarrierPlan, dependency_info, plan_barriers
-from .builder import UNREPLAYABLE, Declared, Pass, declare
-from .compile import Imported, Structure, plan_structure
+from .builder import UNREPLAYABLE, Declarations, Pass, declare
+from .compile import Structure, plan_structure
 from .context import PassContext
 from .describe import describe
 from .formats import attachment_formats
-from .resources import GraphBuffer, GraphImage, format_name, layout_name
+from .imports import Imports
+from .resources import GraphBuffer, GraphImage
 from .transient import Packing, Transients, aspect_of, estimated_requirements, pack
 
 if TYPE_CHECKING:
@@ -41,11 +41,13 @@ class Compiled:
 
 class FrameGraph:
     UNREPLAYABLE = UNREPLAYABLE  # what Pass.key() returns to make every frame record again
+    # call every pass's setup at each compile and fail where a pass's `declares()` stayed equal
+    # while its declarations changed (tests/conftest.py turns it on)
+    verify_declares = False
 
     def __init__(self, device: Any) -> None:
         self.device = device
         self._passes: list[Pass] = []
-        self._imports: dict[str, Imported] = {}
         self._outputs: list[str] = []
         self._owned = Owned(device) if device is not None else None
         self.compiled: Compiled | None = None
@@ -54,6 +56,13 @@ class FrameGraph:
         self._infos: dict[str, tuple[tuple, Any]] = {}
         self._renderings: dict[tuple, Any] = {}  # PassContext.begin_rendering's, per compile
         self.compiles = 0  # how many compiles did work (a cached one does none)
+        # what a compile depends on, kept so that the per-frame check costs little: a count
+        # moved by every change of passes, outputs, imports' shapes or declarations; the
+        # passes' last declarations; the imports (graph/imports.py)
+        self._version = 0
+        self._declarations = Declarations()
+        self._table = Imports(device.vk if device is not None else None, self._vk)
+        self._by_name: dict[str, Pass] | None = None
 
     # ------------------------------------------------------------------ declaring the frame
     def add_pass(self, p: Pass, *, before: str | None = None) -> None:
@@ -70,17 +79,22 @@ class FrameGraph:
                 raise UsageError(f"no pass {before!r} to add {p.name!r} before; passes: {', '.join(names)}")
             at = names.index(before)
         self._passes.insert(at, p)
+        self._changed()
 
     def remove_pass(self, name: str) -> Pass:
         """Take a pass out (not destroyed: the caller now owns it)."""
         for i, p in enumerate(self._passes):
             if p.name == name:
+                self._changed()
                 return self._passes.pop(i)
         raise UsageError(f"the frame graph has no pass named {name!r}")
 
     @property
     def passes(self) -> tuple[Pass, ...]:
         return tuple(self._passes)
+
+    def has_pass(self, name: str) -> bool:
+        return name in self._passes_by_name()
 
     def _vk(self) -> Any:
         if self.device is not None:
@@ -105,35 +119,21 @@ class FrameGraph:
         layers: int = 1,
         layer_views: tuple[Any, ...] = (),
         stage_before: str | tuple[str, ...] = "ALL_COMMANDS",
+        token: Hashable = None,
     ) -> None:
         """An image owned outside the graph; importing a name again replaces it (a new
         swapchain image each frame: only a change of format, size, layers, layouts or
         stage_before recompiles). `layers`: an array image, `layer_views` one view of each
         layer (what `begin_rendering(layer=k)` renders to). `stage_before`: the pipeline stages
         (names as "COLOR_ATTACHMENT_OUTPUT") whose earlier work its first barrier waits for; a
-        swapchain image names the acquire semaphore's wait stage so that the two chain."""
+        swapchain image names the acquire semaphore's wait stage so that the two chain.
+        `token`: see reuse_import."""
         if layers < 1 or (layer_views and len(layer_views) != layers):
             raise UsageError(f"image {name!r}: {layers} layer(s) and {len(layer_views)} layer view(s)")
-        vk = self._vk() if not all(isinstance(v, str) for v in (format, layout_before, layout_after)) else None
-        fmt = format_name(vk, format)
-        value = int(format) if not isinstance(format, str) else int(getattr(vk, f"VK_FORMAT_{fmt}", 0)) if vk else 0
-        self._imports[name] = Imported(
-            name,
-            "image",
-            handle,
-            view,
-            fmt,
-            value,
-            (int(extent[0]), int(extent[1])),
-            mips,
-            samples,
-            layout_name(vk, layout_before),
-            layout_name(vk, layout_after),
-            mip_views=tuple(mip_views),
-            layers=int(layers),
-            layer_views=tuple(layer_views),
-            stage_before=_stage_names(stage_before),
-        )
+        views = (tuple(mip_views), layers, tuple(layer_views))
+        shape = ((int(extent[0]), int(extent[1])), mips, samples, layout_before, layout_after, *views)
+        if self._table.image(name, handle, view, format, *shape, stage_before, token):
+            self._changed()
 
     def import_buffer(
         self,
@@ -143,6 +143,7 @@ class FrameGraph:
         size: int,
         visible_after: bool = False,
         stage_before: str | tuple[str, ...] = "ALL_COMMANDS",
+        token: Hashable = None,
     ) -> None:
         """A buffer owned outside the graph (a frame slot's: import it again each frame).
         `visible_after`: commands recorded after the graph read it, so its last writes get a
@@ -150,19 +151,37 @@ class FrameGraph:
         `stage_before`: as import_image's; "NONE" when nothing on the queue may still use it (a
         frame slot's buffer, whose last frame's fence was waited for): no first barrier, so
         this frame's first use need not wait for the frames still in flight."""
-        self._imports[name] = Imported(
-            name,
-            "buffer",
-            handle,
-            size=int(size),
-            visible_after=bool(visible_after),
-            stage_before=_stage_names(stage_before),
-        )
+        if self._table.buffer(name, handle, size, visible_after, stage_before, token):
+            self._changed()
+
+    def import_slot_buffers(self, buffers: dict[str, Any]) -> None:
+        """A frame slot's buffers (objects with .handle and .size) whose last use was fenced:
+        nothing to wait for. Each is made into an import once (its token: the buffer and its
+        handle, which growing it replaces)."""
+        for name, buffer in buffers.items():
+            token = (buffer, buffer.handle)
+            if not self.reuse_import(name, token):
+                self.import_buffer(name, handle=buffer.handle, size=buffer.size, stage_before="NONE", token=token)
+
+    def reuse_import(self, name: str, token: Hashable) -> bool:
+        """Import `name` again as an import_image/import_buffer call given `token` made it: a
+        caller's cheap stand-in for the arguments, equal only where they are (an object and its
+        handle); False when nothing was made for the token (import it, with the token)."""
+        changed = self._table.reuse(name, token)
+        if changed:
+            self._changed()
+        return changed is not None
+
+    def _changed(self) -> None:
+        """Passes, outputs or an import's shape changed: the next compile plans again."""
+        self._version += 1
+        self._by_name = None
 
     def output(self, name: str) -> None:
         """A resource the frame must produce: the passes writing it (and what they need) run."""
         if name not in self._outputs:
             self._outputs.append(name)
+            self._changed()
 
     # ------------------------------------------------------------------ compiling
     def compile(self, extent: tuple[int, int]) -> None:
@@ -172,16 +191,13 @@ class FrameGraph:
         extent = (int(extent[0]), int(extent[1]))
         if min(extent) < 1:
             raise UsageError(f"the frame graph's extent must be positive, not {extent}")
-        declared: list[tuple[str, Declared]] = [(p.name, declare(p)) for p in self._passes]
-        signature = (
-            extent,
-            tuple(declared),
-            tuple(i.compile_key for i in self._imports.values()),
-            tuple(self._outputs),
-        )
+        declared, changed = self._declarations.of(self._passes, self.verify_declares)
+        if changed:
+            self._changed()
+        signature = (extent, self._version)
         if self.compiled is not None and self.compiled.signature == signature:
             return
-        structure = plan_structure(declared, self._imports, tuple(self._outputs), extent)
+        structure = plan_structure(declared, self._table.by_name, tuple(self._outputs), extent)
         transients = None
         if self.device is not None:
             assert self._owned is not None
@@ -229,22 +245,8 @@ class FrameGraph:
     def _resources(self, c: Compiled) -> tuple[dict[str, GraphImage], dict[str, GraphBuffer]]:
         images = dict(c.transients.images) if c.transients else {}
         buffers = dict(c.transients.buffers) if c.transients else {}
-        for name, imp in self._imports.items():
-            if imp.kind == "image":
-                images[name] = GraphImage(
-                    name,
-                    imp.handle,
-                    imp.view,
-                    imp.format_value,
-                    imp.extent,
-                    imp.mips,
-                    imp.samples,
-                    imp.mip_views,
-                    imp.layers,
-                    imp.layer_views,
-                )
-            else:
-                buffers[name] = GraphBuffer(name, imp.handle, imp.size)
+        images.update(self._table.images)
+        buffers.update(self._table.buffers)
         return images, buffers
 
     def execute(self, cb: Any, on_pass_end: Callable[[str], None] | None = None) -> None:
@@ -258,7 +260,7 @@ class FrameGraph:
         images, buffers = self._resources(c)
         s = c.structure
         ctx = PassContext(self.device, s.extent, images, buffers, c.formats, s.dont_store, self._renderings)
-        by_name = {p.name: p for p in self._passes}
+        by_name = self._passes_by_name()
         for name in s.order:
             rows = c.barriers.before[name]
             if rows:
@@ -302,7 +304,7 @@ class FrameGraph:
             descs = {n: r.desc for n, r in self.compiled.structure.resources.items() if r.desc is not None}
         else:
             descs = {name: desc for p in self._passes for name, desc in declare(p).creates}
-        return attachment_formats(self._vk(), colors, depth, descs, self._imports)
+        return attachment_formats(self._vk(), colors, depth, descs, self._table.by_name)
 
     def inheritance(self, secondaries: SecondaryBuffers, colors: tuple[str, ...] = (), depth: str | None = None) -> Any:
         """The begin info of secondaries drawn inside a pass's `begin_rendering(colors, depth,
@@ -311,21 +313,33 @@ class FrameGraph:
         before the primary is opened."""
         return secondaries.begin_info_rendering(self.attachment_formats(colors, depth))
 
-    def key(self) -> tuple:
+    @overload
+    def key(self) -> tuple: ...
+    @overload
+    def key(self, replayable: bool) -> tuple | None: ...
+    def key(self, replayable: bool = False) -> tuple | None:
         """What a recorded frame depends on: each running pass's (name, key()) in order, the
-        extent, and the imported handles. Equal keys: a kept command buffer draws the same."""
+        extent, and the imported handles. Equal keys: a kept command buffer draws the same.
+        `replayable=True`: None where a pass that runs returns UNREPLAYABLE (see replayable())."""
         c = self._ready()
-        by_name = {p.name: p for p in self._passes}
-        vk = self.device.vk if self.device is not None else None
-        handles = tuple((name, _int(vk, imp.handle), _int(vk, imp.view)) for name, imp in sorted(self._imports.items()))
-        keys = ((name, by_name[name].key()) for name in c.structure.order)
-        return (*((n, object() if k is UNREPLAYABLE else k) for n, k in keys), c.structure.extent, handles)
+        by_name = self._passes_by_name()
+        keys = [(name, by_name[name].key()) for name in c.structure.order]
+        if any(k is UNREPLAYABLE for _, k in keys):
+            if replayable:
+                return None
+            keys = [(n, object() if k is UNREPLAYABLE else k) for n, k in keys]
+        return (*keys, c.structure.extent, self._table.handles())
+
+    def _passes_by_name(self) -> dict[str, Pass]:
+        if self._by_name is None:
+            self._by_name = {p.name: p for p in self._passes}
+        return self._by_name
 
     def replayable(self) -> bool:
         """Whether a recorded frame can be replayed at all: no pass that runs returns
         UNREPLAYABLE as its key."""
         c = self._ready()
-        by_name = {p.name: p for p in self._passes}
+        by_name = self._passes_by_name()
         return not any(by_name[name].key() is UNREPLAYABLE for name in c.structure.order)
 
     def describe(self) -> str:
@@ -344,22 +358,3 @@ class FrameGraph:
         passes, self._passes = self._passes, []
         for p in reversed(passes):
             p.destroy()
-
-
-def _stage_names(stages: str | tuple[str, ...]) -> frozenset[str]:
-    """Stage names without the Vulkan prefix and bit suffix ("COLOR_ATTACHMENT_OUTPUT")."""
-    if isinstance(stages, str):
-        stages = (stages,)
-    names = set()
-    for stage in stages:
-        if not isinstance(stage, str) or not stage:
-            raise UsageError(f"stage_before takes pipeline stage names, not {stage!r}")
-        name = stage.removeprefix("VK_PIPELINE_STAGE_2_").removeprefix("VK_PIPELINE_STAGE_")
-        names.add(name[: -len("_BIT")] if name.endswith("_BIT") else name)
-    return frozenset(names)
-
-
-def _int(vk: Any, handle: Any) -> Any:
-    if handle is None or vk is None or isinstance(handle, int):
-        return handle
-    return handle_int(vk, handle)

@@ -309,6 +309,9 @@ class LightClustersPass(Pass):
         builder.write("clusters", Access.COMPUTE_READ_WRITE)  # the dispatches
         builder.side_effect()  # its readers may be recorded outside the graph (frame/scene_passes.py)
 
+    def declares(self) -> Hashable:
+        return self.grid is not None
+
     def record(self, cb: Any, ctx: Any) -> None:
         assert self.grid is not None
         self.clusters.record(cb, self.set_array, self.grid, ctx.buffer("clusters"), self.light_count)

@@ -79,6 +79,9 @@ class GBufferPass(Pass):
             if name.startswith("draws."):
                 builder.read(name, access)
 
+    def declares(self) -> Hashable:
+        return (self.frame.reads, self.frame.background)
+
     def record(self, cb: Any, ctx: Any) -> None:
         ctx.begin_rendering(colors=("hdr", *GBUFFER), depth="depth", secondaries=True)
         _execute(ctx, cb, self.frame.chunks)
@@ -98,6 +101,9 @@ class RayShadowsPass(Pass):
         builder.read("depth", Access.DEPTH_SAMPLED)
         builder.read("normal_roughness", Access.RAY_READ)
         builder.side_effect()  # writes the mask, outside the graph
+
+    def declares(self) -> Hashable:
+        return ()  # its setup declares the same every frame
 
     def record(self, cb: Any, ctx: Any) -> None:
         shadows, frame = self.frame.ray, self.frame
@@ -120,6 +126,9 @@ class RayDenoisePass(Pass):
         builder.read("depth", Access.DEPTH_SAMPLED)
         builder.read("normal_roughness", Access.COMPUTE_READ)
         builder.side_effect()
+
+    def declares(self) -> Hashable:
+        return ()  # its setup declares the same every frame
 
     def record(self, cb: Any, ctx: Any) -> None:
         shadows, frame = self.frame.ray, self.frame
@@ -149,6 +158,9 @@ class DeferredLightingPass(Pass):
             builder.read(name, Access.COMPUTE_READ)
         builder.write("hdr", Access.COMPUTE_READ_WRITE)
 
+    def declares(self) -> Hashable:
+        return self.frame.reads
+
     def record(self, cb: Any, ctx: Any) -> None:
         frame = self.frame
         width, height = ctx.extent
@@ -176,6 +188,9 @@ class OitAccumulatePass(Pass):
         for name, access in self.frame.reads:  # the blended rows are lit forward: clusters, maps
             if not name.startswith("draws."):
                 builder.read(name, access)
+
+    def declares(self) -> Hashable:
+        return self.frame.reads
 
     def record(self, cb: Any, ctx: Any) -> None:
         transparent = self.frame.transparent

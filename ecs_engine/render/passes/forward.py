@@ -1,6 +1,6 @@
 """The scene's forward rendering and the hdr-stage post effects' seam as passes of the output
 graph (render/passes/output_graph.py), one shape per target form (gpu/scene_attachments.py's
-FORMS):
+Form):
 
 - `direct`: "target" cleared to the background and "depth" cleared to far (0.0, reverse-Z), a
   transient of the graph (nothing after the rendering reads it: never stored);
@@ -29,6 +29,7 @@ from functools import partial
 from typing import Any
 
 from ...gpu.scene_attachments import DEPTH_FORMAT_NAME, HDR_FORMAT_NAME
+from ..config import Form
 from ..graph import UNREPLAYABLE, Access, ImageDesc, Load, Pass
 from .deferred_passes import OIT
 
@@ -41,14 +42,14 @@ class Forward(Pass):
 
     name = "forward"
 
-    def __init__(self, frame: Any, form: str, samples: int, oit: bool = False) -> None:
+    def __init__(self, frame: Any, form: Form, samples: int, oit: bool = False) -> None:
         self.frame, self.form, self.samples, self.oit = frame, form, samples, oit
 
     def attachments(self) -> tuple[tuple[str, ...], str, tuple[str | None, ...] | None]:
         """(colours, depth, resolves) of the rendering."""
-        if self.form == "direct":
+        if self.form == Form.DIRECT:
             return ("target",), "depth", None
-        if self.form == "hdr" and self.samples > 1:
+        if self.form == Form.HDR and self.samples > 1:
             return ("hdr_msaa",), "depth", ("hdr",)
         return ("hdr",), "depth", None
 
@@ -56,13 +57,13 @@ class Forward(Pass):
         colors, depth, resolve = self.attachments()
         for name, access in self.frame.reads:  # what the scene's passes wrote for its draws
             builder.read(name, access)
-        if self.form == "deferred":  # over the lit scene
+        if self.form == Form.DEFERRED:  # over the lit scene
             builder.write("hdr", Access.COLOR_READ_WRITE, load=Load.LOAD)
             builder.write(depth, Access.DEPTH_WRITE, load=Load.LOAD)
             for name in OIT if self.oit else ():  # the weighted transparency's composite samples them
                 builder.read(name, Access.FRAGMENT_SAMPLED)
             return
-        if self.form == "direct" or resolve is not None:  # nothing after the rendering reads them
+        if self.form == Form.DIRECT or resolve is not None:  # nothing after the rendering reads them
             builder.create(depth, ImageDesc(format=DEPTH_FORMAT_NAME, samples=self.samples))
         if resolve is not None:
             builder.create(colors[0], ImageDesc(format=HDR_FORMAT_NAME, samples=self.samples))
@@ -71,6 +72,9 @@ class Forward(Pass):
         if resolve is not None:
             builder.write("hdr", Access.RESOLVE_WRITE)
         builder.write(depth, Access.DEPTH_WRITE, load=Load.CLEAR, clear=FAR)
+
+    def declares(self) -> Hashable:
+        return (self.frame.reads, self.frame.background)
 
     def record(self, cb: Any, ctx: Any) -> None:
         colors, depth, resolve = self.attachments()
@@ -101,6 +105,9 @@ class PostCall(Pass):
         if self.samples == 1:  # a multisampled depth is not stored for the effects
             builder.read("depth", Access.COMPUTE_SAMPLED)
         builder.side_effect()  # it may write "hdr" behind the graph's back (its own barriers)
+
+    def declares(self) -> Hashable:
+        return ()  # its setup declares the same every frame
 
     def record(self, cb: Any, ctx: Any) -> None:
         inputs = self.output.inputs

@@ -32,6 +32,7 @@ from __future__ import annotations
 from collections.abc import Callable, Hashable
 from typing import Any
 
+from ..config import Form
 from ..graph import UNREPLAYABLE, Access, FrameGraph, ImageDesc, Load, Pass
 from ..graph.resources import format_name
 from .deferred_passes import (
@@ -95,6 +96,9 @@ class ToneMapInto(Pass):
         builder.read("hdr", Access.FRAGMENT_SAMPLED)
         builder.write(self.image, Access.COLOR_WRITE)  # every pixel: not loaded
 
+    def declares(self) -> Hashable:
+        return ()  # its setup declares the same every frame
+
     def record(self, cb: Any, ctx: Any) -> None:
         ctx.begin_rendering(colors=(self.image,))
         self.output.tone_map_pass.record(cb, self.frame.state, self.output.target, *self.frame.tone_map)
@@ -114,6 +118,9 @@ class OverlayOver(Pass):
 
     def setup(self, builder: Any) -> None:
         builder.write("target", Access.COLOR_READ_WRITE, load=Load.LOAD)
+
+    def declares(self) -> Hashable:
+        return ()  # its setup declares the same every frame
 
     def record(self, cb: Any, ctx: Any) -> None:
         overlay = self.frame.overlay
@@ -144,14 +151,14 @@ class OutputGraph:
         self._prepared: tuple[Any, Any, FrameGraph] | None = None  # prepare's, until record takes it
         self._copies = False  # this frame's readback copies the target
 
-    def _make(self, form: str, samples: int, color_format: int, ray: bool, oit: bool, post: Any) -> FrameGraph:
+    def _make(self, form: Form, samples: int, color_format: int, ray: bool, oit: bool, post: Any) -> FrameGraph:
         device = self.output.device
         graph = FrameGraph(device)
         try:
             scene = self.output.scene  # the renderer's passes ahead of the scene (frame/scene_passes.py)
             if scene is not None:
                 scene.add_to(graph)
-            if form == "deferred":
+            if form == Form.DEFERRED:
                 frame = self.frame
                 graph.add_pass(GBufferPass(frame))
                 if ray:
@@ -161,7 +168,7 @@ class OutputGraph:
                 if oit:
                     graph.add_pass(OitAccumulatePass(frame))
             graph.add_pass(Forward(self.frame, form, samples, oit))
-            if form != "direct":
+            if form != Form.DIRECT:
                 self._add_post(graph, samples, post)
                 desc = ImageDesc(format=f"VK_FORMAT_{format_name(device.vk, color_format)}")
                 names = [f"ldr_{i}" for i in range(len(self.effects))] + ["target"]
@@ -186,14 +193,14 @@ class OutputGraph:
         target = self.output.target
         attachments = target.attachments
         form, samples, color_format = target.form, int(attachments.samples), int(target.color_format)
-        deferred = form == "deferred"
+        deferred = form == Form.DEFERRED
         # the rays' and weighted transparency's passes from the first frame that has them on
         # (they record nothing on a frame without traced lights or blended rows): one graph,
         # one set of transients, however those come and go
         ray = deferred and self.output.ray_shadows is not None
         oit = deferred and (self.output.oit is not None or self.frame.transparent is not None)
         extent = (int(state.area.extent.width), int(state.area.extent.height))
-        post = self.output.post if form != "direct" else []
+        post = self.output.post if form != Form.DIRECT else []
         # the effects' passes follow the extent (bloom's chain) and the list (made again with it)
         post_shape = (extent, tuple(id(p) for p in post)) if post else None
         shape = (form, samples, color_format, ray, oit, post_shape)
@@ -256,7 +263,8 @@ class OutputGraph:
         """This frame's output (prepared here unless `prepare` was asked the same this frame);
         `secondaries` are the scene's draws."""
         graph = self._taken(state, rendering, tone_map, overlay, slot, readback)
-        if graph is None:
+        taken = graph is not None
+        if graph is None:  # prepared now, after the jobs: with their inputs
             graph = self.prepare(state, rendering, tone_map, overlay, slot, readback)
             self._prepared = None
         target = self.output.target
@@ -270,12 +278,12 @@ class OutputGraph:
         frame.readback = target.record_copy if copies else None
         oit_now = frame.transparent is not None
         scene = self.output.scene
-        if scene is not None:  # its frame's inputs came after `prepare` (the jobs'): imported again
+        if scene is not None and taken:  # its frame's inputs came after `prepare` (the jobs'): imported again
             self._import_scene(graph)
             graph.compile((int(state.area.extent.width), int(state.area.extent.height)))
-            if form == "deferred":
+            if form == Form.DEFERRED:
                 frame.attachments = self._gbuffer_views(graph, target.attachments)
-        names = {"forward": "sky and blended"} if form == "deferred" else {}
+        names = {"forward": "sky and blended"} if form == Form.DEFERRED else {}
 
         def ended(name: str) -> None:
             if mark is None or (name == "imgui" and overlay is None):
@@ -319,7 +327,7 @@ class OutputGraph:
     def _place_readback(self, graph: FrameGraph, wanted: bool) -> None:
         """The readback pass last in `graph` or not (a change recompiles the graph: a swapchain's
         screenshot frame and the one after)."""
-        has = any(p.name == Readback.name for p in graph.passes)
+        has = graph.has_pass(Readback.name)
         if wanted and not has:
             graph.add_pass(Readback(self.frame))
         elif has and not wanted:
@@ -334,19 +342,22 @@ class OutputGraph:
             kept = self._views = (compiled, attachments, GBufferViews(attachments, compiled.transients.images))
         return kept[2]
 
-    def _import_attachments(self, graph: FrameGraph, form: str, attachments: Any) -> None:
+    def _import_attachments(self, graph: FrameGraph, form: Form, attachments: Any) -> None:
         """The target's SceneAttachments: depth, the HDR colour and, with MSAA, the multisampled
         one's resolve (single-sample: the multisampled colour and depth are transients); none in
         the direct form (its depth is a transient).
         Every pass clears what it writes first and nothing after the graph reads them: their
         old contents go (UNDEFINED) and they have no final layout (UNDEFINED)."""
-        if form == "direct":
+        if form == Form.DIRECT:
             return
         images = attachments.images
         named = [("hdr", images[-1])]
         if attachments.samples == 1:  # with MSAA depth and colour are forward's transients
             named.append(("depth", images[0]))
         for name, image in named:
+            token = (image, image.handle)
+            if graph.reuse_import(name, token):
+                continue
             graph.import_image(
                 name,
                 handle=image.handle,
@@ -355,10 +366,15 @@ class OutputGraph:
                 extent=(int(image.width), int(image.height)),
                 layout_before="UNDEFINED",
                 layout_after="UNDEFINED",
+                token=token,
             )
 
     def _import_target(self, graph: FrameGraph, rendering: Any, extent: tuple[int, int]) -> None:
         """The target's image, imported with its format's value (FXAA's pipeline is made for it)."""
+        target = self.output.target
+        token = (rendering.image, rendering.view, extent, target.color_format, target.final_layout)
+        if graph.reuse_import("target", token):
+            return
         graph.import_image(
             "target",
             handle=rendering.image,
@@ -368,6 +384,7 @@ class OutputGraph:
             layout_before="UNDEFINED",  # every pixel is written: the old contents go
             layout_after=_final_layout(self.output.vk, self.output.target.final_layout),
             stage_before=("COLOR_ATTACHMENT_OUTPUT", "ALL_TRANSFER"),  # acquire's wait, last readback
+            token=token,
         )
 
     def describe(self) -> str:

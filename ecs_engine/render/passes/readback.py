@@ -31,6 +31,9 @@ class Readback(Pass):
         builder.read("target", Access.TRANSFER_READ)
         builder.side_effect()  # writes the host buffer, outside the graph
 
+    def declares(self) -> Hashable:
+        return ()  # its setup declares the same every frame
+
     def record(self, cb: Any, ctx: Any) -> None:
         copy: Copy | None = self.frame.readback
         if copy is not None:

@@ -43,7 +43,7 @@ def wants_hdr(name: str, exposure: float, samples: int, blends: bool = False, po
     unless some material blends: an 8-bit target clamps a blended colour before blending (glass lit
     to 3.0 at alpha 0.5 over black: 0.5), the HDR colour after (1.0); or post effects are on (they
     run on the HDR colour, or between the tone map and the target: output_passes.py)."""
-    return name != "clamp" or exposure != 0.0 or samples > 1 or blends or post
+    return name != ToneMap.CLAMP or exposure != 0.0 or samples > 1 or blends or post
 
 
 class ToneMapPass:

@@ -61,6 +61,9 @@ class _BloomPass(Pass):
         self.hdr, self.chain = hdr, chain
         self._released = False
 
+    def declares(self) -> Hashable:
+        return ()  # its setup reads only what it was made with
+
     def destroy(self) -> None:
         if not self._released:
             self._released = True

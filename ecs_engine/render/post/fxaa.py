@@ -175,6 +175,9 @@ class FxaaPass(Pass):
     def key(self) -> Hashable:
         return (self.settings,)
 
+    def declares(self) -> Hashable:
+        return ()  # its setup reads only what it was made with
+
     def record(self, cb: Any, ctx: Any) -> None:
         vk = ctx.vk
         lib = vk.lib

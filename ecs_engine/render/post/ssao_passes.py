@@ -45,6 +45,9 @@ class _ComputePass(Pass):
     def key(self) -> Hashable:
         return (self.settings, self.view.key())
 
+    def declares(self) -> Hashable:
+        return ()  # its setup reads only what it was made with
+
     def _make(self, device: Any) -> None:
         vk = device.vk
         owned = Owned(device)

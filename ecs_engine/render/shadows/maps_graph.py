@@ -58,6 +58,9 @@ class ShadowMapsPass(Pass):
             builder.write(NAME, Access.DEPTH_WRITE, layer=view.layer, load=Load.CLEAR, region=True)
         builder.side_effect()  # the lighting may sample them outside the graph (frame/scene_passes.py)
 
+    def declares(self) -> Hashable:
+        return (tuple(self.culled), tuple(view.layer for view in self.views) if self.views else ())
+
     def record(self, cb: Any, ctx: Any) -> None:
         self.shadows.record(cb, ctx, self.views, self.secondaries)
 
@@ -66,9 +69,11 @@ class ShadowMapsPass(Pass):
         return FrameGraph.UNREPLAYABLE if self.views else None
 
     def import_into(self, graph: FrameGraph) -> None:
-        for name, buffer in self.culled.items():  # the frame slot's: its last use was fenced
-            graph.import_buffer(name, handle=buffer.handle, size=buffer.size, stage_before="NONE")
+        graph.import_slot_buffers(self.culled)
         maps = self.shadows.maps
+        token = (maps, maps.image.handle)
+        if graph.reuse_import(NAME, token):
+            return
         graph.import_image(
             NAME,
             handle=maps.image.handle,
@@ -82,6 +87,7 @@ class ShadowMapsPass(Pass):
             # the last frame's readers and depth tests (frames in flight share the maps): what
             # ShadowMaps.barriers waited for by hand
             stage_before=("FRAGMENT_SHADER", "COMPUTE_SHADER", "EARLY_FRAGMENT_TESTS", "LATE_FRAGMENT_TESTS"),
+            token=token,
         )
 
 
@@ -106,6 +112,9 @@ class ShadowCullPass(Pass):
                 builder.read(name, Access.TRANSFER_READ)  # copied for the host
             builder.write(name, Access.TRANSFER_WRITE if name.endswith("readback") else Access.COMPUTE_READ_WRITE)
         builder.side_effect()
+
+    def declares(self) -> Hashable:
+        return tuple(self.maps.culled)
 
     def record(self, cb: Any, ctx: Any) -> None:
         self.maps.shadows.gpu.record_compute(cb)
