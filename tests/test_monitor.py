@@ -4,6 +4,8 @@ moves, and is black without it."""
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 from gpu_context import headless_gpu, render_world
@@ -97,3 +99,26 @@ def test_a_texture_view_and_a_split_window_in_one_frame() -> None:
     seen = _magenta(shown)
     assert seen.sum() >= 5 and not seen[:, : W // 4].any() and not seen[:, 3 * W // 4 :].any()
     assert len(np.unique(shown[:, : W // 4 - 1].reshape(-1, 3), axis=0)) == 1  # outside the view: background
+
+
+@pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs a display (make test runs under Xvfb)")
+@pytest.mark.parametrize("scene", ["monitor", "split_screen"])
+def test_the_views_in_a_window(scene: str, tmp_path) -> None:
+    """On a swapchain: the first view's submit waits for the image, the last one's signals the
+    present (render/frame/views.py); the screenshot reads the last frame back."""
+    from PIL import Image
+
+    from ecs_engine.app.settings import RunOptions
+    from ecs_engine.app.window import open_glfw, run_windowed
+
+    shot = tmp_path / "shot.png"
+    options = RunOptions(scene=scene, width=W, height=H, frames=6, screenshot=str(shot), validate=True, quiet=True)
+    glfw = open_glfw()
+    assert glfw is not None
+    result = run_windowed(options, glfw)
+    assert result.validation_messages == [] and result.frames == 6
+    pixels = np.asarray(Image.open(shot).convert("RGB")).astype(np.int64)
+    if scene == "monitor":
+        assert _magenta(pixels).sum() >= 10
+    else:  # three views drawn: no pixel left undrawn (black)
+        assert (pixels.sum(axis=-1) > 0).all()

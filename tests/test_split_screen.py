@@ -197,3 +197,37 @@ def test_print_graph_shows_each_view_s_graph_in_order() -> None:
     assert heads[0].endswith("into the window at (0, 0, 32, 48)") and "frame graph 32x48" in text
     assert text.count("clear_target") == 1 and text.count("readback (side effect)") == 1
     assert text.count("writes target region COLOR_WRITE") == 3
+
+
+def test_views_coming_and_going_between_frames() -> None:
+    """An inset added over the right half, then taken away: the view before it becomes the last
+    (the target's final layout, the readback) and the picture is the two halves' again."""
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.render.frame.renderer import Renderer
+
+    with headless_gpu(W, H) as gpu:
+        mesh = gpu.meshes.add(cube_mesh())
+        world = _world(mesh)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+        schedule = default_schedule()
+        try:
+
+            def frame() -> np.ndarray:
+                schedule.run(world, 0.0)
+                renderer.render(world, readback=True)
+                return gpu.target.pixels()[..., :3].astype(np.int64)
+
+            two = frame()
+            inset = world.spawn(  # the red cube, in the right half's top right corner
+                Transform(position=(RED, 0.0, 4.0)),
+                Camera(fov_y=math.radians(60.0)),
+                Viewport(x=0.75, width=0.25, height=0.5, order=1),
+            )
+            three = frame()
+            world.destroy(inset)
+            again = frame()
+        finally:
+            renderer.destroy()
+    corner = (slice(0, H // 2), slice(3 * W // 4, W))
+    assert _share(three[corner], 0) > 0.05 and _share(two[corner], 0) == 0.0
+    assert np.array_equal(again, two)
