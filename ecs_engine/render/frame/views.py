@@ -22,10 +22,11 @@ form at least (target_forms.py). A texture view whose texture no material sample
 - Frame replay is per slot, and a slot's key names its view's graph, rectangle and camera: with
   as many views as slots each view keeps its slot and replays; otherwise the views take turns
   over the slots and every frame records (correct, at the cost of recording).
-- Refused with several views (UsageError, one message): occlusion culling (the GPU keeps one
-  depth pyramid of the last frame, which would be another view's) and post effects (they run
-  over the target's whole HDR image, not a view's corner of it; and one effect's passes would
-  sit in several graphs: not done yet).
+- Post effects of the hdr stage that add their own passes (bloom, SSAO) run in each view's
+  graph over its "hdr" at the view's size. Refused with several views (UsageError, one
+  message): occlusion culling (the GPU keeps one depth pyramid of the last frame, which would
+  be another view's), ldr-stage effects (FXAA writes the whole target from its own image: not
+  placed in a rectangle yet) and effects given as callables (they get the whole HDR image).
 """
 
 from __future__ import annotations
@@ -182,10 +183,14 @@ class Views:
                 "occlusion culling with several camera views: it culls by the last frame's depth, "
                 "which is another view's; use frustum or temporal culling"
             )
-        if r.post_effects:
+        output = r.output
+        ldr = output.graph.effects if output.graph is not None else []
+        if ldr or any(not hasattr(p, "add_hdr") for p in output.post):
+            names = ", ".join(n for n in r.post_effects) or "a post effect given as a callable"
             raise UsageError(
-                "post effects with several camera views are not drawn yet (they run over the whole "
-                "HDR image, not one view's): turn them off for this scene"
+                f"post effects ({names}) with several camera views: those after the tone map (fxaa) "
+                "and those given as callables are not drawn per view yet (bloom and ssao are): "
+                "turn them off for this scene"
             )
 
     def _extract(self, r: Any, world: Any, view: ViewData, materials: Any, dt: float | None) -> FrameData:
