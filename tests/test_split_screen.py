@@ -92,11 +92,14 @@ def test_each_camera_draws_into_its_half(layers: bool) -> None:
         {"msaa": 4},
         {"post": ("bloom", "ssao")},
         {"post": ("bloom",), "light_culling": "deferred"},
+        {"post": ("fxaa",)},
+        {"post": ("bloom", "fxaa"), "msaa": 4},
     ],
 )
 def test_split_screen_in_every_form_and_mode(settings: dict) -> None:
     """The deferred form (the G-buffer and lighting at the view's size), MSAA (the resolve into
-    the view's corner), the GPU-driven path, temporal culling per camera."""
+    the view's corner), the GPU-driven path, temporal culling per camera, post effects (FXAA
+    writing the view's rectangle)."""
     from ecs_engine.gpu.offscreen import OffscreenTarget
 
     samples = settings.pop("msaa", 1)
@@ -155,8 +158,18 @@ def test_occlusion_culling_and_post_effects_are_refused_with_several_views() -> 
         mesh = gpu.meshes.add(cube_mesh())
         with pytest.raises(UsageError, match="occlusion culling with several camera views"):
             _render(gpu, _world(mesh), mode="indirect", culling="occlusion")
-        with pytest.raises(UsageError, match=r"post effects \(fxaa\) with several camera views"):
-            _render(gpu, _world(mesh), post=("fxaa",))
+        from ecs_engine.app.scenes import default_schedule
+        from ecs_engine.render.frame.renderer import Renderer
+
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, tone_map="aces")
+        try:
+            world = _world(mesh)
+            default_schedule().run(world, 0.0)
+            renderer.output.set_post([lambda cb, inputs: None], [])  # a callable effect (a test's spy)
+            with pytest.raises(UsageError, match="a post effect given as a callable with several camera views"):
+                renderer.render(world)
+        finally:
+            renderer.destroy()
 
 
 def test_each_view_replays_its_own_slot_and_never_another_view_s() -> None:

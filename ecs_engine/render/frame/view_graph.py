@@ -14,6 +14,10 @@ the window's picture at that size. Only what writes "target" is moved:
                   offset), a region write: the rest of the target is kept
     imgui         the overlay over the whole target (the last view's frame only carries one)
 
+With post effects after the tone map (FXAA), the tone map writes the graph's own image at the
+view's size as for the window, and the last effect writes the rectangle instead (fxaa.py's
+`place`: its render area and the offset its shader reads from).
+
 "target" is imported at the target's size; a view after the first loads what the views before
 drew (COLOR_ATTACHMENT_OPTIMAL, as the view before left it: its final barrier reaches every later
 command, which this view's first barrier chains with); the last view leaves it in the target's
@@ -27,6 +31,7 @@ from collections.abc import Hashable
 from dataclasses import dataclass
 from typing import Any
 
+from ...errors import UsageError
 from ..config import Form
 from ..graph import Access, FrameGraph, Load, Pass
 from ..passes.output_graph import OutputGraph, OverlayOver, _final_layout
@@ -56,6 +61,9 @@ class ClearTarget(Pass):
     def setup(self, builder: Any) -> None:
         builder.write("target", Access.COLOR_WRITE, load=Load.CLEAR, clear=(*self.frame.background, 1.0))
 
+    def declares(self) -> Hashable:
+        return self.frame.background
+
     def record(self, cb: Any, ctx: Any) -> None:
         ctx.begin_rendering(colors=("target",))
         ctx.end_rendering()
@@ -72,6 +80,9 @@ class ToneMapView(Pass):
     def setup(self, builder: Any) -> None:
         builder.read("hdr", Access.FRAGMENT_SAMPLED)
         builder.write("target", Access.COLOR_WRITE, region=True)  # every pixel of the rectangle
+
+    def declares(self) -> Hashable:
+        return ()  # the same every frame
 
     def record(self, cb: Any, ctx: Any) -> None:
         rect = self.view.placement.rect
@@ -104,8 +115,8 @@ class ViewGraph(OutputGraph):
     """The output graphs of the views' frames at one place in the drawing order (`first`: the
     frame that clears the target); `placement` is set before each frame."""
 
-    def __init__(self, output: Any, first: bool) -> None:
-        super().__init__(output, [])
+    def __init__(self, output: Any, first: bool, effects: list[Any]) -> None:
+        super().__init__(output, effects)
         self.first = first
         self.placement = Placement((0, 0, 1, 1), (1, 1), True, -1)
 
@@ -114,11 +125,19 @@ class ViewGraph(OutputGraph):
             raise RuntimeError("several camera views draw through the HDR colour (target_forms.py)")
         graph = super()._make(form, samples, color_format, ray, oit, post)
         try:
-            for name in ("tone_map", "imgui"):
-                graph.remove_pass(name).destroy()
-            if self.first:
-                graph.add_pass(ClearTarget(self.frame))
-            graph.add_pass(ToneMapView(self.output, self.frame, self))
+            graph.remove_pass("imgui").destroy()
+            if self.effects:  # the tone map writes its own image; the last effect writes the target
+                last = [p for p in graph.passes if getattr(p, "target", None) == "target" and hasattr(p, "place")]
+                if not last:
+                    raise UsageError("the last post effect after the tone map cannot draw into a camera view's part")
+                last[0].place = lambda: self.placement.rect  # (fxaa.py: its area and offset)
+                if self.first:
+                    graph.add_pass(ClearTarget(self.frame), before=last[0].name)
+            else:
+                graph.remove_pass("tone_map").destroy()
+                if self.first:
+                    graph.add_pass(ClearTarget(self.frame))
+                graph.add_pass(ToneMapView(self.output, self.frame, self))
             graph.add_pass(OverlayView(self.frame))
         except BaseException:
             graph.destroy()

@@ -22,11 +22,11 @@ form at least (target_forms.py). A texture view whose texture no material sample
 - Frame replay is per slot, and a slot's key names its view's graph, rectangle and camera: with
   as many views as slots each view keeps its slot and replays; otherwise the views take turns
   over the slots and every frame records (correct, at the cost of recording).
-- Post effects of the hdr stage that add their own passes (bloom, SSAO) run in each view's
-  graph over its "hdr" at the view's size. Refused with several views (UsageError, one
-  message): occlusion culling (the GPU keeps one depth pyramid of the last frame, which would
-  be another view's), ldr-stage effects (FXAA writes the whole target from its own image: not
-  placed in a rectangle yet) and effects given as callables (they get the whole HDR image).
+- Post effects run in each view's graph at the view's size: bloom and SSAO over its "hdr",
+  FXAA into its rectangle (view_graph.py). A texture view's graph has the hdr-stage ones only.
+  Refused with several views (UsageError, one message): occlusion culling (the GPU keeps one
+  depth pyramid of the last frame, which would be another view's) and effects given as
+  callables (they get the whole HDR image).
 """
 
 from __future__ import annotations
@@ -58,9 +58,18 @@ class Views:
         self.texture_graphs: dict[str, TextureGraph] = {}  # and their output graphs
         self.drawn: list[tuple[str, Any]] = []  # the last frame's views: (what, its output graph)
 
-    def graph(self, output: Any, index: int) -> ViewGraph:
+    def graph(self, r: Any, index: int) -> ViewGraph:
+        """The output graph of the window's view at `index`, with the output's ldr effects (made
+        again when those change, after the device is idle: frames in flight may use the old)."""
+        output = r.output
+        effects = output.graph.effects
+        if any(g.effects != effects for g in self.graphs):
+            r.device.wait_idle()
+            for g in self.graphs:
+                g.destroy()
+            self.graphs.clear()
         while len(self.graphs) <= index:
-            self.graphs.append(ViewGraph(output, first=not self.graphs))
+            self.graphs.append(ViewGraph(output, not self.graphs, effects))
         return self.graphs[index]
 
     def extractor(self, camera: int, chunk_rows: int | None) -> FrameExtractor:
@@ -124,7 +133,7 @@ class Views:
                     continue
                 output.graph = plain
                 if split:
-                    graph = output.graph = self.graph(output, i - len(textures))
+                    graph = output.graph = self.graph(r, i - len(textures))
                     graph.placement = Placement(view.rect, (width, height), last, view.view.entity)
                 r.overlay = overlay if last else None
                 stats.append(r._draw(data, materials, w, h, framebuffer, readback and last, *semaphores))
@@ -183,14 +192,10 @@ class Views:
                 "occlusion culling with several camera views: it culls by the last frame's depth, "
                 "which is another view's; use frustum or temporal culling"
             )
-        output = r.output
-        ldr = output.graph.effects if output.graph is not None else []
-        if ldr or any(not hasattr(p, "add_hdr") for p in output.post):
-            names = ", ".join(n for n in r.post_effects) or "a post effect given as a callable"
+        if any(not hasattr(p, "add_hdr") for p in r.output.post):
             raise UsageError(
-                f"post effects ({names}) with several camera views: those after the tone map (fxaa) "
-                "and those given as callables are not drawn per view yet (bloom and ssao are): "
-                "turn them off for this scene"
+                "a post effect given as a callable with several camera views: it gets the whole HDR "
+                "image, not one view's (bloom, ssao and fxaa are drawn per view)"
             )
 
     def _extract(self, r: Any, world: Any, view: ViewData, materials: Any, dt: float | None) -> FrameData:
