@@ -252,3 +252,29 @@ def test_views_coming_and_going_between_frames() -> None:
     corner = (slice(0, H // 2), slice(3 * W // 4, W))
     assert _share(three[corner], 0) > 0.05 and _share(two[corner], 0) == 0.0
     assert np.array_equal(again, two)
+
+
+@pytest.mark.parametrize("transparency", ["sorted", "weighted"])
+def test_blended_rows_in_each_view(transparency: str) -> None:
+    """Half-transparent cubes in both halves, forward over each view's scene (sorted) or
+    accumulated at the view's size in the deferred form (weighted)."""
+    with headless_gpu(W, H) as gpu:
+        mesh = gpu.meshes.add(cube_mesh())
+        world = _world(mesh)
+        library = materials(world)
+        for x, color in ((RED, (1.0, 0.0, 0.0, 0.5)), (GREEN, (0.0, 1.0, 0.0, 0.5))):
+            glass = library.add(Material(f"glass{x}", "lambert", color, alpha_mode="blend"))
+            world.spawn(Transform(position=(x, 0.0, 0.0), scale=(1.5, 1.5, 1.5)), Mesh(handle=mesh, material=glass))
+        for eid in [int(e) for e in world.query(Mesh, write=()).entities()][:2]:
+            world.destroy(eid)  # the opaque cubes go: the blended ones alone
+        settings = {"transparency": transparency, "light_culling": "deferred" if transparency == "weighted" else "auto"}
+        left, right = _halves(_render(gpu, world, frames=2, **settings))
+
+    def tinted(half: np.ndarray, channel: int) -> np.ndarray:  # the glass over the background
+        return half[..., channel] > np.delete(half, channel, axis=-1).max(axis=-1) + 40
+
+    assert tinted(left, 0).mean() > 0.05 and not tinted(left, 1).any()
+    assert tinted(right, 1).mean() > 0.05 and not tinted(right, 0).any()
+    for half, channel in ((left, 0), (right, 1)):  # each centred in its half (its view's size)
+        cols = np.flatnonzero(tinted(half, channel).any(axis=0))
+        assert abs((cols.min() + cols.max()) / 2 - (W // 4 - 0.5)) <= 1.5
