@@ -278,3 +278,24 @@ def test_blended_rows_in_each_view(transparency: str) -> None:
     for half, channel in ((left, 0), (right, 1)):  # each centred in its half (its view's size)
         cols = np.flatnonzero(tinted(half, channel).any(axis=0))
         assert abs((cols.min() + cols.max()) / 2 - (W // 4 - 0.5)) <= 1.5
+
+
+def test_deferred_views_keep_their_own_lighting_sets_and_replay() -> None:
+    """Each view's G-buffer is its graph's: one deferred lighting set per view, named once
+    (re-naming one waits for the device), so a still split screen replays its frames."""
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.render.frame.renderer import Renderer
+
+    with headless_gpu(W, H) as gpu:
+        mesh = gpu.meshes.add(cube_mesh())
+        world = _world(mesh)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, light_culling="deferred")
+        try:
+            default_schedule().run(world, 0.0)
+            for _ in range(6):
+                renderer.render(world)
+            assert len(renderer.views.lighting) == 2
+            assert all(lighting._named is not None for lighting in renderer.views.lighting.values())
+            assert renderer.replay.replayed >= 6
+        finally:
+            renderer.destroy()

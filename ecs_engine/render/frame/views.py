@@ -35,10 +35,11 @@ from collections.abc import Callable
 from typing import Any
 
 from ...errors import UsageError
-from ..config import Culling
+from ..config import Culling, Form
 from ..draw.path import FrameStats
 from ..extract.frame_data import FrameData, FrameExtractor
 from ..extract.views import ViewData, extract_views, several_views
+from ..lighting.deferred import DeferredPass
 from ..passes.output_graph import OutputGraph
 from .texture_views import TextureGraph, TextureTarget
 from .view_graph import Placement, ViewGraph
@@ -56,6 +57,7 @@ class Views:
         self.extractors: dict[int, FrameExtractor] = {}  # by camera entity
         self.targets: dict[str, TextureTarget] = {}  # the texture views', by texture name
         self.texture_graphs: dict[str, TextureGraph] = {}  # and their output graphs
+        self.lighting: dict[Any, DeferredPass] = {}  # the deferred lighting per view (_lighting)
         self.drawn: list[tuple[str, Any]] = []  # the last frame's views: (what, its output graph)
 
     def graph(self, r: Any, index: int) -> ViewGraph:
@@ -113,7 +115,7 @@ class Views:
         output = r.output
         if output.graph is None:
             output.graph = OutputGraph(output, [])
-        plain, overlay, target = output.graph, r.overlay, r.target
+        plain, overlay, target, lighting = output.graph, r.overlay, r.target, output.deferred
         stats = []
         self.drawn = []
         try:
@@ -124,6 +126,7 @@ class Views:
                 w, h = view.rect[2:]
                 if handle is not None:  # into its own target, copied into the texture's layer
                     output.graph = self._texture_graph(r, view, handle)
+                    output.deferred = self._lighting(r, view.texture, lighting)
                     r.target = output.target = self._target(r, view, target)
                     stats.append(r._draw(data, materials, w, h, None, False, *semaphores))
                     r.target = output.target = target
@@ -132,6 +135,7 @@ class Views:
                     )
                     continue
                 output.graph = plain
+                output.deferred = self._lighting(r, i - len(textures) if split else None, lighting)
                 if split:
                     graph = output.graph = self.graph(r, i - len(textures))
                     graph.placement = Placement(view.rect, (width, height), last, view.view.entity)
@@ -140,7 +144,20 @@ class Views:
                 self.drawn.append((f"camera {view.view.entity} into the window at {view.rect}", output.graph))
         finally:
             output.graph, r.overlay, r.target, output.target = plain, overlay, target, target
+            output.deferred = lighting
         return _total(stats)
+
+    def _lighting(self, r: Any, key: Any, window: Any) -> Any:
+        """The deferred lighting of a view's graphs (`key`: its place among the window's views,
+        or its texture's name; None: the window's own). Its set names one target's G-buffer
+        and re-naming it waits for the device, so each view keeps its own (the deferred form
+        only; made on first use)."""
+        if key is None or r.target.form != Form.DEFERRED:
+            return window
+        found = self.lighting.get(key)
+        if found is None:
+            found = self.lighting[key] = DeferredPass(r.device, r.set_layout.handle)
+        return found
 
     def _handle(self, materials: Any, view: ViewData) -> int | None:
         """The texture a texture view draws: the render target of its name that a material
@@ -226,6 +243,9 @@ class Views:
             graph.destroy()
         for target in self.targets.values():
             target.destroy()
+        for lighting in self.lighting.values():
+            lighting.destroy()
+        self.lighting.clear()
         self.graphs.clear()
         self.texture_graphs.clear()
         self.targets.clear()
