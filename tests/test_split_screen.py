@@ -299,3 +299,31 @@ def test_deferred_views_keep_their_own_lighting_sets_and_replay() -> None:
             assert renderer.replay.replayed >= 6
         finally:
             renderer.destroy()
+
+
+@pytest.mark.parametrize("settings", [{"post": ("bloom", "ssao", "fxaa")}, {"light_culling": "deferred"}])
+def test_a_still_split_screen_waits_for_nothing_and_replays(settings: dict) -> None:
+    """Per view what keeps sets for one graph's images (the deferred lighting, the effects'
+    pipelines): once made, no frame waits for the device or writes a set, and frames replay."""
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.render.frame.renderer import Renderer
+
+    with headless_gpu(W, H) as gpu:
+        mesh = gpu.meshes.add(cube_mesh())
+        world = _world(mesh)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, **settings)
+        waits = []
+        real = gpu.device.wait_idle
+        try:
+            default_schedule().run(world, 0.0)
+            for _ in range(4):
+                renderer.render(world)
+            gpu.device.wait_idle = lambda: (waits.append(1), real())[1]
+            version, replayed = gpu.device.objects_version, renderer.replay.replayed
+            for _ in range(4):
+                renderer.render(world)
+            assert waits == [] and gpu.device.objects_version == version
+            assert renderer.replay.replayed - replayed == 8  # 4 frames of 2 views
+        finally:
+            gpu.device.wait_idle = real
+            renderer.destroy()

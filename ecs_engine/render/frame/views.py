@@ -58,6 +58,7 @@ class Views:
         self.targets: dict[str, TextureTarget] = {}  # the texture views', by texture name
         self.texture_graphs: dict[str, TextureGraph] = {}  # and their output graphs
         self.lighting: dict[Any, DeferredPass] = {}  # the deferred lighting per view (_lighting)
+        self.effects: dict[Any, tuple[list[Any], list[Any]]] = {}  # per view: (the window's, copies)
         self.drawn: list[tuple[str, Any]] = []  # the last frame's views: (what, its output graph)
 
     def graph(self, r: Any, index: int) -> ViewGraph:
@@ -115,7 +116,7 @@ class Views:
         output = r.output
         if output.graph is None:
             output.graph = OutputGraph(output, [])
-        plain, overlay, target, lighting = output.graph, r.overlay, r.target, output.deferred
+        plain, overlay, target, lighting, post = output.graph, r.overlay, r.target, output.deferred, output.post
         stats = []
         self.drawn = []
         try:
@@ -127,6 +128,7 @@ class Views:
                 if handle is not None:  # into its own target, copied into the texture's layer
                     output.graph = self._texture_graph(r, view, handle)
                     output.deferred = self._lighting(r, view.texture, lighting)
+                    output.post = self._effects(r, view.texture, post)
                     r.target = output.target = self._target(r, view, target)
                     stats.append(r._draw(data, materials, w, h, None, False, *semaphores))
                     r.target = output.target = target
@@ -135,7 +137,8 @@ class Views:
                     )
                     continue
                 output.graph = plain
-                output.deferred = self._lighting(r, i - len(textures) if split else None, lighting)
+                place = i - len(textures) if split else None
+                output.deferred, output.post = self._lighting(r, place, lighting), self._effects(r, place, post)
                 if split:
                     graph = output.graph = self.graph(r, i - len(textures))
                     graph.placement = Placement(view.rect, (width, height), last, view.view.entity)
@@ -144,7 +147,7 @@ class Views:
                 self.drawn.append((f"camera {view.view.entity} into the window at {view.rect}", output.graph))
         finally:
             output.graph, r.overlay, r.target, output.target = plain, overlay, target, target
-            output.deferred = lighting
+            output.deferred, output.post = lighting, post
         return _total(stats)
 
     def _lighting(self, r: Any, key: Any, window: Any) -> Any:
@@ -158,6 +161,25 @@ class Views:
         if found is None:
             found = self.lighting[key] = DeferredPass(r.device, r.set_layout.handle)
         return found
+
+    def _effects(self, r: Any, key: Any, window: list[Any]) -> list[Any]:
+        """The hdr-stage post effects of a view's graphs (`key` as _lighting's): copies of the
+        window's with the same settings, since an effect's pipelines keep descriptor sets for
+        one graph's images (bloom forgets them, waiting for the device, when another graph's
+        come); made again when the window's change."""
+        if key is None or not window:
+            return window
+        made = self.effects.get(key)
+        if made is not None and made[0] is window:
+            return made[1]
+        if made is not None:
+            r.device.wait_idle()  # frames in flight may use them
+            for effect in made[1]:
+                if effect not in made[0]:  # a copy (an effect without settings is shared)
+                    effect.destroy()
+        copies = [type(p)(p.device, p.settings) if hasattr(p, "settings") else p for p in window]
+        self.effects[key] = (window, copies)
+        return copies
 
     def _handle(self, materials: Any, view: ViewData) -> int | None:
         """The texture a texture view draws: the render target of its name that a material
@@ -246,6 +268,11 @@ class Views:
         for lighting in self.lighting.values():
             lighting.destroy()
         self.lighting.clear()
+        for window, copies in self.effects.values():
+            for effect in copies:
+                if effect not in window:
+                    effect.destroy()
+        self.effects.clear()
         self.graphs.clear()
         self.texture_graphs.clear()
         self.targets.clear()
