@@ -16,9 +16,12 @@ form at least (target_forms.py). A texture view whose texture no material sample
 - Per view: its camera's matrices and layers, a FrameExtractor per camera entity (temporal
   culling's history, the planes and chunk splits kept per camera), the shadow views planned
   from its camera (cascades follow it), its light clusters, its output graph (view_graph.py: one
-  per place in the order, so each keeps its own compiled graph and transients at its size).
-  Shared: the world's snapshot of materials, textures, meshes, the environment and the shadow
-  map images (drawn again in each view's frame, before its scene reads them).
+  per place in the order, so each keeps its own compiled graph and transients at its size),
+  and what keeps descriptor sets for one graph's images: its deferred lighting (DeferredPass)
+  and copies of the window's hdr-stage post effects; so a still split screen waits for nothing
+  and writes no set once made. Shared: the world's snapshot of materials, textures, meshes,
+  the environment and the shadow map images (drawn again in each view's frame, before its
+  scene reads them).
 - Frame replay is per slot, and a slot's key names its view's graph, rectangle and camera: with
   as many views as slots each view keeps its slot and replays; otherwise the views take turns
   over the slots and every frame records (correct, at the cost of recording).
