@@ -9,6 +9,7 @@
 # then `bash scripts/device_run.sh MODE...` with carry [".gl", ".whl"]; results land in $OUT.
 # At most 8 files come back: each mode writes one text file and at most one tar of images.
 # Modes: tests or tests/K/N (the whole suite, or its K-th shard of N, with validation, from a copy of tests/ outside the checkout),
+# parallel/N (all N shards at once),
 # demos (every demo scene with --validate), aniso (tests/texture_reference.py: what the driver's
 # anisotropic filter does to a magnified texture), bench:NAME:ARGS (a benchmark, e.g.
 # bench:schedule:--quick), ab:NAME:ARGS:REPS (old against new, alternated; see below).
@@ -38,6 +39,17 @@ for mode in "$@"; do
       (cd /tmp && timeout 560 python3 -m pytest -q -rfE -p no:cacheprovider --durations=10 $files \
         > "$OUT/gpu_tests.txt" 2>&1; echo "pytest rc=$?" >> "$OUT/gpu_tests.txt")
       grep -v "^\.*s*\.* *\[" "$OUT/gpu_tests.txt" | tail -40 ;;
+    parallel/*)
+      # parallel/N: the suite's N shards at once (the host has 16 cores; one GPU serves them all),
+      # each into gpu_tests_K.txt, 500 s at most
+      n=${mode#parallel/}
+      for k in $(seq "$n"); do
+        files=$(ls /tmp/t/test_*.py | awk -v k="$k" -v n="$n" '(NR - 1) % n == k - 1')
+        (cd /tmp && timeout 500 python3 -m pytest -q -rfE -p no:cacheprovider $files \
+          > "$OUT/gpu_tests_$k.txt" 2>&1; echo "pytest rc=$?" >> "$OUT/gpu_tests_$k.txt") &
+      done
+      wait
+      for k in $(seq "$n"); do tail -3 "$OUT/gpu_tests_$k.txt"; done ;;
     tests:*)
       files=${mode#tests:}
       (cd /tmp && timeout 560 python3 -m pytest -q -p no:cacheprovider ${files//,/ } \

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from .image_clear import clear_once
 from .memory import Image
 from .owned import Owned
 from .pipeline import AttachmentFormats
@@ -89,8 +90,6 @@ class ShadowMaps:
         self.samplers: list[Any] = []
         self._previews: dict[int, Any] = {}  # layer -> its grey view (preview_view)
         # built once (each cffi struct costs microseconds a frame), kept while the maps live:
-        self._renderings: dict[tuple[int, int], Any] = {}  # (layer, texels across) -> VkRenderingInfo
-        self._barriers: dict[tuple[tuple[int, ...], bool], tuple[Any, Any]] = {}  # see barriers()
         self.read_layout = getattr(vk, READ_LAYOUT_NAME)
         # the image, then its layer views and samplers (and preview views, made later): destroyed
         # last made first, so every view goes before its image
@@ -127,45 +126,30 @@ class ShadowMaps:
                         ),
                     )
                 )
-            device.submit_once(self._clear)
+            self._clear()
         except BaseException:
             self.destroy()
             raise
 
-    def _clear(self, cb: Any) -> None:
-        """Every layer cleared to the far plane and left in READ_LAYOUT, once, when the maps are
-        made: a frame then draws only its views' corners, and a layer no view drew is read
-        as lit (so the frame graph's shadow pass declares the same accesses every frame)."""
+    def _clear(self) -> None:
+        """Every layer cleared to the far plane (reverse-Z: 0) and left in READ_LAYOUT, once, when
+        the maps are made: a frame then draws only its views' corners, and a layer no view drew
+        is read as lit (so the frame graph's shadow pass declares the same accesses every frame)."""
         vk = self.vk
         assert self.image is not None
-        image = self.image.handle
-        depth_aspect, layers = vk.VK_IMAGE_ASPECT_DEPTH_BIT, self.layers
-        whole = vk.VkImageSubresourceRange(
-            aspectMask=depth_aspect, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=layers
-        )
-
-        def barrier(old: int, new: int, src_access: int, dst_access: int) -> Any:
-            return vk.VkImageMemoryBarrier(
-                srcAccessMask=src_access,
-                dstAccessMask=dst_access,
-                oldLayout=old,
-                newLayout=new,
-                srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                image=image,
-                subresourceRange=whole,
-            )
-
-        dst = vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL
-        write = vk.VK_ACCESS_TRANSFER_WRITE_BIT
-        top, transfer = vk.VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, vk.VK_PIPELINE_STAGE_TRANSFER_BIT
-        to_clear = barrier(vk.VK_IMAGE_LAYOUT_UNDEFINED, dst, 0, write)
-        vk.vkCmdPipelineBarrier(cb, top, transfer, 0, 0, None, 0, None, 1, [to_clear])
-        depth = vk.VkClearDepthStencilValue(depth=0.0, stencil=0)  # reverse-Z's far plane
-        vk.vkCmdClearDepthStencilImage(cb, image, dst, depth, 1, [whole])
-        to_read = barrier(dst, self.read_layout, write, vk.VK_ACCESS_SHADER_READ_BIT)
         readers = vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
-        vk.vkCmdPipelineBarrier(cb, transfer, readers, 0, 0, None, 0, None, 1, [to_read])
+        access = vk.VK_ACCESS_SHADER_READ_BIT
+        layout = self.read_layout
+        clear_once(
+            self.device,
+            self.image.handle,
+            depth=True,
+            layers=self.layers,
+            value=0.0,
+            layout=layout,
+            readers=readers,
+            read_access=access,
+        )
 
     def _own_view(self, view: Any) -> Any:
         handle, vk = self.device.handle, self.vk
@@ -179,43 +163,6 @@ class ShadowMaps:
         assert self.image is not None
         view = self.image.view  # the 2D array of every layer
         return [vk.VkDescriptorImageInfo(sampler=s, imageView=view, imageLayout=layout) for s in self.samplers]
-
-    def rendering(self, layer: int, resolution: int) -> Any:
-        """VkRenderingInfo (a pointer, for the raw vkCmdBeginRendering) that draws `layer`'s
-        corner of `resolution` texels from secondaries: depth cleared to 0 (reverse-Z far) within
-        that area, stored; the layer in WRITE_LAYOUT (barriers())."""
-        key = (layer, resolution)
-        info = self._renderings.get(key)
-        if info is None:
-            vk = self.vk
-            depth = vk.VkRenderingAttachmentInfo(
-                imageView=self.layer_views[layer],
-                imageLayout=getattr(vk, WRITE_LAYOUT_NAME),
-                resolveMode=vk.VK_RESOLVE_MODE_NONE,
-                loadOp=vk.VK_ATTACHMENT_LOAD_OP_CLEAR,
-                storeOp=vk.VK_ATTACHMENT_STORE_OP_STORE,
-                clearValue=vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=0.0, stencil=0)),
-            )
-            area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(resolution, resolution))
-            struct = vk.VkRenderingInfo(
-                flags=vk.VK_RENDERING_CONTENTS_SECONDARY_COMMAND_BUFFERS_BIT,
-                renderArea=area,
-                layerCount=1,
-                colorAttachmentCount=0,
-                pDepthAttachment=depth,
-            )
-            info = self._renderings[key] = (vk.ffi.addressof(struct), struct, depth)
-        return info[0]
-
-    def barriers(self, layers: tuple[int, ...], first: bool) -> tuple[Any, Any]:
-        """depth_barriers' (before, after) pointers for drawing `layers`, from UNDEFINED the
-        `first` time (every layer is then cleared whole), else from READ_LAYOUT (kept)."""
-        key = (layers, first)
-        kept = self._barriers.get(key)
-        if kept is None:
-            assert self.image is not None
-            kept = self._barriers[key] = depth_barriers(self.vk, self.image.handle, layers, discard=first)
-        return kept[0][0], kept[1][0]
 
     @property
     def plain_sampler(self) -> Any:
@@ -259,6 +206,6 @@ class ShadowMaps:
 
     def destroy(self) -> None:
         self.owned.destroy()
-        self._previews, self._renderings, self._barriers = {}, {}, {}
+        self._previews = {}
         self.samplers, self.layer_views = [], []
         self.image = None

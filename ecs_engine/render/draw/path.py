@@ -47,8 +47,6 @@ class TargetState:
     keep: Any  # what the structs point to
     area_ptr: Any = None  # pointers to the structs above, for raw calls
     viewport_ptr: Any = None
-    # the deferred form: the G-buffer's (VkRenderingInfo, barrier before, barrier after) pointers
-    gbuffer_ptrs: tuple[Any, Any, Any] | None = None
     path_state: dict[Any, Any] = field(default_factory=dict)  # what paths keep per target and slot
 
     @classmethod
@@ -59,28 +57,24 @@ class TargetState:
         output: Any,
         secondary_begin: Any,
         clear_color: tuple[float, float, float],
-        gbuffer: tuple[Any, Any, Any, Any] | None = None,
         depth_only: bool = False,
     ) -> TargetState:
         """`output`: what the state draws into, kept (the scene's own rendering is the output
-        graph's: render/passes/forward.py). `gbuffer`, in the deferred form: the
-        G-buffer's Rendering, Dependency before and after and the begin info of secondaries
-        inside it (the chunks'); `secondary_begin` is then the scene's. `clear_color` and
-        `depth_only` are what those renderings clear (kept for the callers that pass them)."""
+        graph's: render/passes/forward.py; the deferred form's G-buffer pass sets
+        `secondary_begin` after). `clear_color` and `depth_only` are what those renderings
+        clear (kept for the callers that pass them)."""
         width, height = key[1], key[2]
         area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(width, height))
         state = cls(
             key=key,
             area=area,
             viewport=vk.VkViewport(x=0.0, y=0.0, width=float(width), height=float(height), minDepth=0.0, maxDepth=1.0),
-            secondary_begin=secondary_begin if gbuffer is None else gbuffer[3],
+            secondary_begin=secondary_begin,
             aside_begin=secondary_begin,
-            keep=[output, gbuffer],
+            keep=[output],
         )
         state.area_ptr = vk.ffi.addressof(state.area)
         state.viewport_ptr = vk.ffi.addressof(state.viewport)
-        if gbuffer is not None:
-            state.gbuffer_ptrs = (gbuffer[0].ptr, gbuffer[1].ptr, gbuffer[2].ptr)
         return state
 
 

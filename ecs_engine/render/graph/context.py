@@ -3,6 +3,7 @@ attachments it declared (load ops and clear values as declared, viewport and sci
 
 from __future__ import annotations
 
+from collections.abc import Hashable
 from dataclasses import dataclass
 from typing import Any
 
@@ -10,6 +11,7 @@ from ...errors import UsageError
 from .resources import Access, GraphBuffer, GraphImage, Load, Use, is_depth
 
 _INTEGER = ("_UINT", "_SINT")
+_TOKEN = object()  # marks a caller's token among the renderings' keys
 
 
 @dataclass(frozen=True)
@@ -132,13 +134,22 @@ class PassContext:
         mip: int = 0,
         layer: int = 0,
         area: tuple[int, int, int, int] | None = None,
+        token: Hashable = None,
     ) -> None:
         """vkCmdBeginRendering over these declared attachments at `mip` and array `layer`;
         `resolve[i]` (declared RESOLVE_WRITE) receives colour i resolved. `area` (x, y, w, h):
         the render area (CLEAR clears it only; declare the write `region=True` to keep the
         rest), default the whole attachment. Viewport and scissor are the area (not with
         `secondaries`: those set their own). The structs are made once per pass, attachments'
-        views and area (kept until the graph compiles again) and recorded by raw calls."""
+        views and area (kept until the graph compiles again) and recorded by raw calls.
+        `token`: the caller's cheap stand-in for all the arguments and the attachments' views
+        (a layer, its size and the image's handle): a rendering made under it is begun again
+        without looking at them (a pass beginning many renderings a frame)."""
+        if token is not None:
+            made = self._made.get((self.pass_name, _TOKEN, token))
+            if made is not None and not self._rendering:
+                self._begin(made, secondaries)
+                return
         colors = (colors,) if isinstance(colors, str) else tuple(colors)
         resolve = tuple(resolve) if resolve is not None else None
         area = tuple(area) if area is not None else None  # type: ignore[assignment]
@@ -155,6 +166,11 @@ class PassContext:
             if len(self._made) >= 64:  # imported images come and go (swapchain remakes)
                 self._made.clear()
             made = self._made[key] = self._make(colors, depth, resolve, secondaries, mip, layer, area)
+        if token is not None:
+            self._made[(self.pass_name, _TOKEN, token)] = made
+        self._begin(made, secondaries)
+
+    def _begin(self, made: Rendering, secondaries: bool) -> None:
         lib, cb = self.vk.lib, self._cb
         lib.vkCmdBeginRendering(cb, made.info)
         self._rendering = True

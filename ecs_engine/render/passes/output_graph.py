@@ -117,10 +117,11 @@ class OverlayOver(Pass):
         self.frame = frame
 
     def setup(self, builder: Any) -> None:
-        builder.write("target", Access.COLOR_READ_WRITE, load=Load.LOAD)
+        if self.frame.overlay is not None:  # none: culled, with its barrier
+            builder.write("target", Access.COLOR_READ_WRITE, load=Load.LOAD)
 
     def declares(self) -> Hashable:
-        return ()  # its setup declares the same every frame
+        return self.frame.overlay is not None
 
     def record(self, cb: Any, ctx: Any) -> None:
         overlay = self.frame.overlay

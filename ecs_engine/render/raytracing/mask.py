@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from ...gpu.image_clear import clear_once
 from ...gpu.memory import Image
 from ..layouts import MAX_RAY_LIGHTS
 
@@ -34,35 +35,18 @@ class ShadowMask:
 
     def _clear(self) -> None:
         vk = self.device.vk
-        general = vk.VK_IMAGE_LAYOUT_GENERAL
-        whole = vk.VkImageSubresourceRange(
-            aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=LAYERS
+        general, shaders = vk.VK_IMAGE_LAYOUT_GENERAL, vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
+        access = vk.VK_ACCESS_SHADER_READ_BIT
+        clear_once(
+            self.device,
+            self.image.handle,
+            depth=False,
+            layers=LAYERS,
+            value=1.0,
+            layout=general,
+            readers=shaders,
+            read_access=access,
         )
-
-        def barrier(old: int, src: int, dst: int) -> Any:
-            return vk.VkImageMemoryBarrier(
-                srcAccessMask=src,
-                dstAccessMask=dst,
-                oldLayout=old,
-                newLayout=general,
-                srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                image=self.image.handle,
-                subresourceRange=whole,
-            )
-
-        to_clear = barrier(vk.VK_IMAGE_LAYOUT_UNDEFINED, 0, vk.VK_ACCESS_TRANSFER_WRITE_BIT)
-        cleared = barrier(general, vk.VK_ACCESS_TRANSFER_WRITE_BIT, vk.VK_ACCESS_SHADER_READ_BIT)
-        one = vk.VkClearColorValue(float32=[1.0, 1.0, 1.0, 1.0])
-        top, transfer = vk.VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, vk.VK_PIPELINE_STAGE_TRANSFER_BIT
-        shaders = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
-
-        def record(cb: Any) -> None:
-            vk.vkCmdPipelineBarrier(cb, top, transfer, 0, 0, None, 0, None, 1, [to_clear])
-            vk.vkCmdClearColorImage(cb, self.image.handle, general, one, 1, [whole])
-            vk.vkCmdPipelineBarrier(cb, transfer, shaders, 0, 0, None, 0, None, 1, [cleared])
-
-        self.device.submit_once(record)
 
     def destroy(self) -> None:
         self.image.destroy()

@@ -322,9 +322,13 @@ class ShadowPass:
         maps = self.maps
         drawn = {v.layer: s for v, s in zip(views, secondaries, strict=True)}
         sizes = {v.layer: v.resolution for v in views}
+        image = maps.image
+        assert image is not None
+        handle = image.handle
         for layer in drawn:  # each view's corner of its layer (all were cleared when made: ShadowMaps)
             size = min(sizes[layer], maps.resolution)  # as target_state's
-            ctx.begin_rendering(depth="shadow_maps", layer=layer, area=(0, 0, size, size), secondaries=True)
+            area, token = (0, 0, size, size), (layer, size, handle)  # (new maps: another handle)
+            ctx.begin_rendering(depth="shadow_maps", layer=layer, area=area, secondaries=True, token=token)
             buffers = drawn.get(layer)
             if buffers:
                 lib.vkCmdExecuteCommands(cb, len(buffers), vk.ffi.new("VkCommandBuffer[]", buffers))
