@@ -122,3 +122,29 @@ def test_the_views_in_a_window(scene: str, tmp_path) -> None:
         assert _magenta(pixels).sum() >= 10
     else:  # three views drawn: no pixel left undrawn (black)
         assert (pixels.sum(axis=-1) > 0).all()
+
+
+def test_a_texture_view_that_goes_away_leaves_nothing_behind() -> None:
+    """Its camera removed: the next frame draws the window alone and what the view kept (its
+    target, graphs, lighting) is destroyed; the screen keeps the last picture it was given."""
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.demos import monitor
+    from ecs_engine.render.frame.renderer import Renderer
+
+    with headless_gpu(W, H) as gpu:
+        world = World()
+        monitor.build(world, gpu.meshes.add)
+        schedule = default_schedule()
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+        try:
+            schedule.run(world, 0.0)
+            renderer.render(world)
+            assert set(renderer.views.targets) == {"monitor"} and renderer.views.on
+            world.destroy(_monitor_camera(world))
+            schedule.run(world, 0.0)
+            renderer.render(world, readback=True)
+            assert renderer.views.targets == {} and renderer.views.texture_graphs == {} and not renderer.views.on
+            shown = gpu.target.pixels()[..., :3].astype(np.int64)
+        finally:
+            renderer.destroy()
+    assert _magenta(shown).sum() >= 20

@@ -104,6 +104,7 @@ class Views:
         materials = r.materials(world) if views else None
         handles = [(v, self._handle(materials, v)) for v in views if v.texture is not None]
         textures = [(v, h) for v, h in handles if h is not None]
+        self._drop_textures(r, {v.texture for v, _ in textures})
         if not textures and not split:
             if self.on:
                 self.on = self.split = False
@@ -257,6 +258,23 @@ class Views:
             for i, (what, graph) in enumerate(self.drawn)
         ]
         return "\n".join(parts)
+
+    def _drop_textures(self, r: Any, drawn: set[Any]) -> None:
+        """What texture views no longer drawn kept (their target, graphs, lighting, effects'
+        copies), once the device is idle: frames in flight may draw them."""
+        gone = [name for name in self.targets if name not in drawn]
+        if not gone:
+            return
+        r.device.wait_idle()
+        for name in gone:
+            self.targets.pop(name).destroy()
+            for made in (self.texture_graphs.pop(name, None), self.lighting.pop(name, None)):
+                if made is not None:
+                    made.destroy()
+            window, copies = self.effects.pop(name, ([], []))
+            for effect in copies:
+                if effect not in window:
+                    effect.destroy()
 
     def forget(self) -> None:
         """Back to one view: the extractors go (a camera's history would be stale); the graphs
