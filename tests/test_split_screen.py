@@ -148,6 +148,7 @@ def test_a_split_window_back_to_one_camera_draws_as_before() -> None:
             renderer.ensure_output()
             renderer.render(world, readback=True)
             assert not renderer.views.on and renderer.target.form == Form.DIRECT
+            assert renderer.views.graphs == [] and renderer.views.extractors == {}  # nothing kept
             assert np.array_equal(gpu.target.pixels()[..., :3].astype(np.int64), before)
         finally:
             renderer.destroy()

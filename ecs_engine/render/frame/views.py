@@ -108,7 +108,7 @@ class Views:
         if not textures and not split:
             if self.on:
                 self.on = self.split = False
-                self.forget()
+                self.forget(r)
             return None
         self._refuse(r)
         assert materials is not None
@@ -276,10 +276,24 @@ class Views:
                 if effect not in window:
                     effect.destroy()
 
-    def forget(self) -> None:
-        """Back to one view: the extractors go (a camera's history would be stale); the graphs
-        stay (made again only by a change of form or target)."""
+    def forget(self, r: Any) -> None:
+        """Back to the window's one camera: the extractors go (a camera's history would be
+        stale), and the window views' graphs, lighting and effects' copies (their transients'
+        memory) once the device is idle."""
         self.extractors.clear()
+        if not (self.graphs or self.lighting or self.effects):
+            return
+        r.device.wait_idle()
+        for graph in self.graphs:
+            graph.destroy()
+        self.graphs.clear()
+        for key in [k for k in self.lighting if k not in self.targets]:
+            self.lighting.pop(key).destroy()
+        for key in [k for k in self.effects if k not in self.targets]:
+            window, copies = self.effects.pop(key)
+            for effect in copies:
+                if effect not in window:
+                    effect.destroy()
 
     def destroy(self) -> None:
         for graph in [*self.graphs, *self.texture_graphs.values()]:
