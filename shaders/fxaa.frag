@@ -12,6 +12,7 @@ layout(push_constant) uniform Push {
     float subpix;              // amount of sub-pixel aliasing removal, 0 (off) to 1 (softest)
     float edge_threshold;      // local contrast needed, relative to the brightest neighbour
     float edge_threshold_min;  // ... and at least this, so dark areas are left alone
+    ivec2 offset;              // where the output starts in the target (a camera view's rectangle)
 } push;
 
 // The source is an _SRGB image: sampling decodes it to linear colour, whose luma is brought
@@ -41,7 +42,7 @@ float luma_at(vec2 uv) {
 void main() {
     ivec2 size = textureSize(source, 0);
     vec2 rcp = 1.0 / vec2(size);
-    ivec2 p = ivec2(gl_FragCoord.xy);
+    ivec2 p = ivec2(gl_FragCoord.xy) - push.offset;
     vec2 posM = (vec2(p) + 0.5) * rcp;
 
     vec4 rgbaM = texel(p, size);

@@ -7,7 +7,12 @@
 // filtering, as the input attachment it once was), scaled by the exposure and mapped into [0, 1]
 // by the operator; the sRGB target encodes it on write.
 layout(set = 0, binding = 0) uniform texture2D hdr;
-layout(push_constant) uniform Push { ToneMapPush push; };
+// `offset`: where the view's rectangle starts in the target (split screen: render/frame/view_graph.py);
+// the HDR colour is the view's own, drawn from its corner, so the pixel read is shifted back
+layout(push_constant) uniform Push {
+    ToneMapPush push;
+    ivec2 offset;
+};
 
 layout(location = 0) out vec4 out_color;
 
@@ -17,7 +22,7 @@ vec3 aces(vec3 x) {
 }
 
 void main() {
-    vec3 c = max(texelFetch(hdr, ivec2(gl_FragCoord.xy), 0).rgb, vec3(0.0)) * push.exposure;
+    vec3 c = max(texelFetch(hdr, ivec2(gl_FragCoord.xy) - offset, 0).rgb, vec3(0.0)) * push.exposure;
     if (push.operator == TONE_MAP_ACES) {
         c = aces(c);
     } else if (push.operator == TONE_MAP_REINHARD) {

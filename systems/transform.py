@@ -8,12 +8,15 @@ from typing import Any
 import numpy as np
 
 from ecs_engine.components import (
+    ActiveCamera,
     Camera,
     ModelMatrix,
     NormalMatrix,
     PreviousTransform,
     RenderOrigin,
+    RenderTexture,
     Transform,
+    Viewport,
     active_camera,
     render_origin,
 )
@@ -102,7 +105,9 @@ class RenderOriginSystem(System):
     system runs, so this frame's matrices are relative to this frame's camera."""
 
     def __init__(self) -> None:
-        super().__init__(reads=[Camera, Transform], writes=[], name="render_origin")
+        # active_camera's reads: with several cameras it picks by tag, RenderTexture and Viewport order
+        reads = [Camera, Transform, ActiveCamera, RenderTexture, Viewport]
+        super().__init__(reads=reads, writes=[], name="render_origin")
         self._set: RenderOrigin | None = None
         self._stamp: tuple[int, ...] = ()
 

@@ -249,8 +249,11 @@ def test_the_push_constants_are_laid_out_as_the_module_packs_them(tmp_path):
     src = Path(__file__).resolve().parent.parent / "shaders" / "fxaa.frag"
     subprocess.run(["glslc", "--target-env=vulkan1.2", str(src), "-o", str(out)], check=True)  # no -O: names kept
     fields = struct_layouts(out)["Push"].fields()
-    assert fields == [("subpix", 0), ("edge_threshold", 4), ("edge_threshold_min", 8)]
+    # the offset: where a camera view's rectangle starts in the target (render/frame/view_graph.py)
+    assert fields == [("subpix", 0), ("edge_threshold", 4), ("edge_threshold_min", 8), ("offset", 16)]
     assert FxaaSettings(0.5, 0.25, 0.125).push().tolist() == [0.5, 0.25, 0.125, 0.0]
+    push = FxaaPass(FxaaSettings(0.5, 0.25, 0.125))._push
+    assert push.dtype.fields["offset"][1] == 16 and push.itemsize == 24
 
 
 def test_settings_defaults_and_bad_values():

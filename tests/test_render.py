@@ -63,6 +63,8 @@ def test_seed_scenes_match_golden_images(scene, tmp_path):
         ("lights", 257, None, {"lights": 256}),  # clustered
         ("shadows", 3, 5, {}),
         ("environment", 1, 6, {}),  # its generated sky, mirrored, refracted and lighting the ambient
+        ("split_screen", 6, None, {}),  # three cameras' views: two halves and an inset (render/frame/views.py)
+        ("monitor", 2, None, {}),  # a screen showing a second camera's picture (render/frame/texture_views.py)
     ],
 )
 def test_demo_scenes_match_golden_images(scene, lights, instances, options, tmp_path):

@@ -151,6 +151,8 @@ def build_parser(
         "materials: the shading models side by side; lights: --lights small lights (default 1,024); "
         "shadows: a cube, a pillar and boxes under casting lights (--no-shadows: none cast); "
         "environment: spheres mirroring, refracting and lit by a sky (PATH: an equirectangular .hdr or image); "
+        "split_screen: grid100 seen by two cameras, half the window each, and a picture-in-picture; "
+        "monitor: a room with a screen showing a second camera's picture (render to texture); "
         "motion: text-mode ECS scene (no rendering)",
     )
     demo.add_argument(

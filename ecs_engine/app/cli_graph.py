@@ -19,7 +19,11 @@ PRINT_GRAPH_HELP = (
 
 
 def frame_graph_text(renderer: Any) -> str:
-    """The renderer's last frame's output graph as text."""
+    """The renderer's last frame's output graph as text (with several camera views: each view's,
+    in drawing order: render/frame/views.py)."""
+    views = getattr(renderer, "views", None)
+    if views is not None and views.on:
+        return views.describe() or "no frame graph was set up"
     outputs = renderer.output.graph
     text = outputs.describe() if outputs is not None else ""
     return text or "no frame graph was set up"

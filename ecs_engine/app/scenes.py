@@ -8,7 +8,18 @@ from collections.abc import Callable
 from ..ecs.schedule import Schedule
 from ..errors import UsageError
 
-SCENES = ("cube", "grid100", "model", "scaling", "materials", "lights", "shadows", "environment")
+SCENES = (
+    "cube",
+    "grid100",
+    "model",
+    "scaling",
+    "materials",
+    "lights",
+    "shadows",
+    "environment",
+    "split_screen",
+    "monitor",
+)
 SEED_SCENES = SCENES[:3]  # the seed thesis's three: 1 cube, 100 cubes, an OBJ model
 
 SceneBuilder = Callable[..., None]  # build(world, add_mesh, path=None)

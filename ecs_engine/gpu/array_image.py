@@ -1,7 +1,12 @@
 """A sampled 2D array image with a full mip chain and two views of the same texels: sRGB (the
 sampler decodes to linear before filtering) and UNORM (data read as stored); or, with `cube`, six
 half-float RGBA layers seen as one cube map (render/lighting/environment.py). Layers are uploaded from
-NumPy mip chains through a bounded staging buffer."""
+NumPy mip chains through a bounded staging buffer.
+
+The 2D array is stored as sRGB (its UNORM view reads the same bytes as they are): uploads copy
+bytes unchanged, and blits into and within it (a render target's image copied in and its mips made,
+render/passes/render_texture.py) decode and filter in linear light, as the CPU's mip_chain does.
+Hence TRANSFER_SRC too: a blit reads the level above."""
 
 from __future__ import annotations
 
@@ -31,9 +36,10 @@ class ArrayImage:
             flags, storage = vk.VK_IMAGE_CREATE_CUBE_COMPATIBLE_BIT, vk.VK_FORMAT_R16G16B16A16_SFLOAT
             views = [(vk.VK_FORMAT_R16G16B16A16_SFLOAT, vk.VK_IMAGE_VIEW_TYPE_CUBE)]
         else:
-            flags, storage = vk.VK_IMAGE_CREATE_MUTABLE_FORMAT_BIT, vk.VK_FORMAT_R8G8B8A8_UNORM
+            flags, storage = vk.VK_IMAGE_CREATE_MUTABLE_FORMAT_BIT, vk.VK_FORMAT_R8G8B8A8_SRGB
             kind = vk.VK_IMAGE_VIEW_TYPE_2D_ARRAY
             views = [(vk.VK_FORMAT_R8G8B8A8_SRGB, kind), (vk.VK_FORMAT_R8G8B8A8_UNORM, kind)]
+        self.format = storage  # what blits into it convert to
         self.owned = Owned(device)  # the image, its memory, its views: destroyed views first
         self.views: list[Any] = []
         try:
@@ -48,7 +54,9 @@ class ArrayImage:
                     arrayLayers=self.layers,
                     samples=vk.VK_SAMPLE_COUNT_1_BIT,
                     tiling=vk.VK_IMAGE_TILING_OPTIMAL,
-                    usage=vk.VK_IMAGE_USAGE_SAMPLED_BIT | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                    usage=vk.VK_IMAGE_USAGE_SAMPLED_BIT
+                    | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT
+                    | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
                     sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE,
                     initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
                 ),

@@ -12,10 +12,17 @@ to its class's square power of two.
 Textures get added, and replaced only by hot reload: an addition uploads the classes that grew,
 a replacement all of them (after the GPU is idle: this happens when models load or a file is
 edited, not per frame).
+
+A render target (textures.py: `Textures.render_target`) is uploaded as opaque black, like any
+texture, and is a colour texture; `place(handle)` says where it lives (the page's image, its
+layer) for the pass that draws into it each frame (render/passes/render_texture.py). An upload
+that remakes its page fills it black again: the next frame draws it again, and the new image
+changes the pass's key, so frame replay records that frame anew.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -28,6 +35,20 @@ from ..layouts import NO_TEXTURE, TEXTURE_PAGES
 from .textures import CLASS_SIZES, Textures, mip_chain, resized, size_class
 
 assert TEXTURE_PAGES == 2 * len(CLASS_SIZES)
+
+
+@dataclass(frozen=True)
+class TexturePlace:
+    """Where a texture lives after `sync`: `image`'s layer `layer`, `side` x `side` texels and
+    `mips` levels; `page` is its index into the descriptor's texture_pages (2 * class for
+    sRGB colour, + 1 for linear data); `generation`, the upload that made `image`."""
+
+    image: ArrayImage
+    layer: int
+    side: int
+    mips: int
+    page: int
+    generation: int
 
 
 class TexturePages:
@@ -52,6 +73,8 @@ class TexturePages:
             raise
         self.pages: dict[int, ArrayImage] = {}
         self._chains: dict[int, list[np.ndarray]] = {}  # handle -> its mip chain (kept for re-uploads)
+        self._black: dict[int, list[np.ndarray]] = {}  # side -> the opaque black chain render targets share
+        self.render_targets: set[int] = set()  # handles of render targets (a camera draws their layer)
         self._layers: dict[int, list[int]] = {}  # class -> handles, by layer
         self._source: tuple[Textures, int, int] | None = None  # (the registry, how many uploaded, its edits)
         self.refs = np.zeros(0, np.uint32)
@@ -76,7 +99,8 @@ class TexturePages:
         refs[: len(self.refs)] = self.refs[: min(len(self.refs), len(textures))]
         for handle in range(start, len(textures)):
             texture = textures[handle]
-            cls = size_class(*texture.size)
+            target = textures.render_target_of(handle)
+            cls = size_class(*(texture.size if target is None else (target.width, target.height)))
             layers = self._layers.setdefault(cls, [])
             if len(layers) >= min(self.max_layers, 1 << 16):
                 raise UsageError(
@@ -85,7 +109,11 @@ class TexturePages:
             page = 2 * cls + (0 if texture.color else 1)
             refs[handle] = (page << 16) | len(layers)
             layers.append(handle)
-            self._chains[handle] = mip_chain(resized(texture.pixels, CLASS_SIZES[cls]), texture.color)
+            if target is not None:
+                self._chains[handle] = self._black_chain(CLASS_SIZES[cls])
+                self.render_targets.add(handle)
+            else:
+                self._chains[handle] = mip_chain(resized(texture.pixels, CLASS_SIZES[cls]), texture.color)
             grown.add(cls)
         for cls in sorted(grown):
             old = self.pages.pop(cls, None)
@@ -98,6 +126,32 @@ class TexturePages:
         self._source = (textures, len(textures), textures.edits)
         self.generation += 1
         return True
+
+    def place(self, handle: int) -> TexturePlace:
+        """Where texture `handle` lives on the GPU since the last `sync` (its image is made again
+        by a later sync that adds to its class: ask again after each)."""
+        handle = int(handle)
+        ref = int(self.refs[handle]) if 0 <= handle < len(self.refs) else NO_TEXTURE
+        if ref == NO_TEXTURE:
+            raise UsageError(f"texture {handle} is not on the GPU yet: TexturePages.sync uploads it")
+        page, layer = ref >> 16, ref & 0xFFFF
+        image = self.pages[page // 2]
+        return TexturePlace(image, layer, image.side, image.levels, page, self.generation)
+
+    def _black_chain(self, side: int) -> list[np.ndarray]:
+        """Opaque black from side x side down to 1 x 1, one read-only chain per side."""
+        chain = self._black.get(side)
+        if chain is None:
+            chain = []
+            level_side = side
+            while level_side:
+                level = np.zeros((level_side, level_side, 4), np.uint8)
+                level[..., 3] = 255
+                level.flags.writeable = False
+                chain.append(level)
+                level_side //= 2
+            self._black[side] = chain
+        return chain
 
     def image_infos(self) -> list[Any]:
         """TEXTURE_PAGES VkDescriptorImageInfo: per class its sRGB then its UNORM view."""
@@ -126,6 +180,7 @@ class TexturePages:
         self.pages.clear()
         self._chains.clear()
         self._layers.clear()
+        self.render_targets.clear()
         self.refs = np.zeros(0, np.uint32)
 
     def destroy(self) -> None:

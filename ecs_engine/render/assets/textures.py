@@ -12,6 +12,15 @@ How the GPU holds them (render/assets/texture_pages.py): each texture is resized
 between MIN_TEXTURE_SIZE and MAX_TEXTURE_SIZE, its size class, and becomes one layer of that
 class's array image, with a full mip chain made here (`mip_chain`: box-filtered, in linear light
 for sRGB textures).
+
+Render targets (`Textures.render_target(name, width, height)`): textures whose texels a camera
+draws each frame (the RenderTexture component names one: a security monitor, a minimap). A
+material samples one by its handle, as any texture: `Material("screen", "unlit",
+base_color_texture=textures.render_target("monitor", 320, 240))`; the camera with
+`RenderTexture(name="monitor", width=320, height=240)` draws it. On the CPU it is one black texel
+(it has no pixels of its own: a saved scene keeps that texel, not the camera's picture); on the
+GPU it is a layer of the page of `size_class(width, height)`, sRGB, opaque black until a frame
+draws into it (render/passes/render_texture.py copies the camera's image in and makes its mips).
 """
 
 from __future__ import annotations
@@ -26,12 +35,14 @@ from typing import Final
 
 import numpy as np
 
+from ...errors import UsageError
 from ...user_files import IMAGE, UserFileError, open_user_file
 
 __all__ = [
     "MAX_TEXTURE_PIXELS",
     "MAX_TEXTURE_SIZE",
     "MIN_TEXTURE_SIZE",
+    "RenderTarget",
     "Texture",
     "Textures",
     "mip_chain",
@@ -91,6 +102,21 @@ class Texture:
         return int(self.pixels.shape[1]), int(self.pixels.shape[0])
 
 
+@dataclass(frozen=True)
+class RenderTarget:
+    """A texture a camera draws (Textures.render_target): its handle and the size asked for."""
+
+    name: str
+    handle: int
+    width: int
+    height: int
+
+    @property
+    def side(self) -> int:
+        """The side of its square layer on the GPU (its size class's)."""
+        return CLASS_SIZES[size_class(self.width, self.height)]
+
+
 def _fallback_pixels() -> np.ndarray:
     cell = (np.indices((MIN_TEXTURE_SIZE, MIN_TEXTURE_SIZE)) // 4).sum(axis=0) % 2
     out = np.zeros((MIN_TEXTURE_SIZE, MIN_TEXTURE_SIZE, 4), np.uint8)
@@ -108,6 +134,8 @@ class Textures:
         self._textures: list[Texture] = []
         self._fallback: int | None = None
         self._by_file: dict[tuple[str, bool], int] = {}
+        self._targets: dict[str, RenderTarget] = {}  # render targets by name
+        self._target_handles: dict[int, RenderTarget] = {}  # and by handle
         self.version = 0
         self.edits = 0
 
@@ -146,12 +174,57 @@ class Textures:
         self._by_file[key] = handle
         return handle
 
+    def render_target(self, name: str, width: int, height: int) -> int:
+        """The handle of the texture a camera with `RenderTexture(name, width, height)` draws,
+        added on first use (opaque black until drawn); the same name gives the same handle. A
+        name asked for again at another size is a UsageError (one name, one image)."""
+        if not isinstance(name, str) or not name:
+            raise UsageError(f"a render texture needs a name (a non-empty string), not {name!r}")
+        for what, value in (("width", width), ("height", height)):
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+                raise UsageError(f"render texture {name!r}: {what} must be a number of pixels >= 1, not {value!r}")
+        width, height = int(width), int(height)
+        found = self._targets.get(name)
+        if found is not None:
+            if (found.width, found.height) != (width, height):
+                raise UsageError(
+                    f"render texture {name!r} is {found.width} x {found.height} pixels and was asked for again at "
+                    f"{width} x {height}: one name is one image (give the other camera's RenderTexture another name)"
+                )
+            return found.handle
+        too_large = texture_size_error(width, height)
+        if too_large:
+            raise UsageError(f"render texture {name!r}: {too_large}")
+        black = np.zeros((1, 1, 4), np.uint8)
+        black[..., 3] = 255
+        handle = self.add(Texture(name, black, color=True))
+        self._targets[name] = self._target_handles[handle] = RenderTarget(name, handle, width, height)
+        return handle
+
+    def render_target_handle(self, name: str) -> int | None:
+        """The handle of render target `name`, or None when none has that name."""
+        found = self._targets.get(name)
+        return None if found is None else found.handle
+
+    def render_target_of(self, handle: int) -> RenderTarget | None:
+        """The render target with this handle, or None for a texture with pixels of its own."""
+        return self._target_handles.get(int(handle))
+
+    @property
+    def render_targets(self) -> tuple[RenderTarget, ...]:
+        """Every render target, in the order they were added."""
+        return tuple(self._targets.values())
+
     def replace(self, handle: int, texture: Texture) -> None:
         """`texture` under `handle`, where another was: materials naming it draw the new one
-        from the next frame (the GPU copy is made again)."""
+        from the next frame (the GPU copy is made again). A render target's texels come from its
+        camera: replacing one is a UsageError."""
         if not isinstance(texture, Texture):
             raise TypeError(f"Textures.replace takes a Texture, got {type(texture).__name__}")
         self[handle]  # a handle that exists
+        target = self._target_handles.get(int(handle))
+        if target is not None:
+            raise UsageError(f"texture {handle} is render texture {target.name!r}, drawn by its camera: not replaced")
         self._textures[int(handle)] = texture
         self.edits += 1
 

@@ -154,22 +154,25 @@ class FrameExtractor:
         dt: float | None = None,
         bounds: Any = None,
         materials: Materials | None = None,
+        camera: CameraMatrices | None = None,
+        layers: int | None = None,
     ) -> FrameData:
         """`culling`: a CullingMethod, or its name (CULLING; a bool: frustum or none);
         `set_aside`: per material, whether its rows are drawn apart (Materials.set_aside);
         `region`: the part of the target the view shows in (camera_matrices), culled to it;
         temporal culling needs `dt` (the seconds since the last frame) and `bounds` (the mesh
         registry's); `materials`: the world's as the caller found them (Renderer.materials),
-        else extracted here."""
+        else extracted here. `camera` and `layers`: one view's camera (extract/views.py: a split
+        screen's, a render texture's) and the layers it draws, instead of the window camera's."""
         method = self.method(culling)
-        cam = camera_matrices(world, aspect, region)
+        cam = camera_matrices(world, aspect, region) if camera is None else camera
         origin = render_origin(world)
         origin_key = origin.tobytes()
         view = self.view(cam, origin, origin_key)
         positional, directional = extract_lights(world, self._kinds, self._point_lights)
         chunks = self.rows.chunks(world, mesh_count, material_count)
         aside = None
-        layers = camera_layers(world)
+        layers = camera_layers(world) if layers is None else layers
         if chunks and (set_aside is not None or self.rows.hides_rows(world, layers)):
             chunks, seen_aside = self.rows.split(world, chunks, set_aside, layers)
             aside = seen_aside if set_aside is not None else None

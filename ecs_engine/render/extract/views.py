@@ -4,7 +4,9 @@ ActiveCamera, Viewport, RenderTexture and RenderLayers only."""
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
+from typing import Any
 
 from ecs_engine.components.camera import ActiveCamera, Camera, RenderLayers, RenderTexture, Viewport
 from ecs_engine.components.camera_views import CameraView, camera_views
@@ -49,3 +51,20 @@ def extract_views(world: World, width: int, height: int) -> tuple[ViewData, ...]
         rect = view.pixels(*size)
         out.append(ViewData(view, rect, size, camera_matrices_of(world, view.entity, rect[2] / rect[3])))
     return tuple(out)
+
+
+# per world: (structure version, whether a camera has a Viewport or RenderTexture)
+_SEVERAL: weakref.WeakKeyDictionary[Any, tuple[int, bool]] = weakref.WeakKeyDictionary()
+
+
+def several_views(world: World) -> bool:
+    """Whether some camera may draw other than over the whole window: an entity has a Viewport
+    or a RenderTexture (render/frame/views.py draws those; else the window's one camera as
+    ever). Only a spawn, destroy, add or remove can change it: the answer is kept until one."""
+    version = world.structure_version
+    kept = _SEVERAL.get(world)
+    if kept is not None and kept[0] == version:
+        return kept[1]
+    found = any(world.query(c, write=()).count() for c in (Viewport, RenderTexture))
+    _SEVERAL[world] = (version, found)
+    return found

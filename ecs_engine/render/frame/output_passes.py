@@ -166,7 +166,9 @@ class OutputPasses:
             return None
         if self.oit is None:
             self.oit = WeightedTransparency(self.device, self.secondaries)
-        self.oit.ensure(target.attachments.images[0], target.width, target.height)
+        state = self._last[1]  # this frame's: a camera view's size (render/frame/views.py), else the target's
+        width, height = (state.key[1], state.key[2]) if state is not None else (target.width, target.height)
+        self.oit.ensure(target.attachments.images[0], width, height)
         return self.oit
 
     def forget_path_state(self) -> None:

@@ -132,6 +132,9 @@ class TargetForms(PostEffects):
         if self.lights.deferred(samples) or (weighted and self._blends and samples == 1):
             return Form.DEFERRED
         post = bool(self.post_effects)
+        views = getattr(self, "views", None)  # (made in Renderer.__init__ before the first form)
+        if views is not None and views.split:
+            return Form.HDR  # several camera views draw through the HDR colour (view_graph.py)
         return Form.HDR if wants_hdr(self.tone_map, self.exposure, samples, self._blends, post) else Form.DIRECT
 
     def _fit_target(self) -> None:

@@ -33,6 +33,8 @@ TONE_MAPS: Final[dict[str, int]] = {
     ToneMap.REINHARD: TONE_MAP_REINHARD,
 }
 _SETS = 8  # descriptor sets kept, one per HDR view seen (swapchains come and go)
+# the push constants: ToneMapPush, then the view's offset in the target (tonemap.frag's `offset`)
+_PUSH = np.dtype([("push", TONE_MAP_PUSH.dtype), ("offset", "<i4", (2,))])
 
 
 def wants_hdr(name: str, exposure: float, samples: int, blends: bool = False, post: bool = False) -> bool:
@@ -56,10 +58,13 @@ class ToneMapPass:
         self.pool: DescriptorPool | None = None
         self._sets: dict[int, Any] = {}  # HDR view address -> VkDescriptorSet[1]
         self._views = 0  # the target's attachment remakes the sets were made for
-        self.layout = pipeline_layout(device, [self.set_layout.handle], [(stage, 0, TONE_MAP_PUSH.size)])
+        self.layout = pipeline_layout(device, [self.set_layout.handle], [(stage, 0, _PUSH.itemsize)])
         self.pipeline: Any = None
-        self._push = np.zeros(1, dtype=TONE_MAP_PUSH.dtype)
-        self._push_ptr = vk.ffi.from_buffer(self._push)
+        self._all = np.zeros(1, dtype=_PUSH)
+        self._push = self._all["push"]
+        self._offset = self._all["offset"][0]
+        self._at: tuple[int, int] | None = None  # the offset pushed (None: none, zeros)
+        self._push_ptr = vk.ffi.from_buffer(self._all)
 
     def _set_for(self, view: Any) -> Any:
         vk = self.vk
@@ -88,9 +93,19 @@ class ToneMapPass:
         found = self._sets[key] = vk.ffi.new("VkDescriptorSet[1]", [descriptor_set])
         return found
 
-    def record(self, cb: Any, state: Any, target: Any, name: str, exposure: float) -> None:
+    def record(
+        self,
+        cb: Any,
+        state: Any,
+        target: Any,
+        name: str,
+        exposure: float,
+        offset: tuple[int, int] | None = None,
+    ) -> None:
         """The full-screen triangle over `state`'s area (raw calls, inside the output's
-        vkCmdBeginRendering), reading `target`'s HDR view;
+        vkCmdBeginRendering), reading `target`'s HDR view; with `offset` (a view's rectangle
+        of the target: render/frame/view_graph.py) over the rendering's area instead, whose
+        viewport begin_rendering set, the HDR colour read from its corner;
         the set per view made once. A swapchain counts its remakes (`recreations`): a new view may
         reuse an old one's handle value, so the sets made for the old views go then."""
         vk = self.vk
@@ -120,14 +135,18 @@ class ToneMapPass:
             )
         descriptor_set = self._set_for(hdr_view)
         lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.pipeline)
-        lib.vkCmdSetViewport(cb, 0, 1, viewport_ptr)
-        lib.vkCmdSetScissor(cb, 0, 1, area_ptr)
+        if offset is None:
+            lib.vkCmdSetViewport(cb, 0, 1, viewport_ptr)
+            lib.vkCmdSetScissor(cb, 0, 1, area_ptr)
+        if offset != self._at:  # (the window's one view: never)
+            self._offset[:] = offset or (0, 0)
+            self._at = offset
         lib.vkCmdBindDescriptorSets(
             cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 1, descriptor_set, 0, vk.ffi.NULL
         )
         self._push["exposure"] = 2.0**exposure
         self._push["operator"] = TONE_MAPS[name]
-        lib.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_FRAGMENT_BIT, 0, TONE_MAP_PUSH.size, self._push_ptr)
+        lib.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_FRAGMENT_BIT, 0, _PUSH.itemsize, self._push_ptr)
         lib.vkCmdDraw(cb, 3, 1, 0, 0)
 
     def destroy(self) -> None:

@@ -57,7 +57,7 @@ __all__ = ["PRESET", "QUALITY_STEPS", "FxaaPass", "FxaaSettings", "add_fxaa"]
 PRESET = 39
 QUALITY_STEPS = (1.0, 1.0, 1.0, 1.0, 1.0, 1.5, 2.0, 2.0, 2.0, 2.0, 4.0, 8.0)  # shaders/fxaa.frag's STEP
 LUMA_WEIGHTS = (0.299, 0.587, 0.114)
-_PUSH_BYTES = 16  # float subpix, edge_threshold, edge_threshold_min (+ padding)
+_PUSH_BYTES = 24  # float subpix, edge_threshold, edge_threshold_min (+ padding), ivec2 offset
 _SETS = 8  # descriptor sets kept, one per source view seen
 
 
@@ -155,7 +155,12 @@ class FxaaPass(Pass):
         if source == target:
             raise UsageError(f"FXAA reads {source!r} and cannot write the image it reads")
         self.name, self.settings, self.source, self.target, self.create = name, settings, source, target, create
-        self._push = settings.push()
+        self._push = np.zeros(1, [("settings", np.float32, (4,)), ("offset", np.int32, (2,))])
+        self._push["settings"][0] = settings.push()
+        # where it writes the target: None, the whole target (the source's size); else a
+        # callable giving (x, y, width, height), a camera view's rectangle of the window
+        # (render/frame/view_graph.py), the source drawn from its corner; the rest is kept
+        self.place: Any = None
         self._owned: Owned | None = None
         self._set_layout: Any = None
         self._layout: Any = None
@@ -170,22 +175,24 @@ class FxaaPass(Pass):
         if self.create is not None:
             builder.create(self.target, self.create)
         builder.read(self.source, Access.FRAGMENT_SAMPLED)
-        builder.write(self.target, Access.COLOR_WRITE)
+        builder.write(self.target, Access.COLOR_WRITE, region=self.place is not None)
 
     def key(self) -> Hashable:
-        return (self.settings,)
+        return (self.settings,) if self.place is None else (self.settings, self.place())
 
     def declares(self) -> Hashable:
-        return ()  # its setup reads only what it was made with
+        return self.place is not None  # its setup reads what it was made with, and whether it is placed
 
     def record(self, cb: Any, ctx: Any) -> None:
         vk = ctx.vk
         lib = vk.lib
         source, target = ctx.image(self.source), ctx.image(self.target)
-        if tuple(source.extent) != tuple(target.extent):
+        area = None if self.place is None else tuple(self.place())
+        into = tuple(target.extent) if area is None else area[2:]
+        if tuple(source.extent) != into:
             raise UsageError(
                 f"FXAA reads {self.source!r} ({source.extent[0]}x{source.extent[1]}) into {self.target!r} "
-                f"({target.extent[0]}x{target.extent[1]}): they must be the same size"
+                f"({into[0]}x{into[1]}): they must be the same size"
             )
         if source.samples != 1 or target.samples != 1:
             raise UsageError(f"FXAA reads and writes single-sampled images: resolve {self.source!r} first")
@@ -194,7 +201,8 @@ class FxaaPass(Pass):
         linear = is_linear_source(format_name(vk, source.format))
         pipeline = self._pipeline(ctx.device, int(target.format), linear)
         descriptor_set = self._set_for(ctx.device, source)
-        ctx.begin_rendering(colors=(self.target,))
+        ctx.begin_rendering(colors=(self.target,), area=area)
+        self._push["offset"][0] = (0, 0) if area is None else area[:2]
         point = vk.VK_PIPELINE_BIND_POINT_GRAPHICS
         lib.vkCmdBindPipeline(cb, point, pipeline)
         lib.vkCmdBindDescriptorSets(cb, point, self._layout, 0, 1, descriptor_set, 0, vk.ffi.NULL)

@@ -1,0 +1,150 @@
+"""Render to texture (render/frame/texture_views.py): the monitor demo's screen shows what its
+second camera sees (a magenta cube only that camera's layers hold), follows that camera when it
+moves, and is black without it."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+from gpu_context import headless_gpu, render_world
+
+from ecs_engine import World
+from ecs_engine.components import Camera, RenderTexture, Transform
+
+W, H = 80, 60
+
+
+def _magenta(img: np.ndarray) -> np.ndarray:
+    """Where the picture is clearly magenta (red and blue far above green)."""
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    return (r > 90) & (b > 80) & (g < 0.5 * np.minimum(r, b))
+
+
+def _monitor_camera(world: World) -> int:
+    return int(world.query(Camera, RenderTexture, write=()).entities()[0])
+
+
+def test_the_screen_shows_the_second_camera_s_picture_and_follows_it() -> None:
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.demos import monitor
+    from ecs_engine.render.frame.renderer import Renderer
+
+    with headless_gpu(W, H) as gpu:
+        world = World()
+        monitor.build(world, gpu.meshes.add)
+        schedule = default_schedule()
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+        try:
+
+            def frame() -> np.ndarray:
+                schedule.run(world, 0.0)
+                renderer.render(world, readback=True)
+                return gpu.target.pixels()[..., :3].astype(np.int64)
+
+            shown = frame()
+            cam = _monitor_camera(world)
+            place = world.get(cam, Transform)
+            world.set(cam, Transform(position=np.asarray(place.position) + (1.2, 0.0, 0.0), rotation=place.rotation))
+            moved = frame()
+            world.remove(cam, RenderTexture)  # no camera draws it: the screen stays black
+            world.remove(cam, Camera)
+            schedule.run(world, 0.0)
+            renderer.destroy()
+            renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+            dark = frame()
+        finally:
+            renderer.destroy()
+    seen, after = _magenta(shown), _magenta(moved)
+    assert seen.sum() >= 20  # the cube on the screen, in the room's picture
+    assert not _magenta(dark).any()  # the room's camera never sees the cube itself
+    # the second camera moved right: its cube moved left in its picture, and on the screen
+    cols = np.flatnonzero(seen.any(axis=0)), np.flatnonzero(after.any(axis=0))
+    assert after.sum() >= 20 and cols[1].mean() < cols[0].mean() - 1.0
+    # only the screen changed (and what its light falls on: nothing), the room stayed
+    changed = np.abs(moved - shown).max(axis=-1) > 8
+    rows, columns = np.flatnonzero(changed.any(axis=1)), np.flatnonzero(changed.any(axis=0))
+    assert changed.sum() and np.ptp(rows) < H // 2 and np.ptp(columns) < W // 2
+
+
+@pytest.mark.parametrize("settings", [{"light_culling": "deferred"}, {"tone_map": "aces"}, {"msaa": 4}])
+def test_the_screen_shows_it_in_every_form(settings: dict) -> None:
+    """The texture view draws in the window's form (direct above; hdr, deferred, MSAA here)."""
+    from ecs_engine.demos import monitor
+    from ecs_engine.gpu.offscreen import OffscreenTarget
+
+    samples = settings.pop("msaa", 1)
+    with headless_gpu(W, H) as gpu:
+        if samples > 1:
+            gpu.target.destroy()
+            gpu.target = OffscreenTarget(gpu.device, W, H, samples=samples)
+        world = World()
+        monitor.build(world, gpu.meshes.add)
+        shown = render_world(gpu, world, **settings)
+    assert _magenta(shown).sum() >= 20
+
+
+def test_a_texture_view_and_a_split_window_in_one_frame() -> None:
+    """The texture view first, then the window's view in its part of the window (the hdr form)."""
+    from ecs_engine.components import FlyCamera, Viewport
+    from ecs_engine.demos import monitor
+
+    with headless_gpu(W, H) as gpu:
+        world = World()
+        monitor.build(world, gpu.meshes.add)
+        (room,) = world.query(Camera, FlyCamera, write=()).entities()
+        world.add(int(room), Viewport(x=0.25, width=0.5))
+        shown = render_world(gpu, world)
+    seen = _magenta(shown)
+    assert seen.sum() >= 5 and not seen[:, : W // 4].any() and not seen[:, 3 * W // 4 :].any()
+    assert len(np.unique(shown[:, : W // 4 - 1].reshape(-1, 3), axis=0)) == 1  # outside the view: background
+
+
+@pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs a display (make test runs under Xvfb)")
+@pytest.mark.parametrize("scene", ["monitor", "split_screen"])
+def test_the_views_in_a_window(scene: str, tmp_path) -> None:
+    """On a swapchain: the first view's submit waits for the image, the last one's signals the
+    present (render/frame/views.py); the screenshot reads the last frame back."""
+    from PIL import Image
+
+    from ecs_engine.app.settings import RunOptions
+    from ecs_engine.app.window import open_glfw, run_windowed
+
+    shot = tmp_path / "shot.png"
+    options = RunOptions(scene=scene, width=W, height=H, frames=6, screenshot=str(shot), validate=True, quiet=True)
+    glfw = open_glfw()
+    assert glfw is not None
+    result = run_windowed(options, glfw)
+    assert result.validation_messages == [] and result.frames == 6
+    pixels = np.asarray(Image.open(shot).convert("RGB")).astype(np.int64)
+    if scene == "monitor":
+        assert _magenta(pixels).sum() >= 10
+    else:  # three views drawn: no pixel left undrawn (black)
+        assert (pixels.sum(axis=-1) > 0).all()
+
+
+def test_a_texture_view_that_goes_away_leaves_nothing_behind() -> None:
+    """Its camera removed: the next frame draws the window alone and what the view kept (its
+    target, graphs, lighting) is destroyed; the screen keeps the last picture it was given."""
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.demos import monitor
+    from ecs_engine.render.frame.renderer import Renderer
+
+    with headless_gpu(W, H) as gpu:
+        world = World()
+        monitor.build(world, gpu.meshes.add)
+        schedule = default_schedule()
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
+        try:
+            schedule.run(world, 0.0)
+            renderer.render(world)
+            assert set(renderer.views.targets) == {"monitor"} and renderer.views.on
+            world.destroy(_monitor_camera(world))
+            schedule.run(world, 0.0)
+            renderer.render(world, readback=True)
+            assert renderer.views.targets == {} and renderer.views.texture_graphs == {} and not renderer.views.on
+            shown = gpu.target.pixels()[..., :3].astype(np.int64)
+        finally:
+            renderer.destroy()
+    assert _magenta(shown).sum() >= 20
