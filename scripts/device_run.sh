@@ -56,7 +56,7 @@ for mode in "$@"; do
         > "$OUT/gpu_tests_subset.txt" 2>&1; echo "pytest rc=$?" >> "$OUT/gpu_tests_subset.txt")
       tail -15 "$OUT/gpu_tests_subset.txt" ;;
     demos)
-      for scene in cube grid100 model materials lights shadows environment; do
+      for scene in cube grid100 model materials lights shadows environment split_screen monitor; do
         mkdir -p /tmp/demos
         (cd /tmp && timeout 120 python3 -m ecs_engine demo $scene --headless --frames 40 --validate \
           --screenshot "/tmp/demos/$scene.png" > /tmp/demos/$scene.txt 2>&1; echo "$scene rc=$?";

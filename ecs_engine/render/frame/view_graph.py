@@ -34,7 +34,8 @@ from typing import Any
 from ...errors import UsageError
 from ..config import Form
 from ..graph import Access, FrameGraph, Load, Pass
-from ..passes.output_graph import OutputGraph, OverlayOver, _final_layout
+from ..passes.output_frame import OverlayOver
+from ..passes.output_graph import OutputGraph, _final_layout
 
 ATTACHMENT = "COLOR_ATTACHMENT_OPTIMAL"  # the target between the views' frames
 
@@ -143,6 +144,9 @@ class ViewGraph(OutputGraph):
             graph.destroy()
             raise
         return graph
+
+    def _more_inputs(self) -> Any:
+        return self.placement  # the imports' sizes and layouts, the readback's place
 
     def _place_readback(self, graph: FrameGraph, wanted: bool) -> None:
         super()._place_readback(graph, wanted and self.placement.last)

@@ -153,7 +153,12 @@ class OutputGraph:
             self.frame.transparent is not None,
             tuple(output.post),
             scene.signature() if scene is not None else None,
+            self._more_inputs(),
         )
+
+    def _more_inputs(self) -> Any:
+        """What a subclass's imports follow from besides these (a camera view's placement)."""
+        return None
 
     def _again(self, inputs: tuple | None, slot: int) -> FrameGraph | None:
         """The slot's last graph with its imports back, if `inputs` are those it was prepared from."""
