@@ -8,9 +8,10 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
+import ecs_engine
 from ecs_engine.render.config.choices import Choice, Form
 
-PACKAGE = Path(__file__).resolve().parent.parent / "ecs_engine"
+PACKAGE = Path(ecs_engine.__file__).parent  # the package the tests import (installed or not)
 VALUES = frozenset({str(v) for enum in Choice.__subclasses__() for v in enum} | {str(f) for f in Form})
 
 

@@ -35,6 +35,8 @@ class CullingMethod:
 
     name: ClassVar[Culling]
     decides_ahead: ClassVar[bool] = False  # the extract stage decides the camera's rows (masks)
+    # why the method cannot cull the frames of several camera views (None: it can)
+    views_refusal: ClassVar[str | None] = None
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}()"

@@ -30,6 +30,10 @@ def can_cull(ctx: Any) -> bool:
 
 class OcclusionCulling(CullingMethod):
     name = Culling.OCCLUSION
+    views_refusal = (
+        "occlusion culling with several camera views: it culls by the last frame's depth, "
+        "which is another view's; use frustum or temporal culling"
+    )
 
     def gpu(self, host: OcclusionHost, width: int, height: int, rows: int) -> OcclusionPasses | None:
         if rows == 0 or not can_cull(host.ctx):

@@ -38,7 +38,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ...errors import UsageError
-from ..config import Culling, Form
+from ..config import Form
 from ..draw.path import FrameStats
 from ..extract.frame_data import FrameData, FrameExtractor
 from ..extract.views import ViewData, extract_views, several_views
@@ -230,11 +230,9 @@ class Views:
         return found
 
     def _refuse(self, r: Any) -> None:
-        if r.culling_method.name is Culling.OCCLUSION:
-            raise UsageError(
-                "occlusion culling with several camera views: it culls by the last frame's depth, "
-                "which is another view's; use frustum or temporal culling"
-            )
+        refusal = r.culling_method.views_refusal
+        if refusal is not None:
+            raise UsageError(refusal)
         if any(not hasattr(p, "add_hdr") for p in r.output.post):
             raise UsageError(
                 "a post effect given as a callable with several camera views: it gets the whole HDR "

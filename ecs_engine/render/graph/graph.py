@@ -156,10 +156,10 @@ class FrameGraph:
 
     def import_slot_buffers(self, buffers: dict[str, Any]) -> None:
         """A frame slot's buffers (objects with .handle and .size) whose last use was fenced:
-        nothing to wait for. Each is made into an import once (its token: the buffer and its
-        handle, which growing it replaces)."""
+        nothing to wait for. Each is made into an import once (its token: the buffer's identity,
+        handle and size: all an import of it is made from)."""
         for name, buffer in buffers.items():
-            token = (buffer, buffer.handle)
+            token = (id(buffer), buffer.handle, buffer.size)
             if not self.reuse_import(name, token):
                 self.import_buffer(name, handle=buffer.handle, size=buffer.size, stage_before="NONE", token=token)
 

@@ -352,7 +352,7 @@ class OutputGraph:
         if attachments.samples == 1:  # with MSAA depth and colour are forward's transients
             named.append(("depth", images[0]))
         for name, image in named:
-            token = (image, image.handle)
+            token = (id(image), image.handle, image.width, image.height)
             if graph.reuse_import(name, token):
                 continue
             graph.import_image(

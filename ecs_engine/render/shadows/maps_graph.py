@@ -71,7 +71,7 @@ class ShadowMapsPass(Pass):
     def import_into(self, graph: FrameGraph) -> None:
         graph.import_slot_buffers(self.culled)
         maps = self.shadows.maps
-        token = (maps, maps.image.handle)
+        token = (id(maps), maps.image.handle, maps.resolution, maps.layers)  # all the import is made from
         if graph.reuse_import(NAME, token):
             return
         graph.import_image(
