@@ -178,6 +178,11 @@ class FrameGraph:
         a pass's declarations."""
         return self._version
 
+    def compiled_for(self, extent: tuple[int, int]) -> bool:
+        """Whether the last compile stands for `extent` and everything since (a compile would
+        do nothing)."""
+        return self.compiled is not None and self.compiled.signature == (extent, self._version)
+
     def imports_snapshot(self) -> tuple:
         """The imports as they stand (restore_imports brings them back)."""
         return (self._version, self._table.snapshot())
@@ -342,11 +347,14 @@ class FrameGraph:
         `replayable=True`: None where a pass that runs returns UNREPLAYABLE (see replayable())."""
         c = self._ready()
         by_name = self._passes_by_name()
-        keys = [(name, by_name[name].key()) for name in c.structure.order]
-        if any(k is UNREPLAYABLE for _, k in keys):
-            if replayable:
-                return None
-            keys = [(n, object() if k is UNREPLAYABLE else k) for n, k in keys]
+        keys = []
+        for name in c.structure.order:
+            k = by_name[name].key()
+            if k is UNREPLAYABLE:
+                if replayable:
+                    return None
+                k = object()  # equal to no other key
+            keys.append((name, k))
         return (*keys, c.structure.extent, self._table.handles())
 
     def _passes_by_name(self) -> dict[str, Pass]:

@@ -30,6 +30,8 @@ class Imports:
         self.buffers: dict[str, GraphBuffer] = {}
         self._ints: dict[str, tuple[Any, Any]] = {}  # the handle and view as integers
         self._names: list[str] | None = None  # sorted
+        self._handles: tuple | None = None  # handles()' answer until an import changes
+        self._shared = False  # the dicts are a snapshot's: copied before a change (_use)
 
     def image(
         self,
@@ -92,23 +94,27 @@ class Imports:
     def snapshot(self) -> tuple:
         """The imports as they stand, for `restore` (a frame slot's, brought back when it comes
         round again with the same inputs)."""
-        return (dict(self.by_name), dict(self.images), dict(self.buffers), dict(self._ints))
+        return (dict(self.by_name), dict(self.images), dict(self.buffers), dict(self._ints), self.handles())
 
     def restore(self, snapshot: tuple) -> None:
         """The imports of `snapshot`; the caller knows their shapes are today's (the graph's
         version is the one it was taken at), so nothing recompiles."""
-        by_name, images, buffers, ints = snapshot
+        by_name, images, buffers, ints, handles = snapshot
         if by_name.keys() != self.by_name.keys():
             self._names = None
-        self.by_name, self.images, self.buffers, self._ints = dict(by_name), dict(images), dict(buffers), dict(ints)
+        self.by_name, self.images, self.buffers, self._ints, self._handles = by_name, images, buffers, ints, handles
+        self._shared = True
 
     def handles(self) -> tuple:
         """(name, handle, view) of each import as integers, by name: what frame replay's key holds."""
+        if self._handles is not None:
+            return self._handles
         names = self._names
         if names is None:
             names = self._names = sorted(self.by_name)
         ints = self._ints
-        return tuple((n, *ints[n]) for n in names)
+        self._handles = tuple((n, *ints[n]) for n in names)
+        return self._handles
 
     def _keep(self, name: str, args: tuple, imported: Imported) -> bool:
         made = self._made.setdefault(name, {})
@@ -122,7 +128,10 @@ class Imports:
         old = self.by_name.get(name)
         if old is imported:
             return False
-        self.by_name[name], self._ints[name] = imported, ints
+        if self._shared:  # a snapshot's dicts: this change is not the snapshot's
+            self.by_name, self.images, self.buffers = dict(self.by_name), dict(self.images), dict(self.buffers)
+            self._ints, self._shared = dict(self._ints), False
+        self.by_name[name], self._ints[name], self._handles = imported, ints, None
         if imported.kind == "image":
             self.images[name] = resource
         else:

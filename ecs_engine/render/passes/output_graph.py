@@ -120,22 +120,26 @@ class OutputGraph:
         `rendering` (output_passes.OutputRendering) names the target's image; `readback`:
         copy the target to the host. When nothing it reads changed since the slot's last
         prepare, that one's imports are brought back instead of made again (_again)."""
-        inputs = self._inputs(state, rendering) if not readback else None
+        inputs = self._inputs(state, rendering, overlay) if not readback else None
         graph = self._again(inputs, slot)
         if graph is not None:
             self._copies = False  # (a frame reading back prepares in full)
             if not FrameGraph.verify_declares:
-                self._set_frame(graph, state, rendering, tone_map, overlay, slot, readback)
+                # what the passes declare from is in `inputs` too: the graph compiled for them stands
+                self._set_frame(graph, state, rendering, tone_map, overlay, slot, readback, compile=False)
                 return graph
-            again = dict(graph._table.by_name)  # the tests: the full prepare must import the same
+            # the tests: a full prepare imports the same, and its compile plans nothing new
+            again, version = dict(graph._table.by_name), graph.version
             full = self._prepare(state, rendering, tone_map, overlay, slot, readback, inputs)
             assert full is graph and graph._table.by_name == again, "the kept imports are not this frame's"
+            assert graph.version == version, "the passes declared anew under the same inputs"
             return graph
         return self._prepare(state, rendering, tone_map, overlay, slot, readback, inputs)
 
-    def _inputs(self, state: Any, rendering: Any) -> tuple:
-        """What a prepare's graph and imports follow from, besides the frame's settings: equal
-        inputs, equal shape and imports."""
+    def _inputs(self, state: Any, rendering: Any, overlay: Any) -> tuple:
+        """What a prepare's graph, imports and the passes' declarations follow from (the other
+        settings of the frame only go into the passes' keys): equal inputs, equal shape,
+        imports and plan."""
         output = self.output
         target, scene = output.target, output.scene
         return (
@@ -154,6 +158,7 @@ class OutputGraph:
             tuple(output.post),
             scene.signature() if scene is not None else None,
             self._more_inputs(),
+            overlay is not None,
         )
 
     def _more_inputs(self) -> Any:
@@ -168,10 +173,18 @@ class OutputGraph:
         return kept[2] if kept[2].restore_imports(kept[3]) else None
 
     def _set_frame(
-        self, graph: FrameGraph, state: Any, rendering: Any, tone_map: Any, overlay: Any, slot: int, readback: bool
+        self,
+        graph: FrameGraph,
+        state: Any,
+        rendering: Any,
+        tone_map: Any,
+        overlay: Any,
+        slot: int,
+        readback: bool,
+        compile: bool = True,
     ) -> None:
         """This frame's settings into the graph's passes (their keys and declarations read them),
-        the graph compiled (cached), and kept for `record`."""
+        the graph compiled (cached; `compile=False`: it stands as it was), kept for `record`."""
         output = self.output
         if output.post and output.inputs is not None:
             for effect in output.post:
@@ -180,7 +193,9 @@ class OutputGraph:
         self.graph = graph
         frame = self.frame
         frame.state, frame.tone_map, frame.overlay, frame.slot = state, tone_map, overlay, slot
-        graph.compile((int(state.area.extent.width), int(state.area.extent.height)))
+        extent = (int(state.area.extent.width), int(state.area.extent.height))
+        if compile or not graph.compiled_for(extent):
+            graph.compile(extent)
         if output.target.form == Form.DEFERRED:
             frame.attachments = self._gbuffer_views(graph, output.target.attachments)
         self._prepared = ((state, rendering, overlay), (tone_map, slot, readback), graph)
