@@ -82,22 +82,6 @@ class OffscreenTarget(TargetForm):
             cb, vk.VK_PIPELINE_STAGE_TRANSFER_BIT, vk.VK_PIPELINE_STAGE_HOST_BIT, 0, 0, None, 1, [barrier], 0, None
         )
 
-    @property
-    def hdr_image(self) -> Image | None:
-        """The HDR colour the post effects and the tone map read (the resolved one with MSAA);
-        None without HDR."""
-        return self.attachments.hdr_image
-
-    @property
-    def depth_image(self) -> Image | None:
-        """The scene's single-sample depth the post effects sample (SceneAttachments.depth_image)."""
-        return self.attachments.depth_image
-
-    @property
-    def hdr_view(self) -> Any:
-        image = self.attachments.hdr_image
-        return image.view if image is not None else None
-
     def output_image(self, output: Any) -> tuple[Any, Any]:
         """(VkImage, view) of `output`: `framebuffer` (the colour image, which frames in flight
         share), or another gpu/memory.py Image of the colour format and size to draw into."""

@@ -97,6 +97,22 @@ class TargetForm:
         """The current form's (made by set_form)."""
         return self._forms[self.form]
 
+    @property
+    def hdr_image(self) -> Image | None:
+        """The HDR colour the post effects and the tone map read (the resolved one with MSAA);
+        None without HDR."""
+        return self.attachments.hdr_image
+
+    @property
+    def depth_image(self) -> Image | None:
+        """The scene's single-sample depth the post effects sample (SceneAttachments.depth_image)."""
+        return self.attachments.depth_image
+
+    @property
+    def hdr_view(self) -> Any:
+        image = self.attachments.hdr_image
+        return image.view if image is not None else None
+
     def formats(self, vk: Any) -> AttachmentFormats:
         """The scene's attachment formats in the current form (scene_formats)."""
         return scene_formats(vk, self.form, self.color_format, self.samples)

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import UsageError
 from .functions import device_function, instance_function, raw_device_function
-from .memory import HOST, Buffer, Image
+from .memory import HOST, Buffer
 from .scene_attachments import Form, SceneAttachments, TargetForm
 
 if TYPE_CHECKING:
@@ -154,22 +154,6 @@ class Swapchain(TargetForm):
 
     def _attachments_for(self, form: Form) -> SceneAttachments:
         return SceneAttachments(self.device, self.width, self.height, self.samples, form)
-
-    @property
-    def hdr_image(self) -> Image | None:
-        """The HDR colour the post effects and the tone map read (the resolved one with MSAA);
-        None without HDR."""
-        return self.attachments.hdr_image
-
-    @property
-    def depth_image(self) -> Image | None:
-        """The scene's single-sample depth the post effects sample (SceneAttachments.depth_image)."""
-        return self.attachments.depth_image
-
-    @property
-    def hdr_view(self) -> Any:
-        image = self.hdr_image
-        return image.view if image is not None else None
 
     def output_image(self, output: Any) -> tuple[Any, Any]:
         """The swapchain image `output` (an entry of `framebuffers`: its index) and its view."""

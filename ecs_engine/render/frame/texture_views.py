@@ -60,19 +60,6 @@ class TextureTarget(TargetForm):
     def take_readback(self) -> bool:
         return False  # the copy into the page is its frame's output
 
-    @property
-    def hdr_image(self) -> Image | None:
-        return self.attachments.hdr_image
-
-    @property
-    def depth_image(self) -> Image | None:
-        return self.attachments.depth_image
-
-    @property
-    def hdr_view(self) -> Any:
-        image = self.attachments.hdr_image
-        return image.view if image is not None else None
-
     def output_image(self, output: Any) -> tuple[Any, Any]:
         return output.handle, output.view
 
