@@ -69,11 +69,12 @@ class TextureTarget(TargetForm):
 
 
 class TextureGraph(OutputGraph):
-    """The output graphs of one texture view: the window's, with the copy into texture
-    `handle`'s layer last instead of a readback."""
+    """The output graphs of one texture view: the window's, with its ldr `effects` (FXAA: the
+    tone map writes an image of its own, the last effect the view's whole target), and the
+    copy into texture `handle`'s layer last instead of a readback."""
 
-    def __init__(self, output: Any, pages: Any, handle: int, name: str) -> None:
-        super().__init__(output, [])
+    def __init__(self, output: Any, pages: Any, handle: int, name: str, effects: list[Any]) -> None:
+        super().__init__(output, effects)
         self.pages, self.handle, self.name = pages, int(handle), name
 
     def _make(self, form: Form, samples: int, color_format: int, ray: bool, oit: bool, post: Any) -> FrameGraph:

@@ -26,7 +26,7 @@ form at least (target_forms.py). A texture view whose texture no material sample
   as many views as slots each view keeps its slot and replays; otherwise the views take turns
   over the slots and every frame records (correct, at the cost of recording).
 - Post effects run in each view's graph at the view's size: bloom and SSAO over its "hdr",
-  FXAA into its rectangle (view_graph.py). A texture view's graph has the hdr-stage ones only.
+  FXAA into its rectangle (view_graph.py); a texture view's into its whole target.
   Refused with several views (UsageError, one message): occlusion culling (the GPU keeps one
   depth pyramid of the last frame, which would be another view's) and effects given as
   callables (they get the whole HDR image).
@@ -130,7 +130,7 @@ class Views:
                 semaphores = (wait if first else None, signal if last else None)
                 w, h = view.rect[2:]
                 if handle is not None:  # into its own target, copied into the texture's layer
-                    output.graph = self._texture_graph(r, view, handle)
+                    output.graph = self._texture_graph(r, view, handle, plain.effects)
                     output.deferred = self._lighting(r, view.texture, lighting)
                     output.post = self._effects(r, view.texture, post)
                     r.target = output.target = self._target(r, view, target)
@@ -219,14 +219,17 @@ class Views:
             found.set_form(window.form)
         return found
 
-    def _texture_graph(self, r: Any, view: ViewData, handle: int) -> TextureGraph:
+    def _texture_graph(self, r: Any, view: ViewData, handle: int, effects: list[Any]) -> TextureGraph:
+        """The texture view's output graph, with the window's ldr `effects` (made again when
+        they or the texture change, after the device is idle: frames in flight may use it)."""
         name = view.texture
         assert name is not None
         found = self.texture_graphs.get(name)
-        if found is None or found.handle != handle:
+        if found is None or found.handle != handle or found.effects != effects:
             if found is not None:
+                r.device.wait_idle()
                 found.destroy()
-            found = self.texture_graphs[name] = TextureGraph(r.output, r.texture_pages, handle, name)
+            found = self.texture_graphs[name] = TextureGraph(r.output, r.texture_pages, handle, name, effects)
         return found
 
     def _refuse(self, r: Any) -> None:

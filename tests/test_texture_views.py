@@ -1,0 +1,82 @@
+"""Texture views (render/frame/texture_views.py) with the window's post effects: FXAA after the
+tone map into the texture's target, as the window and split-screen views have it."""
+
+from __future__ import annotations
+
+import numpy as np
+from gpu_context import headless_gpu
+from host_reads import host_barrier
+
+from ecs_engine import World
+from ecs_engine.gpu.memory import HOST, Buffer
+
+W, H = 80, 60
+
+
+def texture_view_pixels(renderer, name: str = "monitor") -> np.ndarray:
+    """The RGB bytes (height, width, 3) int64 of texture view `name`'s target as its last frame
+    left them (TRANSFER_SRC: what the copy into the texture's layer read); the frame waited for."""
+    device = renderer.device
+    vk = device.vk
+    target = renderer.views.targets[name]
+    out = Buffer(device, target.width * target.height * 4, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
+    try:
+        color = vk.VK_IMAGE_ASPECT_COLOR_BIT
+        region = vk.VkBufferImageCopy(
+            imageSubresource=vk.VkImageSubresourceLayers(aspectMask=color, mipLevel=0, baseArrayLayer=0, layerCount=1),
+            imageOffset=vk.VkOffset3D(0, 0, 0),
+            imageExtent=vk.VkExtent3D(target.width, target.height, 1),
+        )
+
+        def record(cb):
+            src = vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
+            vk.vkCmdCopyImageToBuffer(cb, target.color.handle, src, out.handle, 1, [region])
+            host_barrier(vk, cb)
+
+        device.submit_once(record)
+        return out.bytes().reshape(target.height, target.width, 4)[..., :3].astype(np.int64).copy()
+    finally:
+        out.destroy()
+
+
+def monitor_frame(gpu, **settings) -> tuple[np.ndarray, str]:
+    """The monitor demo's first frame: its texture view's picture and the views' graphs."""
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.demos import monitor
+    from ecs_engine.render.frame.renderer import Renderer
+
+    world = World()
+    monitor.build(world, gpu.meshes.add)
+    renderer = Renderer(gpu.device, gpu.target, gpu.meshes, **settings)
+    try:
+        default_schedule().run(world, 0.0)
+        renderer.render(world, readback=True)
+        return texture_view_pixels(renderer), renderer.views.describe()
+    finally:
+        renderer.destroy()
+
+
+def _edges(img: np.ndarray) -> np.ndarray:
+    """Pixels with a neighbour (4-connected) of another colour."""
+    lum = img.sum(axis=-1)
+    edge = np.zeros(lum.shape, bool)
+    step = np.abs(np.diff(lum, axis=0)) > 30
+    edge[:-1] |= step
+    edge[1:] |= step
+    step = np.abs(np.diff(lum, axis=1)) > 30
+    edge[:, :-1] |= step
+    edge[:, 1:] |= step
+    return edge
+
+
+def test_a_texture_view_gets_fxaa_when_the_config_asks_for_it() -> None:
+    with headless_gpu(W, H) as gpu:
+        plain, plain_graphs = monitor_frame(gpu, tone_map="aces")
+        smooth, graphs = monitor_frame(gpu, tone_map="aces", post={"fxaa"})
+    texture_graph = graphs.split("view 2 of 2")[0]
+    assert "into texture 'monitor'" in texture_graph and "fxaa" in texture_graph
+    assert "fxaa" not in plain_graphs
+    assert plain.shape == (96, 128, 3)  # the screen's picture, at the RenderTexture's size
+    changed = np.abs(smooth - plain).max(axis=-1) > 2
+    assert changed.sum() >= 10  # the spinning cube's silhouette smoothed
+    assert (changed & ~_edges(plain)).sum() <= changed.sum() // 10  # ... on its edges alone
