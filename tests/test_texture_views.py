@@ -3,7 +3,10 @@ tone map into the texture's target, as the window and split-screen views have it
 
 from __future__ import annotations
 
+import shutil
+
 import numpy as np
+import pytest
 from gpu_context import headless_gpu
 from host_reads import host_barrier
 
@@ -80,3 +83,75 @@ def test_a_texture_view_gets_fxaa_when_the_config_asks_for_it() -> None:
     changed = np.abs(smooth - plain).max(axis=-1) > 2
     assert changed.sum() >= 10  # the spinning cube's silhouette smoothed
     assert (changed & ~_edges(plain)).sum() <= changed.sum() // 10  # ... on its edges alone
+
+
+# ------------------------------------------------------------------------------ hot reload
+GREEN_FXAA = """#version 450
+layout(set = 0, binding = 0) uniform sampler2D source;
+layout(location = 0) out vec4 out_color;
+void main() {
+    out_color = vec4(0.0, 1.0, 0.0, 1.0);
+    if (textureLod(source, vec2(0.5), 0.0).r > 1e30) out_color = vec4(1.0);  // never: the set is used
+}
+"""
+
+GREEN_BLOOM = """#version 460
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(set = 0, binding = 0) uniform sampler2D source;
+layout(set = 0, binding = 1, rgba16f) uniform image2D target;
+layout(push_constant) uniform Push { float src; float dst; } push;
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 size = imageSize(target);
+    if (p.x >= size.x || p.y >= size.y) return;
+    vec4 green = vec4(0.0, 4.0, 0.0, 1.0);
+    if (push.src > 1e30 && textureLod(source, vec2(0.5), 0.0).r > 1e30) green = vec4(1.0);  // never
+    imageStore(target, p, green);
+}
+"""
+
+
+def _green(img: np.ndarray) -> np.ndarray:
+    return (img[..., 1] > 200) & (img[..., 0] < 30) & (img[..., 2] < 30)
+
+
+@pytest.mark.skipif(shutil.which("glslc") is None, reason="no glslc")
+@pytest.mark.parametrize(
+    "post, file, text", [("fxaa", "fxaa.frag", GREEN_FXAA), ("bloom", "bloom_upsample.comp", GREEN_BLOOM)]
+)
+def test_a_reloaded_post_effect_shader_draws_in_every_view(tmp_path, monkeypatch, post, file, text) -> None:
+    """Hot reload (app/shader_reload.py, Renderer.rebuild_pipelines) remakes the post effects,
+    and each camera view's copies and graphs follow: the window's view (the left half) and
+    the texture view draw with the new shader (green everywhere), not the old."""
+    import ecs_engine.gpu.pipeline as pipeline
+    from ecs_engine.app.file_watch import FileWatch
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.app.shader_reload import ShaderReload
+    from ecs_engine.components import Camera, FlyCamera, Viewport
+    from ecs_engine.demos import monitor
+    from ecs_engine.render.frame.renderer import Renderer
+
+    shaders = tmp_path / "shaders"
+    shutil.copytree(pipeline.SHADER_DIR, shaders, ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(pipeline, "SHADER_DIR", shaders)
+    with headless_gpu(W, H) as gpu:
+        world = World()
+        monitor.build(world, gpu.meshes.add)
+        (room,) = world.query(Camera, FlyCamera, write=()).entities()
+        world.add(int(room), Viewport(width=0.5))
+        default_schedule().run(world, 0.0)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, post={post})
+        try:
+            renderer.render(world, readback=True)
+            before = gpu.target.pixels()[..., :3].astype(np.int64), texture_view_pixels(renderer)
+            (shaders / file).write_text(text)
+            said = ShaderReload(FileWatch(), shaders).reload([shaders / file], renderer)
+            assert said == [(True, f"hot reload: {file}: compiled, the pipelines made again")]
+            renderer.render(world, readback=True)
+            after = gpu.target.pixels()[..., :3].astype(np.int64), texture_view_pixels(renderer)
+        finally:
+            renderer.destroy()
+    assert not _green(before[0]).any() and not _green(before[1]).any()
+    assert _green(after[0][:, : W // 2]).all()  # the window's view
+    assert not _green(after[0][:, W // 2 :]).any()  # outside it: the background
+    assert _green(after[1]).all()  # the texture view

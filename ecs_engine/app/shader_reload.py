@@ -4,8 +4,9 @@
 A changed stage source (`*.vert`, `*.frag`, `*.comp`) is compiled with glslc to its `.spv`, as
 scripts/compile_shaders.py does; a changed include (`*.glsl`) recompiles every stage source. Then
 the renderer's path is made again (Renderer.rebuild_pipelines: the frames in flight are waited
-for), which remakes the mesh, shadow and set-aside pipelines and the output passes' (lighting, sky,
-tone map) and the UI's from the new SPIR-V. The compute passes made once (light clusters,
+for), which remakes the mesh, shadow and set-aside pipelines, the output passes' (lighting, sky,
+tone map), the post effects' (bloom, SSAO, FXAA; the camera views' copies of them follow) and the
+UI's from the new SPIR-V. The compute passes made once (light clusters,
 occlusion culling, the deferred lighting's compute path) and the ray tracing shaders take a new
 shader at the next start.
 A compile error keeps the old `.spv` and is one line naming the file and line. The manifest is

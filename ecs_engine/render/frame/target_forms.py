@@ -144,9 +144,12 @@ class TargetForms(PostEffects):
 
     def rebuild_pipelines(self) -> None:
         """Pipelines made again from the shader files (hot reload): the path's (the old stays if
-        they cannot be made), the output passes' and the UI's."""
+        they cannot be made), the output passes', the post effects' and the UI's. The effects
+        are made anew (they keep their pipelines), and the camera views' copies and graphs of
+        them follow the new ones (render/frame/views.py remakes them when the window's change)."""
         self.device.wait_idle()  # frames in flight may use the old pipelines
         self._swap_path(self._make_path(self.mode, self.cpu_recorder))
         self.output.forget_pipelines()
+        self._post_apply(self.post_effects, self.post_effects)
         if self.overlay is not None:
             self.overlay.rebuild(self.target)
