@@ -71,7 +71,12 @@ def _refuse(bad: np.ndarray, who: Any, what: Any) -> None:
         raise ValueError(f"{who(row)}: {what(row)}")
 
 
-MAX_TEXTURE_SIZE = 16384  # pixels a side; the renderer refuses what its device's maxImageDimension2D cannot make
+#: The longest side of a render texture in pixels, for the RenderTexture component and
+#: Textures.render_target alike (render_texture_size_error: one message): twice the largest layer
+#: materials sample it from (render/assets/textures.py's MAX_TEXTURE_SIZE, 4096), so the blit into
+#: the layer averages at most 2 x 2 pixels (a larger picture would be drawn to be thrown away), and
+#: an image every Vulkan 1.3 roadmap device makes (maxImageDimension2D >= 8192).
+MAX_RENDER_TEXTURE_SIDE = 8192
 EDGE = 1e-9  # how far past the target's edge a viewport's float sum may land and still be its edge
 
 
@@ -101,8 +106,8 @@ class RenderTexture(Component):
     """The camera draws into an image of its own, sampled by materials as texture `name`."""
 
     name = Field(f"U{NAME_LENGTH}", default="")
-    width = Field(np.uint32, default=256, minimum=1, maximum=MAX_TEXTURE_SIZE)
-    height = Field(np.uint32, default=256, minimum=1, maximum=MAX_TEXTURE_SIZE)
+    width = Field(np.uint32, default=256)  # 1 to MAX_RENDER_TEXTURE_SIDE: `check` says so in one message
+    height = Field(np.uint32, default=256)
 
     @classmethod
     def check(cls, values, who):
@@ -110,6 +115,27 @@ class RenderTexture(Component):
         empty = np.flatnonzero(np.char.str_len(names.astype(str)) == 0)
         if empty.size:
             raise ValueError(f"{who(int(empty[0]))}: RenderTexture.name is empty: materials sample it by name")
+        names, widths, heights = np.broadcast_arrays(names, values["width"], values["height"])
+        sizes = np.stack([widths.reshape(-1), heights.reshape(-1)])
+        bad = np.flatnonzero(((sizes < 1) | (sizes > MAX_RENDER_TEXTURE_SIDE)).any(axis=0))
+        if bad.size:
+            row = int(bad[0])
+            why = render_texture_size_error(str(names.reshape(-1)[row]), int(sizes[0, row]), int(sizes[1, row]))
+            raise ValueError(f"{who(row)}: {why}")
+
+
+def render_texture_size_error(name: str, width: Any, height: Any) -> str | None:
+    """Why a render texture `name` of `width` x `height` pixels is refused, or None: the one
+    message of the RenderTexture component (a ValueError, as every component's check raises)
+    and of Textures.render_target (a UsageError)."""
+    for what, value in (("width", width), ("height", height)):
+        whole = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+        if not whole or not 1 <= value <= MAX_RENDER_TEXTURE_SIDE:
+            return (
+                f"render texture {name!r}: its {what} must be a whole number of pixels from 1 to "
+                f"{MAX_RENDER_TEXTURE_SIDE}, not {value!r}"
+            )
+    return None
 
 
 class RenderLayers(Component):

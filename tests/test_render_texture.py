@@ -57,15 +57,32 @@ def test_one_name_is_one_handle_and_one_size():
     "args, match",
     [
         (("", 16, 16), "needs a name"),
-        (("x", 0, 16), "width must be a number of pixels >= 1"),
-        (("x", 16, 2.5), "height must be a number of pixels >= 1"),
-        (("x", 16, True), "height must be"),
-        (("x", 20000, 16), "larger than an image may be"),
+        (("x", 0, 16), "'x': its width must be a whole number of pixels from 1 to 8192, not 0$"),
+        (("x", 16, 2.5), "its height must be a whole number of pixels from 1 to 8192, not 2.5$"),
+        (("x", 16, True), "its height must be"),
+        (("x", 8193, 16), "its width must be a whole number of pixels from 1 to 8192, not 8193$"),
     ],
 )
 def test_bad_render_targets_are_refused_with_one_message(args, match):
     with pytest.raises(UsageError, match=match):
         Textures().render_target(*args)
+
+
+@pytest.mark.parametrize("size", [(8193, 16), (16, 16384), (0, 16)])
+def test_the_component_and_the_texture_share_one_limit_and_message(size):
+    """RenderTexture (a ValueError, as every component check) and Textures.render_target (a
+    UsageError) refuse the same sizes with the same words; the largest side is taken by both."""
+    from ecs_engine.components import RenderTexture
+    from ecs_engine.components.camera import MAX_RENDER_TEXTURE_SIDE
+
+    with pytest.raises(UsageError) as by_texture:
+        Textures().render_target("tv", *size)
+    with pytest.raises(ValueError) as by_component:
+        World().spawn(RenderTexture(name="tv", width=size[0], height=size[1]))
+    assert str(by_component.value) == f"new entity: {by_texture.value}"
+    side = MAX_RENDER_TEXTURE_SIDE
+    World().spawn(RenderTexture(name="tv", width=side, height=side))
+    assert Textures().render_target("tv", side, side) == 0
 
 
 def test_a_render_target_is_not_replaced_by_pixels():

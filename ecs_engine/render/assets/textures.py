@@ -17,7 +17,8 @@ Render targets (`Textures.render_target(name, width, height)`): textures whose t
 draws each frame (the RenderTexture component names one: a security monitor, a minimap). A
 material samples one by its handle, as any texture: `Material("screen", "unlit",
 base_color_texture=textures.render_target("monitor", 320, 240))`; the camera with
-`RenderTexture(name="monitor", width=320, height=240)` draws it. On the CPU it is one black texel
+`RenderTexture(name="monitor", width=320, height=240)` draws it; both refuse a side over
+MAX_RENDER_TEXTURE_SIDE (components/camera.py: one limit, one message). On the CPU it is one black texel
 (it has no pixels of its own: a saved scene keeps that texel, not the camera's picture); on the
 GPU it is a layer of the page of `size_class(width, height)`, sRGB, opaque black until a frame
 draws into it (render/passes/render_texture.py copies the camera's image in and makes its mips).
@@ -35,6 +36,7 @@ from typing import Final
 
 import numpy as np
 
+from ...components.camera import render_texture_size_error
 from ...errors import UsageError
 from ...user_files import IMAGE, UserFileError, open_user_file
 
@@ -180,9 +182,9 @@ class Textures:
         name asked for again at another size is a UsageError (one name, one image)."""
         if not isinstance(name, str) or not name:
             raise UsageError(f"a render texture needs a name (a non-empty string), not {name!r}")
-        for what, value in (("width", width), ("height", height)):
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-                raise UsageError(f"render texture {name!r}: {what} must be a number of pixels >= 1, not {value!r}")
+        refused = render_texture_size_error(name, width, height)  # the RenderTexture component's limit
+        if refused:
+            raise UsageError(refused)
         width, height = int(width), int(height)
         found = self._targets.get(name)
         if found is not None:
@@ -192,9 +194,6 @@ class Textures:
                     f"{width} x {height}: one name is one image (give the other camera's RenderTexture another name)"
                 )
             return found.handle
-        too_large = texture_size_error(width, height)
-        if too_large:
-            raise UsageError(f"render texture {name!r}: {too_large}")
         black = np.zeros((1, 1, 4), np.uint8)
         black[..., 3] = 255
         handle = self.add(Texture(name, black, color=True))
