@@ -148,3 +148,41 @@ def test_a_texture_view_that_goes_away_leaves_nothing_behind() -> None:
         finally:
             renderer.destroy()
     assert _magenta(shown).sum() >= 20
+
+
+def test_a_saved_monitor_world_loads_with_its_render_target(tmp_path) -> None:
+    """A scene file keeps a render target as one (its name and size, not its black texel): the
+    loaded world's screen shows the second camera's picture again; a render target of that name
+    in the world loaded into is reused, and one of another size there is refused."""
+    import json
+    import zipfile
+
+    from ecs_engine.demos import monitor
+    from ecs_engine.ecs.scene_file import SceneFileError, load_world, save_world
+    from ecs_engine.render.assets.materials import materials
+    from ecs_engine.render.assets.scene_assets import scene_codecs
+
+    path = tmp_path / "monitor.scene"
+    with headless_gpu(W, H) as gpu:
+        world = World()
+        monitor.build(world, gpu.meshes.add)
+        save_world(world, path, resources=scene_codecs(gpu.meshes))
+        loaded = World()
+        load_world(path, loaded, resources=scene_codecs(gpu.meshes))
+        shown = render_world(gpu, loaded)
+        twice = World()  # loaded again into a world that has the render target: one, reused
+        load_world(path, twice, resources=scene_codecs(gpu.meshes))
+        load_world(path, twice, resources=scene_codecs(gpu.meshes))
+        other = World()
+        materials(other).textures.render_target("monitor", 64, 64)
+        with pytest.raises(SceneFileError, match=r"'monitor' is 64 x 64 pixels here and 128 x 96 in the file"):
+            load_world(path, other, resources=scene_codecs(gpu.meshes))
+    with zipfile.ZipFile(path) as archive:
+        header = json.loads(archive.read("header.json"))
+    (saved,) = [r for r in header["resources"] if r["name"] == "materials"]
+    assert saved["doc"]["textures"] == [{"name": "monitor", "render_target": [128, 96]}] and not saved["arrays"]
+    textures = materials(loaded).textures
+    target = textures.render_target_of(textures.render_target_handle("monitor"))
+    assert target is not None and (target.width, target.height) == monitor.SCREEN
+    assert [t.name for t in materials(twice).textures.render_targets] == ["monitor"]
+    assert _magenta(shown).sum() >= 20

@@ -7,9 +7,10 @@ world without one saves no meshes and refuses to load a file that has some; a re
 not a world resource is passed as `scene_codecs(registry)`.
 
 - materials (`Materials` resource): every material as JSON (the dataclass's fields), texture
-  fields as indices into the saved textures, whose pixels are arrays (by value: a `Texture` does
-  not keep the file it came from). On load they join the target's materials (an equal material,
-  such as the default palette, is reused) and `Mesh.material` is rewritten to the new handles.
+  fields as indices into the saved textures: a file's by reference, others' pixels as arrays, a
+  render target (Textures.render_target: a camera draws it) by its name and size. On load they
+  join the target's materials (an equal material, such as the default palette, is reused; a
+  render target of that name too) and `Mesh.material` is rewritten to the new handles.
 - environment (`Environment` resource): its settings as JSON; a source that is a path (or six)
   by reference, pixels as an array. Loading replaces the target's environment.
 - meshes (`Mesh.handle`, the session's MeshRegistry): per handle the entities use, its name,
@@ -28,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from ...components.camera import render_texture_size_error
 from ...components.environment import Environment
 from ...components.mesh import Mesh
 from ...ecs.scene_file import ResourceCodec, SavedResource, register_codec
@@ -45,7 +47,7 @@ from .scene_meshes import (
     WorldMeshes,
     mesh_from_source,
 )
-from .textures import ImageError, Texture, read_image, texture_size_error
+from .textures import ImageError, RenderTarget, Texture, read_image, texture_size_error
 
 __all__ = [
     "MAX_RECIPE_VERTICES",
@@ -87,23 +89,38 @@ class MaterialsCodec:
                 if doc[name] is not None:
                     doc[name] = textures.setdefault(doc[name], len(textures))
             docs.append(doc)
-        saved = [found.textures[h] for h in textures]
-        texture_docs = [{"name": t.name, "color": t.color, "file": t.source} for t in saved]
-        arrays = {f"texture{i}": t.pixels for i, t in enumerate(saved) if t.source is None}  # by value
+        texture_docs: list[dict[str, Any]] = []
+        arrays = {}
+        for i, handle in enumerate(textures):
+            t, target = found.textures[handle], found.textures.render_target_of(handle)
+            if target is not None:  # its camera draws it: its name and size, not its black texel
+                texture_docs.append({"name": target.name, "render_target": [target.width, target.height]})
+                continue
+            texture_docs.append({"name": t.name, "color": t.color, "file": t.source})
+            if t.source is None:  # by value
+                arrays[f"texture{i}"] = t.pixels
         return SavedResource({"materials": docs, "textures": texture_docs}, arrays)
 
     def read(self, saved: SavedResource, world: Any) -> _Prepared:
         doc = _doc(saved.doc, dict, "the materials document")
         texture_docs = _doc(doc.get("textures"), list, "textures")
-        textures = []
+        textures: list[Texture | RenderTarget] = []
         for i, t in enumerate(texture_docs):
             t = _doc(t, dict, f"texture {i}")
+            if "render_target" in t:
+                textures.append(_render_target(i, t))
+                continue
             name, color = str(t.get("name", "")), _doc(t.get("color"), bool, "color")
             textures.append(_texture(i, name, color, t.get("file"), saved.arrays.get(f"texture{i}")))
         target: Materials | None = world.resources.get(Materials)
-        have_textures = [] if target is None else [target.textures[h] for h in range(len(target.textures))]
+        # the target's textures; its render targets by name alone (their texel is no picture)
+        have_textures: list[Texture | RenderTarget] = []
+        if target is not None:
+            for h in range(len(target.textures)):
+                drawn = target.textures.render_target_of(h)
+                have_textures.append(target.textures[h] if drawn is None else drawn)
         new_textures, texture_handles = [], []
-        for t in textures:  # an equal texture already there is reused
+        for t in textures:  # an equal texture (a render target of that name) already there is reused
             same = [h for h, o in enumerate(have_textures) if _same_texture(o, t)]
             if not same:
                 have_textures.append(t)
@@ -137,8 +154,11 @@ class MaterialsCodec:
 
         def apply(world: Any) -> None:
             registry = materials(world)
-            for t in new_textures:
-                registry.textures.add(t)
+            for t in new_textures:  # in order: the handles above count them
+                if isinstance(t, RenderTarget):
+                    registry.textures.render_target(t.name, t.width, t.height)
+                else:
+                    registry.textures.add(t)
             for m in new_materials:
                 registry.add(m)
 
@@ -176,7 +196,30 @@ def _texture(i: int, name: str, color: bool, file: Any, pixels: np.ndarray | Non
     return Texture(name, pixels, color)
 
 
-def _same_texture(a: Texture, b: Texture) -> bool:
+def _render_target(i: int, doc: dict[str, Any]) -> RenderTarget:
+    """Saved texture `i`, a render target: its name and size (the handle is given on load)."""
+    name = _doc(doc.get("name"), str, f"texture {i}'s name")
+    size = _doc(doc["render_target"], list, f"texture {i}'s render_target")
+    if len(size) != 2 or not name:
+        raise ValueError(f"texture {i}: a render target is a name and [width, height], got {name!r} {size[:4]}")
+    refused = render_texture_size_error(name, size[0], size[1])
+    if refused:
+        raise ValueError(f"texture {i}: {refused}")
+    return RenderTarget(name, -1, int(size[0]), int(size[1]))
+
+
+def _same_texture(a: Texture | RenderTarget, b: Texture | RenderTarget) -> bool:
+    """The same pixels (or file), or the same render target: a name is one render target, and
+    one asked for at another size is refused (Textures.render_target's one message)."""
+    if isinstance(a, RenderTarget) or isinstance(b, RenderTarget):
+        if not (isinstance(a, RenderTarget) and isinstance(b, RenderTarget) and a.name == b.name):
+            return False
+        if (a.width, a.height) != (b.width, b.height):
+            raise ValueError(
+                f"render texture {a.name!r} is {a.width} x {a.height} pixels here and {b.width} x {b.height} "
+                "in the file: one name is one image"
+            )
+        return True
     same_file = a.source is not None and a.source == b.source
     return a.name == b.name and a.color == b.color and (same_file or np.array_equal(a.pixels, b.pixels))
 

@@ -18,10 +18,11 @@ draws each frame (the RenderTexture component names one: a security monitor, a m
 material samples one by its handle, as any texture: `Material("screen", "unlit",
 base_color_texture=textures.render_target("monitor", 320, 240))`; the camera with
 `RenderTexture(name="monitor", width=320, height=240)` draws it; both refuse a side over
-MAX_RENDER_TEXTURE_SIDE (components/camera.py: one limit, one message). On the CPU it is one black texel
-(it has no pixels of its own: a saved scene keeps that texel, not the camera's picture); on the
-GPU it is a layer of the page of `size_class(width, height)`, sRGB, opaque black until a frame
-draws into it (render/passes/render_texture.py copies the camera's image in and makes its mips).
+MAX_RENDER_TEXTURE_SIDE (components/camera.py: one limit, one message). On the CPU it is one
+black texel (it has no pixels of its own: a saved scene keeps its name and size, scene_assets.py);
+on the GPU it is a layer of the page of `size_class(width, height)`, sRGB, opaque black until a
+frame draws into it (render/passes/render_texture.py copies the camera's image in and makes its
+mips).
 """
 
 from __future__ import annotations
