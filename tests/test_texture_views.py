@@ -85,6 +85,24 @@ def test_a_texture_view_gets_fxaa_when_the_config_asks_for_it() -> None:
     assert (changed & ~_edges(plain)).sum() <= changed.sum() // 10  # ... on its edges alone
 
 
+@pytest.mark.parametrize("settings", [{"light_culling": "deferred"}, {"msaa": 4}, {"post": {"fxaa", "bloom", "ssao"}}])
+def test_a_texture_view_with_fxaa_in_every_form(settings: dict) -> None:
+    """The deferred form, MSAA (FXAA after the resolve and tone map) and the hdr-stage effects
+    before it: the texture view's picture is drawn (its magenta cube) through FXAA."""
+    from ecs_engine.gpu.offscreen import OffscreenTarget
+
+    samples = settings.pop("msaa", 1)
+    settings.setdefault("post", {"fxaa"})
+    with headless_gpu(W, H) as gpu:
+        if samples > 1:
+            gpu.target.destroy()
+            gpu.target = OffscreenTarget(gpu.device, W, H, samples=samples)
+        picture, graphs = monitor_frame(gpu, **settings)
+    assert "fxaa" in graphs.split("view 2 of 2")[0]
+    r, g, b = picture[..., 0], picture[..., 1], picture[..., 2]
+    assert ((r > 90) & (b > 80) & (g < 0.5 * np.minimum(r, b))).sum() >= 100
+
+
 # ------------------------------------------------------------------------------ hot reload
 GREEN_FXAA = """#version 450
 layout(set = 0, binding = 0) uniform sampler2D source;
