@@ -130,7 +130,7 @@ class Views:
                 semaphores = (wait if first else None, signal if last else None)
                 w, h = view.rect[2:]
                 if handle is not None:  # into its own target, copied into the texture's layer
-                    output.graph = self._texture_graph(r, view, handle, plain.effects)
+                    output.graph = self._texture_graph(r, view, handle)
                     output.deferred = self._lighting(r, view.texture, lighting)
                     output.post = self._effects(r, view.texture, post)
                     r.target = output.target = self._target(r, view, target)
@@ -219,11 +219,14 @@ class Views:
             found.set_form(window.form)
         return found
 
-    def _texture_graph(self, r: Any, view: ViewData, handle: int, effects: list[Any]) -> TextureGraph:
-        """The texture view's output graph, with the window's ldr `effects` (made again when
+    def _texture_graph(self, r: Any, view: ViewData, handle: int) -> TextureGraph:
+        """The texture view's output graph, with the window's ldr effects (made again when
         they or the texture change, after the device is idle: frames in flight may use it)."""
         name = view.texture
         assert name is not None
+        # the window's: the output's graph is the window's now, or the texture view's drawn
+        # just before this one (texture views come first), made with the same effects
+        effects = r.output.graph.effects
         found = self.texture_graphs.get(name)
         if found is None or found.handle != handle or found.effects != effects:
             if found is not None:
