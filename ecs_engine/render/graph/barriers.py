@@ -24,6 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from ...gpu.image_barrier import dependency, image_barrier
 from .compile import Structure, subresources
 from .resources import flags
 from .transient import Packing
@@ -316,32 +317,40 @@ def dependency_info(
     device lacks); it holds copies of its barriers, so it can be kept and recorded again."""
     image_rows, buffer_rows = [], []
     for b in rows:
-        common = {
-            "srcStageMask": flags(vk, "VK_PIPELINE_STAGE_2_", b.src_stages - drop),
-            "srcAccessMask": flags(vk, "VK_ACCESS_2_", b.src_access - drop),
-            "dstStageMask": flags(vk, "VK_PIPELINE_STAGE_2_", b.dst_stages - drop),
-            "dstAccessMask": flags(vk, "VK_ACCESS_2_", b.dst_access - drop),
-            "srcQueueFamilyIndex": vk.VK_QUEUE_FAMILY_IGNORED,
-            "dstQueueFamilyIndex": vk.VK_QUEUE_FAMILY_IGNORED,
-        }
+        src_stage = flags(vk, "VK_PIPELINE_STAGE_2_", b.src_stages - drop)
+        src_access = flags(vk, "VK_ACCESS_2_", b.src_access - drop)
+        dst_stage = flags(vk, "VK_PIPELINE_STAGE_2_", b.dst_stages - drop)
+        dst_access = flags(vk, "VK_ACCESS_2_", b.dst_access - drop)
         if b.base_mip is None:
             buffer_rows.append(
-                vk.VkBufferMemoryBarrier2(buffer=buffers[b.resource], offset=0, size=WHOLE_SIZE, **common)
+                vk.VkBufferMemoryBarrier2(
+                    srcStageMask=src_stage,
+                    srcAccessMask=src_access,
+                    dstStageMask=dst_stage,
+                    dstAccessMask=dst_access,
+                    srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+                    dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+                    buffer=buffers[b.resource],
+                    offset=0,
+                    size=WHOLE_SIZE,
+                )
             )
             continue
         image_rows.append(
-            vk.VkImageMemoryBarrier2(
-                oldLayout=getattr(vk, f"VK_IMAGE_LAYOUT_{b.old_layout}"),
-                newLayout=getattr(vk, f"VK_IMAGE_LAYOUT_{b.new_layout}"),
-                image=images[b.resource],
-                subresourceRange=vk.VkImageSubresourceRange(
-                    aspectMask=aspects[b.resource],
-                    baseMipLevel=b.base_mip,
-                    levelCount=b.mip_count,
-                    baseArrayLayer=b.base_layer,
-                    layerCount=b.layer_count,
-                ),
-                **common,
+            image_barrier(
+                vk,
+                images[b.resource],
+                aspect=aspects[b.resource],
+                base_mip=b.base_mip,
+                mips=b.mip_count,
+                base_layer=b.base_layer,
+                layers=b.layer_count,
+                old=getattr(vk, f"VK_IMAGE_LAYOUT_{b.old_layout}"),
+                new=getattr(vk, f"VK_IMAGE_LAYOUT_{b.new_layout}"),
+                src_stage=src_stage,
+                src_access=src_access,
+                dst_stage=dst_stage,
+                dst_access=dst_access,
             )
         )
-    return vk.VkDependencyInfo(pBufferMemoryBarriers=buffer_rows or None, pImageMemoryBarriers=image_rows or None)
+    return dependency(vk, image_rows, buffer_rows)
