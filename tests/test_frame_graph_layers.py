@@ -44,14 +44,14 @@ def test_layers_have_their_own_state_and_barriers_cover_layer_ranges():
     (one,) = plan.before["shadow:1"]
     assert (one.base_layer, one.layer_count, one.old_layout) == (1, 1, "UNDEFINED")
     assert one.new_layout == "DEPTH_STENCIL_ATTACHMENT_OPTIMAL"
-    rows = plan.before["light"]  # layers 1 and 3 were drawn; 0 and 2 are still as imported
+    rows = plan.before["light"]  # layers 1 and 3 were drawn; 0 and 2, still as imported, are
+    # read in the layout they came in: no barrier (test_frame_graph_trims.py)
     drawn = [(r.base_layer, r.layer_count) for r in rows if r.old_layout == "DEPTH_STENCIL_ATTACHMENT_OPTIMAL"]
-    kept = [(r.base_layer, r.layer_count) for r in rows if r.old_layout == "DEPTH_STENCIL_READ_ONLY_OPTIMAL"]
-    assert drawn == [(1, 1), (3, 1)] and kept == [(0, 1), (2, 1)]
+    assert drawn == [(1, 1), (3, 1)] and len(rows) == 2
     assert all(r.new_layout == "DEPTH_STENCIL_READ_ONLY_OPTIMAL" for r in rows)
     text = shadow_graph().describe()
-    assert "barrier shadows[mip 0][layer 3] DEPTH_STENCIL_ATTACHMENT_OPTIMAL" in text
-    assert "barrier shadows[mip 0][layer 0] (ALL_COMMANDS -> " in text  # a layer named even alone
+    assert "barrier shadows[mip 0][layer 3] DEPTH_STENCIL_ATTACHMENT_OPTIMAL" in text  # a layer named even alone
+    assert "barrier shadows[mip 0][layer 0]" not in text
     assert "imported shadows: D32_SFLOAT 32x32, 4 layers, DEPTH_STENCIL_READ_ONLY_OPTIMAL -> " in text
 
 

@@ -5,6 +5,8 @@ moves, and is black without it."""
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 import pytest
@@ -14,6 +16,45 @@ from ecs_engine import World
 from ecs_engine.components import Camera, RenderTexture, Transform
 
 W, H = 80, 60
+
+
+class Room:
+    """The monitor demo's world on a headless target; `frame` runs the schedule and draws it
+    with the room's Renderer (made on the first frame, destroyed with the fixture)."""
+
+    def __init__(self, gpu: Any, world: World, schedule: Any) -> None:
+        self.gpu, self.world, self.schedule = gpu, world, schedule
+        self.renderer: Any = None
+
+    def frame(self, readback: bool = True) -> np.ndarray:
+        from ecs_engine.render.frame.renderer import Renderer
+
+        self.schedule.run(self.world, 0.0)
+        if self.renderer is None:
+            self.renderer = Renderer(self.gpu.device, self.gpu.target, self.gpu.meshes)
+        self.renderer.render(self.world, readback=readback)
+        return self.gpu.target.pixels()[..., :3].astype(np.int64) if readback else np.empty(0)
+
+    def new_renderer(self) -> None:
+        """The next frame is drawn by a new Renderer."""
+        if self.renderer is not None:
+            self.renderer.destroy()
+            self.renderer = None
+
+
+@pytest.fixture
+def room() -> Iterator[Room]:
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.demos import monitor
+
+    with headless_gpu(W, H) as gpu:
+        world = World()
+        monitor.build(world, gpu.meshes.add)
+        made = Room(gpu, world, default_schedule())
+        try:
+            yield made
+        finally:
+            made.new_renderer()
 
 
 def _magenta(img: np.ndarray) -> np.ndarray:
@@ -26,36 +67,18 @@ def _monitor_camera(world: World) -> int:
     return int(world.query(Camera, RenderTexture, write=()).entities()[0])
 
 
-def test_the_screen_shows_the_second_camera_s_picture_and_follows_it() -> None:
-    from ecs_engine.app.scenes import default_schedule
-    from ecs_engine.demos import monitor
-    from ecs_engine.render.frame.renderer import Renderer
-
-    with headless_gpu(W, H) as gpu:
-        world = World()
-        monitor.build(world, gpu.meshes.add)
-        schedule = default_schedule()
-        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
-        try:
-
-            def frame() -> np.ndarray:
-                schedule.run(world, 0.0)
-                renderer.render(world, readback=True)
-                return gpu.target.pixels()[..., :3].astype(np.int64)
-
-            shown = frame()
-            cam = _monitor_camera(world)
-            place = world.get(cam, Transform)
-            world.set(cam, Transform(position=np.asarray(place.position) + (1.2, 0.0, 0.0), rotation=place.rotation))
-            moved = frame()
-            world.remove(cam, RenderTexture)  # no camera draws it: the screen stays black
-            world.remove(cam, Camera)
-            schedule.run(world, 0.0)
-            renderer.destroy()
-            renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
-            dark = frame()
-        finally:
-            renderer.destroy()
+def test_the_screen_shows_the_second_camera_s_picture_and_follows_it(room: Room) -> None:
+    world = room.world
+    shown = room.frame()
+    cam = _monitor_camera(world)
+    place = world.get(cam, Transform)
+    world.set(cam, Transform(position=np.asarray(place.position) + (1.2, 0.0, 0.0), rotation=place.rotation))
+    moved = room.frame()
+    world.remove(cam, RenderTexture)  # no camera draws it: the screen stays black
+    world.remove(cam, Camera)
+    room.schedule.run(world, 0.0)
+    room.new_renderer()
+    dark = room.frame()
     seen, after = _magenta(shown), _magenta(moved)
     assert seen.sum() >= 20  # the cube on the screen, in the room's picture
     assert not _magenta(dark).any()  # the room's camera never sees the cube itself
@@ -69,33 +92,26 @@ def test_the_screen_shows_the_second_camera_s_picture_and_follows_it() -> None:
 
 
 @pytest.mark.parametrize("settings", [{"light_culling": "deferred"}, {"tone_map": "aces"}, {"msaa": 4}])
-def test_the_screen_shows_it_in_every_form(settings: dict) -> None:
+def test_the_screen_shows_it_in_every_form(room: Room, settings: dict) -> None:
     """The texture view draws in the window's form (direct above; hdr, deferred, MSAA here)."""
-    from ecs_engine.demos import monitor
     from ecs_engine.gpu.offscreen import OffscreenTarget
 
     samples = settings.pop("msaa", 1)
-    with headless_gpu(W, H) as gpu:
-        if samples > 1:
-            gpu.target.destroy()
-            gpu.target = OffscreenTarget(gpu.device, W, H, samples=samples)
-        world = World()
-        monitor.build(world, gpu.meshes.add)
-        shown = render_world(gpu, world, **settings)
+    gpu = room.gpu
+    if samples > 1:
+        gpu.target.destroy()
+        gpu.target = OffscreenTarget(gpu.device, W, H, samples=samples)
+    shown = render_world(gpu, room.world, **settings)
     assert _magenta(shown).sum() >= 20
 
 
-def test_a_texture_view_and_a_split_window_in_one_frame() -> None:
+def test_a_texture_view_and_a_split_window_in_one_frame(room: Room) -> None:
     """The texture view first, then the window's view in its part of the window (the hdr form)."""
     from ecs_engine.components import FlyCamera, Viewport
-    from ecs_engine.demos import monitor
 
-    with headless_gpu(W, H) as gpu:
-        world = World()
-        monitor.build(world, gpu.meshes.add)
-        (room,) = world.query(Camera, FlyCamera, write=()).entities()
-        world.add(int(room), Viewport(x=0.25, width=0.5))
-        shown = render_world(gpu, world)
+    (view,) = room.world.query(Camera, FlyCamera, write=()).entities()
+    room.world.add(int(view), Viewport(x=0.25, width=0.5))
+    shown = render_world(room.gpu, room.world)
     seen = _magenta(shown)
     assert seen.sum() >= 5 and not seen[:, : W // 4].any() and not seen[:, 3 * W // 4 :].any()
     assert len(np.unique(shown[:, : W // 4 - 1].reshape(-1, 3), axis=0)) == 1  # outside the view: background
@@ -124,29 +140,15 @@ def test_the_views_in_a_window(scene: str, tmp_path) -> None:
         assert (pixels.sum(axis=-1) > 0).all()
 
 
-def test_a_texture_view_that_goes_away_leaves_nothing_behind() -> None:
+def test_a_texture_view_that_goes_away_leaves_nothing_behind(room: Room) -> None:
     """Its camera removed: the next frame draws the window alone and what the view kept (its
     target, graphs, lighting) is destroyed; the screen keeps the last picture it was given."""
-    from ecs_engine.app.scenes import default_schedule
-    from ecs_engine.demos import monitor
-    from ecs_engine.render.frame.renderer import Renderer
-
-    with headless_gpu(W, H) as gpu:
-        world = World()
-        monitor.build(world, gpu.meshes.add)
-        schedule = default_schedule()
-        renderer = Renderer(gpu.device, gpu.target, gpu.meshes)
-        try:
-            schedule.run(world, 0.0)
-            renderer.render(world)
-            assert set(renderer.views.targets) == {"monitor"} and renderer.views.on
-            world.destroy(_monitor_camera(world))
-            schedule.run(world, 0.0)
-            renderer.render(world, readback=True)
-            assert renderer.views.targets == {} and renderer.views.texture_graphs == {} and not renderer.views.on
-            shown = gpu.target.pixels()[..., :3].astype(np.int64)
-        finally:
-            renderer.destroy()
+    room.frame(readback=False)
+    assert set(room.renderer.views.targets) == {"monitor"} and room.renderer.views.on
+    room.world.destroy(_monitor_camera(room.world))
+    shown = room.frame()
+    views = room.renderer.views
+    assert views.targets == {} and views.texture_graphs == {} and not views.on
     assert _magenta(shown).sum() >= 20
 
 

@@ -17,6 +17,7 @@ import numpy as np
 
 from .allocator import DEVICE
 from .device import Device
+from .image_barrier import image_barrier, record_image_barriers
 from .memory import HOST, Buffer
 from .owned import Owned
 
@@ -152,19 +153,20 @@ class ArrayImage:
     def _barrier(self, old: int, new: int) -> None:
         vk = self.device.vk
         to_read = new == vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
-        barrier = vk.VkImageMemoryBarrier(
-            srcAccessMask=vk.VK_ACCESS_TRANSFER_WRITE_BIT if to_read else 0,
-            dstAccessMask=vk.VK_ACCESS_SHADER_READ_BIT if to_read else vk.VK_ACCESS_TRANSFER_WRITE_BIT,
-            oldLayout=old,
-            newLayout=new,
-            srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            image=self.handle,
-            subresourceRange=self._range(),
+        barrier = image_barrier(
+            vk,
+            self.handle,
+            aspect=vk.VK_IMAGE_ASPECT_COLOR_BIT,
+            mips=self.levels,
+            layers=self.layers,
+            old=old,
+            new=new,
+            src_stage=vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT if to_read else vk.VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT,
+            src_access=vk.VK_ACCESS_2_TRANSFER_WRITE_BIT if to_read else 0,
+            dst_stage=vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT if to_read else vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT,
+            dst_access=vk.VK_ACCESS_2_SHADER_READ_BIT if to_read else vk.VK_ACCESS_2_TRANSFER_WRITE_BIT,
         )
-        src = vk.VK_PIPELINE_STAGE_TRANSFER_BIT if to_read else vk.VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT
-        dst = vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT if to_read else vk.VK_PIPELINE_STAGE_TRANSFER_BIT
-        self.device.submit_once(lambda cb: vk.vkCmdPipelineBarrier(cb, src, dst, 0, 0, None, 0, None, 1, [barrier]))
+        self.device.submit_once(lambda cb: record_image_barriers(vk, cb, [barrier]))
 
     def destroy(self) -> None:
         self.owned.destroy()

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from .image_barrier import image_barrier, record_image_barriers
+
 
 def clear_once(
     device: Any, image: Any, *, depth: bool, layers: int, value: float, layout: int, readers: int, read_access: int
@@ -20,31 +22,24 @@ def clear_once(
     )
     # a GENERAL image (a storage image) is cleared in place; others in TRANSFER_DST
     cleared_in = layout if layout == vk.VK_IMAGE_LAYOUT_GENERAL else vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL
+    write = vk.VK_ACCESS_2_TRANSFER_WRITE_BIT
+    top, transfer = vk.VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT
 
-    def barrier(old: int, new: int, src: int, dst: int) -> Any:
-        return vk.VkImageMemoryBarrier(
-            srcAccessMask=src,
-            dstAccessMask=dst,
-            oldLayout=old,
-            newLayout=new,
-            srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            image=image,
-            subresourceRange=whole,
-        )
+    def barrier(old: int, new: int, src: tuple[int, int], dst: tuple[int, int]) -> Any:
+        # (`readers` and `read_access` may be synchronization-1 bits: those are the same values)
+        stages = {"src_stage": src[0], "src_access": src[1], "dst_stage": dst[0], "dst_access": dst[1]}
+        return image_barrier(vk, image, aspect=aspect, layers=layers, old=old, new=new, **stages)
 
-    write = vk.VK_ACCESS_TRANSFER_WRITE_BIT
-    to_clear = barrier(vk.VK_IMAGE_LAYOUT_UNDEFINED, cleared_in, 0, write)
-    to_read = barrier(cleared_in, layout, write, read_access)
-    top, transfer = vk.VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, vk.VK_PIPELINE_STAGE_TRANSFER_BIT
+    to_clear = barrier(vk.VK_IMAGE_LAYOUT_UNDEFINED, cleared_in, (top, 0), (transfer, write))
+    to_read = barrier(cleared_in, layout, (transfer, write), (readers, read_access))
 
     def record(cb: Any) -> None:
-        vk.vkCmdPipelineBarrier(cb, top, transfer, 0, 0, None, 0, None, 1, [to_clear])
+        record_image_barriers(vk, cb, [to_clear])
         if depth:
             clear = vk.VkClearDepthStencilValue(depth=value, stencil=0)
             vk.vkCmdClearDepthStencilImage(cb, image, cleared_in, clear, 1, [whole])
         else:
             vk.vkCmdClearColorImage(cb, image, cleared_in, vk.VkClearColorValue(float32=[value] * 4), 1, [whole])
-        vk.vkCmdPipelineBarrier(cb, transfer, readers, 0, 0, None, 0, None, 1, [to_read])
+        record_image_barriers(vk, cb, [to_read])
 
     device.submit_once(record)

@@ -10,6 +10,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from .image_barrier import image_barrier
+
 #: (VkImage, aspect mask, old layout, new layout): one image's layout transition in a dependency
 Transition = tuple[Any, int, int, int]
 
@@ -91,19 +93,16 @@ class Dependency:
             srcStageMask=src[0], srcAccessMask=src[1], dstStageMask=dst[0], dstAccessMask=dst[1]
         )
         self.images = [
-            vk.VkImageMemoryBarrier2(
-                srcStageMask=src[0],
-                srcAccessMask=src[1],
-                dstStageMask=dst[0],
-                dstAccessMask=dst[1],
-                oldLayout=old,
-                newLayout=new,
-                srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                image=image,
-                subresourceRange=vk.VkImageSubresourceRange(
-                    aspectMask=aspect, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=1
-                ),
+            image_barrier(
+                vk,
+                image,
+                aspect=aspect,
+                old=old,
+                new=new,
+                src_stage=src[0],
+                src_access=src[1],
+                dst_stage=dst[0],
+                dst_access=dst[1],
             )
             for image, aspect, old, new in transitions
         ]

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from .image_barrier import dependency, image_barrier
 from .image_clear import clear_once
 from .memory import Image
 from .owned import Owned
@@ -49,27 +50,21 @@ def depth_barriers(vk: Any, image: Any, layers: tuple[int, ...], discard: bool) 
 
     def batch(src: int, src_access: int, dst: int, dst_access: int, old: int, new: int) -> tuple[Any, Any]:
         barriers = [
-            vk.VkImageMemoryBarrier2(
-                srcStageMask=src,
-                srcAccessMask=src_access,
-                dstStageMask=dst,
-                dstAccessMask=dst_access,
-                oldLayout=old,
-                newLayout=new,
-                srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                image=image,
-                subresourceRange=vk.VkImageSubresourceRange(
-                    aspectMask=vk.VK_IMAGE_ASPECT_DEPTH_BIT,
-                    baseMipLevel=0,
-                    levelCount=1,
-                    baseArrayLayer=layer,
-                    layerCount=1,
-                ),
+            image_barrier(
+                vk,
+                image,
+                aspect=vk.VK_IMAGE_ASPECT_DEPTH_BIT,
+                base_layer=layer,
+                old=old,
+                new=new,
+                src_stage=src,
+                src_access=src_access,
+                dst_stage=dst,
+                dst_access=dst_access,
             )
             for layer in layers
         ]
-        info = vk.VkDependencyInfo(pImageMemoryBarriers=barriers)
+        info = dependency(vk, barriers)
         return vk.ffi.addressof(info), info
 
     depth_rw = vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | write

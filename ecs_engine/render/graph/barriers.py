@@ -8,12 +8,15 @@ turns a batch into Vulkan structs. Rules, per (resource, mip, layer):
   same bytes before it (aliasing) and the frame before's uses of its memory;
 - first use of an import: from its layout_before, after the work of its stage_before (any
   earlier work: ALL_COMMANDS, or a semaphore's wait stage); none for a buffer whose
-  stage_before is NONE (a frame slot's, whose last use a fence covered);
+  stage_before is NONE (a frame slot's, whose last use a fence covered), nor for a read of an
+  image in its layout_before: what is there was made visible by whoever wrote it (a graph's
+  final barrier does; graph.py's import_image), and a read after reads needs no barrier;
 - a new layout, or a write after anything, or a read of a write not yet made visible to its
   stages: a barrier from the writes and reads since the last write; a write that discards the
   contents (CLEAR / DONT_CARE, not of a region) transitions from UNDEFINED;
-- after the last pass, imported images go to their layout_after, and the last writes of imported
-  buffers marked visible_after are made visible to every later command.
+- after the last pass, imported images go to their layout_after (none for one that is already in
+  it and that no pass wrote), and the last writes of imported buffers marked visible_after are
+  made visible to every later command.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from ...gpu.image_barrier import dependency, image_barrier
 from .compile import Structure, subresources
 from .resources import flags
 from .transient import Packing
@@ -71,6 +75,10 @@ class _State:
     read_stages: frozenset[str] = EMPTY  # since the last write
     synced_stages: frozenset[str] = EMPTY  # stages the last write was made visible to
     synced_access: frozenset[str] = EMPTY
+    # the last write is an import's, before the graph, and visible to every reader (import_image)
+    # as long as the layout is that it was written in: reads need no barrier, a write still
+    # waits for the import's stage_before
+    before_graph: bool = False
 
 
 @dataclass
@@ -133,7 +141,10 @@ def plan_barriers(s: Structure, packing: Packing) -> BarrierPlan:
                     if image and need.discards and before != need.layout:
                         before = "UNDEFINED"
                     st = _State(before, res.imported.stage_before, frozenset({"MEMORY_WRITE"}))
-                    row = _row(name, at, image, st.layout, need, st.write_stages, st.write_access)
+                    if image and not need.writes and before == need.layout:
+                        st.before_graph = True  # read as it was left: nothing to wait for
+                    else:
+                        row = _row(name, at, image, st.layout, need, st.write_stages, st.write_access)
                 elif image:
                     src, access = _aliased_before(s, packing, states, name, position)
                     prior, prior_writes = _last_frame(s, packing, name)
@@ -148,7 +159,7 @@ def plan_barriers(s: Structure, packing: Packing) -> BarrierPlan:
                 old = "UNDEFINED" if need.discards else st.layout
                 row = _row(name, at, image, old, need, st.write_stages | st.read_stages, st.write_access)
             elif st.write_stages:
-                seen = need.stages <= st.synced_stages and need.access <= st.synced_access
+                seen = st.before_graph or (need.stages <= st.synced_stages and need.access <= st.synced_access)
                 if need.writes or not seen:
                     row = _row(name, at, image, st.layout, need, st.write_stages | st.read_stages, st.write_access)
             elif need.writes and st.read_stages:  # a write after reads only: wait for the reads
@@ -160,7 +171,8 @@ def plan_barriers(s: Structure, packing: Packing) -> BarrierPlan:
                 continue
             st.layout = need.layout
             st.read_stages |= need.stages
-            if row is not None:  # the last write is now visible to these stages
+            if row is not None:  # the last write (or the transition) is now visible to these stages
+                st.before_graph = False
                 st.synced_stages |= need.stages
                 st.synced_access |= need.access
             states[(name, mip, layer)] = st
@@ -252,8 +264,8 @@ def _final(s: Structure, states: dict[Sub, _State]) -> list[Barrier]:
                     st = _State(imp.layout_before, imp.stage_before, frozenset({"MEMORY_WRITE"}))
                     if imp.layout_before == imp.layout_after:
                         continue
-                elif st.layout == imp.layout_after and not st.write_stages:
-                    continue
+                elif st.layout == imp.layout_after and (st.before_graph or not st.write_stages):
+                    continue  # as it was, or as its last barrier left it: nothing written since
                 src = st.write_stages | st.read_stages
                 tail = (imp.layout_after, src, st.write_access, dst_stages, dst_access, layer)
                 rows.append(Barrier(name, mip, 1, st.layout, *tail))
@@ -305,32 +317,40 @@ def dependency_info(
     device lacks); it holds copies of its barriers, so it can be kept and recorded again."""
     image_rows, buffer_rows = [], []
     for b in rows:
-        common = {
-            "srcStageMask": flags(vk, "VK_PIPELINE_STAGE_2_", b.src_stages - drop),
-            "srcAccessMask": flags(vk, "VK_ACCESS_2_", b.src_access - drop),
-            "dstStageMask": flags(vk, "VK_PIPELINE_STAGE_2_", b.dst_stages - drop),
-            "dstAccessMask": flags(vk, "VK_ACCESS_2_", b.dst_access - drop),
-            "srcQueueFamilyIndex": vk.VK_QUEUE_FAMILY_IGNORED,
-            "dstQueueFamilyIndex": vk.VK_QUEUE_FAMILY_IGNORED,
-        }
+        src_stage = flags(vk, "VK_PIPELINE_STAGE_2_", b.src_stages - drop)
+        src_access = flags(vk, "VK_ACCESS_2_", b.src_access - drop)
+        dst_stage = flags(vk, "VK_PIPELINE_STAGE_2_", b.dst_stages - drop)
+        dst_access = flags(vk, "VK_ACCESS_2_", b.dst_access - drop)
         if b.base_mip is None:
             buffer_rows.append(
-                vk.VkBufferMemoryBarrier2(buffer=buffers[b.resource], offset=0, size=WHOLE_SIZE, **common)
+                vk.VkBufferMemoryBarrier2(
+                    srcStageMask=src_stage,
+                    srcAccessMask=src_access,
+                    dstStageMask=dst_stage,
+                    dstAccessMask=dst_access,
+                    srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+                    dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+                    buffer=buffers[b.resource],
+                    offset=0,
+                    size=WHOLE_SIZE,
+                )
             )
             continue
         image_rows.append(
-            vk.VkImageMemoryBarrier2(
-                oldLayout=getattr(vk, f"VK_IMAGE_LAYOUT_{b.old_layout}"),
-                newLayout=getattr(vk, f"VK_IMAGE_LAYOUT_{b.new_layout}"),
-                image=images[b.resource],
-                subresourceRange=vk.VkImageSubresourceRange(
-                    aspectMask=aspects[b.resource],
-                    baseMipLevel=b.base_mip,
-                    levelCount=b.mip_count,
-                    baseArrayLayer=b.base_layer,
-                    layerCount=b.layer_count,
-                ),
-                **common,
+            image_barrier(
+                vk,
+                images[b.resource],
+                aspect=aspects[b.resource],
+                base_mip=b.base_mip,
+                mips=b.mip_count,
+                base_layer=b.base_layer,
+                layers=b.layer_count,
+                old=getattr(vk, f"VK_IMAGE_LAYOUT_{b.old_layout}"),
+                new=getattr(vk, f"VK_IMAGE_LAYOUT_{b.new_layout}"),
+                src_stage=src_stage,
+                src_access=src_access,
+                dst_stage=dst_stage,
+                dst_access=dst_access,
             )
         )
-    return vk.VkDependencyInfo(pBufferMemoryBarriers=buffer_rows or None, pImageMemoryBarriers=image_rows or None)
+    return dependency(vk, image_rows, buffer_rows)

@@ -126,8 +126,10 @@ class FrameGraph:
         stage_before recompiles). `layers`: an array image, `layer_views` one view of each
         layer (what `begin_rendering(layer=k)` renders to). `stage_before`: the pipeline stages
         (names as "COLOR_ATTACHMENT_OUTPUT") whose earlier work its first barrier waits for; a
-        swapchain image names the acquire semaphore's wait stage so that the two chain.
-        `token`: see reuse_import."""
+        swapchain image names the acquire semaphore's wait stage so that the two chain. Its
+        contents in layout_before are taken as visible to readers (a graph's final barrier makes
+        them so; work outside a graph makes its own): a first read in that layout waits for
+        nothing. `token`: see reuse_import."""
         if layers < 1 or (layer_views and len(layer_views) != layers):
             raise UsageError(f"image {name!r}: {layers} layer(s) and {len(layer_views)} layer view(s)")
         views = (tuple(mip_views), layers, tuple(layer_views))

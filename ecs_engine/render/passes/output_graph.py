@@ -76,7 +76,7 @@ class OutputGraph:
         self._recreations = getattr(output.target, "recreations", 0)  # the swapchain's, the graphs made in
         self._prepared: tuple[Any, Any, FrameGraph] | None = None  # prepare's, until record takes it
         # per frame slot: what its last full prepare read (_inputs), the shape, the graph and its
-        # imports then (the slots alternate: each comes round with its own buffers)
+        # imports then (the slots alternate: each comes round with its own buffers; gone with the graph)
         self._kept: dict[int, tuple[tuple, tuple, FrameGraph, tuple]] = {}
         self._copies = False  # this frame's readback copies the target
 
@@ -229,13 +229,10 @@ class OutputGraph:
             # new attachments, whose views may reuse destroyed ones' handle values, which the
             # effects' passes keep descriptor sets by: new graphs, new passes and sets
             self._recreations = recreations
-            for made in self.graphs.values():
-                made.destroy()
-            self.graphs.clear()
+            self._drop(list(self.graphs))
         graph = self.graphs.get(shape)
         if graph is None:
-            for old in [k for k in self.graphs if k[5] != post_shape or k[:3] == shape[:3]]:  # outdone: gone
-                self.graphs.pop(old).destroy()
+            self._drop([k for k in self.graphs if k[5] != post_shape or k[:3] == shape[:3]])  # outdone: gone
             graph = self.graphs[shape] = self._make(*shape)
         self._copies = readback and target.take_readback()  # a swapchain's: only for the image asked
         headless = target.final_layout == self.output.vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
@@ -247,6 +244,13 @@ class OutputGraph:
         if inputs is not None:  # this slot's imports, for its next frame with the same inputs
             self._kept[slot] = (inputs, shape, graph, graph.imports_snapshot())
         return graph
+
+    def _drop(self, shapes: list[tuple]) -> None:
+        """The graphs of `shapes` destroyed, and the slots' kept imports of them forgotten."""
+        for shape in shapes:
+            gone = self.graphs.pop(shape)
+            gone.destroy()
+            self._kept = {slot: kept for slot, kept in self._kept.items() if kept[2] is not gone}
 
     def forget_prepared(self) -> None:
         """A frame that asked `prepare` and is not recorded (replayed, or keyed no further):
@@ -404,7 +408,5 @@ class OutputGraph:
 
     def destroy(self) -> None:
         """The graphs and the passes they hold (the effects' passes too; not the effects)."""
-        for graph in self.graphs.values():
-            graph.destroy()
-        self.graphs.clear()
+        self._drop(list(self.graphs))
         self.graph = None

@@ -39,6 +39,7 @@ from typing import Any
 
 from ...errors import UsageError
 from ...gpu.functions import handle_int
+from ...gpu.image_barrier import image_barrier
 from ...gpu.memory import Image
 from ..assets.texture_pages import TexturePages, TexturePlace
 from ..graph import Access, FrameGraph, Pass, PassBuilder, PassContext
@@ -244,23 +245,19 @@ class _Barriers:
     def make(self, mip: int, count: int, old: int, new: int) -> Any:
         vk = self.vk
         (src_stages, src_access), (dst_stages, dst_access) = self.src[old], self.dst[new]
-        return vk.VkImageMemoryBarrier2(
-            srcStageMask=src_stages,
-            srcAccessMask=src_access,
-            dstStageMask=dst_stages,
-            dstAccessMask=dst_access,
-            oldLayout=old,
-            newLayout=new,
-            srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            image=self.place.image.handle,
-            subresourceRange=vk.VkImageSubresourceRange(
-                aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT,
-                baseMipLevel=mip,
-                levelCount=count,
-                baseArrayLayer=self.place.layer,
-                layerCount=1,
-            ),
+        return image_barrier(
+            vk,
+            self.place.image.handle,
+            aspect=vk.VK_IMAGE_ASPECT_COLOR_BIT,
+            base_mip=mip,
+            mips=count,
+            base_layer=self.place.layer,
+            old=old,
+            new=new,
+            src_stage=src_stages,
+            src_access=src_access,
+            dst_stage=dst_stages,
+            dst_access=dst_access,
         )
 
     def step(self, barriers: list[Any]) -> Step:

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ...gpu.image_barrier import image_barrier, record_image_barriers
 from ...gpu.memory import HOST, Buffer
 
 if TYPE_CHECKING:
@@ -41,59 +42,38 @@ def upload_rects(device: Device, image: Any, tex: Any, rects: list[tuple[int, in
             )
         )
         offset += part.nbytes
-    old = vk.VK_IMAGE_LAYOUT_UNDEFINED if fresh else vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
+    read_only, dst = vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL
+    old = vk.VK_IMAGE_LAYOUT_UNDEFINED if fresh else read_only
+    fragment, transfer = vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT
+    read, write = vk.VK_ACCESS_2_SHADER_READ_BIT, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT
+    color = vk.VK_IMAGE_ASPECT_COLOR_BIT
+    to_copy = image_barrier(
+        vk,
+        image,
+        aspect=color,
+        old=old,
+        new=dst,
+        src_stage=fragment | vk.VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT,
+        src_access=0 if fresh else read,
+        dst_stage=transfer,
+        dst_access=write,
+    )
+    to_read = image_barrier(
+        vk,
+        image,
+        aspect=color,
+        old=dst,
+        new=read_only,
+        src_stage=transfer,
+        src_access=write,
+        dst_stage=fragment,
+        dst_access=read,
+    )
 
     def record(cb: Any) -> None:
-        rng = vk.VkImageSubresourceRange(
-            aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=1
-        )
-        to_copy = vk.VkImageMemoryBarrier(
-            srcAccessMask=0 if fresh else vk.VK_ACCESS_SHADER_READ_BIT,
-            dstAccessMask=vk.VK_ACCESS_TRANSFER_WRITE_BIT,
-            oldLayout=old,
-            newLayout=vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-            srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            image=image,
-            subresourceRange=rng,
-        )
-        vk.vkCmdPipelineBarrier(
-            cb,
-            vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT,
-            vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
-            0,
-            0,
-            None,
-            0,
-            None,
-            1,
-            [to_copy],
-        )
-        vk.vkCmdCopyBufferToImage(
-            cb, staging.handle, image, vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, len(regions), regions
-        )
-        to_read = vk.VkImageMemoryBarrier(
-            srcAccessMask=vk.VK_ACCESS_TRANSFER_WRITE_BIT,
-            dstAccessMask=vk.VK_ACCESS_SHADER_READ_BIT,
-            oldLayout=vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-            newLayout=vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-            srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            image=image,
-            subresourceRange=rng,
-        )
-        vk.vkCmdPipelineBarrier(
-            cb,
-            vk.VK_PIPELINE_STAGE_TRANSFER_BIT,
-            vk.VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT,
-            0,
-            0,
-            None,
-            0,
-            None,
-            1,
-            [to_read],
-        )
+        record_image_barriers(vk, cb, [to_copy])
+        vk.vkCmdCopyBufferToImage(cb, staging.handle, image, dst, len(regions), regions)
+        record_image_barriers(vk, cb, [to_read])
 
     try:
         device.submit_once(record)  # rare: the font atlas, new glyphs, user images
