@@ -49,6 +49,11 @@ class EditorSession(ImGuiSession):
         for draw in self.game_ui:
             draw(self.imgui, world)
 
+    @property
+    def scene(self) -> Any:
+        """The Scene window (editor_viewport.py): the game's view, its `hovered` and `view()`."""
+        return self.editor.scene
+
     def take_requests(self) -> Settings | None:
         """What the user changed in the editor since the last call, or None."""
         return self.editor.take_requests()
