@@ -53,6 +53,10 @@ def test_the_scene_window_shows_the_scene_and_the_panels_only_the_background(sce
     image = scene.gpu.target.pixels()[..., :3].astype(int)
     inside = image[y0:y1, x0:x1]
     assert inside.std() > 5  # the scene's picture, not a flat clear
+    # the scene is shaded for the Scene window's pixels alone (the panels are opaque, so that
+    # shows in the frame's size, not in the pixels under them)
+    graph = scene.state.renderer.output.graph.graph
+    assert graph.describe().startswith(f"frame graph {x1 - x0}x{y1 - y0}")
 
 
 def test_the_viewport_is_remade_when_the_window_target_changes(scene):

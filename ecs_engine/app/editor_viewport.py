@@ -44,9 +44,11 @@ class SceneWindow:
         chosen = flags.no_scrollbar.value | flags.no_scroll_with_mouse.value | flags.no_collapse.value
         if was_hovered:  # a drag over the scene moves the gizmo or the camera, not the window
             chosen |= flags.no_move.value
+        # no padding and no border: the image fills the window, none of its pixels drawn over
         imgui.push_style_var(imgui.StyleVar_.window_padding.value, (0.0, 0.0))
+        imgui.push_style_var(imgui.StyleVar_.window_border_size.value, 0.0)
         shown = imgui.begin(NAME, None, chosen)[0]
-        imgui.pop_style_var()
+        imgui.pop_style_var(2)
         if not shown:
             return False
         io = imgui.get_io()
