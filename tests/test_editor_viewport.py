@@ -142,3 +142,107 @@ def test_a_games_picker_picks_under_the_pointer_inside_the_scene_window(scene):
     hit = Picker(scene.gpu.meshes).under_pointer(world)
     assert hit is not None and hit.entity == cube
     assert np.isfinite(hit.distance)
+
+
+def test_a_split_screen_world_draws_inside_the_scene_window(scene):
+    """Two cameras with Viewports in the editor: their rectangles are the Scene window's halves
+    (views.py draws into the renderer's target, the viewport image); validation stays clean
+    (the fixture's close), the acquire's wait on the last view's submit."""
+    from ecs_engine.components import Camera, Viewport, active_camera
+
+    world = scene.state.world
+    scene.frame()
+    cam = active_camera(world)
+    world.add(cam, Viewport(width=0.5))
+    other = world.spawn(
+        Transform(position=world.get(cam, Transform).position, rotation=world.get(cam, Transform).rotation),
+        world.get(cam, Camera),
+        Viewport(x=0.5, width=0.5),
+    )
+    assert other is not None
+    for _ in range(3):
+        scene.frame()
+    w, h = scene.session.viewport.size
+    drawn = [what for what, _ in scene.state.renderer.views.drawn]
+    assert len(drawn) == 2
+    half = w // 2
+    assert drawn[0].endswith(f"into the window at (0, 0, {half}, {h})"), drawn
+    assert drawn[1].endswith(f"into the window at ({half}, 0, {w - half}, {h})"), drawn
+    x0, y0, x1, y1 = (round(v) for v in scene.session.editor.scene.rect)
+    image = scene.gpu.target.pixels()[y0:y1, x0:x1, :3].astype(int)
+    assert image[:, : (x1 - x0) // 2].std() > 5 and image[:, (x1 - x0) // 2 :].std() > 5
+
+
+def test_dragging_the_splitter_resizes_the_viewport_and_the_next_frame(scene):
+    for _ in range(3):
+        scene.frame()
+    editor = scene.session.editor
+    x0, y0, _, y1 = editor.scene.rect
+    w, h = scene.session.viewport.size
+    start = (x0 - 2.0, (y0 + y1) / 2)  # the splitter between the left column and the Scene window
+    scene.frame(mouse=start)
+    scene.frame(down=True)
+    for dx in (10, 20, 30, 40):
+        scene.frame(mouse=(start[0] + dx, start[1]))
+    scene.frame(down=False)
+    assert scene.session.viewport.size == (w - 40, h)  # the left column grew by the drag (scale 1)
+    described = scene.state.renderer.output.graph.graph.describe()
+    assert described.startswith(f"frame graph {w - 40}x{h}")
+
+
+def test_without_a_scene_window_the_scene_is_drawn_over_the_whole_window(scene):
+    """The Scene window behind another tab (as closed: nothing shows it): no viewport size, the
+    frame draws the window target as an editor without a dock does."""
+    from imgui_bundle import imgui
+
+    for _ in range(2):
+        scene.frame()
+    inspector = imgui.internal.find_window_by_name("Inspector")
+    imgui.internal.dock_builder_dock_window("Scene", inspector.dock_id)
+    for _ in range(3):
+        scene.frame()
+    assert scene.session.viewport.size is None and scene.session.editor.scene.rect is None
+    graph = scene.state.renderer.output.graph.graph
+    assert graph.describe().startswith(f"frame graph {scene.size[0]}x{scene.size[1]}")
+    assert "window" not in graph._table.by_name
+    image = scene.gpu.target.pixels()[..., :3].astype(int)
+    assert image.std() > 5
+
+
+def test_an_old_layout_without_the_scene_window_docks_it_in_the_central_node(config_home, monkeypatch):
+    from imgui_bundle import imgui
+
+    from ecs_engine.app import editor_dock
+
+    monkeypatch.setattr(editor_dock, "in_a_window", lambda io: True)
+    first = Scene()
+    try:
+        for _ in range(2):
+            first.frame()
+        path = first.session.editor.dock.path
+    finally:
+        first.close()  # writes editor.ini
+    sections = path.read_text().split("\n\n")
+    old = [part for part in sections if not part.startswith("[Window][Scene]")]
+    assert len(old) == len(sections) - 1  # the layout as an editor before the Scene window kept it
+    path.write_text("\n\n".join(old))
+    second = Scene()
+    try:
+        for _ in range(3):
+            second.frame()
+        dock = second.session.editor.dock
+        central = imgui.internal.dock_builder_get_central_node(dock.id)
+        assert imgui.internal.find_window_by_name("Scene").dock_id == central.id_
+        assert second.session.viewport.size is not None
+    finally:
+        second.close()
+        path.unlink()
+
+
+@pytest.mark.parametrize("settings", [{"msaa": 4}, {"post": frozenset({"bloom", "fxaa"})}])
+def test_the_viewport_with_msaa_and_post_effects_is_validation_clean(tmp_path, settings):
+    from test_editor import headless
+
+    result = headless(tmp_path, editor=True, frames=3, **settings)  # (asserts no validation message)
+    x0, y0, x1, y1 = (round(v) for v in result.editor.editor.scene.rect)
+    assert result.pixels[y0:y1, x0:x1, :3].std() > 5
