@@ -85,3 +85,17 @@ def test_without_a_window_the_ui_draws_over_the_target():
     assert order(graph) == ["forward", "tone_map", "imgui", "readback"]
     assert "window" not in graph.describe()
     assert barriers(graph, "readback") == {"target": ("COLOR_ATTACHMENT_OPTIMAL", "TRANSFER_SRC_OPTIMAL")}
+
+
+def test_the_pointer_is_measured_from_the_games_view():
+    """In the editor the game's view is the Scene window (InputState.view): a game's pointer is
+    measured from its corner, and its size is the view's (the mouse stays the window's)."""
+    from ecs_engine.systems import ActionMap, InputState
+
+    state = InputState(mouse=(350.0, 120.0), viewport=(1280.0, 720.0))
+    actions = ActionMap({}, state)
+    assert actions.pointer() == (350.0, 120.0) and state.in_view() == ((350.0, 120.0), (1280.0, 720.0))
+    state.view = (300.0, 20.0, 677.0, 483.0)
+    assert actions.pointer() == (50.0, 100.0)
+    assert state.in_view() == ((50.0, 100.0), (677.0, 483.0))
+    assert state.mouse == (350.0, 120.0)
