@@ -23,6 +23,7 @@ from typing import Any
 
 from ...gpu.array_image import nearest_sampler
 from ...gpu.memory import Image
+from ...gpu.owned import Owned
 from ...gpu.scene_attachments import Form, SceneAttachments, TargetForm
 from ..passes.output_frame import WindowImage
 
@@ -102,6 +103,7 @@ class EditorViewport:
         self.target: ViewportTarget | None = None
         self.remade = 0  # targets made (the tests count them)
         self._sampler: Any = None
+        self._owned: Owned | None = None  # the sampler's scope
         self._ui: Any = None  # the ImGuiRenderer the image is registered with, and its id
         self._tex_id: int | None = None
 
@@ -123,7 +125,10 @@ class EditorViewport:
 
     def _nearest(self) -> Any:
         if self._sampler is None:  # at 1:1 a nearest sampler copies each texel to its pixel
-            self._sampler = nearest_sampler(self.device)
+            device = self.device
+            owned = self._owned = self._owned or Owned(device)
+            sampler = nearest_sampler(device)
+            self._sampler = owned.add(sampler, lambda: device.vk.vkDestroySampler(device.handle, sampler, None))
         return self._sampler
 
     def texture(self, ui: Any, window: Any) -> tuple[int, tuple[float, float]]:
@@ -157,7 +162,9 @@ class EditorViewport:
         output = r.output
         r.target = output.target = target
         try:
-            return r.draw_scene(world, readback, None, size, *rest)
+            # the target's own image when the caller named none (its form may change here, as
+            # render's own path does), else named: the form asked stays for this frame
+            return r.draw_scene(world, readback, None if framebuffer is None else target.color, size, *rest)
         finally:
             r.target = output.target = window
             target.window_image = None
@@ -167,6 +174,6 @@ class EditorViewport:
         if self.target is not None:
             self.target.destroy()
             self.target = None
-        if self._sampler is not None:
-            self.device.vk.vkDestroySampler(self.device.handle, self._sampler, None)
-            self._sampler = None
+        if self._owned is not None:
+            self._owned.destroy()
+            self._owned = self._sampler = None
