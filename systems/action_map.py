@@ -194,9 +194,9 @@ class ActionMap:
         return max(-1.0, min(1.0, total))
 
     def pointer(self) -> tuple[float, float] | None:
-        """The mouse position (pixels from the top left of `input.viewport`), None while the UI
-        has the mouse."""
-        return None if self.input.mouse_captured_by_ui else self.input.mouse
+        """The mouse position (pixels from the top left of the game's view: `input.view`, the
+        editor's Scene window, else `input.viewport`), None while the UI has the mouse."""
+        return None if self.input.mouse_captured_by_ui else self.input.in_view()[0]
 
     # --------------------------------------------------------------------- file
     def to_json(self) -> dict[str, Any]:

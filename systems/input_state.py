@@ -106,6 +106,16 @@ class InputState:
     dead_zone: float = DEAD_ZONE
     gamepads: dict[int, Gamepad] = field(default_factory=dict)
     viewport: tuple[float, float] = (0.0, 0.0)  # the size the mouse position is measured in (0: unknown)
+    # the game's view within it: (x0, y0, width, height) in the mouse's units (the editor's Scene
+    # window), None: the whole `viewport`; `mouse` stays the window's (its deltas must not jump)
+    view: tuple[float, float, float, float] | None = None
+
+    def in_view(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        """The mouse from the view's top left, and the view's size (see `view`)."""
+        if self.view is None:
+            return self.mouse, self.viewport
+        x0, y0, w, h = self.view
+        return (self.mouse[0] - x0, self.mouse[1] - y0), (w, h)
 
     @staticmethod
     def check(name: str) -> str:

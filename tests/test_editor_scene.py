@@ -12,16 +12,16 @@ from ecs_engine.render.picking import pick
 
 
 def central_hit(scene):
-    """A pixel in the scene's central node with an entity drawn under it, and that entity."""
+    """A point of the Scene window with an entity drawn under it, and that entity (picked in
+    the viewport's own pixels: its image is the whole view, no region)."""
     editor, world = scene.session.editor, scene.state.world
-    x0, y0, x1, y1 = editor.dock.central
+    x0, y0, w, h = editor.scene.view()
     for fy in np.linspace(0.3, 0.7, 9):
         for fx in np.linspace(0.3, 0.7, 9):
-            x, y = x0 + fx * (x1 - x0), y0 + fy * (y1 - y0)
-            hit = pick(world, scene.gpu.meshes, x, y, W, H, editor.dock.region(W, H))
+            hit = pick(world, scene.gpu.meshes, fx * w, fy * h, w, h)
             if hit is not None:
-                return (x, y), hit.entity
-    raise AssertionError("nothing drawn in the central node")
+                return (x0 + fx * w, y0 + fy * h), hit.entity
+    raise AssertionError("nothing drawn in the Scene window")
 
 
 def click(scene, at) -> None:
@@ -35,6 +35,8 @@ def test_a_click_in_the_scene_selects_what_is_drawn_there_not_through_a_panel(sc
     for _ in range(3):
         scene.frame()
     at, entity = central_hit(scene)
+    scene.frame(mouse=at)
+    assert scene.io.want_capture_mouse and editor.scene.hovered  # ImGui's window, yet the scene's
     click(scene, at)
     assert editor.selected == entity and editor.picked == entity
     editor.selected = None
@@ -75,10 +77,11 @@ def test_the_gizmo_drags_the_selection_and_undo_redo_restore_it(scene):
     # the translate gizmo's centre handle moves the selection in the screen's plane
     from ecs_engine.render.frame.camera import camera_matrices
 
-    cam = camera_matrices(world, W / H, editor.dock.region(W, H))
+    x0, y0, w, h = editor.scene.view()  # the gizmo's rectangle: the viewport's plain projection
+    cam = camera_matrices(world, w / h)
     view = np.asarray(cam.view, np.float64)[:3, :3] @ (before - cam.position)
     clip = np.asarray(cam.projection, np.float64) @ np.r_[view, 1.0]
-    handle = ((clip[0] / clip[3] + 1) * 0.5 * W, (clip[1] / clip[3] + 1) * 0.5 * H)
+    handle = (x0 + (clip[0] / clip[3] + 1) * 0.5 * w, y0 + (clip[1] / clip[3] + 1) * 0.5 * h)
     scene.frame(mouse=handle)
     scene.frame(down=True)
     for dx in (10, 20, 30, 40):
@@ -183,10 +186,17 @@ def test_the_gizmo_draws_over_the_scene_not_in_imguis_fallback_window(scene):
     from imgui_bundle import imgui
 
     editor, world = scene.session.editor, scene.state.world
+    scene.frame()
+    scene.frame()
+    window = imgui.internal.find_window_by_name("Scene")
+    bare = window.draw_list.vtx_buffer.size()  # the image alone
+    lists = imgui.get_draw_data().cmd_lists_count  # an empty background list is not among them
     editor.selected = int(world.query(Transform).entities()[0])
     scene.frame()
     scene.frame()
     debug = imgui.internal.find_window_by_name("Debug##Default")
     assert debug is None or not debug.was_active
-    drawn = imgui.get_draw_data()
-    assert drawn.cmd_lists_count >= 2  # the background list (the gizmo) and the windows'
+    # the gizmo is in the Scene window's list: over its image, clipped to it
+    window = imgui.internal.find_window_by_name("Scene")
+    assert window.draw_list.vtx_buffer.size() > bare + 100
+    assert imgui.get_draw_data().cmd_lists_count == lists  # nothing in the background list

@@ -68,10 +68,16 @@ class ShadowsEditor(Scene):
         return int(self.world.query(kind, write=()).entities()[0])
 
     def image_commands(self) -> list[int]:
-        """The texture ids of the last UI's commands that draw a registered (user) image."""
+        """The texture ids of the last UI's commands that draw a registered (user) image (not
+        the Scene window's: the viewport's image, app/editor_viewport.py)."""
         data = self.imgui.get_draw_data()
         ids = [int(cmd.get_tex_id()) for dl in data.cmd_lists for cmd in dl.cmd_buffer if cmd.elem_count]
-        return [i for i in ids if i in self.overlay.images]
+        scene = self.session.viewport._tex_id
+        return [i for i in ids if i in self.overlay.images and i != scene]
+
+    def thumbnails_drawn(self) -> int:
+        """Registered images the overlay drew, less the Scene window's (the viewport's image)."""
+        return self.overlay.counts.images - (self.session.viewport.size is not None)
 
     def thumbnails(self) -> dict[int, np.ndarray]:
         """Layer -> the screenshot's pixels (RGB) inside its thumbnail (a pixel's margin left out)."""
@@ -110,7 +116,7 @@ def test_each_casting_light_shows_its_shadow_map_layers(scene, tmp_path):
         assert sorted(drawn) == light_layers(scene, eid) and len(drawn) == count
         # ImGui's commands name the registered ids, one command a layer, and the overlay draws them
         assert sorted(scene.image_commands()) == sorted(drawn.values())
-        assert scene.overlay.counts.images == count
+        assert scene.thumbnails_drawn() == count
         if kind is DirectionalLight:
             Image.fromarray(scene.gpu.target.pixels()[..., :3]).save(tmp_path / "sun_shadow_maps.png")
             sun = scene.thumbnails()
@@ -133,20 +139,20 @@ def test_new_maps_are_registered_again_and_the_old_ids_dropped(scene):
     scene.select(sun)
     shadows = scene.state.renderer.shadows
     maps, old = shadows.maps, dict(scene.editor.shadow_maps.drawn)
-    assert maps.resolution == 256 and len(old) == 4 and scene.overlay.counts.images == 4
+    assert maps.resolution == 256 and len(old) == 4 and scene.thumbnails_drawn() == 4
     # the UI is no longer rebuilt (the rate limit): the last one's draws name the old maps' ids
     scene.session.min_interval_s = 1e9
     scene.editor.set(world, sun, Shadow, resolution=512)
     scene.frame()  # the maps are made anew in this frame's render: the overlay drops their ids
     assert shadows.maps is not maps and maps.destroyed and shadows.maps.resolution == 512
     assert not any(tex_id in scene.overlay.images for tex_id in old.values())
-    assert scene.overlay.counts.images == 0
+    assert scene.thumbnails_drawn() == 0
     scene.frame()
     scene.session.min_interval_s = 0.0
     scene.frame()  # built again: the new maps' layers registered under new ids
     new = scene.editor.shadow_maps.drawn
     assert sorted(new) == sorted(old) and not set(new.values()) & set(old.values())
-    assert scene.overlay.counts.images == 4 and sorted(scene.image_commands()) == sorted(new.values())
+    assert scene.thumbnails_drawn() == 4 and sorted(scene.image_commands()) == sorted(new.values())
     grey = [p[..., 0] for p in scene.thumbnails().values()]
     assert any(g.max() - g.min() > 30 for g in grey)
     for _ in range(4):  # the dropped ids' sets go back to the pool once no frame in flight reads them
@@ -159,13 +165,13 @@ def test_a_light_without_a_shadow_shows_no_thumbnails(scene):
     scene.frame()
     spot = scene.light(SpotLight)
     scene.select(spot)
-    assert scene.overlay.counts.images == 1
+    assert scene.thumbnails_drawn() == 1
     world.remove(spot, Shadow)  # what the "casts shadows" checkbox does
     scene.frame()
     scene.frame()
-    assert scene.editor.shadow_maps.drawn == {} and scene.overlay.counts.images == 0
+    assert scene.editor.shadow_maps.drawn == {} and scene.thumbnails_drawn() == 0
     assert scene.image_commands() == []
     assert spot not in {v.entity for v in scene.state.renderer.shadows.last_views}
     # the sun still casts: selecting it shows its cascades
     scene.select(scene.light(DirectionalLight))
-    assert scene.overlay.counts.images == 4
+    assert scene.thumbnails_drawn() == 4

@@ -33,6 +33,7 @@ from .editor_lights import LIGHT_LABELS, LIGHT_SECTIONS, ShadowMapImages
 from .editor_materials import MESH_LABELS, MaterialsPanel, mesh_section
 from .editor_post import post_toggles
 from .editor_tree import HierarchyPanel
+from .editor_viewport import SceneWindow, scene_input
 from .settings import Settings
 
 if TYPE_CHECKING:
@@ -86,6 +87,14 @@ class Editor(BrowserPanel):
         self.picked: int | None = None  # what the last click in the scene picked (None: nothing)
         self.tree = HierarchyPanel()
         self.files = FileMenu()
+        self.scene = SceneWindow(imgui)  # the scene's window in the dock (editor_viewport.py)
+        self.viewport: Any = None  # the renderer's EditorViewport (show_scene), None: no Scene window
+        self.viewport_ui: Any = None  # (the ImGuiRenderer, a callable giving the window target)
+
+    def show_scene(self, viewport: Any, ui: ImGuiRenderer, window: Any) -> None:
+        """Show the scene in a Scene window: the renderer's `viewport` (render/frame/viewport.py)
+        drawn by `ui`; `window()` gives the renderer's window target (its size bounds the image)."""
+        self.viewport, self.viewport_ui = viewport, (ui, window)
 
     def show_shadow_maps(self, renderer: Renderer, overlay: ImGuiRenderer) -> None:
         """Show the shadow maps of `renderer` (render/frame/renderer.py's Renderer) in the light sections,
@@ -149,35 +158,7 @@ class Editor(BrowserPanel):
         self._scene_input(world)
 
     def _scene_input(self, world: World) -> None:
-        """The gizmo over the selection, a click in the scene picks, Ctrl+Z / Ctrl+Y undo and redo,
-        W / E / R pick the gizmo's operation (while no text field has the keyboard)."""
-        imgui = self.imgui
-        io = imgui.get_io()
-        width, height = io.display_size.x, io.display_size.y
-        eid = self.selected
-        self.gizmo.used = False
-        if eid is not None and world.is_alive(eid) and world.has(eid, Transform):
-            self.gizmo.draw(world, eid, self.history, self.dock.central or (0.0, 0.0, width, height))
-        if not io.want_text_input:
-            ctrl = imgui.Key.mod_ctrl
-            if imgui.is_key_chord_pressed(ctrl | imgui.Key.z):
-                self.history.undo(world)
-            elif imgui.is_key_chord_pressed(ctrl | imgui.Key.y) or imgui.is_key_chord_pressed(
-                ctrl | imgui.Key.mod_shift | imgui.Key.z
-            ):
-                self.history.redo(world)
-            for key, operation in zip((imgui.Key.w, imgui.Key.e, imgui.Key.r), OPERATIONS):
-                if not io.key_ctrl and imgui.is_key_pressed(key, False) and not io.want_capture_keyboard:
-                    self.gizmo.operation = operation
-        if imgui.is_mouse_clicked(0) and not io.want_capture_mouse and not self.gizmo.used and self.meshes is not None:
-            from ..render.picking import pick
-
-            mouse = io.mouse_pos
-            size = (max(width, 1.0), max(height, 1.0))
-            hit = pick(world, self.meshes, mouse.x, mouse.y, *size, self.dock.region(*size))
-            self.picked = None if hit is None else hit.entity
-            if hit is not None:
-                self.selected = hit.entity
+        scene_input(self, world)  # editor_viewport.py
 
     def _settings_window(self, world: World, stats: SceneStats) -> None:
         imgui = self.imgui

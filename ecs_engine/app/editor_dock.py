@@ -1,5 +1,5 @@
-"""The editor's docked layout: a dock space over the whole window whose central node shows the
-scene (the renderer draws the view for that rectangle: `region`), with the panels docked around it:
+"""The editor's docked layout: a dock space over the whole window whose central node holds the
+Scene window (editor_viewport.py: the renderer's viewport image), with the panels docked around it:
 scene settings down the left, the inspector down the right, and under the scene the entity
 browser and the hierarchy (tabs) beside the Perf window. In a window narrower than `WIDE` the
 space under the scene would give those two panels under 250 pixels each, so the browser goes
@@ -24,6 +24,7 @@ BOTTOM_RIGHT = ("Perf",)
 PANEL_WIDTH = 300.0  # pixels the side columns get at least (up to 40% of the window each)
 WIDE = 1200.0  # pixels: from this width the browser and Perf go under the scene
 DOCKSPACE = "editor dock space"
+SCENE = "Scene"  # editor_viewport.py's window
 
 
 def config_dir() -> Path:
@@ -106,4 +107,7 @@ class DockLayout:
         for names, node in ((LEFT, left), (RIGHT, right), (BOTTOM_LEFT, browser), (BOTTOM_RIGHT, perf)):
             for name in names:
                 internal.dock_builder_dock_window(name, node)
+        central = internal.dock_builder_get_central_node(self.id)
+        if central is not None:  # the scene's window (editor_viewport.py) fills the central node
+            internal.dock_builder_dock_window(SCENE, central.id_)
         internal.dock_builder_finish(self.id)

@@ -65,8 +65,16 @@ class Gizmo:
         self.local = False  # rotate and translate along the entity's own axes
         self.used = False  # the gizmo took the mouse this frame (the scene click must not pick)
 
-    def draw(self, world: World, entity: int, history: History, rect: tuple[float, float, float, float]) -> None:
-        """The gizmo over `entity`, the scene shown in `rect` (x0, y0, x1, y1 pixels)."""
+    def draw(
+        self,
+        world: World,
+        entity: int,
+        history: History,
+        rect: tuple[float, float, float, float],
+        drawlist: Any = None,
+    ) -> None:
+        """The gizmo over `entity`, the scene shown in `rect` (x0, y0, x1, y1 pixels), drawn into
+        `drawlist` (the Scene window's: clipped to it, over its image) or the background's."""
         g = self.g
         g.begin_frame()
         self.used = False
@@ -79,10 +87,10 @@ class Gizmo:
         g.set_orthographic(int(camera.projection) == ORTHOGRAPHIC)
         x0, y0, x1, y1 = (float(v) for v in rect)
         g.set_rect(x0, y0, x1 - x0, y1 - y0)
-        # under the panels, over the scene (the central node has no window of its own); with no
-        # list given, ImGuizmo draws into the current window: outside any window, ImGui's
-        # fallback "Debug" window, which then shows and clips the gizmo to itself
-        g.set_drawlist(self.imgui.get_background_draw_list())
+        # without a Scene window: under the panels, over the scene drawn under the whole window;
+        # with no list given, ImGuizmo draws into the current window: outside any window,
+        # ImGui's fallback "Debug" window, which then shows and clips the gizmo to itself
+        g.set_drawlist(drawlist if drawlist is not None else self.imgui.get_background_draw_list())
         view = np.eye(4)
         view[:3, :3] = rotation_matrix(eye.rotation)[:3, :3].T  # the camera at the origin
         t = world.get(entity, Transform)

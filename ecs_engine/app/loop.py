@@ -137,7 +137,10 @@ def run_frames(
             keys = held_keys(session)  # a window's own InputState, or the script's headless
             if editor is not None:
                 keys.keyboard_captured_by_ui = editor.wants_keyboard  # keys typed into the UI
-                keys.mouse_captured_by_ui = editor.wants_mouse  # over a UI window, or dragging one
+                # over a UI window, or dragging one; the Scene window's image is the game's view
+                scene = getattr(editor, "scene", None)
+                keys.mouse_captured_by_ui = editor.wants_mouse and not (scene is not None and scene.hovered)
+                keys.view = scene.view() if scene is not None else None
             if source.window is None:  # headless: a script's mouse is in the offscreen image's pixels
                 keys.viewport = (float(options.width), float(options.height))
             if script is not None:

@@ -5,8 +5,8 @@
         world.destroy(hit.entity)                          # hit.point, hit.distance too
 
 It is render/picking.py's ray against the meshes the renderer draws, with the view's size taken
-from the input (the window's size in a window, the image's headless), so a click's position is
-all a game passes.
+from the input (the window's size in a window, the image's headless, the Scene window's in the
+editor: InputState.view), so a click's position is all a game passes.
 """
 
 from __future__ import annotations
@@ -35,7 +35,8 @@ class Picker:
         state = world.resources.get(InputState)
         if state is None or state.mouse_captured_by_ui:
             return None
-        return self.pick(world, *state.mouse)
+        at, size = state.in_view()  # in the editor: the Scene window's part of the window
+        return self.pick(world, at[0], at[1], size)
 
 
 def _viewport(world: World) -> tuple[float, float]:

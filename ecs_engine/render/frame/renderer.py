@@ -44,6 +44,7 @@ from .replay import FrameReplay
 from .resources import FrameResources, frame_sets
 from .scene_passes import ScenePasses
 from .target_forms import TargetForms
+from .viewport import EditorViewport
 from .views import Views, several_views
 
 
@@ -92,6 +93,7 @@ class Renderer(FrameDrawing, PathSettings, TargetForms, CullingSetting):
         self._jobs_generation = jobs.generation if jobs is not None else 0
         self.culling = culling  # its method (culling_method; True: frustum; False: none): CullingSetting
         self.region: tuple[float, float, float, float] | None = None  # the view's part of the target (camera.py)
+        self.viewport: EditorViewport | None = None  # the editor's Scene window: the scene drawn there (viewport.py)
         self.extractor = FrameExtractor(lambda: self.jobs.threads if self.jobs is not None else 1, chunk_rows)
         self.views = Views(self.extractor.threads)  # several cameras' views (views.py); nothing made yet
         self._native = native_recorder  # compiling one costs about a second: callers may share one
@@ -225,7 +227,25 @@ class Renderer(FrameDrawing, PathSettings, TargetForms, CullingSetting):
         """Record and submit one frame (`dt`: seconds since the last, for temporal culling).
         Headless targets read the image back when asked. The world is read by the extract stage
         alone (self.materials, self.extract); everything after it reads the frame's snapshot.
-        Cameras with a Viewport draw each into its rectangle of the window (views.py)."""
+        Cameras with a Viewport draw each into its rectangle of the window (views.py). With the
+        editor's `viewport` sized, the scene is drawn into its image and the UI into the window
+        (viewport.py)."""
+        viewport = self.viewport
+        if viewport is not None and self.overlay is not None and viewport.area(self.target) is not None:
+            return viewport.draw(self, world, readback, framebuffer, extent, wait, signal, dt)
+        return self.draw_scene(world, readback, framebuffer, extent, wait, signal, dt)
+
+    def draw_scene(
+        self,
+        world: World,
+        readback: bool,
+        framebuffer: Any,
+        extent: tuple[int, int] | None,
+        wait: Any,
+        signal: Any,
+        dt: float | None,
+    ) -> FrameStats:
+        """`render` into the target as it stands (the viewport's while it draws)."""
         if self.views.on or several_views(world):
             drawn = self.views.draw(self, world, readback, framebuffer, extent, wait, signal, dt)
             if drawn is not None:
@@ -248,7 +268,7 @@ class Renderer(FrameDrawing, PathSettings, TargetForms, CullingSetting):
         if self._set_aside is not None:
             self._set_aside.destroy()
         names = "views scene output per_frame shadows environment texture_pages lights ray_shadows pool set_layout"
-        for name in [*names.split(), "secondaries", "frames"]:
+        for name in ["viewport", *names.split(), "secondaries", "frames"]:
             made = getattr(self, name, None)
             for part in made if isinstance(made, list) else [made] if made is not None else []:
                 part.destroy()

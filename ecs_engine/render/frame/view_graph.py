@@ -100,16 +100,7 @@ class ToneMapView(Pass):
 
 
 class OverlayView(OverlayOver):
-    """The overlay over the whole target, not the view's rectangle."""
-
-    def record(self, cb: Any, ctx: Any) -> None:
-        overlay = self.frame.overlay
-        if overlay is None:
-            return
-        width, height = ctx.image("target").extent
-        ctx.begin_rendering(colors=("target",))
-        overlay.record(cb, self.frame.slot, width, height)
-        ctx.end_rendering()
+    """The overlay over the whole target, not the view's rectangle (OverlayOver's own now)."""
 
 
 class ViewGraph(OutputGraph):

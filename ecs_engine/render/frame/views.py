@@ -127,7 +127,10 @@ class Views:
             r.overlay = None
             for i, ((view, handle), data) in enumerate(zip(drawn, datas, strict=True)):
                 first, last = i == 0, i == len(drawn) - 1
-                semaphores = (wait if first else None, signal if last else None)
+                # the acquire's wait goes with the first submit that touches the window's image:
+                # the last view's where its UI draws the window (the editor's viewport: viewport.py)
+                waits = last if getattr(target, "window_image", None) is not None else first
+                semaphores = (wait if waits else None, signal if last else None)
                 w, h = view.rect[2:]
                 if handle is not None:  # into its own target, copied into the texture's layer
                     output.graph = self._texture_graph(r, view, handle)

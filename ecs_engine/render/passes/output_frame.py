@@ -1,14 +1,26 @@
 """The output graph's frame (what its passes draw with this frame) and its two passes of its
-own: the tone map into the target (or the first ldr image) and the UI over the target
-(render/passes/output_graph.py builds the graph)."""
+own: the tone map into the target (or the first ldr image) and the UI over the target, or, with
+a `window` (the editor's viewport: render/frame/viewport.py), the UI into the window with the
+target sampled as one of its images (render/passes/output_graph.py builds the graph)."""
 
 from __future__ import annotations
 
 from collections.abc import Hashable
-from typing import Any
+from typing import Any, NamedTuple
 
 from ..graph import UNREPLAYABLE, Access, ImageDesc, Load, Pass
 from .readback import Copy
+
+
+class WindowImage(NamedTuple):
+    """The window's image of a frame whose target is a texture the UI shows (the editor's
+    viewport): the overlay draws it whole, the readback reads it, it is presented."""
+
+    image: Any
+    view: Any
+    format: int
+    extent: tuple[int, int]
+    final_layout: int  # a VkImageLayout: the window target's (TRANSFER_SRC headless, PRESENT_SRC)
 
 
 class OutputFrame:
@@ -22,6 +34,7 @@ class OutputFrame:
     reads: tuple[Any, ...] | list[Any] = ()  # (name, Access) forward reads of the scene's passes
     background: tuple[float, float, float] = (0.0, 0.0, 0.0)  # fixed per renderer
     readback: Copy | None = None  # the target's record_copy on a frame read back
+    window: WindowImage | None = None  # the window the UI draws into, the target sampled (see WindowImage)
     # the deferred form's (render/passes/deferred_passes.py; output_passes.py sets them)
     chunks: tuple[Any, ...] | list[Any] = ()  # the opaque chunks' secondaries, in the G-buffer
     frame_set: Any = None  # the slot's frame descriptor set
@@ -59,7 +72,9 @@ class ToneMapInto(Pass):
 
 
 class OverlayOver(Pass):
-    """The UI over the finished target (loaded, blended over it); nothing without an overlay."""
+    """The UI over the finished target (loaded, blended over it); nothing without an overlay.
+    With a `window` the UI draws the window instead: cleared to the background, the panels and
+    the target as an image among them (sampled: the graph's barrier takes it to SHADER_READ_ONLY)."""
 
     name = "imgui"
 
@@ -67,18 +82,25 @@ class OverlayOver(Pass):
         self.frame = frame
 
     def setup(self, builder: Any) -> None:
-        if self.frame.overlay is not None:  # none: culled, with its barrier
+        frame = self.frame
+        if frame.overlay is None:  # none: culled, with its barrier
+            return
+        if frame.window is not None:
+            builder.read("target", Access.FRAGMENT_SAMPLED)
+            builder.write("window", Access.COLOR_WRITE, load=Load.CLEAR, clear=(*frame.background, 1.0))
+        else:
             builder.write("target", Access.COLOR_READ_WRITE, load=Load.LOAD)
 
     def declares(self) -> Hashable:
-        return self.frame.overlay is not None
+        return (self.frame.overlay is not None, self.frame.window is not None)
 
     def record(self, cb: Any, ctx: Any) -> None:
         overlay = self.frame.overlay
         if overlay is None:
             return
-        width, height = ctx.extent
-        ctx.begin_rendering(colors=("target",))
+        into = "window" if self.frame.window is not None else "target"
+        width, height = ctx.image(into).extent  # the whole image (a camera view's graph: not its extent)
+        ctx.begin_rendering(colors=(into,))
         overlay.record(cb, self.frame.slot, width, height)
         ctx.end_rendering()
 

@@ -7,9 +7,11 @@ per target form (render/frame/output_passes.py; graph_plan.md step 7, first part
     tone_map   "hdr" -> "target", or -> "ldr_0" (a transient of the target's format) with post
                effects of the "ldr" stage on (post/registry.py: FXAA)
     <effect i> "ldr_i" -> "ldr_i+1", the last one -> "target"
-    imgui      the overlay over "target" (loaded: drawn on top); records nothing without one
-    readback   "target" copied to the host (render/passes/readback.py): every frame of a
-               headless target (copying only when asked), a swapchain's reading-back frames
+    imgui      the overlay over "target" (loaded: drawn on top); records nothing without one;
+               with a window image (the editor's viewport: frame/viewport.py) "target" is
+               sampled and the UI draws "window" (output_frame.py), the graph's output
+    readback   "target" (or "window") copied to the host (render/passes/readback.py): every
+               frame of a headless target (copying when asked), a swapchain's reading-back frames
 
 In the deferred form the scene's rendering follows the G-buffer, ray shadow, lighting and
 weighted transparency passes (render/passes/deferred_passes.py).
@@ -21,10 +23,10 @@ images and "ldr_i" are the graph's transients (aliased where their lifetimes all
 the target's image for this frame, imported with its old contents discarded (UNDEFINED) after
 the acquire semaphore's wait (colour output) and the last frame's readback copy of the same
 image (transfer), and left in the target's final layout (`final_layout`: TRANSFER_SRC
-headless, PRESENT_SRC for a swapchain). The graph places every barrier. Each ldr effect adds
-its own passes (`effect.add(graph, source, target, create)`), so the graphs are made again when
-the effects change; one graph is kept per (form, samples, target format, rays, weighted
-transparency, hdr effects and extent), the last two only with hdr effects on.
+headless, PRESENT_SRC for a swapchain, SHADER_READ_ONLY for the viewport). The graph places
+every barrier. Each ldr effect adds its own passes (`effect.add(graph, source, target,
+create)`), so the graphs are made again when the effects change; one graph is kept per (form,
+samples, target format, rays, weighted transparency, hdr effects and extent, window or not).
 """
 
 from __future__ import annotations
@@ -44,7 +46,8 @@ from .deferred_passes import (
     RayShadowsPass,
 )
 from .forward import Forward, PostCall
-from .output_frame import OutputFrame, OverlayOver, ToneMapInto
+from .output_frame import OutputFrame, OverlayOver, ToneMapInto, WindowImage
+from .output_imports import OutputImports, _final_layout  # noqa: F401 (view_graph.py imports it here)
 from .readback import Readback
 
 #: the graph's pass names -> the names the frame's timing marks have always used
@@ -57,12 +60,7 @@ _MARKS = {
 }
 
 
-def _final_layout(vk: Any, layout: int) -> str:
-    """The graph's name of a target's final layout: readback's (headless) or present's."""
-    return "TRANSFER_SRC_OPTIMAL" if layout == vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL else "PRESENT_SRC_KHR"
-
-
-class OutputGraph:
+class OutputGraph(OutputImports):
     """The output graphs (see the module) of one list of ldr effects (maybe none)."""
 
     def __init__(self, output: Any, effects: list[Any]) -> None:
@@ -79,6 +77,7 @@ class OutputGraph:
         # imports then (the slots alternate: each comes round with its own buffers; gone with the graph)
         self._kept: dict[int, tuple[tuple, tuple, FrameGraph, tuple]] = {}
         self._copies = False  # this frame's readback copies the target
+        self._extent = (0, 0)  # this prepare's (the attachments' imports)
 
     def _make(self, form: Form, samples: int, color_format: int, ray: bool, oit: bool, post: Any) -> FrameGraph:
         device = self.output.device
@@ -105,7 +104,7 @@ class OutputGraph:
                 for i, effect in enumerate(self.effects):
                     effect.add(graph, names[i], names[i + 1], None if names[i + 1] == "target" else desc)
             graph.add_pass(OverlayOver(self.frame))
-            graph.output("target")
+            graph.output("window" if self.frame.window is not None else "target")
         except BaseException:
             graph.destroy()
             raise
@@ -120,6 +119,7 @@ class OutputGraph:
         `rendering` (output_passes.OutputRendering) names the target's image; `readback`:
         copy the target to the host. When nothing it reads changed since the slot's last
         prepare, that one's imports are brought back instead of made again (_again)."""
+        self.frame.window = self._window(overlay)
         inputs = self._inputs(state, rendering, overlay) if not readback else None
         graph = self._again(inputs, slot)
         if graph is not None:
@@ -159,7 +159,14 @@ class OutputGraph:
             scene.signature() if scene is not None else None,
             self._more_inputs(),
             overlay is not None,
+            self.frame.window,
         )
+
+    def _window(self, overlay: Any) -> WindowImage | None:
+        """The window the UI draws the target into this frame (a target that is the editor's
+        viewport: frame/viewport.py), or None: the UI draws over the target (a camera view's
+        frame before the last has no UI, so no window either)."""
+        return getattr(self.output.target, "window_image", None) if overlay is not None else None
 
     def _more_inputs(self) -> Any:
         """What a subclass's imports follow from besides these (a camera view's placement)."""
@@ -223,7 +230,8 @@ class OutputGraph:
         post = self.output.post if form != Form.DIRECT else []
         # the effects' passes follow the extent (bloom's chain) and the list (made again with it)
         post_shape = (extent, tuple(id(p) for p in post)) if post else None
-        shape = (form, samples, color_format, ray, oit, post_shape)
+        window = self.frame.window
+        shape = (form, samples, color_format, ray, oit, post_shape, window is not None)
         recreations = getattr(target, "recreations", 0)
         if recreations != self._recreations:
             # new attachments, whose views may reuse destroyed ones' handle values, which the
@@ -233,12 +241,16 @@ class OutputGraph:
         graph = self.graphs.get(shape)
         if graph is None:
             self._drop([k for k in self.graphs if k[5] != post_shape or k[:3] == shape[:3]])  # outdone: gone
-            graph = self.graphs[shape] = self._make(*shape)
+            graph = self.graphs[shape] = self._make(*shape[:6])  # (the window: self.frame's)
         self._copies = readback and target.take_readback()  # a swapchain's: only for the image asked
-        headless = target.final_layout == self.output.vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
+        final = window.final_layout if window is not None else target.final_layout
+        headless = final == self.output.vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
         self._place_readback(graph, self._copies or headless)
+        self._extent = extent
         self._import_attachments(graph, form, attachments)
         self._import_target(graph, rendering, extent)
+        if window is not None:
+            self._import_window(graph, window)
         self._import_scene(graph)
         self._set_frame(graph, state, rendering, tone_map, overlay, slot, readback)
         if inputs is not None:  # this slot's imports, for its next frame with the same inputs
@@ -345,7 +357,7 @@ class OutputGraph:
         screenshot frame and the one after)."""
         has = graph.has_pass(Readback.name)
         if wanted and not has:
-            graph.add_pass(Readback(self.frame))
+            graph.add_pass(Readback(self.frame, "window" if self.frame.window is not None else "target"))
         elif has and not wanted:
             graph.remove_pass(Readback.name).destroy()
 
@@ -357,51 +369,6 @@ class OutputGraph:
         if kept is None or kept[0] is not compiled or kept[1] is not attachments:
             kept = self._views = (compiled, attachments, GBufferViews(attachments, compiled.transients.images))
         return kept[2]
-
-    def _import_attachments(self, graph: FrameGraph, form: Form, attachments: Any) -> None:
-        """The target's SceneAttachments: depth, the HDR colour and, with MSAA, the multisampled
-        one's resolve (single-sample: the multisampled colour and depth are transients); none in
-        the direct form (its depth is a transient).
-        Every pass clears what it writes first and nothing after the graph reads them: their
-        old contents go (UNDEFINED) and they have no final layout (UNDEFINED)."""
-        if form == Form.DIRECT:
-            return
-        images = attachments.images
-        named = [("hdr", images[-1])]
-        if attachments.samples == 1:  # with MSAA depth and colour are forward's transients
-            named.append(("depth", images[0]))
-        for name, image in named:
-            token = (id(image), image.handle, image.width, image.height)
-            if graph.reuse_import(name, token):
-                continue
-            graph.import_image(
-                name,
-                handle=image.handle,
-                view=image.view,
-                format=image.format,
-                extent=(int(image.width), int(image.height)),
-                layout_before="UNDEFINED",
-                layout_after="UNDEFINED",
-                token=token,
-            )
-
-    def _import_target(self, graph: FrameGraph, rendering: Any, extent: tuple[int, int]) -> None:
-        """The target's image, imported with its format's value (FXAA's pipeline is made for it)."""
-        target = self.output.target
-        token = (rendering.image, rendering.view, extent, target.color_format, target.final_layout)
-        if graph.reuse_import("target", token):
-            return
-        graph.import_image(
-            "target",
-            handle=rendering.image,
-            view=rendering.view,
-            format=self.output.target.color_format,
-            extent=extent,
-            layout_before="UNDEFINED",  # every pixel is written: the old contents go
-            layout_after=_final_layout(self.output.vk, self.output.target.final_layout),
-            stage_before=("COLOR_ATTACHMENT_OUTPUT", "ALL_TRANSFER"),  # acquire's wait, last readback
-            token=token,
-        )
 
     def describe(self) -> str:
         return self.graph.describe() if self.graph is not None and self.graph.compiled is not None else ""

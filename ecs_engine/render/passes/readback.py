@@ -20,15 +20,16 @@ Copy = Callable[[Any, Any, tuple[int, int]], None]
 
 
 class Readback(Pass):
-    """Reads "target" by transfer; copies it when `frame.readback` (a Copy) is set."""
+    """Reads `source` ("target", or "window" where the UI draws the target into the window:
+    output_frame.py) by transfer; copies it when `frame.readback` (a Copy) is set."""
 
     name = "readback"
 
-    def __init__(self, frame: Any) -> None:
-        self.frame = frame
+    def __init__(self, frame: Any, source: str = "target") -> None:
+        self.frame, self.source = frame, source
 
     def setup(self, builder: Any) -> None:
-        builder.read("target", Access.TRANSFER_READ)
+        builder.read(self.source, Access.TRANSFER_READ)
         builder.side_effect()  # writes the host buffer, outside the graph
 
     def declares(self) -> Hashable:
@@ -37,7 +38,7 @@ class Readback(Pass):
     def record(self, cb: Any, ctx: Any) -> None:
         copy: Copy | None = self.frame.readback
         if copy is not None:
-            image = ctx.image("target")
+            image = ctx.image(self.source)
             copy(cb, image.handle, image.extent)
 
     def key(self) -> Hashable:

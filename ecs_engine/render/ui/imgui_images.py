@@ -58,6 +58,13 @@ class UserImages:
         )
         self._images[tex_id] = UserImage(descriptor_set, vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]), alive)
 
+    def update(self, tex_id: int, view: Any, sampler: Any, layout: int) -> None:
+        """Name another view under the same id (its set rewritten in place): only while no frame
+        in flight reads the set (after `device.wait_idle()`, as a resize already waits)."""
+        image = self._images[tex_id]
+        info = self.vk.VkDescriptorImageInfo(sampler=sampler, imageView=view, imageLayout=layout)
+        write_images(self.device, image.descriptor_set, 0, [info])
+
     def unregister(self, tex_id: int) -> None:
         """The image is not drawn from the next overlay frame on (unknown ids are ignored)."""
         image = self._images.pop(tex_id, None)

@@ -180,12 +180,18 @@ class ImGuiRenderer:
 
     def register_image(self, view: Any, sampler: Any, layout: int, alive: Callable[[], bool] | None = None) -> int:
         """An ImGui texture id that draws `view` (the caller's, in `layout` whenever the overlay
-        draws) through `sampler`; `alive()`, when given, is asked every overlay frame: once it
+        draws) through `sampler` (a nearest one shows an image drawn at its on-screen size texel
+        for pixel, whatever fraction its corner sits at); `alive()`, when given, is asked every overlay frame: once it
         says False the id is dropped (imgui_images.py)."""
         tex_id = self._next_id
         self._next_id += 1
         self.images.register(tex_id, view, sampler, layout, alive)
         return tex_id
+
+    def update_image(self, tex_id: int, view: Any, sampler: Any, layout: int) -> None:
+        """Point `tex_id` at another view (a remade image): the UI built with the id draws on.
+        Only after `device.wait_idle()` (its set is rewritten in place)."""
+        self.images.update(tex_id, view, sampler, layout)
 
     def unregister_image(self, tex_id: int) -> None:
         """Stop drawing a registered image (its set is reused once no frame in flight reads it)."""
