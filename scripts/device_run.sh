@@ -12,7 +12,8 @@
 # parallel/N (all N shards at once),
 # demos (every demo scene with --validate), aniso (tests/texture_reference.py: what the driver's
 # anisotropic filter does to a magnified texture), bench:NAME:ARGS (a benchmark, e.g.
-# bench:schedule:--quick), ab:NAME:ARGS:REPS (old against new, alternated; see below).
+# bench:schedule:--quick), ab:NAME:ARGS:REPS (old against new, alternated; see below),
+# abcli:LABEL:ARGS:REPS (the CLI's perf JSON, old against new).
 set -u
 export PYTHONUNBUFFERED=1
 for f in .gl/*.deb; do dpkg -x "$f" /; done; ldconfig
@@ -95,6 +96,22 @@ for mode in "$@"; do
         done
       done 2>&1 | tee "$OUT/ab-$label.txt"
       tar -C /tmp -cf "$OUT/ab-$label.tar" "ab-$label" ;;
+    abcli:*)
+      # abcli:LABEL:ARGS:REPS: the CLI (`python3 -m ecs_engine ARGS --perf-json`), this tree and
+      # .ab/base alternated REPS times (e.g. the editor: abcli:editor:editor grid100 --headless
+      # --frames 600:4); every frame's samples in abcli-LABEL.tar
+      IFS=: read -r _ label args reps <<< "$mode"
+      [ -d /tmp/old ] || python3 -m pip install -q --no-deps --no-build-isolation --no-index --target /tmp/old \
+        .ab/base >/dev/null 2>&1 || { echo "install old failed"; continue; }
+      mkdir -p "/tmp/abcli-$label"
+      for rep in $(seq "${reps:-2}"); do
+        if [ $((rep % 2)) = 1 ]; then order="new old"; else order="old new"; fi
+        for v in $order; do
+          (cd /tmp && PYTHONPATH=/tmp/$v:/tmp/site timeout 300 python3 -m ecs_engine $args \
+            --perf-json "/tmp/abcli-$label/$v$rep.json" 2>&1 | tail -1 | sed "s/^/$v$rep: /")
+        done
+      done 2>&1 | tee "$OUT/abcli-$label.txt"
+      tar -C /tmp -cf "$OUT/abcli-$label.tar" "abcli-$label" ;;
     *) echo "unknown mode $mode" ;;
   esac
 done
