@@ -251,7 +251,9 @@ class OcclusionPasses:
 
     def imports(self) -> tuple:
         """The imports' identities (equal: import_into imports the same)."""
-        return (self.depth_token, id(self.pyramid), id(self.visibility))
+        assert self.pyramid is not None and self.visibility is not None
+        buffers = (self.pyramid, self.visibility)
+        return (self.depth_token, *((id(b), b.handle, b.size) for b in buffers))
 
     def destroy(self) -> None:
         """Also when half built (the constructor failed): what exists goes."""
