@@ -137,3 +137,15 @@ def test_each_step_gets_at_most_one_barrier_batch_and_no_step_is_culled():
         culled = {n for n in g.culled if n.startswith(("cull.", "occlusion."))}
         assert culled == set(FRUSTUM + OCCLUSION) - set(order)
         assert all(b.resource != "draws.keys" for name in order for b in g.compiled.barriers.before[name])
+
+
+def test_the_steps_are_timed_under_the_names_the_one_pass_had():
+    """The perf log and monitor add up a name's spans: "culling (compute)" and "light clusters"
+    stay comparable with the frames before the split."""
+    from ecs_engine.render.frame.scene_passes import MARKS
+
+    g = graph(path(occlusion()))
+    culled = [n for n in g.order if n.startswith(("cull.", "occlusion."))]
+    assert {MARKS[n] for n in culled} == {"culling (compute)"}
+    clusters = [n for n in MARKS if n.startswith("light_clusters.")]
+    assert len(clusters) == 3 and {MARKS[n] for n in clusters} == {"light clusters"}

@@ -24,9 +24,7 @@ from ..shadows.views import ShadowView
 #: the passes' names -> the names the frame's timing marks have always used
 MARKS = {
     **CULL_MARKS,
-    "light_clusters.zero": "light clusters: zero",
-    "light_clusters.bounds": "light clusters: bounds",
-    "light_clusters.tiles": "light clusters: tiles",
+    **dict.fromkeys(LightClustersPass.STEPS, "light clusters"),  # added up, as the one pass was
     "shadow_cull": "shadow culling (compute)",  # was timed within "shadow maps"
     "shadow_maps": "shadow maps",
 }
