@@ -302,6 +302,60 @@ def test_a_second_compile_with_the_same_inputs_makes_nothing(run):
     assert graph.compiles == 2 and graph._owned.made > made
 
 
+class Fill(Pass):
+    name = "fill"
+
+    def setup(self, b):
+        b.write("slot", Access.TRANSFER_WRITE)
+
+    def record(self, cb, ctx):
+        slot = ctx.buffer("slot")
+        ctx.vk.vkCmdFillBuffer(cb, slot.handle, 0, slot.size, 0x3C003C00)  # float16 ones
+
+
+class CopyOut(Pass):
+    name = "copy_out"
+
+    def setup(self, b):
+        b.read("slot", Access.TRANSFER_READ)
+        b.write("out", Access.TRANSFER_WRITE)
+        b.side_effect()
+
+    def record(self, cb, ctx):
+        slot, out = ctx.buffer("slot"), ctx.buffer("out")
+        ctx.vk.vkCmdCopyBuffer(cb, slot.handle, out.handle, 1, [ctx.vk.VkBufferCopy(0, 0, slot.size)])
+        host_barrier(ctx.vk, cb)
+
+
+def test_the_barriers_of_alternating_frame_slot_buffers_are_made_once_per_slot():
+    """A frame slot's buffers come round every other frame: each batch's VkDependencyInfo is
+    kept per handles, not made again each frame (the indirect path's cull passes, issue 36)."""
+    device = shared_device()
+    usage = device.vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT | device.vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
+    slots = [Buffer(device, W * H * 8, usage, HOST) for _ in range(2)]
+    out = Buffer(device, W * H * 8, device.vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
+    graph = FrameGraph(device)
+    try:
+        graph.import_buffer("out", handle=out.handle, size=out.size)
+        graph.add_pass(Fill())
+        graph.add_pass(CopyOut())
+        kept = None
+        for frame in range(6):
+            graph.import_slot_buffers({"slot": slots[frame % 2]})
+            graph.compile((W, H))
+            device.submit_once(graph.execute)
+            if frame == 1:
+                kept = dict(graph._infos)
+        assert graph.compiles == 1 and graph._infos == kept
+        assert sorted(batch for batch, _ in kept) == ["copy_out", "copy_out"]  # one per slot
+        ones = np.ones((H, W, 4), np.float16)
+        np.testing.assert_array_equal(out.array(np.float16, (H, W, 4)), ones)
+    finally:
+        graph.destroy()
+        for b in [*slots, out]:
+            b.destroy()
+
+
 def test_destroy_leaves_nothing_for_validation_to_report():
     """On a device of its own: a graph's objects all go with destroy() (validation reports any
     object still alive when the device is destroyed), and a leak is indeed reported."""

@@ -1,5 +1,5 @@
 """The scene's passes ahead of the output's forward (render/frame/scene_passes.py: the indirect
-path's "cull", "light_clusters", "shadow_maps") planned without a device: what they declare from
+path's "cull.*" steps, the "light_clusters.*" ones, "shadow_maps") planned without a device: what they declare from
 the frame's inputs, and the barriers the graph places between them and a forward pass that
 declares their `reads` (the ones the hand barriers made before)."""
 
@@ -13,6 +13,8 @@ from ecs_engine.render.frame.scene_passes import ScenePasses
 from ecs_engine.render.graph import FrameGraph
 
 buffer = NS  # handle, size
+CULL = ["cull.zero", "cull.frustum", "cull.compact", "cull.readback", "cull.host"]  # the frustum's steps
+CLUSTERS = ["light_clusters.zero", "light_clusters.bounds", "light_clusters.tiles"]
 
 
 def scene(cleared=True, gpu=None):
@@ -46,9 +48,9 @@ def graph(s, frame_views, grid=True, path=None):
 
 def test_forward_waits_for_the_cull_the_clusters_and_the_drawn_layers():
     g = graph(scene(), [NS(layer=1, resolution=32)])
-    assert g.order == ["cull", "light_clusters", "shadow_maps", "forward"]
+    assert g.order == [*CULL, *CLUSTERS, "shadow_maps", "forward"]
     rows = {(b.resource, b.base_layer): b for b in g.compiled.barriers.before["forward"]}
-    assert rows[("clusters", 0)].src_stages == {"TRANSFER", "COMPUTE_SHADER"}
+    assert rows[("clusters", 0)].src_stages == {"COMPUTE_SHADER"}  # the fills' were waited for by the dispatches
     assert rows[("clusters", 0)].dst_stages == {"FRAGMENT_SHADER"}
     assert rows[("draws.commands", 0)].dst_stages == {"DRAW_INDIRECT"}
     assert rows[("draws.ids", 0)].dst_stages == {"VERTEX_SHADER"}
@@ -67,14 +69,14 @@ def test_passes_without_work_declare_nothing_and_are_culled():
     were cleared when made (gpu/shadow_maps.py), so no first frame declares anything else."""
     assert graph(scene(), [], grid=False, path=indirect(pending=False)).order == ["forward"]
     g = graph(scene(), [], grid=False, path=indirect(pending=False))
-    assert set(g.culled) == {"cull", "light_clusters", "shadow_cull", "shadow_maps"}
+    assert set(g.culled) >= {*CULL, *CLUSTERS, "shadow_cull", "shadow_maps"}
 
 
 def test_the_views_culled_on_the_gpu_are_drawn_after_their_compute():
     names = [f"shadow_draws.0.{n}" for n in ("ids", "state", "commands")] + ["shadow_draws.readback"]
     gpu = NS(draw_buffers=lambda: {n: buffer(handle=70 + i, size=32) for i, n in enumerate(names)})
     g = graph(scene(gpu=gpu), [NS(layer=0, resolution=64)])
-    assert g.order == ["cull", "light_clusters", "shadow_cull", "shadow_maps", "forward"]
+    assert g.order == [*CULL, *CLUSTERS, "shadow_cull", "shadow_maps", "forward"]
     rows = {b.resource: b for b in g.compiled.barriers.before["shadow_maps"]}
     assert rows["shadow_draws.0.commands"].src_stages == {"COMPUTE_SHADER"}
     assert rows["shadow_draws.0.commands"].dst_stages == {"DRAW_INDIRECT"}
@@ -84,5 +86,18 @@ def test_the_views_culled_on_the_gpu_are_drawn_after_their_compute():
 
 def test_the_frame_slots_buffers_are_not_waited_for_at_their_first_use():
     g = graph(scene(), [])
-    firsts = {b.resource for name in ("cull", "light_clusters") for b in g.compiled.barriers.before[name]}
+    firsts = {b.resource for name in ("cull.zero", "light_clusters.zero") for b in g.compiled.barriers.before[name]}
     assert not firsts & {"clusters", "draws.ids", "draws.commands", "draws.state", "draws.readback"}
+
+
+def test_the_light_cluster_steps_get_the_barriers_placed_by_hand_before():
+    """light_clusters.zero fills, .bounds and .tiles dispatch: transfer -> compute, then compute
+    -> compute between the two dispatches (ClusterPass's two hand barriers before issue 36)."""
+    g = graph(scene(), [])
+    assert g.compiled.barriers.before["light_clusters.zero"] == []  # the slot's: fenced
+    (filled,) = g.compiled.barriers.before["light_clusters.bounds"]
+    assert (filled.resource, filled.src_stages, filled.src_access) == ("clusters", {"TRANSFER"}, {"TRANSFER_WRITE"})
+    assert filled.dst_stages == {"COMPUTE_SHADER"}
+    (bounded,) = g.compiled.barriers.before["light_clusters.tiles"]
+    assert (bounded.src_stages, bounded.dst_stages) == ({"COMPUTE_SHADER"}, {"COMPUTE_SHADER"})
+    assert "SHADER_STORAGE_WRITE" in bounded.src_access and "SHADER_STORAGE_READ" in bounded.dst_access

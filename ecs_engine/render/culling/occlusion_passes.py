@@ -1,11 +1,13 @@
 """Two-phase occlusion culling for the indirect mode (`--culling occlusion`: culling/occlusion.py's
 method asks for these passes), after zeux/niagara.
 
-Per frame, in the primary before the scene's render pass (IndirectPath._record_compute):
+Per frame, in the primary before the scene's render pass, each step one of the frame graph's
+passes (render/draw/cull_pass.py, recording render/draw/indirect_compute.py's steps), which
+declare their accesses: the graph places the barriers between them:
 1. early cull (cull_early.comp): the rows the last frame found visible, still in the frustum,
    with an opaque one-sided material; compact.comp makes their draws;
 2. their depth alone, into this module's depth image (the target's samples; dynamic rendering
-   with the shadow maps' depth format and barriers, gpu/shadow_maps.py's depth_barriers; no bias;
+   with the shadow maps' depth format, begun by the graph; no bias;
    shadow_indirect.vert through the camera's set 0: the same position arithmetic as
    mesh_indirect.vert);
 3. the depth pyramid (depth_reduce.comp): level k holds, per texel, the farthest depth of the
@@ -34,11 +36,12 @@ from __future__ import annotations
 from typing import Any
 
 from ...gpu.array_image import nearest_sampler
+from ...gpu.barrier import Barrier
 from ...gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers, write_images
 from ...gpu.memory import DEVICE, Buffer, Image
 from ...gpu.owned import Owned
 from ...gpu.pipeline import GraphicsPipelineSpec, compute_pipeline, graphics_pipeline, pipeline_layout
-from ...gpu.shadow_maps import READ_LAYOUT_NAME, SHADOW_FORMAT_NAME, WRITE_LAYOUT_NAME, depth_barriers, shadow_formats
+from ...gpu.shadow_maps import READ_LAYOUT_NAME, SHADOW_FORMAT_NAME, shadow_formats
 from ..draw.chunk_paths import vertex_attributes
 from ..draw.path import PathContext
 from ..layouts import (
@@ -51,6 +54,9 @@ from ..layouts import (
     REDUCE_PUSH,
     UINT_BYTES,
 )
+
+#: the frame graph's names of the imports (cull_pass.py's passes declare them)
+DEPTH, PYRAMID, VISIBILITY = "occlusion.depth", "occlusion.pyramid", "occlusion.visibility"
 
 
 def pyramid_levels(width: int, height: int) -> list[tuple[int, int, int]]:
@@ -132,8 +138,9 @@ class OcclusionPasses:
         owned.add(sampler, lambda: vk.vkDestroySampler(handle, sampler, None))
         self._reduce_push = vk.ffi.new("uint32_t[8]")
         self._set_array = vk.ffi.new("VkDescriptorSet[1]", [self.set])
-        self._begin: Any = None  # (VkRenderingInfo pointer, what it points to) at the depth's size
-        self._barriers: Any = None  # depth_barriers of the depth image
+        compute = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
+        rw = vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_SHADER_WRITE_BIT
+        self._level_barrier = Barrier(vk, compute, compute, vk.VK_ACCESS_SHADER_WRITE_BIT, rw)
 
     # ------------------------------------------------------------ resources
     def ensure(self, width: int, height: int, rows: int) -> None:
@@ -168,26 +175,12 @@ class OcclusionPasses:
             usage = vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT
             self.pyramid = self._sized.add(Buffer(device, 4 * (first + w * h), usage, DEVICE))
             self.size = (width, height)
-            self._viewport = vk.ffi.new("VkViewport*", {"width": width, "height": height, "maxDepth": 1.0})
-            self._area = vk.ffi.new("VkRect2D*", {"extent": {"width": width, "height": height}})
-            depth_attachment = vk.VkRenderingAttachmentInfo(
-                imageView=self.depth.view,
-                imageLayout=getattr(vk, WRITE_LAYOUT_NAME),
-                resolveMode=vk.VK_RESOLVE_MODE_NONE,
-                loadOp=vk.VK_ATTACHMENT_LOAD_OP_CLEAR,  # 0: reverse-Z's far
-                storeOp=vk.VK_ATTACHMENT_STORE_OP_STORE,
-                clearValue=vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=0.0, stencil=0)),
-            )
-            info = vk.VkRenderingInfo(renderArea=self._area[0], layerCount=1, pDepthAttachment=depth_attachment)
-            self._begin = (vk.ffi.addressof(info), info)
-            # each frame's depth is new: the last one's is dropped (UNDEFINED) once its pyramid read it
-            self._barriers = depth_barriers(vk, self.depth.handle, (0,), discard=True)
         assert self.visibility is not None and self.pyramid is not None and self.depth is not None
         ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
         write_buffers(
             device, self.set, [(BINDING_VISIBILITY, ssbo, self.visibility), (BINDING_PYRAMID, ssbo, self.pyramid)]
         )
-        layout = getattr(vk, READ_LAYOUT_NAME)  # after end_depth's barrier
+        layout = getattr(vk, READ_LAYOUT_NAME)  # the graph's DEPTH_SAMPLED (the pyramid pass reads it so)
         depth = vk.VkDescriptorImageInfo(sampler=self.sampler, imageView=self.depth.view, imageLayout=layout)
         write_images(device, self.set, BINDING_EARLY_DEPTH, [depth])
 
@@ -200,28 +193,16 @@ class OcclusionPasses:
         )
 
     def zero_visibility(self, cb: Any) -> None:
-        """A new visibility buffer says "not visible" everywhere (the frame's first barrier,
-        transfer -> compute, follows)."""
+        """A new visibility buffer says "not visible" everywhere (the pass that does it declares
+        the write while `fresh`: the graph places the barrier to the early cull)."""
         if self.fresh and self.visibility is not None:
             self.vk.lib.vkCmdFillBuffer(cb, self.visibility.handle, 0, self.visibility.size, 0)
             self.fresh = False
 
-    def begin_depth(self, cb: Any) -> None:
-        """The early pass's barrier and rendering (inline), viewport and scissor: the early rows'
-        draws follow (with `pipelines`), then end_depth."""
-        lib = self.vk.lib
-        lib.vkCmdPipelineBarrier2(cb, self._barriers[0][0])
-        lib.vkCmdBeginRendering(cb, self._begin[0])
-        lib.vkCmdSetViewport(cb, 0, 1, self._viewport)
-        lib.vkCmdSetScissor(cb, 0, 1, self._area)
-
-    def end_depth(self, cb: Any) -> None:
-        lib = self.vk.lib
-        lib.vkCmdEndRendering(cb)
-        lib.vkCmdPipelineBarrier2(cb, self._barriers[1][0])  # the depth -> the pyramid's reads
-
-    def record_pyramid(self, cb: Any, barrier: Any) -> None:
-        """Every level, each after the one below it (`barrier`: compute writes -> compute reads)."""
+    def record_pyramid(self, cb: Any) -> None:
+        """Every level, each after the one below it: the levels share one storage buffer (the
+        graph's "occlusion.pyramid"), so the barrier between two levels' dispatches is this
+        pass's own (the graph tracks mips of images, not ranges of a buffer)."""
         vk = self.vk
         lib = vk.lib
         lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.reduce)
@@ -229,11 +210,50 @@ class OcclusionPasses:
         source = (self.size[0], self.size[1], 0, self.samples)  # level 0 reads the depth image
         for k, (first, w, h) in enumerate(self.levels):
             if k:
-                barrier.record(lib, cb)
+                self._level_barrier.record(lib, cb)
             push[0:8] = [*source, w, h, first, 0]
             lib.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_COMPUTE_BIT, 0, REDUCE_PUSH.size, push)
             lib.vkCmdDispatch(cb, -(-w // REDUCE_GROUP), -(-h // REDUCE_GROUP), 1)
             source = (w, h, first, 0)
+
+    # ------------------------------------------------------------ the graph
+    def import_into(self, graph: Any) -> None:
+        """The depth image, the pyramid and the visibility as the frame graph's imports (shared by
+        the frames in flight: each frame's first use waits for the frame before's, in compute).
+        The depth's contents do not outlive the frame (UNDEFINED before and after); the
+        visibility carries the last frame's verdict to this frame's early cull."""
+        assert self.depth is not None and self.pyramid is not None and self.visibility is not None
+        token = self.depth_token
+        if not graph.reuse_import(DEPTH, token):
+            graph.import_image(
+                DEPTH,
+                handle=self.depth.handle,
+                view=self.depth.view,
+                format=SHADOW_FORMAT_NAME,
+                extent=self.size,
+                samples=self.samples,
+                layout_before="VK_IMAGE_LAYOUT_UNDEFINED",
+                layout_after="VK_IMAGE_LAYOUT_UNDEFINED",
+                stage_before="COMPUTE_SHADER",  # the frame before's pyramid read it
+                token=token,
+            )
+        for name, buffer in ((PYRAMID, self.pyramid), (VISIBILITY, self.visibility)):
+            token = (id(buffer), buffer.handle, buffer.size)
+            if not graph.reuse_import(name, token):
+                size = buffer.size
+                graph.import_buffer(name, handle=buffer.handle, size=size, stage_before="COMPUTE_SHADER", token=token)
+
+    @property
+    def depth_token(self) -> tuple:
+        """What the depth's import and rendering are made from."""
+        assert self.depth is not None
+        return (id(self.depth), self.depth.handle, self.size, self.samples)
+
+    def imports(self) -> tuple:
+        """The imports' identities (equal: import_into imports the same)."""
+        assert self.pyramid is not None and self.visibility is not None
+        buffers = (self.pyramid, self.visibility)
+        return (self.depth_token, *((id(b), b.handle, b.size) for b in buffers))
 
     def destroy(self) -> None:
         """Also when half built (the constructor failed): what exists goes."""
@@ -242,7 +262,6 @@ class OcclusionPasses:
         self.visibility = None
 
     def _release_images(self) -> None:
-        self._begin = self._barriers = None
         self._sized.destroy()
         self.depth = self.pyramid = None
         self.size = (0, 0)

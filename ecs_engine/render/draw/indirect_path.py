@@ -26,7 +26,6 @@ from typing import Any
 
 import numpy as np
 
-from ...gpu.barrier import Barrier
 from ...gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
 from ...gpu.memory import DEVICE, HOST, Buffer
 from ...gpu.pipeline import compute_pipeline, pipeline_layout
@@ -39,12 +38,8 @@ from ..layouts import (
     BINDING_DRAW_STATE,
     BINDING_IDS,
     BINDING_KEYS,
-    COMPACT_GROUP,
     COMPACT_PUSH,
-    CULL_GROUP,
-    CULL_LOD,
     CULL_PUSH,
-    CULL_SUBPIXEL,
     DRAW_COMMAND,
     DRAW_STATE,
     KEY_INFO,
@@ -52,11 +47,11 @@ from ..layouts import (
     UINT_BYTES,
 )
 from .chunk_paths import mesh_pipelines
+from .indirect_compute import IndirectCompute
 from .indirect_draws import (
     STATE_HEADER,
     IndirectFrame,
     check_support,
-    compute_barriers,
     key_capacities,
     record_indirect_draws,
 )
@@ -106,10 +101,8 @@ class IndirectPath(PipelinesPerTarget):
         self._compact_ptr = vk.ffi.from_buffer(self._compact_push)
         self._sets = vk.ffi.new("VkDescriptorSet[2]")
         self._offsets = vk.ffi.new("VkDeviceSize[1]", [0])
-        compute, transfer = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, vk.VK_PIPELINE_STAGE_TRANSFER_BIT
-        to_copy = Barrier(vk, compute, transfer, vk.VK_ACCESS_SHADER_WRITE_BIT, vk.VK_ACCESS_TRANSFER_READ_BIT)
-        self._barriers = [*compute_barriers(vk), to_copy]  # the last: the counters -> their copy
-        self.pending: tuple | None = None  # finish's, for record_compute
+        self.compute = IndirectCompute(self)  # the frame's steps, each a cull pass's (cull_pass.py)
+        self.pending: bool | None = None  # finish made the compute ready; the cull passes record it
 
     # ---------------------------------------------------------------- buffers
     def _make_frame(self, descriptor_set: Any, keys: int, rows: int) -> IndirectFrame:
@@ -183,8 +176,8 @@ class IndirectPath(PipelinesPerTarget):
         return ChunkResult(None, 0, 0, 0, key_counts)
 
     def finish(self, cb: Any, frame: FrameInputs, results: list[ChunkResult], candidates: int) -> list[Any]:
-        """The compute passes made ready for the frame graph's "cull" pass (cull_pass.py:
-        record_compute) and the one secondary that draws what they write."""
+        """The compute made ready for the frame graph's cull passes (indirect_compute.py, recorded
+        by cull_pass.py's passes) and the one secondary that draws what they write."""
         key_counts = np.zeros(2 * len(frame.bounds[2]), dtype=np.int64)  # the meshes' keys: rows as written
         for r in results:
             if r.key_counts is not None:
@@ -200,7 +193,10 @@ class IndirectPath(PipelinesPerTarget):
         f.key_counts, f.candidates = key_counts, candidates  # what the shadow views cull (shadow_indirect.py)
         self._sets[0], self._sets[1] = frame.descriptor_set, f.descriptor_set
         planes = None if frame.planes is None else frame.planes.astype(np.float32)
-        self.pending = (frame, planes, candidates, merged, capacity)  # the graph's "cull" pass records it
+        _, width, height = frame.target.key
+        occlusion = frame.data.culling.gpu(self, width, height, candidates)  # None: the frustum test alone
+        self.compute.prepare(f, frame, planes, candidates, merged, capacity, occlusion)
+        self.pending = True  # the graph's cull passes record it (cull_pass.py)
         f.recorded = merged.index_count // 3  # the triangles the counts will weigh, per draw mesh
         vk = self.vk
         lib = vk.lib
@@ -258,74 +254,10 @@ class IndirectPath(PipelinesPerTarget):
         table["lod_error"] = 0.0
         table["lod_error"][own] = merged.lod_error[owner[own]]
 
-    def record_compute(self, cb: Any) -> None:
-        """This frame's compute passes (finish made them ready), in the frame graph's "cull" pass."""
-        assert self.pending is not None
-        pending, self.pending = self.pending, None
-        self._record_compute(cb, *pending)
-
     def draw_buffers(self, slot: int) -> dict[str, Any]:
         """The slot's buffers the compute passes write and the draws read, by graph name."""
         f = self.frames[slot]
         return {"draws.ids": f.ids, "draws.commands": f.commands, "draws.state": f.state, "draws.readback": f.readback}
-
-    def _record_compute(
-        self,
-        cb: Any,
-        frame: FrameInputs,
-        planes: np.ndarray | None,
-        rows: int,
-        merged: MergedMeshes,
-        capacity: np.ndarray,
-    ) -> None:
-        """Zero the counters, cull (with occlusion culling: its early pass, depth and pyramid
-        first, occlusion.py), write commands, and copy the counters where the CPU can read them
-        (the graph orders the commands, ids and counters before the draws). `capacity`: per key
-        of every draw mesh (levels of detail too), as key_capacities gives it."""
-        keys = len(capacity)
-        vk = self.vk
-        lib = vk.lib
-        f = self.frames[frame.slot]
-        to_compute, compute_to_compute, to_draw, to_host, drawn_to_compute, to_copy = self._barriers
-        _, width, height = frame.target.key
-        occlusion = frame.data.culling.gpu(self, width, height, rows)  # None: the frustum test alone
-        # the previous frame in this slot read the commands and ids: its fence covered that
-        lib.vkCmdFillBuffer(cb, f.state.handle, 0, f.state.size, 0)
-        if occlusion is not None:
-            occlusion.zero_visibility(cb)
-        to_compute.record(lib, cb)
-        layout = self.compute_layout if occlusion is None else occlusion.layout
-        lib.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 2, self._sets, 0, vk.ffi.NULL)
-        push = self._push
-        push["plane_count"] = 0
-        if planes is not None:
-            push["planes"][0, : len(planes)] = planes
-            push["plane_count"] = len(planes)
-        cull = self.cull
-        lod = CULL_LOD if frame.lod and merged.lod_levels.any() else 0
-        push["occlusion"] = (width, height, 0, lod)  # cull.comp: the levels of detail's projection
-        if occlusion is not None:
-            occlusion.bind(cb)
-            subpixel = CULL_SUBPIXEL if occlusion.samples == 1 else 0  # MSAA samples lie off the centres
-            push["occlusion"] = (width, height, len(occlusion.levels), subpixel | lod)
-            self._cull_rows(cb, occlusion.early, rows)
-            self._compact(cb, keys, compute_to_compute, to_draw)
-            occlusion.begin_depth(cb)  # the early rows' depth: the camera's set 0, this frame's set 1
-            lib.vkCmdBindDescriptorSets(
-                cb, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout, 0, 2, self._sets, 0, vk.ffi.NULL
-            )
-            # every draw mesh's keys, as the scene's draws: compact wrote the lists `keys // 2` apart
-            record_indirect_draws(vk, cb, occlusion.pipelines, merged, capacity, f.commands, f.state, self._offsets)
-            occlusion.end_depth(cb)
-            drawn_to_compute.record(lib, cb)  # the early draws read ids and commands: both are rewritten
-            occlusion.record_pyramid(cb, compute_to_compute)
-            lib.vkCmdFillBuffer(cb, f.state.handle, 0, f.state.size, 0)
-            drawn_to_compute.record(lib, cb)  # the zeroed counters and the pyramid -> the late cull
-            cull = occlusion.late
-        self._cull_rows(cb, cull, rows)
-        self._compact(cb, keys, compute_to_compute, to_copy)  # the draws' barrier: the graph's
-        lib.vkCmdCopyBuffer(cb, f.state.handle, f.readback.handle, 1, f.copy_region)
-        to_host.record(lib, cb)
 
     def occlusion_passes(self) -> OcclusionPasses:
         """Occlusion culling's passes (culling/occlusion.py asks), made on first use against this
@@ -333,35 +265,6 @@ class IndirectPath(PipelinesPerTarget):
         if self.occlusion is None:
             self.occlusion = OcclusionPasses(self.ctx, [self.ctx.frame_set_layout, self.set_layout.handle], self.layout)
         return self.occlusion
-
-    def _cull_rows(self, cb: Any, pipeline: Any, rows: int) -> None:
-        """One cull pass over rows [0, rows), in dispatches of at most maxComputeWorkGroupCount groups."""
-        vk = self.vk
-        lib = vk.lib
-        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, pipeline)
-        push = self._push
-        step = self.max_groups * CULL_GROUP
-        for first in range(0, rows, step):
-            count = min(step, rows - first)
-            push["row_end"] = first + count  # rows below this index exist
-            push["first_row"] = first
-            lib.vkCmdPushConstants(
-                cb, self.compute_layout, vk.VK_SHADER_STAGE_COMPUTE_BIT, 0, CULL_PUSH.size, self._push_ptr
-            )
-            lib.vkCmdDispatch(cb, -(-count // CULL_GROUP), 1, 1)
-
-    def _compact(self, cb: Any, keys: int, compute_to_compute: Barrier, to_draw: Barrier) -> None:
-        """The non-empty keys' draw commands, then the barrier to the draws that read them."""
-        vk = self.vk
-        lib = vk.lib
-        compute_to_compute.record(lib, cb)
-        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.compact)
-        self._compact_push["key_count"], self._compact_push["mesh_count"] = keys, keys // 2
-        lib.vkCmdPushConstants(
-            cb, self.compute_layout, vk.VK_SHADER_STAGE_COMPUTE_BIT, 0, COMPACT_PUSH.size, self._compact_ptr
-        )
-        lib.vkCmdDispatch(cb, -(-keys // COMPACT_GROUP), 1, 1)
-        to_draw.record(lib, cb)
 
     def _record_draws(self, cb: Any, slot: int, merged: MergedMeshes, key_counts: np.ndarray) -> None:
         """Into the frame's secondary (viewport, scissor and sets already bound)."""

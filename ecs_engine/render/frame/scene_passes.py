@@ -1,5 +1,6 @@
 """The scene's passes that run ahead of the output's `forward` in the output's frame graph
-(render/passes/output_graph.py; graph_plan.md step 9): the indirect path's compute ("cull"),
+(render/passes/output_graph.py; graph_plan.md step 9): the indirect path's compute (its steps'
+passes, "cull.*" and "occlusion.*": draw/cull_pass.py),
 the light clusters, then the shadow maps. The renderer owns them (their pipelines live in the
 renderer's parts: the path, LightCulling, ShadowPass); `begin` hands them the frame's inputs
 and names the frame slot's buffers the graph imports (the maps are imported too), and `reads`
@@ -13,7 +14,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..draw.cull_pass import CullPass
+from ..draw.cull_pass import MARKS as CULL_MARKS
+from ..draw.cull_pass import CullPasses
 from ..graph import Access, FrameGraph, Pass
 from ..lighting.clusters import ClusterGrid, LightClustersPass
 from ..shadows.maps_graph import ShadowCullPass, ShadowMapsPass
@@ -21,8 +23,8 @@ from ..shadows.views import ShadowView
 
 #: the passes' names -> the names the frame's timing marks have always used
 MARKS = {
-    "cull": "culling (compute)",
-    "light_clusters": "light clusters",
+    **CULL_MARKS,
+    **dict.fromkeys(LightClustersPass.STEPS, "light clusters"),  # added up, as the one pass was
     "shadow_cull": "shadow culling (compute)",  # was timed within "shadow maps"
     "shadow_maps": "shadow maps",
 }
@@ -31,10 +33,10 @@ MARKS = {
 class ScenePasses:
     def __init__(self, device: Any, lights: Any, shadows: Any) -> None:
         self.device = device
-        self.cull = CullPass()
+        self.cull = CullPasses()
         self.clusters = LightClustersPass(lights.pass_)
         self.shadows = ShadowMapsPass(shadows)
-        self.passes: list[Pass] = [self.cull, self.clusters, ShadowCullPass(self.shadows), self.shadows]
+        self.passes: list[Pass] = [*self.cull.passes, *self.clusters.passes, ShadowCullPass(self.shadows), self.shadows]
         self.buffers: dict[str, Any] = {}  # name -> the frame slot's Buffer, imported this frame
         self.reads: tuple[tuple[str, Access], ...] = ()  # what `forward` reads of them this frame
         self.marks = MARKS
@@ -89,6 +91,7 @@ class ScenePasses:
         image = maps.image if maps is not None else None
         return (
             self.cull.path,
+            self.cull.imports(),
             tuple((n, b, b.handle) for n, b in self.buffers.items()),
             tuple((n, b, b.handle) for n, b in shadows.culled.items()),
             maps,
@@ -99,6 +102,7 @@ class ScenePasses:
 
     def import_into(self, graph: FrameGraph) -> None:
         graph.import_slot_buffers(self.buffers)
+        self.cull.import_into(graph)
         self.shadows.import_into(graph)
 
     def destroy(self) -> None:

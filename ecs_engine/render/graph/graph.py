@@ -51,9 +51,9 @@ class FrameGraph:
         self._outputs: list[str] = []
         self._owned = Owned(device) if device is not None else None
         self.compiled: Compiled | None = None
-        # per barrier batch: the handles it was made for and its VkDependencyInfo (made once per
-        # compile, again only for an import's new handle)
-        self._infos: dict[str, tuple[tuple, Any]] = {}
+        # per barrier batch and the handles it was made for: its VkDependencyInfo (made once per
+        # compile and handles: a frame slot's buffers come round again)
+        self._infos: dict[tuple[str, tuple], Any] = {}
         self._renderings: dict[tuple, Any] = {}  # PassContext.begin_rendering's, per compile
         self.compiles = 0  # how many compiles did work (a cached one does none)
         # what a compile depends on, kept so that the per-frame check costs little: a count
@@ -310,9 +310,10 @@ class FrameGraph:
         handles = tuple(
             images[r.resource].handle if r.base_mip is not None else buffers[r.resource].handle for r in rows
         )
-        cached = self._infos.get(batch)
-        if cached is not None and cached[0] == handles:
-            return cached[1][0]
+        # per batch and handles: the frame slots' buffers alternate frame by frame
+        cached = self._infos.get((batch, handles))
+        if cached is not None:
+            return cached[0]
         vk = self.device.vk
         aspects = {n: aspect_of(vk, res.format) for n, res in c.structure.resources.items() if res.kind == "image"}
         drop = EMPTY if self.device.features.get("rayTracing") else RAY_TRACING_ONLY
@@ -320,7 +321,9 @@ class FrameGraph:
             vk, rows, {n: i.handle for n, i in images.items()}, {n: b.handle for n, b in buffers.items()}, aspects, drop
         )
         pointer = vk.ffi.addressof(info)  # for the raw call (the binding's wrapper costs more)
-        self._infos[batch] = (handles, (pointer, info))
+        if len(self._infos) >= 256:  # imports come and go (swapchain remakes, grown buffers)
+            self._infos.clear()
+        self._infos[(batch, handles)] = (pointer, info)
         return pointer
 
     def attachment_formats(self, colors: tuple[str, ...] = (), depth: str | None = None) -> AttachmentFormats:

@@ -150,8 +150,8 @@ def check_light_culling(mode: str) -> None:
 
 
 class ClusterPass:
-    """light_bounds.comp then light_tiles.comp over the cluster buffer (the frame graph's
-    "light_clusters" pass records them: LightClustersPass below)."""
+    """light_bounds.comp then light_tiles.comp over the cluster buffer, after its fills (the
+    frame graph's three light cluster passes record them: LightClustersPass below)."""
 
     def __init__(self, device: Device, frame_set_layout: Any) -> None:
         self.device = device
@@ -160,41 +160,26 @@ class ClusterPass:
         self.owned.add(layout, lambda: device.vk.vkDestroyPipelineLayout(device.handle, layout, None))
         self.pipelines: list[Any] = []
 
-    def record(self, cb: Any, set_array: Any, grid: ClusterGrid, clusters: Any, light_count: int) -> None:
-        """The fills and both dispatches, with the two barriers between them (inside the pass);
-        the graph orders the buffer after its earlier uses and before its readers."""
+    def zero(self, cb: Any, clusters: Any) -> None:
+        """The global list's count and the depth bins' bounds (lowest index, highest) reset."""
+        vk = self.device.vk
+        lib = vk.lib
+        bins = CLUSTER_HEADER * UINT_BYTES
+        handle = clusters.handle
+        lib.vkCmdFillBuffer(cb, handle, 0, UINT_BYTES, 0)  # the global list's count
+        lib.vkCmdFillBuffer(cb, handle, bins, LIGHT_BINS * UINT_BYTES, 0xFFFFFFFF)  # lowest index
+        lib.vkCmdFillBuffer(cb, handle, bins + LIGHT_BINS * UINT_BYTES, LIGHT_BINS * UINT_BYTES, 0)  # highest
+
+    def dispatch(self, cb: Any, set_array: Any, step: int, groups: tuple[int, int]) -> None:
+        """light_bounds.comp (`step` 0, one invocation per light) or light_tiles.comp (1, one
+        group per tile); the graph's passes place the barriers between them and the fills."""
         vk = self.device.vk
         lib = vk.lib
         if not self.pipelines:
             self.pipelines = [self._pipeline(name) for name in ("light_bounds.comp", "light_tiles.comp")]
-        bins = CLUSTER_HEADER * UINT_BYTES
-        vk.vkCmdFillBuffer(cb, clusters.handle, 0, UINT_BYTES, 0)  # the global list's count
-        vk.vkCmdFillBuffer(cb, clusters.handle, bins, LIGHT_BINS * UINT_BYTES, 0xFFFFFFFF)  # lowest index
-        vk.vkCmdFillBuffer(cb, clusters.handle, bins + LIGHT_BINS * UINT_BYTES, LIGHT_BINS * UINT_BYTES, 0)  # highest
-        shader_rw = vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_SHADER_WRITE_BIT
-        compute = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT
-        self._barrier(
-            cb, clusters, vk.VK_ACCESS_TRANSFER_WRITE_BIT, shader_rw, vk.VK_PIPELINE_STAGE_TRANSFER_BIT, compute
-        )
         lib.vkCmdBindDescriptorSets(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.layout, 0, 1, set_array, 0, vk.ffi.NULL)
-        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.pipelines[0])
-        lib.vkCmdDispatch(cb, -(-light_count // CLUSTER_GROUP), 1, 1)
-        self._barrier(cb, clusters, vk.VK_ACCESS_SHADER_WRITE_BIT, shader_rw, compute, compute)
-        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.pipelines[1])
-        lib.vkCmdDispatch(cb, grid.tiles_x, grid.tiles_y, 1)
-
-    def _barrier(self, cb: Any, buffer: Any, src: int, dst: int, src_stage: int, dst_stage: int) -> None:
-        vk = self.device.vk
-        barrier = vk.VkBufferMemoryBarrier(
-            srcAccessMask=src,
-            dstAccessMask=dst,
-            srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            buffer=buffer.handle,
-            offset=0,
-            size=buffer.size,
-        )
-        vk.vkCmdPipelineBarrier(cb, src_stage, dst_stage, 0, 0, None, 1, [barrier], 0, None)
+        lib.vkCmdBindPipeline(cb, vk.VK_PIPELINE_BIND_POINT_COMPUTE, self.pipelines[step])
+        lib.vkCmdDispatch(cb, groups[0], groups[1], 1)
 
     def _pipeline(self, shader: str) -> Any:
         device = self.device
@@ -286,36 +271,54 @@ class LightCulling:
 
 
 class LightClustersPass(Pass):
-    """The frame graph's "light_clusters": the frame slot's cluster buffer ("clusters", imported
-    per frame) filled then written by ClusterPass's dispatches; its readers (forward fragments,
-    the deferred lighting) declare their reads, so the graph places the barriers around it. A
-    frame without a grid declares nothing, and the graph culls the pass."""
+    """One of the frame graph's three light cluster passes over the frame slot's cluster buffer
+    ("clusters", imported per frame): "light_clusters.zero" (the fills), "light_clusters.bounds"
+    (light_bounds.comp) and "light_clusters.tiles" (light_tiles.comp). Each declares its access,
+    so the graph places the barriers between them (transfer -> compute, compute -> compute) and
+    around them (its readers, forward fragments and the deferred lighting, declare their reads).
+    A frame without a grid declares nothing, and the graph culls them. `begin` is the first
+    pass's: the others share its frame inputs."""
 
-    name = "light_clusters"
+    STEPS = ("light_clusters.zero", "light_clusters.bounds", "light_clusters.tiles")
 
-    def __init__(self, clusters: ClusterPass) -> None:
+    def __init__(self, clusters: ClusterPass, step: int = 0, first: LightClustersPass | None = None) -> None:
         self.clusters = clusters
+        self.step = step
+        self.name = self.STEPS[step]
+        self.first = first or self
         self.grid: ClusterGrid | None = None  # this frame's (begin)
         self.set_array: Any = None
         self.light_count = 0
+        self.others = [] if first is not None else [LightClustersPass(clusters, k, self) for k in (1, 2)]
+
+    @property
+    def passes(self) -> list[LightClustersPass]:
+        return [self, *self.others]
 
     def begin(self, grid: ClusterGrid | None, set_array: Any, light_count: int) -> None:
         self.grid, self.set_array, self.light_count = grid, set_array, light_count
 
     def setup(self, builder: Any) -> None:
-        if self.grid is None:
+        if self.first.grid is None:
             return
-        builder.write("clusters", Access.TRANSFER_WRITE)  # the fills
-        builder.write("clusters", Access.COMPUTE_READ_WRITE)  # the dispatches
-        builder.side_effect()  # its readers may be recorded outside the graph (frame/scene_passes.py)
+        builder.write("clusters", Access.TRANSFER_WRITE if self.step == 0 else Access.COMPUTE_READ_WRITE)
+        if self.step == 2:
+            builder.side_effect()  # its readers may be recorded outside the graph (frame/scene_passes.py)
 
     def declares(self) -> Hashable:
-        return self.grid is not None
+        return self.first.grid is not None
 
     def record(self, cb: Any, ctx: Any) -> None:
-        assert self.grid is not None
-        self.clusters.record(cb, self.set_array, self.grid, ctx.buffer("clusters"), self.light_count)
+        first = self.first
+        grid = first.grid
+        assert grid is not None
+        if self.step == 0:
+            self.clusters.zero(cb, ctx.buffer("clusters"))
+        elif self.step == 1:
+            self.clusters.dispatch(cb, first.set_array, 0, (-(-first.light_count // CLUSTER_GROUP), 1))
+        else:
+            self.clusters.dispatch(cb, first.set_array, 1, (grid.tiles_x, grid.tiles_y))
 
     def key(self) -> Hashable:
-        grid = self.grid
-        return None if grid is None else (grid.tiles_x, grid.tiles_y, self.light_count)
+        grid = self.first.grid
+        return None if grid is None else (self.step, grid.tiles_x, grid.tiles_y, self.first.light_count)
