@@ -100,3 +100,99 @@ def test_the_effects_change_the_reference_picture(post: tuple[str, ...]) -> None
     tolerance (bloom spreads the lit cube's light, SSAO darkens the crease on the floor)."""
     size = (W // 2, H)
     assert np.abs(_reference(post, size) - _reference((), size)).max() > 4 * TOLERANCE
+
+
+class _NoUi:
+    """An overlay that draws nothing: the renderer draws the editor's viewport only with a UI."""
+
+    def rebuild(self, target) -> None:
+        pass
+
+    def prepare(self, slot: int, slots: int) -> None:
+        pass
+
+    def record(self, cb, slot: int, width: int, height: int) -> None:
+        pass
+
+
+def _image_pixels(device, image, size: tuple[int, int], layout: int) -> np.ndarray:
+    """The (height, width, 3) corner of a 4-byte colour `image` left in `layout` (and left so)."""
+    from ecs_engine.gpu.memory import HOST, Buffer
+
+    vk = device.vk
+    w, h = size
+    buffer = Buffer(device, w * h * 4, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
+    whole = vk.VkImageSubresourceRange(
+        aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=1
+    )
+
+    def barrier(cb, old: int, new: int) -> None:
+        b = vk.VkImageMemoryBarrier(
+            srcAccessMask=vk.VK_ACCESS_MEMORY_WRITE_BIT,
+            dstAccessMask=vk.VK_ACCESS_MEMORY_READ_BIT | vk.VK_ACCESS_MEMORY_WRITE_BIT,
+            oldLayout=old,
+            newLayout=new,
+            srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+            dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+            image=image.handle,
+            subresourceRange=whole,
+        )
+        every = vk.VK_PIPELINE_STAGE_ALL_COMMANDS_BIT
+        vk.vkCmdPipelineBarrier(cb, every, every, 0, 0, None, 0, None, 1, [b])
+
+    def record(cb) -> None:
+        src = vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
+        barrier(cb, layout, src)
+        region = vk.VkBufferImageCopy(
+            bufferOffset=0,
+            bufferRowLength=0,
+            bufferImageHeight=0,
+            imageSubresource=vk.VkImageSubresourceLayers(
+                aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=0, baseArrayLayer=0, layerCount=1
+            ),
+            imageOffset=vk.VkOffset3D(0, 0, 0),
+            imageExtent=vk.VkExtent3D(w, h, 1),
+        )
+        vk.vkCmdCopyImageToBuffer(cb, image.handle, src, buffer.handle, 1, [region])
+        barrier(cb, src, layout)
+
+    try:
+        device.submit_once(record)
+        return buffer.bytes().reshape(h, w, 4)[..., :3].astype(np.int64)
+    finally:
+        buffer.destroy()
+
+
+@pytest.mark.parametrize("post", POSTS)
+def test_the_editor_viewport_s_effects_see_only_its_rectangle(post: tuple[str, ...]) -> None:
+    """A viewport smaller than the window (drawn into the corner of the window's HDR and depth
+    images, which a whole-window frame left bright) gives a window of its size's picture."""
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.render.frame.renderer import Renderer
+    from ecs_engine.render.frame.viewport import EditorViewport
+
+    size = (W // 2, H)
+    with headless_gpu(W, H) as gpu:
+        world = _world(gpu.meshes.add(cube_mesh()))
+        camera = _camera(world)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, post=post)
+        viewport = renderer.viewport = EditorViewport(gpu.device)
+        renderer.overlay = _NoUi()
+        try:
+            schedule = default_schedule()
+            world.set(camera, Transform(position=(WHITE, 5.0, 3.0)))  # the slab over the whole window
+            schedule.run(world, 0.0)
+            renderer.render(world, readback=True)
+            assert gpu.target.pixels()[..., :3].min() > 200
+            world.set(camera, Transform(position=(RED, 0.3, 4.0)))
+            viewport.size = size
+            schedule.run(world, 0.0)
+            for _ in range(2):
+                renderer.render(world, readback=True)
+            target = viewport.target
+            assert target is not None and (target.width, target.height) == (W, H)
+            picture = _image_pixels(gpu.device, target.color, size, target.final_layout)
+        finally:
+            renderer.destroy()
+    expected = _reference(post, size)
+    assert np.abs(picture - expected).max() <= TOLERANCE
