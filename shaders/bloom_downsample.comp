@@ -9,6 +9,10 @@
 // weights 1 / (1 + luma) (slide 168), normalised, so that one firefly pixel cannot make a bright
 // blob, a flat field passes unchanged and no energy is added; then the optional soft threshold.
 // tests/bloom_reference.py is the same arithmetic in NumPy.
+// The source may be larger than the rectangle this view owns (a split-screen view's corner of
+// the window's HDR image): every size comes from the push constants, and each tap's centre is
+// clamped half a texel inside the rectangle, so a bilinear tap never reads a texel outside it
+// (over a whole image this is what clamp-to-edge addressing gives).
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = 0) const uint FIRST = 0;
 
@@ -18,12 +22,18 @@ layout(set = 0, binding = 1, rgba16f) uniform writeonly image2D target;
 layout(push_constant) uniform Push {
     // threshold, threshold - knee, 2 knee, 0.25 / (knee + 1e-5); off where threshold <= 0
     vec4 threshold;
+    vec2 source_size;  // the rectangle read, texels from the source's corner (0, 0)
+    vec2 target_size;  // the rectangle written
 } push;
 
 const float HALF_MAX = 65504.0;  // the largest float16: an infinite HDR pixel stays finite
 
-vec3 tap(vec2 uv, vec2 texel, float x, float y) {
-    return textureLod(source, uv + vec2(x, y) * texel, 0.0).rgb;
+vec2 texel_scale;  // 1 / the whole source's size: texel coordinates to uv
+
+// the bilinear sample (x, y) source texels from `at` (in texels), kept inside the rectangle
+vec3 tap(vec2 at, float x, float y) {
+    vec2 q = clamp(at + vec2(x, y), vec2(0.5), push.source_size - 0.5);
+    return textureLod(source, q * texel_scale, 0.0).rgb;
 }
 
 float karis(vec3 c) {
@@ -40,18 +50,17 @@ vec3 soft_threshold(vec3 c) {
 }
 
 void main() {
-    ivec2 size = imageSize(target);
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-    if (p.x >= size.x || p.y >= size.y) {
+    if (p.x >= int(push.target_size.x) || p.y >= int(push.target_size.y)) {
         return;
     }
-    vec2 uv = (vec2(p) + 0.5) / vec2(size);
-    vec2 texel = 1.0 / vec2(textureSize(source, 0));
-    vec3 a = tap(uv, texel, -2.0, -2.0), b = tap(uv, texel, 0.0, -2.0), c = tap(uv, texel, 2.0, -2.0);
-    vec3 d = tap(uv, texel, -2.0, 0.0), e = tap(uv, texel, 0.0, 0.0), f = tap(uv, texel, 2.0, 0.0);
-    vec3 g = tap(uv, texel, -2.0, 2.0), h = tap(uv, texel, 0.0, 2.0), i = tap(uv, texel, 2.0, 2.0);
-    vec3 j = tap(uv, texel, -1.0, -1.0), k = tap(uv, texel, 1.0, -1.0);
-    vec3 l = tap(uv, texel, -1.0, 1.0), m = tap(uv, texel, 1.0, 1.0);
+    texel_scale = 1.0 / vec2(textureSize(source, 0));
+    vec2 at = (vec2(p) + 0.5) / push.target_size * push.source_size;
+    vec3 a = tap(at, -2.0, -2.0), b = tap(at, 0.0, -2.0), c = tap(at, 2.0, -2.0);
+    vec3 d = tap(at, -2.0, 0.0), e = tap(at, 0.0, 0.0), f = tap(at, 2.0, 0.0);
+    vec3 g = tap(at, -2.0, 2.0), h = tap(at, 0.0, 2.0), i = tap(at, 2.0, 2.0);
+    vec3 j = tap(at, -1.0, -1.0), k = tap(at, 1.0, -1.0);
+    vec3 l = tap(at, -1.0, 1.0), m = tap(at, 1.0, 1.0);
     vec3 boxes[5] = vec3[5]((a + b + d + e) * 0.25, (b + c + e + f) * 0.25, (d + e + g + h) * 0.25,
                             (e + f + h + i) * 0.25, (j + k + l + m) * 0.25);
     const float weights[5] = float[5](0.125, 0.125, 0.125, 0.125, 0.5);

@@ -16,13 +16,13 @@ layout(push_constant) uniform Params {
     mat4 inverse_projection;
     vec4 lens;
     vec4 shape;
-    ivec4 counts;
+    ivec4 counts;  // zw: the view's rectangle at the images' corner
 } pc;
 
 const float TOLERANCE = 0.05;
 const float EDGE[5] = float[5](0.5, 1.0, 1.0, 1.0, 0.5);
 
-ivec2 size;
+ivec2 size;  // the rectangle, taken as the whole image (a split-screen view's is a corner)
 
 vec3 view_position(ivec2 q, float d) {
     vec2 ndc = (vec2(q) + 0.5) / vec2(size) * 2.0 - 1.0;
@@ -32,7 +32,7 @@ vec3 view_position(ivec2 q, float d) {
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-    size = textureSize(depth_image, 0);
+    size = pc.counts.zw;
     if (any(greaterThanEqual(p, size))) return;
     vec4 centre = texelFetch(noisy, p, 0);
     float d = texelFetch(depth_image, p, 0).x;

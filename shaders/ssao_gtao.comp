@@ -20,13 +20,15 @@ layout(push_constant) uniform Params {
     mat4 inverse_projection;  // clip -> view space (reverse-Z: depth 1 at near, 0 far/infinity)
     vec4 lens;                // x: 0.5 * P[0][0] * width; clip w = y * z_view + z; w: radius (m)
     vec4 shape;               // x: intensity (exponent), y: falloff (fraction of the radius)
-    ivec4 counts;             // x: slices, y: steps a side
+    ivec4 counts;             // x: slices, y: steps a side, zw: the view's rectangle (below)
 } pc;
 
 const float PI = 3.14159265358979;
 const float HALF_PI = 1.57079632679490;
 const int BAYER[16] = int[16](0, 8, 2, 10, 12, 4, 14, 6, 3, 11, 1, 9, 15, 7, 13, 5);
 
+// The view's rectangle at the images' corner, taken as the whole image (a split-screen view's
+// depth is a corner of the window's: its texture size is not the view's).
 ivec2 size;
 
 float depth_at(ivec2 q) {
@@ -70,7 +72,7 @@ float horizon(ivec2 q, vec3 c, vec3 view_vec, float low, float falloff_mul, floa
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-    size = textureSize(depth_image, 0);
+    size = pc.counts.zw;
     if (any(greaterThanEqual(p, size))) return;
     float d = depth_at(p);
     if (d <= 0.0) {

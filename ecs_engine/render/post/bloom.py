@@ -91,9 +91,13 @@ class BloomDownsample(_BloomPass):
     def record(self, cb: Any, ctx: Any) -> None:
         chain = ctx.image(self.chain)
         self.gpu.track(chain)
-        source = ctx.image(self.hdr).view if self.mip == 0 else chain.mip_view(self.mip - 1)
-        kind = "first" if self.mip == 0 else "down"
-        self.gpu.dispatch(cb, kind, source, chain.mip_view(self.mip), chain.mip_extent(self.mip), self.push)
+        if self.mip == 0:  # the HDR image may be larger than the view's rectangle: read only it
+            hdr = ctx.image(self.hdr)
+            kind, source, source_size = "first", hdr.view, hdr.extent
+        else:
+            kind, source, source_size = "down", chain.mip_view(self.mip - 1), chain.mip_extent(self.mip - 1)
+        target, size = chain.mip_view(self.mip), chain.mip_extent(self.mip)
+        self.gpu.dispatch(cb, kind, source, target, size, self.push, source_size)
 
     def key(self) -> Hashable:
         return (self.mip, self.push)
@@ -118,10 +122,11 @@ class BloomUpsample(_BloomPass):
         self.gpu.track(chain)
         if self.mip == 0:
             hdr = ctx.image(self.hdr)
-            target, size = hdr.view, hdr.extent
+            target, size = hdr.view, hdr.extent  # the view's rectangle, maybe a corner of the image
         else:
             target, size = chain.mip_view(self.mip - 1), chain.mip_extent(self.mip - 1)
-        self.gpu.dispatch(cb, "up", chain.mip_view(self.mip), target, size, self.weights)
+        source = chain.mip_view(self.mip)
+        self.gpu.dispatch(cb, "up", source, target, size, self.weights, chain.mip_extent(self.mip))
 
     def key(self) -> Hashable:
         return (self.mip, self.weights)

@@ -15,7 +15,8 @@ from ...gpu.pipeline import compute_pipeline, pipeline_layout
 
 GROUP = 8  # the shaders' local size, each way
 _SETS = 64  # descriptor sets kept: one per (read view, written view) pair; N + N passes a chain
-_PUSH_BYTES = 16  # vec4 threshold (downsample); float src, dst (upsample)
+# vec4 threshold (downsample) or float src, dst (upsample); then vec2 source_size, target_size
+_PUSH_BYTES = 32
 
 
 class BloomPipelines:
@@ -76,17 +77,26 @@ class BloomPipelines:
             self.destroy()
 
     def dispatch(
-        self, cb: Any, kind: str, read_view: Any, write_view: Any, size: tuple[int, int], push: tuple[float, ...]
+        self,
+        cb: Any,
+        kind: str,
+        read_view: Any,
+        write_view: Any,
+        size: tuple[int, int],
+        push: tuple[float, ...],
+        source_size: tuple[int, int],
     ) -> None:
-        """Record one step: pipeline `kind` ("first", "down", "up") reading `read_view` (sampled,
-        SHADER_READ_ONLY_OPTIMAL) and writing `write_view` (storage, GENERAL) of `size` texels,
-        with up to four floats of push constants. Barriers are the frame graph's."""
+        """Record one step: pipeline `kind` ("first", "down", "up") reading the `source_size`
+        rectangle at the corner of `read_view` (sampled, SHADER_READ_ONLY_OPTIMAL) and writing the
+        `size` one of `write_view` (storage, GENERAL), with up to four floats of parameters. The
+        rectangles are the graph's extents, not the images': a split-screen view imports a corner
+        of the window's HDR image. Barriers are the frame graph's."""
         vk = self.vk
         lib = vk.lib
         point = vk.VK_PIPELINE_BIND_POINT_COMPUTE
         lib.vkCmdBindPipeline(cb, point, self.pipelines[kind])
         lib.vkCmdBindDescriptorSets(cb, point, self.layout, 0, 1, self._set_for(read_view, write_view), 0, vk.ffi.NULL)
-        data = struct.pack(f"<{len(push)}f", *push).ljust(_PUSH_BYTES, b"\0")
+        data = struct.pack(f"<{len(push)}f", *push).ljust(16, b"\0") + struct.pack("<4f", *source_size, *size)
         vk.ffi.memmove(self._push, data, _PUSH_BYTES)
         lib.vkCmdPushConstants(cb, self.layout, vk.VK_SHADER_STAGE_COMPUTE_BIT, 0, _PUSH_BYTES, self._push)
         lib.vkCmdDispatch(cb, -(-size[0] // GROUP), -(-size[1] // GROUP), 1)

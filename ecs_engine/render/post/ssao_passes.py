@@ -175,7 +175,8 @@ class CompositePass(_ComputePass):
         return None  # it reads no projection
 
     def _push(self, w: int, h: int) -> bytes:
-        return bytes(PUSH_BYTES)
+        # only counts.zw, the rectangle: the HDR image may be the window's, larger than the view
+        return bytes(PUSH_BYTES - 8) + np.array([w, h], np.int32).tobytes()
 
     def setup(self, b: PassBuilder) -> None:
         b.read(self.ao, Access.COMPUTE_SAMPLED)

@@ -82,10 +82,12 @@ class SsaoView:
 
 def push_constants(projection: np.ndarray, settings: SsaoSettings, extent: tuple[int, int]) -> bytes:
     """inverse projection (column-major for GLSL), lens (pixels per view unit at w = 1, the clip
-    w row's z and constant terms, radius), shape (intensity, falloff), counts (slices, steps)."""
+    w row's z and constant terms, radius), shape (intensity, falloff), counts (slices, steps,
+    `extent`: the view's rectangle at the images' corner, which the shaders take as the whole
+    image: a split-screen view's depth and HDR images are the window's, larger than it)."""
     p = np.asarray(projection, dtype=np.float64)
     inverse = np.linalg.inv(p).astype(np.float32)
     lens = np.array([0.5 * p[0, 0] * extent[0], p[3, 2], p[3, 3], settings.radius], np.float32)
     shape = np.array([settings.intensity, settings.falloff, 0.0, 0.0], np.float32)
-    counts = np.array([settings.slices, settings.steps, 0, 0], np.int32)
+    counts = np.array([settings.slices, settings.steps, extent[0], extent[1]], np.int32)
     return inverse.T.tobytes() + lens.tobytes() + shape.tobytes() + counts.tobytes()
