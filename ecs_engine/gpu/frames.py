@@ -26,7 +26,9 @@ if TYPE_CHECKING:
     from .device import Device
 
 FRAMES_IN_FLIGHT = 2
-MAX_PASSES = 30  # marks a frame may time; queries a slot holds: these, its start and its end
+MAX_PASSES = (
+    64  # marks a frame may time (the culling steps mark one each); queries a slot holds: these, its start and its end
+)
 
 
 @dataclass
