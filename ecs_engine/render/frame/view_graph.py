@@ -99,10 +99,6 @@ class ToneMapView(Pass):
         return (self.frame.tone_map, placement.rect, placement.camera)
 
 
-class OverlayView(OverlayOver):
-    """The overlay over the whole target, not the view's rectangle (OverlayOver's own now)."""
-
-
 class ViewGraph(OutputGraph):
     """The output graphs of the views' frames at one place in the drawing order (`first`: the
     frame that clears the target); `placement` is set before each frame."""
@@ -130,7 +126,7 @@ class ViewGraph(OutputGraph):
                 if self.first:
                     graph.add_pass(ClearTarget(self.frame))
                 graph.add_pass(ToneMapView(self.output, self.frame, self))
-            graph.add_pass(OverlayView(self.frame))
+            graph.add_pass(OverlayOver(self.frame))  # after the view's passes: over the whole target
         except BaseException:
             graph.destroy()
             raise
