@@ -97,7 +97,7 @@ class ScenePasses:
             maps,
             image.handle if image is not None else None,
             self.reads,
-            tuple(view.layer for view in shadows.views) if shadows.views else (),
+            tuple([view.layer for view in shadows.views]) if shadows.views else (),
         )
 
     def import_into(self, graph: FrameGraph) -> None:

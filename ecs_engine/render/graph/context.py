@@ -170,6 +170,23 @@ class PassContext:
             self._made[(self.pass_name, _TOKEN, token)] = made
         self._begin(made, secondaries)
 
+    def render_secondaries(
+        self, buffers: Any, token: Hashable, depth: str | None = None, layer: int = 0, area: Any = None
+    ) -> None:
+        """begin_rendering(depth=, layer=, area=, secondaries=True, token=), `buffers` (secondary
+        command buffers, or none) executed, end_rendering: one call per rendering for a pass
+        that begins many a frame (the shadow maps' layers), a known token costing one lookup."""
+        lib, cb = self.vk.lib, self._cb
+        made = None if self._rendering else self._made.get((self.pass_name, _TOKEN, token))
+        if made is None:
+            self.begin_rendering(depth=depth, layer=layer, area=area, secondaries=True, token=token)
+        else:
+            lib.vkCmdBeginRendering(cb, made.info)
+        if buffers:
+            lib.vkCmdExecuteCommands(cb, len(buffers), self.vk.ffi.new("VkCommandBuffer[]", buffers))
+        lib.vkCmdEndRendering(cb)
+        self._rendering = False
+
     def _begin(self, made: Rendering, secondaries: bool) -> None:
         lib, cb = self.vk.lib, self._cb
         lib.vkCmdBeginRendering(cb, made.info)

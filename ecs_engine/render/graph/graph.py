@@ -308,7 +308,7 @@ class FrameGraph:
         buffers: dict[str, GraphBuffer],
     ) -> Any:
         handles = tuple(
-            images[r.resource].handle if r.base_mip is not None else buffers[r.resource].handle for r in rows
+            [images[r.resource].handle if r.base_mip is not None else buffers[r.resource].handle for r in rows]
         )
         # per batch and handles: the frame slots' buffers alternate frame by frame
         cached = self._infos.get((batch, handles))

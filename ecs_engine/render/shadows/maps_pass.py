@@ -110,7 +110,7 @@ class ShadowPass:
         assert self.maps is not None
         if not views:
             return False
-        resolution = max(v.resolution for v in views)
+        resolution = max([v.resolution for v in views])
         if resolution == self.maps.resolution and len(views) <= self.maps.layers:
             return False
         self.device.wait_idle()
@@ -317,8 +317,6 @@ class ShadowPass:
         (maps_graph.py: it declares the layers, so the graph places the barriers); the first
         maps were cleared whole when made (gpu/shadow_maps.py), so none is read undefined."""
         assert self.maps is not None
-        vk = self.vk
-        lib = vk.lib
         maps = self.maps
         drawn = {v.layer: s for v, s in zip(views, secondaries, strict=True)}
         sizes = {v.layer: v.resolution for v in views}
@@ -328,11 +326,7 @@ class ShadowPass:
         for layer in drawn:  # each view's corner of its layer (all were cleared when made: ShadowMaps)
             size = min(sizes[layer], maps.resolution)  # as target_state's
             area, token = (0, 0, size, size), (layer, size, handle)  # (new maps: another handle)
-            ctx.begin_rendering(depth="shadow_maps", layer=layer, area=area, secondaries=True, token=token)
-            buffers = drawn.get(layer)
-            if buffers:
-                lib.vkCmdExecuteCommands(cb, len(buffers), vk.ffi.new("VkCommandBuffer[]", buffers))
-            ctx.end_rendering()
+            ctx.render_secondaries(drawn.get(layer), token, "shadow_maps", layer, area)
 
     def destroy(self) -> None:
         self.owned.destroy()
