@@ -1,4 +1,4 @@
-"""The editor's viewport as a render target (issue 36, "cameras with targets"): the scene is drawn
+"""The editor's viewport as a render target (a camera with a target): the scene is drawn
 into an image of its own at exactly the Scene window's pixel size, which the UI then draws as
 one of its images (render/ui/imgui_pass.py `register_image`), over a window the UI clears; so no
 scene is shaded under the docked panels.
