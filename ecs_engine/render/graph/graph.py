@@ -27,6 +27,17 @@ if TYPE_CHECKING:
 
 
 @dataclass
+class _Recording:
+    """What execute records with for one compile and one state of the imports."""
+
+    state: object  # the Imports.state it was made for (held: its id stays unique)
+    images: dict[str, GraphImage]
+    buffers: dict[str, GraphBuffer]
+    ctx: PassContext
+    infos: dict[str, tuple[Any, Any]] = field(default_factory=dict)  # batch -> (pointer, info)
+
+
+@dataclass
 class Compiled:
     """One compile's result: the structure (order, culled, lifetimes), where the transients
     live, and the barrier plan; with a device, the transients themselves."""
@@ -51,9 +62,8 @@ class FrameGraph:
         self._outputs: list[str] = []
         self._owned = Owned(device) if device is not None else None
         self.compiled: Compiled | None = None
-        # per barrier batch and the handles it was made for: its VkDependencyInfo (made once per
-        # compile and handles: a frame slot's buffers come round again)
-        self._infos: dict[tuple[str, tuple], Any] = {}
+        # per Imports.state since the compile (a frame slot's comes round again): _recording's
+        self._recordings: dict[int, _Recording] = {}
         self._renderings: dict[tuple, Any] = {}  # PassContext.begin_rendering's, per compile
         self.compiles = 0  # how many compiles did work (a cached one does none)
         # what a compile depends on, kept so that the per-frame check costs little: a count
@@ -242,7 +252,7 @@ class FrameGraph:
         formats = {name: res.format for name, res in structure.resources.items()}
         barriers = plan_barriers(structure, packing)
         self.compiled = Compiled(signature, structure, packing, barriers, transients, formats)
-        self._infos.clear()
+        self._recordings.clear()
         self._renderings.clear()
         self.compiles += 1
 
@@ -268,12 +278,22 @@ class FrameGraph:
         return self._ready().packing.unaliased_bytes
 
     # ------------------------------------------------------------------ recording
-    def _resources(self, c: Compiled) -> tuple[dict[str, GraphImage], dict[str, GraphBuffer]]:
-        images = dict(c.transients.images) if c.transients else {}
-        buffers = dict(c.transients.buffers) if c.transients else {}
+    def _recording(self, c: Compiled) -> _Recording:
+        """What execute records with, for this compile and the imports as they stand."""
+        state = self._table.state
+        kept = self._recordings.get(id(state))
+        if kept is not None and kept.state is state:
+            return kept
+        t = c.transients
+        images, buffers = (dict(t.images), dict(t.buffers)) if t else ({}, {})
         images.update(self._table.images)
         buffers.update(self._table.buffers)
-        return images, buffers
+        s, made = c.structure, self._renderings
+        ctx = PassContext(self.device, s.extent, images, buffers, c.formats, s.dont_store, made)
+        if len(self._recordings) >= 16:  # imports come and go (swapchain remakes, grown buffers)
+            self._recordings.clear()
+        kept = self._recordings[id(state)] = _Recording(state, images, buffers, ctx)
+        return kept
 
     def execute(self, cb: Any, on_pass_end: Callable[[str], None] | None = None) -> None:
         """Record the passes that run, each after its batch of barriers, then the imports'
@@ -283,47 +303,35 @@ class FrameGraph:
         if self.device is None:
             raise UsageError("a frame graph without a device only plans; it cannot execute")
         lib = self.device.vk.lib
-        images, buffers = self._resources(c)
-        s = c.structure
-        ctx = PassContext(self.device, s.extent, images, buffers, c.formats, s.dont_store, self._renderings)
+        rec = self._recording(c)
+        ctx = rec.ctx
+        ctx._rendering = False  # a pass that raised last frame may have left it begun
+        uses, before = c.structure.uses, c.barriers.before
         by_name = self._passes_by_name()
-        for name in s.order:
-            rows = c.barriers.before[name]
+        for name in c.structure.order:
+            rows = before[name]
             if rows:
-                lib.vkCmdPipelineBarrier2(cb, self._info(c, name, rows, images, buffers))
-            ctx._enter(cb, name, s.uses[name])
+                lib.vkCmdPipelineBarrier2(cb, self._info(c, rec, name, rows))
+            ctx._enter(cb, name, uses[name])
             by_name[name].record(cb, ctx)
             ctx._leave()
             if on_pass_end is not None:
                 on_pass_end(name)
         if c.barriers.after:
-            lib.vkCmdPipelineBarrier2(cb, self._info(c, "", c.barriers.after, images, buffers))
+            lib.vkCmdPipelineBarrier2(cb, self._info(c, rec, "", c.barriers.after))
 
-    def _info(
-        self,
-        c: Compiled,
-        batch: str,
-        rows: list[Barrier],
-        images: dict[str, GraphImage],
-        buffers: dict[str, GraphBuffer],
-    ) -> Any:
-        handles = tuple(
-            [images[r.resource].handle if r.base_mip is not None else buffers[r.resource].handle for r in rows]
-        )
-        # per batch and handles: the frame slots' buffers alternate frame by frame
-        cached = self._infos.get((batch, handles))
+    def _info(self, c: Compiled, rec: _Recording, batch: str, rows: list[Barrier]) -> Any:
+        """The VkDependencyInfo of a batch of barriers, made once per recording state."""
+        cached = rec.infos.get(batch)
         if cached is not None:
             return cached[0]
         vk = self.device.vk
         aspects = {n: aspect_of(vk, res.format) for n, res in c.structure.resources.items() if res.kind == "image"}
         drop = EMPTY if self.device.features.get("rayTracing") else RAY_TRACING_ONLY
-        info = dependency_info(
-            vk, rows, {n: i.handle for n, i in images.items()}, {n: b.handle for n, b in buffers.items()}, aspects, drop
-        )
+        images = {n: i.handle for n, i in rec.images.items()}
+        info = dependency_info(vk, rows, images, {n: b.handle for n, b in rec.buffers.items()}, aspects, drop)
         pointer = vk.ffi.addressof(info)  # for the raw call (the binding's wrapper costs more)
-        if len(self._infos) >= 256:  # imports come and go (swapchain remakes, grown buffers)
-            self._infos.clear()
-        self._infos[(batch, handles)] = (pointer, info)
+        rec.infos[batch] = (pointer, info)
         return pointer
 
     def attachment_formats(self, colors: tuple[str, ...] = (), depth: str | None = None) -> AttachmentFormats:

@@ -32,6 +32,8 @@ class Imports:
         self._names: list[str] | None = None  # sorted
         self._handles: tuple | None = None  # handles()' answer until an import changes
         self._shared = False  # the dicts are a snapshot's: copied before a change (_use)
+        self._state: object | None = None  # see `state`
+        self._states: dict[tuple, tuple[object, tuple]] = {}
 
     def image(
         self,
@@ -94,16 +96,31 @@ class Imports:
     def snapshot(self) -> tuple:
         """The imports as they stand, for `restore` (a frame slot's, brought back when it comes
         round again with the same inputs)."""
-        return (dict(self.by_name), dict(self.images), dict(self.buffers), dict(self._ints), self.handles())
+        return (dict(self.by_name), dict(self.images), dict(self.buffers), dict(self._ints), self.handles(), self.state)
 
     def restore(self, snapshot: tuple) -> None:
         """The imports of `snapshot`; the caller knows their shapes are today's (the graph's
         version is the one it was taken at), so nothing recompiles."""
-        by_name, images, buffers, ints, handles = snapshot
+        by_name, images, buffers, ints, handles, state = snapshot
         if by_name.keys() != self.by_name.keys():
             self._names = None
         self.by_name, self.images, self.buffers, self._ints, self._handles = by_name, images, buffers, ints, handles
-        self._shared = True
+        self._shared, self._state = True, state
+
+    @property
+    def state(self) -> object:
+        """One object per set of imports (the same made resources: a frame slot's come round
+        again every few frames), what the graph keeps its recording structs by."""
+        if self._state is None:
+            made = (*self.images.values(), *self.buffers.values())
+            key = tuple(map(id, made))
+            kept = self._states.get(key)
+            if kept is None:
+                if len(self._states) >= 16:  # imports come and go (swapchain remakes, grown buffers)
+                    self._states.clear()
+                kept = self._states[key] = (object(), made)  # `made` held: the ids stay theirs
+            self._state = kept[0]
+        return self._state
 
     def handles(self) -> tuple:
         """(name, handle, view) of each import as integers, by name: what frame replay's key holds."""
@@ -131,7 +148,7 @@ class Imports:
         if self._shared:  # a snapshot's dicts: this change is not the snapshot's
             self.by_name, self.images, self.buffers = dict(self.by_name), dict(self.images), dict(self.buffers)
             self._ints, self._shared = dict(self._ints), False
-        self.by_name[name], self._ints[name], self._handles = imported, ints, None
+        self.by_name[name], self._ints[name], self._handles, self._state = imported, ints, None, None
         if imported.kind == "image":
             self.images[name] = resource
         else:

@@ -298,8 +298,7 @@ class OutputGraph(OutputImports):
         target = self.output.target
         form = target.form
         copies = self._copies
-        order = [p.name for p in graph.passes]
-        posts = [n for n in order if n in self._post_names]
+        posts = [p.name for p in graph.passes if p.name in self._post_names] if mark is not None else None
         last_post = posts[-1] if posts else None
         frame = self.frame
         frame.secondaries = secondaries
