@@ -44,6 +44,7 @@ from ..extract.frame_data import FrameData, FrameExtractor
 from ..extract.views import ViewData, extract_views, several_views
 from ..lighting.deferred import DeferredPass
 from ..passes.output_graph import OutputGraph
+from .draw_frame import FrameRequest
 from .texture_views import TextureGraph, TextureTarget
 from .view_graph import Placement, ViewGraph
 
@@ -84,20 +85,12 @@ class Views:
             found = self.extractors[camera] = FrameExtractor(self.threads, chunk_rows)
         return found
 
-    def draw(
-        self,
-        r: Any,
-        world: Any,
-        readback: bool,
-        framebuffer: Any,
-        extent: tuple[int, int] | None,
-        wait: Any,
-        signal: Any,
-        dt: float | None,
-    ) -> FrameStats | None:
-        """The frame of every view (renderer `r`: render's arguments), or None when the world
+    def draw(self, r: Any, request: FrameRequest) -> FrameStats | None:
+        """The frame of every view (renderer `r`: render's `request`), or None when the world
         draws its one camera over the whole window (Renderer.render's own path)."""
-        width, height = extent or (r.target.width, r.target.height)
+        world, readback, framebuffer = request.world, request.readback, request.framebuffer
+        wait, signal, dt = request.wait, request.signal, request.dt
+        width, height = request.extent or (r.target.width, r.target.height)
         views = extract_views(world, width, height) if several_views(world) else ()
         window = [v for v in views if v.texture is None]
         split = bool(views) and not (len(window) == 1 and window[0].rect == (0, 0, width, height))
