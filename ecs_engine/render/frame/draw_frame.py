@@ -58,6 +58,7 @@ class FrameDrawing:
     meshes: Any
     secondaries: Any
     replay: Any
+    views: Any
     overlay: Any
     ambient: Any
     tone_map: str
@@ -108,6 +109,7 @@ class FrameDrawing:
         if self.jobs is not None and self.jobs.generation != self._jobs_generation:
             self._forget_old_threads()
         frame, gpu_ms = self.frames.acquire()  # its primary is opened only when it must be recorded
+        self.views.recordings.take(self, frame)  # a camera view's own recording in the slot (view_frames.py)
         slot = frame.slot
         pf = self.per_frame[slot]
         if self.shadows.ensure(views):  # new maps (the device was waited for): every set names them
