@@ -115,3 +115,37 @@ def test_view_recordings_go_with_their_views() -> None:
             assert renderer.replay.replayed - replayed == 3
         finally:
             renderer.destroy()
+
+
+def test_a_resized_worker_pool_takes_the_views_pools_of_its_old_threads() -> None:
+    """The worker threads replaced: the secondaries' pools the views keep for threads that are
+    gone are destroyed (as the slots' own are), and the views draw as before."""
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.gpu.secondary import _ThreadPool
+    from ecs_engine.jobs import JobPool
+    from ecs_engine.render.frame.renderer import Renderer
+
+    with headless_gpu(W, H) as gpu, JobPool(2) as pool:
+        mesh = gpu.meshes.add(cube_mesh())
+        world, _ = _world(mesh, 3)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, jobs=pool)
+        schedule = default_schedule()
+        try:
+            schedule.run(world, 0.0)
+            for _ in range(3):
+                renderer.render(world)
+            recs = [rec for slots in renderer.views.recordings.views.values() for rec in slots if rec is not None]
+            assert len(recs) == 6  # 3 views in 2 slots
+            recs[0].secondaries[-1] = _ThreadPool(gpu.device)  # a thread's that is gone (no ident is -1)
+            for _ in range(2):
+                renderer.render(world)
+            assert -1 in recs[0].secondaries  # the same threads: nothing goes
+            pool.resize(3)
+            for _ in range(3):
+                renderer.render(world, readback=True)
+            assert all(-1 not in rec.secondaries for rec in recs)
+            picture = gpu.target.pixels()[..., :3].astype(np.int64)
+        finally:
+            renderer.destroy()
+        expected = _fresh(gpu, world)
+    assert np.array_equal(picture, expected)

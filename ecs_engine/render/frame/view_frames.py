@@ -22,10 +22,15 @@ view's kept chunks forget what they were written from (they write their rows, an
 back their secondaries when the draws are the same).
 
 A view's recordings are destroyed when the view goes (`drop`), after the device is idle (frames
-in flight may execute them)."""
+in flight may execute them); the secondaries' pools of worker threads that are gone, when the
+renderer's pool was resized (as the slots' own: gpu/secondary.py's keep_threads).
+
+The frame ring, secondaries and replay are reached by their private parts here (`_submits`,
+`_pools`, `_recorded`): what is lent and given back is exactly what those keep per slot."""
 
 from __future__ import annotations
 
+import threading
 from typing import Any
 
 
@@ -71,6 +76,7 @@ class ViewRecordings:
         self.device: Any = None  # (its recordings')
         self._last: dict[int, Any] = {}  # per slot: the view whose frame drew there last
         self._lent: tuple[Any, int, SlotRecording, tuple[Any, ...]] | None = None  # take's: what to give back
+        self._jobs = 0  # the renderer's worker pool generation the recordings' thread pools are of
 
     def take(self, r: Any, frame: Any) -> None:
         """Renderer `r`'s slot `frame` (its fence waited for) gets the owner's recording there
@@ -78,6 +84,8 @@ class ViewRecordings:
         owner = self.owner
         if owner is None:
             return
+        if r._jobs_generation != self._jobs:
+            self._keep_threads(r)
         slot = frame.slot
         slots = self.views.setdefault(owner, [None] * len(r.frames.frames))
         rec = slots[slot]
@@ -110,6 +118,16 @@ class ViewRecordings:
         frame.pool, frame.command_buffer, frame.plain_submit = pool, command_buffer, plain_submit
         r.secondaries._pools[slot], r.replay._recorded[slot] = secondaries, None
         ring._submits.update(submits)
+
+    def _keep_threads(self, r: Any) -> None:
+        """The pools of worker threads that are gone, destroyed (the renderer's own were, with the
+        device idle, just before this frame's slot was waited for: Renderer._forget_old_threads)."""
+        self._jobs = r._jobs_generation
+        alive = {t.ident for t in threading.enumerate()}
+        vk = r.device.vk
+        for rec in [rec for slots in self.views.values() for rec in slots if rec is not None]:
+            for ident in [k for k in rec.secondaries if k not in alive]:
+                vk.vkDestroyCommandPool(r.device.handle, rec.secondaries.pop(ident).handle, None)
 
     def drop(self, r: Any, keep: set[Any]) -> None:
         """The recordings of views not in `keep`, once the device is idle."""
