@@ -6,7 +6,7 @@ extent and output graph."""
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from functools import partial
 from typing import Any
 
@@ -20,6 +20,24 @@ from ..passes.set_aside import SetAsidePass
 from ..shadows.maps_pass import ShadowPass
 from .jobs import FrameJobs, job_name
 from .replay import frame_key
+
+
+@dataclass(frozen=True)
+class FrameRequest:
+    """What one `Renderer.render` call asks (its arguments, made once there): the `world` to draw,
+    `readback` of the target, the output image (`framebuffer`; None: the target's own) at
+    `extent` (None: the target's size), the swapchain's semaphores to `wait` for and `signal`,
+    and `dt` (seconds since the last frame, for temporal culling). Handed down unchanged through
+    the editor's viewport (viewport.py, which names its own image and size) and the camera views
+    (views.py)."""
+
+    world: Any
+    readback: bool = False
+    framebuffer: Any = None
+    extent: tuple[int, int] | None = None
+    wait: Any = None
+    signal: Any = None
+    dt: float | None = None
 
 
 class FrameDrawing:
@@ -40,6 +58,7 @@ class FrameDrawing:
     meshes: Any
     secondaries: Any
     replay: Any
+    views: Any
     overlay: Any
     ambient: Any
     tone_map: str
@@ -90,6 +109,7 @@ class FrameDrawing:
         if self.jobs is not None and self.jobs.generation != self._jobs_generation:
             self._forget_old_threads()
         frame, gpu_ms = self.frames.acquire()  # its primary is opened only when it must be recorded
+        self.views.recordings.take(self, frame)  # a camera view's own recording in the slot (view_frames.py)
         slot = frame.slot
         pf = self.per_frame[slot]
         if self.shadows.ensure(views):  # new maps (the device was waited for): every set names them

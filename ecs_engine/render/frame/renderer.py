@@ -37,7 +37,7 @@ from ..lighting.environment import EnvironmentMap
 from ..passes.set_aside import SetAsidePass
 from ..raytracing.shadows import RayShadows
 from ..shadows.maps_pass import ShadowPass
-from .draw_frame import FrameDrawing
+from .draw_frame import FrameDrawing, FrameRequest
 from .output_passes import OutputPasses
 from .path_settings import MODES, PATHS, RECORDER_NAMES, PathSettings  # noqa: F401 (importers name MODES here)
 from .replay import FrameReplay
@@ -230,33 +230,27 @@ class Renderer(FrameDrawing, PathSettings, TargetForms, CullingSetting):
         Cameras with a Viewport draw each into its rectangle of the window (views.py). With the
         editor's `viewport` sized, the scene is drawn into its image and the UI into the window
         (viewport.py)."""
+        request = FrameRequest(world, readback, framebuffer, extent, wait, signal, dt)
         viewport = self.viewport
         if viewport is not None and self.overlay is not None and viewport.area(self.target) is not None:
-            return viewport.draw(self, world, readback, framebuffer, extent, wait, signal, dt)
-        return self.draw_scene(world, readback, framebuffer, extent, wait, signal, dt)
+            return viewport.draw(self, request)
+        return self.draw_scene(request)
 
-    def draw_scene(
-        self,
-        world: World,
-        readback: bool,
-        framebuffer: Any,
-        extent: tuple[int, int] | None,
-        wait: Any,
-        signal: Any,
-        dt: float | None,
-    ) -> FrameStats:
-        """`render` into the target as it stands (the viewport's while it draws)."""
+    def draw_scene(self, request: FrameRequest) -> FrameStats:
+        """`render`'s `request` into the target as it stands (the viewport's while it draws)."""
+        world = request.world
         if self.views.on or several_views(world):
-            drawn = self.views.draw(self, world, readback, framebuffer, extent, wait, signal, dt)
+            drawn = self.views.draw(self, request)
             if drawn is not None:
                 return drawn
         materials = self.materials(world)
         self._blends = materials.blends
-        if framebuffer is None:
+        if request.framebuffer is None:
             self.ensure_output()  # the target's own image: its form can change here
-        width, height = extent or (self.target.width, self.target.height)
-        data = self.extract(world, width, height, materials, dt)  # before any GPU state: a bad world fails here
-        return self._draw(data, materials, width, height, framebuffer, readback, wait, signal)
+        width, height = request.extent or (self.target.width, self.target.height)
+        data = self.extract(world, width, height, materials, request.dt)  # before any GPU state: a bad world fails here
+        wait, signal = request.wait, request.signal
+        return self._draw(data, materials, width, height, request.framebuffer, request.readback, wait, signal)
 
     def destroy(self) -> None:
         self.device.wait_idle()

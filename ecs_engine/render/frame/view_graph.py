@@ -138,21 +138,10 @@ class ViewGraph(OutputGraph):
     def _place_readback(self, graph: FrameGraph, wanted: bool) -> None:
         super()._place_readback(graph, wanted and self.placement.last)
 
-    def _import_attachments(self, graph: FrameGraph, form: Form, attachments: Any) -> None:
-        """The HDR colour and depth as the view's size: its picture is drawn from their corner."""
-        images = attachments.images
-        named = [("hdr", images[-1])] + ([("depth", images[0])] if attachments.samples == 1 else [])
-        extent = self.placement.rect[2:]
-        for name, image in named:
-            graph.import_image(
-                name,
-                handle=image.handle,
-                view=image.view,
-                format=image.format,
-                extent=extent,
-                layout_before="UNDEFINED",
-                layout_after="UNDEFINED",
-            )
+    def _attachments_extent(self) -> tuple[int, int]:
+        """The HDR colour and depth at the view's size: its picture is drawn from their corner."""
+        width, height = self.placement.rect[2:]
+        return width, height
 
     def _import_target(self, graph: FrameGraph, rendering: Any, extent: tuple[int, int]) -> None:
         target = self.output.target

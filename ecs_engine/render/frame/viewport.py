@@ -19,6 +19,7 @@ scene is shaded under the docked panels.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 from ...gpu.array_image import nearest_sampler
@@ -26,6 +27,7 @@ from ...gpu.memory import Image
 from ...gpu.owned import Owned
 from ...gpu.scene_attachments import Form, SceneAttachments, TargetForm
 from ..passes.output_frame import WindowImage
+from .draw_frame import FrameRequest
 
 
 class ViewportTarget(TargetForm):
@@ -149,22 +151,24 @@ class EditorViewport:
         w, h = min(int(self.size[0]), int(window.width)), min(int(self.size[1]), int(window.height))
         return (w, h) if w > 0 and h > 0 else None
 
-    def draw(self, r: Any, world: Any, readback: bool, framebuffer: Any, extent: Any, *rest: Any) -> Any:
-        """Renderer `r`'s frame (render's arguments) with the scene into the viewport image at
-        `size` and the UI into the window (see the module)."""
+    def draw(self, r: Any, request: FrameRequest) -> Any:
+        """Renderer `r`'s frame of `request` with the scene into the viewport image at `size`
+        and the UI into the window (see the module)."""
+        framebuffer = request.framebuffer
         window = r.target
         size = self.area(window)
         assert size is not None
         target = self.ensure(window)
         image, view = window.output_image(framebuffer if framebuffer is not None else window.framebuffer)
-        whole = extent or (window.width, window.height)
+        whole = request.extent or (window.width, window.height)
         target.window_image = WindowImage(image, view, window.color_format, tuple(whole), window.final_layout)
         output = r.output
         r.target = output.target = target
         try:
             # the target's own image when the caller named none (its form may change here, as
             # render's own path does), else named: the form asked stays for this frame
-            return r.draw_scene(world, readback, None if framebuffer is None else target.color, size, *rest)
+            drawn = replace(request, framebuffer=None if framebuffer is None else target.color, extent=size)
+            return r.draw_scene(drawn)
         finally:
             r.target = output.target = window
             target.window_image = None

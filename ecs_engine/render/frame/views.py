@@ -8,11 +8,11 @@ form at least (target_forms.py). A texture view whose texture no material sample
 
 - A world whose cameras have no Viewport or RenderTexture draws as before: `several_views` is
   the one check the window's one camera pays (kept per world structure).
-- Each view's frame takes the next frame slot (its buffers, descriptor set, secondaries, replay
-  record are the slot's); the swapchain's acquire semaphore is waited by the first view's submit,
-  the present semaphore signalled by the last one's; the readback and the overlay go with the
-  last view. The queue runs the submits in order; each graph's barriers chain with the one
-  before's (view_graph.py).
+- Each view's frame takes the next frame slot (its buffers and descriptor set are the slot's;
+  its primary, secondaries and replay record the view's own in that slot: view_frames.py); the
+  swapchain's acquire semaphore is waited by the first view's submit, the present semaphore
+  signalled by the last one's; the readback and the overlay go with the last view. The queue
+  runs the submits in order; each graph's barriers chain with the one before's (view_graph.py).
 - Per view: its camera's matrices and layers, a FrameExtractor per camera entity (temporal
   culling's history, the planes and chunk splits kept per camera), the shadow views planned
   from its camera (cascades follow it), its light clusters, its output graph (view_graph.py: one
@@ -22,9 +22,9 @@ form at least (target_forms.py). A texture view whose texture no material sample
   and writes no set once made. Shared: the world's snapshot of materials, textures, meshes,
   the environment and the shadow map images (drawn again in each view's frame, before its
   scene reads them).
-- Frame replay is per slot, and a slot's key names its view's graph, rectangle and camera: with
-  as many views as slots each view keeps its slot and replays; otherwise the views take turns
-  over the slots and every frame records (correct, at the cost of recording).
+- Frame replay is per view and slot, and a frame's key names its view's graph, rectangle and
+  camera: a still view replays in every slot it has recorded in, however many views take turns
+  over the slots (view_frames.py; a view gone takes its command buffers with it).
 - Post effects run in each view's graph at the view's size: bloom and SSAO over its "hdr",
   FXAA into its rectangle (view_graph.py); a texture view's into its whole target.
   Refused with several views (UsageError, one message): occlusion culling (the GPU keeps one
@@ -44,7 +44,9 @@ from ..extract.frame_data import FrameData, FrameExtractor
 from ..extract.views import ViewData, extract_views, several_views
 from ..lighting.deferred import DeferredPass
 from ..passes.output_graph import OutputGraph
+from .draw_frame import FrameRequest
 from .texture_views import TextureGraph, TextureTarget
+from .view_frames import ViewRecordings
 from .view_graph import Placement, ViewGraph
 
 
@@ -63,6 +65,7 @@ class Views:
         self.lighting: dict[Any, DeferredPass] = {}  # the deferred lighting per view (_lighting)
         self.effects: dict[Any, tuple[list[Any], list[Any]]] = {}  # per view: (the window's, copies)
         self.drawn: list[tuple[str, Any]] = []  # the last frame's views: (what, its output graph)
+        self.recordings = ViewRecordings()  # each view's own per frame slot (frame replay: view_frames.py)
 
     def graph(self, r: Any, index: int) -> ViewGraph:
         """The output graph of the window's view at `index`, with the output's ldr effects (made
@@ -84,20 +87,12 @@ class Views:
             found = self.extractors[camera] = FrameExtractor(self.threads, chunk_rows)
         return found
 
-    def draw(
-        self,
-        r: Any,
-        world: Any,
-        readback: bool,
-        framebuffer: Any,
-        extent: tuple[int, int] | None,
-        wait: Any,
-        signal: Any,
-        dt: float | None,
-    ) -> FrameStats | None:
-        """The frame of every view (renderer `r`: render's arguments), or None when the world
+    def draw(self, r: Any, request: FrameRequest) -> FrameStats | None:
+        """The frame of every view (renderer `r`: render's `request`), or None when the world
         draws its one camera over the whole window (Renderer.render's own path)."""
-        width, height = extent or (r.target.width, r.target.height)
+        world, readback, framebuffer = request.world, request.readback, request.framebuffer
+        wait, signal, dt = request.wait, request.signal, request.dt
+        width, height = request.extent or (r.target.width, r.target.height)
         views = extract_views(world, width, height) if several_views(world) else ()
         window = [v for v in views if v.texture is None]
         split = bool(views) and not (len(window) == 1 and window[0].rect == (0, 0, width, height))
@@ -123,10 +118,17 @@ class Views:
         plain, overlay, target, lighting, post = output.graph, r.overlay, r.target, output.deferred, output.post
         stats = []
         self.drawn = []
+        owners = [
+            ("texture", view.texture) if handle is not None else ("window", i - len(textures))
+            for i, (view, handle) in enumerate(drawn)
+        ]
+        recordings = self.recordings
+        recordings.drop(r, set(owners))  # the views gone: their command buffers
         try:
             r.overlay = None
             for i, ((view, handle), data) in enumerate(zip(drawn, datas, strict=True)):
                 first, last = i == 0, i == len(drawn) - 1
+                recordings.owner = owners[i]
                 # the acquire's wait goes with the first submit that touches the window's image:
                 # the last view's where its UI draws the window (the editor's viewport: viewport.py)
                 waits = last if getattr(target, "window_image", None) is not None else first
@@ -138,6 +140,7 @@ class Views:
                     output.post = self._effects(r, view.texture, post)
                     r.target = output.target = self._target(r, view, target)
                     stats.append(r._draw(data, materials, w, h, None, False, *semaphores))
+                    recordings.give_back(r)
                     r.target = output.target = target
                     self.drawn.append(
                         (f"camera {view.view.entity} into texture {view.texture!r} {w}x{h}", output.graph)
@@ -151,8 +154,11 @@ class Views:
                     graph.placement = Placement(view.rect, (width, height), last, view.view.entity)
                 r.overlay = overlay if last else None
                 stats.append(r._draw(data, materials, w, h, framebuffer, readback and last, *semaphores))
+                recordings.give_back(r)
                 self.drawn.append((f"camera {view.view.entity} into the window at {view.rect}", output.graph))
         finally:
+            recordings.give_back(r)  # (a frame that failed)
+            recordings.owner = None
             output.graph, r.overlay, r.target, output.target = plain, overlay, target, target
             output.deferred, output.post = lighting, post
         return _total(stats)
@@ -288,6 +294,7 @@ class Views:
         stale), and the window views' graphs, lighting and effects' copies (their transients'
         memory) once the device is idle."""
         self.extractors.clear()
+        self.recordings.drop(r, set())  # (the slots' rows are the window camera's from now)
         if not (self.graphs or self.lighting or self.effects):
             return
         r.device.wait_idle()
@@ -303,6 +310,7 @@ class Views:
                     effect.destroy()
 
     def destroy(self) -> None:
+        self.recordings.destroy()
         for graph in [*self.graphs, *self.texture_graphs.values()]:
             graph.destroy()
         for target in self.targets.values():

@@ -39,7 +39,7 @@ class OutputImports:
         named = [("hdr", images[-1])]
         if attachments.samples == 1:  # with MSAA depth and colour are forward's transients
             named.append(("depth", images[0]))
-        width, height = self._extent
+        width, height = self._attachments_extent()
         for name, image in named:
             size = (min(int(image.width), width), min(int(image.height), height))
             token = (id(image), image.handle, size)
@@ -55,6 +55,11 @@ class OutputImports:
                 layout_after="UNDEFINED",
                 token=token,
             )
+
+    def _attachments_extent(self) -> tuple[int, int]:
+        """The extent the attachments are imported at, at most: the frame's (a camera view's
+        graph: its rectangle's, render/frame/view_graph.py)."""
+        return self._extent
 
     def _import_target(self, graph: FrameGraph, rendering: Any, extent: tuple[int, int]) -> None:
         """The target's image, imported with its format's value (FXAA's pipeline is made for it)."""
