@@ -12,6 +12,7 @@ import pytest
 from bloom_reference import LUMA
 from bloom_reference import bloom as reference_bloom
 from gpu_context import shared_device
+from image_readback import record_copy_in, record_copy_out, transition
 
 from ecs_engine.errors import UsageError
 from ecs_engine.render.graph import Access, FrameGraph, Pass, PassBuilder
@@ -142,42 +143,15 @@ class HdrImage:
 
     def barrier(self, cb: Any, old: int, new: int) -> None:
         """Everything before (compute, transfer) done and visible before everything after."""
-        vk = self.device.vk
-        stages = vk.VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | vk.VK_PIPELINE_STAGE_TRANSFER_BIT
-        memory = vk.VK_ACCESS_SHADER_READ_BIT | vk.VK_ACCESS_SHADER_WRITE_BIT | vk.VK_ACCESS_TRANSFER_WRITE_BIT
-        memory |= vk.VK_ACCESS_TRANSFER_READ_BIT
-        rng = vk.VkImageSubresourceRange(
-            aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=1
-        )
-        b = vk.VkImageMemoryBarrier(
-            srcAccessMask=memory,
-            dstAccessMask=memory,
-            oldLayout=old,
-            newLayout=new,
-            srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            image=self.handle,
-            subresourceRange=rng,
-        )
-        vk.vkCmdPipelineBarrier(cb, stages, stages, 0, 0, None, 0, None, 1, [b])
+        transition(self.device.vk, cb, self.handle, old, new)
 
     def copy(self, cb: Any, buffer: Any, to_image: bool) -> None:
+        """To the image (in TRANSFER_DST) or from it (in TRANSFER_SRC)."""
         vk = self.device.vk
-        region = vk.VkBufferImageCopy(
-            imageSubresource=vk.VkImageSubresourceLayers(
-                aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=0, baseArrayLayer=0, layerCount=1
-            ),
-            imageOffset=vk.VkOffset3D(0, 0, 0),
-            imageExtent=vk.VkExtent3D(self.extent[0], self.extent[1], 1),
-        )
         if to_image:
-            vk.vkCmdCopyBufferToImage(
-                cb, buffer.handle, self.handle, vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, [region]
-            )
+            record_copy_in(vk, cb, buffer, self.handle, self.extent)
         else:
-            vk.vkCmdCopyImageToBuffer(
-                cb, self.handle, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, buffer.handle, 1, [region]
-            )
+            record_copy_out(vk, cb, self.handle, buffer, self.extent, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL)
 
     def destroy(self) -> None:
         self.image.destroy()

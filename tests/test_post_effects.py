@@ -13,6 +13,7 @@ import pytest
 from bloom_reference import bloom as reference_bloom
 from fxaa_reference import fxaa_outcomes, linear_to_srgb, outcome_errors, srgb_to_linear
 from gpu_context import headless_gpu
+from image_readback import record_copy_out
 
 from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
@@ -85,38 +86,9 @@ class HdrSpy:
         self.size = (width, height)
         self.buffer = Buffer(device, width * height * 8, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT)
 
-    def _barrier(self, cb: Any, image: Any, old: int, new: int) -> None:
-        vk = self.vk
-        every = vk.VK_ACCESS_MEMORY_READ_BIT | vk.VK_ACCESS_MEMORY_WRITE_BIT
-        rng = vk.VkImageSubresourceRange(
-            aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=1
-        )
-        barrier = vk.VkImageMemoryBarrier(
-            srcAccessMask=every,
-            dstAccessMask=every,
-            oldLayout=old,
-            newLayout=new,
-            srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            image=image.handle,
-            subresourceRange=rng,
-        )
-        stages = vk.VK_PIPELINE_STAGE_ALL_COMMANDS_BIT
-        vk.vkCmdPipelineBarrier(cb, stages, stages, 0, 0, None, 0, None, 1, [barrier])
-
     def __call__(self, cb: Any, inputs: Any) -> None:
-        vk = self.vk
-        image = inputs.hdr
-        read, src = vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
-        self._barrier(cb, image, read, src)
-        region = vk.VkBufferImageCopy(
-            imageSubresource=vk.VkImageSubresourceLayers(
-                aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=0, baseArrayLayer=0, layerCount=1
-            ),
-            imageExtent=vk.VkExtent3D(self.size[0], self.size[1], 1),
-        )
-        vk.vkCmdCopyImageToBuffer(cb, image.handle, src, self.buffer.handle, 1, [region])
-        self._barrier(cb, image, src, read)
+        read_only = self.vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
+        record_copy_out(self.vk, cb, inputs.hdr.handle, self.buffer, self.size, read_only)
 
     def hdr(self) -> np.ndarray:
         width, height = self.size

@@ -14,6 +14,7 @@ import pytest
 import ssao_reference as ref
 from fxaa_reference import linear_to_srgb
 from gpu_context import headless_gpu
+from image_readback import record_copy_out
 
 from ecs_engine import World
 from ecs_engine.app.scenes import default_schedule
@@ -71,33 +72,7 @@ class InputsSpy:
 
     def _copy(self, cb: Any, image: Any, aspect: int, buffer: Any) -> None:
         vk = self.vk
-        read, src = vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
-        every = vk.VK_ACCESS_MEMORY_READ_BIT | vk.VK_ACCESS_MEMORY_WRITE_BIT
-        stages = vk.VK_PIPELINE_STAGE_ALL_COMMANDS_BIT
-        rng = vk.VkImageSubresourceRange(
-            aspectMask=aspect, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=1
-        )
-
-        def barrier(old: int, new: int) -> None:
-            b = vk.VkImageMemoryBarrier(
-                srcAccessMask=every,
-                dstAccessMask=every,
-                oldLayout=old,
-                newLayout=new,
-                srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                image=image.handle,
-                subresourceRange=rng,
-            )
-            vk.vkCmdPipelineBarrier(cb, stages, stages, 0, 0, None, 0, None, 1, [b])
-
-        barrier(read, src)
-        region = vk.VkBufferImageCopy(
-            imageSubresource=vk.VkImageSubresourceLayers(aspectMask=aspect, mipLevel=0, baseArrayLayer=0, layerCount=1),
-            imageExtent=vk.VkExtent3D(W, H, 1),
-        )
-        vk.vkCmdCopyImageToBuffer(cb, image.handle, src, buffer.handle, 1, [region])
-        barrier(src, read)
+        record_copy_out(vk, cb, image.handle, buffer, (W, H), vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, aspect)
 
     def __call__(self, cb: Any, inputs: Any) -> None:
         vk = self.vk

@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 from gpu_context import headless_gpu, render_world
+from image_readback import target_corner
 
 from ecs_engine import World
 from ecs_engine.components import Camera, DirectionalLight, Mesh, Transform, Viewport
@@ -115,54 +116,6 @@ class _NoUi:
         pass
 
 
-def _image_pixels(device, image, size: tuple[int, int], layout: int) -> np.ndarray:
-    """The (height, width, 3) corner of a 4-byte colour `image` left in `layout` (and left so)."""
-    from ecs_engine.gpu.memory import HOST, Buffer
-
-    vk = device.vk
-    w, h = size
-    buffer = Buffer(device, w * h * 4, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, HOST)
-    whole = vk.VkImageSubresourceRange(
-        aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=1
-    )
-
-    def barrier(cb, old: int, new: int) -> None:
-        b = vk.VkImageMemoryBarrier(
-            srcAccessMask=vk.VK_ACCESS_MEMORY_WRITE_BIT,
-            dstAccessMask=vk.VK_ACCESS_MEMORY_READ_BIT | vk.VK_ACCESS_MEMORY_WRITE_BIT,
-            oldLayout=old,
-            newLayout=new,
-            srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            image=image.handle,
-            subresourceRange=whole,
-        )
-        every = vk.VK_PIPELINE_STAGE_ALL_COMMANDS_BIT
-        vk.vkCmdPipelineBarrier(cb, every, every, 0, 0, None, 0, None, 1, [b])
-
-    def record(cb) -> None:
-        src = vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
-        barrier(cb, layout, src)
-        region = vk.VkBufferImageCopy(
-            bufferOffset=0,
-            bufferRowLength=0,
-            bufferImageHeight=0,
-            imageSubresource=vk.VkImageSubresourceLayers(
-                aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=0, baseArrayLayer=0, layerCount=1
-            ),
-            imageOffset=vk.VkOffset3D(0, 0, 0),
-            imageExtent=vk.VkExtent3D(w, h, 1),
-        )
-        vk.vkCmdCopyImageToBuffer(cb, image.handle, src, buffer.handle, 1, [region])
-        barrier(cb, src, layout)
-
-    try:
-        device.submit_once(record)
-        return buffer.bytes().reshape(h, w, 4)[..., :3].astype(np.int64)
-    finally:
-        buffer.destroy()
-
-
 @pytest.mark.parametrize("post", POSTS)
 def test_the_editor_viewport_s_effects_see_only_its_rectangle(post: tuple[str, ...]) -> None:
     """A viewport smaller than the window (drawn into the corner of the window's HDR and depth
@@ -191,7 +144,7 @@ def test_the_editor_viewport_s_effects_see_only_its_rectangle(post: tuple[str, .
                 renderer.render(world, readback=True)
             target = viewport.target
             assert target is not None and (target.width, target.height) == (W, H)
-            picture = _image_pixels(gpu.device, target.color, size, target.final_layout)
+            picture = target_corner(gpu.target, target.color, size, target.final_layout)  # the window's copy
         finally:
             renderer.destroy()
     expected = _reference(post, size)

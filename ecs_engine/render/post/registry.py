@@ -78,6 +78,17 @@ def register(kind: PostEffectKind) -> PostEffectKind:
     return kind
 
 
+def unregister(name: str) -> PostEffectKind:
+    """Remove the effect `name` (a test's or a game's own, when it is done with it); returns its
+    kind. Renderers with it on keep their effect objects until they turn it off. An unknown
+    name: UsageError."""
+    _load()  # a built-in one loaded later would come back
+    found = _KINDS.pop(name, None)
+    if found is None:
+        raise UsageError(f"unknown post effect {name!r}; choices: {', '.join(sorted(_KINDS)) or 'none'}")
+    return found
+
+
 def _load() -> None:
     global _loaded
     if not _loaded:
