@@ -1,11 +1,9 @@
 """A post effect is a plugin: a game's own, wholly outside ecs_engine/ (this module; its GLSL and
 SPIR-V in tests/shaders/), registered (render/post/registry.py) and turned on as a user would
-(RenderConfig, `set_post_effects`, `PostEffectPlugin`, `--post`). On lavapipe against NumPy:
-
-- "vignette" (ldr stage): the tone-mapped image darkened towards the corners, in linear colour;
-- "exposure_scale" (hdr stage): the HDR colour scaled before the tone map, in place.
-
-The `external` fixture registers them for a test and unregisters them after it."""
+(RenderConfig, `set_post_effects`, `PostEffectPlugin`, `--post`), against NumPy on lavapipe:
+"vignette" (ldr stage) darkens the tone-mapped image towards the corners, in linear colour;
+"exposure_scale" (hdr stage) scales the HDR colour in place before the tone map. The `external`
+fixture registers them for a test and unregisters them after it."""
 
 from __future__ import annotations
 
@@ -44,9 +42,8 @@ SOURCES = ("vignette.frag", "exposure_scale.comp")
 
 
 def shader(name: str) -> str:
-    """A shader outside ecs_engine/shaders for the engine's pipeline helpers, which read SHADER_DIR
-    / f"{name}.spv" (gpu/pipeline.py shader_path): an absolute `name` wins pathlib's join."""
-    return str(SHADERS / name)
+    """A game's own SPIR-V, by path (gpu/pipeline.py shader_path)."""
+    return str(SHADERS / f"{name}.spv")
 
 
 # ------------------------------------------------------------------------------ the effects
@@ -256,12 +253,15 @@ def test_a_registered_effect_is_a_name_like_the_built_in_ones(external):
         VignetteSettings(2.0)
 
 
-@pytest.mark.xfail(strict=True, reason="registry.register replaces a kind of the same name silently")
-def test_registering_a_taken_name_is_a_usage_error(external):
-    other = registry.PostEffectKind("vignette", "hdr", ExposureScaleSettings, ExposureScaleEffect)
+def test_a_name_another_module_registered_is_refused_and_a_reload_replaces(external):
+    """Not a built-in's name; the same module again (hot reload) replaces its own."""
+    before = registry.kind("bloom")
+    with pytest.raises(UsageError, match=r"'bloom' is taken \(by ecs_engine\.render\.post\.bloom_effect\)"):
+        registry.register(registry.PostEffectKind("bloom", "ldr", VignetteSettings, VignetteEffect))
+    assert registry.kind("bloom") is before
+    again = registry.PostEffectKind("vignette", "ldr", VignetteSettings, VignetteEffect, "reloaded")
     try:
-        with pytest.raises(UsageError, match="vignette"):
-            registry.register(other)
+        assert registry.register(again) is again and registry.kind("vignette") is again
     finally:
         registry.register(VIGNETTE)  # the fixture's, whatever happened
 

@@ -45,3 +45,17 @@ def test_sources_compile_and_match_when_glslc_is_the_recorded_one(tmp_path):
         subprocess.run(["glslc", "--target-env=vulkan1.2", "-O", str(src), "-o", str(out)], check=True)
         if version == MANIFEST["glslc"]:
             assert out.read_bytes() == src.with_name(src.name + ".spv").read_bytes(), src.name
+
+
+def test_shader_path_takes_an_engine_name_or_a_games_own_spirv(tmp_path):
+    from ecs_engine.errors import UsageError
+    from ecs_engine.gpu.pipeline import shader_path
+
+    assert shader_path("tonemap.vert") == SHADERS / "tonemap.vert.spv"
+    own = tmp_path / "glow.frag.spv"
+    own.write_bytes(b"\x03\x02\x23\x07")
+    assert shader_path(own) == own and shader_path(str(own)) == own
+    with pytest.raises(UsageError, match=r"glow2\.frag\.spv is missing: compile it with glslc$"):
+        shader_path(tmp_path / "glow2.frag.spv")
+    with pytest.raises(UsageError, match=r"nothing\.frag\.spv is missing: run `make shaders`$"):
+        shader_path("nothing.frag")

@@ -18,10 +18,14 @@ if TYPE_CHECKING:
 SHADER_DIR = Path(str(importlib.resources.files("ecs_engine.shaders")))
 
 
-def shader_path(name: str) -> Path:
-    path = SHADER_DIR / f"{name}.spv"
+def shader_path(name: str | Path) -> Path:
+    """An engine shader by name ("tonemap.vert": shaders/tonemap.vert.spv), or a game's own
+    compiled SPIR-V by its path (a Path, or a str ending in .spv)."""
+    own = isinstance(name, Path) or name.endswith(".spv")
+    path = Path(name) if own else SHADER_DIR / f"{name}.spv"
     if not path.is_file():
-        raise UsageError(f"compiled shader {path} is missing: run `make shaders`")
+        fix = "compile it with glslc" if own else "run `make shaders`"
+        raise UsageError(f"compiled shader {path} is missing: {fix}")
     return path
 
 

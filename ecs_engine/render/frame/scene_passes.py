@@ -92,8 +92,8 @@ class ScenePasses:
         return (
             self.cull.path,
             self.cull.imports(),
-            tuple((n, b, b.handle) for n, b in self.buffers.items()),
-            tuple((n, b, b.handle) for n, b in shadows.culled.items()),
+            tuple([(n, b, b.handle) for n, b in self.buffers.items()]),
+            tuple([(n, b, b.handle) for n, b in shadows.culled.items()]),
             maps,
             image.handle if image is not None else None,
             self.reads,

@@ -45,6 +45,7 @@ class PassContext:
         self._dont_store = dont_store  # writes whose attachments store nothing (compile.py)
         # begin_rendering's structs by what they were made from (the graph keeps them per compile)
         self._made: dict[tuple, Rendering] = made if made is not None else {}
+        self._asked: dict[tuple, Rendering] = {}  # by the arguments alone (this context's images)
         self.pass_name = ""
         self._uses: tuple[Use, ...] = ()
         self._rendering = False
@@ -156,16 +157,22 @@ class PassContext:
         if self._rendering:
             raise UsageError(f"pass {self.pass_name!r} begins rendering twice")
         images = self._images
-        try:
-            views = tuple(images[n].attachment_view(mip, layer) for n in (*colors, *(resolve or ()), depth) if n)
-        except KeyError as missing:
-            raise UsageError(f"pass {self.pass_name!r} renders to {missing}, which the graph does not have") from None
-        key = (self.pass_name, colors, depth, resolve, secondaries, mip, layer, area, views)
-        made = self._made.get(key)
+        asked = (self.pass_name, colors, depth, resolve, secondaries, mip, layer, area)
+        made = self._asked.get(asked)  # this context's images are fixed: the views need no look
         if made is None:
-            if len(self._made) >= 64:  # imported images come and go (swapchain remakes)
-                self._made.clear()
-            made = self._made[key] = self._make(colors, depth, resolve, secondaries, mip, layer, area)
+            try:
+                names = (*colors, *(resolve or ()), depth)
+                views = tuple(images[n].attachment_view(mip, layer) for n in names if n)
+            except KeyError as missing:
+                raise UsageError(
+                    f"pass {self.pass_name!r} renders to {missing}, which the graph does not have"
+                ) from None
+            made = self._made.get((*asked, views))
+            if made is None:
+                if len(self._made) >= 64:  # imported images come and go (swapchain remakes)
+                    self._made.clear()
+                made = self._made[(*asked, views)] = self._make(colors, depth, resolve, secondaries, mip, layer, area)
+            self._asked[asked] = made
         if token is not None:
             self._made[(self.pass_name, _TOKEN, token)] = made
         self._begin(made, secondaries)

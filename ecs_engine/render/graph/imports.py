@@ -102,6 +102,8 @@ class Imports:
         """The imports of `snapshot`; the caller knows their shapes are today's (the graph's
         version is the one it was taken at), so nothing recompiles."""
         by_name, images, buffers, ints, handles, state = snapshot
+        if state is self.state:  # the same made imports already (one frame slot, or still ones)
+            return
         if by_name.keys() != self.by_name.keys():
             self._names = None
         self.by_name, self.images, self.buffers, self._ints, self._handles = by_name, images, buffers, ints, handles

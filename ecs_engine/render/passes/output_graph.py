@@ -200,7 +200,7 @@ class OutputGraph(OutputImports):
         self.graph = graph
         frame = self.frame
         frame.state, frame.tone_map, frame.overlay, frame.slot = state, tone_map, overlay, slot
-        extent = (int(state.area.extent.width), int(state.area.extent.height))
+        extent = (state.key[1], state.key[2])  # (the area's size, as Python ints)
         if compile or not graph.compiled_for(extent):
             graph.compile(extent)
         if output.target.form == Form.DEFERRED:
@@ -226,7 +226,7 @@ class OutputGraph(OutputImports):
         # one set of transients, however those come and go
         ray = deferred and self.output.ray_shadows is not None
         oit = deferred and (self.output.oit is not None or self.frame.transparent is not None)
-        extent = (int(state.area.extent.width), int(state.area.extent.height))
+        extent = (state.key[1], state.key[2])  # (the area's size, as Python ints)
         post = self.output.post if form != Form.DIRECT else []
         # the effects' passes follow the extent (bloom's chain) and the list (made again with it)
         post_shape = (extent, tuple(id(p) for p in post)) if post else None
@@ -307,7 +307,7 @@ class OutputGraph(OutputImports):
         scene = self.output.scene
         if scene is not None and taken:  # its frame's inputs came after `prepare` (the jobs'): imported again
             self._import_scene(graph)
-            graph.compile((int(state.area.extent.width), int(state.area.extent.height)))
+            graph.compile((state.key[1], state.key[2]))
             if form == Form.DEFERRED:
                 frame.attachments = self._gbuffer_views(graph, target.attachments)
         names = {"forward": "sky and blended"} if form == Form.DEFERRED else {}

@@ -52,7 +52,7 @@ from ...gpu.pipeline import pipeline_layout, shader_module
 from ..graph import Access, ImageDesc, Pass
 from ..graph.resources import format_name
 
-__all__ = ["PRESET", "QUALITY_STEPS", "FxaaPass", "FxaaSettings", "add_fxaa"]
+__all__ = ["PRESET", "QUALITY_STEPS", "FxaaPass", "FxaaSettings", "add_fxaa", "fullscreen_pipeline"]
 
 PRESET = 39
 QUALITY_STEPS = (1.0, 1.0, 1.0, 1.0, 1.0, 1.5, 2.0, 2.0, 2.0, 2.0, 4.0, 8.0)  # shaders/fxaa.frag's STEP

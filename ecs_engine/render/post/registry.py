@@ -9,14 +9,19 @@ A kind says:
 - `stage`: "hdr" (on the scene's HDR colour, before the tone map: bloom) or "ldr" (on the
   tone-mapped image, before the UI: FXAA);
 - `settings`: its settings class (a frozen dataclass; `settings()` gives the defaults);
-- `make(device, settings)`: the effect object for a renderer on `device`. An hdr one is called
-  `effect(cb, inputs)` with the frame's post/inputs.py PostInputs (the HDR colour, the scene's
-  depth, the extent, the camera's projection: render/frame/output_passes.py's seam); an ldr one adds
-  its passes to the output's frame graph with `effect.add(graph, source, target, create)` (the
-  image names, and the description of `target` when it is an intermediate the effect's pass
-  must create). Both have `key(inputs)` (what a recorded frame depends on, given this frame's
-  PostInputs, or None without an hdr-stage effect on or an HDR colour: frame replay) and
-  `destroy()`;
+- `make(device, settings)`: the effect object for a renderer on `device`. An hdr one adds its
+  passes to the output's frame graph with `effect.add_hdr(graph, extent)`, between the scene's
+  rendering and the tone map: they read and write the graph's "hdr" (the single-sample HDR
+  colour, rgba16f, sampled and storage: written in place) and may read its "depth" (the
+  scene's depth format, sampled); the graph places the barriers (bloom_effect.py,
+  ssao_effect.py; an object without `add_hdr` is called `effect(cb, inputs)` outside the
+  graph instead, and places its own). An ldr one adds its passes with `effect.add(graph,
+  source, target, create)` (the image names, and the description of `target` when it is an intermediate the effect's pass must create).
+  Both have `key(inputs)` (what a recorded frame depends on, given this frame's post/inputs.py
+  PostInputs: frame replay), `destroy()`, and optionally `begin_frame(inputs)` (each frame's
+  PostInputs before the keys are asked: the camera's projection, the extent). A game's effect
+  names its own SPIR-V by path (gpu/pipeline.py `shader_path`); `fullscreen_pipeline`
+  (post/fxaa.py) makes a full-screen pass's pipeline;
 - `depth`: it reads the scene's single-sample depth (config.py refuses it with MSAA);
 - `before`: effects of its stage it runs ahead of (SSAO's composite darkens the HDR colour
   before bloom spreads it); otherwise a stage runs in registration order.
@@ -73,9 +78,19 @@ _loaded = False
 
 
 def register(kind: PostEffectKind) -> PostEffectKind:
-    """Add (or replace: a reloaded module) the effect `kind`; returns it."""
+    """Add the effect `kind`; returns it. A name taken by another module's effect is a
+    UsageError; the same module registering it again (a reloaded module) replaces it."""
+    taken = _KINDS.get(kind.name)
+    if taken is not None and _module(taken) != _module(kind):
+        raise UsageError(
+            f"post effect {kind.name!r} is taken (by {_module(taken)}); unregister it first or choose another name"
+        )
     _KINDS[kind.name] = kind
     return kind
+
+
+def _module(kind: PostEffectKind) -> str:
+    return getattr(kind.make, "__module__", None) or "?"
 
 
 def unregister(name: str) -> PostEffectKind:
