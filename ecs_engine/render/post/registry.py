@@ -11,17 +11,17 @@ A kind says:
 - `settings`: its settings class (a frozen dataclass; `settings()` gives the defaults);
 - `make(device, settings)`: the effect object for a renderer on `device`. An hdr one adds its
   passes to the output's frame graph with `effect.add_hdr(graph, extent)`, between the scene's
-  rendering and the tone map: they read and write the graph's "hdr" (the single-sample HDR
-  colour, rgba16f, sampled and storage: written in place) and may read its "depth" (the
-  scene's depth format, sampled); the graph places the barriers (bloom_effect.py,
-  ssao_effect.py; an object without `add_hdr` is called `effect(cb, inputs)` outside the
-  graph instead, and places its own). An ldr one adds its passes with `effect.add(graph,
-  source, target, create)` (the image names, and the description of `target` when it is an intermediate the effect's pass must create).
-  Both have `key(inputs)` (what a recorded frame depends on, given this frame's post/inputs.py
-  PostInputs: frame replay), `destroy()`, and optionally `begin_frame(inputs)` (each frame's
-  PostInputs before the keys are asked: the camera's projection, the extent). A game's effect
-  names its own SPIR-V by path (gpu/pipeline.py `shader_path`); `fullscreen_pipeline`
-  (post/fxaa.py) makes a full-screen pass's pipeline;
+  rendering and the tone map: they read and write the graph's "hdr" (the single-sample HDR colour,
+  rgba16f, sampled and storage: written in place) and may read its "depth" (the scene's depth
+  format, sampled); the graph places the barriers (bloom_effect.py, ssao_effect.py; an object
+  without `add_hdr` is called `effect(cb, inputs)` outside the graph instead, and places its own).
+  An ldr one adds its passes with `effect.add(graph, source, target, create)` (the image names, and
+  the description of `target` when it is an intermediate the effect's pass must create). Both have
+  `key(inputs)` (what a recorded frame depends on, given this frame's post/inputs.py PostInputs:
+  frame replay), `destroy()`, and optionally `begin_frame(inputs)` (each frame's PostInputs before
+  the keys are asked: the camera's projection, the extent). A game's effect names its own SPIR-V by
+  path (gpu/pipeline.py `shader_path`); `fullscreen_pipeline` (post/fxaa.py) makes a full-screen
+  pass's pipeline;
 - `depth`: it reads the scene's single-sample depth (config.py refuses it with MSAA);
 - `before`: effects of its stage it runs ahead of (SSAO's composite darkens the HDR colour
   before bloom spreads it); otherwise a stage runs in registration order.
