@@ -49,9 +49,9 @@ def test_sources_compile_and_match_when_glslc_is_the_recorded_one(tmp_path):
 
 def test_shader_path_takes_an_engine_name_or_a_games_own_spirv(tmp_path):
     from ecs_engine.errors import UsageError
-    from ecs_engine.gpu.pipeline import shader_path
+    from ecs_engine.gpu.pipeline import SHADER_DIR, shader_path
 
-    assert shader_path("tonemap.vert") == SHADERS / "tonemap.vert.spv"
+    assert shader_path("tonemap.vert") == SHADER_DIR / "tonemap.vert.spv"  # (the installed package's)
     own = tmp_path / "glow.frag.spv"
     own.write_bytes(b"\x03\x02\x23\x07")
     assert shader_path(own) == own and shader_path(str(own)) == own

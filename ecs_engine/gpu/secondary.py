@@ -27,6 +27,10 @@ class _ThreadPool:
         self.buffers: list[Any] = []
         self.used = 0
 
+    def destroy(self, device: Device) -> None:
+        """The pool and its buffers (after the device is done with them)."""
+        device.vk.vkDestroyCommandPool(device.handle, self.handle, None)
+
 
 class SecondaryBuffers:
     def __init__(self, device: Device, frames: int) -> None:
@@ -116,20 +120,18 @@ class SecondaryBuffers:
     def keep_threads(self, alive: set[int]) -> None:
         """Destroy the pools of threads that are gone (a resized worker pool); the device must be
         idle: their buffers may belong to frames in flight."""
-        vk = self.device.vk
         self.device.objects_version += 1  # what they recorded may not be submitted again
         for pools in self._pools:
             for ident in [k for k in pools if k not in alive]:
-                vk.vkDestroyCommandPool(self.device.handle, pools.pop(ident).handle, None)
+                pools.pop(ident).destroy(self.device)
 
     def pool_count(self) -> int:
         return sum(len(pools) for pools in self._pools)
 
     def destroy(self) -> None:
-        vk = self.device.vk
         for pools in self._pools:
             for pool in pools.values():
-                vk.vkDestroyCommandPool(self.device.handle, pool.handle, None)
+                pool.destroy(self.device)
         self._pools = []
 
 

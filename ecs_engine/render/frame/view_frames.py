@@ -33,6 +33,8 @@ from __future__ import annotations
 import threading
 from typing import Any
 
+from ...gpu.owned import Owned
+
 
 class SlotRecording:
     """One view's recording in one frame slot: its primary (and pool), the secondaries' pools,
@@ -40,13 +42,13 @@ class SlotRecording:
 
     def __init__(self, device: Any) -> None:
         vk = device.vk
-        self.pool = vk.vkCreateCommandPool(
-            device.handle,
-            vk.VkCommandPoolCreateInfo(
-                flags=vk.VK_COMMAND_POOL_CREATE_TRANSIENT_BIT, queueFamilyIndex=device.queue_family
-            ),
-            None,
+        self.owned = Owned(device)
+        info = vk.VkCommandPoolCreateInfo(
+            flags=vk.VK_COMMAND_POOL_CREATE_TRANSIENT_BIT, queueFamilyIndex=device.queue_family
         )
+        # registered, not `create`d: a new pool leaves the other recordings valid (no version bump)
+        self.pool = vk.vkCreateCommandPool(device.handle, info, None)
+        self.owned.add(self.pool, lambda: vk.vkDestroyCommandPool(device.handle, self.pool, None))
         info = vk.VkCommandBufferAllocateInfo(
             commandPool=self.pool, level=vk.VK_COMMAND_BUFFER_LEVEL_PRIMARY, commandBufferCount=1
         )
@@ -59,11 +61,10 @@ class SlotRecording:
 
     def destroy(self, device: Any) -> None:
         """After the device is idle."""
-        vk = device.vk
         for pool in self.secondaries.values():
-            vk.vkDestroyCommandPool(device.handle, pool.handle, None)
+            pool.destroy(device)  # (SecondaryBuffers' thread pools, lent to this view)
         self.secondaries.clear()
-        vk.vkDestroyCommandPool(device.handle, self.pool, None)
+        self.owned.destroy()
 
 
 class ViewRecordings:
@@ -124,10 +125,9 @@ class ViewRecordings:
         device idle, just before this frame's slot was waited for: Renderer._forget_old_threads)."""
         self._jobs = r._jobs_generation
         alive = {t.ident for t in threading.enumerate()}
-        vk = r.device.vk
         for rec in [rec for slots in self.views.values() for rec in slots if rec is not None]:
             for ident in [k for k in rec.secondaries if k not in alive]:
-                vk.vkDestroyCommandPool(r.device.handle, rec.secondaries.pop(ident).handle, None)
+                rec.secondaries.pop(ident).destroy(r.device)
 
     def drop(self, r: Any, keep: set[Any]) -> None:
         """The recordings of views not in `keep`, once the device is idle."""
