@@ -347,6 +347,9 @@ def padded_planes(views: list[np.ndarray | None]) -> np.ndarray:
     out = np.empty((len(views), 6, 4))
     for v, planes in enumerate(views):
         p = NO_PLANES if planes is None else np.asarray(planes, np.float64)
+        if len(p) == 6:  # a frustum's: as they are (the common case, a dozen views a frame)
+            out[v] = p
+            continue
         if len(p) > 6:
             raise ValueError(f"at most 6 frustum planes, got {len(p)}")
         out[v] = p[np.minimum(np.arange(6), len(p) - 1)] if len(p) else (0.0, 0.0, 0.0, 1.0)

@@ -97,6 +97,15 @@ class FrameInputs:
     lod: bool = False  # the indirect path draws each row at the coarsest level of detail its size allows
     reuse: Any = None  # the chunks the slot's last frame recorded, to give back when unchanged (frame_replay.py)
 
+    def but(self, **changes: Any) -> FrameInputs:
+        """A copy with `changes` (a shadow view's inputs, eleven a frame in the shadows demo):
+        dataclasses.replace's result without its per-field __init__, which cost more."""
+        if not changes.keys() <= self.__dict__.keys():
+            raise TypeError(f"FrameInputs has no field {sorted(changes.keys() - self.__dict__.keys())}")
+        made = object.__new__(FrameInputs)
+        made.__dict__.update(self.__dict__, **changes)
+        return made
+
 
 @dataclass
 class FrameStats:

@@ -119,6 +119,25 @@ def can_fuse(paths: list[Any]) -> bool:
     )
 
 
+# per paths (and their layouts and pipelines, held: the ids stay theirs): the handles as int64
+# arrays, the same from frame to frame (a dozen views a frame, four pipelines each)
+_handles: dict[tuple[int, ...], tuple[list[Any], np.ndarray, np.ndarray]] = {}
+
+
+def _path_handles(vk: Any, paths: list[Any]) -> tuple[np.ndarray, np.ndarray]:
+    """The paths' pipeline layouts (V,) and pipelines (V, 4) as int64."""
+    held = [(p, p.layout, p.pipelines) for p in paths]
+    key = tuple(id(x) for h in held for x in h)
+    kept = _handles.get(key)
+    if kept is None:
+        if len(_handles) >= 16:  # paths and pipelines made again (hot reload, a new target form)
+            _handles.clear()
+        layouts = np.array([handle_int(vk, p.layout) for p in paths], np.int64)
+        pipelines = np.array([[handle_int(vk, q) for q in p.pipelines] for p in paths], np.int64)
+        kept = _handles[key] = (held, layouts, pipelines)
+    return kept[1], kept[2]
+
+
 class ViewRecording:
     """One frame's views (FrameInputs after their path's begin_frame) as the kernel's arrays;
     `with_camera`: view 0 is the camera's (jobs may then leave it out)."""
@@ -130,8 +149,7 @@ class ViewRecording:
         self.vk, self.recorder, self.views, self.planes = vk, recorder, views, planes
         self.kernel = fused_kernel(recorder._record)
         states = [v.path_state for v in views]
-        self.layouts = np.array([handle_int(vk, p.layout) for p in paths], np.int64)
-        self.pipelines = np.array([[handle_int(vk, q) for q in p.pipelines] for p in paths], np.int64)
+        self.layouts, self.pipelines = _path_handles(vk, paths)
         self.begin_addrs = np.array([s["begin_addr"] for s in states], np.int64)
         self.viewport_addrs = np.array([s["viewport_addr"] for s in states], np.int64)
         self.scissor_addrs = np.array([s["scissor_addr"] for s in states], np.int64)

@@ -174,8 +174,7 @@ class ShadowPass:
             view_set = sets[k]
             view_set.hold(view)
             out.append(
-                replace(
-                    frame,
+                frame.but(
                     descriptor_set=view_set.descriptor_set,
                     set_array=view_set.set_array,
                     target=self.target_state(view.layer, view.resolution),
