@@ -157,3 +157,22 @@ def test_a_deferred_window_resizes_cleanly():
 def test_a_window_with_shadows_resizes_cleanly():
     """Shadow maps do not belong to the swapchain: a resize leaves them, with validation on."""
     resized_run(scene="shadows", light_culling="deferred")
+
+
+def test_a_display_that_refuses_for_a_moment_is_asked_again(monkeypatch):
+    """glfw.init failing once (a busy X server) still opens the window; failing every time
+    falls back to headless (None), after three asks."""
+    import sys
+    import types
+
+    import ecs_engine.app.window as window_module
+
+    answers: list[bool] = []
+    fake = types.SimpleNamespace(set_error_callback=lambda cb: None, init=lambda: answers.pop(0))
+    monkeypatch.setitem(sys.modules, "glfw", fake)
+    monkeypatch.setenv("DISPLAY", ":99")
+    monkeypatch.setattr(window_module.time, "sleep", lambda s: None)
+    answers[:] = [False, True]
+    assert window_module.open_glfw() is fake and answers == []
+    answers[:] = [False, False, False, True]
+    assert window_module.open_glfw() is None and answers == [True]

@@ -72,9 +72,13 @@ def open_glfw() -> Any | None:
     except ImportError as exc:
         raise UsageError(f"the Python package `glfw` is missing ({exc}); run `make demo` to install it") from exc
     glfw.set_error_callback(lambda code, text: None)  # failures are reported through return values
-    if not glfw.init():
-        return None
-    return glfw
+    # a display that refuses a connection for a moment (a busy X server, Xvfb between clients)
+    # is asked again before the run falls back to headless
+    for wait in (0.1, 0.3, 0.0):
+        if glfw.init():
+            return glfw
+        time.sleep(wait)
+    return None
 
 
 class WindowSource:
