@@ -119,37 +119,45 @@ def can_fuse(paths: list[Any]) -> bool:
     )
 
 
-# per paths (and their layouts and pipelines, held: the ids stay theirs): the handles as int64
-# arrays, the same from frame to frame (a dozen views a frame, four pipelines each)
-_handles: dict[tuple[int, ...], tuple[list[Any], np.ndarray, np.ndarray]] = {}
+PathHandles = dict[tuple[int, ...], tuple[list[Any], np.ndarray, np.ndarray]]
 
 
-def _path_handles(vk: Any, paths: list[Any]) -> tuple[np.ndarray, np.ndarray]:
-    """The paths' pipeline layouts (V,) and pipelines (V, 4) as int64."""
+def _path_handles(vk: Any, paths: list[Any], kept_by: PathHandles) -> tuple[np.ndarray, np.ndarray]:
+    """The paths' pipeline layouts (V,) and pipelines (V, 4) as int64, kept in `kept_by` (the
+    caller's: the same from frame to frame, a dozen views a frame) per paths, layouts and
+    pipelines (held, so their ids stay theirs)."""
     held = [(p, p.layout, p.pipelines) for p in paths]
     key = tuple(id(x) for h in held for x in h)
-    kept = _handles.get(key)
+    kept = kept_by.get(key)
     if kept is None:
-        if len(_handles) >= 16:  # paths and pipelines made again (hot reload, a new target form)
-            _handles.clear()
+        if len(kept_by) >= 16:  # paths and pipelines made again (hot reload, a new target form)
+            kept_by.clear()
         layouts = np.array([handle_int(vk, p.layout) for p in paths], np.int64)
         pipelines = np.array([[handle_int(vk, q) for q in p.pipelines] for p in paths], np.int64)
-        kept = _handles[key] = (held, layouts, pipelines)
+        kept = kept_by[key] = (held, layouts, pipelines)
     return kept[1], kept[2]
 
 
 class ViewRecording:
     """One frame's views (FrameInputs after their path's begin_frame) as the kernel's arrays;
-    `with_camera`: view 0 is the camera's (jobs may then leave it out)."""
+    `with_camera`: view 0 is the camera's (jobs may then leave it out); `handles`: the caller's
+    PathHandles, kept across its frames."""
 
-    def __init__(self, paths: list[Any], views: list[FrameInputs], planes: np.ndarray, with_camera: bool) -> None:
+    def __init__(
+        self,
+        paths: list[Any],
+        views: list[FrameInputs],
+        planes: np.ndarray,
+        with_camera: bool,
+        handles: PathHandles | None = None,
+    ) -> None:
         self.with_camera = with_camera
         recorder = paths[0]._recorder.compiled  # one NativeRecorder per device: every path shares it
         vk = recorder.vk
         self.vk, self.recorder, self.views, self.planes = vk, recorder, views, planes
         self.kernel = fused_kernel(recorder._record)
         states = [v.path_state for v in views]
-        self.layouts, self.pipelines = _path_handles(vk, paths)
+        self.layouts, self.pipelines = _path_handles(vk, paths, {} if handles is None else handles)
         self.begin_addrs = np.array([s["begin_addr"] for s in states], np.int64)
         self.viewport_addrs = np.array([s["viewport_addr"] for s in states], np.int64)
         self.scissor_addrs = np.array([s["scissor_addr"] for s in states], np.int64)

@@ -167,11 +167,12 @@ class PassContext:
                 raise UsageError(
                     f"pass {self.pass_name!r} renders to {missing}, which the graph does not have"
                 ) from None
-            made = self._made.get((*asked, views))
+            key = (*asked, views)
+            made = self._made.get(key)
             if made is None:
                 if len(self._made) >= 64:  # imported images come and go (swapchain remakes)
                     self._made.clear()
-                made = self._made[(*asked, views)] = self._make(colors, depth, resolve, secondaries, mip, layer, area)
+                made = self._made[key] = self._make(colors, depth, resolve, secondaries, mip, layer, area)
             self._asked[asked] = made
         if token is not None:
             self._made[(self.pass_name, _TOKEN, token)] = made

@@ -43,7 +43,7 @@ from ...gpu.shadow_maps import ShadowMaps, shadow_formats
 from ..draw.indirect_path import IndirectPath
 from ..draw.instance_rows import cull_views, padded_planes
 from ..draw.path import ChunkResult, FrameInputs, PathContext, RenderPath, TargetState
-from ..draw.view_recording import ViewRecording, can_fuse
+from ..draw.view_recording import PathHandles, ViewRecording, can_fuse
 from ..extract.frame_data import Chunk, FrameData
 from ..layouts import SHADOW_VIEW
 from .indirect import IndirectShadows
@@ -85,6 +85,7 @@ class ShadowPass:
         self._recording: Any = None  # the path this frame's jobs record with
         self._planes = padded_planes([])  # this frame's views' (V, 24) culling planes
         self._fused: ViewRecording | None = None  # the views as one native call a job
+        self._path_handles: PathHandles = {}  # the fused recordings' paths' handles (view_recording.py)
 
     # -------------------------------------------------------------- planning
     def plan(self, data: FrameData, only: set[int] | None = None) -> list[ShadowView]:
@@ -232,9 +233,10 @@ class ShadowPass:
         if can_fuse([path]):  # one native call a job (view_recording.py)
             if can_fuse([camera]):
                 paths, inputs = [camera] + [path] * len(views), [frame] + self._inputs
-                self._fused = ViewRecording(paths, inputs, self._planes, with_camera=True)
+                self._fused = ViewRecording(paths, inputs, self._planes, True, self._path_handles)
             else:
-                self._fused = ViewRecording([path] * len(views), self._inputs, self._planes[1:], with_camera=False)
+                paths = [path] * len(views)
+                self._fused = ViewRecording(paths, self._inputs, self._planes[1:], False, self._path_handles)
 
     @staticmethod
     def view_rows(data: FrameData, camera: RenderPath) -> int:
