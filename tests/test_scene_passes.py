@@ -101,3 +101,25 @@ def test_the_light_cluster_steps_get_the_barriers_placed_by_hand_before():
     (bounded,) = g.compiled.barriers.before["light_clusters.tiles"]
     assert (bounded.src_stages, bounded.dst_stages) == ({"COMPUTE_SHADER"}, {"COMPUTE_SHADER"})
     assert "SHADER_STORAGE_WRITE" in bounded.src_access and "SHADER_STORAGE_READ" in bounded.dst_access
+
+
+def test_a_frame_with_nothing_to_do_brings_back_its_slots_state_and_no_stale_one():
+    s, path = scene(), indirect(pending=False)  # culls on the CPU: nothing for the cull steps
+    frames = [NS(set_array=i, clusters=buffer(handle=20 + i, size=128)) for i in range(2)]
+
+    def begin_slot(slot, views=()):
+        s.begin_slot(path, slot, frames[slot], None, 3, list(views))
+        return s.signature()
+
+    first, second = begin_slot(0), begin_slot(1)
+    assert s.buffers == {"clusters": frames[1].clusters} and first != second
+    assert begin_slot(0) is first and s.buffers == {"clusters": frames[0].clusters}  # brought back, not made
+    assert s.clusters.set_array == 0
+    drawn = begin_slot(0, [NS(layer=1, resolution=32)])  # a frame with a shadow map: the state changes
+    assert s.shadows.views and drawn != first
+    assert begin_slot(0) == first and not s.shadows.views  # made again: the views' state is not kept
+    frames[0].clusters.handle = 30  # the slot's buffer made again in place
+    assert begin_slot(0) != first and s.signature()[2] == (("clusters", frames[0].clusters, 30),)
+    s.begin(path, 0, frames[0], None, 3, [NS(layer=2, resolution=32)], [[]])  # a recorded frame's state
+    begin_slot(0)
+    assert not s.shadows.views  # after a recorded frame's state: made again

@@ -15,7 +15,8 @@ primary is recorded again around old and new secondaries, and the slot starts cl
 What a recording depends on goes into the key (`frame_key`), taken before the jobs; anything
 else makes the frame record as before. The key is the output frame graph's (render/graph/graph.py
 `key()`: each running pass's `key()` in order, the extent and the imported images' handles; the
-graph object itself, one per target form), so a pass keys what it records from and one that
+graph object itself, one per target form, held in the key and equal only to itself, as the
+path is: neither class defines `__eq__`), so a pass keys what it records from and one that
 forgets cannot replay a stale frame; and a prelude of what is still recorded by hand outside the
 graph (`prelude_key`), which shrinks as that work becomes passes:
 - the device's `objects_version`, bumped by every buffer, image or pipeline made, every buffer,
@@ -45,20 +46,6 @@ from typing import Any
 from ..draw.path import ChunkResult
 
 Key = tuple[Any, ...]
-
-
-class Same:
-    """A key's part that equals only the same object (held: an id could be a freed one's)."""
-
-    __slots__ = ("obj",)
-
-    def __init__(self, obj: Any) -> None:
-        self.obj = obj
-
-    def __eq__(self, other: object) -> bool:
-        return isinstance(other, Same) and other.obj is self.obj
-
-    __hash__ = None  # type: ignore[assignment]
 
 
 @dataclass
@@ -133,7 +120,7 @@ def prelude_key(renderer: Any, positional: int, grid: Any, light_count: int, rea
     Each field leaves this list when the pass that records it joins the graph with its key()."""
     return (
         renderer.device.objects_version,  # the device's: stays beside the graph's key
-        Same(renderer.path),  # the chunks' secondaries (forward executes them)
+        renderer.path,  # the chunks' secondaries (forward executes them; held, equal only to itself)
         renderer.meshes.version,  # the chunks' meshes: their buffers
         getattr(renderer.target, "recreations", 0),  # a remade swapchain's images may reuse handles
         positional,  # forward's light billboards (output_passes.py gathers its secondaries)
@@ -179,4 +166,4 @@ def frame_key(renderer: Any, state: Any, slot: int, prelude: tuple[Any, ...], st
         return None
     graph = output_graph(renderer, state, slot, readback)
     key = graph.key(replayable=True) if graph is not None else None
-    return None if key is None else (prelude_key(renderer, *prelude), Same(graph), key)
+    return None if key is None else (prelude_key(renderer, *prelude), graph, key)

@@ -40,6 +40,13 @@ class ScenePasses:
         self.buffers: dict[str, Any] = {}  # name -> the frame slot's Buffer, imported this frame
         self.reads: tuple[tuple[str, Access], ...] = ()  # what `forward` reads of them this frame
         self.marks = MARKS
+        # a frame with nothing for the scene's passes to do (see begin_slot): per frame slot the
+        # arguments and what they set ([token, buffers, reads, signature or None]), while the
+        # passes' own state is the idle one (`_at_rest`)
+        self._idle: dict[int, list[Any] | None] = {}
+        self._at_rest = False
+        self._kept: list[Any] | None = None  # this frame's entry of _idle, or None
+        self._signature: tuple | None = None  # signature()'s, until the state changes
 
     def begin(
         self,
@@ -54,6 +61,7 @@ class ScenePasses:
         """This frame's inputs; `path`: the render path (its compute made ready by finish);
         `frame`: the slot's FrameResources; `shadow_buffers`: per view the secondaries the jobs
         recorded."""
+        self._at_rest, self._kept, self._signature = False, None, None
         self.cull.begin(path, slot)
         self.clusters.begin(grid, frame.set_array, light_count)
         self.shadows.begin(views, shadow_buffers)
@@ -66,12 +74,29 @@ class ScenePasses:
         """Before the frame's replay key (render/frame/replay.py) and its jobs: what the passes
         declare and the key's imports read (the slot's buffers, the clusters' inputs, the shadow
         views), so that the graph compiled for the key is the one recorded; `begin` then adds
-        what the jobs made."""
+        what the jobs made.
+
+        A frame that culls on the CPU, draws no shadow map and clusters no lights (every frame
+        that can be submitted again) sets what the slot's last such frame set, when its
+        arguments and the maps are the same: that is brought back instead of made again (this
+        runs every frame, before the replay key: frame/replay.py)."""
+        token = None
+        if not views and grid is None and getattr(path, "pending", None) is None:
+            clusters = frame.clusters
+            token = (path, frame, frame.set_array, clusters, clusters.handle, light_count, self.shadows.shadows.maps)
+            kept = self._idle.get(slot)
+            if self._at_rest and kept is not None and kept[0] == token:  # (resources compare by their buffers)
+                self.clusters.begin(None, frame.set_array, light_count)
+                self.buffers, self.reads, self._signature, self._kept = kept[1], kept[2], kept[3], kept
+                return
         self.cull.begin(path, slot)  # the indirect path's compute as its last frame left it
         self.clusters.begin(grid, frame.set_array, light_count)
         self.shadows.begin_views(views)
         self.buffers = {"clusters": frame.clusters, **self.cull.buffers}
         self.reads = self._reads(grid)
+        self._signature = None
+        self._at_rest = token is not None
+        self._kept = self._idle[slot] = [token, self.buffers, self.reads, None] if token is not None else None
 
     def _reads(self, grid: ClusterGrid | None) -> tuple[tuple[str, Access], ...]:
         reads = self.cull.reads()
@@ -85,7 +110,14 @@ class ScenePasses:
     def signature(self) -> tuple:
         """What import_into imports and the passes declare from, by identity: equal signatures,
         equal imports and declarations (the output graph's prepare keeps a frame slot's imports
-        under it: passes/output_graph.py)."""
+        under it: passes/output_graph.py). Kept until begin or begin_slot changes the state."""
+        if self._signature is None:
+            self._signature = self._signed()
+            if self._kept is not None:
+                self._kept[3] = self._signature
+        return self._signature
+
+    def _signed(self) -> tuple:
         shadows = self.shadows
         maps = shadows.shadows.maps
         image = maps.image if maps is not None else None

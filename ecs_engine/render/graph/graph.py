@@ -73,6 +73,7 @@ class FrameGraph:
         self._declarations = Declarations()
         self._table = Imports(device.vk if device is not None else None, self._vk)
         self._by_name: dict[str, Pass] | None = None
+        self._running: tuple | None = None
 
     # ------------------------------------------------------------------ declaring the frame
     def add_pass(self, p: Pass, *, before: str | None = None) -> None:
@@ -355,14 +356,16 @@ class FrameGraph:
     @overload
     def key(self, replayable: bool) -> tuple | None: ...
     def key(self, replayable: bool = False) -> tuple | None:
-        """What a recorded frame depends on: each running pass's (name, key()) in order, the
-        extent, and the imported handles. Equal keys: a kept command buffer draws the same.
-        `replayable=True`: None where a pass that runs returns UNREPLAYABLE (see replayable())."""
+        """What a recorded frame depends on: each running pass's (name, key()) in order, the extent, the
+        imported handles (equal keys: a kept command buffer draws the same); None (`replayable`) if UNREPLAYABLE."""
         c = self._ready()
         by_name = self._passes_by_name()
+        run = self._running  # the passes that run, per compile and set of passes
+        if run is None or run[0] is not c or run[1] is not by_name:
+            run = self._running = (c, by_name, [(name, by_name[name]) for name in c.structure.order])
         keys = []
-        for name in c.structure.order:
-            k = by_name[name].key()
+        for name, p in run[2]:
+            k = p.key()
             if k is UNREPLAYABLE:
                 if replayable:
                     return None
@@ -376,11 +379,8 @@ class FrameGraph:
         return self._by_name
 
     def replayable(self) -> bool:
-        """Whether a recorded frame can be replayed at all: no pass that runs returns
-        UNREPLAYABLE as its key."""
-        c = self._ready()
-        by_name = self._passes_by_name()
-        return not any(by_name[name].key() is UNREPLAYABLE for name in c.structure.order)
+        """Whether a recorded frame can be replayed at all: no pass that runs returns UNREPLAYABLE."""
+        return self.key(replayable=True) is not None
 
     def describe(self) -> str:
         """The passes in order, what each reads and writes and the barriers before it, then
