@@ -13,7 +13,7 @@
 # demos (every demo scene with --validate), aniso (tests/texture_reference.py: what the driver's
 # anisotropic filter does to a magnified texture), bench:NAME:ARGS (a benchmark, e.g.
 # bench:schedule:--quick), ab:NAME:ARGS:REPS (old against new, alternated; see below),
-# abcli:LABEL:ARGS:REPS (the CLI's perf JSON, old against new).
+# abcli:LABEL:ARGS:REPS (the CLI's perf JSON, old against new), abpar:NAME:ARGS:REPS[:LABEL] (old and new at once).
 set -u
 export PYTHONUNBUFFERED=1
 for f in .gl/*.deb; do dpkg -x "$f" /; done; ldconfig
@@ -96,6 +96,23 @@ for mode in "$@"; do
         done
       done 2>&1 | tee "$OUT/ab-$label.txt"
       tar -C /tmp -cf "$OUT/ab-$label.tar" "ab-$label" ;;
+    abpar:*)
+      # abpar:NAME:ARGS:REPS[:LABEL]: as ab, but each rep runs new and old at the same time (two
+      # processes on two of the host's cores), so that both see the host's speed of that moment
+      # (it drifts up to 2x between runs; a pair's ratio is then the comparison)
+      IFS=: read -r _ name args reps label <<< "$mode"; args=${args//@/:}; label=${label:-$name}
+      [ -d /tmp/old ] || python3 -m pip install -q --no-deps --no-build-isolation --no-index --target /tmp/old \
+        .ab/base >/dev/null 2>&1 || { echo "install old failed"; continue; }
+      mkdir -p "/tmp/abpar-$label"
+      for rep in $(seq "${reps:-2}"); do
+        for v in new old; do
+          mkdir -p "/tmp/abpar-$label/$v$rep"
+          (cd /tmp && PYTHONPATH=/tmp/$v:/tmp/site timeout 300 python3 -m ecs_engine.bench $name $args \
+            --out "/tmp/abpar-$label/$v$rep" 2>&1 | tail -2 | sed "s/^/$v$rep: /") &
+        done
+        wait
+      done 2>&1 | tee "$OUT/abpar-$label.txt"
+      tar -C /tmp -cf "$OUT/abpar-$label.tar" "abpar-$label" ;;
     abcli:*)
       # abcli:LABEL:ARGS:REPS: the CLI (`python3 -m ecs_engine ARGS --perf-json`), this tree and
       # .ab/base alternated REPS times (e.g. the editor: abcli:editor:editor grid100 --headless

@@ -84,3 +84,24 @@ def test_the_picture_shows_only_the_camera_s_layers() -> None:
         assert _colours(render_world(gpu, _world(None, None, None, mesh))) == (True, True)
         assert _colours(render_world(gpu, _world(0b10, None, 0b10, mesh))) == (False, True)
         assert _colours(render_world(gpu, _world(None, 0b1, 0b10, mesh))) == (True, False)
+
+
+def test_whether_any_entity_has_layers_is_asked_again_only_after_a_structural_change() -> None:
+    from ecs_engine.render.extract.frame_data import camera_layers
+    from ecs_engine.render.extract.structural import structural
+
+    asked = []
+
+    def answer(world: World) -> int:
+        asked.append(world.structure_version)
+        return len(asked)
+
+    world = _world(None, None, None)
+    assert [structural(world, "test", answer) for _ in range(3)] == [1, 1, 1]  # kept: asked once
+    (camera,) = world.query(Camera, write=()).entities()
+    assert camera_layers(world) == 1  # nobody has layers: layer 0
+    world.add(int(camera), RenderLayers(mask=0b110))  # a structural change
+    assert structural(world, "test", answer) == 2 and len(asked) == 2
+    assert camera_layers(world) == 0b110  # the camera's mask, seen at once
+    world.set(int(camera), RenderLayers(mask=0b1))  # a value, not the structure: still read each frame
+    assert camera_layers(world) == 0b1

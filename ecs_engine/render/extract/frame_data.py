@@ -45,6 +45,7 @@ from .environment import extract_environment
 from .lights import KeptPoints, LightKinds, extract_lights, light_kinds
 from .materials import extract_materials
 from .shadows import ShadowCasters, ShadowExtract
+from .structural import structural
 
 # names older code imports from here (they live in extract/chunks.py)
 __all__ = [
@@ -233,7 +234,11 @@ class FrameExtractor:
 
 def camera_layers(world: World) -> int:
     """The layers the window's camera draws (its RenderLayers' mask; layer 0 without one)."""
-    if not world.query(RenderLayers, write=()).count():  # the usual world: no layers at all
+    if not structural(world, "render_layers", _has_layers):  # the usual world: no layers at all
         return DEFAULT_LAYERS
     eid = active_camera(world)
     return int(world.get(eid, RenderLayers).mask) if world.has(eid, RenderLayers) else DEFAULT_LAYERS
+
+
+def _has_layers(world: World) -> bool:
+    return bool(world.query(RenderLayers, write=()).count())

@@ -4,9 +4,7 @@ ActiveCamera, Viewport, RenderTexture and RenderLayers only."""
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
-from typing import Any
 
 from ecs_engine.components.camera import ActiveCamera, Camera, RenderLayers, RenderTexture, Viewport
 from ecs_engine.components.camera_views import CameraView, camera_views
@@ -15,6 +13,7 @@ from ecs_engine.components.transform import Transform
 from ...ecs.world import World
 from ...maths.camera import check_positive
 from .camera import CameraMatrices, camera_matrices_of
+from .structural import structural
 
 READS = (Camera, Transform, ActiveCamera, Viewport, RenderTexture, RenderLayers)
 
@@ -53,18 +52,12 @@ def extract_views(world: World, width: int, height: int) -> tuple[ViewData, ...]
     return tuple(out)
 
 
-# per world: (structure version, whether a camera has a Viewport or RenderTexture)
-_SEVERAL: weakref.WeakKeyDictionary[Any, tuple[int, bool]] = weakref.WeakKeyDictionary()
-
-
 def several_views(world: World) -> bool:
     """Whether some camera may draw other than over the whole window: an entity has a Viewport
     or a RenderTexture (render/frame/views.py draws those; else the window's one camera as
     ever). Only a spawn, destroy, add or remove can change it: the answer is kept until one."""
-    version = world.structure_version
-    kept = _SEVERAL.get(world)
-    if kept is not None and kept[0] == version:
-        return kept[1]
-    found = any(world.query(c, write=()).count() for c in (Viewport, RenderTexture))
-    _SEVERAL[world] = (version, found)
-    return found
+    return bool(structural(world, "several_views", _has_views))
+
+
+def _has_views(world: World) -> bool:
+    return any(world.query(c, write=()).count() for c in (Viewport, RenderTexture))
