@@ -105,3 +105,11 @@ def test_whether_any_entity_has_layers_is_asked_again_only_after_a_structural_ch
     assert camera_layers(world) == 0b110  # the camera's mask, seen at once
     world.set(int(camera), RenderLayers(mask=0b1))  # a value, not the structure: still read each frame
     assert camera_layers(world) == 0b1
+
+
+def test_two_worlds_asked_in_turn_each_get_their_own_answer() -> None:
+    from ecs_engine.render.extract.frame_data import camera_layers
+
+    plain, layered = _world(None, None, None), _world(0b100, None, None)
+    assert plain.structure_version == layered.structure_version  # the same count of changes
+    assert [camera_layers(w) for w in (plain, layered, plain, layered)] == [1, 0b100, 1, 0b100]

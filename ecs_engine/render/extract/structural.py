@@ -1,6 +1,6 @@
 """Answers about a world that only a spawn, destroy, add or remove can change (whether some
-entity has a component at all), asked every frame by the extract stage: each is kept per world
-until its structure version moves, so a frame pays a dictionary lookup, not a query."""
+entity has a component at all), asked every frame by the extract stage: each is kept until the
+world's structure version moves, so a frame pays a lookup, not a query."""
 
 from __future__ import annotations
 
@@ -8,19 +8,17 @@ import weakref
 from collections.abc import Callable
 from typing import Any
 
-# per world: name -> (structure version, answer)
-_KEPT: weakref.WeakKeyDictionary[Any, dict[str, tuple[int, Any]]] = weakref.WeakKeyDictionary()
+# name -> (the world asked last, its structure version then, the answer); one world per name:
+# another world asking is answered anew (a weak reference: a kept answer keeps no world alive)
+_LAST: dict[str, tuple[weakref.ref, int, Any]] = {}
 
 
 def structural(world: Any, name: str, answer: Callable[[Any], Any]) -> Any:
     """`answer(world)`, kept under `name` until the world's structure changes."""
     version = world.structure_version
-    kept = _KEPT.get(world)
-    if kept is None:
-        kept = _KEPT[world] = {}
-    last = kept.get(name)
-    if last is not None and last[0] == version:
-        return last[1]
+    last = _LAST.get(name)
+    if last is not None and last[1] == version and last[0]() is world:
+        return last[2]
     value = answer(world)
-    kept[name] = (version, value)
+    _LAST[name] = (weakref.ref(world), version, value)
     return value
