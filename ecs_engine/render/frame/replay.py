@@ -34,7 +34,7 @@ import) are the graph's.
 
 Frames that always record: a path that is not `replayable` (per_entity pushes each row's data;
 indirect records its own passes), shadow maps drawn (their views' jobs), ray-traced shadows and
-blended rows (sorted each frame): `prelude_replayable`; and a pass whose key is UNREPLAYABLE
+blended rows (sorted each frame): `frame_key`'s `stops`; and a pass whose key is UNREPLAYABLE
 (`graph.replayable()`): the overlay (the UI draws anew each frame), a post effect without a key.
 """
 
@@ -132,38 +132,28 @@ def prelude_key(renderer: Any, positional: int, grid: Any, light_count: int, rea
     )
 
 
-def prelude_replayable(renderer: Any, views: list[Any], traced: list[Any], forward: bool) -> bool:
-    """Whether the work outside the graph may be submitted again: the path's chunks (not
-    per_entity's or indirect's), no shadow maps drawn, no rays, no blended rows (see the module)."""
-    path_ok = getattr(renderer.path, "replayable", False)
-    return renderer.replay.enabled and path_ok and not views and not traced and not forward
-
-
-def output_graph(renderer: Any, state: Any, slot: int, readback: bool) -> Any:
-    """This frame's output graph prepared before its jobs (OutputGraph.prepare: its shape, imports,
-    the frame's tone map and overlay, compiled; the frame's recording reuses it), so that its
-    passes' keys are this frame's; None before the output passes have a graph."""
-    output = renderer.output
-    if output.graph is None:
-        return None
-    rendering = output._rendering(state)
-    tone_map = (renderer.tone_map, renderer.exposure)
-    return output.graph.prepare(state, rendering, tone_map, renderer.overlay, slot, readback)
-
-
 def frame_key(renderer: Any, state: Any, slot: int, prelude: tuple[Any, ...], stops: tuple[Any, ...]) -> Key | None:
-    """This frame's replay key: the prelude's (`prelude`: prelude_key's arguments; `stops`:
-    prelude_replayable's) and the output graph's (graph.key(): each running pass's key() in
-    order, the extent and the imported handles), or None when the frame must record: the
-    prelude forbids it, or a pass returned UNREPLAYABLE (graph.replayable())."""
-    outputs = renderer.output.graph
-    if outputs is not None:
-        outputs.forget_prepared()  # a replayed frame's: this one prepares (or records) anew
+    """This frame's replay key: the prelude's (`prelude`: prelude_key's arguments) and the output
+    graph's, prepared before the jobs (OutputGraph.prepare: its shape, imports and the frame's
+    settings; the frame's recording reuses it) so that its passes' keys are this frame's
+    (graph.key(): each running pass's key() in order, the extent and the imported handles).
+    None when the frame must record: the work outside the graph may not be submitted again
+    (`stops`: the shadow views drawn, the traced lights, blended rows; a path that is not
+    `replayable`: per_entity's, indirect's), or a pass returned UNREPLAYABLE. Run every frame:
+    its few calls are kept few."""
+    output = renderer.output
+    outputs = output.graph
+    if outputs is None:
+        return None
+    outputs.forget_prepared()  # a replayed frame's: this one prepares (or records) anew
     readback = prelude[-1]
     # a screenshot of a window's image records (asking prepare would take its readback request)
-    screenshot = readback and getattr(renderer.target, "readback_image", None) is not None
-    if screenshot or not prelude_replayable(renderer, *stops):
+    if readback and getattr(renderer.target, "readback_image", None) is not None:
         return None
-    graph = output_graph(renderer, state, slot, readback)
-    key = graph.key(replayable=True) if graph is not None else None
+    views, traced, forward = stops
+    if views or traced or forward or not renderer.replay.enabled or not getattr(renderer.path, "replayable", False):
+        return None
+    tone_map = (renderer.tone_map, renderer.exposure)
+    graph = outputs.prepare(state, output._rendering(state), tone_map, renderer.overlay, slot, readback)
+    key = graph.key(replayable=True)
     return None if key is None else (prelude_key(renderer, *prelude), graph, key)

@@ -212,7 +212,7 @@ class FrameGraph:
     def _changed(self) -> None:
         """Passes, outputs or an import's shape changed: the next compile plans again."""
         self._version += 1
-        self._by_name = None
+        self._by_name = self._running = None
 
     def output(self, name: str) -> None:
         """A resource the frame must produce: the passes writing it (and what they need) run."""
@@ -358,13 +358,12 @@ class FrameGraph:
     def key(self, replayable: bool = False) -> tuple | None:
         """What a recorded frame depends on: each running pass's (name, key()) in order, the extent, the
         imported handles (equal keys: a kept command buffer draws the same); None (`replayable`) if UNREPLAYABLE."""
-        c = self._ready()
-        by_name = self._passes_by_name()
-        run = self._running  # the passes that run, per compile and set of passes
-        if run is None or run[0] is not c or run[1] is not by_name:
-            run = self._running = (c, by_name, [(name, by_name[name]) for name in c.structure.order])
+        c, run = self.compiled, self._running  # the passes that run, per compile (and set of passes)
+        if run is None or run[0] is not c:
+            by_name, c = self._passes_by_name(), self._ready()
+            run = self._running = (c, [(name, by_name[name]) for name in c.structure.order])
         keys = []
-        for name, p in run[2]:
+        for name, p in run[1]:
             k = p.key()
             if k is UNREPLAYABLE:
                 if replayable:

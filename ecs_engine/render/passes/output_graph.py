@@ -46,7 +46,7 @@ from .deferred_passes import (
     RayShadowsPass,
 )
 from .forward import Forward, PostCall
-from .output_frame import OutputFrame, OverlayOver, ToneMapInto, WindowImage
+from .output_frame import OutputFrame, OverlayOver, ToneMapInto
 from .output_imports import OutputImports, _final_layout  # noqa: F401 (view_graph.py imports it here)
 from .readback import Readback
 
@@ -118,12 +118,20 @@ class OutputGraph(OutputImports):
         (frame replay asks before the jobs, render/frame/replay.py; `record` then reuses it).
         `rendering` (output_passes.OutputRendering) names the target's image; `readback`:
         copy the target to the host. When nothing it reads changed since the slot's last
-        prepare, that one's imports are brought back instead of made again (_again)."""
-        self.frame.window = self._window(overlay)
-        inputs = self._inputs(state, rendering, overlay) if not readback else None
-        graph = self._again(inputs, slot)
-        if graph is not None:
-            self._copies = False  # (a frame reading back prepares in full)
+        prepare, that one's imports are brought back instead of made again."""
+        # the window the UI draws the target into this frame (a target that is the editor's
+        # viewport: frame/viewport.py), or None: the UI draws over the target (a camera view's
+        # frame before the last has no UI, so no window either)
+        self.frame.window = getattr(self.output.target, "window_image", None) if overlay is not None else None
+        if readback:  # (a frame reading back prepares in full)
+            return self._prepare(state, rendering, tone_map, overlay, slot, readback, None)
+        inputs = self._inputs(state, rendering, overlay)
+        # the slot's last graph with its imports back, if made from `inputs` (a graph destroyed
+        # takes its slots' entries with it: _drop)
+        kept = self._kept.get(slot)
+        if kept is not None and kept[0] == inputs and kept[2].restore_imports(kept[3]):
+            graph = kept[2]
+            self._copies = False
             if not FrameGraph.verify_declares:
                 # what the passes declare from is in `inputs` too: the graph compiled for them stands
                 self._set_frame(graph, state, rendering, tone_map, overlay, slot, readback, compile=False)
@@ -162,22 +170,9 @@ class OutputGraph(OutputImports):
             self.frame.window,
         )
 
-    def _window(self, overlay: Any) -> WindowImage | None:
-        """The window the UI draws the target into this frame (a target that is the editor's
-        viewport: frame/viewport.py), or None: the UI draws over the target (a camera view's
-        frame before the last has no UI, so no window either)."""
-        return getattr(self.output.target, "window_image", None) if overlay is not None else None
-
     def _more_inputs(self) -> Any:
         """What a subclass's imports follow from besides these (a camera view's placement)."""
         return None
-
-    def _again(self, inputs: tuple | None, slot: int) -> FrameGraph | None:
-        """The slot's last graph with its imports back, if `inputs` are those it was prepared from."""
-        kept = self._kept.get(slot)
-        if inputs is None or kept is None or kept[0] != inputs or self.graphs.get(kept[1]) is not kept[2]:
-            return None
-        return kept[2] if kept[2].restore_imports(kept[3]) else None
 
     def _set_frame(
         self,
