@@ -96,18 +96,18 @@ class Imports:
     def snapshot(self) -> tuple:
         """The imports as they stand, for `restore` (a frame slot's, brought back when it comes
         round again with the same inputs)."""
-        return (dict(self.by_name), dict(self.images), dict(self.buffers), dict(self._ints), self.handles(), self.state)
+        handles = self.handles()  # (sorts the names)
+        made = (dict(self.by_name), dict(self.images), dict(self.buffers), dict(self._ints))
+        return (*made, handles, self.state, self._names)
 
     def restore(self, snapshot: tuple) -> None:
         """The imports of `snapshot`; the caller knows their shapes are today's (the graph's
         version is the one it was taken at), so nothing recompiles."""
-        by_name, images, buffers, ints, handles, state = snapshot
-        if state is self.state:  # the same made imports already (one frame slot, or still ones)
+        by_name, images, buffers, ints, handles, state, names = snapshot
+        if state is self._state:  # the same made imports already (one frame slot, or still ones)
             return
-        if by_name.keys() != self.by_name.keys():
-            self._names = None
         self.by_name, self.images, self.buffers, self._ints, self._handles = by_name, images, buffers, ints, handles
-        self._shared, self._state = True, state
+        self._names, self._shared, self._state = names, True, state
 
     @property
     def state(self) -> object:
