@@ -153,7 +153,10 @@ def frame_key(renderer: Any, state: Any, slot: int, prelude: tuple[Any, ...], st
     views, traced, forward = stops
     if views or traced or forward or not renderer.replay.enabled or not getattr(renderer.path, "replayable", False):
         return None
-    tone_map = (renderer.tone_map, renderer.exposure)
-    graph = outputs.prepare(state, output._rendering(state), tone_map, renderer.overlay, slot, readback)
-    key = graph.key(replayable=True)
+    tone_map, rendering, overlay = (renderer.tone_map, renderer.exposure), output._rendering(state), renderer.overlay
+    again = None if readback else outputs.key_again(state, rendering, tone_map, overlay, slot)
+    if again is None:  # the graph prepared now (kept for the frame's recording)
+        graph = outputs.prepare(state, rendering, tone_map, overlay, slot, readback)
+        again = graph, graph.key(replayable=True)
+    graph, key = again
     return None if key is None else (prelude_key(renderer, *prelude), graph, key)

@@ -354,10 +354,11 @@ class FrameGraph:
     @overload
     def key(self) -> tuple: ...
     @overload
-    def key(self, replayable: bool) -> tuple | None: ...
-    def key(self, replayable: bool = False) -> tuple | None:
+    def key(self, replayable: bool, handles: tuple | None = None) -> tuple | None: ...
+    def key(self, replayable: bool = False, handles: tuple | None = None) -> tuple | None:
         """What a recorded frame depends on: each running pass's (name, key()) in order, the extent, the
-        imported handles (equal keys: a kept command buffer draws the same); None (`replayable`) if UNREPLAYABLE."""
+        imported handles (`handles`: a snapshot's the caller knows are today's; equal keys: a kept
+        command buffer draws the same); None (`replayable`) if UNREPLAYABLE."""
         c, run = self.compiled, self._running  # the passes that run, per compile (and set of passes)
         if run is None or run[0] is not c:
             by_name, c = self._passes_by_name(), self._ready()
@@ -370,7 +371,7 @@ class FrameGraph:
                     return None
                 k = object()  # equal to no other key
             keys.append((name, k))
-        return (*keys, c.structure.extent, self._table.handles())
+        return (*keys, c.structure.extent, self._table.handles() if handles is None else handles)
 
     def _passes_by_name(self) -> dict[str, Pass]:
         if self._by_name is None:

@@ -119,16 +119,13 @@ class OutputGraph(OutputImports):
         `rendering` (output_passes.OutputRendering) names the target's image; `readback`:
         copy the target to the host. When nothing it reads changed since the slot's last
         prepare, that one's imports are brought back instead of made again."""
-        # the window the UI draws the target into this frame (a target that is the editor's
-        # viewport: frame/viewport.py), or None: the UI draws over the target (a camera view's
-        # frame before the last has no UI, so no window either)
+        # the window the UI draws the target into (the editor's viewport: frame/viewport.py), or
+        # None: the UI draws over the target (a camera view's frame before the last has no UI)
         self.frame.window = getattr(self.output.target, "window_image", None) if overlay is not None else None
         if readback:  # (a frame reading back prepares in full)
             return self._prepare(state, rendering, tone_map, overlay, slot, readback, None)
         inputs = self._inputs(state, rendering, overlay)
-        # the slot's last graph with its imports back, if made from `inputs` (a graph destroyed
-        # takes its slots' entries with it: _drop)
-        kept = self._kept.get(slot)
+        kept = self._kept.get(slot)  # its imports back if made from `inputs` (_drop forgets a dead graph's)
         if kept is not None and kept[0] == inputs and kept[2].restore_imports(kept[3]):
             graph = kept[2]
             self._copies = False
@@ -187,6 +184,17 @@ class OutputGraph(OutputImports):
     ) -> None:
         """This frame's settings into the graph's passes (their keys and declarations read them),
         the graph compiled (cached; `compile=False`: it stands as it was), kept for `record`."""
+        self._settings(graph, state, tone_map, overlay, slot)
+        output, frame = self.output, self.frame
+        extent = (state.key[1], state.key[2])  # (the area's size, as Python ints)
+        if compile or not graph.compiled_for(extent):
+            graph.compile(extent)
+        if output.target.form == Form.DEFERRED:
+            frame.attachments = self._gbuffer_views(graph, output.target.attachments)
+        self._prepared = ((state, rendering, overlay), (tone_map, slot, readback), graph)
+
+    def _settings(self, graph: FrameGraph, state: Any, tone_map: Any, overlay: Any, slot: int) -> None:
+        """What the passes' keys read: the effects' frame inputs, the state, tone map, overlay, slot."""
         output = self.output
         if output.post and output.inputs is not None:
             for effect in output.post:
@@ -195,12 +203,30 @@ class OutputGraph(OutputImports):
         self.graph = graph
         frame = self.frame
         frame.state, frame.tone_map, frame.overlay, frame.slot = state, tone_map, overlay, slot
-        extent = (state.key[1], state.key[2])  # (the area's size, as Python ints)
-        if compile or not graph.compiled_for(extent):
-            graph.compile(extent)
-        if output.target.form == Form.DEFERRED:
-            frame.attachments = self._gbuffer_views(graph, output.target.attachments)
-        self._prepared = ((state, rendering, overlay), (tone_map, slot, readback), graph)
+
+    def key_again(self, state: Any, rendering: Any, tone_map: Any, overlay: Any, slot: int) -> Any:
+        """A frame's graph key without a prepare (frame replay's, before the jobs: most frames
+        are submitted again, and a prepare brings the slot's imports back and compiles): when
+        the slot's last prepare was made from the same inputs and the graph stands for them
+        (its version then, compiled for the extent), (the graph, its key with the kept
+        imports' handles, or None for UNREPLAYABLE) with the frame's settings set for the
+        passes' keys; else None (prepare, then). `record` then prepares (the imports back)."""
+        self.frame.window = getattr(self.output.target, "window_image", None) if overlay is not None else None
+        inputs = self._inputs(state, rendering, overlay)
+        kept = self._kept.get(slot)
+        if kept is None or kept[0] != inputs:
+            return None
+        graph, (version, imports) = kept[2], kept[3]
+        if version != graph.version or not graph.compiled_for((state.key[1], state.key[2])):
+            return None
+        self._settings(graph, state, tone_map, overlay, slot)
+        self._prepared = None
+        key = graph.key(replayable=True, handles=imports[4])
+        if FrameGraph.verify_declares:  # the tests: a prepare's key is this one
+            full = self.prepare(state, rendering, tone_map, overlay, slot)
+            assert full is graph and full.key(replayable=True) == key, "a kept key that a prepare does not give"
+            self._prepared = None
+        return graph, key
 
     def _prepare(
         self,
