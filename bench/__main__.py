@@ -42,6 +42,7 @@ REGISTRY: dict[str, str] = {
     "raytracing": "raytracing",
     "lod-build": "lod_build",
     "gpu-memory": "gpu_memory",
+    "physics-libs": "physics_libs",
 }
 
 # One line each for the list in the usage text (the modules are not imported to print it).
@@ -63,6 +64,7 @@ SUMMARY: dict[str, str] = {
     "raytracing": "bottom levels per mesh, top-level build and update at 10k to 1M instances (Vulkan ray tracing)",
     "lod-build": "time and peak memory of building levels of detail, 16k to 263k vertices (CPU only)",
     "gpu-memory": "device memory of the renderer's images per render configuration at 1280x720 (Vulkan)",
+    "physics-libs": "rigid-body libraries (rapier3d, culverin, pybullet): a 10k pile, 100k statics, rays (CPU only)",
 }
 
 # The commands that work from any folder once ecs_engine is installed.
