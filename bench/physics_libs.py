@@ -7,7 +7,9 @@ Each library installed in this interpreter runs the same four workloads, all at 
 - `statics`: 100,000 static boxes on a floor with 1,000 dynamic spheres falling on them: ms a step;
 - `rays`: 10,000 rays cast down onto the settled pile in one go (a batch where the library has
   one, else a loop): ms for all;
-- `churn`: 1,000 bodies added then removed at run time: ms for both.
+- `churn`: 1,000 bodies added then removed at run time: ms for both;
+- `deterministic`: two worlds of 1,000 boxes built and stepped alike end with the same poses, bit
+  for bit (the library's own threads at work).
 
 Libraries: `rapier3d` (dimforge's own bindings of Rapier), `culverin` (bindings of Jolt Physics
 with positions and rotations as shared buffers: CPython 3.12 and newer only), `pybullet`. One
@@ -19,7 +21,7 @@ JSON (schema_version 1): {"benchmark": "physics-libs", "quick", "machine", "conf
 "statics", "movers", "rays", "churn", "steps"}, "libraries": [{"name", "version", "installed",
 "threads", "pile": {"step_ms", "readback_ms", "mean_height_before", "mean_height_after",
 "lowest_after", "settled"}, "statics": {"step_ms"}, "rays": {"ms", "hits", "batched"}, "churn": {"add_ms",
-"remove_ms"}}]}.
+"remove_ms"}, "deterministic"}]}.
 """
 
 from __future__ import annotations
@@ -260,6 +262,7 @@ def measure(name: str, lib: Any, config: dict[str, int]) -> dict[str, Any]:
     remove_ms = (time.perf_counter() - t0) * 1e3
     threads = sim.threads()
     del sim
+    same = deterministic(make, lib, min(boxes, 1_000), steps)
     floor = make(lib, config["statics"] + config["movers"] + 1)
     points = grid(config["statics"], 1.0, 0.5)
     points[:, 1] = 0.5  # one layer: a floor of boxes
@@ -282,7 +285,23 @@ def measure(name: str, lib: Any, config: dict[str, int]) -> dict[str, Any]:
         "statics": {"step_ms": statics_ms},
         "rays": {"ms": rays_ms, "hits": hits, "batched": batched},
         "churn": {"add_ms": add_ms, "remove_ms": remove_ms},
+        "deterministic": same,
     }
+
+
+def deterministic(make: Any, lib: Any, boxes: int, steps: int) -> bool:
+    """Whether two worlds built and stepped alike end with the same poses, bit for bit."""
+    ends = []
+    for _ in range(2):
+        sim = make(lib, boxes + 1)
+        sim.ground(200.0)
+        sim.dynamic(grid(boxes, 1.2, 1.0))
+        for _ in range(steps):
+            sim.step()
+        pos, rot = sim.poses()
+        ends.append((pos.tobytes(), rot.tobytes()))
+        del sim
+    return ends[0] == ends[1]
 
 
 def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dict[str, Any]:
@@ -325,7 +344,7 @@ def _dist_version(name: str) -> str | None:
 def table(libraries: list[dict[str, Any]], config: dict[str, int]) -> str:
     head = (
         f"{'library':10} {'pile step ms':>12} {'read-back ms':>12} {'settled':>7} {'statics step ms':>15} "
-        f"{'rays ms':>8} {'add ms':>7} {'remove ms':>9}"
+        f"{'rays ms':>8} {'add ms':>7} {'remove ms':>9} {'same twice':>10}"
     )
     sizes = f"{config['boxes']:,} boxes, {config['statics']:,} statics + {config['movers']:,} movers"
     rows = [f"{sizes}, {config['rays']:,} rays", head]
@@ -337,6 +356,6 @@ def table(libraries: list[dict[str, Any]], config: dict[str, int]) -> str:
         rows.append(
             f"{r['name']:10} {p['step_ms']:12.2f} {p['readback_ms']:12.3f} {p['settled']!s:>7} "
             f"{r['statics']['step_ms']:15.2f} {r['rays']['ms']:8.2f} {r['churn']['add_ms']:7.1f} "
-            f"{r['churn']['remove_ms']:9.1f}"
+            f"{r['churn']['remove_ms']:9.1f} {r['deterministic']!s:>10}"
         )
     return "\n".join(rows)

@@ -29,6 +29,7 @@ def test_physics_libs_quick_writes_json(tmp_path, monkeypatch):
         assert pile["step_ms"] > 0 and pile["readback_ms"] > 0 and lib["statics"]["step_ms"] > 0
         assert lib["rays"]["hits"] == doc["config"]["rays"], name  # every ray lands on the pile or the floor
         assert lib["churn"]["add_ms"] > 0 and lib["churn"]["remove_ms"] > 0
+        assert lib["deterministic"] is True, name  # the same world stepped alike, the same poses
 
 
 def test_the_grid_places_every_body_apart():
