@@ -119,14 +119,11 @@ class OutputGraph(OutputImports):
         `rendering` (output_passes.OutputRendering) names the target's image; `readback`:
         copy the target to the host. When nothing it reads changed since the slot's last
         prepare, that one's imports are brought back instead of made again."""
-        # the window the UI draws the target into (the editor's viewport: frame/viewport.py), or
-        # None: the UI draws over the target (a camera view's frame before the last has no UI)
-        self.frame.window = getattr(self.output.target, "window_image", None) if overlay is not None else None
         if readback:  # (a frame reading back prepares in full)
+            self.frame.window = self._window(overlay)
             return self._prepare(state, rendering, tone_map, overlay, slot, readback, None)
-        inputs = self._inputs(state, rendering, overlay)
-        kept = self._kept.get(slot)  # its imports back if made from `inputs` (_drop forgets a dead graph's)
-        if kept is not None and kept[0] == inputs and kept[2].restore_imports(kept[3]):
+        inputs, kept = self._slot_kept(state, rendering, overlay, slot)
+        if kept is not None and kept[2].restore_imports(kept[3]):
             graph = kept[2]
             self._copies = False
             if not FrameGraph.verify_declares:
@@ -167,6 +164,17 @@ class OutputGraph(OutputImports):
             self.frame.window,
         )
 
+    def _window(self, overlay: Any) -> Any:
+        """The window the UI draws the target into (the editor's viewport), or None: over the target."""
+        return getattr(self.output.target, "window_image", None) if overlay is not None else None
+
+    def _slot_kept(self, state: Any, rendering: Any, overlay: Any, slot: int) -> tuple[tuple, Any]:
+        """The frame's window and `_inputs`, and the slot's kept entry if made from them (or None)."""
+        self.frame.window = self._window(overlay)
+        inputs = self._inputs(state, rendering, overlay)
+        kept = self._kept.get(slot)
+        return inputs, kept if kept is not None and kept[0] == inputs else None
+
     def _more_inputs(self) -> Any:
         """What a subclass's imports follow from besides these (a camera view's placement)."""
         return None
@@ -205,16 +213,11 @@ class OutputGraph(OutputImports):
         frame.state, frame.tone_map, frame.overlay, frame.slot = state, tone_map, overlay, slot
 
     def key_again(self, state: Any, rendering: Any, tone_map: Any, overlay: Any, slot: int) -> Any:
-        """A frame's graph key without a prepare (frame replay's, before the jobs: most frames
-        are submitted again, and a prepare brings the slot's imports back and compiles): when
-        the slot's last prepare was made from the same inputs and the graph stands for them
-        (its version then, compiled for the extent), (the graph, its key with the kept
-        imports' handles, or None for UNREPLAYABLE) with the frame's settings set for the
-        passes' keys; else None (prepare, then). `record` then prepares (the imports back)."""
-        self.frame.window = getattr(self.output.target, "window_image", None) if overlay is not None else None
-        inputs = self._inputs(state, rendering, overlay)
-        kept = self._kept.get(slot)
-        if kept is None or kept[0] != inputs:
+        """Frame replay's graph key without a prepare, when the slot's kept entry has today's inputs
+        and the graph stands for them (that version, compiled for the extent): (the graph, its key
+        with the kept handles, or None for UNREPLAYABLE); else None. `record` prepares later."""
+        kept = self._slot_kept(state, rendering, overlay, slot)[1]
+        if kept is None:
             return None
         graph, (version, imports) = kept[2], kept[3]
         if version != graph.version or not graph.compiled_for((state.key[1], state.key[2])):
@@ -242,15 +245,13 @@ class OutputGraph(OutputImports):
         attachments = target.attachments
         form, samples, color_format = target.form, int(attachments.samples), int(target.color_format)
         deferred = form == Form.DEFERRED
-        # the rays' and weighted transparency's passes from the first frame that has them on
-        # (they record nothing on a frame without traced lights or blended rows): one graph,
-        # one set of transients, however those come and go
+        # the rays' and weighted transparency's passes from the first frame with them on (idle on a frame
+        # without traced lights or blended rows): one graph, one set of transients, as those come and go
         ray = deferred and self.output.ray_shadows is not None
         oit = deferred and (self.output.oit is not None or self.frame.transparent is not None)
         extent = (state.key[1], state.key[2])  # (the area's size, as Python ints)
         post = self.output.post if form != Form.DIRECT else []
-        # the effects' passes follow the extent (bloom's chain) and the list (made again with it)
-        post_shape = (extent, tuple(id(p) for p in post)) if post else None
+        post_shape = (extent, tuple(id(p) for p in post)) if post else None  # the effects' passes follow both
         window = self.frame.window
         shape = (form, samples, color_format, ray, oit, post_shape, window is not None)
         recreations = getattr(target, "recreations", 0)
