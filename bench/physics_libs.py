@@ -53,7 +53,24 @@ def grid(n: int, spacing: float, y0: float) -> np.ndarray:
     return np.stack([(x - side / 2) * spacing, y0 + y * spacing, (z - side / 2) * spacing], axis=1)
 
 
-class Rapier:
+def tiles(n: int) -> np.ndarray:
+    """`n` unit boxes' centres side by side in one layer on y = 0.5: a floor of boxes."""
+    side = int(np.ceil(np.sqrt(n)))
+    i = np.arange(n)
+    return np.stack([(i % side) - side / 2, np.full(n, 0.5), (i // side) - side / 2], axis=1)
+
+
+class Bodies:
+    """The dynamic bodies an adapter made, in order (what `poses` reads back)."""
+
+    bodies: list[Any]
+
+    def forget(self, handles: list[Any]) -> None:
+        gone = set(handles)
+        self.bodies = [h for h in self.bodies if h not in gone]
+
+
+class Rapier(Bodies):
     name = "rapier3d"
 
     def __init__(self, lib: Any, capacity: int) -> None:
@@ -82,8 +99,7 @@ class Rapier:
     def remove(self, handles: list[Any]) -> None:
         for h in handles:
             self.world.remove_body(h)
-        gone = set(handles)
-        self.bodies = [h for h in self.bodies if h not in gone]
+        self.forget(handles)
 
     def step(self) -> None:
         self.world.step()
@@ -105,7 +121,7 @@ class Rapier:
         return sum(cast(ray(tuple(s), direction), 100.0, True) is not None for s in starts), False
 
 
-class Culverin:
+class Culverin(Bodies):
     name = "culverin"
 
     def __init__(self, lib: Any, capacity: int) -> None:
@@ -144,8 +160,7 @@ class Culverin:
     def remove(self, handles: list[int]) -> None:
         self.world.destroy_bodies_batch(handles)
         self._index = None
-        gone = set(handles)
-        self.bodies = [h for h in self.bodies if h not in gone]
+        self.forget(handles)
 
     def step(self) -> None:
         self.world.step(DT)
@@ -168,7 +183,7 @@ class Culverin:
         return int((hits != 0).sum()), True
 
 
-class Bullet:
+class Bullet(Bodies):
     name = "pybullet"
 
     def __init__(self, lib: Any, capacity: int) -> None:
@@ -201,8 +216,7 @@ class Bullet:
     def remove(self, handles: list[int]) -> None:
         for h in handles:
             self.lib.removeBody(h, physicsClientId=self.client)
-        gone = set(handles)
-        self.bodies = [h for h in self.bodies if h not in gone]
+        self.forget(handles)
 
     def step(self) -> None:
         self.lib.stepSimulation(physicsClientId=self.client)
@@ -264,12 +278,7 @@ def measure(name: str, lib: Any, config: dict[str, int]) -> dict[str, Any]:
     del sim
     same = deterministic(make, lib, min(boxes, 1_000), steps)
     floor = make(lib, config["statics"] + config["movers"] + 1)
-    points = grid(config["statics"], 1.0, 0.5)
-    points[:, 1] = 0.5  # one layer: a floor of boxes
-    side = int(np.ceil(np.sqrt(config["statics"])))
-    i = np.arange(config["statics"])
-    points[:, 0], points[:, 2] = (i % side) - side / 2, (i // side) - side / 2
-    floor.statics(points)
+    floor.statics(tiles(config["statics"]))
     floor.dynamic(grid(config["movers"], 1.5, 3.0), sphere=True)
     statics_ms = timed(floor.step, steps)
     return {
