@@ -253,7 +253,7 @@ class OutputPasses:
         for `record`; None without an hdr-stage effect or HDR colour. Called before the frame's
         replay key is taken (the effects' keys read it)."""
         target = self.target
-        hdr = target.hdr_image if target.hdr and self.post else None
+        hdr = target.hdr_image if self.post and target.hdr else None  # (post first: the usual frame has none)
         if hdr is None:  # no hdr-stage effect (or no HDR colour): nothing to hand over
             self.inputs = None
             return None

@@ -226,16 +226,16 @@ class LightCulling:
         reach = 0.0
         # on a device without fragment subgroup arithmetic only the deferred lighting walks the
         # grid: no grid where the lights are lit forward (`clustered`, or MSAA)
-        if not self.supported and (self.mode == LightCullingMode.CLUSTERED or samples > 1):
-            if self.mode in _FORCED and not self._warned:
+        if not self.supported and (self._mode == LightCullingMode.CLUSTERED or samples > 1):
+            if self._mode in _FORCED and not self._warned:
                 self._warned = True
                 log.warning("this device has no subgroup arithmetic in fragment shaders: lights are not clustered")
             return None, False
-        if self.mode != LightCullingMode.LOOP and (
-            self.clustered or self.mode in _FORCED or data.light_count >= CLUSTER_MIN_LIGHTS // 2
+        if self._mode != LightCullingMode.LOOP and (
+            self.clustered or self._mode in _FORCED or data.light_count >= CLUSTER_MIN_LIGHTS // 2
         ):
             bounded, unbounded, reach = light_census(data.lights, data.directional, data.camera.position)
-            clustered = wants_clusters(self.mode, self.clustered, bounded, unbounded)
+            clustered = wants_clusters(self._mode, self.clustered, bounded, unbounded)
         positional = sum(len(p) for p in data.lights)
         grid = cluster_grid(width, height, data.camera.near, reach, positional) if clustered else None
         if grid is not None and grid.buffer_bytes > self.max_bytes:
@@ -257,8 +257,8 @@ class LightCulling:
         """Whether the opaque meshes are lit in compute (the target's deferred form): asked for,
         or `auto` with clustered lights; never with MSAA (the G-buffer has one sample: MSAA
         keeps forward lighting, with one warning when deferred was asked for)."""
-        deferred = self.mode == LightCullingMode.DEFERRED
-        wanted = deferred or (self.mode == LightCullingMode.AUTO and self.clustered)
+        deferred = self._mode == LightCullingMode.DEFERRED
+        wanted = deferred or (self._mode == LightCullingMode.AUTO and self.clustered)
         if wanted and samples > 1:
             if deferred and not self._warned_msaa:
                 self._warned_msaa = True
