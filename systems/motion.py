@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ecs_engine.components import AngularVelocity, Transform, Velocity
+from ecs_engine.components.physics import RigidBody
 from ecs_engine.ecs.schedule import System, any_with
 from ecs_engine.ecs.world import World
 from ecs_engine.jobs import JobPool, over_rows
@@ -23,7 +24,7 @@ class MotionSystem(System):
         pool = world.resources.get(JobPool)
         # Tables with both rates: one batch of jobs, each chunk both kernels (a batch costs
         # ~0.1-0.4 ms to hand out at 16 threads).
-        for batch in world.query(Transform, Velocity, AngularVelocity):
+        for batch in world.query(Transform, Velocity, AngularVelocity, without=(RigidBody,)):
             t, lin, ang = batch[Transform], batch[Velocity].linear, batch[AngularVelocity].angular
 
             def both(
@@ -37,14 +38,14 @@ class MotionSystem(System):
                 integrate_angular(rot[s], ang[s], dt)
 
             over_rows(pool, len(batch), both)
-        for batch in world.query(Transform, Velocity, without=(AngularVelocity,)):
+        for batch in world.query(Transform, Velocity, without=(AngularVelocity, RigidBody)):
             pos, lin = batch[Transform].position, batch[Velocity].linear
 
             def linear(s: slice, pos: np.ndarray = pos, lin: np.ndarray = lin) -> None:
                 integrate_linear(pos[s], lin[s], dt)
 
             over_rows(pool, len(batch), linear)
-        for batch in world.query(Transform, AngularVelocity, without=(Velocity,)):
+        for batch in world.query(Transform, AngularVelocity, without=(Velocity, RigidBody)):
             rot, ang = batch[Transform].rotation, batch[AngularVelocity].angular
 
             def angular(s: slice, rot: np.ndarray = rot, ang: np.ndarray = ang) -> None:

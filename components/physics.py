@@ -1,0 +1,51 @@
+"""Physics as components (the bodies are stepped by ecs_engine.physics, an optional extra).
+
+A `RigidBody` with a `Collider` and a `Transform` is a body of the physics world: dynamic ones
+are moved by it (their Transform written each fixed step, their Velocity and AngularVelocity
+when they have them), kinematic ones follow their Transform and push dynamic ones, static ones
+stay where they were made. The collider's size is in world units (the Transform's scale does
+not scale it)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ecs_engine.ecs.schema import Component, Field
+
+from .transform import LIMIT
+
+# RigidBody.kind
+DYNAMIC, KINEMATIC, STATIC = 0, 1, 2
+# Collider.shape: what its `size` holds
+BOX, SPHERE, CAPSULE, CYLINDER = 0, 1, 2, 3  # half extents (x, y, z); (radius,); (radius, half height)
+SHAPE_NAMES = {BOX: "box", SPHERE: "sphere", CAPSULE: "capsule", CYLINDER: "cylinder"}
+# RigidBody.locked: the axes a body may not move or turn along (world axes; a mask of these)
+LOCK_X, LOCK_Y, LOCK_Z, LOCK_ROTATE_X, LOCK_ROTATE_Y, LOCK_ROTATE_Z = 1, 2, 4, 8, 16, 32
+LOCK_ROTATION = LOCK_ROTATE_X | LOCK_ROTATE_Y | LOCK_ROTATE_Z
+
+
+class RigidBody(Component):
+    """`kind`: DYNAMIC, KINEMATIC or STATIC; `mass` in kg (its inertia follows from the collider);
+    `ccd`: continuous collision detection (small fast bodies that would pass through walls);
+    `locked`: a mask of LOCK_* axes it may not move or turn along (a character upright:
+    LOCK_ROTATION)."""
+
+    kind = Field(np.uint8, default=DYNAMIC, maximum=STATIC)
+    mass = Field(np.float64, default=1.0, finite=True, minimum=0.0, min_exclusive=True, maximum=LIMIT)
+    ccd = Field(np.bool_, default=False)
+    locked = Field(np.uint8, default=0, maximum=63)
+
+
+class Collider(Component):
+    """The body's shape: `shape` (BOX, SPHERE, CAPSULE, CYLINDER) and its `size` (see the
+    constants; the unused entries are ignored); `friction` and `restitution` (0: no bounce, 1:
+    elastic); collision filtering by `category` and `mask` bits (two bodies touch when each one's
+    category is in the other's mask); `sensor`: it reports what enters it and pushes nothing."""
+
+    shape = Field(np.uint8, default=BOX, maximum=CYLINDER)
+    size = Field(np.float64, (3,), default=(0.5, 0.5, 0.5), finite=True, minimum=0.0, min_exclusive=True, maximum=LIMIT)
+    friction = Field(np.float64, default=0.5, finite=True, minimum=0.0, maximum=LIMIT)
+    restitution = Field(np.float64, default=0.0, finite=True, minimum=0.0, maximum=1.0)
+    category = Field(np.uint16, default=0xFFFF)
+    mask = Field(np.uint16, default=0xFFFF)
+    sensor = Field(np.bool_, default=False)

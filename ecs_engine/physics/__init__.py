@@ -1,0 +1,8 @@
+"""Rigid-body physics on Jolt (through culverin, the `physics` extra): RigidBody and Collider
+components (ecs_engine.components.physics), the PhysicsWorld resource, and PhysicsPlugin,
+which steps it in the fixed stage and moves the bodies' Transforms in bulk."""
+
+from .plugin import PhysicsPlugin, PhysicsSystem
+from .world import PhysicsWorld, RayHits
+
+__all__ = ["PhysicsPlugin", "PhysicsSystem", "PhysicsWorld", "RayHits"]

@@ -1,0 +1,307 @@
+"""Physics (ecs_engine.physics on culverin/Jolt) tested against physics, not against the
+library's own numbers: free fall, a bounce with restitution, momentum in an elastic collision,
+a tower standing, friction on a slope, rays against a NumPy ray cast, determinism."""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import re
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ecs_engine import App, MinimalPlugins
+from ecs_engine.components import Transform, Velocity
+from ecs_engine.components.physics import BOX, SPHERE, STATIC, Collider, RigidBody
+from ecs_engine.errors import UsageError
+
+G = 9.81
+DT = 1.0 / 60.0
+
+
+def physics_plugin(**kw):
+    pytest.importorskip("culverin", reason="the physics extra (CPython 3.12+): make test-physics")
+    from ecs_engine.physics import PhysicsPlugin
+
+    return PhysicsPlugin(threads=2, **kw)
+
+
+def simulate(setup, frames, **kw):
+    """A world of `setup`'s bodies stepped `frames` fixed steps of 1/60 s: (world, physics)."""
+    from ecs_engine.physics import PhysicsWorld
+
+    app = App(title="physics test").add_plugins(MinimalPlugins, physics_plugin(**kw))
+    app.add_startup_systems(setup)
+    app.run(frames=frames)
+    return app.world, app.world.resources[PhysicsWorld]
+
+
+def floor(world, friction=0.5, restitution=0.0):
+    return world.spawn(
+        Transform(position=(0.0, -0.5, 0.0)),
+        RigidBody(kind=STATIC),
+        Collider(shape=BOX, size=(50.0, 0.5, 50.0), friction=friction, restitution=restitution),
+    )
+
+
+def ball(world, y, restitution=0.0, x=0.0, **more):
+    return world.spawn(
+        Transform(position=(x, y, 0.0)),
+        RigidBody(),
+        Collider(shape=SPHERE, size=(0.5, 0.5, 0.5), restitution=restitution),
+        *more.values(),
+    )
+
+
+def position(world, entity):
+    return world.get(entity, Transform).position
+
+
+def test_a_dropped_ball_falls_as_gravity_says():
+    made = {}
+
+    def setup(world, dt):
+        made["ball"] = ball(world, 20.0)
+
+    world, _ = simulate(setup, 60)
+    fallen = 20.0 - position(world, made["ball"])[1]
+    # 1 s of free fall: g/2 (4.905 m); the library's default damping (0.05/s) takes under 2%
+    assert fallen == pytest.approx(G / 2, rel=0.03)
+    x, _, z = position(world, made["ball"])
+    assert x == 0.0 and z == 0.0
+
+
+def test_a_ball_bounces_to_restitution_squared_of_its_height():
+    made, heights = {}, []
+    h, e = 5.0, 0.8
+
+    def setup(world, dt):
+        floor(world)
+        made["ball"] = ball(world, h + 0.5, restitution=e)  # its bottom h above the floor
+
+    def record(world, dt):
+        heights.append(float(position(world, made["ball"])[1]) - 0.5)
+
+    from ecs_engine.physics import PhysicsWorld
+
+    app = App(title="bounce").add_plugins(MinimalPlugins, physics_plugin())
+    app.add_startup_systems(setup)
+    app.add_systems("update", record)
+    app.run(frames=180)
+    assert app.world.resources[PhysicsWorld].steps == 180
+    ground = int(np.argmin(heights[:90]))
+    apex = max(heights[ground:])
+    assert heights[ground] < 0.05  # it reached the floor
+    assert apex == pytest.approx(e * e * h, rel=0.12)
+
+
+def test_momentum_is_conserved_in_an_elastic_collision():
+    made = {}
+    m1, m2, v1, v2 = 1.0, 3.0, 2.0, -1.0
+
+    def setup(world, dt):
+        made["a"] = world.spawn(
+            Transform(position=(-2.0, 0.0, 0.0)), RigidBody(mass=m1), Collider(shape=SPHERE, restitution=1.0),
+            Velocity(linear=(v1, 0.0, 0.0)),
+        )  # fmt: skip
+        made["b"] = world.spawn(
+            Transform(position=(2.0, 0.0, 0.0)), RigidBody(mass=m2), Collider(shape=SPHERE, restitution=1.0),
+            Velocity(linear=(v2, 0.0, 0.0)),
+        )  # fmt: skip
+
+    world, _ = simulate(setup, 120, gravity=(0.0, 0.0, 0.0))
+    u1 = world.get(made["a"], Velocity).linear[0]
+    u2 = world.get(made["b"], Velocity).linear[0]
+    before, after = m1 * v1 + m2 * v2, m1 * u1 + m2 * u2
+    damped = math.exp(-0.05 * 2.0)  # the library's default linear damping over the 2 s
+    assert after == pytest.approx(before * damped, rel=0.03)
+    # the elastic answer: u1 = ((m1 - m2) v1 + 2 m2 v2) / (m1 + m2), u2 likewise
+    assert u1 == pytest.approx(((m1 - m2) * v1 + 2 * m2 * v2) / (m1 + m2) * damped, rel=0.08)
+    assert u2 == pytest.approx(((m2 - m1) * v2 + 2 * m1 * v1) / (m1 + m2) * damped, rel=0.08)
+
+
+def test_a_tower_of_ten_boxes_stands_still_for_ten_seconds():
+    made = []
+
+    def setup(world, dt):
+        floor(world)
+        for i in range(10):
+            made.append(world.spawn(Transform(position=(0.0, 0.5 + i, 0.0)), RigidBody(), Collider(shape=BOX)))
+
+    settled = {}
+
+    def watch(world, dt):
+        from ecs_engine import Time
+
+        if world.resources[Time].steps == 60:  # after the first second's settling
+            settled["at"] = np.array([position(world, e) for e in made])
+
+    app = App(title="tower").add_plugins(MinimalPlugins, physics_plugin())
+    app.add_startup_systems(setup)
+    app.add_systems("update", watch)
+    app.run(frames=660)
+    end = np.array([position(app.world, e) for e in made])
+    drift = np.linalg.norm(end - settled["at"], axis=1)
+    assert drift.max() < 1e-3, drift
+    assert end[-1, 1] == pytest.approx(9.5, abs=0.25)  # still a tower, its top where it was
+
+
+@pytest.mark.parametrize(("degrees", "slides"), [(20.0, False), (35.0, True)])
+def test_friction_holds_a_box_below_the_friction_angle_only(degrees, slides):
+    """Both friction coefficients 0.5: the pair's is their geometric mean, 0.5, whose angle is
+    atan(0.5) = 26.6 degrees."""
+    made = {}
+    a = math.radians(degrees)
+    q = (0.0, 0.0, math.sin(a / 2), math.cos(a / 2))  # the slope turned about z
+    down = np.array([-math.cos(a), -math.sin(a), 0.0])  # along the slope, downhill (toward -x)
+    normal = np.array([-math.sin(a), math.cos(a), 0.0])
+
+    def setup(world, dt):
+        world.spawn(Transform(rotation=q), RigidBody(kind=STATIC), Collider(shape=BOX, size=(20.0, 0.5, 5.0)))
+        start = normal * 1.0  # resting on the slope's top face
+        made["box"] = world.spawn(Transform(position=tuple(start), rotation=q), RigidBody(), Collider(shape=BOX))
+
+    world, _ = simulate(setup, 120)
+    moved = float(np.dot(position(world, made["box"]) - normal * 1.0, down))
+    if slides:
+        assert moved > 1.0
+    else:
+        assert abs(moved) < 0.02
+
+
+def test_rays_hit_what_a_numpy_ray_cast_says():
+    rng = np.random.default_rng(7)
+    centres = np.c_[rng.uniform(-8, 8, 40), rng.uniform(0.5, 3, 40), rng.uniform(-8, 8, 40)]
+    half = rng.uniform(0.2, 0.8, (40, 3))
+    made = {}
+
+    def setup(world, dt):
+        made["boxes"] = [
+            world.spawn(Transform(position=tuple(c)), RigidBody(kind=STATIC), Collider(shape=BOX, size=tuple(h)))
+            for c, h in zip(centres, half)
+        ]
+
+    _, physics = simulate(setup, 1)
+    origins = np.c_[rng.uniform(-9, 9, 2000), np.full(2000, 10.0), rng.uniform(-9, 9, 2000)]
+    down = np.tile((0.0, -1.0, 0.0), (2000, 1))
+    hits = physics.raycast(origins, down, max_distance=50.0)
+    # NumPy: a vertical ray hits the highest top face of the boxes over its (x, z)
+    inside = (np.abs(origins[:, None, 0] - centres[None, :, 0]) < half[None, :, 0]) & (
+        np.abs(origins[:, None, 2] - centres[None, :, 2]) < half[None, :, 2]
+    )
+    tops = np.where(inside, centres[None, :, 1] + half[None, :, 1], -np.inf)
+    expected = np.where(inside.any(axis=1), np.array(made["boxes"])[np.argmax(tops, axis=1)], -1)
+    edge = np.min(
+        np.abs(np.abs(origins[:, None, [0, 2]] - centres[None, :, [0, 2]]) - half[None, :, [0, 2]]), axis=(1, 2)
+    )
+    clear = edge > 1e-3  # (rays grazing an edge could go either way in float32)
+    assert (hits.entity[clear] == expected[clear]).all()
+    hit = hits.entity >= 0
+    assert hit.sum() > 100
+    assert np.allclose(hits.distance[hit & clear], 10.0 - tops.max(axis=1)[hit & clear], atol=1e-3)
+    assert np.allclose(hits.normal[hit & clear], (0.0, 1.0, 0.0), atol=1e-3)
+    assert np.isnan(hits.distance[~hit]).all()
+
+
+def _pile(world, dt):
+    floor(world)
+    rng = np.random.default_rng(3)
+    for i in range(60):
+        p = (rng.uniform(-2, 2), 1.0 + i * 0.8, rng.uniform(-2, 2))
+        world.spawn(Transform(position=p), RigidBody(), Collider(shape=BOX if i % 2 else SPHERE))
+
+
+def world_hash(world):
+    digest = hashlib.sha256()
+    for batch in world.query(Transform, RigidBody, write=()):
+        order = np.argsort(batch.entities)
+        digest.update(batch.entities[order].tobytes())
+        digest.update(np.ascontiguousarray(batch[Transform].position[order]).tobytes())
+        digest.update(np.ascontiguousarray(batch[Transform].rotation[order]).tobytes())
+    return digest.hexdigest()
+
+
+def test_the_same_script_gives_the_same_world_twice():
+    first, _ = simulate(_pile, 240)
+    second, _ = simulate(_pile, 240)
+    assert world_hash(first) == world_hash(second)
+
+
+def test_bodies_come_and_go_with_their_entities():
+    made = {}
+
+    def setup(world, dt):
+        floor(world)
+        made["a"] = ball(world, 3.0)
+        made["b"] = ball(world, 6.0)
+
+    def churn(world, dt):
+        from ecs_engine import Time
+
+        steps = world.resources[Time].steps
+        if steps == 10:
+            world.destroy(made["a"])
+            made["c"] = ball(world, 9.0, x=3.0)
+
+    from ecs_engine.physics import PhysicsWorld
+
+    app = App(title="churn").add_plugins(MinimalPlugins, physics_plugin())
+    app.add_startup_systems(setup)
+    app.add_systems("update", churn)
+    app.run(frames=240)
+    physics = app.world.resources[PhysicsWorld]
+    assert set(physics.handles) == {e for e in physics.handles if app.world.is_alive(e)}
+    assert made["a"] not in physics.handles and made["c"] in physics.handles
+    # both balls came to rest on the floor, each at its own body's place
+    for e in (made["b"], made["c"]):
+        assert position(app.world, e)[1] == pytest.approx(0.5, abs=0.03)
+
+
+def test_a_body_with_velocity_is_moved_once_by_the_physics_not_by_motion_too():
+    made = {}
+
+    def setup(world, dt):
+        made["ball"] = ball(world, 50.0, v=Velocity(linear=(3.0, 0.0, 0.0)))
+
+    world, _ = simulate(setup, 60)
+    assert position(world, made["ball"])[0] == pytest.approx(3.0, rel=0.03)  # 1 s at 3 m/s, damped a little
+
+
+def test_bad_bodies_are_refused_naming_the_field():
+    world = App(title="bad").world
+    with pytest.raises(ValueError, match=re.escape("RigidBody.mass must be > 0")):
+        world.spawn(Transform(), RigidBody(mass=-1.0), Collider())
+    with pytest.raises(ValueError, match=re.escape("Collider.size must be > 0")):
+        world.spawn(Transform(), RigidBody(), Collider(size=(0.0, 1.0, 1.0)))
+    with pytest.raises(ValueError, match=re.escape("Collider.shape")):
+        world.spawn(Transform(), RigidBody(), Collider(shape=9))
+    with pytest.raises(ValueError, match=re.escape("Velocity.linear")):
+        world.spawn(Transform(), RigidBody(), Collider(), Velocity(linear=(math.nan, 0.0, 0.0)))
+
+
+def test_without_the_library_the_plugin_is_one_line_naming_the_extra(monkeypatch):
+    monkeypatch.setitem(sys.modules, "culverin", None)  # import culverin: ImportError
+    from ecs_engine.physics import PhysicsPlugin
+
+    with pytest.raises(UsageError) as caught:
+        App(title="no physics").add_plugins(PhysicsPlugin())
+    message = str(caught.value)
+    assert "pip install 'ecs_engine[physics]'" in message and "\n" not in message
+
+
+def test_the_physics_page_example_runs():
+    """docs/physics.md's example (which the docs test leaves to this one: it needs the extra),
+    headless for 90 frames: the ball fell, bounced and rolled along +x."""
+    physics_plugin()
+    page = (Path(__file__).resolve().parent.parent / "docs" / "physics.md").read_text()
+    code = re.search(r"```python\n(.*?)```", page, re.S)[1]
+    assert "app.run()" in code
+    scope: dict = {}
+    exec(code.replace("app.run()", "app.run(frames=90, headless=True, width=160, height=90)"), scope)
+    world = scope["app"].world
+    (ball,) = [e for e in world.query(Velocity).entities()]
+    x, y, _ = world.get(ball, Transform).position
+    assert 0.5 < x < 1.6 and 0.4 < y < 5.0
