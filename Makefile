@@ -8,7 +8,7 @@ BENCH       ?=
 # setup installed it. The recipe prints the command it runs, not this shell test.
 HEADLESS = $$([ -z "$$DISPLAY" ] && command -v xvfb-run >/dev/null && echo "xvfb-run -a ")
 
-.PHONY: setup test test-slow demo shaders bench clean
+.PHONY: setup test test-slow test-physics demo shaders bench clean
 
 setup:
 	@bash scripts/bootstrap.sh
@@ -24,6 +24,13 @@ test: setup
 # their own after `make test`, so the main suite stays under CI's 15 minutes
 test-slow: setup
 	@run="$(HEADLESS)$(PY) -m pytest -m slow $(PYTEST_ARGS)"; echo "$$run"; $$run
+
+# physics (ecs_engine.physics) binds culverin, which has wheels for CPython 3.12+ only: its tests
+# run in a venv of their own, .venv-physics, made with the newest Python 3.12+ found (on the PATH
+# or installed by pyenv; PYTHON=... to choose); in `make test` they are skipped on 3.11
+test-physics:
+	@bash scripts/bootstrap.sh --venv .venv-physics --min-python 3.12 --extras dev,physics
+	@run="$(HEADLESS).venv-physics/bin/python -m pytest tests/test_physics.py $(PYTEST_ARGS)"; echo "$$run"; $$run
 
 demo: setup
 	.venv/bin/ecs-engine editor $(DEMO_ARGS)
@@ -46,5 +53,5 @@ bench:
 endif
 
 clean:
-	rm -rf .venv *.egg-info
+	rm -rf .venv .venv-physics *.egg-info
 

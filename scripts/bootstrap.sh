@@ -3,9 +3,11 @@
 # Safe to run again: apt is skipped when every package is installed, pip when
 # pyproject.toml (and the wanted extras) are unchanged since the last successful install.
 #
-#   scripts/bootstrap.sh [--extras dev,bench]      (default: --extras dev)
+#   scripts/bootstrap.sh [--extras dev,bench] [--venv DIR] [--min-python 3.12]
+#   (defaults: --extras dev --venv .venv --min-python 3.11; the physics tests' venv is
+#   .venv-physics with Python 3.12+, which its library needs)
 #
-# Environment: PYTHON=python3.12 picks the interpreter for a new .venv (make clean to switch);
+# Environment: PYTHON=python3.12 picks the interpreter for a new venv (make clean to switch);
 #              ECS_ENGINE_APT_EXTRA="pkg ..." adds system packages to check/install.
 set -euo pipefail
 
@@ -13,8 +15,8 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 APT_PACKAGES=(libvulkan1 mesa-vulkan-drivers vulkan-validationlayers glslc xvfb xauth python3-venv)
 VENV=.venv
-STAMP=$VENV/.stamp
 EXTRAS=dev
+MIN_PYTHON=3.11
 
 say() { echo "bootstrap: $*"; }
 die() { echo "bootstrap: error: $1" >&2; exit "${2:-1}"; }
@@ -24,25 +26,33 @@ parse_args() {
     case $1 in
       --extras) [ $# -ge 2 ] || die "--extras needs a value, e.g. --extras dev,bench"; EXTRAS=$2; shift 2 ;;
       --extras=*) EXTRAS=${1#--extras=}; shift ;;
+      --venv) [ $# -ge 2 ] || die "--venv needs a folder, e.g. --venv .venv-physics"; VENV=$2; shift 2 ;;
+      --min-python) [[ ${2:-} =~ ^3\.[0-9]+$ ]] || die "--min-python needs a version such as 3.12"; MIN_PYTHON=$2; shift 2 ;;
       -h|--help) sed -n '2,9p' "$0"; exit 0 ;;
       *) die "unknown argument: $1 (usage: scripts/bootstrap.sh [--extras dev,bench])" ;;
     esac
   done
 }
 
-# Prints the first interpreter >= 3.11 (PYTHON if set), or fails.
+# Prints the first interpreter >= MIN_PYTHON (PYTHON if set), or fails; after the ones on the
+# PATH, those pyenv installed (its shims answer only for the version it has selected).
 find_python() {
-  local cand candidates=(python3.13 python3.12 python3.11 python3)
+  local cand root candidates=(python3.13 python3.12 python3.11 python3)
+  root=$( (command -v pyenv >/dev/null && pyenv root) || echo "$HOME/.pyenv")
+  candidates+=($(ls -d "$root"/versions/3.*/bin/python3 2>/dev/null | sort -rV))
   [ -n "${PYTHON:-}" ] && candidates=("$PYTHON")
   for cand in "${candidates[@]}"; do
-    if "$cand" -c 'import sys; sys.exit(sys.version_info < (3, 11))' >/dev/null 2>&1; then
+    if python_ok "$cand"; then
       echo "$cand"; return 0
     fi
   done
   return 1
 }
 
-venv_ok() { [ -x "$VENV/bin/python" ] && [ -x "$VENV/bin/pip" ]; }
+python_ok() { "$1" -c "import sys; sys.exit(sys.version_info < (${MIN_PYTHON/./, }))" >/dev/null 2>&1; }
+
+# a venv made with an older Python than MIN_PYTHON is made again
+venv_ok() { [ -x "$VENV/bin/python" ] && [ -x "$VENV/bin/pip" ] && python_ok "$VENV/bin/python"; }
 
 missing_apt_packages() {
   local pkg
@@ -95,8 +105,9 @@ ensure_package() {
 main() {
   local py=""
   parse_args "$@"
+  STAMP=$VENV/.stamp
   if ! venv_ok; then
-    py=$(find_python) || die "need Python >= 3.11 (tried ${PYTHON:-python3.13 python3.12 python3.11 python3}); install one or set PYTHON=/path/to/python3.11+" 2
+    py=$(find_python) || die "need Python >= $MIN_PYTHON (tried ${PYTHON:-python3.13 python3.12 python3.11 python3, then pyenv versions}); install one or set PYTHON=/path/to/python$MIN_PYTHON+" 2
   fi
   ensure_apt_packages
   if [ -n "$py" ]; then ensure_venv "$py"; fi
