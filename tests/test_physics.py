@@ -253,8 +253,8 @@ def test_bodies_come_and_go_with_their_entities():
     app.add_systems("update", churn)
     app.run(frames=240)
     physics = app.world.resources[PhysicsWorld]
-    assert set(physics.handles) == {e for e in physics.handles if app.world.is_alive(e)}
-    assert made["a"] not in physics.handles and made["c"] in physics.handles
+    assert set(physics.bodies.entities().tolist()) == {made["b"], made["c"], *app.world.query(RigidBody).entities()}
+    assert physics.bodies.handle_of(made["a"]) is None and physics.bodies.handle_of(made["c"]) is not None
     # both balls came to rest on the floor, each at its own body's place
     for e in (made["b"], made["c"]):
         assert position(app.world, e)[1] == pytest.approx(0.5, abs=0.03)

@@ -17,7 +17,25 @@ from ..app.plugins import Plugin
 from ..components import AngularVelocity, Transform, Velocity
 from ..components.physics import DYNAMIC, KINEMATIC, Collider, RigidBody
 from ..ecs.schedule import System, any_with
+from ..jobs import JobPool
 from .world import PhysicsWorld
+
+
+class _TablePlan:
+    """What a step does with one table of bodies, kept while the world's structure, the bodies'
+    rows in the library and the table's RigidBody.kind column stand: its dynamic rows, their
+    entities and rows in the library's buffers, its kinematic rows."""
+
+    __slots__ = ("dynamic", "entities", "key", "kinematic", "rows")
+
+    def __init__(self, key: tuple, batch: Any, physics: PhysicsWorld) -> None:
+        kinds = batch[RigidBody].kind
+        dynamic = np.flatnonzero(kinds == DYNAMIC)
+        self.key = key
+        self.dynamic = dynamic
+        self.entities = batch.entities[dynamic]
+        self.rows = physics.rows(self.entities)
+        self.kinematic = np.flatnonzero(kinds == KINEMATIC)
 
 
 class PhysicsSystem(System):
@@ -30,43 +48,47 @@ class PhysicsSystem(System):
             name="physics",
             run_if=any_with(RigidBody),
         )
+        self._plans: dict[int, _TablePlan] = {}  # by table id
+
+    def _plan(self, world: Any, physics: PhysicsWorld, batch: Any) -> _TablePlan:
+        table = batch.table
+        key = (world.structure_version, physics.bodies.generation, table.column_ticks[(RigidBody, "kind")])
+        plan = self._plans.get(table.id)
+        if plan is None or plan.key != key:
+            physics.bodies.follow_kinds(batch.entities, batch[RigidBody].kind)  # changed by a system
+            plan = self._plans[table.id] = _TablePlan(key, batch, physics)
+        return plan
 
     def run(self, world: Any, dt: float) -> None:
         physics = world.resources[PhysicsWorld]
-        physics.sync(world)
-        native = physics.native
+        physics.pool = world.resources.get(JobPool)
+        if physics.sync(world):
+            self._plans.clear()
+        plans = []
         for batch in world.query(Transform, RigidBody, Collider, write=()):
-            kinematic = np.flatnonzero(batch[RigidBody].kind == KINEMATIC)
-            t = batch[Transform]
-            for r in kinematic:  # moved by the game: follow its Transform
-                h = physics.handles[int(batch.entities[r])]
-                native.set_transform(h, tuple(map(float, t.position[r])), tuple(map(float, t.rotation[r])))
+            plan = self._plan(world, physics, batch)
+            plans.append(plan)
+            if len(plan.kinematic):  # moved by the game: the bodies follow their Transform
+                physics.place(batch.entities[plan.kinematic], batch[Transform], plan.kinematic)
         for batch in world.query(Velocity, RigidBody, Collider, with_=(Transform,), write=()):
-            dynamic = batch[RigidBody].kind == DYNAMIC
-            ids, wanted = batch.entities[dynamic], batch[Velocity].linear[dynamic]
-            for k in np.flatnonzero(np.any(wanted != physics.last_velocity(ids), axis=1)):
-                physics.set_velocity(int(ids[k]), wanted[k])  # set by a system since the last step
+            plan = self._plans[batch.table.id]
+            wanted = batch[Velocity].linear[plan.dynamic]
+            for k in np.flatnonzero(np.any(wanted != physics.last_velocity(plan.entities), axis=1)):
+                physics.set_velocity(int(plan.entities[k]), wanted[k])  # set by a system since the last step
         physics.step(dt)
         for batch in world.query(Transform, RigidBody, Collider):
-            dynamic = batch[RigidBody].kind == DYNAMIC
-            every = bool(dynamic.all())
-            ids = batch.entities if every else batch.entities[dynamic]
-            if not len(ids):
-                continue
-            pos, rot = physics.poses(ids)
-            t = batch[Transform]
-            if every:
-                t.position[:], t.rotation[:] = pos, rot
-            else:
-                t.position[dynamic], t.rotation[dynamic] = pos, rot
+            plan = self._plans[batch.table.id]
+            if len(plan.rows):
+                t = batch[Transform]
+                physics.write_poses(plan.rows, plan.dynamic, t.position, t.rotation)
         for batch in world.query(Velocity, RigidBody, Collider, with_=(Transform,)):
-            dynamic = batch[RigidBody].kind == DYNAMIC
-            lin, _ = physics.velocities(batch.entities[dynamic])
-            batch[Velocity].linear[dynamic] = lin
-            physics.wrote_velocity(batch.entities[dynamic], lin)
+            plan = self._plans[batch.table.id]
+            linear = batch[Velocity].linear
+            physics.write_velocities(plan.rows, plan.dynamic, linear, None)
+            physics.wrote_velocity(plan.entities, linear[plan.dynamic])
         for batch in world.query(AngularVelocity, RigidBody, Collider, with_=(Transform,)):
-            dynamic = batch[RigidBody].kind == DYNAMIC
-            batch[AngularVelocity].angular[dynamic] = physics.velocities(batch.entities[dynamic])[1]
+            plan = self._plans[batch.table.id]
+            physics.write_velocities(plan.rows, plan.dynamic, None, batch[AngularVelocity].angular)
 
 
 class PhysicsPlugin(Plugin):

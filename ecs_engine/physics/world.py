@@ -5,18 +5,19 @@ from __future__ import annotations
 
 import math
 import os
+import time
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from ..components import Transform, Velocity
-from ..components.physics import BOX, CAPSULE, CYLINDER, DYNAMIC, KINEMATIC, SPHERE, STATIC, Collider, RigidBody
 from ..ecs.entities import INDEX_MASK
+from ..jobs import over_rows
+from .bodies import Bodies
 from .library import load
+from .poses import copy_poses, copy_vectors
 
-_MOTIONS = {DYNAMIC: "MOTION_DYNAMIC", KINEMATIC: "MOTION_KINEMATIC", STATIC: "MOTION_STATIC"}
-_SHAPES = {BOX: "SHAPE_BOX", SPHERE: "SHAPE_SPHERE", CAPSULE: "SHAPE_CAPSULE", CYLINDER: "SHAPE_CYLINDER"}
+RAY_CHUNK = 512  # rays per job when a batch is spread over the JobPool
 # a ray hit as the library packs it (48 bytes)
 _HIT = np.dtype(
     [
@@ -71,141 +72,108 @@ class PhysicsWorld:
         settings["temp_allocator_size"] = max(32 << 20, 4096 * self.max_bodies)  # the solver's scratch
         settings["num_threads"] = self.threads
         self.native = self.lib.PhysicsWorld(settings=settings)
-        self.handles: dict[int, int] = {}  # entity -> body handle
-        self._entity_of: dict[int, int] = {}  # body handle -> entity
-        # per entity slot (its id's index bits): the entity whose body it is (-1: none), the body's row
-        # in the library's shared buffers, the linear velocity last written to its Velocity
-        self._owner = np.full(0, -1, np.int64)
-        self._index = np.full(0, -1, np.int64)
-        self._velocity = np.zeros((0, 3))
-        # the bodies' handles sorted, and their entities (a ray hit's entity: raycast)
-        self._by_handle: tuple[np.ndarray, np.ndarray] = (np.empty(0, np.uint64), np.empty(0, np.int64))
-        self._seen = -1  # the world's structure version the bodies were last matched against
+        self.bodies = Bodies(self.lib, self.native)
+        self.pool: Any = None  # the world's JobPool (PhysicsSystem sets it): raycast spreads over it
         self.steps = 0
+        self.step_ms = 0.0
 
-    # ------------------------------------------------------------------ bodies
-    def sync(self, world: Any) -> None:
-        """Bodies made for new entities with Transform, RigidBody and Collider, and destroyed for
-        those gone (or that lost one of them); nothing to do while the world's structure stands."""
-        version = world.structure_version
-        if version == self._seen:
-            return
-        self._seen = version
-        batches = list(world.query(Transform, RigidBody, Collider, write=()))
-        present = np.concatenate([b.entities for b in batches]) if batches else np.empty(0, np.int64)
-        self._grow(int((present & INDEX_MASK).max()) + 1 if len(present) else 0)
-        current = np.full(len(self._owner), -1, np.int64)  # slot -> the entity with a body there now
-        current[present & INDEX_MASK] = present
-        known = np.fromiter(self.handles, np.int64, len(self.handles))
-        gone = known[current[known & INDEX_MASK] != known] if len(known) else known
-        if len(gone):  # first: a new entity may have taken a gone one's slot
-            handles = [self.handles.pop(int(e)) for e in gone]
-            for h in handles:
-                del self._entity_of[h]
-            self.native.destroy_bodies_batch(handles)
-            self._owner[gone & INDEX_MASK] = -1
-        made = 0
-        for batch in batches:
-            new = self._owner[batch.entities & INDEX_MASK] != batch.entities
-            if new.any():
-                made += self._create(world, batch, np.flatnonzero(new))
-        if made or len(gone):
-            self.native.step(0.0)  # (the library makes and removes bodies at its next step)
-            get = self.native.get_index
-            for e, h in self.handles.items():  # a removal moves other bodies' rows
-                self._index[e & INDEX_MASK] = get(h)
-            by_handle = np.fromiter(self._entity_of, np.uint64, len(self._entity_of))
-            order = np.argsort(by_handle)
-            entities = np.fromiter(self._entity_of.values(), np.int64, len(by_handle))
-            self._by_handle = (by_handle[order], entities[order])
-
-    def _grow(self, slots: int) -> None:
-        if slots > len(self._owner):
-            more = max(slots, 2 * len(self._owner)) - len(self._owner)
-            self._owner = np.concatenate([self._owner, np.full(more, -1, np.int64)])
-            self._index = np.concatenate([self._index, np.full(more, -1, np.int64)])
-            self._velocity = np.concatenate([self._velocity, np.zeros((more, 3))])
-
-    def _create(self, world: Any, batch: Any, rows: np.ndarray) -> int:
-        lib, create = self.lib, self.native.create_body
-        body, col, t = batch[RigidBody], batch[Collider], batch[Transform]
-        for r in rows:
-            e = int(batch.entities[r])
-            shape, size = int(col.shape[r]), col.size[r]
-            if shape == BOX:
-                extent: Any = tuple(float(s) for s in size)
-            elif shape == SPHERE:
-                extent = float(size[0])
-            else:  # capsule, cylinder: the library takes (half height, radius)
-                extent = (float(size[1]), float(size[0]))
-            locked = int(body.locked[r])
-            h = create(
-                pos=tuple(float(x) for x in t.position[r]),
-                rot=tuple(float(x) for x in t.rotation[r]),
-                size=extent,
-                shape=getattr(lib, _SHAPES[shape]),
-                motion=getattr(lib, _MOTIONS[int(body.kind[r])]),
-                user_data=e,
-                is_sensor=bool(col.sensor[r]),
-                mass=float(body.mass[r]),
-                category=int(col.category[r]),
-                mask=int(col.mask[r]),
-                friction=float(col.friction[r]),
-                restitution=float(col.restitution[r]),
-                ccd=bool(body.ccd[r]),
-                allowed_dofs=(63 & ~locked) if locked else 0,
-            )
-            self.handles[e] = h
-            self._entity_of[h] = e
-            self._owner[e & INDEX_MASK] = e
-            velocity = world.get(e, Velocity).linear if world.has(e, Velocity) else np.zeros(3)
-            if np.any(velocity):
-                self.native.set_linear_velocity(h, *(float(v) for v in velocity))
-            self._velocity[e & INDEX_MASK] = velocity
-        return len(rows)
+    def sync(self, world: Any) -> bool:
+        """The bodies matched against the world's entities (Bodies.sync): whether any was made or
+        destroyed (then the bodies' rows in the buffers moved)."""
+        return self.bodies.sync(world)
 
     # ------------------------------------------------------------------ the step
     def step(self, dt: float) -> None:
+        """One step of the library's world (`step_ms`: what it took, the library's own time)."""
+        start = time.perf_counter()
         self.native.step(float(dt))
+        self.step_ms = (time.perf_counter() - start) * 1e3
         self.steps += 1
 
+    def rows(self, entities: np.ndarray) -> np.ndarray:
+        """The rows of `entities`' bodies in the library's shared buffers (valid until `generation`
+        changes: bodies.generation)."""
+        return self.bodies.row[entities & INDEX_MASK]
+
+    def buffers(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The library's shared buffers, by body row: positions (M, 4) float64, rotations
+        (x, y, z, w) float32, linear and angular velocities (M, 4) float32 (read-only views)."""
+        native = self.native
+        views = (
+            np.frombuffer(native.positions, np.float64).reshape(-1, 4),
+            np.frombuffer(native.rotations, np.float32).reshape(-1, 4),
+            np.frombuffer(native.velocities, np.float32).reshape(-1, 4),
+            np.frombuffer(native.angular_velocities, np.float32).reshape(-1, 4),
+        )
+        for v in views:
+            v.flags.writeable = False
+        return views
+
     def poses(self, entities: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The bodies' positions (float64) and rotations (x, y, z, w) of `entities`, gathered from
-        the library's shared buffers."""
-        rows = self._index[entities & INDEX_MASK]
-        pos = np.frombuffer(self.native.positions, np.float64).reshape(-1, 4)[rows, :3]
-        rot = np.frombuffer(self.native.rotations, np.float32).reshape(-1, 4)[rows].astype(np.float64)
-        rot /= np.linalg.norm(rot, axis=1)[:, None]
-        return pos, rot
+        """The positions (float64) and unit rotations (x, y, z, w) of `entities`' bodies."""
+        rows = self.rows(entities)
+        position, rotation = np.empty((len(rows), 3)), np.empty((len(rows), 4))
+        self.write_poses(rows, np.arange(len(rows)), position, rotation)
+        return position, rotation
+
+    def write_poses(self, rows: np.ndarray, into: np.ndarray, position: np.ndarray, rotation: np.ndarray) -> None:
+        """position[into], rotation[into] = the poses of the bodies at `rows` (poses.py)."""
+        positions, rotations, _, _ = self.buffers()
+        copy_poses(positions, rotations, rows, into, position, rotation)
 
     def velocities(self, entities: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The linear and angular velocities of `entities` (float64)."""
-        rows = self._index[entities & INDEX_MASK]
-        lin = np.frombuffer(self.native.velocities, np.float32).reshape(-1, 4)[rows, :3]
-        ang = np.frombuffer(self.native.angular_velocities, np.float32).reshape(-1, 4)[rows, :3]
-        return lin.astype(np.float64), ang.astype(np.float64)
+        """The linear and angular velocities of `entities`' bodies (float64)."""
+        rows, everyone = self.rows(entities), np.arange(len(entities))
+        linear, angular = np.empty((len(rows), 3)), np.empty((len(rows), 3))
+        self.write_velocities(rows, everyone, linear, angular)
+        return linear, angular
+
+    def write_velocities(
+        self, rows: np.ndarray, into: np.ndarray, linear: np.ndarray | None, angular: np.ndarray | None
+    ) -> None:
+        """linear[into], angular[into] = the velocities of the bodies at `rows` (None: not asked)."""
+        _, _, lin, ang = self.buffers()
+        if linear is not None:
+            copy_vectors(lin, rows, into, linear)
+        if angular is not None:
+            copy_vectors(ang, rows, into, angular)
+
+    def place(self, entities: np.ndarray, transform: Any, rows: np.ndarray) -> None:
+        """Move `entities`' (kinematic) bodies to their Transform (`transform`'s `rows`)."""
+        put, handles = self.native.set_transform, self.bodies.handle[entities & INDEX_MASK].tolist()
+        for h, p, q in zip(handles, transform.position[rows].tolist(), transform.rotation[rows].tolist()):
+            put(h, tuple(p), tuple(q))
 
     def last_velocity(self, entities: np.ndarray) -> np.ndarray:
         """The linear velocity last written into (or taken from) the Velocity of `entities`."""
-        return self._velocity[entities & INDEX_MASK]
+        return self.bodies.velocity[entities & INDEX_MASK]
 
     def wrote_velocity(self, entities: np.ndarray, linear: np.ndarray) -> None:
-        self._velocity[entities & INDEX_MASK] = linear
+        self.bodies.velocity[entities & INDEX_MASK] = linear
 
     def set_velocity(self, entity: int, linear: Any) -> None:
         """Give `entity`'s body this linear velocity (m/s) now."""
+        handle = self.bodies.handle_of(entity)
+        if handle is None:
+            raise ValueError(f"entity {entity} has no body")
         v = [float(x) for x in linear]
-        self.native.set_linear_velocity(self.handles[entity], *v)
-        self._velocity[entity & INDEX_MASK] = v
+        self.native.set_linear_velocity(handle, *v)
+        self.bodies.velocity[entity & INDEX_MASK] = v
 
     def entity_of(self, handle: int) -> int:
         """The entity of a body handle (-1: none)."""
-        return self._entity_of.get(int(handle), -1)
+        handles, entities = self.bodies.by_handle
+        at = int(np.searchsorted(handles, np.uint64(handle)))
+        return int(entities[at]) if at < len(handles) and handles[at] == handle else -1
 
     # ------------------------------------------------------------------ queries
     def raycast(self, origins: Any, directions: Any, max_distance: float = 1000.0) -> RayHits:
         """Cast every ray (rows of `origins` and `directions`, which need not be unit length) in
-        one batch: the first body each one hits within `max_distance`."""
+        batches, spread over the world's JobPool when it has one (`pool`, which PhysicsSystem
+        sets; the library casts without the GIL): the first body each one hits within
+        `max_distance`."""
+        if not (math.isfinite(max_distance) and max_distance > 0.0):
+            raise ValueError(f"raycast: max_distance must be a positive finite number, got {max_distance!r}")
         o = np.ascontiguousarray(np.asarray(origins, np.float64).reshape(-1, 3))
         d = np.asarray(directions, np.float64).reshape(-1, 3)
         if len(o) != len(d):
@@ -216,11 +184,16 @@ class PhysicsWorld:
         if len(d) and length.min() == 0.0:
             raise ValueError(f"raycast: direction {int(np.argmin(length))} has zero length")
         unit = (d / length[:, None]).astype(np.float32) if len(d) else d.astype(np.float32)
-        raw = self.native.raycast_batch(o.astype(np.float32).ravel(), unit.ravel(), float(max_distance))
-        hits = np.frombuffer(raw, _HIT)
+        starts, hits = o.astype(np.float32), np.empty(len(o), _HIT)
+
+        def cast(rows: slice) -> None:
+            raw = self.native.raycast_batch(starts[rows].ravel(), unit[rows].ravel(), float(max_distance))
+            hits[rows] = np.frombuffer(raw, _HIT)
+
+        over_rows(self.pool, len(o), cast, RAY_CHUNK)
         hit = hits["handle"] != 0
         entity = np.full(len(o), -1, np.int64)
-        handles, entities = self._by_handle
+        handles, entities = self.bodies.by_handle
         if hit.any() and len(handles):
             at = np.minimum(np.searchsorted(handles, hits["handle"]), len(handles) - 1)
             known = hit & (handles[at] == hits["handle"])

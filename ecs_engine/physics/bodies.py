@@ -1,0 +1,136 @@
+"""The bodies of a PhysicsWorld: which entity has which body, matched against the ECS when the
+world's structure changes, with everything per body kept in arrays by entity slot (an entity
+id's index bits) so that matching, moving rows and finding a hit's entity are NumPy, not a
+Python loop over the bodies. Python runs per body only to make one (the library's call)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..components import Transform, Velocity
+from ..components.physics import BOX, CAPSULE, CYLINDER, DYNAMIC, KINEMATIC, SPHERE, STATIC, Collider, RigidBody
+from ..ecs.entities import INDEX_MASK
+
+MOTIONS = {DYNAMIC: "MOTION_DYNAMIC", KINEMATIC: "MOTION_KINEMATIC", STATIC: "MOTION_STATIC"}
+_SHAPES = {BOX: "SHAPE_BOX", SPHERE: "SHAPE_SPHERE", CAPSULE: "SHAPE_CAPSULE", CYLINDER: "SHAPE_CYLINDER"}
+
+
+class Bodies:
+    """Per entity slot: the entity whose body it is (`owner`, -1: none), the body's `handle`, its
+    `kind`, its `row` in the library's shared buffers and the linear `velocity` last written to
+    its Velocity. `generation` counts the times rows moved (bodies made or destroyed)."""
+
+    def __init__(self, lib: Any, native: Any) -> None:
+        self.lib, self.native = lib, native
+        self.owner = np.full(0, -1, np.int64)
+        self.handle = np.zeros(0, np.uint64)
+        self.kind = np.zeros(0, np.uint8)
+        self.row = np.full(0, -1, np.int64)
+        self.velocity = np.zeros((0, 3))
+        self.by_handle = (np.empty(0, np.uint64), np.empty(0, np.int64))  # handles sorted, their entities
+        self.generation = 0
+        self._seen = -1  # the world's structure version last matched
+
+    def __len__(self) -> int:
+        return int((self.owner >= 0).sum())
+
+    def entities(self) -> np.ndarray:
+        """The entities that have a body."""
+        return self.owner[self.owner >= 0]
+
+    def handle_of(self, entity: int) -> int | None:
+        slot = entity & INDEX_MASK
+        return int(self.handle[slot]) if slot < len(self.owner) and self.owner[slot] == entity else None
+
+    def sync(self, world: Any) -> bool:
+        """Bodies made for new entities with Transform, RigidBody and Collider, and destroyed for
+        those gone (or that lost one of them); nothing to do while the world's structure stands.
+        Whether any body was made or destroyed."""
+        version = world.structure_version
+        if version == self._seen:
+            return False
+        self._seen = version
+        batches = list(world.query(Transform, RigidBody, Collider, write=()))
+        present = np.concatenate([b.entities for b in batches]) if batches else np.empty(0, np.int64)
+        self._grow(int((present & INDEX_MASK).max()) + 1 if len(present) else 0)
+        current = np.full(len(self.owner), -1, np.int64)  # slot -> the entity with those components now
+        current[present & INDEX_MASK] = present
+        known = np.flatnonzero(self.owner >= 0)
+        gone = known[current[known] != self.owner[known]]
+        if len(gone):  # first: a new entity may have taken a gone one's slot
+            self.native.destroy_bodies_batch(self.handle[gone].tolist())
+            self.owner[gone] = -1
+        made = 0
+        for batch in batches:
+            new = np.flatnonzero(self.owner[batch.entities & INDEX_MASK] != batch.entities)
+            if len(new):
+                made += self._create(world, batch, new)
+        if not (made or len(gone)):
+            return False
+        self.native.step(0.0)  # (the library makes and removes bodies at its next step)
+        ids = np.frombuffer(self.native.user_data, np.uint64)[: self.native.count].astype(np.int64)
+        ours = (ids & INDEX_MASK) < len(self.owner)  # (a body made on `native` directly is not ours)
+        ours[ours] = self.owner[ids[ours] & INDEX_MASK] == ids[ours]
+        self.row[ids[ours] & INDEX_MASK] = np.flatnonzero(ours)  # a removal moved other bodies' rows
+        slots = np.flatnonzero(self.owner >= 0)
+        order = np.argsort(self.handle[slots])
+        self.by_handle = (self.handle[slots][order], self.owner[slots][order])
+        self.generation += 1
+        return True
+
+    def _grow(self, slots: int) -> None:
+        if slots > len(self.owner):
+            more = max(slots, 2 * len(self.owner)) - len(self.owner)
+            self.owner = np.concatenate([self.owner, np.full(more, -1, np.int64)])
+            self.handle = np.concatenate([self.handle, np.zeros(more, np.uint64)])
+            self.kind = np.concatenate([self.kind, np.zeros(more, np.uint8)])
+            self.row = np.concatenate([self.row, np.full(more, -1, np.int64)])
+            self.velocity = np.concatenate([self.velocity, np.zeros((more, 3))])
+
+    def _create(self, world: Any, batch: Any, rows: np.ndarray) -> int:
+        lib, create = self.lib, self.native.create_body
+        body, col, t = batch[RigidBody], batch[Collider], batch[Transform]
+        moving = world.has(int(batch.entities[rows[0]]), Velocity)  # (a table has Velocity or not)
+        for r in rows.tolist():
+            e = int(batch.entities[r])
+            shape, size = int(col.shape[r]), col.size[r]
+            if shape == BOX:
+                extent: Any = tuple(size.tolist())
+            elif shape == SPHERE:
+                extent = float(size[0])
+            else:  # capsule, cylinder: the library takes (half height, radius)
+                extent = (float(size[1]), float(size[0]))
+            locked, kind = int(body.locked[r]), int(body.kind[r])
+            h = create(
+                pos=tuple(t.position[r].tolist()),
+                rot=tuple(t.rotation[r].tolist()),
+                size=extent,
+                shape=getattr(lib, _SHAPES[shape]),
+                motion=getattr(lib, MOTIONS[kind]),
+                user_data=e,
+                is_sensor=bool(col.sensor[r]),
+                mass=float(body.mass[r]),
+                category=int(col.category[r]),
+                mask=int(col.mask[r]),
+                friction=float(col.friction[r]),
+                restitution=float(col.restitution[r]),
+                ccd=bool(body.ccd[r]),
+                allowed_dofs=(63 & ~locked) if locked else 0,
+            )
+            slot = e & INDEX_MASK
+            self.owner[slot], self.handle[slot], self.kind[slot] = e, h, kind
+            velocity = world.get(e, Velocity).linear if moving else np.zeros(3)
+            if velocity.any():
+                self.native.set_linear_velocity(h, *velocity.tolist())
+            self.velocity[slot] = velocity
+        return len(rows)
+
+    def follow_kinds(self, entities: np.ndarray, kinds: np.ndarray) -> None:
+        """Bodies whose RigidBody.kind a system changed take their new motion."""
+        slots = entities & INDEX_MASK
+        for k in np.flatnonzero(self.kind[slots] != kinds).tolist():
+            kind = int(kinds[k])
+            self.native.set_motion_type(int(self.handle[slots[k]]), getattr(self.lib, MOTIONS[kind]))
+            self.kind[slots[k]] = kind
