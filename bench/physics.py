@@ -1,0 +1,185 @@
+"""Physics through the engine (ecs_engine.physics on culverin/Jolt): what the engine adds to the
+library's own step, at the workloads of docs/physics.md.
+
+- `pile`: N dynamic unit boxes (10,000) spawned in one batch over a static floor, stepped by
+  PhysicsSystem in a one-stage schedule: per step, the library's own step (PhysicsWorld.step_ms)
+  and the whole system's run (the schedule's, timed around it); the engine's added time is their
+  difference: making no body (the world's structure stands), the velocities compared, the poses
+  and velocities gathered into Transform and Velocity. Target: at most 10% of the library's step.
+  Also the first step's cost of making every body (`create_ms`).
+- `statics`: 100,000 static boxes and 1,000 dynamic spheres falling on them, likewise.
+- `rays`: 10,000 rays cast down onto the settled pile through PhysicsWorld.raycast (batches of
+  512 spread over a JobPool of the threads, answered as entities). Target: under 1 ms.
+
+JSON (schema_version 1): {"benchmark": "physics", "quick", "machine", "library": {"name",
+"version"}, "config": {"boxes", "statics", "movers", "rays", "steps", "threads"}, "pile":
+{"create_ms", "library_step_ms", "system_step_ms", "added_ms", "added_fraction", "settled"},
+"statics": {same but settled}, "rays": {"ms", "hits"}, "targets": {"added_fraction_max",
+"rays_ms_max", "added_met", "rays_met"}}; medians over the timed steps.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import time
+from typing import Any
+
+import numpy as np
+
+DT = 1.0 / 60.0
+ADDED_MAX = 0.10  # the engine may add at most 10% to the library's step at 10,000 bodies
+RAYS_MS_MAX = 1.0
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--boxes", type=int, default=10_000, help="dynamic boxes in the pile (default 10,000)")
+    parser.add_argument("--statics", type=int, default=100_000, help="static boxes (default 100,000)")
+    parser.add_argument("--steps", type=int, default=120, help="timed steps per workload (default 120)")
+    parser.add_argument("--threads", type=int, default=None, help="the library's threads (default: one per core)")
+
+
+def preflight(args: argparse.Namespace) -> None:
+    from ecs_engine.errors import UsageError
+    from ecs_engine.physics.library import load
+
+    if min(args.boxes, args.statics, args.steps) < 1 or (args.threads is not None and args.threads < 1):
+        raise UsageError("--boxes, --statics, --steps and --threads must be at least 1")
+    load()  # UsageError naming the extra
+
+
+def grid(n: int, spacing: float, y0: float) -> np.ndarray:
+    side = int(np.ceil(n ** (1 / 3)))
+    i = np.arange(n)
+    x, y, z = i % side, (i // side) % side, i // (side * side)
+    return np.stack([(x - side / 2) * spacing, y0 + y * spacing, (z - side / 2) * spacing], axis=1)
+
+
+def tiles(n: int) -> np.ndarray:
+    side = int(np.ceil(np.sqrt(n)))
+    i = np.arange(n)
+    return np.stack([(i % side) - side / 2, np.full(n, 0.5), (i // side) - side / 2], axis=1)
+
+
+def workload(statics: np.ndarray | None, dynamic: np.ndarray, sphere: bool, steps: int, threads: int) -> dict:
+    """A world of a floor (or `statics` boxes) and `dynamic` bodies stepped `steps` times."""
+    from ecs_engine.components import Transform
+    from ecs_engine.components.physics import BOX, SPHERE, STATIC, Collider, RigidBody
+    from ecs_engine.ecs.schedule import Schedule
+    from ecs_engine.ecs.world import World
+    from ecs_engine.physics import PhysicsSystem, PhysicsWorld
+
+    count = len(dynamic) + (len(statics) if statics is not None else 1)
+    world = World()
+    physics = world.resources[PhysicsWorld] = PhysicsWorld(threads=threads, max_bodies=count + 16)
+    if statics is None:
+        world.spawn(Transform(position=(0.0, -0.5, 0.0)), RigidBody(kind=STATIC), Collider(size=(400.0, 0.5, 400.0)))
+    else:
+        world.spawn_batch(len(statics), Transform(position=statics), RigidBody(kind=STATIC), Collider(shape=BOX))
+    shape = SPHERE if sphere else BOX
+    moving = world.spawn_batch(len(dynamic), Transform(position=dynamic), RigidBody(), Collider(shape=shape))
+    schedule = Schedule(("fixed",))
+    schedule.add(PhysicsSystem(), "fixed")
+    start = time.perf_counter()
+    schedule.run(world, DT)  # makes every body, then the first step
+    create_ms = (time.perf_counter() - start) * 1e3 - physics.step_ms
+    library, system = [], []
+    for _ in range(steps):
+        start = time.perf_counter()
+        schedule.run(world, DT)
+        system.append((time.perf_counter() - start) * 1e3)
+        library.append(physics.step_ms)
+    heights = physics.poses(moving)[0][:, 1]
+    lib_ms, sys_ms = statistics.median(library), statistics.median(system)
+    added = statistics.median(s - lib for s, lib in zip(system, library))
+    result = {
+        "create_ms": create_ms,
+        "library_step_ms": lib_ms,
+        "system_step_ms": sys_ms,
+        "added_ms": added,
+        "added_fraction": added / lib_ms,
+        "lowest": float(heights.min()),  # of the moving bodies' centres
+    }
+    return {"world": world, "physics": physics, "result": result}
+
+
+def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dict[str, Any]:
+    from importlib.metadata import version
+
+    threads = args.threads or len(os.sched_getaffinity(0))
+    if args.quick:
+        config = {"boxes": 300, "statics": 2_000, "movers": 50, "rays": 300, "steps": 30}
+    else:
+        config = {"boxes": args.boxes, "statics": args.statics, "movers": 1_000, "rays": 10_000, "steps": args.steps}
+    config["threads"] = threads
+    machine = {**machine, "threads": threads}  # the library's threads and the ray batches' pool
+    progress.total = 3
+    with progress.step("pile"):
+        pile = workload(None, grid(config["boxes"], 1.2, 1.0), False, config["steps"], threads)
+        p = pile["result"]
+        p["settled"] = bool(p.pop("lowest") > 0.0)  # none fell through the floor (its top: y = 0)
+    with progress.step("rays"):
+        from ecs_engine.jobs import JobPool
+
+        physics = pile["physics"]
+        for _ in range(config["steps"]):  # the pile settles further before the rays
+            physics.step(DT)
+        physics.pool = JobPool(threads)  # as a game's world has (the ray batch spreads over it)
+        starts = grid(config["rays"], 0.5, 60.0)
+        starts[:, 1] = 60.0
+        down = np.tile((0.0, -1.0, 0.0), (len(starts), 1))
+        times = []
+        for _ in range(5):
+            start = time.perf_counter()
+            hits = physics.raycast(starts, down, 100.0)
+            times.append((time.perf_counter() - start) * 1e3)
+        rays = {"ms": statistics.median(times), "hits": int((hits.entity >= 0).sum())}
+        physics.pool.close()
+        del pile, physics
+    with progress.step("statics"):
+        floor = workload(tiles(config["statics"]), grid(config["movers"], 1.5, 3.0), True, config["steps"], threads)
+        statics = floor["result"]
+        statics["settled"] = bool(statics.pop("lowest") > 1.0)  # on the statics (their top: y = 1)
+        del floor
+    targets = {
+        "added_fraction_max": ADDED_MAX,
+        "rays_ms_max": RAYS_MS_MAX,
+        "added_met": p["added_fraction"] <= ADDED_MAX,
+        "rays_met": rays["ms"] < RAYS_MS_MAX,
+    }
+    print(table(config, p, statics, rays, targets))
+    return {
+        "benchmark": "physics",
+        "schema_version": 1,
+        "quick": bool(args.quick),
+        "machine": machine,
+        "library": {"name": "culverin", "version": version("culverin")},
+        "config": config,
+        "pile": p,
+        "statics": statics,
+        "rays": rays,
+        "targets": targets,
+    }
+
+
+def table(config: dict, pile: dict, statics: dict, rays: dict, targets: dict) -> str:
+    def row(name: str, r: dict) -> str:
+        return (
+            f"{name:8} {r['create_ms']:10.1f} {r['library_step_ms']:11.2f} {r['system_step_ms']:11.2f} "
+            f"{r['added_ms']:9.3f} {100 * r['added_fraction']:7.1f}%"
+        )
+
+    met = {True: "MET", False: "MISS"}
+    return "\n".join(
+        [
+            f"{config['boxes']:,} boxes; {config['statics']:,} statics + {config['movers']:,} movers; "
+            f"{config['threads']} threads",
+            f"{'':8} {'create ms':>10} {'library ms':>11} {'system ms':>11} {'added ms':>9} {'added':>8}",
+            row("pile", pile),
+            row("statics", statics),
+            f"{config['rays']:,} rays: {rays['ms']:.2f} ms, {rays['hits']:,} hits",
+            f"target {met[targets['added_met']]}: the engine adds <= {ADDED_MAX:.0%} to the pile's step",
+            f"target {met[targets['rays_met']]}: {config['rays']:,} rays < {RAYS_MS_MAX} ms",
+        ]
+    )
