@@ -20,6 +20,8 @@ for f in .gl/*.deb; do dpkg -x "$f" /; done; ldconfig
 export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 export VK_LAYER_PATH=/usr/share/vulkan/explicit_layer.d
 python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl || exit 1
+# (a warm host keeps /tmp/new from the last call: pip --target would keep that one's files)
+rm -rf /tmp/new
 python3 -m pip install -q --no-deps --no-build-isolation --no-index --target /tmp/new . >/dev/null 2>&1 || {
   echo "install failed"; exit 1; }
 export PYTHONPATH=/tmp/new:/tmp/site
