@@ -49,3 +49,31 @@ class Collider(Component):
     category = Field(np.uint16, default=0xFFFF)
     mask = Field(np.uint16, default=0xFFFF)
     sensor = Field(np.bool_, default=False)
+
+
+# Contact.phase
+BEGIN, STAY, END = 0, 1, 2
+
+
+class Contact(Component):
+    """An event (world.events(Contact)), a row per touching pair and step, sent by PhysicsSystem:
+    bodies `a` and `b` began touching (`phase` BEGIN), still touch (STAY: only when the
+    PhysicsWorld reports them, `contacts="all"`) or parted (END: point, normal and impulse zero);
+    the contact `point`, the `normal` (pointing from a to b) and the `impulse` (N s) that kept
+    them apart."""
+
+    a = Field(np.int64, default=-1, entity=True)
+    b = Field(np.int64, default=-1, entity=True)
+    phase = Field(np.uint8, default=BEGIN, maximum=END)
+    point = Field(np.float64, (3,), default=(0.0, 0.0, 0.0))
+    normal = Field(np.float64, (3,), default=(0.0, 0.0, 0.0))
+    speed = Field(np.float64, default=0.0)
+
+
+class Trigger(Component):
+    """An event (world.events(Trigger)) sent by PhysicsSystem: body `other` `entered` (or, False,
+    left) the `sensor` (an entity whose Collider.sensor is set)."""
+
+    sensor = Field(np.int64, default=-1, entity=True)
+    other = Field(np.int64, default=-1, entity=True)
+    entered = Field(np.bool_, default=True)

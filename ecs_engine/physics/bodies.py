@@ -19,8 +19,8 @@ _SHAPES = {BOX: "SHAPE_BOX", SPHERE: "SHAPE_SPHERE", CAPSULE: "SHAPE_CAPSULE", C
 
 class Bodies:
     """Per entity slot: the entity whose body it is (`owner`, -1: none), the body's `handle`, its
-    `kind`, its `row` in the library's shared buffers and the linear `velocity` last written to
-    its Velocity. `generation` counts the times rows moved (bodies made or destroyed)."""
+    `kind`, whether it is a `sensor`, its `row` in the library's shared buffers and the linear
+    `velocity` last written to its Velocity. `generation` counts the times rows moved (bodies made or destroyed)."""
 
     def __init__(self, lib: Any, native: Any) -> None:
         self.lib, self.native = lib, native
@@ -29,6 +29,7 @@ class Bodies:
         self.kind = np.zeros(0, np.uint8)
         self.row = np.full(0, -1, np.int64)
         self.velocity = np.zeros((0, 3))
+        self.sensor = np.zeros(0, bool)
         self.by_handle = (np.empty(0, np.uint64), np.empty(0, np.int64))  # handles sorted, their entities
         self.generation = 0
         self._seen = -1  # the world's structure version last matched
@@ -43,6 +44,16 @@ class Bodies:
     def handle_of(self, entity: int) -> int | None:
         slot = entity & INDEX_MASK
         return int(self.handle[slot]) if slot < len(self.owner) and self.owner[slot] == entity else None
+
+    def entities_of(self, handles: np.ndarray) -> np.ndarray:
+        """The entity of each body handle (-1: not a body of ours)."""
+        known, entities = self.by_handle
+        out = np.full(len(handles), -1, np.int64)
+        if len(known) and len(handles):
+            at = np.minimum(np.searchsorted(known, handles), len(known) - 1)
+            found = known[at] == handles
+            out[found] = entities[at[found]]
+        return out
 
     def sync(self, world: Any) -> bool:
         """Bodies made for new entities with Transform, RigidBody and Collider, and destroyed for
@@ -88,6 +99,7 @@ class Bodies:
             self.kind = np.concatenate([self.kind, np.zeros(more, np.uint8)])
             self.row = np.concatenate([self.row, np.full(more, -1, np.int64)])
             self.velocity = np.concatenate([self.velocity, np.zeros((more, 3))])
+            self.sensor = np.concatenate([self.sensor, np.zeros(more, bool)])
 
     def _create(self, world: Any, batch: Any, rows: np.ndarray) -> int:
         lib, create = self.lib, self.native.create_body
@@ -121,6 +133,7 @@ class Bodies:
             )
             slot = e & INDEX_MASK
             self.owner[slot], self.handle[slot], self.kind[slot] = e, h, kind
+            self.sensor[slot] = bool(col.sensor[r])
             velocity = world.get(e, Velocity).linear if moving else np.zeros(3)
             if velocity.any():
                 self.native.set_linear_velocity(h, *velocity.tolist())

@@ -15,9 +15,10 @@ import numpy as np
 
 from ..app.plugins import Plugin
 from ..components import AngularVelocity, Transform, Velocity
-from ..components.physics import DYNAMIC, KINEMATIC, Collider, RigidBody
+from ..components.physics import DYNAMIC, KINEMATIC, Collider, Contact, RigidBody, Trigger
 from ..ecs.schedule import System, any_with
 from ..jobs import JobPool
+from .contacts import send_contacts
 from .world import PhysicsWorld
 
 
@@ -44,7 +45,7 @@ class PhysicsSystem(System):
     def __init__(self) -> None:
         super().__init__(
             reads=[Transform, RigidBody, Collider, Velocity, AngularVelocity],
-            writes=[Transform, Velocity, AngularVelocity],
+            writes=[Transform, Velocity, AngularVelocity, Contact, Trigger],
             name="physics",
             run_if=any_with(RigidBody),
         )
@@ -76,6 +77,9 @@ class PhysicsSystem(System):
             for k in np.flatnonzero(np.any(wanted != physics.last_velocity(plan.entities), axis=1)):
                 physics.set_velocity(int(plan.entities[k]), wanted[k])  # set by a system since the last step
         physics.step(dt)
+        records = physics.native.get_contact_events_raw()  # (read every step: reading empties it)
+        if physics.contacts != "none":
+            send_contacts(world, physics, records, stays=physics.contacts == "all")
         for batch in world.query(Transform, RigidBody, Collider):
             plan = self._plans[batch.table.id]
             if len(plan.rows):
@@ -93,17 +97,19 @@ class PhysicsSystem(System):
 
 class PhysicsPlugin(Plugin):
     """Rigid-body physics (the `physics` extra): a PhysicsWorld resource with `gravity`, the
-    library's `threads` and `max_bodies`, stepped by PhysicsSystem in the fixed stage. Without
-    the library, adding the plugin is one UsageError naming the extra to install."""
+    library's `threads`, `max_bodies` and which `contacts` become events, stepped by
+    PhysicsSystem in the fixed stage. Without the library, adding the plugin is one UsageError
+    naming the extra to install."""
 
     def __init__(
         self,
         gravity: tuple[float, float, float] = (0.0, -9.81, 0.0),
         threads: int | None = None,
         max_bodies: int = 65_536,
+        contacts: str = "begin_end",
     ) -> None:
-        self.gravity, self.threads, self.max_bodies = gravity, threads, max_bodies
+        self.gravity, self.threads, self.max_bodies, self.contacts = gravity, threads, max_bodies, contacts
 
     def build(self, app: Any) -> None:
-        app.insert_resource(PhysicsWorld(self.gravity, self.threads, self.max_bodies))
+        app.insert_resource(PhysicsWorld(self.gravity, self.threads, self.max_bodies, self.contacts))
         app.add_systems("fixed", PhysicsSystem())

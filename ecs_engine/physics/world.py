@@ -14,9 +14,13 @@ import numpy as np
 from ..ecs.entities import INDEX_MASK
 from ..jobs import over_rows
 from .bodies import Bodies
+from .contacts import record_dtype
 from .library import load
 from .poses import copy_poses, copy_vectors
 
+# what becomes world.events(Contact): nothing, bodies beginning and ending to touch, or every
+# touching pair every step too (STAY: some 8 rows a body in a pile)
+CONTACTS = ("none", "begin_end", "all")
 RAY_CHUNK = 512  # rays per job when a batch is spread over the JobPool
 # a ray hit as the library packs it (48 bytes)
 _HIT = np.dtype(
@@ -48,6 +52,7 @@ class PhysicsWorld:
     per core) and the most bodies it holds (`max_bodies`). The bodies are the entities with
     Transform, RigidBody and Collider; PhysicsSystem makes and destroys them as those come and go,
     steps the world once per fixed step and writes the dynamic bodies' poses back in bulk.
+    `contacts`: which touches become Contact events (CONTACTS; Trigger events always).
     `native` is the library's world (culverin's PhysicsWorld) for what the engine does not wrap."""
 
     def __init__(
@@ -55,7 +60,10 @@ class PhysicsWorld:
         gravity: tuple[float, float, float] = (0.0, -9.81, 0.0),
         threads: int | None = None,
         max_bodies: int = 65_536,
+        contacts: str = "begin_end",
     ) -> None:
+        if contacts not in CONTACTS:
+            raise ValueError(f"PhysicsWorld.contacts must be one of {', '.join(CONTACTS)}, got {contacts!r}")
         g = tuple(float(x) for x in gravity)
         if len(g) != 3 or not all(math.isfinite(x) for x in g):
             raise ValueError(f"PhysicsWorld.gravity must be 3 finite numbers, got {gravity!r}")
@@ -73,6 +81,8 @@ class PhysicsWorld:
         settings["num_threads"] = self.threads
         self.native = self.lib.PhysicsWorld(settings=settings)
         self.bodies = Bodies(self.lib, self.native)
+        self.contacts = contacts
+        self.contact_dtype = record_dtype(bool(self.lib.USE_DOUBLE_PRECISION))
         self.pool: Any = None  # the world's JobPool (PhysicsSystem sets it): raycast spreads over it
         self.steps = 0
         self.step_ms = 0.0
@@ -162,9 +172,7 @@ class PhysicsWorld:
 
     def entity_of(self, handle: int) -> int:
         """The entity of a body handle (-1: none)."""
-        handles, entities = self.bodies.by_handle
-        at = int(np.searchsorted(handles, np.uint64(handle)))
-        return int(entities[at]) if at < len(handles) and handles[at] == handle else -1
+        return int(self.bodies.entities_of(np.array([handle], np.uint64))[0])
 
     # ------------------------------------------------------------------ queries
     def raycast(self, origins: Any, directions: Any, max_distance: float = 1000.0) -> RayHits:
@@ -191,14 +199,8 @@ class PhysicsWorld:
             hits[rows] = np.frombuffer(raw, _HIT)
 
         over_rows(self.pool, len(o), cast, RAY_CHUNK)
-        hit = hits["handle"] != 0
-        entity = np.full(len(o), -1, np.int64)
-        handles, entities = self.bodies.by_handle
-        if hit.any() and len(handles):
-            at = np.minimum(np.searchsorted(handles, hits["handle"]), len(handles) - 1)
-            known = hit & (handles[at] == hits["handle"])
-            entity[known] = entities[at[known]]
-            hit = known
+        entity = self.bodies.entities_of(hits["handle"])
+        hit = entity >= 0
         distance = np.where(hit, hits["fraction"].astype(np.float64) * max_distance, np.nan)
         point = np.where(hit[:, None], o + unit * distance[:, None], np.nan)
         normal = np.where(hit[:, None], hits["normal"].astype(np.float64), np.nan)
