@@ -33,7 +33,7 @@ from types import ModuleType
 from ..errors import UsageError
 from .app import App
 
-KNOWN_GAMES = {"asteroids": "ecs_engine.demos.asteroids"}
+KNOWN_GAMES = {"asteroids": "ecs_engine.demos.asteroids", "physics": "ecs_engine.demos.physics_playground"}
 GAME_FILE = "game.py"  # a folder's game (ecs-engine new)
 
 _loaded: dict[str, Path] = {}  # module name -> the file this module loaded it from

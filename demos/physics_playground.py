@@ -1,0 +1,146 @@
+"""The physics playground (`ecs-engine play physics`, the `physics` extra): a pile of boxes to
+knock down, a row of dominoes, a tower and a ramp; fly the camera (WASD and the mouse) and shoot
+balls where it looks (the left mouse button or space). `--autoplay` shoots on its own, one ball
+every half second from where the camera stands. A game module, as asteroids is."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ecs_engine import App, World
+from ecs_engine.components import Camera, DirectionalLight, FlyCamera, Mesh, Transform, Velocity
+from ecs_engine.components.physics import BOX, SPHERE, STATIC, Collider, RigidBody
+from ecs_engine.ecs import System
+from ecs_engine.maths.camera import look_rotation, rotation_matrix
+from ecs_engine.render import Material, cube_mesh, materials, sphere_mesh
+from ecs_engine.systems import ActionMap
+
+ACTIONS = {"shoot": ["mouse_left", "space", "gamepad_right_bumper"]}
+BALL_SPEED = 30.0  # m/s
+BALL_RADIUS = 0.35
+BALLS_KEPT = 200  # the oldest ball goes when one more is shot
+
+
+@dataclass(frozen=True)
+class BallLook:
+    """The shot balls' mesh and material (a resource made with the world)."""
+
+    mesh: int
+    material: int
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--autoplay", action="store_true", help="shoot a ball every half second on its own")
+    parser.add_argument("--pile", type=int, default=1000, help="boxes in the pile (default 1,000)")
+
+
+def build(app: App) -> None:
+    from ecs_engine.app.plugins import DefaultPlugins
+    from ecs_engine.physics import PhysicsPlugin
+    from ecs_engine.render import Meshes
+
+    autoplay, pile = getattr(app.options, "autoplay", False), getattr(app.options, "pile", 1000)
+    app.title = "Physics playground"
+    app.add_plugins(DefaultPlugins, PhysicsPlugin())
+    app.add_actions(ACTIONS)
+
+    def setup(world: World, dt: float) -> None:
+        build_world(world, world.resources[Meshes].add, pile)
+
+    app.add_startup_systems(setup)
+    app.add_systems("fixed", ShootSystem(autoplay))
+
+
+def build_world(world: World, add_mesh: object, pile: int = 1000) -> None:
+    """The playground's bodies, meshes, materials, light and camera."""
+    cube, ball = add_mesh(cube_mesh()), add_mesh(sphere_mesh(radius=BALL_RADIUS))  # type: ignore[operator]
+    looks = materials(world)
+    ground = looks.add(Material("ground", "cook_torrance", (0.35, 0.37, 0.4, 1.0), roughness=0.95))
+    crate = looks.add(Material("crate", "cook_torrance", (0.75, 0.5, 0.25, 1.0), roughness=0.7))
+    domino = looks.add(Material("domino", "cook_torrance", (0.9, 0.9, 0.85, 1.0), roughness=0.4))
+    red = looks.add(Material("ball", "cook_torrance", (0.8, 0.1, 0.1, 1.0)))
+    world.resources[BallLook] = BallLook(ball, red)
+
+    def static_box(position: tuple, half: tuple, rotation: tuple = (0.0, 0.0, 0.0, 1.0)) -> None:
+        scale = tuple(2 * h for h in half)
+        world.spawn(
+            Transform(position=position, rotation=rotation, scale=scale),
+            Mesh(handle=cube, material=ground),
+            RigidBody(kind=STATIC),
+            Collider(shape=BOX, size=half),
+        )
+
+    static_box((0.0, -0.5, 0.0), (60.0, 0.5, 60.0))
+    tilt = math.radians(15.0)
+    static_box((-14.0, 2.0, -6.0), (6.0, 0.25, 2.0), (0.0, 0.0, math.sin(tilt / 2), math.cos(tilt / 2)))
+    # the pile: boxes in a block, apart and turned a little at random, falling into a heap
+    side = max(1, round(pile ** (1 / 3)))
+    i = np.arange(pile)
+    rng = np.random.default_rng(7)
+    grid = np.c_[i % side, i // (side * side), (i // side) % side] * 1.4 + rng.uniform(-0.2, 0.2, (pile, 3))
+    where = grid + (6.0 - side * 0.7, 3.0, -side * 0.7)
+    turns = rng.normal(size=(pile, 4))
+    turns /= np.linalg.norm(turns, axis=1)[:, None]
+    crates = Transform(position=where, rotation=turns)
+    world.spawn_batch(pile, crates, Mesh(handle=cube, material=crate), RigidBody(), Collider())
+    # dominoes in a row, the first leaning onto the second
+    for k in range(24):
+        lean = (0.0, 0.0, math.sin(-0.2), math.cos(-0.2)) if k == 0 else (0.0, 0.0, 0.0, 1.0)
+        world.spawn(
+            Transform(position=(-22.0 + k * 0.9, 1.0, 14.0), rotation=lean, scale=(0.2, 2.0, 1.0)),
+            Mesh(handle=cube, material=domino),
+            RigidBody(mass=2.0),
+            Collider(shape=BOX, size=(0.1, 1.0, 0.5), friction=0.6),
+        )
+    # a tower to shoot at
+    for level in range(10):
+        world.spawn(
+            Transform(position=(-4.0, 0.5 + level, -8.0)), Mesh(handle=cube, material=crate), RigidBody(), Collider()
+        )
+    world.spawn(Transform(rotation=look_rotation((-0.4, -1.0, -0.5))), DirectionalLight(illuminance=2.5))
+    world.spawn(Transform(position=(0.0, 6.0, 24.0), rotation=look_rotation((0.0, -0.2, -1.0))), Camera(), FlyCamera())
+
+
+class ShootSystem(System):
+    """Shoots a ball from the camera along its view on the `shoot` action (or every half second
+    with `autoplay`); keeps the newest BALLS_KEPT balls."""
+
+    def __init__(self, autoplay: bool = False) -> None:
+        super().__init__(reads=[Camera, Transform, ActionMap, BallLook], writes=[], name="shoot")
+        self.autoplay = autoplay
+        self._since = 0.0
+        self._fired: list[int] = []
+
+    def run(self, world: World, dt: float) -> None:
+        self._since += dt
+        if self.autoplay:
+            shoot = self._since >= 0.5
+        else:
+            actions = world.resources.get(ActionMap)
+            shoot = actions is not None and actions.action_pressed("shoot")
+        if not shoot:
+            return
+        self._since = 0.0
+        cameras = world.query(Transform, with_=(Camera,))
+        for batch in cameras:
+            eye, rotation = batch[Transform].position[0].copy(), batch[Transform].rotation[0]
+            break
+        else:
+            return
+        ahead = -rotation_matrix(rotation)[:3, 2]  # the camera looks along its -z
+        look = world.resources[BallLook]
+        self._fired.append(
+            world.spawn(
+                Transform(position=eye + ahead * 1.5),
+                Mesh(handle=look.mesh, material=look.material),
+                RigidBody(mass=5.0, ccd=True),
+                Collider(shape=SPHERE, size=(BALL_RADIUS, BALL_RADIUS, BALL_RADIUS), restitution=0.3),
+                Velocity(linear=ahead * BALL_SPEED),
+            )
+        )
+        if len(self._fired) > BALLS_KEPT:
+            world.destroy(self._fired.pop(0))

@@ -1,0 +1,55 @@
+"""`ecs-engine play physics` (demos/physics_playground.py): headless with --autoplay it shoots
+balls, the pile falls into a heap and the dominoes topple; without the physics extra it is one
+line naming it."""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import pytest
+
+from ecs_engine.app.game_module import find_game, game_defaults, make_app
+from ecs_engine.components import Transform, Velocity
+from ecs_engine.components.physics import DYNAMIC, SPHERE, Collider, RigidBody
+
+
+def test_the_playground_plays_itself():
+    pytest.importorskip("culverin", reason="the physics extra (CPython 3.12+): make test-physics")
+    game = find_game("physics")
+    app = make_app(game, game_defaults(game, ["--autoplay", "--pile", "27"]))
+    app.run(frames=150, headless=True, width=96, height=64)
+    world = app.world
+    balls = [
+        e
+        for b in world.query(Transform, Collider, with_=(Velocity,), write=())
+        for e, shape in zip(b.entities, b[Collider].shape)
+        if shape == SPHERE
+    ]
+    assert len(balls) >= 3  # one every half second of the 2.5 s
+    bodies = world.query(Transform, RigidBody, Collider, write=())
+    moving = np.concatenate([b[RigidBody].kind == DYNAMIC for b in bodies])
+    where = np.concatenate([b[Transform].position for b in bodies])[moving]
+    sizes = np.concatenate([b[Collider].size for b in bodies])[moving]
+    assert where[:, 1].min() > 0.05  # nothing fell through the ground
+    # the pile (27 boxes dropped from 3 to 5.8 m, on the +x side) lies in a heap, and dominoes fell
+    pile = np.all(sizes == 0.5, axis=1) & (where[:, 0] > 0.0)
+    assert pile.sum() == 27 and where[pile, 1].max() < 3.0
+    dominoes = [
+        b[Transform].rotation[i]
+        for b in bodies
+        for i in range(len(b))
+        if np.allclose(b[Collider].size[i], (0.1, 1.0, 0.5))
+    ]
+    assert len(dominoes) == 24
+    upright = [abs(q[3]) > 0.99 for q in dominoes]
+    assert sum(upright) < 24
+
+
+def test_without_the_extra_play_physics_is_one_line(monkeypatch, capsys):
+    from ecs_engine.app import cli
+
+    monkeypatch.setitem(sys.modules, "culverin", None)
+    assert cli.main(["play", "physics", "--headless", "--frames", "2"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "pip install 'ecs_engine[physics]'" in err[0], err
