@@ -30,6 +30,7 @@ class Bodies:
         self.row = np.full(0, -1, np.int64)
         self.velocity = np.zeros((0, 3))
         self.sensor = np.zeros(0, bool)
+        self.sensors = 0  # bodies that are sensors
         self.by_handle = (np.empty(0, np.uint64), np.empty(0, np.int64))  # handles sorted, their entities
         self.generation = 0
         self._seen = -1  # the world's structure version last matched
@@ -88,6 +89,7 @@ class Bodies:
         slots = np.flatnonzero(self.owner >= 0)
         order = np.argsort(self.handle[slots])
         self.by_handle = (self.handle[slots][order], self.owner[slots][order])
+        self.sensors = int(self.sensor[self.owner >= 0].sum())
         self.generation += 1
         return True
 

@@ -40,9 +40,9 @@ def record_dtype(double: bool) -> np.dtype:
 _PHASES = (BEGIN, STAY, END)
 
 
-def send_contacts(world: Any, physics: Any, raw: Any, stays: bool) -> None:
-    """The library's contact records since the last step (`raw`) sent as Contact and Trigger
-    events; STAY rows only with `stays`."""
+def send_contacts(world: Any, physics: Any, raw: Any, touches: bool, stays: bool) -> None:
+    """The library's contact records since the last step (`raw`) sent as Trigger events and,
+    with `touches`, Contact events (STAY rows only with `stays`)."""
     records = np.frombuffer(raw, physics.contact_dtype)
     if not len(records):
         return
@@ -57,7 +57,7 @@ def send_contacts(world: Any, physics: Any, raw: Any, stays: bool) -> None:
     a_sensor[ours] = sensor[a[ours] & INDEX_MASK]
     b_sensor[ours] = sensor[b[ours] & INDEX_MASK]
     touching = ours & ~a_sensor & ~b_sensor
-    if touching.any():
+    if touches and touching.any():
         world.events(Contact).send(
             Contact(
                 a=a[touching],

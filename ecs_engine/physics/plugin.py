@@ -9,6 +9,7 @@ steps), their velocities into Velocity and AngularVelocity where they have them.
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 import numpy as np
@@ -77,9 +78,12 @@ class PhysicsSystem(System):
             for k in np.flatnonzero(np.any(wanted != physics.last_velocity(plan.entities), axis=1)):
                 physics.set_velocity(int(plan.entities[k]), wanted[k])  # set by a system since the last step
         physics.step(dt)
-        records = physics.native.get_contact_events_raw()  # (read every step: reading empties it)
-        if physics.contacts != "none":
-            send_contacts(world, physics, records, stays=physics.contacts == "all")
+        contacts = physics.contacts  # (unread, the library's buffer stays at its cap)
+        if contacts in ("begin_end", "all") or (contacts == "triggers" and physics.bodies.sensors):
+            start = time.perf_counter()
+            records = physics.native.get_contact_events_raw()  # a copy of the buffer, which it empties
+            send_contacts(world, physics, records, touches=contacts != "triggers", stays=contacts == "all")
+            physics.events_ms = (time.perf_counter() - start) * 1e3
         for batch in world.query(Transform, RigidBody, Collider):
             plan = self._plans[batch.table.id]
             if len(plan.rows):
@@ -106,7 +110,7 @@ class PhysicsPlugin(Plugin):
         gravity: tuple[float, float, float] = (0.0, -9.81, 0.0),
         threads: int | None = None,
         max_bodies: int = 65_536,
-        contacts: str = "begin_end",
+        contacts: str = "triggers",
     ) -> None:
         self.gravity, self.threads, self.max_bodies, self.contacts = gravity, threads, max_bodies, contacts
 
