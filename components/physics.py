@@ -77,3 +77,24 @@ class Trigger(Component):
     sensor = Field(np.int64, default=-1, entity=True)
     other = Field(np.int64, default=-1, entity=True)
     entered = Field(np.bool_, default=True)
+
+
+# Joint.kind
+FIXED, HINGE, BALL, SLIDER, DISTANCE = 0, 1, 2, 3, 4
+JOINT_NAMES = {FIXED: "fixed", HINGE: "hinge", BALL: "ball", SLIDER: "slider", DISTANCE: "distance"}
+
+
+class Joint(Component):
+    """Joins this entity's body to `other`'s (an entity with a body too), made with the bodies:
+    FIXED (welded as they stand), BALL (turning freely about `pivot`), HINGE (turning about
+    `axis` through `pivot`, within `limits` in radians), SLIDER (moving along `axis` through
+    `pivot`, within `limits` in metres from where it started) or DISTANCE (their centres kept
+    within `limits` metres apart; infinite limits: at the distance they start at). `pivot` and
+    `axis` are in world space at the moment the joint is made; the bodies joined do not collide
+    with each other only if their colliders' category and mask say so."""
+
+    kind = Field(np.uint8, default=HINGE, maximum=DISTANCE)
+    other = Field(np.int64, default=-1, entity=True)
+    pivot = Field(np.float64, (3,), default=(0.0, 0.0, 0.0), finite=True, minimum=-LIMIT, maximum=LIMIT)
+    axis = Field(np.float64, (3,), default=(0.0, 1.0, 0.0), finite=True, unit=True)
+    limits = Field(np.float64, (2,), default=(-np.inf, np.inf))

@@ -1,7 +1,8 @@
 """The physics playground (`ecs-engine play physics`, the `physics` extra): a pile of boxes to
-knock down, a row of dominoes, a tower and a ramp; fly the camera (WASD and the mouse) and shoot
-balls where it looks (the left mouse button or space). `--autoplay` shoots on its own, one ball
-every half second from where the camera stands. A game module, as asteroids is."""
+knock down, a row of dominoes, a chain of hinged links, a tower and a ramp; fly the camera (WASD
+and the mouse) and shoot balls where it looks (the left mouse button or space). `--autoplay`
+shoots on its own, one ball every half second from where the camera stands. A game module, as
+asteroids is."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ import numpy as np
 
 from ecs_engine import App, World
 from ecs_engine.components import Camera, DirectionalLight, FlyCamera, Mesh, Transform, Velocity
-from ecs_engine.components.physics import BOX, SPHERE, STATIC, Collider, RigidBody
+from ecs_engine.components.physics import BOX, HINGE, SPHERE, STATIC, Collider, Joint, RigidBody
 from ecs_engine.ecs import System
 from ecs_engine.maths.camera import look_rotation, rotation_matrix
 from ecs_engine.render import Material, cube_mesh, materials, sphere_mesh
@@ -23,6 +24,7 @@ ACTIONS = {"shoot": ["mouse_left", "space", "gamepad_right_bumper"]}
 BALL_SPEED = 30.0  # m/s
 BALL_RADIUS = 0.35
 BALLS_KEPT = 200  # the oldest ball goes when one more is shot
+CHAIN_LINKS, LINK = 10, 0.8  # the hanging chain's links and their length (m)
 
 
 @dataclass(frozen=True)
@@ -96,13 +98,32 @@ def build_world(world: World, add_mesh: object, pile: int = 1000) -> None:
             RigidBody(mass=2.0),
             Collider(shape=BOX, size=(0.1, 1.0, 0.5), friction=0.6),
         )
+    # a chain of hinged links hanging from a beam, swung at the start (its links pass through
+    # each other's ends: category 8, which their mask leaves out)
+    top = world.spawn(
+        Transform(position=(14.0, 12.0, 0.0), scale=(0.4, 0.4, 0.4)),
+        Mesh(handle=cube, material=ground),
+        RigidBody(kind=STATIC),
+        Collider(shape=BOX, size=(0.2, 0.2, 0.2), category=8, mask=1),
+    )
+    above = top
+    for k in range(CHAIN_LINKS):
+        y = 12.0 - 0.2 - LINK * (k + 0.5)
+        above = world.spawn(
+            Transform(position=(14.0, y, 0.0), scale=(0.3, LINK, 0.3)),
+            Mesh(handle=cube, material=domino),
+            RigidBody(mass=1.0),
+            Collider(shape=BOX, size=(0.15, LINK / 2, 0.15), category=8, mask=1),
+            Joint(kind=HINGE, other=above, pivot=(14.0, y + LINK / 2, 0.0), axis=(0.0, 0.0, 1.0)),
+            *([Velocity(linear=(6.0, 0.0, 0.0))] if k == CHAIN_LINKS - 1 else []),
+        )
     # a tower to shoot at
     for level in range(10):
         world.spawn(
             Transform(position=(-4.0, 0.5 + level, -8.0)), Mesh(handle=cube, material=crate), RigidBody(), Collider()
         )
     world.spawn(Transform(rotation=look_rotation((-0.4, -1.0, -0.5))), DirectionalLight(illuminance=2.5))
-    world.spawn(Transform(position=(0.0, 6.0, 24.0), rotation=look_rotation((0.0, -0.2, -1.0))), Camera(), FlyCamera())
+    world.spawn(Transform(position=(0.0, 9.0, 34.0), rotation=look_rotation((0.0, -0.25, -1.0))), Camera(), FlyCamera())
 
 
 class ShootSystem(System):

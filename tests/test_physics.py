@@ -12,52 +12,20 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from physics_world import G, ball, floor, physics_plugin, position, simulate
 
 from ecs_engine import App, MinimalPlugins
 from ecs_engine.components import Transform, Velocity
-from ecs_engine.components.physics import BEGIN, BOX, END, SPHERE, STATIC, STAY, Collider, Contact, RigidBody, Trigger
+from ecs_engine.components.physics import (
+    BOX,
+    SPHERE,
+    STATIC,
+    Collider,
+    RigidBody,
+)
 from ecs_engine.errors import UsageError
 
-G = 9.81
 DT = 1.0 / 60.0
-
-
-def physics_plugin(**kw):
-    pytest.importorskip("culverin", reason="the physics extra (CPython 3.12+): make test-physics")
-    from ecs_engine.physics import PhysicsPlugin
-
-    return PhysicsPlugin(threads=2, **kw)
-
-
-def simulate(setup, frames, **kw):
-    """A world of `setup`'s bodies stepped `frames` fixed steps of 1/60 s: (world, physics)."""
-    from ecs_engine.physics import PhysicsWorld
-
-    app = App(title="physics test").add_plugins(MinimalPlugins, physics_plugin(**kw))
-    app.add_startup_systems(setup)
-    app.run(frames=frames)
-    return app.world, app.world.resources[PhysicsWorld]
-
-
-def floor(world, friction=0.5, restitution=0.0):
-    return world.spawn(
-        Transform(position=(0.0, -0.5, 0.0)),
-        RigidBody(kind=STATIC),
-        Collider(shape=BOX, size=(50.0, 0.5, 50.0), friction=friction, restitution=restitution),
-    )
-
-
-def ball(world, y, restitution=0.0, x=0.0, **more):
-    return world.spawn(
-        Transform(position=(x, y, 0.0)),
-        RigidBody(),
-        Collider(shape=SPHERE, size=(0.5, 0.5, 0.5), restitution=restitution),
-        *more.values(),
-    )
-
-
-def position(world, entity):
-    return world.get(entity, Transform).position
 
 
 def test_a_dropped_ball_falls_as_gravity_says():
@@ -305,83 +273,3 @@ def test_the_physics_page_example_runs():
     (ball,) = [e for e in world.query(Velocity).entities()]
     x, y, _ = world.get(ball, Transform).position
     assert 0.5 < x < 1.6 and 0.4 < y < 5.0
-
-
-def _events(setup, frames, **kw):
-    """Every Contact and Trigger event of a run, as (step, rows) lists."""
-    from ecs_engine import Time
-
-    seen: dict = {"contacts": [], "triggers": []}
-
-    def listen(world, dt):
-        step = world.resources[Time].steps
-        c, t = world.events(Contact).read(), world.events(Trigger).read()
-        if len(c):
-            seen["contacts"].append((step, c))
-        if len(t):
-            seen["triggers"].append((step, t))
-
-    app = App(title="events").add_plugins(MinimalPlugins, physics_plugin(**kw))
-    app.add_startup_systems(setup)
-    app.add_systems("update", listen)
-    app.run(frames=frames)
-    return seen
-
-
-def test_a_bounce_is_a_contact_that_begins_and_ends_with_the_speed_it_met_at():
-    made = {}
-    h, e, m = 2.0, 0.5, 2.0
-
-    def setup(world, dt):
-        made["floor"] = floor(world)
-        made["ball"] = world.spawn(
-            Transform(position=(0.0, h + 0.5, 0.0)), RigidBody(mass=m), Collider(shape=SPHERE, restitution=e)
-        )
-
-    seen = _events(setup, 60, contacts="begin_end")
-    first = seen["contacts"][0][1]
-    assert set(first.phase) == {BEGIN}
-    assert {int(first.a[0]), int(first.b[0])} == {made["floor"], made["ball"]}
-    assert abs(first.point[0, 1]) < 0.1  # where the ball meets the floor's top
-    assert abs(first.normal[0, 1]) == pytest.approx(1.0, abs=1e-3)
-    # it met the floor at the speed of a fall from h: sqrt(2 g h), give or take a step's gravity
-    assert first.speed[0] == pytest.approx(math.sqrt(2 * G * h), rel=0.05)
-    phases = [int(p) for _, c in seen["contacts"] for p in c.phase]
-    assert STAY not in phases and END in phases  # begin and end only, by default
-
-
-def test_stays_are_reported_when_asked():
-    def setup(world, dt):
-        floor(world)
-        ball(world, 0.5)
-
-    seen = _events(setup, 30, contacts="all")
-    phases = [int(p) for _, c in seen["contacts"] for p in c.phase]
-    assert phases[0] == BEGIN and phases.count(STAY) > 20
-
-
-def test_a_body_entering_and_leaving_a_sensor_is_a_pair_of_triggers():
-    made = {}
-
-    def setup(world, dt):
-        floor(world)
-        made["zone"] = world.spawn(
-            Transform(position=(0.0, 3.0, 0.0)), RigidBody(kind=STATIC), Collider(size=(1.0, 0.5, 1.0), sensor=True)
-        )
-        made["ball"] = ball(world, 6.0)
-
-    seen = _events(setup, 120)  # (triggers only, by default)
-    rows = [
-        (step, int(t.sensor[i]), int(t.other[i]), bool(t.entered[i]))
-        for step, t in seen["triggers"]
-        for i in range(len(t))
-    ]
-    assert [(s, o, e) for _, s, o, e in rows] == [
-        (made["zone"], made["ball"], True),
-        (made["zone"], made["ball"], False),
-    ]
-    assert rows[0][0] < rows[1][0]
-    assert seen["contacts"] == []  # contacts are asked for
-    seen = _events(setup, 120, contacts="begin_end")
-    touched = {(int(c.a[i]), int(c.b[i])) for _, c in seen["contacts"] for i in range(len(c))}
-    assert touched and not any(made["zone"] in pair for pair in touched)  # the sensor pushed nothing

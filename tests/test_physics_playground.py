@@ -11,7 +11,7 @@ import pytest
 
 from ecs_engine.app.game_module import find_game, game_defaults, make_app
 from ecs_engine.components import Transform, Velocity
-from ecs_engine.components.physics import DYNAMIC, SPHERE, Collider, RigidBody
+from ecs_engine.components.physics import DYNAMIC, SPHERE, Collider, Joint, RigidBody
 
 
 def test_the_playground_plays_itself():
@@ -44,6 +44,24 @@ def test_the_playground_plays_itself():
     assert len(dominoes) == 24
     upright = [abs(q[3]) > 0.99 for q in dominoes]
     assert sum(upright) < 24
+    # the chain swung, and its links stayed joined: each link's top where the one above ends
+    from ecs_engine.demos.physics_playground import CHAIN_LINKS, LINK
+    from ecs_engine.maths.camera import rotation_matrix
+
+    links = [e for b in world.query(Joint, write=()) for e in b.entities]
+    assert len(links) == CHAIN_LINKS
+    ends = []
+    for e in links:
+        t = world.get(e, Transform)
+        up = rotation_matrix(t.rotation)[:3, 1] * LINK / 2
+        ends.append((t.position + up, t.position - up))
+    gaps = [np.linalg.norm(ends[k][0] - ends[k - 1][1]) for k in range(1, CHAIN_LINKS)]
+    assert max(gaps) < 0.05
+    bottom = links[-1]  # it swings: away from the middle, or passing through it fast
+    assert (
+        abs(world.get(bottom, Transform).position[0] - 14.0) > 0.1
+        or np.linalg.norm(world.get(bottom, Velocity).linear) > 0.5
+    )
 
 
 def test_without_the_extra_play_physics_is_one_line(monkeypatch, capsys):

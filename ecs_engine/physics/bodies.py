@@ -9,9 +9,10 @@ from typing import Any
 
 import numpy as np
 
-from ..components import Transform, Velocity
+from ..components import AngularVelocity, Transform, Velocity
 from ..components.physics import BOX, CAPSULE, CYLINDER, DYNAMIC, KINEMATIC, SPHERE, STATIC, Collider, RigidBody
 from ..ecs.entities import INDEX_MASK
+from .joints import Joints
 
 MOTIONS = {DYNAMIC: "MOTION_DYNAMIC", KINEMATIC: "MOTION_KINEMATIC", STATIC: "MOTION_STATIC"}
 _SHAPES = {BOX: "SHAPE_BOX", SPHERE: "SHAPE_SPHERE", CAPSULE: "SHAPE_CAPSULE", CYLINDER: "SHAPE_CYLINDER"}
@@ -20,7 +21,8 @@ _SHAPES = {BOX: "SHAPE_BOX", SPHERE: "SHAPE_SPHERE", CAPSULE: "SHAPE_CAPSULE", C
 class Bodies:
     """Per entity slot: the entity whose body it is (`owner`, -1: none), the body's `handle`, its
     `kind`, whether it is a `sensor`, its `row` in the library's shared buffers and the linear
-    `velocity` last written to its Velocity. `generation` counts the times rows moved (bodies made or destroyed)."""
+    `velocity` and `angular` velocity last written to its Velocity and AngularVelocity.
+    `generation` counts the times rows moved (bodies made or destroyed)."""
 
     def __init__(self, lib: Any, native: Any) -> None:
         self.lib, self.native = lib, native
@@ -29,11 +31,13 @@ class Bodies:
         self.kind = np.zeros(0, np.uint8)
         self.row = np.full(0, -1, np.int64)
         self.velocity = np.zeros((0, 3))
+        self.angular = np.zeros((0, 3))
         self.sensor = np.zeros(0, bool)
         self.sensors = 0  # bodies that are sensors
         self.by_handle = (np.empty(0, np.uint64), np.empty(0, np.int64))  # handles sorted, their entities
         self.generation = 0
         self._seen = -1  # the world's structure version last matched
+        self.joints = Joints(lib, native)
 
     def __len__(self) -> int:
         return int((self.owner >= 0).sum())
@@ -55,6 +59,11 @@ class Bodies:
             found = known[at] == handles
             out[found] = entities[at[found]]
         return out
+
+    def position_of(self, entity: int) -> np.ndarray:
+        """The body's position now (the library's buffer)."""
+        positions = np.frombuffer(self.native.positions, np.float64).reshape(-1, 4)
+        return positions[self.row[entity & INDEX_MASK], :3].copy()
 
     def sync(self, world: Any) -> bool:
         """Bodies made for new entities with Transform, RigidBody and Collider, and destroyed for
@@ -79,8 +88,14 @@ class Bodies:
             new = np.flatnonzero(self.owner[batch.entities & INDEX_MASK] != batch.entities)
             if len(new):
                 made += self._create(world, batch, new)
-        if not (made or len(gone)):
-            return False
+        changed = bool(made or len(gone))
+        if changed:
+            self._rows()
+        self.joints.sync(world, self)  # (a joint may come or go without a body)
+        return changed
+
+    def _rows(self) -> None:
+        """The bodies' rows in the buffers after bodies were made or destroyed."""
         self.native.step(0.0)  # (the library makes and removes bodies at its next step)
         ids = np.frombuffer(self.native.user_data, np.uint64)[: self.native.count].astype(np.int64)
         ours = (ids & INDEX_MASK) < len(self.owner)  # (a body made on `native` directly is not ours)
@@ -91,7 +106,6 @@ class Bodies:
         self.by_handle = (self.handle[slots][order], self.owner[slots][order])
         self.sensors = int(self.sensor[self.owner >= 0].sum())
         self.generation += 1
-        return True
 
     def _grow(self, slots: int) -> None:
         if slots > len(self.owner):
@@ -101,12 +115,14 @@ class Bodies:
             self.kind = np.concatenate([self.kind, np.zeros(more, np.uint8)])
             self.row = np.concatenate([self.row, np.full(more, -1, np.int64)])
             self.velocity = np.concatenate([self.velocity, np.zeros((more, 3))])
+            self.angular = np.concatenate([self.angular, np.zeros((more, 3))])
             self.sensor = np.concatenate([self.sensor, np.zeros(more, bool)])
 
     def _create(self, world: Any, batch: Any, rows: np.ndarray) -> int:
         lib, create = self.lib, self.native.create_body
         body, col, t = batch[RigidBody], batch[Collider], batch[Transform]
-        moving = world.has(int(batch.entities[rows[0]]), Velocity)  # (a table has Velocity or not)
+        first = int(batch.entities[rows[0]])  # (a table has Velocity or not, AngularVelocity or not)
+        moving, turning = world.has(first, Velocity), world.has(first, AngularVelocity)
         for r in rows.tolist():
             e = int(batch.entities[r])
             shape, size = int(col.shape[r]), col.size[r]
@@ -140,6 +156,10 @@ class Bodies:
             if velocity.any():
                 self.native.set_linear_velocity(h, *velocity.tolist())
             self.velocity[slot] = velocity
+            spin = world.get(e, AngularVelocity).angular if turning else np.zeros(3)
+            if spin.any():
+                self.native.set_angular_velocity(h, *spin.tolist())
+            self.angular[slot] = spin
         return len(rows)
 
     def follow_kinds(self, entities: np.ndarray, kinds: np.ndarray) -> None:

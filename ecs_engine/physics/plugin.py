@@ -16,11 +16,14 @@ import numpy as np
 
 from ..app.plugins import Plugin
 from ..components import AngularVelocity, Transform, Velocity
-from ..components.physics import DYNAMIC, KINEMATIC, Collider, Contact, RigidBody, Trigger
+from ..components.physics import DYNAMIC, KINEMATIC, Collider, Contact, Joint, RigidBody, Trigger
 from ..ecs.schedule import System, any_with
 from ..jobs import JobPool
 from .contacts import send_contacts
 from .world import PhysicsWorld
+
+# the rates a body shares with its components: (component, field, angular)
+_RATES = ((Velocity, "linear", False), (AngularVelocity, "angular", True))
 
 
 class _TablePlan:
@@ -45,7 +48,7 @@ class PhysicsSystem(System):
 
     def __init__(self) -> None:
         super().__init__(
-            reads=[Transform, RigidBody, Collider, Velocity, AngularVelocity],
+            reads=[Transform, RigidBody, Collider, Joint, Velocity, AngularVelocity],
             writes=[Transform, Velocity, AngularVelocity, Contact, Trigger],
             name="physics",
             run_if=any_with(RigidBody),
@@ -72,11 +75,13 @@ class PhysicsSystem(System):
             plans.append(plan)
             if len(plan.kinematic):  # moved by the game: the bodies follow their Transform
                 physics.place(batch.entities[plan.kinematic], batch[Transform], plan.kinematic)
-        for batch in world.query(Velocity, RigidBody, Collider, with_=(Transform,), write=()):
-            plan = self._plans[batch.table.id]
-            wanted = batch[Velocity].linear[plan.dynamic]
-            for k in np.flatnonzero(np.any(wanted != physics.last_velocity(plan.entities), axis=1)):
-                physics.set_velocity(int(plan.entities[k]), wanted[k])  # set by a system since the last step
+        for kind, field, angular in _RATES:  # rates set by a system since the last step
+            for batch in world.query(kind, RigidBody, Collider, with_=(Transform,), write=()):
+                plan = self._plans[batch.table.id]
+                wanted = getattr(batch[kind], field)[plan.dynamic]
+                changed = np.any(wanted != physics.last_velocity(plan.entities, angular), axis=1)
+                for k in np.flatnonzero(changed).tolist():
+                    physics.set_velocity(int(plan.entities[k]), wanted[k], angular)
         physics.step(dt)
         contacts = physics.contacts  # (unread, the library's buffer stays at its cap)
         if contacts in ("begin_end", "all") or (contacts == "triggers" and physics.bodies.sensors):
@@ -89,14 +94,12 @@ class PhysicsSystem(System):
             if len(plan.rows):
                 t = batch[Transform]
                 physics.write_poses(plan.rows, plan.dynamic, t.position, t.rotation)
-        for batch in world.query(Velocity, RigidBody, Collider, with_=(Transform,)):
-            plan = self._plans[batch.table.id]
-            linear = batch[Velocity].linear
-            physics.write_velocities(plan.rows, plan.dynamic, linear, None)
-            physics.wrote_velocity(plan.entities, linear[plan.dynamic])
-        for batch in world.query(AngularVelocity, RigidBody, Collider, with_=(Transform,)):
-            plan = self._plans[batch.table.id]
-            physics.write_velocities(plan.rows, plan.dynamic, None, batch[AngularVelocity].angular)
+        for kind, field, angular in _RATES:
+            for batch in world.query(kind, RigidBody, Collider, with_=(Transform,)):
+                plan = self._plans[batch.table.id]
+                rate = getattr(batch[kind], field)
+                physics.write_velocities(plan.rows, plan.dynamic, None if angular else rate, rate if angular else None)
+                physics.wrote_velocity(plan.entities, rate[plan.dynamic], angular)
 
 
 class PhysicsPlugin(Plugin):

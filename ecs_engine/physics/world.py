@@ -159,21 +159,23 @@ class PhysicsWorld:
         for h, p, q in zip(handles, transform.position[rows].tolist(), transform.rotation[rows].tolist()):
             put(h, tuple(p), tuple(q))
 
-    def last_velocity(self, entities: np.ndarray) -> np.ndarray:
-        """The linear velocity last written into (or taken from) the Velocity of `entities`."""
-        return self.bodies.velocity[entities & INDEX_MASK]
+    def last_velocity(self, entities: np.ndarray, angular: bool = False) -> np.ndarray:
+        """The linear (or `angular`) velocity last written into, or taken from, the Velocity (or
+        AngularVelocity) of `entities`."""
+        return (self.bodies.angular if angular else self.bodies.velocity)[entities & INDEX_MASK]
 
-    def wrote_velocity(self, entities: np.ndarray, linear: np.ndarray) -> None:
-        self.bodies.velocity[entities & INDEX_MASK] = linear
+    def wrote_velocity(self, entities: np.ndarray, values: np.ndarray, angular: bool = False) -> None:
+        (self.bodies.angular if angular else self.bodies.velocity)[entities & INDEX_MASK] = values
 
-    def set_velocity(self, entity: int, linear: Any) -> None:
-        """Give `entity`'s body this linear velocity (m/s) now."""
+    def set_velocity(self, entity: int, value: Any, angular: bool = False) -> None:
+        """Give `entity`'s body this linear velocity (m/s), or with `angular` this angular one
+        (axis times rad/s), now."""
         handle = self.bodies.handle_of(entity)
         if handle is None:
             raise ValueError(f"entity {entity} has no body")
-        v = [float(x) for x in linear]
-        self.native.set_linear_velocity(handle, *v)
-        self.bodies.velocity[entity & INDEX_MASK] = v
+        v = [float(x) for x in value]
+        (self.native.set_angular_velocity if angular else self.native.set_linear_velocity)(handle, *v)
+        self.wrote_velocity(np.array([entity]), np.array(v), angular)
 
     def entity_of(self, handle: int) -> int:
         """The entity of a body handle (-1: none)."""

@@ -1,0 +1,87 @@
+"""Joint components made into the library's constraints, and destroyed with their entity, their
+Joint or either body (matched when the world's structure changes, as bodies are)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ..components import Transform
+from ..components.physics import BALL, DISTANCE, FIXED, HINGE, JOINT_NAMES, SLIDER, Collider, Joint, RigidBody
+from ..ecs.entities import INDEX_MASK
+from ..errors import UsageError
+
+_TYPES = {
+    FIXED: "CONSTRAINT_FIXED",
+    BALL: "CONSTRAINT_POINT",
+    HINGE: "CONSTRAINT_HINGE",
+    SLIDER: "CONSTRAINT_SLIDER",
+    DISTANCE: "CONSTRAINT_DISTANCE",
+}
+FAR = 1e6  # an infinite slider or distance limit, as the library takes it (metres)
+
+
+class Joints:
+    """Per entity slot: its constraint's handle (0: none) and the entity it joins."""
+
+    def __init__(self, lib: Any, native: Any) -> None:
+        self.lib, self.native = lib, native
+        self.handle = np.zeros(0, np.uint64)
+        self.owner = np.full(0, -1, np.int64)
+
+    def _grow(self, slots: int) -> None:
+        if slots > len(self.handle):
+            more = slots - len(self.handle)
+            self.handle = np.concatenate([self.handle, np.zeros(more, np.uint64)])
+            self.owner = np.concatenate([self.owner, np.full(more, -1, np.int64)])
+
+    def sync(self, world: Any, bodies: Any) -> None:
+        """Constraints made for new joints between bodies, destroyed for joints gone."""
+        batches = list(world.query(Joint, with_=(Transform, RigidBody, Collider), write=()))
+        present = np.concatenate([b.entities for b in batches]) if batches else np.empty(0, np.int64)
+        self._grow(max(len(bodies.owner), int((present & INDEX_MASK).max()) + 1 if len(present) else 0))
+        current = np.full(len(self.owner), -1, np.int64)
+        current[present & INDEX_MASK] = present
+        known = np.flatnonzero(self.owner >= 0)
+        gone = known[current[known] != self.owner[known]]
+        for slot in gone.tolist():  # (a destroyed body's constraints went with it: the call is then ignored)
+            self.native.destroy_constraint(int(self.handle[slot]))
+        self.owner[gone], self.handle[gone] = -1, 0
+        for batch in batches:
+            new = np.flatnonzero(self.owner[batch.entities & INDEX_MASK] != batch.entities)
+            for r in new.tolist():
+                self._make(world, bodies, batch, r)
+
+    def _make(self, world: Any, bodies: Any, batch: Any, r: int) -> None:
+        joint, e = batch[Joint], int(batch.entities[r])
+        kind, other = int(joint.kind[r]), int(joint.other[r])
+        mine, theirs = bodies.handle_of(e), bodies.handle_of(other) if other >= 0 else None
+        if theirs is None:
+            raise UsageError(f"entity {e}: Joint.other is {other}, which has no body (Transform, RigidBody, Collider)")
+        if other == e:
+            raise UsageError(f"entity {e}: Joint.other is the entity itself")
+        low, high = (float(x) for x in joint.limits[r])
+        if math.isnan(low) or math.isnan(high) or low > high:
+            raise UsageError(f"entity {e}: Joint.limits must be two numbers, the first not above the second")
+        pivot, axis = tuple(joint.pivot[r].tolist()), tuple(joint.axis[r].tolist())
+        if kind == HINGE:
+            params: Any = (pivot, axis, max(low, -math.pi), min(high, math.pi))
+        elif kind == SLIDER:
+            params = (pivot, axis, max(low, -FAR), min(high, FAR))
+        elif kind == BALL:
+            params = (pivot,)
+        elif kind == DISTANCE:
+            if math.isinf(low) and math.isinf(high):  # as far apart as they start
+                apart = float(np.linalg.norm(bodies.position_of(e) - bodies.position_of(other)))
+                low = high = apart
+            params = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), max(low, 0.0), min(high, FAR))  # (the centres, body space)
+        else:
+            params = None
+        try:
+            made = self.native.create_constraint(getattr(self.lib, _TYPES[kind]), theirs, mine, params)
+        except (TypeError, ValueError) as exc:
+            raise UsageError(f"entity {e}: a {JOINT_NAMES[kind]} Joint the library refused: {exc}") from None
+        slot = e & INDEX_MASK
+        self.handle[slot], self.owner[slot] = made, e

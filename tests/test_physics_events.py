@@ -1,0 +1,93 @@
+"""Physics events: Contact rows for bodies that touch (asked for) and Trigger rows for bodies
+entering and leaving sensors (on by default)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from physics_world import G, ball, floor, physics_plugin
+
+from ecs_engine import App, MinimalPlugins
+from ecs_engine.components import Transform
+from ecs_engine.components.physics import BEGIN, END, SPHERE, STATIC, STAY, Collider, Contact, RigidBody, Trigger
+
+
+def _events(setup, frames, **kw):
+    """Every Contact and Trigger event of a run, as (step, rows) lists."""
+    from ecs_engine import Time
+
+    seen: dict = {"contacts": [], "triggers": []}
+
+    def listen(world, dt):
+        step = world.resources[Time].steps
+        c, t = world.events(Contact).read(), world.events(Trigger).read()
+        if len(c):
+            seen["contacts"].append((step, c))
+        if len(t):
+            seen["triggers"].append((step, t))
+
+    app = App(title="events").add_plugins(MinimalPlugins, physics_plugin(**kw))
+    app.add_startup_systems(setup)
+    app.add_systems("update", listen)
+    app.run(frames=frames)
+    return seen
+
+
+def test_a_bounce_is_a_contact_that_begins_and_ends_with_the_speed_it_met_at():
+    made = {}
+    h, e, m = 2.0, 0.5, 2.0
+
+    def setup(world, dt):
+        made["floor"] = floor(world)
+        made["ball"] = world.spawn(
+            Transform(position=(0.0, h + 0.5, 0.0)), RigidBody(mass=m), Collider(shape=SPHERE, restitution=e)
+        )
+
+    seen = _events(setup, 60, contacts="begin_end")
+    first = seen["contacts"][0][1]
+    assert set(first.phase) == {BEGIN}
+    assert {int(first.a[0]), int(first.b[0])} == {made["floor"], made["ball"]}
+    assert abs(first.point[0, 1]) < 0.1  # where the ball meets the floor's top
+    assert abs(first.normal[0, 1]) == pytest.approx(1.0, abs=1e-3)
+    # it met the floor at the speed of a fall from h: sqrt(2 g h), give or take a step's gravity
+    assert first.speed[0] == pytest.approx(math.sqrt(2 * G * h), rel=0.05)
+    phases = [int(p) for _, c in seen["contacts"] for p in c.phase]
+    assert STAY not in phases and END in phases  # begin and end only, by default
+
+
+def test_stays_are_reported_when_asked():
+    def setup(world, dt):
+        floor(world)
+        ball(world, 0.5)
+
+    seen = _events(setup, 30, contacts="all")
+    phases = [int(p) for _, c in seen["contacts"] for p in c.phase]
+    assert phases[0] == BEGIN and phases.count(STAY) > 20
+
+
+def test_a_body_entering_and_leaving_a_sensor_is_a_pair_of_triggers():
+    made = {}
+
+    def setup(world, dt):
+        floor(world)
+        made["zone"] = world.spawn(
+            Transform(position=(0.0, 3.0, 0.0)), RigidBody(kind=STATIC), Collider(size=(1.0, 0.5, 1.0), sensor=True)
+        )
+        made["ball"] = ball(world, 6.0)
+
+    seen = _events(setup, 120)  # (triggers only, by default)
+    rows = [
+        (step, int(t.sensor[i]), int(t.other[i]), bool(t.entered[i]))
+        for step, t in seen["triggers"]
+        for i in range(len(t))
+    ]
+    assert [(s, o, e) for _, s, o, e in rows] == [
+        (made["zone"], made["ball"], True),
+        (made["zone"], made["ball"], False),
+    ]
+    assert rows[0][0] < rows[1][0]
+    assert seen["contacts"] == []  # contacts are asked for
+    seen = _events(setup, 120, contacts="begin_end")
+    touched = {(int(c.a[i]), int(c.b[i])) for _, c in seen["contacts"] for i in range(len(c))}
+    assert touched and not any(made["zone"] in pair for pair in touched)  # the sensor pushed nothing
