@@ -98,3 +98,22 @@ class Joint(Component):
     pivot = Field(np.float64, (3,), default=(0.0, 0.0, 0.0), finite=True, minimum=-LIMIT, maximum=LIMIT)
     axis = Field(np.float64, (3,), default=(0.0, 1.0, 0.0), finite=True, unit=True)
     limits = Field(np.float64, (2,), default=(-np.inf, np.inf))
+
+
+class CharacterController(Component):
+    """A walking capsule moved by the physics' character controller (with Transform; its
+    position is the capsule's centre): `height` and `radius` (m), the highest `step_height` it
+    walks up, the steepest `max_slope` it walks up (radians), the `strength` (N) it pushes
+    dynamic bodies with. The game sets `walk` (m/s; its vertical part is ignored) and `jump` (the
+    upward speed of a jump, taken at the next step on the ground, then set back to 0); the
+    physics writes `grounded` and `vertical` (the speed along the world's up now, m/s)."""
+
+    height = Field(np.float64, default=1.8, finite=True, minimum=0.0, min_exclusive=True, maximum=LIMIT)
+    radius = Field(np.float64, default=0.4, finite=True, minimum=0.0, min_exclusive=True, maximum=LIMIT)
+    step_height = Field(np.float64, default=0.4, finite=True, minimum=0.0, maximum=LIMIT)
+    max_slope = Field(np.float64, default=np.pi / 4, finite=True, minimum=0.0, maximum=np.pi / 2)
+    strength = Field(np.float64, default=100.0, finite=True, minimum=0.0, maximum=LIMIT)
+    walk = Field(np.float64, (3,), default=(0.0, 0.0, 0.0), finite=True, minimum=-LIMIT, maximum=LIMIT)
+    jump = Field(np.float64, default=0.0, finite=True, minimum=0.0, maximum=LIMIT)
+    grounded = Field(np.bool_, default=False)
+    vertical = Field(np.float64, default=0.0, finite=True)

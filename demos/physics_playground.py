@@ -1,5 +1,6 @@
 """The physics playground (`ecs-engine play physics`, the `physics` extra): a pile of boxes to
-knock down, a row of dominoes, a chain of hinged links, a tower and a ramp; fly the camera (WASD
+knock down, a row of dominoes, a chain of hinged links, a tower, a ramp and a character walking
+a loop through it all; fly the camera (WASD
 and the mouse) and shoot balls where it looks (the left mouse button or space). `--autoplay`
 shoots on its own, one ball every half second from where the camera stands. A game module, as
 asteroids is."""
@@ -14,10 +15,10 @@ import numpy as np
 
 from ecs_engine import App, World
 from ecs_engine.components import Camera, DirectionalLight, FlyCamera, Mesh, Transform, Velocity
-from ecs_engine.components.physics import BOX, HINGE, SPHERE, STATIC, Collider, Joint, RigidBody
+from ecs_engine.components.physics import BOX, HINGE, SPHERE, STATIC, CharacterController, Collider, Joint, RigidBody
 from ecs_engine.ecs import System
 from ecs_engine.maths.camera import look_rotation, rotation_matrix
-from ecs_engine.render import Material, cube_mesh, materials, sphere_mesh
+from ecs_engine.render import Material, cube_mesh, cylinder_mesh, materials, sphere_mesh
 from ecs_engine.systems import ActionMap
 
 ACTIONS = {"shoot": ["mouse_left", "space", "gamepad_right_bumper"]}
@@ -25,6 +26,8 @@ BALL_SPEED = 30.0  # m/s
 BALL_RADIUS = 0.35
 BALLS_KEPT = 200  # the oldest ball goes when one more is shot
 CHAIN_LINKS, LINK = 10, 0.8  # the hanging chain's links and their length (m)
+WALK_LOOP = ((-8.0, 4.0), (20.0, 4.0), (20.0, -16.0), (-8.0, -16.0))  # the walker's corners (x, z)
+WALK_SPEED, JUMP_SPEED = 4.0, 5.0  # m/s
 
 
 @dataclass(frozen=True)
@@ -54,7 +57,7 @@ def build(app: App) -> None:
         build_world(world, world.resources[Meshes].add, pile)
 
     app.add_startup_systems(setup)
-    app.add_systems("fixed", ShootSystem(autoplay))
+    app.add_systems("fixed", ShootSystem(autoplay), WalkerSystem())
 
 
 def build_world(world: World, add_mesh: object, pile: int = 1000) -> None:
@@ -117,6 +120,13 @@ def build_world(world: World, add_mesh: object, pile: int = 1000) -> None:
             Joint(kind=HINGE, other=above, pivot=(14.0, y + LINK / 2, 0.0), axis=(0.0, 0.0, 1.0)),
             *([Velocity(linear=(6.0, 0.0, 0.0))] if k == CHAIN_LINKS - 1 else []),
         )
+    # a character walking a loop around the heap, jumping now and then
+    body = add_mesh(cylinder_mesh(radius=0.4, height=1.8))  # type: ignore[operator]
+    world.spawn(
+        Transform(position=(WALK_LOOP[0][0], 0.9, WALK_LOOP[0][1])),
+        Mesh(handle=body, material=looks.add(Material("walker", "cook_torrance", (0.2, 0.5, 0.9, 1.0)))),
+        CharacterController(),
+    )
     # a tower to shoot at
     for level in range(10):
         world.spawn(
@@ -165,3 +175,26 @@ class ShootSystem(System):
         )
         if len(self._fired) > BALLS_KEPT:
             world.destroy(self._fired.pop(0))
+
+
+class WalkerSystem(System):
+    """Walks each character toward the next corner of WALK_LOOP, jumping every third second."""
+
+    def __init__(self) -> None:
+        super().__init__(reads=[Transform, CharacterController], writes=[CharacterController], name="walker")
+        self._corner = 1
+        self._clock = 0.0
+
+    def run(self, world: World, dt: float) -> None:
+        self._clock += dt
+        for batch in world.query(Transform, CharacterController):
+            walker, where = batch[CharacterController], batch[Transform].position
+            goal = np.array(WALK_LOOP[self._corner])
+            ahead = goal - where[:, [0, 2]]
+            if np.linalg.norm(ahead[0]) < 0.5:
+                self._corner = (self._corner + 1) % len(WALK_LOOP)
+            direction = ahead / np.maximum(np.linalg.norm(ahead, axis=1)[:, None], 1e-9)
+            walker.walk[:, 0], walker.walk[:, 2] = direction[:, 0] * WALK_SPEED, direction[:, 1] * WALK_SPEED
+            if self._clock >= 3.0:
+                walker.jump[:] = JUMP_SPEED
+                self._clock = 0.0

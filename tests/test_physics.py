@@ -192,6 +192,34 @@ def world_hash(world):
     return digest.hexdigest()
 
 
+_HASH_SCRIPT = """
+import sys
+sys.path.insert(0, {tests!r})
+from physics_world import simulate
+from test_physics import _pile, world_hash
+world, _ = simulate(_pile, 240, threads={threads})
+print(world_hash(world))
+"""
+
+
+@pytest.mark.parametrize("threads", [1, 4])
+def test_the_same_script_gives_the_same_world_in_another_process(threads):
+    """Across processes too, and with the library's threads at 1 or 4 (its job system's order
+    must not show in the result)."""
+    physics_plugin()
+    import subprocess
+
+    tests = str(Path(__file__).resolve().parent)
+    script = _HASH_SCRIPT.format(tests=tests, threads=threads)
+    runs = [
+        subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120) for _ in range(2)
+    ]
+    for run in runs:
+        assert run.returncode == 0, run.stderr
+    here, _ = simulate(_pile, 240)  # (2 threads)
+    assert runs[0].stdout.split()[-1] == runs[1].stdout.split()[-1] == world_hash(here)
+
+
 def test_the_same_script_gives_the_same_world_twice():
     first, _ = simulate(_pile, 240)
     second, _ = simulate(_pile, 240)

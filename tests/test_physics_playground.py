@@ -57,6 +57,10 @@ def test_the_playground_plays_itself():
         ends.append((t.position + up, t.position - up))
     gaps = [np.linalg.norm(ends[k][0] - ends[k - 1][1]) for k in range(1, CHAIN_LINKS)]
     assert max(gaps) < 0.05
+    from ecs_engine.components.physics import CharacterController
+
+    (walker,) = world.query(CharacterController).entities()
+    assert np.linalg.norm(world.get(walker, Transform).position[[0, 2]] - (-8.0, 4.0)) > 3.0  # it walked
     bottom = links[-1]  # it swings: away from the middle, or passing through it fast
     assert (
         abs(world.get(bottom, Transform).position[0] - 14.0) > 0.1

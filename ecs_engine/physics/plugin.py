@@ -16,7 +16,16 @@ import numpy as np
 
 from ..app.plugins import Plugin
 from ..components import AngularVelocity, Transform, Velocity
-from ..components.physics import DYNAMIC, KINEMATIC, Collider, Contact, Joint, RigidBody, Trigger
+from ..components.physics import (
+    DYNAMIC,
+    KINEMATIC,
+    CharacterController,
+    Collider,
+    Contact,
+    Joint,
+    RigidBody,
+    Trigger,
+)
 from ..ecs.schedule import System, any_with
 from ..jobs import JobPool
 from .contacts import send_contacts
@@ -48,10 +57,10 @@ class PhysicsSystem(System):
 
     def __init__(self) -> None:
         super().__init__(
-            reads=[Transform, RigidBody, Collider, Joint, Velocity, AngularVelocity],
-            writes=[Transform, Velocity, AngularVelocity, Contact, Trigger],
+            reads=[Transform, RigidBody, Collider, Joint, Velocity, AngularVelocity, CharacterController],
+            writes=[Transform, Velocity, AngularVelocity, CharacterController, Contact, Trigger],
             name="physics",
-            run_if=any_with(RigidBody),
+            run_if=any_with(RigidBody) | any_with(CharacterController),
         )
         self._plans: dict[int, _TablePlan] = {}  # by table id
 
@@ -82,7 +91,11 @@ class PhysicsSystem(System):
                 changed = np.any(wanted != physics.last_velocity(plan.entities, angular), axis=1)
                 for k in np.flatnonzero(changed).tolist():
                     physics.set_velocity(int(plan.entities[k]), wanted[k], angular)
+        if physics.characters.made:
+            physics.characters.move(world, physics.gravity[1], dt)
         physics.step(dt)
+        if physics.characters.made:
+            physics.characters.write_back(world)
         contacts = physics.contacts  # (unread, the library's buffer stays at its cap)
         if contacts in ("begin_end", "all") or (contacts == "triggers" and physics.bodies.sensors):
             start = time.perf_counter()

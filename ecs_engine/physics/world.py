@@ -14,6 +14,7 @@ import numpy as np
 from ..ecs.entities import INDEX_MASK
 from ..jobs import over_rows
 from .bodies import Bodies
+from .characters import Characters
 from .contacts import record_dtype
 from .library import load
 from .poses import copy_poses, copy_vectors
@@ -85,6 +86,8 @@ class PhysicsWorld:
         settings["num_threads"] = self.threads
         self.native = self.lib.PhysicsWorld(settings=settings)
         self.bodies = Bodies(self.lib, self.native)
+        self.characters = Characters(self.native)
+        self._seen = -1  # the world's structure version last matched
         self.contacts = contacts
         self.contact_dtype = record_dtype(bool(self.lib.USE_DOUBLE_PRECISION))
         self.pool: Any = None  # the world's JobPool (PhysicsSystem sets it): raycast spreads over it
@@ -93,9 +96,14 @@ class PhysicsWorld:
         self.events_ms = 0.0  # the last step's contact records read and sent as events
 
     def sync(self, world: Any) -> bool:
-        """The bodies matched against the world's entities (Bodies.sync): whether any was made or
-        destroyed (then the bodies' rows in the buffers moved)."""
-        return self.bodies.sync(world)
+        """The bodies and characters matched against the world's entities (Bodies.sync): whether
+        any body was made or destroyed (then the bodies' rows in the buffers moved)."""
+        if world.structure_version == self._seen:
+            return False
+        self._seen = world.structure_version
+        changed = self.bodies.sync(world)
+        self.characters.sync(world)
+        return changed
 
     # ------------------------------------------------------------------ the step
     def step(self, dt: float) -> None:
