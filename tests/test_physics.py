@@ -301,3 +301,34 @@ def test_the_physics_page_example_runs():
     (ball,) = [e for e in world.query(Velocity).entities()]
     x, y, _ = world.get(ball, Transform).position
     assert 0.5 < x < 1.6 and 0.4 < y < 5.0
+
+
+def test_a_shape_cast_and_overlaps_find_what_geometry_says():
+    from ecs_engine.components.physics import CAPSULE
+
+    made = {}
+
+    def setup(world, dt):
+        made["low"] = world.spawn(
+            Transform(position=(0.0, 1.0, 0.0)), RigidBody(kind=STATIC), Collider(shape=BOX, size=(1.0, 1.0, 1.0))
+        )
+        made["far"] = world.spawn(
+            Transform(position=(10.0, 1.0, 0.0)), RigidBody(kind=STATIC), Collider(shape=BOX, size=(1.0, 1.0, 1.0))
+        )
+
+    _, physics = simulate(setup, 1)
+    # a sphere of radius 0.5 dropped from y = 6 meets the box's top (y = 2) after 3.5 m
+    hit = physics.shapecast(SPHERE, 0.5, (0.0, 6.0, 0.0), (0.0, -10.0, 0.0))
+    assert hit is not None and hit.entity == made["low"]
+    assert hit.distance == pytest.approx(3.5, abs=0.02)
+    assert hit.normal[1] == pytest.approx(1.0, abs=1e-3) and hit.point[1] == pytest.approx(2.0, abs=0.02)
+    # a capsule swept sideways at y = 5 passes over both
+    assert physics.shapecast(CAPSULE, (0.3, 0.5, 0.3), (-5.0, 5.0, 0.0), (20.0, 0.0, 0.0)) is None
+    # ignoring the first box, the sweep along x meets the far one
+    along = physics.shapecast(BOX, (0.2, 0.2, 0.2), (-5.0, 1.0, 0.0), (20.0, 0.0, 0.0), ignore=made["low"])
+    assert along is not None and along.entity == made["far"] and along.distance == pytest.approx(13.8, abs=0.02)
+    assert list(physics.overlap_sphere((1.5, 1.0, 0.0), 0.6)) == [made["low"]]  # 0.5 from its side
+    assert list(physics.overlap_sphere((1.5, 3.0, 0.0), 0.6)) == []  # beyond its corner
+    assert list(physics.overlap_box((-20.0, 0.0, -1.0), (20.0, 0.5, 1.0))) == sorted([made["low"], made["far"]])
+    with pytest.raises(ValueError, match="size must be 3 positive"):
+        physics.shapecast(BOX, (0.0, 1.0, 1.0), (0.0, 0.0, 0.0), (1.0, 0.0, 0.0))

@@ -3,6 +3,7 @@ components (ecs_engine.components.physics), the PhysicsWorld resource, and Physi
 which steps it in the fixed stage and moves the bodies' Transforms in bulk."""
 
 from .plugin import PhysicsPlugin, PhysicsSystem
-from .world import PhysicsWorld, RayHits
+from .queries import RayHits, ShapeHit
+from .world import PhysicsWorld
 
-__all__ = ["PhysicsPlugin", "PhysicsSystem", "PhysicsWorld", "RayHits"]
+__all__ = ["PhysicsPlugin", "PhysicsSystem", "PhysicsWorld", "RayHits", "ShapeHit"]

@@ -15,7 +15,7 @@ from ..ecs.entities import INDEX_MASK
 from .joints import Joints
 
 MOTIONS = {DYNAMIC: "MOTION_DYNAMIC", KINEMATIC: "MOTION_KINEMATIC", STATIC: "MOTION_STATIC"}
-_SHAPES = {BOX: "SHAPE_BOX", SPHERE: "SHAPE_SPHERE", CAPSULE: "SHAPE_CAPSULE", CYLINDER: "SHAPE_CYLINDER"}
+SHAPES = {BOX: "SHAPE_BOX", SPHERE: "SHAPE_SPHERE", CAPSULE: "SHAPE_CAPSULE", CYLINDER: "SHAPE_CYLINDER"}
 
 
 class Bodies:
@@ -137,7 +137,7 @@ class Bodies:
                 pos=tuple(t.position[r].tolist()),
                 rot=tuple(t.rotation[r].tolist()),
                 size=extent,
-                shape=getattr(lib, _SHAPES[shape]),
+                shape=getattr(lib, SHAPES[shape]),
                 motion=getattr(lib, MOTIONS[kind]),
                 user_data=e,
                 is_sensor=bool(col.sensor[r]),

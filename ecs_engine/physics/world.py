@@ -6,18 +6,18 @@ from __future__ import annotations
 import math
 import os
 import time
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from ..ecs.entities import INDEX_MASK
-from ..jobs import over_rows
+from . import queries
 from .bodies import Bodies
 from .characters import Characters
 from .contacts import record_dtype
 from .library import load
 from .poses import copy_poses, copy_vectors
+from .queries import RayHits, ShapeHit
 
 # what becomes events: nothing; Trigger events only (the default: read only while a sensor exists);
 # Contact events too for bodies beginning and ending to touch; or every touching pair every step
@@ -26,30 +26,6 @@ from .poses import copy_poses, copy_vectors
 # about 10,000 records a step (measured): ~1 ms a step in a pile of 10,000 boxes, all of it
 # pairs that went on touching, so that beginnings past the cap are lost
 CONTACTS = ("none", "triggers", "begin_end", "all")
-RAY_CHUNK = 512  # rays per job when a batch is spread over the JobPool
-# a ray hit as the library packs it (48 bytes)
-_HIT = np.dtype(
-    [
-        ("handle", np.uint64),
-        ("fraction", np.float32),
-        ("normal", np.float32, 3),
-        ("point", np.float32, 3),
-        ("sub_shape", np.uint32),
-        ("material", np.uint32),
-        ("pad", np.uint32),
-    ]
-)
-
-
-@dataclass(frozen=True)
-class RayHits:
-    """Per ray: the `entity` hit first (-1: none), the `distance` along the ray, the hit `point`
-    and the surface `normal` there (NaN where nothing was hit)."""
-
-    entity: np.ndarray
-    distance: np.ndarray
-    point: np.ndarray
-    normal: np.ndarray
 
 
 class PhysicsWorld:
@@ -189,34 +165,26 @@ class PhysicsWorld:
         """The entity of a body handle (-1: none)."""
         return int(self.bodies.entities_of(np.array([handle], np.uint64))[0])
 
-    # ------------------------------------------------------------------ queries
+    # ------------------------------------------------------------------ queries (queries.py)
     def raycast(self, origins: Any, directions: Any, max_distance: float = 1000.0) -> RayHits:
         """Cast every ray (rows of `origins` and `directions`, which need not be unit length) in
         batches, spread over the world's JobPool when it has one (`pool`, which PhysicsSystem
         sets; the library casts without the GIL): the first body each one hits within
         `max_distance`."""
-        if not (math.isfinite(max_distance) and max_distance > 0.0):
-            raise ValueError(f"raycast: max_distance must be a positive finite number, got {max_distance!r}")
-        o = np.ascontiguousarray(np.asarray(origins, np.float64).reshape(-1, 3))
-        d = np.asarray(directions, np.float64).reshape(-1, 3)
-        if len(o) != len(d):
-            raise ValueError(f"raycast: {len(o)} origins but {len(d)} directions")
-        if not (np.isfinite(o).all() and np.isfinite(d).all()):
-            raise ValueError("raycast: origins and directions must be finite")
-        length = np.linalg.norm(d, axis=1)
-        if len(d) and length.min() == 0.0:
-            raise ValueError(f"raycast: direction {int(np.argmin(length))} has zero length")
-        unit = (d / length[:, None]).astype(np.float32) if len(d) else d.astype(np.float32)
-        starts, hits = o.astype(np.float32), np.empty(len(o), _HIT)
+        return queries.raycast(self, origins, directions, max_distance)
 
-        def cast(rows: slice) -> None:
-            raw = self.native.raycast_batch(starts[rows].ravel(), unit[rows].ravel(), float(max_distance))
-            hits[rows] = np.frombuffer(raw, _HIT)
+    def shapecast(
+        self, shape: int, size: Any, origin: Any, motion: Any, rotation: Any = (0.0, 0.0, 0.0, 1.0), ignore: int = -1
+    ) -> ShapeHit | None:
+        """Sweep a `shape` (BOX, SPHERE, CAPSULE, CYLINDER, sized as a Collider's) from `origin`
+        along `motion` (a vector: where it would end), turned by `rotation`: the first body it
+        touches (not `ignore`'s), or None."""
+        return queries.shapecast(self, shape, size, origin, motion, rotation, ignore)
 
-        over_rows(self.pool, len(o), cast, RAY_CHUNK)
-        entity = self.bodies.entities_of(hits["handle"])
-        hit = entity >= 0
-        distance = np.where(hit, hits["fraction"].astype(np.float64) * max_distance, np.nan)
-        point = np.where(hit[:, None], o + unit * distance[:, None], np.nan)
-        normal = np.where(hit[:, None], hits["normal"].astype(np.float64), np.nan)
-        return RayHits(entity, distance, point, normal)
+    def overlap_sphere(self, centre: Any, radius: float) -> np.ndarray:
+        """The entities whose bodies overlap a sphere (their exact shapes, not their bounds)."""
+        return queries.overlap_sphere(self, centre, radius)
+
+    def overlap_box(self, low: Any, high: Any) -> np.ndarray:
+        """The entities whose bodies' bounds overlap the axis-aligned box from `low` to `high`."""
+        return queries.overlap_box(self, low, high)

@@ -1,0 +1,140 @@
+"""The world's queries: rays in batches, shape casts and overlaps, answered as entities."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..components.physics import BOX, SHAPE_NAMES, SPHERE
+from ..jobs import over_rows
+
+RAY_CHUNK = 512  # rays per job when a batch is spread over the JobPool
+# a ray hit as the library packs it (48 bytes)
+_HIT = np.dtype(
+    [
+        ("handle", np.uint64),
+        ("fraction", np.float32),
+        ("normal", np.float32, 3),
+        ("point", np.float32, 3),
+        ("sub_shape", np.uint32),
+        ("material", np.uint32),
+        ("pad", np.uint32),
+    ]
+)
+
+
+@dataclass(frozen=True)
+class RayHits:
+    """Per ray: the `entity` hit first (-1: none), the `distance` along the ray, the hit `point`
+    and the surface `normal` there (NaN where nothing was hit)."""
+
+    entity: np.ndarray
+    distance: np.ndarray
+    point: np.ndarray
+    normal: np.ndarray
+
+
+@dataclass(frozen=True)
+class ShapeHit:
+    """What a shape cast touched first: the `entity`, the `distance` the shape moved before, the
+    contact `point` and the surface `normal` there."""
+
+    entity: int
+    distance: float
+    point: np.ndarray
+    normal: np.ndarray
+
+
+def raycast(physics: Any, origins: Any, directions: Any, max_distance: float) -> RayHits:
+    if not (math.isfinite(max_distance) and max_distance > 0.0):
+        raise ValueError(f"raycast: max_distance must be a positive finite number, got {max_distance!r}")
+    o = np.ascontiguousarray(np.asarray(origins, np.float64).reshape(-1, 3))
+    d = np.asarray(directions, np.float64).reshape(-1, 3)
+    if len(o) != len(d):
+        raise ValueError(f"raycast: {len(o)} origins but {len(d)} directions")
+    if not (np.isfinite(o).all() and np.isfinite(d).all()):
+        raise ValueError("raycast: origins and directions must be finite")
+    length = np.linalg.norm(d, axis=1)
+    if len(d) and length.min() == 0.0:
+        raise ValueError(f"raycast: direction {int(np.argmin(length))} has zero length")
+    unit = (d / length[:, None]).astype(np.float32) if len(d) else d.astype(np.float32)
+    starts, hits = o.astype(np.float32), np.empty(len(o), _HIT)
+
+    def cast(rows: slice) -> None:
+        raw = physics.native.raycast_batch(starts[rows].ravel(), unit[rows].ravel(), float(max_distance))
+        hits[rows] = np.frombuffer(raw, _HIT)
+
+    over_rows(physics.pool, len(o), cast, RAY_CHUNK)
+    entity = physics.bodies.entities_of(hits["handle"])
+    hit = entity >= 0
+    distance = np.where(hit, hits["fraction"].astype(np.float64) * max_distance, np.nan)
+    point = np.where(hit[:, None], o + unit * distance[:, None], np.nan)
+    normal = np.where(hit[:, None], hits["normal"].astype(np.float64), np.nan)
+    return RayHits(entity, distance, point, normal)
+
+
+def _vector(value: Any, name: str, what: str) -> tuple[float, ...]:
+    v = np.asarray(value, np.float64).reshape(-1)
+    if v.shape != (3,) or not np.isfinite(v).all():
+        raise ValueError(f"{what}: {name} must be 3 finite numbers, got {value!r}")
+    return tuple(v.tolist())
+
+
+def _extent(shape: int, size: Any, what: str) -> Any:
+    """A Collider's size as the library takes this shape's (bodies.py does the same)."""
+    s = np.broadcast_to(np.asarray(size, np.float64), (3,)) if np.ndim(size) == 0 else np.asarray(size, np.float64)
+    if shape not in SHAPE_NAMES:
+        raise ValueError(f"{what}: unknown shape {shape} (BOX, SPHERE, CAPSULE or CYLINDER)")
+    if s.shape != (3,) or not np.isfinite(s).all() or (s <= 0).any():
+        raise ValueError(f"{what}: size must be 3 positive finite numbers, got {size!r}")
+    if shape == BOX:
+        return tuple(s.tolist())
+    if shape == SPHERE:
+        return float(s[0])
+    return (float(s[1]), float(s[0]))
+
+
+def shapecast(
+    physics: Any, shape: int, size: Any, origin: Any, motion: Any, rotation: Any, ignore: int
+) -> ShapeHit | None:
+    from .bodies import SHAPES
+
+    extent = _extent(shape, size, "shapecast")
+    start, move = _vector(origin, "origin", "shapecast"), _vector(motion, "motion", "shapecast")
+    turn = np.asarray(rotation, np.float64).reshape(-1)
+    if turn.shape != (4,) or not np.isfinite(turn).all() or not np.linalg.norm(turn) > 0:
+        raise ValueError(f"shapecast: rotation must be a non-zero quaternion, got {rotation!r}")
+    skip = physics.bodies.handle_of(ignore) if ignore >= 0 else None
+    kind = getattr(physics.lib, SHAPES[shape])
+    found = physics.native.shapecast(
+        kind, start, tuple((turn / np.linalg.norm(turn)).tolist()), move, extent, skip or 0
+    )
+    if found is None:
+        return None
+    handle, fraction, point, normal = found
+    entity = int(physics.bodies.entities_of(np.array([handle], np.uint64))[0])
+    if entity < 0:
+        return None
+    return ShapeHit(entity, float(fraction) * math.dist(move, (0.0, 0.0, 0.0)), np.array(point), np.array(normal))
+
+
+def overlap_sphere(physics: Any, centre: Any, radius: float) -> np.ndarray:
+    if not (math.isfinite(radius) and radius > 0.0):
+        raise ValueError(f"overlap_sphere: radius must be a positive finite number, got {radius!r}")
+    found = physics.native.overlap_sphere(_vector(centre, "centre", "overlap_sphere"), float(radius))
+    return _ours(physics, found)
+
+
+def overlap_box(physics: Any, low: Any, high: Any) -> np.ndarray:
+    lo, hi = _vector(low, "low", "overlap_box"), _vector(high, "high", "overlap_box")
+    if any(a > b for a, b in zip(lo, hi)):
+        raise ValueError(f"overlap_box: low {lo} must not be above high {hi}")
+    return _ours(physics, physics.native.overlap_aabb(lo, hi))
+
+
+def _ours(physics: Any, handles: list[int]) -> np.ndarray:
+    entities = physics.bodies.entities_of(np.asarray(handles, np.uint64))
+    return np.sort(entities[entities >= 0])
