@@ -2,8 +2,8 @@
 components (ecs_engine.components.physics), the PhysicsWorld resource, and PhysicsPlugin,
 which steps it in the fixed stage and moves the bodies' Transforms in bulk."""
 
+from .physics_world import PhysicsWorld
 from .plugin import PhysicsPlugin, PhysicsSystem
 from .queries import RayHits, ShapeHit
-from .world import PhysicsWorld
 
 __all__ = ["PhysicsPlugin", "PhysicsSystem", "PhysicsWorld", "RayHits", "ShapeHit"]

@@ -29,7 +29,7 @@ from ..components.physics import (
 from ..ecs.schedule import System, any_with
 from ..jobs import JobPool
 from .contacts import send_contacts
-from .world import PhysicsWorld
+from .physics_world import PhysicsWorld
 
 # the rates a body shares with its components: (component, field, angular)
 _RATES = ((Velocity, "linear", False), (AngularVelocity, "angular", True))
