@@ -32,6 +32,8 @@ from typing import Any
 
 import numpy as np
 
+from .physics_libs import grid, tiles
+
 DT = 1.0 / 60.0
 ADDED_MAX = 0.10  # the engine may add at most 10% to the library's step at 10,000 bodies
 RAYS_MS_MAX = 1.0
@@ -51,19 +53,6 @@ def preflight(args: argparse.Namespace) -> None:
     if min(args.boxes, args.statics, args.steps) < 1 or (args.threads is not None and args.threads < 1):
         raise UsageError("--boxes, --statics, --steps and --threads must be at least 1")
     load()  # UsageError naming the extra
-
-
-def grid(n: int, spacing: float, y0: float) -> np.ndarray:
-    side = int(np.ceil(n ** (1 / 3)))
-    i = np.arange(n)
-    x, y, z = i % side, (i // side) % side, i // (side * side)
-    return np.stack([(x - side / 2) * spacing, y0 + y * spacing, (z - side / 2) * spacing], axis=1)
-
-
-def tiles(n: int) -> np.ndarray:
-    side = int(np.ceil(np.sqrt(n)))
-    i = np.arange(n)
-    return np.stack([(i % side) - side / 2, np.full(n, 0.5), (i // side) - side / 2], axis=1)
 
 
 def workload(statics: np.ndarray | None, dynamic: np.ndarray, sphere: bool, steps: int, threads: int) -> dict:

@@ -332,3 +332,15 @@ def test_a_shape_cast_and_overlaps_find_what_geometry_says():
     assert list(physics.overlap_box((-20.0, 0.0, -1.0), (20.0, 0.5, 1.0))) == sorted([made["low"], made["far"]])
     with pytest.raises(ValueError, match="size must be 3 positive"):
         physics.shapecast(BOX, (0.0, 1.0, 1.0), (0.0, 0.0, 0.0), (1.0, 0.0, 0.0))
+
+
+def test_bad_settings_are_refused_naming_them():
+    physics_plugin()
+    from ecs_engine.physics import PhysicsPlugin, PhysicsWorld
+
+    with pytest.raises(ValueError, match="gravity must be 3 finite numbers"):
+        PhysicsWorld(gravity=(0.0, math.nan, 0.0))
+    with pytest.raises(ValueError, match="contacts must be one of none, triggers, begin_end, all"):
+        PhysicsWorld(contacts="some")
+    with pytest.raises(TypeError, match="no setting gravitty"):
+        PhysicsPlugin(gravitty=(0.0, -1.0, 0.0))

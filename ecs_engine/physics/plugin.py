@@ -9,6 +9,7 @@ steps), their velocities into Velocity and AngularVelocity where they have them.
 
 from __future__ import annotations
 
+import inspect
 import time
 from typing import Any
 
@@ -31,6 +32,7 @@ from ..jobs import JobPool
 from .contacts import send_contacts
 from .physics_world import PhysicsWorld
 
+_SETTINGS = ", ".join(inspect.signature(PhysicsWorld).parameters)
 # the rates a body shares with its components: (component, field, angular)
 _RATES = ((Velocity, "linear", False), (AngularVelocity, "angular", True))
 
@@ -116,20 +118,17 @@ class PhysicsSystem(System):
 
 
 class PhysicsPlugin(Plugin):
-    """Rigid-body physics (the `physics` extra): a PhysicsWorld resource with `gravity`, the
-    library's `threads`, `max_bodies` and which `contacts` become events, stepped by
-    PhysicsSystem in the fixed stage. Without the library, adding the plugin is one UsageError
-    naming the extra to install."""
+    """Rigid-body physics (the `physics` extra): a PhysicsWorld resource made with `settings`
+    (PhysicsWorld's: `gravity`, the library's `threads`, `max_bodies`, which `contacts` become
+    events), stepped by PhysicsSystem in the fixed stage. Without the library, adding the plugin
+    is one UsageError naming the extra to install."""
 
-    def __init__(
-        self,
-        gravity: tuple[float, float, float] = (0.0, -9.81, 0.0),
-        threads: int | None = None,
-        max_bodies: int = 65_536,
-        contacts: str = "triggers",
-    ) -> None:
-        self.gravity, self.threads, self.max_bodies, self.contacts = gravity, threads, max_bodies, contacts
+    def __init__(self, **settings: Any) -> None:
+        unknown = sorted(set(settings) - set(inspect.signature(PhysicsWorld).parameters))
+        if unknown:
+            raise TypeError(f"PhysicsPlugin: no setting {', '.join(unknown)} (PhysicsWorld takes {_SETTINGS})")
+        self.settings = settings
 
     def build(self, app: Any) -> None:
-        app.insert_resource(PhysicsWorld(self.gravity, self.threads, self.max_bodies, self.contacts))
+        app.insert_resource(PhysicsWorld(**self.settings))
         app.add_systems("fixed", PhysicsSystem())
