@@ -30,7 +30,7 @@ test-slow: setup
 # or installed by pyenv; PYTHON=... to choose); in `make test` they are skipped on 3.11
 test-physics:
 	@bash scripts/bootstrap.sh --venv .venv-physics --min-python 3.12 --extras dev,physics
-	@run="$(HEADLESS).venv-physics/bin/python -m pytest tests/test_physics*.py tests/test_bench_physics.py $(PYTEST_ARGS)"; echo "$$run"; $$run
+	@run="$(HEADLESS).venv-physics/bin/python -m pytest tests/test_physics*.py tests/test_bench_physics.py tests/test_editor_physics.py $(PYTEST_ARGS)"; echo "$$run"; $$run
 
 demo: setup
 	.venv/bin/ecs-engine editor $(DEMO_ARGS)

@@ -344,3 +344,29 @@ def test_bad_settings_are_refused_naming_them():
         PhysicsWorld(contacts="some")
     with pytest.raises(TypeError, match="no setting gravitty"):
         PhysicsPlugin(gravitty=(0.0, -1.0, 0.0))
+
+
+def test_paused_bodies_stay_and_one_step_moves_them_once():
+    from ecs_engine import Time
+    from ecs_engine.physics import PhysicsWorld
+
+    made, seen = {}, []
+
+    def setup(world, dt):
+        made["ball"] = ball(world, 10.0)
+
+    def control(world, dt):  # (update: after the fixed step of this frame)
+        physics = world.resources[PhysicsWorld]
+        frame = world.resources[Time].steps
+        seen.append((frame, physics.steps, float(position(world, made["ball"])[1])))
+        physics.paused = frame >= 10
+        physics.step_once = frame == 20
+
+    app = App(title="pause").add_plugins(MinimalPlugins, physics_plugin())
+    app.add_startup_systems(setup)
+    app.add_systems("update", control)
+    app.run(frames=30)
+    at = {frame: (steps, y) for frame, steps, y in seen}
+    assert at[11][0] == at[20][0] == 10 and at[11][1] == at[20][1]  # paused: no step, no motion
+    assert at[21][0] == 11 and at[21][1] < at[20][1]  # one step, then paused again
+    assert at[30][0] == 11

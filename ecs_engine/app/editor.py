@@ -31,6 +31,7 @@ from .editor_history import History
 from .editor_layout import button_width, hint, push_label_room, radio_width, same_line_if_fits, wrapped_colored
 from .editor_lights import LIGHT_LABELS, LIGHT_SECTIONS, ShadowMapImages
 from .editor_materials import MESH_LABELS, MaterialsPanel, mesh_section
+from .editor_physics import PhysicsPanel
 from .editor_post import post_toggles
 from .editor_tree import HierarchyPanel
 from .editor_viewport import SceneWindow, scene_input
@@ -88,6 +89,7 @@ class Editor(BrowserPanel):
         self.tree = HierarchyPanel()
         self.files = FileMenu()
         self.scene = SceneWindow(imgui)  # the scene's window in the dock (editor_viewport.py)
+        self.physics = PhysicsPanel()  # while the world has physics (editor_physics.py)
         self.viewport: Any = None  # the renderer's EditorViewport (show_scene), None: no Scene window
         self.viewport_ui: Any = None  # (the ImGuiRenderer, a callable giving the window target)
 
@@ -155,6 +157,7 @@ class Editor(BrowserPanel):
             self.open_tab = None
             imgui.end_tab_bar()
         imgui.end()
+        self.physics.draw(imgui, world)
         self._scene_input(world)
 
     def _scene_input(self, world: World) -> None:

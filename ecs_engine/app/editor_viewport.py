@@ -99,11 +99,12 @@ def scene_input(editor: Any, world: Any) -> None:
     else:
         scene.rect, scene.hovered = None, False
     try:
+        inside = scene.rect is not None  # drawn over the image, clipped to the window
+        rect = scene.rect if inside else (0.0, 0.0, width, height)
+        editor.physics.draw_colliders(imgui, world, rect, imgui.get_window_draw_list() if inside else None)
         eid = editor.selected
         editor.gizmo.used = False
         if eid is not None and world.is_alive(eid) and world.has(eid, Transform):
-            inside = scene.rect is not None  # drawn over the image, clipped to the window
-            rect = scene.rect if inside else (0.0, 0.0, width, height)
             drawlist = imgui.get_window_draw_list() if inside else None
             editor.gizmo.draw(world, eid, editor.history, rect, drawlist)
     finally:

@@ -67,6 +67,8 @@ class PhysicsWorld:
         self.contacts = contacts
         self.contact_dtype = record_dtype(bool(self.lib.USE_DOUBLE_PRECISION))
         self.pool: Any = None  # the world's JobPool (PhysicsSystem sets it): raycast spreads over it
+        self.paused = False  # PhysicsSystem does nothing (the editor's Physics window sets it)
+        self.step_once = False  # paused: the next fixed step runs once all the same
         self.steps = 0
         self.step_ms = 0.0  # the library's last step
         self.events_ms = 0.0  # the last step's contact records read and sent as events

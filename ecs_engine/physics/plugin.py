@@ -77,6 +77,10 @@ class PhysicsSystem(System):
 
     def run(self, world: Any, dt: float) -> None:
         physics = world.resources[PhysicsWorld]
+        if physics.paused:
+            if not physics.step_once:
+                return
+            physics.step_once = False
         physics.pool = world.resources.get(JobPool)
         if physics.sync(world):
             self._plans.clear()
