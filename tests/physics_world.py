@@ -16,7 +16,7 @@ def physics_plugin(**kw):
     pytest.importorskip("culverin", reason="the physics extra (CPython 3.12+): make test-physics")
     from ecs_engine.physics import PhysicsPlugin
 
-    return PhysicsPlugin(threads=2, **kw)
+    return PhysicsPlugin(**{"threads": 2, **kw})
 
 
 def simulate(setup, frames, **kw):
