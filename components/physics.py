@@ -18,7 +18,12 @@ from .transform import LIMIT
 DYNAMIC, KINEMATIC, STATIC = 0, 1, 2
 # Collider.shape: what its `size` holds
 BOX, SPHERE, CAPSULE, CYLINDER = 0, 1, 2, 3  # half extents (x, y, z); (radius,); (radius, half height)
-SHAPE_NAMES = {BOX: "box", SPHERE: "sphere", CAPSULE: "capsule", CYLINDER: "cylinder"}
+# the entity's Mesh (its vertices scaled by the Transform's scale) wrapped in its convex hull, or
+# its triangles as they are (static bodies only); `size` is not used
+CONVEX_HULL, MESH = 4, 5
+SHAPE_NAMES = {BOX: "box", SPHERE: "sphere", CAPSULE: "capsule", CYLINDER: "cylinder", CONVEX_HULL: "convex hull"}
+SHAPE_NAMES[MESH] = "mesh"
+PRIMITIVES = (BOX, SPHERE, CAPSULE, CYLINDER)  # the shapes `size` describes
 # RigidBody.locked: the axes a body may not move or turn along (world axes; a mask of these)
 LOCK_X, LOCK_Y, LOCK_Z, LOCK_ROTATE_X, LOCK_ROTATE_Y, LOCK_ROTATE_Z = 1, 2, 4, 8, 16, 32
 LOCK_ROTATION = LOCK_ROTATE_X | LOCK_ROTATE_Y | LOCK_ROTATE_Z
@@ -37,12 +42,13 @@ class RigidBody(Component):
 
 
 class Collider(Component):
-    """The body's shape: `shape` (BOX, SPHERE, CAPSULE, CYLINDER) and its `size` (see the
-    constants; the unused entries are ignored); `friction` and `restitution` (0: no bounce, 1:
-    elastic); collision filtering by `category` and `mask` bits (two bodies touch when each one's
-    category is in the other's mask); `sensor`: it reports what enters it and pushes nothing."""
+    """The body's shape: `shape` (BOX, SPHERE, CAPSULE, CYLINDER) with its `size` (see the
+    constants; the unused entries are ignored), or CONVEX_HULL or MESH of the entity's Mesh;
+    `friction` and `restitution` (0: no bounce, 1: elastic); collision filtering by `category`
+    and `mask` bits (two bodies touch when each one's category is in the other's mask);
+    `sensor`: it reports what enters it and pushes nothing."""
 
-    shape = Field(np.uint8, default=BOX, maximum=CYLINDER)
+    shape = Field(np.uint8, default=BOX, maximum=MESH)
     size = Field(np.float64, (3,), default=(0.5, 0.5, 0.5), finite=True, minimum=0.0, min_exclusive=True, maximum=LIMIT)
     friction = Field(np.float64, default=0.5, finite=True, minimum=0.0, maximum=LIMIT)
     restitution = Field(np.float64, default=0.0, finite=True, minimum=0.0, maximum=1.0)

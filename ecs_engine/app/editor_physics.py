@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from ..components import Camera, Transform, active_camera
-from ..components.physics import BOX, SPHERE, Collider
+from ..components.physics import BOX, PRIMITIVES, SPHERE, Collider
 from ..maths.camera import rotation_matrix
 from .editor_gizmo import gl_projection
 
@@ -101,8 +101,9 @@ class PhysicsPanel:
             return 0
         eye = world.get(cam, Transform)
         parts = [
-            (b[Transform].position, b[Transform].rotation, b[Collider].shape, b[Collider].size)
+            (b[Transform].position[keep], b[Transform].rotation[keep], b[Collider].shape[keep], b[Collider].size[keep])
             for b in world.query(Transform, Collider, write=())
+            for keep in [np.isin(b[Collider].shape, PRIMITIVES)]  # (a mesh's shape is drawn already)
         ]
         if not parts:
             return 0

@@ -10,9 +10,22 @@ from typing import Any
 import numpy as np
 
 from ..components import AngularVelocity, Transform, Velocity
-from ..components.physics import BOX, CAPSULE, CYLINDER, DYNAMIC, KINEMATIC, SPHERE, STATIC, Collider, RigidBody
+from ..components.physics import (
+    BOX,
+    CAPSULE,
+    CONVEX_HULL,
+    CYLINDER,
+    DYNAMIC,
+    KINEMATIC,
+    MESH,
+    SPHERE,
+    STATIC,
+    Collider,
+    RigidBody,
+)
 from ..ecs.entities import INDEX_MASK
 from .joints import Joints
+from .mesh_shapes import make_from_mesh
 
 MOTIONS = {DYNAMIC: "MOTION_DYNAMIC", KINEMATIC: "MOTION_KINEMATIC", STATIC: "MOTION_STATIC"}
 SHAPES = {BOX: "SHAPE_BOX", SPHERE: "SHAPE_SPHERE", CAPSULE: "SHAPE_CAPSULE", CYLINDER: "SHAPE_CYLINDER"}
@@ -126,6 +139,10 @@ class Bodies:
         for r in rows.tolist():
             e = int(batch.entities[r])
             shape, size = int(col.shape[r]), col.size[r]
+            if shape in (CONVEX_HULL, MESH):
+                h = make_from_mesh(world, lib, self.native, MOTIONS, e, shape, body, col, t, r)
+                self._made(world, e, h, int(body.kind[r]), bool(col.sensor[r]), moving, turning)
+                continue
             if shape == BOX:
                 extent: Any = tuple(size.tolist())
             elif shape == SPHERE:
@@ -149,18 +166,22 @@ class Bodies:
                 ccd=bool(body.ccd[r]),
                 allowed_dofs=(63 & ~locked) if locked else 0,
             )
-            slot = e & INDEX_MASK
-            self.owner[slot], self.handle[slot], self.kind[slot] = e, h, kind
-            self.sensor[slot] = bool(col.sensor[r])
-            velocity = world.get(e, Velocity).linear if moving else np.zeros(3)
-            if velocity.any():
-                self.native.set_linear_velocity(h, *velocity.tolist())
-            self.velocity[slot] = velocity
-            spin = world.get(e, AngularVelocity).angular if turning else np.zeros(3)
-            if spin.any():
-                self.native.set_angular_velocity(h, *spin.tolist())
-            self.angular[slot] = spin
+            self._made(world, e, h, kind, bool(col.sensor[r]), moving, turning)
         return len(rows)
+
+    def _made(self, world: Any, e: int, h: int, kind: int, sensor: bool, moving: bool, turning: bool) -> None:
+        """Entity `e`'s new body `h` recorded, given its Velocity and AngularVelocity."""
+        slot = e & INDEX_MASK
+        self.owner[slot], self.handle[slot], self.kind[slot] = e, h, kind
+        self.sensor[slot] = sensor
+        velocity = world.get(e, Velocity).linear if moving else np.zeros(3)
+        if velocity.any():
+            self.native.set_linear_velocity(h, *velocity.tolist())
+        self.velocity[slot] = velocity
+        spin = world.get(e, AngularVelocity).angular if turning else np.zeros(3)
+        if spin.any():
+            self.native.set_angular_velocity(h, *spin.tolist())
+        self.angular[slot] = spin
 
     def follow_kinds(self, entities: np.ndarray, kinds: np.ndarray) -> None:
         """Bodies whose RigidBody.kind a system changed take their new motion."""

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..app.plugins import Plugin
-from ..components import AngularVelocity, Transform, Velocity
+from ..components import AngularVelocity, Mesh, Transform, Velocity
 from ..components.physics import (
     DYNAMIC,
     KINEMATIC,
@@ -59,7 +59,7 @@ class PhysicsSystem(System):
 
     def __init__(self) -> None:
         super().__init__(
-            reads=[Transform, RigidBody, Collider, Joint, Velocity, AngularVelocity, CharacterController],
+            reads=[Transform, RigidBody, Collider, Joint, Mesh, Velocity, AngularVelocity, CharacterController],
             writes=[Transform, Velocity, AngularVelocity, CharacterController, Contact, Trigger],
             name="physics",
             run_if=any_with(RigidBody) | any_with(CharacterController),

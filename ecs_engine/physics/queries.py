@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from ..components.physics import BOX, SHAPE_NAMES, SPHERE
+from ..components.physics import BOX, PRIMITIVES, SPHERE
 from ..jobs import over_rows
 
 RAY_CHUNK = 512  # rays per job when a batch is spread over the JobPool
@@ -86,8 +86,8 @@ def _vector(value: Any, name: str, what: str) -> tuple[float, ...]:
 def _extent(shape: int, size: Any, what: str) -> Any:
     """A Collider's size as the library takes this shape's (bodies.py does the same)."""
     s = np.broadcast_to(np.asarray(size, np.float64), (3,)) if np.ndim(size) == 0 else np.asarray(size, np.float64)
-    if shape not in SHAPE_NAMES:
-        raise ValueError(f"{what}: unknown shape {shape} (BOX, SPHERE, CAPSULE or CYLINDER)")
+    if shape not in PRIMITIVES:
+        raise ValueError(f"{what}: shape must be BOX, SPHERE, CAPSULE or CYLINDER, got {shape}")
     if s.shape != (3,) or not np.isfinite(s).all() or (s <= 0).any():
         raise ValueError(f"{what}: size must be 3 positive finite numbers, got {size!r}")
     if shape == BOX:
