@@ -21,8 +21,9 @@ BOX, SPHERE, CAPSULE, CYLINDER = 0, 1, 2, 3  # half extents (x, y, z); (radius,)
 # the entity's Mesh (its vertices scaled by the Transform's scale) wrapped in its convex hull, or
 # its triangles as they are (static bodies only); `size` is not used
 CONVEX_HULL, MESH = 4, 5
+HEIGHT_FIELD = 6  # the entity's HeightField (static bodies only); `size` is not used
 SHAPE_NAMES = {BOX: "box", SPHERE: "sphere", CAPSULE: "capsule", CYLINDER: "cylinder", CONVEX_HULL: "convex hull"}
-SHAPE_NAMES[MESH] = "mesh"
+SHAPE_NAMES.update({MESH: "mesh", HEIGHT_FIELD: "height field"})
 PRIMITIVES = (BOX, SPHERE, CAPSULE, CYLINDER)  # the shapes `size` describes
 # RigidBody.locked: the axes a body may not move or turn along (world axes; a mask of these)
 LOCK_X, LOCK_Y, LOCK_Z, LOCK_ROTATE_X, LOCK_ROTATE_Y, LOCK_ROTATE_Z = 1, 2, 4, 8, 16, 32
@@ -43,18 +44,28 @@ class RigidBody(Component):
 
 class Collider(Component):
     """The body's shape: `shape` (BOX, SPHERE, CAPSULE, CYLINDER) with its `size` (see the
-    constants; the unused entries are ignored), or CONVEX_HULL or MESH of the entity's Mesh;
+    constants; the unused entries are ignored), CONVEX_HULL or MESH of the entity's Mesh, or
+    HEIGHT_FIELD of its HeightField;
     `friction` and `restitution` (0: no bounce, 1: elastic); collision filtering by `category`
     and `mask` bits (two bodies touch when each one's category is in the other's mask);
     `sensor`: it reports what enters it and pushes nothing."""
 
-    shape = Field(np.uint8, default=BOX, maximum=MESH)
+    shape = Field(np.uint8, default=BOX, maximum=HEIGHT_FIELD)
     size = Field(np.float64, (3,), default=(0.5, 0.5, 0.5), finite=True, minimum=0.0, min_exclusive=True, maximum=LIMIT)
     friction = Field(np.float64, default=0.5, finite=True, minimum=0.0, maximum=LIMIT)
     restitution = Field(np.float64, default=0.0, finite=True, minimum=0.0, maximum=1.0)
     category = Field(np.uint16, default=0xFFFF)
     mask = Field(np.uint16, default=0xFFFF)
     sensor = Field(np.bool_, default=False)
+
+
+class HeightField(Component):
+    """Terrain for a static body whose Collider.shape is HEIGHT_FIELD: `heights` (m), a square
+    grid of n x n samples (n of 2 or more), row by row along +z, each row along +x, `spacing`
+    (m) apart; the entity's Transform.position is the grid's first corner."""
+
+    heights = Field(object)
+    spacing = Field(np.float64, default=1.0, finite=True, minimum=0.0, min_exclusive=True, maximum=LIMIT)
 
 
 # Contact.phase

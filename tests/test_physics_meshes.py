@@ -8,7 +8,7 @@ from physics_world import ball, physics_plugin, position
 
 from ecs_engine import App, MinimalPlugins
 from ecs_engine.components import Mesh, Transform
-from ecs_engine.components.physics import CONVEX_HULL, DYNAMIC, MESH, STATIC, Collider, RigidBody
+from ecs_engine.components.physics import CONVEX_HULL, DYNAMIC, MESH, SPHERE, STATIC, Collider, RigidBody
 
 
 def run(setup, frames=120):
@@ -71,3 +71,32 @@ def test_a_mesh_collider_that_cannot_be_made_is_one_error(kind, with_mesh, says,
     assert stop.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and says in err[0] and "entity " in err[0]
+
+
+def test_balls_rest_on_a_height_field_at_its_height():
+    import numpy as np
+
+    from ecs_engine.components.physics import HEIGHT_FIELD, HeightField
+
+    n, spacing = 17, 0.5
+    x = np.arange(n) * spacing
+    heights = np.tile(0.25 * x, (n, 1))  # rows along z, each rising along x: a 14 degree slope
+    heights[:, :4] = 0.0  # a flat strip at x < 1.5 where a ball can rest
+    made = {}
+
+    def setup(world, dt):
+        world.spawn(
+            Transform(position=(0.0, 0.0, 0.0)),
+            RigidBody(kind=STATIC),
+            Collider(shape=HEIGHT_FIELD, friction=1.0),
+            HeightField(heights=heights, spacing=spacing),
+        )
+        for name, x in (("flat", 0.7), ("hill", 6.0)):  # (z = 4: inside the grid, 8 m square)
+            made[name] = world.spawn(Transform(position=(x, 4.0, 4.0)), RigidBody(), Collider(shape=SPHERE))
+
+    world, _ = run(setup, 150)
+    flat = position(world, made["flat"])
+    assert flat[1] == pytest.approx(0.5, abs=0.03) and flat[0] == pytest.approx(0.7, abs=0.05)
+    hill = position(world, made["hill"])
+    assert hill[0] < 6.0  # it rolled down the slope, staying on the terrain's surface
+    assert hill[1] == pytest.approx(0.25 * max(hill[0], 1.5) + 0.5 / np.cos(np.arctan(0.25)), abs=0.1)

@@ -16,6 +16,7 @@ from ..components.physics import (
     CONVEX_HULL,
     CYLINDER,
     DYNAMIC,
+    HEIGHT_FIELD,
     KINEMATIC,
     MESH,
     SPHERE,
@@ -139,7 +140,7 @@ class Bodies:
         for r in rows.tolist():
             e = int(batch.entities[r])
             shape, size = int(col.shape[r]), col.size[r]
-            if shape in (CONVEX_HULL, MESH):
+            if shape in (CONVEX_HULL, MESH, HEIGHT_FIELD):
                 h = make_from_mesh(world, lib, self.native, MOTIONS, e, shape, body, col, t, r)
                 self._made(world, e, h, int(body.kind[r]), bool(col.sensor[r]), moving, turning)
                 continue

@@ -1,5 +1,6 @@
-"""Bodies shaped by the entity's own Mesh: its convex hull (any motion) or its triangles
-(static only), the mesh's vertices scaled by the entity's Transform.scale, as it is drawn."""
+"""Bodies shaped by the entity's own data: its Mesh's convex hull (any motion) or triangles
+(static only), the mesh's vertices scaled by the entity's Transform.scale as it is drawn; or its
+HeightField (static only)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from ..components import Mesh
-from ..components.physics import MESH, SHAPE_NAMES, STATIC
+from ..components.physics import HEIGHT_FIELD, MESH, SHAPE_NAMES, STATIC, HeightField
 from ..errors import UsageError
 
 
@@ -20,6 +21,8 @@ def make_from_mesh(
     from ..render.assets.meshes import Meshes  # (numpy only: no GPU)
 
     name = SHAPE_NAMES[shape]
+    if shape == HEIGHT_FIELD:
+        return _height_field(world, native, e, body, col, t, r)
     meshes = world.resources.get(Meshes)
     if meshes is None or not world.has(e, Mesh):
         raise UsageError(f"entity {e}: a {name} Collider takes its shape from the entity's Mesh, and it has none")
@@ -54,5 +57,35 @@ def make_from_mesh(
             ccd=bool(body.ccd[r]),
             **place,
             **filters,
+        )
+    )
+
+
+def _height_field(world: Any, native: Any, e: int, body: Any, col: Any, t: Any, r: int) -> int:
+    if int(body.kind[r]) != STATIC:
+        raise UsageError(f"entity {e}: a height field Collider is for static bodies (RigidBody.kind STATIC)")
+    if not world.has(e, HeightField):
+        raise UsageError(
+            f"entity {e}: a height field Collider takes its heights from the entity's HeightField, and it has none"
+        )
+    field = world.get(e, HeightField)
+    heights = np.asarray(field.heights, np.float64) if field.heights is not None else np.zeros((0, 0))
+    if heights.ndim != 2 or heights.shape[0] != heights.shape[1] or heights.shape[0] < 2:
+        raise UsageError(f"entity {e}: HeightField.heights must be a square grid of 2 x 2 or more, got {heights.shape}")
+    if not np.isfinite(heights).all():
+        raise UsageError(f"entity {e}: HeightField.heights must be finite")
+    spacing = float(field.spacing)
+    return int(
+        native.create_heightfield(
+            pos=tuple(t.position[r].tolist()),
+            rot=tuple(t.rotation[r].tolist()),
+            scale=(spacing, 1.0, spacing),
+            heights=np.ascontiguousarray(heights, np.float32).ravel(),
+            grid_size=len(heights),
+            user_data=e,
+            category=int(col.category[r]),
+            mask=int(col.mask[r]),
+            friction=float(col.friction[r]),
+            restitution=float(col.restitution[r]),
         )
     )

@@ -23,6 +23,7 @@ from ..components.physics import (
     CharacterController,
     Collider,
     Contact,
+    HeightField,
     Joint,
     RigidBody,
     Trigger,
@@ -59,7 +60,17 @@ class PhysicsSystem(System):
 
     def __init__(self) -> None:
         super().__init__(
-            reads=[Transform, RigidBody, Collider, Joint, Mesh, Velocity, AngularVelocity, CharacterController],
+            reads=[
+                Transform,
+                RigidBody,
+                Collider,
+                Joint,
+                Mesh,
+                HeightField,
+                Velocity,
+                AngularVelocity,
+                CharacterController,
+            ],
             writes=[Transform, Velocity, AngularVelocity, CharacterController, Contact, Trigger],
             name="physics",
             run_if=any_with(RigidBody) | any_with(CharacterController),
