@@ -370,3 +370,33 @@ def test_paused_bodies_stay_and_one_step_moves_them_once():
     assert at[11][0] == at[20][0] == 10 and at[11][1] == at[20][1]  # paused: no step, no motion
     assert at[21][0] == 11 and at[21][1] < at[20][1]  # one step, then paused again
     assert at[30][0] == 11
+
+
+def test_a_body_a_system_moves_is_put_there_and_goes_on_from_there():
+    """Writing a dynamic body's Transform teleports it (a game wrapping a field, a respawn):
+    it falls on from where it was put, its velocity kept."""
+    from ecs_engine import Time
+
+    made, seen = {}, {}
+
+    def setup(world, dt):
+        made["ball"] = ball(world, 50.0, v=Velocity(linear=(2.0, 0.0, 0.0)))
+
+    def wrap(world, dt):  # (update: after the step)
+        frame = world.resources[Time].steps
+        if frame == 30:
+            seen["before"] = world.get(made["ball"], Velocity).linear.copy()
+            world.set(made["ball"], Transform(position=(-20.0, 40.0, 5.0)))
+        if frame == 31:
+            seen["after"] = position(world, made["ball"]).copy(), world.get(made["ball"], Velocity).linear.copy()
+
+    app = App(title="teleport").add_plugins(MinimalPlugins, physics_plugin())
+    app.add_startup_systems(setup)
+    app.add_systems("update", wrap)
+    app.run(frames=40)
+    where, velocity = seen["after"]
+    step = 1 / 60
+    assert where[0] == pytest.approx(-20.0 + 2.0 * step, abs=0.01)  # one step from where it was put
+    assert where[1] == pytest.approx(40.0 + seen["before"][1] * step, abs=0.02)
+    assert where[2] == pytest.approx(5.0, abs=1e-6)
+    assert velocity[1] == pytest.approx(seen["before"][1] - G * step, abs=0.05)  # still falling as fast

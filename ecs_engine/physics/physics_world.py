@@ -145,6 +145,19 @@ class PhysicsWorld:
         for h, p, q in zip(handles, transform.position[rows].tolist(), transform.rotation[rows].tolist()):
             put(h, tuple(p), tuple(q))
 
+    def follow_moved(self, rows: np.ndarray, entities: np.ndarray, transform: Any, into: np.ndarray) -> None:
+        """Bodies (at `rows`, of `entities`) whose Transform (`transform`'s rows `into`) a system
+        changed since the last step wrote it are put there (teleported, their velocity kept)."""
+        positions, rotations, _, _ = self.buffers()
+        where, turn = transform.position[into], transform.rotation[into]
+        were = positions[rows, :3]
+        was = rotations[rows].astype(np.float64)
+        was /= np.sqrt(np.einsum("ij,ij->i", was, was))[:, None]
+        moved = np.any(where != were, axis=1) | np.any(np.abs(turn - was) > 1e-6, axis=1)
+        put = self.native.set_transform
+        for k in np.flatnonzero(moved).tolist():
+            put(int(self.bodies.handle[entities[k] & INDEX_MASK]), tuple(where[k].tolist()), tuple(turn[k].tolist()))
+
     def last_velocity(self, entities: np.ndarray, angular: bool = False) -> np.ndarray:
         """The linear (or `angular`) velocity last written into, or taken from, the Velocity (or
         AngularVelocity) of `entities`."""

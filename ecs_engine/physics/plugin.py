@@ -38,12 +38,20 @@ _SETTINGS = ", ".join(inspect.signature(PhysicsWorld).parameters)
 _RATES = ((Velocity, "linear", False), (AngularVelocity, "angular", True))
 
 
+def _ticks(table: Any) -> tuple[int, int]:
+    """The write ticks of a table's Transform position and rotation columns."""
+    ticks = table.column_ticks
+    return ticks[(Transform, "position")], ticks[(Transform, "rotation")]
+
+
 class _TablePlan:
     """What a step does with one table of bodies, kept while the world's structure, the bodies'
     rows in the library and the table's RigidBody.kind column stand: its dynamic rows, their
-    entities and rows in the library's buffers, its kinematic rows."""
+    entities and rows in the library's buffers, its kinematic rows, and the Transform columns'
+    write ticks after the last step wrote them (`written`: another tick since, a system moved
+    some body)."""
 
-    __slots__ = ("dynamic", "entities", "key", "kinematic", "rows")
+    __slots__ = ("dynamic", "entities", "key", "kinematic", "rows", "written")
 
     def __init__(self, key: tuple, batch: Any, physics: PhysicsWorld) -> None:
         kinds = batch[RigidBody].kind
@@ -53,6 +61,7 @@ class _TablePlan:
         self.entities = batch.entities[dynamic]
         self.rows = physics.rows(self.entities)
         self.kinematic = np.flatnonzero(kinds == KINEMATIC)
+        self.written: tuple[int, int] | None = None
 
 
 class PhysicsSystem(System):
@@ -101,6 +110,8 @@ class PhysicsSystem(System):
             plans.append(plan)
             if len(plan.kinematic):  # moved by the game: the bodies follow their Transform
                 physics.place(batch.entities[plan.kinematic], batch[Transform], plan.kinematic)
+            if plan.written is not None and plan.written != _ticks(batch.table) and len(plan.rows):
+                physics.follow_moved(plan.rows, plan.entities, batch[Transform], plan.dynamic)  # teleported
         for kind, field, angular in _RATES:  # rates set by a system since the last step
             for batch in world.query(kind, RigidBody, Collider, with_=(Transform,), write=()):
                 plan = self._plans[batch.table.id]
@@ -124,6 +135,7 @@ class PhysicsSystem(System):
             if len(plan.rows):
                 t = batch[Transform]
                 physics.write_poses(plan.rows, plan.dynamic, t.position, t.rotation)
+                plan.written = _ticks(batch.table)
         for kind, field, angular in _RATES:
             for batch in world.query(kind, RigidBody, Collider, with_=(Transform,)):
                 plan = self._plans[batch.table.id]
