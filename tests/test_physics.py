@@ -400,3 +400,29 @@ def test_a_body_a_system_moves_is_put_there_and_goes_on_from_there():
     assert where[1] == pytest.approx(40.0 + seen["before"][1] * step, abs=0.02)
     assert where[2] == pytest.approx(5.0, abs=1e-6)
     assert velocity[1] == pytest.approx(seen["before"][1] - G * step, abs=0.05)  # still falling as fast
+
+
+def test_a_body_with_a_parent_is_one_error_and_a_body_s_children_follow_it(capsys):
+    from ecs_engine.components import Parent, WorldMatrix
+
+    made = {}
+
+    def setup(world, dt):
+        made["ball"] = ball(world, 5.0)
+        made["badge"] = world.spawn(Transform(position=(0.0, 1.0, 0.0)), Parent(entity=made["ball"]))
+
+    world, _ = simulate(setup, 30)
+    fallen = position(world, made["ball"])
+    assert fallen[1] < 5.0
+    # the child is drawn 1 m above wherever its body went (its world matrix, from the hierarchy)
+    matrix = world.get(made["badge"], WorldMatrix).matrix
+    assert matrix[1, 3] == pytest.approx(fallen[1] + 1.0, abs=0.05)
+
+    def orphan(world, dt):
+        root = world.spawn(Transform())
+        world.spawn(Transform(), RigidBody(), Collider(), Parent(entity=root))
+
+    with pytest.raises(SystemExit) as stop:
+        simulate(orphan, 2)
+    assert stop.value.code == 2
+    assert "cannot have a Parent" in capsys.readouterr().err

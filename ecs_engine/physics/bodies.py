@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from ..components import AngularVelocity, Transform, Velocity
+from ..components import AngularVelocity, Parent, Transform, Velocity
 from ..components.physics import (
     BOX,
     CAPSULE,
@@ -25,6 +25,7 @@ from ..components.physics import (
     RigidBody,
 )
 from ..ecs.entities import INDEX_MASK
+from ..errors import UsageError
 from .joints import Joints
 from .mesh_shapes import make_from_mesh
 
@@ -87,6 +88,11 @@ class Bodies:
         if version == self._seen:
             return False
         self._seen = version
+        for batch in world.query(Transform, RigidBody, Collider, with_=(Parent,), write=()):
+            raise UsageError(
+                f"entity {int(batch.entities[0])}: a body moves in world space and cannot have a Parent "
+                "(make the body the parent: its children follow it)"
+            )
         batches = list(world.query(Transform, RigidBody, Collider, write=()))
         present = np.concatenate([b.entities for b in batches]) if batches else np.empty(0, np.int64)
         self._grow(int((present & INDEX_MASK).max()) + 1 if len(present) else 0)
