@@ -108,13 +108,17 @@ class Joint(Component):
     `pivot`, within `limits` in metres from where it started) or DISTANCE (their centres kept
     within `limits` metres apart; infinite limits: at the distance they start at). `pivot` and
     `axis` are in world space at the moment the joint is made; the bodies joined do not collide
-    with each other only if their colliders' category and mask say so."""
+    with each other only if their colliders' category and mask say so. A hinge or slider with a
+    finite `target` has a motor driving it there (radians from where it was made, or metres
+    along the axis), with at most `strength` (N m or N); a system may move the target."""
 
     kind = Field(np.uint8, default=HINGE, maximum=DISTANCE)
     other = Field(np.int64, default=-1, entity=True)
     pivot = Field(np.float64, (3,), default=(0.0, 0.0, 0.0), finite=True, minimum=-LIMIT, maximum=LIMIT)
     axis = Field(np.float64, (3,), default=(0.0, 1.0, 0.0), finite=True, unit=True)
     limits = Field(np.float64, (2,), default=(-np.inf, np.inf))
+    target = Field(np.float64, default=np.nan)
+    strength = Field(np.float64, default=1000.0, finite=True, minimum=0.0, min_exclusive=True, maximum=LIMIT)
 
 
 class CharacterController(Component):

@@ -118,3 +118,47 @@ def test_a_joint_to_an_entity_without_a_body_is_one_error_naming_them():
     with pytest.raises(SystemExit) as stop:
         app.run(frames=2)
     assert stop.value.code == 2
+
+
+def test_a_motor_turns_a_hinge_to_its_target_and_follows_a_new_one():
+    from ecs_engine import Time
+
+    made, angles = {}, {}
+
+    def setup(world, dt):
+        made["post"] = anchor(world, (0.0, 1.0, 0.0))
+        made["door"] = world.spawn(
+            Transform(position=(1.2, 1.0, 0.0)), RigidBody(), Collider(shape=BOX, size=(1.0, 1.0, 0.05), **NO_TOUCH),
+            Joint(kind=HINGE, other=made["post"], pivot=(0.0, 1.0, 0.0), axis=(0.0, 1.0, 0.0), target=0.8),
+        )  # fmt: skip
+
+    def turn(world, dt):
+        frame = world.resources[Time].steps
+        q = world.get(made["door"], Transform).rotation
+        angles[frame] = 2 * np.arctan2(q[1], q[3])
+        if frame == 90:  # a system moves the target: the door follows
+            world.set(made["door"], Joint, target=-0.5)
+
+    app = App(title="motor").add_plugins(MinimalPlugins, physics_plugin())
+    app.add_startup_systems(setup)
+    app.add_systems("update", turn)
+    app.run(frames=180)
+    assert angles[90] == pytest.approx(0.8, abs=0.02)
+    assert angles[180] == pytest.approx(-0.5, abs=0.02)
+
+
+def test_a_motor_on_a_ball_joint_is_one_error(capsys):
+    def setup(world, dt):
+        top = anchor(world, (0.0, 5.0, 0.0))
+        world.spawn(
+            Transform(position=(1.0, 5.0, 0.0)),
+            RigidBody(),
+            Collider(shape=SPHERE),
+            Joint(kind=BALL, other=top, target=1.0),
+        )
+
+    app = App(title="bad motor").add_plugins(MinimalPlugins, physics_plugin())
+    app.add_startup_systems(setup)
+    with pytest.raises(SystemExit):
+        app.run(frames=2)
+    assert "a ball Joint has no motor" in capsys.readouterr().err

@@ -30,12 +30,15 @@ class Joints:
         self.lib, self.native = lib, native
         self.handle = np.zeros(0, np.uint64)
         self.owner = np.full(0, -1, np.int64)
+        self.target = np.full(0, np.nan)  # the motor target last handed to the library
+        self.motors = 0  # joints with a motor
 
     def _grow(self, slots: int) -> None:
         if slots > len(self.handle):
             more = slots - len(self.handle)
             self.handle = np.concatenate([self.handle, np.zeros(more, np.uint64)])
             self.owner = np.concatenate([self.owner, np.full(more, -1, np.int64)])
+            self.target = np.concatenate([self.target, np.full(more, np.nan)])
 
     def sync(self, world: Any, bodies: Any) -> None:
         """Constraints made for new joints between bodies, destroyed for joints gone."""
@@ -48,11 +51,25 @@ class Joints:
         gone = known[current[known] != self.owner[known]]
         for slot in gone.tolist():  # (a destroyed body's constraints went with it: the call is then ignored)
             self.native.destroy_constraint(int(self.handle[slot]))
-        self.owner[gone], self.handle[gone] = -1, 0
+        self.owner[gone], self.handle[gone], self.target[gone] = -1, 0, np.nan
+        made = 0
         for batch in batches:
             new = np.flatnonzero(self.owner[batch.entities & INDEX_MASK] != batch.entities)
             for r in new.tolist():
                 self._make(world, bodies, batch, r)
+                made += 1
+        if made:
+            self.native.step(0.0)  # (a constraint takes a motor target once the library has made it)
+        self.motors = sum(int(np.isfinite(b[Joint].target).sum()) for b in batches)
+
+    def drive(self, world: Any) -> None:
+        """Motor targets a system changed (or new motors') handed to the library."""
+        for batch in world.query(Joint, with_=(Transform, RigidBody, Collider), write=()):
+            slots, target = batch.entities & INDEX_MASK, batch[Joint].target
+            wanted = np.isfinite(target) & (target != self.target[slots]) & (self.handle[slots] != 0)
+            for r in np.flatnonzero(wanted).tolist():
+                self.native.set_constraint_target(int(self.handle[slots[r]]), float(target[r]))
+                self.target[slots[r]] = target[r]
 
     def _make(self, world: Any, bodies: Any, batch: Any, r: int) -> None:
         joint, e = batch[Joint], int(batch.entities[r])
@@ -79,8 +96,15 @@ class Joints:
             params = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), max(low, 0.0), min(high, FAR))  # (the centres, body space)
         else:
             params = None
+        strength, motor = float(joint.strength[r]), None
+        if math.isfinite(float(joint.target[r])):
+            if kind not in (HINGE, SLIDER):
+                raise UsageError(
+                    f"entity {e}: a {JOINT_NAMES[kind]} Joint has no motor (Joint.target is for hinges and sliders)"
+                )
+            motor = {"max_torque": strength} if kind == HINGE else {"max_force": strength}
         try:
-            made = self.native.create_constraint(getattr(self.lib, _TYPES[kind]), theirs, mine, params)
+            made = self.native.create_constraint(getattr(self.lib, _TYPES[kind]), theirs, mine, params, motor)
         except (TypeError, ValueError) as exc:
             raise UsageError(f"entity {e}: a {JOINT_NAMES[kind]} Joint the library refused: {exc}") from None
         slot = e & INDEX_MASK

@@ -119,6 +119,8 @@ class PhysicsSystem(System):
                 changed = np.any(wanted != physics.last_velocity(plan.entities, angular), axis=1)
                 for k in np.flatnonzero(changed).tolist():
                     physics.set_velocity(int(plan.entities[k]), wanted[k], angular)
+        if physics.bodies.joints.motors:
+            physics.bodies.joints.drive(world)
         if physics.characters.made:
             physics.characters.move(world, physics.gravity[1], dt)
         physics.step(dt)
