@@ -426,3 +426,32 @@ def test_a_body_with_a_parent_is_one_error_and_a_body_s_children_follow_it(capsy
         simulate(orphan, 2)
     assert stop.value.code == 2
     assert "cannot have a Parent" in capsys.readouterr().err
+
+
+def test_a_collider_a_system_changes_remakes_the_body():
+    """A ball shrunk mid-run (Collider.size) settles lower; one made bouncy bounces."""
+    from ecs_engine import Time
+
+    made, seen = {}, {}
+
+    def setup(world, dt):
+        floor(world)
+        made["shrunk"] = ball(world, 0.5, x=-2.0)
+        made["bouncy"] = ball(world, 0.5, x=2.0)
+
+    def change(world, dt):
+        frame = world.resources[Time].steps
+        if frame == 30:
+            world.set(made["shrunk"], Collider, size=(0.2, 0.2, 0.2))
+            world.set(made["bouncy"], Collider, restitution=0.9)
+            world.set(made["bouncy"], Transform(position=(2.0, 3.0, 0.0)))
+        seen.setdefault("bouncy", []).append(float(position(world, made["bouncy"])[1]))
+
+    app = App(title="remake").add_plugins(MinimalPlugins, physics_plugin())
+    app.add_startup_systems(setup)
+    app.add_systems("update", change)
+    app.run(frames=150)
+    assert position(app.world, made["shrunk"])[1] == pytest.approx(0.2, abs=0.02)  # resting on its new radius
+    heights = seen["bouncy"][31:]
+    bottom = int(np.argmin(heights[:60]))
+    assert max(heights[bottom:]) > 0.5 + 0.5 * 2.5  # bounced back up most of its 2.5 m drop

@@ -33,6 +33,35 @@ MOTIONS = {DYNAMIC: "MOTION_DYNAMIC", KINEMATIC: "MOTION_KINEMATIC", STATIC: "MO
 SHAPES = {BOX: "SHAPE_BOX", SPHERE: "SHAPE_SPHERE", CAPSULE: "SHAPE_CAPSULE", CYLINDER: "SHAPE_CYLINDER"}
 
 
+# what a body was made from (per slot): a change in a system remakes the body (rebuild_changed)
+SPEC = np.dtype(
+    [
+        ("shape", np.uint8),
+        ("size", np.float64, 3),
+        ("friction", np.float64),
+        ("restitution", np.float64),
+        ("category", np.uint16),
+        ("mask", np.uint16),
+        ("sensor", np.bool_),
+        ("mass", np.float64),
+        ("ccd", np.bool_),
+        ("locked", np.uint8),
+    ]
+)
+
+
+def spec(batch: Any) -> np.ndarray:
+    """What each row's body is made from (SPEC), but its kind (which `follow_kinds` changes
+    without a new body)."""
+    col, body = batch[Collider], batch[RigidBody]
+    out = np.empty(len(batch), SPEC)
+    for name in ("shape", "size", "friction", "restitution", "category", "mask", "sensor"):
+        out[name] = getattr(col, name)
+    for name in ("mass", "ccd", "locked"):
+        out[name] = getattr(body, name)
+    return out
+
+
 class Bodies:
     """Per entity slot: the entity whose body it is (`owner`, -1: none), the body's `handle`, its
     `kind`, whether it is a `sensor`, its `row` in the library's shared buffers and the linear
@@ -48,6 +77,7 @@ class Bodies:
         self.velocity = np.zeros((0, 3))
         self.angular = np.zeros((0, 3))
         self.sensor = np.zeros(0, bool)
+        self.spec = np.zeros(0, SPEC)
         self.sensors = 0  # bodies that are sensors
         self.by_handle = (np.empty(0, np.uint64), np.empty(0, np.int64))  # handles sorted, their entities
         self.generation = 0
@@ -137,6 +167,7 @@ class Bodies:
             self.velocity = np.concatenate([self.velocity, np.zeros((more, 3))])
             self.angular = np.concatenate([self.angular, np.zeros((more, 3))])
             self.sensor = np.concatenate([self.sensor, np.zeros(more, bool)])
+            self.spec = np.concatenate([self.spec, np.zeros(more, SPEC)])
 
     def _create(self, world: Any, batch: Any, rows: np.ndarray) -> int:
         lib, create = self.lib, self.native.create_body
@@ -174,7 +205,23 @@ class Bodies:
                 allowed_dofs=(63 & ~locked) if locked else 0,
             )
             self._made(world, e, h, kind, bool(col.sensor[r]), moving, turning)
+        self.spec[batch.entities[rows] & INDEX_MASK] = spec(batch)[rows]
         return len(rows)
+
+    def rebuild_changed(self, world: Any, batch: Any) -> bool:
+        """Bodies of `batch` whose Collider or RigidBody (but its kind) a system changed made
+        again from their components, joints on them too: whether any was."""
+        slots = batch.entities & INDEX_MASK
+        changed = np.flatnonzero((self.owner[slots] == batch.entities) & (spec(batch) != self.spec[slots]))
+        if not len(changed):
+            return False
+        self.native.destroy_bodies_batch(self.handle[slots[changed]].tolist())
+        self.owner[slots[changed]] = -1
+        self.joints.forget(batch.entities[changed])
+        self._create(world, batch, changed)
+        self._rows()
+        self.joints.sync(world, self)
+        return True
 
     def _made(self, world: Any, e: int, h: int, kind: int, sensor: bool, moving: bool, turning: bool) -> None:
         """Entity `e`'s new body `h` recorded, given its Velocity and AngularVelocity."""

@@ -31,6 +31,7 @@ class Joints:
         self.handle = np.zeros(0, np.uint64)
         self.owner = np.full(0, -1, np.int64)
         self.target = np.full(0, np.nan)  # the motor target last handed to the library
+        self.other = np.full(0, -1, np.int64)  # the entity joined to
         self.motors = 0  # joints with a motor
 
     def _grow(self, slots: int) -> None:
@@ -39,6 +40,7 @@ class Joints:
             self.handle = np.concatenate([self.handle, np.zeros(more, np.uint64)])
             self.owner = np.concatenate([self.owner, np.full(more, -1, np.int64)])
             self.target = np.concatenate([self.target, np.full(more, np.nan)])
+            self.other = np.concatenate([self.other, np.full(more, -1, np.int64)])
 
     def sync(self, world: Any, bodies: Any) -> None:
         """Constraints made for new joints between bodies, destroyed for joints gone."""
@@ -61,6 +63,14 @@ class Joints:
         if made:
             self.native.step(0.0)  # (a constraint takes a motor target once the library has made it)
         self.motors = sum(int(np.isfinite(b[Joint].target).sum()) for b in batches)
+
+    def forget(self, entities: np.ndarray) -> None:
+        """The joints on `entities`' bodies (which are made again) destroyed, to be made again by
+        the next `sync`."""
+        on = np.flatnonzero((self.owner >= 0) & (np.isin(self.owner, entities) | np.isin(self.other, entities)))
+        for slot in on.tolist():
+            self.native.destroy_constraint(int(self.handle[slot]))
+        self.owner[on], self.handle[on], self.target[on] = -1, 0, np.nan
 
     def drive(self, world: Any) -> None:
         """Motor targets a system changed (or new motors') handed to the library."""
@@ -108,4 +118,4 @@ class Joints:
         except (TypeError, ValueError) as exc:
             raise UsageError(f"entity {e}: a {JOINT_NAMES[kind]} Joint the library refused: {exc}") from None
         slot = e & INDEX_MASK
-        self.handle[slot], self.owner[slot] = made, e
+        self.handle[slot], self.owner[slot], self.other[slot] = made, e, other

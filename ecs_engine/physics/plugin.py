@@ -38,6 +38,12 @@ _SETTINGS = ", ".join(inspect.signature(PhysicsWorld).parameters)
 _RATES = ((Velocity, "linear", False), (AngularVelocity, "angular", True))
 
 
+# the columns a body is made from: another write tick on one, and the table's bodies are looked at
+_BODY_COLUMNS = [(RigidBody, name) for name in RigidBody.__fields__] + [
+    (Collider, name) for name in Collider.__fields__
+]
+
+
 def _ticks(table: Any) -> tuple[int, int]:
     """The write ticks of a table's Transform position and rotation columns."""
     ticks = table.column_ticks
@@ -46,7 +52,7 @@ def _ticks(table: Any) -> tuple[int, int]:
 
 class _TablePlan:
     """What a step does with one table of bodies, kept while the world's structure, the bodies'
-    rows in the library and the table's RigidBody.kind column stand: its dynamic rows, their
+    rows in the library and the table's RigidBody and Collider columns stand: its dynamic rows, their
     entities and rows in the library's buffers, its kinematic rows, and the Transform columns'
     write ticks after the last step wrote them (`written`: another tick since, a system moved
     some body)."""
@@ -88,10 +94,15 @@ class PhysicsSystem(System):
 
     def _plan(self, world: Any, physics: PhysicsWorld, batch: Any) -> _TablePlan:
         table = batch.table
-        key = (world.structure_version, physics.bodies.generation, table.column_ticks[(RigidBody, "kind")])
+        ticks = table.column_ticks
+        made_from = tuple(ticks[key] for key in _BODY_COLUMNS)
+        key = (world.structure_version, physics.bodies.generation, made_from)
         plan = self._plans.get(table.id)
         if plan is None or plan.key != key:
             physics.bodies.follow_kinds(batch.entities, batch[RigidBody].kind)  # changed by a system
+            if plan is not None and plan.key[:2] == key[:2] and physics.bodies.rebuild_changed(world, batch):
+                self._plans.clear()  # (rows moved)
+                key = (world.structure_version, physics.bodies.generation, made_from)
             plan = self._plans[table.id] = _TablePlan(key, batch, physics)
         return plan
 
