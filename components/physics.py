@@ -34,12 +34,16 @@ class RigidBody(Component):
     """`kind`: DYNAMIC, KINEMATIC or STATIC; `mass` in kg (its inertia follows from the collider);
     `ccd`: continuous collision detection (small fast bodies that would pass through walls);
     `locked`: a mask of LOCK_* axes it may not move or turn along (a character upright:
-    LOCK_ROTATION)."""
+    LOCK_ROTATION); `gravity_scale` (0: it floats); `linear_damping` and `angular_damping` (per
+    second: each step takes that share of the velocity away, on top of the library's 0.05)."""
 
     kind = Field(np.uint8, default=DYNAMIC, maximum=STATIC)
     mass = Field(np.float64, default=1.0, finite=True, minimum=0.0, min_exclusive=True, maximum=LIMIT)
     ccd = Field(np.bool_, default=False)
     locked = Field(np.uint8, default=0, maximum=63)
+    gravity_scale = Field(np.float64, default=1.0, finite=True, minimum=-LIMIT, maximum=LIMIT)
+    linear_damping = Field(np.float64, default=0.0, finite=True, minimum=0.0, maximum=LIMIT)
+    angular_damping = Field(np.float64, default=0.0, finite=True, minimum=0.0, maximum=LIMIT)
 
 
 class Collider(Component):

@@ -455,3 +455,26 @@ def test_a_collider_a_system_changes_remakes_the_body():
     heights = seen["bouncy"][31:]
     bottom = int(np.argmin(heights[:60]))
     assert max(heights[bottom:]) > 0.5 + 0.5 * 2.5  # bounced back up most of its 2.5 m drop
+
+
+def test_gravity_scale_and_damping_per_body():
+    made = {}
+
+    def setup(world, dt):
+        made["half"] = world.spawn(
+            Transform(position=(0.0, 50.0, 0.0)), RigidBody(gravity_scale=0.5), Collider(shape=SPHERE)
+        )
+        made["float"] = world.spawn(
+            Transform(position=(3.0, 50.0, 0.0)), RigidBody(gravity_scale=0.0), Collider(shape=SPHERE)
+        )
+        made["drag"] = world.spawn(
+            Transform(position=(-30.0, 50.0, 9.0)), RigidBody(gravity_scale=0.0, linear_damping=2.0),
+            Collider(shape=SPHERE), Velocity(linear=(10.0, 0.0, 0.0)),
+        )  # fmt: skip
+
+    world, _ = simulate(setup, 60)
+    assert 50.0 - position(world, made["half"])[1] == pytest.approx(0.5 * G / 2, rel=0.03)  # half of g/2 in 1 s
+    assert position(world, made["float"])[1] == pytest.approx(50.0, abs=1e-6)
+    # velocity times (1 - 2/60) a step, with the library's 0.05 beside it: about e^-2.05 after 1 s
+    speed = world.get(made["drag"], Velocity).linear[0]
+    assert speed == pytest.approx(10.0 * ((1 - 2.0 / 60) * (1 - 0.05 / 60)) ** 60, rel=0.02)

@@ -158,6 +158,28 @@ class PhysicsWorld:
         for k in np.flatnonzero(moved).tolist():
             put(int(self.bodies.handle[entities[k] & INDEX_MASK]), tuple(where[k].tolist()), tuple(turn[k].tolist()))
 
+    def tune(
+        self,
+        rows: np.ndarray,
+        handles: np.ndarray,
+        mass: np.ndarray,
+        scale: np.ndarray,
+        linear: np.ndarray,
+        angular: np.ndarray,
+        dt: float,
+    ) -> None:
+        """Before a step: bodies' own gravity scale (a force of (scale - 1) m g) and damping (each
+        velocity times 1 - damping dt), which the library has not per body; a call a body."""
+        _, _, lin, ang = self.buffers()
+        g = np.asarray(self.gravity)
+        for k, h in enumerate(handles.tolist()):
+            if scale[k] != 1.0:
+                self.native.apply_force(h, *((scale[k] - 1.0) * mass[k] * g).tolist())
+            if linear[k] > 0.0:
+                self.native.set_linear_velocity(h, *(lin[rows[k], :3] * max(0.0, 1.0 - linear[k] * dt)).tolist())
+            if angular[k] > 0.0:
+                self.native.set_angular_velocity(h, *(ang[rows[k], :3] * max(0.0, 1.0 - angular[k] * dt)).tolist())
+
     def last_velocity(self, entities: np.ndarray, angular: bool = False) -> np.ndarray:
         """The linear (or `angular`) velocity last written into, or taken from, the Velocity (or
         AngularVelocity) of `entities`."""

@@ -28,6 +28,7 @@ from ..components.physics import (
     RigidBody,
     Trigger,
 )
+from ..ecs.entities import INDEX_MASK
 from ..ecs.schedule import System, any_with
 from ..jobs import JobPool
 from .contacts import send_contacts
@@ -57,7 +58,7 @@ class _TablePlan:
     write ticks after the last step wrote them (`written`: another tick since, a system moved
     some body)."""
 
-    __slots__ = ("dynamic", "entities", "key", "kinematic", "rows", "written")
+    __slots__ = ("dynamic", "entities", "key", "kinematic", "rows", "tuned", "written")
 
     def __init__(self, key: tuple, batch: Any, physics: PhysicsWorld) -> None:
         kinds = batch[RigidBody].kind
@@ -68,6 +69,26 @@ class _TablePlan:
         self.rows = physics.rows(self.entities)
         self.kinematic = np.flatnonzero(kinds == KINEMATIC)
         self.written: tuple[int, int] | None = None
+        # dynamic bodies with their own gravity scale or damping (the library has neither per
+        # body): (their rows in the buffers, handles, masses, scales, linear and angular damping)
+        body = batch[RigidBody]
+        scale, linear, angular = (
+            body.gravity_scale[dynamic],
+            body.linear_damping[dynamic],
+            body.angular_damping[dynamic],
+        )
+        tuned = np.flatnonzero((scale != 1.0) | (linear > 0.0) | (angular > 0.0))
+        self.tuned = None
+        if len(tuned):
+            handles = physics.bodies.handle[self.entities[tuned] & INDEX_MASK]
+            self.tuned = (
+                self.rows[tuned],
+                handles,
+                body.mass[dynamic][tuned],
+                scale[tuned],
+                linear[tuned],
+                angular[tuned],
+            )
 
 
 class PhysicsSystem(System):
@@ -130,6 +151,9 @@ class PhysicsSystem(System):
                 changed = np.any(wanted != physics.last_velocity(plan.entities, angular), axis=1)
                 for k in np.flatnonzero(changed).tolist():
                     physics.set_velocity(int(plan.entities[k]), wanted[k], angular)
+        for plan in plans:
+            if plan.tuned is not None:
+                physics.tune(*plan.tuned, dt)
         if physics.bodies.joints.motors:
             physics.bodies.joints.drive(world)
         if physics.characters.made:
