@@ -435,6 +435,7 @@ def test_a_collider_a_system_changes_remakes_the_body():
     made, seen = {}, {}
 
     def setup(world, dt):
+        made["other"] = ball(world, 8.0, x=8.0, v=Velocity())  # a table of its own, planned first
         floor(world)
         made["shrunk"] = ball(world, 0.5, x=-2.0)
         made["bouncy"] = ball(world, 0.5, x=2.0)
@@ -452,6 +453,7 @@ def test_a_collider_a_system_changes_remakes_the_body():
     app.add_systems("update", change)
     app.run(frames=150)
     assert position(app.world, made["shrunk"])[1] == pytest.approx(0.2, abs=0.02)  # resting on its new radius
+    assert position(app.world, made["other"])[1] == pytest.approx(0.5, abs=0.03)  # its rows followed too
     heights = seen["bouncy"][31:]
     bottom = int(np.argmin(heights[:60]))
     assert max(heights[bottom:]) > 0.5 + 0.5 * 2.5  # bounced back up most of its 2.5 m drop

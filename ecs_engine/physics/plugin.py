@@ -1,11 +1,16 @@
 """PhysicsPlugin: the PhysicsWorld resource and PhysicsSystem, which steps it once per fixed step.
 
 Per step, in bulk (NumPy over whole columns; Python per body only where one changed by hand):
-bodies are made and destroyed as entities gain or lose Transform, RigidBody and Collider (the
-world's structure changed); a Velocity set by a system since the last step is handed to its
-body; kinematic bodies are moved to their Transform; the world steps; the dynamic bodies'
-positions and rotations go into their Transform (the fixed step's interpolation draws between
-steps), their velocities into Velocity and AngularVelocity where they have them."""
+- bodies, joints and characters are made and destroyed as entities gain or lose their
+  components (when the world's structure changed);
+- a body whose Collider or RigidBody a system changed is made again; one whose Transform a
+  system wrote is put there; a Velocity or AngularVelocity set by a system is handed to its
+  body; kinematic bodies follow their Transform; gravity scales, damping and joint motors are
+  applied; characters move;
+- the world steps;
+- the dynamic bodies' positions and rotations go into their Transform (the fixed step's
+  interpolation draws between steps), their velocities into Velocity and AngularVelocity where
+  they have them; contacts become events."""
 
 from __future__ import annotations
 
@@ -40,9 +45,7 @@ _RATES = ((Velocity, "linear", False), (AngularVelocity, "angular", True))
 
 
 # the columns a body is made from: another write tick on one, and the table's bodies are looked at
-_BODY_COLUMNS = [(RigidBody, name) for name in RigidBody.__fields__] + [
-    (Collider, name) for name in Collider.__fields__
-]
+_BODY_COLUMNS = [(kind, name) for kind in (RigidBody, Collider) for name in kind.__fields__]
 
 
 def _ticks(table: Any) -> tuple[int, int]:
@@ -113,19 +116,25 @@ class PhysicsSystem(System):
         )
         self._plans: dict[int, _TablePlan] = {}  # by table id
 
-    def _plan(self, world: Any, physics: PhysicsWorld, batch: Any) -> _TablePlan:
-        table = batch.table
-        ticks = table.column_ticks
-        made_from = tuple(ticks[key] for key in _BODY_COLUMNS)
-        key = (world.structure_version, physics.bodies.generation, made_from)
-        plan = self._plans.get(table.id)
-        if plan is None or plan.key != key:
-            physics.bodies.follow_kinds(batch.entities, batch[RigidBody].kind)  # changed by a system
-            if plan is not None and plan.key[:2] == key[:2] and physics.bodies.rebuild_changed(world, batch):
-                self._plans.clear()  # (rows moved)
+    def _plan_all(self, world: Any, physics: PhysicsWorld) -> None:
+        """Each table's plan, made again where its key changed. A body made again (a Collider
+        or RigidBody a system changed) moves other bodies' rows: every plan is made again then."""
+        while True:
+            rebuilt = False
+            for batch in world.query(Transform, RigidBody, Collider, write=()):
+                table = batch.table
+                made_from = tuple(table.column_ticks[key] for key in _BODY_COLUMNS)
                 key = (world.structure_version, physics.bodies.generation, made_from)
-            plan = self._plans[table.id] = _TablePlan(key, batch, physics)
-        return plan
+                plan = self._plans.get(table.id)
+                if plan is not None and plan.key == key:
+                    continue
+                physics.bodies.follow_kinds(batch.entities, batch[RigidBody].kind)  # changed by a system
+                if plan is not None and plan.key[:2] == key[:2] and physics.bodies.rebuild_changed(world, batch):
+                    rebuilt = True
+                    break
+                self._plans[table.id] = _TablePlan(key, batch, physics)
+            if not rebuilt:
+                return
 
     def run(self, world: Any, dt: float) -> None:
         physics = world.resources[PhysicsWorld]
@@ -136,9 +145,10 @@ class PhysicsSystem(System):
         physics.pool = world.resources.get(JobPool)
         if physics.sync(world):
             self._plans.clear()
+        self._plan_all(world, physics)
         plans = []
         for batch in world.query(Transform, RigidBody, Collider, write=()):
-            plan = self._plan(world, physics, batch)
+            plan = self._plans[batch.table.id]
             plans.append(plan)
             if len(plan.kinematic):  # moved by the game: the bodies follow their Transform
                 physics.place(batch.entities[plan.kinematic], batch[Transform], plan.kinematic)
