@@ -170,42 +170,53 @@ class Bodies:
             self.spec = np.concatenate([self.spec, np.zeros(more, SPEC)])
 
     def _create(self, world: Any, batch: Any, rows: np.ndarray) -> int:
-        lib, create = self.lib, self.native.create_body
+        """Bodies for `rows` of `batch`: each one a library call, with the rows' values taken
+        out of the columns in bulk first (Python per body costs more than the call)."""
+        lib, native = self.lib, self.native
         body, col, t = batch[RigidBody], batch[Collider], batch[Transform]
-        first = int(batch.entities[rows[0]])  # (a table has Velocity or not, AngularVelocity or not)
-        moving, turning = world.has(first, Velocity), world.has(first, AngularVelocity)
-        for r in rows.tolist():
-            e = int(batch.entities[r])
-            shape, size = int(col.shape[r]), col.size[r]
+        entities = batch.entities[rows]
+        shapes, kinds, locked = col.shape[rows].tolist(), body.kind[rows].tolist(), body.locked[rows].tolist()
+        sizes, positions, rotations = col.size[rows].tolist(), t.position[rows].tolist(), t.rotation[rows].tolist()
+        sensors, masses, ccd = col.sensor[rows].tolist(), body.mass[rows].tolist(), body.ccd[rows].tolist()
+        categories, masks = col.category[rows].tolist(), col.mask[rows].tolist()
+        frictions, restitutions = col.friction[rows].tolist(), col.restitution[rows].tolist()
+        shape_ids = {shape: getattr(lib, name) for shape, name in SHAPES.items()}
+        motion_ids = {kind: getattr(lib, name) for kind, name in MOTIONS.items()}
+        handles = []
+        for k, e in enumerate(entities.tolist()):
+            shape, size = shapes[k], sizes[k]
             if shape in (CONVEX_HULL, MESH, HEIGHT_FIELD):
-                h = make_from_mesh(world, lib, self.native, MOTIONS, e, shape, body, col, t, r)
-                self._made(world, e, h, int(body.kind[r]), bool(col.sensor[r]), moving, turning)
+                handles.append(make_from_mesh(world, lib, native, MOTIONS, e, shape, body, col, t, int(rows[k])))
                 continue
             if shape == BOX:
-                extent: Any = tuple(size.tolist())
+                extent: Any = tuple(size)
             elif shape == SPHERE:
-                extent = float(size[0])
+                extent = size[0]
             else:  # capsule, cylinder: the library takes (half height, radius)
-                extent = (float(size[1]), float(size[0]))
-            locked, kind = int(body.locked[r]), int(body.kind[r])
-            h = create(
-                pos=tuple(t.position[r].tolist()),
-                rot=tuple(t.rotation[r].tolist()),
-                size=extent,
-                shape=getattr(lib, SHAPES[shape]),
-                motion=getattr(lib, MOTIONS[kind]),
-                user_data=e,
-                is_sensor=bool(col.sensor[r]),
-                mass=float(body.mass[r]),
-                category=int(col.category[r]),
-                mask=int(col.mask[r]),
-                friction=float(col.friction[r]),
-                restitution=float(col.restitution[r]),
-                ccd=bool(body.ccd[r]),
-                allowed_dofs=(63 & ~locked) if locked else 0,
+                extent = (size[1], size[0])
+            handles.append(
+                native.create_body(
+                    pos=tuple(positions[k]),
+                    rot=tuple(rotations[k]),
+                    size=extent,
+                    shape=shape_ids[shape],
+                    motion=motion_ids[kinds[k]],
+                    user_data=e,
+                    is_sensor=sensors[k],
+                    mass=masses[k],
+                    category=categories[k],
+                    mask=masks[k],
+                    friction=frictions[k],
+                    restitution=restitutions[k],
+                    ccd=ccd[k],
+                    allowed_dofs=(63 & ~locked[k]) if locked[k] else 0,
+                )
             )
-            self._made(world, e, h, kind, bool(col.sensor[r]), moving, turning)
-        self.spec[batch.entities[rows] & INDEX_MASK] = spec(batch)[rows]
+        slots = entities & INDEX_MASK
+        self.owner[slots], self.handle[slots], self.kind[slots] = entities, handles, kinds
+        self.sensor[slots] = col.sensor[rows]
+        self.spec[slots] = spec(batch)[rows]
+        self._rates(world, entities, np.asarray(handles, np.uint64))
         return len(rows)
 
     def rebuild_changed(self, world: Any, batch: Any) -> bool:
@@ -223,19 +234,22 @@ class Bodies:
         self.joints.sync(world, self)
         return True
 
-    def _made(self, world: Any, e: int, h: int, kind: int, sensor: bool, moving: bool, turning: bool) -> None:
-        """Entity `e`'s new body `h` recorded, given its Velocity and AngularVelocity."""
-        slot = e & INDEX_MASK
-        self.owner[slot], self.handle[slot], self.kind[slot] = e, h, kind
-        self.sensor[slot] = sensor
-        velocity = world.get(e, Velocity).linear if moving else np.zeros(3)
-        if velocity.any():
-            self.native.set_linear_velocity(h, *velocity.tolist())
-        self.velocity[slot] = velocity
-        spin = world.get(e, AngularVelocity).angular if turning else np.zeros(3)
-        if spin.any():
-            self.native.set_angular_velocity(h, *spin.tolist())
-        self.angular[slot] = spin
+    def _rates(self, world: Any, entities: np.ndarray, handles: np.ndarray) -> None:
+        """New bodies given their entities' Velocity and AngularVelocity (where they have them and
+        they are not zero), and those kept as the last written."""
+        slots = entities & INDEX_MASK
+        self.velocity[slots], self.angular[slots] = 0.0, 0.0
+        first = int(entities[0])  # (a table has Velocity or not, AngularVelocity or not)
+        for kind, field, rates, put in (
+            (Velocity, "linear", self.velocity, self.native.set_linear_velocity),
+            (AngularVelocity, "angular", self.angular, self.native.set_angular_velocity),
+        ):
+            if not world.has(first, kind):
+                continue
+            values = np.array([getattr(world.get(int(e), kind), field) for e in entities.tolist()])
+            rates[slots] = values
+            for k in np.flatnonzero(values.any(axis=1)).tolist():
+                put(int(handles[k]), *values[k].tolist())
 
     def follow_kinds(self, entities: np.ndarray, kinds: np.ndarray) -> None:
         """Bodies whose RigidBody.kind a system changed take their new motion."""
