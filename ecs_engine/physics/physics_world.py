@@ -112,7 +112,10 @@ class PhysicsWorld:
 
     def poses(self, entities: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The positions (float64) and unit rotations (x, y, z, w) of `entities`' bodies."""
-        rows = self.rows(entities)
+        return self._poses_at(self.rows(entities))
+
+    def _poses_at(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The poses of the bodies at `rows`, as write_poses puts them into Transform."""
         position, rotation = np.empty((len(rows), 3)), np.empty((len(rows), 4))
         self.write_poses(rows, np.arange(len(rows)), position, rotation)
         return position, rotation
@@ -121,13 +124,6 @@ class PhysicsWorld:
         """position[into], rotation[into] = the poses of the bodies at `rows` (poses.py)."""
         positions, rotations, _, _ = self.buffers()
         copy_poses(positions, rotations, rows, into, position, rotation)
-
-    def velocities(self, entities: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The linear and angular velocities of `entities`' bodies (float64)."""
-        rows, everyone = self.rows(entities), np.arange(len(entities))
-        linear, angular = np.empty((len(rows), 3)), np.empty((len(rows), 3))
-        self.write_velocities(rows, everyone, linear, angular)
-        return linear, angular
 
     def write_velocities(
         self, rows: np.ndarray, into: np.ndarray, linear: np.ndarray | None, angular: np.ndarray | None
@@ -147,16 +143,11 @@ class PhysicsWorld:
 
     def follow_moved(self, rows: np.ndarray, entities: np.ndarray, transform: Any, into: np.ndarray) -> None:
         """Bodies (at `rows`, of `entities`) whose Transform (`transform`'s rows `into`) a system
-        changed since the last step wrote it are put there (teleported, their velocity kept)."""
-        positions, rotations, _, _ = self.buffers()
-        where, turn = transform.position[into], transform.rotation[into]
-        were = positions[rows, :3]
-        was = rotations[rows].astype(np.float64)
-        was /= np.sqrt(np.einsum("ij,ij->i", was, was))[:, None]
-        moved = np.any(where != were, axis=1) | np.any(np.abs(turn - was) > 1e-6, axis=1)
-        put = self.native.set_transform
-        for k in np.flatnonzero(moved).tolist():
-            put(int(self.bodies.handle[entities[k] & INDEX_MASK]), tuple(where[k].tolist()), tuple(turn[k].tolist()))
+        changed since the last step wrote it are put there (teleported, their velocity kept). The
+        poses are compared as write_poses made them, so an unmoved body compares equal."""
+        were, was = self._poses_at(rows)
+        moved = np.any(transform.position[into] != were, axis=1) | np.any(transform.rotation[into] != was, axis=1)
+        self.place(entities[moved], transform, into[moved])
 
     def tune(
         self,
@@ -197,10 +188,6 @@ class PhysicsWorld:
         v = [float(x) for x in value]
         (self.native.set_angular_velocity if angular else self.native.set_linear_velocity)(handle, *v)
         self.wrote_velocity(np.array([entity]), np.array(v), angular)
-
-    def entity_of(self, handle: int) -> int:
-        """The entity of a body handle (-1: none)."""
-        return int(self.bodies.entities_of(np.array([handle], np.uint64))[0])
 
     # ------------------------------------------------------------------ queries (queries.py)
     def raycast(self, origins: Any, directions: Any, max_distance: float = 1000.0) -> RayHits:
