@@ -20,7 +20,8 @@ STICK = (
 
 
 class Characters:
-    """The characters by entity: the library's Character objects and each one's vertical speed."""
+    """The characters by entity: the library's Character objects (their vertical speed is kept
+    in CharacterController.vertical)."""
 
     def __init__(self, native: Any) -> None:
         self.native = native
