@@ -145,15 +145,21 @@ def frame_key(renderer: Any, state: Any, slot: int, prelude: tuple[Any, ...], st
     outputs = output.graph
     if outputs is None:
         return None
-    outputs.forget_prepared()  # a replayed frame's: this one prepares (or records) anew
     readback = prelude[-1]
-    # a screenshot of a window's image records (asking prepare would take its readback request)
-    if readback and getattr(renderer.target, "readback_image", None) is not None:
-        return None
     views, traced, forward = stops
-    if views or traced or forward or not renderer.replay.enabled or not getattr(renderer.path, "replayable", False):
+    if (
+        views
+        or traced
+        or forward
+        or not renderer.replay.enabled
+        or not getattr(renderer.path, "replayable", False)
+        # a screenshot of a window's image records (asking prepare would take its readback request)
+        or (readback and getattr(renderer.target, "readback_image", None) is not None)
+    ):
+        outputs.forget_prepared()  # an earlier frame's: this one records, and prepares anew
         return None
     tone_map, rendering, overlay = (renderer.tone_map, renderer.exposure), output._rendering(state), renderer.overlay
+    # (key_again and prepare leave only this frame's prepared graph behind)
     again = None if readback else outputs.key_again(state, rendering, tone_map, overlay, slot)
     if again is None:  # the graph prepared now (kept for the frame's recording)
         graph = outputs.prepare(state, rendering, tone_map, overlay, slot, readback)

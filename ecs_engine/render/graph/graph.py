@@ -196,6 +196,12 @@ class FrameGraph:
         do nothing)."""
         return self.compiled is not None and self.compiled.signature == (extent, self._version)
 
+    def stands(self, version: int, extent: tuple[int, int]) -> bool:
+        """Whether the graph is still at `version` and compiled for it and `extent` (one call
+        for frame replay's check, which runs every frame)."""
+        compiled = self.compiled
+        return version == self._version and compiled is not None and compiled.signature == (extent, version)
+
     def imports_snapshot(self) -> tuple:
         """The imports as they stand (restore_imports brings them back)."""
         return (self._version, self._table.snapshot())
@@ -359,7 +365,8 @@ class FrameGraph:
         """What a recorded frame depends on: each running pass's (name, key()) in order, the extent, the
         imported handles (`handles`: a snapshot's the caller knows are today's; equal keys: a kept
         command buffer draws the same); None (`replayable`) if UNREPLAYABLE."""
-        c, run = self.compiled, self._running  # the passes that run, per compile (and set of passes)
+        c = self.compiled
+        run = self._running  # the passes that run, per compile (and set of passes)
         if run is None or run[0] is not c:
             by_name, c = self._passes_by_name(), self._ready()
             run = self._running = (c, [(name, by_name[name]) for name in c.structure.order])

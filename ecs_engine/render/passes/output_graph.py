@@ -159,7 +159,6 @@ class OutputGraph(OutputImports):
             self.frame.transparent is not None,
             tuple(output.post),
             scene.signature() if scene is not None else None,
-            self._more_inputs(),
             overlay is not None,
             self.frame.window,
         )
@@ -174,10 +173,6 @@ class OutputGraph(OutputImports):
         inputs = self._inputs(state, rendering, overlay)
         kept = self._kept.get(slot)
         return inputs, kept if kept is not None and kept[0] == inputs else None
-
-    def _more_inputs(self) -> Any:
-        """What a subclass's imports follow from besides these (a camera view's placement)."""
-        return None
 
     def _set_frame(
         self,
@@ -215,16 +210,18 @@ class OutputGraph(OutputImports):
     def key_again(self, state: Any, rendering: Any, tone_map: Any, overlay: Any, slot: int) -> Any:
         """Frame replay's graph key without a prepare, when the slot's kept entry has today's inputs
         and the graph stands for them (that version, compiled for the extent): (the graph, its key
-        with the kept handles, or None for UNREPLAYABLE); else None. `record` prepares later."""
-        kept = self._slot_kept(state, rendering, overlay, slot)[1]
-        if kept is None:
+        with the kept handles, or None for UNREPLAYABLE); else None. `record` prepares later.
+        It runs every frame, before the jobs: its calls are kept few (_slot_kept's, inlined)."""
+        kept = self._kept.get(slot)
+        self.frame.window = None if overlay is None else self._window(overlay)
+        if kept is None or kept[0] != self._inputs(state, rendering, overlay):
             return None
         graph, (version, imports) = kept[2], kept[3]
-        if version != graph.version or not graph.compiled_for((state.key[1], state.key[2])):
+        if not graph.stands(version, (state.key[1], state.key[2])):
             return None
         self._settings(graph, state, tone_map, overlay, slot)
         self._prepared = None
-        key = graph.key(replayable=True, handles=imports[4])
+        key = graph.key(True, imports[4])
         if FrameGraph.verify_declares:  # the tests: a prepare's key is this one
             full = self.prepare(state, rendering, tone_map, overlay, slot)
             assert full is graph and full.key(replayable=True) == key, "a kept key that a prepare does not give"
