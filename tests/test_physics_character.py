@@ -1,6 +1,6 @@
 """The character controller (CharacterController): it walks, falls, lands, jumps as high as its
 speed says, climbs steps below its step height and slopes below its steepest, is stopped by
-what is higher or steeper, and pushes dynamic bodies."""
+what is higher or steeper, pushes dynamic bodies and is pushed by them."""
 
 from __future__ import annotations
 
@@ -129,3 +129,41 @@ def test_it_pushes_a_dynamic_box():
     world, seen = run(setup, 120)
     assert world.get(made["box"], Transform).position[0] > 3.0  # shoved along +x
     assert seen[-1][0][0] > 1.5
+
+
+
+def pushed_by_a_ball(mass):
+    """Where a character standing at the origin is after a `mass` kg ball rolled at it at 6 m/s
+    along +x (and another rolled past it, 3 m aside), and where that ball is."""
+    from ecs_engine.components import Velocity
+    from ecs_engine.components.physics import SPHERE
+
+    made = {}
+
+    def setup(world, dt):
+        floor(world)
+        for z, name in ((0.0, "ball"), (3.0, "miss")):
+            made[name] = world.spawn(
+                Transform(position=(-3.0, 0.3, z)),
+                RigidBody(mass=mass),
+                Collider(shape=SPHERE, size=(0.3, 0.3, 0.3)),
+                Velocity(linear=(6.0, 0.0, 0.0)),
+            )
+        world.spawn(*walker())
+
+    world, seen = run(setup, 90)
+    return seen[-1][0], world.get(made["ball"], Transform).position
+
+
+def test_a_body_thrown_at_it_pushes_it_the_more_the_heavier_it_is():
+    """A ball rolled into a character standing still shoves it along the ball's way (not
+    aside, and the ball does not go through it); a heavier ball at the same speed shoves it
+    further."""
+    at = {}
+    for mass in (5.0, 40.0):
+        character, ball = pushed_by_a_ball(mass)
+        assert character[0] > 0.3, f"a {mass} kg ball at 6 m/s moved the character only to x={character[0]:.3f}"
+        assert abs(character[2]) < 0.05
+        assert ball[0] < character[0]
+        at[mass] = character[0]
+    assert at[40.0] > at[5.0] + 0.2, at
