@@ -131,7 +131,6 @@ def test_it_pushes_a_dynamic_box():
     assert seen[-1][0][0] > 1.5
 
 
-
 def pushed_by_a_ball(mass):
     """Where a character standing at the origin is after a `mass` kg ball rolled at it at 6 m/s
     along +x (and another rolled past it, 3 m aside), and where that ball is."""

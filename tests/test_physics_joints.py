@@ -120,6 +120,50 @@ def test_a_joint_to_an_entity_without_a_body_is_one_error_naming_them():
     assert stop.value.code == 2
 
 
+def test_a_joint_to_a_destroyed_entity_is_one_error_saying_so(capsys):
+    def setup(world, dt):
+        gone = world.spawn(Transform(), RigidBody(), Collider())
+        world.destroy(gone)
+        world.spawn(Transform(), RigidBody(), Collider(), Joint(kind=BALL, other=gone))
+
+    app = App(title="dead joint").add_plugins(MinimalPlugins, physics_plugin())
+    app.add_startup_systems(setup)
+    with pytest.raises(SystemExit) as stop:
+        app.run(frames=2)
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert "Joint.other" in err and "not alive" in err
+
+
+def test_a_pendulum_whose_anchor_is_destroyed_falls_free_and_loses_its_joint():
+    from ecs_engine import Time
+
+    made, seen = {}, []
+
+    def setup(world, dt):
+        made["top"] = anchor(world, (0.0, 5.0, 0.0))
+        made["bob"] = world.spawn(
+            Transform(position=(2.0, 5.0, 0.0)), RigidBody(), Collider(shape=SPHERE, size=(0.2, 0.2, 0.2)),
+            Joint(kind=BALL, other=made["top"], pivot=(0.0, 5.0, 0.0)),
+        )  # fmt: skip
+
+    def cut(world, dt):
+        steps = world.resources[Time].steps
+        if steps == 30:
+            world.destroy(made["top"])
+        seen.append((steps, world.get(made["bob"], Transform).position.copy(), world.has(made["bob"], Joint)))
+
+    app = App(title="cut").add_plugins(MinimalPlugins, physics_plugin())
+    app.add_startup_systems(setup)
+    app.add_systems("update", cut)
+    app.run(frames=120)
+    before = [p for s, p, _ in seen if s <= 30]
+    after = [p for s, p, _ in seen if s >= 100]
+    assert np.abs(np.linalg.norm(np.array(before) - (0.0, 5.0, 0.0), axis=1) - 2.0).max() < 0.01
+    assert np.linalg.norm(after[-1] - (0.0, 5.0, 0.0)) > 2.5  # no rope: it left the circle
+    assert all(j for s, _, j in seen if s < 30) and not any(j for s, _, j in seen if s > 32)
+
+
 def test_a_motor_turns_a_hinge_to_its_target_and_follows_a_new_one():
     from ecs_engine import Time
 

@@ -1,5 +1,6 @@
 """Joint components made into the library's constraints, and destroyed with their entity, their
-Joint or either body (matched when the world's structure changes, as bodies are)."""
+Joint or either body (matched when the world's structure changes, as bodies are); a joint whose
+other body goes breaks, and its Joint is removed (`Joints._break`)."""
 
 from __future__ import annotations
 
@@ -54,15 +55,38 @@ class Joints:
         for slot in gone.tolist():  # (a destroyed body's constraints went with it: the call is then ignored)
             self.native.destroy_constraint(int(self.handle[slot]))
         self.owner[gone], self.handle[gone], self.target[gone] = -1, 0, np.nan
+        broken = self._break(world, bodies)
         made = 0
         for batch in batches:
             new = np.flatnonzero(self.owner[batch.entities & INDEX_MASK] != batch.entities)
+            if len(broken):  # (their Joint goes at the sync point: not made again meanwhile)
+                new = new[~np.isin(batch.entities[new], broken)]
             for r in new.tolist():
                 self._make(world, bodies, batch, r)
                 made += 1
         if made:
             self.native.step(0.0)  # (a constraint takes a motor target once the library has made it)
         self.motors = sum(int(np.isfinite(b[Joint].target).sum()) for b in batches)
+
+    def _break(self, world: Any, bodies: Any) -> np.ndarray:
+        """The joints whose other body is gone (its entity destroyed, or without RigidBody or
+        Collider now) break, as a rope whose anchor is taken away: the library destroyed their
+        constraints with that body, and their Joint is removed from the entity at the sync
+        point (a game sees it go: `world.has`, or an observer of Joint's removal). The entities."""
+        live = np.flatnonzero(self.owner >= 0)
+        others = self.other[live]
+        slots = others & INDEX_MASK
+        there = slots < len(bodies.owner)
+        held = np.zeros(len(live), bool)
+        held[there] = bodies.owner[slots[there]] == others[there]
+        broken = live[~held]
+        for slot in broken.tolist():  # (a destroyed body's constraints went with it: the call is then ignored)
+            self.native.destroy_constraint(int(self.handle[slot]))
+        owners = self.owner[broken].copy()
+        if len(owners):
+            world.remove(owners, Joint)
+        self.owner[broken], self.handle[broken], self.target[broken] = -1, 0, np.nan
+        return owners
 
     def forget(self, entities: np.ndarray) -> None:
         """The joints on `entities`' bodies (which are made again) destroyed, to be made again by
@@ -86,7 +110,8 @@ class Joints:
         kind, other = int(joint.kind[r]), int(joint.other[r])
         mine, theirs = bodies.handle_of(e), bodies.handle_of(other) if other >= 0 else None
         if theirs is None:
-            raise UsageError(f"entity {e}: Joint.other is {other}, which has no body (Transform, RigidBody, Collider)")
+            why = "which has no body (Transform, RigidBody, Collider)" if world.is_alive(other) else "not alive"
+            raise UsageError(f"entity {e}: Joint.other is {other}, {why}")
         if other == e:
             raise UsageError(f"entity {e}: Joint.other is the entity itself")
         low, high = (float(x) for x in joint.limits[r])
