@@ -74,11 +74,13 @@ def build_world(
     seed: int = 1,
     autoplay: bool = False,
     level: int = 1,
+    physics: bool = False,
 ) -> None:
     looks = materials(world)
     game = Game(
         seed=int(seed),
         first_level=int(level),
+        physics=physics,
         meshes={"rock": add_mesh(rock_mesh()), "ship": add_mesh(ship_mesh()), "shot": add_mesh(sphere_mesh(8, 6))},
         materials={
             "rock": looks.add(Material("rock", "cook_torrance", (0.45, 0.4, 0.36, 1.0), roughness=0.9)),
@@ -124,6 +126,21 @@ def game_systems(autoplay: bool = False, controls: System | None = None) -> dict
     return {"fixed": fixed, "update": [FollowCameraSystem()]}
 
 
+def add_game_systems(app: App, autoplay: bool, controls: System | None, physics: bool = False) -> None:
+    """game_systems into `app`; with `physics`, the PhysicsPlugin's step and the ship's contacts
+    where MotionSystem moved everything else (asteroids_physics.py)."""
+    from ecs_engine.systems import MotionSystem
+
+    for stage, systems in game_systems(autoplay, controls).items():
+        for system in systems:
+            app.add_systems(stage, system)
+            if physics and isinstance(system, MotionSystem):  # (the bodies move where the rest did)
+                from .asteroids_physics import ShipContactSystem, physics_plugin
+
+                app.add_plugins(physics_plugin())
+                app.add_systems(stage, ShipContactSystem())
+
+
 def schedule(autoplay: bool = False, controls: System | None = None) -> Schedule:
     """The game's systems (game_systems), then the stock render origin and matrices."""
     from ecs_engine.systems import RenderOriginSystem, TransformSystem
@@ -151,6 +168,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=1,
         help=f"the level to start at, 1 to {LEVELS} ({LEVELS}: 100,000 asteroids)",
     )
+    parser.add_argument(
+        "--physics",
+        action="store_true",
+        help="asteroids bounce off one another and the ship (the physics extra: pip install 'ecs_engine[physics]')",
+    )
 
 
 def build(app: App) -> None:
@@ -159,7 +181,9 @@ def build(app: App) -> None:
     from ecs_engine.app.plugins import CameraControlPlugin, DefaultPlugins, HierarchyPlugin, MotionPlugin, TimePlugin
     from ecs_engine.render import Meshes
 
-    seed, autoplay, level = (getattr(app.options, k, d) for k, d in (("seed", 1), ("autoplay", False), ("level", 1)))
+    options = app.options
+    seed, level = int(getattr(options, "seed", 1)), int(getattr(options, "level", 1))
+    autoplay, physics = bool(getattr(options, "autoplay", False)), bool(getattr(options, "physics", False))
     if not 1 <= level <= LEVELS:
         raise UsageError(f"--level {level}: asteroids has levels 1 to {LEVELS}")
     app.title = "Asteroids"
@@ -168,10 +192,9 @@ def build(app: App) -> None:
         app.add_actions(ACTIONS)
 
     def setup(world: World, dt: float) -> None:
-        build_world(world, world.resources[Meshes].add, seed=seed, autoplay=autoplay, level=level)
+        build_world(world, world.resources[Meshes].add, seed=seed, autoplay=autoplay, level=level, physics=physics)
 
     app.add_startup_systems(setup)
-    for stage, systems in game_systems(autoplay, None if autoplay else controls()).items():
-        app.add_systems(stage, *systems)
+    add_game_systems(app, autoplay, None if autoplay else controls(), physics)
     app.add_ui(draw_hud)
     app.set_summary(summary)

@@ -88,6 +88,7 @@ class Game:
     shots: int = 0
     kills: int = 0
     half: float = 0.0  # the arena spans [-half, half) in x and z
+    physics: bool = False  # asteroids and the ship are rigid bodies (asteroids_physics.py)
     meshes: dict[str, int] = field(default_factory=dict)
     materials: dict[str, int] = field(default_factory=dict)
     rng: np.random.Generator = field(default_factory=lambda: np.random.default_rng(1))
@@ -114,9 +115,16 @@ def forward(heading: np.ndarray | float) -> np.ndarray:
     return np.stack([-np.sin(h), np.zeros_like(h), -np.cos(h)], axis=-1)
 
 
-def spawn_asteroids(world: World, game: Game, n: int, sizes: np.ndarray | int, at: np.ndarray | None = None) -> None:
+def spawn_asteroids(
+    world: World,
+    game: Game,
+    n: int,
+    sizes: np.ndarray | int,
+    at: np.ndarray | None = None,
+    velocity: np.ndarray | None = None,
+) -> None:
     """n asteroids of the given size classes, at `at` (else anywhere in the arena, away from the
-    ship), moving and spinning at random (drawn from the game's generator)."""
+    ship), moving (at `velocity` if given) and spinning at random (drawn from the game's generator)."""
     if n <= 0:
         return
     rng = game.rng
@@ -126,8 +134,9 @@ def spawn_asteroids(world: World, game: Game, n: int, sizes: np.ndarray | int, a
         at[:, [0, 2]] = rng.uniform(-game.half, game.half, (n, 2))
         at[:, [0, 2]] += np.where(np.abs(at[:, [0, 2]]) < 12.0, 24.0, 0.0)  # not on top of the start
     radii = np.asarray(RADII)[sizes]
-    velocity = np.zeros((n, 3))
-    velocity[:, [0, 2]] = rng.normal(0.0, 2.5, (n, 2)) / np.sqrt(radii)[:, None]
+    drawn = np.zeros((n, 3))
+    drawn[:, [0, 2]] = rng.normal(0.0, 2.5, (n, 2)) / np.sqrt(radii)[:, None]  # (drawn anyway: replays' order)
+    velocity = drawn if velocity is None else velocity
     world.spawn_batch(
         n,
         Transform(position=at, rotation=rng.normal(size=(n, 4)), scale=np.repeat(2.0 * radii[:, None], 3, 1)),
@@ -136,6 +145,7 @@ def spawn_asteroids(world: World, game: Game, n: int, sizes: np.ndarray | int, a
         Asteroid(size=sizes),
         Collider(radius=radii),
         Mesh(handle=game.meshes.get("rock", 0), material=game.materials.get("rock", 0)),
+        *(_bodies(radii) if game.physics else ()),
     )
 
 
@@ -151,8 +161,23 @@ def start(world: World, game: Game) -> None:
         Ship(invulnerable=2.0),
         Collider(radius=SHIP_RADIUS),
         Mesh(handle=game.meshes.get("ship", 0), material=game.materials.get("ship", 0)),
+        *(_ship_body() if game.physics else ()),
     )
     spawn_asteroids(world, game, game.level_count(), game.rng.choice(3, game.level_count(), p=(0.2, 0.3, 0.5)))
+
+
+def _bodies(radii: np.ndarray) -> tuple:
+    from .asteroids_physics import bodies
+
+    return bodies(radii)
+
+
+def _ship_body() -> tuple:
+    from ecs_engine.components.physics import LOCK_ROTATION, LOCK_Y
+
+    from .asteroids_physics import SHIP_MASS, bodies
+
+    return bodies(np.array([SHIP_RADIUS]), np.array([SHIP_MASS]), LOCK_Y | LOCK_ROTATION)  # it turns as steered
 
 
 class ShipSystem(System):
@@ -267,7 +292,8 @@ class CollisionSystem(System):
                 hit = AsteroidHit(asteroid=rocks[i_rock[first]], projectile=shots[i_shot[first]])
                 world.events(AsteroidHit).send(hit)
         ships, ship_at, ship_r = _gather(world, Ship)
-        if len(ships) and not world.resources[Game].over:
+        game = world.resources[Game]
+        if len(ships) and not game.over and not game.physics:  # (with physics: its contacts, asteroids_physics.py)
             _, i_rock = overlapping_pairs(ship_at, ship_r, rock_at, rock_r)
             if len(i_rock):  # one contact a step: the first asteroid's size class
                 world.events(ShipHit).send(ShipHit(int(world.get(int(rocks[i_rock[0]]), Asteroid).size)))
