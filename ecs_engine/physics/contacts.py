@@ -46,9 +46,11 @@ def send_contacts(world: Any, physics: Any, raw: Any, touches: bool, stays: bool
     records = np.frombuffer(raw, physics.contact_dtype)
     if not len(records):
         return
+    if not stays:  # most records of a resting pile are STAY: leave them before anything else
+        records = records[records["flags"] != 1]
+        if not len(records):
+            return
     phase = np.asarray(_PHASES, np.uint8)[records["flags"].clip(0, 2)]
-    keep = phase != STAY if not stays else np.ones(len(records), bool)
-    records, phase = records[keep], phase[keep]
     a, b = physics.bodies.entities_of(records["body1"]), physics.bodies.entities_of(records["body2"])
     ours = (a >= 0) & (b >= 0)  # (a body made on `native` directly has no entity)
     sensor = physics.bodies.sensor
