@@ -1,0 +1,194 @@
+"""A glTF mesh's primitives as the engine's meshes (MeshData), and its materials as Materials.
+
+A primitive without NORMAL gets flat normals, as the specification asks; triangle strips and
+fans become triangle lists; points and lines are left out with one warning (the renderer draws
+triangles). Textures that cannot be read warn and use the fallback, as models' do.
+"""
+
+from __future__ import annotations
+
+import io
+import logging
+from typing import Any
+
+import numpy as np
+
+from ..materials import Material, Materials
+from ..mesh_data import MeshData
+from ..textures import ImageError, Texture, pixels_of
+from .document import GltfDocument
+
+log = logging.getLogger("ecs_engine")
+
+TRIANGLES, STRIP, FAN = 4, 5, 6
+_MODES = {0: "points", 1: "lines", 2: "line loops", 3: "line strips"}
+# glTF texture slot (in pbrMetallicRoughness or the material) -> Material field, sRGB?
+_TEXTURES = {
+    "baseColorTexture": ("base_color_texture", True),
+    "metallicRoughnessTexture": ("metallic_roughness_texture", False),
+    "normalTexture": ("normal_texture", False),
+    "emissiveTexture": ("emissive_texture", True),
+    "occlusionTexture": ("occlusion_texture", False),
+}
+
+
+def primitive_mesh(document: GltfDocument, mesh: int, index: int) -> MeshData | None:
+    """Primitive `index` of mesh `mesh` as MeshData, or None for points and lines (warned)."""
+    here = f"meshes[{mesh}].primitives[{index}]"
+    primitive = document.item("meshes", mesh, "mesh")["primitives"][index]
+    mode = primitive.get("mode", TRIANGLES)
+    if mode in _MODES:
+        log.warning("%s: %s draws %s, which are left out (triangles only)", document.file, here, _MODES[mode])
+        return None
+    if mode not in (TRIANGLES, STRIP, FAN):
+        raise document.error(f"{here}.mode", f"is {mode!r}, not a glTF primitive mode (0 to 6)")
+    attributes = primitive.get("attributes")
+    if not isinstance(attributes, dict) or "POSITION" not in attributes:
+        raise document.error(f"{here}.attributes", "has no POSITION")
+    positions = _attribute(document, attributes, "POSITION", here, (3,))
+    n = len(positions)
+    normals = _attribute(document, attributes, "NORMAL", here, (3,), n) if "NORMAL" in attributes else None
+    uvs = _attribute(document, attributes, "TEXCOORD_0", here, (2,), n) if "TEXCOORD_0" in attributes else None
+    if "indices" in primitive:
+        where = f"{here}.indices"
+        indices = document.accessor(document.number(primitive, "indices", here), where)
+        if indices.dtype.kind != "u" or indices.ndim != 1:
+            raise document.error(where, "is not an accessor of unsigned integer scalars")
+        indices = indices.astype(np.uint32)
+        if len(indices) and int(indices.max()) >= n:
+            raise document.error(where, f"index {int(indices.max())} is past the primitive's {n} vertices")
+    else:
+        indices = np.arange(n, dtype=np.uint32)
+    triangles = _triangles(indices, mode)
+    if not len(triangles):
+        raise document.error(here, "has no whole triangle")
+    if normals is None:  # flat: each triangle's own vertices
+        positions, uvs = positions[triangles.reshape(-1)], None if uvs is None else uvs[triangles.reshape(-1)]
+        normals = np.repeat(_face_normals(positions.reshape(-1, 3, 3)), 3, axis=0)
+        triangles = np.arange(len(positions), dtype=np.uint32).reshape(-1, 3)
+    name = str(document.item("meshes", mesh, "mesh").get("name", f"mesh{mesh}"))
+    source = {"file": str(document.file.resolve()), "mesh": mesh, "primitive": index}
+    return MeshData.from_arrays(
+        positions.astype(np.float32),
+        normals.astype(np.float32),
+        triangles.reshape(-1),
+        f"{document.file.stem}:{name}:{index}",
+        uvs=None if uvs is None else uvs.astype(np.float32),
+        source=source,
+    )
+
+
+def _attribute(
+    document: GltfDocument, attributes: dict[str, Any], name: str, here: str, shape: tuple[int, ...], count: int = 0
+) -> np.ndarray:
+    where = f"{here}.attributes.{name}"
+    values = document.accessor(document.number(attributes, name, f"{here}.attributes"), where)
+    if values.shape[1:] != shape or values.dtype.kind != "f":
+        raise document.error(where, f"holds {values.dtype} elements of shape {values.shape[1:]}, not float {shape}")
+    if count and len(values) != count:
+        raise document.error(where, f"has {len(values)} elements, but POSITION has {count}")
+    return values
+
+
+def _triangles(indices: np.ndarray, mode: int) -> np.ndarray:
+    """(n, 3) triangles from a list, strip or fan, in the winding the specification gives."""
+    if mode == TRIANGLES:
+        return indices[: len(indices) - len(indices) % 3].reshape(-1, 3)
+    count = max(len(indices) - 2, 0)
+    k = np.arange(count)
+    if mode == STRIP:  # odd triangles swap their first two vertices to keep the winding
+        first = np.where(k % 2 == 0, k, k + 1)
+        second = np.where(k % 2 == 0, k + 1, k)
+        return np.stack([indices[first], indices[second], indices[k + 2]], axis=1)
+    return np.stack([np.full(count, indices[0]), indices[k + 1], indices[k + 2]], axis=1)
+
+
+def _face_normals(triangles: np.ndarray) -> np.ndarray:
+    cross = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    length = np.linalg.norm(cross, axis=1, keepdims=True)
+    return np.where(length > 0.0, cross / np.maximum(length, 1e-30), (0.0, 0.0, 1.0))
+
+
+class GltfMaterials:
+    """The file's materials added to `registry` when first used (handles by material index;
+    None: the primitive names none, the caller's default)."""
+
+    def __init__(self, document: GltfDocument, registry: Materials) -> None:
+        self.document, self.registry = document, registry
+        self.handles: dict[int, int] = {}
+        self.images: dict[tuple[Any, bool], int] = {}
+
+    def handle(self, index: int | None, where: str) -> int | None:
+        if index is None:
+            return None
+        if index not in self.handles:
+            self.handles[index] = self.registry.add(self._material(index, where))
+        return self.handles[index]
+
+    def _material(self, index: int, where: str) -> Material:
+        d = self.document
+        m = d.item("materials", index, where)
+        here = f"materials[{index}]"
+        pbr = m.get("pbrMetallicRoughness", {})
+        if not isinstance(pbr, dict):
+            raise d.error(f"{here}.pbrMetallicRoughness", "is not an object")
+        base = np.clip(d.floats(pbr, "baseColorFactor", f"{here}.pbrMetallicRoughness", 4, [1, 1, 1, 1]), 0, 1)
+        emissive = np.maximum(d.floats(m, "emissiveFactor", here, 3, [0, 0, 0]), 0.0)
+        mode = m.get("alphaMode", "OPAQUE")
+        if mode not in ("OPAQUE", "MASK", "BLEND"):
+            raise d.error(f"{here}.alphaMode", f"is {mode!r}, not OPAQUE, MASK or BLEND")
+        fields: dict[str, Any] = {}
+        for slot, (field, color) in _TEXTURES.items():
+            info = pbr.get(slot, m.get(slot))
+            if isinstance(info, dict):
+                fields[field] = self._texture(info, color, f"{here}.{slot}")
+        normal = m.get("normalTexture")
+        scale = float(normal.get("scale", 1.0)) if isinstance(normal, dict) else 1.0
+        return Material(
+            str(m.get("name", f"material{index}")),
+            "cook_torrance",
+            (float(base[0]), float(base[1]), float(base[2]), float(base[3])),
+            metallic=float(np.clip(pbr.get("metallicFactor", 1.0), 0.0, 1.0)),
+            roughness=float(np.clip(pbr.get("roughnessFactor", 1.0), 0.0, 1.0)),
+            emissive=(float(emissive[0]), float(emissive[1]), float(emissive[2])),
+            alpha_mode={"MASK": "mask", "BLEND": "blend"}.get(mode, "opaque"),
+            alpha_cutoff=float(np.clip(m.get("alphaCutoff", 0.5), 0.0, 1.0)),
+            double_sided=bool(m.get("doubleSided", False)),
+            normal_scale=scale if np.isfinite(scale) else 1.0,
+            **fields,
+        )
+
+    def _texture(self, info: dict[str, Any], color: bool, where: str) -> int:
+        d = self.document
+        textures = self.registry.textures
+        texture = d.item("textures", info.get("index"), f"{where}.index")
+        source = texture.get("source")
+        key = (source, color)
+        if key not in self.images:
+            image = d.item("images", source, f"{where} (its texture's source)")
+            try:
+                if "bufferView" in image:
+                    data, offset, length, _ = d.view(d.number(image, "bufferView", where), f"{where}.bufferView")
+                    pixels = _decode(data[offset : offset + length])
+                    handle = textures.add(Texture(f"{d.file.stem}:image{source}", pixels, color))
+                elif isinstance(image.get("uri"), str) and image["uri"].startswith("data:"):
+                    from .document import _data_uri
+
+                    pixels = _decode(_data_uri(d, image["uri"], f"images[{source}].uri"))
+                    handle = textures.add(Texture(f"{d.file.stem}:image{source}", pixels, color))
+                else:
+                    handle = textures.load(d.file.parent / str(image.get("uri")), color=color, named_by=str(d.file))
+            except (ImageError, ValueError, OSError) as exc:
+                log.warning("%s: images[%s] cannot be read (%s); drawn with the fallback texture", d.file, source, exc)
+                handle = textures.fallback
+            self.images[key] = handle
+        return self.images[key]
+
+
+def _decode(data: bytes) -> np.ndarray:
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        return pixels_of(Image.open(io.BytesIO(data)))
+    except (UnidentifiedImageError, OSError) as exc:
+        raise ImageError(str(exc)) from None

@@ -1,0 +1,225 @@
+"""A glTF scene as a prefab: its node tree read once (meshes uploaded, materials added), then
+spawned as entities as many times as wanted, each node an entity with its Transform and a
+Parent, so the hierarchy's TransformSystem places it. A node's mesh is a Mesh on it (one
+primitive) or on a child entity per primitive; its camera is a Camera, its KHR_lights_punctual
+light a PointLight, SpotLight or DirectionalLight (both look down their local -Z, as the
+engine's do).
+
+    scene = load_gltf(path, meshes.add, materials(world))
+    root = scene.spawn(world, Transform(position=(0, 0, 5)))   # entities: scene.entities(...)
+    roots = scene.spawn_many(world, 1000, positions)           # one root a copy, node by node in bulk
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ....components import Camera, DirectionalLight, Mesh, Name, Parent, PointLight, SpotLight, Transform
+from ....components.camera import ORTHOGRAPHIC, PERSPECTIVE
+from ....maths.decompose import decompose, trs_matrices
+from ..materials import Materials
+from ..mesh_data import MeshData
+from .document import GltfDocument
+from .meshes import GltfMaterials, primitive_mesh
+
+__all__ = ["GltfNode", "GltfScene", "load_gltf"]
+
+LIGHTS = "KHR_lights_punctual"
+DEFAULT_RANGE = 100.0  # m: a light without `range` (infinite in glTF) reaches this far here
+
+
+@dataclass
+class GltfNode:
+    """One node: its glTF index and name, its parent's place in GltfScene.nodes (-1: a root of the
+    scene), its local TRS, its primitives' (mesh, material) handles and its camera or light."""
+
+    index: int
+    name: str
+    parent: int
+    translation: np.ndarray
+    rotation: np.ndarray
+    scale: np.ndarray
+    parts: list[tuple[int, int]] = field(default_factory=list)
+    components: list[Any] = field(default_factory=list)  # a Camera or a light
+
+
+@dataclass
+class GltfScene:
+    file: Path
+    document: GltfDocument
+    nodes: list[GltfNode]  # parents before children
+
+    def spawn(self, world: Any, at: Transform | None = None) -> int:
+        """One copy: a root entity (named after the file, placed `at`) whose children are the
+        scene's root nodes. The root entity."""
+        place = at if at is not None else Transform()
+        p, r, s = (np.asarray(v, np.float64)[None] for v in (place.position, place.rotation, place.scale))
+        roots = self.spawn_many(world, 1, p, r, s)
+        return int(roots[0])
+
+    def spawn_many(
+        self, world: Any, count: int, positions: Any, rotations: Any = None, scales: Any = None
+    ) -> np.ndarray:
+        """`count` copies, their roots at `positions` (and `rotations`, `scales`): each node is
+        one spawn_batch over the copies. The roots' entities."""
+        position = np.broadcast_to(np.asarray(positions, np.float64), (count, 3))
+        rotation = np.broadcast_to(np.asarray((0, 0, 0, 1) if rotations is None else rotations, np.float64), (count, 4))
+        scale = np.broadcast_to(np.asarray((1, 1, 1) if scales is None else scales, np.float64), (count, 3))
+        place = Transform(position=position, rotation=rotation, scale=scale)
+        roots = world.spawn_batch(count, place, Name(value=self.file.stem))
+        made: list[np.ndarray] = []
+        for node in self.nodes:
+            parent = roots if node.parent < 0 else made[node.parent]
+            here = Transform(position=node.translation, rotation=node.rotation, scale=node.scale)
+            values: list[Any] = [here, Parent(entity=parent), Name(value=node.name)]
+            values += node.components
+            if len(node.parts) == 1:
+                values.append(Mesh(handle=node.parts[0][0], material=node.parts[0][1]))
+            ids = world.spawn_batch(count, *values)
+            made.append(ids)
+            if len(node.parts) > 1:
+                for handle, material in node.parts:
+                    world.spawn_batch(count, Transform(), Parent(entity=ids), Mesh(handle=handle, material=material))
+        return roots
+
+
+def load_gltf(
+    path: str | os.PathLike[str], add_mesh: Callable[[MeshData], int], registry: Materials, scene: int | None = None
+) -> GltfScene:
+    """The file's scene `scene` (default: the file's `scene`, else its first), its meshes added
+    with `add_mesh` (render.Meshes.add) and its materials to `registry` (a primitive without one
+    gets material 0). GltfError naming the file and field for anything the specification forbids."""
+    document = GltfDocument.read(path)
+    scenes = document.items("scenes")
+    if scene is None:
+        scene = document.json.get("scene", 0) if scenes else None
+    roots: list[int]
+    if scene is None:  # no scenes: every node that is nobody's child
+        children = {c for n in document.items("nodes") if isinstance(n, dict) for c in n.get("children", [])}
+        roots = [i for i in range(len(document.items("nodes"))) if i not in children]
+    else:
+        roots = list(document.item("scenes", scene, "scene").get("nodes", []))
+    return GltfScene(document.file, document, _Reader(document, add_mesh, registry).tree(roots))
+
+
+class _Reader:
+    def __init__(self, document: GltfDocument, add_mesh: Callable[[MeshData], int], registry: Materials) -> None:
+        self.d, self.add_mesh = document, add_mesh
+        self.materials = GltfMaterials(document, registry)
+        self.meshes: dict[int, list[tuple[int, int]]] = {}
+        self.lights = document.json.get("extensions", {}).get(LIGHTS, {}).get("lights", [])
+
+    def tree(self, roots: list[int]) -> list[GltfNode]:
+        out: list[GltfNode] = []
+        seen: set[int] = set()
+        stack = [(r, -1, "scene.nodes") for r in reversed(roots)]
+        while stack:
+            index, parent, where = stack.pop()
+            entry = self.d.item("nodes", index, where)
+            if index in seen:
+                raise self.d.error(where, f"names node {index} a second time (a node has one parent, no cycles)")
+            seen.add(index)
+            out.append(self._node(index, entry, parent))
+            children = entry.get("children", [])
+            if not isinstance(children, list):
+                raise self.d.error(f"nodes[{index}].children", "is not an array")
+            here = len(out) - 1
+            stack += [(c, here, f"nodes[{index}].children") for c in reversed(children)]
+        return out
+
+    def _node(self, index: int, entry: dict[str, Any], parent: int) -> GltfNode:
+        here = f"nodes[{index}]"
+        if "matrix" in entry:
+            if any(k in entry for k in ("translation", "rotation", "scale")):
+                raise self.d.error(here, "has both a matrix and translation, rotation or scale")
+            t, r, s = node_trs(self.d.floats(entry, "matrix", here, 16, None).reshape(4, 4).T, self.d, f"{here}.matrix")
+        else:
+            t = self.d.floats(entry, "translation", here, 3, [0, 0, 0])
+            r = self.d.floats(entry, "rotation", here, 4, [0, 0, 0, 1])
+            s = self.d.floats(entry, "scale", here, 3, [1, 1, 1])
+            length = float(np.linalg.norm(r))
+            if abs(length - 1.0) > 1e-3:
+                raise self.d.error(f"{here}.rotation", f"is {r.tolist()}, not a unit quaternion")
+            r = r / length
+        node = GltfNode(index, str(entry.get("name", f"node{index}")), parent, t, r, s)
+        if "mesh" in entry:
+            node.parts = self._mesh(self.d.number(entry, "mesh", here), f"{here}.mesh")
+        if "camera" in entry:
+            node.components.append(self._camera(self.d.number(entry, "camera", here), f"{here}.camera"))
+        light = entry.get("extensions", {}).get(LIGHTS) if isinstance(entry.get("extensions"), dict) else None
+        if isinstance(light, dict):
+            node.components.append(self._light(light.get("light"), f"{here}.extensions.{LIGHTS}.light"))
+        return node
+
+    def _mesh(self, mesh: int, where: str) -> list[tuple[int, int]]:
+        if mesh not in self.meshes:
+            primitives = self.d.item("meshes", mesh, where).get("primitives")
+            if not isinstance(primitives, list) or not primitives:
+                raise self.d.error(f"meshes[{mesh}].primitives", "is not a non-empty array")
+            parts = []
+            for p, primitive in enumerate(primitives):
+                if not isinstance(primitive, dict):
+                    raise self.d.error(f"meshes[{mesh}].primitives[{p}]", "is not an object")
+                data = primitive_mesh(self.d, mesh, p)
+                if data is None:
+                    continue
+                material = self.materials.handle(primitive.get("material"), f"meshes[{mesh}].primitives[{p}].material")
+                parts.append((self.add_mesh(data), 0 if material is None else material))
+            self.meshes[mesh] = parts
+        return self.meshes[mesh]
+
+    def _camera(self, index: int, where: str) -> Camera:
+        c = self.d.item("cameras", index, where)
+        here = f"cameras[{index}]"
+        kind = c.get("type")
+        if kind == "perspective" and isinstance(c.get("perspective"), dict):
+            p, at = c["perspective"], f"{here}.perspective"
+            fov = self.d.floats(p, "yfov", at, 1, None)[0]
+            near = self.d.floats(p, "znear", at, 1, None)[0]
+            far = self.d.floats(p, "zfar", at, 1, [math.inf])[0] if "zfar" in p else math.inf
+            aspect = self.d.floats(p, "aspectRatio", at, 1, [0.0])[0]
+            return Camera(projection=PERSPECTIVE, fov_y=fov, near=near, far=far, aspect=aspect)
+        if kind == "orthographic" and isinstance(c.get("orthographic"), dict):
+            o, at = c["orthographic"], f"{here}.orthographic"
+            ymag = self.d.floats(o, "ymag", at, 1, None)[0]
+            near, far = self.d.floats(o, "znear", at, 1, None)[0], self.d.floats(o, "zfar", at, 1, None)[0]
+            return Camera(projection=ORTHOGRAPHIC, height=2.0 * abs(ymag), near=max(near, 1e-4), far=far)
+        raise self.d.error(f"{here}.type", f"is {kind!r} (with no matching object), not perspective or orthographic")
+
+    def _light(self, index: Any, where: str) -> Any:
+        if isinstance(index, bool) or not isinstance(index, int) or not 0 <= index < len(self.lights):
+            raise self.d.error(where, f"is {index!r}, not one of the file's {len(self.lights)} lights")
+        light, here = self.lights[index], f"extensions.{LIGHTS}.lights[{index}]"
+        color = np.clip(self.d.floats(light, "color", here, 3, [1, 1, 1]), 0.0, None)
+        intensity = max(float(self.d.floats(light, "intensity", here, 1, [1.0])[0]), 0.0)
+        reach = float(self.d.floats(light, "range", here, 1, [DEFAULT_RANGE])[0])
+        kind = light.get("type")
+        if kind == "directional":
+            return DirectionalLight(color=color, illuminance=intensity)
+        if kind == "point":
+            return PointLight(color=color, intensity=intensity, radius=reach)
+        if kind == "spot":
+            spot = light.get("spot", {})
+            inner = float(self.d.floats(spot, "innerConeAngle", f"{here}.spot", 1, [0.0])[0])
+            outer = float(self.d.floats(spot, "outerConeAngle", f"{here}.spot", 1, [math.pi / 4])[0])
+            return SpotLight(color=color, intensity=intensity, radius=reach, inner_angle=inner, outer_angle=outer)
+        raise self.d.error(f"{here}.type", f"is {kind!r}, not directional, point or spot")
+
+
+def node_trs(matrix: np.ndarray, document: GltfDocument, where: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A node matrix (row-major here) as translation, rotation (x, y, z, w) and scale; GltfError
+    when it is not one (a shear, a projection), which a Transform cannot hold."""
+    basis = matrix[:3, :3]
+    if abs(np.linalg.det(basis)) < 1e-18 or not np.allclose(matrix[3], (0, 0, 0, 1)):
+        raise document.error(where, "is not a translation, rotation and scale")
+    t, r, s = decompose(matrix)
+    if not np.allclose(trs_matrices(t[None], r[None], s[None])[0], matrix, atol=1e-5 * max(1.0, np.abs(matrix).max())):
+        raise document.error(where, "has a shear, which a Transform (translation, rotation, scale) cannot hold")
+    return t, r, s
