@@ -80,7 +80,6 @@ def build_world(
     game = Game(
         seed=int(seed),
         first_level=int(level),
-        physics=physics,
         meshes={"rock": add_mesh(rock_mesh()), "ship": add_mesh(ship_mesh()), "shot": add_mesh(sphere_mesh(8, 6))},
         materials={
             "rock": looks.add(Material("rock", "cook_torrance", (0.45, 0.4, 0.36, 1.0), roughness=0.9)),
@@ -97,6 +96,10 @@ def build_world(
             "shot": looks.add(Material("shot", "unlit", (1.0, 0.9, 0.3, 1.0), emissive=(4.0, 3.0, 0.8))),
         },
     )
+    if physics:
+        from .asteroids_physics import bodies
+
+        game.bodies = bodies
     world.resources[Game] = game
     world.resources[ShipControls] = ShipControls()
     if ActionMap not in world.resources:  # `play` puts the user's bindings there first

@@ -14,6 +14,7 @@ resource's generator, in a fixed order, so a seed and the same controls give the
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -88,7 +89,9 @@ class Game:
     shots: int = 0
     kills: int = 0
     half: float = 0.0  # the arena spans [-half, half) in x and z
-    physics: bool = False  # asteroids and the ship are rigid bodies (asteroids_physics.py)
+    # with physics (asteroids_physics.py): the rigid-body components of asteroids of these radii,
+    # or of the ship (ship=True), added where they are spawned; None: the game's own overlap test
+    bodies: Callable[..., tuple] | None = None
     meshes: dict[str, int] = field(default_factory=dict)
     materials: dict[str, int] = field(default_factory=dict)
     rng: np.random.Generator = field(default_factory=lambda: np.random.default_rng(1))
@@ -145,7 +148,7 @@ def spawn_asteroids(
         Asteroid(size=sizes),
         Collider(radius=radii),
         Mesh(handle=game.meshes.get("rock", 0), material=game.materials.get("rock", 0)),
-        *(_bodies(radii) if game.physics else ()),
+        *(game.bodies(radii) if game.bodies is not None else ()),
     )
 
 
@@ -161,23 +164,9 @@ def start(world: World, game: Game) -> None:
         Ship(invulnerable=2.0),
         Collider(radius=SHIP_RADIUS),
         Mesh(handle=game.meshes.get("ship", 0), material=game.materials.get("ship", 0)),
-        *(_ship_body() if game.physics else ()),
+        *(game.bodies(np.array([SHIP_RADIUS]), ship=True) if game.bodies is not None else ()),
     )
     spawn_asteroids(world, game, game.level_count(), game.rng.choice(3, game.level_count(), p=(0.2, 0.3, 0.5)))
-
-
-def _bodies(radii: np.ndarray) -> tuple:
-    from .asteroids_physics import bodies
-
-    return bodies(radii)
-
-
-def _ship_body() -> tuple:
-    from ecs_engine.components.physics import LOCK_ROTATION, LOCK_Y
-
-    from .asteroids_physics import SHIP_MASS, bodies
-
-    return bodies(np.array([SHIP_RADIUS]), np.array([SHIP_MASS]), LOCK_Y | LOCK_ROTATION)  # it turns as steered
 
 
 class ShipSystem(System):
@@ -293,7 +282,7 @@ class CollisionSystem(System):
                 world.events(AsteroidHit).send(hit)
         ships, ship_at, ship_r = _gather(world, Ship)
         game = world.resources[Game]
-        if len(ships) and not game.over and not game.physics:  # (with physics: its contacts, asteroids_physics.py)
+        if len(ships) and not game.over and game.bodies is None:  # (with physics: its contacts, asteroids_physics.py)
             _, i_rock = overlapping_pairs(ship_at, ship_r, rock_at, rock_r)
             if len(i_rock):  # one contact a step: the first asteroid's size class
                 world.events(ShipHit).send(ShipHit(int(world.get(int(rocks[i_rock[0]]), Asteroid).size)))

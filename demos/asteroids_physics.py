@@ -5,8 +5,8 @@ by what hits it. The ship is hurt when a contact begins (a Contact event, not th
 overlap test); shots still hit asteroids through the game's broad phase (they are not bodies:
 a shot's hit splits the asteroid, it does not bounce).
 
-The bodies ride on the game's own entities: `bodies(radii)` are the components spawn_asteroids
-and start add when the Game resource says `physics`.
+The bodies ride on the game's own entities: `bodies` is the Game resource's `bodies`, which
+spawn_asteroids and start call for the components they add (asteroids.py sets it).
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ecs_engine.components import Velocity
-from ecs_engine.components.physics import BEGIN, LOCK_Y, SPHERE, Contact, RigidBody
+from ecs_engine.components.physics import BEGIN, LOCK_ROTATION, LOCK_Y, SPHERE, Contact, RigidBody
 from ecs_engine.components.physics import Collider as Body
 from ecs_engine.ecs import System, World
 
@@ -27,11 +27,12 @@ SHIP_MASS = 2_000.0  # kg: a medium asteroid (1.3 t) deflects it, a big one thro
 RESTITUTION = 0.8  # asteroids bounce, losing a little
 
 
-def bodies(radii: np.ndarray, mass: np.ndarray | None = None, locked: int = LOCK_Y) -> tuple[Any, Any]:
-    """The RigidBody and Collider of spheres of `radii` (their mass from DENSITY unless given)."""
+def bodies(radii: np.ndarray, ship: bool = False) -> tuple[Any, Any]:
+    """The RigidBody and Collider of asteroids of `radii` (their mass from DENSITY), or of the
+    ship (SHIP_MASS, and it does not turn but as steered): Game.bodies."""
     radii = np.asarray(radii, np.float64)
-    if mass is None:
-        mass = DENSITY * 4.0 / 3.0 * np.pi * radii**3
+    mass = np.full(len(radii), SHIP_MASS) if ship else DENSITY * 4.0 / 3.0 * np.pi * radii**3
+    locked = LOCK_Y | LOCK_ROTATION if ship else LOCK_Y
     return (
         RigidBody(mass=mass, locked=locked),
         Body(shape=SPHERE, size=np.repeat(radii[:, None], 3, 1), restitution=RESTITUTION, friction=0.1),

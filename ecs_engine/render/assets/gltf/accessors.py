@@ -5,12 +5,9 @@ every byte checked against the view that holds it."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
-
-if TYPE_CHECKING:
-    from .document import GltfDocument
 
 # componentType -> little-endian dtype
 COMPONENTS: dict[int, np.dtype] = {
@@ -34,10 +31,10 @@ SHAPES: dict[str, tuple[int, ...]] = {
 SPARSE_INDICES = (5121, 5123, 5125)
 
 
-def decode(document: GltfDocument, index: int) -> np.ndarray:
-    """Accessor `index` of `document` as an array (count, *shape): float32 for FLOAT and
-    normalized integers, else the component's own integer type. Matrices come row-major
-    (m[..., row, column]), as NumPy and the engine use them."""
+def decode(document: Any, index: int) -> np.ndarray:
+    """Accessor `index` of `document` (a GltfDocument: its JSON, views and errors) as an array
+    (count, *shape): float32 for FLOAT and normalized integers, else the component's own
+    integer type. Matrices come row-major (m[..., row, column]), as NumPy and the engine use them."""
     entry = document.json["accessors"][index]
     here = f"accessors[{index}]"
     component = entry.get("componentType")
@@ -81,7 +78,7 @@ def element_layout(dtype: np.dtype, shape: tuple[int, ...]) -> tuple[int, int, i
 
 
 def _read(
-    document: GltfDocument, entry: dict[str, Any], here: str, dtype: np.dtype, shape: tuple[int, ...], count: int
+    document: Any, entry: dict[str, Any], here: str, dtype: np.dtype, shape: tuple[int, ...], count: int
 ) -> np.ndarray:
     data, view_offset, view_length, stride = document.view(
         document.number(entry, "bufferView", here), f"{here}.bufferView"
@@ -108,7 +105,7 @@ def _read(
 
 
 def _sparse(
-    document: GltfDocument, sparse: Any, here: str, values: np.ndarray, dtype: np.dtype, shape: tuple[int, ...]
+    document: Any, sparse: Any, here: str, values: np.ndarray, dtype: np.dtype, shape: tuple[int, ...]
 ) -> np.ndarray:
     if not isinstance(sparse, dict):
         raise document.error(here, "is not an object")
@@ -130,9 +127,7 @@ def _sparse(
     return out
 
 
-def _tight(
-    document: GltfDocument, part: Any, where: str, dtype: np.dtype, shape: tuple[int, ...], count: int
-) -> np.ndarray:
+def _tight(document: Any, part: Any, where: str, dtype: np.dtype, shape: tuple[int, ...], count: int) -> np.ndarray:
     """A sparse section's indices or values: `count` tightly packed elements in a buffer view."""
     if not isinstance(part, dict):
         raise document.error(where, "is not an object")
