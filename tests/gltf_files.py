@@ -189,6 +189,22 @@ class GltfBuilder:
             entry["extensions"] = {"KHR_lights_punctual": {"light": light}}
         return self._add("nodes", entry)
 
+    def animation(self, channels: list[tuple[int, str, Any, Any, str]], name: str | None = None) -> int:
+        """Each channel (node, path, times, values, interpolation): its own sampler, whose output
+        is `values` as given (keys x 3 for CUBICSPLINE: in-tangent, value, out-tangent)."""
+        samplers, out = [], []
+        for node, path, times, values, interpolation in channels:
+            values = np.asarray(values, np.float32)
+            flat = values.reshape(-1) if path == "weights" else values.reshape(-1, values.shape[-1])
+            sampler = {
+                "input": self.accessor(np.asarray(times, np.float32), min_max=True),
+                "output": self.accessor(flat),
+                "interpolation": interpolation,
+            }
+            samplers.append(sampler)
+            out.append({"sampler": len(samplers) - 1, "target": {"node": node, "path": path}})
+        return self._add("animations", {"samplers": samplers, "channels": out, **({"name": name} if name else {})})
+
     def scene(self, nodes: list[int]) -> int:
         index = self._add("scenes", {"nodes": nodes})
         self.json.setdefault("scene", index)

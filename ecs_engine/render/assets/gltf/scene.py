@@ -26,6 +26,7 @@ from ....components.camera import ORTHOGRAPHIC, PERSPECTIVE
 from ....maths.decompose import decompose, trs_matrices
 from ..materials import Materials
 from ..mesh_data import MeshData
+from .clips import Clip, read_clips
 from .document import GltfDocument
 from .meshes import GltfMaterials, primitive_mesh
 
@@ -55,6 +56,7 @@ class GltfScene:
     file: Path
     document: GltfDocument
     nodes: list[GltfNode]  # parents before children
+    clips: list[Clip] = field(default_factory=list)  # the file's animations (clips.py)
 
     def spawn(self, world: Any, at: Transform | None = None) -> int:
         """One copy: a root entity (named after the file, placed `at`) whose children are the
@@ -106,7 +108,8 @@ def load_gltf(
         roots = [i for i in range(len(document.items("nodes"))) if i not in children]
     else:
         roots = list(document.item("scenes", scene, "scene").get("nodes", []))
-    return GltfScene(document.file, document, _Reader(document, add_mesh, registry).tree(roots))
+    nodes = _Reader(document, add_mesh, registry).tree(roots)
+    return GltfScene(document.file, document, nodes, read_clips(document))
 
 
 class _Reader:
