@@ -1,5 +1,6 @@
 """Stock component schemas. Declare your own the same way: subclass Component, add Fields."""
 
+from .animation import AnimationPlayer, AnimationTarget
 from .camera import (
     ORTHOGRAPHIC,
     PERSPECTIVE,
@@ -29,6 +30,8 @@ __all__ = [
     "PERSPECTIVE",
     "ActiveCamera",
     "AngularVelocity",
+    "AnimationPlayer",
+    "AnimationTarget",
     "Camera",
     "CameraView",
     "DirectionalLight",

@@ -100,4 +100,13 @@ def test_bad_game_structure_input_is_one_usage_error(build, message):
     with pytest.raises(UsageError) as caught:
         build(app)
     assert message in str(caught.value) and "\n" not in str(caught.value)
-    assert app.systems().keys() <= {"snapshot", "orbit", "motion", "spring", "render_origin", "transform", "hierarchy"}
+    assert app.systems().keys() <= {
+        "snapshot",
+        "orbit",
+        "motion",
+        "spring",
+        "animation",
+        "render_origin",
+        "transform",
+        "hierarchy",
+    }

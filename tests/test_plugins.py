@@ -63,6 +63,7 @@ def test_minimal_plugins_have_no_window_and_no_gpu():
         "orbit": "fixed",
         "motion": "fixed",
         "spring": "fixed",
+        "animation": "update",
         "render_origin": "post_update",
         "transform": "post_update",
         "hierarchy": "post_update",

@@ -1,5 +1,17 @@
-"""Animation: keyframe curves sampled as glTF defines them (sampling.py)."""
+"""Animation: keyframe curves sampled as glTF defines them (sampling.py), clips bound to
+entities by their names (clip.py), played by AnimationPlayer components (player.py)."""
 
+from .clip import AnimationClip, AnimationClips, ClipChannel, target_id
 from .sampling import CUBICSPLINE, INTERPOLATIONS, LINEAR, STEP, Curve
 
-__all__ = ["CUBICSPLINE", "INTERPOLATIONS", "LINEAR", "STEP", "Curve"]
+__all__ = [
+    "CUBICSPLINE",
+    "INTERPOLATIONS",
+    "LINEAR",
+    "STEP",
+    "AnimationClip",
+    "AnimationClips",
+    "ClipChannel",
+    "Curve",
+    "target_id",
+]

@@ -69,6 +69,18 @@ class MotionPlugin(Plugin):
         app.add_systems("fixed", OrbitSystem(), MotionSystem(), SpringSystem())
 
 
+class AnimationPlugin(Plugin):
+    """AnimationPlayer components play the AnimationClips resource's clips on their targets,
+    each frame before the transforms (ecs_engine/animation/player.py)."""
+
+    def build(self, app: App) -> None:
+        from ..animation import AnimationClips
+        from ..animation.player import AnimationSystem
+
+        app.world.resources.setdefault(AnimationClips, AnimationClips())
+        app.add_systems("update", AnimationSystem())
+
+
 class CameraControlPlugin(Plugin):
     """A camera with FlyCamera flies on the keys and mouse (systems/camera_control.py)."""
 
@@ -290,6 +302,7 @@ DefaultPlugins = PluginGroup(
     WindowPlugin,
     RenderPlugin,
     MotionPlugin,
+    AnimationPlugin,
     CameraControlPlugin,
     TransformPlugin,
     HierarchyPlugin,
@@ -298,4 +311,6 @@ DefaultPlugins = PluginGroup(
     PerfPlugin,
     name="DefaultPlugins",
 )
-MinimalPlugins = PluginGroup(TimePlugin, MotionPlugin, TransformPlugin, HierarchyPlugin, name="MinimalPlugins")
+MinimalPlugins = PluginGroup(
+    TimePlugin, MotionPlugin, AnimationPlugin, TransformPlugin, HierarchyPlugin, name="MinimalPlugins"
+)

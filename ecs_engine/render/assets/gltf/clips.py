@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from ....animation.clip import AnimationClip, ClipChannel, target_id
 from ....animation.sampling import CUBICSPLINE, INTERPOLATIONS, LINEAR, Curve
 
 __all__ = ["Channel", "Clip", "read_clips"]
@@ -121,3 +122,15 @@ def _curve(document: Any, sampler: Any, here: str, path: str, targets: int) -> C
     if per_key == 1:
         return Curve(times, values[:, 0], interpolation, rotation)
     return Curve(times, values[:, 1], interpolation, rotation, values[:, 0], values[:, 2])
+
+
+def animation_clip(clip: Clip, paths: dict[int, str]) -> AnimationClip:
+    """A file's clip bound by names (`paths`: glTF node index -> its path of names in the scene),
+    as AnimationClips holds it; channels of nodes outside the scene, and morph weights (not
+    played yet), are left out."""
+    channels = tuple(
+        ClipChannel(target_id(paths[c.node]), c.path, c.curve)
+        for c in clip.channels
+        if c.node in paths and c.path != "weights"
+    )
+    return AnimationClip(clip.name, channels)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import os
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,12 +22,15 @@ from typing import Any
 
 import numpy as np
 
+from ....animation import AnimationClips, target_id
 from ....components import Camera, DirectionalLight, Mesh, Name, Parent, PointLight, SpotLight, Transform
+from ....components.animation import AnimationPlayer, AnimationTarget
 from ....components.camera import ORTHOGRAPHIC, PERSPECTIVE
+from ....errors import UsageError
 from ....maths.decompose import decompose, trs_matrices
 from ..materials import Materials
 from ..mesh_data import MeshData
-from .clips import Clip, read_clips
+from .clips import Clip, animation_clip, read_clips
 from .document import GltfDocument
 from .meshes import GltfMaterials, primitive_mesh
 
@@ -49,6 +53,7 @@ class GltfNode:
     scale: np.ndarray
     parts: list[tuple[int, int]] = field(default_factory=list)
     components: list[Any] = field(default_factory=list)  # a Camera or a light
+    path: str = ""  # its names from the scene's root node ("Armature/Hips"): what clips bind to
 
 
 @dataclass
@@ -57,31 +62,39 @@ class GltfScene:
     document: GltfDocument
     nodes: list[GltfNode]  # parents before children
     clips: list[Clip] = field(default_factory=list)  # the file's animations (clips.py)
+    # the clips' handles in each world's AnimationClips they were added to
+    _handles: weakref.WeakKeyDictionary[AnimationClips, list[int]] = field(default_factory=weakref.WeakKeyDictionary)
 
-    def spawn(self, world: Any, at: Transform | None = None) -> int:
+    def spawn(self, world: Any, at: Transform | None = None, play: str | int | None = None) -> int:
         """One copy: a root entity (named after the file, placed `at`) whose children are the
-        scene's root nodes. The root entity."""
+        scene's root nodes; `play`: a clip (name or index) it plays, looping. The root entity."""
         place = at if at is not None else Transform()
         p, r, s = (np.asarray(v, np.float64)[None] for v in (place.position, place.rotation, place.scale))
-        roots = self.spawn_many(world, 1, p, r, s)
-        return int(roots[0])
+        return int(self.spawn_many(world, 1, p, r, s, play)[0])
 
     def spawn_many(
-        self, world: Any, count: int, positions: Any, rotations: Any = None, scales: Any = None
-    ) -> np.ndarray:
+        self, world: Any, count: int, positions: Any, rotations: Any = None, scales: Any = None,
+        play: str | int | None = None,
+    ) -> np.ndarray:  # fmt: skip
         """`count` copies, their roots at `positions` (and `rotations`, `scales`): each node is
-        one spawn_batch over the copies. The roots' entities."""
+        one spawn_batch over the copies. With clips, each root has an AnimationPlayer (playing
+        `play`, or no clip) and each node an AnimationTarget. The roots' entities."""
         position = np.broadcast_to(np.asarray(positions, np.float64), (count, 3))
         rotation = np.broadcast_to(np.asarray((0, 0, 0, 1) if rotations is None else rotations, np.float64), (count, 4))
         scale = np.broadcast_to(np.asarray((1, 1, 1) if scales is None else scales, np.float64), (count, 3))
         place = Transform(position=position, rotation=rotation, scale=scale)
-        roots = world.spawn_batch(count, place, Name(value=self.file.stem))
+        player: list[Any] = []
+        if self.clips:
+            player = [AnimationPlayer(clip=self._clip(world, play), playing=play is not None)]
+        roots = world.spawn_batch(count, place, Name(value=self.file.stem), *player)
         made: list[np.ndarray] = []
         for node in self.nodes:
             parent = roots if node.parent < 0 else made[node.parent]
             here = Transform(position=node.translation, rotation=node.rotation, scale=node.scale)
             values: list[Any] = [here, Parent(entity=parent), Name(value=node.name)]
             values += node.components
+            if player:
+                values.append(AnimationTarget(player=roots, id=target_id(node.path)))
             if len(node.parts) == 1:
                 values.append(Mesh(handle=node.parts[0][0], material=node.parts[0][1]))
             ids = world.spawn_batch(count, *values)
@@ -90,6 +103,29 @@ class GltfScene:
                 for handle, material in node.parts:
                     world.spawn_batch(count, Transform(), Parent(entity=ids), Mesh(handle=handle, material=material))
         return roots
+
+    def _clip(self, world: Any, play: str | int | None) -> int:
+        """The handle of clip `play` (its name, or its index in the file); -1 for None."""
+        handles = self._registered(world)
+        names = [clip.name for clip in self.clips]
+        if play is None:
+            return -1
+        if isinstance(play, str) and play in names:
+            return handles[names.index(play)]
+        if isinstance(play, int) and not isinstance(play, bool) and 0 <= play < len(handles):
+            return handles[play]
+        raise UsageError(f"{self.file}: has no clip {play!r} (its clips: {', '.join(names) or 'none'})")
+
+    def clip_handles(self, world: Any) -> dict[str, int]:
+        """The scene's clips added to the world's AnimationClips (once a world): handle by name."""
+        return {clip.name: h for clip, h in zip(self.clips, self._registered(world))}
+
+    def _registered(self, world: Any) -> list[int]:
+        clips = world.resources.setdefault(AnimationClips, AnimationClips())
+        if clips not in self._handles:
+            paths = {node.index: node.path for node in self.nodes}
+            self._handles[clips] = [clips.add(animation_clip(clip, paths)) for clip in self.clips]
+        return self._handles[clips]
 
 
 def load_gltf(
@@ -129,7 +165,9 @@ class _Reader:
             if index in seen:
                 raise self.d.error(where, f"names node {index} a second time (a node has one parent, no cycles)")
             seen.add(index)
-            out.append(self._node(index, entry, parent))
+            node = self._node(index, entry, parent)
+            node.path = node.name if parent < 0 else f"{out[parent].path}/{node.name}"
+            out.append(node)
             children = entry.get("children", [])
             if not isinstance(children, list):
                 raise self.d.error(f"nodes[{index}].children", "is not an array")
