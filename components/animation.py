@@ -14,13 +14,21 @@ from ecs_engine.ecs.schema import Component, Field
 class AnimationPlayer(Component):
     """The clip (a handle in AnimationClips; -1: none) at `time` seconds, moving at `speed` while
     `playing`; at the clip's end it starts again when `looping`, else it stops there (`playing`
-    turns False)."""
+    turns False).
+
+    A cross-fade (animation/player.py's `crossfade`) keeps the clip it left in `from_clip`, at
+    `from_time`, still moving, and blends it into `clip` over `fade` seconds (`faded` of them
+    gone); then `from_clip` is -1 again."""
 
     clip = Field(np.int32, default=-1, minimum=-1)
     time = Field(np.float64, default=0.0, finite=True)
     speed = Field(np.float64, default=1.0, finite=True, minimum=-1e3, maximum=1e3)
     playing = Field(np.bool_, default=True)
     looping = Field(np.bool_, default=True)
+    from_clip = Field(np.int32, default=-1, minimum=-1)
+    from_time = Field(np.float64, default=0.0, finite=True)
+    fade = Field(np.float64, default=0.0, finite=True, minimum=0.0)
+    faded = Field(np.float64, default=0.0, finite=True, minimum=0.0)
 
 
 class AnimationTarget(Component):

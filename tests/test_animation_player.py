@@ -10,7 +10,7 @@ import pytest
 from gltf_files import GltfBuilder
 
 from ecs_engine import World
-from ecs_engine.animation import LINEAR, AnimationClips
+from ecs_engine.animation import LINEAR, AnimationClips, Curve
 from ecs_engine.animation.player import AnimationSystem
 from ecs_engine.components import Name, Transform
 from ecs_engine.components.animation import AnimationPlayer
@@ -26,8 +26,13 @@ def slide_at(t):
     return np.array([np.interp(t, KEYS, SLIDE[:, i]) for i in range(3)])
 
 
+TURNS = np.array([[0.0, 0.0, 0.0, 1.0], [0.0, np.sin(0.6), 0.0, np.cos(0.6)], [0.0, 1.0, 0.0, 0.0]])
+LIFT = np.array([[0.0, 5.0, 0.0], [0.0, 7.0, 0.0], [0.0, 5.0, 0.0]])
+
+
 def arm_file(tmp_path, name="rig.gltf", extra_first=False):
-    """A body with an arm below it; the clip 'wave' slides the arm (and 'still' holds the body)."""
+    """A body with an arm below it; the clip 'wave' slides the arm (and 'still' holds the body),
+    'lift' raises it and 'turn' turns it."""
     b = GltfBuilder()
     if extra_first:
         b.node("tail", translation=(0.0, -1.0, 0.0))  # node indices differ from the other file's
@@ -35,6 +40,7 @@ def arm_file(tmp_path, name="rig.gltf", extra_first=False):
     body = b.node("body", children=[arm])
     b.animation([(arm, "translation", KEYS, SLIDE, LINEAR)], name="wave")
     b.animation([(body, "scale", [0.0], [[2.0, 2.0, 2.0]], LINEAR)], name="still")
+    b.animation([(arm, "translation", KEYS, LIFT, LINEAR), (arm, "rotation", KEYS, TURNS, LINEAR)], name="lift")
     roots = [body] + ([0] if extra_first else [])
     b.scene(roots)
     return load_gltf(b.gltf(tmp_path / name), lambda mesh: 0, Materials())
@@ -110,6 +116,27 @@ def test_a_clip_the_world_lacks_or_a_scene_lacks_is_one_error(tmp_path):
     world.set(root, AnimationPlayer, clip=7, playing=True)
     with pytest.raises(UsageError, match=rf"entity {root}: AnimationPlayer.clip is 7, but the world's AnimationClips"):
         step(world, 0.1)
-    with pytest.raises(UsageError, match=r"rig.gltf: has no clip 'run' \(its clips: wave, still\)"):
+    with pytest.raises(UsageError, match=r"rig.gltf: has no clip 'run' \(its clips: wave, still, lift\)"):
         scene.spawn(World(), play="run")
-    assert len(world.resources[AnimationClips]) == 2
+    assert len(world.resources[AnimationClips]) == 3
+
+
+def test_a_crossfade_blends_the_old_clip_into_the_new_by_its_progress(tmp_path):
+    from ecs_engine.animation.player import crossfade
+
+    scene = arm_file(tmp_path)
+    world = World()
+    root = scene.spawn(world, play="wave")
+    step(world, 0.4)
+    crossfade(world, root, scene.clip_handles(world)["lift"], 0.5)
+    step(world, 0.25)  # halfway: wave at 0.65 s, lift at 0.25 s, each weighing a half
+    (arm,) = named(world, "arm")
+    lift_at = np.array([np.interp(0.25, KEYS, LIFT[:, i]) for i in range(3)])
+    np.testing.assert_allclose(world.get(arm, Transform).position, (slide_at(0.65) + lift_at) / 2, atol=1e-6)
+    turn = Curve(KEYS, TURNS, LINEAR, rotation=True).sample(0.25)
+    np.testing.assert_allclose(world.get(arm, Transform).rotation, turn, atol=1e-6)  # lift's alone: wave has no turn
+    step(world, 0.3)  # the fade is over: lift alone, wave let go
+    player = world.get(root, AnimationPlayer)
+    assert player.from_clip == -1
+    lift_at = np.array([np.interp(0.55, KEYS, LIFT[:, i]) for i in range(3)])
+    np.testing.assert_allclose(world.get(arm, Transform).position, lift_at, atol=1e-6)
