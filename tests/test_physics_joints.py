@@ -108,16 +108,22 @@ def test_a_distance_joint_and_a_fixed_joint_keep_what_they_keep():
     assert np.abs(gap - 1.0).max() < 0.02  # welded: the two boxes fell and tumbled as one
 
 
-def test_a_joint_to_an_entity_without_a_body_is_one_error_naming_them():
-    def setup(world, dt):
-        lost = world.spawn(Transform())
-        world.spawn(Transform(), RigidBody(), Collider(), Joint(kind=BALL, other=lost))
-
+def refused(setup, capsys) -> str:
+    """What a run of `setup` printed when it stopped with exit status 2 (one error)."""
     app = App(title="bad joint").add_plugins(MinimalPlugins, physics_plugin())
     app.add_startup_systems(setup)
     with pytest.raises(SystemExit) as stop:
         app.run(frames=2)
     assert stop.value.code == 2
+    return capsys.readouterr().err
+
+
+def test_a_joint_to_an_entity_without_a_body_is_one_error_naming_them(capsys):
+    def setup(world, dt):
+        lost = world.spawn(Transform())
+        world.spawn(Transform(), RigidBody(), Collider(), Joint(kind=BALL, other=lost))
+
+    assert "which has no body" in refused(setup, capsys)
 
 
 def test_a_joint_to_a_destroyed_entity_is_one_error_saying_so(capsys):
@@ -126,42 +132,8 @@ def test_a_joint_to_a_destroyed_entity_is_one_error_saying_so(capsys):
         world.destroy(gone)
         world.spawn(Transform(), RigidBody(), Collider(), Joint(kind=BALL, other=gone))
 
-    app = App(title="dead joint").add_plugins(MinimalPlugins, physics_plugin())
-    app.add_startup_systems(setup)
-    with pytest.raises(SystemExit) as stop:
-        app.run(frames=2)
-    assert stop.value.code == 2
-    err = capsys.readouterr().err
+    err = refused(setup, capsys)
     assert "Joint.other" in err and "not alive" in err
-
-
-def test_a_pendulum_whose_anchor_is_destroyed_falls_free_and_loses_its_joint():
-    from ecs_engine import Time
-
-    made, seen = {}, []
-
-    def setup(world, dt):
-        made["top"] = anchor(world, (0.0, 5.0, 0.0))
-        made["bob"] = world.spawn(
-            Transform(position=(2.0, 5.0, 0.0)), RigidBody(), Collider(shape=SPHERE, size=(0.2, 0.2, 0.2)),
-            Joint(kind=BALL, other=made["top"], pivot=(0.0, 5.0, 0.0)),
-        )  # fmt: skip
-
-    def cut(world, dt):
-        steps = world.resources[Time].steps
-        if steps == 30:
-            world.destroy(made["top"])
-        seen.append((steps, world.get(made["bob"], Transform).position.copy(), world.has(made["bob"], Joint)))
-
-    app = App(title="cut").add_plugins(MinimalPlugins, physics_plugin())
-    app.add_startup_systems(setup)
-    app.add_systems("update", cut)
-    app.run(frames=120)
-    before = [p for s, p, _ in seen if s <= 30]
-    after = [p for s, p, _ in seen if s >= 100]
-    assert np.abs(np.linalg.norm(np.array(before) - (0.0, 5.0, 0.0), axis=1) - 2.0).max() < 0.01
-    assert np.linalg.norm(after[-1] - (0.0, 5.0, 0.0)) > 2.5  # no rope: it left the circle
-    assert all(j for s, _, j in seen if s < 30) and not any(j for s, _, j in seen if s > 32)
 
 
 def test_a_motor_turns_a_hinge_to_its_target_and_follows_a_new_one():

@@ -37,7 +37,7 @@ __all__ = ["ModelPart", "load_model", "model_part"]
 log = logging.getLogger("ecs_engine")
 
 # glTF texture slot (trimesh's PBRMaterial attribute and the JSON key) -> Material field, sRGB?
-_GLTF_TEXTURES = {
+GLTF_TEXTURES = {
     "baseColorTexture": ("base_color_texture", True),
     "metallicRoughnessTexture": ("metallic_roughness_texture", False),
     "normalTexture": ("normal_texture", False),
@@ -194,7 +194,7 @@ class _GltfMaterials:
         name = _name(pbr) or "material"
         fields: dict[str, Any] = {}
         declared = self._declared(name)  # what the file's JSON says the material's textures are
-        for slot, (field, color) in _GLTF_TEXTURES.items():
+        for slot, (field, color) in GLTF_TEXTURES.items():
             image = getattr(pbr, slot, None)
             if image is not None:
                 fields[field] = self._texture(image, color, name, slot)
@@ -241,7 +241,7 @@ class _GltfMaterials:
             if not isinstance(m, dict) or m.get("name", "material") != material:
                 continue
             slots = {**m.get("pbrMetallicRoughness", {}), **m}
-            for slot in _GLTF_TEXTURES:
+            for slot in GLTF_TEXTURES:
                 info = slots.get(slot)
                 if isinstance(info, dict) and isinstance(info.get("index"), int):
                     out[slot] = self._image_name(info["index"])

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..materials import Material, Materials
 from ..mesh_data import MeshData
+from ..model_loading import GLTF_TEXTURES
 from ..textures import ImageError, Texture, pixels_of
 from .document import GltfDocument
 
@@ -22,14 +23,6 @@ log = logging.getLogger("ecs_engine")
 
 TRIANGLES, STRIP, FAN = 4, 5, 6
 _MODES = {0: "points", 1: "lines", 2: "line loops", 3: "line strips"}
-# glTF texture slot (in pbrMetallicRoughness or the material) -> Material field, sRGB?
-_TEXTURES = {
-    "baseColorTexture": ("base_color_texture", True),
-    "metallicRoughnessTexture": ("metallic_roughness_texture", False),
-    "normalTexture": ("normal_texture", False),
-    "emissiveTexture": ("emissive_texture", True),
-    "occlusionTexture": ("occlusion_texture", False),
-}
 
 
 def primitive_mesh(document: GltfDocument, mesh: int, index: int) -> MeshData | None:
@@ -138,7 +131,7 @@ class GltfMaterials:
         if mode not in ("OPAQUE", "MASK", "BLEND"):
             raise d.error(f"{here}.alphaMode", f"is {mode!r}, not OPAQUE, MASK or BLEND")
         fields: dict[str, Any] = {}
-        for slot, (field, color) in _TEXTURES.items():
+        for slot, (field, color) in GLTF_TEXTURES.items():
             info = pbr.get(slot, m.get(slot))
             if isinstance(info, dict):
                 fields[field] = self._texture(info, color, f"{here}.{slot}")
