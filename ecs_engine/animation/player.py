@@ -90,7 +90,10 @@ def _apply(
     over what a clip faded from wrote this frame, and written outright where none did."""
     order = np.argsort(ids, kind="stable")
     rows, ids, times = rows[order], ids[order], times[order]
-    weight = None if weight is None or (weight >= 1.0).all() else weight[order]
+    faded_from = weight is None
+    blend = not faded_from and bool((weight < 1.0).any())
+    if blend:
+        weight = weight[order]
     for channel in clip.channels:
         key = np.uint64(channel.target)
         lo, hi = int(np.searchsorted(ids, key, "left")), int(np.searchsorted(ids, key, "right"))
@@ -99,9 +102,9 @@ def _apply(
         name = _COLUMNS[channel.property]
         column, here = getattr(transform, name), rows[lo:hi]
         value = channel.curve.sample(times[lo:hi])
-        if weight is None:
+        if faded_from:
             written[name][here] = True
-        else:
+        elif blend:
             w = np.where(written[name][here], weight[lo:hi], 1.0)  # a target the old clip left alone: the new one's
             now = column[here]
             value = slerp(now, value, w) if name == "rotation" else now + (value - now) * w[:, None]

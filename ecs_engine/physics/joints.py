@@ -52,9 +52,7 @@ class Joints:
         current[present & INDEX_MASK] = present
         known = np.flatnonzero(self.owner >= 0)
         gone = known[current[known] != self.owner[known]]
-        for slot in gone.tolist():  # (a destroyed body's constraints went with it: the call is then ignored)
-            self.native.destroy_constraint(int(self.handle[slot]))
-        self.owner[gone], self.handle[gone], self.target[gone] = -1, 0, np.nan
+        self._drop(gone)
         broken = self._break(world, bodies)
         made = 0
         for batch in batches:
@@ -80,21 +78,23 @@ class Joints:
         held = np.zeros(len(live), bool)
         held[there] = bodies.owner[slots[there]] == others[there]
         broken = live[~held]
-        for slot in broken.tolist():  # (a destroyed body's constraints went with it: the call is then ignored)
-            self.native.destroy_constraint(int(self.handle[slot]))
         owners = self.owner[broken].copy()
         if len(owners):
             world.remove(owners, Joint)
-        self.owner[broken], self.handle[broken], self.target[broken] = -1, 0, np.nan
+        self._drop(broken)
         return owners
 
     def forget(self, entities: np.ndarray) -> None:
         """The joints on `entities`' bodies (which are made again) destroyed, to be made again by
         the next `sync`."""
-        on = np.flatnonzero((self.owner >= 0) & (np.isin(self.owner, entities) | np.isin(self.other, entities)))
-        for slot in on.tolist():
+        self._drop(np.flatnonzero((self.owner >= 0) & (np.isin(self.owner, entities) | np.isin(self.other, entities))))
+
+    def _drop(self, slots: np.ndarray) -> None:
+        """The constraints at `slots` destroyed and the slots emptied (a constraint that went with
+        a destroyed body: the library ignores the call)."""
+        for slot in slots.tolist():
             self.native.destroy_constraint(int(self.handle[slot]))
-        self.owner[on], self.handle[on], self.target[on] = -1, 0, np.nan
+        self.owner[slots], self.handle[slots], self.target[slots] = -1, 0, np.nan
 
     def drive(self, world: Any) -> None:
         """Motor targets a system changed (or new motors') handed to the library."""

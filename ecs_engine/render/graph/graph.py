@@ -194,7 +194,7 @@ class FrameGraph:
     def compiled_for(self, extent: tuple[int, int]) -> bool:
         """Whether the last compile stands for `extent` and everything since (a compile would
         do nothing)."""
-        return self.compiled is not None and self.compiled.signature == (extent, self._version)
+        return self.stands(self._version, extent)
 
     def stands(self, version: int, extent: tuple[int, int]) -> bool:
         """Whether the graph is still at `version` and compiled for it and `extent` (one call

@@ -169,7 +169,7 @@ class OutputGraph(OutputImports):
 
     def _slot_kept(self, state: Any, rendering: Any, overlay: Any, slot: int) -> tuple[tuple, Any]:
         """The frame's window and `_inputs`, and the slot's kept entry if made from them (or None)."""
-        self.frame.window = self._window(overlay)
+        self.frame.window = None if overlay is None else self._window(overlay)  # (run every frame: no call without)
         inputs = self._inputs(state, rendering, overlay)
         kept = self._kept.get(slot)
         return inputs, kept if kept is not None and kept[0] == inputs else None
@@ -210,11 +210,9 @@ class OutputGraph(OutputImports):
     def key_again(self, state: Any, rendering: Any, tone_map: Any, overlay: Any, slot: int) -> Any:
         """Frame replay's graph key without a prepare, when the slot's kept entry has today's inputs
         and the graph stands for them (that version, compiled for the extent): (the graph, its key
-        with the kept handles, or None for UNREPLAYABLE); else None. `record` prepares later.
-        It runs every frame, before the jobs: its calls are kept few (_slot_kept's, inlined)."""
-        kept = self._kept.get(slot)
-        self.frame.window = None if overlay is None else self._window(overlay)
-        if kept is None or kept[0] != self._inputs(state, rendering, overlay):
+        with the kept handles, or None for UNREPLAYABLE); else None. `record` prepares later."""
+        kept = self._slot_kept(state, rendering, overlay, slot)[1]
+        if kept is None:
             return None
         graph, (version, imports) = kept[2], kept[3]
         if not graph.stands(version, (state.key[1], state.key[2])):

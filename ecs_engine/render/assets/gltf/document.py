@@ -118,7 +118,7 @@ class GltfDocument:
             elif not isinstance(uri, str):
                 raise self.error(f"{here}.uri", f"is {uri!r}, not a string")
             elif uri.startswith("data:"):
-                data = _data_uri(self, uri, f"{here}.uri")
+                data = data_uri(self, uri, f"{here}.uri")
             else:
                 data = self._external(uri, f"{here}.uri")
             if len(data) < length:
@@ -183,7 +183,7 @@ def _glb_chunks(file: Path, data: bytes) -> tuple[bytes, bytes | None]:
     return chunks[0][1], binary
 
 
-def _data_uri(document: GltfDocument, uri: str, where: str) -> bytes:
+def data_uri(document: GltfDocument, uri: str, where: str) -> bytes:
     head, _, body = uri.partition(",")
     if not head.endswith(";base64"):
         raise document.error(where, f"is a data URI that is not base64 ({head[:40]!r})")

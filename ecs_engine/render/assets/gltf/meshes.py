@@ -17,7 +17,7 @@ from ..materials import Material, Materials
 from ..mesh_data import MeshData
 from ..model_loading import GLTF_TEXTURES
 from ..textures import ImageError, Texture, pixels_of
-from .document import GltfDocument
+from .document import GltfDocument, data_uri
 
 log = logging.getLogger("ecs_engine")
 
@@ -165,9 +165,7 @@ class GltfMaterials:
                     pixels = _decode(data[offset : offset + length])
                     handle = textures.add(Texture(f"{d.file.stem}:image{source}", pixels, color))
                 elif isinstance(image.get("uri"), str) and image["uri"].startswith("data:"):
-                    from .document import _data_uri
-
-                    pixels = _decode(_data_uri(d, image["uri"], f"images[{source}].uri"))
+                    pixels = _decode(data_uri(d, image["uri"], f"images[{source}].uri"))
                     handle = textures.add(Texture(f"{d.file.stem}:image{source}", pixels, color))
                 else:
                     handle = textures.load(d.file.parent / str(image.get("uri")), color=color, named_by=str(d.file))
