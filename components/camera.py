@@ -8,13 +8,13 @@ so they live with the data they read rather than in either of them.
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from ecs_engine.ecs.schema import Component, Field
+from ecs_engine.ecs.structural import structural
 from ecs_engine.ecs.world import World
 from ecs_engine.errors import UsageError
 
@@ -154,12 +154,7 @@ def active_camera(world: World) -> int:
     RenderTexture, the only one, or else the one tagged ActiveCamera, or else (split screen) the
     first by Viewport order, then entity id. Raises UsageError when there is none or it is
     ambiguous. camera_views.py lists every camera that draws."""
-    cached = _ACTIVE.get(world)
-    if cached is not None and cached[0] == world.structure_version:
-        return cached[1]  # which entity it is can only change with the world's structure
-    eid = _active_camera(world)
-    _ACTIVE[world] = (world.structure_version, eid)
-    return eid
+    return structural(world, "active_camera", _active_camera)  # only the structure changes it
 
 
 def _active_camera(world: World) -> int:
@@ -186,10 +181,6 @@ def _active_camera(world: World) -> int:
         f"{len(cameras)} entities have Camera and Transform and none is tagged ActiveCamera: "
         "add ActiveCamera() to the one to render from"
     )
-
-
-# per world: (structure_version, active camera)
-_ACTIVE: weakref.WeakKeyDictionary[Any, tuple[int, int]] = weakref.WeakKeyDictionary()
 
 
 @dataclass

@@ -87,8 +87,8 @@ def test_the_picture_shows_only_the_camera_s_layers() -> None:
 
 
 def test_whether_any_entity_has_layers_is_asked_again_only_after_a_structural_change() -> None:
+    from ecs_engine.ecs.structural import structural
     from ecs_engine.render.extract.frame_data import camera_layers
-    from ecs_engine.render.extract.structural import structural
 
     asked = []
 

@@ -10,6 +10,7 @@ writes, so it never needs to know which system is running.
 from __future__ import annotations
 
 from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 
@@ -31,6 +32,8 @@ class Storage:
         self._table_ids: dict[frozenset[type[Component]], int] = {}
         # Bumped by every spawn, destroy, add and remove that is applied (not when queued).
         self.structure_version = 0
+        # (structure_version, {name: answer}): ecs/structural.py's answers, for that version
+        self.answers: tuple[int, dict[str, Any]] = (0, {})
         self._places: dict[int, tuple[int, ArchetypeTable, int]] = {}  # see located
         self.log: LifecycleLog | None = None  # made when something watches components come and go
         self.table_for(frozenset())

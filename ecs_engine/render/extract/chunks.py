@@ -23,6 +23,7 @@ import numpy as np
 from ...components import Mesh, ModelMatrix, NotShadowCaster, NotShadowReceiver
 from ...components.camera import RenderLayers
 from ...components.camera_views import DEFAULT_LAYERS
+from ...ecs.structural import structural
 from ...ecs.world import World
 from ...jobs import row_chunks
 
@@ -95,8 +96,6 @@ class ChunkExtract:
         self._chunks: list[Chunk] = []
         self._split_key: tuple[object, ...] = ()
         self._split: list[tuple[np.ndarray, np.ndarray]] = []  # per table: chunk rows, rows set aside
-        self._layered_key: tuple[object, ...] = ()
-        self._layered = False  # whether a table with a mesh holds RenderLayers rows
 
     def chunks(self, world: World, mesh_count: int, material_count: int = 1 << 32) -> list[Chunk]:
         """Row ranges of every table with a ModelMatrix and a Mesh, each with its buffer slice.
@@ -141,11 +140,7 @@ class ChunkExtract:
         only the rows it sees)."""
         if not layers & DEFAULT_LAYERS:
             return True
-        key = (world, world.structure_version)  # which tables hold RenderLayers rows changes no other way
-        if key != self._layered_key:
-            tables = world.query(ModelMatrix, Mesh, write=()).tables
-            self._layered_key, self._layered = key, any(t.has(RenderLayers) and t.count for t in tables)
-        return self._layered
+        return structural(world, "layered_meshes", _layered_meshes)  # which tables: only structure changes it
 
     def split(
         self, world: World, chunks: list[Chunk], blend: np.ndarray | None, layers: int = DEFAULT_LAYERS
@@ -200,3 +195,8 @@ def _seen(table: Any, rows: int, layers: int) -> np.ndarray:
     if not table.has(RenderLayers):
         return np.full(rows, bool(layers & DEFAULT_LAYERS))
     return (table.columns[_LAYERS][:rows] & np.uint32(layers)) != 0
+
+
+def _layered_meshes(world: World) -> bool:
+    """Whether some row with a mesh has RenderLayers."""
+    return any(t.has(RenderLayers) and t.count for t in world.query(ModelMatrix, Mesh, write=()).tables)

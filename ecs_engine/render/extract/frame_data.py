@@ -23,6 +23,7 @@ from ...components import render_origin
 from ...components.camera import RenderLayers, active_camera
 from ...components.camera_views import DEFAULT_LAYERS
 from ...components.environment import Environment
+from ...ecs.structural import structural
 from ...ecs.world import World
 from ...maths.culling import frustum_planes
 from ..assets.materials import Materials
@@ -45,7 +46,6 @@ from .environment import extract_environment
 from .lights import KeptPoints, LightKinds, extract_lights, light_kinds
 from .materials import extract_materials
 from .shadows import ShadowCasters, ShadowExtract
-from .structural import structural
 
 # names older code imports from here (they live in extract/chunks.py)
 __all__ = [

@@ -10,10 +10,10 @@ from ecs_engine.components.camera import ActiveCamera, Camera, RenderLayers, Ren
 from ecs_engine.components.camera_views import CameraView, camera_views
 from ecs_engine.components.transform import Transform
 
+from ...ecs.structural import structural
 from ...ecs.world import World
 from ...maths.camera import check_positive
 from .camera import CameraMatrices, camera_matrices_of
-from .structural import structural
 
 READS = (Camera, Transform, ActiveCamera, Viewport, RenderTexture, RenderLayers)
 
