@@ -37,3 +37,12 @@ class AnimationTarget(Component):
 
     player = Field(np.int64, default=-1, entity=True)
     id = Field(np.uint64, default=0)
+
+
+class Skinned(Component):
+    """A mesh its skin's joints move (animation/skins.py): `skin`, a skin of the world's Skins
+    resource, and `copy`, which copy of that skin's joints (a prefab spawned many times has
+    one copy per spawn). Its vertices follow the joints' world matrices, not its own."""
+
+    skin = Field(np.int32, default=-1, minimum=-1)
+    copy = Field(np.int32, default=0, minimum=0)

@@ -109,4 +109,5 @@ def test_bad_game_structure_input_is_one_usage_error(build, message):
         "render_origin",
         "transform",
         "hierarchy",
+        "skins",
     }

@@ -46,8 +46,8 @@ ALLOWED: dict[str, set[str] | None] = {
     "assets/scene_assets.py": None,
     "assets/scene_meshes.py": None,  # the meshes' codec, apart from scene_assets.py for size
     # a glTF scene spawned into a world as entities (a prefab) and its clips added to the world's
-    # AnimationClips, by a game's set-up or systems, never while a frame is drawn
-    "assets/gltf/scene.py": {"GltfScene.spawn_many", "GltfScene._registered"},
+    # AnimationClips (its skins to its Skins), by a game's set-up or systems, never while a frame is drawn
+    "assets/gltf/scene.py": {"GltfScene.spawn_many", "GltfScene._registered", "GltfScene._skins"},
     # the app's and editor's question "which entity is under this pixel", asked between frames
     # with the world in hand (a ray from the active camera against the rows' spheres)
     "picking.py": None,

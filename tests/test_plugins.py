@@ -67,6 +67,7 @@ def test_minimal_plugins_have_no_window_and_no_gpu():
         "render_origin": "post_update",
         "transform": "post_update",
         "hierarchy": "post_update",
+        "skins": "post_update",
     }
 
 
@@ -76,7 +77,7 @@ def test_the_demo_schedule_is_the_scene_plugins(monkeypatch):
     assert default_schedule().order() == [
         ("fixed", ["snapshot", "orbit", "motion", "spring"]),
         ("update", ["fly_camera"]),
-        ("post_update", ["render_origin", "transform", "hierarchy"]),
+        ("post_update", ["render_origin", "transform", "hierarchy", "skins"]),
     ]
     monkeypatch.setattr(plugins, "SCENE_PLUGINS", plugins.SCENE_PLUGINS.without(HierarchyPlugin))
     assert default_schedule().order()[2] == ("post_update", ["render_origin", "transform"])

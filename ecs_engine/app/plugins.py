@@ -100,12 +100,14 @@ class TransformPlugin(Plugin):
 
 
 class HierarchyPlugin(Plugin):
-    """Children's matrices from their Parent's, after TransformPlugin's."""
+    """Children's matrices from their Parent's, after TransformPlugin's; then the skins' joint
+    matrices from their joints' (animation/skins.py)."""
 
     def build(self, app: App) -> None:
+        from ..animation.skins import SkinSystem
         from ..systems import HierarchySystem
 
-        app.add_systems("post_update", HierarchySystem())
+        app.add_systems("post_update", HierarchySystem(), SkinSystem())
 
 
 class InputPlugin(Plugin):

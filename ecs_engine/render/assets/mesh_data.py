@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from .skin_weights import SkinWeights
+
 __all__ = ["MeshData", "bounding_sphere", "normalized", "tangent_frames"]
 
 
@@ -57,6 +59,7 @@ class MeshData:
     # {"file": path, "part": k} (a model's part), {"normalized": size, "of": source} or
     # {"normalized_together": size, "of": [sources], "part": k}; None: unknown. Read-only.
     source: dict[str, Any] | None = None
+    skin: SkinWeights | None = None  # the joints and weights that move each vertex; None: not skinned
 
     def __post_init__(self) -> None:
         for field, dtype in (
@@ -91,6 +94,8 @@ class MeshData:
             raise ValueError(f"MeshData {self.name!r}: normals must be unit length")
         if self.center.shape != (3,) or not np.isfinite(self.center).all() or not 0.0 <= self.radius < np.inf:
             raise ValueError(f"MeshData {self.name!r}: bad bounding sphere {self.center}, {self.radius}")
+        if self.skin is not None and self.skin.vertex_count != v:
+            raise ValueError(f"MeshData {self.name!r}: skin weights for {self.skin.vertex_count} vertices, not {v}")
         if self.tangents is None:
             tangents = tangent_frames(self.positions, self.normals, self.uvs, self.indices)
             object.__setattr__(self, "tangents", tangents)
@@ -113,13 +118,14 @@ class MeshData:
         uvs: np.ndarray | None = None,
         tangents: np.ndarray | None = None,
         source: dict[str, Any] | None = None,
+        skin: SkinWeights | None = None,
     ) -> MeshData:
         """Validate and freeze the arrays and compute the bounding sphere (and, when not given,
         the tangents from the texture coordinates)."""
         positions = _frozen(positions, np.float32, "positions")
         center, radius = bounding_sphere(positions)
         indices = np.asarray(indices).reshape(-1)
-        return cls(positions, normals, indices, name, center, radius, uvs, tangents, source)  # type: ignore[arg-type]
+        return cls(positions, normals, indices, name, center, radius, uvs, tangents, source, skin)  # type: ignore[arg-type]
 
     @property
     def vertex_count(self) -> int:

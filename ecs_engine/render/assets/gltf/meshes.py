@@ -16,6 +16,7 @@ import numpy as np
 from ..materials import Material, Materials
 from ..mesh_data import MeshData
 from ..model_loading import GLTF_TEXTURES
+from ..skin_weights import SkinWeights
 from ..textures import ImageError, Texture, pixels_of
 from .document import GltfDocument, data_uri
 
@@ -52,11 +53,14 @@ def primitive_mesh(document: GltfDocument, mesh: int, index: int) -> MeshData | 
             raise document.error(where, f"index {int(indices.max())} is past the primitive's {n} vertices")
     else:
         indices = np.arange(n, dtype=np.uint32)
+    skin = _skin_weights(document, attributes, here, n)
     triangles = _triangles(indices, mode)
     if not len(triangles):
         raise document.error(here, "has no whole triangle")
     if normals is None:  # flat: each triangle's own vertices
-        positions, uvs = positions[triangles.reshape(-1)], None if uvs is None else uvs[triangles.reshape(-1)]
+        corners = triangles.reshape(-1)
+        positions, uvs = positions[corners], None if uvs is None else uvs[corners]
+        skin = None if skin is None else (skin[0][corners], skin[1][corners])
         normals = np.repeat(_face_normals(positions.reshape(-1, 3, 3)), 3, axis=0)
         triangles = np.arange(len(positions), dtype=np.uint32).reshape(-1, 3)
     name = str(document.item("meshes", mesh, "mesh").get("name", f"mesh{mesh}"))
@@ -68,7 +72,42 @@ def primitive_mesh(document: GltfDocument, mesh: int, index: int) -> MeshData | 
         f"{document.file.stem}:{name}:{index}",
         uvs=None if uvs is None else uvs.astype(np.float32),
         source=source,
+        skin=None if skin is None else _weights(document, *skin, here),
     )
+
+
+def _skin_weights(
+    document: GltfDocument, attributes: dict[str, Any], here: str, count: int
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """JOINTS_0/1 and WEIGHTS_0/1 side by side ((count, 4 or 8) each), or None without JOINTS_0."""
+    if "JOINTS_0" not in attributes and "WEIGHTS_0" not in attributes:
+        return None
+    sets = [k for k in (0, 1) if f"JOINTS_{k}" in attributes or f"WEIGHTS_{k}" in attributes]
+    if sets != list(range(len(sets))):
+        raise document.error(f"{here}.attributes", "has JOINTS_1 or WEIGHTS_1 without JOINTS_0 and WEIGHTS_0")
+    joints, weights = [], []
+    for k in sets:
+        for name in (f"JOINTS_{k}", f"WEIGHTS_{k}"):
+            if name not in attributes:
+                other = f"WEIGHTS_{k}" if name.startswith("JOINTS") else f"JOINTS_{k}"
+                raise document.error(f"{here}.attributes", f"has {other} without {name}")
+        where = f"{here}.attributes.JOINTS_{k}"
+        j = document.accessor(document.number(attributes, f"JOINTS_{k}", f"{here}.attributes"), where)
+        if j.dtype.kind != "u" or j.shape[1:] != (4,):
+            raise document.error(where, f"holds {j.dtype} elements of shape {j.shape[1:]}, not unsigned VEC4")
+        if len(j) != count:
+            raise document.error(where, f"has {len(j)} elements, but POSITION has {count}")
+        w = _attribute(document, attributes, f"WEIGHTS_{k}", here, (4,), count)  # normalized integers read as floats
+        joints.append(j)
+        weights.append(w)
+    return np.concatenate(joints, axis=1), np.concatenate(weights, axis=1)
+
+
+def _weights(document: GltfDocument, joints: np.ndarray, weights: np.ndarray, here: str) -> SkinWeights:
+    try:
+        return SkinWeights.of(joints, weights, "vertex weights")
+    except ValueError as exc:
+        raise document.error(f"{here}.attributes.WEIGHTS_0", str(exc).removeprefix("vertex weights: ")) from None
 
 
 def _attribute(

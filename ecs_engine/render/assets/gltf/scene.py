@@ -23,8 +23,9 @@ from typing import Any
 import numpy as np
 
 from ....animation import AnimationClips, target_id
+from ....animation.skins import Skins
 from ....components import Camera, DirectionalLight, Mesh, Name, Parent, PointLight, SpotLight, Transform
-from ....components.animation import AnimationPlayer, AnimationTarget
+from ....components.animation import AnimationPlayer, AnimationTarget, Skinned
 from ....components.camera import ORTHOGRAPHIC, PERSPECTIVE
 from ....errors import UsageError
 from ....maths.decompose import decompose, trs_matrices
@@ -33,6 +34,7 @@ from ..mesh_data import MeshData
 from .clips import Clip, animation_clip, read_clips
 from .document import GltfDocument
 from .meshes import GltfMaterials, primitive_mesh
+from .skins import GltfSkin, bind, read_skin
 
 __all__ = ["GltfNode", "GltfScene", "load_gltf"]
 
@@ -54,6 +56,7 @@ class GltfNode:
     parts: list[tuple[int, int]] = field(default_factory=list)
     components: list[Any] = field(default_factory=list)  # a Camera or a light
     path: str = ""  # its names from the scene's root node ("Armature/Hips"): what clips bind to
+    skin: int = -1  # its mesh's skin: a place in GltfScene.skins (-1: none)
 
 
 @dataclass
@@ -62,8 +65,10 @@ class GltfScene:
     document: GltfDocument
     nodes: list[GltfNode]  # parents before children
     clips: list[Clip] = field(default_factory=list)  # the file's animations (clips.py)
-    # the clips' handles in each world's AnimationClips they were added to
+    skins: list[GltfSkin] = field(default_factory=list)  # the skins its nodes use (skins.py)
+    # the clips' handles in each world's AnimationClips they were added to; the skins' in its Skins
     _handles: weakref.WeakKeyDictionary[AnimationClips, list[int]] = field(default_factory=weakref.WeakKeyDictionary)
+    _skin_handles: weakref.WeakKeyDictionary[Skins, list[int]] = field(default_factory=weakref.WeakKeyDictionary)
 
     def spawn(self, world: Any, at: Transform | None = None, play: str | int | None = None) -> int:
         """One copy: a root entity (named after the file, placed `at`) whose children are the
@@ -87,6 +92,9 @@ class GltfScene:
         if self.clips:
             player = [AnimationPlayer(clip=self._clip(world, play), playing=play is not None)]
         roots = world.spawn_batch(count, place, Name(value=self.file.stem), *player)
+        skins, handles = self._skins(world)
+        # each skin's copies made here: numbered from its copies so far (joints added below)
+        skinned = [Skinned(skin=h, copy=np.arange(skins[h].copies, skins[h].copies + count)) for h in handles]
         made: list[np.ndarray] = []
         for node in self.nodes:
             parent = roots if node.parent < 0 else made[node.parent]
@@ -95,14 +103,25 @@ class GltfScene:
             values += node.components
             if player:
                 values.append(AnimationTarget(player=roots, id=target_id(node.path)))
+            skin = [skinned[node.skin]] if node.skin >= 0 else []
             if len(node.parts) == 1:
-                values.append(Mesh(handle=node.parts[0][0], material=node.parts[0][1]))
+                values += [Mesh(handle=node.parts[0][0], material=node.parts[0][1]), *skin]
             ids = world.spawn_batch(count, *values)
             made.append(ids)
             if len(node.parts) > 1:
                 for handle, material in node.parts:
-                    world.spawn_batch(count, Transform(), Parent(entity=ids), Mesh(handle=handle, material=material))
+                    part = [Transform(), Parent(entity=ids), Mesh(handle=handle, material=material), *skin]
+                    world.spawn_batch(count, *part)
+        for h, s in zip(handles, self.skins, strict=True):
+            skins.add_copies(h, np.stack([made[j] for j in s.joints], axis=1))
         return roots
+
+    def _skins(self, world: Any) -> tuple[Skins, list[int]]:
+        """The world's Skins, and this scene's skins' handles in it (added once a world)."""
+        skins = world.resources.setdefault(Skins, Skins())
+        if skins not in self._skin_handles:
+            self._skin_handles[skins] = [skins.add(s.name, s.inverse_binds, s.reach) for s in self.skins]
+        return skins, self._skin_handles[skins]
 
     def _clip(self, world: Any, play: str | int | None) -> int:
         """The handle of clip `play` (its name, or its index in the file); -1 for None."""
@@ -144,8 +163,9 @@ def load_gltf(
         roots = [i for i in range(len(document.items("nodes"))) if i not in children]
     else:
         roots = list(document.item("scenes", scene, "scene").get("nodes", []))
-    nodes = _Reader(document, add_mesh, registry).tree(roots)
-    return GltfScene(document.file, document, nodes, read_clips(document))
+    reader = _Reader(document, add_mesh, registry)
+    nodes = reader.tree(roots)
+    return GltfScene(document.file, document, nodes, read_clips(document), reader.skins(nodes))
 
 
 class _Reader:
@@ -153,6 +173,7 @@ class _Reader:
         self.d, self.add_mesh = document, add_mesh
         self.materials = GltfMaterials(document, registry)
         self.meshes: dict[int, list[tuple[int, int]]] = {}
+        self.data: dict[int, MeshData] = {}  # by mesh handle: what a skin checks its vertices against
         self.lights = document.json.get("extensions", {}).get(LIGHTS, {}).get("lights", [])
 
     def tree(self, roots: list[int]) -> list[GltfNode]:
@@ -192,12 +213,34 @@ class _Reader:
         node = GltfNode(index, str(entry.get("name", f"node{index}")), parent, t, r, s)
         if "mesh" in entry:
             node.parts = self._mesh(self.d.number(entry, "mesh", here), f"{here}.mesh")
+        if "skin" in entry:
+            if "mesh" not in entry:
+                raise self.d.error(f"{here}.skin", "is on a node without a mesh")
+            node.skin = self.d.number(entry, "skin", here)  # the file's index, until skins() reads it
         if "camera" in entry:
             node.components.append(self._camera(self.d.number(entry, "camera", here), f"{here}.camera"))
         light = entry.get("extensions", {}).get(LIGHTS) if isinstance(entry.get("extensions"), dict) else None
         if isinstance(light, dict):
             node.components.append(self._light(light.get("light"), f"{here}.extensions.{LIGHTS}.light"))
         return node
+
+    def skins(self, nodes: list[GltfNode]) -> list[GltfSkin]:
+        """The skins `nodes` use, read and checked against their meshes; each node's `skin`
+        then names its place in the list."""
+        places = {node.index: k for k, node in enumerate(nodes)}
+        read: dict[int, int] = {}
+        out: list[GltfSkin] = []
+        for node in nodes:
+            if node.skin < 0:
+                continue
+            here = f"nodes[{node.index}].skin"
+            if node.skin not in read:
+                read[node.skin] = len(out)
+                out.append(read_skin(self.d, node.skin, places, here))
+            node.skin = read[node.skin]
+            for handle, _ in node.parts:
+                bind(self.d, out[node.skin], self.data[handle], here)
+        return out
 
     def _mesh(self, mesh: int, where: str) -> list[tuple[int, int]]:
         if mesh not in self.meshes:
@@ -212,7 +255,9 @@ class _Reader:
                 if data is None:
                     continue
                 material = self.materials.handle(primitive.get("material"), f"meshes[{mesh}].primitives[{p}].material")
-                parts.append((self.add_mesh(data), 0 if material is None else material))
+                handle = self.add_mesh(data)
+                self.data[handle] = data
+                parts.append((handle, 0 if material is None else material))
             self.meshes[mesh] = parts
         return self.meshes[mesh]
 
