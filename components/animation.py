@@ -42,7 +42,11 @@ class AnimationTarget(Component):
 class Skinned(Component):
     """A mesh its skin's joints move (animation/skins.py): `skin`, a skin of the world's Skins
     resource, and `copy`, which copy of that skin's joints (a prefab spawned many times has
-    one copy per spawn). Its vertices follow the joints' world matrices, not its own."""
+    one copy per spawn). Its vertices follow the joints' world matrices, not its own: its
+    ModelMatrix, which SkinSystem writes, only places `centre` and `radius` (its mesh's bounding
+    sphere in the bind pose) around the pose, for culling, shadows and picking."""
 
     skin = Field(np.int32, default=-1, minimum=-1)
     copy = Field(np.int32, default=0, minimum=0)
+    centre = Field(np.float32, 3, default=(0.0, 0.0, 0.0), finite=True)
+    radius = Field(np.float32, default=0.0, finite=True, minimum=0.0)

@@ -5,13 +5,43 @@
 layout(push_constant) uniform Push { Instance row; } push;
 #endif
 
+// Skinning (render/extract/skins.py, render/assets/skin_vertices.py): a row whose misc.w >> 1 is
+// not 0 is a skinned mesh's, its joint matrices starting at (misc.w >> 1) - 1; its vertex's
+// eight joints and weights are found by the vertex's index in its mesh (gl_BaseVertex: the
+// indirect mode draws from the merged buffer). Its model rows (which place only its bounds, for
+// culling) give way to the weighted sum of those joints' matrices, so the normal matrix and the
+// position below follow the pose as a model matrix would.
+layout(std430, set = SET_FRAME, binding = BINDING_JOINTS) readonly buffer Joints { vec4 joint_rows[]; };
+layout(std430, set = SET_FRAME, binding = BINDING_SKIN_VERTICES) readonly buffer SkinVertices { uint skin_words[]; };
+
+Instance skinned(Instance inst) {
+    uint first = inst.misc.w >> 1;
+    if (first == 0u) return inst;
+    uint at = skin_words[inst.misc.y >> 1] + uint(gl_VertexIndex - gl_BaseVertexARB) * uint(SKIN_WORDS);
+    vec4 r0 = vec4(0.0), r1 = vec4(0.0), r2 = vec4(0.0);
+    for (uint k = 0u; k < 8u; ++k) {
+        float w = uintBitsToFloat(skin_words[at + 4u + k]);
+        if (w == 0.0) continue;
+        uint pair = skin_words[at + k / 2u];
+        uint joint = (k & 1u) == 0u ? (pair & 0xFFFFu) : (pair >> 16);
+        uint row = 3u * (first - 1u + joint);
+        r0 += w * joint_rows[row];
+        r1 += w * joint_rows[row + 1u];
+        r2 += w * joint_rows[row + 2u];
+    }
+    inst.model[0] = r0;
+    inst.model[1] = r1;
+    inst.model[2] = r2;
+    return inst;
+}
+
 Instance instance_row() {
 #if defined(PUSH_INSTANCE)
-    return push.row;
+    return skinned(push.row);
 #elif defined(INDIRECT_INSTANCE)
-    return instances[ids[gl_InstanceIndex]];
+    return skinned(instances[ids[gl_InstanceIndex]]);
 #else
-    return instances[gl_InstanceIndex];
+    return skinned(instances[gl_InstanceIndex]);
 #endif
 }
 

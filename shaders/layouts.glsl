@@ -22,6 +22,9 @@
 #define BINDING_SHADOW_DEPTH 9
 #define BINDING_ENVIRONMENT 10
 #define FEATURE_ENVIRONMENT 33554432
+#define BINDING_JOINTS 11
+#define BINDING_SKIN_VERTICES 12
+#define SKIN_WORDS 12
 #define SHADOW_HARD 0
 #define SHADOW_PCF 1
 #define SHADOW_PCSS 2
@@ -117,7 +120,7 @@ struct Light {  // 64 bytes, std430
 // One entity's row: 64 bytes (the normal matrix is derived in the vertex shader).
 struct Instance {  // 64 bytes, std430
     vec4 model[3];              // offset 0: rows of the camera-relative model matrix (the last row is 0 0 0 1)
-    uvec4 misc;                 // offset 48: x: material index, y: key = mesh * 2 + mirrored, z: 1 NotShadowReceiver, w: ROW_* bits (indirect mode: ROW_NOT_CASTER), else 0
+    uvec4 misc;                 // offset 48: x: material index, y: key = mesh * 2 + mirrored, z: 1 NotShadowReceiver, w: bit 0 ROW_NOT_CASTER (indirect mode), bits 1-31 a skinned row's first joint + 1 (extract/skins.py), else 0
 };
 
 // A material (render/materials.py): what the fragment shader's shading model reads.

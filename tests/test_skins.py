@@ -16,7 +16,7 @@ from gltf_files import ARRAY_BUFFER, UNSIGNED_BYTE, UNSIGNED_SHORT, GltfBuilder
 
 from ecs_engine import World
 from ecs_engine.animation.skins import Skins, SkinSystem, skinned_positions
-from ecs_engine.components import Mesh, Name, Transform
+from ecs_engine.components import Mesh, ModelMatrix, Name, Transform, render_origin
 from ecs_engine.components.animation import Skinned
 from ecs_engine.maths.decompose import trs_matrices
 from ecs_engine.render.assets.gltf import GltfError
@@ -145,7 +145,7 @@ def test_the_rest_pose_is_the_bind_pose_wherever_a_copy_stands(tmp_path):
     mesh = meshes[world.get(entity(world, "skinned", 2), Mesh).handle]
     assert mesh.skin is not None and np.allclose(mesh.skin.weights.sum(1), 1.0, atol=1e-6)
     for copy in range(3):
-        moved = skinned_positions(mesh.positions, mesh.skin.joints, mesh.skin.weights, skin.matrices[copy])
+        moved = skinned_positions(mesh.positions, mesh.skin.joints, mesh.skin.weights, skin.world_matrices(copy))
         assert np.allclose(moved, positions + (4.0 * copy, 0.0, 0.0), atol=1e-5)
 
 
@@ -170,11 +170,16 @@ def test_posed_vertices_match_the_specification_s_formula_in_many_poses(tmp_path
             world.set(entity(world, name), Transform(position=pose[name][0], rotation=rotation, scale=pose[name][2]))
         settle(world)
         skin = world.resources.get(Skins)[0]
-        got = skinned_positions(mesh.positions, mesh.skin.joints, mesh.skin.weights, skin.matrices[0])
+        got = skinned_positions(mesh.positions, mesh.skin.joints, mesh.skin.weights, skin.world_matrices(0))
         want = spec_positions(positions, joints, weights, globals_of(pose))
         assert np.abs(got - want).max() <= 1e-4 * size * 4, np.abs(got - want).max()
-        # the pose's sphere holds every posed vertex
+        # the pose's sphere holds every posed vertex, and the mesh row's model matrix places the
+        # mesh's own sphere on it (what the renderer culls and picks by)
         assert (np.linalg.norm(got - skin.centres[0], axis=1) <= skin.radii[0] + 1e-9).all()
+        model = world.get(entity(world, "skinned"), ModelMatrix).model.astype(np.float64)
+        centre = (model @ np.r_[mesh.center, 1.0])[:3] + render_origin(world)
+        radius = mesh.radius * np.linalg.norm(model[:3, :3], axis=0).max()
+        assert np.allclose(centre, skin.centres[0], atol=1e-4) and np.isclose(radius, skin.radii[0], rtol=1e-5)
 
 
 def test_each_copy_follows_its_own_joints_and_a_joint_gone_counts_as_the_identity(tmp_path):
@@ -186,13 +191,14 @@ def test_each_copy_follows_its_own_joints_and_a_joint_gone_counts_as_the_identit
     settle(world)
     skin = world.resources.get(Skins)[0]
     mesh = meshes[world.get(a, Mesh).handle]
-    first = skinned_positions(mesh.positions, mesh.skin.joints, mesh.skin.weights, skin.matrices[0])
-    second = skinned_positions(mesh.positions, mesh.skin.joints, mesh.skin.weights, skin.matrices[1])
+    first = skinned_positions(mesh.positions, mesh.skin.joints, mesh.skin.weights, skin.world_matrices(0))
+    second = skinned_positions(mesh.positions, mesh.skin.joints, mesh.skin.weights, skin.world_matrices(1))
     assert np.allclose(first, positions, atol=1e-5)
     assert np.allclose(second, positions + (4.0, 5.0, 0.0), atol=1e-5)
     world.destroy(entity(world, "head", 1))
     settle(world)
-    assert np.allclose(world.resources.get(Skins)[0].matrices[1, 2], np.linalg.inv(globals_of(BIND)["head"]))
+    head = world.resources.get(Skins)[0].world_matrices(1)[2]
+    assert np.allclose(head, np.linalg.inv(globals_of(BIND)["head"]), atol=1e-6)
 
 
 def test_skin_weights_are_normalised_padded_and_checked():
@@ -250,3 +256,21 @@ def test_nan_or_negative_weights_are_one_error_naming_the_file_and_the_accessor(
         with pytest.raises(GltfError, match=what) as caught:
             spawn(path)
         assert str(path) in str(caught.value) and ("WEIGHTS" in str(caught.value) or "accessors[" in str(caught.value))
+
+
+def test_the_pose_kernel_matches_its_numpy_reference():
+    from ecs_engine.animation import skin_pose
+
+    rng = np.random.default_rng(4)
+    worlds = rng.normal(size=(40, 4, 4))
+    worlds[:, 3] = (0, 0, 0, 1)
+    rows = rng.integers(-1, 40, (7, 5))  # -1: a joint that is gone
+    binds, reach, origin = rng.normal(size=(5, 4, 4)), rng.uniform(0, 2, 5), rng.normal(size=3) * 100
+    outs = []
+    for kernel in (skin_pose.pose, skin_pose.pose_numpy):
+        out, centres, radii = np.zeros((7, 5, 3, 4), np.float32), np.zeros((7, 3)), np.zeros(7)
+        kernel(worlds, rows, binds, reach, origin, out, centres, radii, 2, 7)
+        outs.append((out, centres, radii))
+    for a, b in zip(*outs, strict=True):
+        assert np.allclose(a, b, rtol=1e-5, atol=1e-4)
+    assert (outs[0][2][2:] > 0).all() and (outs[0][2][:2] == 0).all()  # only copies 2:7 were posed

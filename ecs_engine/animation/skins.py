@@ -3,24 +3,34 @@ skin once (its inverse bind matrices, and how far from each joint its vertices l
 joint entities of every copy of it; a mesh entity names its skin and copy with `Skinned`.
 
 Each frame, after the hierarchy placed the joints, SkinSystem computes every copy's joint
-matrices in one pass per skin: joint world matrix @ inverse bind matrix, in world space (the
-glTF specification's joint matrix times the mesh node's global transform, which a skinned
-mesh's vertices ignore), and a sphere holding the posed vertices. A vertex is then the
+matrices in one pass per skin (skin_pose.py, on the job pool's threads): joint world matrix @
+inverse bind matrix (the glTF specification's joint matrix times the mesh node's global
+transform, which a skinned mesh's vertices ignore), kept as float32 rows relative to the render
+origin as ModelMatrix is, and a sphere holding the posed vertices. A vertex is then the
 weighted sum of its joints' matrices applied to it (`skinned_positions`, the reference the GPU
 is held to)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from ecs_engine.components.animation import Skinned
+from ecs_engine.components.camera import RenderOrigin, render_origin
 from ecs_engine.components.hierarchy import WorldMatrix
+from ecs_engine.components.transform import ModelMatrix
+from ecs_engine.ecs.entities import INDEX_MASK
 from ecs_engine.ecs.gather import gather
 from ecs_engine.ecs.schedule import System, any_with
+from ecs_engine.jobs import JobPool, over_rows
 
 from ..errors import UsageError
+from .skin_pose import pose
+
+COPIES_PER_JOB = 512  # a job poses this many copies (24 joints: ~12k matrices)
+_WORLD = (WorldMatrix, "matrix")
 
 
 @dataclass
@@ -29,11 +39,16 @@ class Skin:
     inverse_binds: np.ndarray  # (J, 4, 4) float64
     reach: np.ndarray  # (J,) float64: the farthest a vertex it moves lies from the joint, in bind space
     joints: np.ndarray = field(default_factory=lambda: np.empty((0, 0), np.int64))  # (copies, J) entity ids
-    # what SkinSystem computed last: (copies, J, 4, 4) float64 joint matrices in world space, and
-    # per copy a sphere (centre (copies, 3), radius (copies,)) around the posed vertices
+    # what SkinSystem computed last: (copies, J, 3, 4) float32 joint matrices' rows relative to
+    # `origin` (the render origin then), and per copy a sphere around the posed vertices, in
+    # world space (centre (copies, 3), radius (copies,))
     matrices: np.ndarray | None = None
+    origin: np.ndarray = field(default_factory=lambda: np.zeros(3))
     centres: np.ndarray | None = None
     radii: np.ndarray | None = None
+    # where the joints' world matrices are: (structure version, the table's id or -1 for several
+    # tables, rows (copies, J) in it, -1 for a joint that is gone)
+    places: tuple[int, int, np.ndarray] | None = None
 
     @property
     def joint_count(self) -> int:
@@ -42,6 +57,16 @@ class Skin:
     @property
     def copies(self) -> int:
         return int(self.joints.shape[0])
+
+    def world_matrices(self, copy: int) -> np.ndarray:
+        """Copy `copy`'s joint matrices (J, 4, 4) float64, in world space, as last computed."""
+        if self.matrices is None:
+            raise UsageError(f"skin {self.name!r} has not been posed yet (SkinSystem runs after the hierarchy)")
+        out = np.zeros((self.joint_count, 4, 4))
+        out[:, :3] = self.matrices[copy]
+        out[:, :3, 3] += self.origin
+        out[:, 3, 3] = 1.0
+        return out
 
 
 class Skins:
@@ -71,7 +96,7 @@ class Skins:
             raise UsageError(f"skin {s.name!r} has {s.joint_count} joints: copies must be (n, {s.joint_count})")
         first = s.copies
         s.joints = np.concatenate([s.joints, joints])
-        s.matrices = s.centres = s.radii = None
+        s.matrices = s.centres = s.radii = s.places = None
         return np.arange(first, first + len(joints), dtype=np.int32)
 
     def __getitem__(self, handle: int) -> Skin:
@@ -83,44 +108,92 @@ class Skins:
         return len(self.skins)
 
 
-def joint_matrices(world: object, skin: Skin) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(matrices (copies, J, 4, 4), centres (copies, 3), radii (copies,)) of `skin`'s copies as
-    the joints' WorldMatrix stands; a joint that is gone counts as the identity."""
-    worlds, found = gather(world, skin.joints, WorldMatrix, "matrix")
-    worlds[~found] = np.eye(4)
-    matrices = worlds @ skin.inverse_binds
-    # a vertex moved by joint j alone lies within reach_j * (the joint's largest axis scale) of
-    # the joint's origin; a blend of joints lies in the hull of those balls
-    origins = worlds[..., :3, 3]
-    scale = np.linalg.norm(worlds[..., :3, :3], axis=-2).max(axis=-1)
-    reach = skin.reach * scale
-    low, high = (origins - reach[..., None]).min(axis=1), (origins + reach[..., None]).max(axis=1)
-    centres = (low + high) / 2
-    radii = (np.linalg.norm(origins - centres[:, None], axis=2) + reach).max(axis=1, initial=0.0)
-    return matrices, centres, radii
+def joint_matrices(world: Any, skin: Skin, origin: np.ndarray, pool: Any = None) -> None:
+    """Pose `skin`'s copies as the joints' WorldMatrix stands (Skin.matrices, centres, radii),
+    relative to `origin`; ranges of copies on `pool`'s threads."""
+    worlds, rows = _joint_worlds(world, skin)
+    copies = skin.copies
+    if skin.matrices is None or skin.matrices.shape[0] != copies:
+        skin.matrices = np.empty((copies, skin.joint_count, 3, 4), np.float32)
+        skin.centres, skin.radii = np.empty((copies, 3)), np.empty(copies)
+    skin.origin = origin.copy()
+    out, centres, radii = skin.matrices, skin.centres, skin.radii
+    assert centres is not None and radii is not None
+    binds, reach = skin.inverse_binds, skin.reach
+
+    def chunk(s: slice) -> None:
+        pose(worlds, rows, binds, reach, origin, out, centres, radii, s.start, s.stop)
+
+    over_rows(pool, copies, chunk, chunk_rows=COPIES_PER_JOB)
+
+
+def _joint_worlds(world: Any, skin: Skin) -> tuple[np.ndarray, np.ndarray]:
+    """(world matrices, rows (copies, J) in them): the joints' table's WorldMatrix column when they
+    all live in one table (the usual case: kept per structure version), else a gathered copy."""
+    storage = world.storage
+    places = skin.places
+    if places is None or places[0] != storage.structure_version:
+        ids = skin.joints.reshape(-1)
+        alive = world.alive(ids)
+        at = np.where(alive, ids & INDEX_MASK, 0)
+        tables = storage.index.table[at]
+        found = np.unique(tables[alive])
+        one = len(found) == 1 and storage.tables[int(found[0])].has(WorldMatrix)
+        rows = np.where(alive, storage.index.row[at], -1) if one else np.where(alive, np.arange(len(ids)), -1)
+        table = int(found[0]) if one else -1
+        places = skin.places = (storage.structure_version, table, rows.reshape(skin.joints.shape))
+    if places[1] >= 0:
+        return storage.tables[places[1]].columns[_WORLD], places[2]
+    worlds, found = gather(world, skin.joints.reshape(-1), WorldMatrix, "matrix")
+    return worlds, np.where(found, places[2].reshape(-1), -1).reshape(skin.joints.shape)
 
 
 class SkinSystem(System):
-    """Every skin's joint matrices and pose bounds (Skin.matrices, centres, radii), after the
-    hierarchy (HierarchyPlugin adds it after HierarchySystem)."""
+    """Every skin's joint matrices and pose bounds (Skin.matrices, centres, radii), then each
+    Skinned row's ModelMatrix: its mesh's sphere (Skinned.centre, radius) scaled and moved onto
+    its copy's pose sphere, relative to the render origin (the renderer culls by it; the vertex
+    shader draws the vertices from the joints). After the hierarchy (HierarchyPlugin)."""
 
     def __init__(self) -> None:
-        super().__init__(reads=[Skins, WorldMatrix, Skinned], writes=[], name="skins", run_if=any_with(Skinned))
+        reads = [Skins, WorldMatrix, Skinned, RenderOrigin, JobPool]
+        super().__init__(reads=reads, writes=[ModelMatrix], name="skins", run_if=any_with(Skinned))
 
-    def run(self, world: object, dt: float) -> None:
-        skins = world.resources.get(Skins)  # type: ignore[attr-defined]
+    def run(self, world: Any, dt: float) -> None:
+        skins = world.resources.get(Skins)
         if skins is None:
             return
+        origin = np.asarray(render_origin(world), np.float64)
+        pool = world.resources.get(JobPool)
         for skin in skins.skins:
             if skin.copies:
-                skin.matrices, skin.centres, skin.radii = joint_matrices(world, skin)
+                joint_matrices(world, skin, origin, pool)
+        centres = [np.zeros((0, 3)) if s.centres is None else s.centres for s in skins.skins]
+        radii = [np.zeros(0) if s.radii is None else s.radii for s in skins.skins]
+        first = np.cumsum([0] + [len(r) for r in radii])
+        every_centre, every_radius = np.concatenate(centres), np.concatenate(radii)
+        for batch in world.query(Skinned, ModelMatrix):
+            skinned, model = batch[Skinned], batch[ModelMatrix].model
+            skin, copy = skinned.skin.astype(np.int64), skinned.copy.astype(np.int64)
+            known = (skin >= 0) & (skin < len(radii))
+            at = first[np.where(known, skin, 0)] + copy
+            known &= at < first[np.where(known, skin, 0) + 1]
+            if not known.any():
+                continue
+            rows = np.flatnonzero(known)
+            scale = every_radius[at[rows]] / np.maximum(skinned.radius[rows].astype(np.float64), 1e-30)
+            place = every_centre[at[rows]] - origin - scale[:, None] * skinned.centre[rows]
+            m = np.zeros((len(rows), 4, 4))
+            m[:, [0, 1, 2], [0, 1, 2]] = scale[:, None]
+            m[:, :3, 3], m[:, 3, 3] = place, 1.0
+            model[rows] = m
 
 
 def skinned_positions(
     positions: np.ndarray, joints: np.ndarray, weights: np.ndarray, matrices: np.ndarray
 ) -> np.ndarray:
     """Vertices (V, 3) moved by their joints: sum over influences of weight * (matrices[joint] @
-    (position, 1)), with `joints`, `weights` (V, k) and one copy's `matrices` (J, 4, 4)."""
+    (position, 1)), with `joints`, `weights` (V, k) and one copy's `matrices` (J, 3 or 4, 4)."""
     p = np.c_[np.asarray(positions, np.float64), np.ones(len(positions))]
-    blended = np.einsum("vk,vkij->vij", np.asarray(weights, np.float64), matrices[np.asarray(joints, np.int64)])
-    return np.einsum("vij,vj->vi", blended, p)[:, :3]
+    rows = np.asarray(matrices, np.float64)[:, :3]
+    blended = np.einsum("vk,vkij->vij", np.asarray(weights, np.float64), rows[np.asarray(joints, np.int64)])
+    return np.einsum("vij,vj->vi", blended, p)

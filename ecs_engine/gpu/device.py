@@ -76,7 +76,10 @@ class Device:
             raise UsageError(f"{props.deviceName} lacks device extension(s) {missing}")
 
         f12 = vk.VkPhysicalDeviceVulkan12Features()
-        vk.vkGetPhysicalDeviceFeatures2(self.physical, vk.VkPhysicalDeviceFeatures2(pNext=f12))
+        f11 = vk.VkPhysicalDeviceVulkan11Features(pNext=f12)
+        vk.vkGetPhysicalDeviceFeatures2(self.physical, vk.VkPhysicalDeviceFeatures2(pNext=f11))
+        if not f11.shaderDrawParameters:  # the vertex shaders find a skinned vertex by gl_BaseVertex
+            raise UsageError(f"{props.deviceName} lacks shaderDrawParameters (Vulkan 1.1), which the mesh shaders use")
         # ray tracing (gpu/acceleration.py): enabled where the device has all of it
         ray_chain = ray_tracing_chain(vk, self.physical, supported, f12)  # kept until the device is made
         if ray_chain is not None:
@@ -91,6 +94,7 @@ class Device:
             hostQueryReset=f12.hostQueryReset,
             bufferDeviceAddress=1 if ray_chain is not None else 0,
         )
+        want11 = vk.VkPhysicalDeviceVulkan11Features(pNext=want12, shaderDrawParameters=1)
         self.features = {"drawIndirectCount": bool(f12.drawIndirectCount), "hostQueryReset": bool(f12.hostQueryReset)}
         self.features["rayTracing"] = ray_chain is not None
         self.ray_tracing = ray_tracing_properties(vk, self.physical) if ray_chain is not None else None
@@ -121,7 +125,7 @@ class Device:
         # the Python object of that element.
         queue_info = vk.VkDeviceQueueCreateInfo(queueFamilyIndex=self.queue_family, pQueuePriorities=[1.0])
         info = vk.VkDeviceCreateInfo(
-            pNext=want12,
+            pNext=want11,
             pQueueCreateInfos=[queue_info],
             ppEnabledExtensionNames=exts,
             pEnabledFeatures=features,

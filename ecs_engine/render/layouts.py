@@ -87,7 +87,8 @@ INSTANCE = Struct(
             "misc",
             "uvec4",
             "x: material index, y: key = mesh * 2 + mirrored, z: 1 NotShadowReceiver, "
-            "w: ROW_* bits (indirect mode: ROW_NOT_CASTER), else 0",
+            "w: bit 0 ROW_NOT_CASTER (indirect mode), bits 1-31 a skinned row's first joint + 1 "
+            "(extract/skins.py), else 0",
         ),
     ],
     doc="One entity's row: 64 bytes (the normal matrix is derived in the vertex shader).",
@@ -256,6 +257,10 @@ BINDING_CLUSTERS = 5  # clustered lights (light_clusters.py): distance bins and 
 # comparison sampler (PCF and PCSS; hard shadows), and read as depths (PCSS's blocker search)
 BINDING_SHADOW_VIEWS, BINDING_SHADOW_MAP, BINDING_SHADOW_MAP_HARD, BINDING_SHADOW_DEPTH = 6, 7, 8, 9
 BINDING_ENVIRONMENT = 10  # the Environment's cube map (a black 1-texel cube without one)
+# skinning (render/extract/skins.py, render/assets/skin_vertices.py): the frame's joint matrices
+# (3 vec4 rows each) and the skinned meshes' vertex weights, read by the vertex shaders
+BINDING_JOINTS, BINDING_SKIN_VERTICES = 11, 12
+SKIN_WORDS = 12  # a skinned vertex's record in BINDING_SKIN_VERTICES: 4 words of joint indices, 8 of weights
 TEXTURE_PAGES = 18  # texture_pages.py: two views (sRGB, UNORM) per size class, 16 to 4096 texels
 BINDING_IDS, BINDING_KEYS, BINDING_DRAW_STATE, BINDING_COMMANDS = 0, 1, 2, 3
 # shading models: the values of Material.kind.x and bits 0-5 of the mesh pipelines' MATERIAL_FEATURES
@@ -337,7 +342,8 @@ _GLSL_NAMES = """
 SET_FRAME SET_INDIRECT BINDING_GLOBALS BINDING_LIGHTS BINDING_INSTANCES BINDING_MATERIALS BINDING_TEXTURES
 BINDING_CLUSTERS FEATURE_CLUSTERED FEATURE_SPOT_LIGHTS FEATURE_DIRECTIONAL_LIGHTS FEATURE_EMISSIVE FEATURE_BLEND
 FEATURE_SHADOWS BINDING_SHADOW_VIEWS BINDING_SHADOW_MAP BINDING_SHADOW_MAP_HARD BINDING_SHADOW_DEPTH
-BINDING_ENVIRONMENT FEATURE_ENVIRONMENT SHADOW_HARD SHADOW_PCF SHADOW_PCSS CLUSTER_GROUP MAX_GLOBAL_LIGHTS
+BINDING_ENVIRONMENT FEATURE_ENVIRONMENT BINDING_JOINTS BINDING_SKIN_VERTICES SKIN_WORDS
+SHADOW_HARD SHADOW_PCF SHADOW_PCSS CLUSTER_GROUP MAX_GLOBAL_LIGHTS
 LIGHT_BINS CLUSTER_HEADER CLUSTER_GLOBALS TEXTURE_PAGES BINDING_IDS BINDING_KEYS BINDING_DRAW_STATE
 BINDING_COMMANDS MODEL_UNLIT MODEL_LAMBERT MODEL_OREN_NAYAR MODEL_PHONG MODEL_BLINN_PHONG MODEL_COOK_TORRANCE
 FEATURE_ALPHA_MASK FEATURE_TEXTURES FEATURE_DOUBLE_SIDED ALPHA_OPAQUE ALPHA_MASK ALPHA_BLEND LIGHT_POINT

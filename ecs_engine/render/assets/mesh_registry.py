@@ -26,6 +26,7 @@ from ..layouts import MAX_LODS, MESH_VERTEX
 from .lod_worker import LevelBuilder
 from .mesh_data import MeshData
 from .mesh_lod import Lod, build_lods
+from .skin_vertices import SkinVertices
 
 if TYPE_CHECKING:
     from ...gpu.device import Device
@@ -95,6 +96,7 @@ class MeshRegistry:
         self._mesh_buffers = Owned(device)
         self._merged_buffers = Owned(device)
         self._bottom_levels = Owned(device)
+        self._skins = SkinVertices(device)  # the skinned meshes' weights, for the vertex shaders
 
     def add(self, mesh: MeshData) -> int:
         """Upload `mesh` once: the same MeshData, or an equal one (the same vertices and indices,
@@ -148,6 +150,10 @@ class MeshRegistry:
         self._bottom_levels.destroy()
         self._bottom.clear()
         self.version += 1
+
+    def skin_buffer(self) -> Buffer:
+        """The skinned meshes' joints and weights as the vertex shaders read them (skin_vertices.py)."""
+        return self._skins.buffer([m.data for m in self._meshes], self.version)
 
     def __getitem__(self, handle: int) -> GpuMesh:
         return self._meshes[handle]
@@ -289,6 +295,7 @@ class MeshRegistry:
         if self._builder is not None:
             self._builder.close()
         self._destroy_merged()
+        self._skins.destroy()
         self._bottom_levels.destroy()  # built from the meshes' buffers: before them
         self._bottom.clear()
         self._mesh_buffers.destroy()
@@ -331,7 +338,8 @@ def _interleaved(mesh: MeshData) -> np.ndarray:
 
 def _digest(mesh: MeshData) -> bytes:
     h = hashlib.blake2b(digest_size=16)
-    for array in (mesh.positions, mesh.normals, mesh.uvs, mesh.tangents, mesh.indices):
+    skin = () if mesh.skin is None else (mesh.skin.joints, mesh.skin.weights)
+    for array in (mesh.positions, mesh.normals, mesh.uvs, mesh.tangents, mesh.indices, *skin):
         h.update(str(array.shape).encode())
         h.update(np.ascontiguousarray(array).tobytes())
     return h.digest()

@@ -316,6 +316,7 @@ class ChunkPath(PipelinesPerTarget):
             frame.material_count,
             rows,
             key_counts,
+            chunk.skin,
         )
         result = self._recorded(chunk, frame, rows, n, key_counts)
         result.written = written
@@ -324,7 +325,7 @@ class ChunkPath(PipelinesPerTarget):
     def record_keyed(self, chunk: Chunk, frame: FrameInputs, keys: np.ndarray, key_counts: np.ndarray) -> ChunkResult:
         """record_chunk for a chunk already culled (instance_rows.cull_views: one view's keys)."""
         rows = self.rows_for(chunk, frame)
-        n = write_keyed(chunk.model, chunk.material, keys, key_counts, frame.material_count, rows)
+        n = write_keyed(chunk.model, chunk.material, keys, key_counts, frame.material_count, rows, chunk.skin)
         result = self._recorded(chunk, frame, rows, n, key_counts)
         result.written = None  # rows from another culling (a kept result may say otherwise): never kept
         return result

@@ -20,55 +20,13 @@ import numpy as np
 from ... import native
 from ...maths.culling import bounding_spheres, spheres_visible
 from ..layouts import INSTANCE
+from .rows_numpy import NO_SKIN, _determinant3, _write_keyed_numpy, write_rows_numpy
 
 INSTANCE_DTYPE = INSTANCE.dtype
 # the kernel writes a row as 8 uint64 words: model rows in words 0-5, misc.xy in word 6, zw in 7
 if not (INSTANCE.size == 64 and INSTANCE.offset("model") == 0 and INSTANCE.offset("misc") == 48):
     raise RuntimeError(f"the row-writing kernel assumes 64-byte rows, misc at byte 48:\n{INSTANCE.glsl()}")
 NO_PLANES = np.zeros((0, 4), dtype=np.float64)
-
-
-def _determinant3(m3: np.ndarray) -> np.ndarray:
-    return (
-        m3[:, 0, 0] * (m3[:, 1, 1] * m3[:, 2, 2] - m3[:, 1, 2] * m3[:, 2, 1])
-        - m3[:, 0, 1] * (m3[:, 1, 0] * m3[:, 2, 2] - m3[:, 1, 2] * m3[:, 2, 0])
-        + m3[:, 0, 2] * (m3[:, 1, 0] * m3[:, 2, 1] - m3[:, 1, 1] * m3[:, 2, 0])
-    )
-
-
-def write_rows_numpy(
-    model: np.ndarray,
-    handle: np.ndarray,
-    material: np.ndarray,
-    centers: np.ndarray,
-    radii: np.ndarray,
-    planes: np.ndarray,
-    n_materials: int,
-    rows: np.ndarray,
-    key_counts: np.ndarray,
-) -> int:
-    """Reference version of `write_rows`."""
-    keys = handle.astype(np.int64) * 2 + (_determinant3(model[:, :3, :3]) < 0)
-    if len(planes):
-        c, r = bounding_spheres(model, centers[handle], radii[handle])
-        keys = np.where(spheres_visible(c, r, planes), keys, -1)
-    key_counts[:] = np.bincount(keys[keys >= 0], minlength=len(key_counts))[: len(key_counts)]
-    return _write_keyed_numpy(model, material, keys, n_materials, rows)
-
-
-def _write_keyed_numpy(
-    model: np.ndarray, material: np.ndarray, keys: np.ndarray, n_materials: int, rows: np.ndarray
-) -> int:
-    """The rows whose key is not -1 into `rows`, sorted by key (stable): write_rows' order."""
-    visible = np.flatnonzero(keys >= 0)
-    order = visible[np.argsort(keys[visible], kind="stable")]
-    n = len(order)
-    out = rows[:n]
-    out["model"] = model[order, :3, :]
-    out["misc"][:, 0] = material[order] % n_materials
-    out["misc"][:, 1] = keys[order]
-    out["misc"][:, 2:] = 0
-    return n
 
 
 def _cull_run_kernel(model, e0, e1, e2, radius, planes, key0, keys):  # pragma: no cover - compiled
@@ -114,7 +72,7 @@ def _cull_run_kernel(model, e0, e1, e2, radius, planes, key0, keys):  # pragma: 
 
 
 def _write_rows_kernel(
-    model_4x4, handle, material, centers, radii, planes, n_materials, rows, key_counts
+    model_4x4, handle, material, centers, radii, planes, n_materials, rows, key_counts, skin
 ):  # pragma: no cover - compiled
     # Pass 1 culls and keys the rows, one run of equal meshes at a time (vectorised, see above),
     # and counts rows per key; pass 2 (_write_keyed) writes the visible ones by key. `planes`
@@ -147,16 +105,17 @@ def _write_rows_kernel(
         key_counts[2 * h] += plain
         key_counts[2 * h + 1] += mirrored
         i = j
-    return _write_keyed(model_4x4, material, keys, key_counts, n_materials, np.uint64(0), rows)
+    return _write_keyed(model_4x4, material, keys, key_counts, n_materials, np.uint64(0), rows, skin)
 
 
 def _write_keyed_kernel(
-    model_4x4, material, keys, key_counts, n_materials, misc_zw, rows
+    model_4x4, material, keys, key_counts, n_materials, misc_zw, rows, skin
 ):  # pragma: no cover - compiled
     # Pass 2: the rows whose key is not -1 written by key (a counting sort), 8 bytes at a time:
     # `rows` is a flat uint64 view (8 words a row), and so is `model` below. The current key's
     # cursor stays in a register while the key repeats (rows of one mesh come in runs). misc_zw
-    # is the rows' last word (misc.z: 1 for rows no shadow falls on).
+    # is the rows' last word (misc.z: 1 for rows no shadow falls on); `skin` (per row, or empty)
+    # each row's misc.w (a skinned row's joint matrices: Chunk.skin).
     model = model_4x4.reshape(model_4x4.size).view(np.uint64)
     offsets = np.empty(key_counts.shape[0], np.int64)
     total = 0
@@ -179,7 +138,7 @@ def _write_keyed_kernel(
         for w in range(6):  # model rows 0-2: 12 floats
             rows[dst + w] = model[src + w]
         rows[dst + 6] = np.uint64(material[i] % n_materials) | (np.uint64(k) << np.uint64(32))
-        rows[dst + 7] = misc_zw
+        rows[dst + 7] = misc_zw | (np.uint64(skin[i]) << np.uint64(32)) if skin.shape[0] else misc_zw
         j += 1
     return total
 
@@ -323,20 +282,32 @@ def write_rows(
     n_materials: int,
     rows: np.ndarray,
     key_counts: np.ndarray,
+    skin: np.ndarray | None = None,
 ) -> int:
     """Cull (when `planes` is given), then write the visible rows into `rows` (INSTANCE_DTYPE,
     at least len(handle) long) sorted by key = mesh * 2 + mirrored, counting rows per key into
-    `key_counts`. Returns the number written. Releases the GIL with numba."""
+    `key_counts`; `skin`: per row, its misc.w (Chunk.skin). Returns the number written. Releases
+    the GIL with numba."""
+    skin = NO_SKIN if skin is None else skin
     planes = NO_PLANES if planes is None else planes
     if _write_rows_native is None or not rows.flags.c_contiguous:
-        return write_rows_numpy(model, handle, material, centers, radii, planes, n_materials, rows, key_counts)
+        return write_rows_numpy(model, handle, material, centers, radii, planes, n_materials, rows, key_counts, skin)
     if len(planes) > 6:
         raise ValueError(f"at most 6 frustum planes, got {len(planes)}")
     if not model.flags.c_contiguous:
         model = np.ascontiguousarray(model)
     return int(
         _write_rows_native(
-            model, handle, material, centers, radii, planes, np.uint32(n_materials), rows.view(np.uint64), key_counts
+            model,
+            handle,
+            material,
+            centers,
+            radii,
+            planes,
+            np.uint32(n_materials),
+            rows.view(np.uint64),
+            key_counts,
+            skin,
         )
     )
 
@@ -386,10 +357,12 @@ def write_keyed(
     key_counts: np.ndarray,
     n_materials: int,
     rows: np.ndarray,
+    skin: np.ndarray | None = None,
 ) -> int:
     """The rows whose key (from cull_views: one view's) is not -1, written into `rows` sorted by
     key as `write_rows` writes them; returns the number written."""
+    skin = NO_SKIN if skin is None else skin
     if _write_keyed_native is not None and rows.flags.c_contiguous and model.flags.c_contiguous:
-        rows64 = rows.view(np.uint64)
-        return int(_write_keyed_native(model, material, keys, key_counts, np.uint32(n_materials), np.uint64(0), rows64))
-    return _write_keyed_numpy(model, material, keys, n_materials, rows)
+        rows64, n = rows.view(np.uint64), np.uint32(n_materials)
+        return int(_write_keyed_native(model, material, keys, key_counts, n, np.uint64(0), rows64, skin))
+    return _write_keyed_numpy(model, material, keys, n_materials, rows, skin)

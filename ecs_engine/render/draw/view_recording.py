@@ -21,7 +21,7 @@ from ...gpu.functions import handle_int
 from ..config import Recorder
 from ..extract.frame_data import NOT_RECEIVER, Chunk
 from ..layouts import INSTANCE
-from .instance_rows import _cull_views_native, _write_keyed
+from .instance_rows import NO_SKIN, _cull_views_native, _write_keyed
 from .path import ChunkResult, FrameInputs
 
 _compiled: dict[int, Any] = {}  # per NativeRecorder (id of its compiled loop): the fused kernel
@@ -49,6 +49,7 @@ def fused_kernel(record: Any) -> Any:
         planes,
         n_materials,
         misc_zw,
+        skin,
         rows,
         rows_addr,
         row_starts,
@@ -80,7 +81,14 @@ def fused_kernel(record: Any) -> Any:
                 continue
             start = row_starts[v]
             write(
-                model, material, keys[v], key_counts[v], n_materials, misc_zw[v], rows[8 * start : 8 * (start + total)]
+                model,
+                material,
+                keys[v],
+                key_counts[v],
+                n_materials,
+                misc_zw[v],
+                rows[8 * start : 8 * (start + total)],
+                skin,
             )
             result = record(
                 cbs[v],
@@ -190,6 +198,7 @@ class ViewRecording:
             self.planes[first:],
             self.n_materials,
             misc_zw,
+            NO_SKIN if chunk.skin is None else chunk.skin,
             self.rows,
             self.rows_addr,
             self.row_bases[first:] + chunk.offset,

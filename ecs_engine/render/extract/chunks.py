@@ -21,17 +21,20 @@ from typing import Any
 import numpy as np
 
 from ...components import Mesh, ModelMatrix, NotShadowCaster, NotShadowReceiver
+from ...components.animation import Skinned
 from ...components.camera import RenderLayers
 from ...components.camera_views import DEFAULT_LAYERS
 from ...ecs.structural import structural
 from ...ecs.world import World
 from ...jobs import row_chunks
+from .skins import SkinFrame
 
 # what a system running ChunkExtract declares
-READS = (ModelMatrix, Mesh, NotShadowCaster, NotShadowReceiver, RenderLayers)
+READS = (ModelMatrix, Mesh, NotShadowCaster, NotShadowReceiver, RenderLayers, Skinned)
 _HANDLE = (Mesh, "handle")  # the columns whose writes make the extractor check handles again
 _MATERIAL = (Mesh, "material")
 _LAYERS = (RenderLayers, "mask")
+_SKIN, _COPY = (Skinned, "skin"), (Skinned, "copy")
 MODEL_COLUMN = (ModelMatrix, "model")  # a Chunk's `ticks` key: when its model matrices were last written
 # Rows per job, by default about one job per thread but never under MIN_CHUNK_ROWS. Measured on
 # the H100 host (native recorder): 4,096-row jobs were slower on 16 threads than on 4 (per-job
@@ -63,6 +66,8 @@ class Chunk:
     # its table's column ticks, for views of the table's own columns (not gathered copies): what
     # a frame slot's rows were written from can then be told unchanged (chunk_paths.py)
     ticks: dict[Any, int] | None = None
+    # per row, a skinned row's Instance.misc.w (its joint matrices' place: extract/skins.py), or None
+    skin: np.ndarray | None = None
 
     @property
     def name(self) -> str:
@@ -77,6 +82,7 @@ class SetAsideRows:
     model: np.ndarray
     handle: np.ndarray
     material: np.ndarray
+    skin: np.ndarray | None = None  # per row, its Instance.misc.w (Chunk.skin); None: no row is skinned
     # the same rows as shadow casters, per table (its shadow tags), offsets after the chunks' rows
     casters: list[Chunk] = field(default_factory=list)
 
@@ -97,10 +103,13 @@ class ChunkExtract:
         self._split_key: tuple[object, ...] = ()
         self._split: list[tuple[np.ndarray, np.ndarray]] = []  # per table: chunk rows, rows set aside
 
-    def chunks(self, world: World, mesh_count: int, material_count: int = 1 << 32) -> list[Chunk]:
-        """Row ranges of every table with a ModelMatrix and a Mesh, each with its buffer slice.
-        Kept while the world is the same and its tables keep their rows, layout and Mesh
-        columns (the views stay valid and see every value written since)."""
+    def chunks(
+        self, world: World, mesh_count: int, material_count: int = 1 << 32, skins: SkinFrame | None = None
+    ) -> list[Chunk]:
+        """Row ranges of every table with a ModelMatrix and a Mesh, each with its buffer slice
+        (and its skinned rows' misc.w from `skins`). Kept while the world is the same and its
+        tables keep their rows, layout, Mesh and Skinned columns (the views stay valid and see
+        every value written since)."""
         query = world.query(ModelMatrix, Mesh, write=())
         tables = query.tables
         key = (
@@ -109,7 +118,9 @@ class ChunkExtract:
             material_count,
             self.chunk_rows,
             self.threads(),
+            None if skins is None else skins.key,
             *[(t.id, t.version, t.count, t.column_ticks[_HANDLE], t.column_ticks[_MATERIAL]) for t in tables],
+            *[(t.column_ticks.get(_SKIN), t.column_ticks.get(_COPY)) for t in tables],
         )
         if key == self._chunks_key:
             return self._chunks
@@ -117,10 +128,13 @@ class ChunkExtract:
         offset = 0
         for batch in query:
             m, mesh = batch[ModelMatrix], batch[Mesh]
+            skin = None if skins is None else skins.row_skins(batch.table, len(batch))
             for s in row_chunks(len(batch), self.rows_per_job(len(batch))):
                 flags, table = shadow_flags(batch), batch.table.id
                 ticks = batch.table.column_ticks
-                out.append(Chunk(m.model[s], mesh.handle[s], mesh.material[s], offset, flags, table, s.start, ticks))
+                chunk = Chunk(m.model[s], mesh.handle[s], mesh.material[s], offset, flags, table, s.start, ticks)
+                chunk.skin = None if skin is None else skin[s]
+                out.append(chunk)
                 offset += s.stop - s.start
         if out:
             top = max(int(c.handle.max()) for c in out)
@@ -143,7 +157,12 @@ class ChunkExtract:
         return structural(world, "layered_meshes", _layered_meshes)  # which tables: only structure changes it
 
     def split(
-        self, world: World, chunks: list[Chunk], blend: np.ndarray | None, layers: int = DEFAULT_LAYERS
+        self,
+        world: World,
+        chunks: list[Chunk],
+        blend: np.ndarray | None,
+        layers: int = DEFAULT_LAYERS,
+        skins: SkinFrame | None = None,
     ) -> tuple[list[Chunk], SetAsideRows]:
         """(Called with the chunks of a world with a mesh.) The chunks without the rows set
         aside (`blend`: per material, or None for none) or outside `layers` (gathered copies,
@@ -165,22 +184,27 @@ class ChunkExtract:
                 self._split.append((np.flatnonzero(seen & ~flags), np.flatnonzero(seen & flags)))
             self._split_key = key
         opaque: list[Chunk] = []
-        models, handles, materials, flags = [], [], [], []
+        models, handles, materials, flags, skinned = [], [], [], [], []
         offset = 0
         for batch, (keep, blended) in zip(query, self._split):
             m, mesh = batch[ModelMatrix], batch[Mesh]
             model, handle, material = m.model[keep], mesh.handle[keep], mesh.material[keep]
+            skin = None if skins is None else skins.row_skins(batch.table, len(batch))
             for s in row_chunks(len(keep), self.rows_per_job(len(keep))):
-                opaque.append(Chunk(model[s], handle[s], material[s], offset, shadow_flags(batch)))
+                chunk = Chunk(model[s], handle[s], material[s], offset, shadow_flags(batch))
+                chunk.skin = None if skin is None else skin[keep][s]
+                opaque.append(chunk)
                 offset += s.stop - s.start
             models.append(m.model[blended])
             handles.append(mesh.handle[blended])
             materials.append(mesh.material[blended])
             flags.append(shadow_flags(batch))
+            skinned.append(np.zeros(len(blended), np.uint32) if skin is None else skin[blended])
         rows = SetAsideRows(np.concatenate(models), np.concatenate(handles), np.concatenate(materials))
-        for model, handle, material, tags in zip(models, handles, materials, flags, strict=True):
+        rows.skin = np.concatenate(skinned) if skins is not None else None
+        for model, handle, material, tags, skin in zip(models, handles, materials, flags, skinned, strict=True):
             if len(handle):  # a shadow view's rows: the chunks', then these
-                rows.casters.append(Chunk(model, handle, material, offset, tags))
+                rows.casters.append(Chunk(model, handle, material, offset, tags, skin=skin if skins else None))
                 offset += len(handle)
         return opaque, rows
 

@@ -46,6 +46,7 @@ from .environment import extract_environment
 from .lights import KeptPoints, LightKinds, extract_lights, light_kinds
 from .materials import extract_materials
 from .shadows import ShadowCasters, ShadowExtract
+from .skins import extract_skins
 
 # names older code imports from here (they live in extract/chunks.py)
 __all__ = [
@@ -84,6 +85,7 @@ class FrameData:
     shadows: ShadowCasters | None = None  # the lights with a Shadow (None: none has one)
     environment: Environment | None = None  # the world's Environment resource
     materials: Materials | None = None  # the world's Materials (or a default palette); None: not extracted
+    joints: np.ndarray | None = None  # the skins' joint matrices (N, 3, 4) float32 (extract/skins.py); None: none
 
     def visible(self, chunk: Chunk) -> np.ndarray | None:
         """The rows of `chunk` to draw, where the culling decided ahead (temporal); else None."""
@@ -171,11 +173,12 @@ class FrameExtractor:
         origin_key = origin.tobytes()
         view = self.view(cam, origin, origin_key)
         positional, directional = extract_lights(world, self._kinds, self._point_lights)
-        chunks = self.rows.chunks(world, mesh_count, material_count)
+        skins = extract_skins(world, origin)
+        chunks = self.rows.chunks(world, mesh_count, material_count, skins)
         aside = None
         layers = camera_layers(world) if layers is None else layers
         if chunks and (set_aside is not None or self.rows.hides_rows(world, layers)):
-            chunks, seen_aside = self.rows.split(world, chunks, set_aside, layers)
+            chunks, seen_aside = self.rows.split(world, chunks, set_aside, layers, skins)
             aside = seen_aside if set_aside is not None else None
         planes = method.planes(lambda: self.planes(cam.lens, view))
         masks = method.masks(world, cam, origin, planes, dt, bounds)  # (temporal culling's: it reads the world)
@@ -200,6 +203,7 @@ class FrameExtractor:
             shadows=self.casters(world),
             environment=extract_environment(world),
             materials=materials,
+            joints=None if skins is None else skins.joints,
         )
 
     def view(self, cam: CameraMatrices, origin: np.ndarray, origin_key: bytes) -> np.ndarray:

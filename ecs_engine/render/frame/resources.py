@@ -14,6 +14,7 @@ from ...gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffer
 from ...gpu.device import Device
 from ...gpu.memory import DEVICE, UPLOAD, Buffer
 from ...gpu.owned import Owned
+from .. import layouts
 from ..assets.materials import Materials
 from ..assets.texture_pages import TexturePages
 from ..extract.frame_data import FrameData
@@ -22,12 +23,14 @@ from ..layouts import (
     BINDING_ENVIRONMENT,
     BINDING_GLOBALS,
     BINDING_INSTANCES,
+    BINDING_JOINTS,
     BINDING_LIGHTS,
     BINDING_MATERIALS,
     BINDING_SHADOW_DEPTH,
     BINDING_SHADOW_MAP,
     BINDING_SHADOW_MAP_HARD,
     BINDING_SHADOW_VIEWS,
+    BINDING_SKIN_VERTICES,
     BINDING_TEXTURES,
     GLOBALS,
     INSTANCE,
@@ -42,6 +45,8 @@ from .camera import CameraMatrices
 
 MIN_LIGHTS = 256
 MIN_MATERIALS = 64
+MIN_JOINTS = 64
+JOINT_BYTES = 48  # a joint matrix's three rows of four floats
 
 
 def frame_sets(device: Device, frames: int) -> tuple[DescriptorSetLayout, DescriptorPool]:
@@ -51,7 +56,8 @@ def frame_sets(device: Device, frames: int) -> tuple[DescriptorSetLayout, Descri
     ssbo = vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
     sampler = vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
     uniform = vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER
-    buffers = (BINDING_LIGHTS, BINDING_INSTANCES, BINDING_MATERIALS, BINDING_CLUSTERS, BINDING_SHADOW_VIEWS)
+    ssbos = "LIGHTS INSTANCES MATERIALS CLUSTERS SHADOW_VIEWS JOINTS SKIN_VERTICES"
+    buffers = tuple(getattr(layouts, f"BINDING_{name}") for name in ssbos.split())
     # the shadow rays' any-hit shader reads the materials and textures (shaders/shadow_rays.rahit)
     any_hit = vk.lib.VK_SHADER_STAGE_ANY_HIT_BIT_KHR if device.ray_tracing is not None else 0
     layout = DescriptorSetLayout(
@@ -80,6 +86,8 @@ class FrameResources:
     materials: Buffer
     clusters: Buffer  # device-local: cluster.comp writes it, the fragment shader reads it
     shadow_views: Buffer  # SHADOW_VIEW rows (render/shadows/maps_pass.py)
+    joints: Buffer  # the skins' joint matrices this frame (extract/skins.py): 3 vec4 rows each
+    skin_vertices: Buffer  # the mesh registry's skinned vertex weights (assets/skin_vertices.py), or a stand-in
     descriptor_set: Any
     set_array: Any  # VkDescriptorSet[1] for raw calls
     written: tuple[Any, ...] | None = None  # what the globals buffer holds
@@ -125,6 +133,8 @@ class FrameResources:
                     )
                 ),
                 shadow_views=made.add(Buffer(device, SHADOW_VIEW.size * 4, ssbo)),
+                joints=made.add(Buffer(device, JOINT_BYTES * MIN_JOINTS, ssbo, UPLOAD)),
+                skin_vertices=made.add(Buffer(device, 16, ssbo)),  # until a frame has skinned rows
                 descriptor_set=descriptor_set,
                 set_array=vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]),
                 shadow_maps=shadow_maps,
@@ -153,6 +163,8 @@ class FrameResources:
                 (BINDING_MATERIALS, ssbo, self.materials),
                 (BINDING_CLUSTERS, ssbo, self.clusters),
                 (BINDING_SHADOW_VIEWS, ssbo, self.shadow_views),
+                (BINDING_JOINTS, ssbo, self.joints),
+                (BINDING_SKIN_VERTICES, ssbo, self.skin_vertices),
             ],
         )
         write_images(device, self.descriptor_set, BINDING_TEXTURES, pages.image_infos())
@@ -196,6 +208,16 @@ class FrameResources:
                 if self.materials is not before[2]:
                     self.materials_written = None
                 self.write_set(device, pages)
+
+    def write_skins(self, device: Device, joints: np.ndarray, skin_vertices: Buffer) -> None:
+        """The frame's joint matrices ((N, 3, 4) float32) into this slot's buffer, grown to hold
+        them, and the set naming `skin_vertices` (the mesh registry's, made again when a skinned
+        mesh is added)."""
+        grown = self.joints.grown(len(joints) * JOINT_BYTES, self.owned)
+        if grown is not self.joints or skin_vertices is not self.skin_vertices:
+            self.joints, self.skin_vertices = grown, skin_vertices
+            self.write_set(device, self.pages)
+        self.joints.array(np.float32, joints.shape)[:] = joints
 
     def ensure_clusters(self, device: Device, pages: TexturePages, grid: ClusterGrid) -> None:
         """Room for `grid`'s light lists (safe: this slot's fence was waited on)."""

@@ -57,6 +57,7 @@ class GltfNode:
     components: list[Any] = field(default_factory=list)  # a Camera or a light
     path: str = ""  # its names from the scene's root node ("Armature/Hips"): what clips bind to
     skin: int = -1  # its mesh's skin: a place in GltfScene.skins (-1: none)
+    spheres: list[tuple[np.ndarray, float]] = field(default_factory=list)  # per part, its mesh's (centre, radius)
 
 
 @dataclass
@@ -94,7 +95,7 @@ class GltfScene:
         roots = world.spawn_batch(count, place, Name(value=self.file.stem), *player)
         skins, handles = self._skins(world)
         # each skin's copies made here: numbered from its copies so far (joints added below)
-        skinned = [Skinned(skin=h, copy=np.arange(skins[h].copies, skins[h].copies + count)) for h in handles]
+        copies = [np.arange(skins[h].copies, skins[h].copies + count) for h in handles]
         made: list[np.ndarray] = []
         for node in self.nodes:
             parent = roots if node.parent < 0 else made[node.parent]
@@ -103,15 +104,15 @@ class GltfScene:
             values += node.components
             if player:
                 values.append(AnimationTarget(player=roots, id=target_id(node.path)))
-            skin = [skinned[node.skin]] if node.skin >= 0 else []
+            skin = [] if node.skin < 0 else [Skinned(skin=handles[node.skin], copy=copies[node.skin])]
             if len(node.parts) == 1:
-                values += [Mesh(handle=node.parts[0][0], material=node.parts[0][1]), *skin]
+                values += [Mesh(handle=node.parts[0][0], material=node.parts[0][1]), *_bound(skin, node.spheres[0])]
             ids = world.spawn_batch(count, *values)
             made.append(ids)
             if len(node.parts) > 1:
-                for handle, material in node.parts:
-                    part = [Transform(), Parent(entity=ids), Mesh(handle=handle, material=material), *skin]
-                    world.spawn_batch(count, *part)
+                for (handle, material), sphere in zip(node.parts, node.spheres, strict=True):
+                    part = [Transform(), Parent(entity=ids), Mesh(handle=handle, material=material)]
+                    world.spawn_batch(count, *part, *_bound(skin, sphere))
         for h, s in zip(handles, self.skins, strict=True):
             skins.add_copies(h, np.stack([made[j] for j in s.joints], axis=1))
         return roots
@@ -213,6 +214,7 @@ class _Reader:
         node = GltfNode(index, str(entry.get("name", f"node{index}")), parent, t, r, s)
         if "mesh" in entry:
             node.parts = self._mesh(self.d.number(entry, "mesh", here), f"{here}.mesh")
+            node.spheres = [(self.data[h].center, self.data[h].radius) for h, _ in node.parts]
         if "skin" in entry:
             if "mesh" not in entry:
                 raise self.d.error(f"{here}.skin", "is on a node without a mesh")
@@ -297,6 +299,11 @@ class _Reader:
             outer = float(self.d.floats(spot, "outerConeAngle", f"{here}.spot", 1, [math.pi / 4])[0])
             return SpotLight(color=color, intensity=intensity, radius=reach, inner_angle=inner, outer_angle=outer)
         raise self.d.error(f"{here}.type", f"is {kind!r}, not directional, point or spot")
+
+
+def _bound(skin: list[Skinned], sphere: tuple[np.ndarray, float]) -> list[Skinned]:
+    """A part's Skinned (none or one) with its mesh's bind-pose sphere."""
+    return [Skinned(skin=s.skin, copy=s.copy, centre=sphere[0], radius=sphere[1]) for s in skin]
 
 
 def node_trs(matrix: np.ndarray, document: GltfDocument, where: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

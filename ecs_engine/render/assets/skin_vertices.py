@@ -1,0 +1,68 @@
+"""The skinned meshes' vertex weights as one storage buffer the vertex shaders read
+(shaders/instance_row.glsl), as 32-bit words: first, per mesh handle up to the last skinned
+one, the word where its vertices' records start (SKIN_NONE for a mesh without a skin); then each
+vertex's record of SKIN_WORDS words, in vertex order: its eight joint indices, two 16-bit halves
+a word (the lower half first), then its eight weights as floats. A vertex is found by its index
+in its own mesh (gl_VertexIndex - gl_BaseVertex), so the instanced paths' per-mesh buffers and
+the indirect path's merged one read the same records."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ...gpu.memory import Buffer, upload
+from ...gpu.owned import Owned
+from ..layouts import SKIN_WORDS
+from .mesh_data import MeshData
+
+SKIN_NONE = 0xFFFFFFFF
+
+
+def skin_words(meshes: list[MeshData]) -> np.ndarray:
+    """The buffer's words for `meshes` (by handle); one SKIN_NONE word when none is skinned."""
+    skinned = [h for h, m in enumerate(meshes) if m.skin is not None]
+    header = np.full(max(skinned) + 1 if skinned else 1, SKIN_NONE, np.uint32)
+    parts, at = [header], len(header)
+    for h in skinned:
+        skin = meshes[h].skin
+        assert skin is not None
+        records = np.empty((skin.vertex_count, SKIN_WORDS), np.uint32)
+        records[:, :4] = np.ascontiguousarray(skin.joints, "<u2").view("<u4")
+        records[:, 4:] = np.ascontiguousarray(skin.weights, "<f4").view("<u4")
+        header[h] = at
+        parts.append(records.reshape(-1))
+        at += records.size
+    return np.concatenate(parts)
+
+
+class SkinVertices:
+    """The buffer for a mesh registry's meshes, made again when its skinned meshes change."""
+
+    def __init__(self, device: Any) -> None:
+        self.device = device
+        self._owned = Owned(device)
+        self._buffer: Buffer | None = None
+        self._made_for: tuple[Any, ...] | None = None  # the skinned meshes it holds: (handle, MeshData id)
+        self._checked = -1  # the registry version last looked at
+
+    def buffer(self, meshes: list[MeshData], version: int) -> Buffer:
+        """The buffer for `meshes` (a registry's, at `version`). Making it anew waits for the GPU
+        (frames in flight read the old one): only when a skinned mesh is added or replaced."""
+        if self._buffer is not None and version == self._checked:
+            return self._buffer
+        self._checked = version
+        made_for = tuple((h, id(m)) for h, m in enumerate(meshes) if m.skin is not None)
+        if self._buffer is None or made_for != self._made_for:
+            usage = self.device.vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT
+            fresh = upload(self.device, skin_words(meshes), usage)
+            if self._buffer is not None:
+                self.device.wait_idle()
+                self._owned.release(self._buffer)
+            self._buffer, self._made_for = self._owned.add(fresh), made_for
+        return self._buffer
+
+    def destroy(self) -> None:
+        self._owned.destroy()
+        self._buffer = None
