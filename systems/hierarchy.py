@@ -34,6 +34,9 @@ from ecs_engine.jobs import JobPool, over_rows
 from ecs_engine.maths.decompose import trs_matrices
 
 _PARENT = (Parent, "entity")
+# a level's rows per job on the pool: a skinned crowd's levels hold tens of thousands of joints
+# each, which whole jobs of jobs.CHUNK_ROWS would leave on one thread
+LEVEL_CHUNK_ROWS = 4096
 
 
 @dataclass
@@ -122,6 +125,8 @@ class HierarchySystem(System):
         super().__init__(reads=reads, writes=writes, name="hierarchy", run_if=any_with(Parent))
         self._plan: _Plan | None = None
         self._world: Any = None
+        self._out: tuple[np.ndarray, np.ndarray] | None = None  # see _scratch
+        self._gathered: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # see _local
 
     def plan(self, world: World) -> _Plan | None:
         """The plan for the world as it is (kept while what it depends on is unchanged)."""
@@ -182,8 +187,7 @@ class HierarchySystem(System):
         worlds: list[np.ndarray] = [b[WorldMatrix].matrix for b in world.query(WorldMatrix, with_=(Parent,))]
         models: list[np.ndarray] = [b[ModelMatrix].model for b in world.query(ModelMatrix, with_=(Parent,))]
         direct = len(tables) == 1 and len(worlds) == 1 and len(models) == 1
-        out = worlds[0] if direct else np.empty((n, 4, 4))
-        model = models[0] if direct else np.empty((n, 4, 4), np.float32)
+        out, model = (worlds[0], models[0]) if direct else self._scratch(n)
         if native.AVAILABLE:  # a level's rows are independent: cut into chunks on the pool
             pool = world.resources.get(JobPool)
             for rows in plan.levels:
@@ -191,7 +195,7 @@ class HierarchySystem(System):
                 def chunk(s: slice, rows: np.ndarray = rows) -> None:
                     _compose(rows[s], plan.parent_row, plan.above_row, trs, above, out, model, origin)  # type: ignore[misc]
 
-                over_rows(pool, len(rows), chunk)
+                over_rows(pool, len(rows), chunk, chunk_rows=LEVEL_CHUNK_ROWS)
         else:
             self._compose_numpy(plan, trs, above, out)
             model[:] = out
@@ -204,16 +208,26 @@ class HierarchySystem(System):
                 first = plan.offsets[batch.table.id]
                 batch[ModelMatrix].model = model[first : first + len(batch)]
 
-    @staticmethod
-    def _local(plan: _Plan) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _scratch(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """The pass's output arrays for `n` rows when they are copied out per table: kept between
+        frames (fresh ones would fault their pages in every frame: ~5 ms at 250k rows)."""
+        if self._out is None or len(self._out[0]) != n:
+            self._out = (np.empty((n, 4, 4)), np.empty((n, 4, 4), np.float32))
+        return self._out
+
+    def _local(self, plan: _Plan) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The rows' position, rotation and scale: the table's columns themselves when there is
-        one table with Transform, else gathered (identity where a table has no Transform)."""
+        one table with Transform, else gathered (identity where a table has no Transform) into
+        arrays kept between frames."""
         tables, n = plan.tables, plan.count
         if len(tables) == 1 and tables[0].has(Transform):
             c = tables[0].columns
             return c[(Transform, "position")][:n], c[(Transform, "rotation")][:n], c[(Transform, "scale")][:n]
-        position, rotation, scale = np.zeros((n, 3)), np.zeros((n, 4)), np.ones((n, 3))
-        rotation[:, 3] = 1.0
+        if self._gathered is None or len(self._gathered[0]) != n:
+            self._gathered = (np.empty((n, 3)), np.empty((n, 4)), np.empty((n, 3)))
+        position, rotation, scale = self._gathered
+        if not all(t.has(Transform) for t in tables):
+            position[:], rotation[:], scale[:] = 0.0, (0.0, 0.0, 0.0, 1.0), 1.0
         for t in tables:
             if t.has(Transform):
                 rows = slice(plan.offsets[t.id], plan.offsets[t.id] + t.count)

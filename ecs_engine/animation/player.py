@@ -21,10 +21,11 @@ from ecs_engine.components.animation import AnimationPlayer, AnimationTarget
 from ecs_engine.ecs.schedule import System, any_with
 
 from ..errors import UsageError
-from .clip import AnimationClip, AnimationClips
+from .clip import AnimationClip, AnimationClips, ClipChannel
 from .sampling import slerp
 
 _COLUMNS = {"translation": "position", "rotation": "rotation", "scale": "scale"}
+_TARGET_PLAYER, _TARGET_ID = (AnimationTarget, "player"), (AnimationTarget, "id")
 
 
 @dataclass
@@ -40,6 +41,23 @@ class _Players:
     weight: np.ndarray
 
 
+# per clip a group: (the rows that play it sorted by target id, per channel of the clip the
+# (channel, first, end) of its rows among them)
+_Group = tuple[np.ndarray, list[tuple[ClipChannel, int, int]]]
+
+
+@dataclass
+class _Binding:
+    """Which Transform rows of a table each clip moves, channel by channel: kept while the table's
+    rows, its AnimationTarget column, the players and what they play stay the same (a frame then
+    only samples and writes)."""
+
+    key: tuple[Any, ...]
+    at: np.ndarray  # per row, its player's place in _Players (rows without one: any)
+    faded: list[_Group]  # the clips faded from
+    playing: list[_Group]
+
+
 class AnimationSystem(System):
     def __init__(self) -> None:
         super().__init__(
@@ -48,6 +66,7 @@ class AnimationSystem(System):
             name="animation",
             run_if=any_with(AnimationPlayer),
         )
+        self._bindings: dict[int, _Binding] = {}  # by table id
 
     def run(self, world: Any, dt: float) -> None:
         clips = world.resources.get(AnimationClips)
@@ -56,49 +75,74 @@ class AnimationSystem(System):
         players = advance(world, clips, dt)
         if not len(players.entity):
             return
+        seen = set()
         for batch in world.query(AnimationTarget, Transform):
-            target = batch[AnimationTarget]
-            at = np.minimum(np.searchsorted(players.entity, target.player), len(players.entity) - 1)
-            found = players.entity[at] == target.player
-            if not found.any():
-                continue
+            table = batch.table
+            seen.add(table.id)
+            binding = self._binding(world, table, batch[AnimationTarget], players, clips)
             transform = batch[Transform]
             # per column, the rows the clips faded from wrote this frame (the new clip blends over those)
-            written = {name: np.zeros(len(found), bool) for name in _COLUMNS.values()}
-            from_clip = np.where(found, players.from_clip[at], -1)
-            for c in np.unique(from_clip[from_clip >= 0]).tolist():  # the clips faded from, at full weight
-                rows = np.flatnonzero(from_clip == c)
-                _apply(transform, rows, target.id[rows], players.from_time[at[rows]], clips[c], None, written)
-            clip = np.where(found, players.clip[at], -1)
-            for c in np.unique(clip[clip >= 0]).tolist():
-                rows = np.flatnonzero(clip == c)
-                weight = players.weight[at[rows]]
-                _apply(transform, rows, target.id[rows], players.time[at[rows]], clips[c], weight, written)
+            written = {name: np.zeros(len(batch), bool) for name in _COLUMNS.values()} if binding.faded else {}
+            for rows, spans in binding.faded:  # at full weight
+                _apply(transform, rows, spans, players.from_time[binding.at[rows]], None, written)
+            for rows, spans in binding.playing:
+                weight = players.weight[binding.at[rows]]
+                _apply(transform, rows, spans, players.time[binding.at[rows]], weight, written)
+        for gone in set(self._bindings) - seen:
+            del self._bindings[gone]
+
+    def _binding(self, world: Any, table: Any, target: Any, players: _Players, clips: AnimationClips) -> _Binding:
+        key = (
+            world.storage.structure_version,
+            table.column_ticks[_TARGET_PLAYER],
+            table.column_ticks[_TARGET_ID],
+            players.entity.tobytes(),
+            players.clip.tobytes(),
+            players.from_clip.tobytes(),
+            len(clips),
+        )
+        kept = self._bindings.get(table.id)
+        if kept is not None and kept.key == key:
+            return kept
+        at = np.minimum(np.searchsorted(players.entity, target.player), len(players.entity) - 1)
+        found = players.entity[at] == target.player
+        groups = []
+        for clip_of in (players.from_clip, players.clip):
+            clip = np.where(found, clip_of[at], -1)
+            handles = np.unique(clip[clip >= 0]).tolist()
+            groups.append([_group(np.flatnonzero(clip == c), target.id, clips[c]) for c in handles])
+        made = self._bindings[table.id] = _Binding(key, at, groups[0], groups[1])
+        return made
+
+
+def _group(rows: np.ndarray, ids: np.ndarray, of: AnimationClip) -> _Group:
+    """`rows` sorted by target id, and each channel of `of` with the span of those it targets."""
+    order = np.argsort(ids[rows], kind="stable")
+    rows = rows[order]
+    sorted_ids = ids[rows]
+    spans = []
+    for channel in of.channels:
+        key = np.uint64(channel.target)
+        lo, hi = int(np.searchsorted(sorted_ids, key, "left")), int(np.searchsorted(sorted_ids, key, "right"))
+        if hi > lo:
+            spans.append((channel, lo, hi))
+    return rows, spans
 
 
 def _apply(
     transform: Any,
     rows: np.ndarray,
-    ids: np.ndarray,
+    spans: list[tuple[ClipChannel, int, int]],
     times: np.ndarray,
-    clip: AnimationClip,
     weight: Any,
     written: dict[str, np.ndarray],
 ) -> None:
-    """`clip` at `times` into the Transform rows `rows` (whose target ids are `ids`). With
+    """A clip's channels (`spans` of `rows`) at `times` (per row) into the Transform rows. With
     `weight` (None: a clip faded from, which marks what it writes in `written`), blended by it
     over what a clip faded from wrote this frame, and written outright where none did."""
-    order = np.argsort(ids, kind="stable")
-    rows, ids, times = rows[order], ids[order], times[order]
     faded_from = weight is None
     blend = not faded_from and bool((weight < 1.0).any())
-    if blend:
-        weight = weight[order]
-    for channel in clip.channels:
-        key = np.uint64(channel.target)
-        lo, hi = int(np.searchsorted(ids, key, "left")), int(np.searchsorted(ids, key, "right"))
-        if hi == lo:
-            continue
+    for channel, lo, hi in spans:
         name = _COLUMNS[channel.property]
         column, here = getattr(transform, name), rows[lo:hi]
         value = channel.curve.sample(times[lo:hi])

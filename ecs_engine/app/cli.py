@@ -153,6 +153,8 @@ def build_parser(
         "environment: spheres mirroring, refracting and lit by a sky (PATH: an equirectangular .hdr or image); "
         "split_screen: grid100 seen by two cameras, half the window each, and a picture-in-picture; "
         "monitor: a room with a screen showing a second camera's picture (render to texture); "
+        "animation: a crowd of skinned characters strolling, idle, walk and run cross-faded by speed "
+        "(--entities characters, default 200); "
         "motion: text-mode ECS scene (no rendering)",
     )
     demo.add_argument(

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib
 from collections.abc import Callable
+from typing import Any
 
 from ..ecs.schedule import Schedule
 from ..errors import UsageError
@@ -19,6 +20,7 @@ SCENES = (
     "environment",
     "split_screen",
     "monitor",
+    "animation",
 )
 SEED_SCENES = SCENES[:3]  # the seed thesis's three: 1 cube, 100 cubes, an OBJ model
 
@@ -37,11 +39,22 @@ def scene_builder(name: str, entities: int = 10_000, lights: int | None = None, 
     build = importlib.import_module(f"ecs_engine.demos.{name}").build
     if name == "scaling":
         return lambda world, add_mesh, path=None: build(world, add_mesh, path, entities=entities)
+    if name == "animation" and entities != 10_000:  # (its own default crowd otherwise)
+        return lambda world, add_mesh, path=None: build(world, add_mesh, path, entities=entities)
     if name == "lights" and lights is not None:
         return lambda world, add_mesh, path=None: build(world, add_mesh, path, lights=lights)
     if name == "shadows" and not shadows:
         return lambda world, add_mesh, path=None: build(world, add_mesh, path, shadows=False)
     return build
+
+
+def scene_systems(name: str) -> list[tuple[str, Any]]:
+    """The (stage, system) pairs a demo scene runs besides default_schedule's (its module's
+    `systems()`; none for most)."""
+    if name not in SCENES:
+        return []
+    systems = getattr(importlib.import_module(f"ecs_engine.demos.{name}"), "systems", None)
+    return [] if systems is None else list(systems())
 
 
 def default_schedule() -> Schedule:

@@ -34,7 +34,7 @@ from ..render.assets.meshes import Meshes
 from ..render.assets.scene_assets import scene_codecs
 from ..render.config import Caps, RenderConfig, check
 from ..render.frame.renderer import Renderer
-from .scenes import default_schedule, is_scene_file, scene_builder
+from .scenes import default_schedule, is_scene_file, scene_builder, scene_systems
 from .settings import RunOptions, Settings
 
 PROBATION_FRAMES = 3  # frames a newly opened scene must run before the one before it is let go
@@ -215,7 +215,10 @@ class Session:
         else:
             build = scene_builder(scene, self.options.entities, self.options.lights, self.options.shadows)
             build(world, self.gpu.meshes.add, path)
-        return world, default_schedule()
+        schedule = default_schedule()
+        for stage, system in scene_systems(scene):
+            schedule.add(system, stage)
+        return world, schedule
 
     def apply(self, wanted: Settings) -> None:
         """Make `wanted` the settings in force, changing only what differs. All or nothing: what
