@@ -172,3 +172,29 @@ def test_times_that_decrease_are_one_error_naming_the_key(tmp_path):
     b.scene([node])
     with pytest.raises(GltfError, match=r"animations\[0\]\.samplers\[0\]\.input: times do not increase at key 2"):
         read_clips(GltfDocument.read(b.gltf(tmp_path / "back.gltf")))
+
+
+def test_writing_a_linear_curve_in_place_matches_sampling_it():
+    from ecs_engine.animation.sampling import LINEAR, Curve
+    from ecs_engine.animation.write_linear import write_sampled
+
+    rng = np.random.default_rng(9)
+    times = np.array([0.0, 0.4, 1.0, 1.7])
+    quats = rng.normal(size=(4, 4))
+    quats /= np.linalg.norm(quats, axis=1, keepdims=True)
+    quats[2] = -quats[1] * 0.999 + 0.001  # nearly opposite neighbours: the shorter way round
+    quats[2] /= np.linalg.norm(quats[2])
+    curves = [
+        Curve(times, quats, LINEAR, rotation=True),
+        Curve(times, rng.normal(size=(4, 3)), LINEAR),
+        Curve(times[:1], rng.normal(size=(1, 3)), LINEAR),  # one key: its value at every time
+    ]
+    t = np.r_[rng.uniform(-0.5, 2.2, 50), times]  # before, inside, after and on the keys
+    for curve in curves:
+        width = curve.values.shape[1]
+        column = np.full((80, width), 7.0)
+        rows = rng.permutation(80)[: len(t)]
+        write_sampled(curve, t, rows, column)
+        assert np.allclose(column[rows], curve.sample(t), atol=1e-12)
+        untouched = np.setdiff1d(np.arange(80), rows)
+        assert (column[untouched] == 7.0).all()

@@ -23,6 +23,7 @@ from ecs_engine.ecs.schedule import System, any_with
 from ..errors import UsageError
 from .clip import AnimationClip, AnimationClips, ClipChannel
 from .sampling import slerp
+from .write_linear import write_sampled
 
 _COLUMNS = {"translation": "position", "rotation": "rotation", "scale": "scale"}
 _TARGET_PLAYER, _TARGET_ID = (AnimationTarget, "player"), (AnimationTarget, "id")
@@ -145,6 +146,9 @@ def _apply(
     for channel, lo, hi in spans:
         name = _COLUMNS[channel.property]
         column, here = getattr(transform, name), rows[lo:hi]
+        if not faded_from and not blend:  # the usual case: sampled straight into the column
+            write_sampled(channel.curve, times[lo:hi], here, column)
+            continue
         value = channel.curve.sample(times[lo:hi])
         if faded_from:
             written[name][here] = True

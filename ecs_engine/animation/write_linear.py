@@ -1,0 +1,66 @@
+"""A LINEAR curve sampled straight into a component column: what AnimationSystem does for most
+channels (a clip at full weight), without the temporaries of Curve.sample: per row a binary
+search for its key, then lerp or the specification's slerp (sampling.py's), written in place.
+A numba kernel, and Curve.sample where numba is missing."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import native
+from .sampling import LINEAR, Curve
+
+
+def _write_kernel(times, values, rotation, t, rows, column):  # pragma: no cover - compiled
+    keys = times.shape[0]
+    width = values.shape[1]
+    for i in range(rows.shape[0]):
+        r = rows[i]
+        if keys == 1:
+            for c in range(width):
+                column[r, c] = values[0, c]
+            continue
+        x = min(max(t[i], times[0]), times[keys - 1])
+        lo, hi = 0, keys - 1  # the last key at or before x, at most the one before the last
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            if times[mid] <= x:
+                lo = mid
+            else:
+                hi = mid
+        k = lo
+        s = (x - times[k]) / (times[k + 1] - times[k])
+        if not rotation:
+            for c in range(width):
+                column[r, c] = (1.0 - s) * values[k, c] + s * values[k + 1, c]
+            continue
+        dot = 0.0
+        for c in range(4):
+            dot += values[k, c] * values[k + 1, c]
+        sign = -1.0 if dot < 0.0 else 1.0
+        angle = np.arccos(min(abs(dot), 1.0))
+        sin = np.sin(angle)
+        if sin < 1e-6:
+            wa, wb = 1.0 - s, sign * s
+        else:
+            wa, wb = np.sin(angle * (1.0 - s)) / sin, sign * np.sin(angle * s) / sin
+        norm = 0.0
+        for c in range(4):
+            v = wa * values[k, c] + wb * values[k + 1, c]
+            column[r, c] = v
+            norm += v * v
+        inv = 1.0 / np.sqrt(norm)
+        for c in range(4):
+            column[r, c] *= inv
+
+
+_write_native = native.njit(_write_kernel)
+
+
+def write_sampled(curve: Curve, times: np.ndarray, rows: np.ndarray, column: np.ndarray) -> None:
+    """column[rows] = curve.sample(times), in place (LINEAR curves through the kernel)."""
+    if _write_native is None or curve.interpolation != LINEAR or column.ndim != 2:
+        column[rows] = curve.sample(times)
+        return
+    values = np.ascontiguousarray(curve.values, np.float64).reshape(len(curve.times), -1)
+    _write_native(curve.times.astype(np.float64), values, curve.rotation, times, rows, column)
