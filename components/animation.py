@@ -10,6 +10,8 @@ import numpy as np
 
 from ecs_engine.ecs.schema import Component, Field
 
+EVENT_NAME_LENGTH = 32  # characters of an AnimationEvent's name
+
 
 class AnimationPlayer(Component):
     """The clip (a handle in AnimationClips; -1: none) at `time` seconds, moving at `speed` while
@@ -50,3 +52,14 @@ class Skinned(Component):
     copy = Field(np.int32, default=0, minimum=0)
     centre = Field(np.float32, 3, default=(0.0, 0.0, 0.0), finite=True)
     radius = Field(np.float32, default=0.0, finite=True, minimum=0.0)
+
+
+class AnimationEvent(Component):
+    """An event (world.events(AnimationEvent)) AnimationSystem sends when a player's time passes
+    a time its clip marks (AnimationClips.mark): the `player` entity, its `clip`, the mark's
+    `name` and its `time` in the clip (footsteps, a sword's hit, a sound's cue)."""
+
+    player = Field(np.int64, default=-1, entity=True)
+    clip = Field(np.int32, default=-1)
+    name = Field(f"U{EVENT_NAME_LENGTH}", default="")
+    time = Field(np.float64, default=0.0)

@@ -1,7 +1,7 @@
 """Animation: keyframe curves sampled as glTF defines them (sampling.py), clips bound to
 entities by their names (clip.py), played by AnimationPlayer components (player.py)."""
 
-from .clip import AnimationClip, AnimationClips, ClipChannel, target_id
+from .clip import AnimationClip, AnimationClips, ClipChannel, ClipEvent, target_id
 from .sampling import CUBICSPLINE, INTERPOLATIONS, LINEAR, STEP, Curve
 
 __all__ = [
@@ -12,6 +12,7 @@ __all__ = [
     "AnimationClip",
     "AnimationClips",
     "ClipChannel",
+    "ClipEvent",
     "Curve",
     "target_id",
 ]

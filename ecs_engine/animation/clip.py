@@ -5,10 +5,13 @@ Binding by names, not entity ids, is what lets one clip play on many characters.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ecs_engine.components.animation import EVENT_NAME_LENGTH
+
+from ..errors import UsageError
 from .sampling import Curve
 
 PROPERTIES = ("translation", "rotation", "scale")
@@ -32,9 +35,16 @@ class ClipChannel:
 
 
 @dataclass(frozen=True)
+class ClipEvent:
+    time: float  # seconds into the clip
+    name: str
+
+
+@dataclass(frozen=True)
 class AnimationClip:
     name: str
     channels: tuple[ClipChannel, ...]
+    events: tuple[ClipEvent, ...] = ()  # marks a player passing them sends as AnimationEvents, by time
 
     @property
     def duration(self) -> float:
@@ -55,6 +65,17 @@ class AnimationClips:
                 )
         self.clips.append(clip)
         return len(self.clips) - 1
+
+    def mark(self, handle: int, time: float, name: str) -> None:
+        """Mark clip `handle` at `time` seconds: a player passing that time sends an
+        AnimationEvent named `name` (at most EVENT_NAME_LENGTH characters)."""
+        clip = self[handle]
+        if not (isinstance(time, int | float) and 0.0 <= time <= clip.duration):
+            raise UsageError(f"clip {clip.name!r}: a mark's time must be within 0 to {clip.duration:g} s, not {time!r}")
+        if not isinstance(name, str) or not 0 < len(name) <= EVENT_NAME_LENGTH:
+            raise UsageError(f"clip {clip.name!r}: a mark's name must be 1 to {EVENT_NAME_LENGTH} characters: {name!r}")
+        events = tuple(sorted((*clip.events, ClipEvent(float(time), name)), key=lambda e: e.time))
+        self.clips[handle] = replace(clip, events=events)
 
     def __getitem__(self, handle: int) -> AnimationClip:
         return self.clips[handle]

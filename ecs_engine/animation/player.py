@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from ecs_engine.components import Transform
-from ecs_engine.components.animation import AnimationPlayer, AnimationTarget
+from ecs_engine.components.animation import AnimationEvent, AnimationPlayer, AnimationTarget
 from ecs_engine.ecs.schedule import System, any_with
 
 from ..errors import UsageError
@@ -63,7 +63,7 @@ class AnimationSystem(System):
     def __init__(self) -> None:
         super().__init__(
             reads=[AnimationClips, AnimationTarget],
-            writes=[AnimationPlayer, Transform],
+            writes=[AnimationPlayer, Transform, AnimationEvent],
             name="animation",
             run_if=any_with(AnimationPlayer),
         )
@@ -197,6 +197,7 @@ def advance(world: Any, clips: AnimationClips, dt: float) -> _Players:
                     f"but the world's AnimationClips holds {len(clips)} clips"
                 )
         t, ended = _moved(p.time, clip, p, durations, dt)
+        _send_events(world, clips, batch.entities, clip, p.time, t, p.speed * np.where(p.playing, dt, 0.0))
         p.time = t
         fading = from_clip >= 0
         weight = np.ones(len(clip))
@@ -220,6 +221,30 @@ def advance(world: Any, clips: AnimationClips, dt: float) -> _Players:
     columns = [np.concatenate(c) for c in zip(*parts)]
     order = np.argsort(columns[0])
     return _Players(*(c[order] for c in columns))
+
+
+def _send_events(
+    world: Any, clips: AnimationClips, players: np.ndarray, clip: np.ndarray, before: np.ndarray, after: np.ndarray,
+    moved: np.ndarray,
+) -> None:  # fmt: skip
+    """An AnimationEvent for each mark a player's time passed this frame: within (before, after]
+    going forwards, [after, before) backwards, round the end when the clip looped (`moved`: the
+    time the player moved, signed)."""
+    for c in np.unique(clip[(clip >= 0) & (moved != 0.0)]).tolist():
+        events = clips[c].events
+        if not events:
+            continue
+        rows = np.flatnonzero((clip == c) & (moved != 0.0))
+        t0, t1, forward = before[rows], after[rows], moved[rows] > 0.0
+        wrapped = np.where(forward, t1 < t0, t1 > t0)
+        for event in events:
+            e = event.time
+            inside = np.where(forward, (t0 < e) & (e <= t1), (t1 <= e) & (e < t0))
+            around = np.where(forward, (e > t0) | (e <= t1), (e < t0) | (e >= t1))
+            passed = rows[np.where(wrapped, around, inside)]
+            if len(passed):
+                sent = AnimationEvent(player=players[passed], clip=c, name=event.name, time=e)
+                world.events(AnimationEvent).send(sent)
 
 
 def _moved(time: np.ndarray, clip: np.ndarray, p: Any, durations: np.ndarray, dt: float) -> tuple[np.ndarray, ...]:
