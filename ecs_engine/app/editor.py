@@ -23,6 +23,7 @@ from ..ecs.world import World
 from ..gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
 from ..maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
 from ..render.config import CHOICES, RenderConfig, applies
+from .editor_animation import AnimationPanel
 from .editor_browser import Browser, BrowserPanel
 from .editor_dock import DockLayout
 from .editor_files import FileMenu
@@ -90,6 +91,8 @@ class Editor(BrowserPanel):
         self.files = FileMenu()
         self.scene = SceneWindow(imgui)  # the scene's window in the dock (editor_viewport.py)
         self.physics = PhysicsPanel()  # while the world has physics (editor_physics.py)
+        self.animation = AnimationPanel()  # while a character is selected (editor_animation.py)
+        self.animated: int | None = None  # the player the Animation window showed last
         self.viewport: Any = None  # the renderer's EditorViewport (show_scene), None: no Scene window
         self.viewport_ui: Any = None  # (the ImGuiRenderer, a callable giving the window target)
 
@@ -158,6 +161,7 @@ class Editor(BrowserPanel):
             imgui.end_tab_bar()
         imgui.end()
         self.physics.draw(imgui, world)
+        self.animated = self.animation.draw(imgui, world, self.selected)
         self._scene_input(world)
 
     def _scene_input(self, world: World) -> None:

@@ -102,6 +102,8 @@ def scene_input(editor: Any, world: Any) -> None:
         inside = scene.rect is not None  # drawn over the image, clipped to the window
         rect = scene.rect if inside else (0.0, 0.0, width, height)
         editor.physics.draw_colliders(imgui, world, rect, imgui.get_window_draw_list() if inside else None)
+        animated = editor.animated  # the character the Animation window shows (editor_animation.py)
+        editor.animation.draw_skeleton(imgui, world, animated, rect, imgui.get_window_draw_list() if inside else None)
         eid = editor.selected
         editor.gizmo.used = False
         if eid is not None and world.is_alive(eid) and world.has(eid, Transform):
