@@ -108,3 +108,25 @@ def test_unposed_the_character_is_its_bind_pose_and_its_hips_carry_it(tmp_path):
     assert (np.abs(bind - still).max(axis=2) > 24).sum() <= 6
     assert (np.abs(moved - moved_still).max(axis=2) > 24).sum() <= 6
     assert (np.abs(moved - bind).max(axis=2) > 24).sum() > 100
+
+
+def test_three_characters_at_fixed_clip_times_match_their_golden_image(tmp_path):
+    """demos/character.py's humanoid idling, walking and running at fixed times, casting shadows:
+    the whole path (its .glb, the clips, the skin, the GPU) against an image kept in tests/golden."""
+    from golden_images import SIZE, assert_close_to_golden
+
+    from ecs_engine.animation.player import AnimationSystem
+    from ecs_engine.components.animation import AnimationPlayer
+    from ecs_engine.demos.character import character_file
+
+    with headless_gpu(*SIZE) as gpu:
+        world = World()
+        stage(gpu, world)
+        scene = load_gltf(character_file(tmp_path), gpu.meshes.add, materials(world))
+        roots = scene.spawn_many(world, 3, [(-1.0, 0.0, 0.3), (0.1, 0.0, 0.0), (1.2, 0.0, -0.3)])
+        handles = scene.clip_handles(world)
+        for root, clip, time in zip(roots, ("idle", "walk", "run"), (0.5, 0.25, 0.2), strict=True):
+            world.set(int(root), AnimationPlayer(clip=handles[clip], time=time, playing=False))
+        world.run_system(AnimationSystem(), 0.0)
+        pixels = render_world(gpu, world)
+    assert_close_to_golden(pixels.astype(np.uint8), "characters")
