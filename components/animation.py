@@ -54,6 +54,14 @@ class Skinned(Component):
     radius = Field(np.float32, default=0.0, finite=True, minimum=0.0)
 
 
+class MorphWeights(Component):
+    """How much each of its mesh's morph targets (render/assets/morph_targets.py) is applied: up
+    to eight weights, the first as many as the mesh has targets. A clip's "weights" channel
+    animates them on the node's entity."""
+
+    weights = Field(np.float32, 8, default=(0.0,) * 8, finite=True)
+
+
 class AnimationEvent(Component):
     """An event (world.events(AnimationEvent)) AnimationSystem sends when a player's time passes
     a time its clip marks (AnimationClips.mark): the `player` entity, its `clip`, the mark's

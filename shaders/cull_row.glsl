@@ -46,9 +46,10 @@ uint draw_key(uint key, vec3 center, float radius) {
 
 // The row drawn: a slot in the region of the key it is drawn with.
 void append_row(uint i, uint key, vec3 center, float radius) {
-    // a skinned row (misc.w >> 1, instance_row.glsl) draws its own mesh: its vertex weights are
-    // that mesh's, not a coarser level's
-    uint drawn = (instances[i].misc.w >> 1) != 0u ? key : draw_key(key, center, radius);
+    // a skinned or morphed row (misc.w >> 1, misc.z >> 1: instance_row.glsl) draws its own mesh:
+    // its vertex weights and morph deltas are that mesh's, not a coarser level's
+    uvec4 misc = instances[i].misc;
+    uint drawn = ((misc.w >> 1) | (misc.z >> 1)) != 0u ? key : draw_key(key, center, radius);
     uint slot = atomicAdd(visible[drawn], 1u);
     ids_out[keys[drawn].base + slot] = i;
 }

@@ -17,7 +17,7 @@ layout(std430, set = SET_FRAME, binding = BINDING_SKIN_VERTICES) readonly buffer
 Instance skinned(Instance inst) {
     uint first = inst.misc.w >> 1;
     if (first == 0u) return inst;
-    uint at = skin_words[inst.misc.y >> 1] + uint(gl_VertexIndex - gl_BaseVertexARB) * uint(SKIN_WORDS);
+    uint at = skin_words[2u * (inst.misc.y >> 1)] + uint(gl_VertexIndex - gl_BaseVertexARB) * uint(SKIN_WORDS);
     vec4 r0 = vec4(0.0), r1 = vec4(0.0), r2 = vec4(0.0);
     for (uint k = 0u; k < 8u; ++k) {
         float w = uintBitsToFloat(skin_words[at + 4u + k]);
@@ -33,6 +33,31 @@ Instance skinned(Instance inst) {
     inst.model[1] = r1;
     inst.model[2] = r2;
     return inst;
+}
+
+// Morph targets: a row whose misc.z >> 1 is not 0 has its eight weights in joint_rows at
+// (misc.z >> 1) - 1 and the row after; its mesh's morph block (skin_vertices.py) holds each
+// target's deltas by vertex. The vertex moves by the weighted sum of its deltas (before a skin,
+// as glTF orders them).
+void morphed(Instance inst, inout vec3 position, inout vec3 normal, inout vec3 tangent) {
+    uint at = inst.misc.z >> 1;
+    if (at == 0u) return;
+    uint block = skin_words[2u * (inst.misc.y >> 1) + 1u];
+    if (block == 0xFFFFFFFFu) return;
+    uint targets = skin_words[block], vertices = skin_words[block + 1u];
+    uint v = uint(gl_VertexIndex - gl_BaseVertexARB);
+    vec4 lo = joint_rows[at - 1u], hi = joint_rows[at];
+    float w[8] = float[8](lo.x, lo.y, lo.z, lo.w, hi.x, hi.y, hi.z, hi.w);
+    for (uint t = 0u; t < min(targets, 8u); ++t) {
+        if (w[t] == 0.0) continue;
+        uint r = block + 2u + (t * vertices + v) * uint(MORPH_WORDS);
+        position += w[t] * vec3(uintBitsToFloat(skin_words[r]), uintBitsToFloat(skin_words[r + 1u]),
+                                uintBitsToFloat(skin_words[r + 2u]));
+        normal += w[t] * vec3(uintBitsToFloat(skin_words[r + 3u]), uintBitsToFloat(skin_words[r + 4u]),
+                              uintBitsToFloat(skin_words[r + 5u]));
+        tangent += w[t] * vec3(uintBitsToFloat(skin_words[r + 6u]), uintBitsToFloat(skin_words[r + 7u]),
+                               uintBitsToFloat(skin_words[r + 8u]));
+    }
 }
 
 Instance instance_row() {

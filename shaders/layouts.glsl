@@ -25,6 +25,7 @@
 #define BINDING_JOINTS 11
 #define BINDING_SKIN_VERTICES 12
 #define SKIN_WORDS 12
+#define MORPH_WORDS 9
 #define SHADOW_HARD 0
 #define SHADOW_PCF 1
 #define SHADOW_PCSS 2

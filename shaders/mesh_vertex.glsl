@@ -40,15 +40,19 @@ mat3 normal_matrix(Instance inst) {
 
 void main() {
     Instance inst = instance_row();
-    vec3 world = instance_world(inst, in_position);
+    vec3 position = in_position, normal = in_normal, tangent = vec3(0.0);
+#ifdef TEXTURED
+    tangent = in_tangent.xyz;
+#endif
+    morphed(inst, position, normal, tangent);
+    vec3 world = instance_world(inst, position);
     v_position = world;
     mat3 nm = normal_matrix(inst);
-    v_normal = nm * in_normal;
+    v_normal = nm * normal;
     v_material = inst.misc.x | ((inst.misc.z & 1u) << 31);   // bit 31: NotShadowReceiver
 #ifdef TEXTURED
     // tangents move with the surface (the model matrix); the bitangent's sign flips with mirroring
-    vec3 t = vec3(dot(inst.model[0].xyz, in_tangent.xyz), dot(inst.model[1].xyz, in_tangent.xyz),
-                  dot(inst.model[2].xyz, in_tangent.xyz));
+    vec3 t = vec3(dot(inst.model[0].xyz, tangent), dot(inst.model[1].xyz, tangent), dot(inst.model[2].xyz, tangent));
     float mirrored = determinant(mat3(inst.model[0].xyz, inst.model[1].xyz, inst.model[2].xyz)) < 0.0 ? -1.0 : 1.0;
     v_uv = in_uv;
     v_tangent = vec4(t, in_tangent.w * mirrored);

@@ -17,7 +17,9 @@ layout(location = 1) flat out uint v_material;
 
 void main() {
     Instance inst = instance_row();
-    vec3 world = instance_world(inst, in_position);
+    vec3 position = in_position, normal = vec3(0.0), tangent = vec3(0.0);
+    morphed(inst, position, normal, tangent);
+    vec3 world = instance_world(inst, position);
     gl_Position = g.projection * (g.view * vec4(world, 1.0));
 #ifdef CUTOUT
     v_uv = in_uv;

@@ -14,7 +14,7 @@ from ecs_engine.components.animation import EVENT_NAME_LENGTH
 from ..errors import UsageError
 from .sampling import Curve
 
-PROPERTIES = ("translation", "rotation", "scale")
+PROPERTIES = ("translation", "rotation", "scale", "weights")  # weights: MorphWeights' (morph targets)
 _FNV_OFFSET, _FNV_PRIME, _MASK = 0xCBF29CE484222325, 0x100000001B3, (1 << 64) - 1
 
 

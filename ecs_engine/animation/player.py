@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from ecs_engine.components import Transform
-from ecs_engine.components.animation import AnimationEvent, AnimationPlayer, AnimationTarget
+from ecs_engine.components.animation import AnimationEvent, AnimationPlayer, AnimationTarget, MorphWeights
 from ecs_engine.ecs.schedule import System, any_with
 
 from ..errors import UsageError
@@ -25,7 +25,7 @@ from .clip import AnimationClip, AnimationClips, ClipChannel
 from .sampling import slerp
 from .write_linear import write_sampled
 
-_COLUMNS = {"translation": "position", "rotation": "rotation", "scale": "scale"}
+_COLUMNS = {"translation": "position", "rotation": "rotation", "scale": "scale"}  # Transform's, by property
 _TARGET_PLAYER, _TARGET_ID = (AnimationTarget, "player"), (AnimationTarget, "id")
 
 
@@ -63,7 +63,7 @@ class AnimationSystem(System):
     def __init__(self) -> None:
         super().__init__(
             reads=[AnimationClips, AnimationTarget],
-            writes=[AnimationPlayer, Transform, AnimationEvent],
+            writes=[AnimationPlayer, Transform, AnimationEvent, MorphWeights],
             name="animation",
             run_if=any_with(AnimationPlayer),
         )
@@ -82,15 +82,27 @@ class AnimationSystem(System):
             seen.add(table.id)
             binding = self._binding(world, table, batch[AnimationTarget], players, clips)
             transform = batch[Transform]
-            # per column, the rows the clips faded from wrote this frame (the new clip blends over those)
-            written = {name: np.zeros(len(batch), bool) for name in _COLUMNS.values()} if binding.faded else {}
-            for rows, spans in binding.faded:  # at full weight
-                _apply(transform, rows, spans, players.from_time[binding.at[rows]], None, written)
-            for rows, spans in binding.playing:
-                weight = players.weight[binding.at[rows]]
-                _apply(transform, rows, spans, players.time[binding.at[rows]], weight, written)
+            columns = {prop: getattr(transform, name) for prop, name in _COLUMNS.items()}
+            self._play(binding, players, columns, len(batch))
+        if any(c.property == "weights" for clip in clips.clips for c in clip.channels):
+            for batch in world.query(AnimationTarget, MorphWeights):  # the morph targets' weights
+                kept = self._bindings.get(batch.table.id)
+                if kept is not None:
+                    self._play(kept, players, {"weights": batch[MorphWeights].weights}, len(batch))
         for gone in set(self._bindings) - seen:
             del self._bindings[gone]
+
+    @staticmethod
+    def _play(binding: _Binding, players: _Players, columns: dict[str, np.ndarray], rows: int) -> None:
+        """The binding's clips into `columns` (by channel property; channels of others wait for
+        their own pass): the clips faded from, then those playing, blended over them."""
+        # per property, the rows the clips faded from wrote this frame (the new clip blends over those)
+        written = {prop: np.zeros(rows, bool) for prop in columns} if binding.faded else {}
+        for at, spans in binding.faded:  # at full weight
+            _apply(columns, at, spans, players.from_time[binding.at[at]], None, written)
+        for at, spans in binding.playing:
+            weight = players.weight[binding.at[at]]
+            _apply(columns, at, spans, players.time[binding.at[at]], weight, written)
 
     def _binding(self, world: Any, table: Any, target: Any, players: _Players, clips: AnimationClips) -> _Binding:
         key = (
@@ -131,21 +143,27 @@ def _group(rows: np.ndarray, ids: np.ndarray, of: AnimationClip) -> _Group:
 
 
 def _apply(
-    transform: Any,
+    columns: dict[str, np.ndarray],
     rows: np.ndarray,
     spans: list[tuple[ClipChannel, int, int]],
     times: np.ndarray,
     weight: Any,
     written: dict[str, np.ndarray],
 ) -> None:
-    """A clip's channels (`spans` of `rows`) at `times` (per row) into the Transform rows. With
-    `weight` (None: a clip faded from, which marks what it writes in `written`), blended by it
-    over what a clip faded from wrote this frame, and written outright where none did."""
+    """A clip's channels (`spans` of `rows`) at `times` (per row) into `columns` (by property;
+    a channel of another property is left). With `weight` (None: a clip faded from, which marks
+    what it writes in `written`), blended by it over what a clip faded from wrote this frame, and
+    written outright where none did."""
     faded_from = weight is None
     blend = not faded_from and bool((weight < 1.0).any())
     for channel, lo, hi in spans:
-        name = _COLUMNS[channel.property]
-        column, here = getattr(transform, name), rows[lo:hi]
+        name = channel.property
+        column = columns.get(name)
+        if column is None:
+            continue
+        here = rows[lo:hi]
+        if name == "weights":  # as many of the eight as the mesh has targets
+            column = column[:, : channel.curve.values.shape[1]]
         if not faded_from and not blend:  # the usual case: sampled straight into the column
             write_sampled(channel.curve, times[lo:hi], here, column)
             continue

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from .morph_targets import MorphTargets
 from .skin_weights import SkinWeights
 
 __all__ = ["MeshData", "bounding_sphere", "normalized", "tangent_frames"]
@@ -60,6 +61,7 @@ class MeshData:
     # {"normalized_together": size, "of": [sources], "part": k}; None: unknown. Read-only.
     source: dict[str, Any] | None = None
     skin: SkinWeights | None = None  # the joints and weights that move each vertex; None: not skinned
+    morph: MorphTargets | None = None  # its morph targets; None: none
 
     def __post_init__(self) -> None:
         for field, dtype in (
@@ -96,6 +98,8 @@ class MeshData:
             raise ValueError(f"MeshData {self.name!r}: bad bounding sphere {self.center}, {self.radius}")
         if self.skin is not None and self.skin.vertex_count != v:
             raise ValueError(f"MeshData {self.name!r}: skin weights for {self.skin.vertex_count} vertices, not {v}")
+        if self.morph is not None and self.morph.vertex_count != v:
+            raise ValueError(f"MeshData {self.name!r}: morph targets for {self.morph.vertex_count} vertices, not {v}")
         if self.tangents is None:
             tangents = tangent_frames(self.positions, self.normals, self.uvs, self.indices)
             object.__setattr__(self, "tangents", tangents)
@@ -119,13 +123,16 @@ class MeshData:
         tangents: np.ndarray | None = None,
         source: dict[str, Any] | None = None,
         skin: SkinWeights | None = None,
+        morph: MorphTargets | None = None,
     ) -> MeshData:
         """Validate and freeze the arrays and compute the bounding sphere (and, when not given,
         the tangents from the texture coordinates)."""
         positions = _frozen(positions, np.float32, "positions")
         center, radius = bounding_sphere(positions)
+        if morph is not None:  # the farthest its targets move a vertex at weights within [-1, 1]
+            radius += float(np.linalg.norm(morph.positions.astype(np.float64), axis=2).sum(axis=0).max(initial=0.0))
         indices = np.asarray(indices).reshape(-1)
-        return cls(positions, normals, indices, name, center, radius, uvs, tangents, source, skin)  # type: ignore[arg-type]
+        return cls(positions, normals, indices, name, center, radius, uvs, tangents, source, skin, morph)  # type: ignore[arg-type]
 
     @property
     def vertex_count(self) -> int:

@@ -339,7 +339,8 @@ def _interleaved(mesh: MeshData) -> np.ndarray:
 def _digest(mesh: MeshData) -> bytes:
     h = hashlib.blake2b(digest_size=16)
     skin = () if mesh.skin is None else (mesh.skin.joints, mesh.skin.weights)
-    for array in (mesh.positions, mesh.normals, mesh.uvs, mesh.tangents, mesh.indices, *skin):
+    morph = () if mesh.morph is None else (mesh.morph.positions, mesh.morph.normals, mesh.morph.tangents)
+    for array in (mesh.positions, mesh.normals, mesh.uvs, mesh.tangents, mesh.indices, *skin, *morph):
         h.update(str(array.shape).encode())
         h.update(np.ascontiguousarray(array).tobytes())
     return h.digest()

@@ -1,10 +1,12 @@
-"""The skinned meshes' vertex weights as one storage buffer the vertex shaders read
-(shaders/instance_row.glsl), as 32-bit words: first, per mesh handle up to the last skinned
-one, the word where its vertices' records start (SKIN_NONE for a mesh without a skin); then each
-vertex's record of SKIN_WORDS words, in vertex order: its eight joint indices, two 16-bit halves
-a word (the lower half first), then its eight weights as floats. A vertex is found by its index
-in its own mesh (gl_VertexIndex - gl_BaseVertex), so the instanced paths' per-mesh buffers and
-the indirect path's merged one read the same records."""
+"""The skinned and morphed meshes' vertex data as one storage buffer the vertex shaders read
+(shaders/instance_row.glsl), as 32-bit words. First, per mesh handle up to the last such mesh,
+two words: where its skin records start and where its morph block starts (SKIN_NONE for none).
+A skin record (SKIN_WORDS words, one per vertex, in vertex order): its eight joint indices, two
+16-bit halves a word (the lower half first), then its eight weights as floats. A morph block:
+its target count T, its vertex count V, then per target, per vertex, MORPH_WORDS floats (the
+position's, normal's and tangent's deltas). A vertex is found by its index in its own mesh
+(gl_VertexIndex - gl_BaseVertex), so the instanced paths' per-mesh buffers and the indirect
+path's merged one read the same records."""
 
 from __future__ import annotations
 
@@ -14,26 +16,34 @@ import numpy as np
 
 from ...gpu.memory import Buffer, upload
 from ...gpu.owned import Owned
-from ..layouts import SKIN_WORDS
+from ..layouts import MORPH_WORDS, SKIN_WORDS
 from .mesh_data import MeshData
 
 SKIN_NONE = 0xFFFFFFFF
 
 
 def skin_words(meshes: list[MeshData]) -> np.ndarray:
-    """The buffer's words for `meshes` (by handle); one SKIN_NONE word when none is skinned."""
-    skinned = [h for h, m in enumerate(meshes) if m.skin is not None]
-    header = np.full(max(skinned) + 1 if skinned else 1, SKIN_NONE, np.uint32)
+    """The buffer's words for `meshes` (by handle); two SKIN_NONE words when none deforms."""
+    deformed = [h for h, m in enumerate(meshes) if m.skin is not None or m.morph is not None]
+    header = np.full(2 * (max(deformed) + 1 if deformed else 1), SKIN_NONE, np.uint32)
     parts, at = [header], len(header)
-    for h in skinned:
-        skin = meshes[h].skin
-        assert skin is not None
-        records = np.empty((skin.vertex_count, SKIN_WORDS), np.uint32)
-        records[:, :4] = np.ascontiguousarray(skin.joints, "<u2").view("<u4")
-        records[:, 4:] = np.ascontiguousarray(skin.weights, "<f4").view("<u4")
-        header[h] = at
-        parts.append(records.reshape(-1))
-        at += records.size
+    for h in deformed:
+        skin, morph = meshes[h].skin, meshes[h].morph
+        if skin is not None:
+            records = np.empty((skin.vertex_count, SKIN_WORDS), np.uint32)
+            records[:, :4] = np.ascontiguousarray(skin.joints, "<u2").view("<u4")
+            records[:, 4:] = np.ascontiguousarray(skin.weights, "<f4").view("<u4")
+            header[2 * h] = at
+            parts.append(records.reshape(-1))
+            at += records.size
+        if morph is not None:
+            deltas = np.concatenate([morph.positions, morph.normals, morph.tangents], axis=2)  # (T, V, 9)
+            assert deltas.shape[2] == MORPH_WORDS
+            words = deltas.astype("<f4").view("<u4").reshape(-1)
+            block = np.r_[np.array([morph.count, morph.vertex_count], np.uint32), words]
+            header[2 * h + 1] = at
+            parts.append(block)
+            at += block.size
     return np.concatenate(parts)
 
 
@@ -53,7 +63,7 @@ class SkinVertices:
         if self._buffer is not None and version == self._checked:
             return self._buffer
         self._checked = version
-        made_for = tuple((h, id(m)) for h, m in enumerate(meshes) if m.skin is not None)
+        made_for = tuple((h, id(m)) for h, m in enumerate(meshes) if m.skin is not None or m.morph is not None)
         if self._buffer is None or made_for != self._made_for:
             usage = self.device.vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT
             fresh = upload(self.device, skin_words(meshes), usage)

@@ -316,7 +316,7 @@ class ChunkPath(PipelinesPerTarget):
             frame.material_count,
             rows,
             key_counts,
-            chunk.skin,
+            chunk.extra,
         )
         result = self._recorded(chunk, frame, rows, n, key_counts)
         result.written = written
@@ -325,7 +325,7 @@ class ChunkPath(PipelinesPerTarget):
     def record_keyed(self, chunk: Chunk, frame: FrameInputs, keys: np.ndarray, key_counts: np.ndarray) -> ChunkResult:
         """record_chunk for a chunk already culled (instance_rows.cull_views: one view's keys)."""
         rows = self.rows_for(chunk, frame)
-        n = write_keyed(chunk.model, chunk.material, keys, key_counts, frame.material_count, rows, chunk.skin)
+        n = write_keyed(chunk.model, chunk.material, keys, key_counts, frame.material_count, rows, chunk.extra)
         result = self._recorded(chunk, frame, rows, n, key_counts)
         result.written = None  # rows from another culling (a kept result may say otherwise): never kept
         return result
@@ -336,7 +336,7 @@ class ChunkPath(PipelinesPerTarget):
         if n == 0:
             return ChunkResult(None, 0, 0, 0)
         if chunk.flags & NOT_RECEIVER:
-            rows["misc"][:n, 2] = 1  # no shadow falls on these (mesh_vertex.glsl)
+            rows["misc"][:n, 2] |= 1  # no shadow falls on these (mesh_vertex.glsl)
         first = frame.row_base + chunk.offset
         recorded = (first, n, key_counts.tobytes())  # the draws depend on these alone (instanced)
         if frame.reuse is not None:  # the slot's last frame was recorded like this one (frame_replay.py)

@@ -168,10 +168,10 @@ class IndirectPath(PipelinesPerTarget):
         key_counts = np.zeros(2 * len(index_counts), dtype=np.int64)
         write_rows(
             chunk.model, chunk.handle, chunk.material, centers, radii, None, frame.material_count, rows, key_counts,
-            chunk.skin,
+            chunk.extra,
         )  # fmt: skip
         if chunk.flags & NOT_RECEIVER:
-            rows["misc"][:, 2] = 1  # no shadow falls on these (mesh_vertex.glsl)
+            rows["misc"][:, 2] |= 1  # no shadow falls on these (mesh_vertex.glsl)
         if chunk.flags & NOT_CASTER:
             rows["misc"][:, 3] |= ROW_NOT_CASTER  # the shadow views' cull leaves these out (cull.comp)
         return ChunkResult(None, 0, 0, 0, key_counts)

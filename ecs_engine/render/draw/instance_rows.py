@@ -20,7 +20,7 @@ import numpy as np
 from ... import native
 from ...maths.culling import bounding_spheres, spheres_visible
 from ..layouts import INSTANCE
-from .rows_numpy import NO_SKIN, _determinant3, _write_keyed_numpy, write_rows_numpy
+from .rows_numpy import NO_EXTRA, _determinant3, _write_keyed_numpy, write_rows_numpy
 
 INSTANCE_DTYPE = INSTANCE.dtype
 # the kernel writes a row as 8 uint64 words: model rows in words 0-5, misc.xy in word 6, zw in 7
@@ -72,7 +72,7 @@ def _cull_run_kernel(model, e0, e1, e2, radius, planes, key0, keys):  # pragma: 
 
 
 def _write_rows_kernel(
-    model_4x4, handle, material, centers, radii, planes, n_materials, rows, key_counts, skin
+    model_4x4, handle, material, centers, radii, planes, n_materials, rows, key_counts, extra
 ):  # pragma: no cover - compiled
     # Pass 1 culls and keys the rows, one run of equal meshes at a time (vectorised, see above),
     # and counts rows per key; pass 2 (_write_keyed) writes the visible ones by key. `planes`
@@ -105,17 +105,17 @@ def _write_rows_kernel(
         key_counts[2 * h] += plain
         key_counts[2 * h + 1] += mirrored
         i = j
-    return _write_keyed(model_4x4, material, keys, key_counts, n_materials, np.uint64(0), rows, skin)
+    return _write_keyed(model_4x4, material, keys, key_counts, n_materials, np.uint64(0), rows, extra)
 
 
 def _write_keyed_kernel(
-    model_4x4, material, keys, key_counts, n_materials, misc_zw, rows, skin
+    model_4x4, material, keys, key_counts, n_materials, misc_zw, rows, extra
 ):  # pragma: no cover - compiled
     # Pass 2: the rows whose key is not -1 written by key (a counting sort), 8 bytes at a time:
     # `rows` is a flat uint64 view (8 words a row), and so is `model` below. The current key's
     # cursor stays in a register while the key repeats (rows of one mesh come in runs). misc_zw
-    # is the rows' last word (misc.z: 1 for rows no shadow falls on); `skin` (per row, or empty)
-    # each row's misc.w (a skinned row's joint matrices: Chunk.skin).
+    # is the rows' last word (misc.z: 1 for rows no shadow falls on); `extra` (per row, or empty)
+    # is ORed into it (a skinned or morphed row's misc.z and misc.w bits: Chunk.extra).
     model = model_4x4.reshape(model_4x4.size).view(np.uint64)
     offsets = np.empty(key_counts.shape[0], np.int64)
     total = 0
@@ -138,7 +138,7 @@ def _write_keyed_kernel(
         for w in range(6):  # model rows 0-2: 12 floats
             rows[dst + w] = model[src + w]
         rows[dst + 6] = np.uint64(material[i] % n_materials) | (np.uint64(k) << np.uint64(32))
-        rows[dst + 7] = misc_zw | (np.uint64(skin[i]) << np.uint64(32)) if skin.shape[0] else misc_zw
+        rows[dst + 7] = misc_zw | extra[i] if extra.shape[0] else misc_zw
         j += 1
     return total
 
@@ -282,16 +282,16 @@ def write_rows(
     n_materials: int,
     rows: np.ndarray,
     key_counts: np.ndarray,
-    skin: np.ndarray | None = None,
+    extra: np.ndarray | None = None,
 ) -> int:
     """Cull (when `planes` is given), then write the visible rows into `rows` (INSTANCE_DTYPE,
     at least len(handle) long) sorted by key = mesh * 2 + mirrored, counting rows per key into
-    `key_counts`; `skin`: per row, its misc.w (Chunk.skin). Returns the number written. Releases
+    `key_counts`; `extra`: per row, bits of its misc.z and misc.w (Chunk.extra). Returns the number written. Releases
     the GIL with numba."""
-    skin = NO_SKIN if skin is None else skin
+    extra = NO_EXTRA if extra is None else extra
     planes = NO_PLANES if planes is None else planes
     if _write_rows_native is None or not rows.flags.c_contiguous:
-        return write_rows_numpy(model, handle, material, centers, radii, planes, n_materials, rows, key_counts, skin)
+        return write_rows_numpy(model, handle, material, centers, radii, planes, n_materials, rows, key_counts, extra)
     if len(planes) > 6:
         raise ValueError(f"at most 6 frustum planes, got {len(planes)}")
     if not model.flags.c_contiguous:
@@ -307,7 +307,7 @@ def write_rows(
             np.uint32(n_materials),
             rows.view(np.uint64),
             key_counts,
-            skin,
+            extra,
         )
     )
 
@@ -357,12 +357,12 @@ def write_keyed(
     key_counts: np.ndarray,
     n_materials: int,
     rows: np.ndarray,
-    skin: np.ndarray | None = None,
+    extra: np.ndarray | None = None,
 ) -> int:
     """The rows whose key (from cull_views: one view's) is not -1, written into `rows` sorted by
     key as `write_rows` writes them; returns the number written."""
-    skin = NO_SKIN if skin is None else skin
+    extra = NO_EXTRA if extra is None else extra
     if _write_keyed_native is not None and rows.flags.c_contiguous and model.flags.c_contiguous:
         rows64, n = rows.view(np.uint64), np.uint32(n_materials)
-        return int(_write_keyed_native(model, material, keys, key_counts, n, np.uint64(0), rows64, skin))
-    return _write_keyed_numpy(model, material, keys, n_materials, rows, skin)
+        return int(_write_keyed_native(model, material, keys, key_counts, n, np.uint64(0), rows64, extra))
+    return _write_keyed_numpy(model, material, keys, n_materials, rows, extra)

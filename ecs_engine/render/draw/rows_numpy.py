@@ -7,7 +7,8 @@ import numpy as np
 
 from ...maths.culling import bounding_spheres, spheres_visible
 
-NO_SKIN = np.zeros(0, dtype=np.uint32)  # a chunk without skinned rows: misc.w is 0
+# a chunk whose rows neither skin nor morph: misc.z and misc.w carry nothing per row
+NO_EXTRA = np.zeros(0, dtype=np.uint64)
 
 
 def _determinant3(m3: np.ndarray) -> np.ndarray:
@@ -28,7 +29,7 @@ def write_rows_numpy(
     n_materials: int,
     rows: np.ndarray,
     key_counts: np.ndarray,
-    skin: np.ndarray = NO_SKIN,
+    extra: np.ndarray = NO_EXTRA,
 ) -> int:
     """Reference version of `write_rows`."""
     keys = handle.astype(np.int64) * 2 + (_determinant3(model[:, :3, :3]) < 0)
@@ -36,11 +37,11 @@ def write_rows_numpy(
         c, r = bounding_spheres(model, centers[handle], radii[handle])
         keys = np.where(spheres_visible(c, r, planes), keys, -1)
     key_counts[:] = np.bincount(keys[keys >= 0], minlength=len(key_counts))[: len(key_counts)]
-    return _write_keyed_numpy(model, material, keys, n_materials, rows, skin)
+    return _write_keyed_numpy(model, material, keys, n_materials, rows, extra)
 
 
 def _write_keyed_numpy(
-    model: np.ndarray, material: np.ndarray, keys: np.ndarray, n_materials: int, rows: np.ndarray, skin: np.ndarray
+    model: np.ndarray, material: np.ndarray, keys: np.ndarray, n_materials: int, rows: np.ndarray, extra: np.ndarray
 ) -> int:
     """The rows whose key is not -1 into `rows`, sorted by key (stable): write_rows' order."""
     visible = np.flatnonzero(keys >= 0)
@@ -50,6 +51,5 @@ def _write_keyed_numpy(
     out["model"] = model[order, :3, :]
     out["misc"][:, 0] = material[order] % n_materials
     out["misc"][:, 1] = keys[order]
-    out["misc"][:, 2] = 0
-    out["misc"][:, 3] = skin[order] if len(skin) else 0
+    out["misc"][:, 2:] = extra[order].view(np.uint32).reshape(-1, 2) if len(extra) else 0
     return n

@@ -21,7 +21,7 @@ from ...gpu.functions import handle_int
 from ..config import Recorder
 from ..extract.frame_data import NOT_RECEIVER, Chunk
 from ..layouts import INSTANCE
-from .instance_rows import NO_SKIN, _cull_views_native, _write_keyed
+from .instance_rows import NO_EXTRA, _cull_views_native, _write_keyed
 from .path import ChunkResult, FrameInputs
 
 _compiled: dict[int, Any] = {}  # per NativeRecorder (id of its compiled loop): the fused kernel
@@ -49,7 +49,7 @@ def fused_kernel(record: Any) -> Any:
         planes,
         n_materials,
         misc_zw,
-        skin,
+        extra,
         rows,
         rows_addr,
         row_starts,
@@ -88,7 +88,7 @@ def fused_kernel(record: Any) -> Any:
                 n_materials,
                 misc_zw[v],
                 rows[8 * start : 8 * (start + total)],
-                skin,
+                extra,
             )
             result = record(
                 cbs[v],
@@ -198,7 +198,7 @@ class ViewRecording:
             self.planes[first:],
             self.n_materials,
             misc_zw,
-            NO_SKIN if chunk.skin is None else chunk.skin,
+            NO_EXTRA if chunk.extra is None else chunk.extra,
             self.rows,
             self.rows_addr,
             self.row_bases[first:] + chunk.offset,

@@ -27,7 +27,7 @@ from ...components.camera_views import DEFAULT_LAYERS
 from ...ecs.structural import structural
 from ...ecs.world import World
 from ...jobs import row_chunks
-from .skins import SkinFrame
+from .skins import DeformFrame
 
 # what a system running ChunkExtract declares
 READS = (ModelMatrix, Mesh, NotShadowCaster, NotShadowReceiver, RenderLayers, Skinned)
@@ -66,8 +66,9 @@ class Chunk:
     # its table's column ticks, for views of the table's own columns (not gathered copies): what
     # a frame slot's rows were written from can then be told unchanged (chunk_paths.py)
     ticks: dict[Any, int] | None = None
-    # per row, a skinned row's Instance.misc.w (its joint matrices' place: extract/skins.py), or None
-    skin: np.ndarray | None = None
+    # per row, the bits a skinned or morphed row adds to its Instance's misc.z and misc.w (z | w << 32:
+    # where its joints and morph weights are, extract/skins.py), or None
+    extra: np.ndarray | None = None
 
     @property
     def name(self) -> str:
@@ -82,7 +83,7 @@ class SetAsideRows:
     model: np.ndarray
     handle: np.ndarray
     material: np.ndarray
-    skin: np.ndarray | None = None  # per row, its Instance.misc.w (Chunk.skin); None: no row is skinned
+    extra: np.ndarray | None = None  # per row, its misc bits (Chunk.extra); None: no row is skinned or morphed
     # the same rows as shadow casters, per table (its shadow tags), offsets after the chunks' rows
     casters: list[Chunk] = field(default_factory=list)
 
@@ -104,7 +105,7 @@ class ChunkExtract:
         self._split: list[tuple[np.ndarray, np.ndarray]] = []  # per table: chunk rows, rows set aside
 
     def chunks(
-        self, world: World, mesh_count: int, material_count: int = 1 << 32, skins: SkinFrame | None = None
+        self, world: World, mesh_count: int, material_count: int = 1 << 32, skins: DeformFrame | None = None
     ) -> list[Chunk]:
         """Row ranges of every table with a ModelMatrix and a Mesh, each with its buffer slice
         (and its skinned rows' misc.w from `skins`). Kept while the world is the same and its
@@ -120,7 +121,7 @@ class ChunkExtract:
             self.threads(),
             None if skins is None else skins.key,
             *[(t.id, t.version, t.count, t.column_ticks[_HANDLE], t.column_ticks[_MATERIAL]) for t in tables],
-            *[(t.column_ticks.get(_SKIN), t.column_ticks.get(_COPY)) for t in tables],
+            *[(t.column_ticks.get(_SKIN), t.column_ticks.get(_COPY)) for t in tables],  # (weights: read each frame)
         )
         if key == self._chunks_key:
             return self._chunks
@@ -128,12 +129,12 @@ class ChunkExtract:
         offset = 0
         for batch in query:
             m, mesh = batch[ModelMatrix], batch[Mesh]
-            skin = None if skins is None else skins.row_skins(batch.table, len(batch))
+            skin = None if skins is None else skins.row_extra(batch.table, len(batch))
             for s in row_chunks(len(batch), self.rows_per_job(len(batch))):
                 flags, table = shadow_flags(batch), batch.table.id
                 ticks = batch.table.column_ticks
                 chunk = Chunk(m.model[s], mesh.handle[s], mesh.material[s], offset, flags, table, s.start, ticks)
-                chunk.skin = None if skin is None else skin[s]
+                chunk.extra = None if skin is None else skin[s]
                 out.append(chunk)
                 offset += s.stop - s.start
         if out:
@@ -162,7 +163,7 @@ class ChunkExtract:
         chunks: list[Chunk],
         blend: np.ndarray | None,
         layers: int = DEFAULT_LAYERS,
-        skins: SkinFrame | None = None,
+        skins: DeformFrame | None = None,
     ) -> tuple[list[Chunk], SetAsideRows]:
         """(Called with the chunks of a world with a mesh.) The chunks without the rows set
         aside (`blend`: per material, or None for none) or outside `layers` (gathered copies,
@@ -189,22 +190,22 @@ class ChunkExtract:
         for batch, (keep, blended) in zip(query, self._split):
             m, mesh = batch[ModelMatrix], batch[Mesh]
             model, handle, material = m.model[keep], mesh.handle[keep], mesh.material[keep]
-            skin = None if skins is None else skins.row_skins(batch.table, len(batch))
+            skin = None if skins is None else skins.row_extra(batch.table, len(batch))
             for s in row_chunks(len(keep), self.rows_per_job(len(keep))):
                 chunk = Chunk(model[s], handle[s], material[s], offset, shadow_flags(batch))
-                chunk.skin = None if skin is None else skin[keep][s]
+                chunk.extra = None if skin is None else skin[keep][s]
                 opaque.append(chunk)
                 offset += s.stop - s.start
             models.append(m.model[blended])
             handles.append(mesh.handle[blended])
             materials.append(mesh.material[blended])
             flags.append(shadow_flags(batch))
-            skinned.append(np.zeros(len(blended), np.uint32) if skin is None else skin[blended])
+            skinned.append(np.zeros(len(blended), np.uint64) if skin is None else skin[blended])
         rows = SetAsideRows(np.concatenate(models), np.concatenate(handles), np.concatenate(materials))
-        rows.skin = np.concatenate(skinned) if skins is not None else None
+        rows.extra = np.concatenate(skinned) if skins is not None else None
         for model, handle, material, tags, skin in zip(models, handles, materials, flags, skinned, strict=True):
             if len(handle):  # a shadow view's rows: the chunks', then these
-                rows.casters.append(Chunk(model, handle, material, offset, tags, skin=skin if skins else None))
+                rows.casters.append(Chunk(model, handle, material, offset, tags, extra=skin if skins else None))
                 offset += len(handle)
         return opaque, rows
 

@@ -46,7 +46,7 @@ from .environment import extract_environment
 from .lights import KeptPoints, LightKinds, extract_lights, light_kinds
 from .materials import extract_materials
 from .shadows import ShadowCasters, ShadowExtract
-from .skins import extract_skins
+from .skins import extract_deform
 
 # names older code imports from here (they live in extract/chunks.py)
 __all__ = [
@@ -85,7 +85,8 @@ class FrameData:
     shadows: ShadowCasters | None = None  # the lights with a Shadow (None: none has one)
     environment: Environment | None = None  # the world's Environment resource
     materials: Materials | None = None  # the world's Materials (or a default palette); None: not extracted
-    joints: np.ndarray | None = None  # the skins' joint matrices (N, 3, 4) float32 (extract/skins.py); None: none
+    # the skins' joint matrices' rows and the morph weights (K, 4) float32 (extract/skins.py); None: neither
+    deform: np.ndarray | None = None
 
     def visible(self, chunk: Chunk) -> np.ndarray | None:
         """The rows of `chunk` to draw, where the culling decided ahead (temporal); else None."""
@@ -173,7 +174,7 @@ class FrameExtractor:
         origin_key = origin.tobytes()
         view = self.view(cam, origin, origin_key)
         positional, directional = extract_lights(world, self._kinds, self._point_lights)
-        skins = extract_skins(world, origin)
+        skins = extract_deform(world, origin)
         chunks = self.rows.chunks(world, mesh_count, material_count, skins)
         aside = None
         layers = camera_layers(world) if layers is None else layers
@@ -203,7 +204,7 @@ class FrameExtractor:
             shadows=self.casters(world),
             environment=extract_environment(world),
             materials=materials,
-            joints=None if skins is None else skins.joints,
+            deform=None if skins is None else skins.rows,
         )
 
     def view(self, cam: CameraMatrices, origin: np.ndarray, origin_key: bytes) -> np.ndarray:

@@ -1,66 +1,87 @@
-"""The skins' part of a frame: every skin copy's joint matrices (animation/skins.py's
-SkinSystem computed them) as the rows the vertex shader reads, relative to the render origin,
-and per skinned mesh row where its joints start (its Instance.misc.w).
+"""The skins' and morph targets' part of a frame: what the vertex shaders deform vertices by
+(shaders/instance_row.glsl), as one array of vec4 rows (`rows`), and per mesh row the bits of
+its Instance misc.z and misc.w that point into it (`row_extra`).
 
-The joint rows are the skins' copies one after the other (skin 0's copies, then skin 1's...),
-each copy's J matrices in joint order, 3 rows of 4 floats each (the matrix's last row is 0 0 0 1).
-A skinned row's misc.w is (first joint + 1) << 1: 0 for a row no skin moves, bit 0 being the
-indirect mode's ROW_NOT_CASTER."""
+- Joint matrices: every skin copy's (animation/skins.py's SkinSystem posed them), the skins one
+  after the other, each copy's J matrices in joint order, 3 rows each (the last row is 0 0 0 1),
+  relative to the render origin. A skinned row's misc.w is (its first joint's row / 3 + 1) << 1
+  (0: not skinned; bit 0 is the indirect mode's ROW_NOT_CASTER).
+- Morph weights: after the joints, 2 rows (8 weights) for each row of every table with a mesh
+  and MorphWeights. A morphed row's misc.z is (its first weights row + 1) << 1 (bit 0 is
+  NotShadowReceiver's)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from ...animation.skins import Skins
-from ...components.animation import Skinned
+from ...components import Mesh
+from ...components.animation import MorphWeights, Skinned
 
-READS = (Skins, Skinned)
-_SKIN, _COPY = (Skinned, "skin"), (Skinned, "copy")
+READS = (Skins, Skinned, MorphWeights, Mesh)
+_SKIN, _COPY, _WEIGHTS = (Skinned, "skin"), (Skinned, "copy"), (MorphWeights, "weights")
 
 
 @dataclass
-class SkinFrame:
-    joints: np.ndarray  # (N, 3, 4) float32: every copy's joint matrices, relative to the render origin
-    first: np.ndarray  # per skin: its first copy's first joint row
+class DeformFrame:
+    rows: np.ndarray  # (K, 4) float32: the joints' rows, then the morph weights' rows
+    first: np.ndarray  # per skin: its first copy's first joint
     counts: np.ndarray  # per skin: its joints
-    copies: np.ndarray  # per skin: its copies computed this frame
-    key: tuple[int, ...]  # equal keys, equal rows' misc.w (the skins' sizes)
+    copies: np.ndarray  # per skin: its copies posed this frame
+    morphs: dict[int, int] = field(default_factory=dict)  # table id -> its first weights row in `rows`
+    key: tuple[Any, ...] = ()  # equal keys, equal rows' misc bits (the skins' and morph tables' sizes)
 
-    def row_skins(self, table: Any, rows: int) -> np.ndarray | None:
-        """Per row of `table` (its first `rows`), its misc.w; None for a table without Skinned. A row
-        naming a skin or copy the frame lacks is drawn as it is, unskinned (0)."""
-        if not table.has(Skinned):
+    def row_extra(self, table: Any, rows: int) -> np.ndarray | None:
+        """Per row of `table` (its first `rows`), the bits it adds to its Instance's misc.z and
+        misc.w (z | w << 32); None for a table neither skinned nor morphed. A row naming a skin
+        or copy the frame lacks is drawn unskinned."""
+        skinned, morphed = table.has(Skinned), table.id in self.morphs
+        if not skinned and not morphed:
             return None
-        skin = table.columns[_SKIN][:rows].astype(np.int64)
-        copy = table.columns[_COPY][:rows].astype(np.int64)
-        known = (skin >= 0) & (skin < len(self.first))
-        s = np.where(known, skin, 0)
-        known &= copy < self.copies[s]
-        start = self.first[s] + copy * self.counts[s]
-        return np.where(known, (start + 1) << 1, 0).astype(np.uint32)
+        extra = np.zeros(rows, np.uint64)
+        if skinned:
+            skin = table.columns[_SKIN][:rows].astype(np.int64)
+            copy = table.columns[_COPY][:rows].astype(np.int64)
+            known = (skin >= 0) & (skin < len(self.first))
+            s = np.where(known, skin, 0)
+            known &= copy < self.copies[s]
+            start = self.first[s] + copy * self.counts[s]
+            extra |= np.where(known, (start + 1) << 1, 0).astype(np.uint64) << np.uint64(32)
+        if morphed:
+            first = self.morphs[table.id] + 2 * np.arange(rows)
+            extra |= ((first + 1) << 1).astype(np.uint64)
+        return extra
 
 
-def extract_skins(world: Any, origin: np.ndarray) -> SkinFrame | None:
-    """The world's skins as a SkinFrame, or None when no skin has copies posed. The joints' rows
-    are the skins' own (one skin: no copy) when they were posed at this origin."""
+def extract_deform(world: Any, origin: np.ndarray) -> DeformFrame | None:
+    """The world's posed skins and morph weights as a DeformFrame, or None when it has neither.
+    One skin and no morph targets: its own rows, not a copy (when posed at this origin)."""
     skins = world.resources.get(Skins)
-    if skins is None or not any(s.matrices is not None for s in skins.skins):
+    posed = skins is not None and any(s.matrices is not None for s in skins.skins)
+    tables = [(b.table.id, b[MorphWeights].weights) for b in world.query(Mesh, MorphWeights, write=()) if len(b)]
+    if not posed and not tables:
         return None
     parts, first, counts, copies, at = [], [], [], [], 0
-    for s in skins.skins:
-        posed = s.matrices if s.matrices is not None else np.empty((0, s.joint_count, 3, 4), np.float32)
+    for s in skins.skins if skins is not None else []:
+        matrices = s.matrices if s.matrices is not None else np.empty((0, s.joint_count, 3, 4), np.float32)
         first.append(at)
         counts.append(s.joint_count)
-        copies.append(len(posed))
-        at += posed.shape[0] * posed.shape[1]
-        rows = posed.reshape(-1, 3, 4)
+        copies.append(len(matrices))
+        at += matrices.shape[0] * matrices.shape[1]
+        rows = matrices.reshape(-1, 3, 4)
         if len(rows) and not np.array_equal(s.origin, origin):  # posed before the origin moved
             rows = rows.copy()
             rows[:, :, 3] += (s.origin - origin).astype(np.float32)
-        parts.append(rows)
-    joints = parts[0] if len(parts) == 1 else np.concatenate(parts)
-    key = tuple(counts) + tuple(copies)
-    return SkinFrame(joints, np.array(first), np.array(counts), np.array(copies), key)
+        parts.append(rows.reshape(-1, 4))
+    morphs, row = {}, 3 * at
+    for tid, weights in tables:
+        morphs[tid] = row
+        parts.append(np.asarray(weights, np.float32).reshape(-1, 4))
+        row += 2 * len(weights)
+    rows = parts[0] if len(parts) == 1 else np.concatenate(parts) if parts else np.zeros((0, 4), np.float32)
+    key = (tuple(counts), tuple(copies), tuple((tid, len(w)) for tid, w in tables))
+    first_, counts_, copies_ = (np.array(v, np.int64) for v in (first, counts, copies))
+    return DeformFrame(rows, first_, counts_, copies_, morphs, key)

@@ -118,8 +118,8 @@ class FrameDrawing:
         camera_rows = self.path.rows_needed(data.candidates) + len(data.set_aside or ())
         rows = camera_rows + len(views) * ShadowPass.view_rows(data, self.path)  # each view's after the camera's
         pf.ensure_capacity(self.device, self.texture_pages, rows, data.light_count, material_count, len(views))
-        if data.joints is not None:  # skinned rows: their joints, and the meshes' weights named
-            pf.write_skins(self.device, data.joints, self.meshes.skin_buffer())
+        if data.deform is not None:  # skinned or morphed rows: their joints and weights, the meshes' data named
+            pf.write_deform(self.device, data.deform, self.meshes.skin_buffer())
         deferred = self.target.form == Form.DEFERRED
         named = self.shadows.light_views(views) if views else {}
         places = ray.places(traced) if ray is not None and traced else {}

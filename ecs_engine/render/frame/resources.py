@@ -46,7 +46,7 @@ from .camera import CameraMatrices
 MIN_LIGHTS = 256
 MIN_MATERIALS = 64
 MIN_JOINTS = 64
-JOINT_BYTES = 48  # a joint matrix's three rows of four floats
+ROW_BYTES = 16  # a vec4 row: a third of a joint matrix, or half a row's morph weights
 
 
 def frame_sets(device: Device, frames: int) -> tuple[DescriptorSetLayout, DescriptorPool]:
@@ -86,7 +86,7 @@ class FrameResources:
     materials: Buffer
     clusters: Buffer  # device-local: cluster.comp writes it, the fragment shader reads it
     shadow_views: Buffer  # SHADOW_VIEW rows (render/shadows/maps_pass.py)
-    joints: Buffer  # the skins' joint matrices this frame (extract/skins.py): 3 vec4 rows each
+    joints: Buffer  # the skins' joint matrices and the morph weights this frame (extract/skins.py), vec4 rows
     skin_vertices: Buffer  # the mesh registry's skinned vertex weights (assets/skin_vertices.py), or a stand-in
     descriptor_set: Any
     set_array: Any  # VkDescriptorSet[1] for raw calls
@@ -133,7 +133,7 @@ class FrameResources:
                     )
                 ),
                 shadow_views=made.add(Buffer(device, SHADOW_VIEW.size * 4, ssbo)),
-                joints=made.add(Buffer(device, JOINT_BYTES * MIN_JOINTS, ssbo, UPLOAD)),
+                joints=made.add(Buffer(device, 3 * ROW_BYTES * MIN_JOINTS, ssbo, UPLOAD)),
                 skin_vertices=made.add(Buffer(device, 16, ssbo)),  # until a frame has skinned rows
                 descriptor_set=descriptor_set,
                 set_array=vk.ffi.new("VkDescriptorSet[1]", [descriptor_set]),
@@ -209,15 +209,15 @@ class FrameResources:
                     self.materials_written = None
                 self.write_set(device, pages)
 
-    def write_skins(self, device: Device, joints: np.ndarray, skin_vertices: Buffer) -> None:
-        """The frame's joint matrices ((N, 3, 4) float32) into this slot's buffer, grown to hold
-        them, and the set naming `skin_vertices` (the mesh registry's, made again when a skinned
-        mesh is added)."""
-        grown = self.joints.grown(len(joints) * JOINT_BYTES, self.owned)
+    def write_deform(self, device: Device, rows: np.ndarray, skin_vertices: Buffer) -> None:
+        """The frame's joint matrices and morph weights ((K, 4) float32 rows) into this slot's
+        buffer, grown to hold them, and the set naming `skin_vertices` (the mesh registry's, made
+        again when a skinned or morphed mesh is added)."""
+        grown = self.joints.grown(len(rows) * ROW_BYTES, self.owned)
         if grown is not self.joints or skin_vertices is not self.skin_vertices:
             self.joints, self.skin_vertices = grown, skin_vertices
             self.write_set(device, self.pages)
-        self.joints.array(np.float32, joints.shape)[:] = joints
+        self.joints.array(np.float32, rows.shape)[:] = rows
 
     def ensure_clusters(self, device: Device, pages: TexturePages, grid: ClusterGrid) -> None:
         """Room for `grid`'s light lists (safe: this slot's fence was waited on)."""

@@ -71,7 +71,7 @@ class SetAsidePass:
         out = frame.instances[first_row : first_row + len(rows)]
         n = write_rows(
             rows.model, rows.handle, rows.material, centers, radii, frame.planes, frame.material_count, out, key_counts,
-            rows.skin,
+            rows.extra,
         )  # fmt: skip
         if n == 0:
             return 0, 0, 0, None
@@ -87,12 +87,12 @@ class SetAsidePass:
         self, frame: FrameInputs, rows: SetAsideRows, first_row: int, eye: np.ndarray, materials: Materials, oit: Any
     ) -> tuple[Any, int, int, int, Any]:
         centers, radii, index_counts = frame.bounds
-        model, handle, material, skin = rows.model, rows.handle, rows.material, rows.skin
+        model, handle, material, extra = rows.model, rows.handle, rows.material, rows.extra
         c, r = bounding_spheres(model, centers[handle], radii[handle])
         if frame.planes is not None:
             keep = np.flatnonzero(spheres_visible(c, r, frame.planes))
             model, handle, material, c = model[keep], handle[keep], material[keep], c[keep]
-            skin = None if skin is None else skin[keep]
+            extra = None if extra is None else extra[keep]
         n = len(handle)
         if n == 0:
             return None, 0, 0, 0, None
@@ -119,8 +119,8 @@ class SetAsidePass:
         out["misc"] = 0
         out["misc"][:, 0] = material[order]
         out["misc"][:, 1] = keys
-        if skin is not None:
-            out["misc"][:, 3] = skin[order]  # a skinned row's joints (extract/skins.py)
+        if extra is not None:  # a skinned or morphed row's (extract/skins.py)
+            out["misc"][:, 2:] = extra[order].view(np.uint32).reshape(-1, 2)
         group = (keys * len(FILLS) + fill) * 2 + blended
         starts = np.flatnonzero(np.r_[True, group[1:] != group[:-1]])
         counts = np.diff(np.r_[starts, n])

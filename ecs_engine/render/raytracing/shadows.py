@@ -270,8 +270,8 @@ class RayShadows:
             own = pairs[at] if pairs is not None else None
             out = rows[at]
             write_instances(chunk.model, chunk.handle, blas, chunk.offset, caster, out, chunk.material, cutout, own)
-            if chunk.skin is not None:  # a skinned row's bottom level is its bind pose: no ray sees it (yet)
-                out["blas"][chunk.skin != 0] = 0
+            if chunk.extra is not None:  # a skinned or morphed row's bottom level is its rest pose: no ray sees it
+                out["blas"][chunk.extra != 0] = 0
 
         if jobs is not None and len(chunks) > 1:
             jobs.map(job, chunks)

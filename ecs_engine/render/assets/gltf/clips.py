@@ -126,11 +126,6 @@ def _curve(document: Any, sampler: Any, here: str, path: str, targets: int) -> C
 
 def animation_clip(clip: Clip, paths: dict[int, str]) -> AnimationClip:
     """A file's clip bound by names (`paths`: glTF node index -> its path of names in the scene),
-    as AnimationClips holds it; channels of nodes outside the scene, and morph weights (not
-    played yet), are left out."""
-    channels = tuple(
-        ClipChannel(target_id(paths[c.node]), c.path, c.curve)
-        for c in clip.channels
-        if c.node in paths and c.path != "weights"
-    )
+    as AnimationClips holds it; channels of nodes outside the scene are left out."""
+    channels = tuple(ClipChannel(target_id(paths[c.node]), c.path, c.curve) for c in clip.channels if c.node in paths)
     return AnimationClip(clip.name, channels)

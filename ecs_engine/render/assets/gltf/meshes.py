@@ -16,6 +16,7 @@ import numpy as np
 from ..materials import Material, Materials
 from ..mesh_data import MeshData
 from ..model_loading import GLTF_TEXTURES
+from ..morph_targets import MAX_MORPH_TARGETS, MorphTargets
 from ..skin_weights import SkinWeights
 from ..textures import ImageError, Texture, pixels_of
 from .document import GltfDocument, data_uri
@@ -54,6 +55,7 @@ def primitive_mesh(document: GltfDocument, mesh: int, index: int) -> MeshData | 
     else:
         indices = np.arange(n, dtype=np.uint32)
     skin = _skin_weights(document, attributes, here, n)
+    morph = _morph_deltas(document, primitive, here, n)
     triangles = _triangles(indices, mode)
     if not len(triangles):
         raise document.error(here, "has no whole triangle")
@@ -61,6 +63,7 @@ def primitive_mesh(document: GltfDocument, mesh: int, index: int) -> MeshData | 
         corners = triangles.reshape(-1)
         positions, uvs = positions[corners], None if uvs is None else uvs[corners]
         skin = None if skin is None else (skin[0][corners], skin[1][corners])
+        morph = None if morph is None else (morph[0][:, corners], None, None)  # flat: no normals to morph
         normals = np.repeat(_face_normals(positions.reshape(-1, 3, 3)), 3, axis=0)
         triangles = np.arange(len(positions), dtype=np.uint32).reshape(-1, 3)
     name = str(document.item("meshes", mesh, "mesh").get("name", f"mesh{mesh}"))
@@ -73,7 +76,45 @@ def primitive_mesh(document: GltfDocument, mesh: int, index: int) -> MeshData | 
         uvs=None if uvs is None else uvs.astype(np.float32),
         source=source,
         skin=None if skin is None else _weights(document, *skin, here),
+        morph=None if morph is None else _morph(document, mesh, morph, here),
     )
+
+
+def _morph_deltas(
+    document: GltfDocument, primitive: dict[str, Any], here: str, count: int
+) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None] | None:
+    """The primitive's targets' POSITION, NORMAL and TANGENT deltas ((T, V, 3) each; None for an
+    attribute no target has), or None without targets."""
+    targets = primitive.get("targets")
+    if targets is None:
+        return None
+    if not isinstance(targets, list) or not targets or not all(isinstance(t, dict) for t in targets):
+        raise document.error(f"{here}.targets", "is not a non-empty array of objects")
+    if len(targets) > MAX_MORPH_TARGETS:
+        many = f"has {len(targets)} morph targets; at most {MAX_MORPH_TARGETS} are drawn"
+        raise document.error(f"{here}.targets", many)
+    out: list[np.ndarray | None] = []
+    for name in ("POSITION", "NORMAL", "TANGENT"):
+        if not any(name in t for t in targets):
+            out.append(None)
+            continue
+        deltas = np.zeros((len(targets), count, 3), np.float32)
+        for k, target in enumerate(targets):
+            if name in target:
+                deltas[k] = _attribute(document, target, name, f"{here}.targets[{k}]", (3,), count, inside="")
+        out.append(deltas)
+    positions = out[0] if out[0] is not None else np.zeros((len(targets), count, 3), np.float32)
+    return positions, out[1], out[2]
+
+
+def _morph(document: GltfDocument, mesh: int, deltas: tuple[Any, Any, Any], here: str) -> MorphTargets:
+    entry = document.item("meshes", mesh, "mesh")
+    count = len(deltas[0])
+    weights = document.floats(entry, "weights", f"meshes[{mesh}]", count, [0.0] * count) if "weights" in entry else None
+    try:
+        return MorphTargets.of(deltas[0], deltas[1], deltas[2], weights, "morph targets")
+    except ValueError as exc:
+        raise document.error(f"{here}.targets", str(exc).removeprefix("morph targets: ")) from None
 
 
 def _skin_weights(
@@ -111,10 +152,13 @@ def _weights(document: GltfDocument, joints: np.ndarray, weights: np.ndarray, he
 
 
 def _attribute(
-    document: GltfDocument, attributes: dict[str, Any], name: str, here: str, shape: tuple[int, ...], count: int = 0
-) -> np.ndarray:
-    where = f"{here}.attributes.{name}"
-    values = document.accessor(document.number(attributes, name, f"{here}.attributes"), where)
+    document: GltfDocument, attributes: dict[str, Any], name: str, here: str, shape: tuple[int, ...], count: int = 0,
+    inside: str = "attributes",
+) -> np.ndarray:  # fmt: skip
+    """Attribute `name` of `attributes` (the primitive's `inside` object: its attributes, or a
+    morph target) as floats of `shape`, `count` of them when given."""
+    where = f"{here}.{inside}.{name}" if inside else f"{here}.{name}"
+    values = document.accessor(document.number(attributes, name, f"{here}.{inside}" if inside else here), where)
     if values.shape[1:] != shape or values.dtype.kind != "f":
         raise document.error(where, f"holds {values.dtype} elements of shape {values.shape[1:]}, not float {shape}")
     if count and len(values) != count:

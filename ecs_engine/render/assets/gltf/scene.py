@@ -25,7 +25,7 @@ import numpy as np
 from ....animation import AnimationClips, target_id
 from ....animation.skins import Skins
 from ....components import Camera, DirectionalLight, Mesh, Name, Parent, PointLight, SpotLight, Transform
-from ....components.animation import AnimationPlayer, AnimationTarget, Skinned
+from ....components.animation import AnimationPlayer, AnimationTarget, MorphWeights, Skinned
 from ....components.camera import ORTHOGRAPHIC, PERSPECTIVE
 from ....errors import UsageError
 from ....maths.decompose import decompose, trs_matrices
@@ -58,6 +58,7 @@ class GltfNode:
     path: str = ""  # its names from the scene's root node ("Armature/Hips"): what clips bind to
     skin: int = -1  # its mesh's skin: a place in GltfScene.skins (-1: none)
     spheres: list[tuple[np.ndarray, float]] = field(default_factory=list)  # per part, its mesh's (centre, radius)
+    morphs: list[np.ndarray | None] = field(default_factory=list)  # per part, its morph weights at rest (or None)
 
 
 @dataclass
@@ -107,12 +108,13 @@ class GltfScene:
             skin = [] if node.skin < 0 else [Skinned(skin=handles[node.skin], copy=copies[node.skin])]
             if len(node.parts) == 1:
                 values += [Mesh(handle=node.parts[0][0], material=node.parts[0][1]), *_bound(skin, node.spheres[0])]
+                values += _morph(node.morphs[0])
             ids = world.spawn_batch(count, *values)
             made.append(ids)
             if len(node.parts) > 1:
-                for (handle, material), sphere in zip(node.parts, node.spheres, strict=True):
+                for (handle, material), sphere, morph in zip(node.parts, node.spheres, node.morphs, strict=True):
                     part = [Transform(), Parent(entity=ids), Mesh(handle=handle, material=material)]
-                    world.spawn_batch(count, *part, *_bound(skin, sphere))
+                    world.spawn_batch(count, *part, *_bound(skin, sphere), *_morph(morph))
         for h, s in zip(handles, self.skins, strict=True):
             skins.add_copies(h, np.stack([made[j] for j in s.joints], axis=1))
         return roots
@@ -215,6 +217,7 @@ class _Reader:
         if "mesh" in entry:
             node.parts = self._mesh(self.d.number(entry, "mesh", here), f"{here}.mesh")
             node.spheres = [(self.data[h].center, self.data[h].radius) for h, _ in node.parts]
+            node.morphs = [self._morph_weights(entry, self.data[h], here) for h, _ in node.parts]
         if "skin" in entry:
             if "mesh" not in entry:
                 raise self.d.error(f"{here}.skin", "is on a node without a mesh")
@@ -225,6 +228,15 @@ class _Reader:
         if isinstance(light, dict):
             node.components.append(self._light(light.get("light"), f"{here}.extensions.{LIGHTS}.light"))
         return node
+
+    def _morph_weights(self, entry: dict[str, Any], data: MeshData, here: str) -> np.ndarray | None:
+        """A part's morph weights at rest: the node's `weights`, else its mesh's (None: no targets)."""
+        if data.morph is None:
+            return None
+        count = data.morph.count
+        if "weights" in entry:
+            return self.d.floats(entry, "weights", here, count, None)
+        return data.morph.weights
 
     def skins(self, nodes: list[GltfNode]) -> list[GltfSkin]:
         """The skins `nodes` use, read and checked against their meshes; each node's `skin`
@@ -299,6 +311,13 @@ class _Reader:
             outer = float(self.d.floats(spot, "outerConeAngle", f"{here}.spot", 1, [math.pi / 4])[0])
             return SpotLight(color=color, intensity=intensity, radius=reach, inner_angle=inner, outer_angle=outer)
         raise self.d.error(f"{here}.type", f"is {kind!r}, not directional, point or spot")
+
+
+def _morph(weights: np.ndarray | None) -> list[MorphWeights]:
+    """A part's MorphWeights (none or one): its weights at rest, padded to eight."""
+    if weights is None:
+        return []
+    return [MorphWeights(weights=np.pad(np.asarray(weights, np.float32), (0, 8 - len(weights))))]
 
 
 def _bound(skin: list[Skinned], sphere: tuple[np.ndarray, float]) -> list[Skinned]:
