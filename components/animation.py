@@ -71,3 +71,22 @@ class AnimationEvent(Component):
     clip = Field(np.int32, default=-1)
     name = Field(f"U{EVENT_NAME_LENGTH}", default="")
     time = Field(np.float64, default=0.0)
+
+
+LAYERS = 2  # clips an AnimationLayers adds over a player's own
+
+
+class AnimationLayers(Component):
+    """Clips played over the AnimationPlayer's on the same entity, each on its own clock (`time`,
+    `speed`, `playing`, `looping` as the player's), blended over what is below it by `weight` (0
+    to 1: rotations by slerp, positions and scales linearly), on the targets of its `mask` only (a
+    handle in the world's AnimationMasks, -1: every target). Layer 0 is applied first. An upper
+    body waving over a walk is a layer with the walk's player below and an upper-body mask."""
+
+    clip = Field(np.int32, LAYERS, default=(-1,) * LAYERS, minimum=-1)
+    time = Field(np.float64, LAYERS, default=(0.0,) * LAYERS, finite=True)
+    speed = Field(np.float64, LAYERS, default=(1.0,) * LAYERS, finite=True, minimum=-1e3, maximum=1e3)
+    playing = Field(np.bool_, LAYERS, default=(True,) * LAYERS)
+    looping = Field(np.bool_, LAYERS, default=(True,) * LAYERS)
+    weight = Field(np.float64, LAYERS, default=(1.0,) * LAYERS, finite=True, minimum=0.0, maximum=1.0)
+    mask = Field(np.int32, LAYERS, default=(-1,) * LAYERS, minimum=-1)

@@ -106,6 +106,7 @@ def test_bad_game_structure_input_is_one_usage_error(build, message):
         "motion",
         "spring",
         "animation",
+        "animation_layers",
         "render_origin",
         "transform",
         "hierarchy",

@@ -64,6 +64,7 @@ def test_minimal_plugins_have_no_window_and_no_gpu():
         "motion": "fixed",
         "spring": "fixed",
         "animation": "update",
+        "animation_layers": "update",
         "render_origin": "post_update",
         "transform": "post_update",
         "hierarchy": "post_update",

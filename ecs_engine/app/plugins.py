@@ -71,14 +71,17 @@ class MotionPlugin(Plugin):
 
 class AnimationPlugin(Plugin):
     """AnimationPlayer components play the AnimationClips resource's clips on their targets,
-    each frame before the transforms (ecs_engine/animation/player.py)."""
+    each frame before the transforms (ecs_engine/animation/player.py); AnimationLayers blend more
+    clips over them (animation/layers.py)."""
 
     def build(self, app: App) -> None:
         from ..animation import AnimationClips
+        from ..animation.layers import AnimationLayerSystem, AnimationMasks
         from ..animation.player import AnimationSystem
 
         app.world.resources.setdefault(AnimationClips, AnimationClips())
-        app.add_systems("update", AnimationSystem())
+        app.world.resources.setdefault(AnimationMasks, AnimationMasks())
+        app.add_systems("update", AnimationSystem(), AnimationLayerSystem())
 
 
 class CameraControlPlugin(Plugin):
