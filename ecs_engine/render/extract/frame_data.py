@@ -46,7 +46,7 @@ from .environment import extract_environment
 from .lights import KeptPoints, LightKinds, extract_lights, light_kinds
 from .materials import extract_materials
 from .shadows import ShadowCasters, ShadowExtract
-from .skins import extract_deform
+from .skins import deformed, extract_deform
 
 # names older code imports from here (they live in extract/chunks.py)
 __all__ = [
@@ -174,7 +174,7 @@ class FrameExtractor:
         origin_key = origin.tobytes()
         view = self.view(cam, origin, origin_key)
         positional, directional = extract_lights(world, self._kinds, self._point_lights)
-        skins = extract_deform(world, origin)
+        skins = extract_deform(world, origin) if structural(world, "deformed", deformed) else None
         chunks = self.rows.chunks(world, mesh_count, material_count, skins)
         aside = None
         layers = camera_layers(world) if layers is None else layers

@@ -56,6 +56,12 @@ class DeformFrame:
         return extra
 
 
+def deformed(world: Any) -> bool:
+    """Whether some entity is skinned or has morph weights (a structural answer: the usual world
+    has neither, and its frame then skips extract_deform)."""
+    return bool(world.query(Skinned, write=()).count() or world.query(MorphWeights, write=()).count())
+
+
 def extract_deform(world: Any, origin: np.ndarray) -> DeformFrame | None:
     """The world's posed skins and morph weights as a DeformFrame, or None when it has neither.
     One skin and no morph targets: its own rows, not a copy (when posed at this origin)."""
