@@ -100,15 +100,20 @@ def ratio_verdict(measured: float | None, baseline: float | None, limit: float) 
     return {"ratio": ratio, "limit": limit, "met": None if ratio is None else ratio <= limit}
 
 
-def timed_frames(world: Any, schedule: Any, renderer: Any, warmup: int, frames: int) -> dict[str, float | None]:
+def timed_frames(
+    world: Any, schedule: Any, renderer: Any, warmup: int, frames: int, warm: Any = None
+) -> dict[str, float | None]:
     """`warmup` then `frames` frames of 1/60 s: the medians of the CPU frame (the schedule and
     the render, minus waits for the GPU) and of the GPU frame (timestamps, a frame late; None
-    when the device gave none), after the device has finished."""
+    when the device gave none), after the device has finished. `warm()`: called once, when the
+    warm-up frames are done."""
     import statistics
 
     cpu: list[float] = []
     gpu: list[float] = []
     for i in range(warmup + frames):
+        if i == warmup and warm is not None:
+            warm()
         t0 = time.perf_counter()
         schedule.run(world, 1.0 / 60.0)
         stats = renderer.render(world)

@@ -22,13 +22,14 @@ from __future__ import annotations
 import argparse
 import statistics
 import tempfile
-import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ecs_engine.jobs import default_threads
+
+from . import timed_frames
 
 COUNTS = (1_000, 10_000)
 QUICK_COUNTS = (20,)
@@ -105,28 +106,15 @@ def measure(gpu: Any, n: int, shadows: bool, still: bool, warmup: int, frames: i
     world, schedule = crowd(gpu, n, shadows, folder, still)
     timer = _Timer()
     schedule.timer = timer
-    cpu: list[float] = []
-    gpu_ms: list[float] = []
     with JobPool(THREADS) as pool:
         world.resources[JobPool] = pool
         renderer = Renderer(device, target, meshes, jobs=pool)
         try:
-            for i in range(warmup + frames):
-                if i == warmup:
-                    timer.ms.clear()
-                t0 = time.perf_counter()
-                schedule.run(world, 1.0 / 60.0)
-                stats = renderer.render(world)
-                if i >= warmup:
-                    cpu.append((time.perf_counter() - t0) * 1e3 - stats.wait_ms)
-                    if stats.gpu_ms is not None:
-                        gpu_ms.append(stats.gpu_ms)
-            device.wait_idle()
+            timed = timed_frames(world, schedule, renderer, warmup, frames, warm=timer.ms.clear)
         finally:
             renderer.destroy()
     return {
-        "cpu_ms": statistics.median(cpu),
-        "gpu_ms": statistics.median(gpu_ms) if gpu_ms else None,
+        **timed,
         "systems_ms": {name: statistics.median(timer.ms.get(name, [0.0])) for name in SYSTEMS},
     }
 

@@ -13,12 +13,12 @@ import json
 import numpy as np
 import pytest
 from gltf_files import ARRAY_BUFFER, UNSIGNED_BYTE, UNSIGNED_SHORT, GltfBuilder
+from skinned_files import ORDER, globals_of
 
 from ecs_engine import World
 from ecs_engine.animation.skins import Skins, SkinSystem, skinned_positions
 from ecs_engine.components import Mesh, ModelMatrix, Name, Transform, render_origin
 from ecs_engine.components.animation import Skinned
-from ecs_engine.maths.decompose import trs_matrices
 from ecs_engine.render.assets.gltf import GltfError
 from ecs_engine.render.assets.gltf.scene import load_gltf
 from ecs_engine.render.assets.materials import Materials
@@ -31,22 +31,8 @@ BIND = {
     "spine": ((0.0, 1.0, 0.0), (0.0, 0.0, np.sin(0.2), np.cos(0.2)), (1.0, 1.5, 0.8)),
     "head": ((0.0, 1.0, 0.0), (np.sin(0.1), 0.0, 0.0, np.cos(0.1)), (1.0, 1.0, 1.0)),
 }
-PARENT = {"hips": None, "spine": "hips", "head": "spine"}
-ORDER = ["hips", "spine", "head"]  # the skin's joints, in this order
-
-
-def local(trs):
-    t, r, s = (np.asarray(v, np.float64)[None] for v in trs)
-    return trs_matrices(t, r, s)[0]
-
-
-def globals_of(pose):
-    """Each joint's global matrix, composed from the nodes' TRS here (not by the engine)."""
-    out = {}
-    for name in ORDER:
-        parent = PARENT[name]
-        out[name] = (np.eye(4) if parent is None else out[parent]) @ local(pose[name])
-    return out
+# (ORDER: the skin's joints, in this order; globals_of composes the joints' global matrices from
+# the nodes' TRS, not by the engine: tests/skinned_files.py)
 
 
 def body(n=24, seed=3):

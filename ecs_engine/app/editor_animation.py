@@ -12,12 +12,11 @@ import numpy as np
 from ..animation import AnimationClips
 from ..animation.player import crossfade
 from ..animation.skins import Skins
-from ..components import Camera, Transform, active_camera
+from ..components import active_camera
 from ..components.animation import AnimationPlayer, AnimationTarget
 from ..components.hierarchy import Parent, WorldMatrix
 from ..ecs.gather import gather
-from .editor_gizmo import gl_projection
-from .editor_physics import project
+from .editor_physics import draw_segments
 
 COLOUR = 0xFFFFC040  # ImGui's ABGR: a light blue
 
@@ -116,14 +115,4 @@ class AnimationPanel:
             cam = active_camera(world)
         except Exception:  # no camera: nothing to draw it from
             return 0
-        eye = world.get(cam, Transform)
-        x0, y0, x1, y1 = rect
-        projection = gl_projection(world.get(cam, Camera), (x1 - x0) / max(y1 - y0, 1.0))
-        screen, front = project(segments.reshape(-1, 3), eye.position, eye.rotation, projection, rect)
-        both = np.asarray(front.reshape(-1, 2).all(axis=1))
-        target = drawlist if drawlist is not None else imgui.get_background_draw_list()
-        drawn = 0
-        for a, b in screen.reshape(-1, 2, 2)[both].tolist():
-            target.add_line(imgui.ImVec2(*a), imgui.ImVec2(*b), COLOUR, 2.0)
-            drawn += 1
-        return drawn
+        return draw_segments(imgui, world, cam, segments, rect, drawlist, COLOUR, 2.0)

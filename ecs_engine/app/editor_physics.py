@@ -110,13 +110,23 @@ class PhysicsPanel:
         position, rotation, shape, size = (np.concatenate(column) for column in zip(*parts))
         nearest = np.argsort(np.linalg.norm(position - eye.position, axis=1))[:MAX_WIREFRAMES]
         segments = collider_segments(position[nearest], rotation[nearest], shape[nearest], size[nearest])
-        x0, y0, x1, y1 = rect
-        projection = gl_projection(world.get(cam, Camera), (x1 - x0) / max(y1 - y0, 1.0))
-        screen, front = project(segments.reshape(-1, 3), eye.position, eye.rotation, projection, rect)
-        both = np.asarray(front.reshape(-1, 2).all(axis=1))  # (a line with an end behind the eye: left out)
-        drawn = 0
-        target = drawlist if drawlist is not None else imgui.get_background_draw_list()
-        for a, b in screen.reshape(-1, 2, 2)[both].tolist():
-            target.add_line(imgui.ImVec2(*a), imgui.ImVec2(*b), COLOUR, 1.0)
-            drawn += 1
-        return drawn
+        return draw_segments(imgui, world, cam, segments, rect, drawlist, COLOUR, 1.0)
+
+
+def draw_segments(
+    imgui: Any, world: Any, cam: int, segments: np.ndarray, rect: tuple, drawlist: Any, colour: int, thickness: float
+) -> int:
+    """World-space line `segments` (S, 2, 3) seen from camera `cam`, drawn into `drawlist` (None:
+    the background's) over the scene in `rect`; a line with an end behind the eye is left out.
+    How many were drawn."""
+    eye = world.get(cam, Transform)
+    x0, y0, x1, y1 = rect
+    projection = gl_projection(world.get(cam, Camera), (x1 - x0) / max(y1 - y0, 1.0))
+    screen, front = project(segments.reshape(-1, 3), eye.position, eye.rotation, projection, rect)
+    both = np.asarray(front.reshape(-1, 2).all(axis=1))
+    target = drawlist if drawlist is not None else imgui.get_background_draw_list()
+    drawn = 0
+    for a, b in screen.reshape(-1, 2, 2)[both].tolist():
+        target.add_line(imgui.ImVec2(*a), imgui.ImVec2(*b), colour, thickness)
+        drawn += 1
+    return drawn
