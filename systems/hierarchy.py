@@ -85,38 +85,66 @@ def _trs(position, rotation, scale, row, m):  # pragma: no cover - compiled
 
 
 @native.njit
-def _compose(order, parent_row, above_row, trs, above, out, model, origin):  # pragma: no cover - compiled
+def _compose(
+    order, parent_row, above_row, trs_a, trs_b, split, above, out_a, model_a, out_b, model_b, origin, drawn_a
+):  # pragma: no cover - compiled
     """out[row] = (parent's world) @ T R S(row), rows taken in `order` (parents before children),
-    and model[row] = out[row] with `origin` taken from its translation (float32); `trs`: the
-    rows' (position, rotation, scale); `above`: those of parents outside the hierarchy, the
-    parent of `row` at above_row[row] (-1: none)."""
-    position, rotation, scale = trs
+    and model[row] = out[row] with `origin` taken from its translation (float32). Rows below
+    `split` are the first table's, read from `trs_a` (position, rotation, scale) and written to
+    its own columns `out_a` and `model_a` in place (`model_a` only if `drawn_a`: a table of
+    joints has no ModelMatrix); the others, less `split`, from `trs_b` into `out_b` and `model_b`
+    (the other tables', gathered). `above`: the trs of parents outside the
+    hierarchy, the parent of `row` at above_row[row] (-1: none)."""
     above_p, above_r, above_s = above
+    pos_a, rot_a, scale_a = trs_a
+    pos_b, rot_b, scale_b = trs_b
     m = np.empty((3, 4))
     a = np.empty((3, 4))
+    v = np.empty((3, 4))
     for k in range(order.shape[0]):
         row = order[k]
-        _trs(position, rotation, scale, row, m)
+        if row < split:
+            _trs(pos_a, rot_a, scale_a, row, m)
+        else:
+            _trs(pos_b, rot_b, scale_b, row - split, m)
         p = parent_row[row]
         r = above_row[row]
-        if p < 0 and r >= 0:
+        if p >= 0 and p < split:  # the parent's world matrix, from whichever table holds it
+            for i in range(3):
+                for j in range(4):
+                    a[i, j] = out_a[p, i, j]
+        elif p >= 0:
+            for i in range(3):
+                for j in range(4):
+                    a[i, j] = out_b[p - split, i, j]
+        elif r >= 0:
             _trs(above_p, above_r, above_s, r, a)
         for i in range(3):
             for j in range(4):
-                if p >= 0:
-                    v = out[p, i, 0] * m[0, j] + out[p, i, 1] * m[1, j] + out[p, i, 2] * m[2, j]
-                    if j == 3:
-                        v += out[p, i, 3]
-                elif r >= 0:
-                    v = a[i, 0] * m[0, j] + a[i, 1] * m[1, j] + a[i, 2] * m[2, j]
-                    if j == 3:
-                        v += a[i, 3]
+                if p >= 0 or r >= 0:
+                    x = a[i, 0] * m[0, j] + a[i, 1] * m[1, j] + a[i, 2] * m[2, j]
+                    v[i, j] = x + a[i, 3] if j == 3 else x
                 else:
-                    v = m[i, j]
-                out[row, i, j] = v
-                model[row, i, j] = v - origin[i] if j == 3 else v
-        out[row, 3, 0], out[row, 3, 1], out[row, 3, 2], out[row, 3, 3] = 0.0, 0.0, 0.0, 1.0
-        model[row, 3, 0], model[row, 3, 1], model[row, 3, 2], model[row, 3, 3] = 0.0, 0.0, 0.0, 1.0
+                    v[i, j] = m[i, j]
+        if row < split:
+            _store(v, origin, out_a, model_a, row, drawn_a)
+        else:
+            _store(v, origin, out_b, model_b, row - split, True)
+
+
+@native.inner
+def _store(v, origin, out, model, at, drawn):  # pragma: no cover - compiled
+    """out[at] = v (3 x 4) over (0, 0, 0, 1); if `drawn`, model[at] the same, its translation
+    less `origin`."""
+    for i in range(3):
+        for j in range(4):
+            out[at, i, j] = v[i, j]
+    out[at, 3, 0], out[at, 3, 1], out[at, 3, 2], out[at, 3, 3] = 0.0, 0.0, 0.0, 1.0
+    if drawn:
+        for i in range(3):
+            for j in range(4):
+                model[at, i, j] = v[i, j] - origin[i] if j == 3 else v[i, j]
+        model[at, 3, 0], model[at, 3, 1], model[at, 3, 2], model[at, 3, 3] = 0.0, 0.0, 0.0, 1.0
 
 
 class HierarchySystem(System):
@@ -130,7 +158,8 @@ class HierarchySystem(System):
 
     def plan(self, world: World) -> _Plan | None:
         """The plan for the world as it is (kept while what it depends on is unchanged)."""
-        with_t = world.query(Parent, Transform, write=()).tables
+        # the largest table first: the native pass writes its columns in place (run)
+        with_t = sorted(world.query(Parent, Transform, write=()).tables, key=lambda t: -t.count)
         without_t = world.query(Parent, without=(Transform,), write=()).tables
         tables = [t for t in (*with_t, *without_t) if t.count]
         key = tuple((t.id, t.version, t.column_ticks[_PARENT]) for t in tables)
@@ -179,27 +208,21 @@ class HierarchySystem(System):
         if plan is None:
             return
         n, tables = plan.count, plan.tables
-        trs = self._local(plan)
         above = self._above(plan)
         origin = np.asarray(render_origin(world), np.float64)
+        if native.AVAILABLE:
+            self._run_native(world, plan, above, origin)
+            return
+        trs = self._local(plan)
         # one table (the usual case): the pass writes its columns in place; else into scratch
         # arrays copied out per table
         worlds: list[np.ndarray] = [b[WorldMatrix].matrix for b in world.query(WorldMatrix, with_=(Parent,))]
         models: list[np.ndarray] = [b[ModelMatrix].model for b in world.query(ModelMatrix, with_=(Parent,))]
         direct = len(tables) == 1 and len(worlds) == 1 and len(models) == 1
         out, model = (worlds[0], models[0]) if direct else self._scratch(n)
-        if native.AVAILABLE:  # a level's rows are independent: cut into chunks on the pool
-            pool = world.resources.get(JobPool)
-            for rows in plan.levels:
-
-                def chunk(s: slice, rows: np.ndarray = rows) -> None:
-                    _compose(rows[s], plan.parent_row, plan.above_row, trs, above, out, model, origin)  # type: ignore[misc]
-
-                over_rows(pool, len(rows), chunk, chunk_rows=LEVEL_CHUNK_ROWS)
-        else:
-            self._compose_numpy(plan, trs, above, out)
-            model[:] = out
-            model[:, :3, 3] = out[:, :3, 3] - origin  # in float64, before the cast
+        self._compose_numpy(plan, trs, above, out)
+        model[:] = out
+        model[:, :3, 3] = out[:, :3, 3] - origin  # in float64, before the cast
         if not direct:
             for batch in world.query(WorldMatrix, with_=(Parent,)):
                 first = plan.offsets[batch.table.id]
@@ -208,6 +231,46 @@ class HierarchySystem(System):
                 first = plan.offsets[batch.table.id]
                 batch[ModelMatrix].model = model[first : first + len(batch)]
 
+    def _run_native(self, world: World, plan: _Plan, above: tuple[np.ndarray, ...], origin: np.ndarray) -> None:
+        """The compiled pass: the first (largest) table's rows read and written in its own
+        columns, the other tables' gathered into arrays kept between frames and copied back (a
+        skinned crowd: 240k joints in place, 10k mesh nodes gathered); a level's rows are
+        independent, cut into jobs on the pool."""
+        tables, n = plan.tables, plan.count
+        first = tables[0]
+        split = first.count if first.has(Transform) else 0
+        drawn_a = first.has(ModelMatrix)
+        out_a, model_a = np.empty((0, 4, 4)), np.empty((0, 4, 4), np.float32)  # (none in place: unused)
+        for batch in world.query(WorldMatrix, with_=(Parent,)):
+            if split and batch.table is first:
+                out_a = batch[WorldMatrix].matrix
+        for batch in world.query(ModelMatrix, with_=(Parent,)):
+            if split and batch.table is first:
+                model_a = batch[ModelMatrix].model
+        c = first.columns
+        none = np.zeros((0, 3)), np.zeros((0, 4)), np.zeros((0, 3))
+        trs_a = tuple(c[(Transform, f)][:split] for f in ("position", "rotation", "scale")) if split else none
+        trs_b = self._local(plan, split)
+        out_b, model_b = self._scratch(n - split)
+        pool = world.resources.get(JobPool)
+        for rows in plan.levels:
+
+            def chunk(s: slice, rows: np.ndarray = rows) -> None:
+                _compose(  # type: ignore[misc]
+                    rows[s], plan.parent_row, plan.above_row, trs_a, trs_b, split, above,
+                    out_a, model_a, out_b, model_b, origin, drawn_a,
+                )  # fmt: skip
+
+            over_rows(pool, len(rows), chunk, chunk_rows=LEVEL_CHUNK_ROWS)
+        for batch in world.query(WorldMatrix, with_=(Parent,)):
+            if batch.table is not first or not split:
+                at = plan.offsets[batch.table.id] - split
+                batch[WorldMatrix].matrix = out_b[at : at + len(batch)]
+        for batch in world.query(ModelMatrix, with_=(Parent,)):  # what is drawn
+            if batch.table is not first or not split:
+                at = plan.offsets[batch.table.id] - split
+                batch[ModelMatrix].model = model_b[at : at + len(batch)]
+
     def _scratch(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         """The pass's output arrays for `n` rows when they are copied out per table: kept between
         frames (fresh ones would fault their pages in every frame: ~5 ms at 250k rows)."""
@@ -215,22 +278,22 @@ class HierarchySystem(System):
             self._out = (np.empty((n, 4, 4)), np.empty((n, 4, 4), np.float32))
         return self._out
 
-    def _local(self, plan: _Plan) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The rows' position, rotation and scale: the table's columns themselves when there is
-        one table with Transform, else gathered (identity where a table has no Transform) into
-        arrays kept between frames."""
-        tables, n = plan.tables, plan.count
+    def _local(self, plan: _Plan, skip: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The position, rotation and scale of the rows from `skip` on: the table's columns
+        themselves when there is one table with Transform, else gathered (identity where a table
+        has no Transform) into arrays kept between frames."""
+        tables, n = [t for t in plan.tables if plan.offsets[t.id] >= skip], plan.count - skip
         if len(tables) == 1 and tables[0].has(Transform):
             c = tables[0].columns
             return c[(Transform, "position")][:n], c[(Transform, "rotation")][:n], c[(Transform, "scale")][:n]
-        if self._gathered is None or len(self._gathered[0]) != n:
+        if self._gathered is None or len(self._gathered[0]) != n:  # (n 0: empty, nothing to gather)
             self._gathered = (np.empty((n, 3)), np.empty((n, 4)), np.empty((n, 3)))
         position, rotation, scale = self._gathered
         if not all(t.has(Transform) for t in tables):
             position[:], rotation[:], scale[:] = 0.0, (0.0, 0.0, 0.0, 1.0), 1.0
         for t in tables:
             if t.has(Transform):
-                rows = slice(plan.offsets[t.id], plan.offsets[t.id] + t.count)
+                rows = slice(plan.offsets[t.id] - skip, plan.offsets[t.id] - skip + t.count)
                 for field, into in (("position", position), ("rotation", rotation), ("scale", scale)):
                     into[rows] = t.columns[(Transform, field)][: t.count]
         return position, rotation, scale
