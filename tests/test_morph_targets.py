@@ -44,7 +44,7 @@ def blob(rings=12, sides=14):
     return positions, n.astype(np.float32), indices, [swell, push], [tilt, np.zeros_like(tilt)]
 
 
-def blob_file(tmp_path, edit=None, node_weights=None, clip=True, skinned=False):
+def blob_file(tmp_path, edit=None, node_weights=None, clip=True, skinned=False, parts=1):
     b = GltfBuilder()
     positions, normals, indices, deltas, normal_deltas = blob()
     targets = [{"POSITION": d, "NORMAL": nd} for d, nd in zip(deltas, normal_deltas, strict=True)]
@@ -55,7 +55,7 @@ def blob_file(tmp_path, edit=None, node_weights=None, clip=True, skinned=False):
         )
     red = b.material("red", base_color=(0.9, 0.3, 0.2, 1.0), metallic=0.0)
     primitive = b.primitive(positions, indices, normals=normals, material=red, targets=targets, **extra)
-    mesh = b.mesh([primitive], name="blob", weights=[0.25, 0.0])
+    mesh = b.mesh([primitive] * parts, name="blob", weights=[0.25, 0.0])
     kids = []
     if skinned:
         bone = b.node("bone", translation=(0.0, 0.0, 0.0))
@@ -105,6 +105,22 @@ def test_targets_load_with_default_weights_and_a_clip_animates_them(tmp_path):
         blob_file(tmp_path, node_weights=[0.0, 0.8], clip=False), lambda m: meshes.append(m) or 0, materials(world)
     ).spawn(world)
     assert np.allclose(world.get(entity(world, "body"), MorphWeights).weights[:2], [0.0, 0.8])  # the node's win
+
+
+def test_the_parts_of_a_node_of_several_primitives_follow_its_animated_weights(tmp_path):
+    from ecs_engine.components import Parent
+
+    world = World()
+    scene = load_gltf(blob_file(tmp_path, parts=2), lambda m: 0, materials(world))
+    root = scene.spawn(world, play="pulse")
+    node = entity(world, "body")
+    children = world.query(Parent, MorphWeights).entities()
+    parts = [int(e) for e in children if int(world.get(int(e), Parent).entity) == node]
+    assert len(parts) == 2
+    world.set(root, AnimationPlayer, time=1.5, playing=False)
+    world.run_system(AnimationSystem(), 0.0)
+    for e in (node, *parts):
+        assert np.allclose(world.get(e, MorphWeights).weights[:2], [0.5, 0.75]), e
 
 
 def stage(gpu, world):

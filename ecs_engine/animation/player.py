@@ -18,6 +18,8 @@ import numpy as np
 
 from ecs_engine.components import Transform
 from ecs_engine.components.animation import AnimationEvent, AnimationPlayer, AnimationTarget, MorphWeights
+from ecs_engine.components.hierarchy import Parent
+from ecs_engine.ecs.gather import gather
 from ecs_engine.ecs.schedule import System, any_with
 
 from ..errors import UsageError
@@ -62,7 +64,7 @@ class _Binding:
 class AnimationSystem(System):
     def __init__(self) -> None:
         super().__init__(
-            reads=[AnimationClips, AnimationTarget],
+            reads=[AnimationClips, AnimationTarget, Parent],
             writes=[AnimationPlayer, Transform, AnimationEvent, MorphWeights],
             name="animation",
             run_if=any_with(AnimationPlayer),
@@ -89,6 +91,12 @@ class AnimationSystem(System):
                 kept = self._bindings.get(batch.table.id)
                 if kept is not None:
                     self._play(kept, players, {"weights": batch[MorphWeights].weights}, len(batch))
+        # a node of several primitives: its parts (children with MorphWeights and no target of
+        # their own) take the node's weights, as its channel wrote them or a system set them
+        for batch in world.query(Parent, MorphWeights, without=(AnimationTarget,)):
+            weights, found = gather(world, batch[Parent].entity, MorphWeights, "weights")
+            column = batch[MorphWeights].weights
+            column[found] = weights[found]
         for gone in set(self._bindings) - seen:
             del self._bindings[gone]
 

@@ -109,6 +109,8 @@ class GltfScene:
             if len(node.parts) == 1:
                 values += [Mesh(handle=node.parts[0][0], material=node.parts[0][1]), *_bound(skin, node.spheres[0])]
                 values += _morph(node.morphs[0])
+            elif any(m is not None for m in node.morphs):  # the weights its channel animates (its parts take them)
+                values += _morph(next(m for m in node.morphs if m is not None))
             ids = world.spawn_batch(count, *values)
             made.append(ids)
             if len(node.parts) > 1:
