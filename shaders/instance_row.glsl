@@ -5,59 +5,15 @@
 layout(push_constant) uniform Push { Instance row; } push;
 #endif
 
-// Skinning (render/extract/skins.py, render/assets/skin_vertices.py): a row whose misc.w >> 1 is
-// not 0 is a skinned mesh's, its joint matrices starting at (misc.w >> 1) - 1; its vertex's
-// eight joints and weights are found by the vertex's index in its mesh (gl_BaseVertex: the
-// indirect mode draws from the merged buffer). Its model rows (which place only its bounds, for
-// culling) give way to the weighted sum of those joints' matrices, so the normal matrix and the
-// position below follow the pose as a model matrix would.
-layout(std430, set = SET_FRAME, binding = BINDING_JOINTS) readonly buffer Joints { vec4 joint_rows[]; };
-layout(std430, set = SET_FRAME, binding = BINDING_SKIN_VERTICES) readonly buffer SkinVertices { uint skin_words[]; };
+#include "deform.glsl"
 
-Instance skinned(Instance inst) {
-    uint first = inst.misc.w >> 1;
-    if (first == 0u) return inst;
-    uint at = skin_words[2u * (inst.misc.y >> 1)] + uint(gl_VertexIndex - gl_BaseVertexARB) * uint(SKIN_WORDS);
-    vec4 r0 = vec4(0.0), r1 = vec4(0.0), r2 = vec4(0.0);
-    for (uint k = 0u; k < 8u; ++k) {
-        float w = uintBitsToFloat(skin_words[at + 4u + k]);
-        if (w == 0.0) continue;
-        uint pair = skin_words[at + k / 2u];
-        uint joint = (k & 1u) == 0u ? (pair & 0xFFFFu) : (pair >> 16);
-        uint row = 3u * (first - 1u + joint);
-        r0 += w * joint_rows[row];
-        r1 += w * joint_rows[row + 1u];
-        r2 += w * joint_rows[row + 2u];
-    }
-    inst.model[0] = r0;
-    inst.model[1] = r1;
-    inst.model[2] = r2;
-    return inst;
-}
+// The vertex's index in its own mesh (the indirect mode draws from the merged buffer).
+uint mesh_vertex_index() { return uint(gl_VertexIndex - gl_BaseVertexARB); }
 
-// Morph targets: a row whose misc.z >> 1 is not 0 has its eight weights in joint_rows at
-// (misc.z >> 1) - 1 and the row after; its mesh's morph block (skin_vertices.py) holds each
-// target's deltas by vertex. The vertex moves by the weighted sum of its deltas (before a skin,
-// as glTF orders them).
+Instance skinned(Instance inst) { return skin_vertex(inst, mesh_vertex_index()); }
+
 void morphed(Instance inst, inout vec3 position, inout vec3 normal, inout vec3 tangent) {
-    uint at = inst.misc.z >> 1;
-    if (at == 0u) return;
-    uint block = skin_words[2u * (inst.misc.y >> 1) + 1u];
-    if (block == 0xFFFFFFFFu) return;
-    uint targets = skin_words[block], vertices = skin_words[block + 1u];
-    uint v = uint(gl_VertexIndex - gl_BaseVertexARB);
-    vec4 lo = joint_rows[at - 1u], hi = joint_rows[at];
-    float w[8] = float[8](lo.x, lo.y, lo.z, lo.w, hi.x, hi.y, hi.z, hi.w);
-    for (uint t = 0u; t < min(targets, 8u); ++t) {
-        if (w[t] == 0.0) continue;
-        uint r = block + 2u + (t * vertices + v) * uint(MORPH_WORDS);
-        position += w[t] * vec3(uintBitsToFloat(skin_words[r]), uintBitsToFloat(skin_words[r + 1u]),
-                                uintBitsToFloat(skin_words[r + 2u]));
-        normal += w[t] * vec3(uintBitsToFloat(skin_words[r + 3u]), uintBitsToFloat(skin_words[r + 4u]),
-                              uintBitsToFloat(skin_words[r + 5u]));
-        tangent += w[t] * vec3(uintBitsToFloat(skin_words[r + 6u]), uintBitsToFloat(skin_words[r + 7u]),
-                               uintBitsToFloat(skin_words[r + 8u]));
-    }
+    morph_vertex(inst, mesh_vertex_index(), position, normal, tangent);
 }
 
 Instance instance_row() {
@@ -68,10 +24,4 @@ Instance instance_row() {
 #else
     return skinned(instances[gl_InstanceIndex]);
 #endif
-}
-
-// A model-space position in the render-relative world: the row's 3x4 model matrix.
-vec3 instance_world(Instance inst, vec3 position) {
-    vec4 p = vec4(position, 1.0);
-    return vec3(dot(inst.model[0], p), dot(inst.model[1], p), dot(inst.model[2], p));
 }

@@ -93,6 +93,7 @@
 #define BINDING_RAY_ROWS 7
 #define MESH_VERTEX_FLOATS 12
 #define MESH_VERTEX_UV 6
+#define POSED_GROUP 64
 
 // The frame's uniforms. Positions are relative to the render origin (the camera, unless
 // RenderOrigin is pinned).

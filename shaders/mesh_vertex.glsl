@@ -18,26 +18,6 @@ layout(location = 4) out vec4 v_tangent;
 
 #include "instance_row.glsl"
 
-// The normal matrix: the cofactor of the model's 3x3 part (det * inverse transpose), made from
-// columns scaled by the largest one (so huge scales do not overflow and tiny ones do not all
-// vanish), its sign flipped for mirrored matrices. Finite for zero scales too: a flattened axis
-// gives a zero term and the fragment shader falls back to the face normal. The same formula as
-// maths.transform.normal_scale, per vertex instead of per entity on the CPU.
-mat3 normal_matrix(Instance inst) {
-    vec3 c0 = vec3(inst.model[0].x, inst.model[1].x, inst.model[2].x);
-    vec3 c1 = vec3(inst.model[0].y, inst.model[1].y, inst.model[2].y);
-    vec3 c2 = vec3(inst.model[0].z, inst.model[1].z, inst.model[2].z);
-    vec3 top = max(max(abs(c0), abs(c1)), abs(c2));
-    float peak = max(max(top.x, top.y), top.z);
-    if (peak > 0.0) {
-        float s = 1.0 / peak;
-        c0 *= s; c1 *= s; c2 *= s;
-    }
-    vec3 x = cross(c1, c2), y = cross(c2, c0), z = cross(c0, c1);
-    float sign_det = dot(c0, x) < 0.0 ? -1.0 : 1.0;
-    return mat3(x, y, z) * sign_det;
-}
-
 void main() {
     Instance inst = instance_row();
     vec3 position = in_position, normal = in_normal, tangent = vec3(0.0);

@@ -108,12 +108,7 @@ class MeshRegistry:
         digest = _digest(mesh)
         if digest in self._by_content:
             return self._by_content[digest]
-        vk = self.device.vk
-        ray = ray_input_usage(self.device)  # a bottom level may be built from them
-        vertices = self._mesh_buffers.add(
-            upload(self.device, _interleaved(mesh), vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | ray)
-        )
-        indices = self._mesh_buffers.add(upload(self.device, mesh.indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT | ray))
+        vertices, indices = self._upload(mesh)
         handle = len(self._meshes)
         self._meshes.append(GpuMesh(mesh, vertices, indices, len(mesh.indices)))
         self._lods.append(None)
@@ -126,14 +121,9 @@ class MeshRegistry:
         """`mesh` uploaded under `handle` in place of the one there (hot reload), after the GPU is
         idle; its levels of detail, the merged buffers, the bounds and the bottom levels are
         made again as they are needed."""
-        vk = self.device.vk
         self.device.wait_idle()  # frames in flight may draw from the buffers destroyed here
         old = self._meshes[handle]
-        ray = ray_input_usage(self.device)
-        vertices = self._mesh_buffers.add(
-            upload(self.device, _interleaved(mesh), vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | ray)
-        )
-        indices = self._mesh_buffers.add(upload(self.device, mesh.indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT | ray))
+        vertices, indices = self._upload(mesh)
         self._mesh_buffers.release(old.vertices)
         self._mesh_buffers.release(old.indices)
         for key in [k for k, h in self._by_data.items() if h == handle]:
@@ -150,6 +140,19 @@ class MeshRegistry:
         self._bottom_levels.destroy()
         self._bottom.clear()
         self.version += 1
+
+    def _upload(self, mesh: MeshData) -> tuple[Buffer, Buffer]:
+        """`mesh`'s vertex and index buffers, owned here. A bottom level may be built from them;
+        a deformed mesh's vertices are also read as storage (render/draw/posed_vertices.py)."""
+        vk = self.device.vk
+        ray = ray_input_usage(self.device)
+        deformed = mesh.skin is not None or mesh.morph is not None
+        storage = vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT if deformed else 0
+        vertices = self._mesh_buffers.add(
+            upload(self.device, _interleaved(mesh), vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | ray | storage)
+        )
+        indices = self._mesh_buffers.add(upload(self.device, mesh.indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT | ray))
+        return vertices, indices
 
     def skin_buffer(self) -> Buffer:
         """The skinned meshes' joints and weights as the vertex shaders read them (skin_vertices.py)."""
