@@ -171,3 +171,48 @@ def test_the_compiled_sphere_pass_equals_the_numpy_one():
     picking._entries_native(origin, direction, models, centers, radii, handles, got)
     assert np.isfinite(want).sum() > 10 and np.isinf(want).sum() > 10
     np.testing.assert_allclose(got, want, rtol=1e-6, atol=1e-6)  # float32 matrices
+
+
+def test_a_skinned_character_is_picked_by_its_posed_triangles(tmp_path):
+    """A tube bent over at its spine (tests/skinned_files.py): a click on the bent-over part picks
+    it, and a click where its upper part stood in the bind pose picks nothing (the row's
+    ModelMatrix only places the pose's sphere; the triangles are the shader's pose)."""
+    from skinned_files import tube_file
+
+    from ecs_engine.animation.skins import Skins, skinned_positions
+    from ecs_engine.components import Name
+    from ecs_engine.render.assets.gltf.scene import load_gltf
+    from ecs_engine.render.assets.materials import Materials
+
+    class Meshes(Registry):
+        def bounds(self):  # each mesh's own sphere in its bind pose, as MeshRegistry.bounds gives
+            centres = np.array([m.positions.mean(axis=0) for m in self.meshes], np.float64)
+            radii = [np.linalg.norm(m.positions - c, axis=1).max() for m, c in zip(self.meshes, centres, strict=True)]
+            return centres, np.array(radii), np.zeros(len(self.meshes), np.int64)
+
+    loaded = []
+
+    def add(mesh):
+        loaded.append(mesh)
+        return len(loaded) - 1
+
+    world = World()
+    add_camera(world, (0.0, 1.3, 7.0), (0.0, 1.3, 0.0))
+    scene = load_gltf(tube_file(tmp_path / "tube.gltf"), add, Materials())
+    scene.spawn(world)
+    named = {world.get(int(e), Name).value: int(e) for e in world.query(Name).entities()}
+    spine = world.get(named["spine"], Transform)
+    bend = (0.0, 0.0, math.sin(0.75), math.cos(0.75))  # 1.5 rad about z: the upper part lies sideways
+    world.set(named["spine"], Transform(position=spine.position, rotation=bend, scale=spine.scale))
+    default_schedule().run(world, 0.0)
+    meshes = Meshes(*loaded)
+    body = named["body"]
+    mesh = loaded[int(world.get(body, Mesh).handle)]
+    matrices = world.resources.get(Skins)[0].world_matrices(0)
+    posed = skinned_positions(mesh.positions, mesh.skin.joints, mesh.skin.weights, matrices)
+    top = posed[mesh.positions[:, 1] > 2.0].mean(axis=0)  # on the axis of the bent-over part, far to the side
+    assert top[0] < -1.0
+    hit = pick(world, meshes, *pixel_of(world, top), W, H)
+    assert hit is not None and hit.entity == body
+    assert np.linalg.norm(posed - hit.point, axis=1).min() < 0.4  # on the posed surface
+    assert pick(world, meshes, *pixel_of(world, np.array([0.0, 2.4, 0.0])), W, H) is None  # bind pose's top: empty now

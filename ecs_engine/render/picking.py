@@ -8,8 +8,9 @@ point and distance too. Its cost grows with the entities (the sphere test: one N
 the ModelMatrix column) and with the triangles of the few meshes whose spheres the ray enters.
 
 The test is what the renderer draws: ModelMatrix (render-relative float32) and the mesh's
-triangles, double-sided (a click on a back face still picks). Entities without Mesh, or with a
-handle the registry lacks, are skipped.
+triangles, double-sided (a click on a back face still picks); a skinned or morphed mesh's
+triangles posed as its vertex shader poses them (the pose's sphere first, as for culling).
+Entities without Mesh, or with a handle the registry lacks, are skipped.
 """
 
 from __future__ import annotations
@@ -20,7 +21,9 @@ from typing import Any
 import numpy as np
 
 from .. import native
+from ..animation.skins import Skins, skinned_positions
 from ..components import Mesh, ModelMatrix, render_origin
+from ..components.animation import MorphWeights, Skinned
 from ..ecs.world import World
 from .frame.camera import camera_matrices
 
@@ -179,13 +182,32 @@ def pick(
     for row in np.argsort(entries, kind="stable"):
         if entries[row] >= best_t:  # every later sphere starts beyond the nearest hit so far
             break
-        model = models[row].astype(np.float64)
         data = meshes[int(handles[row])].data
-        triangles = data.positions.astype(np.float64)[data.indices.reshape(-1, 3)]
-        world_triangles = triangles @ model[:3, :3].T + model[:3, 3]
-        t = ray_triangles(local_origin, direction, world_triangles)
+        triangles = _triangles(world, int(ids[row]), data, models[row].astype(np.float64), origin - local_origin)
+        t = ray_triangles(local_origin, direction, triangles)
         if t < best_t:
             best_t, best = t, row
     if best < 0:
         return None
     return Pick(int(ids[best]), origin + best_t * direction, best_t)
+
+
+def _triangles(world: World, entity: int, data: Any, model: np.ndarray, render_at: np.ndarray) -> np.ndarray:
+    """A row's triangles (T, 3, 3) relative to the render origin `render_at`, as the vertex
+    shaders place them (shaders/deform.glsl): a morphed mesh's vertices moved by its weights, then
+    a skinned mesh's posed by its copy's joints (its ModelMatrix only places a bounding sphere
+    around the pose), else the model matrix's."""
+    positions = data.positions.astype(np.float64)
+    morph = getattr(data, "morph", None)
+    if morph is not None and world.has(entity, MorphWeights):
+        weights = world.get(entity, MorphWeights).weights[: morph.count].astype(np.float64)
+        positions = positions + np.einsum("t,tvc->vc", weights, morph.positions.astype(np.float64))
+    skin: Any = getattr(data, "skin", None)
+    skins = world.resources.get(Skins) if skin is not None and world.has(entity, Skinned) else None
+    if skins is not None:
+        handle, copy = int(world.get(entity, Skinned).skin), int(world.get(entity, Skinned).copy)
+        posed = skins[handle] if 0 <= handle < len(skins) else None
+        if posed is not None and posed.matrices is not None and copy < posed.copies:
+            moved = skinned_positions(positions, skin.joints, skin.weights, posed.world_matrices(copy)) - render_at
+            return moved[data.indices.reshape(-1, 3)]
+    return positions[data.indices.reshape(-1, 3)] @ model[:3, :3].T + model[:3, 3]
