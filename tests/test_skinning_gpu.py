@@ -130,3 +130,35 @@ def test_three_characters_at_fixed_clip_times_match_their_golden_image(tmp_path)
         world.run_system(AnimationSystem(), 0.0)
         pixels = render_world(gpu, world)
     assert_close_to_golden(pixels.astype(np.uint8), "characters")
+
+
+def test_ray_traced_shadows_follow_the_pose_and_its_changes(tmp_path):
+    """With shadows="raytraced" a skinned row's rays hit a bottom level built from this frame's
+    pose (render/raytracing/deformed.py): the shadow on the ground is the still CPU-posed copy's,
+    in the first pose and again after the pose changes (a refit), and not the bind pose's."""
+    from ecs_engine.app.scenes import default_schedule
+    from ecs_engine.render.frame.renderer import Renderer
+
+    with headless_gpu(W, H) as gpu:
+        if gpu.device.ray_tracing is None:
+            pytest.skip(f"{gpu.device.info.name} has no ray-tracing pipelines")
+        world, _ = character(gpu, tmp_path, posed=True)
+        renderer = Renderer(gpu.device, gpu.target, gpu.meshes, shadows="raytraced")
+        try:
+            frames = []
+            for turn in (0.8, -0.6):  # the second pose refits the first one's bottom level
+                spine = entity(world, "spine")
+                t = world.get(spine, Transform)
+                world.set(spine, Transform(position=t.position, rotation=quat((0.0, 0.0, 1.0), turn), scale=t.scale))
+                default_schedule().run(world, 0.0)
+                for _ in range(2):
+                    renderer.render(world, readback=True)
+                frames.append((gpu.target.pixels()[..., :3].astype(np.int64), still_copy(gpu, tmp_path, world)))
+        finally:
+            renderer.destroy()
+        references = [render_world(gpu, still, shadows="raytraced") for _, still in frames]
+        bind = render_world(gpu, character(gpu, tmp_path, posed=False)[0], shadows="raytraced")
+    for (drawn, _), reference in zip(frames, references, strict=True):
+        assert (np.abs(drawn - reference).max(axis=2) > 24).sum() <= 6
+        assert (np.abs(drawn - bind).max(axis=2) > 24).sum() > 150
+    assert (np.abs(frames[0][0] - frames[1][0]).max(axis=2) > 24).sum() > 150  # the two poses differ

@@ -12,7 +12,8 @@ the fraction that reached it goes to the shadow mask the deferred lighting reads
 alpha-masked materials are not opaque to the rays: shaders/shadow_rays.rahit fetches the hit's
 uv from the mesh's buffers (by device address) and lets the ray through where the material's
 alpha is under its cutoff, as the shadow maps' cutout pass does (the frame set, set 0 of this
-pipeline, gives it the materials and textures).
+pipeline, gives it the materials and textures). A skinned or morphed row's instance names a
+bottom level of its own, built from this frame's pose (render/raytracing/deformed.py).
 
 At most `max_lights` (MAX_RAY_LIGHTS) lights are traced (directional, then spot, then point
 lights, in world order, as the shadow maps' views are ordered); the renderer draws shadow maps
@@ -59,6 +60,7 @@ from ..layouts import (
     SET_RAY,
 )
 from ..lighting.rows import local_minus_z
+from .deformed import IDENTITY_3X4, DeformedLevels
 from .denoise import ShadowDenoise
 from .instances import write_instances
 from .mask import ShadowMask
@@ -195,6 +197,8 @@ class RayShadows:
             self.sampler = nearest_sampler(device)
             self.top = TopLevel(device, 1024)
             self._made.append(self.top)
+            self.deformed = DeformedLevels(device, frame_set_layout)  # skinned and morphed rows' bottom levels
+            self._made.append(self.deformed)
             self.slots = [_Slot(device, self.pool, self.set_layout) for _ in range(frames)]
         except BaseException:
             self.destroy()
@@ -260,6 +264,7 @@ class RayShadows:
             rows[:count]["blas"] = 0
         cutout = self.cutouts(materials)
         pairs = s.pairs_for(count) if cutout is not None else None
+        deformed = self.deformed.plan(chunks if data.deform is not None else [], self.meshes)
         if cutout is not None:
             s.mesh_buffers(self.meshes)
 
@@ -270,8 +275,10 @@ class RayShadows:
             own = pairs[at] if pairs is not None else None
             out = rows[at]
             write_instances(chunk.model, chunk.handle, blas, chunk.offset, caster, out, chunk.material, cutout, own)
-            if chunk.extra is not None:  # a skinned or morphed row's bottom level is its rest pose: no ray sees it
-                out["blas"][chunk.extra != 0] = 0
+            posed = deformed.get(id(chunk))
+            if posed is not None:  # a skinned or morphed row: its own bottom level, already posed in the world
+                out["blas"][posed[0]] = posed[1]
+                out["transform"][posed[0]] = IDENTITY_3X4
 
         if jobs is not None and len(chunks) > 1:
             jobs.map(job, chunks)
@@ -310,6 +317,7 @@ class RayShadows:
         lib = self.device.vk.lib
         s = self.slots[slot]
         assert s.rows is not None
+        self.deformed.record(cb, frame_set, self.meshes)  # their bottom levels, before the top level
         update = self._since_build < REBUILD_EVERY
         refit = self.top.record(cb, s.rows.address, self._count, update)
         self._since_build = self._since_build + 1 if refit else 1
