@@ -82,3 +82,32 @@ def test_bad_masks_and_clips_are_one_error():
     world, _, _ = _world(clip=(9, -1))
     with pytest.raises(UsageError, match=r"AnimationLayers\.clip names clip 9"):
         _run(world)
+
+
+def test_a_layer_blends_morph_weights_by_its_weight_and_mask_and_the_parts_follow():
+    """A layer's weights channel blends over the player's morph weights as positions do
+    (linearly, by the layer's weight), only on its mask's targets; a node's parts (children with
+    MorphWeights and no target) take the blended weights."""
+    from ecs_engine.components import Parent
+    from ecs_engine.components.animation import MorphWeights
+
+    def held(values):
+        return Curve(np.array([0.0, 2.0]), np.array([values, values], np.float64), LINEAR)
+
+    world = World()
+    clips = world.resources.setdefault(AnimationClips, AnimationClips())
+    base = clips.add(AnimationClip("base", (ClipChannel(target_id("face"), "weights", held([0.2, 0.0])),)))
+    over = clips.add(AnimationClip("over", (ClipChannel(target_id("face"), "weights", held([1.0, 0.6])),)))
+    masks = world.resources.setdefault(AnimationMasks, AnimationMasks())
+    elsewhere = masks.add([target_id("hips")])
+    root = world.spawn(Transform(), AnimationPlayer(clip=base), AnimationLayers(clip=(over, over), weight=(0.25, 0.0)))
+    face = world.spawn(Transform(), AnimationTarget(player=root, id=target_id("face")), MorphWeights())
+    part = world.spawn(Transform(), Parent(entity=face), MorphWeights())
+    _run(world)
+    want = [0.2 + 0.8 * 0.25, 0.6 * 0.25]
+    np.testing.assert_allclose(world.get(face, MorphWeights).weights[:2], want, atol=1e-6)
+    np.testing.assert_allclose(world.get(part, MorphWeights).weights[:2], want, atol=1e-6)
+    assert not world.get(face, MorphWeights).weights[2:].any()
+    world.set(root, AnimationLayers, mask=(elsewhere, -1))  # the face is not in the mask
+    _run(world)
+    np.testing.assert_allclose(world.get(face, MorphWeights).weights[:2], [0.2, 0.0], atol=1e-6)

@@ -1,7 +1,7 @@
 """Layers of clips over a player's (components/animation.py's AnimationLayers): each frame,
 after AnimationSystem wrote the players' clips, AnimationLayerSystem moves every layer's clock
-on and blends its clip over the Transforms below, by its weight, on the targets its mask names
-(the world's AnimationMasks). Masks are sets of target ids: `targets_below` gives a scene's
+on and blends its clip over the Transforms and morph weights below, by its weight, on the
+targets its mask names (the world's AnimationMasks). Masks are sets of target ids: `targets_below` gives a scene's
 subtree's (an upper body: everything under the chest)."""
 
 from __future__ import annotations
@@ -10,13 +10,13 @@ from typing import Any
 
 import numpy as np
 
-from ecs_engine.components import Transform
-from ecs_engine.components.animation import LAYERS, AnimationLayers, AnimationTarget
+from ecs_engine.components import Parent, Transform
+from ecs_engine.components.animation import LAYERS, AnimationLayers, AnimationTarget, MorphWeights
 from ecs_engine.ecs.schedule import System, any_with
 
 from ..errors import UsageError
 from .clip import AnimationClips, ClipChannel, target_id
-from .player import _COLUMNS, _group
+from .player import _COLUMNS, _group, weights_to_parts
 from .sampling import slerp
 
 
@@ -52,8 +52,8 @@ def targets_below(paths: Any, *roots: str) -> list[int]:
 class AnimationLayerSystem(System):
     def __init__(self) -> None:
         super().__init__(
-            reads=[AnimationClips, AnimationMasks, AnimationTarget],
-            writes=[AnimationLayers, Transform],
+            reads=[AnimationClips, AnimationMasks, AnimationTarget, Parent],
+            writes=[AnimationLayers, Transform, MorphWeights],
             name="animation_layers",
             run_if=any_with(AnimationLayers),
         )
@@ -65,22 +65,34 @@ class AnimationLayerSystem(System):
         layers = _advance(world, clips, dt)
         if layers is None:
             return
-        entity, clip, time, weight, mask = layers
         masks = world.resources.get(AnimationMasks)
         for batch in world.query(AnimationTarget, Transform):
-            target, transform = batch[AnimationTarget], batch[Transform]
-            at = np.minimum(np.searchsorted(entity, target.player), len(entity) - 1)
-            found = entity[at] == target.player
+            transform = batch[Transform]
             columns = {prop: getattr(transform, name) for prop, name in _COLUMNS.items()}
-            for k in range(LAYERS):
-                playing = np.where(found, clip[at, k], -1)
-                for c in np.unique(playing[playing >= 0]).tolist():
-                    rows = np.flatnonzero(playing == c)
-                    rows = rows[_in_mask(masks, mask[at[rows], k], target.id[rows])]
-                    if not len(rows):
-                        continue
-                    rows, spans = _group(rows, target.id, clips[c])
-                    _blend(columns, rows, spans, time[at[rows], k], weight[at[rows], k])
+            _blend_layers(batch[AnimationTarget], columns, layers, clips, masks)
+        if any(c.property == "weights" for clip in clips.clips for c in clip.channels):
+            for batch in world.query(AnimationTarget, MorphWeights):  # the morph targets' weights
+                _blend_layers(batch[AnimationTarget], {"weights": batch[MorphWeights].weights}, layers, clips, masks)
+            weights_to_parts(world)
+
+
+def _blend_layers(
+    target: Any, columns: dict[str, np.ndarray], layers: tuple[np.ndarray, ...], clips: AnimationClips, masks: Any
+) -> None:
+    """Every layer's clip blended over `columns` (by property) of the rows `target` (their
+    AnimationTarget) names, where a layer's player and mask take them."""
+    entity, clip, time, weight, mask = layers
+    at = np.minimum(np.searchsorted(entity, target.player), len(entity) - 1)
+    found = entity[at] == target.player
+    for k in range(LAYERS):
+        playing = np.where(found, clip[at, k], -1)
+        for c in np.unique(playing[playing >= 0]).tolist():
+            rows = np.flatnonzero(playing == c)
+            rows = rows[_in_mask(masks, mask[at[rows], k], target.id[rows])]
+            if not len(rows):
+                continue
+            rows, spans = _group(rows, target.id, clips[c])
+            _blend(columns, rows, spans, time[at[rows], k], weight[at[rows], k])
 
 
 def _advance(world: Any, clips: AnimationClips, dt: float) -> tuple[np.ndarray, ...] | None:
@@ -136,6 +148,8 @@ def _blend(
         column = columns.get(channel.property)
         if column is None:
             continue
+        if channel.property == "weights":  # as many of the eight as the mesh has targets
+            column = column[:, : channel.curve.values.shape[1]]
         here, w = rows[lo:hi], weight[lo:hi]
         value, now = channel.curve.sample(times[lo:hi]), column[here]
         column[here] = slerp(now, value, w) if channel.property == "rotation" else now + (value - now) * w[:, None]

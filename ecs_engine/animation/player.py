@@ -91,12 +91,7 @@ class AnimationSystem(System):
                 kept = self._bindings.get(batch.table.id)
                 if kept is not None:
                     self._play(kept, players, {"weights": batch[MorphWeights].weights}, len(batch))
-        # a node of several primitives: its parts (children with MorphWeights and no target of
-        # their own) take the node's weights, as its channel wrote them or a system set them
-        for batch in world.query(Parent, MorphWeights, without=(AnimationTarget,)):
-            weights, found = gather(world, batch[Parent].entity, MorphWeights, "weights")
-            column = batch[MorphWeights].weights
-            column[found] = weights[found]
+        weights_to_parts(world)
         for gone in set(self._bindings) - seen:
             del self._bindings[gone]
 
@@ -183,6 +178,15 @@ def _apply(
             now = column[here]
             value = slerp(now, value, w) if name == "rotation" else now + (value - now) * w[:, None]
         column[here] = value
+
+
+def weights_to_parts(world: Any) -> None:
+    """A node of several primitives: its parts (children with MorphWeights and no target of
+    their own) take the node's weights, as its channel (and layers) wrote them or a system set them."""
+    for batch in world.query(Parent, MorphWeights, without=(AnimationTarget,)):
+        weights, found = gather(world, batch[Parent].entity, MorphWeights, "weights")
+        column = batch[MorphWeights].weights
+        column[found] = weights[found]
 
 
 def crossfade(world: Any, player: int, clip: int, seconds: float, time: float = 0.0) -> None:
