@@ -140,3 +140,38 @@ def test_a_crossfade_blends_the_old_clip_into_the_new_by_its_progress(tmp_path):
     assert player.from_clip == -1
     lift_at = np.array([np.interp(0.55, KEYS, LIFT[:, i]) for i in range(3)])
     np.testing.assert_allclose(world.get(arm, Transform).position, lift_at, atol=1e-6)
+
+
+def test_a_crowd_s_clips_written_over_the_job_pool_equal_those_written_on_one_thread(tmp_path):
+    """AnimationSystem hands its full-weight writes to the world's JobPool in pieces of rows
+    (write_linear.write_all); a crowd of characters with different clips and times ends with the
+    same Transforms, bit for bit, as without a pool, frame after frame."""
+    from ecs_engine.demos.character import CLIPS, character_file
+    from ecs_engine.jobs import JobPool
+    from ecs_engine.render.assets.materials import materials
+
+    def crowd(pool):
+        world = World()
+        scene = load_gltf(character_file(tmp_path), lambda mesh: 0, materials(world))
+        n = 1400  # about 7 animated channels a character: 10k rows, several pieces of rows
+        rng = np.random.default_rng(3)
+        roots = scene.spawn_many(world, n, np.c_[np.arange(n) * 2.0, np.zeros(n), np.zeros(n)])
+        handles = scene.clip_handles(world)
+        clip = np.array([handles[name] for name in CLIPS], np.int32)[rng.integers(0, len(CLIPS), n)]
+        world.set(roots, AnimationPlayer(clip=clip, time=rng.uniform(0, 1, n), speed=rng.uniform(0.8, 1.2, n)))
+        if pool is not None:
+            world.resources[JobPool] = pool
+        system = AnimationSystem()
+        out = []
+        for _ in range(3):
+            world.run_system(system, 0.05)
+            out.append(np.concatenate([b[Transform].rotation.copy() for b in world.query(Transform)]))
+        return out
+
+    with JobPool(4) as pool:
+        spread = crowd(pool)
+    alone = crowd(None)
+    assert len(spread[0]) > 30000
+    for a, b in zip(spread, alone, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(spread[0], spread[2])  # the clips move

@@ -21,14 +21,16 @@ from ecs_engine.components.animation import AnimationEvent, AnimationPlayer, Ani
 from ecs_engine.components.hierarchy import Parent
 from ecs_engine.ecs.gather import gather
 from ecs_engine.ecs.schedule import System, any_with
+from ecs_engine.jobs import JobPool
 
 from ..errors import UsageError
 from .clip import AnimationClip, AnimationClips, ClipChannel
 from .sampling import slerp
-from .write_linear import write_sampled
+from .write_linear import Write, write_all
 
 _COLUMNS = {"translation": "position", "rotation": "rotation", "scale": "scale"}  # Transform's, by property
 _TARGET_PLAYER, _TARGET_ID = (AnimationTarget, "player"), (AnimationTarget, "id")
+_FULL = np.ones(0)  # the weights of rows none of whose players fades: each is 1 (no blend)
 
 
 @dataclass
@@ -64,7 +66,7 @@ class _Binding:
 class AnimationSystem(System):
     def __init__(self) -> None:
         super().__init__(
-            reads=[AnimationClips, AnimationTarget, Parent],
+            reads=[AnimationClips, AnimationTarget, Parent, JobPool],
             writes=[AnimationPlayer, Transform, AnimationEvent, MorphWeights],
             name="animation",
             run_if=any_with(AnimationPlayer),
@@ -76,6 +78,7 @@ class AnimationSystem(System):
         if clips is None:
             return
         players = advance(world, clips, dt)
+        pool = world.resources.get(JobPool)
         if not len(players.entity):
             return
         seen = set()
@@ -85,27 +88,32 @@ class AnimationSystem(System):
             binding = self._binding(world, table, batch[AnimationTarget], players, clips)
             transform = batch[Transform]
             columns = {prop: getattr(transform, name) for prop, name in _COLUMNS.items()}
-            self._play(binding, players, columns, len(batch))
+            self._play(binding, players, columns, len(batch), pool)
         if any(c.property == "weights" for clip in clips.clips for c in clip.channels):
             for batch in world.query(AnimationTarget, MorphWeights):  # the morph targets' weights
                 kept = self._bindings.get(batch.table.id)
                 if kept is not None:
-                    self._play(kept, players, {"weights": batch[MorphWeights].weights}, len(batch))
+                    self._play(kept, players, {"weights": batch[MorphWeights].weights}, len(batch), pool)
         weights_to_parts(world)
         for gone in set(self._bindings) - seen:
             del self._bindings[gone]
 
     @staticmethod
-    def _play(binding: _Binding, players: _Players, columns: dict[str, np.ndarray], rows: int) -> None:
+    def _play(binding: _Binding, players: _Players, columns: dict[str, np.ndarray], rows: int, pool: Any) -> None:
         """The binding's clips into `columns` (by channel property; channels of others wait for
-        their own pass): the clips faded from, then those playing, blended over them."""
+        their own pass): the clips faded from, then those playing, blended over them. The
+        writes at full weight (most of them) go last, together, over `pool`'s threads: each row
+        plays one clip, so they touch rows no blend reads."""
         # per property, the rows the clips faded from wrote this frame (the new clip blends over those)
         written = {prop: np.zeros(rows, bool) for prop in columns} if binding.faded else {}
+        writes: list[Write] = []
         for at, spans in binding.faded:  # at full weight
-            _apply(columns, at, spans, players.from_time[binding.at[at]], None, written)
+            _apply(columns, at, spans, players.from_time[binding.at[at]], None, written, writes)
+        fading = bool((players.weight < 1.0).any())  # else no row blends: its weight is not gathered
         for at, spans in binding.playing:
-            weight = players.weight[binding.at[at]]
-            _apply(columns, at, spans, players.time[binding.at[at]], weight, written)
+            weight = players.weight[binding.at[at]] if fading else _FULL
+            _apply(columns, at, spans, players.time[binding.at[at]], weight, written, writes)
+        write_all(writes, pool)
 
     def _binding(self, world: Any, table: Any, target: Any, players: _Players, clips: AnimationClips) -> _Binding:
         key = (
@@ -152,11 +160,13 @@ def _apply(
     times: np.ndarray,
     weight: Any,
     written: dict[str, np.ndarray],
+    writes: list[Write],
 ) -> None:
     """A clip's channels (`spans` of `rows`) at `times` (per row) into `columns` (by property;
     a channel of another property is left). With `weight` (None: a clip faded from, which marks
     what it writes in `written`), blended by it over what a clip faded from wrote this frame, and
-    written outright where none did."""
+    written outright where none did. A clip at full weight over nothing faded leaves its
+    writes in `writes` (write_all's), for the caller to make."""
     faded_from = weight is None
     blend = not faded_from and bool((weight < 1.0).any())
     for channel, lo, hi in spans:
@@ -168,7 +178,7 @@ def _apply(
         if name == "weights":  # as many of the eight as the mesh has targets
             column = column[:, : channel.curve.values.shape[1]]
         if not faded_from and not blend:  # the usual case: sampled straight into the column
-            write_sampled(channel.curve, times[lo:hi], here, column)
+            writes.append((channel.curve, times[lo:hi], here, column))
             continue
         value = channel.curve.sample(times[lo:hi])
         if faded_from:

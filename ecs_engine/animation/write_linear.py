@@ -1,14 +1,19 @@
 """A LINEAR curve sampled straight into a component column: what AnimationSystem does for most
 channels (a clip at full weight), without the temporaries of Curve.sample: per row a binary
 search for its key, then lerp or the specification's slerp (sampling.py's), written in place.
-A numba kernel, and Curve.sample where numba is missing."""
+A numba kernel (without the GIL: `write_all` spreads a frame's writes over the job pool's
+threads in pieces of rows), and Curve.sample where numba is missing."""
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 
 from .. import native
 from .sampling import LINEAR, Curve
+
+PIECE_ROWS = 4096  # rows a job of write_all samples: a crowd's channel of 10k characters is a few jobs
 
 
 def _write_kernel(times, values, rotation, t, rows, column):  # pragma: no cover - compiled
@@ -64,3 +69,27 @@ def write_sampled(curve: Curve, times: np.ndarray, rows: np.ndarray, column: np.
         return
     values = np.ascontiguousarray(curve.values, np.float64).reshape(len(curve.times), -1)
     _write_native(curve.times.astype(np.float64), values, curve.rotation, times, rows, column)
+
+
+Write = tuple[Curve, np.ndarray, np.ndarray, np.ndarray]  # write_sampled's arguments
+
+
+def write_all(writes: list[Write], pool: Any = None) -> None:
+    """write_sampled for each of `writes`, which touch distinct rows, in pieces of PIECE_ROWS rows
+    over `pool`'s threads (a JobPool; None or one thread: in turn, here)."""
+    if pool is None or pool.threads == 1 or _write_native is None or sum(len(w[2]) for w in writes) < 2 * PIECE_ROWS:
+        for curve, times, rows, column in writes:
+            write_sampled(curve, times, rows, column)
+        return
+    pieces = []
+    for curve, times, rows, column in writes:
+        if curve.interpolation != LINEAR or column.ndim != 2:
+            write_sampled(curve, times, rows, column)
+            continue
+        keys = np.ascontiguousarray(curve.times, np.float64)
+        values = np.ascontiguousarray(curve.values, np.float64).reshape(len(keys), -1)
+        for at in range(0, len(rows), PIECE_ROWS):
+            piece = slice(at, at + PIECE_ROWS)
+            pieces.append((keys, values, curve.rotation, times[piece], rows[piece], column))
+    native_write = _write_native
+    pool.map(lambda piece: native_write(*piece), pieces)
