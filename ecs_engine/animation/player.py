@@ -61,6 +61,8 @@ class _Binding:
     at: np.ndarray  # per row, its player's place in _Players (rows without one: any)
     faded: list[_Group]  # the clips faded from
     playing: list[_Group]
+    # per group of `playing`, its rows' players' places (at[rows], gathered once)
+    players_of: list[np.ndarray]
 
 
 class AnimationSystem(System):
@@ -110,9 +112,9 @@ class AnimationSystem(System):
         for at, spans in binding.faded:  # at full weight
             _apply(columns, at, spans, players.from_time[binding.at[at]], None, written, writes)
         fading = bool((players.weight < 1.0).any())  # else no row blends: its weight is not gathered
-        for at, spans in binding.playing:
-            weight = players.weight[binding.at[at]] if fading else _FULL
-            _apply(columns, at, spans, players.time[binding.at[at]], weight, written, writes)
+        for (at, spans), of in zip(binding.playing, binding.players_of, strict=True):
+            weight = players.weight[of] if fading else _FULL
+            _apply(columns, at, spans, players.time[of], weight, written, writes)
         write_all(writes, pool)
 
     def _binding(self, world: Any, table: Any, target: Any, players: _Players, clips: AnimationClips) -> _Binding:
@@ -135,7 +137,8 @@ class AnimationSystem(System):
             clip = np.where(found, clip_of[at], -1)
             handles = np.unique(clip[clip >= 0]).tolist()
             groups.append([_group(np.flatnonzero(clip == c), target.id, clips[c]) for c in handles])
-        made = self._bindings[table.id] = _Binding(key, at, groups[0], groups[1])
+        players_of = [at[rows] for rows, _ in groups[1]]
+        made = self._bindings[table.id] = _Binding(key, at, groups[0], groups[1], players_of)
         return made
 
 
@@ -225,6 +228,7 @@ def advance(world: Any, clips: AnimationClips, dt: float) -> _Players:
     wrapped into the clip when looping, else held at its end (or start, played backwards), where
     it stops; a fade's progress moved on, and ended when complete."""
     durations = clips.durations()
+    marked = any(clip.events for clip in clips.clips)  # else no player can pass a mark
     parts: list[tuple[np.ndarray, ...]] = []
     for batch in world.query(AnimationPlayer):
         p = batch[AnimationPlayer]
@@ -237,7 +241,8 @@ def advance(world: Any, clips: AnimationClips, dt: float) -> _Players:
                     f"but the world's AnimationClips holds {len(clips)} clips"
                 )
         t, ended = _moved(p.time, clip, p, durations, dt)
-        _send_events(world, clips, batch.entities, clip, p.time, t, p.speed * np.where(p.playing, dt, 0.0))
+        if marked:
+            _send_events(world, clips, batch.entities, clip, p.time, t, p.speed * np.where(p.playing, dt, 0.0))
         p.time = t
         fading = from_clip >= 0
         weight = np.ones(len(clip))
