@@ -12,7 +12,7 @@ N x 24 joints) and GPU nanoseconds per vertex drawn (N x 1,728, camera pass). Th
 issue): 10k characters at 120 FPS end to end without shadows, i.e. max(CPU, GPU) at most 8.33 ms.
 
 JSON (schema_version 1): {"benchmark": "animation", "quick", "machine", "device", "config":
-{"width", "height", "warmup", "frames", "counts", "threads", "joints", "vertices"}, "results":
+{"width", "height", "warmup", "frames", "counts", "threads", "mode", "joints", "vertices"}, "results":
 [{"characters", "shadows", "still", "cpu_ms", "gpu_ms", "systems_ms": {name: ms}, "us_per_joint",
 "ns_per_vertex", "runs"}], "target": {"characters", "frame_ms", "limit_ms", "met"}}.
 """
@@ -42,6 +42,10 @@ THREADS = min(16, default_threads())
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--counts", type=int, nargs="+", help="crowd sizes (default 1k and 10k)")
+    parser.add_argument(
+        "--mode", default="instanced", choices=("instanced", "indirect"),
+        help="render mode (indirect: GPU culling and levels of detail by projected size)",
+    )  # fmt: skip
 
 
 class _Timer:
@@ -98,7 +102,9 @@ def crowd(gpu: Any, n: int, shadows: bool, folder: Path, still: bool = False) ->
     return world, schedule
 
 
-def measure(gpu: Any, n: int, shadows: bool, still: bool, warmup: int, frames: int, folder: Path) -> dict[str, Any]:
+def measure(
+    gpu: Any, n: int, shadows: bool, still: bool, warmup: int, frames: int, folder: Path, mode: str = "instanced"
+) -> dict[str, Any]:
     from ecs_engine.jobs import JobPool
     from ecs_engine.render.frame.renderer import Renderer
 
@@ -108,7 +114,7 @@ def measure(gpu: Any, n: int, shadows: bool, still: bool, warmup: int, frames: i
     schedule.timer = timer
     with JobPool(THREADS) as pool:
         world.resources[JobPool] = pool
-        renderer = Renderer(device, target, meshes, jobs=pool)
+        renderer = Renderer(device, target, meshes, jobs=pool, mode=mode)
         try:
             timed = timed_frames(world, schedule, renderer, warmup, frames, warm=timer.ms.clear)
         finally:
@@ -125,6 +131,7 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
     from . import headless_gpu
 
     counts = tuple(args.counts) if getattr(args, "counts", None) else (QUICK_COUNTS if args.quick else COUNTS)
+    mode = getattr(args, "mode", "instanced")
     warmup, frames = (2, 4) if args.quick else (20, 60)
     joints, vertices = len(SKELETON), len(mesh_arrays()[0])
     configs = [(n, shadows, False) for n in counts for shadows in (False, True)] + [(n, False, True) for n in counts]
@@ -135,7 +142,7 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
             for n, shadows, still in configs if round_ == 0 else configs[::-1]:
                 what = "still meshes" if still else f"shadows {'on' if shadows else 'off'}"
                 with progress.step(f"round {round_ + 1}: {n:,} characters, {what}"):
-                    measured = measure(gpu, n, shadows, still, warmup, frames, Path(folder))
+                    measured = measure(gpu, n, shadows, still, warmup, frames, Path(folder), mode)
                     runs.setdefault((n, shadows, still), []).append(measured)
         device_info = gpu[0].info.__dict__
     results = []
@@ -170,6 +177,7 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
             "frames": frames,
             "counts": list(counts),
             "threads": THREADS,
+            "mode": mode,
             "joints": joints,
             "vertices": vertices,
         },
@@ -192,7 +200,8 @@ def target_entry(results: list[dict[str, Any]]) -> dict[str, Any]:
 def format_table(doc: dict[str, Any]) -> str:
     cfg = doc["config"]
     lines = [
-        f"animation at {cfg['width']}x{cfg['height']}, {cfg['threads']} threads, {cfg['joints']} joints and "
+        f"animation at {cfg['width']}x{cfg['height']}, {cfg.get('mode', 'instanced')} mode, {cfg['threads']} threads, "
+        f"{cfg['joints']} joints and "
         f"{cfg['vertices']} vertices a character: the smaller of 2 runs' medians",
         f"{'characters':>10} {'shadows':>7} {'CPU ms':>8} {'GPU ms':>8} "
         + " ".join(f"{name + ' ms':>13}" for name in SYSTEMS)

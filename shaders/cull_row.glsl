@@ -27,12 +27,12 @@ bool in_frustum(vec3 center, float radius) {
 // threshold_px).
 const float LOD_PIXELS = 1.0;
 
-// The key the row is drawn with: with CULL_LOD, that of the coarsest level of its mesh whose
-// error, projected at the sphere's nearest point (the camera's globals g), covers at most
-// LOD_PIXELS; else its own. The same rule as mesh_lod.py lod_for_screen_size.
-uint draw_key(uint key, vec3 center, float radius) {
+// The level of detail the row is drawn at (0: its mesh): with CULL_LOD, the coarsest level of
+// its mesh whose error, projected at the sphere's nearest point (the camera's globals g), covers
+// at most LOD_PIXELS; else 0. The same rule as mesh_lod.py lod_for_screen_size.
+uint draw_level(uint key, vec3 center, float radius) {
     KeyInfo k = keys[key];
-    if ((pc.occlusion.w & CULL_LOD) == 0u || k.lod.y == 0u) return key;
+    if ((pc.occlusion.w & CULL_LOD) == 0u || k.lod.y == 0u) return 0u;
     mat4 P = g.projection;
     float focal = 0.5 * float(pc.occlusion.y) * abs(P[1][1]);  // pixels a unit covers at distance 1
     float nearest = P[2][3] != 0.0 ? length(center - g.eye.xyz) - radius : 1.0;
@@ -41,15 +41,15 @@ uint draw_key(uint key, vec3 center, float radius) {
     for (uint l = 0u; l < min(k.lod.y, uint(MAX_LODS)); ++l) {
         if (k.lod_error[l] * scale * focal <= LOD_PIXELS * nearest) level = l + 1u;
     }
-    return level == 0u ? key : (k.lod.x + level - 1u) * 2u + (key & 1u);
+    return level;
 }
 
-// The row drawn: a slot in the region of the key it is drawn with.
+// The row drawn: a slot in the region of the key of the level it is drawn at, holding its index
+// and, above ROW_LEVEL_SHIFT, that level (a skinned or morphed row's vertex shader reads the
+// weights and deltas of the level it draws: instance_row.glsl).
 void append_row(uint i, uint key, vec3 center, float radius) {
-    // a skinned or morphed row (misc.w >> 1, misc.z >> 1: instance_row.glsl) draws its own mesh:
-    // its vertex weights and morph deltas are that mesh's, not a coarser level's
-    uvec4 misc = instances[i].misc;
-    uint drawn = ((misc.w >> 1) | (misc.z >> 1)) != 0u ? key : draw_key(key, center, radius);
+    uint level = draw_level(key, center, radius);
+    uint drawn = level == 0u ? key : (keys[key].lod.x + level - 1u) * 2u + (key & 1u);
     uint slot = atomicAdd(visible[drawn], 1u);
-    ids_out[keys[drawn].base + slot] = i;
+    ids_out[keys[drawn].base + slot] = i | (level << uint(ROW_LEVEL_SHIFT));
 }

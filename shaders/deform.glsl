@@ -5,16 +5,27 @@
 
 // Skinning (render/extract/skins.py, render/assets/skin_vertices.py): a row whose misc.w >> 1 is
 // not 0 is a skinned mesh's, its joint matrices starting at (misc.w >> 1) - 1; its vertex's
-// eight joints and weights are found by the vertex's index in its mesh. Its model rows (which place only its bounds, for
+// eight joints and weights are found by the vertex's index in its mesh, or in the level of
+// detail `level` of it (0: the mesh itself) the indirect mode draws. Its model rows (which place only its bounds, for
 // culling) give way to the weighted sum of those joints' matrices, so the normal matrix and the
 // position below follow the pose as a model matrix would.
 layout(std430, set = SET_FRAME, binding = BINDING_JOINTS) readonly buffer Joints { vec4 joint_rows[]; };
 layout(std430, set = SET_FRAME, binding = BINDING_SKIN_VERTICES) readonly buffer SkinVertices { uint skin_words[]; };
 
-Instance skin_vertex(Instance inst, uint v) {
+// Where the header (skin_vertices.py) says the row's mesh's (at `level`) skin records (part 0) or
+// morph block (part 1) start; 0xFFFFFFFF for none.
+uint deform_data(Instance inst, uint level, uint part) {
+    uint mesh = inst.misc.y >> 1;
+    if (mesh >= skin_words[0] || level > uint(MAX_LODS)) return 0xFFFFFFFFu;
+    return skin_words[1u + uint(SKIN_HEADER_WORDS) * mesh + 2u * level + part];
+}
+
+Instance skin_vertex(Instance inst, uint v, uint level) {
     uint first = inst.misc.w >> 1;
     if (first == 0u) return inst;
-    uint at = skin_words[2u * (inst.misc.y >> 1)] + v * uint(SKIN_WORDS);
+    uint records = deform_data(inst, level, 0u);
+    if (records == 0xFFFFFFFFu) return inst;
+    uint at = records + v * uint(SKIN_WORDS);
     vec4 r0 = vec4(0.0), r1 = vec4(0.0), r2 = vec4(0.0);
     for (uint k = 0u; k < 8u; ++k) {
         float w = uintBitsToFloat(skin_words[at + 4u + k]);
@@ -36,10 +47,10 @@ Instance skin_vertex(Instance inst, uint v) {
 // (misc.z >> 1) - 1 and the row after; its mesh's morph block (skin_vertices.py) holds each
 // target's deltas by vertex. The vertex moves by the weighted sum of its deltas (before a skin,
 // as glTF orders them).
-void morph_vertex(Instance inst, uint v, inout vec3 position, inout vec3 normal, inout vec3 tangent) {
+void morph_vertex(Instance inst, uint v, uint level, inout vec3 position, inout vec3 normal, inout vec3 tangent) {
     uint at = inst.misc.z >> 1;
     if (at == 0u) return;
-    uint block = skin_words[2u * (inst.misc.y >> 1) + 1u];
+    uint block = deform_data(inst, level, 1u);
     if (block == 0xFFFFFFFFu) return;
     uint targets = skin_words[block], vertices = skin_words[block + 1u];
     vec4 lo = joint_rows[at - 1u], hi = joint_rows[at];

@@ -7,20 +7,26 @@ layout(push_constant) uniform Push { Instance row; } push;
 
 #include "deform.glsl"
 
-// The vertex's index in its own mesh (the indirect mode draws from the merged buffer).
+// The vertex's index in its own mesh or level (the indirect mode draws from the merged buffer).
 uint mesh_vertex_index() { return uint(gl_VertexIndex - gl_BaseVertexARB); }
 
-Instance skinned(Instance inst) { return skin_vertex(inst, mesh_vertex_index()); }
+// The level of detail drawn (0: the mesh itself): the indirect mode's cull passes put it above
+// ROW_LEVEL_SHIFT in the row's entry of ids (cull_row.glsl); the other paths draw the mesh.
+uint row_level = 0u;
+
+Instance skinned(Instance inst) { return skin_vertex(inst, mesh_vertex_index(), row_level); }
 
 void morphed(Instance inst, inout vec3 position, inout vec3 normal, inout vec3 tangent) {
-    morph_vertex(inst, mesh_vertex_index(), position, normal, tangent);
+    morph_vertex(inst, mesh_vertex_index(), row_level, position, normal, tangent);
 }
 
 Instance instance_row() {
 #if defined(PUSH_INSTANCE)
     return skinned(push.row);
 #elif defined(INDIRECT_INSTANCE)
-    return skinned(instances[ids[gl_InstanceIndex]]);
+    uint entry = ids[gl_InstanceIndex];
+    row_level = entry >> uint(ROW_LEVEL_SHIFT);
+    return skinned(instances[entry & ((1u << uint(ROW_LEVEL_SHIFT)) - 1u)]);
 #else
     return skinned(instances[gl_InstanceIndex]);
 #endif

@@ -94,6 +94,8 @@
 #define MESH_VERTEX_FLOATS 12
 #define MESH_VERTEX_UV 6
 #define POSED_GROUP 64
+#define SKIN_HEADER_WORDS 10
+#define ROW_LEVEL_SHIFT 29
 
 // The frame's uniforms. Positions are relative to the render origin (the camera, unless
 // RenderOrigin is pinned).

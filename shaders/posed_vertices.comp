@@ -17,13 +17,13 @@ layout(push_constant) uniform Probe { Instance row; uint vertices; uint first; u
 void main() {
     uint v = gl_GlobalInvocationID.x;
     if (v >= pc.vertices) return;
-    Instance inst = skin_vertex(pc.row, v);
+    Instance inst = skin_vertex(pc.row, v, 0u);
     uint at = v * uint(MESH_VERTEX_FLOATS);
     vec3 position = vec3(rest[at], rest[at + 1u], rest[at + 2u]);
     vec3 normal = vec3(rest[at + 3u], rest[at + 4u], rest[at + 5u]);
     uint t = at + uint(MESH_VERTEX_UV) + 2u;
     vec3 tangent = vec3(rest[t], rest[t + 1u], rest[t + 2u]);
-    morph_vertex(inst, v, position, normal, tangent);
+    morph_vertex(inst, v, 0u, position, normal, tangent);
     vec4 world = vec4(instance_world(inst, position), 1.0);
     if (pc.normals == 0u) {
         posed[pc.first + v] = world;  // a bottom level's vertices (render/raytracing/deformed.py)

@@ -319,6 +319,12 @@ REDUCE_GROUP = 8  # depth_reduce.comp's local size, each way
 CULL_SUBPIXEL = 1  # CullPush.occlusion.w: rows covering no pixel centre are culled (occlusion culling)
 CULL_LOD = 2  # CullPush.occlusion.w: rows draw the coarsest level of detail their size allows
 MAX_LODS = 4  # coarser levels a key table row holds (KeyInfo.lod_error)
+# the skinned and morphed meshes' data (render/assets/skin_vertices.py): per mesh, where its skin
+# records and morph block start, for the mesh and each coarser level (the indirect mode draws levels)
+SKIN_HEADER_WORDS = 2 * (1 + MAX_LODS)
+# a visible row's entry in the indirect mode's ids (cull_row.glsl): its index, and the level it is
+# drawn at above ROW_LEVEL_SHIFT (a skinned row's vertex shader reads that level's weights)
+ROW_LEVEL_SHIFT = 29
 
 STRUCTS = [
     GLOBALS,
@@ -355,6 +361,7 @@ DEFERRED_WORDS CULL_GROUP ROW_NOT_CASTER COMPACT_GROUP SET_OCCLUSION BINDING_VIS
 BINDING_EARLY_DEPTH REDUCE_GROUP CULL_SUBPIXEL CULL_LOD MAX_LODS MAX_RAY_LIGHTS RAY_PLACE FEATURE_RAY_SHADOWS
 BINDING_SHADOW_MASK BINDING_RAY_SCENE BINDING_RAY_FRAME BINDING_RAY_DEPTH BINDING_RAY_NORMAL BINDING_RAY_MASK
 BINDING_RAY_DENOISED SET_RAY BINDING_RAY_MESHES BINDING_RAY_ROWS MESH_VERTEX_FLOATS MESH_VERTEX_UV POSED_GROUP
+SKIN_HEADER_WORDS ROW_LEVEL_SHIFT
 """.split()
 DEFINES = {name: globals()[name] for name in _GLSL_NAMES}
 

@@ -8,6 +8,11 @@ original's, measured both ways at vertices (lod_error.py). A level is good enoug
 error covers under about a pixel on screen, so `lod_for_screen_size` takes the coarsest level whose
 error, projected at the nearest point of the bounding sphere, is at most `threshold_px`.
 
+A skinned or morphed mesh's levels keep its joints, weights and morph deltas: each level vertex
+takes those of the original vertex it is (see below), so the vertex shader poses a level as it
+poses the mesh. Their error also bounds what the collapses get wrong once the mesh moves
+(lod_deform.py), which its rest shape does not show.
+
 Why the attributes are chosen, not interpolated: the library moves kept vertices to their quadric's
 optimum and returns only positions and triangles. Split vertices (UV seams, hard edges) would tear
 the surface if simplified apart, so positions are welded first; every output vertex is a welded
@@ -30,8 +35,11 @@ from typing import Final
 import fast_simplification
 import numpy as np
 
+from .lod_deform import deform_error
 from .lod_error import level_error
 from .mesh_data import MeshData
+from .morph_targets import MorphTargets
+from .skin_weights import SkinWeights
 
 __all__ = [
     "DEFAULT_RATIOS",
@@ -233,9 +241,16 @@ def _simplified(mesh: MeshData, welded: _Welded, target: int, name: str) -> tupl
     vertices, indices = np.unique(chosen.reshape(-1), return_inverse=True)
     positions = points[rank[welded.weld[vertices]]]
     normals = _facing_normals(positions, indices.reshape(-1, 3), mesh.normals[vertices].astype(np.float64))
-    lod = MeshData.from_arrays(positions, normals, indices.astype(np.uint32), name, mesh.uvs[vertices])
+    skin = None if mesh.skin is None else SkinWeights(mesh.skin.joints[vertices], mesh.skin.weights[vertices])
+    morph = mesh.morph
+    if morph is not None:
+        morph = MorphTargets(
+            morph.positions[:, vertices], morph.normals[:, vertices], morph.tangents[:, vertices], morph.weights
+        )
+    indices = indices.astype(np.uint32)
+    lod = MeshData.from_arrays(positions, normals, indices, name, mesh.uvs[vertices], skin=skin, morph=morph)
     error = level_error(welded.positions, welded.triangles, root, rank, used, points, rank[mapped[kept]])
-    return lod, error
+    return lod, max(error, deform_error(mesh, welded.weld, welded.positions, root))
 
 
 def _closest_copies(mesh: MeshData, weld: np.ndarray, corners: np.ndarray, survivors: np.ndarray) -> np.ndarray:

@@ -154,9 +154,17 @@ class MeshRegistry:
         indices = self._mesh_buffers.add(upload(self.device, mesh.indices, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT | ray))
         return vertices, indices
 
-    def skin_buffer(self) -> Buffer:
-        """The skinned meshes' joints and weights as the vertex shaders read them (skin_vertices.py)."""
-        return self._skins.buffer([m.data for m in self._meshes], self.version)
+    def skin_buffer(self, levels: bool = False) -> Buffer:
+        """The skinned and morphed meshes' joints, weights and morph deltas as the vertex shaders
+        read them (skin_vertices.py); with `levels` (the indirect mode, which draws levels of
+        detail), their coarser levels' too, built now where they were not yet."""
+        datas = [m.data for m in self._meshes]
+        coarser = {}
+        if levels:
+            for h, data in enumerate(datas):
+                if data.skin is not None or data.morph is not None:
+                    coarser[h] = [lod.mesh for lod in self.lods(h)]
+        return self._skins.buffer(datas, (self.version, levels, self._levels_built), coarser)
 
     def __getitem__(self, handle: int) -> GpuMesh:
         return self._meshes[handle]

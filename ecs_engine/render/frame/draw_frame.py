@@ -11,7 +11,7 @@ from functools import partial
 from typing import Any
 
 from ..assets.materials import Materials
-from ..config import Form
+from ..config import Form, Mode
 from ..draw.path import FrameInputs, FrameStats
 from ..extract.frame_data import FrameData
 from ..layouts import FEATURE_ENVIRONMENT, FEATURE_RAY_SHADOWS, FEATURE_SHADOWS, INSTANCE
@@ -64,6 +64,7 @@ class FrameDrawing:
     tone_map: str
     exposure: float
     lod: bool
+    mode: Mode
     transparency: str
     material_features: int
     _set_aside: SetAsidePass | None
@@ -119,7 +120,8 @@ class FrameDrawing:
         rows = camera_rows + len(views) * ShadowPass.view_rows(data, self.path)  # each view's after the camera's
         pf.ensure_capacity(self.device, self.texture_pages, rows, data.light_count, material_count, len(views))
         if data.deform is not None:  # skinned or morphed rows: their joints and weights, the meshes' data named
-            pf.write_deform(self.device, data.deform, self.meshes.skin_buffer())
+            levels = self.lod and self.mode == Mode.INDIRECT  # the indirect mode draws their levels of detail
+            pf.write_deform(self.device, data.deform, self.meshes.skin_buffer(levels))
         deferred = self.target.form == Form.DEFERRED
         named = self.shadows.light_views(views) if views else {}
         places = ray.places(traced) if ray is not None and traced else {}
