@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from ...errors import UsageError
 from ...gpu.descriptors import DescriptorPool, DescriptorSetLayout, write_buffers
 from ...gpu.memory import DEVICE, HOST, Buffer
 from ...gpu.pipeline import compute_pipeline, pipeline_layout
@@ -43,6 +44,7 @@ from ..layouts import (
     DRAW_COMMAND,
     DRAW_STATE,
     KEY_INFO,
+    ROW_LEVEL_SHIFT,
     ROW_NOT_CASTER,
     UINT_BYTES,
 )
@@ -139,6 +141,8 @@ class IndirectPath(PipelinesPerTarget):
 
     def _ensure_capacity(self, slot: int, keys: int, rows: int) -> None:
         """Grow the frame's buffers; safe: the frame's fence has been waited on."""
+        if rows > 1 << ROW_LEVEL_SHIFT:  # a row's ids entry holds its index below the level it is drawn at
+            raise UsageError(f"the indirect mode draws at most {1 << ROW_LEVEL_SHIFT:,} rows a frame, not {rows:,}")
         f = self.frames[slot]
         if keys > f.key_slots:
             for b in (f.keys, f.ids, f.state, f.commands, f.readback):
