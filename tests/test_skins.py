@@ -260,3 +260,26 @@ def test_the_pose_kernel_matches_its_numpy_reference():
     for a, b in zip(*outs, strict=True):
         assert np.allclose(a, b, rtol=1e-5, atol=1e-4)
     assert (outs[0][2][2:] > 0).all() and (outs[0][2][:2] == 0).all()  # only copies 2:7 were posed
+
+
+def test_the_placing_kernel_matches_its_numpy_reference():
+    """SkinSystem's ModelMatrix per Skinned row (skin_pose.place): compiled and NumPy agree, rows
+    naming no skin or a copy past their skin's are left as they were."""
+    from ecs_engine.animation import skin_pose
+
+    rng = np.random.default_rng(6)
+    n = 30
+    skin = rng.integers(-1, 3, n).astype(np.int32)  # -1: none; skin 2 does not exist
+    copy = rng.integers(0, 4, n).astype(np.int32)  # skin 0 has 3 copies, skin 1 has 2
+    radius, centre = rng.uniform(0.5, 2.0, n).astype(np.float32), rng.normal(size=(n, 3)).astype(np.float32)
+    first = np.array([0, 3, 5], np.int64)
+    centres, radii, origin = rng.normal(size=(5, 3)) * 10, rng.uniform(1, 3, 5), rng.normal(size=3)
+    outs = []
+    for kernel in (skin_pose.place, skin_pose.place_numpy):
+        model = np.full((n, 4, 4), 7.0, np.float32)
+        kernel(skin, copy, radius, centre, first, centres, radii, origin, model)
+        outs.append(model)
+    np.testing.assert_allclose(outs[0], outs[1], rtol=1e-5, atol=1e-5)
+    known = (skin >= 0) & (skin < 2) & (copy < np.array([3, 2, 0])[np.clip(skin, 0, 2)])
+    assert known.any() and (~known).any()
+    assert (outs[0][~known] == 7.0).all() and (outs[0][known, 3, 3] == 1.0).all()

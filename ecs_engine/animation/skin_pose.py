@@ -83,3 +83,56 @@ def pose(
         pose_numpy(worlds, rows, binds, reach, origin, out, centres, radii, start, stop)
         return
     _pose_native(worlds, rows, binds, reach, origin, out, centres, radii, start, stop)
+
+
+def place_numpy(
+    skin: np.ndarray, copy: np.ndarray, radius: np.ndarray, centre: np.ndarray, first: np.ndarray,
+    centres: np.ndarray, radii: np.ndarray, origin: np.ndarray, model: np.ndarray,
+) -> None:  # fmt: skip
+    """Reference version of `place`."""
+    known = (skin >= 0) & (skin < len(first) - 1)
+    at = first[np.where(known, skin, 0)] + copy
+    known &= at < first[np.where(known, skin, 0) + 1]
+    rows = np.flatnonzero(known)
+    scale = radii[at[rows]] / np.maximum(radius[rows].astype(np.float64), 1e-30)
+    m = np.zeros((len(rows), 4, 4))
+    m[:, [0, 1, 2], [0, 1, 2]] = scale[:, None]
+    m[:, :3, 3] = centres[at[rows]] - origin - scale[:, None] * centre[rows]
+    m[:, 3, 3] = 1.0
+    model[rows] = m
+
+
+def _place_kernel(skin, copy, radius, centre, first, centres, radii, origin, model):  # pragma: no cover - compiled
+    skins = first.shape[0] - 1
+    for i in range(skin.shape[0]):
+        s = skin[i]
+        if s < 0 or s >= skins:
+            continue
+        at = first[s] + copy[i]
+        if at >= first[s + 1]:
+            continue
+        scale = radii[at] / max(np.float64(radius[i]), 1e-30)
+        for r in range(4):
+            for c in range(4):
+                model[i, r, c] = 0.0
+        for r in range(3):
+            model[i, r, r] = scale
+            model[i, r, 3] = centres[at, r] - origin[r] - scale * centre[i, r]
+        model[i, 3, 3] = 1.0
+
+
+_place_native = native.njit(_place_kernel)
+
+
+def place(
+    skin: np.ndarray, copy: np.ndarray, radius: np.ndarray, centre: np.ndarray, first: np.ndarray,
+    centres: np.ndarray, radii: np.ndarray, origin: np.ndarray, model: np.ndarray,
+) -> None:  # fmt: skip
+    """Each Skinned row's ModelMatrix (`model`, float32): its mesh's sphere (`centre`, `radius`)
+    scaled and moved onto its copy's pose sphere, less `origin`. `skin`, `copy` per row; `first`
+    (skins + 1) the first copy of each skin in `centres` and `radii`, all skins' copies in turn.
+    Rows naming no skin or copy are left."""
+    if _place_native is None:
+        place_numpy(skin, copy, radius, centre, first, centres, radii, origin, model)
+        return
+    _place_native(skin, copy, radius, centre, first, centres, radii, origin, model)

@@ -27,7 +27,7 @@ from ecs_engine.ecs.schedule import System, any_with
 from ecs_engine.jobs import JobPool, over_rows
 
 from ..errors import UsageError
-from .skin_pose import pose
+from .skin_pose import place, pose
 
 COPIES_PER_JOB = 512  # a job poses this many copies (24 joints: ~12k matrices)
 _WORLD = (WorldMatrix, "matrix")
@@ -169,23 +169,14 @@ class SkinSystem(System):
                 joint_matrices(world, skin, origin, pool)
         centres = [np.zeros((0, 3)) if s.centres is None else s.centres for s in skins.skins]
         radii = [np.zeros(0) if s.radii is None else s.radii for s in skins.skins]
-        first = np.cumsum([0] + [len(r) for r in radii])
+        first = np.cumsum([0] + [len(r) for r in radii]).astype(np.int64)
         every_centre, every_radius = np.concatenate(centres), np.concatenate(radii)
         for batch in world.query(Skinned, ModelMatrix):
-            skinned, model = batch[Skinned], batch[ModelMatrix].model
-            skin, copy = skinned.skin.astype(np.int64), skinned.copy.astype(np.int64)
-            known = (skin >= 0) & (skin < len(radii))
-            at = first[np.where(known, skin, 0)] + copy
-            known &= at < first[np.where(known, skin, 0) + 1]
-            if not known.any():
-                continue
-            rows = np.flatnonzero(known)
-            scale = every_radius[at[rows]] / np.maximum(skinned.radius[rows].astype(np.float64), 1e-30)
-            place = every_centre[at[rows]] - origin - scale[:, None] * skinned.centre[rows]
-            m = np.zeros((len(rows), 4, 4))
-            m[:, [0, 1, 2], [0, 1, 2]] = scale[:, None]
-            m[:, :3, 3], m[:, 3, 3] = place, 1.0
-            model[rows] = m
+            skinned = batch[Skinned]
+            place(
+                skinned.skin, skinned.copy, skinned.radius, skinned.centre, first,
+                every_centre, every_radius, origin, batch[ModelMatrix].model,
+            )  # fmt: skip
 
 
 def skinned_positions(
