@@ -34,9 +34,11 @@ from ecs_engine.jobs import JobPool, over_rows
 from ecs_engine.maths.decompose import trs_matrices
 
 _PARENT = (Parent, "entity")
-# a level's rows per job on the pool, at least: a skinned crowd's levels hold ten to thirty
-# thousand joints each, which jobs of jobs.CHUNK_ROWS (or 4,096) would spread over a few of 16 threads
-LEVEL_CHUNK_ROWS = 1024
+# a level's rows per job on the pool: a skinned crowd's levels hold tens of thousands of joints
+# each, which whole jobs of jobs.CHUNK_ROWS would leave on one thread. Not fewer: jobs of 1,024
+# rows made a 10k crowd's hierarchy slower on the H200 (4.1-4.3 to 6.3-7.1 ms), likely as each job pays
+# the compiled pass's dispatch of its thirteen arguments
+LEVEL_CHUNK_ROWS = 4096
 
 
 @dataclass
