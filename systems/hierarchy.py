@@ -2,8 +2,9 @@
 
 Each frame (after TransformSystem, which wrote every ModelMatrix as if each entity were a root):
 every entity with Parent gets world = parent's world @ own local matrix, parents before children
-(a compiled pass per level, its rows cut into chunks on the JobPool; a batched float64 matmul
-per level without numba), written
+(a compiled pass per level, its rows cut into chunks on the JobPool, or, for a forest of many
+trees such as a crowd's skeletons, a compiled pass per job of whole trees; a batched float64
+matmul per level without numba), written
 to WorldMatrix, and its ModelMatrix rewritten from it relative to the render origin, in float64
 before the cast (so a hierarchy 10^7 units out keeps its precision). A child whose parent is -1
 or dead is a root; one whose parent has no Parent uses that parent's Transform as its world. A
@@ -19,6 +20,7 @@ gather), never sorted and never looped over in Python.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import pairwise
 from typing import Any
 
 import numpy as np
@@ -39,6 +41,9 @@ _PARENT = (Parent, "entity")
 # rows made a 10k crowd's hierarchy slower on the H200 (4.1-4.3 to 6.3-7.1 ms), likely as each job pays
 # the compiled pass's dispatch of its thirteen arguments
 LEVEL_CHUNK_ROWS = 4096
+# with at least this many trees a thread, jobs take whole trees instead: each runs every level of
+# its trees in one compiled call, with no wait between levels (a crowd: 10k trees of 25 joints)
+TREES_PER_JOB = 4
 
 
 @dataclass
@@ -54,6 +59,12 @@ class _Plan:
     outside: list[tuple[Any, np.ndarray, np.ndarray]]
     outside_versions: tuple[int, ...]  # those tables' versions when planned
     above_row: np.ndarray  # per row: where its parent outside the hierarchy is in run's `above` (-1: none)
+    # per row: its tree (its level-0 ancestor's row) and depth; many trees (a crowd) are cut into
+    # jobs of whole trees (_tree_jobs, kept per job count)
+    tree: np.ndarray
+    depth: np.ndarray
+    trees: int
+    jobs: dict[int, tuple[np.ndarray, list[int]]]
 
 
 def levels(parent_row: np.ndarray, kids: np.ndarray) -> list[np.ndarray]:
@@ -149,6 +160,36 @@ def _store(v, origin, out, model, at, drawn):  # pragma: no cover - compiled
         model[at, 3, 0], model[at, 3, 1], model[at, 3, 2], model[at, 3, 3] = 0.0, 0.0, 0.0, 1.0
 
 
+def _trees(by_level: list[np.ndarray], parent_row: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per row: its tree (its level-0 ancestor's row) and its depth."""
+    n = len(parent_row)
+    tree, depth = np.arange(n), np.zeros(n, np.int64)
+    for d, rows in enumerate(by_level[1:], start=1):
+        tree[rows] = tree[parent_row[rows]]
+        depth[rows] = d
+    return tree, depth
+
+
+def _tree_jobs(plan: _Plan, jobs: int) -> tuple[np.ndarray, list[int]]:
+    """The rows in `jobs` runs of whole trees of about equal rows (trees taken by their roots'
+    order), each run level by level and in row order within a level, as the level passes read
+    the columns (a crowd's joints of one node lie together); and where the runs start."""
+    kept = plan.jobs.get(jobs)
+    if kept is not None:
+        return kept
+    n = plan.count
+    roots = plan.levels[0]
+    sizes = np.bincount(plan.tree, minlength=n)[roots]
+    before = np.cumsum(sizes) - sizes  # the rows of the trees before each
+    job_of = np.zeros(n, np.int64)
+    job_of[roots] = np.minimum(before * jobs // max(n, 1), jobs - 1)
+    job = job_of[plan.tree]
+    order = np.lexsort((np.arange(n), plan.depth, job))
+    cuts = np.searchsorted(job[order], np.arange(jobs + 1)).tolist()
+    made = plan.jobs[jobs] = (order, cuts)
+    return made
+
+
 class HierarchySystem(System):
     def __init__(self) -> None:
         reads, writes = [Transform, Parent, RenderOrigin], [WorldMatrix, ModelMatrix]
@@ -201,7 +242,11 @@ class HierarchySystem(System):
         elif with_rows:  # run gathers them in this order
             mine = np.concatenate([m for _, m in with_rows])
             above_row[mine] = np.arange(len(mine))
-        plan = _Plan(key, tables, offsets, len(kids), by_level, parent_row, outside, versions, above_row)
+        tree, depth = _trees(by_level, parent_row)
+        trees = len(by_level[0]) if by_level else 0
+        plan = _Plan(
+            key, tables, offsets, len(kids), by_level, parent_row, outside, versions, above_row, tree, depth, trees, {}
+        )
         self._plan, self._world = plan, world
         return plan
 
@@ -255,15 +300,29 @@ class HierarchySystem(System):
         trs_b = self._local(plan, split)
         out_b, model_b = self._scratch(n - split)
         pool = world.resources.get(JobPool)
-        for rows in plan.levels:
 
-            def chunk(s: slice, rows: np.ndarray = rows) -> None:
-                _compose(  # type: ignore[misc]
-                    rows[s], plan.parent_row, plan.above_row, trs_a, trs_b, split, above,
-                    out_a, model_a, out_b, model_b, origin, drawn_a,
-                )  # fmt: skip
+        def compose(rows: np.ndarray) -> None:
+            _compose(  # type: ignore[misc]
+                rows, plan.parent_row, plan.above_row, trs_a, trs_b, split, above,
+                out_a, model_a, out_b, model_b, origin, drawn_a,
+            )  # fmt: skip
 
-            over_rows(pool, len(rows), chunk, chunk_rows=LEVEL_CHUNK_ROWS)
+        threads = 1 if pool is None else pool.threads
+        if plan.trees >= TREES_PER_JOB * threads:  # whole trees a job: one call each, no level waits
+            order, cuts = _tree_jobs(plan, 2 * threads if threads > 1 else 1)
+            pieces = [order[a:b] for a, b in pairwise(cuts) if b > a]
+            if pool is None or len(pieces) == 1:
+                for piece in pieces:
+                    compose(piece)
+            else:
+                pool.map(compose, pieces)
+        else:
+            for rows in plan.levels:
+
+                def chunk(s: slice, rows: np.ndarray = rows) -> None:
+                    compose(rows[s])
+
+                over_rows(pool, len(rows), chunk, chunk_rows=LEVEL_CHUNK_ROWS)
         for batch in world.query(WorldMatrix, with_=(Parent,)):
             if batch.table is not first or not split:
                 at = plan.offsets[batch.table.id] - split

@@ -271,3 +271,35 @@ def test_levels_cut_into_chunks_on_the_pool_give_the_same_matrices():
     rng = np.random.default_rng(8)
     with JobPool(4) as pool:
         np.testing.assert_array_equal(worlds(pool), alone)
+
+
+def test_one_tree_and_a_forest_give_the_same_matrices_on_the_pool_as_alone():
+    """The compiled pass cuts one wide tree into chunks of a level at a time and a forest (a crowd)
+    into jobs of whole trees (systems/hierarchy.py's _tree_jobs): both equal the pass on one
+    thread, bit for bit, three levels deep."""
+    from ecs_engine import native
+    from ecs_engine.jobs import CHUNK_ROWS, JobPool
+    from ecs_engine.systems import HierarchySystem
+
+    if not native.AVAILABLE:
+        pytest.skip("ECS_ENGINE_NO_NUMBA set")
+    n = 3 * CHUNK_ROWS
+
+    def worlds(pool, trees):
+        rng = np.random.default_rng(9)
+        world = World()
+        if pool is not None:
+            world.resources[JobPool] = pool
+        roots = world.spawn_batch(trees, Transform(position=rng.normal(size=(trees, 3))))
+        kids = world.spawn_batch(
+            n, Transform(position=rng.normal(size=(n, 3)), scale=rng.uniform(0.5, 2, (n, 3))),
+            Parent(entity=roots[rng.integers(0, trees, n)]),
+        )  # fmt: skip
+        world.spawn_batch(n, Transform(position=(0.0, 1.0, 0.0)), Parent(entity=kids[rng.permutation(n)]))
+        world.run_system(HierarchySystem(), 0.0)
+        return world.query(WorldMatrix).column(WorldMatrix.matrix)
+
+    for trees in (1, 500):
+        alone = worlds(None, trees)
+        with JobPool(4) as pool:
+            np.testing.assert_array_equal(worlds(pool, trees), alone)
