@@ -214,7 +214,6 @@ def test_read_back_skinned_and_morphed_vertices_match_the_specification_for_ever
             np.testing.assert_allclose(positions, mesh_arrays[0], atol=1e-4 * SIZE)  # the bind pose
             np.testing.assert_allclose(positions, want_p, atol=1e-4 * SIZE)
             np.testing.assert_allclose(normals, want_n, atol=1e-4)
-            worst = 0.0
             for clip in CLIPS:
                 world, root = world_with(scene, play=clip)
                 for t in PROBES:
@@ -224,12 +223,10 @@ def test_read_back_skinned_and_morphed_vertices_match_the_specification_for_ever
                     error = np.abs(positions - want_p).max()
                     assert error <= 1e-4 * SIZE, (clip, t, error)
                     assert np.abs(normals - want_n).max() <= 1e-3, (clip, t)
-                    worst = max(worst, error)
                     moved = np.abs(want_p - mesh_arrays[0]).max()
                     assert moved > 0.05, (clip, t, moved)  # the pose shows: the test can fail
         finally:
             probe.destroy()
-    assert worst < 1e-4 * SIZE
 
 
 def test_the_probe_sees_the_shader_s_deform_not_the_row_s_model_matrix(tmp_path):
