@@ -97,6 +97,7 @@ class MeshRegistry:
         self._merged_buffers = Owned(device)
         self._bottom_levels = Owned(device)
         self._skins = SkinVertices(device)  # the skinned meshes' weights, for the vertex shaders
+        self._skin_kept: tuple[tuple[Any, ...], Buffer] | None = None  # skin_buffer's last answer
 
     def add(self, mesh: MeshData) -> int:
         """Upload `mesh` once: the same MeshData, or an equal one (the same vertices and indices,
@@ -157,14 +158,21 @@ class MeshRegistry:
     def skin_buffer(self, levels: bool = False) -> Buffer:
         """The skinned and morphed meshes' joints, weights and morph deltas as the vertex shaders
         read them (skin_vertices.py); with `levels` (the indirect mode, which draws levels of
-        detail), their coarser levels' too, built now where they were not yet."""
+        detail), their coarser levels' too, built now where they were not yet. Looked at again
+        only when meshes or levels change (it is asked every frame with deformed rows)."""
+        kept = self._skin_kept
+        if kept is not None and kept[0] == (self.version, levels, self._levels_built):
+            return kept[1]
         datas = [m.data for m in self._meshes]
         coarser = {}
         if levels:
             for h, data in enumerate(datas):
                 if data.skin is not None or data.morph is not None:
                     coarser[h] = [lod.mesh for lod in self.lods(h)]
-        return self._skins.buffer(datas, (self.version, levels, self._levels_built), coarser)
+        key = (self.version, levels, self._levels_built)  # (after the levels built just now)
+        buffer = self._skins.buffer(datas, key, coarser)
+        self._skin_kept = (key, buffer)
+        return buffer
 
     def __getitem__(self, handle: int) -> GpuMesh:
         return self._meshes[handle]
@@ -307,6 +315,7 @@ class MeshRegistry:
             self._builder.close()
         self._destroy_merged()
         self._skins.destroy()
+        self._skin_kept = None
         self._bottom_levels.destroy()  # built from the meshes' buffers: before them
         self._bottom.clear()
         self._mesh_buffers.destroy()
