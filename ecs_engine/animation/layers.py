@@ -16,7 +16,7 @@ from ecs_engine.ecs.schedule import System, any_with
 
 from ..errors import UsageError
 from .clip import AnimationClips, ClipChannel, target_id
-from .player import _COLUMNS, _group, weights_to_parts
+from .player import _COLUMNS, _group, _moved, weights_to_parts
 from .sampling import slerp
 
 
@@ -109,15 +109,7 @@ def _advance(world: Any, clips: AnimationClips, dt: float) -> tuple[np.ndarray, 
                 f"entity {int(batch.entities[row])}: AnimationLayers.clip names clip {int(clip.max())}, "
                 f"but the world's AnimationClips holds {len(clips)} clips"
             )
-        valid = clip >= 0
-        length = np.where(valid, durations[np.maximum(clip, 0)], 0.0)
-        moving = valid & layer.playing
-        t = layer.time + np.where(moving, layer.speed * dt, 0.0)
-        wrap = moving & layer.looping & (length > 0.0)
-        t = np.where(wrap, np.mod(t, np.where(length > 0.0, length, 1.0)), t)
-        hold = valid & ~layer.looping
-        layer.time = np.where(hold, np.clip(t, 0.0, length), t)
-        ended = moving & hold & (((layer.speed > 0) & (t >= length)) | ((layer.speed < 0) & (t <= 0.0)))
+        layer.time, ended = _moved(layer.time, clip, layer, durations, dt)  # as a player's clock
         if ended.any():
             layer.playing = layer.playing & ~ended
         parts.append((batch.entities, clip, layer.time.copy(), layer.weight.copy(), layer.mask.astype(np.int64)))

@@ -62,13 +62,22 @@ def _write_kernel(times, values, rotation, t, rows, column):  # pragma: no cover
 _write_native = native.njit(_write_kernel)
 
 
+def _kernel_args(curve: Curve, column: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool] | None:
+    """The kernel's view of `curve` (key times and values as float64, rotation or not) when it
+    can write into `column`; None where Curve.sample must (no numba, not LINEAR, a flat column)."""
+    if _write_native is None or curve.interpolation != LINEAR or column.ndim != 2:
+        return None
+    keys = np.ascontiguousarray(curve.times, np.float64)
+    return keys, np.ascontiguousarray(curve.values, np.float64).reshape(len(keys), -1), curve.rotation
+
+
 def write_sampled(curve: Curve, times: np.ndarray, rows: np.ndarray, column: np.ndarray) -> None:
     """column[rows] = curve.sample(times), in place (LINEAR curves through the kernel)."""
-    if _write_native is None or curve.interpolation != LINEAR or column.ndim != 2:
+    args, native_write = _kernel_args(curve, column), _write_native
+    if args is None or native_write is None:
         column[rows] = curve.sample(times)
         return
-    values = np.ascontiguousarray(curve.values, np.float64).reshape(len(curve.times), -1)
-    _write_native(curve.times.astype(np.float64), values, curve.rotation, times, rows, column)
+    native_write(*args, times, rows, column)
 
 
 Write = tuple[Curve, np.ndarray, np.ndarray, np.ndarray]  # write_sampled's arguments
@@ -83,13 +92,12 @@ def write_all(writes: list[Write], pool: Any = None) -> None:
         return
     pieces = []
     for curve, times, rows, column in writes:
-        if curve.interpolation != LINEAR or column.ndim != 2:
+        args = _kernel_args(curve, column)
+        if args is None:
             write_sampled(curve, times, rows, column)
             continue
-        keys = np.ascontiguousarray(curve.times, np.float64)
-        values = np.ascontiguousarray(curve.values, np.float64).reshape(len(keys), -1)
         for at in range(0, len(rows), PIECE_ROWS):
             piece = slice(at, at + PIECE_ROWS)
-            pieces.append((keys, values, curve.rotation, times[piece], rows[piece], column))
+            pieces.append((*args, times[piece], rows[piece], column))
     native_write = _write_native
     pool.map(lambda piece: native_write(*piece), pieces)
