@@ -37,9 +37,9 @@ from ecs_engine.maths.decompose import trs_matrices
 
 _PARENT = (Parent, "entity")
 # a level's rows per job on the pool: a skinned crowd's levels hold tens of thousands of joints
-# each, which whole jobs of jobs.CHUNK_ROWS would leave on one thread. Not fewer: jobs of 1,024
-# rows made a 10k crowd's hierarchy slower on the H200 (4.1-4.3 to 6.3-7.1 ms), likely as each job pays
-# the compiled pass's dispatch of its thirteen arguments
+# each, which whole jobs of jobs.CHUNK_ROWS would leave on one thread. Not fewer: smaller jobs
+# were slower on 16 threads (each pays the compiled pass's dispatch of its thirteen arguments, it
+# seems)
 LEVEL_CHUNK_ROWS = 4096
 # with at least this many trees a thread, jobs take whole trees instead: each runs every level of
 # its trees in one compiled call, with no wait between levels (a crowd: 10k trees of 25 joints)
@@ -63,7 +63,6 @@ class _Plan:
     # jobs of whole trees (_tree_jobs, kept per job count)
     tree: np.ndarray
     depth: np.ndarray
-    trees: int
     jobs: dict[int, tuple[np.ndarray, list[int]]]
 
 
@@ -243,9 +242,8 @@ class HierarchySystem(System):
             mine = np.concatenate([m for _, m in with_rows])
             above_row[mine] = np.arange(len(mine))
         tree, depth = _trees(by_level, parent_row)
-        trees = len(by_level[0]) if by_level else 0
         plan = _Plan(
-            key, tables, offsets, len(kids), by_level, parent_row, outside, versions, above_row, tree, depth, trees, {}
+            key, tables, offsets, len(kids), by_level, parent_row, outside, versions, above_row, tree, depth, {}
         )
         self._plan, self._world = plan, world
         return plan
@@ -308,7 +306,7 @@ class HierarchySystem(System):
             )  # fmt: skip
 
         threads = 1 if pool is None else pool.threads
-        if plan.trees >= TREES_PER_JOB * threads:  # whole trees a job: one call each, no level waits
+        if len(plan.levels[0]) >= TREES_PER_JOB * threads:  # whole trees a job: one call each, no level waits
             order, cuts = _tree_jobs(plan, 2 * threads if threads > 1 else 1)
             pieces = [order[a:b] for a, b in pairwise(cuts) if b > a]
             if pool is None or len(pieces) == 1:
