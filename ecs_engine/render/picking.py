@@ -200,8 +200,7 @@ def _triangles(world: World, entity: int, data: Any, model: np.ndarray, render_a
     positions = data.positions.astype(np.float64)
     morph = getattr(data, "morph", None)
     if morph is not None and world.has(entity, MorphWeights):
-        weights = world.get(entity, MorphWeights).weights[: morph.count].astype(np.float64)
-        positions = positions + np.einsum("t,tvc->vc", weights, morph.positions.astype(np.float64))
+        positions = morph.applied(world.get(entity, MorphWeights).weights, positions, data.normals)[0]
     skin: Any = getattr(data, "skin", None)
     skins = world.resources.get(Skins) if skin is not None and world.has(entity, Skinned) else None
     if skins is not None:
