@@ -1,5 +1,5 @@
 """The skins' and morph targets' part of a frame: what the vertex shaders deform vertices by
-(shaders/instance_row.glsl), as one array of vec4 rows (`rows`), and per mesh row the bits of
+(shaders/deform.glsl), as one array of vec4 rows (`rows`), and per mesh row the bits of
 its Instance misc.z and misc.w that point into it (`row_extra`).
 
 - Joint matrices: every skin copy's (animation/skins.py's SkinSystem posed them), the skins one
