@@ -71,6 +71,7 @@ class App(AppSystems):
         self._startup: list[System] = []
         self._open_hooks: list[Hook] = []
         self._frame_hooks: list[FrameHook] = []
+        self._close_hooks: list[Callable[[World], Any]] = []
         self._where: dict[str, str] = {}  # system name -> its stage
         self._lists: dict[str, list[System]] = {}  # system name -> the list that runs it
         self._unnamed = 0  # lambdas numbered so far
@@ -145,6 +146,18 @@ class App(AppSystems):
         whose resources need the GPU or the window (session.gpu, session.source)."""
         self._open_hooks.append(hook)
         return self
+
+    def on_close(self, hook: Callable[[World], Any]) -> App:
+        """`hook(world)` when the run ends (in reverse order of adding, as the run closes): for
+        plugins that hold a device or a file open (a sound device, a capture)."""
+        self._close_hooks.append(hook)
+        return self
+
+    def close_hooks(self) -> None:
+        """Run the close hooks (AppSession.close): each once, the last added first."""
+        hooks, self._close_hooks = self._close_hooks[::-1], []
+        for hook in hooks:
+            hook(self.world)
 
     def on_frame_end(self, hook: FrameHook) -> App:
         """`hook(session, editor)` between frames (the editor: None without one), where the

@@ -45,6 +45,7 @@ class AppSession(Session):
             saves.flush()
 
     def close(self) -> None:
+        self.app.close_hooks()
         self.app.window.unbind()
         meshes, gpu = self.app.world.resources.get(Meshes), getattr(self, "gpu", None)
         if meshes is not None and gpu is not None and meshes.registry is gpu.meshes:

@@ -120,6 +120,12 @@ def render_flags(headless_frames: int = 1) -> OneLineParser:
     )
     common.add_argument("--record-input", metavar="PATH", help="write the run's input by frame to this file")
     common.add_argument(
+        "--audio-out",
+        metavar="WAV",
+        help="a game with sound (AudioPlugin): write what it would play to this WAV file, frame by frame, "
+        "instead of the sound device",
+    )
+    common.add_argument(
         "--force",
         action="store_true",
         help="let --screenshot, --perf-json, --trace and --record-input replace a file of another kind (a PNG, a "

@@ -1,12 +1,13 @@
-"""The files a run writes (`--screenshot`, `--perf-json`, `--trace`, `--record-input`), checked before its
-first frame, so a long run never ends by failing to write, and never by destroying a user's file.
+"""The files a run writes (`--screenshot`, `--perf-json`, `--trace`, `--record-input`, `--audio-out`),
+checked before its first frame, so a long run never ends by failing to write, and never by destroying a user's file.
 
 Each output is refused, in one line naming it, when: its path is empty or a folder; its folder
 does not exist or cannot be written; a screenshot's name does not end in .png (it is always
 written as PNG); it is also one of the run's inputs (a model, a sky, a scene file, the input
 script: a run never writes over what it reads) or another of its outputs; or a file is there
 that is not of the kind written (a PNG for the screenshot, a perf log for --perf-json, a trace
-for --trace, an input script for --record-input): a scene, a script or a photo is not replaced without `--force`.
+for --trace, an input script for --record-input, a WAV file for --audio-out): a scene, a script
+or a photo is not replaced without `--force`.
 An empty file is replaced: nothing is lost; a device or a pipe (/dev/null) never is.
 """
 
@@ -52,6 +53,13 @@ def is_trace(path: Path) -> bool:
     return isinstance(doc, dict) and "traceEvents" in doc
 
 
+def is_wav(path: Path) -> bool:
+    """A RIFF/WAVE file (what --audio-out writes)."""
+    with open(path, "rb") as f:
+        head = f.read(12)
+    return head[:4] == b"RIFF" and head[8:12] == b"WAVE"
+
+
 def is_input_script(path: Path) -> bool:
     """A file of input events (app/input_script.py's format) with at least one event, or a
     recording (which may have none)."""
@@ -72,6 +80,7 @@ OUTPUTS: dict[str, tuple[str, Callable[[Path], bool], str]] = {
     "--perf-json": ("the performance log", is_perf_log, "a --perf-json log"),
     "--trace": ("the trace", is_trace, "a --trace file"),
     "--record-input": ("the input recording", is_input_script, "an input script"),
+    "--audio-out": ("the sound capture", is_wav, "a WAV file"),
 }
 
 
@@ -174,5 +183,6 @@ def check_run_files(options: RunOptions) -> None:
         "--perf-json": options.perf_json,
         "--trace": options.trace,
         "--record-input": options.record_input,
+        "--audio-out": options.audio_out,
     }
     check_outputs(outputs, inputs, options.force)

@@ -88,6 +88,7 @@ class RunOptions:
     trace: str | None = None  # write a Chrome trace of systems, jobs and GPU passes here at the end (app/trace.py)
     input_script: str | None = None  # input by frame to replay (app/input_script.py)
     record_input: str | None = None  # write the run's input by frame here at the end
+    audio_out: str | None = None  # capture the sound (AudioPlugin) to this WAV file, frame by frame
     force: bool = False  # the outputs may replace a file of another kind (app/output_files.py)
     editor: bool = False  # the ImGui editor and Perf window (headless: drawn into the image)
     perf_lines: bool = True  # the perf lines (once a second headless, and the closing one): an App's PerfPlugin
@@ -122,6 +123,7 @@ class RunOptions:
         "trace",
         "input_script",
         "record_input",
+        "audio_out",
         "force",
     )
 

@@ -1,0 +1,220 @@
+"""The `Audio` resource: clips, buses, one-shot sounds, and the output the mixer plays into.
+
+    audio = world.resources[Audio]
+    boom = audio.load("boom.ogg")               # once; again gives the same clip
+    audio.play(boom, at=(3.0, 0.0, -2.0))       # fire and forget, from any system
+    audio.set_volume("music", 0.5); audio.mute("effects")
+
+Buses: `master` (everything), `music` and `effects`, and any made with `add_bus(name)`; each
+has a volume and a mute, and every bus but the master goes through the master. A sound's level
+is its own volume times its bus's times the master's. Voices are the mixer's (mixer.py); this
+side hands out their numbers and takes them back when the mixer says a voice is done."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..errors import UsageError
+from .clips import checked_samples, decode
+from .mixer import SAMPLE_RATE, Mixer
+from .outputs import CaptureOutput, DeviceOutput
+from .spatial import Listener, point_sources, spatialize
+
+BUSES = ("master", "music", "effects")
+
+
+class Audio:
+    """World resource (see the module). `output`: "device" (the default sound device, the null
+    output when there is none), "null" (no device at all), or a path: the WAV file the sound is
+    captured into, frame by frame (`--audio-out`)."""
+
+    def __init__(
+        self, output: str | os.PathLike[str] = "device", sample_rate: int = SAMPLE_RATE, doppler_factor: float = 1.0
+    ) -> None:
+        if not isinstance(sample_rate, int) or not 8_000 <= sample_rate <= 192_000:
+            raise UsageError(f"Audio: sample_rate must be an integer from 8,000 to 192,000 Hz, got {sample_rate!r}")
+        if not np.isfinite(doppler_factor) or doppler_factor < 0:
+            raise UsageError(f"Audio: doppler_factor must be 0 (off) or more, got {doppler_factor!r}")
+        self.sample_rate = sample_rate
+        self.doppler_factor = float(doppler_factor)
+        self.mixer = Mixer(sample_rate)
+        self._names: list[str] = list(BUSES)
+        self._volume = np.ones(len(BUSES))
+        self._muted = np.zeros(len(BUSES), bool)
+        self._clips: dict[str, int] = {}
+        self._clip_names: list[str] = []
+        self._next_voice = 0
+        self._free: list[int] = []
+        self.owner: dict[int, int] = {}  # voice -> the entity whose AudioSource it plays (-1: a one-shot)
+        self.one_shots: dict[int, tuple[np.ndarray | None, float, float]] = {}  # voice -> (at, volume, pitch)
+        self.listener = Listener.at_origin()
+        if output in ("device", "null"):
+            self.output: DeviceOutput | CaptureOutput = DeviceOutput(self.mixer, null=output == "null")
+        else:
+            self.output = CaptureOutput(self.mixer, output)
+        self._send_buses()
+
+    # ------------------------------------------------------------------ clips
+    def load(self, path: str | os.PathLike[str]) -> int:
+        """The clip of a sound file (WAV, FLAC, MP3, Ogg Vorbis), decoded once: its handle."""
+        key = os.path.realpath(os.fspath(path))
+        if key not in self._clips:
+            self._clips[key] = self._add(decode(path, self.sample_rate), self.sample_rate, os.fspath(path))
+        return self._clips[key]
+
+    def clip(self, samples: np.ndarray, rate: int | None = None, name: str = "clip") -> int:
+        """A clip from samples ((frames,) or (frames, 1 or 2), -1..1) at `rate` Hz (the mixer's by
+        default): a synthesised sound. Its handle."""
+        rate = self.sample_rate if rate is None else rate
+        if not isinstance(rate, int) or rate <= 0:
+            raise UsageError(f"clip {name}: rate must be a positive integer, got {rate!r}")
+        return self._add(checked_samples(samples, name), rate, name)
+
+    def _add(self, samples: np.ndarray, rate: int, name: str) -> int:
+        self._clip_names.append(name)
+        return self.mixer.add_clip(samples, rate)
+
+    def clip_name(self, clip: int) -> str:
+        return self._clip_names[clip] if 0 <= clip < len(self._clip_names) else f"#{clip}"
+
+    @property
+    def clip_count(self) -> int:
+        return len(self._clip_names)
+
+    def check_clip(self, clip: int, who: str) -> None:
+        if not 0 <= clip < len(self._clip_names):
+            raise UsageError(f"{who}: clip {clip} is not a clip of the Audio resource (it has {len(self._clip_names)})")
+
+    # ------------------------------------------------------------------ buses
+    def add_bus(self, name: str, volume: float = 1.0) -> int:
+        """A bus of its own (through the master): its number, for AudioSource.bus and play()."""
+        if name in self._names:
+            raise UsageError(f"Audio.add_bus: there is a bus {name!r} already")
+        self._names.append(name)
+        self._volume = np.append(self._volume, 1.0)
+        self._muted = np.append(self._muted, False)
+        bus = len(self._names) - 1
+        self.set_volume(bus, volume)
+        return bus
+
+    def bus(self, bus: int | str) -> int:
+        """A bus's number, by name or number."""
+        if isinstance(bus, str):
+            if bus not in self._names:
+                raise UsageError(f"no bus {bus!r}: the buses are {', '.join(self._names)}")
+            return self._names.index(bus)
+        if not 0 <= int(bus) < len(self._names):
+            raise UsageError(f"no bus {bus}: there are {len(self._names)} ({', '.join(self._names)})")
+        return int(bus)
+
+    @property
+    def buses(self) -> list[str]:
+        return list(self._names)
+
+    def volume(self, bus: int | str) -> float:
+        return float(self._volume[self.bus(bus)])
+
+    def muted(self, bus: int | str) -> bool:
+        return bool(self._muted[self.bus(bus)])
+
+    def set_volume(self, bus: int | str, volume: float) -> None:
+        number = self.bus(bus)
+        if not np.isfinite(volume) or volume < 0:
+            raise UsageError(f"bus {self._names[number]}: volume must be 0 or more, got {volume!r}")
+        self._volume[number] = volume
+        self._send_buses()
+
+    def mute(self, bus: int | str, muted: bool = True) -> None:
+        self._muted[self.bus(bus)] = muted
+        self._send_buses()
+
+    def bus_gains(self) -> np.ndarray:
+        """Each bus's gain as the mixer applies it: its volume, times the master's unless it is it."""
+        own = np.where(self._muted, 0.0, self._volume)
+        gains = own * own[0]
+        gains[0] = own[0]
+        return gains
+
+    def _send_buses(self) -> None:
+        self.mixer.set_buses(self.bus_gains())
+
+    # ------------------------------------------------------------------ voices
+    def voice(self, owner: int) -> int:
+        """A free voice number, now owned by `owner` (an entity, or -1 for a one-shot)."""
+        voice = self._free.pop() if self._free else self._next_voice
+        if voice == self._next_voice:
+            self._next_voice += 1
+        self.owner[voice] = owner
+        return voice
+
+    def collect(self) -> list[int]:
+        """The voices the mixer finished since the last call, given back (their owners first)."""
+        done = self.mixer.finished()
+        for voice in done:
+            self.owner.pop(voice, None)
+            self.one_shots.pop(voice, None)
+            self._free.append(voice)
+        return done
+
+    def play(
+        self,
+        clip: int,
+        at: Sequence[float] | np.ndarray | None = None,
+        volume: float = 1.0,
+        pitch: float = 1.0,
+        bus: int | str = "effects",
+        loop: bool = False,
+    ) -> int:
+        """Play `clip` once (fire and forget): heard from the world point `at` (spatial, inverse
+        distance from 1 m) or, without one, as it is. Its voice number (for `stop`)."""
+        self.check_clip(clip, "Audio.play")
+        if not np.isfinite(volume) or volume < 0:
+            raise UsageError(f"Audio.play: volume must be 0 or more, got {volume!r}")
+        if not np.isfinite(pitch) or pitch <= 0:
+            raise UsageError(f"Audio.play: pitch must be more than 0, got {pitch!r}")
+        point = None
+        if at is not None:
+            point = np.asarray(at, np.float64).reshape(-1)
+            if point.shape != (3,) or not np.isfinite(point).all():
+                raise UsageError(f"Audio.play: at must be a finite (x, y, z), got {at!r}")
+        number = self.bus(bus)
+        voice = self.voice(-1)
+        self.one_shots[voice] = (point, float(volume), float(pitch))
+        left, right, factor = self.one_shot_gains(point, volume)
+        self.mixer.start(voice, clip, (left, right), pitch * factor, loop, point is not None, number)
+        return voice
+
+    def one_shot_gains(self, point: np.ndarray | None, volume: float) -> tuple[float, float, float]:
+        """(left, right, Doppler factor) of a one-shot heard from `point` by the listener."""
+        if point is None:
+            return volume, volume, 1.0
+        left, right, factor = spatialize(self.listener, point_sources(point[None, :]), self.doppler_factor)
+        return volume * float(left[0]), volume * float(right[0]), float(factor[0])
+
+    def stop(self, voice: int) -> None:
+        """Stop a one-shot (with a short fade)."""
+        if voice in self.owner:
+            self.mixer.stop(voice)
+
+    # ------------------------------------------------------------------ the frame
+    def advance(self, seconds: float) -> None:
+        """After the frame's parameters: a captured output mixes the frame's `seconds` of sound."""
+        self.output.advance(seconds)
+
+    @property
+    def underruns(self) -> int:
+        return self.output.underruns
+
+    def latency_ms(self) -> list[float]:
+        """For each voice started and mixed since: ms from its start call to the block that mixed it."""
+        mixer = self.mixer
+        return [1e3 * (mixer.first_mixed[v] - mixer.started_at[v]) for v in mixer.first_mixed if v in mixer.started_at]
+
+    def close(self) -> None:
+        self.output.close()
+
+    def __repr__(self) -> str:
+        return f"Audio({self.output.backend}, {self.sample_rate} Hz, {len(self.owner)} voices, {self.clip_count} clips)"

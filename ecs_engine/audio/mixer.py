@@ -1,0 +1,210 @@
+"""The mixer: clips, voices and buses, mixed one block at a time by whoever asks for sound (the
+sound device's thread, or the frame itself when the sound is captured to a file).
+
+The frame never touches a voice. It queues commands (start, stop, pause, new gains and rates,
+bus volumes) under a short lock; the mixer takes the whole queue at the head of its next block
+and applies it there, so a slow frame only means a block mixed with the last parameters, never a
+gap in the sound. Voices that end (a clip that does not loop) are handed back the same way
+(`finished`)."""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .mix_kernel import mix_block
+
+SAMPLE_RATE = 48_000
+
+
+@dataclass(frozen=True)
+class ClipBank:
+    """Every clip's samples in one array (what the kernel reads), with each clip's place."""
+
+    samples: np.ndarray
+    offset: np.ndarray
+    length: np.ndarray
+    channels: np.ndarray
+    rate: np.ndarray  # each clip's own sample rate
+
+    @staticmethod
+    def empty() -> ClipBank:
+        no = np.zeros(0, np.int64)
+        return ClipBank(np.zeros(1, np.float32), no, no, no, np.zeros(0, np.float64))
+
+    def add(self, samples: np.ndarray, rate: int) -> ClipBank:
+        frames, channels = samples.shape
+        start = len(self.samples)
+        return ClipBank(
+            np.concatenate([self.samples, np.ascontiguousarray(samples, np.float32).reshape(-1)]),
+            np.append(self.offset, start),
+            np.append(self.length, frames),
+            np.append(self.channels, channels),
+            np.append(self.rate, float(rate)),
+        )
+
+
+class _Voices:
+    """The mixer's voice table (the mixer thread's own), grown on demand."""
+
+    def __init__(self, capacity: int = 64) -> None:
+        self.clip = np.zeros(capacity, np.int64)
+        self.position = np.zeros(capacity, np.float64)
+        self.pitch = np.ones(capacity, np.float64)  # times the clip's rate over the output's
+        self.gain = np.zeros((capacity, 2), np.float32)  # the voice's own (before its bus)
+        self.gain_from = np.zeros((capacity, 2), np.float32)  # what the last block ended on (after the bus)
+        self.loop = np.zeros(capacity, bool)
+        self.live = np.zeros(capacity, bool)
+        self.mono = np.zeros(capacity, bool)
+        self.active = np.zeros(capacity, bool)  # started and not yet finished or stopped
+        self.paused = np.zeros(capacity, bool)
+        self.stopping = np.zeros(capacity, bool)
+        self.bus = np.zeros(capacity, np.int64)
+
+    def fit(self, voice: int) -> None:
+        capacity = len(self.clip)
+        if voice < capacity:
+            return
+        grown = max(voice + 1, 2 * capacity)
+        for name, column in vars(self).items():
+            wider = np.zeros((grown, *column.shape[1:]), column.dtype)
+            wider[:capacity] = column
+            setattr(self, name, wider)
+
+
+class Mixer:
+    """Clips (`add_clip`), voices (`start`, `stop`, `pause`, `set`), buses (`set_buses`), and
+    `render(frames)`: the next block of stereo float32 sound."""
+
+    def __init__(self, sample_rate: int = SAMPLE_RATE) -> None:
+        self.sample_rate = sample_rate
+        self.bank = ClipBank.empty()
+        self._voices = _Voices()
+        self._queue: list[tuple[Any, ...]] = []
+        self._lock = threading.Lock()
+        self._finished: list[int] = []
+        self._bus_gain = np.ones(1, np.float32)
+        self.frames_mixed = 0  # output frames rendered so far
+        self.mix_seconds = 0.0  # CPU time spent in render (the Perf line's audio figure)
+        self.started_at: dict[int, float] = {}  # voice -> perf_counter of its start call (latency)
+        self.first_mixed: dict[int, float] = {}  # voice -> perf_counter of the block that mixed it first
+
+    # ---------------------------------------------------------------- the frame's side
+    def add_clip(self, samples: np.ndarray, rate: int) -> int:
+        """A clip's (frames, channels) float32 samples at `rate` Hz: its index."""
+        with self._lock:
+            self.bank = self.bank.add(samples, rate)
+            return len(self.bank.length) - 1
+
+    def start(
+        self, voice: int, clip: int, gains: tuple[float, float], pitch: float, loop: bool, mono: bool, bus: int
+    ) -> None:
+        """Play `clip` on `voice` from its start."""
+        with self._lock:
+            self._queue.append(("start", voice, clip, gains, pitch, loop, mono, bus, time.perf_counter()))
+
+    def stop(self, voice: int) -> None:
+        """Fade `voice` out over the next block, then free it: reported in `finished` as an ended
+        one is, so that the frame reuses it only once its fade is over."""
+        with self._lock:
+            self._queue.append(("stop", voice))
+
+    def pause(self, voice: int, paused: bool) -> None:
+        with self._lock:
+            self._queue.append(("pause", voice, paused))
+
+    def set(self, voices: np.ndarray, gains: np.ndarray, pitch: np.ndarray) -> None:
+        """New gains ((k, 2): left, right, before the bus) and pitch factors for `voices`."""
+        with self._lock:
+            self._queue.append(("set", np.array(voices, np.int64), np.array(gains, np.float32), np.array(pitch)))
+
+    def set_buses(self, gains: np.ndarray) -> None:
+        """Each bus's gain, its parents' (the master's) already multiplied in."""
+        with self._lock:
+            self._queue.append(("buses", np.array(gains, np.float32)))
+
+    def finished(self) -> list[int]:
+        """The voices whose clips ended, or whose stop faded out, since the last call (they are
+        free again)."""
+        with self._lock:
+            done, self._finished = self._finished, []
+        return done
+
+    # ---------------------------------------------------------------- the mixing side
+    def _apply(self, commands: list[tuple[Any, ...]], now: float) -> None:
+        v = self._voices
+        for command in commands:
+            kind = command[0]
+            if kind == "set":
+                voices, gains, pitch = command[1:]
+                if len(voices):
+                    v.fit(int(voices.max()))
+                    v.gain[voices] = gains
+                    v.pitch[voices] = pitch
+            elif kind == "start":
+                voice, clip, gains, pitch, loop, mono, bus, called = command[1:]
+                v.fit(voice)
+                v.clip[voice], v.position[voice], v.pitch[voice] = clip, 0.0, pitch
+                v.gain[voice] = gains
+                v.gain_from[voice] = np.float32(gains) * self._bus_of(bus)  # a sound starts at its level
+                v.loop[voice], v.mono[voice], v.bus[voice] = loop, mono, bus
+                v.live[voice] = v.active[voice] = True
+                v.paused[voice] = v.stopping[voice] = False
+                self.started_at[voice] = called
+                self.first_mixed.pop(voice, None)
+            elif kind == "stop":
+                voice = command[1]
+                if voice < len(v.clip) and v.active[voice]:
+                    v.stopping[voice] = True
+            elif kind == "pause":
+                voice, paused = command[1:]
+                if voice < len(v.clip) and v.active[voice]:
+                    v.paused[voice] = paused
+                    v.live[voice] = not paused
+                    if not paused:
+                        v.gain_from[voice] = 0.0  # back in with a fade, not a click
+            elif kind == "buses":
+                self._bus_gain = command[1]
+
+    def _bus_of(self, bus: int) -> float:
+        return float(self._bus_gain[bus]) if bus < len(self._bus_gain) else 1.0
+
+    def render(self, frames: int) -> np.ndarray:
+        """The next `frames` of sound, (frames, 2) float32: the queued commands applied first."""
+        began = time.perf_counter()
+        with self._lock:
+            commands, self._queue = self._queue, []
+            bank = self.bank
+        self._apply(commands, began)
+        v = self._voices
+        out = np.zeros((frames, 2), np.float32)
+        used = int(np.flatnonzero(v.active).max(initial=-1)) + 1
+        if used:
+            s = slice(0, used)
+            buses = self._bus_gain
+            bus_gain = np.where(v.bus[s] < len(buses), buses[np.minimum(v.bus[s], len(buses) - 1)], 1.0)
+            target = v.gain[s] * bus_gain[:, None].astype(np.float32)
+            target[v.stopping[s]] = 0.0
+            rate = v.pitch[s] * bank.rate[v.clip[s]] / self.sample_rate if len(bank.rate) else v.pitch[s]
+            fresh = [voice for voice in self.started_at if voice not in self.first_mixed and v.live[voice]]
+            mix_block(
+                out, bank.samples, bank.offset, bank.length, bank.channels, v.clip[s], v.position[s], rate,
+                v.gain_from[s], np.ascontiguousarray(target), v.loop[s], v.live[s], v.mono[s],
+            )  # fmt: skip
+            for voice in fresh:
+                self.first_mixed[voice] = began
+            ended = np.flatnonzero(v.active[s] & ~v.live[s] & ~v.paused[s] & ~v.stopping[s])
+            stopped = np.flatnonzero(v.stopping[s])
+            for done in (ended, stopped):
+                v.active[done] = v.live[done] = v.paused[done] = v.stopping[done] = False
+            if len(ended) or len(stopped):
+                with self._lock:
+                    self._finished.extend(int(x) for x in ended)
+                    self._finished.extend(int(x) for x in stopped)
+        self.frames_mixed += frames
+        self.mix_seconds += time.perf_counter() - began
+        return out
