@@ -23,6 +23,7 @@ from ..components.audio import AudioListener, AudioSource
 from ..components.camera import Camera
 from ..components.hierarchy import WorldMatrix
 from ..ecs.entities import INDEX_MASK
+from ..ecs.errors import describe_entity
 from ..ecs.schedule import System
 from ..errors import UsageError
 from ..maths.transform import quat_to_mat3
@@ -104,7 +105,7 @@ class AudioSystem(System):
                     continue
                 if clip >= audio.clip_count:
                     raise UsageError(
-                        f"entity {int(ids[row])} AudioSource.clip: {clip} is not a clip of the Audio "
+                        f"{describe_entity(int(ids[row]))} AudioSource.clip: {clip} is not a clip of the Audio "
                         f"resource (it has {audio.clip_count})"
                     )
                 bus = int(src.bus[row])
