@@ -209,9 +209,8 @@ class Audio:
         return self.output.underruns
 
     def latency_ms(self) -> list[float]:
-        """For each voice started and mixed since: ms from its start call to the block that mixed it."""
-        mixer = self.mixer
-        return [1e3 * (mixer.first_mixed[v] - mixer.started_at[v]) for v in mixer.first_mixed if v in mixer.started_at]
+        """For the last voices started: ms from each start call to the block that mixed it first."""
+        return [1e3 * seconds for seconds in self.mixer.latencies]
 
     def close(self) -> None:
         self.output.close()

@@ -10,6 +10,7 @@ gap in the sound. Voices that end (a clip that does not loop) are handed back th
 from __future__ import annotations
 
 import threading
+from collections import deque
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -90,8 +91,8 @@ class Mixer:
         self._bus_gain = np.ones(1, np.float32)
         self.frames_mixed = 0  # output frames rendered so far
         self.mix_seconds = 0.0  # CPU time spent in render (the Perf line's audio figure)
-        self.started_at: dict[int, float] = {}  # voice -> perf_counter of its start call (latency)
-        self.first_mixed: dict[int, float] = {}  # voice -> perf_counter of the block that mixed it first
+        self.started_at: dict[int, float] = {}  # voice -> perf_counter of its start call, until first mixed
+        self.latencies: deque[float] = deque(maxlen=4096)  # s from a start call to the block that mixed it
 
     # ---------------------------------------------------------------- the frame's side
     def add_clip(self, samples: np.ndarray, rate: int) -> int:
@@ -155,7 +156,6 @@ class Mixer:
                 v.live[voice] = v.active[voice] = True
                 v.paused[voice] = v.stopping[voice] = False
                 self.started_at[voice] = called
-                self.first_mixed.pop(voice, None)
             elif kind == "stop":
                 voice = command[1]
                 if voice < len(v.clip) and v.active[voice]:
@@ -190,13 +190,13 @@ class Mixer:
             target = v.gain[s] * bus_gain[:, None].astype(np.float32)
             target[v.stopping[s]] = 0.0
             rate = v.pitch[s] * bank.rate[v.clip[s]] / self.sample_rate if len(bank.rate) else v.pitch[s]
-            fresh = [voice for voice in self.started_at if voice not in self.first_mixed and v.live[voice]]
+            fresh = [voice for voice in self.started_at if v.live[voice]]
             mix_block(
                 out, bank.samples, bank.offset, bank.length, bank.channels, v.clip[s], v.position[s], rate,
                 v.gain_from[s], np.ascontiguousarray(target), v.loop[s], v.live[s], v.mono[s],
             )  # fmt: skip
             for voice in fresh:
-                self.first_mixed[voice] = began
+                self.latencies.append(began - self.started_at.pop(voice))
             ended = np.flatnonzero(v.active[s] & ~v.live[s] & ~v.paused[s] & ~v.stopping[s])
             stopped = np.flatnonzero(v.stopping[s])
             for done in (ended, stopped):
