@@ -10,8 +10,8 @@ gap in the sound. Voices that end (a clip that does not loop) are handed back th
 from __future__ import annotations
 
 import threading
-from collections import deque
 import time
+from collections import deque
 from dataclasses import dataclass
 from typing import Any
 
@@ -181,7 +181,7 @@ class Mixer:
             bank = self.bank
         self._apply(commands, began)
         v = self._voices
-        out = np.zeros((frames, 2), np.float32)
+        planes = np.zeros((2, frames), np.float32)  # the kernel's: each channel contiguous
         used = int(np.flatnonzero(v.active).max(initial=-1)) + 1
         if used:
             s = slice(0, used)
@@ -192,7 +192,7 @@ class Mixer:
             rate = v.pitch[s] * bank.rate[v.clip[s]] / self.sample_rate if len(bank.rate) else v.pitch[s]
             fresh = [voice for voice in self.started_at if v.live[voice]]
             mix_block(
-                out, bank.samples, bank.offset, bank.length, bank.channels, v.clip[s], v.position[s], rate,
+                planes, bank.samples, bank.offset, bank.length, bank.channels, v.clip[s], v.position[s], rate,
                 v.gain_from[s], np.ascontiguousarray(target), v.loop[s], v.live[s], v.mono[s],
             )  # fmt: skip
             for voice in fresh:
@@ -206,5 +206,6 @@ class Mixer:
                     self._finished.extend(int(x) for x in ended)
                     self._finished.extend(int(x) for x in stopped)
         self.frames_mixed += frames
+        out = np.ascontiguousarray(planes.T)
         self.mix_seconds += time.perf_counter() - began
         return out
