@@ -1,7 +1,7 @@
 """Asteroids: a ship on a wrapping field of thousands of spinning rocks (up to 100,000 as the
 levels rise), flown with the keyboard, mouse or a gamepad (through actions,
-asteroids_controls.py) or by a bot. The game itself is components and systems
-(asteroids_game.py, asteroids_bot.py); this module makes its meshes, materials, light, camera and
+asteroids_controls.py) or by a bot, with sound (asteroids_sound.py). The game itself is
+components and systems (asteroids_game.py, asteroids_bot.py); this module makes its meshes, materials, light, camera and
 schedule, and is a game module: `build(app)` makes the App `ecs-engine play asteroids` runs, with
 the game's own options (`add_arguments`: --autoplay, --seed, --level)."""
 
@@ -38,6 +38,7 @@ from .asteroids_game import (
     start,
 )
 from .asteroids_hud import draw_hud, summary
+from .asteroids_sound import SoundSystem, start_sound
 
 __all__ = ["ACTIONS", "LEVELS", "ShipControls", "add_arguments", "build", "build_world", "controls", "draw_hud"]
 __all__ += ["schedule", "summary"]
@@ -117,24 +118,28 @@ def controls() -> ShipControlSystem:
     return ShipControlSystem()
 
 
-def game_systems(autoplay: bool = False, controls: System | None = None) -> dict[str, list[System]]:
+def game_systems(
+    autoplay: bool = False, controls: System | None = None, sound: bool = False
+) -> dict[str, list[System]]:
     """The game's own systems by stage: controls (the bot, or `controls`, a system filling
-    ShipControls from the input), the ship, motion, wrap, lifetimes, collisions, damage, levels,
-    restart in the fixed step; the camera per frame."""
+    ShipControls from the input), the ship, motion, wrap, lifetimes, collisions, (with `sound`:
+    its sounds, asteroids_sound.py), damage, levels, restart in the fixed step; the camera per
+    frame."""
     from ecs_engine.systems import MotionSystem
 
     fixed: list[System] = [BotSystem()] if autoplay else [controls] if controls is not None else []
     fixed += [ShipSystem(), MotionSystem(), WrapSystem(), LifetimeSystem(), CollisionSystem()]
+    fixed += [SoundSystem()] if sound else []  # (before the damage destroys what was hit)
     fixed += [DamageSystem(), LevelSystem(), RestartSystem()]
     return {"fixed": fixed, "update": [FollowCameraSystem()]}
 
 
 def add_game_systems(app: App, autoplay: bool, controls: System | None, physics: bool = False) -> None:
-    """game_systems into `app`; with `physics`, the PhysicsPlugin's step and the ship's contacts
-    where MotionSystem moved everything else (asteroids_physics.py)."""
+    """game_systems (with sound) into `app`; with `physics`, the PhysicsPlugin's step and the
+    ship's contacts where MotionSystem moved everything else (asteroids_physics.py)."""
     from ecs_engine.systems import MotionSystem
 
-    for stage, systems in game_systems(autoplay, controls).items():
+    for stage, systems in game_systems(autoplay, controls, sound=True).items():
         for system in systems:
             app.add_systems(stage, system)
             if physics and isinstance(system, MotionSystem):  # (the bodies move where the rest did)
@@ -144,16 +149,20 @@ def add_game_systems(app: App, autoplay: bool, controls: System | None, physics:
                 app.add_systems(stage, ShipContactSystem())
 
 
-def schedule(autoplay: bool = False, controls: System | None = None) -> Schedule:
-    """The game's systems (game_systems), then the stock render origin and matrices."""
+def schedule(autoplay: bool = False, controls: System | None = None, sound: bool = False) -> Schedule:
+    """The game's systems (game_systems), then the stock render origin and matrices (and, with
+    `sound`, AudioSystem: the world needs the Audio resource and start_sound)."""
+    from ecs_engine.audio import AudioSystem
     from ecs_engine.systems import RenderOriginSystem, TransformSystem
 
     steps = Schedule(("fixed", "update", "post_update"))
-    for stage, systems in game_systems(autoplay, controls).items():
+    for stage, systems in game_systems(autoplay, controls, sound).items():
         for system in systems:
             steps.add(system, stage)
     steps.add(RenderOriginSystem(), "post_update")
     steps.add(TransformSystem(), "post_update")
+    if sound:
+        steps.add(AudioSystem(), "post_update")
     return steps
 
 
@@ -182,6 +191,7 @@ def build(app: App) -> None:
     """The game as an App: the stock plugins it uses (no fly camera, hierarchy or interpolated
     motion: its own systems move everything), its HUD, its score line, its actions."""
     from ecs_engine.app.plugins import CameraControlPlugin, DefaultPlugins, HierarchyPlugin, MotionPlugin, TimePlugin
+    from ecs_engine.audio import AudioPlugin
     from ecs_engine.render import Meshes
 
     options = app.options
@@ -191,11 +201,13 @@ def build(app: App) -> None:
         raise UsageError(f"--level {level}: asteroids has levels 1 to {LEVELS}")
     app.title = "Asteroids"
     app.add_plugins(DefaultPlugins.without(TimePlugin, MotionPlugin, CameraControlPlugin, HierarchyPlugin))
+    app.add_plugins(AudioPlugin())
     if not autoplay:  # the bot needs no bindings (build_world puts the defaults there)
         app.add_actions(ACTIONS)
 
     def setup(world: World, dt: float) -> None:
         build_world(world, world.resources[Meshes].add, seed=seed, autoplay=autoplay, level=level, physics=physics)
+        start_sound(world)
 
     app.add_startup_systems(setup)
     add_game_systems(app, autoplay, None if autoplay else controls(), physics)

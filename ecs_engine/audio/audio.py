@@ -49,7 +49,8 @@ class Audio:
         self._next_voice = 0
         self._free: list[int] = []
         self.owner: dict[int, int] = {}  # voice -> the entity whose AudioSource it plays (-1: a one-shot)
-        self.one_shots: dict[int, tuple[np.ndarray | None, float, float]] = {}  # voice -> (at, volume, pitch)
+        # voice -> (at, volume, pitch, min and max distance) of a one-shot
+        self.one_shots: dict[int, tuple[np.ndarray | None, float, float, float, float]] = {}
         self.listener = Listener.at_origin()
         if output in ("device", "null"):
             self.output: DeviceOutput | CaptureOutput = DeviceOutput(self.mixer, null=output == "null")
@@ -167,9 +168,12 @@ class Audio:
         pitch: float = 1.0,
         bus: int | str = "effects",
         loop: bool = False,
+        min_distance: float = 1.0,
+        max_distance: float = 1000.0,
     ) -> int:
-        """Play `clip` once (fire and forget): heard from the world point `at` (spatial, inverse
-        distance from 1 m) or, without one, as it is. Its voice number (for `stop`)."""
+        """Play `clip` once (fire and forget): heard from the world point `at` (spatial: inverse
+        distance between `min_distance` and `max_distance`, panned, its level followed as the
+        listener moves) or, without one, as it is. Its voice number (for `stop`)."""
         self.check_clip(clip, "Audio.play")
         if not np.isfinite(volume) or volume < 0:
             raise UsageError(f"Audio.play: volume must be 0 or more, got {volume!r}")
@@ -180,18 +184,26 @@ class Audio:
             point = np.asarray(at, np.float64).reshape(-1)
             if point.shape != (3,) or not np.isfinite(point).all():
                 raise UsageError(f"Audio.play: at must be a finite (x, y, z), got {at!r}")
+        if not (np.isfinite(min_distance) and np.isfinite(max_distance) and 0 < min_distance <= max_distance):
+            raise UsageError(
+                f"Audio.play: min_distance and max_distance must be finite, more than 0 and in order, "
+                f"got {min_distance!r} and {max_distance!r}"
+            )
         number = self.bus(bus)
         voice = self.voice(-1)
-        self.one_shots[voice] = (point, float(volume), float(pitch))
-        left, right, factor = self.one_shot_gains(point, volume)
+        self.one_shots[voice] = (point, float(volume), float(pitch), float(min_distance), float(max_distance))
+        left, right, factor = self.one_shot_gains(point, volume, min_distance, max_distance)
         self.mixer.start(voice, clip, (left, right), pitch * factor, loop, point is not None, number)
         return voice
 
-    def one_shot_gains(self, point: np.ndarray | None, volume: float) -> tuple[float, float, float]:
+    def one_shot_gains(
+        self, point: np.ndarray | None, volume: float, near: float = 1.0, far: float = 1000.0
+    ) -> tuple[float, float, float]:
         """(left, right, Doppler factor) of a one-shot heard from `point` by the listener."""
         if point is None:
             return volume, volume, 1.0
-        left, right, factor = spatialize(self.listener, point_sources(point[None, :]), self.doppler_factor)
+        sources = point_sources(point[None, :], near, far)
+        left, right, factor = spatialize(self.listener, sources, self.doppler_factor)
         return volume * float(left[0]), volume * float(right[0]), float(factor[0])
 
     def stop(self, voice: int) -> None:

@@ -106,13 +106,16 @@ class SourceColumns:
     cone_outer_gain: np.ndarray
 
 
-def point_sources(positions: np.ndarray) -> SourceColumns:
-    """Sources at `positions` ((N, 3)) with a source's defaults (inverse distance from 1 m to
-    1,000 m, no cone, still): one-shot sounds played at a point."""
+def point_sources(
+    positions: np.ndarray, near: np.ndarray | float = 1.0, far: np.ndarray | float = 1000.0
+) -> SourceColumns:
+    """Sources at `positions` ((N, 3)), heard by inverse distance between `near` and `far`, with
+    no cone, still: one-shot sounds played at a point."""
     n = len(positions)
     ones, zeros = np.ones(n), np.zeros((n, 3))
     full = np.full(n, 360.0)
-    return SourceColumns(positions, zeros, zeros, np.full(n, INVERSE), ones, ones * 1000.0, ones, full, full, ones * 0)
+    near, far = ones * near, ones * far
+    return SourceColumns(positions, zeros, zeros, np.full(n, INVERSE), near, far, ones, full, full, ones * 0)
 
 
 def spatialize(listener: Listener, sources: SourceColumns, doppler_factor: float = 1.0) -> tuple[np.ndarray, ...]:

@@ -128,9 +128,9 @@ class AudioSystem(System):
         self._stop_orphans(audio, kept)
         shots = [(v, *audio.one_shots[v]) for v in audio.one_shots if audio.one_shots[v][0] is not None]
         if shots:
-            voices, points = np.array([s[0] for s in shots]), np.array([s[1] for s in shots])
-            volume, pitch = np.array([s[2] for s in shots]), np.array([s[3] for s in shots])
-            left, right, factor = spatialize(listener, point_sources(points), audio.doppler_factor)
+            voices, points, volume, pitch, near, far = (np.array(column) for column in zip(*shots))
+            heard = point_sources(np.asarray(points, np.float64).reshape(-1, 3), near, far)
+            left, right, factor = spatialize(listener, heard, audio.doppler_factor)
             live_voices.append(voices)
             gains.append(np.c_[volume * left, volume * right])
             pitches.append(pitch * factor)
