@@ -5,8 +5,8 @@ where the game says."""
 from __future__ import annotations
 
 import numpy as np
-
 from audio_scene import RATE, peak_frequency, rms
+
 from ecs_engine import World
 from ecs_engine.audio import Audio
 from ecs_engine.audio.outputs import read_wav

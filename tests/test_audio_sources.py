@@ -8,8 +8,8 @@ import wave
 
 import numpy as np
 import pytest
-
 from audio_scene import FPS, RATE, capture, peak_frequency, rms, tone
+
 from ecs_engine.app.output_files import check_outputs
 from ecs_engine.audio import Audio
 from ecs_engine.components import Transform
