@@ -15,12 +15,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ecs_engine.audio.spatial import EXPONENTIAL, INVERSE, LINEAR
 from ecs_engine.ecs.schema import Component, Field
 
 from .transform import LIMIT
 
 MASTER, MUSIC, EFFECTS = 0, 1, 2  # the Audio resource's first buses; audio.add_bus makes more
+INVERSE, LINEAR, EXPONENTIAL = 0, 1, 2  # distance models (OpenAL's clamped ones: ecs_engine/audio/spatial.py)
 
 __all__ = ["EFFECTS", "EXPONENTIAL", "INVERSE", "LINEAR", "MASTER", "MUSIC", "AudioListener", "AudioSource"]
 

@@ -176,3 +176,32 @@ def test_audio_out_does_not_replace_another_kind_of_file(tmp_path):
     with pytest.raises(UsageError, match="not a WAV file"):
         check_outputs({"--audio-out": str(keep)}, {})
     check_outputs({"--audio-out": str(tmp_path / "new.wav")}, {})
+
+
+def test_underruns_are_counted_and_reported_in_the_perf_lines():
+    """A block asked for after the sound handed over before has run out is an underrun; the perf
+    lines (and the Perf window) carry the count and the mixer's share of a core."""
+    import time
+
+    from ecs_engine.app.perf import PerfMonitor
+    from ecs_engine.ecs.world import World
+
+    world = World()
+    audio = world.resources[Audio] = Audio("null")
+    try:
+        audio.output.device.stop()  # the device's thread no longer asks: this test does
+        feed = audio.output._feed()
+        next(feed)
+        audio.output._runs_out = None
+        feed.send(480)  # 10 ms handed over
+        feed.send(480)  # at once: 20 ms ahead, no gap
+        assert audio.underruns == 0
+        time.sleep(0.06)  # the 20 ms ran out 40 ms ago
+        feed.send(480)
+        assert audio.underruns == 1
+        perf = PerfMonitor()
+        perf.gauges = lambda: world.resources
+        line = perf.summary_line()
+        assert "sound mix" in line and "underruns 1" in line
+    finally:
+        audio.close()

@@ -18,12 +18,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..components import Camera, Environment, Mesh, PointLight, Transform, active_camera
+from ..components.audio import AudioSource
 from ..components.name import Name
 from ..ecs.world import World
 from ..gpu.swapchain import PRESENT_MODES as SWAPCHAIN_PRESENT_MODES
 from ..maths.camera import yaw_pitch_roll, yaw_pitch_roll_quat
 from ..render.config import CHOICES, RenderConfig, applies
 from .editor_animation import AnimationPanel
+from .editor_audio import SOURCE_LABELS, AudioPanel, source_section
 from .editor_browser import Browser, BrowserPanel
 from .editor_dock import DockLayout
 from .editor_files import FileMenu
@@ -92,6 +94,7 @@ class Editor(BrowserPanel):
         self.scene = SceneWindow(imgui)  # the scene's window in the dock (editor_viewport.py)
         self.physics = PhysicsPanel()  # while the world has physics (editor_physics.py)
         self.animation = AnimationPanel()  # while a character is selected (editor_animation.py)
+        self.audio = AudioPanel()  # while the world has sound (editor_audio.py)
         self.animated: int | None = None  # the player the Animation window showed last
         self.viewport: Any = None  # the renderer's EditorViewport (show_scene), None: no Scene window
         self.viewport_ui: Any = None  # (the ImGuiRenderer, a callable giving the window target)
@@ -161,6 +164,7 @@ class Editor(BrowserPanel):
             imgui.end_tab_bar()
         imgui.end()
         self.physics.draw(imgui, world)
+        self.audio.draw(imgui, world)
         self.animated = self.animation.draw(imgui, world, self.selected)
         self._scene_input(world)
 
@@ -260,7 +264,7 @@ class Editor(BrowserPanel):
         if self.status_entity != eid:
             self.status = ""  # an error about another entity
         imgui.text(f"entity {eid & 0xFFFFFFFF} (gen {eid >> 32})")
-        push_label_room(imgui, ENTITY_LABELS + LIGHT_LABELS + MESH_LABELS)
+        push_label_room(imgui, ENTITY_LABELS + LIGHT_LABELS + MESH_LABELS + SOURCE_LABELS)
         if Name in world.components(eid):
             changed, name = imgui.input_text("name", str(world.get(eid, Name).value))
             if changed:
@@ -277,6 +281,8 @@ class Editor(BrowserPanel):
                     section(self, world, eid)
             if Camera in types:
                 self._camera(world, eid)
+            if AudioSource in types:
+                source_section(self, world, eid)
         except ValueError as exc:  # the world's checks (e.g. near >= far): keep the old value
             self.status, self.status_entity = str(exc), eid
         imgui.pop_item_width()

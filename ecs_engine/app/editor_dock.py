@@ -1,7 +1,7 @@
 """The editor's docked layout: a dock space over the whole window whose central node holds the
 Scene window (editor_viewport.py: the renderer's viewport image), with the panels docked around it:
 scene settings down the left, the inspector down the right, and under the scene the entity
-browser and the hierarchy (tabs) beside the Perf window. In a window narrower than `WIDE` the
+browser and the hierarchy (tabs) beside the Perf window (and the Sound window, a tab of it). In a window narrower than `WIDE` the
 space under the scene would give those two panels under 250 pixels each, so the browser goes
 under the settings and Perf under the inspector instead, and the scene keeps the middle from top
 to bottom. The user may rearrange them; ImGui keeps the layout in
@@ -20,7 +20,7 @@ from ..user_dirs import config_home
 LEFT = ("Scene and render",)
 RIGHT = ("Inspector",)
 BOTTOM_LEFT = ("Hierarchy", "Entities")  # tabs; the entity browser in front
-BOTTOM_RIGHT = ("Perf",)
+BOTTOM_RIGHT = ("Perf", "Sound")  # tabs; the Sound window (editor_audio.py) only while there is sound
 PANEL_WIDTH = 300.0  # pixels the side columns get at least (up to 40% of the window each)
 WIDE = 1200.0  # pixels: from this width the browser and Perf go under the scene
 DOCKSPACE = "editor dock space"

@@ -121,6 +121,7 @@ def run_frames(
 ) -> int:
     """The frames, until the source stops; how many ran."""
     perf, profiler = result.perf, result.profiler
+    perf.gauges = lambda: session.world.resources  # the world of the moment (the editor may switch it)
     frames = 0
     while source.running(frames):
         session.renderer.ensure_output()  # HDR colour or not, as settings and materials need

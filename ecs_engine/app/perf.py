@@ -113,6 +113,9 @@ class PerfMonitor:
         self.frame_count = 0
         self.overhead_total_s = 0.0
         self.counters: dict[str, int] = {}
+        # the world's resources that report on themselves (`perf_line()`: the sound's underruns),
+        # asked only when a line or the Perf window shows them; the run loop names its world here
+        self.gauges: Callable[[], Any] | None = None
         self.systems = Breakdown(self.window_s, self.max_rows)  # CPU ms by system (timed frames)
         self.gpu_passes = Breakdown(self.window_s, self.max_rows)  # GPU ms by pass
         self.system_threads: dict[str, str] = {}  # the thread that last ran each system
@@ -304,7 +307,13 @@ class PerfMonitor:
         for label, found in (("systems", self.system_times()), ("gpu passes", self.gpu_pass_times())):
             if found:  # the slowest three: the line is read at a glance
                 parts.append(f"{label} " + ", ".join(f"{x.name} {x.mean:.3f}" for x in found[:3]) + " ms")
+        parts.extend(self.gauge_lines())
         return " | ".join(parts)
+
+    def gauge_lines(self) -> list[str]:
+        """What the world's resources say of themselves (a resource with `perf_line()`)."""
+        resources = self.gauges() if self.gauges is not None else {}
+        return [r.perf_line() for r in list(resources.values()) if callable(getattr(r, "perf_line", None))]
 
     def system_times(self) -> list[NamedTime]:
         """Each system's CPU ms per frame over the window (timed frames only), slowest first."""

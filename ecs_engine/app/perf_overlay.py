@@ -42,6 +42,7 @@ class PerfOverlay:
         self.systems: list[tuple[str, str, str]] = []  # (system, mean ms, thread) slowest first, as drawn
         self.passes: list[tuple[str, str]] = []  # (GPU pass, mean ms) slowest first, as drawn
         self._lines: list[tuple[str, np.ndarray, np.ndarray]] = []
+        self._gauges: list[str] = []  # the resources' own lines (the sound's)
         self._limits = (0.0, 1.0, 1.0)  # x from, x to, y top
         self.visible = False  # drawn last frame (not collapsed, its tab shown): the run loop times systems then
 
@@ -59,6 +60,7 @@ class PerfOverlay:
         threads = perf.system_threads
         self.systems = [(x.name, _ms(x.mean), _thread(threads.get(x.name, ""))) for x in perf.system_times()]
         self.passes = [(x.name, _ms(x.mean)) for x in perf.gpu_pass_times()]
+        self._gauges = perf.gauge_lines()
         t = perf.times()
         self._lines = []
         top = 1.0
@@ -96,6 +98,8 @@ class PerfOverlay:
             imgui.text(f"    process {_ms(perf.cpu_process_percent, '5.1f')}% ({per_core}%/core)")
             imgui.text(f"resident memory {perf.rss_bytes / 2**20:.1f} MiB")
             imgui.text(f"overlay {overlay_ms:.3f} ms, monitor {_ms(perf.overhead_ms * 1e3, '.1f')} us")
+            for line in self._gauges:
+                imgui.text(line)
             self._table("systems", ("system", "CPU ms", "thread"), self.systems)
             self._table("GPU passes", ("GPU pass", "ms"), self.passes)
             self._plot(perf)

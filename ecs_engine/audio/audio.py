@@ -52,6 +52,7 @@ class Audio:
         # voice -> (at, volume, pitch, min and max distance) of a one-shot
         self.one_shots: dict[int, tuple[np.ndarray | None, float, float, float, float]] = {}
         self.listener = Listener.at_origin()
+        self._last_perf = (0.0, 0)  # the mixer's seconds and frames at the last perf_line
         if output in ("device", "null"):
             self.output: DeviceOutput | CaptureOutput = DeviceOutput(self.mixer, null=output == "null")
         else:
@@ -219,6 +220,16 @@ class Audio:
     @property
     def underruns(self) -> int:
         return self.output.underruns
+
+    def perf_line(self) -> str:
+        """The Perf window's and the perf lines' word on the sound: the mixer's share of a core
+        since the last line, the voices, the underruns."""
+        mixer = self.mixer
+        seconds, frames = mixer.mix_seconds, mixer.frames_mixed
+        last, self._last_perf = self._last_perf, (seconds, frames)
+        sound_s = (frames - last[1]) / self.sample_rate
+        share = 100.0 * (seconds - last[0]) / sound_s if sound_s > 0 else 0.0
+        return f"sound mix {share:.1f}% of a core, {len(self.owner)} voices, underruns {self.underruns}"
 
     def latency_ms(self) -> list[float]:
         """For the last voices started: ms from each start call to the block that mixed it first."""

@@ -22,7 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-INVERSE, LINEAR, EXPONENTIAL = 0, 1, 2
+from ..components.audio import EXPONENTIAL, INVERSE, LINEAR
+
 MODELS = {"inverse": INVERSE, "linear": LINEAR, "exponential": EXPONENTIAL}
 SPEED_OF_SOUND = 343.3  # m/s, OpenAL's default
 
