@@ -1,14 +1,13 @@
 """The editor's docked layout: a dock space over the whole window whose central node holds the
-Scene window (editor_viewport.py: the renderer's viewport image), with the panels docked around it:
-scene settings down the left, the inspector down the right, and under the scene the entity
+Scene window (editor_viewport.py: the renderer's viewport image), with the panels docked around
+it: scene settings down the left, the inspector down the right, and under the scene the entity
 browser and the hierarchy (tabs) beside the Perf window (and the Sound window, a tab of it). In
 a window narrower than `WIDE` the space under the scene would give those two panels under 250
-pixels each, so the browser goes under the settings and Perf under the inspector instead, and the scene keeps the middle from top
-to bottom. The user may rearrange them; ImGui keeps the layout in
-`editor.ini` in the user's config folder (XDG_CONFIG_HOME, else ~/.config, then `ecs_engine/`),
-so it is the same next run. The default layout is built only when that file has none. A headless
-editor always has the default layout and leaves the file alone.
-"""
+pixels each, so the browser goes under the settings and Perf under the inspector instead, and
+the scene keeps the middle from top to bottom. The user may rearrange them; ImGui keeps the
+layout in `editor.ini` in the user's config folder (XDG_CONFIG_HOME, else ~/.config, then
+`ecs_engine/`), so it is the same next run. The default layout is built only when that file has
+none. A headless editor always has the default layout and leaves the file alone."""
 
 from __future__ import annotations
 
