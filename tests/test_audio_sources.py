@@ -205,3 +205,26 @@ def test_underruns_are_counted_and_reported_in_the_perf_lines():
         assert "sound mix" in line and "underruns 1" in line
     finally:
         audio.close()
+
+
+def test_a_streamed_clip_plays_the_file_and_loops_it(tmp_path):
+    """A 0.5 s WAV loaded with stream=True, looped: the capture is the file's sound, its level
+    and frequency, across the seam and on; the same clip decoded whole gives the same samples."""
+    path = tmp_path / "music.wav"
+    data = (tone(480.0, 0.5) * 0.5 * 32767).astype("<i2")
+    with wave.open(str(path), "wb") as f:
+        f.setnchannels(1), f.setsampwidth(2), f.setframerate(RATE), f.writeframes(data.tobytes())
+
+    def setup(world, audio):
+        world.resources["clips"] = (audio.load(path, stream=True), audio.load(path))
+        world.spawn(Transform(), AudioSource(clip=world.resources["clips"][0], loop=True, spatial=False))
+
+    samples, app = capture(tmp_path, setup, 60)
+    streamed, whole = app.world.resources["clips"]
+    assert streamed != whole and app.world.resources[Audio].load(path, stream=True) == streamed
+    assert rms(samples[: RATE // 2]) == pytest.approx([0.5 / np.sqrt(2)] * 2, rel=1e-3)
+    assert peak_frequency(samples[:, 0]) == pytest.approx(480.0, rel=1e-3)
+    n = np.arange(len(samples))
+    np.testing.assert_allclose(samples[:, 0], 0.5 * np.sin(2 * np.pi * 480.0 * n / RATE), atol=2e-4)
+    with pytest.raises(UsageError, match="no such file"):
+        app.world.resources[Audio].load(tmp_path / "gone.ogg", stream=True)

@@ -22,6 +22,7 @@ from .clips import checked_samples, decode
 from .mixer import SAMPLE_RATE, Mixer
 from .outputs import CaptureOutput, DeviceOutput
 from .spatial import Listener, point_sources, spatialize
+from .streams import check_streamable
 
 BUSES = ("master", "music", "effects")
 
@@ -57,14 +58,25 @@ class Audio:
             self.output: DeviceOutput | CaptureOutput = DeviceOutput(self.mixer, null=output == "null")
         else:
             self.output = CaptureOutput(self.mixer, output)
+            self.mixer.wait_for_streams = True
         self._send_buses()
 
     # ------------------------------------------------------------------ clips
-    def load(self, path: str | os.PathLike[str]) -> int:
-        """The clip of a sound file (WAV, FLAC, MP3, Ogg Vorbis), decoded once: its handle."""
-        key = os.path.realpath(os.fspath(path))
+    def load(self, path: str | os.PathLike[str], stream: bool = False) -> int:
+        """The clip of a sound file (WAV, FLAC, MP3, Ogg Vorbis): its handle. Decoded once into
+        memory, or with `stream` (music) decoded a little at a time by each voice that plays it
+        (streams.py; such a voice plays at the clip's own pitch: pitch and Doppler pass it by)."""
+        name = os.fspath(path)
+        key = f"{'stream' if stream else 'memory'}:{os.path.realpath(name)}"
         if key not in self._clips:
-            self._clips[key] = self._add(decode(path, self.sample_rate), self.sample_rate, os.fspath(path))
+            if stream:
+                if not os.path.isfile(name):
+                    raise UsageError(f"sound file {name}: no such file")
+                check_streamable(name)
+                self._clip_names.append(name)
+                self._clips[key] = self.mixer.add_stream(os.path.realpath(name))
+            else:
+                self._clips[key] = self._add(decode(path, self.sample_rate), self.sample_rate, name)
         return self._clips[key]
 
     def clip(self, samples: np.ndarray, rate: int | None = None, name: str = "clip") -> int:

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from .mix_kernel import mix_block
+from .streams import Stream
 
 SAMPLE_RATE = 48_000
 
@@ -65,6 +66,7 @@ class _Voices:
         self.paused = np.zeros(capacity, bool)
         self.stopping = np.zeros(capacity, bool)
         self.bus = np.zeros(capacity, np.int64)
+        self.stream = np.zeros(capacity, bool)  # plays a streamed clip (streams.py), not the bank
 
     def fit(self, voice: int) -> None:
         capacity = len(self.clip)
@@ -93,6 +95,9 @@ class Mixer:
         self.mix_seconds = 0.0  # CPU time spent in render (the Perf line's audio figure)
         self.started_at: dict[int, float] = {}  # voice -> perf_counter of its start call, until first mixed
         self.latencies: deque[float] = deque(maxlen=4096)  # s from a start call to the block that mixed it
+        self.streamed: dict[int, str] = {}  # clip -> the file its voices stream (streams.py)
+        self._streams: dict[int, Stream] = {}  # voice -> its decoder
+        self.wait_for_streams = False  # a capture waits for the decoders (the same file every run)
 
     # ---------------------------------------------------------------- the frame's side
     def add_clip(self, samples: np.ndarray, rate: int) -> int:
@@ -100,6 +105,15 @@ class Mixer:
         with self._lock:
             self.bank = self.bank.add(samples, rate)
             return len(self.bank.length) - 1
+
+    def add_stream(self, path: str) -> int:
+        """A clip streamed from `path` when played (streams.py): its index. It holds one silent
+        frame in the bank, so that clips keep one numbering."""
+        with self._lock:
+            self.bank = self.bank.add(np.zeros((1, 2), np.float32), self.sample_rate)
+            clip = len(self.bank.length) - 1
+            self.streamed[clip] = path
+            return clip
 
     def start(
         self, voice: int, clip: int, gains: tuple[float, float], pitch: float, loop: bool, mono: bool, bus: int
@@ -156,6 +170,10 @@ class Mixer:
                 v.live[voice] = v.active[voice] = True
                 v.paused[voice] = v.stopping[voice] = False
                 self.started_at[voice] = called
+                self._close_stream(voice)
+                v.stream[voice] = clip in self.streamed
+                if v.stream[voice]:
+                    self._streams[voice] = Stream(self.streamed[clip], self.sample_rate, bool(loop))
             elif kind == "stop":
                 voice = command[1]
                 if voice < len(v.clip) and v.active[voice]:
@@ -169,6 +187,25 @@ class Mixer:
                         v.gain_from[voice] = 0.0  # back in with a fade, not a click
             elif kind == "buses":
                 self._bus_gain = command[1]
+
+    def _close_stream(self, voice: int) -> None:
+        stream = self._streams.pop(voice, None)
+        if stream is not None:
+            stream.close()
+
+    def _mix_stream(self, planes: np.ndarray, voice: int, target: np.ndarray) -> None:
+        """A streamed voice's next block into `planes`, its gains ramped to `target` as the
+        kernel's are."""
+        v, frames = self._voices, planes.shape[1]
+        block, ended = self._streams[voice].read(frames, self.wait_for_streams)
+        if v.mono[voice]:
+            block[:] = block.mean(axis=1, keepdims=True)
+        ramp = np.arange(1, frames + 1, dtype=np.float32) / frames
+        start = v.gain_from[voice]
+        planes += block.T * (start[:, None] + (target - start)[:, None] * ramp)
+        v.gain_from[voice] = target
+        if ended:
+            v.live[voice] = False
 
     def _bus_of(self, bus: int) -> float:
         return float(self._bus_gain[bus]) if bus < len(self._bus_gain) else 1.0
@@ -191,16 +228,23 @@ class Mixer:
             target[v.stopping[s]] = 0.0
             rate = v.pitch[s] * bank.rate[v.clip[s]] / self.sample_rate if len(bank.rate) else v.pitch[s]
             fresh = [voice for voice in self.started_at if v.live[voice]]
+            streaming = v.stream[s]
+            live = v.live[s] & ~streaming  # the bank's voices: the kernel's
             mix_block(
                 planes, bank.samples, bank.offset, bank.length, bank.channels, v.clip[s], v.position[s], rate,
-                v.gain_from[s], np.ascontiguousarray(target), v.loop[s], v.live[s], v.mono[s],
+                v.gain_from[s], np.ascontiguousarray(target), v.loop[s], live, v.mono[s],
             )  # fmt: skip
+            for row in np.flatnonzero(streaming & v.live[s]).tolist():
+                self._mix_stream(planes, row, target[row])
+            v.live[s] = np.where(streaming, v.live[s], live)
             for voice in fresh:
                 self.latencies.append(began - self.started_at.pop(voice))
             ended = np.flatnonzero(v.active[s] & ~v.live[s] & ~v.paused[s] & ~v.stopping[s])
             stopped = np.flatnonzero(v.stopping[s])
             for done in (ended, stopped):
                 v.active[done] = v.live[done] = v.paused[done] = v.stopping[done] = False
+                for row in done.tolist():
+                    self._close_stream(row)
             if len(ended) or len(stopped):
                 with self._lock:
                     self._finished.extend(int(x) for x in ended)
