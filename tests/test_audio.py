@@ -184,3 +184,26 @@ def test_same_run_writes_the_same_file_twice(tmp_path):
     capture(tmp_path, setup, 50, name="b.wav", every=every)
     assert (tmp_path / "a.wav").read_bytes() == (tmp_path / "b.wav").read_bytes()
     assert rms(first).min() > 0.01 and len(first) == 50 * RATE // FPS
+
+
+def test_a_stereo_clip_keeps_its_channels_unless_heard_from_a_point(tmp_path):
+    """A stereo clip (440 Hz left, 660 Hz right) not spatial: each channel its own tone; spatial
+    and ahead of the listener: both channels the two tones averaged, equal-power centred."""
+    both = np.c_[tone(440.0), tone(660.0)]
+
+    def flat(world, audio):
+        world.spawn(Transform(), AudioSource(clip=audio.clip(both), loop=True, spatial=False))
+
+    samples, _ = capture(tmp_path, flat, 12)
+    n = np.arange(len(samples))
+    np.testing.assert_allclose(samples[:, 0], np.sin(2 * np.pi * 440.0 * n / RATE), atol=1e-5)
+    np.testing.assert_allclose(samples[:, 1], np.sin(2 * np.pi * 660.0 * n / RATE), atol=1e-5)
+
+    def ahead(world, audio):
+        world.spawn(Transform(), AudioListener())
+        world.spawn(Transform(position=(0.0, 0.0, -1.0)), AudioSource(clip=audio.clip(both), loop=True))
+
+    samples, _ = capture(tmp_path, ahead, 12)
+    mean = 0.5 * (np.sin(2 * np.pi * 440.0 * n / RATE) + np.sin(2 * np.pi * 660.0 * n / RATE))
+    for channel in (0, 1):
+        np.testing.assert_allclose(samples[SETTLE:, channel], math.cos(math.pi / 4) * mean[SETTLE:], atol=1e-5)

@@ -228,15 +228,16 @@ class Mixer:
             target[v.stopping[s]] = 0.0
             rate = v.pitch[s] * bank.rate[v.clip[s]] / self.sample_rate if len(bank.rate) else v.pitch[s]
             fresh = [voice for voice in self.started_at if v.live[voice]]
-            streaming = v.stream[s]
-            live = v.live[s] & ~streaming  # the bank's voices: the kernel's
+            streaming = v.stream[s] if self._streams else None
+            live = v.live[s] if streaming is None else v.live[s] & ~streaming  # the bank's voices: the kernel's
             mix_block(
                 planes, bank.samples, bank.offset, bank.length, bank.channels, v.clip[s], v.position[s], rate,
                 v.gain_from[s], np.ascontiguousarray(target), v.loop[s], live, v.mono[s],
             )  # fmt: skip
-            for row in np.flatnonzero(streaming & v.live[s]).tolist():
-                self._mix_stream(planes, row, target[row])
-            v.live[s] = np.where(streaming, v.live[s], live)
+            if streaming is not None:
+                for row in np.flatnonzero(streaming & v.live[s]).tolist():
+                    self._mix_stream(planes, row, target[row])
+                v.live[s] = np.where(streaming, v.live[s], live)
             for voice in fresh:
                 self.latencies.append(began - self.started_at.pop(voice))
             ended = np.flatnonzero(v.active[s] & ~v.live[s] & ~v.paused[s] & ~v.stopping[s])
