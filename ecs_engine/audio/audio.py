@@ -13,7 +13,8 @@ side hands out their numbers and takes them back when the mixer says a voice is 
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+import sys
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -33,7 +34,11 @@ class Audio:
     captured into, frame by frame (`--audio-out`)."""
 
     def __init__(
-        self, output: str | os.PathLike[str] = "device", sample_rate: int = SAMPLE_RATE, doppler_factor: float = 1.0
+        self,
+        output: str | os.PathLike[str] = "device",
+        sample_rate: int = SAMPLE_RATE,
+        doppler_factor: float = 1.0,
+        warn: Callable[[str], None] | None = None,
     ) -> None:
         if not isinstance(sample_rate, int) or not 8_000 <= sample_rate <= 192_000:
             raise UsageError(f"Audio: sample_rate must be an integer from 8,000 to 192,000 Hz, got {sample_rate!r}")
@@ -41,6 +46,9 @@ class Audio:
             raise UsageError(f"Audio: doppler_factor must be 0 (off) or more, got {doppler_factor!r}")
         self.sample_rate = sample_rate
         self.doppler_factor = float(doppler_factor)
+        # a sound that cannot play is said once, in one line, and the game goes on without it
+        self.warn = warn or (lambda line: print(line, file=sys.stderr))
+        self.said: list[str] = []
         self.mixer = Mixer(sample_rate)
         self._names: list[str] = list(BUSES)
         self._volume = np.ones(len(BUSES))
@@ -62,22 +70,36 @@ class Audio:
         self._send_buses()
 
     # ------------------------------------------------------------------ clips
-    def load(self, path: str | os.PathLike[str], stream: bool = False) -> int:
+    def load(self, path: str | os.PathLike[str], stream: bool = False, strict: bool = False) -> int:
         """The clip of a sound file (WAV, FLAC, MP3, Ogg Vorbis): its handle. Decoded once into
         memory, or with `stream` (music) decoded a little at a time by each voice that plays it
-        (streams.py; such a voice plays at the clip's own pitch: pitch and Doppler pass it by)."""
+        (streams.py; such a voice plays at the clip's own pitch: pitch and Doppler pass it by).
+        A file that is missing or cannot be decoded is said in one line and gives a silent clip,
+        so the game goes on without that sound; with `strict`, UsageError instead."""
         name = os.fspath(path)
         key = f"{'stream' if stream else 'memory'}:{os.path.realpath(name)}"
         if key not in self._clips:
-            if stream:
-                if not os.path.isfile(name):
-                    raise UsageError(f"sound file {name}: no such file")
-                check_streamable(name)
-                self._clip_names.append(name)
-                self._clips[key] = self.mixer.add_stream(os.path.realpath(name))
-            else:
-                self._clips[key] = self._add(decode(path, self.sample_rate), self.sample_rate, name)
+            try:
+                if stream:
+                    if not os.path.isfile(name):
+                        raise UsageError(f"sound file {name}: no such file")
+                    check_streamable(name)
+                    self._clip_names.append(name)
+                    self._clips[key] = self.mixer.add_stream(os.path.realpath(name))
+                else:
+                    self._clips[key] = self._add(decode(path, self.sample_rate), self.sample_rate, name)
+            except UsageError as error:
+                if strict:
+                    raise
+                self.say(f"{error}: it plays as silence")
+                self._clips[key] = self._add(np.zeros((1, 1), np.float32), self.sample_rate, f"{name} (silent)")
         return self._clips[key]
+
+    def say(self, line: str) -> None:
+        """Tell the user, once per line, of a sound that cannot play."""
+        if line not in self.said:
+            self.said.append(line)
+            self.warn(line)
 
     def clip(self, samples: np.ndarray, rate: int | None = None, name: str = "clip") -> int:
         """A clip from samples ((frames,) or (frames, 1 or 2), -1..1) at `rate` Hz (the mixer's by

@@ -25,7 +25,6 @@ from ..components.hierarchy import WorldMatrix
 from ..ecs.entities import INDEX_MASK
 from ..ecs.errors import describe_entity
 from ..ecs.schedule import System
-from ..errors import UsageError
 from ..maths.transform import quat_to_mat3
 from .audio import Audio
 from .spatial import Listener, SourceColumns, point_sources, spatialize
@@ -103,13 +102,11 @@ class AudioSystem(System):
                 clip = int(src.clip[row])
                 if clip < 0:
                     continue
-                if clip >= audio.clip_count:
-                    raise UsageError(
-                        f"{describe_entity(int(ids[row]))} AudioSource.clip: {clip} is not a clip of the Audio "
-                        f"resource (it has {audio.clip_count})"
-                    )
+                problem = _unplayable(audio, clip, int(src.bus[row]))
+                if problem:  # said once; the source stays silent, the game goes on
+                    audio.say(f"{describe_entity(int(ids[row]))} AudioSource.{problem}")
+                    continue
                 bus = int(src.bus[row])
-                audio.bus(bus)  # an unknown bus is refused here, naming the buses
                 v = audio.voice(int(ids[row]))
                 gain = (float(left[row]), float(right[row]))
                 mono = bool(src.spatial[row])
@@ -151,6 +148,15 @@ class AudioSystem(System):
                 self._voice[owner & INDEX_MASK] = -1
                 audio.mixer.stop(int(v))
                 audio.owner[int(v)] = -2  # stopping: given back when the mixer says so
+
+
+def _unplayable(audio: Audio, clip: int, bus: int) -> str | None:
+    """Why a source's clip or bus cannot play (the field and the reason), or None."""
+    if clip >= audio.clip_count:
+        return f"clip: {clip} is not a clip of the Audio resource (it has {audio.clip_count}): it stays silent"
+    if bus >= len(audio.buses):
+        return f"bus: {bus} is not a bus (there are {len(audio.buses)}: {', '.join(audio.buses)}): it stays silent"
+    return None
 
 
 def _listener(world: Any) -> Listener:
