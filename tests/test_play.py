@@ -29,18 +29,19 @@ def play(*args: str) -> subprocess.CompletedProcess:
     )
 
 
-def test_headless_autoplay_exits_0_and_prints_the_same_score_every_run():
+def test_headless_autoplay_exits_0_and_prints_the_same_score_and_sound_every_run(tmp_path):
+    size = ("--width", "96", "--height", "64")
     runs = [
-        play(
-            "asteroids", "--headless", "--autoplay", "--frames", "600", "--seed", "1", "--width", "96", "--height", "64"
-        )
-        for _ in range(2)
+        play("asteroids", "--headless", "--autoplay", "--frames", "600", "--seed", "1", *size, "--audio-out", str(wav))
+        for wav in (tmp_path / "a.wav", tmp_path / "b.wav")
     ]
     for run in runs:
         assert run.returncode == 0, run.stderr
     lines = [next(line for line in r.stdout.splitlines() if line.startswith("asteroids: score")) for r in runs]
     assert lines[0] == lines[1]
     assert int(lines[0].split()[2]) > 0  # the bot scored
+    sound = (tmp_path / "a.wav").read_bytes()
+    assert sound == (tmp_path / "b.wav").read_bytes() and len(sound) == 44 + 600 * 800 * 8  # 600 frames of 1/60 s
 
 
 def test_bad_arguments_are_one_clear_error():
