@@ -236,3 +236,24 @@ def test_a_streamed_clip_plays_the_file_and_loops_it(tmp_path):
     np.testing.assert_allclose(samples[:, 0], 0.5 * np.sin(2 * np.pi * 480.0 * n / RATE), atol=2e-4)
     with pytest.raises(UsageError, match="no such file"):
         app.world.resources[Audio].load(tmp_path / "gone.ogg", stream=True, strict=True)
+
+
+def test_a_slow_frame_does_not_stop_the_sound():
+    """While the game's thread runs Python for half a second (a slow frame), the sound device's
+    thread goes on mixing: it gets the GIL at Python's switch interval, and nothing it needs is
+    compiled or loaded there (a first mix on that thread held the sound for the whole 0.5 s)."""
+    import time
+
+    audio = Audio("null")
+    try:
+        audio.play(audio.clip(tone(440.0)), loop=True)
+        time.sleep(0.1)
+        start, mixed = time.perf_counter(), audio.mixer.frames_mixed
+        spin = 0
+        while time.perf_counter() - start < 0.5:
+            for i in range(1000):
+                spin += i
+        busy = time.perf_counter() - start
+        assert (audio.mixer.frames_mixed - mixed) / RATE > 0.5 * busy
+    finally:
+        audio.close()

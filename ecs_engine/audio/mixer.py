@@ -79,6 +79,16 @@ class _Voices:
             setattr(self, name, wider)
 
 
+def _warm_kernel() -> None:
+    """Compile the kernel (or load it from numba's cache) on this thread, not the sound device's:
+    there it would wait for the GIL at each step of loading while the frame holds it, and the
+    sound would stop for as long as the frame runs Python (measured: the whole of a 0.5 s frame)."""
+    one, i64, f64, yes = np.ones(1, np.int64), np.zeros(1, np.int64), np.zeros(1), np.ones(1, bool)
+    gains = np.zeros((1, 2), np.float32)
+    mix_block(np.zeros((2, 4), np.float32), np.zeros(4, np.float32), i64, one * 2, one, i64, f64, f64 + 1.0,
+              gains, gains.copy(), yes, yes.copy(), ~yes)  # fmt: skip
+
+
 class Mixer:
     """Clips (`add_clip`), voices (`start`, `stop`, `pause`, `set`), buses (`set_buses`), and
     `render(frames)`: the next block of stereo float32 sound."""
@@ -98,6 +108,7 @@ class Mixer:
         self.streamed: dict[int, str] = {}  # clip -> the file its voices stream (streams.py)
         self._streams: dict[int, Stream] = {}  # voice -> its decoder
         self.wait_for_streams = False  # a capture waits for the decoders (the same file every run)
+        _warm_kernel()
 
     # ---------------------------------------------------------------- the frame's side
     def add_clip(self, samples: np.ndarray, rate: int) -> int:
