@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 from audio_scene import RATE, peak_frequency, rms
+from test_asteroids import Meshes
 
 from ecs_engine import World
 from ecs_engine.audio import Audio
@@ -18,18 +19,9 @@ from ecs_engine.ecs.timestep import FixedTimestep
 FRAMES = 240
 
 
-class _Meshes:
-    def __init__(self) -> None:
-        self.count = 0
-
-    def add(self, mesh) -> int:
-        self.count += 1
-        return self.count - 1
-
-
 def _run(path, music: bool = True, seed: int = 1) -> tuple[np.ndarray, Game]:
     world = World()
-    asteroids.build_world(world, _Meshes().add, seed=seed, autoplay=True)
+    asteroids.build_world(world, Meshes().add, seed=seed, autoplay=True)
     audio = world.resources[Audio] = Audio(str(path))
     start_sound(world)
     if not music:
