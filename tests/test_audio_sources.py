@@ -257,3 +257,19 @@ def test_a_slow_frame_does_not_stop_the_sound():
         assert (audio.mixer.frames_mixed - mixed) / RATE > 0.5 * busy
     finally:
         audio.close()
+
+
+def test_the_default_device_or_the_null_output_with_one_line():
+    """Audio("device") opens the sound device where there is one; where there is none (CI, the
+    GPU host) it says so in one line and plays into miniaudio's null output, and the game runs."""
+    audio = Audio("device")
+    try:
+        fallback, backend = audio.output.fallback, audio.output.backend
+        if fallback is None:
+            assert backend != "Null"
+        else:
+            assert backend == "Null" and "\n" not in fallback
+            assert fallback.startswith("no sound device") and fallback.endswith("sound goes to the null output")
+        audio.play(audio.clip(tone(440.0, 0.05)))
+    finally:
+        audio.close()
