@@ -44,6 +44,7 @@ class AudioSystem(System):
         self._clip = np.full(0, -1, np.int64)  # by entity index: the clip its voice plays
         self._paused = np.zeros(0, bool)
         self._seen = np.full(0, -1, np.int64)  # by entity index: the source already looked at (autoplay once)
+        self._structure = -1  # the world's structure version when orphaned voices were last looked for
 
     def _fit(self, top: int) -> None:
         size = len(self._voice)
@@ -89,7 +90,8 @@ class AudioSystem(System):
             fresh = self._seen[index] != ids
             self._seen[index] = ids
             playing = np.where(fresh, src.autoplay | src.playing, src.playing)
-            playing = playing & ~np.isin(ids, clear)
+            if clear:
+                playing = playing & ~np.isin(ids, clear)
             changed = (voice >= 0) & (self._clip[index] != src.clip)
             for row in np.flatnonzero(((voice >= 0) & ~playing) | changed):  # stopped, or another clip
                 mixer.stop(int(voice[row]))
@@ -121,8 +123,9 @@ class AudioSystem(System):
             live_voices.append(voice[rows])
             gains.append(np.c_[left[rows], right[rows]])
             pitches.append(src.pitch[rows] * factor[rows])
-        kept = np.concatenate(live_voices) if live_voices else np.zeros(0, np.int64)
-        self._stop_orphans(audio, kept)
+        if world.storage.structure_version != self._structure:  # a source destroyed, or its AudioSource gone?
+            self._structure = world.storage.structure_version
+            self._stop_orphans(audio, np.concatenate(live_voices) if live_voices else np.zeros(0, np.int64))
         shots = [(v, *audio.one_shots[v]) for v in audio.one_shots if audio.one_shots[v][0] is not None]
         if shots:
             voices, points, volume, pitch, near, far = (np.array(column) for column in zip(*shots))
@@ -178,16 +181,19 @@ def _column(batch: Any, component: type, field: str) -> np.ndarray | None:
     return None if column is None else column[: len(batch.entities)]
 
 
-def _poses(batch: Any, rows: Any) -> tuple[np.ndarray, np.ndarray]:
-    """World positions (k, 3) and unit axes ((k, 3, 3): columns right, up, back) of `rows`."""
+def _poses(batch: Any, rows: Any, axes: bool = True) -> tuple[np.ndarray, Any]:
+    """World positions (k, 3) and, with `axes`, unit axes ((k, 3, 3): columns right, up, back)
+    of `rows` (else None)."""
     world = _column(batch, WorldMatrix, "matrix")
     if world is not None:
         matrix = world[rows]
-        axes = matrix[:, :3, :3]
-        lengths = np.linalg.norm(axes, axis=1, keepdims=True)
-        return matrix[:, :3, 3], axes / np.where(lengths > 0, lengths, 1.0)
+        if not axes:
+            return matrix[:, :3, 3], None
+        turn = matrix[:, :3, :3]
+        lengths = np.linalg.norm(turn, axis=1, keepdims=True)
+        return matrix[:, :3, 3], turn / np.where(lengths > 0, lengths, 1.0)
     t = batch[Transform]
-    return t.position[rows], quat_to_mat3(t.rotation[rows])
+    return t.position[rows], quat_to_mat3(t.rotation[rows]) if axes else None
 
 
 def _sources(world: Any) -> Any:
@@ -196,10 +202,13 @@ def _sources(world: Any) -> Any:
         n = len(batch.entities)
         if not n:
             continue
-        position, axes = _poses(batch, slice(0, n))
+        src = batch[AudioSource]
+        coned = bool(((src.cone_inner < 360.0) | (src.cone_outer < 360.0)).any())
+        position, axes = _poses(batch, slice(0, n), axes=coned)  # no cone: no direction needed
         velocity = _column(batch, Velocity, "linear")
         velocity = np.zeros((n, 3)) if velocity is None else velocity
-        yield batch, (position, -axes[:, :, 2], velocity)
+        forward = -axes[:, :, 2] if axes is not None else np.zeros((n, 3))
+        yield batch, (position, forward, velocity)
 
 
 def _gains(src: Any, place: tuple[np.ndarray, ...], listener: Listener, doppler: float) -> tuple[np.ndarray, ...]:
