@@ -17,7 +17,7 @@ MODELS = ("inverse", "linear", "exponential")  # AudioSource.model's values, in 
 RANGES = {"volume": (0.0, 2.0), "pitch": (0.25, 4.0), "rolloff": (0.0, 8.0), "cone_outer_gain": (0.0, 1.0)}
 ANGLES = ("cone_inner", "cone_outer")
 DISTANCES = ("min_distance", "max_distance")
-SOURCE_LABELS = ("volume", "pitch", "rolloff", "model", "bus", "min_distance", "max_distance", "cone_outer_gain")
+SOURCE_LABELS = (*RANGES, "model", "bus", *DISTANCES, *(f"{name} (deg)" for name in ANGLES))
 
 rects: dict[str, tuple[float, float, float, float]] = {}  # the last UI's buttons, by label (tests click them)
 
@@ -89,14 +89,15 @@ class AudioPanel:
             self.focus = False
         if imgui.begin("Sound")[0]:
             imgui.text(f"output  {audio.output.backend}")
-            for bus in audio.buses:
-                changed, volume = imgui.slider_float(f"{bus}##volume", audio.volume(bus), 0.0, 2.0)
-                if changed:
-                    audio.set_volume(bus, max(volume, 0.0))
-                imgui.same_line()
-                changed, muted = imgui.checkbox(f"mute##{bus}", audio.muted(bus))
+            imgui.text("mute, volume")
+            for bus in audio.buses:  # the box first: the rows' boxes line up whatever the names
+                changed, muted = imgui.checkbox(f"##mute {bus}", audio.muted(bus))
                 if changed:
                     audio.mute(bus, muted)
                 _remember(imgui, f"mute {bus}")
+                imgui.same_line()
+                changed, volume = imgui.slider_float(f"{bus}##volume", audio.volume(bus), 0.0, 2.0)
+                if changed:
+                    audio.set_volume(bus, max(volume, 0.0))
             imgui.text_wrapped(audio.perf_line())
         imgui.end()
