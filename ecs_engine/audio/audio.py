@@ -263,8 +263,8 @@ class Audio:
         last, self._last_perf = self._last_perf, (seconds, frames)
         sound_s = (frames - last[1]) / self.sample_rate
         share = 100.0 * (seconds - last[0]) / sound_s if sound_s > 0 else 0.0
-        voices = len(self.owner)
-        return f"sound mix {share:.1f}% of a core, {voices} voice{'' if voices == 1 else 's'}, underruns {self.underruns}"
+        voices = f"{len(self.owner)} voice{'' if len(self.owner) == 1 else 's'}"
+        return f"sound mix {share:.1f}% of a core, {voices}, underruns {self.underruns}"
 
     def latency_ms(self) -> list[float]:
         """For the last voices started: ms from each start call to the block that mixed it first."""
