@@ -121,3 +121,15 @@ def test_ctrl_c_during_start_up_is_one_line_and_exit_130(command, library):
         proc.kill()
     assert proc.returncode == 130, err
     assert err.splitlines() == ["ecs-engine: interrupted"]
+
+
+def test_audio_out_for_a_scene_without_sound_is_one_line_and_writes_nothing(tmp_path):
+    wav = tmp_path / "x.wav"
+    proc = run_cli(
+        "demo", "cube", "--headless", "--frames", "2", "--width", "64", "--height", "48", "--audio-out", str(wav)
+    )
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
+    assert proc.stderr.strip().splitlines() == [
+        f"ecs-engine: error: --audio-out {wav}: cube makes no sound (no AudioPlugin), so there is nothing to capture"
+    ]
+    assert not wav.exists()

@@ -66,6 +66,7 @@ def run(
     editor: ImGuiSession | None = None
     try:
         session = make_session(options, source)
+        check_sound_capture(options, session)
         result.device = describe_device(session.device)
         if ui is not None:  # after the source's key callbacks: ImGui's GLFW backend chains to them
             editor = result.editor = ui(session, source.window)
@@ -106,6 +107,18 @@ def run(
             session.close()  # a Session that failed half-built has closed its source already
         result.validation_messages = source.validation_messages()
     return result
+
+
+def check_sound_capture(options: RunOptions, session: Session) -> None:
+    """`--audio-out` for a run that makes no sound (no AudioPlugin: a demo scene, a game without
+    it) would write nothing: one line, before the first frame."""
+    from ..audio import Audio
+
+    if options.audio_out is not None and Audio not in session.world.resources:
+        raise UsageError(
+            f"--audio-out {options.audio_out}: {options.scene} makes no sound (no AudioPlugin), so there is nothing "
+            "to capture"
+        )
 
 
 def run_frames(
