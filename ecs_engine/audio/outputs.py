@@ -84,6 +84,8 @@ class DeviceOutput:
                 raise UsageError(f"sound: the null output does not open either ({error})") from None
         self.device = device
         self.backend = str(getattr(device, "backend", "?"))
+        if self.backend == "Null" and self.fallback is None and not null:  # miniaudio's own last resort
+            self.fallback = "no sound device (no audio system answered): sound goes to the null output"
         feed = self._feed()
         next(feed)
         device.start(feed)
