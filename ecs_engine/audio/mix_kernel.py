@@ -14,8 +14,8 @@ float32 still places a read within a thousandth of a sample, and the position it
 float64), the interpolated samples (the reads), and the samples times each channel's gain added
 into the block (vector instructions again). One loop doing all three ran about four times
 slower: the reads' addresses come from the positions, which kept the compiler from vectorising
-any of it. The frames around
-a clip's end (wrapping, or running out) take the careful path, one at a time."""
+any of it. A block wholly inside the clip (nearly every voice's) is one such run; the frames
+around a clip's end (wrapping, or running out) take the careful path, one at a time."""
 
 from __future__ import annotations
 
