@@ -49,6 +49,7 @@ class Audio:
         # a sound that cannot play is said once, in one line, and the game goes on without it
         self.warn = warn or (lambda line: print(line, file=sys.stderr))
         self.said: list[str] = []
+        self.notice: str | None = None  # a line for the user, printed by AudioSystem's next run (no device)
         self.mixer = Mixer(sample_rate)
         self._names: list[str] = list(BUSES)
         self._volume = np.ones(len(BUSES))

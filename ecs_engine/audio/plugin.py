@@ -29,8 +29,8 @@ class AudioPlugin(Plugin):
         def open_audio(world: Any, session: Any) -> None:
             chosen = getattr(session.options, "audio_out", None) or self.output or "device"
             audio = Audio(chosen, self.sample_rate, self.doppler_factor)
-            if audio.output.fallback is not None and not getattr(session.options, "quiet", False):
-                print(audio.output.fallback)
+            if not getattr(session.options, "quiet", False):
+                audio.notice = audio.output.fallback  # said by the first frame, after the run's own first line
             world.resources[Audio] = audio
 
         def close_audio(world: Any) -> None:

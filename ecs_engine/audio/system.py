@@ -61,6 +61,9 @@ class AudioSystem(System):
         audio = world.resources.get(Audio)
         if audio is None:
             return
+        if audio.notice is not None:
+            print(audio.notice)
+            audio.notice = None
         ended = audio.collect()
         mixer = audio.mixer
         listener = _listener(world)
