@@ -4,7 +4,7 @@ command buffer. Without a device (`FrameGraph(None)`) it plans only (tests, `des
 
 from __future__ import annotations
 
-from collections.abc import Callable, Hashable
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, overload
 
@@ -18,6 +18,7 @@ from .compile import Structure, plan_structure
 from .context import PassContext
 from .describe import describe
 from .formats import attachment_formats
+from .graph_imports import GraphImports
 from .imports import Imports
 from .resources import GraphBuffer, GraphImage
 from .transient import Packing, Transients, aspect_of, estimated_requirements, pack
@@ -50,7 +51,7 @@ class Compiled:
     formats: dict[str, str] = field(default_factory=dict)  # resource -> its format's name
 
 
-class FrameGraph:
+class FrameGraph(GraphImports):
     UNREPLAYABLE = UNREPLAYABLE  # what Pass.key() returns to make every frame record again
     # call every pass's setup at each compile and fail where a pass's `declares()` stayed equal
     # while its declarations changed (tests/conftest.py turns it on)
@@ -114,77 +115,6 @@ class FrameGraph:
 
         return load_vulkan()
 
-    def import_image(
-        self,
-        name: str,
-        *,
-        handle: Any,
-        view: Any,
-        format: Any,
-        extent: tuple[int, int],
-        mips: int = 1,
-        samples: int = 1,
-        layout_before: Any,
-        layout_after: Any,
-        mip_views: tuple[Any, ...] = (),
-        layers: int = 1,
-        layer_views: tuple[Any, ...] = (),
-        stage_before: str | tuple[str, ...] = "ALL_COMMANDS",
-        token: Hashable = None,
-    ) -> None:
-        """An image owned outside the graph; importing a name again replaces it (a new
-        swapchain image each frame: only a change of format, size, layers, layouts or
-        stage_before recompiles). `layers`: an array image, `layer_views` one view of each
-        layer (what `begin_rendering(layer=k)` renders to). `stage_before`: the pipeline stages
-        (names as "COLOR_ATTACHMENT_OUTPUT") whose earlier work its first barrier waits for; a
-        swapchain image names the acquire semaphore's wait stage so that the two chain. Its
-        contents in layout_before are taken as visible to readers (a graph's final barrier makes
-        them so; work outside a graph makes its own): a first read in that layout waits for
-        nothing. `token`: see reuse_import."""
-        if layers < 1 or (layer_views and len(layer_views) != layers):
-            raise UsageError(f"image {name!r}: {layers} layer(s) and {len(layer_views)} layer view(s)")
-        views = (tuple(mip_views), layers, tuple(layer_views))
-        shape = ((int(extent[0]), int(extent[1])), mips, samples, layout_before, layout_after, *views)
-        if self._table.image(name, handle, view, format, *shape, stage_before, token):
-            self._changed()
-
-    def import_buffer(
-        self,
-        name: str,
-        *,
-        handle: Any,
-        size: int,
-        visible_after: bool = False,
-        stage_before: str | tuple[str, ...] = "ALL_COMMANDS",
-        token: Hashable = None,
-    ) -> None:
-        """A buffer owned outside the graph (a frame slot's: import it again each frame).
-        `visible_after`: commands recorded after the graph read it, so its last writes get a
-        final barrier to all later commands (as images get theirs to layout_after).
-        `stage_before`: as import_image's; "NONE" when nothing on the queue may still use it (a
-        frame slot's buffer, whose last frame's fence was waited for): no first barrier, so
-        this frame's first use need not wait for the frames still in flight."""
-        if self._table.buffer(name, handle, size, visible_after, stage_before, token):
-            self._changed()
-
-    def import_slot_buffers(self, buffers: dict[str, Any]) -> None:
-        """A frame slot's buffers (objects with .handle and .size) whose last use was fenced:
-        nothing to wait for. Each is made into an import once (its token: the buffer's identity,
-        handle and size: all an import of it is made from)."""
-        for name, buffer in buffers.items():
-            token = (id(buffer), buffer.handle, buffer.size)
-            if not self.reuse_import(name, token):
-                self.import_buffer(name, handle=buffer.handle, size=buffer.size, stage_before="NONE", token=token)
-
-    def reuse_import(self, name: str, token: Hashable) -> bool:
-        """Import `name` again as an import_image/import_buffer call given `token` made it: a
-        caller's cheap stand-in for the arguments, equal only where they are (an object and its
-        handle); False when nothing was made for the token (import it, with the token)."""
-        changed = self._table.reuse(name, token)
-        if changed:
-            self._changed()
-        return changed is not None
-
     @property
     def version(self) -> int:
         """Moves with every change a compile plans again for: passes, outputs, an import's shape,
@@ -201,19 +131,6 @@ class FrameGraph:
         for frame replay's check, which runs every frame)."""
         compiled = self.compiled
         return version == self._version and compiled is not None and compiled.signature == (extent, version)
-
-    def imports_snapshot(self) -> tuple:
-        """The imports as they stand (restore_imports brings them back)."""
-        return (self._version, self._table.snapshot())
-
-    def restore_imports(self, snapshot: tuple) -> bool:
-        """The imports of `snapshot` again, if it was taken at this version (their shapes are
-        then today's: nothing recompiles); False, and nothing done, otherwise."""
-        version, imports = snapshot
-        if version != self._version:
-            return False
-        self._table.restore(imports)
-        return True
 
     def _changed(self) -> None:
         """Passes, outputs or an import's shape changed: the next compile plans again."""
