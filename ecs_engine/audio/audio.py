@@ -22,7 +22,7 @@ from ..errors import UsageError
 from .clips import checked_samples, decode
 from .mixer import SAMPLE_RATE, Mixer
 from .outputs import CaptureOutput, DeviceOutput
-from .spatial import Listener, point_sources, spatialize
+from .spatial import Listener, heard_points
 from .streams import check_streamable
 
 BUSES = ("master", "music", "effects")
@@ -82,8 +82,6 @@ class Audio:
         if key not in self._clips:
             try:
                 if stream:
-                    if not os.path.isfile(name):
-                        raise UsageError(f"sound file {name}: no such file")
                     check_streamable(name)
                     self._clip_names.append(name)
                     self._clips[key] = self.mixer.add_stream(os.path.realpath(name))
@@ -238,9 +236,8 @@ class Audio:
         """(left, right, Doppler factor) of a one-shot heard from `point` by the listener."""
         if point is None:
             return volume, volume, 1.0
-        sources = point_sources(point[None, :], near, far)
-        left, right, factor = spatialize(self.listener, sources, self.doppler_factor)
-        return volume * float(left[0]), volume * float(right[0]), float(factor[0])
+        left, right, factor = heard_points(self.listener, point[None, :], volume, near, far, self.doppler_factor)
+        return float(left[0]), float(right[0]), float(factor[0])
 
     def stop(self, voice: int) -> None:
         """Stop a one-shot (with a short fade)."""

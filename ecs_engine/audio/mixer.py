@@ -181,7 +181,7 @@ class Mixer:
                     self._bus_gain = np.r_[self._bus_gain, np.ones(bus + 1 - len(self._bus_gain), np.float32)]
                 v.clip[voice], v.position[voice], v.pitch[voice] = clip, 0.0, pitch
                 v.gain[voice] = gains
-                v.gain_from[voice] = np.float32(gains) * self._bus_of(bus)  # a sound starts at its level
+                v.gain_from[voice] = np.float32(gains) * self._bus_gain[bus]  # a sound starts at its level
                 v.loop[voice], v.mono[voice], v.bus[voice] = loop, mono, bus
                 v.live[voice] = v.active[voice] = True
                 v.paused[voice] = v.stopping[voice] = False
@@ -223,9 +223,6 @@ class Mixer:
         v.gain_from[voice] = target
         if ended:
             v.live[voice] = False
-
-    def _bus_of(self, bus: int) -> float:
-        return float(self._bus_gain[bus]) if bus < len(self._bus_gain) else 1.0
 
     def render(self, frames: int) -> np.ndarray:
         """The next `frames` of sound, (frames, 2) float32: the queued commands applied first."""

@@ -107,16 +107,25 @@ class SourceColumns:
     cone_outer_gain: np.ndarray
 
 
-def point_sources(
-    positions: np.ndarray, near: np.ndarray | float = 1.0, far: np.ndarray | float = 1000.0
-) -> SourceColumns:
-    """Sources at `positions` ((N, 3)), heard by inverse distance between `near` and `far`, with
-    no cone, still: one-shot sounds played at a point."""
+def heard_points(
+    listener: Listener,
+    positions: np.ndarray,
+    volume: np.ndarray | float,
+    near: np.ndarray | float,
+    far: np.ndarray | float,
+    doppler_factor: float,
+) -> tuple[np.ndarray, ...]:
+    """(left gain, right gain, pitch factor) of one-shots played at `positions` ((N, 3)) with
+    `volume`: heard by inverse distance between `near` and `far`, with no cone, still (when
+    Audio.play starts one, and each frame after as the listener moves: AudioSystem)."""
     n = len(positions)
     ones, zeros = np.ones(n), np.zeros((n, 3))
     full = np.full(n, 360.0)
-    near, far = ones * near, ones * far
-    return SourceColumns(positions, zeros, zeros, np.full(n, INVERSE), near, far, ones, full, full, ones * 0)
+    sources = SourceColumns(
+        positions, zeros, zeros, np.full(n, INVERSE), ones * near, ones * far, ones, full, full, ones * 0
+    )
+    left, right, factor = spatialize(listener, sources, doppler_factor)
+    return volume * left, volume * right, factor
 
 
 def spatialize(listener: Listener, sources: SourceColumns, doppler_factor: float = 1.0) -> tuple[np.ndarray, ...]:

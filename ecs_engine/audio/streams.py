@@ -10,6 +10,7 @@ writes is the same every run."""
 
 from __future__ import annotations
 
+import os
 import threading
 from collections import deque
 
@@ -101,6 +102,8 @@ def check_streamable(path: str) -> None:
     """UsageError in one line unless miniaudio can open `path` to stream it (checked when the
     clip is made, not when a voice first plays it)."""
     miniaudio = load()
+    if not os.path.isfile(path):
+        raise UsageError(f"sound file {path}: no such file")
     try:
         info = miniaudio.get_file_info(path)
     except (miniaudio.DecodeError, miniaudio.MiniaudioError) as error:

@@ -27,7 +27,7 @@ from ..ecs.errors import describe_entity
 from ..ecs.schedule import System
 from ..maths.transform import quat_to_mat3
 from .audio import Audio
-from .spatial import Listener, SourceColumns, point_sources, spatialize
+from .spatial import Listener, SourceColumns, heard_points, spatialize
 
 
 class AudioSystem(System):
@@ -132,10 +132,10 @@ class AudioSystem(System):
         shots = [(v, *audio.one_shots[v]) for v in audio.one_shots if audio.one_shots[v][0] is not None]
         if shots:
             voices, points, volume, pitch, near, far = (np.array(column) for column in zip(*shots))
-            heard = point_sources(np.asarray(points, np.float64).reshape(-1, 3), near, far)
-            left, right, factor = spatialize(listener, heard, audio.doppler_factor)
+            at = np.asarray(points, np.float64).reshape(-1, 3)
+            left, right, factor = heard_points(listener, at, volume, near, far, audio.doppler_factor)
             live_voices.append(voices)
-            gains.append(np.c_[volume * left, volume * right])
+            gains.append(np.c_[left, right])
             pitches.append(pitch * factor)
         if live_voices:
             mixer.set(np.concatenate(live_voices), np.concatenate(gains), np.concatenate(pitches))
