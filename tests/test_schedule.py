@@ -149,6 +149,8 @@ def test_run_conditions_are_checked():
     assert not either(w)
     w.spawn(Transform(), AngularVelocity())
     assert either(w) and repr(either) == "any_with(Velocity) | any_with(Transform, AngularVelocity)"
+    empty = World()  # one condition asked of two worlds in turn: each keeps its own answer
+    assert not either(empty) and either(w) and not either(empty)
 
 
 def test_class_system_and_plain_function():

@@ -29,7 +29,6 @@ without one (the default) a stage pays one attribute test and nothing per system
 
 from __future__ import annotations
 
-import weakref
 from collections.abc import Callable, Iterable, Sequence
 from time import perf_counter_ns
 from typing import Any, Protocol
@@ -79,15 +78,14 @@ class AnyWith:
         if not groups or not all(groups):
             raise ValueError("any_with needs at least one component type")
         self.groups = groups
-        self._kept: tuple[Any, int, bool] = (None, -1, False)  # (weakref to the world, version, answer)
 
     def __call__(self, world: World) -> bool:
-        version = world.storage.structure_version
-        ref, kept_version, answer = self._kept
-        if kept_version == version and ref is not None and ref() is world:
-            return answer
-        answer = any(world.query(*group, write=()).count() for group in self.groups)
-        self._kept = (weakref.ref(world), version, answer)
+        # ecs/structural.py's answers, kept under this condition itself (inline: asked per system
+        # and frame)
+        kept = world.storage.answers
+        answer = kept.get(self)
+        if answer is None:
+            answer = kept[self] = any(world.query(*group, write=()).count() for group in self.groups)
         return answer
 
     def __or__(self, other: AnyWith) -> AnyWith:

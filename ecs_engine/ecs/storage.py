@@ -32,8 +32,8 @@ class Storage:
         self._table_ids: dict[frozenset[type[Component]], int] = {}
         # Bumped by every spawn, destroy, add and remove that is applied (not when queued).
         self.structure_version = 0
-        # (structure_version, {name: answer}): ecs/structural.py's answers, for that version
-        self.answers: tuple[int, dict[str, Any]] = (0, {})
+        # {name: answer}: ecs/structural.py's answers for this structure (a new dict at each bump)
+        self.answers: dict[Any, Any] = {}
         self._places: dict[int, tuple[int, ArchetypeTable, int]] = {}  # see located
         self.log: LifecycleLog | None = None  # made when something watches components come and go
         self.table_for(frozenset())
@@ -129,6 +129,7 @@ class Storage:
     def place_one(self, eid: int, types: frozenset[type[Component]], checked: Checked, tick: int) -> None:
         table = self.table_for(types)
         self.structure_version += 1
+        self.answers = {}
         row = table.push_one(eid, tick)
         columns = table.columns
         for key, f in table.fields.items():
@@ -143,6 +144,7 @@ class Storage:
     def place(self, ids: np.ndarray, types: frozenset[type[Component]], checked: Checked, tick: int) -> None:
         table = self.table_for(types)
         self.structure_version += 1
+        self.answers = {}
         rows = table.push(ids, tick)
         given = {(ct, name) for ct, vals in checked.items() for name in vals}
         table.fill_defaults(rows, exclude=given)
@@ -161,6 +163,7 @@ class Storage:
         if self.log is not None:
             self.log.destroyed(table, np.array([row]), np.array([eid], np.int64))
         self.structure_version += 1
+        self.answers = {}
         moved = table.remove_row(row)
         if moved:
             self.index.row[moved & INDEX_MASK] = row
@@ -172,6 +175,7 @@ class Storage:
             return
         index = ids & INDEX_MASK
         self.structure_version += 1
+        self.answers = {}
         tables = self.index.table[index]
         rows = self.index.row[index]
         for tid in np.unique(tables):
@@ -221,6 +225,7 @@ class Storage:
         if self.log is not None:
             self.log.moved(src, dst, rows, ids)
         self.structure_version += 1
+        self.answers = {}
         dst_rows = dst.push(ids, tick)
         for key, col in dst.columns.items():
             source = src.columns.get(key)

@@ -14,12 +14,10 @@ _MISSING = object()
 
 def structural(world: Any, name: str, answer: Callable[[Any], Any]) -> Any:
     """`answer(world)`, kept under `name` until the world's structure changes (one name, one
-    question: two answers under a name would be taken for each other)."""
-    storage = world.storage
-    kept = storage.answers
-    if kept[0] != storage.structure_version:
-        kept = storage.answers = (storage.structure_version, {})
-    value = kept[1].get(name, _MISSING)
+    question: two answers under a name would be taken for each other; schedule.py's AnyWith
+    keeps its answers here under itself)."""
+    kept = world.storage.answers  # emptied by every structural change (storage.py)
+    value = kept.get(name, _MISSING)
     if value is _MISSING:
-        value = kept[1][name] = answer(world)
+        value = kept[name] = answer(world)
     return value

@@ -45,7 +45,7 @@ class PipelinesPerTarget:
         chunk recorded: the pair made for them, made now the first time (on failure nothing
         changes)."""
         ctx = self.ctx
-        if formats == ctx.formats and gbuffer == ctx.gbuffer:
+        if (formats is ctx.formats or formats == ctx.formats) and gbuffer == ctx.gbuffer:
             return
         key = (formats, gbuffer)
         new = replace(ctx, formats=formats, gbuffer=gbuffer)

@@ -121,8 +121,9 @@ class ChunkExtract:
             self.threads(),
             None if skins is None else skins.key,
             *[(t.id, t.version, t.count, t.column_ticks[_HANDLE], t.column_ticks[_MATERIAL]) for t in tables],
-            *[(t.column_ticks.get(_SKIN), t.column_ticks.get(_COPY)) for t in tables],  # (weights: read each frame)
         )
+        if skins is not None:  # the rows' skins name their chunks' extra (weights: read each frame)
+            key += tuple((t.column_ticks.get(_SKIN), t.column_ticks.get(_COPY)) for t in tables)
         if key == self._chunks_key:
             return self._chunks
         out: list[Chunk] = []

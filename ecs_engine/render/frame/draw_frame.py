@@ -6,9 +6,9 @@ extent and output graph."""
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from functools import partial
-from typing import Any
+from typing import Any, NamedTuple
 
 from ..assets.materials import Materials
 from ..config import Form, Mode
@@ -22,14 +22,13 @@ from .jobs import FrameJobs, job_name
 from .replay import frame_key
 
 
-@dataclass(frozen=True)
-class FrameRequest:
+class FrameRequest(NamedTuple):
     """What one `Renderer.render` call asks (its arguments, made once there): the `world` to draw,
     `readback` of the target, the output image (`framebuffer`; None: the target's own) at
     `extent` (None: the target's size), the swapchain's semaphores to `wait` for and `signal`,
     and `dt` (seconds since the last frame, for temporal culling). Handed down unchanged through
     the editor's viewport (viewport.py, which names its own image and size) and the camera views
-    (views.py)."""
+    (views.py). A named tuple: made every frame, and a tuple is made in C."""
 
     world: Any
     readback: bool = False

@@ -19,7 +19,6 @@ scene is shaded under the docked panels.
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Any
 
 from ...gpu.array_image import nearest_sampler
@@ -167,7 +166,7 @@ class EditorViewport:
         try:
             # the target's own image when the caller named none (its form may change here, as
             # render's own path does), else named: the form asked stays for this frame
-            drawn = replace(request, framebuffer=None if framebuffer is None else target.color, extent=size)
+            drawn = request._replace(framebuffer=None if framebuffer is None else target.color, extent=size)
             return r.draw_scene(drawn)
         finally:
             r.target = output.target = window
