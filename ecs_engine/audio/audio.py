@@ -20,6 +20,7 @@ import numpy as np
 
 from ..errors import UsageError
 from .clips import checked_samples, decode
+from .limiter import check_settings
 from .mixer import SAMPLE_RATE, Mixer
 from .outputs import CaptureOutput, DeviceOutput
 from .spatial import Listener, heard_points
@@ -69,6 +70,7 @@ class Audio:
             self.output = CaptureOutput(self.mixer, output)
             self.mixer.wait_for_streams = True
         self._send_buses()
+        self.limiting: tuple[float, float] | None = (0.0, 0.1)  # limit()'s ceiling dB and release s
 
     # ------------------------------------------------------------------ clips
     def load(self, path: str | os.PathLike[str], stream: bool = False, strict: bool = False) -> int:
@@ -173,6 +175,20 @@ class Audio:
         gains[0] = own[0]
         return gains
 
+    def limit(self, ceiling_db: float | None = 0.0, release: float = 0.1) -> None:
+        """The master bus's peak limiter (limiter.py; on by default at 0 dB, 0.1 s): no sound
+        leaves above `ceiling_db` (dB of full scale, -60 to 0), and the gain it takes away comes
+        back over about `release` seconds; `ceiling_db` None turns it off (a mix over full scale
+        is then clipped by the device)."""
+        if ceiling_db is None:
+            self.limiting = None
+        else:
+            wrong = check_settings(ceiling_db, release)
+            if wrong is not None:
+                raise UsageError(f"Audio.limit: {wrong}")
+            self.limiting = (float(ceiling_db), float(release))
+        self.mixer.set_limiter(self.limiting)
+
     def _send_buses(self) -> None:
         self.mixer.set_buses(self.bus_gains())
 
@@ -255,14 +271,17 @@ class Audio:
 
     def perf_line(self) -> str:
         """The Perf window's and the perf lines' word on the sound: the mixer's share of a core
-        since the last line, the voices, the underruns."""
+        since the last line, the voices, the underruns, and how deep the limiter cut since then."""
         mixer = self.mixer
         seconds, frames = mixer.mix_seconds, mixer.frames_mixed
         last, self._last_perf = self._last_perf, (seconds, frames)
         sound_s = (frames - last[1]) / self.sample_rate
         share = 100.0 * (seconds - last[0]) / sound_s if sound_s > 0 else 0.0
         voices = f"{len(self.owner)} voice{'' if len(self.owner) == 1 else 's'}"
-        return f"sound mix {share:.1f}% of a core, {voices}, underruns {self.underruns}"
+        limiter = mixer.limiter
+        lowest = limiter.take_deepest() if limiter is not None else 1.0
+        limiting = f", limiting {20.0 * np.log10(lowest):.1f} dB" if lowest < 1.0 else ""
+        return f"sound mix {share:.1f}% of a core, {voices}, underruns {self.underruns}{limiting}"
 
     def latency_ms(self) -> list[float]:
         """For the last voices started: ms from each start call to the block that mixed it first."""

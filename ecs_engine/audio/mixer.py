@@ -2,7 +2,7 @@
 sound device's thread, or the frame itself when the sound is captured to a file).
 
 The frame never touches a voice. It queues commands (start, stop, pause, new gains and rates,
-bus volumes) under a short lock; the mixer takes the whole queue at the head of its next block
+bus volumes, the limiter's settings) under a short lock; the mixer takes the whole queue at the head of its next block
 and applies it there, so a slow frame only means a block mixed with the last parameters, never a
 gap in the sound. Voices that end (a clip that does not loop) are handed back the same way
 (`finished`)."""
@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from .limiter import Limiter, limit_block
 from .mix_kernel import mix_block
 from .streams import Stream
 
@@ -80,13 +81,14 @@ class _Voices:
 
 
 def _warm_kernel() -> None:
-    """Compile the kernel (or load it from numba's cache) on this thread, not the sound device's:
+    """Compile the kernels (or load it from numba's cache) on this thread, not the sound device's:
     there it would wait for the GIL at each step of loading while the frame holds it, and the
     sound would stop for as long as the frame runs Python (measured: the whole of a 0.5 s frame)."""
     one, i64, f64, yes = np.ones(1, np.int64), np.zeros(1, np.int64), np.zeros(1), np.ones(1, bool)
     gains = np.zeros((1, 2), np.float32)
     mix_block(np.zeros((2, 4), np.float32), np.zeros(4, np.float32), i64, one * 2, one, i64, f64, f64 + 1.0,
               gains, gains.copy(), yes, yes.copy(), ~yes)  # fmt: skip
+    limit_block(np.ones((2, 4), np.float32), 0.5, 0.01, 1.0)
 
 
 class Mixer:
@@ -110,6 +112,7 @@ class Mixer:
         self.streamed: dict[int, str] = {}  # clip -> the file its voices stream (streams.py)
         self._streams: dict[int, Stream] = {}  # voice -> its decoder
         self.wait_for_streams = False  # a capture waits for the decoders (the same file every run)
+        self.limiter: Limiter | None = Limiter(sample_rate)  # the master's last step (limiter.py)
         _warm_kernel()
 
     # ---------------------------------------------------------------- the frame's side
@@ -154,6 +157,11 @@ class Mixer:
         """Each bus's gain, its parents' (the master's) already multiplied in."""
         with self._lock:
             self._queue.append(("buses", np.array(gains, np.float32)))
+
+    def set_limiter(self, settings: tuple[float, float] | None) -> None:
+        """The master limiter's (ceiling in dB, release in s), or None: off."""
+        with self._lock:
+            self._queue.append(("limiter", settings))
 
     def finished(self) -> list[int]:
         """The voices whose clips ended, or whose stop faded out, since the last call (they are
@@ -204,6 +212,14 @@ class Mixer:
                         v.gain_from[voice] = 0.0  # back in with a fade, not a click
             elif kind == "buses":
                 self._bus_gain = command[1]
+            elif kind == "limiter":
+                settings = command[1]
+                if settings is None:
+                    self.limiter = None
+                elif self.limiter is None:
+                    self.limiter = Limiter(self.sample_rate, *settings)
+                else:
+                    self.limiter.set(*settings)
 
     def _close_stream(self, voice: int) -> None:
         stream = self._streams.pop(voice, None)
@@ -234,6 +250,8 @@ class Mixer:
         planes = np.zeros((2, frames), np.float32)  # the kernel's: each channel contiguous
         if self._used:
             self._mix(planes, bank, began)
+        if self.limiter is not None:
+            self.limiter.process(planes)
         self.frames_mixed += frames
         out = np.ascontiguousarray(planes.T)
         self.mix_seconds += time.perf_counter() - began
