@@ -57,9 +57,9 @@ def tube(rings=14, sides=10, radius=0.25, height=2.6):
     return positions.astype(np.float32), normals.astype(np.float32), indices, joints, weights
 
 
-def tube_file(path: Path, material_color=(0.8, 0.5, 0.2, 1.0)) -> Path:
+def tube_file(path: Path, material_color=(0.8, 0.5, 0.2, 1.0), rings=14, sides=10) -> Path:
     b = GltfBuilder()
-    positions, normals, indices, joints, weights = tube()
+    positions, normals, indices, joints, weights = tube(rings=rings, sides=sides)
     joints_1 = b.accessor(joints[:, 4:], UNSIGNED_SHORT, target=ARRAY_BUFFER)
     primitive = b.primitive(
         positions, indices, normals=normals, material=b.material("skin", base_color=material_color, metallic=0.0),

@@ -12,13 +12,26 @@ collapses make when the mesh moves, bounded per collapsed vertex by what it no l
 
 The level's error is the larger of this and the rest shape's, so the rule that picks levels by
 projected error keeps a deformed mesh at full detail until what a pose could move is under a
-pixel."""
+pixel.
+
+So that the levels have little of this error to begin with, a skinned mesh is simplified in
+regions (`joint_regions`): each triangle belongs to the joint with the most weight over its
+corners, a vertex that triangles of several joints share is copied once per joint, and the
+simplifier keeps the open borders this makes (with the mesh's own) where they are. No collapse
+crosses from one joint's region into another's, where the weights change most. The character
+demo's quarter level (of 2,880 triangles), merged across its joints, had 720 triangles and an
+error of 0.19 m, all of it what moving would fold; kept apart, 742 triangles and 0.11 m (its
+rest shape's; moving, 0.063 m). The seams cost a level some triangles (a
+region's border stays whole), and the copies are drawn as the split vertices of a UV seam
+are: the same position, weights and normal each side."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from .mesh_data import MeshData
+from .morph_targets import MorphTargets
+from .skin_weights import SkinWeights
 
 
 def deform_error(mesh: MeshData, weld: np.ndarray, positions: np.ndarray, root: np.ndarray) -> float:
@@ -49,3 +62,33 @@ def deform_error(mesh: MeshData, weld: np.ndarray, positions: np.ndarray, root: 
         deltas = mesh.morph.positions.astype(np.float64)  # (T, V, 3)
         error = max(error, float(np.linalg.norm(deltas[:, src] - deltas[:, dst], axis=2).max()))
     return error
+
+
+def joint_regions(mesh: MeshData) -> tuple[MeshData, np.ndarray] | None:
+    """A skinned `mesh` cut into its joints' regions (see the module): the same triangles, each
+    vertex that triangles of several joints share copied once per joint (every attribute carried),
+    and each vertex's region (its triangles' joint). None for a mesh without a skin."""
+    skin = mesh.skin
+    if skin is None:
+        return None
+    corners = mesh.indices.reshape(-1, 3).astype(np.int64)
+    count = int(skin.joints.max(initial=0)) + 1
+    # each triangle's joint: the most weight summed over its corners' influences (ties: the lowest)
+    pairs = np.arange(len(corners))[:, None] * count + skin.joints.astype(np.int64)[corners].reshape(len(corners), -1)
+    keys, at = np.unique(pairs.reshape(-1), return_inverse=True)
+    sums = np.bincount(at.reshape(-1), skin.weights.astype(np.float64)[corners].reshape(-1), minlength=len(keys))
+    triangle = keys // count
+    order = np.lexsort((-sums, triangle))  # by triangle, then the heaviest joint first (stable: lowest)
+    heaviest = order[np.r_[0, np.flatnonzero(np.diff(triangle[order])) + 1]] if len(order) else order
+    region = keys[heaviest] % count  # (T,)
+    copies, indices = np.unique((corners * count + region[:, None]).reshape(-1), return_inverse=True)
+    source = copies // count
+    morph = mesh.morph
+    if morph is not None:
+        deltas = morph.positions[:, source], morph.normals[:, source], morph.tangents[:, source]
+        morph = MorphTargets(*deltas, morph.weights)
+    cut = MeshData.from_arrays(
+        mesh.positions[source], mesh.normals[source], indices.astype(np.uint32), mesh.name, mesh.uvs[source],
+        tangents=mesh.tangents[source], skin=SkinWeights(skin.joints[source], skin.weights[source]), morph=morph,
+    )  # fmt: skip
+    return cut, copies % count

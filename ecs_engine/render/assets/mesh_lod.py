@@ -35,7 +35,7 @@ from typing import Final
 import fast_simplification
 import numpy as np
 
-from .lod_deform import deform_error
+from .lod_deform import deform_error, joint_regions
 from .lod_error import level_error
 from .mesh_data import MeshData
 from .morph_targets import MorphTargets
@@ -118,7 +118,10 @@ def build_lods(
         raise ValueError(f"LOD ratios must be strictly decreasing fractions in (0, 1), got {ratios}")
     if isinstance(min_triangles, bool) or not isinstance(min_triangles, (int, np.integer)) or min_triangles < 1:
         raise ValueError(f"min_triangles must be an integer of at least 1, got {min_triangles!r}")
-    welded = _welded(mesh)
+    regions = joint_regions(mesh)  # a skinned mesh is simplified within each joint's region
+    if regions is not None:
+        mesh = regions[0]
+    welded = _welded(mesh, None if regions is None else regions[1])
     valence = np.bincount(welded.triangles.reshape(-1)).astype(np.float64)
     if float((valence * valence).sum()) > MAX_VALENCE_SQUARES:
         return []
@@ -129,7 +132,7 @@ def build_lods(
         target = int(ratio * total)
         if target < min_triangles:
             break
-        level = _simplified(mesh, welded, target, f"{mesh.name} lod{i}")
+        level = _simplified(mesh, welded, target, f"{mesh.name} lod{i}", keep_borders=regions is not None)
         if level is None:
             break
         lod_mesh, level_error = level
@@ -185,14 +188,18 @@ def lod_for_screen_size(
     return np.maximum(fits.sum(axis=1) - 1, 0).astype(np.int32)
 
 
-def _welded(mesh: MeshData) -> _Welded:
+def _welded(mesh: MeshData, region: np.ndarray | None = None) -> _Welded:
     """Merge vertices at the same position (split by UV seams or hard edges) so the simplifier
-    sees one connected surface, and drop triangles with no area."""
+    sees one connected surface, and drop triangles with no area. With `region` (per vertex),
+    only vertices of the same region merge (lod_deform.py's joint regions)."""
     positions = mesh.positions + np.float32(0.0)  # -0.0 becomes 0.0, so equal positions have equal bytes
-    keys = np.ascontiguousarray(positions).view(np.dtype((np.void, 12))).reshape(-1)
+    if region is not None:
+        positions = np.c_[positions, region.astype(np.float32)]  # (joint numbers are exact in float32)
+    keys = np.ascontiguousarray(positions).view(np.dtype((np.void, positions.itemsize * positions.shape[1])))
+    keys = keys.reshape(-1)
     _, first, weld = np.unique(keys, return_index=True, return_inverse=True)
     weld = weld.reshape(-1)
-    points = positions[first].astype(np.float64)
+    points = positions[first, :3].astype(np.float64)
     corners = mesh.indices.reshape(-1, 3).astype(np.int64)
     triangles = weld[corners]
     a, b, c = (points[triangles[:, k]] for k in range(3))
@@ -207,13 +214,17 @@ def _welded(mesh: MeshData) -> _Welded:
     return _Welded(points, weld, triangles[keep], corners[keep])
 
 
-def _simplified(mesh: MeshData, welded: _Welded, target: int, name: str) -> tuple[MeshData, float] | None:
+def _simplified(
+    mesh: MeshData, welded: _Welded, target: int, name: str, keep_borders: bool = False
+) -> tuple[MeshData, float] | None:
     """One level of about `target` triangles and its error; None if the library's output has
-    non-finite positions."""
+    non-finite positions. `keep_borders`: no open border's vertex collapses (the joint regions'
+    seams)."""
     with _LIBRARY_LOCK:
         points, faces, collapses = fast_simplification.simplify(
-            welded.positions, welded.triangles.astype(np.int32), target_count=target, return_collapses=True
-        )
+            welded.positions, welded.triangles.astype(np.int32), target_count=target, return_collapses=True,
+            preserve_border=keep_borders,
+        )  # fmt: skip
     points = np.asarray(points, dtype=np.float64)
     if not np.isfinite(points).all():
         return None
