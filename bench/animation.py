@@ -14,7 +14,8 @@ issue): 10k characters at 120 FPS end to end without shadows, i.e. max(CPU, GPU)
 JSON (schema_version 1): {"benchmark": "animation", "quick", "machine", "device", "config":
 {"width", "height", "warmup", "frames", "counts", "threads", "mode", "joints", "vertices"}, "results":
 [{"characters", "shadows", "still", "cpu_ms", "gpu_ms", "systems_ms": {name: ms}, "us_per_joint",
-"ns_per_vertex", "runs"}], "target": {"characters", "frame_ms", "limit_ms", "met"}}.
+"ns_per_vertex", "runs" (each with "python_loop_ns": the core's speed before and after it,
+machine.py)}], "target": {"characters", "frame_ms", "limit_ms", "met"}}.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ import numpy as np
 from ecs_engine.jobs import default_threads
 
 from . import timed_frames
+from .machine import python_loop_ns
 
 COUNTS = (1_000, 10_000)
 QUICK_COUNTS = (20,)
@@ -142,7 +144,9 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
             for n, shadows, still in configs if round_ == 0 else configs[::-1]:
                 what = "still meshes" if still else f"shadows {'on' if shadows else 'off'}"
                 with progress.step(f"round {round_ + 1}: {n:,} characters, {what}"):
+                    before = python_loop_ns()
                     measured = measure(gpu, n, shadows, still, warmup, frames, Path(folder), mode)
+                    measured["python_loop_ns"] = [before, python_loop_ns()]
                     runs.setdefault((n, shadows, still), []).append(measured)
         device_info = gpu[0].info.__dict__
     results = []
