@@ -64,6 +64,10 @@ def deform_error(mesh: MeshData, weld: np.ndarray, positions: np.ndarray, root: 
     return error
 
 
+#: Triangle-by-joint sums made at once by joint_regions (8 bytes each).
+_REGION_CELLS = 1 << 22
+
+
 def joint_regions(mesh: MeshData) -> tuple[MeshData, np.ndarray] | None:
     """A skinned `mesh` cut into its joints' regions (see the module): the same triangles, each
     vertex that triangles of several joints share copied once per joint (every attribute carried),
@@ -73,14 +77,14 @@ def joint_regions(mesh: MeshData) -> tuple[MeshData, np.ndarray] | None:
         return None
     corners = mesh.indices.reshape(-1, 3).astype(np.int64)
     count = int(skin.joints.max(initial=0)) + 1
-    # each triangle's joint: the most weight summed over its corners' influences (ties: the lowest)
-    pairs = np.arange(len(corners))[:, None] * count + skin.joints.astype(np.int64)[corners].reshape(len(corners), -1)
-    keys, at = np.unique(pairs.reshape(-1), return_inverse=True)
-    sums = np.bincount(at.reshape(-1), skin.weights.astype(np.float64)[corners].reshape(-1), minlength=len(keys))
-    triangle = keys // count
-    order = np.lexsort((-sums, triangle))  # by triangle, then the heaviest joint first (stable: lowest)
-    heaviest = order[np.r_[0, np.flatnonzero(np.diff(triangle[order])) + 1]] if len(order) else order
-    region = keys[heaviest] % count  # (T,)
+    region = np.empty(len(corners), np.int64)
+    block = max(1, _REGION_CELLS // count)  # triangles summed at once: bounded memory
+    for start in range(0, len(corners), block):
+        part = corners[start : start + block]
+        rows = np.repeat(np.arange(len(part)), 3 * skin.joints.shape[1])
+        cells = rows * count + skin.joints[part].reshape(-1)
+        summed = np.bincount(cells, skin.weights[part].reshape(-1).astype(np.float64), len(part) * count)
+        region[start : start + len(part)] = summed.reshape(len(part), count).argmax(axis=1)  # ties: the lowest
     copies, indices = np.unique((corners * count + region[:, None]).reshape(-1), return_inverse=True)
     source = copies // count
     morph = mesh.morph
