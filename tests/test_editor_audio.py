@@ -1,6 +1,6 @@
 """The editor's sound (app/editor_audio.py): the inspector's AudioSource section plays and stops
 the selected source with its button, and the Sound window (a tab beside Perf) mutes a bus with
-its box."""
+its box and turns the master's limiter off and on."""
 
 from __future__ import annotations
 
@@ -44,6 +44,13 @@ def test_play_stop_and_mute_from_the_editor():
         _click(scene, "mute music")
         assert audio.muted("music") and not audio.muted("effects")
         assert audio.bus_gains()[audio.bus("music")] == 0.0
+        assert audio.limiting == (0.0, 0.1)  # on by default
+        _click(scene, "limiter")
+        assert audio.limiting is None
+        audio.mixer.render(16)  # (the mixer takes the setting at its next block)
+        assert audio.mixer.limiter is None
+        _click(scene, "limiter")
+        assert audio.limiting == (-1.0, 0.1)
     finally:
         world.resources[Audio].close()
         scene.close()

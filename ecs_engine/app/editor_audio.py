@@ -99,5 +99,23 @@ class AudioPanel:
                 changed, volume = imgui.slider_float(f"{bus}##volume", audio.volume(bus), 0.0, 2.0)
                 if changed:
                     audio.set_volume(bus, max(volume, 0.0))
+            _limiter(imgui, audio)
             imgui.text_wrapped(audio.perf_line())
         imgui.end()
+
+
+def _limiter(imgui: Any, audio: Audio) -> None:
+    """The master limiter (audio/limiter.py): on or off, its ceiling in dB."""
+    on = audio.limiting is not None
+    changed, on = imgui.checkbox("##limiter", on)
+    _remember(imgui, "limiter")
+    if changed:
+        audio.limit(-1.0 if on else None)
+    imgui.same_line()
+    if audio.limiting is None:
+        imgui.text("limiter off")
+        return
+    ceiling, release = audio.limiting
+    changed, ceiling = imgui.slider_float("limiter", ceiling, -24.0, 0.0, "ceiling %.1f dB")
+    if changed:
+        audio.limit(min(max(ceiling, -24.0), 0.0), release)
