@@ -28,6 +28,11 @@ from typing import Any
 
 from ecs_engine.app.scenes import SCENES
 
+try:
+    from .machine import standalone
+except ImportError:  # run as a script (the standalone use below)
+    from machine import standalone  # type: ignore[import-not-found,no-redef]
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scene", default="cube", choices=SCENES, help="demo scene (default: cube, one cube)")
@@ -129,21 +134,8 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
     }
 
 
-class _Silent:
-    total = 0
-
-    def step(self, what: str) -> Any:
-        from contextlib import nullcontext
-
-        return nullcontext()
-
-
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="tiny sizes: a smoke run in seconds")
-    add_arguments(parser)
-    run(parser.parse_args(argv), {}, _Silent())
-    return 0
+    return standalone(__doc__, add_arguments, run, argv)
 
 
 if __name__ == "__main__":

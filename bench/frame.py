@@ -26,8 +26,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import replace
 from typing import Any
 
@@ -39,9 +37,9 @@ from ecs_engine.app.settings import RunOptions
 from ecs_engine.render.frame.renderer import MODES
 
 try:
-    from .machine import python_loop_ns
+    from .machine import python_loop_ns, standalone
 except ImportError:  # run as a script (the standalone use below)
-    from machine import python_loop_ns  # type: ignore[import-not-found,no-redef]
+    from machine import python_loop_ns, standalone  # type: ignore[import-not-found,no-redef]
 
 THREADS = 1
 TARGET_MS = 0.15  # issue 17: the 1-cube scene, instanced, one thread
@@ -197,22 +195,8 @@ def run(args: argparse.Namespace, machine: dict[str, Any], progress: Any) -> dic
     }
 
 
-class _Silent:
-    """Progress for the standalone run: nothing printed."""
-
-    total = 0
-
-    @contextmanager
-    def step(self, what: str) -> Iterator[None]:
-        yield
-
-
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="tiny sizes: a smoke run in seconds")
-    add_arguments(parser)
-    run(parser.parse_args(argv), {}, _Silent())
-    return 0
+    return standalone(__doc__, add_arguments, run, argv)
 
 
 if __name__ == "__main__":

@@ -189,3 +189,26 @@ if __name__ == "__main__":  # pragma: no cover - convenience
     import json
 
     print(json.dumps(describe(), indent=2))
+
+
+class _Silent:
+    """Progress for a standalone run: nothing printed."""
+
+    total = 0
+
+    def step(self, what: str) -> Any:
+        from contextlib import nullcontext
+
+        return nullcontext()
+
+
+def standalone(doc: str | None, add_arguments: Any, run: Any, argv: list[str] | None = None) -> int:
+    """A benchmark module run as a script (`python3 bench/NAME.py`, with whichever ecs_engine is
+    importable): its options and --quick, its run, no JSON written."""
+    import argparse
+
+    parser = argparse.ArgumentParser(description=(doc or "").splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="tiny sizes: a smoke run in seconds")
+    add_arguments(parser)
+    run(parser.parse_args(argv), {}, _Silent())
+    return 0
