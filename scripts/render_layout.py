@@ -148,4 +148,4 @@ FIXUPS = [
 ]
 # files that name the old paths on purpose (after their fix-ups): never renamed, nor checked
 # (they run older trees too: old against new)
-KEEP_OLD_PATHS = ("scripts/ab_frames.py", "bench/gpu_memory.py", "bench/lights.py")
+KEEP_OLD_PATHS = ("scripts/ab_frames.py", "bench/gpu_memory.py", "bench/lights.py", "bench/bytecodes.py")
