@@ -30,8 +30,6 @@ from __future__ import annotations
 import numpy as np
 
 from .mesh_data import MeshData
-from .morph_targets import MorphTargets
-from .skin_weights import SkinWeights
 
 
 def deform_error(mesh: MeshData, weld: np.ndarray, positions: np.ndarray, root: np.ndarray) -> float:
@@ -87,12 +85,9 @@ def joint_regions(mesh: MeshData) -> tuple[MeshData, np.ndarray] | None:
         region[start : start + len(part)] = summed.reshape(len(part), count).argmax(axis=1)  # ties: the lowest
     copies, indices = np.unique((corners * count + region[:, None]).reshape(-1), return_inverse=True)
     source = copies // count
-    morph = mesh.morph
-    if morph is not None:
-        deltas = morph.positions[:, source], morph.normals[:, source], morph.tangents[:, source]
-        morph = MorphTargets(*deltas, morph.weights)
+    morph = None if mesh.morph is None else mesh.morph.vertices(source)
     cut = MeshData.from_arrays(
         mesh.positions[source], mesh.normals[source], indices.astype(np.uint32), mesh.name, mesh.uvs[source],
-        tangents=mesh.tangents[source], skin=SkinWeights(skin.joints[source], skin.weights[source]), morph=morph,
+        tangents=mesh.tangents[source], skin=skin.vertices(source), morph=morph,
     )  # fmt: skip
     return cut, copies % count

@@ -38,8 +38,6 @@ import numpy as np
 from .lod_deform import deform_error, joint_regions
 from .lod_error import level_error
 from .mesh_data import MeshData
-from .morph_targets import MorphTargets
-from .skin_weights import SkinWeights
 
 __all__ = [
     "DEFAULT_RATIOS",
@@ -252,12 +250,8 @@ def _simplified(
     vertices, indices = np.unique(chosen.reshape(-1), return_inverse=True)
     positions = points[rank[welded.weld[vertices]]]
     normals = _facing_normals(positions, indices.reshape(-1, 3), mesh.normals[vertices].astype(np.float64))
-    skin = None if mesh.skin is None else SkinWeights(mesh.skin.joints[vertices], mesh.skin.weights[vertices])
-    morph = mesh.morph
-    if morph is not None:
-        morph = MorphTargets(
-            morph.positions[:, vertices], morph.normals[:, vertices], morph.tangents[:, vertices], morph.weights
-        )
+    skin = None if mesh.skin is None else mesh.skin.vertices(vertices)
+    morph = None if mesh.morph is None else mesh.morph.vertices(vertices)
     indices = indices.astype(np.uint32)
     lod = MeshData.from_arrays(positions, normals, indices, name, mesh.uvs[vertices], skin=skin, morph=morph)
     error = level_error(welded.positions, welded.triangles, root, rank, used, points, rank[mapped[kept]])

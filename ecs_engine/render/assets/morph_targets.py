@@ -58,6 +58,10 @@ class MorphTargets:
     def vertex_count(self) -> int:
         return int(self.positions.shape[1])
 
+    def vertices(self, rows: np.ndarray) -> MorphTargets:
+        """The deltas of vertices `rows`, in that order (a level of detail's, a cut mesh's)."""
+        return MorphTargets(self.positions[:, rows], self.normals[:, rows], self.tangents[:, rows], self.weights)
+
     def applied(self, weights: np.ndarray, positions: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(positions, normals) of the mesh morphed by `weights` (T,): the CPU's reference."""
         w = np.asarray(weights, np.float64)[: self.count]

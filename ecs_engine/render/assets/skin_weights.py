@@ -54,6 +54,10 @@ class SkinWeights:
     def vertex_count(self) -> int:
         return int(self.joints.shape[0])
 
+    def vertices(self, rows: np.ndarray) -> SkinWeights:
+        """The weights of vertices `rows`, in that order (a level of detail's, a cut mesh's)."""
+        return SkinWeights(self.joints[rows], self.weights[rows])
+
     def largest_joint(self) -> int:
         """The largest joint index a vertex uses (with a weight above 0); -1 for no vertex."""
         used = self.joints[self.weights > 0]
