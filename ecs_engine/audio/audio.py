@@ -20,7 +20,7 @@ import numpy as np
 
 from ..errors import UsageError
 from .clips import checked_samples, decode
-from .limiter import check_settings
+from .limiter import CEILING_DB, RELEASE_S, check_settings
 from .mixer import SAMPLE_RATE, Mixer
 from .outputs import CaptureOutput, DeviceOutput
 from .spatial import Listener, heard_points
@@ -70,7 +70,7 @@ class Audio:
             self.output = CaptureOutput(self.mixer, output)
             self.mixer.wait_for_streams = True
         self._send_buses()
-        self.limiting: tuple[float, float] | None = (0.0, 0.1)  # limit()'s ceiling dB and release s
+        self.limiting: tuple[float, float] | None = (CEILING_DB, RELEASE_S)  # limit()'s ceiling dB and release s
 
     # ------------------------------------------------------------------ clips
     def load(self, path: str | os.PathLike[str], stream: bool = False, strict: bool = False) -> int:
@@ -175,7 +175,7 @@ class Audio:
         gains[0] = own[0]
         return gains
 
-    def limit(self, ceiling_db: float | None = 0.0, release: float = 0.1) -> None:
+    def limit(self, ceiling_db: float | None = CEILING_DB, release: float = RELEASE_S) -> None:
         """The master bus's peak limiter (limiter.py; on by default at 0 dB, 0.1 s): no sound
         leaves above `ceiling_db` (dB of full scale, -60 to 0), and the gain it takes away comes
         back over about `release` seconds; `ceiling_db` None turns it off (a mix over full scale

@@ -19,6 +19,10 @@ import math
 import numpy as np
 from numba import njit
 
+#: The limiter's settings until a game sets its own (Audio.limit): the ceiling in dB of full
+#: scale, and seconds for the gain to come back within 1/e.
+CEILING_DB, RELEASE_S = 0.0, 0.1
+
 
 @njit(nogil=True, cache=True)
 def limit_block(planes, ceiling, recover, gain):  # pragma: no cover (compiled)
@@ -42,7 +46,7 @@ def limit_block(planes, ceiling, recover, gain):  # pragma: no cover (compiled)
 class Limiter:
     """The limiter's settings and state, on the mixer's thread."""
 
-    def __init__(self, sample_rate: int, ceiling_db: float = 0.0, release: float = 0.1) -> None:
+    def __init__(self, sample_rate: int, ceiling_db: float = CEILING_DB, release: float = RELEASE_S) -> None:
         self.sample_rate = sample_rate
         self.ceiling = self.recover = 0.0
         self.set(ceiling_db, release)

@@ -2,10 +2,10 @@
 sound device's thread, or the frame itself when the sound is captured to a file).
 
 The frame never touches a voice. It queues commands (start, stop, pause, new gains and rates,
-bus volumes, the limiter's settings) under a short lock; the mixer takes the whole queue at the head of its next block
-and applies it there, so a slow frame only means a block mixed with the last parameters, never a
-gap in the sound. Voices that end (a clip that does not loop) are handed back the same way
-(`finished`)."""
+bus volumes, the limiter's settings) under a short lock; the mixer takes the whole queue at the
+head of its next block and applies it there, so a slow frame only means a block mixed with the
+last parameters, never a gap in the sound. Voices that end (a clip that does not loop) are
+handed back the same way (`finished`)."""
 
 from __future__ import annotations
 
@@ -81,8 +81,8 @@ class _Voices:
 
 
 def _warm_kernel() -> None:
-    """Compile the kernels (or load it from numba's cache) on this thread, not the sound device's:
-    there it would wait for the GIL at each step of loading while the frame holds it, and the
+    """Compile the kernels (or load them from numba's cache) on this thread, not the sound device's:
+    there they would wait for the GIL at each step of loading while the frame holds it, and the
     sound would stop for as long as the frame runs Python (measured: the whole of a 0.5 s frame)."""
     one, i64, f64, yes = np.ones(1, np.int64), np.zeros(1, np.int64), np.zeros(1), np.ones(1, bool)
     gains = np.zeros((1, 2), np.float32)
