@@ -125,11 +125,15 @@ class Storage:
             for name in ct.__fields__
         }
 
+    def _restructured(self) -> None:
+        """A spawn, destroy, add or remove is applied: a new structure version, no answers kept."""
+        self.structure_version += 1
+        self.answers = {}
+
     # ------------------------------------------------------------------ spawn
     def place_one(self, eid: int, types: frozenset[type[Component]], checked: Checked, tick: int) -> None:
         table = self.table_for(types)
-        self.structure_version += 1
-        self.answers = {}
+        self._restructured()
         row = table.push_one(eid, tick)
         columns = table.columns
         for key, f in table.fields.items():
@@ -143,8 +147,7 @@ class Storage:
 
     def place(self, ids: np.ndarray, types: frozenset[type[Component]], checked: Checked, tick: int) -> None:
         table = self.table_for(types)
-        self.structure_version += 1
-        self.answers = {}
+        self._restructured()
         rows = table.push(ids, tick)
         given = {(ct, name) for ct, vals in checked.items() for name in vals}
         table.fill_defaults(rows, exclude=given)
@@ -162,8 +165,7 @@ class Storage:
         table, row = self.locate(eid)
         if self.log is not None:
             self.log.destroyed(table, np.array([row]), np.array([eid], np.int64))
-        self.structure_version += 1
-        self.answers = {}
+        self._restructured()
         moved = table.remove_row(row)
         if moved:
             self.index.row[moved & INDEX_MASK] = row
@@ -174,8 +176,7 @@ class Storage:
             self.destroy_one(int(ids[0]))
             return
         index = ids & INDEX_MASK
-        self.structure_version += 1
-        self.answers = {}
+        self._restructured()
         tables = self.index.table[index]
         rows = self.index.row[index]
         for tid in np.unique(tables):
@@ -224,8 +225,7 @@ class Storage:
         """Copy rows to `dst` (new columns get defaults), swap-remove them from `src`."""
         if self.log is not None:
             self.log.moved(src, dst, rows, ids)
-        self.structure_version += 1
-        self.answers = {}
+        self._restructured()
         dst_rows = dst.push(ids, tick)
         for key, col in dst.columns.items():
             source = src.columns.get(key)
