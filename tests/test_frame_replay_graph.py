@@ -140,7 +140,8 @@ def test_a_frame_recorded_without_a_key_leaves_no_stale_target_in_the_next_key()
             state = renderer.target_state(images[0], 32, 24)
             key = frame_key(renderer, state, renderer.frames.index, (0, None, 0, False), ([], [], False))
             assert key is not None
-            handles = {name: handle for name, handle, _ in key[-1][-1]}
+            kept = key[-1][0]  # the output graph's kept entry for the slot: (inputs, shape, graph, imports)
+            handles = {name: handle for name, handle, _ in kept[3][1][4]}
             assert handles["target"] == handle_int(vk, images[0].handle) != handle_int(vk, images[1].handle)
         finally:
             device.wait_idle()

@@ -105,7 +105,7 @@ def test_the_light_cluster_steps_get_the_barriers_placed_by_hand_before():
 
 def test_a_frame_with_nothing_to_do_brings_back_its_slots_state_and_no_stale_one():
     s, path = scene(), indirect(pending=False)  # culls on the CPU: nothing for the cull steps
-    frames = [NS(set_array=i, clusters=buffer(handle=20 + i, size=128)) for i in range(2)]
+    frames = [NS(set_array=i, clusters=buffer(handle=20 + i, size=128), set_version=1) for i in range(2)]
 
     def begin_slot(slot, views=()):
         s.begin_slot(path, slot, frames[slot], None, 3, list(views))
@@ -118,7 +118,8 @@ def test_a_frame_with_nothing_to_do_brings_back_its_slots_state_and_no_stale_one
     drawn = begin_slot(0, [NS(layer=1, resolution=32)])  # a frame with a shadow map: the state changes
     assert s.shadows.views and drawn != first
     assert begin_slot(0) == first and not s.shadows.views  # made again: the views' state is not kept
-    frames[0].clusters.handle = 30  # the slot's buffer made again in place
+    frames[0].clusters = buffer(handle=30, size=256)  # the slot's buffer grown, its set written anew
+    frames[0].set_version += 1
     assert begin_slot(0) != first and s.signature()[2] == (("clusters", frames[0].clusters, 30),)
     s.begin(path, 0, frames[0], None, 3, [NS(layer=2, resolution=32)], [[]])  # a recorded frame's state
     begin_slot(0)

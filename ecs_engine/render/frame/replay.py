@@ -13,12 +13,13 @@ stands (gpu/frames.py's `resubmit`): no recording at all. When some chunk record
 primary is recorded again around old and new secondaries, and the slot starts clean next time.
 
 What a recording depends on goes into the key (`frame_key`), taken before the jobs; anything
-else makes the frame record as before. The key is the output frame graph's (render/graph/graph.py
-`key()`: each running pass's `key()` in order, the extent and the imported images' handles; the
-graph object itself, one per target form, held in the key and equal only to itself, as the
-path is: neither class defines `__eq__`), so a pass keys what it records from and one that
-forgets cannot replay a stale frame; and a prelude of what is still recorded by hand outside the
-graph (`prelude_key`), which shrinks as that work becomes passes:
+else makes the frame record as before. The key is the output frame graph's: the frame slot's
+kept entry (passes/output_graph.py: the inputs its graph, imports and plan follow from, the graph
+and its imports; held by identity, so the graph's compile, the extent and the imported images'
+handles come with it) and each running pass's `key()` in order (render/graph/graph.py
+`pass_keys()`), so a pass keys what it records from and one that forgets cannot replay a stale
+frame; and a prelude of what is still recorded by hand outside the graph (`prelude_key`), which
+shrinks as that work becomes passes:
 - the device's `objects_version`, bumped by every buffer, image or pipeline made, every buffer,
   image or descriptor pool destroyed, every descriptor set written (a command buffer is invalid
   once a set it binds is written) and the worker threads' command pools destroyed (a resized
@@ -134,9 +135,10 @@ def prelude_key(renderer: Any, positional: int, grid: Any, light_count: int, rea
 
 def frame_key(renderer: Any, state: Any, slot: int, prelude: tuple[Any, ...], stops: tuple[Any, ...]) -> Key | None:
     """This frame's replay key: the prelude's (`prelude`: prelude_key's arguments) and the output
-    graph's, prepared before the jobs (OutputGraph.prepare: its shape, imports and the frame's
-    settings; the frame's recording reuses it) so that its passes' keys are this frame's
-    (graph.key(): each running pass's key() in order, the extent and the imported handles).
+    graph's (OutputGraph.key_again: the slot's kept entry and the passes' keys, when the entry
+    was made from this frame's inputs; else the graph prepared before the jobs, its shape,
+    imports and the frame's settings, which the frame's recording reuses, and its keys then; a
+    frame reading back keys as graph.key(): the passes' keys, the extent and the handles).
     None when the frame must record: the work outside the graph may not be submitted again
     (`stops`: the shadow views drawn, the traced lights, blended rows; a path that is not
     `replayable`: per_entity's, indirect's), or a pass returned UNREPLAYABLE. Run every frame:
@@ -160,9 +162,8 @@ def frame_key(renderer: Any, state: Any, slot: int, prelude: tuple[Any, ...], st
         return None
     tone_map, rendering, overlay = (renderer.tone_map, renderer.exposure), output._rendering(state), renderer.overlay
     # (key_again and prepare leave only this frame's prepared graph behind)
-    again = None if readback else outputs.key_again(state, rendering, tone_map, overlay, slot)
-    if again is None:  # the graph prepared now (kept for the frame's recording)
+    key = False if readback else outputs.key_again(state, rendering, tone_map, overlay, slot)
+    if key is False:  # the graph prepared now (kept for the frame's recording)
         graph = outputs.prepare(state, rendering, tone_map, overlay, slot, readback)
-        again = graph, graph.key(replayable=True)
-    graph, key = again
-    return None if key is None else (prelude_key(renderer, *prelude), graph, key)
+        key = graph.key(replayable=True) if readback else outputs.steady_key(slot)
+    return None if key is None else (prelude_key(renderer, *prelude), key)

@@ -82,10 +82,10 @@ class ScenePasses:
         runs every frame, before the replay key: frame/replay.py)."""
         token = None
         if not views and grid is None and getattr(path, "pending", None) is None:
-            clusters = frame.clusters
-            token = (path, frame, frame.set_array, clusters, clusters.handle, light_count, self.shadows.shadows.maps)
+            # the slot's set is written anew (set_version) for a grown clusters buffer and new maps
+            token = (path, frame, frame.set_version, light_count, self.shadows.shadows.maps)
             kept = self._idle.get(slot)
-            if self._at_rest and kept is not None and kept[0] == token:  # (resources compare by their buffers)
+            if self._at_rest and kept is not None and kept[0] == token:
                 self.clusters.begin(None, frame.set_array, light_count)
                 self.buffers, self.reads, self._signature, self._kept = kept[1], kept[2], kept[3], kept
                 return

@@ -282,20 +282,34 @@ class FrameGraph(GraphImports):
         """What a recorded frame depends on: each running pass's (name, key()) in order, the extent, the
         imported handles (`handles`: a snapshot's the caller knows are today's; equal keys: a kept
         command buffer draws the same); None (`replayable`) if UNREPLAYABLE."""
+        run = self._run()
+        keys = [k() for k in run[2]]
+        if UNREPLAYABLE in keys:
+            if replayable:
+                return None
+            keys = [object() if k is UNREPLAYABLE else k for k in keys]  # equal to no other key
+        c = run[0]
+        return (*zip(run[1], keys), c.structure.extent, self._table.handles() if handles is None else handles)
+
+    def pass_keys(self) -> list | None:
+        """The running passes' key()s in order, or None if one is UNREPLAYABLE: `key()` less what
+        a caller that keeps this graph's compile and imports by identity already holds (frame
+        replay's kept entry: passes/output_graph.py)."""
+        run = self._running
+        if run is None or run[0] is not self.compiled:
+            run = self._run()
+        keys = [k() for k in run[2]]
+        return None if UNREPLAYABLE in keys else keys
+
+    def _run(self) -> tuple:
+        """(the compile, its running passes' names in order, their key methods), kept per compile."""
+        run = self._running
         c = self.compiled
-        run = self._running  # the passes that run, per compile (and set of passes)
         if run is None or run[0] is not c:
             by_name, c = self._passes_by_name(), self._ready()
-            run = self._running = (c, [(name, by_name[name]) for name in c.structure.order])
-        keys = []
-        for name, p in run[1]:
-            k = p.key()
-            if k is UNREPLAYABLE:
-                if replayable:
-                    return None
-                k = object()  # equal to no other key
-            keys.append((name, k))
-        return (*keys, c.structure.extent, self._table.handles() if handles is None else handles)
+            order = c.structure.order
+            run = self._running = (c, tuple(order), [by_name[name].key for name in order])
+        return run
 
     def _passes_by_name(self) -> dict[str, Pass]:
         if self._by_name is None:

@@ -135,24 +135,23 @@ class OutputGraph(OutputImports):
             full = self._prepare(state, rendering, tone_map, overlay, slot, readback, inputs)
             assert full is graph and graph._table.by_name == again, "the kept imports are not this frame's"
             assert graph.version == version, "the passes declared anew under the same inputs"
+            self._kept[slot] = kept  # the same entry (frame replay's key holds it by identity)
             return graph
         return self._prepare(state, rendering, tone_map, overlay, slot, readback, inputs)
 
     def _inputs(self, state: Any, rendering: Any, overlay: Any) -> tuple:
         """What a prepare's graph, imports and the passes' declarations follow from (the other
         settings of the frame only go into the passes' keys): equal inputs, equal shape,
-        imports and plan."""
+        imports and plan. The target's form and swapchain are the state's (a state is made per
+        output image, form and size, and made anew when the swapchain is: output_passes.py),
+        the image and view the rendering's (set when it is made)."""
         output = self.output
         target, scene = output.target, output.scene
         return (
             state,
             rendering,
-            rendering.image,
-            rendering.view,
-            target.form,
             target.attachments,
             target.color_format,
-            getattr(target, "recreations", 0),
             target.final_layout,
             output.ray_shadows,
             output.oit,
@@ -209,22 +208,32 @@ class OutputGraph(OutputImports):
 
     def key_again(self, state: Any, rendering: Any, tone_map: Any, overlay: Any, slot: int) -> Any:
         """Frame replay's graph key without a prepare, when the slot's kept entry has today's inputs
-        and the graph stands for them (that version, compiled for the extent): (the graph, its key
-        with the kept handles, or None for UNREPLAYABLE); else None. `record` prepares later."""
-        kept = self._slot_kept(state, rendering, overlay, slot)[1]
+        and the graph stands for them (that version, compiled for the extent): `steady_key`'s,
+        None for UNREPLAYABLE; else False (`record` prepares later)."""
+        kept = self._kept.get(slot)
         if kept is None:
-            return None
-        graph, (version, imports) = kept[2], kept[3]
-        if not graph.stands(version, (state.key[1], state.key[2])):
-            return None
+            return False
+        self.frame.window = None if overlay is None else self._window(overlay)
+        graph = kept[2]
+        if kept[0] != self._inputs(state, rendering, overlay) or not graph.stands(kept[3][0], state.key[1:]):
+            return False
         self._settings(graph, state, tone_map, overlay, slot)
         self._prepared = None
-        key = graph.key(True, imports[4])
+        keys = graph.pass_keys()
+        key = None if keys is None else (kept, keys)
         if FrameGraph.verify_declares:  # the tests: a prepare's key is this one
             full = self.prepare(state, rendering, tone_map, overlay, slot)
-            assert full is graph and full.key(replayable=True) == key, "a kept key that a prepare does not give"
+            assert full is graph and self.steady_key(slot) == key, "a kept key that a prepare does not give"
             self._prepared = None
-        return graph, key
+        return key
+
+    def steady_key(self, slot: int) -> Any:
+        """After a prepare without readback, the slot's graph key: its kept entry (held by
+        identity: the inputs, and the graph's shape, version and imports, so the compile, the
+        extent and the imported handles) and the running passes' keys; None for UNREPLAYABLE."""
+        kept = self._kept[slot]
+        keys = kept[2].pass_keys()
+        return None if keys is None else (kept, keys)
 
     def _prepare(
         self,
