@@ -96,6 +96,25 @@ def test_without_numba_the_reference_runs(monkeypatch):
     test_rows_are_relative_and_sorted_far_to_near([5, 3, 40], True)
 
 
+def test_a_kept_part_writes_the_values_its_views_see_now():
+    """A table's point lights stay one PositionalLights from frame to frame (extract_lights): the
+    kernel's columns kept on it are its views, so moved lights are written where they are now,
+    and a part whose columns had to be made contiguous keeps nothing (its copies would go stale)."""
+    position = np.array([[1.0, 0.0, 0.0], [0.0, 2.0, 0.0]])
+    part = PositionalLights(position, np.ones(2, np.float32), np.ones((2, 3), np.float32), np.ones(2, np.float32))
+    out = np.zeros((2, FLOATS), np.float32)
+    write_lights([part], [], np.zeros(3), np.zeros(3), out)
+    position[:] = [[5.0, 0.0, 0.0], [0.0, 0.0, 7.0]]  # moved in place, as a system writes the column
+    write_lights([part], [], np.zeros(3), np.zeros(3), out)
+    assert out[:, :3].tolist() == [[0.0, 0.0, 7.0], [5.0, 0.0, 0.0]]  # far to near
+    strided = np.zeros((2, 6))[:, ::2]  # every other column: not C-contiguous
+    other = PositionalLights(strided, np.ones(2, np.float32), np.ones((2, 3), np.float32), np.ones(2, np.float32))
+    write_lights([other], [], np.zeros(3), np.zeros(3), out)
+    strided[0] = (0.0, 0.0, 9.0)
+    write_lights([other], [], np.zeros(3), np.zeros(3), out)
+    assert out[0, :3].tolist() == [0.0, 0.0, 9.0]
+
+
 def test_local_minus_z_is_the_rotation_of_minus_z():
     rng = np.random.default_rng(4)
     q = rng.normal(size=(20, 4))

@@ -12,7 +12,7 @@ operations cost ~25 us a frame for 8 lights, a tenth of the 100-cube frame's bud
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -48,6 +48,9 @@ class PositionalLights:
     direction: np.ndarray | None = None  # (n, 3) where a spot light shines; None: point lights
     cone: np.ndarray | None = None  # (n, 2): cos(outer), 1 / (cos(inner) - cos(outer))
     entity: np.ndarray | None = None  # (n,) the lights' entities (shadows name their views by them)
+    # the kernel's columns, kept when they are these views themselves (extract_lights keeps a
+    # table's point lights from frame to frame, and the views see new values)
+    kernel_columns: tuple[np.ndarray, ...] | None = field(default=None, repr=False, compare=False)
 
     def __len__(self) -> int:
         return len(self.radius)
@@ -206,6 +209,20 @@ def _columns(parts: list[PositionalLights]) -> _Columns:
     )
 
 
+def _kernel_columns(parts: list[PositionalLights]) -> _Columns:
+    """_columns, each C-contiguous (the kernel's one compiled layout); a single part's kept on it
+    when no column had to be copied."""
+    if len(parts) == 1:
+        kept = parts[0].kernel_columns
+        if kept is not None:
+            return kept  # type: ignore[return-value]
+    columns = _columns(parts)
+    contiguous = tuple([c if c.flags.c_contiguous else np.ascontiguousarray(c) for c in columns])
+    if len(parts) == 1 and all(a is b for a, b in zip(contiguous, columns, strict=True)):
+        parts[0].kernel_columns = contiguous
+    return contiguous  # type: ignore[return-value]
+
+
 def write_lights(
     positional: list[PositionalLights],
     directional: list[DirectionalLights],
@@ -218,14 +235,18 @@ def write_lights(
     to `origin`), far first; then the directional ones. Returns the positional count."""
     origin = np.asarray(origin, dtype=np.float64)
     eye = np.asarray(eye, dtype=np.float64)
-    count = sum(len(p) for p in positional)
-    if count:
-        columns = _columns(positional)
+    count = 0
+    if positional:
         if _write_positional_native is None:
-            write_positional_numpy(*columns, origin, eye, out[:count])
+            columns = _columns(positional)
+            count = len(columns[1])
+            if count:
+                write_positional_numpy(*columns, origin, eye, out[:count])
         else:
-            contiguous = [c if c.flags.c_contiguous else np.ascontiguousarray(c) for c in columns]
-            _write_positional_native(*contiguous, origin, eye, out[:count])
+            columns = _kernel_columns(positional)
+            count = len(columns[1])
+            if count:
+                _write_positional_native(*columns, origin, eye, out[:count])
     row = count
     for d in directional:
         rows = out[row : row + len(d)]
