@@ -74,7 +74,15 @@ def scene_formats(vk: Any, form: Form, color_format: int, samples: int) -> Attac
     sky's, the set-aside rows', the billboards') are made for in `form`: the target's format in
     the direct form, else the HDR colour with the target's MSAA count; depth either way."""
     color = color_format if form == Form.DIRECT else getattr(vk, HDR_FORMAT_NAME)
-    return AttachmentFormats((color,), getattr(vk, DEPTH_FORMAT_NAME), 1 if form == Form.DIRECT else samples)
+    key = ((color,), getattr(vk, DEPTH_FORMAT_NAME), 1 if form == Form.DIRECT else samples)
+    # one object per value: the path compares what it draws into by identity first, every frame
+    found = _SCENE_FORMATS.get(key)
+    if found is None:
+        found = _SCENE_FORMATS[key] = AttachmentFormats(*key)
+    return found
+
+
+_SCENE_FORMATS: dict[tuple[tuple[int, ...], int, int], AttachmentFormats] = {}
 
 
 class TargetForm:
