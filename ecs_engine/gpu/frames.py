@@ -69,6 +69,9 @@ class FrameRing:
         self.index = 0
         self.last_wait_ms = 0.0  # time begin() spent waiting for the GPU (not CPU work)
         self.timestamps = device.info.timestamp_valid_bits > 0
+        bits = device.info.timestamp_valid_bits
+        self._mask = (1 << bits) - 1 if 0 < bits < 64 else (1 << 64) - 1  # the ticks' valid bits
+        self._period_ms = device.info.timestamp_period_ns / 1e6  # ms a tick
         self.pass_timing = False  # mark() writes timestamps (from the next recorded frame)
         self.last_gpu: GpuFrame | None = None  # what acquire() read, with pass_timing on
         self._begin_info = vk.VkCommandBufferBeginInfo(flags=0)  # not one-time: it may be submitted again
@@ -159,10 +162,15 @@ class FrameRing:
         """Submit the slot's primary as it was last recorded (its timestamps with it)."""
         vk = self.device.vk
         lib = vk.lib
-        check(vk, lib.vkResetFences(self.device.handle, 1, frame.fence_array))
+        # (the results checked inline, not by check(): this runs every frame)
+        result = lib.vkResetFences(self.device.handle, 1, frame.fence_array)
+        if result:
+            check(vk, result)
         if frame.passes:  # before the call: the GPU may start before it returns
             frame.submitted_ns = time.perf_counter_ns()
-        check(vk, lib.vkQueueSubmit(self.device.queue, 1, self._submit_info(frame, wait, signal), frame.fence))
+        result = lib.vkQueueSubmit(self.device.queue, 1, self._submit_info(frame, wait, signal), frame.fence)
+        if result:
+            check(vk, result)
         frame.submitted = self.timestamps
         self.index = (self.index + 1) % len(self.frames)
 
@@ -193,7 +201,9 @@ class FrameRing:
 
     def wait(self, frame: Frame) -> None:
         vk = self.device.vk
-        check(vk, vk.lib.vkWaitForFences(self.device.handle, 1, frame.fence_array, vk.VK_TRUE, 2**64 - 1))
+        result = vk.lib.vkWaitForFences(self.device.handle, 1, frame.fence_array, 1, _FOREVER)
+        if result:
+            check(vk, result)
 
     def _read_timestamps(self, frame: Frame) -> float | None:
         """The frame's GPU ms; with marks, its passes too (`last_gpu`)."""
@@ -203,19 +213,16 @@ class FrameRing:
         result = vk.lib.vkGetQueryPoolResults(
             self.device.handle, frame.queries, 0, count, 8 * count, data, 8, vk.VK_QUERY_RESULT_64_BIT
         )
-        if result != vk.VK_SUCCESS:
+        if result:  # (VK_SUCCESS is 0; VK_NOT_READY and errors are not)
             return None
-        bits = self.device.info.timestamp_valid_bits
-        mask = (1 << bits) - 1 if bits < 64 else (1 << 64) - 1
-        period = self.device.info.timestamp_period_ns
-        ticks = (int(data[count - 1]) - int(data[0])) & mask
-        ms = ticks * period / 1e6
+        mask, period_ms = self._mask, self._period_ms
+        ms: float = ((data[count - 1] - data[0]) & mask) * period_ms
         if frame.passes:
             stamps = [int(data[k]) for k in range(count - 1)]
-            spans = [((b - a) & mask) * period / 1e6 for a, b in itertools.pairwise(stamps)]
+            spans = [((b - a) & mask) * period_ms for a, b in itertools.pairwise(stamps)]
             done = time.perf_counter_ns()
             passes = list(zip(frame.passes, spans, strict=True))
-            self.last_gpu = GpuFrame(ms, round(stamps[0] * period), passes, frame.submitted_ns, done)
+            self.last_gpu = GpuFrame(ms, round(stamps[0] * period_ms * 1e6), passes, frame.submitted_ns, done)
         return ms
 
     def destroy(self) -> None:
@@ -227,6 +234,9 @@ class FrameRing:
             vk.vkDestroyFence(self.device.handle, f.fence, None)
             vk.vkDestroyCommandPool(self.device.handle, f.pool, None)
         self.frames.clear()
+
+
+_FOREVER = 2**64 - 1  # vkWaitForFences' timeout, ns
 
 
 def check(vk: Any, result: int) -> None:
