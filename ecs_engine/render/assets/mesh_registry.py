@@ -217,7 +217,7 @@ class MeshRegistry:
 
     def _collect(self) -> None:
         """Levels built in the background since the last frame."""
-        if self._builder is not None:
+        if self._builder is not None:  # (the callers ask first too: this runs every frame)
             for handle, levels in self._builder.finished():
                 _remember(self._digests[handle], levels)
                 self._install(handle, levels)
@@ -226,7 +226,8 @@ class MeshRegistry:
         """Per mesh: bounding sphere centre (n, 3) and radius, index count (kept until meshes are
         added). The sphere holds the mesh's levels of detail too: whichever is drawn, culling it
         by the sphere is safe."""
-        self._collect()
+        if self._builder is not None:  # (asked twice a frame: the culling's and the frame's inputs)
+            self._collect()
         n = len(self._meshes)
         if self._bounds is None or self._bounds[0] != (n, self._levels_built):
             meshes = self._meshes

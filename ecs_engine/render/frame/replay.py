@@ -160,10 +160,10 @@ def frame_key(renderer: Any, state: Any, slot: int, prelude: tuple[Any, ...], st
     ):
         outputs.forget_prepared()  # an earlier frame's: this one records, and prepares anew
         return None
-    tone_map, rendering, overlay = (renderer.tone_map, renderer.exposure), output._rendering(state), renderer.overlay
+    tone_map, overlay = (renderer.tone_map, renderer.exposure), renderer.overlay
     # (key_again and prepare leave only this frame's prepared graph behind)
-    key = False if readback else outputs.key_again(state, rendering, tone_map, overlay, slot)
+    key = False if readback else outputs.key_again(state, tone_map, overlay, slot)
     if key is False:  # the graph prepared now (kept for the frame's recording)
-        graph = outputs.prepare(state, rendering, tone_map, overlay, slot, readback)
+        graph = outputs.prepare(state, output._rendering(state), tone_map, overlay, slot, readback)
         key = graph.key(replayable=True) if readback else outputs.steady_key(slot)
     return None if key is None else (prelude_key(renderer, *prelude), key)

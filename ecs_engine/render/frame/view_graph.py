@@ -132,9 +132,9 @@ class ViewGraph(OutputGraph):
             raise
         return graph
 
-    def _inputs(self, state: Any, rendering: Any, overlay: Any) -> tuple:
+    def _inputs(self, state: Any, overlay: Any) -> tuple:
         # the view's placement: the imports' sizes and layouts, the readback's place
-        return (*super()._inputs(state, rendering, overlay), self.placement)
+        return (*super()._inputs(state, overlay), self.placement)
 
     def _place_readback(self, graph: FrameGraph, wanted: bool) -> None:
         super()._place_readback(graph, wanted and self.placement.last)

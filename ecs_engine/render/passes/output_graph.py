@@ -122,7 +122,7 @@ class OutputGraph(OutputImports):
         if readback:  # (a frame reading back prepares in full)
             self.frame.window = self._window(overlay)
             return self._prepare(state, rendering, tone_map, overlay, slot, readback, None)
-        inputs, kept = self._slot_kept(state, rendering, overlay, slot)
+        inputs, kept = self._slot_kept(state, overlay, slot)
         if kept is not None and kept[2].restore_imports(kept[3]):
             graph = kept[2]
             self._copies = False
@@ -139,17 +139,16 @@ class OutputGraph(OutputImports):
             return graph
         return self._prepare(state, rendering, tone_map, overlay, slot, readback, inputs)
 
-    def _inputs(self, state: Any, rendering: Any, overlay: Any) -> tuple:
+    def _inputs(self, state: Any, overlay: Any) -> tuple:
         """What a prepare's graph, imports and the passes' declarations follow from (the other
         settings of the frame only go into the passes' keys): equal inputs, equal shape,
-        imports and plan. The target's form and swapchain are the state's (a state is made per
-        output image, form and size, and made anew when the swapchain is: output_passes.py),
-        the image and view the rendering's (set when it is made)."""
+        imports and plan. The state stands for the target's image (the rendering made with it),
+        form and swapchain: one is made per output image, form and size, and made anew with the
+        swapchain (render/frame/output_passes.py)."""
         output = self.output
         target, scene = output.target, output.scene
         return (
             state,
-            rendering,
             target.attachments,
             target.color_format,
             target.final_layout,
@@ -166,10 +165,10 @@ class OutputGraph(OutputImports):
         """The window the UI draws the target into (the editor's viewport), or None: over the target."""
         return getattr(self.output.target, "window_image", None) if overlay is not None else None
 
-    def _slot_kept(self, state: Any, rendering: Any, overlay: Any, slot: int) -> tuple[tuple, Any]:
+    def _slot_kept(self, state: Any, overlay: Any, slot: int) -> tuple[tuple, Any]:
         """The frame's window and `_inputs`, and the slot's kept entry if made from them (or None)."""
         self.frame.window = None if overlay is None else self._window(overlay)  # (run every frame: no call without)
-        inputs = self._inputs(state, rendering, overlay)
+        inputs = self._inputs(state, overlay)
         kept = self._kept.get(slot)
         return inputs, kept if kept is not None and kept[0] == inputs else None
 
@@ -206,7 +205,7 @@ class OutputGraph(OutputImports):
         frame = self.frame
         frame.state, frame.tone_map, frame.overlay, frame.slot = state, tone_map, overlay, slot
 
-    def key_again(self, state: Any, rendering: Any, tone_map: Any, overlay: Any, slot: int) -> Any:
+    def key_again(self, state: Any, tone_map: Any, overlay: Any, slot: int) -> Any:
         """Frame replay's graph key without a prepare, when the slot's kept entry has today's inputs
         and the graph stands for them (that version, compiled for the extent): `steady_key`'s,
         None for UNREPLAYABLE; else False (`record` prepares later)."""
@@ -215,14 +214,14 @@ class OutputGraph(OutputImports):
             return False
         self.frame.window = None if overlay is None else self._window(overlay)
         graph = kept[2]
-        if kept[0] != self._inputs(state, rendering, overlay) or not graph.stands(kept[3][0], state.key[1:]):
+        if kept[0] != self._inputs(state, overlay) or not graph.stands(kept[3][0], state.key[1:]):
             return False
         self._settings(graph, state, tone_map, overlay, slot)
         self._prepared = None
         keys = graph.pass_keys()
         key = None if keys is None else (kept, keys)
         if FrameGraph.verify_declares:  # the tests: a prepare's key is this one
-            full = self.prepare(state, rendering, tone_map, overlay, slot)
+            full = self.prepare(state, self.output._rendering(state), tone_map, overlay, slot)
             assert full is graph and self.steady_key(slot) == key, "a kept key that a prepare does not give"
             self._prepared = None
         return key
