@@ -18,7 +18,7 @@ from ..layouts import FEATURE_ENVIRONMENT, FEATURE_RAY_SHADOWS, FEATURE_SHADOWS,
 from ..lighting.rows import light_features, write_light_shadows
 from ..passes.set_aside import SetAsidePass
 from ..shadows.maps_pass import ShadowPass
-from .jobs import FrameJobs, job_name
+from .jobs import run_jobs
 from .replay import frame_key
 
 
@@ -116,7 +116,7 @@ class FrameDrawing:
             for each in self.per_frame:
                 each.name_shadow_maps(self.device, self.shadows.maps)
         camera_rows = self.path.rows_needed(data.candidates) + len(data.set_aside or ())
-        rows = camera_rows + len(views) * ShadowPass.view_rows(data, self.path)  # each view's after the camera's
+        rows = camera_rows + (len(views) * ShadowPass.view_rows(data, self.path) if views else 0)  # each view's after
         pf.ensure_capacity(self.device, self.texture_pages, rows, data.light_count, material_count, len(views))
         if data.deform is not None:  # skinned or morphed rows: their joints and weights, the meshes' data named
             levels = self.lod and self.mode == Mode.INDIRECT  # the indirect mode draws their levels of detail
@@ -162,9 +162,7 @@ class FrameDrawing:
 
         self.shadows.prepare(views, inputs, pf, camera_rows, data, path, self._make_shadow_path)
         aside_casters = data.set_aside.casters if data.set_aside is not None else []
-        work = FrameJobs(path, inputs, self.shadows, data.chunks, aside_casters)  # one batch: camera and shadows
-        done = self.jobs.map(work.run, work.work, job_name) if self.jobs is not None else list(map(work.run, work.work))
-        results, shadow_buffers = work.results(done)
+        results, shadow_buffers = run_jobs(self.jobs, path, inputs, self.shadows, data.chunks, aside_casters)
         record_ms = (time.perf_counter() - t0) * 1e3
         again = self.replay.replay(slot, results) if reuse is not None else None
         if again is not None:  # every chunk as the slot last recorded it: its primary as it stands
@@ -200,10 +198,11 @@ class FrameDrawing:
             self.frames.wait(frame)
         draws, visible, triangles = path.counts(inputs, results)
         draws, visible, triangles = draws + aside[1], visible + aside[2], triangles + aside[3]
+        shadows = self.shadows
         return FrameStats(
-            draws=draws + light_draws + self.shadows.draws,
+            draws=draws + light_draws + (shadows.draws if views else 0),
             instances=visible,
-            triangles=triangles + self.shadows.triangles,
+            triangles=triangles + (shadows.triangles if views else 0),
             lights=data.light_count,
             gpu_ms=gpu_ms,
             wait_ms=self.frames.last_wait_ms,

@@ -55,3 +55,23 @@ def job_name(item: tuple[str, Chunk]) -> str:
     """A job's name in errors: the chunk's, and which views it records."""
     kind, chunk = item
     return chunk.name if kind == CAMERA else f"{chunk.name} ({kind})"
+
+
+def run_jobs(
+    jobs: Any, path: RenderPath, inputs: FrameInputs, shadows: ShadowPass, chunks: list[Chunk], aside: list[Chunk]
+) -> tuple[list[ChunkResult], Any]:
+    """The frame's jobs on `jobs` (a JobPool, or None: on this thread): FrameJobs.results' pair.
+    A frame without shadow views (most) runs its camera's chunks alone, without the batch's
+    bookkeeping."""
+    if not shadows.active:
+        record = path.record_chunk
+        if jobs is None:
+            return [record(chunk, inputs) for chunk in chunks], []
+        return jobs.map(lambda chunk: record(chunk, inputs), chunks, _chunk_name), []
+    work = FrameJobs(path, inputs, shadows, chunks, aside)  # one batch: camera and shadows
+    done = jobs.map(work.run, work.work, job_name) if jobs is not None else list(map(work.run, work.work))
+    return work.results(done)
+
+
+def _chunk_name(chunk: Chunk) -> str:
+    return chunk.name
