@@ -236,8 +236,10 @@ class LightCulling:
         ):
             bounded, unbounded, reach = light_census(data.lights, data.directional, data.camera.position)
             clustered = wants_clusters(self._mode, self.clustered, bounded, unbounded)
-        positional = sum(len(p) for p in data.lights)
-        grid = cluster_grid(width, height, data.camera.near, reach, positional) if clustered else None
+        grid = None
+        if clustered:
+            positional = sum(len(p) for p in data.lights)
+            grid = cluster_grid(width, height, data.camera.near, reach, positional)
         if grid is not None and grid.buffer_bytes > self.max_bytes:
             if not self._warned:
                 self._warned = True
