@@ -114,7 +114,7 @@ def test_a_frame_with_nothing_to_do_brings_back_its_slots_state_and_no_stale_one
     first, second = begin_slot(0), begin_slot(1)
     assert s.buffers == {"clusters": frames[1].clusters} and first != second
     assert begin_slot(0) is first and s.buffers == {"clusters": frames[0].clusters}  # brought back, not made
-    assert s.clusters.set_array == 0
+    assert s.clusters.grid is None  # idle: a recorded frame's `begin` names the slot's set
     drawn = begin_slot(0, [NS(layer=1, resolution=32)])  # a frame with a shadow map: the state changes
     assert s.shadows.views and drawn != first
     assert begin_slot(0) == first and not s.shadows.views  # made again: the views' state is not kept

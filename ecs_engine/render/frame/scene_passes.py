@@ -86,7 +86,8 @@ class ScenePasses:
             token = (path, frame, frame.set_version, light_count, self.shadows.shadows.maps)
             kept = self._idle.get(slot)
             if self._at_rest and kept is not None and kept[0] == token:
-                self.clusters.begin(None, frame.set_array, light_count)
+                # the clusters' pass keeps what the last idle frame gave it (no grid: it records
+                # nothing, keys None, and a recorded frame's `begin` names this slot's set)
                 self.buffers, self.reads, self._signature, self._kept = kept[1], kept[2], kept[3], kept
                 return
         self.cull.begin(path, slot)  # the indirect path's compute as its last frame left it
