@@ -9,6 +9,12 @@
 // detail `level` of it (0: the mesh itself) the indirect mode draws. Its model rows (which place only its bounds, for
 // culling) give way to the weighted sum of those joints' matrices, so the normal matrix and the
 // position below follow the pose as a model matrix would.
+// The mesh pipelines' specialisation constant (their fragment shaders' too): without
+// FEATURE_DEFORM no row is deformed, and the code below is compiled out (its registers slowed
+// every vertex). Pipelines made without the constant (posed_vertices.comp) keep it.
+layout(constant_id = 0) const uint MATERIAL_FEATURES = 0xFFFFFFFFu;
+const bool DEFORM = (MATERIAL_FEATURES & uint(FEATURE_DEFORM)) != 0u;
+
 layout(std430, set = SET_FRAME, binding = BINDING_JOINTS) readonly buffer Joints { vec4 joint_rows[]; };
 layout(std430, set = SET_FRAME, binding = BINDING_SKIN_VERTICES) readonly buffer SkinVertices { uint skin_words[]; };
 
@@ -22,7 +28,7 @@ uint deform_data(Instance inst, uint level, uint part) {
 
 Instance skin_vertex(Instance inst, uint v, uint level) {
     uint first = inst.misc.w >> 1;
-    if (first == 0u) return inst;
+    if (!DEFORM || first == 0u) return inst;
     uint records = deform_data(inst, level, 0u);
     if (records == 0xFFFFFFFFu) return inst;
     uint at = records + v * uint(SKIN_WORDS);
@@ -49,7 +55,7 @@ Instance skin_vertex(Instance inst, uint v, uint level) {
 // as glTF orders them).
 void morph_vertex(Instance inst, uint v, uint level, inout vec3 position, inout vec3 normal, inout vec3 tangent) {
     uint at = inst.misc.z >> 1;
-    if (at == 0u) return;
+    if (!DEFORM || at == 0u) return;
     uint block = deform_data(inst, level, 1u);
     if (block == 0xFFFFFFFFu) return;
     uint targets = skin_words[block], vertices = skin_words[block + 1u];

@@ -65,6 +65,7 @@ class GraphicsPipelineSpec:
     depth_write: bool = True
     alpha_blend: bool = False
     fragment_constants: tuple[int, ...] = ()  # uint specialisation constants, constant_id 0, 1, ...
+    vertex_constants: tuple[int, ...] = ()  # the vertex shader's, likewise
     polygon_mode: int = 0  # VK_POLYGON_MODE_FILL; LINE (1) and POINT (2) need fillModeNonSolid
     samples: int = 1  # the rendering's MSAA count
     color_attachments: int = 1  # the rendering's; all written alike (the G-buffer has four)
@@ -146,7 +147,12 @@ def graphics_pipeline(device: Device, spec: GraphicsPipelineSpec) -> Any:
     frag = shader_module(device, spec.fragment_shader) if spec.fragment_shader else None
     try:
         constants, _constant_data = specialization(vk, spec.fragment_constants)
-        stages = [vk.VkPipelineShaderStageCreateInfo(stage=vk.VK_SHADER_STAGE_VERTEX_BIT, module=vert, pName="main")]
+        vertex_constants, _vertex_data = specialization(vk, spec.vertex_constants)
+        stages = [
+            vk.VkPipelineShaderStageCreateInfo(
+                stage=vk.VK_SHADER_STAGE_VERTEX_BIT, module=vert, pName="main", pSpecializationInfo=vertex_constants
+            )
+        ]
         if frag is not None:
             stages.append(
                 vk.VkPipelineShaderStageCreateInfo(

@@ -279,6 +279,9 @@ FEATURE_BLEND = 1 << 23  # some material is alpha-blended: without, every fragme
 FEATURE_SHADOWS = 1 << 24  # some light casts shadows: without, no shadow map is read
 FEATURE_ENVIRONMENT = 1 << 25  # the world has an Environment: its sky, reflections and ambient are read
 FEATURE_RAY_SHADOWS = 1 << 26  # shadows are ray-traced: the deferred lighting reads their mask, no map
+# some row is skinned or morphed: without, the vertex shaders are specialised without deform.glsl's
+# code (its registers cost the 1M-row occlusion depth pass 16% on the H200 though no row took it)
+FEATURE_DEFORM = 1 << 27
 CLUSTER_GROUP = 64  # light_bounds.comp's and light_tiles.comp's local size
 MAX_GLOBAL_LIGHTS = 256  # directional and unbounded lights every fragment loops over, when clustered
 LIGHT_BINS = 1024  # distance bins: exponential shells around the eye, each with its light index range
@@ -359,6 +362,7 @@ LIGHT_SPOT LIGHT_DIRECTIONAL TONE_MAP_CLAMP TONE_MAP_ACES TONE_MAP_REINHARD NO_T
 BINDING_DEPTH BINDING_HDR BINDING_NORMAL_ROUGHNESS BINDING_BASE_METALLIC BINDING_MATERIAL_IDS DEFERRED_TILE
 DEFERRED_WORDS CULL_GROUP ROW_NOT_CASTER COMPACT_GROUP SET_OCCLUSION BINDING_VISIBILITY BINDING_PYRAMID
 BINDING_EARLY_DEPTH REDUCE_GROUP CULL_SUBPIXEL CULL_LOD MAX_LODS MAX_RAY_LIGHTS RAY_PLACE FEATURE_RAY_SHADOWS
+FEATURE_DEFORM
 BINDING_SHADOW_MASK BINDING_RAY_SCENE BINDING_RAY_FRAME BINDING_RAY_DEPTH BINDING_RAY_NORMAL BINDING_RAY_MASK
 BINDING_RAY_DENOISED SET_RAY BINDING_RAY_MESHES BINDING_RAY_ROWS MESH_VERTEX_FLOATS MESH_VERTEX_UV POSED_GROUP
 SKIN_HEADER_WORDS ROW_LEVEL_SHIFT

@@ -129,6 +129,7 @@ class OcclusionPasses:
             layout=graphics_layout,
             vertex_stride=MESH_VERTEX.itemsize,
             vertex_attributes=vertex_attributes(vk, ("position",)),
+            vertex_constants=(ctx.material_features,),  # deform.glsl's (FEATURE_DEFORM)
             **shadow_formats(vk, self.samples).spec_kwargs(),  # depth alone, drawn with dynamic rendering
         )
         plain = pipeline(graphics_pipeline(device, GraphicsPipelineSpec("shadow_indirect.vert", None, **base)))

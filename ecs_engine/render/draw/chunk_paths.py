@@ -69,6 +69,7 @@ def mesh_pipelines(ctx: PathContext, layout: Any, vertex_shader: str, blended: b
         vertex_stride=MESH_VERTEX.itemsize,
         vertex_attributes=vertex_attributes(ctx.device.vk, TEXTURED_VERTEX_INPUTS if textured else VERTEX_INPUTS),
         fragment_constants=(ctx.material_features,),  # mesh.frag's MATERIAL_FEATURES
+        vertex_constants=(ctx.material_features,),  # deform.glsl's (FEATURE_DEFORM)
         polygon_mode=FILL_MODES[ctx.fill],
         samples=ctx.samples,
         # a double-sided material somewhere: back faces reach the fragment shader, which drops
@@ -118,6 +119,7 @@ def shadow_pipelines(ctx: PathContext, layout: Any, vertex_shader: str) -> tuple
         vertex_stride=MESH_VERTEX.itemsize,
         vertex_attributes=vertex_attributes(ctx.device.vk, ("position", "uv") if cutout else ("position",)),
         fragment_constants=(ctx.material_features,) if cutout else (),
+        vertex_constants=(ctx.material_features,),  # deform.glsl's (FEATURE_DEFORM)
         cull_back=not ctx.material_features & FEATURE_DOUBLE_SIDED,
         color_attachments=0,
         depth_bias=SHADOW_DEPTH_BIAS,

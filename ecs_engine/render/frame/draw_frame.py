@@ -14,7 +14,7 @@ from ..assets.materials import Materials
 from ..config import Form, Mode
 from ..draw.path import FrameInputs, FrameStats
 from ..extract.frame_data import FrameData
-from ..layouts import FEATURE_ENVIRONMENT, FEATURE_RAY_SHADOWS, FEATURE_SHADOWS, INSTANCE
+from ..layouts import FEATURE_DEFORM, FEATURE_ENVIRONMENT, FEATURE_RAY_SHADOWS, FEATURE_SHADOWS, INSTANCE
 from ..lighting.rows import light_features, write_light_shadows
 from ..passes.set_aside import SetAsidePass
 from ..shadows.maps_pass import ShadowPass
@@ -103,6 +103,7 @@ class FrameDrawing:
         features = light_features(data.lights, data.directional) | (FEATURE_SHADOWS if views else 0)
         features |= FEATURE_SHADOWS | FEATURE_RAY_SHADOWS if traced else 0
         features |= FEATURE_ENVIRONMENT if self.environment.active else 0
+        features |= FEATURE_DEFORM if data.deform is not None else 0
         self._check_features(materials.features | features)
         grid = self._light_clusters(data, width, height, own_target=framebuffer is None)
         self._sync_textures(materials)
