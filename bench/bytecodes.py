@@ -3,7 +3,7 @@ render), counted instruction by instruction after a warm-up, in all and by modul
 
 A small frame's CPU time moves with the host's core speed (about 2x on the GPU host, between
 minutes), so two versions' times compare only run side by side. The count does not move with
-it: three runs on the H200 counted the same 5,943 a frame, and runs on the lavapipe host agree
+it: repeated runs of one tree on the H200 count the same, and runs on the lavapipe host agree
 with each other too, so it shows what a change to the per-frame path saves at once, and it runs
 without a GPU host. Compare counts made on one machine and Python only: each Python version
 compiles to other bytecodes, and the driver chooses some paths. It is not a time: a C call

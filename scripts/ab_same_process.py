@@ -32,20 +32,25 @@ from contextlib import ExitStack
 from typing import Any
 
 
-def _engine(package: str, scene: str, width: int, height: int, stack: ExitStack) -> Any:
-    """A frame function of `package`'s engine drawing `scene`: () -> CPU ms of one frame."""
+def _engine(package: str, args: argparse.Namespace, stack: ExitStack) -> Any:
+    """A frame function of `package`'s engine drawing `args.scene`: () -> CPU ms of one frame."""
     scenes = importlib.import_module(f"{package}.app.scenes")
     bench = importlib.import_module(f"{package}.bench")
     world_module = importlib.import_module(f"{package}.ecs.world")
+    jobs = importlib.import_module(f"{package}.jobs")
     try:
         renderer_class = importlib.import_module(f"{package}.render.frame.renderer").Renderer
     except ImportError:  # trees before the renderer's sub-packages
         renderer_class = importlib.import_module(f"{package}.render.renderer").Renderer
+    width, height = (int(v) for v in args.size.split("x"))
     device, target, meshes = stack.enter_context(bench.headless_gpu(width, height))
+    pool = stack.enter_context(jobs.JobPool(args.threads)) if args.threads > 1 else None
     world = world_module.World()
-    scenes.scene_builder(scene)(world, meshes.add)
+    scenes.scene_builder(args.scene, args.entities)(world, meshes.add)
+    if pool is not None:
+        world.resources[jobs.JobPool] = pool
     schedule = scenes.default_schedule()
-    renderer = renderer_class(device, target, meshes)
+    renderer = renderer_class(device, target, meshes, mode=args.mode, culling=args.culling, jobs=pool)
     stack.callback(renderer.destroy)
     clock = time.perf_counter
 
@@ -64,13 +69,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--new", default="ecs_engine", help="the newer tree's package name (default ecs_engine)")
     parser.add_argument("--scene", default="cube")
     parser.add_argument("--size", default="640x360")
+    parser.add_argument("--entities", type=int, default=10_000, help="the scaling scene's count")
+    parser.add_argument("--mode", default="instanced")
+    parser.add_argument("--culling", default="frustum")
+    parser.add_argument("--threads", type=int, default=1, help="worker threads (a JobPool each, above 1)")
     parser.add_argument("--warmup", type=int, default=300, help="frames each engine draws before the timing")
     parser.add_argument("--blocks", type=int, default=40, help="blocks per engine, alternated")
     parser.add_argument("--block", type=int, default=100, help="frames a block")
     args = parser.parse_args(argv)
-    width, height = (int(v) for v in args.size.split("x"))
     with ExitStack() as stack:
-        engines = {name: _engine(name, args.scene, width, height, stack) for name in (args.old, args.new)}
+        engines = {name: _engine(name, args, stack) for name in (args.old, args.new)}
         for frame in engines.values():
             for _ in range(args.warmup):
                 frame()
@@ -89,6 +97,10 @@ def main(argv: list[str] | None = None) -> int:
             {
                 "scene": args.scene,
                 "size": args.size,
+                "mode": args.mode,
+                "culling": args.culling,
+                "threads": args.threads,
+                "entities": args.entities,
                 "frames_per_engine": args.blocks * args.block,
                 "median_ms": {name: statistics.median(t) for name, t in times.items()},
                 "block_medians_ms": blocks,
