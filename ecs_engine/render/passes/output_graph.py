@@ -140,11 +140,10 @@ class OutputGraph(OutputImports):
         return self._prepare(state, rendering, tone_map, overlay, slot, readback, inputs)
 
     def _inputs(self, state: Any, overlay: Any) -> tuple:
-        """What a prepare's graph, imports and the passes' declarations follow from (the other
-        settings of the frame only go into the passes' keys): equal inputs, equal shape,
-        imports and plan. The state stands for the target's image (the rendering made with it),
-        form and swapchain: one is made per output image, form and size, and made anew with the
-        swapchain (render/frame/output_passes.py)."""
+        """What a prepare's graph, imports and the passes' declarations follow from (the frame's
+        other settings only go into the passes' keys): equal inputs, equal shape, imports and
+        plan. The state stands for the target's image, form and swapchain (one is made per
+        output image, form and size, and anew with the swapchain: frame/output_passes.py)."""
         output = self.output
         target, scene = output.target, output.scene
         return (
@@ -206,9 +205,9 @@ class OutputGraph(OutputImports):
         frame.state, frame.tone_map, frame.overlay, frame.slot = state, tone_map, overlay, slot
 
     def key_again(self, state: Any, tone_map: Any, overlay: Any, slot: int) -> Any:
-        """Frame replay's graph key without a prepare, when the slot's kept entry has today's inputs
-        and the graph stands for them (that version, compiled for the extent): `steady_key`'s,
-        None for UNREPLAYABLE; else False (`record` prepares later)."""
+        """Frame replay's graph key without a prepare when the slot's kept entry has today's inputs
+        and the graph stands for them (that version, compiled for the extent): `steady_key`'s
+        (None: UNREPLAYABLE); else False (`record` prepares later)."""
         kept = self._kept.get(slot)
         if kept is None:
             return False
@@ -227,9 +226,9 @@ class OutputGraph(OutputImports):
         return key
 
     def steady_key(self, slot: int) -> Any:
-        """After a prepare without readback, the slot's graph key: its kept entry (held by
-        identity: the inputs, and the graph's shape, version and imports, so the compile, the
-        extent and the imported handles) and the running passes' keys; None for UNREPLAYABLE."""
+        """After a prepare without readback, the slot's graph key: its kept entry (by identity:
+        the inputs, the graph's shape, version and imports, so its compile, extent and imported
+        handles) and the running passes' keys; None for UNREPLAYABLE."""
         kept = self._kept[slot]
         keys = kept[2].pass_keys()
         return None if keys is None else (kept, keys)
@@ -285,13 +284,11 @@ class OutputGraph(OutputImports):
     def _drop(self, shapes: list[tuple]) -> None:
         """The graphs of `shapes` destroyed, and the slots' kept imports of them forgotten."""
         for shape in shapes:
-            gone = self.graphs.pop(shape)
-            gone.destroy()
+            (gone := self.graphs.pop(shape)).destroy()
             self._kept = {slot: kept for slot, kept in self._kept.items() if kept[2] is not gone}
 
     def forget_prepared(self) -> None:
-        """A frame that asked `prepare` and is not recorded (replayed, or keyed no further):
-        the next `record` prepares anew."""
+        """A frame that asked `prepare` is not recorded: the next `record` prepares anew."""
         self._prepared = None
 
     def _taken(self, state: Any, rendering: Any, tone_map: Any, overlay: Any, slot: int, readback: bool) -> Any:
