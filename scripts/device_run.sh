@@ -13,7 +13,8 @@
 # demos (every demo scene with --validate), aniso (tests/texture_reference.py: what the driver's
 # anisotropic filter does to a magnified texture), bench:NAME:ARGS (a benchmark, e.g.
 # bench:schedule:--quick), ab:NAME:ARGS:REPS (old against new, alternated; see below),
-# abcli:LABEL:ARGS:REPS (the CLI's perf JSON, old against new), abpar:NAME:ARGS:REPS[:LABEL] (old and new at once).
+# abcli:LABEL:ARGS:REPS (the CLI's perf JSON, old against new), abpar:NAME:ARGS:REPS[:LABEL] (old and new at once),
+# same:LABEL:ARGS (old and new in one process, frame blocks alternated: scripts/ab_same_process.py).
 set -u
 export PYTHONUNBUFFERED=1
 for f in .gl/*.deb; do dpkg -x "$f" /; done; ldconfig
@@ -115,6 +116,21 @@ for mode in "$@"; do
         wait
       done 2>&1 | tee "$OUT/abpar-$label.txt"
       tar -C /tmp -cf "$OUT/abpar-$label.tar" "abpar-$label" ;;
+    same:*)
+      # same:LABEL:ARGS: scripts/ab_same_process.py ARGS (e.g. "--scene cube"), .ab/base renamed
+      # ecs_old beside this tree in one process (a ":" inside ARGS is written "@"); its JSON lines
+      # in same-LABEL.jsonl
+      IFS=: read -r _ label args <<< "$mode"; args=${args//@/:}
+      [ -d /tmp/old ] || python3 -m pip install -q --no-deps --no-build-isolation --no-index --target /tmp/old \
+        .ab/base >/dev/null 2>&1 || { echo "install old failed"; continue; }
+      if [ ! -d /tmp/renamed/ecs_old ]; then  # (without the old runs' numba caches, which name ecs_engine)
+        mkdir -p /tmp/renamed && cp -r /tmp/old/ecs_engine /tmp/renamed/ecs_old
+        find /tmp/renamed/ecs_old -name __pycache__ -type d -prune -exec rm -rf {} +
+        find /tmp/renamed/ecs_old -name '*.py' -exec sed -i 's/\becs_engine\b/ecs_old/g' {} +
+      fi
+      (cd /tmp && PYTHONPATH=/tmp/new:/tmp/renamed:/tmp/site timeout 300 python3 "$REPO/scripts/ab_same_process.py" \
+        --old ecs_old $args >> "$OUT/same-$label.jsonl" 2> "/tmp/same-$label.err" || tail -3 "/tmp/same-$label.err")
+      tail -1 "$OUT/same-$label.jsonl" | cut -c1-400 ;;
     abcli:*)
       # abcli:LABEL:ARGS:REPS: the CLI (`python3 -m ecs_engine ARGS --perf-json`), this tree and
       # .ab/base alternated REPS times (e.g. the editor: abcli:editor:editor grid100 --headless
