@@ -16,8 +16,8 @@ The old tree is made importable under another name first, for example:
     find /tmp/renamed/ecs_old -name '*.py' -exec sed -i 's/\\becs_engine\\b/ecs_old/g' {} +
     PYTHONPATH=/tmp/renamed:... python3 scripts/ab_same_process.py --old ecs_old --scene cube
 
-It prints one JSON object: per engine the median frame (ms), the per-block medians, and the
-median of the blocks' ratios (new / old).
+It prints one JSON object: per engine ("old", "new") the median frame (ms), the per-block
+medians, and the median of the blocks' ratios (new / old).
 """
 
 from __future__ import annotations
@@ -78,7 +78,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--block", type=int, default=100, help="frames a block")
     args = parser.parse_args(argv)
     with ExitStack() as stack:
-        engines = {name: _engine(name, args, stack) for name in (args.old, args.new)}
+        # by role, so that one package may be both (a smoke test of the harness)
+        engines = {"old": _engine(args.old, args, stack), "new": _engine(args.new, args, stack)}
         for frame in engines.values():
             for _ in range(args.warmup):
                 frame()
@@ -91,10 +92,11 @@ def main(argv: list[str] | None = None) -> int:
                 block = [frame() for _ in range(args.block)]
                 times[name] += block
                 blocks[name].append(statistics.median(block))
-    ratios = [n / o for n, o in zip(blocks[args.new], blocks[args.old], strict=True)]
+    ratios = [n / o for n, o in zip(blocks["new"], blocks["old"], strict=True)]
     print(
         json.dumps(
             {
+                "packages": {"old": args.old, "new": args.new},
                 "scene": args.scene,
                 "size": args.size,
                 "mode": args.mode,
