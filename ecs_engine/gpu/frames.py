@@ -68,8 +68,8 @@ class FrameRing:
         self.frames: list[Frame] = []
         self.index = 0
         self.last_wait_ms = 0.0  # time begin() spent waiting for the GPU (not CPU work)
-        self.timestamps = device.info.timestamp_valid_bits > 0
         bits = device.info.timestamp_valid_bits
+        self.timestamps = bits > 0
         self._mask = (1 << bits) - 1 if 0 < bits < 64 else (1 << 64) - 1  # the ticks' valid bits
         self._period_ms = device.info.timestamp_period_ns / 1e6  # ms a tick
         self.pass_timing = False  # mark() writes timestamps (from the next recorded frame)

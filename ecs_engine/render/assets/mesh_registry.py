@@ -217,7 +217,7 @@ class MeshRegistry:
 
     def _collect(self) -> None:
         """Levels built in the background since the last frame."""
-        if self._builder is not None:  # (the callers ask first too: this runs every frame)
+        if self._builder is not None:
             for handle, levels in self._builder.finished():
                 _remember(self._digests[handle], levels)
                 self._install(handle, levels)

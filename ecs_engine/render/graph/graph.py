@@ -296,7 +296,7 @@ class FrameGraph(GraphImports):
         a caller that keeps this graph's compile and imports by identity already holds (frame
         replay's kept entry: passes/output_graph.py)."""
         run = self._running
-        if run is None or run[0] is not self.compiled:
+        if run is None or run[0] is not self.compiled:  # (_run's check, inline: asked every replayed frame)
             run = self._run()
         keys = [k() for k in run[2]]
         return None if UNREPLAYABLE in keys else keys

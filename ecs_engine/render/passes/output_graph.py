@@ -208,6 +208,8 @@ class OutputGraph(OutputImports):
         """Frame replay's graph key without a prepare when the slot's kept entry has today's inputs
         and the graph stands for them (that version, compiled for the extent): `steady_key`'s
         (None: UNREPLAYABLE); else False (`record` prepares later)."""
+        # _slot_kept's lines, inline: this runs every replayed frame, and a slot without an
+        # entry returns before its inputs are built
         kept = self._kept.get(slot)
         if kept is None:
             return False
