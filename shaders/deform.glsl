@@ -10,7 +10,7 @@
 // culling) give way to the weighted sum of those joints' matrices, so the normal matrix and the
 // position below follow the pose as a model matrix would.
 // The mesh pipelines' specialisation constant (their fragment shaders' too): without
-// FEATURE_DEFORM no row is deformed, and the code below is compiled out (its registers slowed
+// FEATURE_DEFORM no row is deformed, and the code below is compiled out (its registers slow
 // every vertex). Pipelines made without the constant (posed_vertices.comp) keep it.
 layout(constant_id = 0) const uint MATERIAL_FEATURES = 0xFFFFFFFFu;
 const bool DEFORM = (MATERIAL_FEATURES & uint(FEATURE_DEFORM)) != 0u;

@@ -280,7 +280,7 @@ FEATURE_SHADOWS = 1 << 24  # some light casts shadows: without, no shadow map is
 FEATURE_ENVIRONMENT = 1 << 25  # the world has an Environment: its sky, reflections and ambient are read
 FEATURE_RAY_SHADOWS = 1 << 26  # shadows are ray-traced: the deferred lighting reads their mask, no map
 # some row is skinned or morphed: without, the vertex shaders are specialised without deform.glsl's
-# code (its registers cost the 1M-row occlusion depth pass 16% on the H200 though no row took it)
+# code, whose registers slow every vertex even where no row takes it
 FEATURE_DEFORM = 1 << 27
 CLUSTER_GROUP = 64  # light_bounds.comp's and light_tiles.comp's local size
 MAX_GLOBAL_LIGHTS = 256  # directional and unbounded lights every fragment loops over, when clustered
