@@ -34,7 +34,10 @@ from typing import Any
 
 def _engine(package: str, args: argparse.Namespace, stack: ExitStack) -> Any:
     """A frame function of `package`'s engine drawing `args.scene`: () -> CPU ms of one frame."""
-    scenes = importlib.import_module(f"{package}.app.scenes")
+    try:
+        scenes = importlib.import_module(f"{package}.app.scenes")
+    except ImportError as exc:
+        raise SystemExit(f"ab_same_process: cannot import the engine {package!r}: {exc}") from None
     bench = importlib.import_module(f"{package}.bench")
     world_module = importlib.import_module(f"{package}.ecs.world")
     jobs = importlib.import_module(f"{package}.jobs")

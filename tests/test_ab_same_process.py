@@ -33,3 +33,17 @@ def test_two_engines_in_one_process_give_their_blocks_and_ratio(tmp_path: Path) 
     ratios = [n / o for n, o in zip(result["block_medians_ms"]["new"], result["block_medians_ms"]["old"], strict=True)]
     assert abs(result["median_block_ratio"] - sum(ratios) / 2) < 1e-9  # two blocks: their mean is the median
     assert result["blocks_new_slower"] == sum(r > 1 for r in ratios)
+
+
+def test_an_engine_that_is_not_importable_is_one_line_and_a_failure(tmp_path: Path) -> None:
+    proc = subprocess.run(
+        [sys.executable, str(SCRIPT), "--old", "no_such_engine"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert proc.returncode != 0 and "Traceback" not in proc.stderr
+    expected = "ab_same_process: cannot import the engine 'no_such_engine': No module named 'no_such_engine'"
+    assert proc.stderr.strip() == expected
