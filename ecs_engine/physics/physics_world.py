@@ -10,14 +10,16 @@ from typing import Any
 
 import numpy as np
 
+from ..components.physics import PRIMITIVES
 from ..ecs.entities import INDEX_MASK
-from . import queries
+from . import queries, ray_grid
 from .bodies import Bodies
 from .characters import Characters
 from .contacts import record_dtype
 from .library import load
 from .poses import copy_poses, copy_vectors
 from .queries import RayHits, ShapeHit
+from .ray_grid import RayGrid, Shapes
 
 # what becomes events: nothing; Trigger events only (the default: read only while a sensor exists);
 # Contact events too for bodies beginning and ending to touch; or every touching pair every step
@@ -70,6 +72,9 @@ class PhysicsWorld:
         self.paused = False  # PhysicsSystem does nothing (the editor's Physics window sets it)
         self.step_once = False  # paused: the next fixed step runs once all the same
         self.steps = 0
+        self.placed = 0  # times bodies were put where their Transform says (place)
+        self._shapes: tuple = (-1, None, False)  # (generation, Shapes, whether other shapes have bodies)
+        self._grid: tuple = ((), None)  # (key, RayGrid)
         self.step_ms = 0.0  # the library's last step
         self.events_ms = 0.0  # the last step's contact records read and sent as events
 
@@ -138,6 +143,7 @@ class PhysicsWorld:
     def place(self, entities: np.ndarray, transform: Any, rows: np.ndarray) -> None:
         """Move `entities`' (kinematic) bodies to their Transform (`transform`'s `rows`)."""
         put, handles = self.native.set_transform, self.bodies.handle[entities & INDEX_MASK].tolist()
+        self.placed += len(handles) > 0
         for h, p, q in zip(handles, transform.position[rows].tolist(), transform.rotation[rows].tolist()):
             put(h, tuple(p), tuple(q))
 
@@ -196,6 +202,23 @@ class PhysicsWorld:
         sets; the library casts without the GIL): the first body each one hits within
         `max_distance`."""
         return queries.raycast(self, origins, directions, max_distance)
+
+    def ray_grid(self) -> tuple[RayGrid | None, bool]:
+        """The grid raycast casts against (None without numba), made again when a step, a body
+        placed or a body made or destroyed moved the shapes; and whether bodies of other shapes
+        than the primitives (meshes, hulls, terrain) are there, for the library to cast against."""
+        bodies = self.bodies
+        if self._shapes[0] != bodies.generation:
+            slots = np.flatnonzero(bodies.owner >= 0)
+            primitive = np.isin(bodies.spec["shape"][slots], PRIMITIVES)
+            at = slots[primitive]
+            shapes = Shapes.of(bodies.owner[at], bodies.row[at], bodies.spec["shape"][at], bodies.spec["size"][at])
+            self._shapes = (bodies.generation, shapes, not primitive.all())
+        key = (bodies.generation, self.steps, self.placed)
+        if ray_grid.AVAILABLE and key != self._grid[0]:
+            positions, rotations, _, _ = self.buffers()
+            self._grid = (key, RayGrid.build(self._shapes[1], positions, rotations))
+        return self._grid[1], self._shapes[2]
 
     def shapecast(
         self, shape: int, size: Any, origin: Any, motion: Any, rotation: Any = (0.0, 0.0, 0.0, 1.0), ignore: int = -1

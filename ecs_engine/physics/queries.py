@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from ..components.physics import BOX, PRIMITIVES, SPHERE
+from ..ecs.entities import INDEX_MASK
 from ..jobs import over_rows
 
 RAY_CHUNK = 512  # rays per job when a batch is spread over the JobPool
@@ -52,19 +53,45 @@ def raycast(physics: Any, origins: Any, directions: Any, max_distance: float) ->
     if not (math.isfinite(max_distance) and max_distance > 0.0):
         raise ValueError(f"raycast: max_distance must be a positive finite number, got {max_distance!r}")
     o = np.ascontiguousarray(np.asarray(origins, np.float64).reshape(-1, 3))
-    d = np.asarray(directions, np.float64).reshape(-1, 3)
+    d = np.ascontiguousarray(np.asarray(directions, np.float64).reshape(-1, 3))
     if len(o) != len(d):
         raise ValueError(f"raycast: {len(o)} origins but {len(d)} directions")
+    grid, others = physics.ray_grid()
+    if grid is None:  # without numba: the library's batch answers every ray
+        return _library_rays(physics, o, _unit(o, d), max_distance)
+    index, distance = np.empty(len(o), np.int64), np.empty(len(o))
+    point, normal = np.empty((len(o), 3)), np.empty((len(o), 3))
+    out = (index, distance, point, normal)
+    over_rows(physics.pool, len(o), lambda rows: grid.cast(o, d, max_distance, rows, out), RAY_CHUNK)
+    if len(o) and index.min() == -2:
+        _unit(o, d)  # (the error naming the first such ray)
+    entity = np.where(index >= 0, grid.shapes.entity[index], -1) if len(grid.shapes.entity) else index
+    if others:  # mesh, hull and terrain bodies are the library's to cast against
+        theirs = _library_rays(physics, o, _unit(o, d), max_distance)
+        shape = physics.bodies.spec["shape"][np.where(theirs.entity >= 0, theirs.entity & INDEX_MASK, 0)]
+        nearer = (theirs.entity >= 0) & ~np.isin(shape, PRIMITIVES) & ~(distance <= theirs.distance)
+        entity[nearer], distance[nearer] = theirs.entity[nearer], theirs.distance[nearer]
+        point[nearer], normal[nearer] = theirs.point[nearer], theirs.normal[nearer]
+    return RayHits(entity, distance, point, normal)
+
+
+def _unit(o: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """The rays' directions made unit length, or ValueError naming the first ray that is not
+    finite or has no direction."""
     if not (np.isfinite(o).all() and np.isfinite(d).all()):
         raise ValueError("raycast: origins and directions must be finite")
     length = np.linalg.norm(d, axis=1)
     if len(d) and length.min() == 0.0:
         raise ValueError(f"raycast: direction {int(np.argmin(length))} has zero length")
-    unit = (d / length[:, None]).astype(np.float32) if len(d) else d.astype(np.float32)
-    starts, hits = o.astype(np.float32), np.empty(len(o), _HIT)
+    return d / length[:, None] if len(d) else d
+
+
+def _library_rays(physics: Any, o: np.ndarray, unit: np.ndarray, max_distance: float) -> RayHits:
+    """The rays cast by the library's batch (float32), in chunks over the world's JobPool."""
+    starts, toward, hits = o.astype(np.float32), unit.astype(np.float32), np.empty(len(o), _HIT)
 
     def cast(rows: slice) -> None:
-        raw = physics.native.raycast_batch(starts[rows].ravel(), unit[rows].ravel(), float(max_distance))
+        raw = physics.native.raycast_batch(starts[rows].ravel(), toward[rows].ravel(), float(max_distance))
         hits[rows] = np.frombuffer(raw, _HIT)
 
     over_rows(physics.pool, len(o), cast, RAY_CHUNK)

@@ -1,0 +1,121 @@
+"""PhysicsWorld.raycast: the engine's rays against the bodies' primitive shapes agree with the
+library's own batch, follow the bodies as they move, and leave meshes and terrain to the
+library, whichever is nearer answering."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from physics_world import ball, floor, simulate
+
+from ecs_engine import native
+from ecs_engine.components import Mesh, Transform
+from ecs_engine.components.physics import BOX, CAPSULE, CYLINDER, MESH, SPHERE, STATIC, Collider, RigidBody
+
+pytestmark = pytest.mark.skipif(not native.AVAILABLE, reason="the engine's rays are compiled with numba")
+
+
+def library(physics, origins, directions, reach):
+    from ecs_engine.physics.queries import _library_rays
+
+    unit = directions / np.linalg.norm(directions, axis=1)[:, None]
+    return _library_rays(physics, np.asarray(origins, np.float64), unit, reach)
+
+
+def test_rays_agree_with_the_library_on_turned_shapes_of_every_kind():
+    rng = np.random.default_rng(11)
+    kinds = [BOX, SPHERE, CAPSULE, CYLINDER]
+
+    def setup(world, dt):
+        for i in range(120):
+            q = rng.normal(size=4)
+            world.spawn(
+                Transform(position=tuple(rng.uniform(-6, 6, 3)), rotation=tuple(q / np.linalg.norm(q))),
+                RigidBody(kind=STATIC),
+                Collider(shape=kinds[i % 4], size=tuple(rng.uniform(0.2, 0.8, 3))),
+            )
+
+    _, physics = simulate(setup, 1)
+    origins = rng.uniform(-8, 8, (3000, 3))
+    directions = rng.normal(size=(3000, 3))
+    hits = physics.raycast(origins, directions, 30.0)
+    theirs = library(physics, origins, directions, 30.0)
+    entity, distance, normal = theirs.entity, theirs.distance, theirs.normal
+    assert (hits.entity >= 0).sum() > 500
+    # the library casts in float32: rays that graze a shape (the two distances apart) may differ
+    same = hits.entity == entity
+    assert same.mean() > 0.99
+    both = same & (entity >= 0)
+    assert np.allclose(hits.distance[both], distance[both], atol=2e-4)
+    met = both & (hits.distance > 0)
+    assert np.allclose(hits.normal[met], normal[met], atol=2e-3)
+
+
+def test_rays_follow_the_bodies_as_they_fall_and_as_they_are_placed():
+    made = {}
+
+    def setup(world, dt):
+        floor(world)
+        made["ball"] = ball(world, 10.0)
+
+    world, physics = simulate(setup, 1)
+    down = [(0.0, -1.0, 0.0)]
+    for _ in range(30):
+        physics.step(1 / 60)
+        top = physics.bodies.position_of(made["ball"])[1] + 0.5
+        hits = physics.raycast([(0.0, 20.0, 0.0)], down, 50.0)
+        assert hits.entity[0] == made["ball"] and hits.distance[0] == pytest.approx(20.0 - top, abs=1e-5)
+    column, row = _transform_row(world, made["ball"])
+    column.position[row] = (5.0, 2.0, 0.0)  # a teleport, as PhysicsSystem makes it of a Transform written
+    physics.place(np.array([made["ball"]]), column, np.array([row]))
+    hits = physics.raycast([(5.0, 20.0, 0.0), (0.0, 20.0, 0.0)], down * 2, 50.0)
+    assert hits.entity[0] == made["ball"] and hits.distance[0] == pytest.approx(17.5, abs=1e-5)
+    assert hits.distance[1] == pytest.approx(20.0, abs=1e-5)  # where it was: the floor
+
+
+def _transform_row(world, entity):
+    """The Transform column holding `entity`'s row, writable, and the row."""
+    for batch in world.query(Transform, write=(Transform,)):
+        if entity in batch.entities:
+            return batch[Transform], int(np.flatnonzero(batch.entities == entity)[0])
+    raise AssertionError(entity)
+
+
+def test_a_mesh_collider_is_hit_where_it_is_nearer_than_the_shapes():
+    from ecs_engine.render import Meshes, plane_mesh
+
+    made = {}
+
+    def setup(world, dt):
+        ground = world.resources[Meshes].add(plane_mesh(size=1.0, subdivisions=4))
+        made["plane"] = world.spawn(  # a 20 m plane at y = 1
+            Transform(position=(0.0, 1.0, 0.0), scale=(20.0, 1.0, 20.0)),
+            Mesh(handle=ground),
+            RigidBody(kind=STATIC),
+            Collider(shape=MESH),
+        )
+        made["above"] = world.spawn(Transform(position=(3.0, 3.0, 0.0)), RigidBody(kind=STATIC), Collider(shape=BOX))
+        made["below"] = world.spawn(Transform(position=(-3.0, -2.0, 0.0)), RigidBody(kind=STATIC), Collider(shape=BOX))
+
+    _, physics = simulate(setup, 1)
+    origins = [(3.0, 10.0, 0.0), (-3.0, 10.0, 0.0), (-3.0, -10.0, 0.0), (30.0, 10.0, 0.0)]
+    directions = [(0.0, -1.0, 0.0)] * 3 + [(0.0, -1.0, 0.0)]
+    directions[2] = (0.0, 1.0, 0.0)
+    hits = physics.raycast(origins, directions, 50.0)
+    assert hits.entity.tolist() == [made["above"], made["plane"], made["below"], -1]
+    assert np.allclose(hits.distance[:3], [6.5, 9.0, 7.5], atol=1e-4)
+    assert np.allclose(hits.point[1], (-3.0, 1.0, 0.0), atol=1e-4)
+
+
+@pytest.mark.parametrize(
+    ("origin", "direction", "says"),
+    [
+        ((0.0, np.nan, 0.0), (0.0, -1.0, 0.0), "origins and directions must be finite"),
+        ((0.0, 5.0, 0.0), (0.0, np.inf, 0.0), "origins and directions must be finite"),
+        ((0.0, 5.0, 0.0), (0.0, 0.0, 0.0), "direction 1 has zero length"),
+    ],
+)
+def test_a_ray_that_is_not_finite_or_has_no_direction_is_one_error(origin, direction, says):
+    _, physics = simulate(lambda world, dt: floor(world), 1)
+    with pytest.raises(ValueError, match=says):
+        physics.raycast([(0.0, 5.0, 0.0), origin], [(0.0, -1.0, 0.0), direction], 10.0)
