@@ -79,9 +79,13 @@ BEGIN, STAY, END = 0, 1, 2
 class Contact(Component):
     """An event (world.events(Contact)), a row per touching pair and step, sent by PhysicsSystem:
     bodies `a` and `b` began touching (`phase` BEGIN), still touch (STAY: only when the
-    PhysicsWorld reports them, `contacts="all"`) or parted (END: point, normal and impulse zero);
-    the contact `point`, the `normal` (pointing from a to b) and the `impulse` (N s) that kept
-    them apart."""
+    PhysicsWorld reports them, `contacts="all"`) or parted (END: point, normal, speed and
+    impulse zero); the contact `point`, the `normal` (pointing from a to b), the `speed` they
+    met at along the normal (m/s) and, for BEGIN, the impact's `impulse` (N s): the momentum
+    the collision gives each body along the normal, (1 + e) m v with e the pair's restitution
+    (the larger one's, as the library combines them), m the pair's reduced mass (a static or
+    kinematic body's counts as infinite) and v the speed; their turning is not counted. STAY
+    rows carry no impulse (a resting body's support is not an impact)."""
 
     a = Field(np.int64, default=-1, entity=True)
     b = Field(np.int64, default=-1, entity=True)
@@ -89,6 +93,7 @@ class Contact(Component):
     point = Field(np.float64, (3,), default=(0.0, 0.0, 0.0))
     normal = Field(np.float64, (3,), default=(0.0, 0.0, 0.0))
     speed = Field(np.float64, default=0.0)
+    impulse = Field(np.float64, default=0.0)
 
 
 class Trigger(Component):

@@ -9,12 +9,13 @@ import pytest
 from physics_world import G, ball, floor, physics_plugin
 
 from ecs_engine import App, MinimalPlugins
-from ecs_engine.components import Transform
+from ecs_engine.components import Transform, Velocity
 from ecs_engine.components.physics import BEGIN, END, SPHERE, STATIC, STAY, Collider, Contact, RigidBody, Trigger
 
 
-def _events(setup, frames, **kw):
-    """Every Contact and Trigger event of a run, as (step, rows) lists."""
+def _events(setup, frames, more=(), **kw):
+    """Every Contact and Trigger event of a run, as (step, rows) lists (`more`: systems run
+    beside the listener, each frame)."""
     from ecs_engine import Time
 
     seen: dict = {"contacts": [], "triggers": []}
@@ -29,7 +30,7 @@ def _events(setup, frames, **kw):
 
     app = App(title="events").add_plugins(MinimalPlugins, physics_plugin(**kw))
     app.add_startup_systems(setup)
-    app.add_systems("update", listen)
+    app.add_systems("update", listen, *more)
     app.run(frames=frames)
     return seen
 
@@ -54,6 +55,48 @@ def test_a_bounce_is_a_contact_that_begins_and_ends_with_the_speed_it_met_at():
     assert first.speed[0] == pytest.approx(math.sqrt(2 * G * h), rel=0.05)
     phases = [int(p) for _, c in seen["contacts"] for p in c.phase]
     assert STAY not in phases and END in phases  # begin and end only, by default
+
+
+@pytest.mark.parametrize(("m_a", "m_b", "e", "floor_under"), [(2.0, None, 0.5, True), (1.0, 3.0, 1.0, False)])
+def test_a_contacts_impulse_is_the_momentum_the_collision_gives_a_body(m_a, m_b, e, floor_under):
+    """Measured from the body's own velocity across the contact, not from the library: a ball
+    bouncing on a floor (the impulse m (1 + e) v), and two balls meeting head on in space (the
+    impulse (1 + e) v m_a m_b / (m_a + m_b))."""
+    from ecs_engine import Time
+
+    made, velocity = {}, {}
+
+    def setup(world, dt):
+        if floor_under:
+            floor(world)
+            made["a"] = world.spawn(
+                Transform(position=(0.0, 2.5, 0.0)), RigidBody(mass=m_a), Collider(shape=SPHERE, restitution=e),
+                Velocity(),
+            )  # fmt: skip
+        else:
+            made["a"] = world.spawn(
+                Transform(position=(-2.0, 0.0, 0.0)), RigidBody(mass=m_a), Collider(shape=SPHERE, restitution=e),
+                Velocity(linear=(3.0, 0.0, 0.0)),
+            )  # fmt: skip
+            world.spawn(
+                Transform(position=(2.0, 0.0, 0.0)), RigidBody(mass=m_b), Collider(shape=SPHERE, restitution=e),
+                Velocity(),
+            )  # fmt: skip
+
+    def track(world, dt):
+        velocity[world.resources[Time].steps] = world.get(made["a"], Velocity).linear.copy()
+
+    seen = _events(setup, 90, contacts="begin_end", gravity=(0.0, -G if floor_under else 0.0, 0.0), more=[track])
+    step, rows = seen["contacts"][0]
+    assert rows.phase[0] == BEGIN and rows.impulse[0] > 1.0
+    axis = 1 if floor_under else 0
+    # its velocity along the normal a step before the contact was reported and two steps after,
+    # less what gravity gave it over those three steps
+    fell = -G * 3 / 60 if floor_under else 0.0
+    change = m_a * abs(velocity[step + 2][axis] - velocity[step - 1][axis] - fell)
+    assert rows.impulse[0] == pytest.approx(change, rel=0.03)
+    ended = [c for _, c in seen["contacts"] if END in c.phase]
+    assert ended and all((c.impulse[c.phase == END] == 0.0).all() for c in ended)
 
 
 def test_stays_are_reported_when_asked():

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from ..components.physics import BEGIN, END, STAY, Contact, Trigger
+from ..components.physics import BEGIN, DYNAMIC, END, STAY, Contact, Trigger
 from ..ecs.entities import INDEX_MASK
 
 # culverin's record of a contact (128 bytes; its positions are float64 in its double-precision
@@ -40,6 +40,18 @@ def record_dtype(double: bool) -> np.dtype:
 _PHASES = (BEGIN, STAY, END)
 
 
+def impact(bodies: Any, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Per pair of bodies (entities a and b), the impulse a unit speed of impact gives each:
+    (1 + e) times their reduced mass, e the larger restitution (the library's combination), a
+    body that is not dynamic counting as infinitely heavy."""
+    sa, sb = a & INDEX_MASK, b & INDEX_MASK
+    spec, dynamic = bodies.spec, bodies.kind == DYNAMIC
+    inverse = np.where(dynamic[sa], 1.0 / spec["mass"][sa], 0.0) + np.where(dynamic[sb], 1.0 / spec["mass"][sb], 0.0)
+    restitution = np.maximum(spec["restitution"][sa], spec["restitution"][sb])
+    with np.errstate(divide="ignore"):
+        return np.where(inverse > 0.0, (1.0 + restitution) / inverse, 0.0)
+
+
 def send_contacts(world: Any, physics: Any, raw: Any, touches: bool, stays: bool) -> None:
     """The library's contact records since the last step (`raw`) sent as Trigger events and,
     with `touches`, Contact events (STAY rows only with `stays`)."""
@@ -60,14 +72,17 @@ def send_contacts(world: Any, physics: Any, raw: Any, touches: bool, stays: bool
     b_sensor[ours] = sensor[b[ours] & INDEX_MASK]
     touching = ours & ~a_sensor & ~b_sensor
     if touches and touching.any():
+        a, b, phase = a[touching], b[touching], phase[touching]
+        speed = records["speed"][touching].astype(np.float64)
         world.events(Contact).send(
             Contact(
-                a=a[touching],
-                b=b[touching],
-                phase=phase[touching],
+                a=a,
+                b=b,
+                phase=phase,
                 point=records["point"][touching].astype(np.float64),
                 normal=records["normal"][touching].astype(np.float64),
-                speed=records["speed"][touching].astype(np.float64),
+                speed=speed,
+                impulse=np.where(phase == BEGIN, impact(physics.bodies, a, b) * speed, 0.0),
             )
         )
     crossing = ours & (a_sensor | b_sensor) & (phase != STAY)
