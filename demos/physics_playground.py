@@ -1,9 +1,9 @@
 """The physics playground (`ecs-engine play physics`, the `physics` extra): a pile of boxes to
-knock down, a row of dominoes, a chain of hinged links, a tower, a ramp and a character walking
-a loop through it all; fly the camera (WASD
-and the mouse) and shoot balls where it looks (the left mouse button or space). `--autoplay`
-shoots on its own, one ball every half second from where the camera stands. A game module, as
-asteroids is."""
+knock down, a row of dominoes, a chain of hinged links, a tower with a ragdoll standing by it,
+a second ragdoll falling onto a ramp and a character walking a loop through it all; fly the
+camera (WASD and the mouse) and shoot balls where it looks (the left mouse button or space).
+`--autoplay` shoots on its own, one ball every half second from where the camera stands. A
+game module, as asteroids is."""
 
 from __future__ import annotations
 
@@ -20,6 +20,8 @@ from ecs_engine.ecs import System
 from ecs_engine.maths.camera import look_rotation, rotation_matrix
 from ecs_engine.render import Material, cube_mesh, cylinder_mesh, materials, sphere_mesh
 from ecs_engine.systems import ActionMap
+
+from .physics_ragdoll import spawn_ragdoll
 
 ACTIONS = {"shoot": ["mouse_left", "space", "gamepad_right_bumper"]}
 BALL_SPEED = 30.0  # m/s
@@ -127,6 +129,10 @@ def build_world(world: World, add_mesh: object, pile: int = 1000) -> None:
         Mesh(handle=body, material=looks.add(Material("walker", "cook_torrance", (0.2, 0.5, 0.9, 1.0)))),
         CharacterController(),
     )
+    # ragdolls: one standing by the tower to shoot at, one falling onto the ramp
+    limb, look = add_mesh(cylinder_mesh()), looks.add(Material("ragdoll", "cook_torrance", (0.85, 0.7, 0.55, 1.0)))  # type: ignore[operator]
+    for feet in ((-1.0, 0.0, -8.0), (-14.0, 6.0, -6.0)):
+        spawn_ragdoll(world, feet, cube, add_mesh(sphere_mesh()), limb, look)  # type: ignore[operator]
     # a tower to shoot at
     for level in range(10):
         world.spawn(

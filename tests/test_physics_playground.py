@@ -46,10 +46,13 @@ def test_the_playground_plays_itself():
     assert sum(upright) < 24
     # the chain swung, and its links stayed joined: each link's top where the one above ends
     from ecs_engine.demos.physics_playground import CHAIN_LINKS, LINK
+    from ecs_engine.demos.physics_ragdoll import PARTS, RAGDOLL
     from ecs_engine.maths.camera import rotation_matrix
 
-    links = [e for b in world.query(Joint, write=()) for e in b.entities]
+    joined = [(e, c) for b in world.query(Joint, Collider, write=()) for e, c in zip(b.entities, b[Collider].category)]
+    links = [e for e, category in joined if category == 8]
     assert len(links) == CHAIN_LINKS
+    assert sum(category == RAGDOLL for _, category in joined) == 2 * (len(PARTS) - 1)  # two ragdolls
     ends = []
     for e in links:
         t = world.get(e, Transform)
@@ -75,3 +78,36 @@ def test_without_the_extra_play_physics_is_one_line(monkeypatch, capsys):
     assert cli.main(["play", "physics", "--headless", "--frames", "2"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "pip install 'ecs_engine[physics]'" in err[0], err
+
+
+def test_a_ragdoll_falls_in_a_heap_with_its_joints_holding():
+    """Dropped from a metre up, a ragdoll collapses on the floor; every joint's pivot, carried by
+    each of its two parts, stays where the other part carries it."""
+    sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
+    from physics_world import floor, simulate
+
+    from ecs_engine.components import Mesh
+    from ecs_engine.demos.physics_ragdoll import PARTS, spawn_ragdoll
+    from ecs_engine.maths.camera import rotation_matrix
+
+    made = {}
+
+    def setup(world, dt):
+        floor(world)
+        made["parts"] = spawn_ragdoll(world, (0.0, 1.0, 0.0), 0, 0, 0, 0)
+
+    world, _ = simulate(setup, 180)
+    parts = made["parts"]
+    assert all(world.has(e, Mesh) for e in parts)
+    where = {e: world.get(e, Transform) for e in parts}
+    for k, part in enumerate(PARTS):
+        if part.parent < 0:
+            continue
+        ends = []
+        for index, start in ((k, part.centre), (part.parent, PARTS[part.parent].centre)):
+            t = where[parts[index]]
+            local = np.asarray(part.pivot) - np.asarray(start)  # (upright and unturned when made)
+            ends.append(t.position + rotation_matrix(t.rotation)[:3, :3] @ local)
+        assert np.linalg.norm(ends[0] - ends[1]) < 0.03, part.name
+    heights = np.array([where[e].position[1] for e in parts])
+    assert heights.min() > 0.0 and heights[2] < 1.0  # on the floor, the head come down from 2.65 m
