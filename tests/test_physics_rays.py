@@ -119,3 +119,29 @@ def test_a_ray_that_is_not_finite_or_has_no_direction_is_one_error(origin, direc
     _, physics = simulate(lambda world, dt: floor(world), 1)
     with pytest.raises(ValueError, match=says):
         physics.raycast([(0.0, 5.0, 0.0), origin], [(0.0, -1.0, 0.0), direction], 10.0)
+
+
+def test_the_grid_stands_while_shapes_stay_within_its_margin_and_rays_see_them_where_they_are():
+    """A box gliding through space at 0.3 m/s past resting ones: the grid is kept for the steps
+    where it moved less than the grid's margin, made again after, and every ray meets the box
+    where it is at that step."""
+    made = {}
+
+    def setup(world, dt):
+        for x in range(-6, 7, 2):
+            world.spawn(Transform(position=(float(x), 0.0, -3.0)), RigidBody(kind=STATIC), Collider(shape=BOX))
+        made["box"] = world.spawn(Transform(position=(-4.0, 0.0, 0.0)), RigidBody(), Collider(shape=BOX))
+
+    _, physics = simulate(setup, 1, gravity=(0.0, 0.0, 0.0))
+    physics.set_velocity(made["box"], (0.3, 0.0, 0.0))
+    grids, kept = [physics.ray_grid()[0]], 0
+    for _ in range(40):
+        physics.step(1 / 60)
+        grid = physics.ray_grid()[0]
+        kept += grid is grids[-1]
+        grids.append(grid)
+        x = physics.bodies.position_of(made["box"])[0]
+        hits = physics.raycast([(x - 0.3, 5.0, 0.0), (x + 0.6, 5.0, 0.0)], [(0.0, -1.0, 0.0)] * 2, 10.0)
+        assert hits.entity[0] == made["box"] and hits.distance[0] == pytest.approx(4.5, abs=1e-6)
+        assert hits.entity[1] == -1  # just past its leading face
+    assert kept > 10 and len({id(g) for g in grids}) > 3  # kept for most steps, made again now and then

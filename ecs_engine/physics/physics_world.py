@@ -204,9 +204,10 @@ class PhysicsWorld:
         return queries.raycast(self, origins, directions, max_distance)
 
     def ray_grid(self) -> tuple[RayGrid | None, bool]:
-        """The grid raycast casts against (None without numba), made again when a step, a body
-        placed or a body made or destroyed moved the shapes; and whether bodies of other shapes
-        than the primitives (meshes, hulls, terrain) are there, for the library to cast against."""
+        """The grid raycast casts against (None without numba), looked at again after a step or
+        a body placed: made again when a body was made or destroyed or a shape moved further
+        than the grid's margin (ray_grid.MARGIN); and whether bodies of other shapes than the
+        primitives (meshes, hulls, terrain) are there, for the library to cast against."""
         bodies = self.bodies
         if self._shapes[0] != bodies.generation:
             slots = np.flatnonzero(bodies.owner >= 0)
@@ -217,7 +218,10 @@ class PhysicsWorld:
         key = (bodies.generation, self.steps, self.placed)
         if ray_grid.AVAILABLE and key != self._grid[0]:
             positions, rotations, _, _ = self.buffers()
-            self._grid = (key, RayGrid.build(self._shapes[1], positions, rotations))
+            grid = self._grid[1]
+            if grid is None or not grid.holds(self._shapes[1], positions, rotations):
+                grid = RayGrid.build(self._shapes[1], positions, rotations)
+            self._grid = (key, grid)
         return self._grid[1], self._shapes[2]
 
     def shapecast(

@@ -12,7 +12,7 @@ from ..components.physics import BOX, PRIMITIVES, SPHERE
 from ..ecs.entities import INDEX_MASK
 from ..jobs import over_rows
 
-RAY_CHUNK = 512  # rays per job when a batch is spread over the JobPool
+RAY_CHUNK = 1024  # rays at least per job (a job of fewer costs more to wake than it saves: docs/physics.md)
 # a ray hit as the library packs it (48 bytes)
 _HIT = np.dtype(
     [

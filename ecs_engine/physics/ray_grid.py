@@ -19,45 +19,86 @@ from .. import native
 from ..components.physics import BOX, CAPSULE, SPHERE
 from .ray_shapes import shape_hit
 
-CELL_REACH = 0.9  # the grid's cell, in the median shape's reach (its bounding sphere's diameter)
+CELL_REACH = 0.7  # the grid's cell, in the median shape's reach (its bounding sphere's diameter)
+MARGIN = 0.02  # the shapes' bounds in the grid are this many cells wider all round: the grid
+# stands for the steps after it was made until a shape moves further than that
 LARGE_CELLS = 64  # a shape over more cells than this is tested by every ray instead
 CELLS_PER_SHAPE = 4  # the grid has at most this many cells per shape (more for far-apart shapes)
 
 
-def _bounds_kernel(positions, rotations, rows, shape, size, big, bounds, extent):  # pragma: no cover
-    """Each shape's world bounds from the buffers (bounds: low x y z, high x y z, float32, a
-    little wide: float32's rounding never puts a hit outside them), and `extent`, the bounds of
-    the shapes that are not `big` (low, then high)."""
+def _reach_kernel(rotations, r, s, s0, s1, s2, a):  # pragma: no cover
+    """How far a shape of kind s and Collider sizes s0..s2, turned as the body at row r of the
+    library's buffers, reaches from its centre along world axis a."""
+    x, y = np.float64(rotations[r, 0]), np.float64(rotations[r, 1])
+    z, w = np.float64(rotations[r, 2]), np.float64(rotations[r, 3])
+    inv = 2.0 / (x * x + y * y + z * z + w * w)
+    # row a of the rotation matrix (of the quaternion made unit)
+    if a == 0:
+        k0, k1, k2 = 1 - (y * y + z * z) * inv, (x * y - z * w) * inv, (x * z + y * w) * inv
+    elif a == 1:
+        k0, k1, k2 = (x * y + z * w) * inv, 1 - (x * x + z * z) * inv, (y * z - x * w) * inv
+    else:
+        k0, k1, k2 = (x * z - y * w) * inv, (y * z + x * w) * inv, 1 - (x * x + y * y) * inv
+    if s == BOX:
+        e = abs(k0) * s0 + abs(k1) * s1 + abs(k2) * s2
+    elif s == SPHERE:
+        e = s0
+    elif s == CAPSULE:  # along local y: radius size[0], half height size[1]
+        e = abs(k1) * s1 + s0
+    else:  # a cylinder: its caps are discs across the axis
+        e = abs(k1) * s1 + s0 * np.sqrt(max(0.0, 1.0 - k1 * k1))
+    return e + 1e-6 * e + 1e-9  # (wide enough that float32's rounding never leaves a hit outside)
+
+
+def _bounds_kernel(positions, rotations, rows, shape, size, big, margin, bounds, extent):  # pragma: no cover
+    """Each shape's world bounds from the buffers, `margin` wider all round (bounds: low x y z,
+    high x y z, float32), and `extent`, the bounds of the shapes that are not `big` (low, then
+    high)."""
     extent[0, :], extent[1, :] = np.inf, -np.inf
+    for i in range(len(rows)):
+        r = rows[i]
+        for a in range(3):
+            c = positions[r, a]
+            e = _reach(rotations, r, shape[i], size[i, 0], size[i, 1], size[i, 2], a) + margin + 1e-6 * abs(c)
+            bounds[i, a], bounds[i, 3 + a] = c - e, c + e
+            if not big[i]:
+                extent[0, a], extent[1, a] = min(extent[0, a], c - e), max(extent[1, a], c + e)
+
+
+def _pose_kernel(positions, rotations, rows, pose):  # pragma: no cover
+    """Each shape's pose now: its centre and its rotation made unit (x, y, z, w)."""
     for i in range(len(rows)):
         r = rows[i]
         x, y = np.float64(rotations[r, 0]), np.float64(rotations[r, 1])
         z, w = np.float64(rotations[r, 2]), np.float64(rotations[r, 3])
-        inv = 1.0 / (x * x + y * y + z * z + w * w)
-        # the rotation's columns' parts along each world axis, squared terms scaled by 1/|q|^2
-        xx, yy, zz = x * x * inv, y * y * inv, z * z * inv
-        xy, xz, yz, xw, yw, zw = x * y * inv, x * z * inv, y * z * inv, x * w * inv, y * w * inv, z * w * inv
-        s, s0, s1, s2 = shape[i], size[i, 0], size[i, 1], size[i, 2]
-        for a in range(3):
-            if a == 0:
-                k0, k1, k2 = 1 - 2 * (yy + zz), 2 * (xy - zw), 2 * (xz + yw)
-            elif a == 1:
-                k0, k1, k2 = 2 * (xy + zw), 1 - 2 * (xx + zz), 2 * (yz - xw)
-            else:
-                k0, k1, k2 = 2 * (xz - yw), 2 * (yz + xw), 1 - 2 * (xx + yy)
-            if s == BOX:
-                e = abs(k0) * s0 + abs(k1) * s1 + abs(k2) * s2
-            elif s == SPHERE:
-                e = s0
-            elif s == CAPSULE:  # along local y: radius size[0], half height size[1]
-                e = abs(k1) * s1 + s0
-            else:  # a cylinder: its caps are discs across the axis
-                e = abs(k1) * s1 + s0 * np.sqrt(max(0.0, 1.0 - k1 * k1))
-            c = positions[r, a]
-            e += 1e-6 * (e + abs(c)) + 1e-9
-            bounds[i, a], bounds[i, 3 + a] = c - e, c + e
-            if not big[i]:
-                extent[0, a], extent[1, a] = min(extent[0, a], c - e), max(extent[1, a], c + e)
+        inv = 1.0 / np.sqrt(x * x + y * y + z * z + w * w)
+        pose[i, 0], pose[i, 1], pose[i, 2] = positions[r, 0], positions[r, 1], positions[r, 2]
+        pose[i, 3], pose[i, 4], pose[i, 5], pose[i, 6] = x * inv, y * inv, z * inv, w * inv
+
+
+def _escaped_kernel(positions, rotations, rows, big, radius, pose, margin):  # pragma: no cover
+    """Whether any shape that is not `big` may reach outside the bounds the grid was made with
+    (`margin` wider than it was at `pose`). No point of a shape has moved further than its
+    centre has plus its radius times the turn's chord, 2 |q - q0| for unit quaternions on the
+    same side; while that stays within the margin the grid holds every shape in its cells."""
+    for i in range(len(rows)):
+        if big[i]:
+            continue
+        r = rows[i]
+        dx, dy, dz = positions[r, 0] - pose[i, 0], positions[r, 1] - pose[i, 1], positions[r, 2] - pose[i, 2]
+        x, y = np.float64(rotations[r, 0]), np.float64(rotations[r, 1])
+        z, w = np.float64(rotations[r, 2]), np.float64(rotations[r, 3])
+        inv = 1.0 / np.sqrt(x * x + y * y + z * z + w * w)
+        if x * pose[i, 3] + y * pose[i, 4] + z * pose[i, 5] + w * pose[i, 6] < 0.0:
+            inv = -inv
+        qx, qy, qz, qw = x * inv - pose[i, 3], y * inv - pose[i, 4], z * inv - pose[i, 5], w * inv - pose[i, 6]
+        moved = np.sqrt(dx * dx + dy * dy + dz * dz) + 2.0 * radius[i] * np.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
+        if moved > margin:
+            return True
+    return False
+
+
+_reach = native.inner(_reach_kernel)
 
 
 def _cells_kernel(bounds, j, origin, inv_cell, dims):  # pragma: no cover
@@ -73,8 +114,9 @@ def _cells_kernel(bounds, j, origin, inv_cell, dims):  # pragma: no cover
 
 
 def _fill_kernel(bounds, small, origin, inv_cell, dims):  # pragma: no cover
-    """The grid's cells as ranges of items (shape indices): (starts, items), starts with a row
-    per cell and one more. Two passes: count each cell's shapes, then place them."""
+    """The grid's cells as ranges of items (shape indices): (starts, items, boxes), starts with
+    a row per cell and one more, boxes the items' bounds beside them (a cell's are read in a
+    row, not gathered by shape). Two passes: count each cell's shapes, then place them."""
     nx, ny = dims[0], dims[1]
     starts = np.zeros(dims[0] * dims[1] * dims[2] + 1, np.int32)
     for k in range(len(small)):
@@ -85,17 +127,21 @@ def _fill_kernel(bounds, small, origin, inv_cell, dims):  # pragma: no cover
                     starts[(cz * ny + cy) * nx + cx + 1] += 1
     for c in range(len(starts) - 1):
         starts[c + 1] += starts[c]
-    items = np.empty(starts[-1], np.int32)
+    items, boxes = np.empty(starts[-1], np.int32), np.empty((starts[-1], 6), np.float32)
     cursor = starts[:-1].copy()
     for k in range(len(small)):
-        x0, y0, z0, x1, y1, z1 = _cells(bounds, small[k], origin, inv_cell, dims)
+        j = small[k]
+        x0, y0, z0, x1, y1, z1 = _cells(bounds, j, origin, inv_cell, dims)
         for cz in range(z0, z1 + 1):
             for cy in range(y0, y1 + 1):
                 for cx in range(x0, x1 + 1):
                     c = (cz * ny + cy) * nx + cx
-                    items[cursor[c]] = small[k]
-                    cursor[c] += 1
-    return starts, items
+                    at = cursor[c]
+                    items[at] = j
+                    for a in range(6):
+                        boxes[at, a] = bounds[j, a]
+                    cursor[c] = at + 1
+    return starts, items, boxes
 
 
 _cells = native.inner(_cells_kernel)
@@ -107,7 +153,7 @@ def _inverse_kernel(d):  # pragma: no cover
 
 
 def _meets_kernel(bounds, j, ox, oy, oz, ix, iy, iz, best):  # pragma: no cover
-    """Whether the ray (from o, 1 / its direction i) meets shape j's bounds before best."""
+    """Whether the ray (from o, 1 / its direction i) meets bounds[j] before best."""
     t1, t2 = (bounds[j, 0] - ox) * ix, (bounds[j, 3] - ox) * ix
     enter, leave = min(t1, t2), max(t1, t2)
     t1, t2 = (bounds[j, 1] - oy) * iy, (bounds[j, 4] - oy) * iy
@@ -132,13 +178,13 @@ def _cast_kernel(  # pragma: no cover
     rows,
     shape,
     size,
-    bounds,
     large,
     origin,
     cell,
     dims,
     starts,
     items,
+    boxes,
     out_shape,
     out_t,
     out_point,
@@ -197,8 +243,10 @@ def _cast_kernel(  # pragma: no cover
             while True:
                 c0 = (cz * ny + cy) * nx + cx
                 for m in range(starts[c0], starts[c0 + 1]):
+                    if not _meets(boxes, m, ox, oy, oz, ix, iy, iz, best):
+                        continue
                     j = items[m]
-                    if seen[j] == k or not _meets(bounds, j, ox, oy, oz, ix, iy, iz, best):
+                    if seen[j] == k:
                         continue
                     seen[j] = k
                     s0, s1, s2 = size[j, 0], size[j, 1], size[j, 2]
@@ -229,9 +277,16 @@ def _cast_kernel(  # pragma: no cover
 
 
 _bounds = native.njit(_bounds_kernel)
+_escaped = native.njit(_escaped_kernel)
+_pose = native.njit(_pose_kernel)
 _fill = native.njit(_fill_kernel)
 _cast = native.njit(_cast_kernel)
 AVAILABLE = _cast is not None
+
+
+def _same(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two views are of the same memory (the library's buffers, viewed again)."""
+    return a.shape == b.shape and a.__array_interface__["data"][0] == b.__array_interface__["data"][0]
 
 
 @dataclass(frozen=True)
@@ -247,6 +302,7 @@ class Shapes:
     shape: np.ndarray
     size: np.ndarray
     cell: float
+    radius: np.ndarray
     big: np.ndarray
     small: np.ndarray
     large: np.ndarray
@@ -263,25 +319,29 @@ class Shapes:
         cell = CELL_REACH * float(np.median(reach)) if len(reach) else 1.0
         big = (reach / cell + 1.0) ** 3 > LARGE_CELLS
         rows = np.ascontiguousarray(rows, np.int64)
-        return cls(entity, rows, shape, size, cell, big, np.flatnonzero(~big), np.flatnonzero(big))
+        return cls(entity, rows, shape, size, cell, reach / 2.0, big, np.flatnonzero(~big), np.flatnonzero(big))
 
 
 @dataclass(frozen=True)
 class RayGrid:
     """The shapes at one moment, and a grid of their bounds: the library's buffers they are
-    posed by (`positions`, `rotations`), their `bounds` (float32: low, high); the grid from
+    posed by (`positions`, `rotations`), their `pose` when the grid was made (centres, unit
+    rotations) and the `margin` their bounds were widened by; the grid from
     `origin` in cubes of `cell`, `dims` of them, whose shapes are items[starts[c]:starts[c + 1]]
-    for cell c = (z * ny + y) * nx + x."""
+    for cell c = (z * ny + y) * nx + x, their bounds boxes[starts[c]:starts[c + 1]] (float32:
+    low, then high)."""
 
     shapes: Shapes
     positions: np.ndarray
     rotations: np.ndarray
-    bounds: np.ndarray
+    pose: np.ndarray
+    margin: float
     origin: np.ndarray
     cell: float
     dims: np.ndarray
     starts: np.ndarray
     items: np.ndarray
+    boxes: np.ndarray
 
     @classmethod
     def build(cls, shapes: Shapes, positions: np.ndarray, rotations: np.ndarray) -> RayGrid:
@@ -290,9 +350,10 @@ class RayGrid:
         measured slower (waking the pool's threads cost more than the work saved). Where the
         shapes lie so far apart that more than CELLS_PER_SHAPE cells a shape would be needed,
         the cells are larger."""
-        assert _bounds is not None and _fill is not None, "the engine's rays need numba (ray_grid.AVAILABLE)"
+        assert _bounds is not None and _fill is not None and _pose is not None, "the rays need numba (AVAILABLE)"
         bounds, extent = np.empty((len(shapes.entity), 6), np.float32), np.empty((2, 3))
-        _bounds(positions, rotations, shapes.rows, shapes.shape, shapes.size, shapes.big, bounds, extent)
+        margin = MARGIN * shapes.cell
+        _bounds(positions, rotations, shapes.rows, shapes.shape, shapes.size, shapes.big, margin, bounds, extent)
         low, high = (extent[0], extent[1]) if len(shapes.small) else (np.zeros(3), np.ones(3))
         cell = shapes.cell
         dims = np.maximum(np.ceil((high - low) / cell), 1.0)
@@ -301,8 +362,19 @@ class RayGrid:
             cell *= float((dims.prod() / most) ** (1 / 3))
             dims = np.maximum(np.ceil((high - low) / cell), 1.0)
         dims = dims.astype(np.int64)
-        starts, items = _fill(bounds, shapes.small, low, 1.0 / cell, dims)
-        return cls(shapes, positions, rotations, bounds, low, cell, dims, starts, items)
+        starts, items, boxes = _fill(bounds, shapes.small, low, 1.0 / cell, dims)
+        pose = np.empty((len(shapes.entity), 7))
+        _pose(positions, rotations, shapes.rows, pose)
+        return cls(shapes, positions, rotations, pose, margin, low, cell, dims, starts, items, boxes)
+
+    def holds(self, shapes: Shapes, positions: np.ndarray, rotations: np.ndarray) -> bool:
+        """Whether this grid still serves `shapes` posed as the buffers say now: the same
+        shapes, and none outside the bounds the grid was made with (its margin)."""
+        if shapes is not self.shapes or not (_same(positions, self.positions) and _same(rotations, self.rotations)):
+            return False
+        assert _escaped is not None
+        s = shapes
+        return not _escaped(positions, rotations, s.rows, s.big, s.radius, self.pose, self.margin)
 
     def cast(
         self,
@@ -328,12 +400,12 @@ class RayGrid:
             s.rows,
             s.shape,
             s.size,
-            self.bounds,
             s.large,
             self.origin,
             self.cell,
             self.dims,
             self.starts,
             self.items,
+            self.boxes,
             *out,
         )
