@@ -1,11 +1,14 @@
 #!/bin/bash
 # A run on the GPU host (the device tool: no network, Python 3.12 with NumPy, numba and psutil).
 # Prepare here, once (both folders are in .git/info/exclude):
-#   .gl/   the Vulkan loader and validation layers as .deb files (apt-get download libvulkan1
-#          vulkan-validationlayers, per the device README)
+#   .gl/   the Vulkan loader, its GL dispatch libraries and the validation layers as .deb files:
+#          apt-get download libvulkan1 vulkan-validationlayers libglvnd0 libegl1 libgl1 libglx0
+#          libgles2 libopengl0 (per the device README; without the libglvnd ones the NVIDIA
+#          driver is refused: VkErrorIncompatibleDriver)
 #   .whl/  wheels for Python 3.12 of what the host lacks: vulkan cffi pycparser glfw trimesh
-#          imgui-bundle esper fast-simplification pillow pytest hypothesis (and their pure deps),
-#          never numpy (the host's numba is built against its own)
+#          imgui-bundle esper fast-simplification miniaudio culverin (and their pure deps;
+#          pillow, pytest and hypothesis are there), never numpy (the host's numba is built
+#          against its own)
 # then `bash scripts/device_run.sh MODE...` with carry [".gl", ".whl"]; results land in $OUT.
 # At most 8 files come back: each mode writes one text file and at most one tar of images.
 # Modes: tests or tests/K/N (the whole suite, or its K-th shard of N, with validation, from a copy of tests/ outside the checkout),
