@@ -47,12 +47,12 @@ def _reach_kernel(rotations, r, s, s0, s1, s2, a):  # pragma: no cover
         e = abs(k1) * s1 + s0
     else:  # a cylinder: its caps are discs across the axis
         e = abs(k1) * s1 + s0 * np.sqrt(max(0.0, 1.0 - k1 * k1))
-    return e + 1e-6 * e + 1e-9  # (wide enough that float32's rounding never leaves a hit outside)
+    return e + 1e-6 * e + 1e-9  # (wide enough that rounding never leaves a hit outside)
 
 
 def _bounds_kernel(positions, rotations, rows, shape, size, big, margin, bounds, extent):  # pragma: no cover
     """Each shape's world bounds from the buffers, `margin` wider all round (bounds: low x y z,
-    high x y z, float32), and `extent`, the bounds of the shapes that are not `big` (low, then
+    high x y z), and `extent`, the bounds of the shapes that are not `big` (low, then
     high)."""
     extent[0, :], extent[1, :] = np.inf, -np.inf
     for i in range(len(rows)):
@@ -127,7 +127,7 @@ def _fill_kernel(bounds, small, origin, inv_cell, dims):  # pragma: no cover
                     starts[(cz * ny + cy) * nx + cx + 1] += 1
     for c in range(len(starts) - 1):
         starts[c + 1] += starts[c]
-    items, boxes = np.empty(starts[-1], np.int32), np.empty((starts[-1], 6), np.float32)
+    items, boxes = np.empty(starts[-1], np.int32), np.empty((starts[-1], 6), np.float64)
     cursor = starts[:-1].copy()
     for k in range(len(small)):
         j = small[k]
@@ -328,8 +328,8 @@ class RayGrid:
     posed by (`positions`, `rotations`), their `pose` when the grid was made (centres, unit
     rotations) and the `margin` their bounds were widened by; the grid from
     `origin` in cubes of `cell`, `dims` of them, whose shapes are items[starts[c]:starts[c + 1]]
-    for cell c = (z * ny + y) * nx + x, their bounds boxes[starts[c]:starts[c + 1]] (float32:
-    low, then high)."""
+    for cell c = (z * ny + y) * nx + x, their bounds boxes[starts[c]:starts[c + 1]] (low,
+    then high)."""
 
     shapes: Shapes
     positions: np.ndarray
@@ -351,7 +351,7 @@ class RayGrid:
         shapes lie so far apart that more than CELLS_PER_SHAPE cells a shape would be needed,
         the cells are larger."""
         assert _bounds is not None and _fill is not None and _pose is not None, "the rays need numba (AVAILABLE)"
-        bounds, extent = np.empty((len(shapes.entity), 6), np.float32), np.empty((2, 3))
+        bounds, extent = np.empty((len(shapes.entity), 6)), np.empty((2, 3))
         margin = MARGIN * shapes.cell
         _bounds(positions, rotations, shapes.rows, shapes.shape, shapes.size, shapes.big, margin, bounds, extent)
         low, high = (extent[0], extent[1]) if len(shapes.small) else (np.zeros(3), np.ones(3))
