@@ -199,8 +199,9 @@ class PhysicsWorld:
     def raycast(self, origins: Any, directions: Any, max_distance: float = 1000.0) -> RayHits:
         """Cast every ray (rows of `origins` and `directions`, which need not be unit length) in
         batches, spread over the world's JobPool when it has one (`pool`, which PhysicsSystem
-        sets; the library casts without the GIL): the first body each one hits within
-        `max_distance`."""
+        sets; the casts release the GIL): the first body each one hits within `max_distance`.
+        The engine casts against boxes, spheres, capsules and cylinders (ray_grid.py), the
+        library against meshes, hulls and terrain."""
         return queries.raycast(self, origins, directions, max_distance)
 
     def ray_grid(self) -> tuple[RayGrid | None, bool]:
