@@ -11,7 +11,7 @@ import pytest
 
 from ecs_engine.app.game_module import find_game, game_defaults, make_app
 from ecs_engine.components import Transform, Velocity
-from ecs_engine.components.physics import DYNAMIC, SPHERE, Collider, Joint, RigidBody
+from ecs_engine.components.physics import DYNAMIC, HINGE, SPHERE, Collider, Joint, RigidBody
 
 
 def test_the_playground_plays_itself():
@@ -111,3 +111,18 @@ def test_a_ragdoll_falls_in_a_heap_with_its_joints_holding():
         assert np.linalg.norm(ends[0] - ends[1]) < 0.03, part.name
     heights = np.array([where[e].position[1] for e in parts])
     assert heights.min() > 0.0 and heights[2] < 1.0  # on the floor, the head come down from 2.65 m
+    # each hinge turned its part about x alone (the parts started alike), within its limits:
+    # a knee bends one way, an elbow the other
+    bent = []
+    for k, part in enumerate(PARTS):
+        if part.joint != HINGE:
+            continue
+        (cx, cy, cz, cw), (px, py, pz, pw) = where[parts[k]].rotation, where[parts[part.parent]].rotation
+        x = pw * cx - px * cw - py * cz + pz * cy  # the parent's inverse times the child's
+        y, z = pw * cy + px * cz - py * cw - pz * cx, pw * cz - px * cy + py * cx - pz * cw
+        w = pw * cw + px * cx + py * cy + pz * cz
+        assert abs(y) < 0.02 and abs(z) < 0.02, part.name
+        angle = 2 * np.arctan2(x * np.sign(w), abs(w))
+        assert part.limits[0] - 0.05 <= angle <= part.limits[1] + 0.05, (part.name, angle)
+        bent.append(abs(angle) > 0.3)
+    assert any(bent)  # it fell in a heap, not stiff
