@@ -67,7 +67,7 @@ def _cast_kernel(  # pragma: no cover
         ox, oy, oz = origins[k, 0], origins[k, 1], origins[k, 2]
         dx, dy, dz = directions[k, 0], directions[k, 1], directions[k, 2]
         length = np.sqrt(dx * dx + dy * dy + dz * dz)
-        # (comparisons: fastmath's reassociation folds np.isfinite's x - x to 0)
+        # (comparisons: np.isfinite answered True for NaN here, under the engine's fastmath flags)
         if not (abs(ox + oy + oz) < np.inf and 0.0 < length < np.inf):
             out_shape[k] = -2
             continue
