@@ -18,6 +18,7 @@ import numpy as np
 
 from .. import native
 from ..components.physics import BOX, CAPSULE, SPHERE
+from .poses import copy_poses
 from .ray_walk import cast_rays
 
 CELL_REACH = 0.7  # the grid's cell, in the median shape's reach (its bounding sphere's diameter)
@@ -27,28 +28,30 @@ LARGE_CELLS = 64  # a shape over more cells than this is tested by every ray ins
 CELLS_PER_SHAPE = 4  # the grid has at most this many cells per shape (more for far-apart shapes)
 
 
-def _reach_kernel(rotations, r, s, s0, s1, s2, a):  # pragma: no cover
+def _reach_kernel(rotations, r, s, s0, s1, s2):  # pragma: no cover
     """How far a shape of kind s and Collider sizes s0..s2, turned as the body at row r of the
-    library's buffers, reaches from its centre along world axis a."""
+    library's buffers, reaches from its centre along the world's x, y and z."""
     x, y = np.float64(rotations[r, 0]), np.float64(rotations[r, 1])
     z, w = np.float64(rotations[r, 2]), np.float64(rotations[r, 3])
     inv = 2.0 / (x * x + y * y + z * z + w * w)
-    # row a of the rotation matrix (of the quaternion made unit)
-    if a == 0:
-        k0, k1, k2 = 1 - (y * y + z * z) * inv, (x * y - z * w) * inv, (x * z + y * w) * inv
-    elif a == 1:
-        k0, k1, k2 = (x * y + z * w) * inv, 1 - (x * x + z * z) * inv, (y * z - x * w) * inv
-    else:
-        k0, k1, k2 = (x * z - y * w) * inv, (y * z + x * w) * inv, 1 - (x * x + y * y) * inv
+    # the rotation matrix (of the quaternion made unit), row by row
+    m0, m1, m2 = 1 - (y * y + z * z) * inv, (x * y - z * w) * inv, (x * z + y * w) * inv
+    m3, m4, m5 = (x * y + z * w) * inv, 1 - (x * x + z * z) * inv, (y * z - x * w) * inv
+    m6, m7, m8 = (x * z - y * w) * inv, (y * z + x * w) * inv, 1 - (x * x + y * y) * inv
     if s == BOX:
-        e = abs(k0) * s0 + abs(k1) * s1 + abs(k2) * s2
+        ex = abs(m0) * s0 + abs(m1) * s1 + abs(m2) * s2
+        ey = abs(m3) * s0 + abs(m4) * s1 + abs(m5) * s2
+        ez = abs(m6) * s0 + abs(m7) * s1 + abs(m8) * s2
     elif s == SPHERE:
-        e = s0
+        ex = ey = ez = s0
     elif s == CAPSULE:  # along local y: radius size[0], half height size[1]
-        e = abs(k1) * s1 + s0
+        ex, ey, ez = abs(m1) * s1 + s0, abs(m4) * s1 + s0, abs(m7) * s1 + s0
     else:  # a cylinder: its caps are discs across the axis
-        e = abs(k1) * s1 + s0 * np.sqrt(max(0.0, 1.0 - k1 * k1))
-    return e + 1e-6 * e + 1e-9  # (wide enough that rounding never leaves a hit outside)
+        ex = abs(m1) * s1 + s0 * np.sqrt(max(0.0, 1.0 - m1 * m1))
+        ey = abs(m4) * s1 + s0 * np.sqrt(max(0.0, 1.0 - m4 * m4))
+        ez = abs(m7) * s1 + s0 * np.sqrt(max(0.0, 1.0 - m7 * m7))
+    # (wide enough that rounding never leaves a hit outside)
+    return ex + 1e-6 * ex + 1e-9, ey + 1e-6 * ey + 1e-9, ez + 1e-6 * ez + 1e-9
 
 
 def _bounds_kernel(positions, rotations, rows, shape, size, big, margin, bounds, extent):  # pragma: no cover
@@ -58,41 +61,32 @@ def _bounds_kernel(positions, rotations, rows, shape, size, big, margin, bounds,
     extent[0, :], extent[1, :] = np.inf, -np.inf
     for i in range(len(rows)):
         r = rows[i]
+        reach = _reach(rotations, r, shape[i], size[i, 0], size[i, 1], size[i, 2])
         for a in range(3):
             c = positions[r, a]
-            e = _reach(rotations, r, shape[i], size[i, 0], size[i, 1], size[i, 2], a) + margin + 1e-6 * abs(c)
+            e = reach[a] + margin + 1e-6 * abs(c)
             bounds[i, a], bounds[i, 3 + a] = c - e, c + e
             if not big[i]:
                 extent[0, a], extent[1, a] = min(extent[0, a], c - e), max(extent[1, a], c + e)
 
 
-def _pose_kernel(positions, rotations, rows, pose):  # pragma: no cover
-    """Each shape's pose now: its centre and its rotation made unit (x, y, z, w)."""
-    for i in range(len(rows)):
-        r = rows[i]
-        x, y = np.float64(rotations[r, 0]), np.float64(rotations[r, 1])
-        z, w = np.float64(rotations[r, 2]), np.float64(rotations[r, 3])
-        inv = 1.0 / np.sqrt(x * x + y * y + z * z + w * w)
-        pose[i, 0], pose[i, 1], pose[i, 2] = positions[r, 0], positions[r, 1], positions[r, 2]
-        pose[i, 3], pose[i, 4], pose[i, 5], pose[i, 6] = x * inv, y * inv, z * inv, w * inv
-
-
-def _escaped_kernel(positions, rotations, rows, big, radius, pose, margin):  # pragma: no cover
+def _escaped_kernel(positions, rotations, rows, big, radius, centre, turn, margin):  # pragma: no cover
     """Whether any shape that is not `big` may reach outside the bounds the grid was made with
-    (`margin` wider than it was at `pose`). No point of a shape has moved further than its
-    centre has plus its radius times the turn's chord, 2 |q - q0| for unit quaternions on the
-    same side; while that stays within the margin the grid holds every shape in its cells."""
+    (`margin` wider than it was at `centre`, turned by the unit quaternion `turn`). No point of
+    a shape has moved further than its centre has plus its radius times the turn's chord,
+    2 |q - q0| for unit quaternions on the same side; while that stays within the margin the
+    grid holds every shape in its cells."""
     for i in range(len(rows)):
         if big[i]:
             continue
         r = rows[i]
-        dx, dy, dz = positions[r, 0] - pose[i, 0], positions[r, 1] - pose[i, 1], positions[r, 2] - pose[i, 2]
+        dx, dy, dz = positions[r, 0] - centre[i, 0], positions[r, 1] - centre[i, 1], positions[r, 2] - centre[i, 2]
         x, y = np.float64(rotations[r, 0]), np.float64(rotations[r, 1])
         z, w = np.float64(rotations[r, 2]), np.float64(rotations[r, 3])
         inv = 1.0 / np.sqrt(x * x + y * y + z * z + w * w)
-        if x * pose[i, 3] + y * pose[i, 4] + z * pose[i, 5] + w * pose[i, 6] < 0.0:
+        if x * turn[i, 0] + y * turn[i, 1] + z * turn[i, 2] + w * turn[i, 3] < 0.0:
             inv = -inv
-        qx, qy, qz, qw = x * inv - pose[i, 3], y * inv - pose[i, 4], z * inv - pose[i, 5], w * inv - pose[i, 6]
+        qx, qy, qz, qw = x * inv - turn[i, 0], y * inv - turn[i, 1], z * inv - turn[i, 2], w * inv - turn[i, 3]
         moved = np.sqrt(dx * dx + dy * dy + dz * dz) + 2.0 * radius[i] * np.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
         if moved > margin:
             return True
@@ -150,7 +144,6 @@ _cells = native.inner(_cells_kernel)
 
 _bounds = native.njit(_bounds_kernel)
 _escaped = native.njit(_escaped_kernel)
-_pose = native.njit(_pose_kernel)
 _fill = native.njit(_fill_kernel)
 AVAILABLE = cast_rays is not None
 
@@ -196,7 +189,7 @@ class Shapes:
 @dataclass(frozen=True)
 class RayGrid:
     """The shapes at one moment, and a grid of their bounds: the library's buffers they are
-    posed by (`positions`, `rotations`), their `pose` when the grid was made (centres, unit
+    posed by (`positions`, `rotations`), their `centre` and `turn` when the grid was made (unit
     rotations) and the `margin` their bounds were widened by; the grid from
     `origin` in cubes of `cell`, `dims` of them, whose shapes are items[starts[c]:starts[c + 1]]
     for cell c = (z * ny + y) * nx + x, their bounds boxes[starts[c]:starts[c + 1]] (low,
@@ -205,7 +198,8 @@ class RayGrid:
     shapes: Shapes
     positions: np.ndarray
     rotations: np.ndarray
-    pose: np.ndarray
+    centre: np.ndarray
+    turn: np.ndarray
     margin: float
     origin: np.ndarray
     cell: float
@@ -221,7 +215,7 @@ class RayGrid:
         measured slower (waking the pool's threads cost more than the work saved). Where the
         shapes lie so far apart that more than CELLS_PER_SHAPE cells a shape would be needed,
         the cells are larger."""
-        assert _bounds is not None and _fill is not None and _pose is not None, "the rays need numba (AVAILABLE)"
+        assert _bounds is not None and _fill is not None, "the engine's rays need numba (ray_grid.AVAILABLE)"
         bounds, extent = np.empty((len(shapes.entity), 6)), np.empty((2, 3))
         margin = MARGIN * shapes.cell
         _bounds(positions, rotations, shapes.rows, shapes.shape, shapes.size, shapes.big, margin, bounds, extent)
@@ -234,9 +228,9 @@ class RayGrid:
             dims = np.maximum(np.ceil((high - low) / cell), 1.0)
         dims = dims.astype(np.int64)
         starts, items, boxes = _fill(bounds, shapes.small, low, 1.0 / cell, dims)
-        pose = np.empty((len(shapes.entity), 7))
-        _pose(positions, rotations, shapes.rows, pose)
-        return cls(shapes, positions, rotations, pose, margin, low, cell, dims, starts, items, boxes)
+        centre, turn = np.empty((len(shapes.entity), 3)), np.empty((len(shapes.entity), 4))
+        copy_poses(positions, rotations, shapes.rows, np.arange(len(shapes.entity)), centre, turn)
+        return cls(shapes, positions, rotations, centre, turn, margin, low, cell, dims, starts, items, boxes)
 
     def holds(self, shapes: Shapes, positions: np.ndarray, rotations: np.ndarray) -> bool:
         """Whether this grid still serves `shapes` posed as the buffers say now: the same
@@ -245,7 +239,7 @@ class RayGrid:
             return False
         assert _escaped is not None
         s = shapes
-        return not _escaped(positions, rotations, s.rows, s.big, s.radius, self.pose, self.margin)
+        return not _escaped(positions, rotations, s.rows, s.big, s.radius, self.centre, self.turn, self.margin)
 
     def cast(
         self,
