@@ -19,6 +19,7 @@ import numpy as np
 from .. import native
 from ..components.physics import BOX, CAPSULE, SPHERE
 from .poses import copy_poses
+from .ray_shapes import turn_at
 from .ray_walk import cast_rays
 
 CELL_REACH = 0.7  # the grid's cell, in the median shape's reach (its bounding sphere's diameter)
@@ -31,13 +32,7 @@ CELLS_PER_SHAPE = 4  # the grid has at most this many cells per shape (more for 
 def _reach_kernel(rotations, r, s, s0, s1, s2):  # pragma: no cover
     """How far a shape of kind s and Collider sizes s0..s2, turned as the body at row r of the
     library's buffers, reaches from its centre along the world's x, y and z."""
-    x, y = np.float64(rotations[r, 0]), np.float64(rotations[r, 1])
-    z, w = np.float64(rotations[r, 2]), np.float64(rotations[r, 3])
-    inv = 2.0 / (x * x + y * y + z * z + w * w)
-    # the rotation matrix (of the quaternion made unit), row by row
-    m0, m1, m2 = 1 - (y * y + z * z) * inv, (x * y - z * w) * inv, (x * z + y * w) * inv
-    m3, m4, m5 = (x * y + z * w) * inv, 1 - (x * x + z * z) * inv, (y * z - x * w) * inv
-    m6, m7, m8 = (x * z - y * w) * inv, (y * z + x * w) * inv, 1 - (x * x + y * y) * inv
+    m0, m1, m2, m3, m4, m5, m6, m7, m8 = turn_at(rotations, r)
     if s == BOX:
         ex = abs(m0) * s0 + abs(m1) * s1 + abs(m2) * s2
         ey = abs(m3) * s0 + abs(m4) * s1 + abs(m5) * s2

@@ -106,17 +106,27 @@ _box = native.inner(_box_kernel)
 _cylinder = native.inner(_cylinder_kernel)
 
 
+def _turn_at_kernel(rotations, r):  # pragma: no cover
+    """The rotation matrix, row by row, of the quaternion at row r of the library's buffer
+    (x, y, z, w, float32), made unit."""
+    x, y = np.float64(rotations[r, 0]), np.float64(rotations[r, 1])
+    z, w = np.float64(rotations[r, 2]), np.float64(rotations[r, 3])
+    inv = 2.0 / (x * x + y * y + z * z + w * w)
+    return (
+        1 - (y * y + z * z) * inv, (x * y - z * w) * inv, (x * z + y * w) * inv,
+        (x * y + z * w) * inv, 1 - (x * x + z * z) * inv, (y * z - x * w) * inv,
+        (x * z - y * w) * inv, (y * z + x * w) * inv, 1 - (x * x + y * y) * inv,
+    )  # fmt: skip
+
+
+turn_at = native.inner(_turn_at_kernel)
+
+
 def _shape_hit_kernel(ox, oy, oz, dx, dy, dz, positions, rotations, row, kind, s0, s1, s2):  # pragma: no cover
     """Where the ray (from o along unit d) first meets a shape of `kind` and Collider sizes s,
     posed as the body at `row` of the library's buffers: (t, world normal); t = inf when it
     misses, 0 when it starts inside (the normal then against the ray)."""
-    x, y = np.float64(rotations[row, 0]), np.float64(rotations[row, 1])
-    z, w = np.float64(rotations[row, 2]), np.float64(rotations[row, 3])
-    inv = 1.0 / np.sqrt(x * x + y * y + z * z + w * w)
-    x, y, z, w = x * inv, y * inv, z * inv, w * inv
-    m0, m1, m2 = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
-    m3, m4, m5 = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
-    m6, m7, m8 = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
+    m0, m1, m2, m3, m4, m5, m6, m7, m8 = turn_at(rotations, row)
     px, py, pz = ox - positions[row, 0], oy - positions[row, 1], oz - positions[row, 2]
     # into the shape's frame: the rotation transposed
     lx, ly, lz = m0 * px + m3 * py + m6 * pz, m1 * px + m4 * py + m7 * pz, m2 * px + m5 * py + m8 * pz
