@@ -110,8 +110,8 @@ def test_a_mesh_collider_is_hit_where_it_is_nearer_than_the_shapes():
 @pytest.mark.parametrize(
     ("origin", "direction", "says"),
     [
-        ((0.0, np.nan, 0.0), (0.0, -1.0, 0.0), "origins and directions must be finite"),
-        ((0.0, 5.0, 0.0), (0.0, np.inf, 0.0), "origins and directions must be finite"),
+        ((0.0, np.nan, 0.0), (0.0, -1.0, 0.0), r"origins and directions must be finite \(ray 1 is not\)"),
+        ((0.0, 5.0, 0.0), (0.0, np.inf, 0.0), r"origins and directions must be finite \(ray 1 is not\)"),
         ((0.0, 5.0, 0.0), (0.0, 0.0, 0.0), "direction 1 has zero length"),
     ],
 )

@@ -78,8 +78,9 @@ def raycast(physics: Any, origins: Any, directions: Any, max_distance: float) ->
 def _unit(o: np.ndarray, d: np.ndarray) -> np.ndarray:
     """The rays' directions made unit length, or ValueError naming the first ray that is not
     finite or has no direction."""
-    if not (np.isfinite(o).all() and np.isfinite(d).all()):
-        raise ValueError("raycast: origins and directions must be finite")
+    finite = np.isfinite(o).all(axis=1) & np.isfinite(d).all(axis=1)
+    if not finite.all():
+        raise ValueError(f"raycast: origins and directions must be finite (ray {int(np.argmin(finite))} is not)")
     length = np.linalg.norm(d, axis=1)
     if len(d) and length.min() == 0.0:
         raise ValueError(f"raycast: direction {int(np.argmin(length))} has zero length")
