@@ -130,9 +130,10 @@ def build_world(world: World, add_mesh: object, pile: int = 1000) -> None:
         CharacterController(),
     )
     # ragdolls: one standing by the tower to shoot at, one falling onto the ramp
-    limb, look = add_mesh(cylinder_mesh()), looks.add(Material("ragdoll", "cook_torrance", (0.85, 0.7, 0.55, 1.0)))  # type: ignore[operator]
+    head, limb = add_mesh(sphere_mesh()), add_mesh(cylinder_mesh())  # type: ignore[operator]
+    look = looks.add(Material("ragdoll", "cook_torrance", (0.85, 0.7, 0.55, 1.0)))
     for feet in ((-1.0, 0.0, -8.0), (-14.0, 6.0, -6.0)):
-        spawn_ragdoll(world, feet, cube, add_mesh(sphere_mesh()), limb, look)  # type: ignore[operator]
+        spawn_ragdoll(world, feet, cube, head, limb, look)
     # a tower to shoot at
     for level in range(10):
         world.spawn(
