@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import threading
 
+import numpy as np
 import pytest
 
+from ecs_engine import native
 from ecs_engine.jobs import JobError, JobPool, over_rows, row_chunks
 
 
@@ -122,3 +124,23 @@ def test_resize_changes_the_thread_count_in_place():
         assert pool.threads == 1
     finally:
         pool.close()
+
+
+def _take_kernel(counters, out, n):  # pragma: no cover
+    for k in range(n):
+        out[k] = native.fetch_add(counters, 1, 1)
+    return native.load(counters, 1)
+
+
+_take = native.njit(_take_kernel)
+
+
+@pytest.mark.skipif(_take is None, reason="compiled kernels share counters")
+def test_threads_adding_to_a_shared_counter_lose_no_add_and_each_take_their_own_value():
+    kernel = _take
+    counters, n = np.zeros(2, np.int64), 100_000
+    outs = [np.empty(n, np.int64) for _ in range(4)]
+    with JobPool(4) as pool:
+        pool.map(lambda out: kernel(counters, out, n), outs)
+    assert counters[1] == 4 * n and counters[0] == 0
+    assert np.array_equal(np.sort(np.concatenate(outs)), np.arange(4 * n))  # no value taken twice

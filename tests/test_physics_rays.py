@@ -121,10 +121,11 @@ def test_a_ray_that_is_not_finite_or_has_no_direction_is_one_error(origin, direc
         physics.raycast([(0.0, 5.0, 0.0), origin], [(0.0, -1.0, 0.0), direction], 10.0)
 
 
-def test_the_grid_stands_while_shapes_stay_within_its_margin_and_rays_see_them_where_they_are():
-    """A box gliding through space at 0.3 m/s past resting ones: the grid is kept for the steps
-    where it moved less than the grid's margin, made again after, and every ray meets the box
-    where it is at that step."""
+def test_the_grid_follows_a_moving_shape_into_new_cells_and_past_its_box():
+    """A box gliding through space at 0.3 m/s past resting ones: the grid is kept, the box moved
+    into the cells it reaches each time it has gone further than the grid's margin, and every
+    ray meets it where it is at that step. Sent far off, past the grid's box, every ray tests
+    it instead."""
     made = {}
 
     def setup(world, dt):
@@ -134,14 +135,22 @@ def test_the_grid_stands_while_shapes_stay_within_its_margin_and_rays_see_them_w
 
     _, physics = simulate(setup, 1, gravity=(0.0, 0.0, 0.0))
     physics.set_velocity(made["box"], (0.3, 0.0, 0.0))
-    grids, kept = [physics.ray_grid()[0]], 0
+    grid = physics.ray_grid()[0]
+    box = int(np.flatnonzero(grid.shapes.entity == made["box"])[0])
+    noted = set()
     for _ in range(40):
         physics.step(1 / 60)
-        grid = physics.ray_grid()[0]
-        kept += grid is grids[-1]
-        grids.append(grid)
         x = physics.bodies.position_of(made["box"])[0]
         hits = physics.raycast([(x - 0.3, 5.0, 0.0), (x + 0.6, 5.0, 0.0)], [(0.0, -1.0, 0.0)] * 2, 10.0)
         assert hits.entity[0] == made["box"] and hits.distance[0] == pytest.approx(4.5, abs=1e-6)
         assert hits.entity[1] == -1  # just past its leading face
-    assert kept > 10 and len({id(g) for g in grids}) > 3  # kept for most steps, made again now and then
+        assert physics.ray_grid()[0] is grid
+        noted.add(float(grid.centre[box, 0]))
+    assert len(noted) > 3 and physics.grids_made == 1  # moved into new cells now and then, never made again
+    physics.set_velocity(made["box"], (0.0, 0.0, 300.0))
+    physics.step(1 / 60)
+    x, _, z = physics.bodies.position_of(made["box"])
+    assert z > grid.origin[2] + grid.dims[2] * grid.cell
+    hits = physics.raycast([(x, 5.0, z)], [(0.0, -1.0, 0.0)], 10.0)
+    assert hits.entity[0] == made["box"] and physics.grids_made == 1
+    assert box in grid.spill[1 : grid.spill[0] + 1]  # tested by every ray, outside the cells

@@ -98,7 +98,7 @@ def test_rays_meet_the_shape_a_march_finds_first_at_its_distance():
         np.empty((count, 3)),
         np.empty((count, 3)),
     )
-    grid.cast(origins, directions, reach, slice(0, count), (index, distance, point, normal))
+    grid.cast(origins, directions, reach, (index, distance, point, normal))
     directions /= np.linalg.norm(directions, axis=1)[:, None]
     centre, turn = positions[:, :3], matrices(rotations.astype(np.float64))
     met = 0
@@ -143,6 +143,88 @@ def test_the_grid_holds_every_shape_in_every_cell_its_bounds_touch():
     down = np.tile((0.0, -1.0, 0.0), (side * side, 1))
     index, distance = np.empty(side * side, np.int64), np.empty(side * side)
     point, normal = np.empty((side * side, 3)), np.empty((side * side, 3))
-    grid.cast(origins, down, 50.0, slice(0, side * side), (index, distance, point, normal))
+    grid.cast(origins, down, 50.0, (index, distance, point, normal))
     assert (index == np.arange(side * side) + 2 * side * side).all()  # the top layer's box below each
     assert np.allclose(distance, 7.0) and np.allclose(normal, (0.0, 1.0, 0.0))
+
+
+def _cast(grid, origins, directions, jobs, pool):
+    count = len(origins)
+    out = (np.full(count, -7, np.int64), np.empty(count), np.empty((count, 3)), np.empty((count, 3)))
+    shared = claims()
+    pool.map(lambda _: grid.cast(origins, directions, 20.0, out, shared), range(jobs))
+    return out
+
+
+def claims():
+    from ecs_engine.physics.ray_refresh import claims
+
+    return claims()
+
+
+def test_threads_sharing_a_cast_take_every_ray_once_and_answer_as_one_thread_does():
+    """Rays spread over a JobPool's threads through shared counters: every ray is cast (a count
+    that is no multiple of the block), with the same answers as one thread."""
+    from ecs_engine.jobs import JobPool
+    from ecs_engine.physics.ray_grid import RayGrid, Shapes
+
+    positions, rotations, shape, size = scene(300, 5.0, 8)
+    grid = RayGrid.build(Shapes.of(np.arange(300), np.arange(300), shape, size), positions, rotations)
+    rng = np.random.default_rng(9)
+    origins, directions = rng.uniform(-7.0, 7.0, (1001, 3)), rng.normal(size=(1001, 3))
+    with JobPool(4) as pool:
+        alone, together = _cast(grid, origins, directions, 1, pool), _cast(grid, origins, directions, 4, pool)
+    assert (alone[0] != -7).all() and (alone[0] >= 0).sum() > 300
+    for a, b in zip(alone, together):
+        assert np.array_equal(a, b, equal_nan=True)
+
+
+def test_shapes_that_moved_past_the_margin_are_moved_into_their_new_cells_as_a_new_grid_has_them():
+    """Shapes moved and turned (within the grid's box), the grid refreshed by four threads
+    sharing the work: every ray answers as on a grid made anew. A shape that leaves the box, or
+    more shapes in a cell than it has room for, is tested by every ray instead, the same answers
+    again; past ray_refresh.SPILL such shapes the grid is made again (False in every job)."""
+    from ecs_engine.jobs import JobPool
+    from ecs_engine.physics.ray_grid import RayGrid, Shapes
+
+    positions, rotations, shape, size = scene(400, 5.0, 10)
+    shapes = Shapes.of(np.arange(400), np.arange(400), shape, size)
+    grid = RayGrid.build(shapes, positions, rotations)
+    rng = np.random.default_rng(11)
+    moved = rng.choice(np.arange(1, 400), 30, replace=False)
+    positions[moved, :3] += rng.uniform(-0.8, 0.8, (30, 3))
+    rotations[moved[:15]] = rng.normal(size=(15, 4))
+    positions[moved[-1], :3] = grid.centre[moved[-1]] + (0.5 * grid.margin, 0.0, 0.0)  # (within the margin)
+    origins, directions = rng.uniform(-7.0, 7.0, (2000, 3)), rng.normal(size=(2000, 3))
+    with JobPool(4) as pool:
+        shared = claims()
+        assert pool.map(lambda _: grid.refresh(shared), range(4)) == [True] * 4
+        assert shared[3] == 29  # (ESCAPES: all but the one within its margin)
+        fresh = RayGrid.build(shapes, positions, rotations)
+        ours, theirs = _cast(grid, origins, directions, 4, pool), _cast(fresh, origins, directions, 1, pool)
+        assert (ours[0] >= 0).sum() > 500
+        for a, b in zip(ours, theirs):
+            assert np.array_equal(a, b, equal_nan=True)
+        assert grid.fill.sum() == fresh.fill.sum()  # no shape left behind in a cell it left
+        shared = claims()
+        assert pool.map(lambda _: grid.refresh(shared), range(4)) == [True] * 4 and shared[3] == 0
+        away = moved[0]  # out of the grid's box: spilt, tested by every ray
+        positions[away, 1] = grid.origin[1] + grid.dims[1] * grid.cell + 1.0
+        crowd = moved[1:6]  # five more into one shape's cells: some find a cell full
+        positions[crowd, :3] = positions[moved[6], :3]
+        shared = claims()
+        assert pool.map(lambda _: grid.refresh(shared), range(4)) == [True] * 4
+        assert away in grid.spill[1 : grid.spill[0] + 1] and grid.spill[0] > 1
+        fresh = RayGrid.build(shapes, positions, rotations)
+        ours, theirs = _cast(grid, origins, directions, 4, pool), _cast(fresh, origins, directions, 1, pool)
+        for a, b in zip(ours, theirs):
+            assert np.array_equal(a, b, equal_nan=True)
+        above = _cast(grid, positions[[away], :3] + (0.0, 5.0, 0.0), np.array([[0.0, -1.0, 0.0]]), 1, pool)
+        assert above[0][0] == away
+        positions[away, :3] = grid.centre[moved[7]] + 0.1  # back in: out of the spill again
+        shared = claims()
+        assert pool.map(lambda _: grid.refresh(shared), range(4)) == [True] * 4
+        assert away not in grid.spill[1 : grid.spill[0] + 1]
+        positions[1:200, :3] = positions[200, :3]  # 199 shapes into one shape's cells: past the spill
+        shared = claims()
+        assert pool.map(lambda _: grid.refresh(shared), range(4)) == [False] * 4

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import os
+import threading
 import time
 from typing import Any
 
@@ -75,6 +76,8 @@ class PhysicsWorld:
         self.placed = 0  # times bodies were put where their Transform says (place)
         self._shapes: tuple = (-1, None, False)  # (generation, Shapes, whether other shapes have bodies)
         self._grid: tuple = ((), None)  # (key, RayGrid)
+        self.grids_made = 0  # how many times raycast's grid was made (a count for benchmarks)
+        self.ray_lock = threading.RLock()  # one batch of rays at a time: each refreshes the grid in place
         self.step_ms = 0.0  # the library's last step
         self.events_ms = 0.0  # the last step's contact records read and sent as events
 
@@ -204,26 +207,45 @@ class PhysicsWorld:
         library against meshes, hulls and terrain."""
         return queries.raycast(self, origins, directions, max_distance)
 
-    def ray_grid(self) -> tuple[RayGrid | None, bool]:
-        """The grid raycast casts against (None without numba), looked at again after a step or
-        a body placed: made again when a body was made or destroyed or a shape moved further
-        than the grid's margin (ray_grid.MARGIN); and whether bodies of other shapes than the
-        primitives (meshes, hulls, terrain) are there, for the library to cast against."""
-        bodies = self.bodies
-        if self._shapes[0] != bodies.generation:
-            slots = np.flatnonzero(bodies.owner >= 0)
-            primitive = np.isin(bodies.spec["shape"][slots], PRIMITIVES)
-            at = slots[primitive]
-            shapes = Shapes.of(bodies.owner[at], bodies.row[at], bodies.spec["shape"][at], bodies.spec["size"][at])
-            self._shapes = (bodies.generation, shapes, not primitive.all())
-        key = (bodies.generation, self.steps, self.placed)
-        if ray_grid.AVAILABLE and key != self._grid[0]:
+    def ray_grid(self, check: bool = True) -> tuple[RayGrid | None, bool, bool]:
+        """The grid raycast casts against (None without numba), brought up to the step after a
+        step or a body placed (RayGrid.refresh) or made again when a body was made or
+        destroyed; whether bodies of other shapes than the primitives (meshes, hulls, terrain)
+        are there, for the library to cast against; and whether the grid is `stale`: with
+        `check` False, a grid from before comes back as it was, for the caller to refresh
+        (spread over its threads) and answer with `grid_refreshed`. Hold `ray_lock` while the
+        grid is in use: refreshing it changes it in place."""
+        with self.ray_lock:
+            bodies = self.bodies
+            if self._shapes[0] != bodies.generation:
+                slots = np.flatnonzero(bodies.owner >= 0)
+                primitive = np.isin(bodies.spec["shape"][slots], PRIMITIVES)
+                at = slots[primitive]
+                shapes = Shapes.of(bodies.owner[at], bodies.row[at], bodies.spec["shape"][at], bodies.spec["size"][at])
+                self._shapes = (bodies.generation, shapes, not primitive.all())
+            key = (bodies.generation, self.steps, self.placed)
+            if ray_grid.AVAILABLE and key != self._grid[0]:
+                positions, rotations, _, _ = self.buffers()
+                grid = self._grid[1]
+                if grid is not None and grid.serves(self._shapes[1], positions, rotations):
+                    if not check:
+                        return grid, self._shapes[2], True
+                    self.grid_refreshed(grid.refresh())
+                else:
+                    self._grid = (key, RayGrid.build(self._shapes[1], positions, rotations))
+                    self.grids_made += 1
+            return self._grid[1], self._shapes[2], False
+
+    def grid_refreshed(self, kept: bool) -> RayGrid:
+        """Take the outcome of the refresh `ray_grid(check=False)` left to its caller: the grid
+        `kept`, or made again."""
+        grid = self._grid[1]
+        if not kept:
             positions, rotations, _, _ = self.buffers()
-            grid = self._grid[1]
-            if grid is None or not grid.holds(self._shapes[1], positions, rotations):
-                grid = RayGrid.build(self._shapes[1], positions, rotations)
-            self._grid = (key, grid)
-        return self._grid[1], self._shapes[2]
+            grid = RayGrid.build(self._shapes[1], positions, rotations)
+            self.grids_made += 1
+        self._grid = ((self.bodies.generation, self.steps, self.placed), grid)
+        return grid
 
     def shapecast(
         self, shape: int, size: Any, origin: Any, motion: Any, rotation: Any = (0.0, 0.0, 0.0, 1.0), ignore: int = -1

@@ -1,0 +1,202 @@
+"""The grid of the engine's rays (ray_grid.py) brought up to the step: the shapes that moved
+further than the grid's margin since they were put in their cells are found, and moved into
+the cells their bounds cover now. A shape that leaves the grid's box or finds a cell full is
+tested by every ray instead, up to SPILL of them; past that the grid is made again.
+
+The threads that are about to cast a batch of rays share the look: each takes SHAPE_BLOCK
+shapes at a time from a counter (native.fetch_add) and writes down those that escaped; once
+every shape is looked at, one of them moves those while the others wait, and then all cast. A
+block taken is finished without waiting for anyone, so a thread that never starts (a pool
+busy elsewhere runs the jobs one after another) holds nobody up."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import native
+from ..native import fetch_add, load
+from .ray_bounds import bound, cells, store
+
+SHAPE_BLOCK = 1024  # shapes a thread looks at at a time
+SPILL = 32  # shapes at most outside the grid's cells, tested by every ray (by their bounds first)
+# a batch's counters, shared by the threads casting it: the rays taken, the shapes taken and
+# looked at, those that escaped, which thread moves them, and how that went (KEPT or REMAKE)
+RAYS, SHAPES, CHECKED, ESCAPES, MOVER, OUTCOME = range(6)
+KEPT, REMAKE = 1, 2
+
+
+def claims() -> np.ndarray:
+    """Counters for one batch's threads to share (RAYS .. OUTCOME)."""
+    return np.zeros(6, np.int64)
+
+
+def _moved_kernel(positions, rotations, r, centre, turn, i, radius):  # pragma: no cover
+    """How far any point of shape i (its body at row r, its bounding sphere's `radius`) may
+    have moved since it was at centre[i], turned by the unit quaternion turn[i]: its centre's
+    move plus its radius times the turn's chord, 2 |q - q0| for unit quaternions on the same
+    side."""
+    dx, dy, dz = positions[r, 0] - centre[i, 0], positions[r, 1] - centre[i, 1], positions[r, 2] - centre[i, 2]
+    x, y = np.float64(rotations[r, 0]), np.float64(rotations[r, 1])
+    z, w = np.float64(rotations[r, 2]), np.float64(rotations[r, 3])
+    inv = 1.0 / np.sqrt(x * x + y * y + z * z + w * w)
+    if x * turn[i, 0] + y * turn[i, 1] + z * turn[i, 2] + w * turn[i, 3] < 0.0:
+        inv = -inv
+    qx, qy, qz, qw = x * inv - turn[i, 0], y * inv - turn[i, 1], z * inv - turn[i, 2], w * inv - turn[i, 3]
+    return np.sqrt(dx * dx + dy * dy + dz * dz) + 2.0 * radius * np.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
+
+
+_moved = native.inner(_moved_kernel)
+
+
+def _move_kernel(  # pragma: no cover
+    escaped,
+    positions,
+    rotations,
+    rows,
+    shape,
+    size,
+    margin,
+    centre,
+    turn,
+    bounds,
+    origin,
+    cell,
+    dims,
+    starts,
+    fill,
+    items,
+    boxes,
+    spill,
+):
+    """Each escaped shape taken out of its cells and put into those its bounds (`margin` wide)
+    cover now, its pose there noted in centre and turn. One that leaves the grid's box, or
+    finds a cell full, goes to the `spill` (its count, then the shapes: every ray tests them,
+    by their bounds first); a cell it did fit in keeps it (a ray looks at a shape once). False
+    where the spill is full: the grid is then half moved, to be made again."""
+    nx, ny = dims[0], dims[1]
+    inv_cell = 1.0 / cell
+    for n in range(len(escaped)):
+        j = escaped[n]
+        for m in range(1, spill[0] + 1):
+            if spill[m] == j:  # (the last takes its place)
+                spill[m] = spill[spill[0]]
+                spill[0] -= 1
+                break
+        x0, y0, z0, x1, y1, z1 = cells(bounds, j, origin, inv_cell, dims)
+        for cz in range(z0, z1 + 1):
+            for cy in range(y0, y1 + 1):
+                for cx in range(x0, x1 + 1):
+                    c = (cz * ny + cy) * nx + cx
+                    last = starts[c] + fill[c] - 1
+                    for m in range(starts[c], last + 1):
+                        if items[m] == j:  # the cell's last item takes its place
+                            items[m] = items[last]
+                            for a in range(6):
+                                boxes[m, a] = boxes[last, a]
+                            fill[c] -= 1
+                            break
+        r = rows[j]
+        bound(positions, rotations, r, shape[j], size[j, 0], size[j, 1], size[j, 2], margin, bounds, j)
+        fits = True
+        for a in range(3):
+            if bounds[j, a] < origin[a] or bounds[j, 3 + a] > origin[a] + dims[a] * cell:
+                fits = False
+        if fits:
+            x0, y0, z0, x1, y1, z1 = cells(bounds, j, origin, inv_cell, dims)
+            for cz in range(z0, z1 + 1):
+                for cy in range(y0, y1 + 1):
+                    for cx in range(x0, x1 + 1):
+                        c = (cz * ny + cy) * nx + cx
+                        at = starts[c] + fill[c]
+                        if at == starts[c + 1]:
+                            fits = False
+                        elif fits:
+                            items[at] = j
+                            store(boxes, at, bounds, j)
+                            fill[c] += 1
+        if not fits:
+            if spill[0] == len(spill) - 1:
+                return False
+            spill[0] += 1
+            spill[spill[0]] = j
+        x, y = np.float64(rotations[r, 0]), np.float64(rotations[r, 1])
+        z, w = np.float64(rotations[r, 2]), np.float64(rotations[r, 3])
+        inv = 1.0 / np.sqrt(x * x + y * y + z * z + w * w)
+        centre[j, 0], centre[j, 1], centre[j, 2] = positions[r, 0], positions[r, 1], positions[r, 2]
+        turn[j, 0], turn[j, 1], turn[j, 2], turn[j, 3] = x * inv, y * inv, z * inv, w * inv
+    return True
+
+
+_move = native.inner(_move_kernel)
+
+
+def _refresh_kernel(  # pragma: no cover
+    claims,
+    escaped,
+    positions,
+    rotations,
+    rows,
+    shape,
+    size,
+    small,
+    radius,
+    margin,
+    centre,
+    turn,
+    bounds,
+    origin,
+    cell,
+    dims,
+    starts,
+    fill,
+    items,
+    boxes,
+    spill,
+):
+    """This thread's share of bringing the grid up to the step (the module's docstring):
+    whether the grid holds every shape now (False: it is to be made again)."""
+    count = len(small)
+    while True:
+        first = fetch_add(claims, SHAPES, SHAPE_BLOCK)
+        if first >= count:
+            break
+        last = min(first + SHAPE_BLOCK, count)
+        for k in range(first, last):
+            i = small[k]
+            if _moved(positions, rotations, rows[i], centre, turn, i, radius[i]) > margin:
+                escaped[fetch_add(claims, ESCAPES, 1)] = i
+        fetch_add(claims, CHECKED, last - first)
+    while load(claims, CHECKED) < count:
+        pass  # the blocks other threads took
+    moving = load(claims, ESCAPES)
+    if moving == 0:
+        return True
+    if fetch_add(claims, MOVER, 1) == 0:
+        # (in index order, whatever order the threads found them in: the same cells every run)
+        kept = _move(
+            np.sort(escaped[:moving]),
+            positions,
+            rotations,
+            rows,
+            shape,
+            size,
+            margin,
+            centre,
+            turn,
+            bounds,
+            origin,
+            cell,
+            dims,
+            starts,
+            fill,
+            items,
+            boxes,
+            spill,
+        )
+        fetch_add(claims, OUTCOME, KEPT if kept else REMAKE)
+    while load(claims, OUTCOME) == 0:
+        pass  # the thread moving them
+    return load(claims, OUTCOME) == KEPT
+
+
+refresh = native.njit(_refresh_kernel)
