@@ -39,12 +39,11 @@ def inner(fn: Callable[..., Any]) -> Callable[..., Any]:
     return njit(fn) or fn
 
 
-def _atomics() -> tuple[Callable[..., Any], Callable[..., Any]]:
-    """`fetch_add(counters, i, n)`: adds n to counters[i] (an int64 array) at once for every
-    thread and answers the value before; `load(counters, i)`: reads counters[i] as another
-    thread's fetch_add left it. For kernels whose jobs share work through counters (a job
-    claims the next block of rows, so a thread that starts late takes fewer). Without numba,
-    plain functions (nothing compiled calls them then)."""
+def _fetch_add() -> Callable[..., Any]:
+    """`fetch_add(counters, i, n)`, for compiled kernels: adds n to counters[i] (an int64
+    array) at once for every thread and answers the value before. For jobs that share work
+    through a counter (a job claims the next block of rows, so a thread that starts late takes
+    fewer). Without numba, a plain function (nothing compiled calls it then)."""
     if not AVAILABLE:
 
         def plain_add(counters: Any, i: int, n: int) -> int:
@@ -52,31 +51,22 @@ def _atomics() -> tuple[Callable[..., Any], Callable[..., Any]]:
             counters[i] += n
             return before
 
-        return plain_add, lambda counters, i: int(counters[i])
+        return plain_add
     from numba import types
     from numba.core import cgutils
     from numba.extending import intrinsic
 
-    def pointer(context: Any, builder: Any, signature: Any, args: Any) -> Any:
-        kind = signature.args[0]
-        array = context.make_array(kind)(context, builder, args[0])
-        return cgutils.get_item_pointer(context, builder, kind, array, [args[1]])
-
     @intrinsic
     def fetch_add(typingctx: Any, counters: Any, i: Any, n: Any) -> Any:
         def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
-            return builder.atomic_rmw("add", pointer(context, builder, signature, args), args[2], "seq_cst")
+            kind = signature.args[0]
+            array = context.make_array(kind)(context, builder, args[0])
+            at = cgutils.get_item_pointer(context, builder, kind, array, [args[1]])
+            return builder.atomic_rmw("add", at, args[2], "seq_cst")
 
         return types.int64(types.Array(types.int64, 1, "C"), types.intp, types.int64), codegen
 
-    @intrinsic
-    def load(typingctx: Any, counters: Any, i: Any) -> Any:
-        def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
-            return builder.load_atomic(pointer(context, builder, signature, args), "seq_cst", 8)
-
-        return types.int64(types.Array(types.int64, 1, "C"), types.intp), codegen
-
-    return fetch_add, load
+    return fetch_add
 
 
-fetch_add, load = _atomics()
+fetch_add = _fetch_add()

@@ -157,7 +157,7 @@ def _cast(grid, origins, directions, jobs, pool):
 
 
 def claims():
-    from ecs_engine.physics.ray_refresh import claims
+    from ecs_engine.physics.ray_walk import claims
 
     return claims()
 
@@ -180,10 +180,10 @@ def test_threads_sharing_a_cast_take_every_ray_once_and_answer_as_one_thread_doe
 
 
 def test_shapes_that_moved_past_the_margin_are_moved_into_their_new_cells_as_a_new_grid_has_them():
-    """Shapes moved and turned (within the grid's box), the grid refreshed by four threads
-    sharing the work: every ray answers as on a grid made anew. A shape that leaves the box, or
-    more shapes in a cell than it has room for, is tested by every ray instead, the same answers
-    again; past ray_refresh.SPILL such shapes the grid is made again (False in every job)."""
+    """Shapes moved and turned (within the grid's box), the grid refreshed: every ray answers
+    as on a grid made anew. A shape that leaves the box, or more shapes in a cell than it has
+    room for, is tested by every ray instead, the same answers again; past ray_refresh.SPILL
+    such shapes the grid is to be made again (False)."""
     from ecs_engine.jobs import JobPool
     from ecs_engine.physics.ray_grid import RayGrid, Shapes
 
@@ -194,37 +194,38 @@ def test_shapes_that_moved_past_the_margin_are_moved_into_their_new_cells_as_a_n
     moved = rng.choice(np.arange(1, 400), 30, replace=False)
     positions[moved, :3] += rng.uniform(-0.8, 0.8, (30, 3))
     rotations[moved[:15]] = rng.normal(size=(15, 4))
-    positions[moved[-1], :3] = grid.centre[moved[-1]] + (0.5 * grid.margin, 0.0, 0.0)  # (within the margin)
+    stays = moved[-1]  # (within the margin: left in its cells)
+    positions[stays, :3] = grid.centre[stays] + (0.5 * grid.margin, 0.0, 0.0)
     origins, directions = rng.uniform(-7.0, 7.0, (2000, 3)), rng.normal(size=(2000, 3))
-    with JobPool(4) as pool:
-        shared = claims()
-        assert pool.map(lambda _: grid.refresh(shared), range(4)) == [True] * 4
-        assert shared[3] == 29  # (ESCAPES: all but the one within its margin)
+
+    def same_as_a_new_grid(pool):
         fresh = RayGrid.build(shapes, positions, rotations)
         ours, theirs = _cast(grid, origins, directions, 4, pool), _cast(fresh, origins, directions, 1, pool)
         assert (ours[0] >= 0).sum() > 500
         for a, b in zip(ours, theirs):
             assert np.array_equal(a, b, equal_nan=True)
-        assert grid.fill.sum() == fresh.fill.sum()  # no shape left behind in a cell it left
-        shared = claims()
-        assert pool.map(lambda _: grid.refresh(shared), range(4)) == [True] * 4 and shared[3] == 0
+        return fresh
+
+    with JobPool(4) as pool:
+        assert grid.refresh()
+        assert (
+            np.array_equal(grid.centre[moved[:-1]], positions[moved[:-1], :3])
+            and (grid.centre[stays] != positions[stays, :3]).any()
+        )
+        fresh = same_as_a_new_grid(pool)
+        assert grid.fill.sum() == fresh.fill.sum() and grid.spill[0] == 0  # no shape left behind in a cell it left
         away = moved[0]  # out of the grid's box: spilt, tested by every ray
         positions[away, 1] = grid.origin[1] + grid.dims[1] * grid.cell + 1.0
         crowd = moved[1:6]  # five more into one shape's cells: some find a cell full
         positions[crowd, :3] = positions[moved[6], :3]
-        shared = claims()
-        assert pool.map(lambda _: grid.refresh(shared), range(4)) == [True] * 4
+        assert grid.refresh()
         assert away in grid.spill[1 : grid.spill[0] + 1] and grid.spill[0] > 1
-        fresh = RayGrid.build(shapes, positions, rotations)
-        ours, theirs = _cast(grid, origins, directions, 4, pool), _cast(fresh, origins, directions, 1, pool)
-        for a, b in zip(ours, theirs):
-            assert np.array_equal(a, b, equal_nan=True)
+        same_as_a_new_grid(pool)
         above = _cast(grid, positions[[away], :3] + (0.0, 5.0, 0.0), np.array([[0.0, -1.0, 0.0]]), 1, pool)
         assert above[0][0] == away
         positions[away, :3] = grid.centre[moved[7]] + 0.1  # back in: out of the spill again
-        shared = claims()
-        assert pool.map(lambda _: grid.refresh(shared), range(4)) == [True] * 4
+        assert grid.refresh()
         assert away not in grid.spill[1 : grid.spill[0] + 1]
-        positions[1:200, :3] = positions[200, :3]  # 199 shapes into one shape's cells: past the spill
-        shared = claims()
-        assert pool.map(lambda _: grid.refresh(shared), range(4)) == [False] * 4
+        same_as_a_new_grid(pool)
+    positions[1:200, :3] = positions[200, :3]  # 199 shapes into one shape's cells: past the spill
+    assert not grid.refresh()

@@ -77,7 +77,7 @@ class PhysicsWorld:
         self._shapes: tuple = (-1, None, False)  # (generation, Shapes, whether other shapes have bodies)
         self._grid: tuple = ((), None)  # (key, RayGrid)
         self.grids_made = 0  # how many times raycast's grid was made (a count for benchmarks)
-        self.ray_lock = threading.RLock()  # one batch of rays at a time: each refreshes the grid in place
+        self.ray_lock = threading.RLock()  # one batch of rays at a time: a refresh changes the grid in place
         self.step_ms = 0.0  # the library's last step
         self.events_ms = 0.0  # the last step's contact records read and sent as events
 
@@ -207,14 +207,12 @@ class PhysicsWorld:
         library against meshes, hulls and terrain."""
         return queries.raycast(self, origins, directions, max_distance)
 
-    def ray_grid(self, check: bool = True) -> tuple[RayGrid | None, bool, bool]:
+    def ray_grid(self) -> tuple[RayGrid | None, bool]:
         """The grid raycast casts against (None without numba), brought up to the step after a
-        step or a body placed (RayGrid.refresh) or made again when a body was made or
-        destroyed; whether bodies of other shapes than the primitives (meshes, hulls, terrain)
-        are there, for the library to cast against; and whether the grid is `stale`: with
-        `check` False, a grid from before comes back as it was, for the caller to refresh
-        (spread over its threads) and answer with `grid_refreshed`. Hold `ray_lock` while the
-        grid is in use: refreshing it changes it in place."""
+        step or a body placed (RayGrid.refresh), made again when a body was made or destroyed
+        or the refresh could not keep it; and whether bodies of other shapes than the
+        primitives (meshes, hulls, terrain) are there, for the library to cast against. Hold
+        `ray_lock` while the grid is in use: a refresh changes it in place."""
         with self.ray_lock:
             bodies = self.bodies
             if self._shapes[0] != bodies.generation:
@@ -227,25 +225,11 @@ class PhysicsWorld:
             if ray_grid.AVAILABLE and key != self._grid[0]:
                 positions, rotations, _, _ = self.buffers()
                 grid = self._grid[1]
-                if grid is not None and grid.serves(self._shapes[1], positions, rotations):
-                    if not check:
-                        return grid, self._shapes[2], True
-                    self.grid_refreshed(grid.refresh())
-                else:
-                    self._grid = (key, RayGrid.build(self._shapes[1], positions, rotations))
+                if grid is None or not (grid.serves(self._shapes[1], positions, rotations) and grid.refresh()):
+                    grid = RayGrid.build(self._shapes[1], positions, rotations)
                     self.grids_made += 1
-            return self._grid[1], self._shapes[2], False
-
-    def grid_refreshed(self, kept: bool) -> RayGrid:
-        """Take the outcome of the refresh `ray_grid(check=False)` left to its caller: the grid
-        `kept`, or made again."""
-        grid = self._grid[1]
-        if not kept:
-            positions, rotations, _, _ = self.buffers()
-            grid = RayGrid.build(self._shapes[1], positions, rotations)
-            self.grids_made += 1
-        self._grid = ((self.bodies.generation, self.steps, self.placed), grid)
-        return grid
+                self._grid = (key, grid)
+            return self._grid[1], self._shapes[2]
 
     def shapecast(
         self, shape: int, size: Any, origin: Any, motion: Any, rotation: Any = (0.0, 0.0, 0.0, 1.0), ignore: int = -1

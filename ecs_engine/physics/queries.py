@@ -11,10 +11,12 @@ import numpy as np
 from ..components.physics import BOX, PRIMITIVES, SPHERE
 from ..ecs.entities import INDEX_MASK
 from ..jobs import over_rows
-from .ray_refresh import OUTCOME, REMAKE, claims
+from .ray_walk import claims
 
 RAY_CHUNK = 1024  # rays at least per job of the library's batch (fewer cost more to wake than they save)
-RAYS_PER_WAKE = 100  # the engine's rays a thread casts in the time its waking takes (GPU host: ~25 us)
+# the engine's rays a thread casts in the time its waking takes (GPU host: ~25 us), so that n
+# rays wake sqrt(n / RAYS_PER_WAKE) threads (the least time for rays shared plus threads woken)
+RAYS_PER_WAKE = 100
 # a ray hit as the library packs it (48 bytes)
 _HIT = np.dtype(
     [
@@ -59,17 +61,20 @@ def raycast(physics: Any, origins: Any, directions: Any, max_distance: float) ->
     if len(o) != len(d):
         raise ValueError(f"raycast: {len(o)} origins but {len(d)} directions")
     with physics.ray_lock:
-        grid, others, stale = physics.ray_grid(check=False)
+        grid, others = physics.ray_grid()
         if grid is None:  # without numba: the library's batch answers every ray
             return _library_rays(physics, o, _unit(o, d), max_distance)
         index, distance = np.empty(len(o), np.int64), np.empty(len(o))
         point, normal = np.empty((len(o), 3)), np.empty((len(o), 3))
         out = (index, distance, point, normal)
-        kept = _cast_shared(physics.pool, grid, stale, o, d, max_distance, out)
-        if stale:
-            grid = physics.grid_refreshed(kept)
-        if not kept:
-            _cast_shared(physics.pool, grid, False, o, d, max_distance, out)
+        shared = claims()
+        jobs = (
+            1 if physics.pool is None else max(1, min(physics.pool.threads, round(math.sqrt(len(o) / RAYS_PER_WAKE))))
+        )
+        if jobs == 1:
+            grid.cast(o, d, max_distance, out, shared)
+        else:  # (a job per thread: they take blocks of rays from the shared counter as they come free)
+            physics.pool.map(lambda _: grid.cast(o, d, max_distance, out, shared), range(jobs))
     if len(o) and index.min() == -2:
         _unit(o, d)  # (the error naming the first such ray)
     entity = np.where(index >= 0, grid.shapes.entity[index], -1) if len(grid.shapes.entity) else index
@@ -80,28 +85,6 @@ def raycast(physics: Any, origins: Any, directions: Any, max_distance: float) ->
         entity[nearer], distance[nearer] = theirs.entity[nearer], theirs.distance[nearer]
         point[nearer], normal[nearer] = theirs.point[nearer], theirs.normal[nearer]
     return RayHits(entity, distance, point, normal)
-
-
-def _cast_shared(
-    pool: Any, grid: Any, refresh: bool, o: np.ndarray, d: np.ndarray, max_distance: float, out: Any
-) -> bool:
-    """The rays cast on the grid by a job per thread of `pool`, the threads sharing the rays
-    through counters (ray_refresh.claims); with `refresh`, first the grid brought up to the
-    step, shared likewise: False, and nothing cast, where it must be made again instead. As
-    many threads as pay for their waking: waking one costs about as much as casting
-    RAYS_PER_WAKE rays, so n rays take sqrt(n / RAYS_PER_WAKE) of them."""
-    shared = claims()
-
-    def job(_: int) -> None:
-        if not refresh or grid.refresh(shared):
-            grid.cast(o, d, max_distance, out, shared)
-
-    jobs = 1 if pool is None else max(1, min(pool.threads, round(math.sqrt(len(o) / RAYS_PER_WAKE))))
-    if jobs == 1:
-        job(0)
-    else:
-        pool.map(job, range(jobs))
-    return shared[OUTCOME] != REMAKE
 
 
 def _unit(o: np.ndarray, d: np.ndarray) -> np.ndarray:

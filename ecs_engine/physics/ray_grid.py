@@ -19,8 +19,8 @@ import numpy as np
 from ..components.physics import BOX, CAPSULE, SPHERE
 from .poses import copy_poses
 from .ray_bounds import bounds_of, fill_cells
-from .ray_refresh import SPILL, claims, refresh
-from .ray_walk import cast_rays
+from .ray_refresh import SPILL, refresh
+from .ray_walk import cast_rays, claims
 
 CELL_REACH = 0.7  # the grid's cell, in the median shape's reach (its bounding sphere's diameter)
 MARGIN = 0.05  # the shapes' bounds in the grid are this many cells wider all round: a shape
@@ -95,7 +95,7 @@ class RayGrid:
     fill: np.ndarray
     items: np.ndarray
     boxes: np.ndarray
-    escaped: np.ndarray  # where a refresh's threads write down the shapes that escaped
+    escaped: np.ndarray  # where a refresh writes down the shapes that escaped
     spill: np.ndarray  # how many shapes are outside the grid's cells, then they (ray_refresh.SPILL)
 
     @classmethod
@@ -129,16 +129,14 @@ class RayGrid:
         still lie within their bounds is `refresh`'s to see to)."""
         return shapes is self.shapes and _same(positions, self.positions) and _same(rotations, self.rotations)
 
-    def refresh(self, shared: np.ndarray | None = None) -> bool:
+    def refresh(self) -> bool:
         """Bring the grid up to the buffers' poses (ray_refresh.py): every shape that moved
         further than the margin since it was put in its cells moved into the cells it covers
-        now. False where the grid must be made again instead (a shape left its box, a cell is
-        full). `shared`: claims() that the threads about to cast a batch share this by (each
-        answers once the grid is brought up, or found wanting)."""
+        now. False where the grid must be made again instead (more than SPILL shapes found no
+        room in the cells or left the grid's box)."""
         assert refresh is not None
         s = self.shapes
         return refresh(
-            claims() if shared is None else shared,
             self.escaped,
             self.positions,
             self.rotations,

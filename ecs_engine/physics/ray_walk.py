@@ -12,10 +12,14 @@ import numpy as np
 from .. import native
 from ..native import fetch_add
 from .ray_bounds import bound
-from .ray_refresh import RAYS
 from .ray_shapes import shape_hit
 
 RAY_BLOCK = 64  # rays a thread takes at a time (about 15 us of work on the GPU host's cores)
+
+
+def claims() -> np.ndarray:
+    """The counter of rays taken, for the threads casting one batch to share."""
+    return np.zeros(1, np.int64)
 
 
 def _inverse_kernel(d):  # pragma: no cover
@@ -63,7 +67,7 @@ def _cast_kernel(  # pragma: no cover
     out_point,
     out_normal,
 ):
-    """Rays in blocks of RAY_BLOCK taken from claims[RAYS] (shared by the threads casting them)
+    """Rays in blocks of RAY_BLOCK taken from claims[0] (shared by the threads casting them)
     until none are left: the nearest shape each meets within max_t (out_shape -1: none; -2:
     the ray's origin or direction is not finite, or the direction is zero), the distance, the
     point and the normal (NaN without a hit). The grid's cells in the ray's order, stopping at
@@ -81,7 +85,7 @@ def _cast_kernel(  # pragma: no cover
         bound(positions, rotations, rows[j], shape[j], size[j, 0], size[j, 1], size[j, 2], 0.0, large_bounds, n)
     count = len(origins)
     while True:
-        first = fetch_add(claims, RAYS, RAY_BLOCK)
+        first = fetch_add(claims, 0, RAY_BLOCK)
         if first >= count:
             break
         for k in range(first, min(first + RAY_BLOCK, count)):
