@@ -18,6 +18,8 @@ from ecs_engine import App, MinimalPlugins
 from ecs_engine.components import Transform, Velocity
 from ecs_engine.components.physics import (
     BOX,
+    DYNAMIC,
+    KINEMATIC,
     SPHERE,
     STATIC,
     Collider,
@@ -457,6 +459,36 @@ def test_a_collider_a_system_changes_remakes_the_body():
     heights = seen["bouncy"][31:]
     bottom = int(np.argmin(heights[:60]))
     assert max(heights[bottom:]) > 0.5 + 0.5 * 2.5  # bounced back up most of its 2.5 m drop
+
+
+def test_a_body_a_system_makes_static_dynamic_or_kinematic_takes_its_new_motion():
+    """RigidBody.kind changed mid-run: a static box made dynamic falls, a falling one made
+    static stops where it is, one made kinematic stays at its Transform (the game moves it). A
+    change to or from static makes the body again: the library crashed when asked to move a
+    static one."""
+    from ecs_engine import Time
+
+    made, at = {}, {}
+
+    def setup(world, dt):
+        floor(world)
+        made["freed"] = world.spawn(Transform(position=(-3.0, 4.0, 0.0)), RigidBody(kind=STATIC), Collider(shape=BOX))
+        made["held"] = world.spawn(Transform(position=(0.0, 8.0, 0.0)), RigidBody(), Collider(shape=BOX))
+        made["driven"] = world.spawn(Transform(position=(3.0, 8.0, 0.0)), RigidBody(), Collider(shape=BOX))
+
+    def change(world, dt):
+        if world.resources[Time].steps == 30:
+            for name, kind in (("freed", DYNAMIC), ("held", STATIC), ("driven", KINEMATIC)):
+                world.set(made[name], RigidBody, kind=kind)
+                at[name] = float(position(world, made[name])[1])
+
+    app = App(title="kinds").add_plugins(MinimalPlugins, physics_plugin())
+    app.add_startup_systems(setup)
+    app.add_systems("update", change)
+    app.run(frames=120)
+    assert position(app.world, made["freed"])[1] == pytest.approx(0.5, abs=0.03)  # fell onto the floor
+    assert position(app.world, made["held"])[1] == pytest.approx(at["held"], abs=1e-6)  # stayed in mid-air
+    assert position(app.world, made["driven"])[1] == pytest.approx(at["driven"], abs=1e-6)  # where its Transform is
 
 
 def test_gravity_scale_and_damping_per_body():

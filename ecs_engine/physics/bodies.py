@@ -81,6 +81,7 @@ class Bodies:
         self.sensors = 0  # bodies that are sensors
         self.by_handle = (np.empty(0, np.uint64), np.empty(0, np.int64))  # handles sorted, their entities
         self.generation = 0
+        self.motions = 0  # counts the bodies whose kind changed (static, kinematic, dynamic)
         self._seen = -1  # the world's structure version last matched
         self.joints = Joints(lib, native)
 
@@ -220,10 +221,13 @@ class Bodies:
         return len(rows)
 
     def rebuild_changed(self, world: Any, batch: Any) -> bool:
-        """Bodies of `batch` whose Collider or RigidBody (but its kind) a system changed made
-        again from their components, joints on them too: whether any was."""
+        """Bodies of `batch` whose Collider or RigidBody (but its kind, unless to or from static)
+        a system changed made again from their components, joints on them too: whether any
+        was."""
         slots = batch.entities & INDEX_MASK
-        changed = np.flatnonzero((self.owner[slots] == batch.entities) & (spec(batch) != self.spec[slots]))
+        kinds, was = batch[RigidBody].kind, self.kind[slots]
+        static = (was != kinds) & ((was == STATIC) | (kinds == STATIC))  # (follow_kinds does the others)
+        changed = np.flatnonzero((self.owner[slots] == batch.entities) & ((spec(batch) != self.spec[slots]) | static))
         if not len(changed):
             return False
         self.native.destroy_bodies_batch(self.handle[slots[changed]].tolist())
@@ -252,9 +256,13 @@ class Bodies:
                 put(int(handles[k]), *values[k].tolist())
 
     def follow_kinds(self, entities: np.ndarray, kinds: np.ndarray) -> None:
-        """Bodies whose RigidBody.kind a system changed take their new motion."""
+        """Bodies whose RigidBody.kind a system changed between dynamic and kinematic take their
+        new motion (to or from static, rebuild_changed makes them again: the library cannot
+        move a body made static, and crashed when asked)."""
         slots = entities & INDEX_MASK
-        for k in np.flatnonzero(self.kind[slots] != kinds).tolist():
+        was = self.kind[slots]
+        for k in np.flatnonzero((was != kinds) & (was != STATIC) & (kinds != STATIC)).tolist():
             kind = int(kinds[k])
             self.native.set_motion_type(int(self.handle[slots[k]]), getattr(self.lib, MOTIONS[kind]))
             self.kind[slots[k]] = kind
+            self.motions += 1
