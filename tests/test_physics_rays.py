@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from physics_world import ball, floor, simulate
+from physics_world import ball, floor, physics_plugin, simulate
 
 from ecs_engine import native
 from ecs_engine.components import Mesh, Transform
-from ecs_engine.components.physics import BOX, CAPSULE, CYLINDER, MESH, SPHERE, STATIC, Collider, RigidBody
+from ecs_engine.components.physics import BOX, CAPSULE, CYLINDER, DYNAMIC, MESH, SPHERE, STATIC, Collider, RigidBody
 
 pytestmark = pytest.mark.skipif(not native.AVAILABLE, reason="the engine's rays are compiled with numba")
 
@@ -71,6 +71,44 @@ def test_rays_follow_the_bodies_as_they_fall_and_as_they_are_placed():
     hits = physics.raycast([(5.0, 20.0, 0.0), (0.0, 20.0, 0.0)], down * 2, 50.0)
     assert hits.entity[0] == made["ball"] and hits.distance[0] == pytest.approx(17.5, abs=1e-5)
     assert hits.distance[1] == pytest.approx(20.0, abs=1e-5)  # where it was: the floor
+
+
+def test_rays_see_a_static_body_where_it_is_put_and_follow_one_made_dynamic():
+    """Static bodies' shapes are looked at only after a body was put somewhere: a static box put
+    elsewhere is met there, and one a system makes dynamic is followed as it falls."""
+    from ecs_engine import App, MinimalPlugins, Time
+    from ecs_engine.physics import PhysicsWorld
+
+    made, seen = {}, []
+
+    def setup(world, dt):
+        floor(world)
+        for k, x in enumerate((-4.0, 4.0)):
+            made[k] = world.spawn(Transform(position=(x, 3.0, 0.0)), RigidBody(kind=STATIC), Collider(shape=BOX))
+
+    def look(world, dt):
+        physics, step = world.resources[PhysicsWorld], world.resources[Time].steps
+        hits = physics.raycast([(-2.0, 20.0, 0.0), (-4.0, 20.0, 0.0), (4.0, 20.0, 0.0)], [(0.0, -1.0, 0.0)] * 3, 50.0)
+        seen.append((step, hits, float(world.get(made[1], Transform).position[1])))
+        if step == 5:
+            column, row = _transform_row(world, made[0])
+            column.position[row] = (-2.0, 5.0, 0.0)  # put elsewhere (a static body follows only `place`)
+            physics.place(np.array([made[0]]), column, np.array([row]))
+        if step == 15:  # (later: a body made dynamic has the grid made again)
+            world.set(made[1], RigidBody, kind=DYNAMIC)
+
+    app = App(title="static rays").add_plugins(MinimalPlugins, physics_plugin())
+    app.add_startup_systems(setup)
+    app.add_systems("update", look)
+    app.run(frames=50)
+    for step, hits, y in seen:
+        if step <= 6:  # (before the change reached the bodies)
+            continue
+        assert hits.entity[0] == made[0] and hits.distance[0] == pytest.approx(14.5, abs=1e-5)
+        assert hits.entity[1] != made[0]  # not where it was
+        assert hits.entity[2] == made[1] and hits.distance[2] == pytest.approx(19.5 - y, abs=1e-4)
+    assert seen[10][2] == 3.0
+    assert seen[-1][2] < 2.0  # it fell
 
 
 def _transform_row(world, entity):

@@ -83,7 +83,9 @@ def test_rays_meet_the_shape_a_march_finds_first_at_its_distance():
     from ecs_engine.physics.ray_grid import RayGrid, Shapes
 
     positions, rotations, shape, size = scene(400, 6.0, 5)
-    grid = RayGrid.build(Shapes.of(np.arange(400) + 1000, np.arange(400), shape, size), positions, rotations)
+    grid = RayGrid.build(
+        Shapes.of(np.arange(400) + 1000, np.arange(400), shape, size, np.zeros(400, bool)), positions, rotations
+    )
     assert list(grid.shapes.large) == [0]  # the floor: every ray tests it
     rng = np.random.default_rng(6)
     count, reach = 240, 25.0
@@ -137,7 +139,9 @@ def test_the_grid_holds_every_shape_in_every_cell_its_bounds_touch():
     positions[:, 0], positions[:, 2] = np.tile(x.ravel(), 3), np.tile(z.ravel(), 3)
     positions[:, 1] = np.repeat([0.5, 1.5, 2.5], side * side)
     rotations = np.tile(np.float32((0, 0, 0, 1)), (count, 1))
-    shapes = Shapes.of(np.arange(count), np.arange(count), np.full(count, BOX), np.full((count, 3), 0.5))
+    shapes = Shapes.of(
+        np.arange(count), np.arange(count), np.full(count, BOX), np.full((count, 3), 0.5), np.zeros(count, bool)
+    )
     grid = RayGrid.build(shapes, positions, rotations)
     origins = np.c_[x.ravel(), np.full(side * side, 10.0), z.ravel()]
     down = np.tile((0.0, -1.0, 0.0), (side * side, 1))
@@ -169,7 +173,9 @@ def test_threads_sharing_a_cast_take_every_ray_once_and_answer_as_one_thread_doe
     from ecs_engine.physics.ray_grid import RayGrid, Shapes
 
     positions, rotations, shape, size = scene(300, 5.0, 8)
-    grid = RayGrid.build(Shapes.of(np.arange(300), np.arange(300), shape, size), positions, rotations)
+    grid = RayGrid.build(
+        Shapes.of(np.arange(300), np.arange(300), shape, size, np.zeros(300, bool)), positions, rotations
+    )
     rng = np.random.default_rng(9)
     origins, directions = rng.uniform(-7.0, 7.0, (1001, 3)), rng.normal(size=(1001, 3))
     with JobPool(4) as pool:
@@ -183,12 +189,14 @@ def test_shapes_that_moved_past_the_margin_are_moved_into_their_new_cells_as_a_n
     """Shapes moved and turned (within the grid's box), the grid refreshed: every ray answers
     as on a grid made anew. A shape that leaves the box, or more shapes in a cell than it has
     room for, is tested by every ray instead, the same answers again; past ray_refresh.SPILL
-    such shapes the grid is to be made again (False)."""
+    such shapes the grid is to be made again (False). Static bodies' shapes are looked at only
+    when asked (a body was put somewhere)."""
     from ecs_engine.jobs import JobPool
     from ecs_engine.physics.ray_grid import RayGrid, Shapes
 
     positions, rotations, shape, size = scene(400, 5.0, 10)
-    shapes = Shapes.of(np.arange(400), np.arange(400), shape, size)
+    still = np.arange(400) % 2 == 0  # static bodies' shapes: looked at only when bodies were put somewhere
+    shapes = Shapes.of(np.arange(400), np.arange(400), shape, size, still)
     grid = RayGrid.build(shapes, positions, rotations)
     rng = np.random.default_rng(11)
     moved = rng.choice(np.arange(1, 400), 30, replace=False)
@@ -226,6 +234,11 @@ def test_shapes_that_moved_past_the_margin_are_moved_into_their_new_cells_as_a_n
         positions[away, :3] = grid.centre[moved[7]] + 0.1  # back in: out of the spill again
         assert grid.refresh()
         assert away not in grid.spill[1 : grid.spill[0] + 1]
+        same_as_a_new_grid(pool)
+        put = 2 * np.flatnonzero(np.arange(2, 400, 2) % 7 == 0)[0] + 2  # a static shape, put elsewhere
+        positions[put, :3] = positions[moved[8], :3] + 0.3
+        assert grid.refresh(everything=False) and (grid.centre[put] != positions[put, :3]).all()
+        assert grid.refresh(everything=True) and (grid.centre[put] == positions[put, :3]).all()
         same_as_a_new_grid(pool)
     positions[1:200, :3] = positions[200, :3]  # 199 shapes into one shape's cells: past the spill
     assert not grid.refresh()

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from ..components.physics import PRIMITIVES
+from ..components.physics import PRIMITIVES, STATIC
 from ..ecs.entities import INDEX_MASK
 from . import queries, ray_grid
 from .bodies import Bodies
@@ -74,7 +74,7 @@ class PhysicsWorld:
         self.step_once = False  # paused: the next fixed step runs once all the same
         self.steps = 0
         self.placed = 0  # times bodies were put where their Transform says (place)
-        self._shapes: tuple = (-1, None, False)  # (generation, Shapes, whether other shapes have bodies)
+        self._shapes: tuple = ((), None, False)  # ((generation, motions), Shapes, whether other shapes have bodies)
         self._grid: tuple = ((), None)  # (key, RayGrid)
         self.grids_made = 0  # how many times raycast's grid was made (a count for benchmarks)
         self.ray_lock = threading.RLock()  # one batch of rays at a time: a refresh changes the grid in place
@@ -215,17 +215,20 @@ class PhysicsWorld:
         `ray_lock` while the grid is in use: a refresh changes it in place."""
         with self.ray_lock:
             bodies = self.bodies
-            if self._shapes[0] != bodies.generation:
+            if self._shapes[0] != (bodies.generation, bodies.motions):
                 slots = np.flatnonzero(bodies.owner >= 0)
                 primitive = np.isin(bodies.spec["shape"][slots], PRIMITIVES)
                 at = slots[primitive]
-                shapes = Shapes.of(bodies.owner[at], bodies.row[at], bodies.spec["shape"][at], bodies.spec["size"][at])
-                self._shapes = (bodies.generation, shapes, not primitive.all())
+                spec, still = bodies.spec[at], bodies.kind[at] == STATIC
+                shapes = Shapes.of(bodies.owner[at], bodies.row[at], spec["shape"], spec["size"], still)
+                self._shapes = ((bodies.generation, bodies.motions), shapes, not primitive.all())
             key = (bodies.generation, self.steps, self.placed)
             if ray_grid.AVAILABLE and key != self._grid[0]:
                 positions, rotations, _, _ = self.buffers()
-                grid = self._grid[1]
-                if grid is None or not (grid.serves(self._shapes[1], positions, rotations) and grid.refresh()):
+                grid, everything = self._grid[1], self._grid[0][2:] != (self.placed,)
+                if grid is None or not (
+                    grid.serves(self._shapes[1], positions, rotations) and grid.refresh(everything)
+                ):
                     grid = RayGrid.build(self._shapes[1], positions, rotations)
                     self.grids_made += 1
                 self._grid = (key, grid)

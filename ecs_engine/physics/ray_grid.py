@@ -27,6 +27,7 @@ MARGIN = 0.05  # the shapes' bounds in the grid are this many cells wider all ro
 # stays in its cells until it moves further than that (ray_refresh.py). In a settling pile of
 # 10,000 boxes, 160 shapes a step moved past 0.02 and 20 past 0.05, for 9% more bounds tests a
 # ray; 0.1 took 70% more
+ROOM = 1  # cells all round the shapes for them to move into before they are spilt (ray_refresh.py)
 LARGE_CELLS = 64  # a shape over more cells than this is tested by every ray instead
 CELLS_PER_SHAPE = 4  # the grid has at most this many cells per shape (more for far-apart shapes)
 AVAILABLE = cast_rays is not None
@@ -54,9 +55,10 @@ class Shapes:
     big: np.ndarray
     small: np.ndarray
     large: np.ndarray
+    watched: np.ndarray
 
     @classmethod
-    def of(cls, entity: np.ndarray, rows: np.ndarray, shape: np.ndarray, size: np.ndarray) -> Shapes:
+    def of(cls, entity: np.ndarray, rows: np.ndarray, shape: np.ndarray, size: np.ndarray, still: np.ndarray) -> Shapes:
         shape, size = np.ascontiguousarray(shape, np.int64), np.ascontiguousarray(size, np.float64)
         r, h = size[:, 0], size[:, 1]
         reach = 2.0 * np.select(
@@ -67,7 +69,8 @@ class Shapes:
         cell = CELL_REACH * float(np.median(reach)) if len(reach) else 1.0
         big = (reach / cell + 1.0) ** 3 > LARGE_CELLS
         rows = np.ascontiguousarray(rows, np.int64)
-        return cls(entity, rows, shape, size, cell, reach / 2.0, big, np.flatnonzero(~big), np.flatnonzero(big))
+        small, large, watched = np.flatnonzero(~big), np.flatnonzero(big), np.flatnonzero(~big & ~still)
+        return cls(entity, rows, shape, size, cell, reach / 2.0, big, small, large, watched)
 
 
 @dataclass(frozen=True)
@@ -111,12 +114,12 @@ class RayGrid:
         bounds_of(positions, rotations, shapes.rows, shapes.shape, shapes.size, shapes.big, margin, bounds, extent)
         low, high = (extent[0], extent[1]) if len(shapes.small) else (np.zeros(3), np.ones(3))
         cell = shapes.cell
-        dims = np.maximum(np.ceil((high - low) / cell), 1.0) + 2.0
+        dims = np.maximum(np.ceil((high - low) / cell), 1.0) + 2 * ROOM
         most = CELLS_PER_SHAPE * len(shapes.small) + 64
         if dims.prod() > most:
             cell *= float((dims.prod() / most) ** (1 / 3))
-            dims = np.maximum(np.ceil((high - low) / cell), 1.0) + 2.0
-        low, dims = low - cell, dims.astype(np.int64)
+            dims = np.maximum(np.ceil((high - low) / cell), 1.0) + 2 * ROOM
+        low, dims = low - ROOM * cell, dims.astype(np.int64)
         starts, fill, items, boxes = fill_cells(bounds, shapes.small, low, 1.0 / cell, dims)
         centre, turn = np.empty((len(shapes.entity), 3)), np.empty((len(shapes.entity), 4))
         copy_poses(positions, rotations, shapes.rows, np.arange(len(shapes.entity)), centre, turn)
@@ -129,11 +132,13 @@ class RayGrid:
         still lie within their bounds is `refresh`'s to see to)."""
         return shapes is self.shapes and _same(positions, self.positions) and _same(rotations, self.rotations)
 
-    def refresh(self) -> bool:
+    def refresh(self, everything: bool = True) -> bool:
         """Bring the grid up to the buffers' poses (ray_refresh.py): every shape that moved
         further than the margin since it was put in its cells moved into the cells it covers
-        now. False where the grid must be made again instead (more than SPILL shapes found no
-        room in the cells or left the grid's box)."""
+        now; with `everything` False only the watched shapes are looked at (no body was put
+        anywhere since the last refresh: a static one has not moved). False where the grid must
+        be made again instead (more than SPILL shapes found no room in the cells or left the
+        grid's box)."""
         assert refresh is not None
         s = self.shapes
         return refresh(
@@ -143,7 +148,7 @@ class RayGrid:
             s.rows,
             s.shape,
             s.size,
-            s.small,
+            s.small if everything else s.watched,
             s.radius,
             self.margin,
             self.centre,

@@ -75,7 +75,9 @@ def _cast_kernel(  # pragma: no cover
     the cells (`spill`: their count, then they; by their `bounds` first) and the large shapes.
     A shape
     is looked at once a ray (`seen`: the last ray that looked at it), and tested exactly only
-    when the ray meets its bounds before the nearest hit so far."""
+    when the ray meets its bounds before the nearest hit so far. Of shapes hit at the same
+    distance (a ray starting inside two) the one of the lower index is answered, whatever
+    order the cells hold them in."""
     nx, ny, nz = dims[0], dims[1], dims[2]
     inv_cell = 1.0 / cell
     seen = np.full(len(shape), -1, np.int64)
@@ -137,7 +139,7 @@ def _cast_kernel(  # pragma: no cover
                         t, a, b, c = shape_hit(
                             ox, oy, oz, dx, dy, dz, positions, rotations, rows[j], shape[j], s0, s1, s2
                         )
-                        if t < best or (hit < 0 and t <= best):
+                        if t < best or (t == best and (hit < 0 or j < hit)):
                             best, hit, hx, hy, hz = t, j, a, b, c
                     out = min(ex, ey, ez)
                     if best <= out or out > leave:
@@ -159,14 +161,14 @@ def _cast_kernel(  # pragma: no cover
                 if seen[j] != k and _meets(bounds, j, ox, oy, oz, ix, iy, iz, best):
                     s0, s1, s2 = size[j, 0], size[j, 1], size[j, 2]
                     t, a, b, c = shape_hit(ox, oy, oz, dx, dy, dz, positions, rotations, rows[j], shape[j], s0, s1, s2)
-                    if t < best or (hit < 0 and t <= best):
+                    if t < best or (t == best and (hit < 0 or j < hit)):
                         best, hit, hx, hy, hz = t, j, a, b, c
             for n in range(len(large)):  # past the grid's hit, their bounds say, as a floor is
                 if _meets(large_bounds, n, ox, oy, oz, ix, iy, iz, best):
                     j = large[n]
                     s0, s1, s2 = size[j, 0], size[j, 1], size[j, 2]
                     t, a, b, c = shape_hit(ox, oy, oz, dx, dy, dz, positions, rotations, rows[j], shape[j], s0, s1, s2)
-                    if t < best or (hit < 0 and t <= best):
+                    if t < best or (t == best and (hit < 0 or j < hit)):
                         best, hit, hx, hy, hz = t, j, a, b, c
             out_shape[k] = hit
             if hit < 0:
