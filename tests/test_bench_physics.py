@@ -27,9 +27,11 @@ def test_physics_bench_quick_writes_json(tmp_path, monkeypatch, capsys):
         assert r["added_ms"] == pytest.approx(r["system_step_ms"] - r["library_step_ms"], abs=r["system_step_ms"])
         assert r["added_fraction"] == pytest.approx(r["added_ms"] / r["library_step_ms"])
         assert 0 <= r["events_ms"] and r["added_without_events_ms"] <= r["added_ms"]
-    rays = doc["rays"]
-    assert rays["hits"] == doc["config"]["rays"]  # every ray lands on the pile or the floor
-    assert rays["same_as_library"] > 0.98 and 0 < rays["grid_ms"] and 0 < rays["library_ms"]
+    for name in ("rays", "statics_rays"):
+        rays = doc[name]
+        assert rays["hits"] == doc["config"]["rays"], name  # every ray lands on a body
+        assert rays["same_as_library"] > 0.98 and 0 < rays["grid_ms"] and 0 < rays["library_ms"], name
+        assert len(rays["python_loop_ns"]) == 2 and rays["remade"] <= rays["steps"], name
     met = {"added_met", "added_without_events_met", "rays_met"}
     assert set(doc["targets"]) == {"added_fraction_max", "rays_ms_max", *met}
     assert "target" in capsys.readouterr().out
