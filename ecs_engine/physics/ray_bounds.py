@@ -88,36 +88,48 @@ def _store_kernel(boxes, at, bounds, j):  # pragma: no cover
 store = native.inner(_store_kernel)
 
 
-def _fill_kernel(bounds, small, origin, inv_cell, dims):  # pragma: no cover
-    """The grid's cells as ranges of items (shape indices): (starts, fill, items, boxes). Cell
-    c's shapes are items[starts[c]:starts[c] + fill[c]], their bounds beside them in boxes (a
-    cell's are read in a row, not gathered by shape); up to starts[c + 1] is room to spare.
-    Two passes: count each cell's shapes, then place them."""
-    nx, ny = dims[0], dims[1]
+def _insert_kernel(layout, bounds, j):  # pragma: no cover
+    """Shape j put into every cell its bounds cover, as far as the first without room (the
+    cells before it keep it): whether every cell took it. `layout`: the grid's (origin, cell,
+    dims, starts, fill, items, boxes), RayGrid's."""
+    origin, cell, dims, starts, fill, items, boxes = layout
+    x0, y0, z0, x1, y1, z1 = cells(bounds, j, origin, 1.0 / cell, dims)
+    for cz in range(z0, z1 + 1):
+        for cy in range(y0, y1 + 1):
+            for cx in range(x0, x1 + 1):
+                c = (cz * dims[1] + cy) * dims[0] + cx
+                at = starts[c] + fill[c]
+                if at == starts[c + 1]:
+                    return False
+                items[at] = j
+                store(boxes, at, bounds, j)
+                fill[c] += 1
+    return True
+
+
+insert = native.inner(_insert_kernel)
+
+
+def _fill_kernel(bounds, small, origin, cell, dims):  # pragma: no cover
+    """The grid's layout (origin, cell, dims, starts, fill, items, boxes): cell c's shapes are
+    items[starts[c]:starts[c] + fill[c]], their bounds beside them in boxes (a cell's are read
+    in a row, not gathered by shape); up to starts[c + 1] is room to spare. Two passes: count
+    each cell's shapes, then place them."""
     fill = np.zeros(dims[0] * dims[1] * dims[2], np.int32)
     for k in range(len(small)):
-        x0, y0, z0, x1, y1, z1 = cells(bounds, small[k], origin, inv_cell, dims)
+        x0, y0, z0, x1, y1, z1 = cells(bounds, small[k], origin, 1.0 / cell, dims)
         for cz in range(z0, z1 + 1):
             for cy in range(y0, y1 + 1):
                 for cx in range(x0, x1 + 1):
-                    fill[(cz * ny + cy) * nx + cx] += 1
+                    fill[(cz * dims[1] + cy) * dims[0] + cx] += 1
     starts = np.zeros(len(fill) + 1, np.int32)
     for c in range(len(fill)):
         starts[c + 1] = starts[c] + fill[c] + SPARE + fill[c] // 4
         fill[c] = 0
-    items, boxes = np.empty(starts[-1], np.int32), np.empty((starts[-1], 6), np.float32)
+    layout = (origin, cell, dims, starts, fill, np.empty(starts[-1], np.int32), np.empty((starts[-1], 6), np.float32))
     for k in range(len(small)):
-        j = small[k]
-        x0, y0, z0, x1, y1, z1 = cells(bounds, j, origin, inv_cell, dims)
-        for cz in range(z0, z1 + 1):
-            for cy in range(y0, y1 + 1):
-                for cx in range(x0, x1 + 1):
-                    c = (cz * ny + cy) * nx + cx
-                    at = starts[c] + fill[c]
-                    items[at] = j
-                    store(boxes, at, bounds, j)
-                    fill[c] += 1
-    return starts, fill, items, boxes
+        insert(layout, bounds, small[k])  # (room for every one: counted above)
+    return layout
 
 
 bounds_of = native.njit(_bounds_kernel)

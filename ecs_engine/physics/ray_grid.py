@@ -120,12 +120,17 @@ class RayGrid:
             cell *= float((dims.prod() / most) ** (1 / 3))
             dims = np.maximum(np.ceil((high - low) / cell), 1.0) + 2 * ROOM
         low, dims = low - ROOM * cell, dims.astype(np.int64)
-        starts, fill, items, boxes = fill_cells(bounds, shapes.small, low, 1.0 / cell, dims)
+        _, _, _, starts, fill, items, boxes = fill_cells(bounds, shapes.small, low, float(cell), dims)
         centre, turn = np.empty((len(shapes.entity), 3)), np.empty((len(shapes.entity), 4))
         copy_poses(positions, rotations, shapes.rows, np.arange(len(shapes.entity)), centre, turn)
-        escaped = np.empty(len(shapes.small), np.int64)
-        grid = (shapes, positions, rotations, centre, turn, bounds, margin, low, cell, dims, starts, fill, items, boxes)
-        return cls(*grid, escaped, np.zeros(SPILL + 1, np.int64))
+        escaped, spill = np.empty(len(shapes.small), np.int64), np.zeros(SPILL + 1, np.int64)
+        poses = (positions, rotations, centre, turn, bounds, margin)
+        return cls(shapes, *poses, low, float(cell), dims, starts, fill, items, boxes, escaped, spill)
+
+    @property
+    def layout(self) -> tuple:
+        """(origin, cell, dims, starts, fill, items, boxes): the grid as its kernels take it."""
+        return self.origin, self.cell, self.dims, self.starts, self.fill, self.items, self.boxes
 
     def serves(self, shapes: Shapes, positions: np.ndarray, rotations: np.ndarray) -> bool:
         """Whether this grid was made for these `shapes`, posed by these buffers (whether they
@@ -154,13 +159,7 @@ class RayGrid:
             self.centre,
             self.turn,
             self.bounds,
-            self.origin,
-            self.cell,
-            self.dims,
-            self.starts,
-            self.fill,
-            self.items,
-            self.boxes,
+            self.layout,
             self.spill,
         )
 
@@ -190,13 +189,7 @@ class RayGrid:
             s.shape,
             s.size,
             s.large,
-            self.origin,
-            self.cell,
-            self.dims,
-            self.starts,
-            self.fill,
-            self.items,
-            self.boxes,
+            self.layout,
             self.bounds,
             self.spill,
             *out,

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import native
-from .ray_bounds import bound, cells, store
+from .ray_bounds import bound, cells, insert
 
 SPILL = 32  # shapes at most outside the grid's cells, tested by every ray (by their bounds first)
 
@@ -36,33 +36,15 @@ def _moved_kernel(positions, rotations, r, centre, turn, i, radius):  # pragma: 
 _moved = native.inner(_moved_kernel)
 
 
-def _move_kernel(  # pragma: no cover
-    escaped,
-    positions,
-    rotations,
-    rows,
-    shape,
-    size,
-    margin,
-    centre,
-    turn,
-    bounds,
-    origin,
-    cell,
-    dims,
-    starts,
-    fill,
-    items,
-    boxes,
-    spill,
-):
+def _move_kernel(
+    escaped, positions, rotations, rows, shape, size, margin, centre, turn, bounds, layout, spill
+):  # pragma: no cover
     """Each escaped shape taken out of its cells and put into those its bounds (`margin` wide)
     cover now, its pose there noted in centre and turn. One that leaves the grid's box, or
     finds a cell full, goes to the `spill` (its count, then the shapes: every ray tests them,
     by their bounds first); a cell it did fit in keeps it (a ray looks at a shape once). False
     where the spill is full: the grid is then half moved, to be made again."""
-    nx, ny = dims[0], dims[1]
-    inv_cell = 1.0 / cell
+    origin, cell, dims, starts, fill, items, boxes = layout
     for n in range(len(escaped)):
         j = escaped[n]
         for m in range(1, spill[0] + 1):
@@ -70,11 +52,11 @@ def _move_kernel(  # pragma: no cover
                 spill[m] = spill[spill[0]]
                 spill[0] -= 1
                 break
-        x0, y0, z0, x1, y1, z1 = cells(bounds, j, origin, inv_cell, dims)
+        x0, y0, z0, x1, y1, z1 = cells(bounds, j, origin, 1.0 / cell, dims)
         for cz in range(z0, z1 + 1):
             for cy in range(y0, y1 + 1):
                 for cx in range(x0, x1 + 1):
-                    c = (cz * ny + cy) * nx + cx
+                    c = (cz * dims[1] + cy) * dims[0] + cx
                     last = starts[c] + fill[c] - 1
                     for m in range(starts[c], last + 1):
                         if items[m] == j:  # the cell's last item takes its place
@@ -85,24 +67,11 @@ def _move_kernel(  # pragma: no cover
                             break
         r = rows[j]
         bound(positions, rotations, r, shape[j], size[j, 0], size[j, 1], size[j, 2], margin, bounds, j)
-        fits = True
+        inside = True
         for a in range(3):
             if bounds[j, a] < origin[a] or bounds[j, 3 + a] > origin[a] + dims[a] * cell:
-                fits = False
-        if fits:
-            x0, y0, z0, x1, y1, z1 = cells(bounds, j, origin, inv_cell, dims)
-            for cz in range(z0, z1 + 1):
-                for cy in range(y0, y1 + 1):
-                    for cx in range(x0, x1 + 1):
-                        c = (cz * ny + cy) * nx + cx
-                        at = starts[c] + fill[c]
-                        if at == starts[c + 1]:
-                            fits = False
-                        elif fits:
-                            items[at] = j
-                            store(boxes, at, bounds, j)
-                            fill[c] += 1
-        if not fits:
+                inside = False
+        if not (inside and insert(layout, bounds, j)):
             if spill[0] == len(spill) - 1:
                 return False
             spill[0] += 1
@@ -119,57 +88,20 @@ _move = native.inner(_move_kernel)
 
 
 def _refresh_kernel(  # pragma: no cover
-    escaped,
-    positions,
-    rotations,
-    rows,
-    shape,
-    size,
-    small,
-    radius,
-    margin,
-    centre,
-    turn,
-    bounds,
-    origin,
-    cell,
-    dims,
-    starts,
-    fill,
-    items,
-    boxes,
-    spill,
+    escaped, positions, rotations, rows, shape, size, looked, radius, margin, centre, turn, bounds, layout, spill
 ):
-    """The grid brought up to the step (the module's docstring): whether it holds every shape
-    now (False: it is to be made again)."""
+    """The grid brought up to the step (the module's docstring), the `looked` shapes looked
+    at: whether it holds every shape now (False: it is to be made again)."""
     moving = 0
-    for k in range(len(small)):
-        i = small[k]
+    for k in range(len(looked)):
+        i = looked[k]
         if _moved(positions, rotations, rows[i], centre, turn, i, radius[i]) > margin:
             escaped[moving] = i
             moving += 1
     if moving == 0:
         return True
-    return _move(
-        escaped[:moving],
-        positions,
-        rotations,
-        rows,
-        shape,
-        size,
-        margin,
-        centre,
-        turn,
-        bounds,
-        origin,
-        cell,
-        dims,
-        starts,
-        fill,
-        items,
-        boxes,
-        spill,
-    )
+    found = escaped[:moving]
+    return _move(found, positions, rotations, rows, shape, size, margin, centre, turn, bounds, layout, spill)
 
 
 refresh = native.njit(_refresh_kernel)

@@ -53,13 +53,7 @@ def _cast_kernel(  # pragma: no cover
     shape,
     size,
     large,
-    origin,
-    cell,
-    dims,
-    starts,
-    fill,
-    items,
-    boxes,
+    layout,
     bounds,
     spill,
     out_shape,
@@ -70,14 +64,14 @@ def _cast_kernel(  # pragma: no cover
     """Rays in blocks of RAY_BLOCK taken from claims[0] (shared by the threads casting them)
     until none are left: the nearest shape each meets within max_t (out_shape -1: none; -2:
     the ray's origin or direction is not finite, or the direction is zero), the distance, the
-    point and the normal (NaN without a hit). The grid's cells in the ray's order, stopping at
-    the first cell whose exit lies past the nearest hit so far, then the shapes spilt out of
-    the cells (`spill`: their count, then they; by their `bounds` first) and the large shapes.
-    A shape
-    is looked at once a ray (`seen`: the last ray that looked at it), and tested exactly only
-    when the ray meets its bounds before the nearest hit so far. Of shapes hit at the same
-    distance (a ray starting inside two) the one of the lower index is answered, whatever
-    order the cells hold them in."""
+    point and the normal (NaN without a hit). The grid's cells (its `layout`, RayGrid's) in
+    the ray's order, stopping at the first cell whose exit lies past the nearest hit so far,
+    then the shapes spilt out of the cells (`spill`: their count, then they; by their `bounds`
+    first) and the large shapes. A shape is looked at once a ray (`seen`: the last ray that
+    looked at it), and tested exactly only when the ray meets its bounds before the nearest
+    hit so far. Of shapes hit at the same distance (a ray starting inside two) the one of the
+    lower index is answered, whatever order the cells hold them in."""
+    origin, cell, dims, starts, fill, items, boxes = layout
     nx, ny, nz = dims[0], dims[1], dims[2]
     inv_cell = 1.0 / cell
     seen = np.full(len(shape), -1, np.int64)
