@@ -80,6 +80,7 @@ class PhysicsWorld:
         self.ray_lock = threading.RLock()  # one batch of rays at a time: a refresh changes the grid in place
         self.step_ms = 0.0  # the library's last step
         self.events_ms = 0.0  # the last step's contact records read and sent as events
+        self.events_copy_ms = 0.0  # of which the library's copy of its buffer of records
 
     def sync(self, world: Any) -> bool:
         """The bodies and characters matched against the world's entities (Bodies.sync): whether
