@@ -209,7 +209,7 @@ def cast_rays(physics: Any, starts: np.ndarray, down: np.ndarray, times: int = 3
         theirs.append((time.perf_counter() - start) * 1e3)
     positions, rotations, _, _ = physics.buffers()
     start = time.perf_counter()
-    RayGrid.build(physics.ray_grid()[0].shapes, positions, rotations)
+    RayGrid.build(physics.ray_grid()[0].shapes, positions, rotations, physics.pool)
     made = (time.perf_counter() - start) * 1e3
     return {
         "ms": statistics.median(ours),

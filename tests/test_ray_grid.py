@@ -242,3 +242,29 @@ def test_shapes_that_moved_past_the_margin_are_moved_into_their_new_cells_as_a_n
         same_as_a_new_grid(pool)
     positions[1:200, :3] = positions[200, :3]  # 199 shapes into one shape's cells: past the spill
     assert not grid.refresh()
+
+
+def test_a_grid_made_by_threads_holds_what_one_thread_makes(monkeypatch):
+    """Made over a JobPool (the threads taking blocks of shapes and each cell's slots at once),
+    every cell holds the same shapes as when one thread makes it (in any order), and every ray
+    answers alike."""
+    import ecs_engine.physics.ray_grid as ray_grid
+    from ecs_engine.jobs import JobPool
+    from ecs_engine.physics.ray_grid import RayGrid, Shapes
+
+    monkeypatch.setattr(ray_grid, "SHARED_BUILD", 0)
+    monkeypatch.setattr(ray_grid, "BLOCK", 64)
+    positions, rotations, shape, size = scene(900, 8.0, 12)
+    shapes = Shapes.of(np.arange(900), np.arange(900), shape, size, np.zeros(900, bool))
+    rng = np.random.default_rng(13)
+    origins, directions = rng.uniform(-10.0, 10.0, (1500, 3)), rng.normal(size=(1500, 3))
+    with JobPool(4) as pool:
+        alone, together = RayGrid.build(shapes, positions, rotations), RayGrid.build(shapes, positions, rotations, pool)
+        assert np.array_equal(alone.starts, together.starts) and np.array_equal(alone.fill, together.fill)
+        for c in np.flatnonzero(alone.fill):
+            first, last = alone.starts[c], alone.starts[c] + alone.fill[c]
+            assert sorted(alone.items[first:last]) == sorted(together.items[first:last]), c
+        ours, theirs = _cast(together, origins, directions, 4, pool), _cast(alone, origins, directions, 1, pool)
+    assert (ours[0] >= 0).sum() > 300
+    for a, b in zip(ours, theirs):
+        assert np.array_equal(a, b, equal_nan=True)

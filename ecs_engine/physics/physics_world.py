@@ -230,7 +230,7 @@ class PhysicsWorld:
                 if grid is None or not (
                     grid.serves(self._shapes[1], positions, rotations) and grid.refresh(everything)
                 ):
-                    grid = RayGrid.build(self._shapes[1], positions, rotations)
+                    grid = RayGrid.build(self._shapes[1], positions, rotations, self.pool)
                     self.grids_made += 1
                 self._grid = (key, grid)
             return self._grid[1], self._shapes[2]

@@ -9,9 +9,11 @@ import numpy as np
 
 from .. import native
 from ..components.physics import BOX, CAPSULE, SPHERE
+from ..native import fetch_add
 from .ray_shapes import turn_at
 
 SPARE = 2  # room for this many more shapes in every cell, and a quarter of those it holds
+BLOCK = 2048  # shapes a thread takes at a time while the grid is made
 
 
 def _reach_kernel(rotations, r, s, s0, s1, s2):  # pragma: no cover
@@ -50,15 +52,26 @@ def _bound_kernel(positions, rotations, r, s, s0, s1, s2, margin, bounds, i):  #
 bound = native.inner(_bound_kernel)
 
 
-def _bounds_kernel(positions, rotations, rows, shape, size, big, margin, bounds, extent):  # pragma: no cover
-    """Each shape's bounds (`bound`), and `extent`, the bounds of the shapes that are not `big`
-    (low, then high)."""
-    extent[0, :], extent[1, :] = np.inf, -np.inf
-    for i in range(len(rows)):
-        bound(positions, rotations, rows[i], shape[i], size[i, 0], size[i, 1], size[i, 2], margin, bounds, i)
-        if not big[i]:
-            for a in range(3):
-                extent[0, a], extent[1, a] = min(extent[0, a], bounds[i, a]), max(extent[1, a], bounds[i, 3 + a])
+def _bounds_kernel(
+    claims, block, positions, rotations, rows, shape, size, big, margin, bounds, parts
+):  # pragma: no cover
+    """Each shape's bounds (`bound`), in blocks of `block` shapes taken from claims[0] (by the
+    threads making the grid, or one), and parts[b], the extent of block b's shapes that are
+    not `big` (low, then high)."""
+    count = len(rows)
+    while True:
+        b = fetch_add(claims, 0, 1)
+        if b * block >= count:
+            break
+        parts[b, 0, :], parts[b, 1, :] = np.inf, -np.inf
+        for i in range(b * block, min(count, (b + 1) * block)):
+            bound(positions, rotations, rows[i], shape[i], size[i, 0], size[i, 1], size[i, 2], margin, bounds, i)
+            if not big[i]:
+                for a in range(3):
+                    parts[b, 0, a], parts[b, 1, a] = (
+                        min(parts[b, 0, a], bounds[i, a]),
+                        max(parts[b, 1, a], bounds[i, 3 + a]),
+                    )
 
 
 def _cells_kernel(bounds, j, origin, inv_cell, dims):  # pragma: no cover
@@ -88,49 +101,76 @@ def _store_kernel(boxes, at, bounds, j):  # pragma: no cover
 store = native.inner(_store_kernel)
 
 
-def _insert_kernel(layout, bounds, j):  # pragma: no cover
+def _insert_kernel(layout, bounds, j, shared):  # pragma: no cover
     """Shape j put into every cell its bounds cover, as far as the first without room (the
     cells before it keep it): whether every cell took it. `layout`: the grid's (origin, cell,
-    dims, starts, fill, items, boxes), RayGrid's."""
+    dims, starts, fill, items, boxes), RayGrid's. `shared`: threads put shapes in at once,
+    each slot taken for every thread at once (room counted beforehand)."""
     origin, cell, dims, starts, fill, items, boxes = layout
     x0, y0, z0, x1, y1, z1 = cells(bounds, j, origin, 1.0 / cell, dims)
     for cz in range(z0, z1 + 1):
         for cy in range(y0, y1 + 1):
             for cx in range(x0, x1 + 1):
                 c = (cz * dims[1] + cy) * dims[0] + cx
-                at = starts[c] + fill[c]
-                if at == starts[c + 1]:
-                    return False
+                if shared:
+                    at = starts[c] + fetch_add(fill, c, 1)
+                else:
+                    at = starts[c] + fill[c]
+                    if at == starts[c + 1]:
+                        return False
+                    fill[c] += 1
                 items[at] = j
                 store(boxes, at, bounds, j)
-                fill[c] += 1
     return True
 
 
 insert = native.inner(_insert_kernel)
 
 
-def _fill_kernel(bounds, small, origin, cell, dims):  # pragma: no cover
-    """The grid's layout (origin, cell, dims, starts, fill, items, boxes): cell c's shapes are
-    items[starts[c]:starts[c] + fill[c]], their bounds beside them in boxes (a cell's are read
-    in a row, not gathered by shape); up to starts[c + 1] is room to spare. Two passes: count
-    each cell's shapes, then place them."""
-    fill = np.zeros(dims[0] * dims[1] * dims[2], np.int32)
-    for k in range(len(small)):
-        x0, y0, z0, x1, y1, z1 = cells(bounds, small[k], origin, 1.0 / cell, dims)
-        for cz in range(z0, z1 + 1):
-            for cy in range(y0, y1 + 1):
-                for cx in range(x0, x1 + 1):
-                    fill[(cz * dims[1] + cy) * dims[0] + cx] += 1
-    starts = np.zeros(len(fill) + 1, np.int32)
-    for c in range(len(fill)):
-        starts[c + 1] = starts[c] + fill[c] + SPARE + fill[c] // 4
-        fill[c] = 0
-    layout = (origin, cell, dims, starts, fill, np.empty(starts[-1], np.int32), np.empty((starts[-1], 6), np.float32))
-    for k in range(len(small)):
-        insert(layout, bounds, small[k])  # (room for every one: counted above)
-    return layout
+def _count_kernel(claims, block, bounds, small, origin, cell, dims, counts, shared):  # pragma: no cover
+    """counts[c]: how many of the `small` shapes' bounds cover cell c, in blocks of `block`
+    shapes taken from claims[1] (adding at once for every thread where `shared`)."""
+    count = len(small)
+    while True:
+        first = fetch_add(claims, 1, block)
+        if first >= count:
+            break
+        for k in range(first, min(count, first + block)):
+            x0, y0, z0, x1, y1, z1 = cells(bounds, small[k], origin, 1.0 / cell, dims)
+            for cz in range(z0, z1 + 1):
+                for cy in range(y0, y1 + 1):
+                    for cx in range(x0, x1 + 1):
+                        c = (cz * dims[1] + cy) * dims[0] + cx
+                        if shared:
+                            fetch_add(counts, c, 1)
+                        else:
+                            counts[c] += 1
+
+
+def _starts_kernel(counts):  # pragma: no cover
+    """Each cell's first slot, with room for its shapes and to spare (SPARE, and a quarter
+    more); `counts` zeroed, to be the cells' fill."""
+    starts = np.zeros(len(counts) + 1, np.int32)
+    for c in range(len(counts)):
+        starts[c + 1] = starts[c] + counts[c] + SPARE + counts[c] // 4
+        counts[c] = 0
+    return starts
+
+
+def _place_kernel(claims, block, bounds, small, layout, shared):  # pragma: no cover
+    """The `small` shapes put into the cells their bounds cover (room counted by _count), in
+    blocks of `block` taken from claims[2] (`shared`: by threads at once, so the order in a cell
+    varies, which no answer depends on)."""
+    count = len(small)
+    while True:
+        first = fetch_add(claims, 2, block)
+        if first >= count:
+            break
+        for k in range(first, min(count, first + block)):
+            insert(layout, bounds, small[k], shared)
 
 
 bounds_of = native.njit(_bounds_kernel)
-fill_cells = native.njit(_fill_kernel)
+count_cells = native.njit(_count_kernel)
+starts_of = native.njit(_starts_kernel)
+place_cells = native.njit(_place_kernel)

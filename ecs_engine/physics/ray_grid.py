@@ -13,12 +13,13 @@ floor) are tested by every ray."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ..components.physics import BOX, CAPSULE, SPHERE
 from .poses import copy_poses
-from .ray_bounds import bounds_of, fill_cells
+from .ray_bounds import BLOCK, bounds_of, count_cells, place_cells, starts_of
 from .ray_refresh import SPILL, refresh
 from .ray_walk import cast_rays, claims
 
@@ -30,6 +31,7 @@ MARGIN = 0.05  # the shapes' bounds in the grid are this many cells wider all ro
 ROOM = 1  # cells all round the shapes for them to move into before they are spilt (ray_refresh.py)
 LARGE_CELLS = 64  # a shape over more cells than this is tested by every ray instead
 CELLS_PER_SHAPE = 4  # the grid has at most this many cells per shape (more for far-apart shapes)
+SHARED_BUILD = 20_000  # shapes from which the grid is made on the pool's threads
 AVAILABLE = cast_rays is not None
 
 
@@ -102,30 +104,45 @@ class RayGrid:
     spill: np.ndarray  # how many shapes are outside the grid's cells, then they (ray_refresh.SPILL)
 
     @classmethod
-    def build(cls, shapes: Shapes, positions: np.ndarray, rotations: np.ndarray) -> RayGrid:
+    def build(cls, shapes: Shapes, positions: np.ndarray, rotations: np.ndarray, pool: Any = None) -> RayGrid:
         """The grid of `shapes` where their bodies are now (the library's buffers: positions
-        (M, 4) float64, rotations (M, 4) float32), on this thread: spread over the JobPool it
-        measured slower (waking the pool's threads cost more than the work saved). Where the
-        shapes lie so far apart that more than CELLS_PER_SHAPE cells a shape would be needed,
-        the cells are larger."""
-        assert bounds_of is not None and fill_cells is not None, "the engine's rays need numba (ray_grid.AVAILABLE)"
-        bounds, extent = np.empty((len(shapes.entity), 6)), np.empty((2, 3))
+        (M, 4) float64, rotations (M, 4) float32): on `pool`'s threads for SHARED_BUILD shapes
+        or more (they take blocks of shapes from shared counters, three maps), else on this
+        one (waking the threads costs more than the work saves: 0.2-0.4 ms a map on the GPU
+        host). Where the shapes lie so far apart that more than CELLS_PER_SHAPE cells a shape
+        would be needed, the cells are larger."""
+        assert bounds_of is not None and count_cells is not None and place_cells is not None and starts_of is not None
+        count, small = len(shapes.entity), shapes.small
+        jobs = 1 if pool is None or count < SHARED_BUILD else min(pool.threads, -(-count // BLOCK))
+        shared = np.zeros(3, np.int64)
+
+        def run(kernel: Any, *args: Any) -> None:
+            if jobs == 1:
+                kernel(shared, BLOCK, *args)
+            else:
+                pool.map(lambda _: kernel(shared, BLOCK, *args), range(jobs))
+
+        bounds, parts = np.empty((count, 6)), np.empty((-(-count // BLOCK), 2, 3))
         margin = MARGIN * shapes.cell
-        bounds_of(positions, rotations, shapes.rows, shapes.shape, shapes.size, shapes.big, margin, bounds, extent)
-        low, high = (extent[0], extent[1]) if len(shapes.small) else (np.zeros(3), np.ones(3))
+        run(bounds_of, positions, rotations, shapes.rows, shapes.shape, shapes.size, shapes.big, margin, bounds, parts)
+        low, high = (parts[:, 0].min(axis=0), parts[:, 1].max(axis=0)) if len(small) else (np.zeros(3), np.ones(3))
         cell = shapes.cell
         dims = np.maximum(np.ceil((high - low) / cell), 1.0) + 2 * ROOM
-        most = CELLS_PER_SHAPE * len(shapes.small) + 64
+        most = CELLS_PER_SHAPE * len(small) + 64
         if dims.prod() > most:
             cell *= float((dims.prod() / most) ** (1 / 3))
             dims = np.maximum(np.ceil((high - low) / cell), 1.0) + 2 * ROOM
-        low, dims = low - ROOM * cell, dims.astype(np.int64)
-        _, _, _, starts, fill, items, boxes = fill_cells(bounds, shapes.small, low, float(cell), dims)
-        centre, turn = np.empty((len(shapes.entity), 3)), np.empty((len(shapes.entity), 4))
-        copy_poses(positions, rotations, shapes.rows, np.arange(len(shapes.entity)), centre, turn)
-        escaped, spill = np.empty(len(shapes.small), np.int64), np.zeros(SPILL + 1, np.int64)
+        low, dims, cell = low - ROOM * cell, dims.astype(np.int64), float(cell)
+        fill = np.zeros(int(dims.prod()), np.int64)
+        run(count_cells, bounds, small, low, cell, dims, fill, jobs > 1)
+        starts = starts_of(fill)
+        items, boxes = np.empty(starts[-1], np.int32), np.empty((starts[-1], 6), np.float32)
+        run(place_cells, bounds, small, (low, cell, dims, starts, fill, items, boxes), jobs > 1)
+        centre, turn = np.empty((count, 3)), np.empty((count, 4))
+        copy_poses(positions, rotations, shapes.rows, np.arange(count), centre, turn)
+        escaped, spill = np.empty(len(small), np.int64), np.zeros(SPILL + 1, np.int64)
         poses = (positions, rotations, centre, turn, bounds, margin)
-        return cls(shapes, *poses, low, float(cell), dims, starts, fill, items, boxes, escaped, spill)
+        return cls(shapes, *poses, low, cell, dims, starts, fill, items, boxes, escaped, spill)
 
     @property
     def layout(self) -> tuple:

@@ -71,7 +71,7 @@ def _move_kernel(
         for a in range(3):
             if bounds[j, a] < origin[a] or bounds[j, 3 + a] > origin[a] + dims[a] * cell:
                 inside = False
-        if not (inside and insert(layout, bounds, j)):
+        if not (inside and insert(layout, bounds, j, False)):
             if spill[0] == len(spill) - 1:
                 return False
             spill[0] += 1
