@@ -134,3 +134,43 @@ def test_a_body_entering_and_leaving_a_sensor_is_a_pair_of_triggers():
     seen = _events(setup, 120, contacts="begin_end")
     touched = {(int(c.a[i]), int(c.b[i])) for _, c in seen["contacts"] for i in range(len(c))}
     assert touched and not any(made["zone"] in pair for pair in touched)  # the sensor pushed nothing
+
+
+@pytest.mark.parametrize("stays", [False, True])
+def test_the_compiled_pass_over_the_records_sorts_them_as_numpy_does(stays):
+    """The records of balls falling through a sensor onto a floor (begin, stay and end rows,
+    triggers among them), sorted by the compiled pass and by its NumPy twin: the same rows,
+    entities, phases and triggers."""
+    import numpy as np
+
+    from ecs_engine.physics import contacts
+
+    if contacts._sort is None:
+        pytest.skip("the compiled pass needs numba")
+
+    def setup(world, dt):
+        floor(world)
+        world.spawn(
+            Transform(position=(0.0, 2.0, 0.0)), RigidBody(kind=STATIC), Collider(size=(3.0, 0.5, 3.0), sensor=True)
+        )
+        for k in range(6):
+            ball(world, 3.0 + k, x=0.3 * k - 0.8)
+
+    from physics_world import simulate
+
+    _, physics = simulate(setup, 1, contacts="all")
+    seen = {BEGIN: 0, STAY: 0, END: 0, "triggers": 0}
+    for _ in range(150):
+        physics.step(1 / 60)
+        records = np.frombuffer(physics.native.get_contact_events_raw(), physics.contact_dtype)
+        known, owners = physics.bodies.by_handle
+        ours = contacts._sort(
+            records["flags"], records["body1"], records["body2"], known, owners, physics.bodies.sensor, stays
+        )
+        theirs = contacts._sort_numpy(records, physics, stays)
+        for x, y in zip(ours, theirs):
+            assert np.array_equal(x, y)
+        for p in ours[3]:
+            seen[int(p)] += 1
+        seen["triggers"] += len(ours[4])
+    assert seen[BEGIN] >= 6 and seen[END] >= 1 and seen["triggers"] >= 6 and (seen[STAY] > 0) == stays

@@ -126,7 +126,12 @@ class Events(Generic[T]):
         n = max((len(v) for name, v in raw.items() if v.shape != fields[name].shape and v.ndim), default=1)
         values = {name: f.coerce(raw[name], n) for name, f in fields.items()}
         kind.check(values, lambda row: f"{kind.__name__} event {row}")
-        return {name: np.broadcast_to(v, (n, *fields[name].shape)).copy() for name, v in values.items()}, n
+        shapes = {name: (n, *f.shape) for name, f in fields.items()}
+        # (a column of n rows already is copied as it is: broadcast_to costs more than the copy)
+        return {
+            name: v.copy() if v.shape == shapes[name] else np.broadcast_to(v, shapes[name]).copy()
+            for name, v in values.items()
+        }, n
 
     # ---------------------------------------------------------------- reading
     def read(self, reader: Reader | None = None) -> Any:
