@@ -127,15 +127,24 @@ def _insert_kernel(layout, bounds, j, shared):  # pragma: no cover
 insert = native.inner(_insert_kernel)
 
 
+def _take_kernel(claims, i, block, count):  # pragma: no cover
+    """The next block of `count` rows for this thread, from the counter claims[i]: (first,
+    last), empty once every row is taken."""
+    first = min(fetch_add(claims, i, block), count)
+    return first, min(count, first + block)
+
+
+take = native.inner(_take_kernel)
+
+
 def _count_kernel(claims, block, bounds, small, origin, cell, dims, counts, shared):  # pragma: no cover
     """counts[c]: how many of the `small` shapes' bounds cover cell c, in blocks of `block`
     shapes taken from claims[1] (adding at once for every thread where `shared`)."""
-    count = len(small)
     while True:
-        first = fetch_add(claims, 1, block)
-        if first >= count:
-            break
-        for k in range(first, min(count, first + block)):
+        first, last = take(claims, 1, block, len(small))
+        if first == last:
+            return
+        for k in range(first, last):
             x0, y0, z0, x1, y1, z1 = cells(bounds, small[k], origin, 1.0 / cell, dims)
             for cz in range(z0, z1 + 1):
                 for cy in range(y0, y1 + 1):
@@ -161,13 +170,11 @@ def _place_kernel(claims, block, bounds, small, layout, shared):  # pragma: no c
     """The `small` shapes put into the cells their bounds cover (room counted by _count), in
     blocks of `block` taken from claims[2] (`shared`: by threads at once, so the order in a cell
     varies, which no answer depends on)."""
-    count = len(small)
-    while True:
-        first = fetch_add(claims, 2, block)
-        if first >= count:
-            break
-        for k in range(first, min(count, first + block)):
+    first, last = take(claims, 2, block, len(small))
+    while first < last:
+        for k in range(first, last):
             insert(layout, bounds, small[k], shared)
+        first, last = take(claims, 2, block, len(small))
 
 
 bounds_of = native.njit(_bounds_kernel)
