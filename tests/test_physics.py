@@ -491,6 +491,32 @@ def test_a_body_a_system_makes_static_dynamic_or_kinematic_takes_its_new_motion(
     assert position(app.world, made["driven"])[1] == pytest.approx(at["driven"], abs=1e-6)  # where its Transform is
 
 
+def test_a_static_body_a_system_moves_is_put_there():
+    """A static ledge a system moves (its Transform written) is where a ball then lands; the
+    Transform is not written back over."""
+    from ecs_engine import Time
+
+    made = {}
+
+    def setup(world, dt):
+        floor(world)
+        made["ledge"] = world.spawn(
+            Transform(position=(0.0, 1.0, 0.0)), RigidBody(kind=STATIC), Collider(shape=BOX, size=(1.0, 0.25, 1.0))
+        )
+
+    def move(world, dt):
+        if world.resources[Time].steps == 10:
+            world.set(made["ledge"], Transform(position=(5.0, 3.0, 0.0)))
+            made["ball"] = ball(world, 6.0, x=5.0)
+
+    app = App(title="ledge").add_plugins(MinimalPlugins, physics_plugin())
+    app.add_startup_systems(setup)
+    app.add_systems("update", move)
+    app.run(frames=150)
+    assert position(app.world, made["ledge"]) == pytest.approx((5.0, 3.0, 0.0))
+    assert position(app.world, made["ball"])[1] == pytest.approx(3.25 + 0.5, abs=0.03)  # on the ledge, not the floor
+
+
 def test_gravity_scale_and_damping_per_body():
     made = {}
 

@@ -92,7 +92,11 @@ def test_rays_see_a_static_body_where_it_is_put_and_follow_one_made_dynamic():
         seen.append((step, hits, float(world.get(made[1], Transform).position[1])))
         if step == 5:
             column, row = _transform_row(world, made[0])
-            column.position[row] = (-2.0, 5.0, 0.0)  # put elsewhere (a static body follows only `place`)
+            column.position[row] = (
+                -2.0,
+                5.0,
+                0.0,
+            )  # put elsewhere, as PhysicsSystem puts a body whose Transform a system wrote
             physics.place(np.array([made[0]]), column, np.array([row]))
         if step == 15:  # (later: a body made dynamic has the grid made again)
             world.set(made[1], RigidBody, kind=DYNAMIC)

@@ -25,6 +25,7 @@ from ..components import AngularVelocity, Mesh, Transform, Velocity
 from ..components.physics import (
     DYNAMIC,
     KINEMATIC,
+    STATIC,
     CharacterController,
     Collider,
     Contact,
@@ -57,11 +58,22 @@ def _ticks(table: Any) -> tuple[int, int]:
 class _TablePlan:
     """What a step does with one table of bodies, kept while the world's structure, the bodies'
     rows in the library and the table's RigidBody and Collider columns stand: its dynamic rows, their
-    entities and rows in the library's buffers, its kinematic rows, and the Transform columns'
-    write ticks after the last step wrote them (`written`: another tick since, a system moved
-    some body)."""
+    entities and rows in the library's buffers, its kinematic rows, its static rows (`still`)
+    likewise, and the Transform columns' write ticks after the last step (`written`: another
+    tick since, a system moved some body: a dynamic or static one is put there)."""
 
-    __slots__ = ("dynamic", "entities", "key", "kinematic", "rows", "tuned", "written")
+    __slots__ = (
+        "dynamic",
+        "entities",
+        "key",
+        "kinematic",
+        "rows",
+        "still",
+        "still_entities",
+        "still_rows",
+        "tuned",
+        "written",
+    )
 
     def __init__(self, key: tuple, batch: Any, physics: PhysicsWorld) -> None:
         kinds = batch[RigidBody].kind
@@ -71,6 +83,9 @@ class _TablePlan:
         self.entities = batch.entities[dynamic]
         self.rows = physics.rows(self.entities)
         self.kinematic = np.flatnonzero(kinds == KINEMATIC)
+        self.still = np.flatnonzero(kinds == STATIC)
+        self.still_entities = batch.entities[self.still]
+        self.still_rows = physics.rows(self.still_entities)
         self.written: tuple[int, int] | None = None
         # dynamic bodies with their own gravity scale or damping (the library has neither per
         # body): (their rows in the buffers, handles, masses, scales, linear and angular damping)
@@ -117,8 +132,10 @@ class PhysicsSystem(System):
         self._plans: dict[int, _TablePlan] = {}  # by table id
 
     def _plan_all(self, world: Any, physics: PhysicsWorld) -> None:
-        """Each table's plan, made again where its key changed. A body made again (a Collider
-        or RigidBody a system changed) moves other bodies' rows: every plan is made again then."""
+        """Each table's plan, made again where its key changed, keeping the Transform's write
+        ticks the last step saw (a body a system put somewhere in a frame that also made or
+        destroyed one is still followed). A body made again (a Collider or RigidBody a system
+        changed) moves other bodies' rows: every plan is made again then."""
         while True:
             rebuilt = False
             for batch in world.query(Transform, RigidBody, Collider, write=()):
@@ -132,7 +149,9 @@ class PhysicsSystem(System):
                 if plan is not None and plan.key[:2] == key[:2] and physics.bodies.rebuild_changed(world, batch):
                     rebuilt = True
                     break
-                self._plans[table.id] = _TablePlan(key, batch, physics)
+                fresh = self._plans[table.id] = _TablePlan(key, batch, physics)
+                if plan is not None:  # (a Transform a system wrote this frame is still to be followed)
+                    fresh.written = plan.written
             if not rebuilt:
                 return
 
@@ -143,8 +162,7 @@ class PhysicsSystem(System):
                 return
             physics.step_once = False
         physics.pool = world.resources.get(JobPool)
-        if physics.sync(world):
-            self._plans.clear()
+        physics.sync(world)  # (the plans follow: their keys hold the structure and the bodies' rows)
         self._plan_all(world, physics)
         plans = []
         for batch in world.query(Transform, RigidBody, Collider, write=()):
@@ -152,8 +170,11 @@ class PhysicsSystem(System):
             plans.append(plan)
             if len(plan.kinematic):  # moved by the game: the bodies follow their Transform
                 physics.place(batch.entities[plan.kinematic], batch[Transform], plan.kinematic)
-            if plan.written is not None and plan.written != _ticks(batch.table) and len(plan.rows):
-                physics.follow_moved(plan.rows, plan.entities, batch[Transform], plan.dynamic)  # teleported
+            if plan.written is not None and plan.written != _ticks(batch.table):  # teleported
+                if len(plan.rows):
+                    physics.follow_moved(plan.rows, plan.entities, batch[Transform], plan.dynamic)
+                if len(plan.still):
+                    physics.follow_moved(plan.still_rows, plan.still_entities, batch[Transform], plan.still)
         for kind, field, angular in _RATES:  # rates set by a system since the last step
             for batch in world.query(kind, RigidBody, Collider, with_=(Transform,), write=()):
                 plan = self._plans[batch.table.id]
@@ -184,7 +205,7 @@ class PhysicsSystem(System):
             if len(plan.rows):
                 t = batch[Transform]
                 physics.write_poses(plan.rows, plan.dynamic, t.position, t.rotation)
-                plan.written = _ticks(batch.table)
+            plan.written = _ticks(batch.table)
         for kind, field, angular in _RATES:
             for batch in world.query(kind, RigidBody, Collider, with_=(Transform,)):
                 plan = self._plans[batch.table.id]
