@@ -31,7 +31,7 @@ def _vectors_kernel(vectors, rows, into, out):  # pragma: no cover
         out[d, 2] = vectors[r, 2]
 
 
-_poses = native.njit(_poses_kernel)
+pose_rows = native.inner(_poses_kernel)
 _vectors = native.njit(_vectors_kernel)
 
 
@@ -45,8 +45,8 @@ def copy_poses(
 ) -> None:
     """out_position[into] = positions[rows, :3]; out_rotation[into] = rotations[rows] made unit
     in float64 (`positions`: (M, 4) float64, `rotations`: (M, 4) float32, the library's buffers)."""
-    if _poses is not None and out_position.flags.c_contiguous and out_rotation.flags.c_contiguous:
-        _poses(positions, rotations, rows, into, out_position, out_rotation)
+    if native.AVAILABLE and out_position.flags.c_contiguous and out_rotation.flags.c_contiguous:
+        pose_rows(positions, rotations, rows, into, out_position, out_rotation)
         return
     rot = rotations[rows].astype(np.float64)
     out_position[into] = positions[rows, :3]

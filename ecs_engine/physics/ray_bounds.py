@@ -52,19 +52,29 @@ def _bound_kernel(positions, rotations, r, s, s0, s1, s2, margin, bounds, i):  #
 bound = native.inner(_bound_kernel)
 
 
+def _take_kernel(claims, i, block, count):  # pragma: no cover
+    """The next block of `count` rows for this thread, from the counter claims[i]: (first,
+    last), empty once every row is taken."""
+    first = min(fetch_add(claims, i, block), count)
+    return first, min(count, first + block)
+
+
+take = native.inner(_take_kernel)
+
+
 def _bounds_kernel(
     claims, block, positions, rotations, rows, shape, size, big, margin, bounds, parts
 ):  # pragma: no cover
     """Each shape's bounds (`bound`), in blocks of `block` shapes taken from claims[0] (by the
     threads making the grid, or one), and parts[b], the extent of block b's shapes that are
     not `big` (low, then high)."""
-    count = len(rows)
     while True:
-        b = fetch_add(claims, 0, 1)
-        if b * block >= count:
+        first, last = take(claims, 0, block, len(rows))
+        if first == last:
             break
+        b = first // block
         parts[b, 0, :], parts[b, 1, :] = np.inf, -np.inf
-        for i in range(b * block, min(count, (b + 1) * block)):
+        for i in range(first, last):
             bound(positions, rotations, rows[i], shape[i], size[i, 0], size[i, 1], size[i, 2], margin, bounds, i)
             if not big[i]:
                 for a in range(3):
@@ -125,16 +135,6 @@ def _insert_kernel(layout, bounds, j, shared):  # pragma: no cover
 
 
 insert = native.inner(_insert_kernel)
-
-
-def _take_kernel(claims, i, block, count):  # pragma: no cover
-    """The next block of `count` rows for this thread, from the counter claims[i]: (first,
-    last), empty once every row is taken."""
-    first = min(fetch_add(claims, i, block), count)
-    return first, min(count, first + block)
-
-
-take = native.inner(_take_kernel)
 
 
 def _count_kernel(claims, block, bounds, small, origin, cell, dims, counts, shared):  # pragma: no cover

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import native
+from .poses import pose_rows
 from .ray_bounds import bound, cells, insert
 
 SPILL = 32  # shapes at most outside the grid's cells, tested by every ray (by their bounds first)
@@ -76,11 +77,7 @@ def _move_kernel(
                 return False
             spill[0] += 1
             spill[spill[0]] = j
-        x, y = np.float64(rotations[r, 0]), np.float64(rotations[r, 1])
-        z, w = np.float64(rotations[r, 2]), np.float64(rotations[r, 3])
-        inv = 1.0 / np.sqrt(x * x + y * y + z * z + w * w)
-        centre[j, 0], centre[j, 1], centre[j, 2] = positions[r, 0], positions[r, 1], positions[r, 2]
-        turn[j, 0], turn[j, 1], turn[j, 2], turn[j, 3] = x * inv, y * inv, z * inv, w * inv
+    pose_rows(positions, rotations, rows[escaped], escaped, centre, turn)  # where they were put
     return True
 
 

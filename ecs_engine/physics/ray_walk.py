@@ -10,8 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import native
-from ..native import fetch_add
-from .ray_bounds import bound
+from .ray_bounds import bound, take
 from .ray_shapes import shape_hit
 
 RAY_BLOCK = 64  # rays a thread takes at a time (about 15 us of work on the GPU host's cores)
@@ -79,12 +78,11 @@ def _cast_kernel(  # pragma: no cover
     for n in range(len(large)):
         j = large[n]
         bound(positions, rotations, rows[j], shape[j], size[j, 0], size[j, 1], size[j, 2], 0.0, large_bounds, n)
-    count = len(origins)
     while True:
-        first = fetch_add(claims, 0, RAY_BLOCK)
-        if first >= count:
+        first, last = take(claims, 0, RAY_BLOCK, len(origins))
+        if first == last:
             break
-        for k in range(first, min(first + RAY_BLOCK, count)):
+        for k in range(first, last):
             ox, oy, oz = origins[k, 0], origins[k, 1], origins[k, 2]
             dx, dy, dz = directions[k, 0], directions[k, 1], directions[k, 2]
             length = np.sqrt(dx * dx + dy * dy + dz * dz)
