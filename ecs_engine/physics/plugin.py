@@ -58,9 +58,9 @@ def _ticks(table: Any) -> tuple[int, int]:
 class _TablePlan:
     """What a step does with one table of bodies, kept while the world's structure, the bodies'
     rows in the library and the table's RigidBody and Collider columns stand: its dynamic rows, their
-    entities and rows in the library's buffers, its kinematic rows, its static rows (`still`)
-    likewise, and the Transform columns' write ticks after the last step (`written`: another
-    tick since, a system moved some body: a dynamic or static one is put there)."""
+    entities and rows in the library's buffers, its kinematic rows, its static rows (`still`), and
+    the Transform columns' write ticks after the last step (`written`: another tick since, a
+    system moved some body: a dynamic or static one is put there)."""
 
     __slots__ = (
         "dynamic",
@@ -69,8 +69,6 @@ class _TablePlan:
         "kinematic",
         "rows",
         "still",
-        "still_entities",
-        "still_rows",
         "tuned",
         "written",
     )
@@ -84,8 +82,6 @@ class _TablePlan:
         self.rows = physics.rows(self.entities)
         self.kinematic = np.flatnonzero(kinds == KINEMATIC)
         self.still = np.flatnonzero(kinds == STATIC)
-        self.still_entities = batch.entities[self.still]
-        self.still_rows = physics.rows(self.still_entities)
         self.written: tuple[int, int] | None = None
         # dynamic bodies with their own gravity scale or damping (the library has neither per
         # body): (their rows in the buffers, handles, masses, scales, linear and angular damping)
@@ -173,8 +169,9 @@ class PhysicsSystem(System):
             if plan.written is not None and plan.written != _ticks(batch.table):  # teleported
                 if len(plan.rows):
                     physics.follow_moved(plan.rows, plan.entities, batch[Transform], plan.dynamic)
-                if len(plan.still):
-                    physics.follow_moved(plan.still_rows, plan.still_entities, batch[Transform], plan.still)
+                if len(plan.still):  # (their rows only now: a system seldom moves a static body)
+                    still = batch.entities[plan.still]
+                    physics.follow_moved(physics.rows(still), still, batch[Transform], plan.still)
         for kind, field, angular in _RATES:  # rates set by a system since the last step
             for batch in world.query(kind, RigidBody, Collider, with_=(Transform,), write=()):
                 plan = self._plans[batch.table.id]
