@@ -2,11 +2,12 @@
 engine in compiled loops that release the GIL, over a uniform grid of the shapes' bounds.
 
 Why not the library's batch: culverin's reads each hit's body through Jolt's locking body
-interface, so its threads contend: 10,000 rays on a pile of 10,000 boxes took 4.0-4.3 ms on 16
-threads of the GPU host, these 1.25-1.31 (a median step; docs/physics.md). The primitives'
-poses are in the library's shared buffers already. A grid of their bounds, a little wide, is
-made from them and kept from step to step until a shape moves further than that margin; each
-ray walks it cell by cell (ray_walk.py), testing a shape's bounds and then its exact shape
+interface, so its threads contend: 10,000 rays on a pile of 10,000 boxes took it 4.1-6.1 ms
+on 16 threads of the GPU host, these 1.4-2.5 (median steps, as the host's speed drifted;
+docs/physics.md). The primitives' poses are in the library's shared buffers already. A grid
+of their bounds, a little wide, is made from them and brought up to each step: the shapes
+that moved further than that margin are moved into other cells (ray_refresh.py). Each ray
+walks it cell by cell (ray_walk.py), testing a shape's bounds and then its exact shape
 (ray_shapes.py), as the library does, in float64. Shapes too big for the grid's cells (a
 floor) are tested by every ray."""
 
