@@ -106,3 +106,25 @@ def test_events_are_checked_and_access_is_declared():
         schedule.add(bad)
         with pytest.raises(AccessError, match="Hit events"):
             schedule.run(world, 0.0)
+
+
+def test_rows_sent_in_bulk_are_read_as_sent_and_must_match_the_fields():
+    """send_rows (engine code's bulk path): the arrays are read back as they were given, after
+    a checked send; an array of another dtype, shape or a missing field is refused and sends
+    nothing."""
+    world = World()
+    channel = world.events(Collision)
+    channel.send(Collision(a=1, b=2, impulse=(0.0, 1.0, 0.0)))
+    rows = {"a": np.array([3, 4]), "b": np.array([5, 6]), "impulse": np.ones((2, 3), np.float32)}
+    channel.send_rows(rows, 2)
+    read = channel.read()
+    assert read.a.tolist() == [1, 3, 4] and read.b.tolist() == [2, 5, 6]
+    assert read.impulse.dtype == np.float32 and read.impulse[1:].tolist() == [[1.0] * 3] * 2
+    for bad, what in (
+        ({**rows, "impulse": np.ones((2, 3))}, "float64"),
+        ({**rows, "a": np.array([3])}, r"\(1,\)"),
+        ({"a": rows["a"], "b": rows["b"]}, "nothing"),
+    ):
+        with pytest.raises(TypeError, match=f"Collision.*{what}"):
+            channel.send_rows(bad, 2)
+    assert len(channel.read()) == 3

@@ -114,6 +114,22 @@ class Events(Generic[T]):
         self._current.items.append((arrays, n))
         self._current.count += n
 
+    def send_rows(self, arrays: dict[str, np.ndarray], n: int) -> None:
+        """Send n column events made by engine code in bulk: one array per field, of its dtype
+        and n rows of its shape, kept as they are (not checked for values, not copied: the
+        caller gives them up). Checking and copying cost more than making them when a handful
+        of events comes after a physics step that evicted every cache."""
+        kind: type[Component] = self.kind  # type: ignore[assignment]
+        fields = kind.__fields__
+        for name, f in fields.items():
+            v = arrays.get(name)
+            if v is None or v.dtype != f.dtype or v.shape != (n, *f.shape):
+                got = "nothing" if v is None else f"{v.dtype} {v.shape}"
+                raise TypeError(f"{kind.__name__}.{name}: send_rows takes {f.dtype} {(n, *f.shape)}, got {got}")
+        self._system(writing=True)
+        self._current.items.append((arrays, n))
+        self._current.count += n
+
     def send_batch(self, events: list[T]) -> None:
         for event in events:
             self.send(event)

@@ -68,12 +68,15 @@ def _entity_kernel(known, owners, handle):  # pragma: no cover
 _entity = native.inner(_entity_kernel)
 
 
-def _sort_kernel(flags, body1, body2, known, owners, sensor, stays):  # pragma: no cover
-    """The records in one pass: (rows, a, b, phase) of those between two bodies of ours that
-    are not sensors (STAY rows only with `stays`), and (sensor, other, entered) of the bodies
-    entering or leaving a sensor."""
+def _sort_kernel(flags, body1, body2, point, normal, speed, known, owners, bodies, stays):  # pragma: no cover
+    """The records in one pass: the Contact columns (a, b, phase, point, normal, speed,
+    impulse) of those between two bodies of ours that are not sensors (STAY rows only with
+    `stays`), and the Trigger columns (sensor, other, entered) of the bodies entering or
+    leaving a sensor. `bodies`: (sensor, kind, mass, restitution) by entity index."""
+    sensor, kind, mass, restitution = bodies
     n = len(flags)
-    rows, a, b, phase = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.uint8)
+    a, b, phase = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.uint8)
+    at, toward, met, impulse = np.empty((n, 3)), np.empty((n, 3)), np.empty(n), np.empty(n)
     sensors, others, entered = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.bool_)
     k = t = 0
     for i in range(n):
@@ -83,15 +86,23 @@ def _sort_kernel(flags, body1, body2, known, owners, sensor, stays):  # pragma: 
         ea, eb = _entity(known, owners, body1[i]), _entity(known, owners, body2[i])
         if ea < 0 or eb < 0:  # (a body made on `native` directly has no entity)
             continue
-        kind = BEGIN if f == 0 else (STAY if f == 1 else END)
-        sa, sb = sensor[ea & INDEX_MASK], sensor[eb & INDEX_MASK]
-        if not (sa or sb):
-            rows[k], a[k], b[k], phase[k] = i, ea, eb, kind
+        p = BEGIN if f == 0 else (STAY if f == 1 else END)
+        ia, ib = ea & INDEX_MASK, eb & INDEX_MASK
+        if not (sensor[ia] or sensor[ib]):
+            a[k], b[k], phase[k] = ea, eb, p
+            for c in range(3):
+                at[k, c], toward[k, c] = point[i, c], normal[i, c]
+            met[k] = speed[i]
+            wa, wb = (1.0 / mass[ia] if kind[ia] == DYNAMIC else 0.0), (1.0 / mass[ib] if kind[ib] == DYNAMIC else 0.0)
+            inverse = wa + wb
+            e = max(restitution[ia], restitution[ib])
+            impulse[k] = (1.0 + e) / inverse * met[k] if p == BEGIN and inverse > 0.0 else 0.0
             k += 1
-        elif kind != STAY:
-            sensors[t], others[t], entered[t] = (ea, eb, kind == BEGIN) if sa else (eb, ea, kind == BEGIN)
+        elif p != STAY:
+            sensors[t], others[t], entered[t] = (ea, eb, p == BEGIN) if sensor[ia] else (eb, ea, p == BEGIN)
             t += 1
-    return rows[:k], a[:k], b[:k], phase[:k], sensors[:t], others[:t], entered[:t]
+    contacts = (a[:k], b[:k], phase[:k], at[:k], toward[:k], met[:k], impulse[:k])
+    return contacts, (sensors[:t], others[:t], entered[:t])
 
 
 _sort = native.njit(_sort_kernel)
@@ -109,9 +120,25 @@ def _sort_numpy(records: np.ndarray, physics: Any, stays: bool) -> tuple:
     a_sensor, b_sensor = sensor[a & INDEX_MASK], sensor[b & INDEX_MASK]
     touching = ~a_sensor & ~b_sensor
     crossing = ~touching & (phase != STAY)
-    sensors = np.where(a_sensor, a, b)[crossing]
-    others = np.where(a_sensor, b, a)[crossing]
-    return rows[touching], a[touching], b[touching], phase[touching], sensors, others, phase[crossing] == BEGIN
+    triggers = (np.where(a_sensor, a, b)[crossing], np.where(a_sensor, b, a)[crossing], phase[crossing] == BEGIN)
+    rows, a, b, phase = rows[touching], a[touching], b[touching], phase[touching]
+    speed = records["speed"][rows].astype(np.float64)
+    impulse = np.where(phase == BEGIN, impact(physics.bodies, a, b) * speed, 0.0)
+    point, normal = records["point"][rows].astype(np.float64), records["normal"][rows].astype(np.float64)
+    return (a, b, phase, point, normal, speed, impulse), triggers
+
+
+def sorted_records(records: np.ndarray, physics: Any, stays: bool) -> tuple:
+    """The Contact columns and the Trigger columns of the library's records (_sort_kernel),
+    compiled where numba is, else in NumPy."""
+    if _sort is None:
+        return _sort_numpy(records, physics, stays)
+    bodies = physics.bodies
+    spec = bodies.spec
+    known, owners = bodies.by_handle
+    by_entity = (bodies.sensor, bodies.kind, spec["mass"], spec["restitution"])
+    fields = (records["flags"], records["body1"], records["body2"], records["point"], records["normal"])
+    return _sort(*fields, records["speed"], known, owners, by_entity, stays)
 
 
 def send_contacts(world: Any, physics: Any, raw: Any, touches: bool, stays: bool) -> None:
@@ -120,26 +147,8 @@ def send_contacts(world: Any, physics: Any, raw: Any, touches: bool, stays: bool
     records = np.frombuffer(raw, physics.contact_dtype)
     if not len(records):
         return
-    if _sort is not None:
-        known, owners = physics.bodies.by_handle
-        sorted_ = _sort(
-            records["flags"], records["body1"], records["body2"], known, owners, physics.bodies.sensor, stays
-        )
-    else:
-        sorted_ = _sort_numpy(records, physics, stays)
-    rows, a, b, phase, sensors, others, entered = sorted_
-    if touches and len(rows):
-        speed = records["speed"][rows].astype(np.float64)
-        world.events(Contact).send(
-            Contact(
-                a=a,
-                b=b,
-                phase=phase,
-                point=records["point"][rows].astype(np.float64),
-                normal=records["normal"][rows].astype(np.float64),
-                speed=speed,
-                impulse=np.where(phase == BEGIN, impact(physics.bodies, a, b) * speed, 0.0),
-            )
-        )
-    if len(sensors):
-        world.events(Trigger).send(Trigger(sensor=sensors, other=others, entered=entered))
+    contacts, triggers = sorted_records(records, physics, stays)
+    if touches and len(contacts[0]):
+        world.events(Contact).send_rows(dict(zip(Contact.__fields__, contacts)), len(contacts[0]))
+    if len(triggers[0]):
+        world.events(Trigger).send_rows(dict(zip(Trigger.__fields__, triggers)), len(triggers[0]))
