@@ -167,8 +167,9 @@ def claims():
 
 
 def test_threads_sharing_a_cast_take_every_ray_once_and_answer_as_one_thread_does():
-    """Rays spread over a JobPool's threads through shared counters: every ray is cast (a count
-    that is no multiple of the block), with the same answers as one thread."""
+    """Rays spread over a JobPool's threads through shared counters, or over numba's threads:
+    every ray is cast (a count that is no multiple of the block), with the same answers as one
+    thread."""
     from ecs_engine.jobs import JobPool
     from ecs_engine.physics.ray_grid import RayGrid, Shapes
 
@@ -182,6 +183,13 @@ def test_threads_sharing_a_cast_take_every_ray_once_and_answer_as_one_thread_doe
         alone, together = _cast(grid, origins, directions, 1, pool), _cast(grid, origins, directions, 4, pool)
     assert (alone[0] != -7).all() and (alone[0] >= 0).sum() > 300
     for a, b in zip(alone, together):
+        assert np.array_equal(a, b, equal_nan=True)
+    # on numba's own threads (native.parallel), each shape answered as `answer` says
+    answer = 10 * np.arange(300) + 7
+    spread = (np.full(1001, -7, np.int64), np.empty(1001), np.empty((1001, 3)), np.empty((1001, 3)))
+    grid.cast(origins, directions, 20.0, spread, answer=answer, jobs=3)
+    assert np.array_equal(spread[0], np.where(alone[0] >= 0, answer[alone[0]], alone[0]))
+    for a, b in zip(alone[1:], spread[1:]):
         assert np.array_equal(a, b, equal_nan=True)
 
 

@@ -11,12 +11,12 @@ import numpy as np
 from ..components.physics import BOX, PRIMITIVES, SPHERE
 from ..ecs.entities import INDEX_MASK
 from ..jobs import over_rows
-from .ray_walk import claims
 
 RAY_CHUNK = 1024  # rays at least per job of the library's batch (fewer cost more to wake than they save)
-# the engine's rays a thread casts in the time its waking takes (GPU host: ~25 us), so that n
-# rays wake sqrt(n / RAYS_PER_WAKE) threads (the least time for rays shared plus threads woken)
-RAYS_PER_WAKE = 100
+# rays per thread of numba's that casts them (up to the pool's thread count; fewer than twice
+# this are cast on the calling thread). On the GPU host 10,000 rays on the pile right after a
+# step took 3.2-4.4 ms on one thread, 1.0-1.5 on 6, 0.89-1.05 on 10 and 0.82-1.03 on 16
+RAYS_PER_THREAD = 500
 # a ray hit as the library packs it (48 bytes)
 _HIT = np.dtype(
     [
@@ -67,17 +67,11 @@ def raycast(physics: Any, origins: Any, directions: Any, max_distance: float) ->
         index, distance = np.empty(len(o), np.int64), np.empty(len(o))
         point, normal = np.empty((len(o), 3)), np.empty((len(o), 3))
         out = (index, distance, point, normal)
-        shared = claims()
-        jobs = (
-            1 if physics.pool is None else max(1, min(physics.pool.threads, round(math.sqrt(len(o) / RAYS_PER_WAKE))))
-        )
-        if jobs == 1:
-            grid.cast(o, d, max_distance, out, shared)
-        else:  # (a job per thread: they take blocks of rays from the shared counter as they come free)
-            physics.pool.map(lambda _: grid.cast(o, d, max_distance, out, shared), range(jobs))
-    if len(o) and index.min() == -2:
+        jobs = 1 if physics.pool is None else min(physics.pool.threads, len(o) // RAYS_PER_THREAD)
+        grid.cast(o, d, max_distance, out, answer=grid.shapes.entity, jobs=jobs)
+    entity = index
+    if len(o) and entity.min() == -2:
         _unit(o, d)  # (the error naming the first such ray)
-    entity = np.where(index >= 0, grid.shapes.entity[index], -1) if len(grid.shapes.entity) else index
     if others:  # mesh, hull and terrain bodies are the library's to cast against
         theirs = _library_rays(physics, o, _unit(o, d), max_distance)
         shape = physics.bodies.spec["shape"][np.where(theirs.entity >= 0, theirs.entity & INDEX_MASK, 0)]

@@ -18,11 +18,12 @@ from typing import Any
 
 import numpy as np
 
+from .. import native
 from ..components.physics import BOX, CAPSULE, SPHERE
 from .poses import copy_poses
 from .ray_bounds import BLOCK, bounds_of, count_cells, place_cells, starts_of
 from .ray_refresh import SPILL, refresh
-from .ray_walk import cast_rays, claims
+from .ray_walk import cast_rays, claims, spread_rays
 
 CELL_REACH = 0.7  # the grid's cell, in the median shape's reach (its bounding sphere's diameter)
 MARGIN = 0.05  # the shapes' bounds in the grid are this many cells wider all round: a shape
@@ -188,27 +189,44 @@ class RayGrid:
         max_distance: float,
         out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
         shared: np.ndarray | None = None,
+        answer: np.ndarray | None = None,
+        jobs: int = 1,
     ) -> None:
-        """Cast the rays (origins and directions, float64, C order) into `out`: the shape each
-        one hits first (an index into shapes.entity; -1: none, -2: a ray that is not finite or
-        has no direction), the distance, the point and the normal. `shared`: claims() that the
-        threads casting share the rays by (this thread casts those left, RAY_BLOCK at a
-        time); without, this thread casts them all."""
-        s = self.shapes
+        """Cast the rays (origins and directions, float64, C order) into `out`: per ray,
+        answer[the shape it hits first] (by default the shape's index into shapes.entity; -1:
+        none, -2: a ray that is not finite or has no direction), the distance, the point and
+        the normal. `jobs` over 1: on that many of numba's threads at once (native.parallel).
+        `shared`: claims() that threads casting the same rays share them by (this one casts
+        those left, RAY_BLOCK at a time); without, this call casts them all."""
         assert cast_rays is not None
+        s = self.shapes
+        shared = claims() if shared is None else shared
+        answer = np.arange(len(s.shape)) if answer is None else answer
+        if jobs > 1 and spread_rays is not None:
+            poses, kinds = (self.positions, self.rotations), (s.rows, s.shape, s.size, s.large)
+            with native.LAUNCH:
+                jobs = native.spread(jobs)
+                spread_rays(
+                    jobs, origins, directions, float(max_distance), shared, poses, kinds, *self._walk, answer, out
+                )
+            return
         cast_rays(
             origins,
             directions,
             float(max_distance),
-            claims() if shared is None else shared,
+            shared,
             self.positions,
             self.rotations,
             s.rows,
             s.shape,
             s.size,
             s.large,
-            self.layout,
-            self.bounds,
-            self.spill,
+            *self._walk,
+            answer,
             *out,
         )
+
+    @property
+    def _walk(self) -> tuple:
+        """(layout, bounds, spill): the grid as the walk takes it."""
+        return self.layout, self.bounds, self.spill

@@ -2,8 +2,9 @@
 the grid's cells in the ray's order (Amanatides and Woo), each cell's shapes tested by their
 bounds and then exactly (ray_shapes.py), then the shapes too large for the grid (a floor)
 whose bounds the ray meets before its nearest hit. Compiled, the GIL released:
-the JobPool's threads cast rays side by side, each taking the next RAY_BLOCK rays from a counter
-they share until none are left (a thread that starts late takes fewer)."""
+threads cast rays side by side (numba's own, started together: spread_rays), each taking the
+next RAY_BLOCK rays from a counter they share until none are left (a thread that starts late
+takes fewer)."""
 
 from __future__ import annotations
 
@@ -55,21 +56,22 @@ def _cast_kernel(  # pragma: no cover
     layout,
     bounds,
     spill,
+    answer,
     out_shape,
     out_t,
     out_point,
     out_normal,
 ):
     """Rays in blocks of RAY_BLOCK taken from claims[0] (shared by the threads casting them)
-    until none are left: the nearest shape each meets within max_t (out_shape -1: none; -2:
-    the ray's origin or direction is not finite, or the direction is zero), the distance, the
-    point and the normal (NaN without a hit). The grid's cells (its `layout`, RayGrid's) in
-    the ray's order, stopping at the first cell whose exit lies past the nearest hit so far,
-    then the shapes spilt out of the cells (`spill`: their count, then they; by their `bounds`
-    first) and the large shapes. A shape is looked at once a ray (`seen`: the last ray that
-    looked at it), and tested exactly only when the ray meets its bounds before the nearest
-    hit so far. Of shapes hit at the same distance (a ray starting inside two) the one of the
-    lower index is answered, whatever order the cells hold them in."""
+    until none are left: the nearest shape each meets within max_t (out_shape: answer[the
+    shape's index]; -1: none; -2: the ray's origin or direction is not finite, or the direction
+    is zero), the distance, the point and the normal (NaN without a hit). The grid's cells (its
+    `layout`, RayGrid's) in the ray's order, stopping at the first cell whose exit lies past the
+    nearest hit so far, then the shapes spilt out of the cells (`spill`: their count, then they;
+    by their `bounds` first) and the large shapes. A shape is looked at once a ray (`seen`: the
+    last ray that looked at it), and tested exactly only when the ray meets its bounds before
+    the nearest hit so far. Of shapes hit at the same distance (a ray starting inside two) the
+    one of the lower index is answered, whatever order the cells hold them in."""
     origin, cell, dims, starts, fill, items, boxes = layout
     nx, ny, nz = dims[0], dims[1], dims[2]
     inv_cell = 1.0 / cell
@@ -162,7 +164,7 @@ def _cast_kernel(  # pragma: no cover
                     t, a, b, c = shape_hit(ox, oy, oz, dx, dy, dz, positions, rotations, rows[j], shape[j], s0, s1, s2)
                     if t < best or (t == best and (hit < 0 or j < hit)):
                         best, hit, hx, hy, hz = t, j, a, b, c
-            out_shape[k] = hit
+            out_shape[k] = answer[hit] if hit >= 0 else -1
             if hit < 0:
                 best = hx = hy = hz = np.nan
             out_t[k] = best
@@ -171,3 +173,36 @@ def _cast_kernel(  # pragma: no cover
 
 
 cast_rays = native.njit(_cast_kernel)
+
+
+def _spread_kernel(  # pragma: no cover
+    jobs, origins, directions, max_t, claims, poses, shapes, layout, bounds, spill, answer, out
+):
+    """cast_rays on `jobs` of numba's threads at once (native.parallel), sharing the rays."""
+    positions, rotations = poses
+    rows, shape, size, large = shapes
+    out_shape, out_t, out_point, out_normal = out
+    for _ in native.prange(jobs):
+        cast_rays(  # type: ignore[misc]
+            origins,
+            directions,
+            max_t,
+            claims,
+            positions,
+            rotations,
+            rows,
+            shape,
+            size,
+            large,
+            layout,
+            bounds,
+            spill,
+            answer,
+            out_shape,
+            out_t,
+            out_point,
+            out_normal,
+        )
+
+
+spread_rays = native.parallel(_spread_kernel)
