@@ -196,3 +196,48 @@ def test_the_grid_follows_a_moving_shape_into_new_cells_and_past_its_box():
     hits = physics.raycast([(x, 5.0, z)], [(0.0, -1.0, 0.0)], 10.0)
     assert hits.entity[0] == made["box"] and physics.grids_made == 1
     assert box in grid.spill[1 : grid.spill[0] + 1]  # tested by every ray, outside the cells
+
+
+def test_many_rays_bring_the_grid_up_and_are_cast_in_one_kernel_on_numbas_threads(monkeypatch):
+    """Over 1,000 rays with the world's JobPool: the grid's refresh and the cast run in one
+    kernel on numba's threads (ray_spread.py), step after step as boxes tumble onto a floor,
+    each ray answering as on a grid made anew, the grid kept."""
+    from ecs_engine.jobs import JobPool
+    from ecs_engine.physics import ray_grid
+    from ecs_engine.physics.ray_grid import RayGrid
+
+    fused = []
+    kernel = ray_grid.refresh_and_spread
+    monkeypatch.setattr(ray_grid, "refresh_and_spread", lambda *a: fused.append(a[0]) or kernel(*a))
+
+    def setup(world, dt):
+        floor(world)
+        for k in range(40):
+            q = np.array([0.3 * k, 1.0, 0.2, 1.0])
+            where = (0.9 * (k % 6) - 2.2, 1.0 + 0.8 * (k // 6), 0.7 * (k % 4) - 1.0)
+            world.spawn(
+                Transform(position=where, rotation=tuple(q / np.linalg.norm(q))), RigidBody(), Collider(shape=BOX)
+            )
+
+    _, physics = simulate(setup, 1)
+    physics.pool = JobPool(3)
+    x, z = np.meshgrid(np.linspace(-3.5, 3.5, 40), np.linspace(-2.5, 2.5, 30))
+    origins = np.c_[x.ravel(), np.full(x.size, 12.0), z.ravel()]
+    down = np.tile((0.0, -1.0, 0.0), (len(origins), 1))
+    physics.raycast(origins, down, 50.0)
+    grid = physics.ray_grid()[0]
+    for _ in range(25):
+        physics.step(1 / 60)
+        hits = physics.raycast(origins, down, 50.0)
+        positions, rotations, _, _ = physics.buffers()
+        fresh = (
+            np.empty(len(origins), np.int64),
+            np.empty(len(origins)),
+            np.empty((len(origins), 3)),
+            np.empty((len(origins), 3)),
+        )
+        RayGrid.build(grid.shapes, positions, rotations).cast(origins, down, 50.0, fresh, answer=grid.shapes.entity)
+        assert np.array_equal(hits.entity, fresh[0]) and np.array_equal(hits.distance, fresh[1], equal_nan=True)
+    physics.pool.close()
+    assert len(fused) == 25 and min(fused) > 1 and physics.ray_grid()[0] is grid
+    assert (hits.entity >= 0).sum() > 300

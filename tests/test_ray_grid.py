@@ -193,12 +193,15 @@ def test_threads_sharing_a_cast_take_every_ray_once_and_answer_as_one_thread_doe
         assert np.array_equal(a, b, equal_nan=True)
 
 
-def test_shapes_that_moved_past_the_margin_are_moved_into_their_new_cells_as_a_new_grid_has_them():
+@pytest.mark.parametrize("fused", [False, True])
+def test_shapes_that_moved_past_the_margin_are_moved_into_their_new_cells_as_a_new_grid_has_them(fused):
     """Shapes moved and turned (within the grid's box), the grid refreshed: every ray answers
     as on a grid made anew. A shape that leaves the box, or more shapes in a cell than it has
     room for, is tested by every ray instead, the same answers again; past ray_refresh.SPILL
     such shapes the grid is to be made again (False). Static bodies' shapes are looked at only
-    when asked (a body was put somewhere)."""
+    when asked (a body was put somewhere). `fused`: the refresh and a cast in one kernel on
+    numba's threads (refresh_and_cast), its rays answering as on the new grid, none cast where
+    the grid is to be made again."""
     from ecs_engine.jobs import JobPool
     from ecs_engine.physics.ray_grid import RayGrid, Shapes
 
@@ -214,6 +217,20 @@ def test_shapes_that_moved_past_the_margin_are_moved_into_their_new_cells_as_a_n
     positions[stays, :3] = grid.centre[stays] + (0.5 * grid.margin, 0.0, 0.0)
     origins, directions = rng.uniform(-7.0, 7.0, (2000, 3)), rng.normal(size=(2000, 3))
 
+    def bring(everything=True):
+        if not fused:
+            return grid.refresh(everything=everything)
+        out, shared = (np.full(2000, -7, np.int64), np.empty(2000), np.empty((2000, 3)), np.empty((2000, 3))), claims()
+        done = grid.refresh_and_cast(everything, 3, origins, directions, 20.0, out, shared, 10 * np.arange(400))
+        if done and everything:  # (else a static shape put elsewhere is not looked at, by design)
+            fresh = (np.empty(2000, np.int64), np.empty(2000), np.empty((2000, 3)), np.empty((2000, 3)))
+            new = RayGrid.build(shapes, positions, rotations)
+            new.cast(origins, directions, 20.0, fresh, answer=10 * np.arange(400))
+            for a, b in zip(out, fresh):
+                assert np.array_equal(a, b, equal_nan=True)
+        assert shared[0] >= len(origins) if done else shared[0] == 0  # (every ray taken, or none)
+        return done
+
     def same_as_a_new_grid(pool):
         fresh = RayGrid.build(shapes, positions, rotations)
         ours, theirs = _cast(grid, origins, directions, 4, pool), _cast(fresh, origins, directions, 1, pool)
@@ -223,7 +240,7 @@ def test_shapes_that_moved_past_the_margin_are_moved_into_their_new_cells_as_a_n
         return fresh
 
     with JobPool(4) as pool:
-        assert grid.refresh()
+        assert bring()
         assert (
             np.array_equal(grid.centre[moved[:-1]], positions[moved[:-1], :3])
             and (grid.centre[stays] != positions[stays, :3]).any()
@@ -234,22 +251,22 @@ def test_shapes_that_moved_past_the_margin_are_moved_into_their_new_cells_as_a_n
         positions[away, 1] = grid.origin[1] + grid.dims[1] * grid.cell + 1.0
         crowd = moved[1:6]  # five more into one shape's cells: some find a cell full
         positions[crowd, :3] = positions[moved[6], :3]
-        assert grid.refresh()
+        assert bring()
         assert away in grid.spill[1 : grid.spill[0] + 1] and grid.spill[0] > 1
         same_as_a_new_grid(pool)
         above = _cast(grid, positions[[away], :3] + (0.0, 5.0, 0.0), np.array([[0.0, -1.0, 0.0]]), 1, pool)
         assert above[0][0] == away
         positions[away, :3] = grid.centre[moved[7]] + 0.1  # back in: out of the spill again
-        assert grid.refresh()
+        assert bring()
         assert away not in grid.spill[1 : grid.spill[0] + 1]
         same_as_a_new_grid(pool)
         put = 2 * np.flatnonzero(np.arange(2, 400, 2) % 7 == 0)[0] + 2  # a static shape, put elsewhere
         positions[put, :3] = positions[moved[8], :3] + 0.3
-        assert grid.refresh(everything=False) and (grid.centre[put] != positions[put, :3]).all()
-        assert grid.refresh(everything=True) and (grid.centre[put] == positions[put, :3]).all()
+        assert bring(everything=False) and (grid.centre[put] != positions[put, :3]).all()
+        assert bring(everything=True) and (grid.centre[put] == positions[put, :3]).all()
         same_as_a_new_grid(pool)
     positions[1:200, :3] = positions[200, :3]  # 199 shapes into one shape's cells: past the spill
-    assert not grid.refresh()
+    assert not bring()
 
 
 def test_a_grid_made_by_threads_holds_what_one_thread_makes(monkeypatch):

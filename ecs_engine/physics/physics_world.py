@@ -7,6 +7,7 @@ import math
 import os
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -109,15 +110,13 @@ class PhysicsWorld:
         """The library's shared buffers, by body row: positions (M, 4) float64, rotations
         (x, y, z, w) float32, linear and angular velocities (M, 4) float32 (read-only views)."""
         native = self.native
-        views = (
-            np.frombuffer(native.positions, np.float64).reshape(-1, 4),
-            np.frombuffer(native.rotations, np.float32).reshape(-1, 4),
-            np.frombuffer(native.velocities, np.float32).reshape(-1, 4),
-            np.frombuffer(native.angular_velocities, np.float32).reshape(-1, 4),
-        )
-        for v in views:
-            v.flags.writeable = False
-        return views
+        rates = (_view(native.velocities, np.float32), _view(native.angular_velocities, np.float32))
+        return (*self.pose_buffers(), *rates)
+
+    def pose_buffers(self) -> tuple[np.ndarray, np.ndarray]:
+        """The positions and rotations of `buffers` alone (each view costs: rays ask for them
+        each step)."""
+        return _view(self.native.positions, np.float64), _view(self.native.rotations, np.float32)
 
     def poses(self, entities: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The positions (float64) and unit rotations (x, y, z, w) of `entities`' bodies."""
@@ -131,7 +130,7 @@ class PhysicsWorld:
 
     def write_poses(self, rows: np.ndarray, into: np.ndarray, position: np.ndarray, rotation: np.ndarray) -> None:
         """position[into], rotation[into] = the poses of the bodies at `rows` (poses.py)."""
-        positions, rotations, _, _ = self.buffers()
+        positions, rotations = self.pose_buffers()
         copy_poses(positions, rotations, rows, into, position, rotation)
 
     def write_velocities(
@@ -208,12 +207,14 @@ class PhysicsWorld:
         library against meshes, hulls and terrain."""
         return queries.raycast(self, origins, directions, max_distance)
 
-    def ray_grid(self) -> tuple[RayGrid | None, bool]:
+    def ray_grid(self, refresh: Callable[[RayGrid, bool], bool] | None = None) -> tuple[RayGrid | None, bool]:
         """The grid raycast casts against (None without numba), brought up to the step after a
         step or a body placed (RayGrid.refresh), made again when a body was made or destroyed
         or the refresh could not keep it; and whether bodies of other shapes than the
         primitives (meshes, hulls, terrain) are there, for the library to cast against. Hold
-        `ray_lock` while the grid is in use: a refresh changes it in place."""
+        `ray_lock` while the grid is in use: a refresh changes it in place. `refresh(grid,
+        everything)`: what brings the grid up instead of RayGrid.refresh (raycast's casts the
+        rays in the same kernel), False where it could not."""
         with self.ray_lock:
             bodies = self.bodies
             if self._shapes[0] != (bodies.generation, bodies.motions):
@@ -225,11 +226,10 @@ class PhysicsWorld:
                 self._shapes = ((bodies.generation, bodies.motions), shapes, not primitive.all())
             key = (bodies.generation, self.steps, self.placed)
             if ray_grid.AVAILABLE and key != self._grid[0]:
-                positions, rotations, _, _ = self.buffers()
+                positions, rotations = self.pose_buffers()
                 grid, everything = self._grid[1], self._grid[0][2:] != (self.placed,)
-                if grid is None or not (
-                    grid.serves(self._shapes[1], positions, rotations) and grid.refresh(everything)
-                ):
+                bring = RayGrid.refresh if refresh is None else refresh
+                if grid is None or not (grid.serves(self._shapes[1], positions, rotations) and bring(grid, everything)):
                     grid = RayGrid.build(self._shapes[1], positions, rotations, self.pool)
                     self.grids_made += 1
                 self._grid = (key, grid)
@@ -250,3 +250,10 @@ class PhysicsWorld:
     def overlap_box(self, low: Any, high: Any) -> np.ndarray:
         """The entities whose bodies' bounds overlap the axis-aligned box from `low` to `high`."""
         return queries.overlap_box(self, low, high)
+
+
+def _view(buffer: Any, dtype: Any) -> np.ndarray:
+    """A read-only (M, 4) view of one of the library's buffers."""
+    view = np.frombuffer(buffer, dtype).reshape(-1, 4)
+    view.flags.writeable = False
+    return view

@@ -11,6 +11,7 @@ import numpy as np
 from ..components.physics import BOX, PRIMITIVES, SPHERE
 from ..ecs.entities import INDEX_MASK
 from ..jobs import over_rows
+from .ray_walk import claims
 
 RAY_CHUNK = 1024  # rays at least per job of the library's batch (fewer cost more to wake than they save)
 # rays per thread of numba's that casts them (up to the pool's thread count; fewer than twice
@@ -60,15 +61,20 @@ def raycast(physics: Any, origins: Any, directions: Any, max_distance: float) ->
     d = np.ascontiguousarray(np.asarray(directions, np.float64).reshape(-1, 3))
     if len(o) != len(d):
         raise ValueError(f"raycast: {len(o)} origins but {len(d)} directions")
+    jobs = 1 if physics.pool is None else min(physics.pool.threads, len(o) // RAYS_PER_THREAD)
+    index, distance = np.empty(len(o), np.int64), np.empty(len(o))
+    point, normal = np.empty((len(o), 3)), np.empty((len(o), 3))
+    out, shared = (index, distance, point, normal), claims()
+
+    def refresh_and_cast(grid: Any, everything: bool) -> bool:
+        return grid.refresh_and_cast(everything, jobs, o, d, max_distance, out, shared, grid.shapes.entity)
+
     with physics.ray_lock:
-        grid, others = physics.ray_grid()
+        grid, others = physics.ray_grid(refresh_and_cast if jobs > 1 else None)
         if grid is None:  # without numba: the library's batch answers every ray
             return _library_rays(physics, o, _unit(o, d), max_distance)
-        index, distance = np.empty(len(o), np.int64), np.empty(len(o))
-        point, normal = np.empty((len(o), 3)), np.empty((len(o), 3))
-        out = (index, distance, point, normal)
-        jobs = 1 if physics.pool is None else min(physics.pool.threads, len(o) // RAYS_PER_THREAD)
-        grid.cast(o, d, max_distance, out, answer=grid.shapes.entity, jobs=jobs)
+        if shared[0] < len(o):  # (not cast with the grid's refresh)
+            grid.cast(o, d, max_distance, out, shared, grid.shapes.entity, jobs)
     entity = index
     if len(o) and entity.min() == -2:
         _unit(o, d)  # (the error naming the first such ray)

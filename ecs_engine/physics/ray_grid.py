@@ -22,8 +22,9 @@ from .. import native
 from ..components.physics import BOX, CAPSULE, SPHERE
 from .poses import copy_poses
 from .ray_bounds import BLOCK, bounds_of, count_cells, place_cells, starts_of
-from .ray_refresh import SPILL, refresh
-from .ray_walk import cast_rays, claims, spread_rays
+from .ray_refresh import SPILL, counters, refresh
+from .ray_spread import refresh_and_spread, spread_rays
+from .ray_walk import cast_rays, claims
 
 CELL_REACH = 0.7  # the grid's cell, in the median shape's reach (its bounding sphere's diameter)
 MARGIN = 0.05  # the shapes' bounds in the grid are this many cells wider all round: a shape
@@ -164,23 +165,48 @@ class RayGrid:
         be made again instead (more than SPILL shapes found no room in the cells or left the
         grid's box)."""
         assert refresh is not None
+        return refresh(counters(), *self._refresh(everything))
+
+    def refresh_and_cast(
+        self,
+        everything: bool,
+        jobs: int,
+        origins: np.ndarray,
+        directions: np.ndarray,
+        max_distance: float,
+        out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+        shared: np.ndarray,
+        answer: np.ndarray,
+    ) -> bool:
+        """`refresh`, then `cast`, in one kernel on `jobs` of numba's threads (ray_spread.py):
+        False where the grid must be made again (then no ray is cast: shared[0] is 0)."""
+        assert refresh_and_spread is not None
+        rays = self._rays(origins, directions, max_distance, shared, answer, out)
+        with native.LAUNCH:
+            return bool(refresh_and_spread(native.spread(jobs), counters(), self._refresh(everything)[0], *rays))
+
+    def _refresh(self, everything: bool) -> tuple[tuple, tuple]:
+        """The refresh's arguments: ray_refresh.look's (the shapes to look at), settle's."""
         s = self.shapes
-        return refresh(
-            self.escaped,
-            self.positions,
-            self.rotations,
-            s.rows,
-            s.shape,
-            s.size,
-            s.small if everything else s.watched,
-            s.radius,
-            self.margin,
-            self.centre,
-            self.turn,
-            self.bounds,
-            self.layout,
-            self.spill,
-        )
+        poses, since = (self.positions, self.rotations, s.rows), (self.margin, self.centre, self.turn)
+        look = (*poses, s.small if everything else s.watched, s.radius, *since, self.escaped)
+        return look, (*poses, s.shape, s.size, *since, self.bounds, self.layout, self.spill)
+
+    def _rays(
+        self,
+        origins: np.ndarray,
+        directions: np.ndarray,
+        max_distance: float,
+        shared: np.ndarray | None,
+        answer: np.ndarray | None,
+        out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    ) -> tuple:
+        """cast_rays' arguments."""
+        s = self.shapes
+        shared = claims() if shared is None else shared
+        answer = np.arange(len(s.shape)) if answer is None else answer
+        shapes = (self.positions, self.rotations, s.rows, s.shape, s.size, s.large)
+        return (origins, directions, float(max_distance), shared, *shapes, *self._walk, answer, *out)
 
     def cast(
         self,
@@ -195,36 +221,16 @@ class RayGrid:
         """Cast the rays (origins and directions, float64, C order) into `out`: per ray,
         answer[the shape it hits first] (by default the shape's index into shapes.entity; -1:
         none, -2: a ray that is not finite or has no direction), the distance, the point and
-        the normal. `jobs` over 1: on that many of numba's threads at once (native.parallel).
+        the normal. `jobs` over 1: on that many of numba's threads at once (ray_spread.py).
         `shared`: claims() that threads casting the same rays share them by (this one casts
         those left, RAY_BLOCK at a time); without, this call casts them all."""
         assert cast_rays is not None
-        s = self.shapes
-        shared = claims() if shared is None else shared
-        answer = np.arange(len(s.shape)) if answer is None else answer
+        rays = self._rays(origins, directions, max_distance, shared, answer, out)
         if jobs > 1 and spread_rays is not None:
-            poses, kinds = (self.positions, self.rotations), (s.rows, s.shape, s.size, s.large)
             with native.LAUNCH:
-                jobs = native.spread(jobs)
-                spread_rays(
-                    jobs, origins, directions, float(max_distance), shared, poses, kinds, *self._walk, answer, out
-                )
+                spread_rays(native.spread(jobs), *rays)
             return
-        cast_rays(
-            origins,
-            directions,
-            float(max_distance),
-            shared,
-            self.positions,
-            self.rotations,
-            s.rows,
-            s.shape,
-            s.size,
-            s.large,
-            *self._walk,
-            answer,
-            *out,
-        )
+        cast_rays(*rays)
 
     @property
     def _walk(self) -> tuple:

@@ -3,18 +3,18 @@ further than the grid's margin since they were put in their cells are found, and
 the cells their bounds cover now. A shape that leaves the grid's box or finds a cell full is
 tested by every ray instead, up to SPILL of them; past that the grid is made again.
 
-On this thread, before the rays are cast: shared by the casting threads through counters (the
-look at every shape first, one of them moving those that escaped while the others waited), it
-measured no faster on the GPU host (1.25-1.39 ms for 10,000 rays either way), the waiting
-threads' waking taking as long as the look."""
+Before the rays are cast, on this thread or, for many rays, on numba's threads in the kernel
+that casts them (ray_spread.py): they share the look at every shape, then one of them moves the
+escaped shapes, in the order of their index, while the others wait."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from .. import native
+from ..native import fetch_add
 from .poses import pose_rows
-from .ray_bounds import bound, cells, insert
+from .ray_bounds import bound, cells, insert, take
 
 SPILL = 32  # shapes at most outside the grid's cells, tested by every ray (by their bounds first)
 
@@ -84,21 +84,52 @@ def _move_kernel(
 _move = native.inner(_move_kernel)
 
 
-def _refresh_kernel(  # pragma: no cover
-    escaped, positions, rotations, rows, shape, size, looked, radius, margin, centre, turn, bounds, layout, spill
-):
-    """The grid brought up to the step (the module's docstring), the `looked` shapes looked
-    at: whether it holds every shape now (False: it is to be made again)."""
-    moving = 0
-    for k in range(len(looked)):
-        i = looked[k]
-        if _moved(positions, rotations, rows[i], centre, turn, i, radius[i]) > margin:
-            escaped[moving] = i
-            moving += 1
-    if moving == 0:
+LOOK_BLOCK = 512  # shapes a thread looks at at a time
+
+
+def _look_kernel(claims, positions, rotations, rows, looked, radius, margin, centre, turn, escaped):  # pragma: no cover
+    """The `looked` shapes that moved further than the margin, in blocks taken from claims[0]
+    (by the threads looking, or one): written to escaped[claims[1]...], claims[1] counting
+    them; claims[2] counts the shapes looked at."""
+    while True:
+        first, last = take(claims, 0, LOOK_BLOCK, len(looked))
+        if first == last:
+            break
+        for k in range(first, last):
+            i = looked[k]
+            if _moved(positions, rotations, rows[i], centre, turn, i, radius[i]) > margin:
+                escaped[fetch_add(claims, 1, 1)] = i
+        fetch_add(claims, 2, last - first)
+
+
+look = native.inner(_look_kernel)
+
+
+def _settle_kernel(
+    claims, escaped, positions, rotations, rows, shape, size, margin, centre, turn, bounds, layout, spill
+):  # pragma: no cover
+    """The escaped shapes (claims[1] of them) moved, in the order of their index (however the
+    threads that looked found them): whether the grid holds every shape now."""
+    if claims[1] == 0:
         return True
-    found = escaped[:moving]
+    found = np.sort(escaped[: claims[1]])
     return _move(found, positions, rotations, rows, shape, size, margin, centre, turn, bounds, layout, spill)
+
+
+settle = native.inner(_settle_kernel)
+
+
+def _refresh_kernel(claims, shapes, move):  # pragma: no cover
+    """The grid brought up to the step (the module's docstring) on this thread: look with
+    `shapes`' arguments, settle with `move`'s: whether it holds every shape now (False: it is
+    to be made again)."""
+    look(claims, *shapes)
+    return settle(claims, shapes[-1], *move)
+
+
+def counters() -> np.ndarray:
+    """A refresh's counters (_look's three, then the fused kernel's in ray_spread.py)."""
+    return np.zeros(5, np.int64)
 
 
 refresh = native.njit(_refresh_kernel)

@@ -2,9 +2,9 @@
 the grid's cells in the ray's order (Amanatides and Woo), each cell's shapes tested by their
 bounds and then exactly (ray_shapes.py), then the shapes too large for the grid (a floor)
 whose bounds the ray meets before its nearest hit. Compiled, the GIL released:
-threads cast rays side by side (numba's own, started together: spread_rays), each taking the
-next RAY_BLOCK rays from a counter they share until none are left (a thread that starts late
-takes fewer)."""
+threads cast rays side by side (numba's own, started together: ray_spread.py), each taking
+the next RAY_BLOCK rays from a counter they share until none are left (a thread that starts
+late takes fewer)."""
 
 from __future__ import annotations
 
@@ -173,36 +173,3 @@ def _cast_kernel(  # pragma: no cover
 
 
 cast_rays = native.njit(_cast_kernel)
-
-
-def _spread_kernel(  # pragma: no cover
-    jobs, origins, directions, max_t, claims, poses, shapes, layout, bounds, spill, answer, out
-):
-    """cast_rays on `jobs` of numba's threads at once (native.parallel), sharing the rays."""
-    positions, rotations = poses
-    rows, shape, size, large = shapes
-    out_shape, out_t, out_point, out_normal = out
-    for _ in native.prange(jobs):
-        cast_rays(  # type: ignore[misc]
-            origins,
-            directions,
-            max_t,
-            claims,
-            positions,
-            rotations,
-            rows,
-            shape,
-            size,
-            large,
-            layout,
-            bounds,
-            spill,
-            answer,
-            out_shape,
-            out_t,
-            out_point,
-            out_normal,
-        )
-
-
-spread_rays = native.parallel(_spread_kernel)
