@@ -14,8 +14,9 @@ library's own step, at the workloads of docs/physics.md.
 - `statics`: 100,000 static boxes and 1,000 dynamic spheres falling on them, likewise; and
   the same 10,000 rays onto them (`statics_rays`: the refresh of the grid looks at the moving
   shapes only).
-- `rays`: 10,000 rays cast down onto the settled pile through PhysicsWorld.raycast (spread over
-  a JobPool of the threads, which take blocks of rays as they come free; answered as entities),
+- `rays`: 10,000 rays cast down onto the settled pile through PhysicsWorld.raycast (with a
+  JobPool of the threads: on as many of numba's threads, which take blocks of rays as they come
+  free; answered as entities),
   once a step for 30 steps (`ms`: the median step, `mean_ms`, `max_ms`; the grid of the shapes
   is made again `remade` times, when too many shapes found no room in its cells; `grid_ms`:
   making it alone). Target: under 1 ms. Beside it, the library's own batch on the same rays

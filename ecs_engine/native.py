@@ -46,7 +46,7 @@ def parallel(fn: Callable[..., Any]) -> Callable[..., Any] | None:
 
 # OpenMP's threads (numba's omp threading layer) otherwise spin for milliseconds after each
 # parallel kernel, taking the cores from whatever runs next: on the GPU host 10,000 rays cast
-# on 16 of them slowed the library's ray batch run after them from 4.3-4.5 ms to 8.3-9.0.
+# on 16 of them slowed the library's ray batch run after them from 4.2-4.5 ms to 8.3-9.0.
 # Asleep at once they start the next kernel as soon (libgomp reads this when it loads, at the
 # first parallel kernel; a value set before is kept)
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")

@@ -70,7 +70,7 @@ class PhysicsWorld:
         self._seen = -1  # the world's structure version last matched
         self.contacts = contacts
         self.contact_dtype = record_dtype(bool(self.lib.USE_DOUBLE_PRECISION))
-        self.pool: Any = None  # the world's JobPool (PhysicsSystem sets it): raycast spreads over it
+        self.pool: Any = None  # the world's JobPool (PhysicsSystem sets it): how many threads raycast takes
         self.paused = False  # PhysicsSystem does nothing (the editor's Physics window sets it)
         self.step_once = False  # paused: the next fixed step runs once all the same
         self.steps = 0
@@ -200,9 +200,10 @@ class PhysicsWorld:
 
     # ------------------------------------------------------------------ queries (queries.py)
     def raycast(self, origins: Any, directions: Any, max_distance: float = 1000.0) -> RayHits:
-        """Cast every ray (rows of `origins` and `directions`, which need not be unit length) in
-        batches, spread over the world's JobPool when it has one (`pool`, which PhysicsSystem
-        sets; the casts release the GIL): the first body each one hits within `max_distance`.
+        """Cast every ray (rows of `origins` and `directions`, which need not be unit length): the
+        first body each one hits within `max_distance`. With the world's JobPool (`pool`, which
+        PhysicsSystem sets) many rays are cast on as many of numba's threads (ray_spread.py),
+        and the library's batch spreads over the pool.
         The engine casts against boxes, spheres, capsules and cylinders (ray_grid.py), the
         library against meshes, hulls and terrain."""
         return queries.raycast(self, origins, directions, max_distance)

@@ -2,14 +2,14 @@
 engine in compiled loops that release the GIL, over a uniform grid of the shapes' bounds.
 
 Why not the library's batch: culverin's reads each hit's body through Jolt's locking body
-interface, so its threads contend: 10,000 rays on a pile of 10,000 boxes took it 4.1-6.1 ms
-on 16 threads of the GPU host, these 1.4-2.5 (median steps, as the host's speed drifted;
-docs/physics.md). The primitives' poses are in the library's shared buffers already. A grid
+interface, so its threads contend: 10,000 rays on a pile of 10,000 boxes took it 3.9-4.4 ms
+on 16 threads of the GPU host, these 0.73-0.78 (median steps; docs/physics.md). The primitives' poses are in the library's shared buffers already. A grid
 of their bounds, a little wide, is made from them and brought up to each step: the shapes
 that moved further than that margin are moved into other cells (ray_refresh.py). Each ray
 walks it cell by cell (ray_walk.py), testing a shape's bounds and then its exact shape
-(ray_shapes.py), as the library does, in float64. Shapes too big for the grid's cells (a
-floor) are tested by every ray."""
+(ray_shapes.py), as the library does, in float64, on numba's threads for many rays, the
+refresh in the same kernel (ray_spread.py). Shapes too big for the grid's cells (a floor)
+are tested by every ray."""
 
 from __future__ import annotations
 
