@@ -44,13 +44,6 @@ def parallel(fn: Callable[..., Any]) -> Callable[..., Any] | None:
     return _numba.njit(parallel=True, nogil=True, cache=True, error_model="numpy", fastmath=FASTMATH)(fn)
 
 
-# OpenMP's threads (numba's omp threading layer) otherwise spin for milliseconds after each
-# parallel kernel, taking the cores from whatever runs next: on the GPU host 10,000 rays cast
-# on 16 of them slowed the library's ray batch run after them from 4.2-4.5 ms to 8.3-9.0.
-# Asleep at once they start the next kernel as soon (libgomp reads this when it loads, at the
-# first parallel kernel; a value set before is kept)
-os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
-
 # numba's workqueue threading layer (where neither OpenMP nor TBB is found) aborts the process
 # when two threads launch parallel kernels at once
 LAUNCH = threading.Lock()
@@ -58,7 +51,15 @@ LAUNCH = threading.Lock()
 
 def spread(threads: int) -> int:
     """Run the calling thread's next parallel kernels on at most `threads` of numba's threads
-    (no more than it started: NUMBA_NUM_THREADS, one per core by default); the count."""
+    (no more than it started: NUMBA_NUM_THREADS, one per core by default); the count.
+
+    OpenMP's threads (numba's omp threading layer) otherwise spin for milliseconds after each
+    kernel, taking the cores from whatever runs next: on the GPU host 10,000 rays cast on 16
+    of them slowed the library's ray batch run after them from 4.2-4.5 ms to 8.3-9.0. Asleep at
+    once they start the next kernel as soon. libgomp reads OMP_WAIT_POLICY when it loads, at
+    the first parallel kernel: set here (unless set before) so that a program that never runs
+    one keeps its own OpenMP's default."""
+    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
     count = max(1, min(int(threads), _numba.config.NUMBA_NUM_THREADS))
     _numba.set_num_threads(count)
     return count
