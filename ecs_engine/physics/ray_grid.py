@@ -2,14 +2,14 @@
 engine in compiled loops that release the GIL, over a uniform grid of the shapes' bounds.
 
 Why not the library's batch: culverin's reads each hit's body through Jolt's locking body
-interface, so its threads contend: 10,000 rays on a pile of 10,000 boxes took it 3.9-4.4 ms
-on 16 threads of the GPU host, these 0.73-0.78 (median steps; docs/physics.md). The primitives' poses are in the library's shared buffers already. A grid
-of their bounds, a little wide, is made from them and brought up to each step: the shapes
-that moved further than that margin are moved into other cells (ray_refresh.py). Each ray
-walks it cell by cell (ray_walk.py), testing a shape's bounds and then its exact shape
-(ray_shapes.py), as the library does, in float64, on numba's threads for many rays, the
-refresh in the same kernel (ray_spread.py). Shapes too big for the grid's cells (a floor)
-are tested by every ray."""
+interface, so its threads contend: 10,000 rays on a pile of 10,000 boxes took it 3.9-4.4 ms on
+16 threads of the GPU host, these 0.73-0.78 (median steps; docs/physics.md). The primitives'
+poses are in the library's shared buffers already. A grid of their bounds, a little wide, is
+made from them and brought up to each step: the shapes that moved further than that margin are
+moved into other cells (ray_refresh.py). Each ray walks it cell by cell (ray_walk.py), testing a
+shape's bounds and then its exact shape (ray_shapes.py), as the library does, in float64, on
+numba's threads for many rays, the refresh in the same kernel (ray_spread.py). Shapes too big
+for the grid's cells (a floor) are tested by every ray."""
 
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ from ..components.physics import BOX, CAPSULE, SPHERE
 from .poses import copy_poses
 from .ray_bounds import BLOCK, bounds_of, count_cells, place_cells, starts_of
 from .ray_refresh import SPILL, counters, refresh
-from .ray_spread import refresh_and_spread, spread_rays
+from .ray_spread import refresh_and_spread
 from .ray_walk import cast_rays, claims
 
 CELL_REACH = 0.7  # the grid's cell, in the median shape's reach (its bounding sphere's diameter)
@@ -36,6 +36,7 @@ LARGE_CELLS = 64  # a shape over more cells than this is tested by every ray ins
 CELLS_PER_SHAPE = 4  # the grid has at most this many cells per shape (more for far-apart shapes)
 SHARED_BUILD = 20_000  # shapes from which the grid is made on the pool's threads
 AVAILABLE = cast_rays is not None
+_NOTHING = np.empty(0, np.intp)  # no shape to look at
 
 
 def _same(a: np.ndarray, b: np.ndarray) -> bool:
@@ -103,7 +104,7 @@ class RayGrid:
     fill: np.ndarray
     items: np.ndarray
     boxes: np.ndarray
-    escaped: np.ndarray  # where a refresh writes down the shapes that escaped
+    marks: np.ndarray  # per shape, 1 while a refresh has it down as escaped
     spill: np.ndarray  # how many shapes are outside the grid's cells, then they (ray_refresh.SPILL)
 
     @classmethod
@@ -143,9 +144,9 @@ class RayGrid:
         run(place_cells, bounds, small, (low, cell, dims, starts, fill, items, boxes), jobs > 1)
         centre, turn = np.empty((count, 3)), np.empty((count, 4))
         copy_poses(positions, rotations, shapes.rows, np.arange(count), centre, turn)
-        escaped, spill = np.empty(len(small), np.int64), np.zeros(SPILL + 1, np.int64)
+        marks, spill = np.zeros(count, np.uint8), np.zeros(SPILL + 1, np.int64)
         poses = (positions, rotations, centre, turn, bounds, margin)
-        return cls(shapes, *poses, low, cell, dims, starts, fill, items, boxes, escaped, spill)
+        return cls(shapes, *poses, low, cell, dims, starts, fill, items, boxes, marks, spill)
 
     @property
     def layout(self) -> tuple:
@@ -165,7 +166,8 @@ class RayGrid:
         be made again instead (more than SPILL shapes found no room in the cells or left the
         grid's box)."""
         assert refresh is not None
-        return refresh(counters(), *self._refresh(everything))
+        s = self.shapes
+        return refresh(counters(), *self._refresh(s.small if everything else s.watched))
 
     def refresh_and_cast(
         self,
@@ -180,16 +182,21 @@ class RayGrid:
     ) -> bool:
         """`refresh`, then `cast`, in one kernel on `jobs` of numba's threads (ray_spread.py):
         False where the grid must be made again (then no ray is cast: shared[0] is 0)."""
-        assert refresh_and_spread is not None
+        s = self.shapes
         rays = self._rays(origins, directions, max_distance, shared, answer, out)
-        with native.LAUNCH:
-            return bool(refresh_and_spread(native.spread(jobs), counters(), self._refresh(everything)[0], *rays))
+        return self._spread(s.small if everything else s.watched, jobs, rays)
 
-    def _refresh(self, everything: bool) -> tuple[tuple, tuple]:
+    def _spread(self, looked: np.ndarray, jobs: int, rays: tuple) -> bool:
+        """ray_spread's kernel: the `looked` shapes' refresh and the rays, on `jobs` threads."""
+        assert refresh_and_spread is not None
+        with native.LAUNCH:
+            return bool(refresh_and_spread(native.spread(jobs), counters(), self._refresh(looked)[0], *rays))
+
+    def _refresh(self, looked: np.ndarray) -> tuple[tuple, tuple]:
         """The refresh's arguments: ray_refresh.look's (the shapes to look at), settle's."""
         s = self.shapes
         poses, since = (self.positions, self.rotations, s.rows), (self.margin, self.centre, self.turn)
-        look = (*poses, s.small if everything else s.watched, s.radius, *since, self.escaped)
+        look = (*poses, looked, s.radius, *since, self.marks)
         return look, (*poses, s.shape, s.size, *since, self.bounds, self.layout, self.spill)
 
     def _rays(
@@ -226,11 +233,10 @@ class RayGrid:
         those left, RAY_BLOCK at a time); without, this call casts them all."""
         assert cast_rays is not None
         rays = self._rays(origins, directions, max_distance, shared, answer, out)
-        if jobs > 1 and spread_rays is not None:
-            with native.LAUNCH:
-                spread_rays(native.spread(jobs), *rays)
-            return
-        cast_rays(*rays)
+        if jobs > 1 and refresh_and_spread is not None:
+            self._spread(_NOTHING, jobs, rays)  # (no shape looked at: the rays alone)
+        else:
+            cast_rays(*rays)
 
     @property
     def _walk(self) -> tuple:

@@ -87,10 +87,10 @@ _move = native.inner(_move_kernel)
 LOOK_BLOCK = 512  # shapes a thread looks at at a time
 
 
-def _look_kernel(claims, positions, rotations, rows, looked, radius, margin, centre, turn, escaped):  # pragma: no cover
+def _look_kernel(claims, positions, rotations, rows, looked, radius, margin, centre, turn, marks):  # pragma: no cover
     """The `looked` shapes that moved further than the margin, in blocks taken from claims[0]
-    (by the threads looking, or one): written to escaped[claims[1]...], claims[1] counting
-    them; claims[2] counts the shapes looked at."""
+    (by the threads looking, or one): marked (marks[i] 1), claims[1] counting them; claims[2]
+    counts the shapes looked at."""
     while True:
         first, last = take(claims, 0, LOOK_BLOCK, len(looked))
         if first == last:
@@ -98,7 +98,8 @@ def _look_kernel(claims, positions, rotations, rows, looked, radius, margin, cen
         for k in range(first, last):
             i = looked[k]
             if _moved(positions, rotations, rows[i], centre, turn, i, radius[i]) > margin:
-                escaped[fetch_add(claims, 1, 1)] = i
+                marks[i] = 1
+                fetch_add(claims, 1, 1)
         fetch_add(claims, 2, last - first)
 
 
@@ -106,13 +107,19 @@ look = native.inner(_look_kernel)
 
 
 def _settle_kernel(
-    claims, escaped, positions, rotations, rows, shape, size, margin, centre, turn, bounds, layout, spill
+    claims, looked, marks, positions, rotations, rows, shape, size, margin, centre, turn, bounds, layout, spill
 ):  # pragma: no cover
-    """The escaped shapes (claims[1] of them) moved, in the order of their index (however the
-    threads that looked found them): whether the grid holds every shape now."""
+    """The marked shapes (claims[1] of them) moved, in the order of their index (whichever
+    threads marked them), their marks cleared: whether the grid holds every shape now."""
     if claims[1] == 0:
         return True
-    found = np.sort(escaped[: claims[1]])
+    found, n = np.empty(claims[1], np.int64), 0
+    for k in range(len(looked)):
+        i = looked[k]
+        if marks[i]:
+            marks[i] = 0
+            found[n] = i
+            n += 1
     return _move(found, positions, rotations, rows, shape, size, margin, centre, turn, bounds, layout, spill)
 
 
@@ -124,7 +131,7 @@ def _refresh_kernel(claims, shapes, move):  # pragma: no cover
     `shapes`' arguments, settle with `move`'s: whether it holds every shape now (False: it is
     to be made again)."""
     look(claims, *shapes)
-    return settle(claims, shapes[-1], *move)
+    return settle(claims, shapes[3], shapes[-1], *move)
 
 
 def counters() -> np.ndarray:

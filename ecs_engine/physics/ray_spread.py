@@ -26,7 +26,7 @@ def _refresh_and_cast_kernel(counters, shapes, move, rays):  # pragma: no cover
     while fetch_add(counters, 2, 0) < len(shapes[3]):  # (blocks that other threads look at)
         pass
     if fetch_add(counters, _MOVER, 1) == 0:
-        fetch_add(counters, _MOVED, 1 if settle(counters, shapes[-1], *move) else 2)
+        fetch_add(counters, _MOVED, 1 if settle(counters, shapes[3], shapes[-1], *move) else 2)
     while fetch_add(counters, _MOVED, 0) == 0:
         pass
     if counters[_MOVED] == 1:
@@ -36,21 +36,15 @@ def _refresh_and_cast_kernel(counters, shapes, move, rays):  # pragma: no cover
 _refresh_and_cast = native.inner(_refresh_and_cast_kernel)
 
 
-# (the parallel kernels take the rays' arguments one by one and pack them inside the loop: numba
+# (the parallel kernel takes the rays' arguments one by one and packs them inside the loop: numba
 # hands its threads the loop's variables, and refuses a tuple that holds a tuple, the layout)
-def _spread_kernel(
-    jobs, o, d, reach, claims, p, r, rows, shape, size, large, layout, bounds, spill, answer, *out
-):  # pragma: no cover
-    """cast_rays on `jobs` of numba's threads at once, sharing the rays."""
-    for _ in native.prange(jobs):
-        cast_rays(o, d, reach, claims, p, r, rows, shape, size, large, layout, bounds, spill, answer, *out)  # type: ignore[misc]
-
-
 def _refresh_and_spread_kernel(  # pragma: no cover
     jobs, counters, shapes, o, d, reach, claims, p, r, rows, shape, size, large, layout, bounds, spill, answer, *out
 ):
     """The refresh (look's `shapes`, the rest as the rays have them) and the rays on `jobs` of
-    numba's threads at once: whether the rays were cast (False: the grid is to be made again)."""
+    numba's threads at once: whether the rays were cast (False: the grid is to be made again).
+    With no shape to look at, the rays alone: one parallel kernel to compile, not two (each
+    takes seconds)."""
     for _ in native.prange(jobs):
         margin, centre, turn = shapes[5], shapes[6], shapes[7]
         move = (p, r, rows, shape, size, margin, centre, turn, bounds, layout, spill)
@@ -59,5 +53,4 @@ def _refresh_and_spread_kernel(  # pragma: no cover
     return counters[_MOVED] == 1
 
 
-spread_rays = native.parallel(_spread_kernel)
 refresh_and_spread = native.parallel(_refresh_and_spread_kernel)
