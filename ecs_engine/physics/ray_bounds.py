@@ -13,7 +13,6 @@ from ..native import fetch_add
 from .ray_shapes import turn_at
 
 SPARE = 2  # room for this many more shapes in every cell, and a quarter of those it holds
-TAIL = 8  # free slots past the cells for full cells to move into: an eighth of theirs (RayGrid.build)
 BLOCK = 2048  # shapes a thread takes at a time while the grid is made
 
 
@@ -113,13 +112,11 @@ store = native.inner(_store_kernel)
 
 
 def _insert_kernel(layout, bounds, j, shared):  # pragma: no cover
-    """Shape j put into every cell its bounds cover: whether every cell took it. A full cell
-    moves to the free slots past the others (`tail`) with twice its room; where those are too
-    few, the cells before it keep the shape and it is not put in (False). `layout`: the grid's
-    (origin, cell, dims, starts, fill, items, boxes, room, tail), RayGrid's. `shared`: threads
-    put shapes in at once, each slot taken for every thread at once (room counted
-    beforehand)."""
-    origin, cell, dims, starts, fill, items, boxes, room, tail = layout
+    """Shape j put into every cell its bounds cover, as far as the first without room (the
+    cells before it keep it): whether every cell took it. `layout`: the grid's (origin, cell,
+    dims, starts, fill, items, boxes), RayGrid's. `shared`: threads put shapes in at once,
+    each slot taken for every thread at once (room counted beforehand)."""
+    origin, cell, dims, starts, fill, items, boxes = layout
     x0, y0, z0, x1, y1, z1 = cells(bounds, j, origin, 1.0 / cell, dims)
     for cz in range(z0, z1 + 1):
         for cy in range(y0, y1 + 1):
@@ -128,17 +125,9 @@ def _insert_kernel(layout, bounds, j, shared):  # pragma: no cover
                 if shared:
                     at = starts[c] + fetch_add(fill, c, 1)
                 else:
-                    if fill[c] == room[c]:
-                        more = 2 * room[c] + SPARE
-                        if tail[0] + more > len(items):
-                            return False
-                        for m in range(fill[c]):
-                            items[tail[0] + m] = items[starts[c] + m]
-                            for a in range(6):
-                                boxes[tail[0] + m, a] = boxes[starts[c] + m, a]
-                        starts[c], room[c] = tail[0], more
-                        tail[0] += more
                     at = starts[c] + fill[c]
+                    if at == starts[c + 1]:
+                        return False
                     fill[c] += 1
                 items[at] = j
                 store(boxes, at, bounds, j)

@@ -21,7 +21,7 @@ import numpy as np
 from .. import native
 from ..components.physics import BOX, CAPSULE, SPHERE
 from .poses import copy_poses
-from .ray_bounds import BLOCK, TAIL, bounds_of, count_cells, place_cells, starts_of
+from .ray_bounds import BLOCK, bounds_of, count_cells, place_cells, starts_of
 from .ray_refresh import SPILL, counters, refresh
 from .ray_spread import refresh_and_spread
 from .ray_walk import cast_rays, claims
@@ -87,9 +87,8 @@ class RayGrid:
     grid from `origin` in cubes of `cell`, `dims` of them (a cell more all round than the
     shapes needed, for them to move into), whose shapes are items[starts[c]:starts[c] +
     fill[c]] for cell c = (z * ny + y) * nx + x, their bounds boxes[...] beside them (low,
-    then high), `room` for room[c] in all; past every cell's room, free slots from tail[0] on,
-    for a full cell to move into. `refresh` moves the shapes that left their bounds into
-    other cells: the grid's arrays change in place (PhysicsWorld.ray_lock)."""
+    then high), room to spare up to starts[c + 1]. `refresh` moves the shapes that left their
+    bounds into other cells: the grid's arrays change in place (PhysicsWorld.ray_lock)."""
 
     shapes: Shapes
     positions: np.ndarray
@@ -105,8 +104,6 @@ class RayGrid:
     fill: np.ndarray
     items: np.ndarray
     boxes: np.ndarray
-    room: np.ndarray
-    tail: np.ndarray
     marks: np.ndarray  # per shape, 1 while a refresh has it down as escaped
     spill: np.ndarray  # how many shapes are outside the grid's cells, then they (ray_refresh.SPILL)
 
@@ -143,21 +140,18 @@ class RayGrid:
         fill = np.zeros(int(dims.prod()), np.int64)
         run(count_cells, bounds, small, low, cell, dims, fill, jobs > 1)
         starts = starts_of(fill)
-        room, tail = np.diff(starts), np.array([starts[-1]], np.int64)
-        slots = int(starts[-1]) + max(1024, int(starts[-1]) // TAIL)
-        items, boxes = np.empty(slots, np.int32), np.empty((slots, 6), np.float32)
-        run(place_cells, bounds, small, (low, cell, dims, starts, fill, items, boxes, room, tail), jobs > 1)
+        items, boxes = np.empty(starts[-1], np.int32), np.empty((starts[-1], 6), np.float32)
+        run(place_cells, bounds, small, (low, cell, dims, starts, fill, items, boxes), jobs > 1)
         centre, turn = np.empty((count, 3)), np.empty((count, 4))
         copy_poses(positions, rotations, shapes.rows, np.arange(count), centre, turn)
         marks, spill = np.zeros(count, np.uint8), np.zeros(SPILL + 1, np.int64)
         poses = (positions, rotations, centre, turn, bounds, margin)
-        return cls(shapes, *poses, low, cell, dims, starts, fill, items, boxes, room, tail, marks, spill)
+        return cls(shapes, *poses, low, cell, dims, starts, fill, items, boxes, marks, spill)
 
     @property
     def layout(self) -> tuple:
-        """(origin, cell, dims, starts, fill, items, boxes, room, tail): the grid as its kernels
-        take it."""
-        return self.origin, self.cell, self.dims, self.starts, self.fill, self.items, self.boxes, self.room, self.tail
+        """(origin, cell, dims, starts, fill, items, boxes): the grid as its kernels take it."""
+        return self.origin, self.cell, self.dims, self.starts, self.fill, self.items, self.boxes
 
     def serves(self, shapes: Shapes, positions: np.ndarray, rotations: np.ndarray) -> bool:
         """Whether this grid was made for these `shapes`, posed by these buffers (whether they

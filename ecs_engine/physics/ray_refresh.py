@@ -1,9 +1,7 @@
 """The grid of the engine's rays (ray_grid.py) brought up to the step: the shapes that moved
 further than the grid's margin since they were put in their cells are found, and moved into
-the cells their bounds cover now. A full cell moves past the others into the grid's free
-slots, with twice its room (ray_bounds.insert). A shape that leaves the grid's box, or finds
-the free slots too few, is tested by every ray instead, up to SPILL of them; past that the grid
-is made again.
+the cells their bounds cover now. A shape that leaves the grid's box or finds a cell full is
+tested by every ray instead, up to SPILL of them; past that the grid is made again.
 
 Before the rays are cast, on this thread or, for many rays, on numba's threads in the kernel
 that casts them (ray_spread.py): they share the look at every shape, then one of them moves the
@@ -43,12 +41,11 @@ def _move_kernel(
     escaped, positions, rotations, rows, shape, size, margin, centre, turn, bounds, layout, spill
 ):  # pragma: no cover
     """Each escaped shape taken out of its cells and put into those its bounds (`margin` wide)
-    cover now, its pose there noted in centre and turn. One that leaves the grid's box, or finds
-    a full cell with no free slots left to move to, goes to the `spill` (its count, then the
-    shapes: every ray tests them, by their bounds first); a cell it did fit in keeps it (a ray
-    looks at a shape once). False where the spill is full: the grid is then half moved, to be
-    made again."""
-    origin, cell, dims, starts, fill, items, boxes, _, _ = layout
+    cover now, its pose there noted in centre and turn. One that leaves the grid's box, or
+    finds a cell full, goes to the `spill` (its count, then the shapes: every ray tests them,
+    by their bounds first); a cell it did fit in keeps it (a ray looks at a shape once). False
+    where the spill is full: the grid is then half moved, to be made again."""
+    origin, cell, dims, starts, fill, items, boxes = layout
     for n in range(len(escaped)):
         j = escaped[n]
         for m in range(1, spill[0] + 1):

@@ -72,7 +72,7 @@ def _cast_kernel(  # pragma: no cover
     last ray that looked at it), and tested exactly only when the ray meets its bounds before
     the nearest hit so far. Of shapes hit at the same distance (a ray starting inside two) the
     one of the lower index is answered, whatever order the cells hold them in."""
-    origin, cell, dims, starts, fill, items, boxes, _, _ = layout
+    origin, cell, dims, starts, fill, items, boxes = layout
     nx, ny, nz = dims[0], dims[1], dims[2]
     inv_cell = 1.0 / cell
     seen = np.full(len(shape), -1, np.int64)
