@@ -92,11 +92,12 @@ def _sort_kernel(flags, body1, body2, point, normal, speed, known, owners, bodie
             a[k], b[k], phase[k] = ea, eb, p
             for c in range(3):
                 at[k, c], toward[k, c] = point[i, c], normal[i, c]
-            met[k] = speed[i]
-            wa, wb = (1.0 / mass[ia] if kind[ia] == DYNAMIC else 0.0), (1.0 / mass[ib] if kind[ib] == DYNAMIC else 0.0)
-            inverse = wa + wb
-            e = max(restitution[ia], restitution[ib])
-            impulse[k] = (1.0 + e) / inverse * met[k] if p == BEGIN and inverse > 0.0 else 0.0
+            met[k], impulse[k] = speed[i], 0.0
+            if p == BEGIN:  # (STAY and END rows carry no impulse)
+                inverse = 1.0 / mass[ia] if kind[ia] == DYNAMIC else 0.0
+                inverse += 1.0 / mass[ib] if kind[ib] == DYNAMIC else 0.0
+                if inverse > 0.0:
+                    impulse[k] = (1.0 + max(restitution[ia], restitution[ib])) / inverse * met[k]
             k += 1
         elif p != STAY:
             sensors[t], others[t], entered[t] = (ea, eb, p == BEGIN) if sensor[ia] else (eb, ea, p == BEGIN)

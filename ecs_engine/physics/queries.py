@@ -62,9 +62,9 @@ def raycast(physics: Any, origins: Any, directions: Any, max_distance: float) ->
     if len(o) != len(d):
         raise ValueError(f"raycast: {len(o)} origins but {len(d)} directions")
     jobs = 1 if physics.pool is None else min(physics.pool.threads, len(o) // RAYS_PER_THREAD)
-    index, distance = np.empty(len(o), np.int64), np.empty(len(o))
+    entity, distance = np.empty(len(o), np.int64), np.empty(len(o))
     point, normal = np.empty((len(o), 3)), np.empty((len(o), 3))
-    out, shared = (index, distance, point, normal), claims()
+    out, shared = (entity, distance, point, normal), claims()
 
     def refresh_and_cast(grid: Any, everything: bool) -> bool:
         return grid.refresh_and_cast(everything, jobs, o, d, max_distance, out, shared, grid.shapes.entity)
@@ -75,7 +75,6 @@ def raycast(physics: Any, origins: Any, directions: Any, max_distance: float) ->
             return _library_rays(physics, o, _unit(o, d), max_distance)
         if shared[0] < len(o):  # (not cast with the grid's refresh)
             grid.cast(o, d, max_distance, out, shared, grid.shapes.entity, jobs)
-    entity = index
     if len(o) and entity.min() == -2:
         _unit(o, d)  # (the error naming the first such ray)
     if others:  # mesh, hull and terrain bodies are the library's to cast against
